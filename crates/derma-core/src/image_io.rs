@@ -1,0 +1,235 @@
+//! Image input and output: greyscale and RGB fields from PNG (8/16-bit) or OpenEXR; PNG 8/16-bit
+//! and multi-layer OpenEXR outputs, all written atomically (see [`crate::atomic`]).
+
+use crate::atomic;
+use crate::error::{CoreError, Result};
+use crate::map::Map;
+use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+use image::{ExtendedColorType, ImageEncoder};
+use std::path::Path;
+
+/// A decoded image as linear-in-file values in [0, 1] (PNG values are used as stored, i.e. an
+/// artist's grey level is the probability; EXR values are taken as they are).
+pub struct LoadedImage {
+    pub channels: Vec<Map>,
+    /// True when the file had colour channels that differ from each other.
+    pub is_colour: bool,
+}
+
+fn decode(path: &Path) -> Result<image::DynamicImage> {
+    let bytes = std::fs::read(path).map_err(|source| CoreError::Read { path: path.to_path_buf(), source })?;
+    image::load_from_memory(&bytes).map_err(|e| CoreError::Image { path: path.to_path_buf(), detail: e.to_string() })
+}
+
+/// Loads an image as RGB maps with values in [0, 1] (EXR: as stored).
+pub fn read_rgb(path: &Path) -> Result<LoadedImage> {
+    let img = decode(path)?.into_rgb32f();
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    if w == 0 || h == 0 {
+        return Err(CoreError::Image { path: path.to_path_buf(), detail: "image has zero size".into() });
+    }
+    let mut ch = [Vec::with_capacity(w * h), Vec::with_capacity(w * h), Vec::with_capacity(w * h)];
+    let mut is_colour = false;
+    for p in img.pixels() {
+        for k in 0..3 {
+            let v = p.0[k];
+            if !v.is_finite() {
+                return Err(CoreError::Image { path: path.to_path_buf(), detail: "contains NaN or infinite values".into() });
+            }
+            ch[k].push(v);
+        }
+        if (p.0[0] - p.0[1]).abs() > 1.0 / 255.0 || (p.0[0] - p.0[2]).abs() > 1.0 / 255.0 {
+            is_colour = true;
+        }
+    }
+    let [r, g, b] = ch;
+    Ok(LoadedImage {
+        channels: vec![Map::from_vec(w, h, r)?, Map::from_vec(w, h, g)?, Map::from_vec(w, h, b)?],
+        is_colour,
+    })
+}
+
+/// Loads a greyscale image. Colour images are converted by Rec. 709 luminance and reported
+/// through `is_colour` so the caller can warn.
+pub fn read_grey(path: &Path) -> Result<LoadedImage> {
+    let rgb = read_rgb(path)?;
+    if !rgb.is_colour {
+        let r = rgb.channels.into_iter().next().expect("three channels");
+        return Ok(LoadedImage { channels: vec![r], is_colour: false });
+    }
+    let (w, h) = (rgb.channels[0].width(), rgb.channels[0].height());
+    let d: Vec<f32> = (0..w * h)
+        .map(|i| {
+            0.2126 * rgb.channels[0].data()[i] + 0.7152 * rgb.channels[1].data()[i] + 0.0722 * rgb.channels[2].data()[i]
+        })
+        .collect();
+    Ok(LoadedImage { channels: vec![Map::from_vec(w, h, d)?], is_colour: true })
+}
+
+fn encode_png(path: &Path, w: usize, h: usize, bytes: &[u8], ty: ExtendedColorType) -> Result<()> {
+    atomic::write_with(path, |tmp| {
+        let file = std::fs::File::create(tmp).map_err(|source| CoreError::Write { path: path.to_path_buf(), source })?;
+        let writer = std::io::BufWriter::with_capacity(1 << 20, file);
+        PngEncoder::new_with_quality(writer, CompressionType::Fast, FilterType::Adaptive)
+            .write_image(bytes, w as u32, h as u32, ty)
+            .map_err(|e| CoreError::Encode { path: path.to_path_buf(), detail: e.to_string() })
+    })
+}
+
+#[inline]
+fn q8(v: f32) -> u8 {
+    (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
+}
+#[inline]
+fn q16(v: f32) -> u16 {
+    (v.clamp(0.0, 1.0) * 65535.0 + 0.5) as u16
+}
+
+/// Writes 1 (grey), 3 (RGB) or 4 (RGBA) maps of already-encoded values in [0, 1] as an 8-bit PNG.
+pub fn write_png8(path: &Path, maps: &[&Map]) -> Result<()> {
+    let (w, h, ty) = check_maps(path, maps, [ExtendedColorType::L8, ExtendedColorType::Rgb8, ExtendedColorType::Rgba8])?;
+    let n = maps.len();
+    let mut bytes = vec![0u8; w * h * n];
+    for (k, m) in maps.iter().enumerate() {
+        for (i, &v) in m.data().iter().enumerate() {
+            bytes[i * n + k] = q8(v);
+        }
+    }
+    encode_png(path, w, h, &bytes, ty)
+}
+
+/// Writes 1, 3 or 4 maps of values in [0, 1] as a 16-bit PNG.
+pub fn write_png16(path: &Path, maps: &[&Map]) -> Result<()> {
+    let (w, h, ty) =
+        check_maps(path, maps, [ExtendedColorType::L16, ExtendedColorType::Rgb16, ExtendedColorType::Rgba16])?;
+    let n = maps.len();
+    let mut bytes = vec![0u8; w * h * n * 2];
+    for (k, m) in maps.iter().enumerate() {
+        for (i, &v) in m.data().iter().enumerate() {
+            let b = q16(v).to_ne_bytes();
+            bytes[2 * (i * n + k)] = b[0];
+            bytes[2 * (i * n + k) + 1] = b[1];
+        }
+    }
+    encode_png(path, w, h, &bytes, ty)
+}
+
+fn check_maps(path: &Path, maps: &[&Map], types: [ExtendedColorType; 3]) -> Result<(usize, usize, ExtendedColorType)> {
+    let ty = match maps.len() {
+        1 => types[0],
+        3 => types[1],
+        4 => types[2],
+        n => return Err(CoreError::Encode { path: path.to_path_buf(), detail: format!("{n} channels (expected 1, 3 or 4)") }),
+    };
+    let (w, h) = (maps[0].width(), maps[0].height());
+    if maps.iter().any(|m| m.width() != w || m.height() != h) {
+        return Err(CoreError::Encode { path: path.to_path_buf(), detail: "channels differ in size".into() });
+    }
+    Ok((w, h, ty))
+}
+
+/// Sample precision of an EXR layer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExrPrecision {
+    F32,
+    F16,
+}
+
+/// Writes named single-channel maps into one OpenEXR file (ZIP-compressed, one channel per map).
+pub fn write_exr(path: &Path, channels: &[(&str, &Map)], precision: ExrPrecision) -> Result<()> {
+    use exr::prelude::*;
+    let (w, h) = match channels.first() {
+        Some((_, m)) => (m.width(), m.height()),
+        None => return Err(CoreError::Encode { path: path.to_path_buf(), detail: "no channels".into() }),
+    };
+    let list: Vec<AnyChannel<FlatSamples>> = channels
+        .iter()
+        .map(|(name, m)| {
+            let samples = match precision {
+                ExrPrecision::F32 => FlatSamples::F32(m.data().to_vec()),
+                ExrPrecision::F16 => FlatSamples::F16(m.data().iter().map(|&v| half::f16::from_f32(v)).collect()),
+            };
+            AnyChannel::new(*name, samples)
+        })
+        .collect();
+    let layer = Layer::new((w, h), LayerAttributes::default(), Encoding::FAST_LOSSLESS, AnyChannels::sort(list.into()));
+    let image = Image::from_layer(layer);
+    atomic::write_with(path, |tmp| {
+        image.write().to_file(tmp).map_err(|e| CoreError::Encode { path: path.to_path_buf(), detail: e.to_string() })
+    })
+}
+
+/// Reads every channel of an OpenEXR file's first layer, by name (for tests and round trips).
+pub fn read_exr_channels(path: &Path) -> Result<Vec<(String, Map)>> {
+    use exr::prelude::*;
+    let img = read_all_flat_layers_from_file(path).map_err(|e| CoreError::Image { path: path.to_path_buf(), detail: e.to_string() })?;
+    let layer = img.layer_data.first().ok_or_else(|| CoreError::Image { path: path.to_path_buf(), detail: "no layers".into() })?;
+    let (w, h) = (layer.size.width(), layer.size.height());
+    layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| {
+            let v: Vec<f32> = c.sample_data.values_as_f32().collect();
+            Ok((c.name.to_string(), Map::from_vec(w, h, v)?))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tmpdir(tag: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("derma-io-{tag}-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn png16_and_exr_roundtrip() {
+        let d = tmpdir("rt");
+        let mut m = Map::filled(5, 3, 0.0);
+        for i in 0..15 {
+            m.data_mut()[i] = i as f32 / 14.0;
+        }
+        let p = d.join("g.png");
+        write_png16(&p, &[&m]).unwrap();
+        let back = read_grey(&p).unwrap();
+        assert!(!back.is_colour);
+        for (a, b) in back.channels[0].data().iter().zip(m.data()) {
+            assert!((a - b).abs() < 1.0 / 65535.0 + 1e-6);
+        }
+        let e = d.join("m.exr");
+        write_exr(&e, &[("height", &m), ("melanin", &m)], ExrPrecision::F32).unwrap();
+        let ch = read_exr_channels(&e).unwrap();
+        assert_eq!(ch.len(), 2);
+        assert_eq!(ch[0].1, m);
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn colour_image_is_flagged_and_converted() {
+        let d = tmpdir("col");
+        let r = Map::filled(2, 2, 1.0);
+        let z = Map::filled(2, 2, 0.0);
+        let p = d.join("c.png");
+        write_png8(&p, &[&r, &z, &z]).unwrap();
+        let g = read_grey(&p).unwrap();
+        assert!(g.is_colour);
+        assert!((g.channels[0].get(0, 0) - 0.2126).abs() < 1e-3);
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn corrupt_file_error_names_the_file() {
+        let d = tmpdir("bad");
+        let p = d.join("broken.png");
+        std::fs::write(&p, b"not a png at all").unwrap();
+        let e = read_grey(&p).err().unwrap().to_string();
+        assert!(e.contains("broken.png"), "{e}");
+        let e = read_grey(&d.join("missing.png")).err().unwrap().to_string();
+        assert!(e.contains("missing.png"), "{e}");
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+}

@@ -1,0 +1,22 @@
+//! Core types shared by every derma crate.
+//!
+//! - [`map::Map`]: a planar `f32` image with a size, the unit every stage exchanges.
+//! - [`rng::Philox`]: a counter-based random generator keyed by (seed, stream, index), so that a
+//!   random draw never depends on thread order (and can be reproduced on a GPU).
+//! - [`color`]: spectra on the 380–780 nm grid, the CIE 1931 observer, XYZ ↔ linear sRGB.
+//! - [`image_io`]: PNG (8/16-bit) and OpenEXR reading and atomic writing.
+//! - [`mesh`]: OBJ and glTF/GLB loading, unit detection, and [`raster`]: UV-space rasterisation
+//!   of a mesh into per-texel surface points.
+
+pub mod atomic;
+mod cie_table;
+pub mod color;
+pub mod error;
+pub mod image_io;
+pub mod map;
+pub mod mesh;
+pub mod raster;
+pub mod rng;
+
+pub use error::{CoreError, Result};
+pub use map::Map;

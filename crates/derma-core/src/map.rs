@@ -1,0 +1,188 @@
+//! Planar f32 maps: one channel per `Map`, row-major with row 0 at the top of the image
+//! (image convention). The texture-space v coordinate increases upward (OpenGL), so v = 1 − (y+½)/h.
+
+use crate::error::{CoreError, Result};
+
+/// A single-channel, row-major `f32` image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Map {
+    width: usize,
+    height: usize,
+    data: Vec<f32>,
+}
+
+impl Map {
+    /// A `width` × `height` map filled with `value`.
+    pub fn filled(width: usize, height: usize, value: f32) -> Self {
+        Self { width, height, data: vec![value; width * height] }
+    }
+
+    /// Wraps existing row-major data; fails when the length does not match the size.
+    pub fn from_vec(width: usize, height: usize, data: Vec<f32>) -> Result<Self> {
+        if data.len() != width * height {
+            return Err(CoreError::Invalid {
+                what: "map data".into(),
+                detail: format!("{} values for a {width}x{height} map (expected {})", data.len(), width * height),
+            });
+        }
+        Ok(Self { width, height, data })
+    }
+
+    pub fn width(&self) -> usize {
+        self.width
+    }
+    pub fn height(&self) -> usize {
+        self.height
+    }
+    pub fn data(&self) -> &[f32] {
+        &self.data
+    }
+    pub fn data_mut(&mut self) -> &mut [f32] {
+        &mut self.data
+    }
+    pub fn into_vec(self) -> Vec<f32> {
+        self.data
+    }
+
+    #[inline]
+    pub fn get(&self, x: usize, y: usize) -> f32 {
+        self.data[y * self.width + x]
+    }
+    #[inline]
+    pub fn set(&mut self, x: usize, y: usize, v: f32) {
+        self.data[y * self.width + x] = v;
+    }
+
+    /// Bilinear sample at texture coordinates (u, v) ∈ [0, 1]², v up (OpenGL). With `wrap` the
+    /// map is treated as periodic, otherwise coordinates are clamped to the edge texels.
+    pub fn sample_uv(&self, u: f32, v: f32, wrap: bool) -> f32 {
+        let fx = u * self.width as f32 - 0.5;
+        let fy = (1.0 - v) * self.height as f32 - 0.5;
+        self.sample_texel(fx, fy, wrap)
+    }
+
+    /// Bilinear sample at continuous texel coordinates (texel centres at integers).
+    pub fn sample_texel(&self, fx: f32, fy: f32, wrap: bool) -> f32 {
+        let x0 = fx.floor();
+        let y0 = fy.floor();
+        let tx = fx - x0;
+        let ty = fy - y0;
+        let (w, h) = (self.width as i64, self.height as i64);
+        let idx = |x: i64, y: i64| -> usize {
+            let (x, y) = if wrap {
+                (x.rem_euclid(w), y.rem_euclid(h))
+            } else {
+                (x.clamp(0, w - 1), y.clamp(0, h - 1))
+            };
+            (y * w + x) as usize
+        };
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let a = self.data[idx(x0, y0)];
+        let b = self.data[idx(x0 + 1, y0)];
+        let c = self.data[idx(x0, y0 + 1)];
+        let d = self.data[idx(x0 + 1, y0 + 1)];
+        let top = a + (b - a) * tx;
+        let bot = c + (d - c) * tx;
+        top + (bot - top) * ty
+    }
+
+    /// Resamples to a new size by bilinear filtering (area-averaging first when shrinking by more
+    /// than 2×, so thin painted strokes are not lost).
+    pub fn resized(&self, width: usize, height: usize) -> Map {
+        if width == self.width && height == self.height {
+            return self.clone();
+        }
+        let mut src = self.clone();
+        while src.width >= 2 * width.max(1) * 2 && src.height >= 2 * height.max(1) * 2 {
+            src = src.halved();
+        }
+        let sx = src.width as f32 / width as f32;
+        let sy = src.height as f32 / height as f32;
+        let mut out = Map::filled(width, height, 0.0);
+        for y in 0..height {
+            for x in 0..width {
+                let fx = (x as f32 + 0.5) * sx - 0.5;
+                let fy = (y as f32 + 0.5) * sy - 0.5;
+                out.set(x, y, src.sample_texel(fx, fy, false));
+            }
+        }
+        out
+    }
+
+    fn halved(&self) -> Map {
+        let (w, h) = (self.width / 2, self.height / 2);
+        let mut out = Map::filled(w, h, 0.0);
+        for y in 0..h {
+            for x in 0..w {
+                let s = self.get(2 * x, 2 * y)
+                    + self.get(2 * x + 1, 2 * y)
+                    + self.get(2 * x, 2 * y + 1)
+                    + self.get(2 * x + 1, 2 * y + 1);
+                out.set(x, y, 0.25 * s);
+            }
+        }
+        out
+    }
+
+    /// Mean, minimum and maximum over the texels where `mask` (if given) is true.
+    pub fn stats(&self, mask: Option<&[bool]>) -> MapStats {
+        let mut sum = 0.0f64;
+        let mut n = 0usize;
+        let mut lo = f32::INFINITY;
+        let mut hi = f32::NEG_INFINITY;
+        for (i, &v) in self.data.iter().enumerate() {
+            if mask.is_some_and(|m| !m[i]) {
+                continue;
+            }
+            sum += v as f64;
+            n += 1;
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+        MapStats { mean: if n > 0 { sum / n as f64 } else { 0.0 }, min: lo, max: hi, count: n }
+    }
+}
+
+/// Summary statistics of a map.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct MapStats {
+    pub mean: f64,
+    pub min: f32,
+    pub max: f32,
+    pub count: usize,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bilinear_reproduces_texel_centres_and_midpoints() {
+        let m = Map::from_vec(2, 1, vec![0.0, 1.0]).unwrap();
+        assert_eq!(m.sample_uv(0.25, 0.5, false), 0.0);
+        assert_eq!(m.sample_uv(0.75, 0.5, false), 1.0);
+        assert!((m.sample_uv(0.5, 0.5, false) - 0.5).abs() < 1e-6);
+        // wrapping: halfway between the last and the first texel
+        assert!((m.sample_uv(0.0, 0.5, true) - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn resize_preserves_constant_and_mean() {
+        let m = Map::filled(64, 32, 0.3);
+        let r = m.resized(7, 5);
+        assert!(r.data().iter().all(|&v| (v - 0.3).abs() < 1e-6));
+        let mut g = Map::filled(64, 64, 0.0);
+        for y in 0..64 {
+            for x in 0..64 {
+                g.set(x, y, x as f32 / 63.0);
+            }
+        }
+        let r = g.resized(8, 8);
+        assert!((r.stats(None).mean - 0.5).abs() < 0.02);
+    }
+
+    #[test]
+    fn from_vec_rejects_wrong_length() {
+        assert!(Map::from_vec(3, 3, vec![0.0; 8]).is_err());
+    }
+}

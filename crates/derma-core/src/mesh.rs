@@ -1,0 +1,265 @@
+//! Triangle meshes with UVs: loading from OBJ (`tobj`) and glTF/GLB (`gltf`), unit detection,
+//! vertex normals and MikkTSpace tangents (`bevy_mikktspace`, lives in derma-skin's normal map).
+
+use crate::error::{CoreError, Result};
+use glam::{Mat4, Vec2, Vec3};
+use std::path::Path;
+
+/// An indexed triangle mesh with one UV set. Positions are in millimetres once
+/// [`TriMesh::to_millimetres`] has been applied.
+#[derive(Clone, Debug, Default)]
+pub struct TriMesh {
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub uvs: Vec<Vec2>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// The length unit a mesh was authored in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LengthUnit {
+    Mm,
+    Cm,
+    M,
+}
+
+impl LengthUnit {
+    pub fn to_mm(self) -> f32 {
+        match self {
+            LengthUnit::Mm => 1.0,
+            LengthUnit::Cm => 10.0,
+            LengthUnit::M => 1000.0,
+        }
+    }
+
+    /// Guesses the unit of a human head or face from its largest bounding-box extent: an adult
+    /// head is about 150–250 mm across (a face mask about 120–200 mm), so an extent of 0.05–2 is
+    /// read as metres, 2–60 as centimetres and anything larger as millimetres.
+    pub fn guess_from_extent(extent: f32) -> LengthUnit {
+        if extent <= 2.0 {
+            LengthUnit::M
+        } else if extent <= 60.0 {
+            LengthUnit::Cm
+        } else {
+            LengthUnit::Mm
+        }
+    }
+}
+
+impl TriMesh {
+    /// Loads an OBJ, glTF or GLB file (by extension).
+    pub fn load(path: &Path) -> Result<TriMesh> {
+        let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+        let mesh = match ext.as_str() {
+            "obj" => load_obj(path)?,
+            "gltf" | "glb" => load_gltf(path)?,
+            _ => {
+                return Err(CoreError::Mesh {
+                    path: path.to_path_buf(),
+                    detail: format!("unknown extension '.{ext}'; expected .obj, .gltf or .glb"),
+                })
+            }
+        };
+        mesh.validate(path)?;
+        Ok(mesh)
+    }
+
+    fn validate(&self, path: &Path) -> Result<()> {
+        let err = |detail: String| Err(CoreError::Mesh { path: path.to_path_buf(), detail });
+        if self.triangles.is_empty() {
+            return err("it contains no triangles".into());
+        }
+        if self.uvs.len() != self.positions.len() {
+            return err("it has no texture coordinates (UVs); derma paints textures in UV space, so unwrap the mesh first".into());
+        }
+        let n = self.positions.len() as u32;
+        if self.triangles.iter().any(|t| t.iter().any(|&i| i >= n)) {
+            return err("a triangle refers to a vertex that does not exist".into());
+        }
+        if self.positions.iter().any(|p| !p.is_finite()) || self.uvs.iter().any(|p| !p.is_finite()) {
+            return err("it contains NaN or infinite coordinates".into());
+        }
+        Ok(())
+    }
+
+    /// Largest extent of the axis-aligned bounding box.
+    pub fn extent(&self) -> f32 {
+        let (lo, hi) = self.bounds();
+        (hi - lo).max_element()
+    }
+
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.positions.iter().fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        })
+    }
+
+    /// Scales positions from `unit` to millimetres.
+    pub fn to_millimetres(&mut self, unit: LengthUnit) {
+        let s = unit.to_mm();
+        for p in &mut self.positions {
+            *p *= s;
+        }
+    }
+
+    /// Total surface area (in the mesh's units squared).
+    pub fn area(&self) -> f64 {
+        self.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| self.positions[i as usize]);
+                0.5 * (b - a).cross(c - a).length() as f64
+            })
+            .sum()
+    }
+
+    /// Recomputes area-weighted vertex normals (used when the file has none).
+    pub fn compute_normals(&mut self) {
+        let mut n = vec![Vec3::ZERO; self.positions.len()];
+        for t in &self.triangles {
+            let [a, b, c] = t.map(|i| self.positions[i as usize]);
+            let f = (b - a).cross(c - a);
+            for &i in t {
+                n[i as usize] += f;
+            }
+        }
+        self.normals = n.into_iter().map(|v| v.normalize_or(Vec3::Z)).collect();
+    }
+}
+
+fn load_obj(path: &Path) -> Result<TriMesh> {
+    let opts = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
+    let (models, _) = tobj::load_obj(path, &opts).map_err(|e| match e {
+        tobj::LoadError::OpenFileFailed => CoreError::Read {
+            path: path.to_path_buf(),
+            source: std::io::Error::new(std::io::ErrorKind::NotFound, "cannot open file"),
+        },
+        other => CoreError::Mesh { path: path.to_path_buf(), detail: format!("OBJ parse error: {other}") },
+    })?;
+    let mut mesh = TriMesh::default();
+    let mut any_missing_normals = false;
+    for m in models {
+        let m = m.mesh;
+        let base = mesh.positions.len() as u32;
+        let nv = m.positions.len() / 3;
+        if m.texcoords.len() / 2 != nv {
+            return Err(CoreError::Mesh {
+                path: path.to_path_buf(),
+                detail: "it has no texture coordinates (vt) for every vertex; derma paints textures in UV space, so unwrap the mesh first".into(),
+            });
+        }
+        for i in 0..nv {
+            mesh.positions.push(Vec3::new(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]));
+            mesh.uvs.push(Vec2::new(m.texcoords[2 * i], m.texcoords[2 * i + 1]));
+        }
+        if m.normals.len() / 3 == nv {
+            for i in 0..nv {
+                mesh.normals.push(Vec3::new(m.normals[3 * i], m.normals[3 * i + 1], m.normals[3 * i + 2]).normalize_or(Vec3::Z));
+            }
+        } else {
+            any_missing_normals = true;
+            mesh.normals.extend(std::iter::repeat_n(Vec3::ZERO, nv));
+        }
+        for t in m.indices.chunks_exact(3) {
+            mesh.triangles.push([base + t[0], base + t[1], base + t[2]]);
+        }
+    }
+    if any_missing_normals {
+        mesh.compute_normals();
+    }
+    Ok(mesh)
+}
+
+fn load_gltf(path: &Path) -> Result<TriMesh> {
+    let (doc, buffers, _) = gltf::import(path)
+        .map_err(|e| CoreError::Mesh { path: path.to_path_buf(), detail: format!("glTF error: {e}") })?;
+    let mut mesh = TriMesh::default();
+    let mut missing_normals = false;
+    let mut missing_uvs = false;
+    let scene = doc.default_scene().or_else(|| doc.scenes().next());
+    let mut stack: Vec<(gltf::Node, Mat4)> = match &scene {
+        Some(s) => s.nodes().map(|n| (n, Mat4::IDENTITY)).collect(),
+        None => doc.nodes().map(|n| (n, Mat4::IDENTITY)).collect(),
+    };
+    while let Some((node, parent)) = stack.pop() {
+        let xf = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        for child in node.children() {
+            stack.push((child, xf));
+        }
+        let Some(gmesh) = node.mesh() else { continue };
+        let normal_xf = xf.inverse().transpose();
+        for prim in gmesh.primitives() {
+            if prim.mode() != gltf::mesh::Mode::Triangles {
+                continue;
+            }
+            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let Some(pos) = reader.read_positions() else { continue };
+            let base = mesh.positions.len() as u32;
+            let pos: Vec<Vec3> = pos.map(|p| xf.transform_point3(Vec3::from(p))).collect();
+            let nv = pos.len();
+            match reader.read_tex_coords(0) {
+                // glTF puts v = 0 at the top of the image; derma uses OpenGL's v up.
+                Some(tc) => mesh.uvs.extend(tc.into_f32().map(|t| Vec2::new(t[0], 1.0 - t[1]))),
+                None => {
+                    missing_uvs = true;
+                    mesh.uvs.extend(std::iter::repeat_n(Vec2::ZERO, nv));
+                }
+            }
+            match reader.read_normals() {
+                Some(n) => mesh.normals.extend(n.map(|n| normal_xf.transform_vector3(Vec3::from(n)).normalize_or(Vec3::Z))),
+                None => {
+                    missing_normals = true;
+                    mesh.normals.extend(std::iter::repeat_n(Vec3::ZERO, nv));
+                }
+            }
+            mesh.positions.extend(pos);
+            let idx: Vec<u32> = match reader.read_indices() {
+                Some(i) => i.into_u32().collect(),
+                None => (0..nv as u32).collect(),
+            };
+            for t in idx.chunks_exact(3) {
+                mesh.triangles.push([base + t[0], base + t[1], base + t[2]]);
+            }
+        }
+    }
+    if missing_uvs {
+        return Err(CoreError::Mesh {
+            path: path.to_path_buf(),
+            detail: "a primitive has no TEXCOORD_0; derma paints textures in UV space, so unwrap the mesh first".into(),
+        });
+    }
+    if missing_normals {
+        mesh.compute_normals();
+    }
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unit_guess_for_heads() {
+        assert_eq!(LengthUnit::guess_from_extent(0.22), LengthUnit::M);
+        assert_eq!(LengthUnit::guess_from_extent(15.0), LengthUnit::Cm);
+        assert_eq!(LengthUnit::guess_from_extent(230.0), LengthUnit::Mm);
+    }
+
+    #[test]
+    fn obj_without_uvs_is_a_clear_error() {
+        let d = std::env::temp_dir().join(format!("derma-mesh-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let p = d.join("nouv.obj");
+        std::fs::write(&p, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        let e = TriMesh::load(&p).unwrap_err().to_string();
+        assert!(e.contains("nouv.obj") && e.contains("texture coordinates"), "{e}");
+        let p2 = d.join("ok.obj");
+        std::fs::write(&p2, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n").unwrap();
+        let m = TriMesh::load(&p2).unwrap();
+        assert_eq!(m.triangles.len(), 1);
+        assert!((m.area() - 0.5).abs() < 1e-9);
+        assert!((m.normals[0] - Vec3::Z).length() < 1e-6);
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+}
