@@ -1,1 +1,19 @@
+//! From biology to render parameters.
+//!
+//! The [`Appearance`] trait turns the bio parameters derma paints per texel (melanin, blood,
+//! oxygenation, layer thicknesses…) into what a renderer takes. Its first implementation,
+//! [`SpectralKubelkaMunk`], computes a layered Kubelka–Munk diffuse reflectance per wavelength
+//! from published chromophore spectra ([`chromophore`]) and integrates it with the CIE 1931
+//! observer under D65 to linear sRGB. A lookup table with simplex interpolation
+//! ([`lut`]) makes it fast enough for 16-megapixel texture sets.
 
+pub mod appearance;
+pub mod chromophore;
+pub mod fresnel;
+mod hemoglobin_table;
+pub mod kubelka_munk;
+pub mod lut;
+pub mod spectral_km;
+
+pub use appearance::{Appearance, BioTexel};
+pub use spectral_km::{SpectralKubelkaMunk, SkinLayers};
