@@ -6,7 +6,10 @@ use std::path::{Path, PathBuf};
 
 /// The temporary sibling used while `path` is being written.
 pub fn temp_path(path: &Path) -> PathBuf {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
@@ -20,7 +23,10 @@ where
     match write(&tmp) {
         Ok(()) => std::fs::rename(&tmp, path).map_err(|source| {
             let _ = std::fs::remove_file(&tmp);
-            CoreError::Write { path: path.to_path_buf(), source }
+            CoreError::Write {
+                path: path.to_path_buf(),
+                source,
+            }
         }),
         Err(e) => {
             let _ = std::fs::remove_file(&tmp);
@@ -32,15 +38,24 @@ where
 /// Atomically writes `bytes` to `path`.
 pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
     write_with(path, |tmp| {
-        std::fs::write(tmp, bytes).map_err(|source| CoreError::Write { path: path.to_path_buf(), source })
+        std::fs::write(tmp, bytes).map_err(|source| CoreError::Write {
+            path: path.to_path_buf(),
+            source,
+        })
     })
 }
 
 /// Checks that `dir` exists (creating it if needed) and is writable, before any work is done.
 pub fn ensure_writable_dir(dir: &Path) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(|source| CoreError::Write { path: dir.to_path_buf(), source })?;
+    std::fs::create_dir_all(dir).map_err(|source| CoreError::Write {
+        path: dir.to_path_buf(),
+        source,
+    })?;
     let probe = dir.join(format!(".derma-write-probe.{}", std::process::id()));
-    std::fs::write(&probe, b"probe").map_err(|source| CoreError::Write { path: dir.to_path_buf(), source })?;
+    std::fs::write(&probe, b"probe").map_err(|source| CoreError::Write {
+        path: dir.to_path_buf(),
+        source,
+    })?;
     let _ = std::fs::remove_file(&probe);
     Ok(())
 }
@@ -57,7 +72,10 @@ mod tests {
         std::fs::write(&target, b"old").unwrap();
         let r = write_with(&target, |tmp| {
             std::fs::write(tmp, b"partial").unwrap();
-            Err(CoreError::Invalid { what: "test".into(), detail: "boom".into() })
+            Err(CoreError::Invalid {
+                what: "test".into(),
+                detail: "boom".into(),
+            })
         });
         assert!(r.is_err());
         assert_eq!(std::fs::read(&target).unwrap(), b"old");

@@ -18,10 +18,10 @@ pub type Spectrum = [f64; N_WAVELENGTHS];
 /// CIE standard illuminant D65, relative spectral power, 380–780 nm every 10 nm.
 /// Source: CIE 15:2004 "Colorimetry", Table T.1 (values at the 10 nm points).
 pub const D65_10NM: Spectrum = [
-    49.9755, 54.6482, 82.7549, 91.486, 93.4318, 86.6823, 104.865, 117.008, 117.812, 114.861, 115.923,
-    108.811, 109.354, 107.802, 104.79, 107.689, 104.405, 104.046, 100.0, 96.3342, 95.788, 88.6856,
-    90.0062, 89.5991, 87.6987, 83.2886, 83.6992, 80.0268, 80.2146, 82.2778, 78.2842, 69.7213,
-    71.6091, 74.349, 61.604, 69.8856, 75.087, 63.5927, 46.4182, 66.8054, 63.3828,
+    49.9755, 54.6482, 82.7549, 91.486, 93.4318, 86.6823, 104.865, 117.008, 117.812, 114.861,
+    115.923, 108.811, 109.354, 107.802, 104.79, 107.689, 104.405, 104.046, 100.0, 96.3342, 95.788,
+    88.6856, 90.0062, 89.5991, 87.6987, 83.2886, 83.6992, 80.0268, 80.2146, 82.2778, 78.2842,
+    69.7213, 71.6091, 74.349, 61.604, 69.8856, 75.087, 63.5927, 46.4182, 66.8054, 63.3828,
 ];
 
 /// CIE 1931 colour-matching functions (x̄, ȳ, z̄) at sample `i`.
@@ -96,7 +96,13 @@ pub fn srgb_decode(x: f32) -> f32 {
 pub fn xyz_to_lab(xyz: [f64; 3]) -> [f64; 3] {
     // D65 white point, CIE 15:2004 (2° observer): Xn = 0.95047, Yn = 1, Zn = 1.08883.
     let n = [0.95047, 1.0, 1.08883];
-    let f = |t: f64| if t > (6.0f64 / 29.0).powi(3) { t.cbrt() } else { t / (3.0 * (6.0f64 / 29.0).powi(2)) + 4.0 / 29.0 };
+    let f = |t: f64| {
+        if t > (6.0f64 / 29.0).powi(3) {
+            t.cbrt()
+        } else {
+            t / (3.0 * (6.0f64 / 29.0).powi(2)) + 4.0 / 29.0
+        }
+    };
     let (fx, fy, fz) = (f(xyz[0] / n[0]), f(xyz[1] / n[1]), f(xyz[2] / n[2]));
     [116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)]
 }
@@ -118,7 +124,9 @@ mod tests {
     #[test]
     fn ybar_peaks_at_555_and_integrates_like_cie() {
         // ȳ has its maximum (1.0) near 555 nm; on the 10 nm grid the largest sample is at 550 or 560.
-        let (imax, _) = (0..N_WAVELENGTHS).map(|i| (i, cmf(i)[1])).fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+        let (imax, _) = (0..N_WAVELENGTHS)
+            .map(|i| (i, cmf(i)[1]))
+            .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
         assert!(matches!(wavelength_nm(imax) as i32, 550 | 560));
         // Σ ȳ Δλ ≈ 106.86 for the 1931 observer (CIE 15:2004).
         let s: f64 = (0..N_WAVELENGTHS).map(|i| cmf(i)[1] * 10.0).sum();

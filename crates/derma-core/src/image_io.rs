@@ -17,8 +17,14 @@ pub struct LoadedImage {
 }
 
 fn decode(path: &Path) -> Result<image::DynamicImage> {
-    let bytes = std::fs::read(path).map_err(|source| CoreError::Read { path: path.to_path_buf(), source })?;
-    image::load_from_memory(&bytes).map_err(|e| CoreError::Image { path: path.to_path_buf(), detail: e.to_string() })
+    let bytes = std::fs::read(path).map_err(|source| CoreError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    image::load_from_memory(&bytes).map_err(|e| CoreError::Image {
+        path: path.to_path_buf(),
+        detail: e.to_string(),
+    })
 }
 
 /// Loads an image as RGB maps with values in [0, 1] (EXR: as stored).
@@ -26,15 +32,25 @@ pub fn read_rgb(path: &Path) -> Result<LoadedImage> {
     let img = decode(path)?.into_rgb32f();
     let (w, h) = (img.width() as usize, img.height() as usize);
     if w == 0 || h == 0 {
-        return Err(CoreError::Image { path: path.to_path_buf(), detail: "image has zero size".into() });
+        return Err(CoreError::Image {
+            path: path.to_path_buf(),
+            detail: "image has zero size".into(),
+        });
     }
-    let mut ch = [Vec::with_capacity(w * h), Vec::with_capacity(w * h), Vec::with_capacity(w * h)];
+    let mut ch = [
+        Vec::with_capacity(w * h),
+        Vec::with_capacity(w * h),
+        Vec::with_capacity(w * h),
+    ];
     let mut is_colour = false;
     for p in img.pixels() {
         for k in 0..3 {
             let v = p.0[k];
             if !v.is_finite() {
-                return Err(CoreError::Image { path: path.to_path_buf(), detail: "contains NaN or infinite values".into() });
+                return Err(CoreError::Image {
+                    path: path.to_path_buf(),
+                    detail: "contains NaN or infinite values".into(),
+                });
             }
             ch[k].push(v);
         }
@@ -44,7 +60,11 @@ pub fn read_rgb(path: &Path) -> Result<LoadedImage> {
     }
     let [r, g, b] = ch;
     Ok(LoadedImage {
-        channels: vec![Map::from_vec(w, h, r)?, Map::from_vec(w, h, g)?, Map::from_vec(w, h, b)?],
+        channels: vec![
+            Map::from_vec(w, h, r)?,
+            Map::from_vec(w, h, g)?,
+            Map::from_vec(w, h, b)?,
+        ],
         is_colour,
     })
 }
@@ -55,24 +75,38 @@ pub fn read_grey(path: &Path) -> Result<LoadedImage> {
     let rgb = read_rgb(path)?;
     if !rgb.is_colour {
         let r = rgb.channels.into_iter().next().expect("three channels");
-        return Ok(LoadedImage { channels: vec![r], is_colour: false });
+        return Ok(LoadedImage {
+            channels: vec![r],
+            is_colour: false,
+        });
     }
     let (w, h) = (rgb.channels[0].width(), rgb.channels[0].height());
     let d: Vec<f32> = (0..w * h)
         .map(|i| {
-            0.2126 * rgb.channels[0].data()[i] + 0.7152 * rgb.channels[1].data()[i] + 0.0722 * rgb.channels[2].data()[i]
+            0.2126 * rgb.channels[0].data()[i]
+                + 0.7152 * rgb.channels[1].data()[i]
+                + 0.0722 * rgb.channels[2].data()[i]
         })
         .collect();
-    Ok(LoadedImage { channels: vec![Map::from_vec(w, h, d)?], is_colour: true })
+    Ok(LoadedImage {
+        channels: vec![Map::from_vec(w, h, d)?],
+        is_colour: true,
+    })
 }
 
 fn encode_png(path: &Path, w: usize, h: usize, bytes: &[u8], ty: ExtendedColorType) -> Result<()> {
     atomic::write_with(path, |tmp| {
-        let file = std::fs::File::create(tmp).map_err(|source| CoreError::Write { path: path.to_path_buf(), source })?;
+        let file = std::fs::File::create(tmp).map_err(|source| CoreError::Write {
+            path: path.to_path_buf(),
+            source,
+        })?;
         let writer = std::io::BufWriter::with_capacity(1 << 20, file);
         PngEncoder::new_with_quality(writer, CompressionType::Fast, FilterType::Adaptive)
             .write_image(bytes, w as u32, h as u32, ty)
-            .map_err(|e| CoreError::Encode { path: path.to_path_buf(), detail: e.to_string() })
+            .map_err(|e| CoreError::Encode {
+                path: path.to_path_buf(),
+                detail: e.to_string(),
+            })
     })
 }
 
@@ -87,7 +121,15 @@ fn q16(v: f32) -> u16 {
 
 /// Writes 1 (grey), 3 (RGB) or 4 (RGBA) maps of already-encoded values in [0, 1] as an 8-bit PNG.
 pub fn write_png8(path: &Path, maps: &[&Map]) -> Result<()> {
-    let (w, h, ty) = check_maps(path, maps, [ExtendedColorType::L8, ExtendedColorType::Rgb8, ExtendedColorType::Rgba8])?;
+    let (w, h, ty) = check_maps(
+        path,
+        maps,
+        [
+            ExtendedColorType::L8,
+            ExtendedColorType::Rgb8,
+            ExtendedColorType::Rgba8,
+        ],
+    )?;
     let n = maps.len();
     let mut bytes = vec![0u8; w * h * n];
     for (k, m) in maps.iter().enumerate() {
@@ -100,8 +142,15 @@ pub fn write_png8(path: &Path, maps: &[&Map]) -> Result<()> {
 
 /// Writes 1, 3 or 4 maps of values in [0, 1] as a 16-bit PNG.
 pub fn write_png16(path: &Path, maps: &[&Map]) -> Result<()> {
-    let (w, h, ty) =
-        check_maps(path, maps, [ExtendedColorType::L16, ExtendedColorType::Rgb16, ExtendedColorType::Rgba16])?;
+    let (w, h, ty) = check_maps(
+        path,
+        maps,
+        [
+            ExtendedColorType::L16,
+            ExtendedColorType::Rgb16,
+            ExtendedColorType::Rgba16,
+        ],
+    )?;
     let n = maps.len();
     let mut bytes = vec![0u8; w * h * n * 2];
     for (k, m) in maps.iter().enumerate() {
@@ -114,16 +163,28 @@ pub fn write_png16(path: &Path, maps: &[&Map]) -> Result<()> {
     encode_png(path, w, h, &bytes, ty)
 }
 
-fn check_maps(path: &Path, maps: &[&Map], types: [ExtendedColorType; 3]) -> Result<(usize, usize, ExtendedColorType)> {
+fn check_maps(
+    path: &Path,
+    maps: &[&Map],
+    types: [ExtendedColorType; 3],
+) -> Result<(usize, usize, ExtendedColorType)> {
     let ty = match maps.len() {
         1 => types[0],
         3 => types[1],
         4 => types[2],
-        n => return Err(CoreError::Encode { path: path.to_path_buf(), detail: format!("{n} channels (expected 1, 3 or 4)") }),
+        n => {
+            return Err(CoreError::Encode {
+                path: path.to_path_buf(),
+                detail: format!("{n} channels (expected 1, 3 or 4)"),
+            })
+        }
     };
     let (w, h) = (maps[0].width(), maps[0].height());
     if maps.iter().any(|m| m.width() != w || m.height() != h) {
-        return Err(CoreError::Encode { path: path.to_path_buf(), detail: "channels differ in size".into() });
+        return Err(CoreError::Encode {
+            path: path.to_path_buf(),
+            detail: "channels differ in size".into(),
+        });
     }
     Ok((w, h, ty))
 }
@@ -140,30 +201,51 @@ pub fn write_exr(path: &Path, channels: &[(&str, &Map)], precision: ExrPrecision
     use exr::prelude::*;
     let (w, h) = match channels.first() {
         Some((_, m)) => (m.width(), m.height()),
-        None => return Err(CoreError::Encode { path: path.to_path_buf(), detail: "no channels".into() }),
+        None => {
+            return Err(CoreError::Encode {
+                path: path.to_path_buf(),
+                detail: "no channels".into(),
+            })
+        }
     };
     let list: Vec<AnyChannel<FlatSamples>> = channels
         .iter()
         .map(|(name, m)| {
             let samples = match precision {
                 ExrPrecision::F32 => FlatSamples::F32(m.data().to_vec()),
-                ExrPrecision::F16 => FlatSamples::F16(m.data().iter().map(|&v| half::f16::from_f32(v)).collect()),
+                ExrPrecision::F16 => {
+                    FlatSamples::F16(m.data().iter().map(|&v| half::f16::from_f32(v)).collect())
+                }
             };
             AnyChannel::new(*name, samples)
         })
         .collect();
-    let layer = Layer::new((w, h), LayerAttributes::default(), Encoding::FAST_LOSSLESS, AnyChannels::sort(list.into()));
+    let layer = Layer::new(
+        (w, h),
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(list.into()),
+    );
     let image = Image::from_layer(layer);
     atomic::write_with(path, |tmp| {
-        image.write().to_file(tmp).map_err(|e| CoreError::Encode { path: path.to_path_buf(), detail: e.to_string() })
+        image.write().to_file(tmp).map_err(|e| CoreError::Encode {
+            path: path.to_path_buf(),
+            detail: e.to_string(),
+        })
     })
 }
 
 /// Reads every channel of an OpenEXR file's first layer, by name (for tests and round trips).
 pub fn read_exr_channels(path: &Path) -> Result<Vec<(String, Map)>> {
     use exr::prelude::*;
-    let img = read_all_flat_layers_from_file(path).map_err(|e| CoreError::Image { path: path.to_path_buf(), detail: e.to_string() })?;
-    let layer = img.layer_data.first().ok_or_else(|| CoreError::Image { path: path.to_path_buf(), detail: "no layers".into() })?;
+    let img = read_all_flat_layers_from_file(path).map_err(|e| CoreError::Image {
+        path: path.to_path_buf(),
+        detail: e.to_string(),
+    })?;
+    let layer = img.layer_data.first().ok_or_else(|| CoreError::Image {
+        path: path.to_path_buf(),
+        detail: "no layers".into(),
+    })?;
     let (w, h) = (layer.size.width(), layer.size.height());
     layer
         .channel_data

@@ -14,7 +14,11 @@ pub struct Map {
 impl Map {
     /// A `width` × `height` map filled with `value`.
     pub fn filled(width: usize, height: usize, value: f32) -> Self {
-        Self { width, height, data: vec![value; width * height] }
+        Self {
+            width,
+            height,
+            data: vec![value; width * height],
+        }
     }
 
     /// Wraps existing row-major data; fails when the length does not match the size.
@@ -22,10 +26,18 @@ impl Map {
         if data.len() != width * height {
             return Err(CoreError::Invalid {
                 what: "map data".into(),
-                detail: format!("{} values for a {width}x{height} map (expected {})", data.len(), width * height),
+                detail: format!(
+                    "{} values for a {width}x{height} map (expected {})",
+                    data.len(),
+                    width * height
+                ),
             });
         }
-        Ok(Self { width, height, data })
+        Ok(Self {
+            width,
+            height,
+            data,
+        })
     }
 
     pub fn width(&self) -> usize {
@@ -139,7 +151,12 @@ impl Map {
             lo = lo.min(v);
             hi = hi.max(v);
         }
-        MapStats { mean: if n > 0 { sum / n as f64 } else { 0.0 }, min: lo, max: hi, count: n }
+        MapStats {
+            mean: if n > 0 { sum / n as f64 } else { 0.0 },
+            min: lo,
+            max: hi,
+            count: n,
+        }
     }
 }
 

@@ -50,7 +50,10 @@ impl LengthUnit {
 impl TriMesh {
     /// Loads an OBJ, glTF or GLB file (by extension).
     pub fn load(path: &Path) -> Result<TriMesh> {
-        let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
         let mesh = match ext.as_str() {
             "obj" => load_obj(path)?,
             "gltf" | "glb" => load_gltf(path)?,
@@ -66,7 +69,12 @@ impl TriMesh {
     }
 
     fn validate(&self, path: &Path) -> Result<()> {
-        let err = |detail: String| Err(CoreError::Mesh { path: path.to_path_buf(), detail });
+        let err = |detail: String| {
+            Err(CoreError::Mesh {
+                path: path.to_path_buf(),
+                detail,
+            })
+        };
         if self.triangles.is_empty() {
             return err("it contains no triangles".into());
         }
@@ -77,7 +85,8 @@ impl TriMesh {
         if self.triangles.iter().any(|t| t.iter().any(|&i| i >= n)) {
             return err("a triangle refers to a vertex that does not exist".into());
         }
-        if self.positions.iter().any(|p| !p.is_finite()) || self.uvs.iter().any(|p| !p.is_finite()) {
+        if self.positions.iter().any(|p| !p.is_finite()) || self.uvs.iter().any(|p| !p.is_finite())
+        {
             return err("it contains NaN or infinite coordinates".into());
         }
         Ok(())
@@ -90,9 +99,10 @@ impl TriMesh {
     }
 
     pub fn bounds(&self) -> (Vec3, Vec3) {
-        self.positions.iter().fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), &p| {
-            (lo.min(p), hi.max(p))
-        })
+        self.positions.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        )
     }
 
     /// Scales positions from `unit` to millimetres.
@@ -129,13 +139,21 @@ impl TriMesh {
 }
 
 fn load_obj(path: &Path) -> Result<TriMesh> {
-    let opts = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
+    let opts = tobj::LoadOptions {
+        single_index: true,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
     let (models, _) = tobj::load_obj(path, &opts).map_err(|e| match e {
         tobj::LoadError::OpenFileFailed => CoreError::Read {
             path: path.to_path_buf(),
             source: std::io::Error::new(std::io::ErrorKind::NotFound, "cannot open file"),
         },
-        other => CoreError::Mesh { path: path.to_path_buf(), detail: format!("OBJ parse error: {other}") },
+        other => CoreError::Mesh {
+            path: path.to_path_buf(),
+            detail: format!("OBJ parse error: {other}"),
+        },
     })?;
     let mut mesh = TriMesh::default();
     let mut any_missing_normals = false;
@@ -150,12 +168,20 @@ fn load_obj(path: &Path) -> Result<TriMesh> {
             });
         }
         for i in 0..nv {
-            mesh.positions.push(Vec3::new(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]));
-            mesh.uvs.push(Vec2::new(m.texcoords[2 * i], m.texcoords[2 * i + 1]));
+            mesh.positions.push(Vec3::new(
+                m.positions[3 * i],
+                m.positions[3 * i + 1],
+                m.positions[3 * i + 2],
+            ));
+            mesh.uvs
+                .push(Vec2::new(m.texcoords[2 * i], m.texcoords[2 * i + 1]));
         }
         if m.normals.len() / 3 == nv {
             for i in 0..nv {
-                mesh.normals.push(Vec3::new(m.normals[3 * i], m.normals[3 * i + 1], m.normals[3 * i + 2]).normalize_or(Vec3::Z));
+                mesh.normals.push(
+                    Vec3::new(m.normals[3 * i], m.normals[3 * i + 1], m.normals[3 * i + 2])
+                        .normalize_or(Vec3::Z),
+                );
             }
         } else {
             any_missing_normals = true;
@@ -172,8 +198,10 @@ fn load_obj(path: &Path) -> Result<TriMesh> {
 }
 
 fn load_gltf(path: &Path) -> Result<TriMesh> {
-    let (doc, buffers, _) = gltf::import(path)
-        .map_err(|e| CoreError::Mesh { path: path.to_path_buf(), detail: format!("glTF error: {e}") })?;
+    let (doc, buffers, _) = gltf::import(path).map_err(|e| CoreError::Mesh {
+        path: path.to_path_buf(),
+        detail: format!("glTF error: {e}"),
+    })?;
     let mut mesh = TriMesh::default();
     let mut missing_normals = false;
     let mut missing_uvs = false;
@@ -194,20 +222,28 @@ fn load_gltf(path: &Path) -> Result<TriMesh> {
                 continue;
             }
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-            let Some(pos) = reader.read_positions() else { continue };
+            let Some(pos) = reader.read_positions() else {
+                continue;
+            };
             let base = mesh.positions.len() as u32;
             let pos: Vec<Vec3> = pos.map(|p| xf.transform_point3(Vec3::from(p))).collect();
             let nv = pos.len();
             match reader.read_tex_coords(0) {
                 // glTF puts v = 0 at the top of the image; derma uses OpenGL's v up.
-                Some(tc) => mesh.uvs.extend(tc.into_f32().map(|t| Vec2::new(t[0], 1.0 - t[1]))),
+                Some(tc) => mesh
+                    .uvs
+                    .extend(tc.into_f32().map(|t| Vec2::new(t[0], 1.0 - t[1]))),
                 None => {
                     missing_uvs = true;
                     mesh.uvs.extend(std::iter::repeat_n(Vec2::ZERO, nv));
                 }
             }
             match reader.read_normals() {
-                Some(n) => mesh.normals.extend(n.map(|n| normal_xf.transform_vector3(Vec3::from(n)).normalize_or(Vec3::Z))),
+                Some(n) => mesh.normals.extend(n.map(|n| {
+                    normal_xf
+                        .transform_vector3(Vec3::from(n))
+                        .normalize_or(Vec3::Z)
+                })),
                 None => {
                     missing_normals = true;
                     mesh.normals.extend(std::iter::repeat_n(Vec3::ZERO, nv));
@@ -253,9 +289,16 @@ mod tests {
         let p = d.join("nouv.obj");
         std::fs::write(&p, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
         let e = TriMesh::load(&p).unwrap_err().to_string();
-        assert!(e.contains("nouv.obj") && e.contains("texture coordinates"), "{e}");
+        assert!(
+            e.contains("nouv.obj") && e.contains("texture coordinates"),
+            "{e}"
+        );
         let p2 = d.join("ok.obj");
-        std::fs::write(&p2, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n").unwrap();
+        std::fs::write(
+            &p2,
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n",
+        )
+        .unwrap();
         let m = TriMesh::load(&p2).unwrap();
         assert_eq!(m.triangles.len(), 1);
         assert!((m.area() - 0.5).abs() < 1e-9);

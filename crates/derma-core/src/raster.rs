@@ -44,7 +44,8 @@ impl UvRaster {
                 outside += 1;
             }
             let y0 = ((1.0 - hi.y) * height as f32 - 0.5).floor().max(0.0) as usize;
-            let y1 = (((1.0 - lo.y) * height as f32 - 0.5).ceil().max(0.0) as usize).min(height.saturating_sub(1));
+            let y1 = (((1.0 - lo.y) * height as f32 - 0.5).ceil().max(0.0) as usize)
+                .min(height.saturating_sub(1));
             if y0 > y1 || y0 >= height {
                 continue;
             }
@@ -67,7 +68,8 @@ impl UvRaster {
                 let mut conflicts = Vec::new();
                 for &ti in &bins[b] {
                     let t = mesh.triangles[ti as usize];
-                    let uv = t.map(|i| mesh.uvs[i as usize] * Vec2::new(width as f32, height as f32));
+                    let uv =
+                        t.map(|i| mesh.uvs[i as usize] * Vec2::new(width as f32, height as f32));
                     // texel-space coordinates with y down
                     let p = uv.map(|q| Vec2::new(q.x, height as f32 - q.y));
                     let area = (p[1] - p[0]).perp_dot(p[2] - p[0]);
@@ -136,7 +138,8 @@ impl UvRaster {
 
     /// Fraction of texels covered by some triangle.
     pub fn coverage(&self) -> f64 {
-        self.triangle.iter().filter(|&&t| t != NO_TRIANGLE).count() as f64 / self.triangle.len().max(1) as f64
+        self.triangle.iter().filter(|&&t| t != NO_TRIANGLE).count() as f64
+            / self.triangle.len().max(1) as f64
     }
 }
 
@@ -147,7 +150,8 @@ impl UvRaster {
 pub fn dilation_sources(covered: &[bool], width: usize, height: usize) -> Option<Vec<u32>> {
     let n = width * height;
     let mut src = vec![u32::MAX; n];
-    let mut queue: std::collections::VecDeque<u32> = std::collections::VecDeque::with_capacity(n / 4);
+    let mut queue: std::collections::VecDeque<u32> =
+        std::collections::VecDeque::with_capacity(n / 4);
     for (i, &c) in covered.iter().enumerate() {
         if c {
             src[i] = i as u32;
@@ -162,7 +166,11 @@ pub fn dilation_sources(covered: &[bool], width: usize, height: usize) -> Option
         let border = (-1..=1).any(|dy| {
             (-1..=1).any(|dx| {
                 let (nx, ny) = (x + dx, y + dy);
-                nx >= 0 && ny >= 0 && nx < width as i64 && ny < height as i64 && !covered[(ny as usize) * width + nx as usize]
+                nx >= 0
+                    && ny >= 0
+                    && nx < width as i64
+                    && ny < height as i64
+                    && !covered[(ny as usize) * width + nx as usize]
             })
         });
         if border {
@@ -207,11 +215,26 @@ mod tests {
     use super::*;
 
     fn quad(uv_offset: f32, scale: f32) -> TriMesh {
-        let positions = vec![Vec3::new(0.0, 0.0, 0.0), Vec3::new(10.0, 0.0, 0.0), Vec3::new(10.0, 10.0, 0.0), Vec3::new(0.0, 10.0, 0.0)];
-        let uvs = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)]
-            .map(|u| u * scale + Vec2::splat(uv_offset))
-            .to_vec();
-        let mut m = TriMesh { positions, uvs, normals: vec![], triangles: vec![[0, 1, 2], [0, 2, 3]] };
+        let positions = vec![
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(10.0, 0.0, 0.0),
+            Vec3::new(10.0, 10.0, 0.0),
+            Vec3::new(0.0, 10.0, 0.0),
+        ];
+        let uvs = [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::new(0.0, 1.0),
+        ]
+        .map(|u| u * scale + Vec2::splat(uv_offset))
+        .to_vec();
+        let mut m = TriMesh {
+            positions,
+            uvs,
+            normals: vec![],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        };
         m.compute_normals();
         m
     }
@@ -223,7 +246,10 @@ mod tests {
         assert_eq!(r.overlapping_triangles, 0);
         // texel (0, 0) is at u = 1/32, v = 1 − 1/32 → x = 10/32 mm, y = 10·31/32 mm
         let p = r.position[0];
-        assert!((p.x - 10.0 / 32.0).abs() < 1e-4 && (p.y - 10.0 * 31.0 / 32.0).abs() < 1e-4, "{p}");
+        assert!(
+            (p.x - 10.0 / 32.0).abs() < 1e-4 && (p.y - 10.0 * 31.0 / 32.0).abs() < 1e-4,
+            "{p}"
+        );
     }
 
     #[test]
@@ -234,7 +260,8 @@ mod tests {
         m.positions.extend(extra.positions);
         m.uvs.extend(extra.uvs);
         m.normals.extend(extra.normals);
-        m.triangles.extend(extra.triangles.iter().map(|t| t.map(|i| i + base)));
+        m.triangles
+            .extend(extra.triangles.iter().map(|t| t.map(|i| i + base)));
         let r = UvRaster::new(&m, 16, 16);
         assert_eq!(r.overlapping_triangles, 4);
     }
@@ -245,7 +272,9 @@ mod tests {
         assert!((r.coverage() - 0.25).abs() < 1e-9);
         let covered: Vec<bool> = (0..256).map(|i| r.covered(i)).collect();
         let src = dilation_sources(&covered, 16, 16).unwrap();
-        let mut v: Vec<f32> = (0..256).map(|i| if covered[i] { (i % 16) as f32 } else { -1.0 }).collect();
+        let mut v: Vec<f32> = (0..256)
+            .map(|i| if covered[i] { (i % 16) as f32 } else { -1.0 })
+            .collect();
         apply_dilation(&mut v, &src);
         assert!(v.iter().all(|&x| x >= 0.0));
         // texel (0, 8) is left of the chart whose leftmost column is x = 4

@@ -40,13 +40,19 @@ pub struct Philox {
 
 impl Philox {
     pub fn new(seed: u64, stream: u32) -> Self {
-        Self { key: [seed as u32, (seed >> 32) as u32], stream }
+        Self {
+            key: [seed as u32, (seed >> 32) as u32],
+            stream,
+        }
     }
 
     /// Four independent 32-bit words for (index, sub).
     #[inline]
     pub fn u32x4_sub(&self, index: u64, sub: u32) -> [u32; 4] {
-        philox4x32_10([index as u32, (index >> 32) as u32, self.stream, sub], self.key)
+        philox4x32_10(
+            [index as u32, (index >> 32) as u32, self.stream, sub],
+            self.key,
+        )
     }
 
     #[inline]
@@ -84,13 +90,19 @@ mod tests {
     /// Known-answer vectors of Philox4x32-10 published with Random123 (kat_vectors).
     #[test]
     fn philox_known_answers() {
-        assert_eq!(philox4x32_10([0; 4], [0; 2]), [0x6627e8d5, 0xe169c58d, 0xbc57ac4c, 0x9b00dbd8]);
+        assert_eq!(
+            philox4x32_10([0; 4], [0; 2]),
+            [0x6627e8d5, 0xe169c58d, 0xbc57ac4c, 0x9b00dbd8]
+        );
         assert_eq!(
             philox4x32_10([u32::MAX; 4], [u32::MAX; 2]),
             [0x408f276d, 0x41c83b0e, 0xa20bc7c6, 0x6d5451fd]
         );
         assert_eq!(
-            philox4x32_10([0x243f6a88, 0x85a308d3, 0x13198a2e, 0x03707344], [0xa4093822, 0x299f31d0]),
+            philox4x32_10(
+                [0x243f6a88, 0x85a308d3, 0x13198a2e, 0x03707344],
+                [0xa4093822, 0x299f31d0]
+            ),
             [0xd16cfe09, 0x94fdcceb, 0x5001e420, 0x24126ea1]
         );
     }

@@ -37,7 +37,9 @@ mod tests {
         // ((n−1)/(n+1))² at normal incidence.
         assert!((fresnel_unpolarised(1.0, 1.0, 1.4) - (0.4f64 / 2.4).powi(2)).abs() < 1e-12);
         // Reciprocal at normal incidence, total internal reflection beyond asin(1/1.4).
-        assert!((fresnel_unpolarised(1.0, 1.4, 1.0) - fresnel_unpolarised(1.0, 1.0, 1.4)).abs() < 1e-12);
+        assert!(
+            (fresnel_unpolarised(1.0, 1.4, 1.0) - fresnel_unpolarised(1.0, 1.0, 1.4)).abs() < 1e-12
+        );
         let crit = (1.0f64 / 1.4).asin();
         assert_eq!(fresnel_unpolarised((crit + 0.01).cos(), 1.4, 1.0), 1.0);
         assert!(fresnel_unpolarised(0.0, 1.0, 1.4) > 0.999);
@@ -50,6 +52,9 @@ mod tests {
         let ri = diffuse_reflectance(1.4, 1.0);
         let re = diffuse_reflectance(1.0, 1.4);
         assert!((re - 0.0744).abs() < 0.003, "external {re}");
-        assert!((ri - (1.0 - (1.0 - re) / 1.96)).abs() < 1e-3, "internal {ri}");
+        assert!(
+            (ri - (1.0 - (1.0 - re) / 1.96)).abs() < 1e-3,
+            "internal {ri}"
+        );
     }
 }

@@ -14,11 +14,17 @@ pub struct LayerRT {
 /// T = b / (a sinh(bSd) + b cosh(bSd)) (Kubelka 1948, eqs. for a finite layer).
 pub fn layer(k: f64, s: f64, d: f64) -> LayerRT {
     if s <= 1e-12 {
-        return LayerRT { r: 0.0, t: (-k * d).exp() };
+        return LayerRT {
+            r: 0.0,
+            t: (-k * d).exp(),
+        };
     }
     if k <= 1e-12 {
         // Non-absorbing limit: R = Sd/(1+Sd), T = 1/(1+Sd).
-        return LayerRT { r: s * d / (1.0 + s * d), t: 1.0 / (1.0 + s * d) };
+        return LayerRT {
+            r: s * d / (1.0 + s * d),
+            t: 1.0 / (1.0 + s * d),
+        };
     }
     let a = (s + k) / s;
     let b = (a * a - 1.0).sqrt();
@@ -26,14 +32,20 @@ pub fn layer(k: f64, s: f64, d: f64) -> LayerRT {
     // Divide numerator and denominator by cosh to stay finite for thick layers.
     let th = x.tanh();
     let denom = a * th + b;
-    LayerRT { r: th / denom, t: b / (denom * x.cosh()) }
+    LayerRT {
+        r: th / denom,
+        t: b / (denom * x.cosh()),
+    }
 }
 
 /// Layer `top` over layer `bottom` with multiple inter-reflections (Kubelka 1954):
 /// R = R₁ + T₁² R₂ / (1 − R₁R₂), T = T₁T₂ / (1 − R₁R₂).
 pub fn stack(top: LayerRT, bottom: LayerRT) -> LayerRT {
     let m = 1.0 / (1.0 - top.r * bottom.r);
-    LayerRT { r: top.r + top.t * top.t * bottom.r * m, t: top.t * bottom.t * m }
+    LayerRT {
+        r: top.r + top.t * top.t * bottom.r * m,
+        t: top.t * bottom.t * m,
+    }
 }
 
 /// KM coefficients from transport coefficients by the diffusion correspondence K = 2 μa,
@@ -59,7 +71,12 @@ mod tests {
 
     #[test]
     fn energy_is_conserved_and_absorption_vanishes_without_k() {
-        for &(k, s, d) in &[(0.0, 3.0, 0.5), (0.1, 3.0, 0.5), (2.0, 0.5, 0.2), (1e-6, 10.0, 1.0)] {
+        for &(k, s, d) in &[
+            (0.0, 3.0, 0.5),
+            (0.1, 3.0, 0.5),
+            (2.0, 0.5, 0.2),
+            (1e-6, 10.0, 1.0),
+        ] {
             let l = layer(k, s, d);
             assert!(l.r >= 0.0 && l.t >= 0.0 && l.r + l.t <= 1.0 + 1e-12);
             if k == 0.0 {

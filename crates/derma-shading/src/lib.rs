@@ -16,4 +16,4 @@ pub mod lut;
 pub mod spectral_km;
 
 pub use appearance::{Appearance, BioTexel};
-pub use spectral_km::{SpectralKubelkaMunk, SkinLayers};
+pub use spectral_km::{SkinLayers, SpectralKubelkaMunk};

@@ -65,11 +65,16 @@ impl<const D: usize> GridLut<D> {
         let values = (0..total)
             .into_par_iter()
             .map(|flat| {
-                let p: [f32; D] = std::array::from_fn(|k| axes[k].node((flat / strides[k]) % axes[k].n));
+                let p: [f32; D] =
+                    std::array::from_fn(|k| axes[k].node((flat / strides[k]) % axes[k].n));
                 f(p)
             })
             .collect();
-        Self { axes, strides, values }
+        Self {
+            axes,
+            strides,
+            values,
+        }
     }
 
     pub fn axes(&self) -> &[Axis; D] {
@@ -118,9 +123,24 @@ mod tests {
 
     fn axes() -> [Axis; 3] {
         [
-            Axis { min: 0.0, max: 1.0, n: 5, scale: AxisScale::Linear },
-            Axis { min: 0.0, max: 0.5, n: 4, scale: AxisScale::Cbrt },
-            Axis { min: -1.0, max: 1.0, n: 3, scale: AxisScale::Linear },
+            Axis {
+                min: 0.0,
+                max: 1.0,
+                n: 5,
+                scale: AxisScale::Linear,
+            },
+            Axis {
+                min: 0.0,
+                max: 0.5,
+                n: 4,
+                scale: AxisScale::Cbrt,
+            },
+            Axis {
+                min: -1.0,
+                max: 1.0,
+                n: 3,
+                scale: AxisScale::Linear,
+            },
         ]
     }
 
@@ -141,7 +161,11 @@ mod tests {
             }
         }
         // Affine in the warped coordinates → reproduced everywhere.
-        for &p in &[[0.13f32, 0.071, 0.37], [0.99, 0.49, -0.99], [0.5, 0.0001, 0.0]] {
+        for &p in &[
+            [0.13f32, 0.071, 0.37],
+            [0.99, 0.49, -0.99],
+            [0.5, 0.0001, 0.0],
+        ] {
             let (a, b) = (lut.lookup(p), f(p));
             for c in 0..3 {
                 assert!((a[c] - b[c]).abs() < 1e-4, "{p:?}: {a:?} vs {b:?}");

@@ -29,7 +29,11 @@ pub struct SkinLayers {
 
 impl Default for SkinLayers {
     fn default() -> Self {
-        Self { dermis_mm: 2.0, hypodermis_reflectance: 1.0, refractive_index: 1.4 }
+        Self {
+            dermis_mm: 2.0,
+            hypodermis_reflectance: 1.0,
+            refractive_index: 1.4,
+        }
     }
 }
 
@@ -75,12 +79,42 @@ pub struct SpectralKubelkaMunk {
 /// on the face, lips and eyelids being thinnest). Inputs outside are clamped.
 fn lut_axes() -> [Axis; 6] {
     [
-        Axis { min: 0.0, max: 100.0, n: 25, scale: AxisScale::Cbrt },
-        Axis { min: 0.0, max: 1.0, n: 5, scale: AxisScale::Linear },
-        Axis { min: 0.0, max: 0.32, n: 17, scale: AxisScale::Cbrt },
-        Axis { min: 0.0, max: 1.0, n: 4, scale: AxisScale::Linear },
-        Axis { min: 5.0, max: 50.0, n: 3, scale: AxisScale::Linear },
-        Axis { min: 20.0, max: 200.0, n: 5, scale: AxisScale::Linear },
+        Axis {
+            min: 0.0,
+            max: 100.0,
+            n: 25,
+            scale: AxisScale::Cbrt,
+        },
+        Axis {
+            min: 0.0,
+            max: 1.0,
+            n: 5,
+            scale: AxisScale::Linear,
+        },
+        Axis {
+            min: 0.0,
+            max: 0.32,
+            n: 17,
+            scale: AxisScale::Cbrt,
+        },
+        Axis {
+            min: 0.0,
+            max: 1.0,
+            n: 4,
+            scale: AxisScale::Linear,
+        },
+        Axis {
+            min: 5.0,
+            max: 50.0,
+            n: 3,
+            scale: AxisScale::Linear,
+        },
+        Axis {
+            min: 20.0,
+            max: 200.0,
+            n: 5,
+            scale: AxisScale::Linear,
+        },
     ]
 }
 
@@ -89,7 +123,20 @@ impl SpectralKubelkaMunk {
     pub fn new(layers: SkinLayers) -> Self {
         let spectra = Spectra::new();
         let internal_reflectance = diffuse_reflectance(layers.refractive_index, 1.0);
-        let probe = Self { layers, spectra, internal_reflectance, lut: GridLut::build([Axis { min: 0.0, max: 1.0, n: 2, scale: AxisScale::Linear }; 6], |_| [0.0; 3]) };
+        let probe = Self {
+            layers,
+            spectra,
+            internal_reflectance,
+            lut: GridLut::build(
+                [Axis {
+                    min: 0.0,
+                    max: 1.0,
+                    n: 2,
+                    scale: AxisScale::Linear,
+                }; 6],
+                |_| [0.0; 3],
+            ),
+        };
         let lut = GridLut::build(lut_axes(), |p| {
             probe.exact_albedo(&BioTexel {
                 melanin: p[0] / p[5],
@@ -113,12 +160,16 @@ impl SpectralKubelkaMunk {
         let d_sc = bio.stratum_corneum_um.max(0.0) as f64 * 1e-3;
         let d_epi = bio.epidermis_um.max(0.0) as f64 * 1e-3;
         let ri = self.internal_reflectance;
-        let hypo = LayerRT { r: self.layers.hypodermis_reflectance, t: 0.0 };
+        let hypo = LayerRT {
+            r: self.layers.hypodermis_reflectance,
+            t: 0.0,
+        };
         std::array::from_fn(|i| {
             // Donner & Jensen 2006 eqs. 5–6: melanin and blood displace baseline tissue.
             let mu_sc = s.base[i];
             let mu_epi = cm * (beta * s.eu[i] + (1.0 - beta) * s.pheo[i]) + (1.0 - cm) * s.base[i];
-            let mu_derm = cb * (ox * s.blood_oxy[i] + (1.0 - ox) * s.blood_deoxy[i]) + (1.0 - cb) * s.base[i];
+            let mu_derm =
+                cb * (ox * s.blood_oxy[i] + (1.0 - ox) * s.blood_deoxy[i]) + (1.0 - cb) * s.base[i];
             let (k_sc, s_sc) = km_from_transport(mu_sc, s.sp_epi[i]);
             let (k_e, s_e) = km_from_transport(mu_epi, s.sp_epi[i]);
             let (k_d, s_d) = km_from_transport(mu_derm, s.sp_derm[i]);
@@ -134,7 +185,8 @@ impl SpectralKubelkaMunk {
 
     /// Linear sRGB albedo computed spectrally (no table).
     pub fn exact_albedo(&self, bio: &BioTexel) -> [f32; 3] {
-        reflectance_to_linear_srgb(&self.reflectance_spectrum(bio)).map(|c| c.clamp(0.0, 1.0) as f32)
+        reflectance_to_linear_srgb(&self.reflectance_spectrum(bio))
+            .map(|c| c.clamp(0.0, 1.0) as f32)
     }
 
     pub fn layers(&self) -> &SkinLayers {
@@ -155,7 +207,14 @@ impl Appearance for SpectralKubelkaMunk {
 
     #[inline]
     fn albedo(&self, b: &BioTexel) -> [f32; 3] {
-        self.lut.lookup([b.melanin * b.epidermis_um.clamp(20.0, 200.0), b.pheomelanin, b.blood, b.oxygenation, b.stratum_corneum_um, b.epidermis_um])
+        self.lut.lookup([
+            b.melanin * b.epidermis_um.clamp(20.0, 200.0),
+            b.pheomelanin,
+            b.blood,
+            b.oxygenation,
+            b.stratum_corneum_um,
+            b.epidermis_um,
+        ])
     }
 }
 
@@ -179,7 +238,10 @@ mod tests {
         // Measured facial skin (e.g. Xiao et al. 2017, 3D skin colour database): L* 45–75,
         // a* 5–20, b* 10–25 for light to medium skin; red > green > blue.
         assert!(rgb[0] > rgb[1] && rgb[1] > rgb[2], "{rgb:?}");
-        assert!((55.0..80.0).contains(&l) && (3.0..25.0).contains(&a) && (5.0..30.0).contains(&b), "Lab {l} {a} {b}");
+        assert!(
+            (55.0..80.0).contains(&l) && (3.0..25.0).contains(&a) && (5.0..30.0).contains(&b),
+            "Lab {l} {a} {b}"
+        );
     }
 
     #[test]
@@ -187,16 +249,34 @@ mod tests {
         let m = SpectralKubelkaMunk::default();
         let mut prev = f64::INFINITY;
         for k in 0..10 {
-            let bio = BioTexel { melanin: 0.01 + 0.05 * k as f32, ..BioTexel::FAIR };
+            let bio = BioTexel {
+                melanin: 0.01 + 0.05 * k as f32,
+                ..BioTexel::FAIR
+            };
             let l = lab(m.exact_albedo(&bio))[0];
             assert!(l < prev, "lightness must fall with melanin");
             prev = l;
         }
-        let pale = lab(m.exact_albedo(&BioTexel { blood: 0.002, ..BioTexel::FAIR }));
-        let flushed = lab(m.exact_albedo(&BioTexel { blood: 0.08, ..BioTexel::FAIR }));
-        assert!(flushed[1] > pale[1] + 5.0, "a* {} → {}", pale[1], flushed[1]);
+        let pale = lab(m.exact_albedo(&BioTexel {
+            blood: 0.002,
+            ..BioTexel::FAIR
+        }));
+        let flushed = lab(m.exact_albedo(&BioTexel {
+            blood: 0.08,
+            ..BioTexel::FAIR
+        }));
+        assert!(
+            flushed[1] > pale[1] + 5.0,
+            "a* {} → {}",
+            pale[1],
+            flushed[1]
+        );
         // Deoxygenated blood looks bluer (lower a*, lower b*) than oxygenated.
-        let venous = lab(m.exact_albedo(&BioTexel { blood: 0.08, oxygenation: 0.0, ..BioTexel::FAIR }));
+        let venous = lab(m.exact_albedo(&BioTexel {
+            blood: 0.08,
+            oxygenation: 0.0,
+            ..BioTexel::FAIR
+        }));
         assert!(venous[2] < flushed[2]);
     }
 
@@ -205,7 +285,11 @@ mod tests {
         let m = SpectralKubelkaMunk::default();
         for &cm in &[0.0, 0.1, 0.5] {
             for &cb in &[0.0, 0.05, 0.3] {
-                let r = m.reflectance_spectrum(&BioTexel { melanin: cm, blood: cb, ..BioTexel::FAIR });
+                let r = m.reflectance_spectrum(&BioTexel {
+                    melanin: cm,
+                    blood: cb,
+                    ..BioTexel::FAIR
+                });
                 assert!(r.iter().all(|&x| (0.0..1.0).contains(&x)));
             }
         }

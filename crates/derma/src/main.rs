@@ -1,1 +1,49 @@
-fn main(){}
+//! `derma`: the command-line tool. Thin: parses flags and config, calls the libraries, shows
+//! progress, and writes report.json and manifest.json.
+
+mod skin;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(
+    name = "derma",
+    version,
+    about = "The appearance of digital humans, from biology"
+)]
+struct Cli {
+    /// More log output (-v info, -vv debug).
+    #[arg(short, long, action = clap::ArgAction::Count, global = true)]
+    verbose: u8,
+    /// No progress bars or notes (for scripts).
+    #[arg(short, long, global = true)]
+    quiet: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Procedural biological skin: scatter features, paint bio maps, write a texture set.
+    Skin(skin::SkinArgs),
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let level = match cli.verbose {
+        0 => "warn",
+        1 => "info",
+        _ => "debug",
+    };
+    tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::new(level))
+        .with_writer(std::io::stderr)
+        .init();
+    let result = match cli.command {
+        Command::Skin(args) => skin::run(args, cli.quiet),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}

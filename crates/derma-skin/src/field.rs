@@ -1,0 +1,376 @@
+//! Probability fields and vector fields (thesis §5.1, §5.3.7): greyscale maps in UV space read as
+//! densities per unit surface area (fixing the thesis' per-texel bias, DESIGN §3), RGB maps read
+//! as vectors, and a small expression language to composite them (thesis §7.5).
+
+use crate::{Result, SkinError};
+use derma_core::image_io;
+use derma_core::Map;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// A named set of scalar fields and vector fields, all in UV space.
+#[derive(Default, Clone)]
+pub struct FieldSet {
+    pub scalars: BTreeMap<String, Map>,
+    /// Vector fields: direction (R, G in [0,1], 0.5 = zero) and length B.
+    pub vectors: BTreeMap<String, [Map; 3]>,
+    /// Messages for the user (colour images converted, uniform fallbacks…).
+    pub notes: Vec<String>,
+}
+
+/// A vector read from a vector field: a unit direction in UV space and a length in [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvVector {
+    pub dir: glam::Vec2,
+    pub length: f32,
+}
+
+impl FieldSet {
+    /// Scalar field `name` sampled at (u, v), in [0, 1].
+    pub fn sample(&self, map: &Map, u: f32, v: f32, wrap: bool) -> f32 {
+        map.sample_uv(u, v, wrap).clamp(0.0, 1.0)
+    }
+
+    pub fn scalar(&self, name: &str) -> Result<&Map> {
+        self.scalars.get(name).ok_or_else(|| SkinError::Field {
+            name: name.into(),
+            detail: format!(
+                "no such field; known fields: {}",
+                self.scalars.keys().cloned().collect::<Vec<_>>().join(", ")
+            ),
+        })
+    }
+
+    /// Vector at (u, v) of vector field `name`.
+    pub fn vector(&self, name: &str, u: f32, v: f32, wrap: bool) -> Result<UvVector> {
+        let f = self.vectors.get(name).ok_or_else(|| SkinError::Field {
+            name: name.into(),
+            detail: "no such vector field".into(),
+        })?;
+        let x = 2.0 * f[0].sample_uv(u, v, wrap) - 1.0;
+        let y = 2.0 * f[1].sample_uv(u, v, wrap) - 1.0;
+        let d = glam::Vec2::new(x, y);
+        Ok(UvVector {
+            dir: d.normalize_or_zero(),
+            length: if d.length() < 1e-3 {
+                0.0
+            } else {
+                f[2].sample_uv(u, v, wrap).clamp(0.0, 1.0)
+            },
+        })
+    }
+
+    /// Loads every `NAME.png`/`NAME.exr` of `dir` as field NAME (`*_vectors` files as vector fields).
+    pub fn load_dir(&mut self, dir: &Path) -> Result<()> {
+        let entries = std::fs::read_dir(dir).map_err(|source| derma_core::CoreError::Read {
+            path: dir.to_path_buf(),
+            source,
+        })?;
+        let mut paths: Vec<_> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
+        paths.sort();
+        for p in paths {
+            let ext = p
+                .extension()
+                .map(|e| e.to_string_lossy().to_ascii_lowercase())
+                .unwrap_or_default();
+            if ext != "png" && ext != "exr" {
+                continue;
+            }
+            let name = p
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            self.load_file(&name, &p)?;
+        }
+        Ok(())
+    }
+
+    /// Loads one file as field `name`.
+    pub fn load_file(&mut self, name: &str, path: &Path) -> Result<()> {
+        if name.ends_with("_vectors") {
+            let img = image_io::read_rgb(path)?;
+            let [r, g, b]: [Map; 3] = img.channels.try_into().map_err(|_| SkinError::Field {
+                name: name.into(),
+                detail: "expected RGB".into(),
+            })?;
+            self.vectors.insert(name.into(), [r, g, b]);
+        } else {
+            let img = image_io::read_grey(path)?;
+            if img.is_colour {
+                self.notes.push(format!(
+                    "warning: field '{name}' ({}) is a colour image; converted to greyscale by luminance (paint probability fields in grey)",
+                    path.display()
+                ));
+            }
+            let m = img.channels.into_iter().next().expect("one channel");
+            if m.data().iter().any(|&v| !(0.0..=1.0).contains(&v)) {
+                self.notes.push(format!(
+                    "warning: field '{name}' ({}) has values outside [0, 1]; clamped",
+                    path.display()
+                ));
+            }
+            self.scalars.insert(name.into(), m);
+        }
+        Ok(())
+    }
+
+    /// Defines field `name` by an expression over existing fields (e.g. "face - eyes - lips").
+    pub fn define(&mut self, name: &str, expr: &str) -> Result<()> {
+        let ast = Parser::new(expr)
+            .parse()
+            .map_err(|detail| SkinError::Field {
+                name: name.into(),
+                detail: format!("in expression \"{expr}\": {detail}"),
+            })?;
+        let mut refs = Vec::new();
+        ast.names(&mut refs);
+        let mut size = (1usize, 1usize);
+        for r in &refs {
+            let m = self.scalars.get(r).ok_or_else(|| SkinError::Field {
+                name: name.into(),
+                detail: format!("expression \"{expr}\" uses unknown field '{r}'"),
+            })?;
+            if m.width() * m.height() > size.0 * size.1 {
+                size = (m.width(), m.height());
+            }
+        }
+        let resampled: BTreeMap<&str, Map> = refs
+            .iter()
+            .map(|r| (r.as_str(), self.scalars[r].resized(size.0, size.1)))
+            .collect();
+        let data: Vec<f32> = (0..size.0 * size.1)
+            .map(|i| ast.eval(&|n| resampled[n].data()[i]).clamp(0.0, 1.0))
+            .collect();
+        self.scalars
+            .insert(name.into(), Map::from_vec(size.0, size.1, data)?);
+        Ok(())
+    }
+}
+
+/// Expression tree of the compositing language.
+#[derive(Debug, Clone)]
+enum Expr {
+    Num(f32),
+    Name(String),
+    Neg(Box<Expr>),
+    Bin(char, Box<Expr>, Box<Expr>),
+    Call(String, Vec<Expr>),
+}
+
+impl Expr {
+    fn names(&self, out: &mut Vec<String>) {
+        match self {
+            Expr::Num(_) => {}
+            Expr::Name(n) => {
+                if !out.contains(n) {
+                    out.push(n.clone())
+                }
+            }
+            Expr::Neg(e) => e.names(out),
+            Expr::Bin(_, a, b) => {
+                a.names(out);
+                b.names(out)
+            }
+            Expr::Call(_, args) => args.iter().for_each(|a| a.names(out)),
+        }
+    }
+
+    fn eval(&self, get: &dyn Fn(&str) -> f32) -> f32 {
+        match self {
+            Expr::Num(v) => *v,
+            Expr::Name(n) => get(n),
+            Expr::Neg(e) => -e.eval(get),
+            Expr::Bin(op, a, b) => {
+                let (a, b) = (a.eval(get), b.eval(get));
+                match op {
+                    '+' => a + b,
+                    '-' => a - b,
+                    '*' => a * b,
+                    _ => a / b.max(1e-6),
+                }
+            }
+            Expr::Call(f, args) => {
+                let v: Vec<f32> = args.iter().map(|a| a.eval(get)).collect();
+                match f.as_str() {
+                    "min" => v[0].min(v[1]),
+                    "max" => v[0].max(v[1]),
+                    "clamp" => v[0].clamp(0.0, 1.0),
+                    "pow" => v[0].max(0.0).powf(v[1]),
+                    // smooth(x, a, b): smoothstep of x between a and b
+                    _ => {
+                        let t = ((v[0] - v[1]) / (v[2] - v[1])).clamp(0.0, 1.0);
+                        t * t * (3.0 - 2.0 * t)
+                    }
+                }
+            }
+        }
+    }
+}
+
+struct Parser<'a> {
+    s: &'a [u8],
+    i: usize,
+}
+
+impl<'a> Parser<'a> {
+    fn new(s: &'a str) -> Self {
+        Self {
+            s: s.as_bytes(),
+            i: 0,
+        }
+    }
+    fn ws(&mut self) {
+        while self.i < self.s.len() && self.s[self.i].is_ascii_whitespace() {
+            self.i += 1;
+        }
+    }
+    fn peek(&mut self) -> Option<u8> {
+        self.ws();
+        self.s.get(self.i).copied()
+    }
+    fn parse(mut self) -> std::result::Result<Expr, String> {
+        let e = self.sum()?;
+        match self.peek() {
+            None => Ok(e),
+            Some(c) => Err(format!(
+                "unexpected '{}' at position {}",
+                c as char,
+                self.i + 1
+            )),
+        }
+    }
+    fn sum(&mut self) -> std::result::Result<Expr, String> {
+        let mut e = self.product()?;
+        while let Some(c @ (b'+' | b'-')) = self.peek() {
+            self.i += 1;
+            e = Expr::Bin(c as char, Box::new(e), Box::new(self.product()?));
+        }
+        Ok(e)
+    }
+    fn product(&mut self) -> std::result::Result<Expr, String> {
+        let mut e = self.unary()?;
+        while let Some(c @ (b'*' | b'/')) = self.peek() {
+            self.i += 1;
+            e = Expr::Bin(c as char, Box::new(e), Box::new(self.unary()?));
+        }
+        Ok(e)
+    }
+    fn unary(&mut self) -> std::result::Result<Expr, String> {
+        match self.peek() {
+            Some(b'-') => {
+                self.i += 1;
+                Ok(Expr::Neg(Box::new(self.unary()?)))
+            }
+            Some(b'(') => {
+                self.i += 1;
+                let e = self.sum()?;
+                if self.peek() != Some(b')') {
+                    return Err("missing ')'".into());
+                }
+                self.i += 1;
+                Ok(e)
+            }
+            Some(c) if c.is_ascii_digit() || c == b'.' => {
+                let start = self.i;
+                while self.i < self.s.len()
+                    && (self.s[self.i].is_ascii_digit() || self.s[self.i] == b'.')
+                {
+                    self.i += 1;
+                }
+                let t = std::str::from_utf8(&self.s[start..self.i]).unwrap_or("");
+                t.parse()
+                    .map(Expr::Num)
+                    .map_err(|_| format!("bad number '{t}'"))
+            }
+            Some(c) if c.is_ascii_alphabetic() || c == b'_' => {
+                let start = self.i;
+                while self.i < self.s.len()
+                    && (self.s[self.i].is_ascii_alphanumeric() || self.s[self.i] == b'_')
+                {
+                    self.i += 1;
+                }
+                let name = String::from_utf8_lossy(&self.s[start..self.i]).into_owned();
+                if self.peek() == Some(b'(') {
+                    self.i += 1;
+                    let mut args = vec![self.sum()?];
+                    while self.peek() == Some(b',') {
+                        self.i += 1;
+                        args.push(self.sum()?);
+                    }
+                    if self.peek() != Some(b')') {
+                        return Err(format!("missing ')' after arguments of {name}"));
+                    }
+                    self.i += 1;
+                    let arity =
+                        match name.as_str() {
+                            "min" | "max" | "pow" => 2,
+                            "clamp" => 1,
+                            "smooth" => 3,
+                            _ => return Err(format!(
+                                "unknown function '{name}' (known: min, max, clamp, pow, smooth)"
+                            )),
+                        };
+                    if args.len() != arity {
+                        return Err(format!(
+                            "{name} takes {arity} argument(s), got {}",
+                            args.len()
+                        ));
+                    }
+                    Ok(Expr::Call(name, args))
+                } else {
+                    Ok(Expr::Name(name))
+                }
+            }
+            Some(c) => Err(format!(
+                "unexpected '{}' at position {}",
+                c as char,
+                self.i + 1
+            )),
+            None => Err("unexpected end of expression".into()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn expressions_composite_fields() {
+        let mut f = FieldSet::default();
+        f.scalars.insert("face".into(), Map::filled(4, 4, 0.9));
+        f.scalars.insert(
+            "eyes".into(),
+            Map::from_vec(2, 2, vec![0.5, 0.0, 0.0, 0.0]).unwrap(),
+        );
+        f.define("freckles", "face - eyes * 2").unwrap();
+        let m = &f.scalars["freckles"];
+        assert_eq!((m.width(), m.height()), (4, 4));
+        assert!((m.get(3, 3) - 0.9).abs() < 1e-6);
+        assert_eq!(m.get(0, 0), 0.0); // 0.9 − 1.0 clamped
+        f.define("p", "pow(face, 2) + min(0.05, max(eyes, 0.01))")
+            .unwrap();
+        assert!((f.scalars["p"].get(3, 3) - (0.81 + 0.01)).abs() < 1e-5);
+        f.define("s", "smooth(face, 0.8, 1.0)").unwrap();
+        assert!((f.scalars["s"].get(1, 1) - 0.5).abs() < 1e-5);
+    }
+
+    #[test]
+    fn expression_errors_name_the_problem() {
+        let mut f = FieldSet::default();
+        f.scalars.insert("face".into(), Map::filled(2, 2, 1.0));
+        let e = f.define("x", "face - nose").unwrap_err().to_string();
+        assert!(e.contains("nose") && e.contains("'x'"), "{e}");
+        assert!(f.define("x", "face -").is_err());
+        assert!(f
+            .define("x", "foo(face)")
+            .unwrap_err()
+            .to_string()
+            .contains("unknown function"));
+        assert!(f
+            .define("x", "min(face)")
+            .unwrap_err()
+            .to_string()
+            .contains("2 argument"));
+    }
+}

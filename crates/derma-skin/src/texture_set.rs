@@ -1,0 +1,252 @@
+//! Bio maps → the renderer's texture set (thesis §4.8.8, mmd(FEATURE(…))): base colour through an
+//! [`Appearance`], roughness and specular from documented skin values modulated by lips and hair,
+//! height and normal maps; dilation into the UV gutter; and the files of DESIGN.md §3.
+
+use crate::config::MaterialConfig;
+use crate::paint::{BioMaps, BIO_CHANNELS};
+use crate::surface::Surface;
+use derma_core::color::srgb_encode;
+use derma_core::image_io::{self, ExrPrecision};
+use derma_core::Map;
+use derma_shading::{Appearance, BioTexel};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::path::Path;
+
+/// Normal-incidence reflectance of hair keratin, n ≈ 1.55 (Stamm, Garcia & Fuchs 1977, "The optical
+/// properties of human hair"): ((1.55 − 1)/(1.55 + 1))² = 0.0465.
+pub const HAIR_F0: f32 = 0.0465;
+/// Specular maps store F0 / 0.08 (the Unreal/Substance "specular" convention: 0.5 ↔ F0 = 4 %).
+pub const SPECULAR_SCALE: f32 = 0.08;
+
+/// The render maps, linear values.
+pub struct RenderMaps {
+    /// Diffuse albedo, linear sRGB.
+    pub base_color: [Map; 3],
+    pub roughness: Map,
+    /// F0 / 0.08.
+    pub specular: Map,
+    /// Tangent-space normal in [−1, 1].
+    pub normal: [Map; 3],
+    pub height_mm: Map,
+}
+
+/// Converts painted bio maps to render maps. `dilation` (meshes) fills texels outside the UV charts.
+pub fn convert(
+    bio: &BioMaps,
+    surface: &Surface,
+    appearance: &dyn Appearance,
+    material: &MaterialConfig,
+    dilation: Option<&[u32]>,
+) -> RenderMaps {
+    let (w, h) = (bio.width, bio.height);
+    let n = w * h;
+    let mut rgb = vec![[0.0f32; 3]; n];
+    let mut rough = vec![0.0f32; n];
+    let mut spec = vec![0.0f32; n];
+    rgb.par_chunks_mut(w)
+        .zip(rough.par_chunks_mut(w))
+        .zip(spec.par_chunks_mut(w))
+        .enumerate()
+        .for_each(|(y, ((c, r), s))| {
+            for x in 0..w {
+                let t = &bio.texels[y * w + x];
+                let a = appearance.albedo(&BioTexel {
+                    melanin: t.melanin,
+                    pheomelanin: t.pheomelanin,
+                    blood: t.blood,
+                    oxygenation: t.oxygenation,
+                    stratum_corneum_um: t.stratum_corneum_um,
+                    epidermis_um: t.epidermis_um,
+                });
+                let ea = t.extra[3].clamp(0.0, 1.0);
+                c[x] = std::array::from_fn(|k| a[k] + (t.extra[k] - a[k]) * ea);
+                let base_r = material.roughness_skin
+                    + (material.roughness_lips - material.roughness_skin) * t.lips;
+                r[x] = base_r + (material.roughness_hair - base_r) * ea;
+                s[x] =
+                    (material.specular_f0 + (HAIR_F0 - material.specular_f0) * ea) / SPECULAR_SCALE;
+            }
+        });
+    let mut height_mm = bio.channel(|s| s.height_mm);
+    // Normals from the undilated height, with one-sided differences at chart borders.
+    let mut normal = crate::normal_map::normals_from_height(surface, &height_mm);
+    let mut base_color =
+        [0, 1, 2].map(|k| Map::from_vec(w, h, rgb.iter().map(|c| c[k]).collect()).expect("size"));
+    let mut roughness = Map::from_vec(w, h, rough).expect("size");
+    let mut specular = Map::from_vec(w, h, spec).expect("size");
+    if let Some(src) = dilation {
+        let maps: Vec<&mut Map> = base_color
+            .iter_mut()
+            .chain(normal.iter_mut())
+            .chain([&mut roughness, &mut specular, &mut height_mm])
+            .collect();
+        maps.into_par_iter()
+            .for_each(|m| derma_core::raster::apply_dilation(m.data_mut(), src));
+    }
+    RenderMaps {
+        base_color,
+        roughness,
+        specular,
+        normal,
+        height_mm,
+    }
+}
+
+/// One output file as listed in manifest.json.
+#[derive(Clone, Debug, Serialize)]
+pub struct OutputEntry {
+    pub file: String,
+    pub colour_space: String,
+    pub meaning: String,
+}
+
+/// Range of the height map, for decoding height.png.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct HeightRange {
+    pub min_mm: f32,
+    pub max_mm: f32,
+}
+
+/// Writes the texture-set maps into `dir` (each atomically; files in parallel).
+pub fn write_maps(
+    dir: &Path,
+    bio: &BioMaps,
+    maps: &RenderMaps,
+    dilation: Option<&[u32]>,
+) -> crate::Result<(Vec<OutputEntry>, HeightRange)> {
+    let hs = maps.height_mm.stats(None);
+    let range = HeightRange {
+        min_mm: hs.min,
+        max_mm: hs.max,
+    };
+    let span = (hs.max - hs.min).max(1e-9);
+    let bio_channel = |f: fn(&crate::features::BioSample) -> f32| {
+        let mut m = bio.channel(f);
+        if let Some(src) = dilation {
+            derma_core::raster::apply_dilation(m.data_mut(), src);
+        }
+        m
+    };
+    type Job<'a> = Box<dyn FnOnce() -> crate::Result<()> + Send + 'a>;
+    let mut list: Vec<(&str, &str, &str, Job)> = Vec::new();
+    list.push((
+        "base_color.png",
+        "sRGB",
+        "diffuse albedo (glTF baseColor / Unreal Base Color), 8-bit sRGB",
+        Box::new(|| {
+            let enc = maps.base_color.clone().map(|mut m| {
+                m.data_mut().iter_mut().for_each(|v| *v = srgb_encode(*v));
+                m
+            });
+            Ok(image_io::write_png8(
+                &dir.join("base_color.png"),
+                &[&enc[0], &enc[1], &enc[2]],
+            )?)
+        }),
+    ));
+    list.push((
+        "normal.png",
+        "linear (non-colour)",
+        "tangent-space normal, OpenGL +Y (green up), MikkTSpace frame on meshes; 16-bit, n·½+½",
+        Box::new(|| {
+            let enc = maps.normal.clone().map(|mut m| {
+                m.data_mut().iter_mut().for_each(|v| *v = 0.5 * *v + 0.5);
+                m
+            });
+            Ok(image_io::write_png16(
+                &dir.join("normal.png"),
+                &[&enc[0], &enc[1], &enc[2]],
+            )?)
+        }),
+    ));
+    list.push((
+        "height.exr",
+        "linear",
+        "displacement in mm from the mean skin surface (float32)",
+        Box::new(|| {
+            Ok(image_io::write_exr(
+                &dir.join("height.exr"),
+                &[("height_mm", &maps.height_mm)],
+                ExrPrecision::F32,
+            )?)
+        }),
+    ));
+    list.push((
+        "height.png",
+        "linear (non-colour)",
+        "displacement, 16-bit, 0 ↔ height_range.min_mm and 1 ↔ max_mm (report.json)",
+        Box::new(move || {
+            let mut m = maps.height_mm.clone();
+            m.data_mut()
+                .iter_mut()
+                .for_each(|v| *v = (*v - hs.min) / span);
+            Ok(image_io::write_png16(&dir.join("height.png"), &[&m])?)
+        }),
+    ));
+    list.push((
+        "roughness.png",
+        "linear (non-colour)",
+        "glTF perceptual roughness (Unreal Roughness), 8-bit",
+        Box::new(|| {
+            Ok(image_io::write_png8(
+                &dir.join("roughness.png"),
+                &[&maps.roughness],
+            )?)
+        }),
+    ));
+    list.push((
+        "specular.png",
+        "linear (non-colour)",
+        "specular level F0/0.08 (Unreal/Substance Specular: 0.5 ↔ F0 = 4 %), 8-bit",
+        Box::new(|| {
+            Ok(image_io::write_png8(
+                &dir.join("specular.png"),
+                &[&maps.specular],
+            )?)
+        }),
+    ));
+    list.push((
+        "melanin.exr",
+        "linear",
+        "melanosome volume fraction of the epidermis (melanin) and pheomelanin share",
+        Box::new(|| {
+            let (m, p) = (bio_channel(|s| s.melanin), bio_channel(|s| s.pheomelanin));
+            Ok(image_io::write_exr(
+                &dir.join("melanin.exr"),
+                &[("melanin", &m), ("pheomelanin", &p)],
+                ExrPrecision::F32,
+            )?)
+        }),
+    ));
+    list.push((
+        "hemoglobin.exr",
+        "linear",
+        "whole-blood volume fraction of the dermis (blood) and its oxygenation",
+        Box::new(|| {
+            let (b, o) = (bio_channel(|s| s.blood), bio_channel(|s| s.oxygenation));
+            Ok(image_io::write_exr(
+                &dir.join("hemoglobin.exr"),
+                &[("blood", &b), ("oxygenation", &o)],
+                ExrPrecision::F32,
+            )?)
+        }),
+    ));
+    list.push(("bio.exr", "linear", "every bio parameter as a channel (half float): melanin, pheomelanin, blood, oxygenation, stratum_corneum_um, epidermis_um, height_mm, extra.RGBA, lips", Box::new(|| {
+        let chans: Vec<(&str, Map)> = BIO_CHANNELS.iter().map(|(n, f)| (*n, bio_channel(*f))).collect();
+        let refs: Vec<(&str, &Map)> = chans.iter().map(|(n, m)| (*n, m)).collect();
+        Ok(image_io::write_exr(&dir.join("bio.exr"), &refs, ExrPrecision::F16)?)
+    })));
+    let entries = list
+        .iter()
+        .map(|(f, c, m, _)| OutputEntry {
+            file: (*f).into(),
+            colour_space: (*c).into(),
+            meaning: (*m).into(),
+        })
+        .collect();
+    list.into_par_iter()
+        .map(|(_, _, _, j)| j())
+        .collect::<crate::Result<Vec<()>>>()?;
+    Ok((entries, range))
+}
