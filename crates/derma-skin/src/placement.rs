@@ -42,7 +42,7 @@ pub struct Kind<T> {
 }
 
 impl<T: Feature> Kind<T> {
-    fn new(mut items: Vec<T>, period: Option<[f32; 2]>, cell_mm: f32) -> Self {
+    pub fn new(mut items: Vec<T>, period: Option<[f32; 2]>, cell_mm: f32) -> Self {
         let originals = items.len();
         if let Some([px, py]) = period {
             let mut ghosts = Vec::new();

@@ -206,16 +206,11 @@ fn field_values(p: Vec3) -> ([f32; 10], [f32; 3]) {
         )
     };
     let eyes = front * eye(32.0).max(eye(-32.0));
-    // Lips: upper lip with a cupid's bow, lower lip fuller.
-    let lip_r = if y > -46.0 {
-        let top = -37.5 - 1.5 * (-(x.abs() - 6.0).powi(2) / 20.0).exp() + 0.004 * x * x;
-        ((y + 46.0) / (top + 46.0))
-            .abs()
-            .max((x / 25.0).abs().powf(1.6))
-    } else {
-        ((y + 46.0) / 9.5).abs().max((x / 24.0).abs().powf(1.6))
-    };
-    let lips = front * smoothstep(1.05, 0.9, lip_r * (1.0 + 0.6 * (x / 25.0).powi(2)));
+    // Lips: a superellipse around the mouth line (y = −46), the upper lip 8 mm tall with a
+    // cupid's bow dip at the centre, the lower lip 10 mm and fuller; corners at |x| = 25 mm.
+    let lip_h = if y > -46.0 { 8.0 - 1.5 * (-(x / 4.0).powi(2)).exp() + 1.5 * (-((x.abs() - 7.0) / 4.0).powi(2)).exp() } else { 10.0 };
+    let lip_r = (((y + 46.0) / lip_h).powi(2) + (x.abs() / 25.0).powf(2.5)).sqrt();
+    let lips = front * smoothstep(1.0, 0.8, lip_r);
     let face = front * (1.0 - scalp) * smoothstep(-100.0, -88.0, y);
     let freckles =
         (face * gauss(x, y, 0.0, 5.0, 40.0, 30.0) - eyes - lips - eyebrows).clamp(0.0, 1.0);
