@@ -1,0 +1,225 @@
+//! End-to-end tests of `derma skin` at small sizes, and its error messages for bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn derma() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_derma"))
+}
+
+fn tmp(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("derma-cli-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run(args: &[&str]) -> (bool, String) {
+    let out = derma().args(args).arg("--quiet").output().unwrap();
+    (out.status.success(), String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+const ALL: [&str; 13] = [
+    "base_color.png",
+    "normal.png",
+    "height.exr",
+    "height.png",
+    "roughness.png",
+    "specular.png",
+    "melanin.exr",
+    "hemoglobin.exr",
+    "bio.exr",
+    "features.json",
+    "preview.png",
+    "manifest.json",
+    "report.json",
+];
+
+fn report(dir: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn default_run_writes_the_whole_set_with_plausible_statistics() {
+    let d = tmp("default");
+    let (ok, err) = run(&["skin", "--size", "128", "--out", d.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    for f in ALL {
+        assert!(d.join(f).exists(), "{f} missing");
+    }
+    // No temporary files left behind.
+    assert!(std::fs::read_dir(&d).unwrap().all(|e| !e.unwrap().file_name().to_string_lossy().ends_with(".tmp")));
+    let r = report(&d);
+    let bc = &r["statistics"]["base_color_linear"];
+    let (red, green, blue) = (bc[0]["mean"].as_f64().unwrap(), bc[1]["mean"].as_f64().unwrap(), bc[2]["mean"].as_f64().unwrap());
+    assert!(red > green && green > blue && (0.25..0.7).contains(&red), "{red} {green} {blue}");
+    assert!(r["counts"]["follicle"].as_u64().unwrap() > 160_000);
+    let manifest: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("manifest.json")).unwrap()).unwrap();
+    assert_eq!(manifest["maps"].as_array().unwrap().len(), ALL.len() - 1);
+    // The normal map decodes to unit vectors pointing out of the surface.
+    let n = derma_core::image_io::read_rgb(&d.join("normal.png")).unwrap();
+    for i in (0..128 * 128).step_by(97) {
+        let v = [0, 1, 2].map(|k| 2.0 * n.channels[k].data()[i] - 1.0);
+        let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        assert!((len - 1.0).abs() < 0.01 && v[2] > 0.0);
+    }
+    // Same seed → identical files; bio.exr channels are all there.
+    let d2 = tmp("default2");
+    let (ok, _) = run(&["skin", "--size", "128", "--threads", "1", "--out", d2.to_str().unwrap()]);
+    assert!(ok);
+    for f in ["base_color.png", "normal.png", "height.exr", "bio.exr", "features.json"] {
+        assert_eq!(std::fs::read(d.join(f)).unwrap(), std::fs::read(d2.join(f)).unwrap(), "{f} differs");
+    }
+    let ch = derma_core::image_io::read_exr_channels(&d.join("bio.exr")).unwrap();
+    assert_eq!(ch.len(), 12);
+}
+
+#[test]
+fn patch_and_print_config() {
+    let d = tmp("patch");
+    let (ok, err) = run(&["skin", "--patch", "20x20", "--size", "64", "--out", d.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert_eq!(report(&d)["inputs"]["surface"], "patch");
+    let out = derma().args(["skin", "--print-config"]).output().unwrap();
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("[freckle]") && text.contains("density_per_cm2") && text.contains("thesis"));
+}
+
+fn write_quad_obj(path: &Path, scale: f32) {
+    let s = scale;
+    std::fs::write(
+        path,
+        format!("v 0 0 0\nv {s} 0 0\nv {s} {s} 0\nv 0 {s} 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n"),
+    )
+    .unwrap();
+}
+
+#[test]
+fn user_meshes_obj_and_glb_any_scale() {
+    let d = tmp("mesh");
+    let obj = d.join("quad.obj");
+    write_quad_obj(&obj, 0.2); // 20 cm written in metres
+    let out = d.join("out");
+    let o = derma().args(["skin", "--mesh", obj.to_str().unwrap(), "--size", "64", "--out", out.to_str().unwrap()]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("read as metres") && err.contains("uniform fields"), "{err}");
+    let r = report(&out);
+    assert!((r["surface_area_cm2"].as_f64().unwrap() - 400.0).abs() < 1.0);
+
+    // The same quad as a binary glTF.
+    let glb = d.join("quad.glb");
+    std::fs::write(&glb, quad_glb()).unwrap();
+    let out2 = d.join("out2");
+    let (ok, err) = run(&["skin", "--mesh", glb.to_str().unwrap(), "--size", "64", "--out", out2.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert!((report(&out2)["surface_area_cm2"].as_f64().unwrap() - 400.0).abs() < 1.0);
+}
+
+/// A minimal GLB (glTF 2.0 binary): one 200 mm quad with positions, UVs and indices.
+fn quad_glb() -> Vec<u8> {
+    let pos: [f32; 12] = [0.0, 0.0, 0.0, 200.0, 0.0, 0.0, 200.0, 200.0, 0.0, 0.0, 200.0, 0.0];
+    let uv: [f32; 8] = [0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0];
+    let idx: [u16; 6] = [0, 1, 2, 0, 2, 3];
+    let mut bin: Vec<u8> = Vec::new();
+    pos.iter().for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
+    uv.iter().for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
+    idx.iter().for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1}},"indices":2}}]}}],
+"buffers":[{{"byteLength":{}}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":32}},{{"buffer":0,"byteOffset":80,"byteLength":12}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[200,200,0]}},
+{{"bufferView":1,"componentType":5126,"count":4,"type":"VEC2"}},{{"bufferView":2,"componentType":5123,"count":6,"type":"SCALAR"}}]}}"#,
+        bin.len()
+    );
+    let mut j = json.into_bytes();
+    while j.len() % 4 != 0 {
+        j.push(b' ');
+    }
+    let total = 12 + 8 + j.len() + 8 + bin.len();
+    let mut out = Vec::new();
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(j.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&j);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
+
+#[test]
+fn canonical_face_model_from_shared_data() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/canonical_face_model.obj");
+    if !p.exists() {
+        eprintln!("skipping: {} is absent", p.display());
+        return;
+    }
+    let d = tmp("canon");
+    let o = derma().args(["skin", "--mesh", p.to_str().unwrap(), "--size", "128", "--out", d.to_str().unwrap()]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("centimetres"), "unit note: {err}");
+    let r = report(&d);
+    // A face mask of ~15 cm × 20 cm: a few hundred cm².
+    let a = r["surface_area_cm2"].as_f64().unwrap();
+    assert!((100.0..600.0).contains(&a), "{a}");
+    assert!(r["counts"]["mole"].as_u64().unwrap() > 0);
+}
+
+#[test]
+fn bad_inputs_get_clear_errors() {
+    let d = tmp("bad");
+    let out = d.join("out");
+    let o = out.to_str().unwrap();
+    // Missing mesh.
+    let (ok, err) = run(&["skin", "--mesh", "/nonexistent/head.obj", "--out", o]);
+    assert!(!ok && err.contains("head.obj"), "{err}");
+    // Corrupt mesh.
+    let bad = d.join("bad.obj");
+    std::fs::write(&bad, "v 1 2\nf 1 2 3 4 5\n").unwrap();
+    let (ok, err) = run(&["skin", "--mesh", bad.to_str().unwrap(), "--size", "32", "--out", o]);
+    assert!(!ok && err.contains("bad.obj"), "{err}");
+    // Mesh without UVs.
+    let nouv = d.join("nouv.obj");
+    std::fs::write(&nouv, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let (ok, err) = run(&["skin", "--mesh", nouv.to_str().unwrap(), "--size", "32", "--out", o]);
+    assert!(!ok && err.contains("nouv.obj") && err.contains("texture coordinates"), "{err}");
+    // Unknown key, NaN and out-of-range values name the key and file.
+    let cfg = d.join("c.toml");
+    for (text, key) in [("[mole]\nsize = 3\n", "size"), ("[freckle]\npower = nan\n", "freckle.power"), ("size = 3\n", "size")] {
+        std::fs::write(&cfg, text).unwrap();
+        let (ok, err) = run(&["skin", "--config", cfg.to_str().unwrap(), "--out", o]);
+        assert!(!ok && err.contains("c.toml") && err.contains(key), "{text}: {err}");
+    }
+    // A size that cannot fit in memory is refused before any work.
+    let (ok, err) = run(&["skin", "--size", "16384", "--out", o]);
+    assert!(!ok && (err.contains("GiB") || err.contains("16384")), "{err}");
+    // Unwritable output directory (a file where a directory should be).
+    let file = d.join("afile");
+    std::fs::write(&file, "x").unwrap();
+    let (ok, err) = run(&["skin", "--size", "32", "--out", file.join("sub").to_str().unwrap()]);
+    assert!(!ok && err.contains("not writable"), "{err}");
+    // Colour image as a probability field: converted with a warning.
+    let fields = d.join("fields");
+    std::fs::create_dir_all(&fields).unwrap();
+    let r = derma_core::Map::filled(8, 8, 1.0);
+    let z = derma_core::Map::filled(8, 8, 0.0);
+    derma_core::image_io::write_png8(&fields.join("moles.png"), &[&r, &z, &z]).unwrap();
+    let obj = d.join("q.obj");
+    write_quad_obj(&obj, 100.0);
+    let o2 = derma().args(["skin", "--mesh", obj.to_str().unwrap(), "--fields", fields.to_str().unwrap(), "--size", "32", "--out", o]).output().unwrap();
+    let err = String::from_utf8_lossy(&o2.stderr);
+    assert!(o2.status.success() && err.contains("moles") && err.contains("colour image"), "{err}");
+    // Corrupt field image.
+    std::fs::write(fields.join("freckles.png"), b"garbage").unwrap();
+    let (ok, err) = run(&["skin", "--mesh", obj.to_str().unwrap(), "--fields", fields.to_str().unwrap(), "--size", "32", "--out", o]);
+    assert!(!ok && err.contains("freckles.png"), "{err}");
+}
