@@ -301,15 +301,16 @@ impl<'a> Parser<'a> {
                         return Err(format!("missing ')' after arguments of {name}"));
                     }
                     self.i += 1;
-                    let arity =
-                        match name.as_str() {
-                            "min" | "max" | "pow" => 2,
-                            "clamp" => 1,
-                            "smooth" => 3,
-                            _ => return Err(format!(
+                    let arity = match name.as_str() {
+                        "min" | "max" | "pow" => 2,
+                        "clamp" => 1,
+                        "smooth" => 3,
+                        _ => {
+                            return Err(format!(
                                 "unknown function '{name}' (known: min, max, clamp, pow, smooth)"
-                            )),
-                        };
+                            ))
+                        }
+                    };
                     if args.len() != arity {
                         return Err(format!(
                             "{name} takes {arity} argument(s), got {}",

@@ -36,6 +36,13 @@ pub struct Grid {
 
 const BIAS: i64 = 1 << 20;
 
+/// ⌊x⌋ without a libm call (targets without SSE4.1 lower `f32::floor` to `floorf`).
+#[inline]
+pub fn fast_floor(x: f32) -> i64 {
+    let t = x as i64;
+    t - ((x < t as f32) as i64)
+}
+
 #[inline]
 fn key(ix: i64, iy: i64, iz: i64) -> u64 {
     (((ix + BIAS) as u64) & 0x1f_ffff)
@@ -81,9 +88,15 @@ impl Grid {
     }
 
     #[inline]
+    fn cell_of(&self, p: Vec3) -> [i64; 3] {
+        let c = p * self.inv_cell;
+        [fast_floor(c.x), fast_floor(c.y), fast_floor(c.z)]
+    }
+
+    #[inline]
     fn cell_key(&self, p: Vec3) -> u64 {
-        let c = (p * self.inv_cell).floor();
-        key(c.x as i64, c.y as i64, c.z as i64)
+        let [x, y, z] = self.cell_of(p);
+        key(x, y, z)
     }
 
     /// Features whose bounding boxes overlap the cell of `p`.
@@ -106,6 +119,9 @@ pub struct GridCursor<'a> {
     grid: &'a Grid,
     last_key: u64,
     last: &'a [u32],
+    /// Bounds of the last cell: while the point stays inside, nothing is recomputed.
+    lo: Vec3,
+    hi: Vec3,
 }
 
 impl<'a> GridCursor<'a> {
@@ -114,12 +130,21 @@ impl<'a> GridCursor<'a> {
             grid,
             last_key: u64::MAX,
             last: &[],
+            lo: Vec3::INFINITY,
+            hi: Vec3::NEG_INFINITY,
         }
     }
 
     #[inline]
     pub fn query(&mut self, p: Vec3) -> &'a [u32] {
-        let k = self.grid.cell_key(p);
+        if p.cmpge(self.lo).all() && p.cmplt(self.hi).all() {
+            return self.last;
+        }
+        let c = self.grid.cell_of(p);
+        let cell = 1.0 / self.grid.inv_cell;
+        self.lo = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) * cell;
+        self.hi = self.lo + Vec3::splat(cell);
+        let k = key(c[0], c[1], c[2]);
         if k != self.last_key {
             self.last_key = k;
             self.last = match self.grid.cells.get(&k) {

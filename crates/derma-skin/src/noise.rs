@@ -9,6 +9,7 @@
 //! interpolant (Perlin 1985; see Lagae et al. 2010, "A survey of procedural noise functions",
 //! §3.1) concentrates its energy near the lattice frequency: three octaves give the band.
 
+use crate::index::fast_floor;
 use glam::Vec3;
 
 /// Eight channels of noise in [0, 1] from one set of lattice look-ups.
@@ -94,10 +95,13 @@ impl BandNoise {
         let mut out = [0.0f32; CHANNELS];
         for o in &self.octaves {
             let q = Vec3::new(p.x * o.inv_cell, p.y * o.inv_cell_y, p.z * o.inv_cell);
-            let c = q.floor();
-            let f = q - c;
+            let (cx, cy, cz) = (
+                fast_floor(q.x) as i32,
+                fast_floor(q.y) as i32,
+                fast_floor(q.z) as i32,
+            );
+            let f = q - Vec3::new(cx as f32, cy as f32, cz as f32);
             let s = f * f * (Vec3::splat(3.0) - 2.0 * f);
-            let (cx, cy, cz) = (c.x as i32, c.y as i32, c.z as i32);
             let mut acc = [0.0f32; CHANNELS];
             for corner in 0..8 {
                 let (dx, dy, dz) = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);

@@ -208,7 +208,11 @@ fn field_values(p: Vec3) -> ([f32; 10], [f32; 3]) {
     let eyes = front * eye(32.0).max(eye(-32.0));
     // Lips: a superellipse around the mouth line (y = −46), the upper lip 8 mm tall with a
     // cupid's bow dip at the centre, the lower lip 10 mm and fuller; corners at |x| = 25 mm.
-    let lip_h = if y > -46.0 { 8.0 - 1.5 * (-(x / 4.0).powi(2)).exp() + 1.5 * (-((x.abs() - 7.0) / 4.0).powi(2)).exp() } else { 10.0 };
+    let lip_h = if y > -46.0 {
+        8.0 - 1.5 * (-(x / 4.0).powi(2)).exp() + 1.5 * (-((x.abs() - 7.0) / 4.0).powi(2)).exp()
+    } else {
+        10.0
+    };
     let lip_r = (((y + 46.0) / lip_h).powi(2) + (x.abs() / 25.0).powf(2.5)).sqrt();
     let lips = front * smoothstep(1.0, 0.8, lip_r);
     let face = front * (1.0 - scalp) * smoothstep(-100.0, -88.0, y);

@@ -9,11 +9,18 @@ use derma_skin::placement::{FeatureSet, Kind};
 use glam::Vec3;
 
 fn small(size: u32) -> SkinConfig {
-    SkinConfig { size, scatter_resolution: 256, ..SkinConfig::default() }
+    SkinConfig {
+        size,
+        scatter_resolution: 256,
+        ..SkinConfig::default()
+    }
 }
 
 fn run_with_threads(cfg: &SkinConfig, threads: usize) -> derma_skin::generate::Generated {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
     pool.install(|| generate(cfg, &Inputs::default(), &NoProgress).unwrap())
 }
 
@@ -23,12 +30,18 @@ fn same_seed_is_bit_identical_with_one_or_two_threads() {
     let a = run_with_threads(&cfg, 1);
     let b = run_with_threads(&cfg, 2);
     assert_eq!(a.features.total(), b.features.total());
-    assert!(a.bio.texels == b.bio.texels, "bio maps differ between 1 and 2 threads");
+    assert!(
+        a.bio.texels == b.bio.texels,
+        "bio maps differ between 1 and 2 threads"
+    );
     for k in 0..3 {
         assert!(a.render.base_color[k].data() == b.render.base_color[k].data());
         assert!(a.render.normal[k].data() == b.render.normal[k].data());
     }
-    assert_eq!(serde_json::to_string(&a.features.to_json()).unwrap(), serde_json::to_string(&b.features.to_json()).unwrap());
+    assert_eq!(
+        serde_json::to_string(&a.features.to_json()).unwrap(),
+        serde_json::to_string(&b.features.to_json()).unwrap()
+    );
     // A different seed gives different skin.
     let c = run_with_threads(&SkinConfig { seed: 2, ..cfg }, 2);
     assert!(a.bio.texels != c.bio.texels);
@@ -38,14 +51,23 @@ fn same_seed_is_bit_identical_with_one_or_two_threads() {
 fn a_mole_straddling_the_template_seam_paints_both_sides() {
     // The template's UV seam runs down the back of the head (u = 0 | 1).
     let cfg = small(256);
-    let g = run_with_threads(&SkinConfig { cyst: Default::default(), ..cfg.clone() }, 2);
+    let g = run_with_threads(
+        &SkinConfig {
+            cyst: Default::default(),
+            ..cfg.clone()
+        },
+        2,
+    );
     let s = &g.surface;
     // Find the covered texels at u ≈ 0 and u ≈ 1 on the middle row, and the point between them.
     let row = s.height / 2;
     let (left, right) = (row * s.width, row * s.width + s.width - 1);
     assert!(s.covered(left) && s.covered(right));
     let seam = 0.5 * (s.position(left) + s.position(right));
-    assert!(s.position(left).distance(s.position(right)) < 4.0, "seam sides meet in 3D");
+    assert!(
+        s.position(left).distance(s.position(right)) < 4.0,
+        "seam sides meet in 3D"
+    );
     let mole = Mole {
         center: seam,
         radius: 3.0,
@@ -66,9 +88,20 @@ fn a_mole_straddling_the_template_seam_paints_both_sides() {
     };
     let bio = derma_skin::paint::paint(&cfg, s, &g.fields, &empty, &|_| {}).unwrap();
     let base = cfg.baseline.melanin.max;
-    assert!(bio.texels[left].melanin > base + 0.05, "left of the seam: {}", bio.texels[left].melanin);
-    assert!(bio.texels[right].melanin > base + 0.05, "right of the seam: {}", bio.texels[right].melanin);
-    assert!((bio.texels[left].melanin - bio.texels[right].melanin).abs() < 0.05, "continuous across the seam");
+    assert!(
+        bio.texels[left].melanin > base + 0.05,
+        "left of the seam: {}",
+        bio.texels[left].melanin
+    );
+    assert!(
+        bio.texels[right].melanin > base + 0.05,
+        "right of the seam: {}",
+        bio.texels[right].melanin
+    );
+    assert!(
+        (bio.texels[left].melanin - bio.texels[right].melanin).abs() < 0.05,
+        "continuous across the seam"
+    );
 }
 
 #[test]
@@ -87,7 +120,11 @@ fn tileable_patch_wraps_seamlessly() {
         edge += (m(0, y) - m(w - 1, y)).abs() as f64;
         inner += (m(1, y) - m(0, y)).abs() as f64 + (m(w - 1, y) - m(w - 2, y)).abs() as f64;
     }
-    assert!(edge < 1.5 * inner / 2.0 + 1e-6, "edge {edge} vs interior {}", inner / 2.0);
+    assert!(
+        edge < 1.5 * inner / 2.0 + 1e-6,
+        "edge {edge} vs interior {}",
+        inner / 2.0
+    );
     let hm = &g.render.height_mm;
     let (mut e2, mut i2) = (0.0f64, 0.0f64);
     for x in 0..w {
@@ -108,11 +145,22 @@ fn density_is_per_unit_area_on_patches_and_faces() {
     let g = run_with_threads(&cfg, 2);
     let c = g.features.counts();
     assert_eq!(c.mole, (cfg.mole.density_per_cm2 * 100.0).round() as usize);
-    assert_eq!(c.freckle, (cfg.freckle.density_per_cm2 * 100.0).round() as usize);
+    assert_eq!(
+        c.freckle,
+        (cfg.freckle.density_per_cm2 * 100.0).round() as usize
+    );
     // On the template, the thesis' counts (§5.3) come out.
     let t = run_with_threads(&small(64), 2).features.counts();
-    for (got, want) in [(t.cyst, 5000), (t.mole, 700), (t.freckle, 3000), (t.follicle, 170_000)] {
-        assert!((got as f64 - want as f64).abs() <= 0.02 * want as f64, "{got} vs {want}");
+    for (got, want) in [
+        (t.cyst, 5000),
+        (t.mole, 700),
+        (t.freckle, 3000),
+        (t.follicle, 170_000),
+    ] {
+        assert!(
+            (got as f64 - want as f64).abs() <= 0.02 * want as f64,
+            "{got} vs {want}"
+        );
     }
 }
 
@@ -140,7 +188,11 @@ fn moles_are_darker_than_their_surroundings() {
             darker += 1;
         }
     }
-    assert!(darker as f64 >= 0.8 * moles.len() as f64, "{darker} of {}", moles.len());
+    assert!(
+        darker as f64 >= 0.8 * moles.len() as f64,
+        "{darker} of {}",
+        moles.len()
+    );
     // Base colour stays in the range of real skin (linear albedo, CIE-derived).
     let bc = &g.render.base_color;
     let means = [0, 1, 2].map(|k| bc[k].stats(None).mean);

@@ -16,7 +16,10 @@ fn tmp(tag: &str) -> PathBuf {
 
 fn run(args: &[&str]) -> (bool, String) {
     let out = derma().args(args).arg("--quiet").output().unwrap();
-    (out.status.success(), String::from_utf8_lossy(&out.stderr).into_owned())
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
 }
 
 const ALL: [&str; 13] = [
@@ -48,13 +51,25 @@ fn default_run_writes_the_whole_set_with_plausible_statistics() {
         assert!(d.join(f).exists(), "{f} missing");
     }
     // No temporary files left behind.
-    assert!(std::fs::read_dir(&d).unwrap().all(|e| !e.unwrap().file_name().to_string_lossy().ends_with(".tmp")));
+    assert!(std::fs::read_dir(&d).unwrap().all(|e| !e
+        .unwrap()
+        .file_name()
+        .to_string_lossy()
+        .ends_with(".tmp")));
     let r = report(&d);
     let bc = &r["statistics"]["base_color_linear"];
-    let (red, green, blue) = (bc[0]["mean"].as_f64().unwrap(), bc[1]["mean"].as_f64().unwrap(), bc[2]["mean"].as_f64().unwrap());
-    assert!(red > green && green > blue && (0.25..0.7).contains(&red), "{red} {green} {blue}");
+    let (red, green, blue) = (
+        bc[0]["mean"].as_f64().unwrap(),
+        bc[1]["mean"].as_f64().unwrap(),
+        bc[2]["mean"].as_f64().unwrap(),
+    );
+    assert!(
+        red > green && green > blue && (0.25..0.7).contains(&red),
+        "{red} {green} {blue}"
+    );
     assert!(r["counts"]["follicle"].as_u64().unwrap() > 160_000);
-    let manifest: serde_json::Value = serde_json::from_slice(&std::fs::read(d.join("manifest.json")).unwrap()).unwrap();
+    let manifest: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(d.join("manifest.json")).unwrap()).unwrap();
     assert_eq!(manifest["maps"].as_array().unwrap().len(), ALL.len() - 1);
     // The normal map decodes to unit vectors pointing out of the surface.
     let n = derma_core::image_io::read_rgb(&d.join("normal.png")).unwrap();
@@ -65,10 +80,28 @@ fn default_run_writes_the_whole_set_with_plausible_statistics() {
     }
     // Same seed → identical files; bio.exr channels are all there.
     let d2 = tmp("default2");
-    let (ok, _) = run(&["skin", "--size", "128", "--threads", "1", "--out", d2.to_str().unwrap()]);
+    let (ok, _) = run(&[
+        "skin",
+        "--size",
+        "128",
+        "--threads",
+        "1",
+        "--out",
+        d2.to_str().unwrap(),
+    ]);
     assert!(ok);
-    for f in ["base_color.png", "normal.png", "height.exr", "bio.exr", "features.json"] {
-        assert_eq!(std::fs::read(d.join(f)).unwrap(), std::fs::read(d2.join(f)).unwrap(), "{f} differs");
+    for f in [
+        "base_color.png",
+        "normal.png",
+        "height.exr",
+        "bio.exr",
+        "features.json",
+    ] {
+        assert_eq!(
+            std::fs::read(d.join(f)).unwrap(),
+            std::fs::read(d2.join(f)).unwrap(),
+            "{f} differs"
+        );
     }
     let ch = derma_core::image_io::read_exr_channels(&d.join("bio.exr")).unwrap();
     assert_eq!(ch.len(), 12);
@@ -77,12 +110,22 @@ fn default_run_writes_the_whole_set_with_plausible_statistics() {
 #[test]
 fn patch_and_print_config() {
     let d = tmp("patch");
-    let (ok, err) = run(&["skin", "--patch", "20x20", "--size", "64", "--out", d.to_str().unwrap()]);
+    let (ok, err) = run(&[
+        "skin",
+        "--patch",
+        "20x20",
+        "--size",
+        "64",
+        "--out",
+        d.to_str().unwrap(),
+    ]);
     assert!(ok, "{err}");
     assert_eq!(report(&d)["inputs"]["surface"], "patch");
     let out = derma().args(["skin", "--print-config"]).output().unwrap();
     let text = String::from_utf8(out.stdout).unwrap();
-    assert!(text.contains("[freckle]") && text.contains("density_per_cm2") && text.contains("thesis"));
+    assert!(
+        text.contains("[freckle]") && text.contains("density_per_cm2") && text.contains("thesis")
+    );
 }
 
 fn write_quad_obj(path: &Path, scale: f32) {
@@ -100,10 +143,24 @@ fn user_meshes_obj_and_glb_any_scale() {
     let obj = d.join("quad.obj");
     write_quad_obj(&obj, 0.2); // 20 cm written in metres
     let out = d.join("out");
-    let o = derma().args(["skin", "--mesh", obj.to_str().unwrap(), "--size", "64", "--out", out.to_str().unwrap()]).output().unwrap();
+    let o = derma()
+        .args([
+            "skin",
+            "--mesh",
+            obj.to_str().unwrap(),
+            "--size",
+            "64",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
-    assert!(err.contains("read as metres") && err.contains("uniform fields"), "{err}");
+    assert!(
+        err.contains("read as metres") && err.contains("uniform fields"),
+        "{err}"
+    );
     let r = report(&out);
     assert!((r["surface_area_cm2"].as_f64().unwrap() - 400.0).abs() < 1.0);
 
@@ -111,20 +168,33 @@ fn user_meshes_obj_and_glb_any_scale() {
     let glb = d.join("quad.glb");
     std::fs::write(&glb, quad_glb()).unwrap();
     let out2 = d.join("out2");
-    let (ok, err) = run(&["skin", "--mesh", glb.to_str().unwrap(), "--size", "64", "--out", out2.to_str().unwrap()]);
+    let (ok, err) = run(&[
+        "skin",
+        "--mesh",
+        glb.to_str().unwrap(),
+        "--size",
+        "64",
+        "--out",
+        out2.to_str().unwrap(),
+    ]);
     assert!(ok, "{err}");
     assert!((report(&out2)["surface_area_cm2"].as_f64().unwrap() - 400.0).abs() < 1.0);
 }
 
 /// A minimal GLB (glTF 2.0 binary): one 200 mm quad with positions, UVs and indices.
 fn quad_glb() -> Vec<u8> {
-    let pos: [f32; 12] = [0.0, 0.0, 0.0, 200.0, 0.0, 0.0, 200.0, 200.0, 0.0, 0.0, 200.0, 0.0];
+    let pos: [f32; 12] = [
+        0.0, 0.0, 0.0, 200.0, 0.0, 0.0, 200.0, 200.0, 0.0, 0.0, 200.0, 0.0,
+    ];
     let uv: [f32; 8] = [0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0];
     let idx: [u16; 6] = [0, 1, 2, 0, 2, 3];
     let mut bin: Vec<u8> = Vec::new();
-    pos.iter().for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
-    uv.iter().for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
-    idx.iter().for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
+    pos.iter()
+        .for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
+    uv.iter()
+        .for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
+    idx.iter()
+        .for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
     while bin.len() % 4 != 0 {
         bin.push(0);
     }
@@ -157,13 +227,25 @@ fn quad_glb() -> Vec<u8> {
 
 #[test]
 fn canonical_face_model_from_shared_data() {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/canonical_face_model.obj");
+    let p =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/canonical_face_model.obj");
     if !p.exists() {
         eprintln!("skipping: {} is absent", p.display());
         return;
     }
     let d = tmp("canon");
-    let o = derma().args(["skin", "--mesh", p.to_str().unwrap(), "--size", "128", "--out", d.to_str().unwrap()]).output().unwrap();
+    let o = derma()
+        .args([
+            "skin",
+            "--mesh",
+            p.to_str().unwrap(),
+            "--size",
+            "128",
+            "--out",
+            d.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
     assert!(err.contains("centimetres"), "unit note: {err}");
@@ -185,27 +267,62 @@ fn bad_inputs_get_clear_errors() {
     // Corrupt mesh.
     let bad = d.join("bad.obj");
     std::fs::write(&bad, "v 1 2\nf 1 2 3 4 5\n").unwrap();
-    let (ok, err) = run(&["skin", "--mesh", bad.to_str().unwrap(), "--size", "32", "--out", o]);
+    let (ok, err) = run(&[
+        "skin",
+        "--mesh",
+        bad.to_str().unwrap(),
+        "--size",
+        "32",
+        "--out",
+        o,
+    ]);
     assert!(!ok && err.contains("bad.obj"), "{err}");
     // Mesh without UVs.
     let nouv = d.join("nouv.obj");
     std::fs::write(&nouv, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
-    let (ok, err) = run(&["skin", "--mesh", nouv.to_str().unwrap(), "--size", "32", "--out", o]);
-    assert!(!ok && err.contains("nouv.obj") && err.contains("texture coordinates"), "{err}");
+    let (ok, err) = run(&[
+        "skin",
+        "--mesh",
+        nouv.to_str().unwrap(),
+        "--size",
+        "32",
+        "--out",
+        o,
+    ]);
+    assert!(
+        !ok && err.contains("nouv.obj") && err.contains("texture coordinates"),
+        "{err}"
+    );
     // Unknown key, NaN and out-of-range values name the key and file.
     let cfg = d.join("c.toml");
-    for (text, key) in [("[mole]\nsize = 3\n", "size"), ("[freckle]\npower = nan\n", "freckle.power"), ("size = 3\n", "size")] {
+    for (text, key) in [
+        ("[mole]\nsize = 3\n", "size"),
+        ("[freckle]\npower = nan\n", "freckle.power"),
+        ("size = 3\n", "size"),
+    ] {
         std::fs::write(&cfg, text).unwrap();
         let (ok, err) = run(&["skin", "--config", cfg.to_str().unwrap(), "--out", o]);
-        assert!(!ok && err.contains("c.toml") && err.contains(key), "{text}: {err}");
+        assert!(
+            !ok && err.contains("c.toml") && err.contains(key),
+            "{text}: {err}"
+        );
     }
     // A size that cannot fit in memory is refused before any work.
     let (ok, err) = run(&["skin", "--size", "16384", "--out", o]);
-    assert!(!ok && (err.contains("GiB") || err.contains("16384")), "{err}");
+    assert!(
+        !ok && (err.contains("GiB") || err.contains("16384")),
+        "{err}"
+    );
     // Unwritable output directory (a file where a directory should be).
     let file = d.join("afile");
     std::fs::write(&file, "x").unwrap();
-    let (ok, err) = run(&["skin", "--size", "32", "--out", file.join("sub").to_str().unwrap()]);
+    let (ok, err) = run(&[
+        "skin",
+        "--size",
+        "32",
+        "--out",
+        file.join("sub").to_str().unwrap(),
+    ]);
     assert!(!ok && err.contains("not writable"), "{err}");
     // Colour image as a probability field: converted with a warning.
     let fields = d.join("fields");
@@ -215,11 +332,37 @@ fn bad_inputs_get_clear_errors() {
     derma_core::image_io::write_png8(&fields.join("moles.png"), &[&r, &z, &z]).unwrap();
     let obj = d.join("q.obj");
     write_quad_obj(&obj, 100.0);
-    let o2 = derma().args(["skin", "--mesh", obj.to_str().unwrap(), "--fields", fields.to_str().unwrap(), "--size", "32", "--out", o]).output().unwrap();
+    let o2 = derma()
+        .args([
+            "skin",
+            "--mesh",
+            obj.to_str().unwrap(),
+            "--fields",
+            fields.to_str().unwrap(),
+            "--size",
+            "32",
+            "--out",
+            o,
+        ])
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&o2.stderr);
-    assert!(o2.status.success() && err.contains("moles") && err.contains("colour image"), "{err}");
+    assert!(
+        o2.status.success() && err.contains("moles") && err.contains("colour image"),
+        "{err}"
+    );
     // Corrupt field image.
     std::fs::write(fields.join("freckles.png"), b"garbage").unwrap();
-    let (ok, err) = run(&["skin", "--mesh", obj.to_str().unwrap(), "--fields", fields.to_str().unwrap(), "--size", "32", "--out", o]);
+    let (ok, err) = run(&[
+        "skin",
+        "--mesh",
+        obj.to_str().unwrap(),
+        "--fields",
+        fields.to_str().unwrap(),
+        "--size",
+        "32",
+        "--out",
+        o,
+    ]);
     assert!(!ok && err.contains("freckles.png"), "{err}");
 }
