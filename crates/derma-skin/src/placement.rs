@@ -382,7 +382,8 @@ pub fn walk_wrinkle(
             break;
         }
         uv += v.dir * (step / mm_per_uv);
-        if !wrap && !(0.0..=1.0).contains(&uv.x) || !wrap && !(0.0..=1.0).contains(&uv.y) {
+        let inside = (0.0..=1.0).contains(&uv.x) && (0.0..=1.0).contains(&uv.y);
+        if !wrap && !inside {
             break;
         }
         if wrap {
