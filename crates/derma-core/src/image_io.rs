@@ -196,7 +196,10 @@ pub enum ExrPrecision {
     F16,
 }
 
-/// Writes named single-channel maps into one OpenEXR file (ZIP-compressed, one channel per map).
+/// Writes named single-channel maps into one OpenEXR file (RLE-compressed, one channel per map).
+/// Blocks are compressed and written in order on the calling thread, so the bytes are the same on
+/// every run (parallel block compression writes blocks in completion order); callers write
+/// several files in parallel instead.
 pub fn write_exr(path: &Path, channels: &[(&str, &Map)], precision: ExrPrecision) -> Result<()> {
     use exr::prelude::*;
     let (w, h) = match channels.first() {
@@ -228,10 +231,14 @@ pub fn write_exr(path: &Path, channels: &[(&str, &Map)], precision: ExrPrecision
     );
     let image = Image::from_layer(layer);
     atomic::write_with(path, |tmp| {
-        image.write().to_file(tmp).map_err(|e| CoreError::Encode {
-            path: path.to_path_buf(),
-            detail: e.to_string(),
-        })
+        image
+            .write()
+            .non_parallel()
+            .to_file(tmp)
+            .map_err(|e| CoreError::Encode {
+                path: path.to_path_buf(),
+                detail: e.to_string(),
+            })
     })
 }
 
