@@ -196,10 +196,10 @@ pub enum ExrPrecision {
     F16,
 }
 
-/// Writes named single-channel maps into one OpenEXR file (RLE-compressed, one channel per map).
-/// Blocks are compressed and written in order on the calling thread, so the bytes are the same on
-/// every run (parallel block compression writes blocks in completion order); callers write
-/// several files in parallel instead.
+/// Writes named single-channel maps into one OpenEXR file (RLE-compressed scan lines, one
+/// channel per map). Line order "increasing" makes the parallel block compressor write blocks in
+/// order, so the bytes are identical on every run (with "unspecified" order they land in
+/// completion order).
 pub fn write_exr(path: &Path, channels: &[(&str, &Map)], precision: ExrPrecision) -> Result<()> {
     use exr::prelude::*;
     let (w, h) = match channels.first() {
@@ -226,7 +226,11 @@ pub fn write_exr(path: &Path, channels: &[(&str, &Map)], precision: ExrPrecision
     let layer = Layer::new(
         (w, h),
         LayerAttributes::default(),
-        Encoding::FAST_LOSSLESS,
+        Encoding {
+            compression: Compression::RLE,
+            blocks: Blocks::ScanLines,
+            line_order: LineOrder::Increasing,
+        },
         AnyChannels::sort(list.into()),
     );
     let image = Image::from_layer(layer);

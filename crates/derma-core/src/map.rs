@@ -137,17 +137,21 @@ impl Map {
     }
 
     fn halved(&self) -> Map {
+        use rayon::prelude::*;
         let (w, h) = (self.width / 2, self.height / 2);
         let mut out = Map::filled(w, h, 0.0);
-        for y in 0..h {
-            for x in 0..w {
-                let s = self.get(2 * x, 2 * y)
-                    + self.get(2 * x + 1, 2 * y)
-                    + self.get(2 * x, 2 * y + 1)
-                    + self.get(2 * x + 1, 2 * y + 1);
-                out.set(x, y, 0.25 * s);
-            }
-        }
+        out.data
+            .par_chunks_mut(w.max(1))
+            .enumerate()
+            .for_each(|(y, row)| {
+                for (x, o) in row.iter_mut().enumerate() {
+                    let s = self.get(2 * x, 2 * y)
+                        + self.get(2 * x + 1, 2 * y)
+                        + self.get(2 * x, 2 * y + 1)
+                        + self.get(2 * x + 1, 2 * y + 1);
+                    *o = 0.25 * s;
+                }
+            });
         out
     }
 

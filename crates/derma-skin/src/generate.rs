@@ -368,18 +368,22 @@ pub fn preview_image(g: &Generated) -> [Map; 3] {
             ]
         }
     };
+    // Thumbnails are downsampled first (area-averaged), then encoded or normalised.
+    let t = PANEL / 2;
+    let small = |m: &Map| m.resized(t, t);
     let enc = |m: &Map| {
-        let mut m = m.clone();
+        let mut m = small(m);
         m.data_mut()
             .iter_mut()
             .for_each(|v| *v = derma_core::color::srgb_encode(*v));
         m
     };
     let half = |m: &Map| {
-        let mut m = m.clone();
+        let mut m = small(m);
         m.data_mut().iter_mut().for_each(|v| *v = 0.5 * *v + 0.5);
         m
     };
+    let rough = small(&r.roughness);
     let sheet = vec![
         [
             enc(&r.base_color[0]),
@@ -387,14 +391,10 @@ pub fn preview_image(g: &Generated) -> [Map; 3] {
             enc(&r.base_color[2]),
         ],
         [half(&r.normal[0]), half(&r.normal[1]), half(&r.normal[2])],
-        normalised(&r.height_mm),
-        [
-            r.roughness.clone(),
-            r.roughness.clone(),
-            r.roughness.clone(),
-        ],
-        normalised(&g.bio.channel(|s| s.melanin)),
-        normalised(&g.bio.channel(|s| s.blood)),
+        normalised(&small(&r.height_mm)),
+        [rough.clone(), rough.clone(), rough],
+        normalised(&small(&g.bio.channel(|s| s.melanin))),
+        normalised(&small(&g.bio.channel(|s| s.blood))),
     ];
     compose(&renders, &sheet, PANEL)
 }

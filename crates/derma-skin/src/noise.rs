@@ -25,6 +25,18 @@ struct Octave {
     salt: u64,
 }
 
+/// Lattice values of the cells last used, one slot per octave (per thread).
+#[derive(Default, Clone)]
+pub struct NoiseCache {
+    octaves: [CacheSlot; 3],
+}
+
+#[derive(Default, Clone, Copy)]
+struct CacheSlot {
+    key: Option<(i32, i32, i32)>,
+    values: [[f32; CHANNELS]; 8],
+}
+
 /// Three-octave band-limited noise keyed by a seed.
 #[derive(Clone, Debug)]
 pub struct BandNoise {
@@ -90,34 +102,51 @@ impl BandNoise {
     }
 
     /// Noise at `p` (mm); each channel in [0, 1] with mean ½.
-    #[inline]
     pub fn eval(&self, p: Vec3) -> [f32; CHANNELS] {
+        self.eval_cached(p, &mut NoiseCache::default())
+    }
+
+    /// As [`BandNoise::eval`], reusing the lattice values of the previous call's cells: texels
+    /// are visited in scanline order and cells are millimetres wide, so most calls hit.
+    #[inline]
+    pub fn eval_cached(&self, p: Vec3, cache: &mut NoiseCache) -> [f32; CHANNELS] {
         let mut out = [0.0f32; CHANNELS];
-        for o in &self.octaves {
+        for (k, o) in self.octaves.iter().enumerate() {
             let q = Vec3::new(p.x * o.inv_cell, p.y * o.inv_cell_y, p.z * o.inv_cell);
             let (cx, cy, cz) = (
                 fast_floor(q.x) as i32,
                 fast_floor(q.y) as i32,
                 fast_floor(q.z) as i32,
             );
-            let f = q - Vec3::new(cx as f32, cy as f32, cz as f32);
-            let s = f * f * (Vec3::splat(3.0) - 2.0 * f);
-            let mut acc = [0.0f32; CHANNELS];
-            for corner in 0..8 {
-                let (dx, dy, dz) = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
-                let w = (if dx == 1 { s.x } else { 1.0 - s.x })
-                    * (if dy == 1 { s.y } else { 1.0 - s.y })
-                    * (if dz == 1 { s.z } else { 1.0 - s.z });
-                if w == 0.0 {
-                    continue;
-                }
-                let h = self.corner(o, cx + dx, cy + dy, cz + dz);
-                for (ch, a) in acc.iter_mut().enumerate() {
-                    *a += w * ((h >> (8 * ch)) & 0xff) as f32;
+            let slot = &mut cache.octaves[k];
+            if slot.key != Some((cx, cy, cz)) {
+                slot.key = Some((cx, cy, cz));
+                for corner in 0..8 {
+                    let (dx, dy, dz) = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+                    let h = self.corner(o, cx + dx as i32, cy + dy as i32, cz + dz as i32);
+                    for ch in 0..CHANNELS {
+                        slot.values[corner][ch] =
+                            ((h >> (8 * ch)) & 0xff) as f32 * (o.weight / 255.0);
+                    }
                 }
             }
-            for ch in 0..CHANNELS {
-                out[ch] += o.weight * acc[ch] * (1.0 / 255.0);
+            let f = q - Vec3::new(cx as f32, cy as f32, cz as f32);
+            let s = f * f * (Vec3::splat(3.0) - 2.0 * f);
+            let (sx, sy, sz) = (s.x, s.y, s.z);
+            let w = [
+                (1.0 - sx) * (1.0 - sy) * (1.0 - sz),
+                sx * (1.0 - sy) * (1.0 - sz),
+                (1.0 - sx) * sy * (1.0 - sz),
+                sx * sy * (1.0 - sz),
+                (1.0 - sx) * (1.0 - sy) * sz,
+                sx * (1.0 - sy) * sz,
+                (1.0 - sx) * sy * sz,
+                sx * sy * sz,
+            ];
+            for corner in 0..8 {
+                for ch in 0..CHANNELS {
+                    out[ch] += w[corner] * slot.values[corner][ch];
+                }
             }
         }
         out

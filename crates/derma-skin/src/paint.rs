@@ -110,13 +110,14 @@ pub fn paint(
         .enumerate()
         .for_each(|(task, rows)| {
             let mut cur = Cursors::new(features);
+            let mut noise_cache = crate::noise::NoiseCache::default();
             for (k, s) in rows.iter_mut().enumerate() {
                 let i = task * w * ROWS_PER_TASK + k;
                 if !surface.covered(i) {
                     continue;
                 }
                 let p = surface.position(i);
-                let n = noise.eval(p);
+                let n = noise.eval_cached(p, &mut noise_cache);
                 let v = |c: usize| chans[c].0 + chans[c].1 * n[c];
                 *s = BioSample {
                     melanin: v(0),
