@@ -140,6 +140,41 @@ pub fn write_png8(path: &Path, maps: &[&Map]) -> Result<()> {
     encode_png(path, w, h, &bytes, ty)
 }
 
+/// Writes 1 or 3 maps of *linear* values as an 8-bit sRGB PNG (alpha is not encoded). The
+/// transfer function is applied through a 65 536-entry table, exact to the 8-bit rounding except
+/// within 1/65 535 of a code boundary.
+pub fn write_png8_srgb(path: &Path, maps: &[&Map]) -> Result<()> {
+    let (w, h, ty) = check_maps(
+        path,
+        maps,
+        [
+            ExtendedColorType::L8,
+            ExtendedColorType::Rgb8,
+            ExtendedColorType::Rgba8,
+        ],
+    )?;
+    let table: Vec<u8> = (0..65536u32)
+        .map(|i| q8(crate::color::srgb_encode(i as f32 / 65535.0)))
+        .collect();
+    let n = maps.len();
+    let mut bytes = vec![0u8; w * h * n];
+    {
+        use rayon::prelude::*;
+        bytes
+            .par_chunks_mut(w * n)
+            .enumerate()
+            .for_each(|(y, row)| {
+                for (k, m) in maps.iter().enumerate() {
+                    let src = &m.data()[y * w..(y + 1) * w];
+                    for (x, &v) in src.iter().enumerate() {
+                        row[x * n + k] = table[(v.clamp(0.0, 1.0) * 65535.0 + 0.5) as usize];
+                    }
+                }
+            });
+    }
+    encode_png(path, w, h, &bytes, ty)
+}
+
 /// Writes 1, 3 or 4 maps of values in [0, 1] as a 16-bit PNG.
 pub fn write_png16(path: &Path, maps: &[&Map]) -> Result<()> {
     let (w, h, ty) = check_maps(
@@ -298,6 +333,25 @@ mod tests {
         let ch = read_exr_channels(&e).unwrap();
         assert_eq!(ch.len(), 2);
         assert_eq!(ch[0].1, m);
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn srgb_table_matches_the_transfer_function() {
+        let d = tmpdir("srgb");
+        let m = Map::from_vec(
+            256,
+            1,
+            (0..256).map(|i| (i as f32 / 255.0).powf(2.2)).collect(),
+        )
+        .unwrap();
+        let p = d.join("s.png");
+        write_png8_srgb(&p, &[&m]).unwrap();
+        let back = read_grey(&p).unwrap();
+        for (i, &v) in back.channels[0].data().iter().enumerate() {
+            let want = q8(crate::color::srgb_encode(m.data()[i]));
+            assert!(((v * 255.0).round() as i32 - want as i32).abs() <= 1, "{i}");
+        }
         std::fs::remove_dir_all(&d).unwrap();
     }
 

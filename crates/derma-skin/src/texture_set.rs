@@ -5,7 +5,6 @@
 use crate::config::MaterialConfig;
 use crate::paint::{BioMaps, BIO_CHANNELS};
 use crate::surface::Surface;
-use derma_core::color::srgb_encode;
 use derma_core::image_io::{self, ExrPrecision};
 use derma_core::Map;
 use derma_shading::{Appearance, BioTexel};
@@ -135,13 +134,10 @@ pub fn write_maps(
         "sRGB",
         "diffuse albedo (glTF baseColor / Unreal Base Color), 8-bit sRGB",
         Box::new(|| {
-            let enc = maps.base_color.clone().map(|mut m| {
-                m.data_mut().iter_mut().for_each(|v| *v = srgb_encode(*v));
-                m
-            });
-            Ok(image_io::write_png8(
+            let c = &maps.base_color;
+            Ok(image_io::write_png8_srgb(
                 &dir.join("base_color.png"),
-                &[&enc[0], &enc[1], &enc[2]],
+                &[&c[0], &c[1], &c[2]],
             )?)
         }),
     ));
