@@ -13,7 +13,7 @@ use crate::features::wrinkle::Wrinkle;
 use crate::features::Feature;
 use crate::field::FieldSet;
 use crate::index::Grid;
-use crate::scatter::Sampler;
+use crate::scatter::{Sampler, SurfacePoint};
 use crate::surface::Surface;
 use crate::Result;
 use derma_core::rng::Philox;
@@ -150,41 +150,67 @@ fn pitch(frame: &crate::surface::Frame, size: usize) -> f32 {
     frame.texel_area(size, size).sqrt()
 }
 
-/// Scatters one kind in parallel; the i-th feature depends only on (seed, stream, i).
-fn scatter<T: Send>(
-    surface: &Surface,
-    fields: &FieldSet,
-    field: &str,
+/// What to scatter for one kind: its density field (raised to `power`), peak density per cm²,
+/// whether it is enabled, and its RNG stream.
+struct Spec<'a> {
+    field: &'a str,
     power: f32,
     density: f32,
     enabled: bool,
-    seed: u64,
     stream: u32,
-    make: impl Fn(&Philox, u64, crate::scatter::SurfacePoint) -> Option<T> + Sync,
-) -> Result<Vec<T>> {
-    if !enabled || density <= 0.0 {
-        return Ok(Vec::new());
+}
+
+impl<'a> Spec<'a> {
+    fn new(field: &'a str, density: f32, enabled: bool, stream: u32) -> Self {
+        Self {
+            field,
+            power: 1.0,
+            density,
+            enabled,
+            stream,
+        }
     }
-    let map = fields.scalar(field)?;
-    let wrap = surface.period().is_some();
-    let weights: Vec<f32> = (0..surface.len())
-        .map(|i| {
-            let uv = surface.uv(i);
-            let v = map.sample_uv(uv.x, uv.y, wrap).clamp(0.0, 1.0);
-            if power == 1.0 {
-                v
-            } else {
-                v.powf(power)
-            }
-        })
-        .collect();
-    let sampler = Sampler::new(surface, |i| weights[i]);
-    let n = sampler.count(density);
-    let rng = Philox::new(seed, stream);
-    Ok((0..n as u64)
-        .into_par_iter()
-        .filter_map(|k| sampler.sample(&rng, k).and_then(|p| make(&rng, k, p)))
-        .collect())
+}
+
+/// Scatters kinds over one surface.
+struct Scatter<'a> {
+    surface: &'a Surface,
+    fields: &'a FieldSet,
+    seed: u64,
+}
+
+impl Scatter<'_> {
+    /// Scatters one kind in parallel; the i-th feature depends only on (seed, stream, i).
+    fn kind<T: Send>(
+        &self,
+        spec: Spec,
+        make: impl Fn(&Philox, u64, SurfacePoint) -> Option<T> + Sync,
+    ) -> Result<Vec<T>> {
+        if !spec.enabled || spec.density <= 0.0 {
+            return Ok(Vec::new());
+        }
+        let s = self.surface;
+        let map = self.fields.scalar(spec.field)?;
+        let wrap = s.period().is_some();
+        let weights: Vec<f32> = (0..s.len())
+            .map(|i| {
+                let uv = s.uv(i);
+                let v = map.sample_uv(uv.x, uv.y, wrap).clamp(0.0, 1.0);
+                if spec.power == 1.0 {
+                    v
+                } else {
+                    v.powf(spec.power)
+                }
+            })
+            .collect();
+        let sampler = Sampler::new(s, |i| weights[i]);
+        let n = sampler.count(spec.density);
+        let rng = Philox::new(self.seed, spec.stream);
+        Ok((0..n as u64)
+            .into_par_iter()
+            .filter_map(|k| sampler.sample(&rng, k).and_then(|p| make(&rng, k, p)))
+            .collect())
+    }
 }
 
 /// Places every feature kind of `cfg` on `scatter_surface` (the surface at scatter resolution);
@@ -195,124 +221,76 @@ pub fn place(
     scatter_surface: &Surface,
     size: usize,
 ) -> Result<FeatureSet> {
-    let seed = cfg.seed;
     let s = scatter_surface;
+    let sc = Scatter {
+        surface: s,
+        fields,
+        seed: cfg.seed,
+    };
     let period = s.period();
+    let px = |p: &SurfacePoint| pitch(&p.frame, size);
 
     let c = &cfg.cyst;
-    let cysts = scatter(
-        s,
-        fields,
-        &c.field,
-        1.0,
-        c.density_per_cm2,
-        c.enabled,
-        seed,
-        stream::CYST,
+    let cysts = sc.kind(
+        Spec::new(&c.field, c.density_per_cm2, c.enabled, stream::CYST),
         |r, k, p| {
-            let z = r.normal2(k, 1)[0];
             Some(Cyst::new(
                 p.position,
                 c,
-                z,
+                r.normal2(k, 1)[0],
                 r.uniform4(k, 2)[0],
-                pitch(&p.frame, size),
+                px(&p),
             ))
         },
     )?;
-
     let m = &cfg.mole;
-    let moles = scatter(
-        s,
-        fields,
-        &m.field,
-        1.0,
-        m.density_per_cm2,
-        m.enabled,
-        seed,
-        stream::MOLE,
+    let moles = sc.kind(
+        Spec::new(&m.field, m.density_per_cm2, m.enabled, stream::MOLE),
         |r, k, p| {
+            let (z, u, v) = (r.normal2(k, 1)[0], r.uniform4(k, 2), r.uniform4(k, 3));
             Some(Mole::new(
                 p.position,
                 p.frame.t,
                 p.frame.b,
                 m,
-                r.normal2(k, 1)[0],
-                r.uniform4(k, 2),
-                r.uniform4(k, 3),
-                pitch(&p.frame, size),
+                z,
+                u,
+                v,
+                px(&p),
             ))
         },
     )?;
-
     let f = &cfg.freckle;
-    let freckles = scatter(
-        s,
-        fields,
-        &f.field,
-        f.power,
-        f.density_per_cm2,
-        f.enabled,
-        seed,
-        stream::FRECKLE,
-        |r, k, p| {
-            Some(Freckle::new(
-                p.position,
-                p.frame.t,
-                p.frame.b,
-                f,
-                r.normal2(k, 1)[0],
-                r.uniform4(k, 2),
-                r.uniform4(k, 3),
-                pitch(&p.frame, size),
-            ))
-        },
-    )?;
-
+    let freckle_spec = Spec {
+        power: f.power,
+        ..Spec::new(&f.field, f.density_per_cm2, f.enabled, stream::FRECKLE)
+    };
+    let freckles = sc.kind(freckle_spec, |r, k, p| {
+        let (z, u, v) = (r.normal2(k, 1)[0], r.uniform4(k, 2), r.uniform4(k, 3));
+        Some(Freckle::new(
+            p.position,
+            p.frame.t,
+            p.frame.b,
+            f,
+            z,
+            u,
+            v,
+            px(&p),
+        ))
+    })?;
     let pc = &cfg.pore;
-    let pores = scatter(
-        s,
-        fields,
-        &pc.field,
-        1.0,
-        pc.density_per_cm2,
-        pc.enabled,
-        seed,
-        stream::PORE,
-        |r, k, p| {
-            Some(Pore::new(
-                p.position,
-                pc,
-                r.normal2(k, 1)[0],
-                pitch(&p.frame, size),
-            ))
-        },
+    let pores = sc.kind(
+        Spec::new(&pc.field, pc.density_per_cm2, pc.enabled, stream::PORE),
+        |r, k, p| Some(Pore::new(p.position, pc, r.normal2(k, 1)[0], px(&p))),
     )?;
-
-    let fo = &cfg.follicle;
-    let follicles = scatter(
-        s,
-        fields,
-        &fo.field,
-        1.0,
-        fo.density_per_cm2,
-        fo.enabled,
-        seed,
-        stream::FOLLICLE,
-        |_, _, p| Some(Follicle::new(p.position, fo, pitch(&p.frame, size))),
-    )?;
-    let eb = &cfg.eyebrow;
-    let eyebrows = scatter(
-        s,
-        fields,
-        &eb.field,
-        1.0,
-        eb.density_per_cm2,
-        eb.enabled,
-        seed,
-        stream::EYEBROW,
-        |_, _, p| Some(Follicle::new(p.position, eb, pitch(&p.frame, size))),
-    )?;
+    let hair = |fc: &crate::config::FollicleConfig, stream| {
+        sc.kind(
+            Spec::new(&fc.field, fc.density_per_cm2, fc.enabled, stream),
+            |_, _, p| Some(Follicle::new(p.position, fc, px(&p))),
+        )
+    };
+    let follicles = hair(&cfg.follicle, stream::FOLLICLE)?;
+    let eyebrows = hair(&cfg.eyebrow, stream::EYEBROW)?;
 
     let w = &cfg.wrinkle;
     if w.enabled && w.density_per_cm2 > 0.0 && !fields.vectors.contains_key(&w.vector_field) {
@@ -321,21 +299,14 @@ pub fn place(
             detail: "wrinkles need this vector field (RGB: R,G direction, B length)".into(),
         });
     }
-    let wrinkles = scatter(
-        s,
-        fields,
-        &w.field,
-        1.0,
-        w.density_per_cm2,
-        w.enabled,
-        seed,
-        stream::WRINKLE,
+    let wrinkles = sc.kind(
+        Spec::new(&w.field, w.density_per_cm2, w.enabled, stream::WRINKLE),
         |r, k, p| {
             let u = r.uniform4(k, 1);
             let curve = walk_wrinkle(s, fields, &w.vector_field, w.max_length_mm, p)?;
             let width = w.width_mm.min + (w.width_mm.max - w.width_mm.min) * u[0];
             let depth = w.depth_mm.min + (w.depth_mm.max - w.depth_mm.min) * u[1];
-            Some(Wrinkle::new(curve, width, depth, pitch(&p.frame, size)))
+            Some(Wrinkle::new(curve, width, depth, px(&p)))
         },
     )?;
 
@@ -357,7 +328,7 @@ pub fn walk_wrinkle(
     fields: &FieldSet,
     name: &str,
     max_length_mm: f32,
-    start: crate::scatter::SurfacePoint,
+    start: SurfacePoint,
 ) -> Option<CubicBezier> {
     let wrap = s.period().is_some();
     let v0 = fields.vector(name, start.uv.x, start.uv.y, wrap).ok()?;
