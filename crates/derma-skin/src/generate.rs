@@ -14,6 +14,23 @@ use derma_shading::Appearance;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+/// Every file `derma skin` writes into its output directory.
+pub const OUTPUT_FILES: [&str; 13] = [
+    "base_color.png",
+    "normal.png",
+    "height.exr",
+    "height.png",
+    "roughness.png",
+    "specular.png",
+    "melanin.exr",
+    "hemoglobin.exr",
+    "bio.exr",
+    "features.json",
+    "preview.png",
+    "manifest.json",
+    "report.json",
+];
+
 /// Files given on the command line (they override the config's `surface.mesh`).
 #[derive(Clone, Debug, Default)]
 pub struct Inputs {

@@ -275,20 +275,3 @@ pub fn run(args: SkinArgs, quiet: bool) -> Result<()> {
     }
     Ok(())
 }
-
-/// Every file `derma skin` writes.
-const OUTPUT_NAMES: [&str; 13] = [
-    "base_color.png",
-    "normal.png",
-    "height.exr",
-    "height.png",
-    "roughness.png",
-    "specular.png",
-    "melanin.exr",
-    "hemoglobin.exr",
-    "bio.exr",
-    "features.json",
-    "preview.png",
-    "manifest.json",
-    "report.json",
-];

@@ -22,21 +22,7 @@ fn run(args: &[&str]) -> (bool, String) {
     )
 }
 
-const ALL: [&str; 13] = [
-    "base_color.png",
-    "normal.png",
-    "height.exr",
-    "height.png",
-    "roughness.png",
-    "specular.png",
-    "melanin.exr",
-    "hemoglobin.exr",
-    "bio.exr",
-    "features.json",
-    "preview.png",
-    "manifest.json",
-    "report.json",
-];
+const ALL: [&str; 13] = derma_skin::generate::OUTPUT_FILES;
 
 fn report(dir: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
