@@ -140,7 +140,7 @@ pub fn run(args: SkinArgs, quiet: bool) -> Result<()> {
     for input in [&args.mesh, &args.config].into_iter().flatten() {
         if let Ok(c) = std::fs::canonicalize(input) {
             if c.parent() == Some(out_canon.as_path())
-                && OUTPUT_NAMES
+                && derma_skin::generate::OUTPUT_FILES
                     .iter()
                     .any(|n| c.file_name().is_some_and(|f| f == *n))
             {
