@@ -151,6 +151,11 @@ pub fn run(args: SkinArgs, quiet: bool) -> Result<()> {
             }
         }
     }
+    if let Some(f) = &args.fields {
+        if std::fs::canonicalize(f).ok().as_deref() == Some(out_canon.as_path()) {
+            bail!("--fields and --out are the same directory '{}'; outputs could overwrite painted fields", f.display());
+        }
+    }
     derma_skin::generate::check_memory(cfg.size as usize)?;
 
     let pool = rayon::ThreadPoolBuilder::new()

@@ -331,6 +331,17 @@ fn bad_inputs_get_clear_errors() {
         o2.status.success() && err.contains("moles") && err.contains("colour image"),
         "{err}"
     );
+    // Fields and outputs in one directory could overwrite the painted fields: refused.
+    let (ok, err) = run(&[
+        "skin",
+        "--mesh",
+        obj.to_str().unwrap(),
+        "--fields",
+        fields.to_str().unwrap(),
+        "--out",
+        fields.to_str().unwrap(),
+    ]);
+    assert!(!ok && err.contains("same directory"), "{err}");
     // Corrupt field image.
     std::fs::write(fields.join("freckles.png"), b"garbage").unwrap();
     let (ok, err) = run(&[
