@@ -124,6 +124,27 @@ impl TriMesh {
             .sum()
     }
 
+    /// Writes the mesh as Wavefront OBJ (positions, UVs, normals; one index per corner), atomically.
+    pub fn write_obj(&self, path: &Path) -> Result<()> {
+        use std::fmt::Write;
+        let mut s = String::with_capacity(self.positions.len() * 80 + self.triangles.len() * 40);
+        let _ = writeln!(s, "# written by derma");
+        for p in &self.positions {
+            let _ = writeln!(s, "v {} {} {}", p.x, p.y, p.z);
+        }
+        for t in &self.uvs {
+            let _ = writeln!(s, "vt {} {}", t.x, t.y);
+        }
+        for n in &self.normals {
+            let _ = writeln!(s, "vn {} {} {}", n.x, n.y, n.z);
+        }
+        for t in &self.triangles {
+            let [a, b, c] = t.map(|i| i + 1);
+            let _ = writeln!(s, "f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}");
+        }
+        crate::atomic::write_bytes(path, s.as_bytes())
+    }
+
     /// Recomputes area-weighted vertex normals (used when the file has none).
     pub fn compute_normals(&mut self) {
         let mut n = vec![Vec3::ZERO; self.positions.len()];
@@ -301,6 +322,12 @@ mod tests {
         .unwrap();
         let m = TriMesh::load(&p2).unwrap();
         assert_eq!(m.triangles.len(), 1);
+        // Round trip through the writer.
+        let p3 = d.join("rt.obj");
+        m.write_obj(&p3).unwrap();
+        let back = TriMesh::load(&p3).unwrap();
+        assert_eq!(back.positions, m.positions);
+        assert_eq!(back.uvs, m.uvs);
         assert!((m.area() - 0.5).abs() < 1e-9);
         assert!((m.normals[0] - Vec3::Z).length() < 1e-6);
         std::fs::remove_dir_all(&d).unwrap();

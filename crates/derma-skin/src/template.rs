@@ -285,6 +285,25 @@ pub fn default_fields(mesh: &TriMesh) -> FieldSet {
     set
 }
 
+/// Writes the template for artists to start from: `head.obj` (mm) and every default field as a
+/// 16-bit PNG (`NAME.png`, and `wrinkle_vectors.png` as RGB) — the layout `--fields` reads.
+pub fn export(dir: &std::path::Path) -> crate::Result<Vec<String>> {
+    derma_core::atomic::ensure_writable_dir(dir)?;
+    let mesh = head_mesh();
+    mesh.write_obj(&dir.join("head.obj"))?;
+    let fields = default_fields(&mesh);
+    let mut written = vec!["head.obj".to_string()];
+    for (name, m) in &fields.scalars {
+        derma_core::image_io::write_png16(&dir.join(format!("{name}.png")), &[m])?;
+        written.push(format!("{name}.png"));
+    }
+    for (name, [r, g, b]) in &fields.vectors {
+        derma_core::image_io::write_png16(&dir.join(format!("{name}.png")), &[r, g, b])?;
+        written.push(format!("{name}.png"));
+    }
+    Ok(written)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

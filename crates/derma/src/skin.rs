@@ -42,6 +42,10 @@ pub struct SkinArgs {
     /// Print the full default configuration with units and sources, then exit.
     #[arg(long)]
     print_config: bool,
+    /// Write the built-in head (head.obj, mm) and its default fields (PNG) into DIR, then exit:
+    /// paint over the fields and run `derma skin --mesh DIR/head.obj --fields DIR`.
+    #[arg(long, value_name = "DIR")]
+    export_template: Option<PathBuf>,
 }
 
 struct Bars {
@@ -93,6 +97,19 @@ fn sha256_file(p: &Path) -> Option<String> {
 pub fn run(args: SkinArgs, quiet: bool) -> Result<()> {
     if args.print_config {
         print!("{}", SkinConfig::print_default());
+        return Ok(());
+    }
+    if let Some(dir) = &args.export_template {
+        let files = derma_skin::template::export(dir)
+            .with_context(|| format!("cannot export the template to '{}'", dir.display()))?;
+        if !quiet {
+            eprintln!(
+                "wrote {} files to {}: {}",
+                files.len(),
+                dir.display(),
+                files.join(", ")
+            );
+        }
         return Ok(());
     }
     let start = Instant::now();

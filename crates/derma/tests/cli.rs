@@ -206,6 +206,48 @@ fn quad_glb() -> Vec<u8> {
 }
 
 #[test]
+fn exported_template_round_trips_through_mesh_and_fields() {
+    // Export the head and its fields, then run on them as a user would after painting.
+    let d = tmp("export");
+    let t = d.join("template");
+    let (ok, err) = run(&["skin", "--export-template", t.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    for f in [
+        "head.obj",
+        "scalp.png",
+        "lips.png",
+        "freckles.png",
+        "wrinkle_vectors.png",
+    ] {
+        assert!(t.join(f).exists(), "{f}");
+    }
+    let out = d.join("out");
+    let (ok, err) = run(&[
+        "skin",
+        "--mesh",
+        t.join("head.obj").to_str().unwrap(),
+        "--fields",
+        t.to_str().unwrap(),
+        "--size",
+        "64",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let r = report(&out);
+    // The same thesis counts as the built-in default (fields quantised to 16 bits; ±2 %).
+    for (kind, want) in [
+        ("follicle", 170_000.0),
+        ("freckle", 3000.0),
+        ("mole", 700.0),
+    ] {
+        let got = r["counts"][kind].as_f64().unwrap();
+        assert!((got - want).abs() < 0.02 * want, "{kind}: {got}");
+    }
+    assert!(r["counts"]["wrinkle"].as_u64().unwrap() > 0);
+}
+
+#[test]
 fn canonical_face_model_from_shared_data() {
     let p =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/canonical_face_model.obj");
