@@ -11,6 +11,21 @@ pub enum AxisScale {
     Cbrt,
 }
 
+/// ∛x for x ≥ 0 without a libm call: an exponent-halving bit estimate refined by three Newton
+/// steps (relative error < 1e-6 over [1e-12, 1e6]; tested against `f32::cbrt`).
+#[inline]
+pub fn fast_cbrt(x: f32) -> f32 {
+    if x <= 0.0 {
+        return 0.0;
+    }
+    // Bit-level estimate: divide the exponent by 3 (Kahan's magic constant for f32).
+    let mut y = f32::from_bits(x.to_bits() / 3 + 709_921_077);
+    for _ in 0..3 {
+        y = y - (y * y * y - x) / (3.0 * y * y);
+    }
+    y
+}
+
 /// One axis of a table: `n` nodes from `min` to `max`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Axis {
@@ -24,7 +39,7 @@ impl Axis {
     fn warp(&self, x: f32) -> f32 {
         match self.scale {
             AxisScale::Linear => x,
-            AxisScale::Cbrt => x.cbrt(),
+            AxisScale::Cbrt => fast_cbrt(x),
         }
     }
     /// Parameter value at node `i`.
@@ -171,6 +186,17 @@ mod tests {
                 assert!((a[c] - b[c]).abs() < 1e-4, "{p:?}: {a:?} vs {b:?}");
             }
         }
+    }
+
+    #[test]
+    fn fast_cbrt_matches_libm() {
+        let mut x = 1e-12f32;
+        while x < 1e6 {
+            let (a, b) = (fast_cbrt(x), x.cbrt());
+            assert!(((a - b) / b).abs() < 1e-6, "{x}: {a} vs {b}");
+            x *= 1.37;
+        }
+        assert_eq!(fast_cbrt(0.0), 0.0);
     }
 
     #[test]

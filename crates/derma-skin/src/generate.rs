@@ -248,9 +248,12 @@ pub fn generate(cfg: &SkinConfig, inputs: &Inputs, progress: &dyn Progress) -> R
     lap("scatter+index", &mut timings);
 
     progress.stage("paint", size as u64);
-    let bio = crate::paint::paint(cfg, &surface, &fields, &features, &|rows| {
+    let mut bio = crate::paint::paint(cfg, &surface, &fields, &features, &|rows| {
         progress.advance_to(rows as u64)
     })?;
+    if let Some(src) = &dilation {
+        bio.dilate(src);
+    }
     lap("paint", &mut timings);
 
     progress.stage("convert", 1);
@@ -300,8 +303,7 @@ pub fn write_outputs(
     timings: &mut Vec<(String, f64)>,
 ) -> Result<(Vec<OutputEntry>, crate::texture_set::HeightRange)> {
     let t = Instant::now();
-    let (mut entries, range) =
-        crate::texture_set::write_maps(dir, &g.bio, &g.render, g.dilation.as_deref())?;
+    let (mut entries, range) = crate::texture_set::write_maps(dir, &g.bio, &g.render)?;
     let features = serde_json::to_vec(&g.features.to_json()).map_err(|e| SkinError::Field {
         name: "features.json".into(),
         detail: e.to_string(),

@@ -40,6 +40,17 @@ pub const BIO_CHANNELS: [(&str, fn(&BioSample) -> f32); 12] = [
 ];
 
 impl BioMaps {
+    /// Fills texels outside the UV charts from their dilation sources (whole samples at once,
+    /// so every map derived from them is dilated consistently).
+    pub fn dilate(&mut self, sources: &[u32]) {
+        for i in 0..self.texels.len() {
+            let s = sources[i] as usize;
+            if s != i {
+                self.texels[i] = self.texels[s];
+            }
+        }
+    }
+
     /// One channel as a planar map.
     pub fn channel(&self, f: fn(&BioSample) -> f32) -> Map {
         Map::from_vec(

@@ -30,7 +30,8 @@ pub struct RenderMaps {
     pub height_mm: Map,
 }
 
-/// Converts painted bio maps to render maps. `dilation` (meshes) fills texels outside the UV charts.
+/// Converts painted bio maps (already dilated on meshes, see [`BioMaps::dilate`]) to render maps;
+/// `dilation` fills the normal map's texels outside the UV charts.
 pub fn convert(
     bio: &BioMaps,
     surface: &Surface,
@@ -67,20 +68,17 @@ pub fn convert(
                     (material.specular_f0 + (HAIR_F0 - material.specular_f0) * ea) / SPECULAR_SCALE;
             }
         });
-    let mut height_mm = bio.channel(|s| s.height_mm);
-    // Normals from the undilated height, with one-sided differences at chart borders.
+    let height_mm = bio.channel(|s| s.height_mm);
+    // Normals use only texels on the surface (one-sided differences at chart borders), then are
+    // dilated themselves; every other map derives from already dilated bio samples.
     let mut normal = crate::normal_map::normals_from_height(surface, &height_mm);
-    let mut base_color =
+    let base_color =
         [0, 1, 2].map(|k| Map::from_vec(w, h, rgb.iter().map(|c| c[k]).collect()).expect("size"));
-    let mut roughness = Map::from_vec(w, h, rough).expect("size");
-    let mut specular = Map::from_vec(w, h, spec).expect("size");
+    let roughness = Map::from_vec(w, h, rough).expect("size");
+    let specular = Map::from_vec(w, h, spec).expect("size");
     if let Some(src) = dilation {
-        let maps: Vec<&mut Map> = base_color
-            .iter_mut()
-            .chain(normal.iter_mut())
-            .chain([&mut roughness, &mut specular, &mut height_mm])
-            .collect();
-        maps.into_par_iter()
+        normal
+            .par_iter_mut()
             .for_each(|m| derma_core::raster::apply_dilation(m.data_mut(), src));
     }
     RenderMaps {
@@ -112,7 +110,6 @@ pub fn write_maps(
     dir: &Path,
     bio: &BioMaps,
     maps: &RenderMaps,
-    dilation: Option<&[u32]>,
 ) -> crate::Result<(Vec<OutputEntry>, HeightRange)> {
     let hs = maps.height_mm.stats(None);
     let range = HeightRange {
@@ -120,13 +117,7 @@ pub fn write_maps(
         max_mm: hs.max,
     };
     let span = (hs.max - hs.min).max(1e-9);
-    let bio_channel = |f: fn(&crate::features::BioSample) -> f32| {
-        let mut m = bio.channel(f);
-        if let Some(src) = dilation {
-            derma_core::raster::apply_dilation(m.data_mut(), src);
-        }
-        m
-    };
+    let bio_channel = |f: fn(&crate::features::BioSample) -> f32| bio.channel(f);
     type Job<'a> = Box<dyn FnOnce() -> crate::Result<()> + Send + 'a>;
     let mut list: Vec<(&str, &str, &str, Job)> = Vec::new();
     list.push((
