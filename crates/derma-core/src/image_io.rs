@@ -237,6 +237,7 @@ pub enum ExrPrecision {
 /// completion order).
 pub fn write_exr(path: &Path, channels: &[(&str, &Map)], precision: ExrPrecision) -> Result<()> {
     use exr::prelude::*;
+    use rayon::prelude::*;
     let (w, h) = match channels.first() {
         Some((_, m)) => (m.width(), m.height()),
         None => {
@@ -251,9 +252,12 @@ pub fn write_exr(path: &Path, channels: &[(&str, &Map)], precision: ExrPrecision
         .map(|(name, m)| {
             let samples = match precision {
                 ExrPrecision::F32 => FlatSamples::F32(m.data().to_vec()),
-                ExrPrecision::F16 => {
-                    FlatSamples::F16(m.data().iter().map(|&v| half::f16::from_f32(v)).collect())
-                }
+                ExrPrecision::F16 => FlatSamples::F16(
+                    m.data()
+                        .par_iter()
+                        .map(|&v| half::f16::from_f32(v))
+                        .collect(),
+                ),
             };
             AnyChannel::new(*name, samples)
         })
