@@ -68,9 +68,11 @@ pub struct Generated {
     pub appearance: &'static str,
 }
 
-/// Bytes of memory per output texel the pipeline needs at its peak (bio samples 48, render maps
-/// 36, surface raster 24, encode buffers ≈ 30, dilation 4).
-pub const BYTES_PER_TEXEL: f64 = 142.0;
+/// Bytes of memory per output texel at the pipeline's peak: measured peak resident memory of
+/// `derma skin` on the built-in head was 0.92 GB at 2048² and 3.18 GB at 4096², i.e. 184 bytes
+/// per added texel (bio samples 48, render maps 36, surface raster 24, file encoding buffers);
+/// rounded up for a margin.
+pub const BYTES_PER_TEXEL: f64 = 200.0;
 
 fn available_memory_bytes() -> Option<f64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
