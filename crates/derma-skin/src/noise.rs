@@ -97,7 +97,10 @@ impl BandNoise {
             x = x.rem_euclid(o.period[0]);
             y = y.rem_euclid(o.period[1]);
         }
-        let key = (x as u32 as u64) | ((y as u32 as u64) << 21) ^ ((z as u32 as u64) << 42);
+        // 21 bits per axis (±1 M cells ≥ ±1.5 km at the finest octave): no two cells share a key.
+        let key = (x as u64 & 0x1f_ffff)
+            | ((y as u64 & 0x1f_ffff) << 21)
+            | ((z as u64 & 0x1f_ffff) << 42);
         mix64(key ^ self.seed.wrapping_mul(0xd6e8_feb8_6659_fd93) ^ o.salt)
     }
 
@@ -172,6 +175,25 @@ mod tests {
             // continuous: a 1 µm step changes little
             let c = n.eval(p + Vec3::new(0.001, 0.0, 0.0));
             assert!((a[0] - c[0]).abs() < 0.02);
+        }
+    }
+
+    #[test]
+    fn lattice_cells_get_distinct_values() {
+        // Packing the cell key must not let two cells (negative coordinates included) collide:
+        // collisions repeat lattice values and show as streaks.
+        let n = BandNoise::new(1, [8.0, 2.0, 0.5], None);
+        let o = n.octaves[0];
+        let mut seen = std::collections::HashSet::new();
+        for x in -40..40 {
+            for y in -40..40 {
+                for z in -2..2 {
+                    assert!(
+                        seen.insert(n.corner(&o, x, y, z)),
+                        "cells collide at ({x}, {y}, {z})"
+                    );
+                }
+            }
         }
     }
 
