@@ -6,12 +6,12 @@ use std::path::PathBuf;
 /// Errors raised by derma-core.
 #[derive(Debug, thiserror::Error)]
 pub enum CoreError {
-    #[error("cannot read '{path}': {source}")]
+    #[error("cannot read '{path}'")]
     Read {
         path: PathBuf,
         source: std::io::Error,
     },
-    #[error("cannot write '{path}': {source}")]
+    #[error("cannot write '{path}'")]
     Write {
         path: PathBuf,
         source: std::io::Error,

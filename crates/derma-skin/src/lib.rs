@@ -38,7 +38,7 @@ pub enum SkinError {
     Field { name: String, detail: String },
     #[error("mesh '{path}': {detail}")]
     Mesh { path: String, detail: String },
-    #[error("{0}")]
+    #[error(transparent)]
     Core(#[from] derma_core::CoreError),
     #[error("output of {width}x{height} texels needs about {need_gib:.1} GiB of memory; {have_gib:.1} GiB are available: choose a smaller --size")]
     TooLarge {
