@@ -29,6 +29,12 @@ fn decode(path: &Path) -> Result<image::DynamicImage> {
 
 /// Loads an image as RGB maps with values in [0, 1] (EXR: as stored).
 pub fn read_rgb(path: &Path) -> Result<LoadedImage> {
+    let is_exr = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if is_exr {
+        return read_exr_rgb(path);
+    }
     let img = decode(path)?.into_rgb32f();
     let (w, h) = (img.width() as usize, img.height() as usize);
     if w == 0 || h == 0 {
@@ -91,6 +97,47 @@ pub fn read_grey(path: &Path) -> Result<LoadedImage> {
     Ok(LoadedImage {
         channels: vec![Map::from_vec(w, h, d)?],
         is_colour: true,
+    })
+}
+
+/// EXR through the `exr` crate, so single-channel (Y, or any one channel) files — what paint
+/// packages save for masks — load as well as RGB ones.
+fn read_exr_rgb(path: &Path) -> Result<LoadedImage> {
+    let channels = read_exr_channels(path)?;
+    let find = |names: &[&str]| {
+        channels
+            .iter()
+            .find(|(n, _)| names.iter().any(|m| n.eq_ignore_ascii_case(m)))
+            .map(|(_, m)| m.clone())
+    };
+    let bad = |detail: &str| CoreError::Image {
+        path: path.to_path_buf(),
+        detail: detail.into(),
+    };
+    let (r, g, b) = match (find(&["R"]), find(&["G"]), find(&["B"])) {
+        (Some(r), Some(g), Some(b)) => (r, g, b),
+        _ => {
+            let y = find(&["Y", "L", "A"])
+                .or_else(|| (channels.len() == 1).then(|| channels[0].1.clone()));
+            let y = y.ok_or_else(|| bad("no R,G,B channels and no single grey (Y) channel"))?;
+            (y.clone(), y.clone(), y)
+        }
+    };
+    if [&r, &g, &b]
+        .iter()
+        .any(|m| m.data().iter().any(|v| !v.is_finite()))
+    {
+        return Err(bad("contains NaN or infinite values"));
+    }
+    let is_colour = r
+        .data()
+        .iter()
+        .zip(g.data())
+        .zip(b.data())
+        .any(|((r, g), b)| (r - g).abs() > 1.0 / 255.0 || (r - b).abs() > 1.0 / 255.0);
+    Ok(LoadedImage {
+        channels: vec![r, g, b],
+        is_colour,
     })
 }
 
@@ -356,6 +403,24 @@ mod tests {
             let want = q8(crate::color::srgb_encode(m.data()[i]));
             assert!(((v * 255.0).round() as i32 - want as i32).abs() <= 1, "{i}");
         }
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn greyscale_exr_reads_as_a_field() {
+        // A painted field saved from a paint package as single-channel (Y) float EXR.
+        let d = tmpdir("exrfield");
+        let mut m = Map::filled(6, 4, 0.25);
+        m.set(5, 3, 0.75);
+        let p = d.join("moles.exr");
+        write_exr(&p, &[("Y", &m)], ExrPrecision::F32).unwrap();
+        let g = read_grey(&p).unwrap();
+        assert!(!g.is_colour);
+        assert_eq!((g.channels[0].width(), g.channels[0].height()), (6, 4));
+        assert!(
+            (g.channels[0].get(0, 0) - 0.25).abs() < 1e-6
+                && (g.channels[0].get(5, 3) - 0.75).abs() < 1e-6
+        );
         std::fs::remove_dir_all(&d).unwrap();
     }
 
