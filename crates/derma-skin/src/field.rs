@@ -89,6 +89,12 @@ impl FieldSet {
     pub fn load_file(&mut self, name: &str, path: &Path) -> Result<()> {
         if name.ends_with("_vectors") {
             let img = image_io::read_rgb(path)?;
+            if !img.is_colour {
+                self.notes.push(format!(
+                    "warning: vector field '{name}' ({}) is greyscale (R = G = B); expected RGB: R, G the direction (0.5 = 0) and B the length",
+                    path.display()
+                ));
+            }
             let [r, g, b]: [Map; 3] = img.channels.try_into().map_err(|_| SkinError::Field {
                 name: name.into(),
                 detail: "expected RGB".into(),
