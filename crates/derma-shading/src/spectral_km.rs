@@ -12,7 +12,7 @@ use crate::chromophore;
 use crate::fresnel::diffuse_reflectance;
 use crate::kubelka_munk::{km_from_transport, layer, stack, LayerRT};
 use crate::lut::{Axis, AxisScale, GridLut};
-use derma_core::color::{reflectance_to_linear_srgb, Spectrum, N_WAVELENGTHS};
+use derma_core::color::{reflectance_to_linear_srgb, Spectrum};
 
 /// Fixed properties of the layered skin model.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -217,9 +217,6 @@ impl Appearance for SpectralKubelkaMunk {
         ])
     }
 }
-
-/// Number of spectral samples the model uses (re-exported for reports).
-pub const SPECTRAL_SAMPLES: usize = N_WAVELENGTHS;
 
 #[cfg(test)]
 mod tests {

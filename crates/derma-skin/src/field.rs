@@ -26,11 +26,6 @@ pub struct UvVector {
 }
 
 impl FieldSet {
-    /// Scalar field `name` sampled at (u, v), in [0, 1].
-    pub fn sample(&self, map: &Map, u: f32, v: f32, wrap: bool) -> f32 {
-        map.sample_uv(u, v, wrap).clamp(0.0, 1.0)
-    }
-
     pub fn scalar(&self, name: &str) -> Result<&Map> {
         self.scalars.get(name).ok_or_else(|| SkinError::Field {
             name: name.into(),
