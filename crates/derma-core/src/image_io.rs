@@ -168,29 +168,24 @@ fn q16(v: f32) -> u16 {
 
 /// Writes 1 (grey), 3 (RGB) or 4 (RGBA) maps of already-encoded values in [0, 1] as an 8-bit PNG.
 pub fn write_png8(path: &Path, maps: &[&Map]) -> Result<()> {
-    let (w, h, ty) = check_maps(
-        path,
-        maps,
-        [
-            ExtendedColorType::L8,
-            ExtendedColorType::Rgb8,
-            ExtendedColorType::Rgba8,
-        ],
-    )?;
-    let n = maps.len();
-    let mut bytes = vec![0u8; w * h * n];
-    for (k, m) in maps.iter().enumerate() {
-        for (i, &v) in m.data().iter().enumerate() {
-            bytes[i * n + k] = q8(v);
-        }
-    }
-    encode_png(path, w, h, &bytes, ty)
+    write_png8_with(path, maps, q8)
 }
 
 /// Writes 1 or 3 maps of *linear* values as an 8-bit sRGB PNG (alpha is not encoded). The
 /// transfer function is applied through a 65 536-entry table, exact to the 8-bit rounding except
 /// within 1/65 535 of a code boundary.
 pub fn write_png8_srgb(path: &Path, maps: &[&Map]) -> Result<()> {
+    let table: Vec<u8> = (0..65536u32)
+        .map(|i| q8(crate::color::srgb_encode(i as f32 / 65535.0)))
+        .collect();
+    write_png8_with(path, maps, |v| {
+        table[(v.clamp(0.0, 1.0) * 65535.0 + 0.5) as usize]
+    })
+}
+
+/// Interleaves `maps` into 8-bit samples with `quantise` (rows in parallel) and encodes them.
+fn write_png8_with(path: &Path, maps: &[&Map], quantise: impl Fn(f32) -> u8 + Sync) -> Result<()> {
+    use rayon::prelude::*;
     let (w, h, ty) = check_maps(
         path,
         maps,
@@ -200,25 +195,18 @@ pub fn write_png8_srgb(path: &Path, maps: &[&Map]) -> Result<()> {
             ExtendedColorType::Rgba8,
         ],
     )?;
-    let table: Vec<u8> = (0..65536u32)
-        .map(|i| q8(crate::color::srgb_encode(i as f32 / 65535.0)))
-        .collect();
     let n = maps.len();
     let mut bytes = vec![0u8; w * h * n];
-    {
-        use rayon::prelude::*;
-        bytes
-            .par_chunks_mut(w * n)
-            .enumerate()
-            .for_each(|(y, row)| {
-                for (k, m) in maps.iter().enumerate() {
-                    let src = &m.data()[y * w..(y + 1) * w];
-                    for (x, &v) in src.iter().enumerate() {
-                        row[x * n + k] = table[(v.clamp(0.0, 1.0) * 65535.0 + 0.5) as usize];
-                    }
+    bytes
+        .par_chunks_mut(w * n)
+        .enumerate()
+        .for_each(|(y, row)| {
+            for (k, m) in maps.iter().enumerate() {
+                for (x, &v) in m.data()[y * w..(y + 1) * w].iter().enumerate() {
+                    row[x * n + k] = quantise(v);
                 }
-            });
-    }
+            }
+        });
     encode_png(path, w, h, &bytes, ty)
 }
 

@@ -36,6 +36,26 @@ pub struct Axis {
 }
 
 impl Axis {
+    /// `n` nodes evenly spaced from `min` to `max`.
+    pub const fn linear(min: f32, max: f32, n: usize) -> Self {
+        Self {
+            min,
+            max,
+            n,
+            scale: AxisScale::Linear,
+        }
+    }
+
+    /// `n` nodes evenly spaced in ∛x from `min` to `max`.
+    pub const fn cbrt(min: f32, max: f32, n: usize) -> Self {
+        Self {
+            min,
+            max,
+            n,
+            scale: AxisScale::Cbrt,
+        }
+    }
+
     fn warp(&self, x: f32) -> f32 {
         match self.scale {
             AxisScale::Linear => x,
@@ -138,24 +158,9 @@ mod tests {
 
     fn axes() -> [Axis; 3] {
         [
-            Axis {
-                min: 0.0,
-                max: 1.0,
-                n: 5,
-                scale: AxisScale::Linear,
-            },
-            Axis {
-                min: 0.0,
-                max: 0.5,
-                n: 4,
-                scale: AxisScale::Cbrt,
-            },
-            Axis {
-                min: -1.0,
-                max: 1.0,
-                n: 3,
-                scale: AxisScale::Linear,
-            },
+            Axis::linear(0.0, 1.0, 5),
+            Axis::cbrt(0.0, 0.5, 4),
+            Axis::linear(-1.0, 1.0, 3),
         ]
     }
 

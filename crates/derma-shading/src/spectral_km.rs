@@ -11,7 +11,7 @@ use crate::appearance::{Appearance, BioTexel};
 use crate::chromophore;
 use crate::fresnel::diffuse_reflectance;
 use crate::kubelka_munk::{km_from_transport, layer, stack, LayerRT};
-use crate::lut::{Axis, AxisScale, GridLut};
+use crate::lut::{Axis, GridLut};
 use derma_core::color::{reflectance_to_linear_srgb, Spectrum};
 
 /// Fixed properties of the layered skin model.
@@ -79,42 +79,12 @@ pub struct SpectralKubelkaMunk {
 /// on the face, lips and eyelids being thinnest). Inputs outside are clamped.
 fn lut_axes() -> [Axis; 6] {
     [
-        Axis {
-            min: 0.0,
-            max: 100.0,
-            n: 25,
-            scale: AxisScale::Cbrt,
-        },
-        Axis {
-            min: 0.0,
-            max: 1.0,
-            n: 5,
-            scale: AxisScale::Linear,
-        },
-        Axis {
-            min: 0.0,
-            max: 0.32,
-            n: 17,
-            scale: AxisScale::Cbrt,
-        },
-        Axis {
-            min: 0.0,
-            max: 1.0,
-            n: 4,
-            scale: AxisScale::Linear,
-        },
-        Axis {
-            min: 5.0,
-            max: 50.0,
-            n: 3,
-            scale: AxisScale::Linear,
-        },
-        Axis {
-            min: 20.0,
-            max: 200.0,
-            n: 5,
-            scale: AxisScale::Linear,
-        },
+        Axis::cbrt(0.0, 100.0, 25),
+        Axis::linear(0.0, 1.0, 5),
+        Axis::cbrt(0.0, 0.32, 17),
+        Axis::linear(0.0, 1.0, 4),
+        Axis::linear(5.0, 50.0, 3),
+        Axis::linear(20.0, 200.0, 5),
     ]
 }
 
@@ -127,15 +97,7 @@ impl SpectralKubelkaMunk {
             layers,
             spectra,
             internal_reflectance,
-            lut: GridLut::build(
-                [Axis {
-                    min: 0.0,
-                    max: 1.0,
-                    n: 2,
-                    scale: AxisScale::Linear,
-                }; 6],
-                |_| [0.0; 3],
-            ),
+            lut: GridLut::build([Axis::linear(0.0, 1.0, 2); 6], |_| [0.0; 3]),
         };
         let lut = GridLut::build(lut_axes(), |p| {
             probe.exact_albedo(&BioTexel {

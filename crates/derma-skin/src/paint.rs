@@ -147,7 +147,7 @@ pub fn paint(
                 }
                 let q = PaintPoint {
                     p,
-                    n: normal(surface, i),
+                    n: surface.normal(i),
                 };
                 apply_kind(&features.cysts, &mut cur.cyst, &(), &q, s);
                 apply_kind(&features.moles, &mut cur.mole, &(), &q, s);
@@ -168,20 +168,6 @@ pub fn paint(
         height: surface.height,
         texels,
     })
-}
-
-#[inline]
-fn normal(surface: &Surface, i: usize) -> glam::Vec3 {
-    match surface.mesh_surface() {
-        None => glam::Vec3::Z,
-        Some(m) => {
-            let tri = m.raster.triangle[i] as usize;
-            let [w1, w2] = m.raster.bary[i];
-            let idx = m.mesh.triangles[tri];
-            let nn = |k: usize| m.mesh.normals[idx[k] as usize];
-            (nn(0) * (1.0 - w1 - w2) + nn(1) * w1 + nn(2) * w2).normalize_or(glam::Vec3::Z)
-        }
-    }
 }
 
 #[inline]

@@ -148,6 +148,20 @@ impl Surface {
         }
     }
 
+    /// Interpolated unit normal of a covered texel.
+    #[inline]
+    pub fn normal(&self, i: usize) -> Vec3 {
+        match &self.geometry {
+            Geometry::Patch { .. } => Vec3::Z,
+            Geometry::Mesh(m) => {
+                let [w1, w2] = m.raster.bary[i];
+                let idx = m.mesh.triangles[m.raster.triangle[i] as usize];
+                let nn = |k: usize| m.mesh.normals[idx[k] as usize];
+                (nn(0) * (1.0 - w1 - w2) + nn(1) * w1 + nn(2) * w2).normalize_or(Vec3::Z)
+            }
+        }
+    }
+
     /// Surface frame of a covered texel.
     pub fn frame(&self, i: usize) -> Frame {
         match &self.geometry {
@@ -162,11 +176,7 @@ impl Surface {
                 let tri = m.raster.triangle[i] as usize;
                 let [w1, w2] = m.raster.bary[i];
                 let w0 = 1.0 - w1 - w2;
-                let idx = m.mesh.triangles[tri];
-                let n = (m.mesh.normals[idx[0] as usize] * w0
-                    + m.mesh.normals[idx[1] as usize] * w1
-                    + m.mesh.normals[idx[2] as usize] * w2)
-                    .normalize_or(Vec3::Z);
+                let n = self.normal(i);
                 let tc = |k: usize| Vec3::from_slice(&m.tangents[3 * tri + k][..3]);
                 let sign = m.tangents[3 * tri][3];
                 let t_raw = tc(0) * w0 + tc(1) * w1 + tc(2) * w2;

@@ -7,7 +7,7 @@ use crate::paint::{BioMaps, BIO_CHANNELS};
 use crate::surface::Surface;
 use derma_core::image_io::{self, ExrPrecision};
 use derma_core::Map;
-use derma_shading::{Appearance, BioTexel};
+use derma_shading::Appearance;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::path::Path;
@@ -51,14 +51,7 @@ pub fn convert(
         .for_each(|(y, ((c, r), s))| {
             for x in 0..w {
                 let t = &bio.texels[y * w + x];
-                let a = appearance.albedo(&BioTexel {
-                    melanin: t.melanin,
-                    pheomelanin: t.pheomelanin,
-                    blood: t.blood,
-                    oxygenation: t.oxygenation,
-                    stratum_corneum_um: t.stratum_corneum_um,
-                    epidermis_um: t.epidermis_um,
-                });
+                let a = appearance.albedo(&t.texel());
                 let ea = t.extra[3].clamp(0.0, 1.0);
                 c[x] = std::array::from_fn(|k| a[k] + (t.extra[k] - a[k]) * ea);
                 let base_r = material.roughness_skin

@@ -34,6 +34,19 @@ pub struct BioSample {
 }
 
 impl BioSample {
+    /// The parameters that determine colour, for an [`derma_shading::Appearance`].
+    #[inline]
+    pub fn texel(&self) -> derma_shading::BioTexel {
+        derma_shading::BioTexel {
+            melanin: self.melanin,
+            pheomelanin: self.pheomelanin,
+            blood: self.blood,
+            oxygenation: self.oxygenation,
+            stratum_corneum_um: self.stratum_corneum_um,
+            epidermis_um: self.epidermis_um,
+        }
+    }
+
     /// Composites colour `rgb` with coverage `a` over the extra colour ("over" operator).
     #[inline]
     pub fn add_extra(&mut self, rgb: [f32; 3], a: f32) {
