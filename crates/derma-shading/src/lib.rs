@@ -8,9 +8,8 @@
 //! ([`lut`]) makes it fast enough for 16-megapixel texture sets.
 
 pub mod appearance;
-pub mod chromophore;
-pub mod fresnel;
-mod hemoglobin_table;
+/// Chromophore spectra and Fresnel reflectance live in the optics crate; re-exported here.
+pub use derma_optics::{chromophore, fresnel};
 pub mod kubelka_munk;
 pub mod lut;
 pub mod spectral_km;

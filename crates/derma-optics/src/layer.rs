@@ -1,0 +1,160 @@
+//! A layered turbid slab as the transport sees it at one wavelength: per layer thickness,
+//! absorption (split by chromophore), scattering, Henyey–Greenstein anisotropy and index.
+
+use crate::error::{OpticsError, Result};
+
+/// Number of absorber classes tallied separately.
+pub const N_ABSORBERS: usize = 5;
+/// Names of the absorber classes, in tally order. A plain slab puts all its absorption in
+/// `medium` (index 4, shared with the skin's baseline tissue absorption).
+pub const ABSORBER_NAMES: [&str; N_ABSORBERS] = [
+    "eumelanin",
+    "pheomelanin",
+    "oxyhemoglobin",
+    "deoxyhemoglobin",
+    "baseline",
+];
+/// Index of the absorber class a plain slab uses.
+pub const MEDIUM: usize = 4;
+
+/// One homogeneous layer. Lengths in mm, coefficients in mm⁻¹.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Layer {
+    pub thickness_mm: f64,
+    /// Absorption coefficient μa (mm⁻¹).
+    pub mua: f64,
+    /// Scattering coefficient μs (mm⁻¹).
+    pub mus: f64,
+    /// Henyey–Greenstein anisotropy g ∈ (−1, 1).
+    pub g: f64,
+    /// Refractive index.
+    pub n: f64,
+    /// Share of μa per absorber class (sums to 1 where μa > 0).
+    pub absorber_share: [f64; N_ABSORBERS],
+}
+
+impl Layer {
+    /// A layer whose absorption is all `medium`.
+    pub fn plain(thickness_mm: f64, mua: f64, mus: f64, g: f64, n: f64) -> Self {
+        let mut absorber_share = [0.0; N_ABSORBERS];
+        absorber_share[MEDIUM] = 1.0;
+        Self {
+            thickness_mm,
+            mua,
+            mus,
+            g,
+            n,
+            absorber_share,
+        }
+    }
+
+    /// Extinction μt = μa + μs.
+    pub fn mut_(&self) -> f64 {
+        self.mua + self.mus
+    }
+}
+
+/// What lies below the last layer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Bottom {
+    /// A semi-infinite clear medium of this index: light crossing into it is transmitted.
+    Medium { n: f64 },
+    /// A diffusely (Lambertian) reflecting surface of this albedo, BioSpec's white hypodermis
+    /// (thesis §2.1); what it does not reflect counts as transmitted.
+    Lambertian { albedo: f64 },
+}
+
+/// The top surface between the ambient medium and the first layer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Surface {
+    /// A flat interface.
+    Smooth,
+    /// Micro-facets with Trowbridge–Reitz normals of this aspect ratio σ (thesis §4.5.1).
+    TrowbridgeReitz { sigma: f64 },
+}
+
+/// A stack of layers at one wavelength.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Stack {
+    pub layers: Vec<Layer>,
+    /// Index of the medium above (1 for air).
+    pub n_above: f64,
+    pub bottom: Bottom,
+    pub surface: Surface,
+}
+
+impl Stack {
+    /// Checks every value; the error names the layer and field.
+    pub fn validate(&self) -> Result<()> {
+        if self.layers.is_empty() {
+            return Err(OpticsError::Invalid("a stack needs at least one layer".into()));
+        }
+        if self.layers.len() > crate::MAX_LAYERS {
+            return Err(OpticsError::Invalid(format!(
+                "{} layers given; at most {} are supported",
+                self.layers.len(),
+                crate::MAX_LAYERS
+            )));
+        }
+        let check = |ok: bool, what: String| {
+            if ok {
+                Ok(())
+            } else {
+                Err(OpticsError::Invalid(what))
+            }
+        };
+        for (i, l) in self.layers.iter().enumerate() {
+            let k = i + 1;
+            check(
+                l.thickness_mm.is_finite() && l.thickness_mm > 0.0,
+                format!("layer {k}: thickness {} mm must be finite and > 0", l.thickness_mm),
+            )?;
+            check(
+                l.mua.is_finite() && l.mua >= 0.0,
+                format!("layer {k}: absorption μa = {} must be finite and ≥ 0", l.mua),
+            )?;
+            check(
+                l.mus.is_finite() && l.mus >= 0.0,
+                format!("layer {k}: scattering μs = {} must be finite and ≥ 0", l.mus),
+            )?;
+            check(
+                l.g.is_finite() && l.g > -1.0 && l.g < 1.0,
+                format!("layer {k}: anisotropy g = {} must lie in (−1, 1)", l.g),
+            )?;
+            check(
+                l.n.is_finite() && (1.0..=3.0).contains(&l.n),
+                format!("layer {k}: refractive index n = {} must lie in [1, 3]", l.n),
+            )?;
+        }
+        check(
+            self.n_above.is_finite() && (1.0..=3.0).contains(&self.n_above),
+            format!("index above n = {} must lie in [1, 3]", self.n_above),
+        )?;
+        match self.bottom {
+            Bottom::Medium { n } => check(
+                n.is_finite() && (1.0..=3.0).contains(&n),
+                format!("index below n = {n} must lie in [1, 3]"),
+            )?,
+            Bottom::Lambertian { albedo } => check(
+                (0.0..=1.0).contains(&albedo),
+                format!("bottom albedo {albedo} must lie in [0, 1]"),
+            )?,
+        }
+        if let Surface::TrowbridgeReitz { sigma } = self.surface {
+            check(
+                sigma.is_finite() && sigma > 0.0 && sigma <= 1.0,
+                format!("surface aspect ratio σ = {sigma} must lie in (0, 1]"),
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Depth of the top of each layer and of the bottom of the stack (mm).
+    pub fn boundaries(&self) -> Vec<f64> {
+        let mut z = vec![0.0];
+        for l in &self.layers {
+            z.push(z.last().copied().unwrap_or(0.0) + l.thickness_mm);
+        }
+        z
+    }
+}

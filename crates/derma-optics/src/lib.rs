@@ -1,0 +1,30 @@
+//! Light in layered skin.
+//!
+//! The skin optics of derma: chromophore spectra ([`chromophore`]), the BioSpec four-layer
+//! specimen built from bio parameters ([`specimen`]), a Monte Carlo photon transport that follows
+//! thesis §4.4–4.5 ([`transport`]) on the CPU ([`run`]) and the GPU ([`gpu`]), its tallies
+//! ([`tally`]: sampled BRDF, spectrum, radial profile, absorption per layer and chromophore),
+//! and the precompute grid over bio parameters ([`precompute`]).
+
+pub mod bio;
+pub mod chromophore;
+pub mod error;
+pub mod fresnel;
+mod hemoglobin_table;
+pub mod layer;
+pub mod microfacet;
+pub mod photon_rng;
+pub mod run;
+pub mod slab;
+pub mod specimen;
+pub mod tally;
+pub mod transport;
+
+pub use bio::BioTexel;
+pub use error::{OpticsError, Result};
+pub use layer::{Bottom, Layer, Stack, Surface};
+pub use run::{Device, Run};
+pub use tally::Tally;
+
+/// Most layers a stack may have (the GPU kernel's fixed arrays).
+pub const MAX_LAYERS: usize = 8;
