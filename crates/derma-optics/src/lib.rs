@@ -6,15 +6,18 @@
 //! ([`tally`]: sampled BRDF, spectrum, radial profile, absorption per layer and chromophore),
 //! and the precompute grid over bio parameters ([`precompute`]).
 
+pub mod backend;
 pub mod bio;
 pub mod chromophore;
 pub mod error;
 pub mod fresnel;
+pub mod gpu;
 mod hemoglobin_table;
 pub mod layer;
 pub mod microfacet;
 pub mod photon_rng;
 pub mod run;
+pub mod simulate;
 pub mod slab;
 pub mod specimen;
 pub mod tally;

@@ -22,6 +22,8 @@ use std::f64::consts::TAU;
 /// Russian roulette threshold and survival odds (MCML defaults, Wang et al. 1995 §3.9).
 pub const ROULETTE_WEIGHT: f64 = 1e-4;
 pub const ROULETTE_CHANCE: f64 = 0.1;
+/// Interactions after which a photon is abandoned (never reached in practice; bounds GPU loops).
+pub const MAX_STEPS: u64 = 100_000_000;
 /// Tries at drawing a micro-normal that faces the ray before falling back to the macro normal.
 const FACING_TRIES: u32 = 8;
 
@@ -251,7 +253,14 @@ pub fn trace(
 
     let mut layer = 0usize;
     let mut s_left = 0.0f64;
+    let mut steps = 0u64;
     while w > 0.0 {
+        steps += 1;
+        if steps > MAX_STEPS {
+            // A photon trapped this long is abandoned; its weight is booked with roulette.
+            t.roulette -= w;
+            break;
+        }
         if s_left <= 0.0 {
             s_left = -(1.0 - rng.uniform()).ln();
         }

@@ -1,0 +1,280 @@
+//! The GPU backend: `optics.wgsl` on wgpu (Vulkan, Metal, DX12; Mesa lavapipe in CI). Same
+//! algorithm and random stream as the CPU path, in f32, with tallies in 64-bit fixed point so
+//! that GPU results are bit-identical from run to run.
+
+use crate::error::{OpticsError, Result};
+use crate::layer::{Bottom, Surface, N_ABSORBERS};
+use crate::run::Run;
+use crate::tally::Tally;
+use crate::transport::{Incidence, Prepared};
+use std::sync::OnceLock;
+use wgpu::util::DeviceExt;
+
+const SHADER: &str = include_str!("optics.wgsl");
+const WORKGROUP: u32 = 64;
+/// Fixed-point scale of the tallies (2^24 units per photon weight).
+const FIXED: f64 = 16_777_216.0;
+
+struct Gpu {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    pipeline: wgpu::ComputePipeline,
+    name: String,
+}
+
+static GPU: OnceLock<std::result::Result<Gpu, String>> = OnceLock::new();
+
+fn init() -> std::result::Result<Gpu, String> {
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+        power_preference: wgpu::PowerPreference::HighPerformance,
+        force_fallback_adapter: false,
+        compatible_surface: None,
+        apply_limit_buckets: false,
+    }))
+    .map_err(|e| {
+        format!("no GPU adapter found ({e}); on Linux without a GPU install Mesa's lavapipe (apt-get install mesa-vulkan-drivers)")
+    })?;
+    let info = adapter.get_info();
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("derma-optics"),
+        required_features: wgpu::Features::empty(),
+        required_limits: adapter.limits(),
+        ..Default::default()
+    }))
+    .map_err(|e| format!("could not open the GPU device {}: {e}", info.name))?;
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("optics.wgsl"),
+        source: wgpu::ShaderSource::Wgsl(SHADER.into()),
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("photon transport"),
+        layout: None,
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    if let Some(e) = pollster::block_on(scope.pop()) {
+        return Err(format!("the transport shader did not compile on {}: {e}", info.name));
+    }
+    Ok(Gpu {
+        device,
+        queue,
+        pipeline,
+        name: format!("{} ({:?})", info.name, info.backend),
+    })
+}
+
+fn gpu() -> Result<&'static Gpu> {
+    GPU.get_or_init(init).as_ref().map_err(|e| OpticsError::Gpu(e.clone()))
+}
+
+/// Whether a GPU adapter can be opened, and its name.
+pub fn available() -> Option<String> {
+    gpu().ok().map(|g| g.name.clone())
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    seed_lo: u32,
+    seed_hi: u32,
+    offset_lo: u32,
+    offset_hi: u32,
+    count: u32,
+    threads: u32,
+    n_lambda: u32,
+    n_layers: u32,
+    incidence: u32,
+    surface: u32,
+    sigma: f32,
+    bottom: u32,
+    bottom_value: f32,
+    n_above: f32,
+    brdf_ti: u32,
+    brdf_to: u32,
+    brdf_phi: u32,
+    channels: u32,
+    profile_bins: u32,
+    profile_dmax: f32,
+}
+
+fn fixed_to_f64(lo: u32, hi: u32) -> f64 {
+    (((hi as u64) << 32 | lo as u64) as i64) as f64 / FIXED
+}
+
+/// Runs `run` on the GPU.
+pub fn run_gpu(run: &Run, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
+    run.validate()?;
+    let g = gpu()?;
+    let prepared: Vec<Prepared> = run.stacks.iter().map(Prepared::new).collect();
+    let nl = prepared.len() as u32;
+    let n_layers = prepared[0].mut_.len() as u32;
+    let mut layer_data = Vec::with_capacity((nl * n_layers * 12) as usize);
+    for p in &prepared {
+        for l in 0..n_layers as usize {
+            layer_data.extend_from_slice(&[
+                p.z[l] as f32,
+                p.z[l + 1] as f32,
+                p.mut_[l] as f32,
+                p.mua_over_mut[l] as f32,
+                p.inv_mut[l] as f32,
+                p.g[l] as f32,
+                p.n[l] as f32,
+            ]);
+            layer_data.extend(p.share[l].iter().map(|&v| v as f32));
+        }
+    }
+    let channels = run.channels() as u32;
+    let chan: Vec<f32> = if run.channel_weights.is_empty() {
+        vec![1.0; nl as usize]
+    } else {
+        run.channel_weights.iter().flatten().map(|&v| v as f32).collect()
+    };
+    let (bti, bto, bphi) = run.brdf.map_or((0, 0, 0), |b| (b.theta_in, b.theta_out, b.phi));
+    let brdf_len = (bti * bto * bphi) as u32 * channels;
+    let (pbins, pdmax) = run.profile.map_or((0, 1.0), |p| (p.bins, p.d_max_mm));
+    let slots = 8 * nl + 8 * N_ABSORBERS as u32 + 1 + brdf_len + pbins as u32 * nl;
+    let n_counts = nl + bti as u32;
+
+    // Threads: a multiple of the wavelength count and of the workgroup; photons per dispatch
+    // a multiple of the thread count, so every dispatch starts at a multiple of nλ.
+    let threads = (65_536 / (nl * WORKGROUP)).max(1) * nl * WORKGROUP;
+    let per_dispatch = threads as u64 * 16;
+
+    let (surface, sigma) = match prepared[0].surface {
+        Surface::Smooth => (0, 0.0),
+        Surface::TrowbridgeReitz { sigma } => (1, sigma as f32),
+    };
+    let (bottom, bottom_value) = match prepared[0].bottom {
+        Bottom::Medium { n } => (0, n as f32),
+        Bottom::Lambertian { albedo } => (1, albedo as f32),
+    };
+    let d = &g.device;
+    let storage = |label, bytes: &[u8], usage| {
+        d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytes,
+            usage,
+        })
+    };
+    let layers_buf = storage("layers", bytemuck::cast_slice(&layer_data), wgpu::BufferUsages::STORAGE);
+    let chan_buf = storage("channels", bytemuck::cast_slice(&chan), wgpu::BufferUsages::STORAGE);
+    let rw = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+    let acc_buf = storage("tallies", bytemuck::cast_slice(&vec![0u32; 2 * slots as usize]), rw);
+    let counts_buf = storage("counts", bytemuck::cast_slice(&vec![0u32; n_counts as usize]), rw);
+
+    let mut offset = 0u64;
+    while offset < run.photons {
+        let count = (run.photons - offset).min(per_dispatch) as u32;
+        let params = Params {
+            seed_lo: run.seed as u32,
+            seed_hi: (run.seed >> 32) as u32,
+            offset_lo: offset as u32,
+            offset_hi: (offset >> 32) as u32,
+            count,
+            threads,
+            n_lambda: nl,
+            n_layers,
+            incidence: matches!(run.incidence, Incidence::ArcsinZenith) as u32,
+            surface,
+            sigma,
+            bottom,
+            bottom_value,
+            n_above: prepared[0].n_above as f32,
+            brdf_ti: bti as u32,
+            brdf_to: bto as u32,
+            brdf_phi: bphi as u32,
+            channels,
+            profile_bins: pbins as u32,
+            profile_dmax: pdmax as f32,
+        };
+        let params_buf = storage("params", bytemuck::bytes_of(&params), wgpu::BufferUsages::UNIFORM);
+        let layout = g.pipeline.get_bind_group_layout(0);
+        let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: params_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: layers_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: chan_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: acc_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: counts_buf.as_entire_binding() },
+            ],
+        });
+        let mut enc = d.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&g.pipeline);
+            pass.set_bind_group(0, &bind, &[]);
+            pass.dispatch_workgroups(threads / WORKGROUP, 1, 1);
+        }
+        g.queue.submit([enc.finish()]);
+        d.poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| OpticsError::Gpu(format!("waiting for the device: {e}")))?;
+        offset += count as u64;
+        progress(offset);
+    }
+
+    let acc = read_back(g, &acc_buf, 2 * slots as usize)?;
+    let counts = read_back(g, &counts_buf, n_counts as usize)?;
+    let val = |slot: u32| fixed_to_f64(acc[2 * slot as usize], acc[2 * slot as usize + 1]);
+
+    let mut t = run.empty_tally();
+    t.photons = run.photons;
+    for l in 0..nl {
+        t.per_lambda_count[l as usize] = counts[l as usize] as u64;
+        for k in 0..4 {
+            let s = val(l * 8 + k as u32);
+            t.per_lambda[l as usize][k] = s;
+            t.sum[k] += s;
+            t.sum_sq[k] += val(l * 8 + 4 + k as u32);
+        }
+    }
+    let abs0 = 8 * nl;
+    for (li, a) in t.absorbed.iter_mut().enumerate() {
+        for (c, v) in a.iter_mut().enumerate() {
+            *v = val(abs0 + (li * N_ABSORBERS + c) as u32);
+        }
+    }
+    t.roulette = val(abs0 + 40);
+    let brdf0 = abs0 + 41;
+    for (i, v) in t.brdf.iter_mut().enumerate() {
+        *v = val(brdf0 + i as u32);
+    }
+    for (i, v) in t.brdf_in.iter_mut().enumerate() {
+        *v = counts[nl as usize + i] as u64;
+    }
+    let prof0 = brdf0 + brdf_len;
+    for (i, v) in t.profile.iter_mut().enumerate() {
+        *v = val(prof0 + i as u32);
+    }
+    Ok(t)
+}
+
+fn read_back(g: &Gpu, buf: &wgpu::Buffer, len: usize) -> Result<Vec<u32>> {
+    let size = (len * 4) as u64;
+    let staging = g.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("read back"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = g.device.create_command_encoder(&Default::default());
+    enc.copy_buffer_to_buffer(buf, 0, &staging, 0, size);
+    g.queue.submit([enc.finish()]);
+    let slice = staging.slice(..);
+    slice.map_async(wgpu::MapMode::Read, |_| {});
+    g.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| OpticsError::Gpu(format!("reading results back: {e}")))?;
+    let data = slice
+        .get_mapped_range()
+        .map_err(|e| OpticsError::Gpu(format!("mapping results: {e}")))?;
+    let out = bytemuck::cast_slice(&data).to_vec();
+    drop(data);
+    staging.unmap();
+    Ok(out)
+}
