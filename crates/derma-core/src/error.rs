@@ -22,6 +22,8 @@ pub enum CoreError {
     Encode { path: PathBuf, detail: String },
     #[error("'{path}' is not a usable mesh: {detail}")]
     Mesh { path: PathBuf, detail: String },
+    #[error("'{path}': {message}")]
+    Format { path: PathBuf, message: String },
     #[error("invalid value for {what}: {detail}")]
     Invalid { what: String, detail: String },
 }

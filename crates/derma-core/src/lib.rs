@@ -11,10 +11,12 @@
 pub mod atomic;
 mod cie_table;
 pub mod color;
+pub mod dtab;
 pub mod error;
 pub mod image_io;
 pub mod map;
 pub mod mesh;
+pub mod plot;
 pub mod raster;
 pub mod rng;
 

@@ -16,6 +16,7 @@ mod hemoglobin_table;
 pub mod layer;
 pub mod microfacet;
 pub mod photon_rng;
+pub mod precompute;
 pub mod run;
 pub mod simulate;
 pub mod slab;

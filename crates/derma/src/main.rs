@@ -1,6 +1,7 @@
 //! `derma`: the command-line tool. Thin: parses flags and config, calls the libraries, shows
 //! progress, and writes report.json and manifest.json.
 
+mod optics;
 mod skin;
 
 use clap::{Parser, Subcommand};
@@ -26,6 +27,9 @@ struct Cli {
 enum Command {
     /// Procedural biological skin: scatter features, paint bio maps, write a texture set.
     Skin(skin::SkinArgs),
+    /// Skin optics: Monte Carlo light transport in layered skin (CPU and GPU).
+    #[command(subcommand)]
+    Optics(optics::OpticsCommand),
 }
 
 fn main() {
@@ -41,6 +45,7 @@ fn main() {
         .init();
     let result = match cli.command {
         Command::Skin(args) => skin::run(args, cli.quiet),
+        Command::Optics(cmd) => optics::run(cmd, cli.quiet),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

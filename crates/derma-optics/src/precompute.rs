@@ -1,0 +1,367 @@
+//! The precompute grid (thesis Precalculate, §4.8.6): the skin simulation over a grid of bio
+//! parameters, as independent shards that resume where they stopped, merged into a `.dtab`.
+//!
+//! A run directory holds `grid.toml` (the grid it was started with; a different grid is refused)
+//! and one `entries/NNNNNN.json` per finished grid node, written atomically. Shard k of n owns
+//! the nodes i with i mod n = k − 1, so shards are separate processes (a Slurm array or a
+//! Kubernetes indexed Job) that can share a directory or use their own; `merge` reads any number
+//! of directories and writes the table in node order.
+
+use crate::bio::BioTexel;
+use crate::error::{OpticsError, Result};
+use crate::run::Device;
+use crate::simulate::{simulate_skin, SkinResult, SkinSimConfig};
+use crate::tally::{BrdfBins, ProfileBins};
+use derma_core::dtab::{Dtab, DtabAxis, DtabHeader, DtabValue};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Names of the grid axes, in table order (the bio parameters of thesis §5.2).
+pub const AXES: [&str; 6] = [
+    "melanin",
+    "pheomelanin",
+    "blood",
+    "oxygenation",
+    "stratum_corneum_um",
+    "epidermis_um",
+];
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridAxes {
+    pub melanin: Vec<f64>,
+    pub pheomelanin: Vec<f64>,
+    pub blood: Vec<f64>,
+    pub oxygenation: Vec<f64>,
+    pub stratum_corneum_um: Vec<f64>,
+    pub epidermis_um: Vec<f64>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Grid {
+    pub photons: u64,
+    pub seed: u64,
+    /// BRDF bins [θi, θo, Δφ].
+    #[serde(default = "default_brdf")]
+    pub brdf: [usize; 3],
+    #[serde(default = "default_profile_bins")]
+    pub profile_bins: usize,
+    #[serde(default = "default_dmax")]
+    pub profile_d_max_mm: f64,
+    pub axes: GridAxes,
+}
+
+fn default_brdf() -> [usize; 3] {
+    let b = SkinSimConfig::default().brdf;
+    [b.theta_in, b.theta_out, b.phi]
+}
+fn default_profile_bins() -> usize {
+    SkinSimConfig::default().profile.bins
+}
+fn default_dmax() -> f64 {
+    SkinSimConfig::default().profile.d_max_mm
+}
+
+/// The default grid: 4 nodes on each of the 6 axes (4096 entries), 10⁶ photons each. Nodes span
+/// Jimenez et al. 2010 table 1 (melanin ≤ 0.5; dermal blood ≤ 0.32 — the top node 0.2 because
+/// BioSpec's dermis holds 0.2–5 % blood), venous to arterial oxygenation, and facial layer
+/// thicknesses (stratum corneum 5–50 µm; epidermis 20–200 µm, Sandby-Møller et al. 2003).
+pub const DEFAULT_GRID: &str = r#"# derma optics precompute grid: 4^6 = 4096 entries x 10^6 photons.
+photons = 1000000
+seed = 1
+brdf = [9, 9, 12]
+profile_bins = 64
+profile_d_max_mm = 8.0
+
+[axes]
+melanin = [0.002, 0.05, 0.2, 0.5]
+pheomelanin = [0.0, 0.3, 0.6, 1.0]
+blood = [0.002, 0.02, 0.08, 0.2]
+oxygenation = [0.5, 0.7, 0.85, 1.0]
+stratum_corneum_um = [5.0, 15.0, 30.0, 50.0]
+epidermis_um = [20.0, 60.0, 120.0, 200.0]
+"#;
+
+impl Grid {
+    pub fn parse(text: &str, origin: &Path) -> Result<Self> {
+        let g: Grid = toml::from_str(text).map_err(|e| OpticsError::File {
+            path: origin.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        g.validate(origin)?;
+        Ok(g)
+    }
+
+    pub fn default_grid() -> Self {
+        Self::parse(DEFAULT_GRID, Path::new("<built-in default grid>"))
+            .expect("the built-in grid parses")
+    }
+
+    pub fn axes(&self) -> [&Vec<f64>; 6] {
+        let a = &self.axes;
+        [
+            &a.melanin,
+            &a.pheomelanin,
+            &a.blood,
+            &a.oxygenation,
+            &a.stratum_corneum_um,
+            &a.epidermis_um,
+        ]
+    }
+
+    fn validate(&self, origin: &Path) -> Result<()> {
+        let bad = |m: String| OpticsError::File {
+            path: origin.to_path_buf(),
+            message: m,
+        };
+        if self.photons == 0 {
+            return Err(bad("photons must be at least 1".into()));
+        }
+        let ranges = [(0.0, 1.0), (0.0, 1.0), (0.0, 1.0), (0.0, 1.0), (0.1, 1000.0), (1.0, 2000.0)];
+        for ((name, values), (lo, hi)) in AXES.iter().zip(self.axes()).zip(ranges) {
+            if values.is_empty() {
+                return Err(bad(format!("axes.{name} needs at least one value")));
+            }
+            for w in values.windows(2) {
+                if !(w[1] > w[0]) {
+                    return Err(bad(format!("axes.{name} must be strictly increasing")));
+                }
+            }
+            for v in values {
+                if !(v.is_finite() && *v >= lo && *v <= hi) {
+                    return Err(bad(format!("axes.{name}: {v} outside [{lo}, {hi}]")));
+                }
+            }
+        }
+        if self.brdf.iter().any(|&b| b == 0) || self.profile_bins == 0 || !(self.profile_d_max_mm > 0.0) {
+            return Err(bad("brdf bins, profile_bins and profile_d_max_mm must be positive".into()));
+        }
+        Ok(())
+    }
+
+    pub fn len(&self) -> usize {
+        self.axes().iter().map(|a| a.len()).product()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Bio parameters of node `i` (first axis slowest).
+    pub fn node(&self, i: usize) -> BioTexel {
+        let axes = self.axes();
+        let mut rest = i;
+        let mut v = [0.0; 6];
+        for k in (0..6).rev() {
+            let n = axes[k].len();
+            v[k] = axes[k][rest % n];
+            rest /= n;
+        }
+        BioTexel {
+            melanin: v[0] as f32,
+            pheomelanin: v[1] as f32,
+            blood: v[2] as f32,
+            oxygenation: v[3] as f32,
+            stratum_corneum_um: v[4] as f32,
+            epidermis_um: v[5] as f32,
+        }
+    }
+
+    /// Simulation settings of node `i`: its own seed so entries are independent of sharding.
+    pub fn config(&self, i: usize) -> SkinSimConfig {
+        SkinSimConfig {
+            photons: self.photons,
+            seed: self.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ i as u64,
+            brdf: BrdfBins {
+                theta_in: self.brdf[0],
+                theta_out: self.brdf[1],
+                phi: self.brdf[2],
+            },
+            profile: ProfileBins {
+                bins: self.profile_bins,
+                d_max_mm: self.profile_d_max_mm,
+            },
+        }
+    }
+}
+
+/// A shard `k/n` (1-based k).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    pub k: usize,
+    pub n: usize,
+}
+
+impl Shard {
+    pub fn parse(s: &str) -> Result<Self> {
+        let bad = || OpticsError::Invalid(format!("--shard '{s}': expected k/n with 1 ≤ k ≤ n"));
+        let (a, b) = s.split_once('/').ok_or_else(bad)?;
+        let k: usize = a.trim().parse().map_err(|_| bad())?;
+        let n: usize = b.trim().parse().map_err(|_| bad())?;
+        if n == 0 || k == 0 || k > n {
+            return Err(bad());
+        }
+        Ok(Self { k, n })
+    }
+
+    pub fn owns(&self, i: usize) -> bool {
+        i % self.n == self.k - 1
+    }
+}
+
+fn entry_path(dir: &Path, i: usize) -> PathBuf {
+    dir.join("entries").join(format!("{i:06}.json"))
+}
+
+/// Prepares `dir` for `grid`: writes `grid.toml`, or checks that the one there is the same.
+pub fn prepare_dir(dir: &Path, grid: &Grid) -> Result<()> {
+    derma_core::atomic::ensure_writable_dir(&dir.join("entries"))?;
+    let path = dir.join("grid.toml");
+    let text = toml::to_string(grid).map_err(|e| OpticsError::Invalid(e.to_string()))?;
+    if path.exists() {
+        let old = std::fs::read_to_string(&path).map_err(|e| OpticsError::Io {
+            path: path.clone(),
+            source: e,
+        })?;
+        let old_grid = Grid::parse(&old, &path)?;
+        if &old_grid != grid {
+            return Err(OpticsError::File {
+                path,
+                message: "this directory was started with a different grid; use a new --out \
+                          directory or the same grid"
+                    .into(),
+            });
+        }
+        return Ok(());
+    }
+    derma_core::atomic::write_bytes(&path, text.as_bytes())?;
+    Ok(())
+}
+
+/// Node indices of `shard` that `dir` does not hold yet.
+pub fn pending(dir: &Path, grid: &Grid, shard: Shard) -> Vec<usize> {
+    (0..grid.len())
+        .filter(|&i| shard.owns(i) && !entry_path(dir, i).exists())
+        .collect()
+}
+
+/// Simulates node `i` and writes its entry atomically.
+pub fn compute_entry(
+    dir: &Path,
+    grid: &Grid,
+    i: usize,
+    device: Device,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<SkinResult> {
+    let r = simulate_skin(&grid.node(i), &grid.config(i), device, progress)?;
+    let json = serde_json::to_vec(&r).map_err(|e| OpticsError::Invalid(e.to_string()))?;
+    derma_core::atomic::write_bytes(&entry_path(dir, i), &json)?;
+    Ok(r)
+}
+
+fn read_entry(path: &Path) -> Result<SkinResult> {
+    let bytes = std::fs::read(path).map_err(|e| OpticsError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    serde_json::from_slice(&bytes).map_err(|e| OpticsError::File {
+        path: path.to_path_buf(),
+        message: format!("not a precompute entry: {e}"),
+    })
+}
+
+/// Values stored per node, in order.
+pub fn value_layout(grid: &Grid) -> Vec<DtabValue> {
+    let b = grid.brdf[0] * grid.brdf[1] * grid.brdf[2];
+    let v = |name: &str, len| DtabValue {
+        name: name.into(),
+        len,
+    };
+    vec![
+        v("linear_srgb", 3),
+        v("r_diffuse", derma_core::color::N_WAVELENGTHS),
+        v("r_specular", derma_core::color::N_WAVELENGTHS),
+        v("brdf_rgb", 3 * b),
+        v("profile_rgb", 3 * grid.profile_bins),
+        v("absorbed", 4 * crate::layer::N_ABSORBERS),
+    ]
+}
+
+/// Joins the entries of `dirs` (all started with the same grid) into one table.
+pub fn merge(dirs: &[PathBuf]) -> Result<Dtab> {
+    let first = dirs
+        .first()
+        .ok_or_else(|| OpticsError::Invalid("merge needs at least one directory".into()))?;
+    let gp = first.join("grid.toml");
+    let text = std::fs::read_to_string(&gp).map_err(|e| OpticsError::Io {
+        path: gp.clone(),
+        source: e,
+    })?;
+    let grid = Grid::parse(&text, &gp)?;
+    for d in &dirs[1..] {
+        let p = d.join("grid.toml");
+        let t = std::fs::read_to_string(&p).map_err(|e| OpticsError::Io {
+            path: p.clone(),
+            source: e,
+        })?;
+        if Grid::parse(&t, &p)? != grid {
+            return Err(OpticsError::File {
+                path: p,
+                message: format!("grid differs from {}", gp.display()),
+            });
+        }
+    }
+    let layout = value_layout(&grid);
+    let stride: usize = layout.iter().map(|v| v.len).sum();
+    let mut data = Vec::with_capacity(grid.len() * stride);
+    let mut missing = Vec::new();
+    let mut photons_total = 0u64;
+    for i in 0..grid.len() {
+        let Some(path) = dirs.iter().map(|d| entry_path(d, i)).find(|p| p.exists()) else {
+            missing.push(i);
+            continue;
+        };
+        let r = read_entry(&path)?;
+        photons_total += r.config.photons;
+        data.extend(r.linear_srgb.iter().map(|&v| v as f32));
+        data.extend(r.r_diffuse.iter().map(|&v| v as f32));
+        data.extend(r.r_specular.iter().map(|&v| v as f32));
+        data.extend(r.brdf_rgb.iter().flatten().map(|&v| v as f32));
+        data.extend(r.profile_rgb.iter().flatten().map(|&v| v as f32));
+        data.extend(r.absorbed.iter().flatten().map(|&v| v as f32));
+    }
+    if !missing.is_empty() {
+        let show: Vec<String> = missing.iter().take(10).map(|i| i.to_string()).collect();
+        return Err(OpticsError::Invalid(format!(
+            "{} of {} entries are missing (first: {}); run the remaining shards first",
+            missing.len(),
+            grid.len(),
+            show.join(", ")
+        )));
+    }
+    let axes = AXES
+        .iter()
+        .zip(grid.axes())
+        .map(|(n, v)| DtabAxis {
+            name: n.to_string(),
+            values: v.clone(),
+        })
+        .collect();
+    Ok(Dtab {
+        header: DtabHeader {
+            axes,
+            values: layout,
+            meta: serde_json::json!({
+                "kind": "derma optics precompute",
+                "grid": grid,
+                "photons_total": photons_total,
+                "wavelengths_nm": "380..780 step 10",
+                "brdf": "sr^-1, linear sRGB under D65, [theta_in][theta_out][dphi] bins of the grid",
+                "profile_rgb": "mm^-2 per photon, rings of profile_d_max_mm/profile_bins",
+                "absorbed": "fraction per [layer][absorber]: layers SC, epidermis, papillary, reticular; absorbers eumelanin, pheomelanin, oxyhemoglobin, deoxyhemoglobin, baseline",
+            }),
+        },
+        data,
+    })
+}
