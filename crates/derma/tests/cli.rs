@@ -399,3 +399,49 @@ fn bad_inputs_get_clear_errors() {
     ]);
     assert!(!ok && err.contains("freckles.png"), "{err}");
 }
+
+#[test]
+fn optics_slab_json_and_errors() {
+    let out = derma()
+        .args(["-q", "optics", "slab", "--layer", "0.2,10,90,0.75,1", "--photons", "20000", "--device", "cpu", "--json"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for k in ["r_specular", "r_diffuse", "t_total", "absorbed", "photons", "photons_per_s", "device"] {
+        assert!(v.get(k).is_some(), "missing key {k}");
+    }
+    for k in ["r_specular", "r_diffuse", "t_total", "absorbed"] {
+        assert!(v["stderr"][k].is_number(), "stderr.{k}");
+    }
+    assert_eq!(v["device"], "cpu");
+    assert_eq!(v["photons"], 20000);
+    let sum = ["r_specular", "r_diffuse", "t_total", "absorbed"]
+        .iter()
+        .map(|k| v[k].as_f64().unwrap())
+        .sum::<f64>();
+    assert!((sum - 1.0).abs() < 0.01);
+
+    let (ok, err) = run(&["optics", "slab", "--layer", "0.2,10,90,1.5,1"]);
+    assert!(!ok && err.contains("anisotropy g = 1.5"), "{err}");
+    let (ok, err) = run(&["optics", "slab", "--layer", "0.2,ten,90,0.5,1"]);
+    assert!(!ok && err.contains("mua_per_cm = 'ten'"), "{err}");
+    let (ok, err) = run(&["optics", "simulate", "--melanin", "1.5", "--device", "cpu"]);
+    assert!(!ok && err.contains("--melanin 1.5"), "{err}");
+}
+
+#[test]
+fn optics_simulate_writes_result_and_plots() {
+    let dir = tmp("optics-sim");
+    let (ok, err) = run(&[
+        "optics", "simulate", "--photons", "8200", "--device", "cpu", "--plot", "--out", dir.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    for f in ["result.json", "spectrum.svg", "brdf.svg", "profile.svg"] {
+        assert!(dir.join(f).exists(), "{f}");
+    }
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("result.json")).unwrap()).unwrap();
+    assert_eq!(r["r_diffuse"].as_array().unwrap().len(), 41);
+    assert!(r["bookkeeping_error"].as_f64().unwrap().abs() < 1e-9);
+}
