@@ -67,7 +67,11 @@ pub fn crc32(bytes: &[u8]) -> u32 {
     for &b in bytes {
         crc ^= b as u32;
         for _ in 0..8 {
-            crc = if crc & 1 != 0 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
         }
     }
     !crc
@@ -97,10 +101,13 @@ impl Dtab {
         if bytes.len() < 16 || &bytes[..4] != MAGIC {
             return Err(bad("not a .dtab table (missing DTAB magic)"));
         }
-        let word = |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
+        let word =
+            |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
         let version = word(4);
         if version != VERSION {
-            return Err(bad(&format!("unsupported .dtab version {version} (expected {VERSION})")));
+            return Err(bad(&format!(
+                "unsupported .dtab version {version} (expected {VERSION})"
+            )));
         }
         let body = bytes.len() - 4;
         if crc32(&bytes[..body]) != word(body) {
@@ -159,8 +166,14 @@ mod tests {
     fn round_trip_and_corruption() {
         let t = Dtab {
             header: DtabHeader {
-                axes: vec![DtabAxis { name: "a".into(), values: vec![0.0, 1.0] }],
-                values: vec![DtabValue { name: "rgb".into(), len: 3 }],
+                axes: vec![DtabAxis {
+                    name: "a".into(),
+                    values: vec![0.0, 1.0],
+                }],
+                values: vec![DtabValue {
+                    name: "rgb".into(),
+                    len: 3,
+                }],
                 meta: serde_json::json!({"photons": 10}),
             },
             data: vec![0.1, 0.2, 0.3, 0.4, 0.5, 0.6],

@@ -54,7 +54,9 @@ fn fmt_num(v: f64) -> String {
 }
 
 fn esc(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
 }
 
 impl Plot {
@@ -120,7 +122,11 @@ impl Plot {
         };
         for y in yt {
             let py = sy(y);
-            let label = if self.log_y { format!("1e{}", y as i32) } else { fmt_num(y) };
+            let label = if self.log_y {
+                format!("1e{}", y as i32)
+            } else {
+                fmt_num(y)
+            };
             let _ = writeln!(
                 s,
                 r##"<line x1="{L}" y1="{py:.1}" x2="{:.1}" y2="{py:.1}" stroke="#ddd"/><text x="{:.1}" y="{:.1}" text-anchor="end">{label}</text>"##,
@@ -189,8 +195,16 @@ mod tests {
             y_label: "y".into(),
             log_y: true,
             series: vec![
-                Series { label: "s1".into(), color: "red".into(), points: vec![(0.0, 1.0), (1.0, 0.01)] },
-                Series { label: "s2".into(), color: "blue".into(), points: vec![(0.0, 0.0), (1.0, 0.1)] },
+                Series {
+                    label: "s1".into(),
+                    color: "red".into(),
+                    points: vec![(0.0, 1.0), (1.0, 0.01)],
+                },
+                Series {
+                    label: "s2".into(),
+                    color: "blue".into(),
+                    points: vec![(0.0, 0.0), (1.0, 0.1)],
+                },
             ],
         };
         let svg = p.to_svg();

@@ -11,20 +11,34 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let out = args.next().unwrap_or_else(|| "optics-spectra.svg".into());
     let photons: u64 = args.next().map_or(Ok(2_050_000), |s| s.parse())?;
-    let cfg = SkinSimConfig { photons, ..SkinSimConfig::default() };
+    let cfg = SkinSimConfig {
+        photons,
+        ..SkinSimConfig::default()
+    };
     let mut series = Vec::new();
     for (label, melanin, color) in [
         ("fair (melanin 2 %)", 0.02, "#e377c2"),
         ("medium (10 %)", 0.10, "#bc6c25"),
         ("dark (35 %)", 0.35, "#4a2c1d"),
     ] {
-        let bio = BioTexel { melanin, ..BioTexel::FAIR };
+        let bio = BioTexel {
+            melanin,
+            ..BioTexel::FAIR
+        };
         let r = simulate_skin(&bio, &cfg, Device::Cpu, &|_| {})?;
-        println!("{label}: linear sRGB {:.3?}, {:.1} s", r.linear_srgb, r.seconds);
+        println!(
+            "{label}: linear sRGB {:.3?}, {:.1} s",
+            r.linear_srgb, r.seconds
+        );
         series.push(Series {
             label: label.into(),
             color: color.into(),
-            points: r.wavelengths_nm.iter().copied().zip(r.r_diffuse.iter().copied()).collect(),
+            points: r
+                .wavelengths_nm
+                .iter()
+                .copied()
+                .zip(r.r_diffuse.iter().copied())
+                .collect(),
         });
     }
     let plot = Plot {

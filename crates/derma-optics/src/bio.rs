@@ -35,4 +35,3 @@ impl BioTexel {
         epidermis_um: 100.0,
     };
 }
-

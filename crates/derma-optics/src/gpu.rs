@@ -25,7 +25,8 @@ struct Gpu {
 static GPU: OnceLock<std::result::Result<Gpu, String>> = OnceLock::new();
 
 fn init() -> std::result::Result<Gpu, String> {
-    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
     let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
         power_preference: wgpu::PowerPreference::HighPerformance,
         force_fallback_adapter: false,
@@ -57,7 +58,10 @@ fn init() -> std::result::Result<Gpu, String> {
         cache: None,
     });
     if let Some(e) = pollster::block_on(scope.pop()) {
-        return Err(format!("the transport shader did not compile on {}: {e}", info.name));
+        return Err(format!(
+            "the transport shader did not compile on {}: {e}",
+            info.name
+        ));
     }
     Ok(Gpu {
         device,
@@ -68,7 +72,9 @@ fn init() -> std::result::Result<Gpu, String> {
 }
 
 fn gpu() -> Result<&'static Gpu> {
-    GPU.get_or_init(init).as_ref().map_err(|e| OpticsError::Gpu(e.clone()))
+    GPU.get_or_init(init)
+        .as_ref()
+        .map_err(|e| OpticsError::Gpu(e.clone()))
 }
 
 /// Whether a GPU adapter can be opened, and its name.
@@ -131,9 +137,15 @@ pub fn run_gpu(run: &Run, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
     let chan: Vec<f32> = if run.channel_weights.is_empty() {
         vec![1.0; nl as usize]
     } else {
-        run.channel_weights.iter().flatten().map(|&v| v as f32).collect()
+        run.channel_weights
+            .iter()
+            .flatten()
+            .map(|&v| v as f32)
+            .collect()
     };
-    let (bti, bto, bphi) = run.brdf.map_or((0, 0, 0), |b| (b.theta_in, b.theta_out, b.phi));
+    let (bti, bto, bphi) = run
+        .brdf
+        .map_or((0, 0, 0), |b| (b.theta_in, b.theta_out, b.phi));
     let brdf_len = (bti * bto * bphi) as u32 * channels;
     let (pbins, pdmax) = run.profile.map_or((0, 1.0), |p| (p.bins, p.d_max_mm));
     let slots = 8 * nl + 8 * N_ABSORBERS as u32 + 1 + brdf_len + pbins as u32 * nl;
@@ -160,11 +172,27 @@ pub fn run_gpu(run: &Run, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
             usage,
         })
     };
-    let layers_buf = storage("layers", bytemuck::cast_slice(&layer_data), wgpu::BufferUsages::STORAGE);
-    let chan_buf = storage("channels", bytemuck::cast_slice(&chan), wgpu::BufferUsages::STORAGE);
+    let layers_buf = storage(
+        "layers",
+        bytemuck::cast_slice(&layer_data),
+        wgpu::BufferUsages::STORAGE,
+    );
+    let chan_buf = storage(
+        "channels",
+        bytemuck::cast_slice(&chan),
+        wgpu::BufferUsages::STORAGE,
+    );
     let rw = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-    let acc_buf = storage("tallies", bytemuck::cast_slice(&vec![0u32; 2 * slots as usize]), rw);
-    let counts_buf = storage("counts", bytemuck::cast_slice(&vec![0u32; n_counts as usize]), rw);
+    let acc_buf = storage(
+        "tallies",
+        bytemuck::cast_slice(&vec![0u32; 2 * slots as usize]),
+        rw,
+    );
+    let counts_buf = storage(
+        "counts",
+        bytemuck::cast_slice(&vec![0u32; n_counts as usize]),
+        rw,
+    );
 
     let mut offset = 0u64;
     while offset < run.photons {
@@ -191,17 +219,36 @@ pub fn run_gpu(run: &Run, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
             profile_bins: pbins as u32,
             profile_dmax: pdmax as f32,
         };
-        let params_buf = storage("params", bytemuck::bytes_of(&params), wgpu::BufferUsages::UNIFORM);
+        let params_buf = storage(
+            "params",
+            bytemuck::bytes_of(&params),
+            wgpu::BufferUsages::UNIFORM,
+        );
         let layout = g.pipeline.get_bind_group_layout(0);
         let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
             label: None,
             layout: &layout,
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: params_buf.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: layers_buf.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: chan_buf.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: acc_buf.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 4, resource: counts_buf.as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: params_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: layers_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: chan_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: acc_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: counts_buf.as_entire_binding(),
+                },
             ],
         });
         let mut enc = d.create_command_encoder(&Default::default());

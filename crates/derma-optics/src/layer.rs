@@ -87,7 +87,9 @@ impl Stack {
     /// Checks every value; the error names the layer and field.
     pub fn validate(&self) -> Result<()> {
         if self.layers.is_empty() {
-            return Err(OpticsError::Invalid("a stack needs at least one layer".into()));
+            return Err(OpticsError::Invalid(
+                "a stack needs at least one layer".into(),
+            ));
         }
         if self.layers.len() > crate::MAX_LAYERS {
             return Err(OpticsError::Invalid(format!(
@@ -107,15 +109,24 @@ impl Stack {
             let k = i + 1;
             check(
                 l.thickness_mm.is_finite() && l.thickness_mm > 0.0,
-                format!("layer {k}: thickness {} mm must be finite and > 0", l.thickness_mm),
+                format!(
+                    "layer {k}: thickness {} mm must be finite and > 0",
+                    l.thickness_mm
+                ),
             )?;
             check(
                 l.mua.is_finite() && l.mua >= 0.0,
-                format!("layer {k}: absorption μa = {} must be finite and ≥ 0", l.mua),
+                format!(
+                    "layer {k}: absorption μa = {} must be finite and ≥ 0",
+                    l.mua
+                ),
             )?;
             check(
                 l.mus.is_finite() && l.mus >= 0.0,
-                format!("layer {k}: scattering μs = {} must be finite and ≥ 0", l.mus),
+                format!(
+                    "layer {k}: scattering μs = {} must be finite and ≥ 0",
+                    l.mus
+                ),
             )?;
             check(
                 l.g.is_finite() && l.g > -1.0 && l.g < 1.0,

@@ -26,8 +26,14 @@ mod tests {
     #[test]
     fn endpoints_and_limits() {
         for sigma in [0.3, 0.75, 0.999999, 1.0] {
-            assert!(tr_cos_zenith(0.0, sigma).abs() < 1e-6, "ρ = 0 gives a grazing normal");
-            assert!((tr_cos_zenith(1.0, sigma) - 1.0).abs() < 1e-6, "ρ → 1 gives the pole");
+            assert!(
+                tr_cos_zenith(0.0, sigma).abs() < 1e-6,
+                "ρ = 0 gives a grazing normal"
+            );
+            assert!(
+                (tr_cos_zenith(1.0, sigma) - 1.0).abs() < 1e-6,
+                "ρ → 1 gives the pole"
+            );
         }
         // Continuity at σ = 1 (the limit branch against the formula just off it).
         for rho in [0.1, 0.5, 0.9] {

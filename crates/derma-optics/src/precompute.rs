@@ -118,7 +118,14 @@ impl Grid {
         if self.photons == 0 {
             return Err(bad("photons must be at least 1".into()));
         }
-        let ranges = [(0.0, 1.0), (0.0, 1.0), (0.0, 1.0), (0.0, 1.0), (0.1, 1000.0), (1.0, 2000.0)];
+        let ranges = [
+            (0.0, 1.0),
+            (0.0, 1.0),
+            (0.0, 1.0),
+            (0.0, 1.0),
+            (0.1, 1000.0),
+            (1.0, 2000.0),
+        ];
         for ((name, values), (lo, hi)) in AXES.iter().zip(self.axes()).zip(ranges) {
             if values.is_empty() {
                 return Err(bad(format!("axes.{name} needs at least one value")));
@@ -134,8 +141,13 @@ impl Grid {
                 }
             }
         }
-        if self.brdf.iter().any(|&b| b == 0) || self.profile_bins == 0 || !(self.profile_d_max_mm > 0.0) {
-            return Err(bad("brdf bins, profile_bins and profile_d_max_mm must be positive".into()));
+        if self.brdf.iter().any(|&b| b == 0)
+            || self.profile_bins == 0
+            || !(self.profile_d_max_mm > 0.0)
+        {
+            return Err(bad(
+                "brdf bins, profile_bins and profile_d_max_mm must be positive".into(),
+            ));
         }
         Ok(())
     }

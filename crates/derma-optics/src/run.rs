@@ -59,7 +59,9 @@ impl Run {
             return Err(OpticsError::Invalid("no stacks to simulate".into()));
         }
         if self.photons == 0 {
-            return Err(OpticsError::Invalid("photon count must be at least 1".into()));
+            return Err(OpticsError::Invalid(
+                "photon count must be at least 1".into(),
+            ));
         }
         let layers = self.stacks[0].layers.len();
         for (i, s) in self.stacks.iter().enumerate() {

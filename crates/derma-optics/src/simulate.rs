@@ -197,5 +197,11 @@ pub fn simulate_skin(
     let run = skin_run(bio, cfg);
     let t0 = std::time::Instant::now();
     let tally = crate::backend::run_on(&run, device, progress)?;
-    Ok(skin_result(bio, cfg, &tally, device, t0.elapsed().as_secs_f64()))
+    Ok(skin_result(
+        bio,
+        cfg,
+        &tally,
+        device,
+        t0.elapsed().as_secs_f64(),
+    ))
 }

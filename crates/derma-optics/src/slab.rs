@@ -79,7 +79,11 @@ impl SlabResult {
                 t_total: t.stderr(TRANSMITTED),
                 absorbed: t.stderr(ABSORBED),
             },
-            absorbed_per_layer: t.absorbed.iter().map(|a| a.iter().sum::<f64>() / n).collect(),
+            absorbed_per_layer: t
+                .absorbed
+                .iter()
+                .map(|a| a.iter().sum::<f64>() / n)
+                .collect(),
             bookkeeping_error: t.bookkeeping_error() / n,
             photons: t.photons,
             photons_per_s: t.photons as f64 / seconds.max(1e-9),

@@ -160,7 +160,11 @@ mod tests {
         }
         // 550 nm: epidermis μa = 0.02·(0.7·49.4 + 0.3·27.9) + 0.98·0.046 ≈ 0.904 mm⁻¹.
         let s = &stacks[17];
-        assert!((s.layers[1].mua - 0.904).abs() < 0.01, "{}", s.layers[1].mua);
+        assert!(
+            (s.layers[1].mua - 0.904).abs() < 0.01,
+            "{}",
+            s.layers[1].mua
+        );
         // Reticular dermis holds 0.91/1.2 of the papillary blood.
         let r = s.layers[3].mua - s.layers[3].absorber_share[BASE] * s.layers[3].mua;
         let p = s.layers[2].mua - s.layers[2].absorber_share[BASE] * s.layers[2].mua;

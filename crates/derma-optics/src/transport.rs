@@ -62,7 +62,10 @@ impl Prepared {
                 .zip(&mut_)
                 .map(|(l, &t)| if t > 0.0 { l.mua / t } else { 0.0 })
                 .collect(),
-            inv_mut: mut_.iter().map(|&t| if t > 0.0 { 1.0 / t } else { 0.0 }).collect(),
+            inv_mut: mut_
+                .iter()
+                .map(|&t| if t > 0.0 { 1.0 / t } else { 0.0 })
+                .collect(),
             mut_,
             g: s.layers.iter().map(|l| l.g).collect(),
             n: s.layers.iter().map(|l| l.n).collect(),
@@ -127,13 +130,21 @@ fn interface(u: V3, m: V3, n1: f64, n2: f64, xi: f64) -> V3 {
     let cos_i = -dot(u, m);
     let f = fresnel_unpolarised(cos_i, n1, n2);
     if xi < f {
-        [u[0] + 2.0 * cos_i * m[0], u[1] + 2.0 * cos_i * m[1], u[2] + 2.0 * cos_i * m[2]]
+        [
+            u[0] + 2.0 * cos_i * m[0],
+            u[1] + 2.0 * cos_i * m[1],
+            u[2] + 2.0 * cos_i * m[2],
+        ]
     } else {
         let eta = n1 / n2;
         let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
         let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
         let k = eta * cos_i - cos_t;
-        [eta * u[0] + k * m[0], eta * u[1] + k * m[1], eta * u[2] + k * m[2]]
+        [
+            eta * u[0] + k * m[0],
+            eta * u[1] + k * m[1],
+            eta * u[2] + k * m[2],
+        ]
     }
 }
 

@@ -44,14 +44,21 @@ fn shards_merge_to_the_same_table_and_resume_skips_finished_entries() {
     let entry = whole.join("entries/000002.json");
     let before = std::fs::metadata(&entry).unwrap().modified().unwrap();
     assert_eq!(fill(&whole, &grid, Shard::parse("1/1").unwrap()), 0);
-    assert_eq!(std::fs::metadata(&entry).unwrap().modified().unwrap(), before);
+    assert_eq!(
+        std::fs::metadata(&entry).unwrap().modified().unwrap(),
+        before
+    );
 
     let (a, b) = (tmp("a"), tmp("b"));
     assert_eq!(fill(&a, &grid, Shard::parse("1/2").unwrap()), 2);
     assert_eq!(fill(&b, &grid, Shard::parse("2/2").unwrap()), 2);
     let t1 = precompute::merge(&[whole.clone()]).unwrap();
     let t2 = precompute::merge(&[b.clone(), a.clone()]).unwrap();
-    assert_eq!(t1.to_bytes(), t2.to_bytes(), "sharding does not change the table");
+    assert_eq!(
+        t1.to_bytes(),
+        t2.to_bytes(),
+        "sharding does not change the table"
+    );
     assert_eq!(t1.header.nodes(), 4);
     // More melanin → darker: node 0 (melanin 0.02) vs node 2 (0.2), same blood.
     let (o, _) = t1.header.offset("linear_srgb").unwrap();
@@ -61,10 +68,15 @@ fn shards_merge_to_the_same_table_and_resume_skips_finished_entries() {
     // A missing shard is a clear error; a different grid in the same directory is refused.
     let e = precompute::merge(&[a.clone()]).unwrap_err().to_string();
     assert!(e.contains("2 of 4 entries are missing"), "{e}");
-    let other = Grid { photons: 999, ..grid.clone() };
+    let other = Grid {
+        photons: 999,
+        ..grid.clone()
+    };
     let e = precompute::prepare_dir(&a, &other).unwrap_err().to_string();
     assert!(e.contains("different grid"), "{e}");
-    assert!(Shard::parse("3/2").is_err() && Shard::parse("0/2").is_err() && Shard::parse("x").is_err());
+    assert!(
+        Shard::parse("3/2").is_err() && Shard::parse("0/2").is_err() && Shard::parse("x").is_err()
+    );
     for d in [whole, a, b] {
         let _ = std::fs::remove_dir_all(d);
     }

@@ -42,7 +42,13 @@ fn adding_doubling_cases() {
             .iter()
             .map(|l| {
                 let f = |k: &str| l[k].as_f64().unwrap();
-                Layer::plain(f("d_mm"), f("mua_per_cm") / 10.0, f("mus_per_cm") / 10.0, f("g"), f("n"))
+                Layer::plain(
+                    f("d_mm"),
+                    f("mua_per_cm") / 10.0,
+                    f("mus_per_cm") / 10.0,
+                    f("g"),
+                    f("n"),
+                )
             })
             .collect();
         // iadpython's n_above/n_below are glass slides with air beyond: clear layers here.
@@ -56,8 +62,20 @@ fn adding_doubling_cases() {
         }
         let r = slab(&Run::totals(slab_stack(ls, 1.0, 1.0), 400_000, 7));
         let se_r = (r.stderr.r_specular.powi(2) + r.stderr.r_diffuse.powi(2)).sqrt();
-        close(&format!("{name}: R"), r.r_specular + r.r_diffuse, se_r, c["r_total"].as_f64().unwrap(), 0.002);
-        close(&format!("{name}: T"), r.t_total, r.stderr.t_total, c["t_total"].as_f64().unwrap(), 0.002);
+        close(
+            &format!("{name}: R"),
+            r.r_specular + r.r_diffuse,
+            se_r,
+            c["r_total"].as_f64().unwrap(),
+            0.002,
+        );
+        close(
+            &format!("{name}: T"),
+            r.t_total,
+            r.stderr.t_total,
+            c["t_total"].as_f64().unwrap(),
+            0.002,
+        );
     }
 }
 
@@ -65,14 +83,35 @@ fn adding_doubling_cases() {
 fn van_de_hulst_table_35_and_mcml() {
     // van de Hulst 1980, table 35, as used in MCML's paper (Wang, Jacques & Zheng 1995, §4.1):
     // μa 10 /cm, μs 90 /cm, g 0.75, d 0.02 cm, n 1: Rd 0.09739, Tt 0.66096.
-    let r = slab(&Run::totals(slab_stack(layers(&["0.2,10,90,0.75,1"]), 1.0, 1.0), 1_000_000, 3));
-    close("van de Hulst Rd", r.r_diffuse, r.stderr.r_diffuse, 0.09739, 0.002);
-    close("van de Hulst Tt", r.t_total, r.stderr.t_total, 0.66096, 0.002);
+    let r = slab(&Run::totals(
+        slab_stack(layers(&["0.2,10,90,0.75,1"]), 1.0, 1.0),
+        1_000_000,
+        3,
+    ));
+    close(
+        "van de Hulst Rd",
+        r.r_diffuse,
+        r.stderr.r_diffuse,
+        0.09739,
+        0.002,
+    );
+    close(
+        "van de Hulst Tt",
+        r.t_total,
+        r.stderr.t_total,
+        0.66096,
+        0.002,
+    );
     assert_eq!(r.r_specular, 0.0);
     // MCML's own result for that case (Wang et al. 1995, quoted with its error in
     // SKIN-OPTICS-REFERENCES): Rd 0.09721, Tt 0.66109 — agreement within the combined errors.
-    assert!((r.r_diffuse - 0.09721).abs() < 4.0 * (r.stderr.r_diffuse.powi(2) + 0.0003f64.powi(2)).sqrt());
-    assert!((r.t_total - 0.66109).abs() < 4.0 * (r.stderr.t_total.powi(2) + 0.0003f64.powi(2)).sqrt());
+    assert!(
+        (r.r_diffuse - 0.09721).abs()
+            < 4.0 * (r.stderr.r_diffuse.powi(2) + 0.0003f64.powi(2)).sqrt()
+    );
+    assert!(
+        (r.t_total - 0.66109).abs() < 4.0 * (r.stderr.t_total.powi(2) + 0.0003f64.powi(2)).sqrt()
+    );
 }
 
 #[test]
@@ -80,7 +119,11 @@ fn semi_infinite_media() {
     // Adding-doubling (iadpython 0.5.3) for semi-infinite media, SKIN-OPTICS-REFERENCES:
     // albedo 0.9, g 0, n 1.5: R 0.2601; albedo 0.99, g 0.9, n 1.4: R 0.2790 (specular included).
     for (spec, reference) in [("1000,10,90,0,1.5", 0.2601), ("1000,1,99,0.9,1.4", 0.2790)] {
-        let r = slab(&Run::totals(slab_stack(layers(&[spec]), 1.0, 1.0), 300_000, 5));
+        let r = slab(&Run::totals(
+            slab_stack(layers(&[spec]), 1.0, 1.0),
+            300_000,
+            5,
+        ));
         let se = (r.stderr.r_specular.powi(2) + r.stderr.r_diffuse.powi(2)).sqrt();
         close(spec, r.r_specular + r.r_diffuse, se, reference, 0.003);
         assert!(r.t_total < 1e-6);
@@ -88,7 +131,10 @@ fn semi_infinite_media() {
 }
 
 fn skin_tally(bio: &BioTexel, photons: u64) -> (Run, Tally) {
-    let cfg = SkinSimConfig { photons, ..SkinSimConfig::default() };
+    let cfg = SkinSimConfig {
+        photons,
+        ..SkinSimConfig::default()
+    };
     let run = skin_run(bio, &cfg);
     let t = run_cpu(&run, &|_| {}).unwrap();
     (run, t)
@@ -99,9 +145,27 @@ fn energy_bookkeeping_is_exact() {
     // R + T + A equals the launched weight (photons + roulette's net) to rounding, for slabs of
     // every kind and the skin specimen; roulette's net is zero within noise.
     let runs = vec![
-        Run::totals(slab_stack(layers(&["1,1,100,0.9,1.4"]), 1.0, 1.0), 50_000, 1),
-        Run::totals(slab_stack(layers(&["0.1,10,400,0.85,1.4", "1,1,200,0.8,1.33"]), 1.2, 1.5), 50_000, 2),
-        skin_run(&BioTexel::FAIR, &SkinSimConfig { photons: 41_000, ..SkinSimConfig::default() }),
+        Run::totals(
+            slab_stack(layers(&["1,1,100,0.9,1.4"]), 1.0, 1.0),
+            50_000,
+            1,
+        ),
+        Run::totals(
+            slab_stack(
+                layers(&["0.1,10,400,0.85,1.4", "1,1,200,0.8,1.33"]),
+                1.2,
+                1.5,
+            ),
+            50_000,
+            2,
+        ),
+        skin_run(
+            &BioTexel::FAIR,
+            &SkinSimConfig {
+                photons: 41_000,
+                ..SkinSimConfig::default()
+            },
+        ),
     ];
     for run in runs {
         let t = run_cpu(&run, &|_| {}).unwrap();
@@ -111,14 +175,21 @@ fn energy_bookkeeping_is_exact() {
             t.bookkeeping_error()
         );
         let absorbed: f64 = t.absorbed.iter().flatten().sum();
-        assert!((absorbed - t.sum[3]).abs() <= 1e-9 * t.weight_total(), "per-layer absorption sums to A");
+        assert!(
+            (absorbed - t.sum[3]).abs() <= 1e-9 * t.weight_total(),
+            "per-layer absorption sums to A"
+        );
         assert!(t.roulette.abs() < 0.01 * t.photons as f64);
     }
 }
 
 #[test]
 fn lossless_index_matched_specimen_returns_everything() {
-    let run = Run::totals(slab_stack(layers(&["0.5,0,100,0.8,1", "0.5,0,50,0,1"]), 1.0, 1.0), 50_000, 9);
+    let run = Run::totals(
+        slab_stack(layers(&["0.5,0,100,0.8,1", "0.5,0,50,0,1"]), 1.0, 1.0),
+        50_000,
+        9,
+    );
     let r = slab(&run);
     assert_eq!(r.absorbed, 0.0);
     assert!((r.r_specular + r.r_diffuse + r.t_total - 1.0).abs() < 1e-12);
@@ -126,13 +197,32 @@ fn lossless_index_matched_specimen_returns_everything() {
 
 #[test]
 fn results_do_not_depend_on_thread_count() {
-    let run = skin_run(&BioTexel::FAIR, &SkinSimConfig { photons: 20_000, ..SkinSimConfig::default() });
-    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-    let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    let run = skin_run(
+        &BioTexel::FAIR,
+        &SkinSimConfig {
+            photons: 20_000,
+            ..SkinSimConfig::default()
+        },
+    );
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let two = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
     let a = one.install(|| run_cpu(&run, &|_| {}).unwrap());
     let b = two.install(|| run_cpu(&run, &|_| {}).unwrap());
     assert_eq!(a, b);
-    let c = run_cpu(&Run { seed: 2, ..run.clone() }, &|_| {}).unwrap();
+    let c = run_cpu(
+        &Run {
+            seed: 2,
+            ..run.clone()
+        },
+        &|_| {},
+    )
+    .unwrap();
     assert_ne!(a.sum, c.sum, "another seed gives another sample");
 }
 
@@ -146,7 +236,11 @@ fn sampled_brdf_is_reciprocal() {
         bottom: Bottom::Lambertian { albedo: 0.6 },
         surface: Surface::Smooth,
     };
-    let bins = BrdfBins { theta_in: 6, theta_out: 6, phi: 4 };
+    let bins = BrdfBins {
+        theta_in: 6,
+        theta_out: 6,
+        phi: 4,
+    };
     let run = Run {
         stacks: vec![stack],
         photons: 3_000_000,
@@ -183,7 +277,11 @@ fn cpu_and_gpu_agree() {
         eprintln!("skipped: no GPU adapter");
         return;
     }
-    let run = Run::totals(slab_stack(layers(&["1,1,100,0.9,1.4"]), 1.0, 1.0), 100_000, 4);
+    let run = Run::totals(
+        slab_stack(layers(&["1,1,100,0.9,1.4"]), 1.0, 1.0),
+        100_000,
+        4,
+    );
     let c = slab(&run);
     let tg = derma_optics::gpu::run_gpu(&run, &|_| {}).unwrap();
     let g = SlabResult::from_tally(&tg, 1.0, "gpu");
@@ -194,19 +292,45 @@ fn cpu_and_gpu_agree() {
         ("T", c.t_total, g.t_total, c.stderr.t_total),
         ("A", c.absorbed, g.absorbed, c.stderr.absorbed),
     ] {
-        assert!((a - b).abs() < 3.0 * se * 2f64.sqrt(), "{what}: cpu {a} gpu {b} ± {se}");
+        assert!(
+            (a - b).abs() < 3.0 * se * 2f64.sqrt(),
+            "{what}: cpu {a} gpu {b} ± {se}"
+        );
     }
     assert!((c.r_specular - g.r_specular).abs() < 1e-6);
-    assert!(g.bookkeeping_error.abs() < 1e-5, "GPU books balance to f32 precision");
+    assert!(
+        g.bookkeeping_error.abs() < 1e-5,
+        "GPU books balance to f32 precision"
+    );
     // The GPU is deterministic too (integer tallies).
     assert_eq!(tg, derma_optics::gpu::run_gpu(&run, &|_| {}).unwrap());
     // And the skin specimen (micro-facet surface, white hypodermis) agrees in colour.
-    let cfg = SkinSimConfig { photons: 41_000, ..SkinSimConfig::default() };
+    let cfg = SkinSimConfig {
+        photons: 41_000,
+        ..SkinSimConfig::default()
+    };
     let sr = skin_run(&BioTexel::FAIR, &cfg);
-    let a = skin_result(&BioTexel::FAIR, &cfg, &run_cpu(&sr, &|_| {}).unwrap(), Device::Cpu, 1.0);
-    let b = skin_result(&BioTexel::FAIR, &cfg, &derma_optics::gpu::run_gpu(&sr, &|_| {}).unwrap(), Device::Gpu, 1.0);
+    let a = skin_result(
+        &BioTexel::FAIR,
+        &cfg,
+        &run_cpu(&sr, &|_| {}).unwrap(),
+        Device::Cpu,
+        1.0,
+    );
+    let b = skin_result(
+        &BioTexel::FAIR,
+        &cfg,
+        &derma_optics::gpu::run_gpu(&sr, &|_| {}).unwrap(),
+        Device::Gpu,
+        1.0,
+    );
     for c in 0..3 {
-        assert!((a.linear_srgb[c] - b.linear_srgb[c]).abs() < 0.01, "{:?} vs {:?}", a.linear_srgb, b.linear_srgb);
+        assert!(
+            (a.linear_srgb[c] - b.linear_srgb[c]).abs() < 0.01,
+            "{:?} vs {:?}",
+            a.linear_srgb,
+            b.linear_srgb
+        );
     }
 }
 
@@ -217,27 +341,46 @@ fn skin_spectra_have_the_known_shape() {
     // between them; reflectance rising towards the red; darker skin reflects less.
     let mut prev: Option<Vec<f64>> = None;
     for melanin in [0.02f32, 0.1, 0.35] {
-        let bio = BioTexel { melanin, blood: 0.03, ..BioTexel::FAIR };
+        let bio = BioTexel {
+            melanin,
+            blood: 0.03,
+            ..BioTexel::FAIR
+        };
         let (run, t) = skin_tally(&bio, 820_000);
-        let cfg = SkinSimConfig { photons: run.photons, ..SkinSimConfig::default() };
+        let cfg = SkinSimConfig {
+            photons: run.photons,
+            ..SkinSimConfig::default()
+        };
         let r = skin_result(&bio, &cfg, &t, Device::Cpu, 1.0).r_diffuse;
         let at = |nm: usize| r[(nm - 380) / 10];
-        assert!(at(700) > at(600) && at(600) > at(500), "rising to red, melanin {melanin}: {r:?}");
+        assert!(
+            at(700) > at(600) && at(600) > at(500),
+            "rising to red, melanin {melanin}: {r:?}"
+        );
         if melanin < 0.05 {
             // Darker epidermis absorbs the violet more than blood does; the dip is a fair-skin feature.
-            assert!(at(420) < at(450) && at(420) < at(390).max(at(400)), "Soret dip, melanin {melanin}");
+            assert!(
+                at(420) < at(450) && at(420) < at(390).max(at(400)),
+                "Soret dip, melanin {melanin}"
+            );
         }
         if melanin < 0.3 {
             // The 560 nm hump stands above the line through the 540 and 580 nm dips (in dark
             // skin, melanin flattens the Q bands away, as in measured spectra).
-            assert!(at(560) > 0.5 * (at(540) + at(580)) && at(540) < at(560), "Q bands, melanin {melanin}");
+            assert!(
+                at(560) > 0.5 * (at(540) + at(580)) && at(540) < at(560),
+                "Q bands, melanin {melanin}"
+            );
         }
         if melanin < 0.05 {
             assert!(at(540) < at(520), "542 nm dip below the 520 nm shoulder");
         }
         if let Some(p) = &prev {
             for nm in (450..=700).step_by(50) {
-                assert!(at(nm) < p[(nm - 380) / 10], "more melanin reflects less at {nm} nm");
+                assert!(
+                    at(nm) < p[(nm - 380) / 10],
+                    "more melanin reflects less at {nm} nm"
+                );
             }
         }
         prev = Some(r);

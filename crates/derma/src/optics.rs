@@ -146,9 +146,11 @@ fn bar(total: u64, quiet: bool, msg: &str) -> Option<ProgressBar> {
     (!quiet).then(|| {
         let b = ProgressBar::new(total);
         b.set_style(
-            ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} photons {elapsed} (eta {eta})")
-                .expect("template")
-                .progress_chars("=> "),
+            ProgressStyle::with_template(
+                "{msg} [{bar:30}] {pos}/{len} photons {elapsed} (eta {eta})",
+            )
+            .expect("template")
+            .progress_chars("=> "),
         );
         b.set_message(msg.to_string());
         b
@@ -169,14 +171,23 @@ fn slab(a: SlabArgs) -> Result<()> {
     if a.json {
         println!("{}", serde_json::to_string(&r)?);
     } else {
-        println!("specular R   {:.6} ± {:.6}", r.r_specular, r.stderr.r_specular);
-        println!("diffuse R    {:.6} ± {:.6}", r.r_diffuse, r.stderr.r_diffuse);
+        println!(
+            "specular R   {:.6} ± {:.6}",
+            r.r_specular, r.stderr.r_specular
+        );
+        println!(
+            "diffuse R    {:.6} ± {:.6}",
+            r.r_diffuse, r.stderr.r_diffuse
+        );
         println!("total T      {:.6} ± {:.6}", r.t_total, r.stderr.t_total);
         println!("absorbed A   {:.6} ± {:.6}", r.absorbed, r.stderr.absorbed);
         for (i, v) in r.absorbed_per_layer.iter().enumerate() {
             println!("  layer {}    {v:.6}", i + 1);
         }
-        println!("photons      {} in {:.3} s = {:.3e} photons/s on {}", r.photons, r.seconds, r.photons_per_s, r.device);
+        println!(
+            "photons      {} in {:.3} s = {:.3e} photons/s on {}",
+            r.photons, r.seconds, r.photons_per_s, r.device
+        );
     }
     Ok(())
 }
@@ -221,9 +232,18 @@ fn simulate(a: SimulateArgs, quiet: bool) -> Result<()> {
         println!("{}", serde_json::to_string(&r)?);
     } else {
         let c = r.linear_srgb;
-        println!("diffuse reflectance (albedo) linear sRGB  {:.4} {:.4} {:.4}", c[0], c[1], c[2]);
-        println!("XYZ                                      {:.4} {:.4} {:.4}", r.xyz[0], r.xyz[1], r.xyz[2]);
-        println!("reflected: specular {:.4}, diffuse {:.4}", r.reflected_specular, r.reflected_diffuse);
+        println!(
+            "diffuse reflectance (albedo) linear sRGB  {:.4} {:.4} {:.4}",
+            c[0], c[1], c[2]
+        );
+        println!(
+            "XYZ                                      {:.4} {:.4} {:.4}",
+            r.xyz[0], r.xyz[1], r.xyz[2]
+        );
+        println!(
+            "reflected: specular {:.4}, diffuse {:.4}",
+            r.reflected_specular, r.reflected_diffuse
+        );
         for (name, a) in r.layer_names.iter().zip(&r.absorbed) {
             let parts: Vec<String> = r
                 .absorber_names
@@ -232,7 +252,11 @@ fn simulate(a: SimulateArgs, quiet: bool) -> Result<()> {
                 .filter(|(_, v)| **v > 0.0)
                 .map(|(n, v)| format!("{n} {v:.4}"))
                 .collect();
-            println!("absorbed in {name:<17} {:.4}  ({})", a.iter().sum::<f64>(), parts.join(", "));
+            println!(
+                "absorbed in {name:<17} {:.4}  ({})",
+                a.iter().sum::<f64>(),
+                parts.join(", ")
+            );
         }
         println!(
             "{} photons in {:.2} s = {:.3e} photons/s on {}",
@@ -256,7 +280,10 @@ fn check_bio(b: &BioTexel) -> Result<()> {
             bail!("{name} {v} is outside [0, 1]");
         }
     }
-    for (name, v) in [("--sc-um", b.stratum_corneum_um), ("--epidermis-um", b.epidermis_um)] {
+    for (name, v) in [
+        ("--sc-um", b.stratum_corneum_um),
+        ("--epidermis-um", b.epidermis_um),
+    ] {
         if !(v.is_finite() && v > 0.0 && v <= 2000.0) {
             bail!("{name} {v} must be a thickness in (0, 2000] µm");
         }
@@ -264,7 +291,9 @@ fn check_bio(b: &BioTexel) -> Result<()> {
     Ok(())
 }
 
-const COLORS: [&str; 6] = ["#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b"];
+const COLORS: [&str; 6] = [
+    "#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b",
+];
 
 fn write_plots(r: &SkinResult, dir: &Path) -> Result<()> {
     let spectrum = Plot {
@@ -276,24 +305,40 @@ fn write_plots(r: &SkinResult, dir: &Path) -> Result<()> {
             Series {
                 label: "diffuse".into(),
                 color: COLORS[0].into(),
-                points: r.wavelengths_nm.iter().copied().zip(r.r_diffuse.iter().copied()).collect(),
+                points: r
+                    .wavelengths_nm
+                    .iter()
+                    .copied()
+                    .zip(r.r_diffuse.iter().copied())
+                    .collect(),
             },
             Series {
                 label: "specular".into(),
                 color: COLORS[1].into(),
-                points: r.wavelengths_nm.iter().copied().zip(r.r_specular.iter().copied()).collect(),
+                points: r
+                    .wavelengths_nm
+                    .iter()
+                    .copied()
+                    .zip(r.r_specular.iter().copied())
+                    .collect(),
             },
         ],
     };
     let b = r.brdf_bins;
     // In-plane slices (Δφ bins nearest 0 and π) for a few incident angles, luminance-like green.
     let mut brdf_series = Vec::new();
-    for (k, ti) in [0, b.theta_in / 3, 2 * b.theta_in / 3, b.theta_in - 1].into_iter().enumerate() {
+    for (k, ti) in [0, b.theta_in / 3, 2 * b.theta_in / 3, b.theta_in - 1]
+        .into_iter()
+        .enumerate()
+    {
         let (t_in, _, _) = b.centre(ti, 0, 0);
         let mut pts = Vec::new();
         for to in (0..b.theta_out).rev() {
             let (_, t_out, _) = b.centre(ti, to, 0);
-            pts.push((-t_out.to_degrees(), r.brdf_rgb[b.index(ti, to, b.phi - 1)][1]));
+            pts.push((
+                -t_out.to_degrees(),
+                r.brdf_rgb[b.index(ti, to, b.phi - 1)][1],
+            ));
         }
         for to in 0..b.theta_out {
             let (_, t_out, _) = b.centre(ti, to, 0);
@@ -330,7 +375,11 @@ fn write_plots(r: &SkinResult, dir: &Path) -> Result<()> {
             })
             .collect(),
     };
-    for (name, p) in [("spectrum.svg", spectrum), ("brdf.svg", brdf), ("profile.svg", profile)] {
+    for (name, p) in [
+        ("spectrum.svg", spectrum),
+        ("brdf.svg", brdf),
+        ("profile.svg", profile),
+    ] {
         derma_core::atomic::write_bytes(&dir.join(name), p.to_svg().as_bytes())
             .with_context(|| format!("writing {name}"))?;
     }
@@ -349,7 +398,8 @@ fn precompute(a: PrecomputeArgs, quiet: bool) -> Result<()> {
         Grid::default_grid()
     } else {
         let p = Path::new(&a.grid);
-        let text = std::fs::read_to_string(p).with_context(|| format!("reading grid '{}'", p.display()))?;
+        let text = std::fs::read_to_string(p)
+            .with_context(|| format!("reading grid '{}'", p.display()))?;
         Grid::parse(&text, p)?
     };
     let shard = Shard::parse(&a.shard)?;
@@ -384,7 +434,11 @@ fn precompute(a: PrecomputeArgs, quiet: bool) -> Result<()> {
         b.finish_and_clear();
     }
     if !quiet {
-        eprintln!("{} entries in {:.1} s", todo.len(), t0.elapsed().as_secs_f64());
+        eprintln!(
+            "{} entries in {:.1} s",
+            todo.len(),
+            t0.elapsed().as_secs_f64()
+        );
     }
     Ok(())
 }

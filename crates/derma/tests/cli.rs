@@ -403,12 +403,31 @@ fn bad_inputs_get_clear_errors() {
 #[test]
 fn optics_slab_json_and_errors() {
     let out = derma()
-        .args(["-q", "optics", "slab", "--layer", "0.2,10,90,0.75,1", "--photons", "20000", "--device", "cpu", "--json"])
+        .args([
+            "-q",
+            "optics",
+            "slab",
+            "--layer",
+            "0.2,10,90,0.75,1",
+            "--photons",
+            "20000",
+            "--device",
+            "cpu",
+            "--json",
+        ])
         .output()
         .unwrap();
     assert!(out.status.success());
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    for k in ["r_specular", "r_diffuse", "t_total", "absorbed", "photons", "photons_per_s", "device"] {
+    for k in [
+        "r_specular",
+        "r_diffuse",
+        "t_total",
+        "absorbed",
+        "photons",
+        "photons_per_s",
+        "device",
+    ] {
         assert!(v.get(k).is_some(), "missing key {k}");
     }
     for k in ["r_specular", "r_diffuse", "t_total", "absorbed"] {
@@ -434,7 +453,15 @@ fn optics_slab_json_and_errors() {
 fn optics_simulate_writes_result_and_plots() {
     let dir = tmp("optics-sim");
     let (ok, err) = run(&[
-        "optics", "simulate", "--photons", "8200", "--device", "cpu", "--plot", "--out", dir.to_str().unwrap(),
+        "optics",
+        "simulate",
+        "--photons",
+        "8200",
+        "--device",
+        "cpu",
+        "--plot",
+        "--out",
+        dir.to_str().unwrap(),
     ]);
     assert!(ok, "{err}");
     for f in ["result.json", "spectrum.svg", "brdf.svg", "profile.svg"] {
