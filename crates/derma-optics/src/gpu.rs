@@ -194,6 +194,41 @@ pub fn run_gpu(run: &Run, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
         rw,
     );
 
+    // One uniform buffer and bind group for all dispatches; only the parameters change.
+    let params_buf = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("params"),
+        size: std::mem::size_of::<Params>() as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let layout = g.pipeline.get_bind_group_layout(0);
+    let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: params_buf.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: layers_buf.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: chan_buf.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: acc_buf.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: counts_buf.as_entire_binding(),
+            },
+        ],
+    });
+
     let mut offset = 0u64;
     while offset < run.photons {
         let count = (run.photons - offset).min(per_dispatch) as u32;
@@ -219,38 +254,8 @@ pub fn run_gpu(run: &Run, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
             profile_bins: pbins as u32,
             profile_dmax: pdmax as f32,
         };
-        let params_buf = storage(
-            "params",
-            bytemuck::bytes_of(&params),
-            wgpu::BufferUsages::UNIFORM,
-        );
-        let layout = g.pipeline.get_bind_group_layout(0);
-        let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: None,
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: params_buf.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: layers_buf.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: chan_buf.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: acc_buf.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: counts_buf.as_entire_binding(),
-                },
-            ],
-        });
+        g.queue
+            .write_buffer(&params_buf, 0, bytemuck::bytes_of(&params));
         let mut enc = d.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
