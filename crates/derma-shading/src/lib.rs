@@ -7,12 +7,23 @@
 //! observer under D65 to linear sRGB. A lookup table with simplex interpolation
 //! ([`lut`]) makes it fast enough for 16-megapixel texture sets.
 
+pub mod annealing;
 pub mod appearance;
+pub mod ashikhmin_shirley;
+pub mod brdf_fit;
+pub mod burley;
 /// Chromophore spectra and Fresnel reflectance live in the optics crate; re-exported here.
 pub use derma_optics::{chromophore, fresnel};
+pub mod ggx;
+pub mod kelemen;
 pub mod kubelka_munk;
+pub mod least_squares;
 pub mod lut;
+pub mod microfacet_terms;
+pub mod render_model;
+pub mod skin_dual_lobe;
 pub mod spectral_km;
+pub mod sum_of_gaussians;
 
 pub use appearance::{Appearance, BioTexel};
 pub use spectral_km::{SkinLayers, SpectralKubelkaMunk};
