@@ -73,6 +73,18 @@ fn layer_from_parts(
 /// tissue; the dermis mixes whole blood (p_b, oxygenation p_o) with baseline tissue. The stratum
 /// corneum scatters like the epidermis (Donner & Jensen give one epidermal σs′).
 pub fn skin_stack(bio: &BioTexel, lambda_nm: f64, blood_oxy_deoxy: [f64; 2]) -> Stack {
+    skin_stack_with_epidermal_blood(bio, 0.0, lambda_nm, blood_oxy_deoxy)
+}
+
+/// [`skin_stack`] with whole blood also in the living epidermis, volume fraction
+/// `epidermal_blood` (the two-layer model of Donner et al. 2008 and Jimenez et al. 2010 §6,
+/// table 1, has epidermal hemoglobin C_he; it displaces baseline tissue like melanin does).
+pub fn skin_stack_with_epidermal_blood(
+    bio: &BioTexel,
+    epidermal_blood: f64,
+    lambda_nm: f64,
+    blood_oxy_deoxy: [f64; 2],
+) -> Stack {
     let pm = bio.melanin as f64;
     let pp = bio.pheomelanin as f64;
     let pb = bio.blood as f64;
@@ -87,7 +99,9 @@ pub fn skin_stack(bio: &BioTexel, lambda_nm: f64, blood_oxy_deoxy: [f64; 2]) -> 
     let mut epi = [0.0; N_ABSORBERS];
     epi[EU] = pm * (1.0 - pp) * chromophore::eumelanin(lambda_nm);
     epi[PHEO] = pm * pp * chromophore::pheomelanin(lambda_nm);
-    epi[BASE] = (1.0 - pm) * base;
+    epi[HBO2] = epidermal_blood * po * blood_oxy_deoxy[0];
+    epi[HB] = epidermal_blood * (1.0 - po) * blood_oxy_deoxy[1];
+    epi[BASE] = (1.0 - pm - epidermal_blood).max(0.0) * base;
     let dermis = |blood: f64| {
         let mut d = [0.0; N_ABSORBERS];
         d[HBO2] = blood * po * blood_oxy_deoxy[0];
@@ -132,10 +146,15 @@ pub fn skin_stack(bio: &BioTexel, lambda_nm: f64, blood_oxy_deoxy: [f64; 2]) -> 
 
 /// The skin stack on derma's 10 nm grid, 380–780 nm.
 pub fn skin_stacks(bio: &BioTexel) -> Vec<Stack> {
+    skin_stacks_with_epidermal_blood(bio, 0.0)
+}
+
+/// [`skin_stacks`] with epidermal blood (see [`skin_stack_with_epidermal_blood`]).
+pub fn skin_stacks_with_epidermal_blood(bio: &BioTexel, epidermal_blood: f64) -> Vec<Stack> {
     (0..N_WAVELENGTHS)
         .map(|i| {
             let blood = [chromophore::blood(i, 1.0), chromophore::blood(i, 0.0)];
-            skin_stack(bio, wavelength_nm(i), blood)
+            skin_stack_with_epidermal_blood(bio, epidermal_blood, wavelength_nm(i), blood)
         })
         .collect()
 }

@@ -1,7 +1,18 @@
 //! The bio → render interface (thesis §4.8.6, the model-match function mmd): what a texel's
-//! biology looks like to a renderer. Implementations: analytic spectral model (this crate).
+//! biology looks like to a renderer. Implementations: the analytic spectral model
+//! ([`crate::SpectralKubelkaMunk`]) and the Monte Carlo match table ([`crate::TableAppearance`]).
 
 pub use derma_optics::BioTexel;
+
+/// Subsurface scattering parameters engines take, per linear-sRGB channel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Subsurface {
+    /// Surface albedo of the diffusion profile (Burley's A; Unreal/Blender subsurface colour),
+    /// linear.
+    pub color: [f32; 3],
+    /// Scatter distance in mm (Christensen & Burley 2015's mean free path ℓ).
+    pub radius_mm: [f32; 3],
+}
 
 /// Converts bio parameters to render parameters.
 pub trait Appearance: Send + Sync {
@@ -11,4 +22,12 @@ pub trait Appearance: Send + Sync {
     /// reflectance under D65 including internal reflection at the skin surface, excluding the
     /// external specular reflection, which the renderer adds from the specular map.
     fn albedo(&self, bio: &BioTexel) -> [f32; 3];
+    /// Subsurface parameters, where the implementation knows them.
+    fn subsurface(&self, _bio: &BioTexel) -> Option<Subsurface> {
+        None
+    }
+    /// Albedo and subsurface together (one table lookup for implementations that can).
+    fn shade(&self, bio: &BioTexel) -> ([f32; 3], Option<Subsurface>) {
+        (self.albedo(bio), self.subsurface(bio))
+    }
 }

@@ -12,6 +12,7 @@ pub mod appearance;
 pub mod ashikhmin_shirley;
 pub mod brdf_fit;
 pub mod burley;
+pub mod error;
 /// Chromophore spectra and Fresnel reflectance live in the optics crate; re-exported here.
 pub use derma_optics::{chromophore, fresnel};
 pub mod ggx;
@@ -19,11 +20,17 @@ pub mod kelemen;
 pub mod kubelka_munk;
 pub mod least_squares;
 pub mod lut;
+pub mod match_table;
 pub mod microfacet_terms;
 pub mod render_model;
+pub mod skin_color_lut;
 pub mod skin_dual_lobe;
 pub mod spectral_km;
 pub mod sum_of_gaussians;
+pub mod table_appearance;
 
-pub use appearance::{Appearance, BioTexel};
+pub use appearance::{Appearance, BioTexel, Subsurface};
+pub use error::{Result, ShadingError};
+pub use match_table::MatchTable;
 pub use spectral_km::{SkinLayers, SpectralKubelkaMunk};
+pub use table_appearance::TableAppearance;

@@ -15,8 +15,10 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Every file `derma skin` writes into its output directory.
-pub const OUTPUT_FILES: [&str; 13] = [
+pub const OUTPUT_FILES: [&str; 15] = [
     "base_color.png",
+    "sss_color.png",
+    "sss_radius.png",
     "normal.png",
     "height.exr",
     "height.png",
@@ -31,9 +33,32 @@ pub const OUTPUT_FILES: [&str; 13] = [
     "report.json",
 ];
 
+/// Which bio → render conversion the texture set uses.
+#[derive(Clone, Default)]
+pub enum AppearanceChoice {
+    /// The built-in Monte Carlo match table (derma's default).
+    #[default]
+    Default,
+    /// The analytic spectral Kubelka–Munk model.
+    Analytic,
+    /// A match table read by the caller.
+    Table(std::sync::Arc<derma_shading::TableAppearance>),
+}
+
+impl std::fmt::Debug for AppearanceChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            AppearanceChoice::Default => "Default",
+            AppearanceChoice::Analytic => "Analytic",
+            AppearanceChoice::Table(_) => "Table",
+        })
+    }
+}
+
 /// Files given on the command line (they override the config's `surface.mesh`).
 #[derive(Clone, Debug, Default)]
 pub struct Inputs {
+    pub appearance: AppearanceChoice,
     pub mesh: Option<PathBuf>,
     pub fields_dir: Option<PathBuf>,
     /// Directory relative to which paths in the config are resolved.
@@ -259,11 +284,23 @@ pub fn generate(cfg: &SkinConfig, inputs: &Inputs, progress: &dyn Progress) -> R
     lap("paint", &mut timings);
 
     progress.stage("convert", 1);
-    let appearance = derma_shading::SpectralKubelkaMunk::default();
+    let analytic;
+    let builtin;
+    let appearance: &dyn Appearance = match &inputs.appearance {
+        AppearanceChoice::Analytic => {
+            analytic = derma_shading::SpectralKubelkaMunk::default();
+            &analytic
+        }
+        AppearanceChoice::Default => {
+            builtin = derma_shading::TableAppearance::builtin();
+            &builtin
+        }
+        AppearanceChoice::Table(t) => t.as_ref(),
+    };
     let render = crate::texture_set::convert(
         &bio,
         &surface,
-        &appearance,
+        appearance,
         &cfg.material,
         dilation.as_deref(),
     );

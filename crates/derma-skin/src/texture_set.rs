@@ -28,7 +28,20 @@ pub struct RenderMaps {
     /// Tangent-space normal in [−1, 1].
     pub normal: [Map; 3],
     pub height_mm: Map,
+    /// Subsurface maps, when the appearance provides them (the match table does).
+    pub subsurface: Option<SubsurfaceMaps>,
 }
+
+/// Per-texel subsurface parameters (linear sRGB channels).
+pub struct SubsurfaceMaps {
+    /// Burley's surface albedo A (subsurface colour), linear.
+    pub color: [Map; 3],
+    /// Scatter distance (mean free path ℓ) in mm.
+    pub radius_mm: [Map; 3],
+}
+
+/// sss_radius.png stores ℓ / SSS_RADIUS_RANGE_MM (16-bit): 0–8 mm, the radial profile's range.
+pub const SSS_RADIUS_RANGE_MM: f32 = 8.0;
 
 /// Converts painted bio maps (already dilated on meshes, see [`BioMaps::dilate`]) to render maps;
 /// `dilation` fills the normal map's texels outside the UV charts.
@@ -44,14 +57,27 @@ pub fn convert(
     let mut rgb = vec![[0.0f32; 3]; n];
     let mut rough = vec![0.0f32; n];
     let mut spec = vec![0.0f32; n];
+    let mut sss = vec![[0.0f32; 6]; n];
+    let has_sss = appearance.subsurface(&bio.texels[0].texel()).is_some();
     rgb.par_chunks_mut(w)
         .zip(rough.par_chunks_mut(w))
         .zip(spec.par_chunks_mut(w))
+        .zip(sss.par_chunks_mut(w))
         .enumerate()
-        .for_each(|(y, ((c, r), s))| {
+        .for_each(|(y, (((c, r), s), ss))| {
             for x in 0..w {
                 let t = &bio.texels[y * w + x];
-                let a = appearance.albedo(&t.texel());
+                let (a, sub) = appearance.shade(&t.texel());
+                if let Some(sub) = sub {
+                    ss[x] = [
+                        sub.color[0],
+                        sub.color[1],
+                        sub.color[2],
+                        sub.radius_mm[0],
+                        sub.radius_mm[1],
+                        sub.radius_mm[2],
+                    ];
+                }
                 let ea = t.extra[3].clamp(0.0, 1.0);
                 c[x] = std::array::from_fn(|k| a[k] + (t.extra[k] - a[k]) * ea);
                 let base_r = material.roughness_skin
@@ -68,6 +94,13 @@ pub fn convert(
     let base_color =
         [0, 1, 2].map(|k| Map::from_vec(w, h, rgb.iter().map(|c| c[k]).collect()).expect("size"));
     let roughness = Map::from_vec(w, h, rough).expect("size");
+    let subsurface = has_sss.then(|| {
+        let ch = |k: usize| Map::from_vec(w, h, sss.iter().map(|v| v[k]).collect()).expect("size");
+        SubsurfaceMaps {
+            color: [ch(0), ch(1), ch(2)],
+            radius_mm: [ch(3), ch(4), ch(5)],
+        }
+    });
     let specular = Map::from_vec(w, h, spec).expect("size");
     if let Some(src) = dilation {
         normal
@@ -80,6 +113,7 @@ pub fn convert(
         specular,
         normal,
         height_mm,
+        subsurface,
     }
 }
 
@@ -217,6 +251,37 @@ pub fn write_maps(
         let refs: Vec<(&str, &Map)> = chans.iter().map(|(n, m)| (*n, m)).collect();
         Ok(image_io::write_exr(&dir.join("bio.exr"), &refs, ExrPrecision::F16)?)
     })));
+    if let Some(sub) = &maps.subsurface {
+        list.push((
+            "sss_color.png",
+            "sRGB",
+            "subsurface colour: Burley 2015 surface albedo A of the fitted diffusion profile (Unreal Subsurface Color, Blender Subsurface Color), 8-bit sRGB",
+            Box::new(|| {
+                let c = &sub.color;
+                Ok(image_io::write_png8_srgb(
+                    &dir.join("sss_color.png"),
+                    &[&c[0], &c[1], &c[2]],
+                )?)
+            }),
+        ));
+        list.push((
+            "sss_radius.png",
+            "linear (non-colour)",
+            "subsurface scatter distance per channel (Christensen & Burley 2015 mean free path, Blender Subsurface Radius), 16-bit, 0 ↔ 0 mm and 1 ↔ 8 mm",
+            Box::new(|| {
+                let r = sub.radius_mm.clone().map(|mut m| {
+                    m.data_mut()
+                        .iter_mut()
+                        .for_each(|v| *v = (*v / SSS_RADIUS_RANGE_MM).clamp(0.0, 1.0));
+                    m
+                });
+                Ok(image_io::write_png16(
+                    &dir.join("sss_radius.png"),
+                    &[&r[0], &r[1], &r[2]],
+                )?)
+            }),
+        ));
+    }
     let entries = list
         .iter()
         .map(|(f, c, m, _)| OutputEntry {

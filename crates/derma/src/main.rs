@@ -1,6 +1,7 @@
 //! `derma`: the command-line tool. Thin: parses flags and config, calls the libraries, shows
 //! progress, and writes report.json and manifest.json.
 
+mod matching;
 mod optics;
 mod skin;
 
@@ -30,6 +31,9 @@ enum Command {
     /// Skin optics: Monte Carlo light transport in layered skin (CPU and GPU).
     #[command(subcommand)]
     Optics(optics::OpticsCommand),
+    /// Model matching: fit render models to the optics, and the skin-colour LUT.
+    #[command(subcommand)]
+    Match(matching::MatchCommand),
 }
 
 fn main() {
@@ -46,6 +50,7 @@ fn main() {
     let result = match cli.command {
         Command::Skin(args) => skin::run(args, cli.quiet),
         Command::Optics(cmd) => optics::run(cmd, cli.quiet),
+        Command::Match(cmd) => matching::run(cmd, cli.quiet),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -33,7 +33,7 @@ pub enum DeviceArg {
     Gpu,
 }
 
-fn resolve(d: DeviceArg) -> Device {
+pub fn resolve(d: DeviceArg) -> Device {
     match d {
         DeviceArg::Cpu => Device::Cpu,
         DeviceArg::Gpu => Device::Gpu,

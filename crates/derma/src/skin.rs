@@ -46,6 +46,19 @@ pub struct SkinArgs {
     /// paint over the fields and run `derma skin --mesh DIR/head.obj --fields DIR`.
     #[arg(long, value_name = "DIR")]
     export_template: Option<PathBuf>,
+    /// Bio → render conversion: `table` (the Monte Carlo match table, default; adds
+    /// sss_color.png and sss_radius.png) or `analytic` (spectral Kubelka–Munk, colour only).
+    #[arg(long, value_enum, default_value = "table")]
+    appearance: AppearanceArg,
+    /// A match table from `derma match fit` instead of the built-in one (implies table).
+    #[arg(long, value_name = "FILE.dtab")]
+    table: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum AppearanceArg {
+    Table,
+    Analytic,
 }
 
 struct Bars {
@@ -191,7 +204,19 @@ pub fn run(args: SkinArgs, quiet: bool) -> Result<()> {
         Some(b)
     };
     let progress = Bars { bar, quiet };
+    let appearance = match (&args.table, args.appearance) {
+        (Some(_), AppearanceArg::Analytic) => {
+            bail!("--table and --appearance analytic contradict each other")
+        }
+        (Some(p), _) => derma_skin::generate::AppearanceChoice::Table(std::sync::Arc::new(
+            derma_shading::TableAppearance::read(p)
+                .with_context(|| format!("reading match table {}", p.display()))?,
+        )),
+        (None, AppearanceArg::Table) => derma_skin::generate::AppearanceChoice::Default,
+        (None, AppearanceArg::Analytic) => derma_skin::generate::AppearanceChoice::Analytic,
+    };
     let inputs = Inputs {
+        appearance,
         mesh: args.mesh.clone(),
         fields_dir: args.fields.clone(),
         config_dir: args

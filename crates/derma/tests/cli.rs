@@ -22,7 +22,7 @@ fn run(args: &[&str]) -> (bool, String) {
     )
 }
 
-const ALL: [&str; 13] = derma_skin::generate::OUTPUT_FILES;
+const ALL: [&str; 15] = derma_skin::generate::OUTPUT_FILES;
 
 fn report(dir: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
@@ -471,4 +471,164 @@ fn optics_simulate_writes_result_and_plots() {
         serde_json::from_slice(&std::fs::read(dir.join("result.json")).unwrap()).unwrap();
     assert_eq!(r["r_diffuse"].as_array().unwrap().len(), 41);
     assert!(r["bookkeeping_error"].as_f64().unwrap().abs() < 1e-9);
+}
+
+#[test]
+fn match_fit_table_plots_and_skin_with_it() {
+    let dir = tmp("match");
+    let grid = dir.join("grid.toml");
+    std::fs::write(
+        &grid,
+        "photons = 30000\nseed = 3\nbrdf = [6, 6, 8]\nprofile_bins = 32\nprofile_d_max_mm = 6.0\n\
+         [axes]\nmelanin = [0.01, 0.3]\npheomelanin = [0.3]\nblood = [0.02]\noxygenation = [0.75]\n\
+         stratum_corneum_um = [15.0]\nepidermis_um = [80.0]\n",
+    )
+    .unwrap();
+    let pre = dir.join("pre");
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let (ok, err) = run(&[
+        "optics",
+        "precompute",
+        "--grid",
+        &s(&grid),
+        "--out",
+        &s(&pre),
+        "--device",
+        "cpu",
+    ]);
+    assert!(ok, "{err}");
+    let pre_t = dir.join("pre.dtab");
+    let (ok, err) = run(&["optics", "merge", &s(&pre), "--out", &s(&pre_t)]);
+    assert!(ok, "{err}");
+    let table = dir.join("table.dtab");
+    let plots = dir.join("plots");
+    let out = derma()
+        .args([
+            "match",
+            "fit",
+            "--grid",
+            &s(&pre_t),
+            "--out",
+            &s(&table),
+            "--model",
+            "ggx,kelemen",
+            "--anneal-steps",
+            "60",
+            "--plots",
+            &s(&plots),
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("ggx") && stdout.contains("burley"),
+        "{stdout}"
+    );
+    assert!(table.exists() && dir.join("table.dtab.json").exists());
+    let csv = std::fs::read_to_string(dir.join("table.residuals.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 3, "{csv}");
+    assert!(csv.starts_with("node,melanin,"));
+    assert!(plots.join("profile-node0.svg").exists());
+    assert!(std::fs::read_dir(&plots).unwrap().count() >= 4);
+    // The table drives the skin job: subsurface maps appear, darker melanin node → darker.
+    let t = derma_shading::MatchTable::read(&table).unwrap();
+    let fair = t
+        .value_at(&[0.01, 0.3, 0.02, 0.75, 15.0, 80.0], "ggx")
+        .unwrap();
+    let dark = t
+        .value_at(&[0.3, 0.3, 0.02, 0.75, 15.0, 80.0], "ggx")
+        .unwrap();
+    assert!(dark[0] < fair[0] && dark[1] < fair[1], "{fair:?} {dark:?}");
+    let sk = dir.join("skin");
+    let (ok, err) = run(&[
+        "skin",
+        "--size",
+        "64",
+        "--table",
+        &s(&table),
+        "--out",
+        &s(&sk),
+    ]);
+    assert!(ok, "{err}");
+    assert!(sk.join("sss_radius.png").exists() && sk.join("sss_color.png").exists());
+    assert_eq!(report(&sk)["appearance"], "match-table");
+    // The analytic appearance writes no subsurface maps.
+    let an = dir.join("analytic");
+    let (ok, err) = run(&[
+        "skin",
+        "--size",
+        "64",
+        "--appearance",
+        "analytic",
+        "--out",
+        &s(&an),
+    ]);
+    assert!(ok, "{err}");
+    assert!(!an.join("sss_radius.png").exists());
+    assert_eq!(report(&an)["appearance"], "spectral-km");
+    // Errors name the problem.
+    let (ok, err) = run(&[
+        "match",
+        "fit",
+        "--grid",
+        &s(&pre_t),
+        "--out",
+        &s(&table),
+        "--model",
+        "phong",
+    ]);
+    assert!(
+        !ok && err.contains("phong") && err.contains("kelemen"),
+        "{err}"
+    );
+    let (ok, err) = run(&["match", "fit", "--grid", &s(&pre_t), "--out", &s(&pre_t)]);
+    assert!(!ok && err.contains("--out must differ"), "{err}");
+    let (ok, err) = run(&[
+        "skin",
+        "--size",
+        "64",
+        "--table",
+        &s(&pre_t),
+        "--out",
+        &s(&sk),
+    ]);
+    assert!(!ok && err.contains("not a derma match table"), "{err}");
+}
+
+#[test]
+fn match_lut_png_and_dtab() {
+    let dir = tmp("lut");
+    let png = dir.join("lut.png");
+    let dt = dir.join("lut.dtab");
+    let (ok, err) = run(&[
+        "match",
+        "lut",
+        "--size",
+        "3",
+        "--photons",
+        "3000",
+        "--out",
+        png.to_str().unwrap(),
+        "--out",
+        dt.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let img = derma_core::image_io::read_rgb(&png).unwrap();
+    assert_eq!(img.channels[0].width(), 3);
+    let t = derma_core::dtab::Dtab::read(&dt).unwrap();
+    assert_eq!(t.header.nodes(), 9);
+    assert_eq!(t.header.meta["eumelanin_blend"], 0.61);
+    let (ok, err) = run(&[
+        "match",
+        "lut",
+        "--out",
+        dir.join("lut.jpg").to_str().unwrap(),
+    ]);
+    assert!(!ok && err.contains(".png or .dtab"), "{err}");
 }

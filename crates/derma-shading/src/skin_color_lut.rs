@@ -1,0 +1,258 @@
+//! The skin-colour lookup table of Jimenez et al. 2010 (§6, eq. 7, fig. 9): RGB over
+//! u = ∛C_m (melanin) and v = ∛C_hd (dermal hemoglobin), with a 61 % eumelanin blend and
+//! epidermal hemoglobin C_he = 0.25 C_hd, each entry the total diffuse reflectance of the
+//! optics crate's Monte Carlo skin under diffuse light.
+//!
+//! Every entry uses the same photon seed (common random numbers), so the table is smooth in
+//! its parameters: neighbouring entries share their random paths and differ only by physics.
+
+use crate::error::{Result, ShadingError};
+use derma_core::color::{reflectance_to_linear_srgb, Spectrum, N_WAVELENGTHS};
+use derma_core::dtab::{Dtab, DtabAxis, DtabHeader, DtabValue};
+use derma_optics::run::{Device, Run};
+use derma_optics::specimen::skin_stacks_with_epidermal_blood;
+use derma_optics::tally::R_DIFFUSE;
+use derma_optics::transport::Incidence;
+use derma_optics::BioTexel;
+
+/// Settings of the LUT.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LutOptions {
+    /// Entries per axis.
+    pub size: usize,
+    pub photons: u64,
+    pub seed: u64,
+    /// Eumelanin share of melanin, β_m = 0.61 (Jimenez et al. 2010, fig. 9).
+    pub eumelanin: f64,
+    /// C_he / C_hd = 0.25 (Jimenez et al. 2010, §6).
+    pub epidermal_ratio: f64,
+    /// Top of the melanin axis, C_m ≤ 0.5 (Jimenez et al. 2010, table 1).
+    pub melanin_max: f64,
+    /// Top of the dermal hemoglobin axis, C_hd ≤ 0.32 (Jimenez et al. 2010, table 1).
+    pub blood_max: f64,
+    /// The rest of the specimen: BioSpec's fair defaults ([`BioTexel::FAIR`]).
+    pub oxygenation: f64,
+    pub stratum_corneum_um: f64,
+    pub epidermis_um: f64,
+}
+
+impl Default for LutOptions {
+    /// 32 × 32 entries of 2·10⁴ photons: about 1 % colour noise per entry (41 wavelengths,
+    /// ~500 photons each) and a couple of minutes on two cores.
+    fn default() -> Self {
+        Self {
+            size: 32,
+            photons: 20_000,
+            seed: 1,
+            eumelanin: 0.61,
+            epidermal_ratio: 0.25,
+            melanin_max: 0.5,
+            blood_max: 0.32,
+            oxygenation: BioTexel::FAIR.oxygenation as f64,
+            stratum_corneum_um: BioTexel::FAIR.stratum_corneum_um as f64,
+            epidermis_um: BioTexel::FAIR.epidermis_um as f64,
+        }
+    }
+}
+
+/// The table: `rgb[v * size + u]`, linear sRGB under D65.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkinColorLut {
+    pub options: LutOptions,
+    pub rgb: Vec<[f32; 3]>,
+}
+
+/// Total diffuse reflectance (linear sRGB) of skin with melanin `c_m` and dermal blood `c_hd`.
+pub fn entry_color(opts: &LutOptions, c_m: f64, c_hd: f64, device: Device) -> Result<[f64; 3]> {
+    let bio = BioTexel {
+        melanin: c_m as f32,
+        pheomelanin: (1.0 - opts.eumelanin) as f32,
+        blood: c_hd as f32,
+        oxygenation: opts.oxygenation as f32,
+        stratum_corneum_um: opts.stratum_corneum_um as f32,
+        epidermis_um: opts.epidermis_um as f32,
+    };
+    let run = Run {
+        stacks: skin_stacks_with_epidermal_blood(&bio, opts.epidermal_ratio * c_hd),
+        photons: opts.photons,
+        seed: opts.seed,
+        incidence: Incidence::ArcsinZenith,
+        brdf: None,
+        profile: None,
+        channel_weights: Vec::new(),
+    };
+    let t = derma_optics::backend::run_on(&run, device, &|_| {})?;
+    let r: Spectrum =
+        std::array::from_fn(|i| t.per_lambda[i][R_DIFFUSE] / t.per_lambda_count[i].max(1) as f64);
+    debug_assert_eq!(r.len(), N_WAVELENGTHS);
+    Ok(reflectance_to_linear_srgb(&r))
+}
+
+impl SkinColorLut {
+    /// Node value of axis position `i` for an axis topping at `max`: (i/(n−1) · ∛max)³.
+    pub fn node(&self, i: usize, max: f64) -> f64 {
+        let u = i as f64 / (self.options.size - 1) as f64 * max.cbrt();
+        u * u * u
+    }
+
+    /// Simulates every entry; `progress` gets the entries done.
+    pub fn build(opts: LutOptions, device: Device, progress: &dyn Fn(usize)) -> Result<Self> {
+        if opts.size < 2 || opts.photons == 0 {
+            return Err(ShadingError::Invalid(format!(
+                "LUT size {} and photons {} must be at least 2 and 1",
+                opts.size, opts.photons
+            )));
+        }
+        for (name, v) in [
+            ("eumelanin", opts.eumelanin),
+            ("epidermal ratio", opts.epidermal_ratio),
+            ("melanin max", opts.melanin_max),
+            ("blood max", opts.blood_max),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(ShadingError::Invalid(format!("{name} {v} outside [0, 1]")));
+            }
+        }
+        let mut lut = Self {
+            options: opts,
+            rgb: Vec::with_capacity(opts.size * opts.size),
+        };
+        for v in 0..opts.size {
+            for u in 0..opts.size {
+                let c = entry_color(
+                    &opts,
+                    lut.node(u, opts.melanin_max),
+                    lut.node(v, opts.blood_max),
+                    device,
+                )?;
+                lut.rgb.push(c.map(|x| x as f32));
+                progress(lut.rgb.len());
+            }
+        }
+        Ok(lut)
+    }
+
+    /// Jimenez et al. 2010 eq. 7, normalised to [0, 1]: (∛C_m / ∛C_m,max, ∛C_hd / ∛C_hd,max).
+    pub fn uv(&self, c_m: f64, c_hd: f64) -> (f64, f64) {
+        (
+            (c_m.max(0.0) / self.options.melanin_max).cbrt().min(1.0),
+            (c_hd.max(0.0) / self.options.blood_max).cbrt().min(1.0),
+        )
+    }
+
+    /// Bilinear lookup, as a GPU samples the texture.
+    pub fn lookup(&self, c_m: f64, c_hd: f64) -> [f64; 3] {
+        let n = self.options.size;
+        let (u, v) = self.uv(c_m, c_hd);
+        let (x, y) = (u * (n - 1) as f64, v * (n - 1) as f64);
+        let (i, j) = ((x as usize).min(n - 2), (y as usize).min(n - 2));
+        let (fx, fy) = (x - i as f64, y - j as f64);
+        let at = |a: usize, b: usize| self.rgb[b * n + a];
+        std::array::from_fn(|c| {
+            let top = at(i, j)[c] as f64 * (1.0 - fx) + at(i + 1, j)[c] as f64 * fx;
+            let bot = at(i, j + 1)[c] as f64 * (1.0 - fx) + at(i + 1, j + 1)[c] as f64 * fx;
+            top * (1.0 - fy) + bot * fy
+        })
+    }
+
+    /// As a `.dtab` over (∛C_hd, ∛C_m), value "linear_srgb".
+    pub fn to_dtab(&self) -> Dtab {
+        let n = self.options.size;
+        let ax = |name: &str, max: f64| DtabAxis {
+            name: name.into(),
+            values: (0..n)
+                .map(|i| i as f64 / (n - 1) as f64 * max.cbrt())
+                .collect(),
+        };
+        let o = &self.options;
+        Dtab {
+            header: DtabHeader {
+                axes: vec![
+                    ax("blood_cbrt", o.blood_max),
+                    ax("melanin_cbrt", o.melanin_max),
+                ],
+                values: vec![DtabValue {
+                    name: "linear_srgb".into(),
+                    len: 3,
+                }],
+                meta: serde_json::json!({
+                    "kind": "derma skin colour LUT",
+                    "source": "Jimenez et al. 2010 §6 eq. 7: u = cbrt(C_m), v = cbrt(C_hd); total diffuse reflectance of derma's Monte Carlo skin under diffuse light",
+                    "eumelanin_blend": o.eumelanin,
+                    "epidermal_hemoglobin_ratio": o.epidermal_ratio,
+                    "melanin_max": o.melanin_max,
+                    "blood_max": o.blood_max,
+                    "oxygenation": o.oxygenation,
+                    "stratum_corneum_um": o.stratum_corneum_um,
+                    "epidermis_um": o.epidermis_um,
+                    "photons_per_entry": o.photons,
+                    "seed": o.seed,
+                    "png": "u (melanin) along x, v (hemoglobin) along y from the top; sRGB-encoded 16-bit",
+                }),
+            },
+            data: self.rgb.iter().flatten().copied().collect(),
+        }
+    }
+
+    /// The table as images: three channels of `size × size`, linear.
+    pub fn channels(&self) -> [derma_core::Map; 3] {
+        let n = self.options.size;
+        [0, 1, 2].map(|c| {
+            derma_core::Map::from_vec(n, n, self.rgb.iter().map(|p| p[c]).collect()).expect("size")
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn small() -> SkinColorLut {
+        let o = LutOptions {
+            size: 4,
+            photons: 6000,
+            ..Default::default()
+        };
+        SkinColorLut::build(o, Device::Cpu, &|_| {}).unwrap()
+    }
+
+    #[test]
+    fn monotonic_in_melanin_and_blood_reddens() {
+        let lut = small();
+        let n = lut.options.size;
+        for v in 0..n {
+            for u in 1..n {
+                let (a, b) = (lut.rgb[v * n + u - 1], lut.rgb[v * n + u]);
+                for c in 0..3 {
+                    assert!(b[c] < a[c], "row {v}, u {u}, channel {c}: {a:?} → {b:?}");
+                }
+            }
+        }
+        // More hemoglobin at low melanin: green drops more than red (skin reddens).
+        let (a, b) = (lut.rgb[0], lut.rgb[(n - 1) * n]);
+        assert!(b[1] / a[1] < b[0] / a[0], "{a:?} {b:?}");
+        // Pale skin is bright, dark skin is dark.
+        assert!(
+            lut.rgb[0][0] > 0.4 && lut.rgb[n - 1][0] < 0.2,
+            "{:?}",
+            lut.rgb
+        );
+        // Lookup at nodes returns the node; the cube-root axis puts C_m = 0.5·(1/3)³ at u = 1/3.
+        let c = lut.lookup(lut.node(1, 0.5), 0.0);
+        assert!((c[0] - lut.rgb[1][0] as f64).abs() < 1e-6);
+        let (u, _) = lut.uv(0.5 / 27.0, 0.0);
+        assert!((u - 1.0 / 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn deterministic() {
+        let o = LutOptions {
+            size: 2,
+            photons: 2000,
+            ..Default::default()
+        };
+        let a = SkinColorLut::build(o, Device::Cpu, &|_| {}).unwrap();
+        let b = SkinColorLut::build(o, Device::Cpu, &|_| {}).unwrap();
+        assert_eq!(a, b);
+    }
+}
