@@ -58,7 +58,7 @@ impl RenderModel for AshikhminShirley {
         Basis {
             offset: spec,
             diffuse,
-            lobes: [0.0; 2],
+            lobes: [0.0; 3],
         }
     }
 }

@@ -32,6 +32,13 @@ impl Weighting {
     }
 }
 
+/// Fits leave out bins beyond 80° zenith (as Ngan, Matusik & Durand 2005, "Experimental
+/// analysis of BRDF models", do with measured data): the Monte Carlo's surface has no
+/// shadowing or masking (BioSpec's perturbed normals, thesis §4.4), so its grazing bins grow as
+/// 1/cosθ where every render model with a masking term goes to zero, and those bins would
+/// otherwise dominate the squared difference. The cut-off is a parameter.
+pub const DEFAULT_MAX_ZENITH_DEG: f64 = 80.0;
+
 /// Gauss–Legendre 2-point nodes on [0, 1].
 const GL2: [f64; 2] = [0.211_324_865_405_187_1, 0.788_675_134_594_812_9];
 /// Quadrature points per bin.
@@ -41,6 +48,8 @@ pub const POINTS_PER_BIN: usize = 8;
 pub struct FitGeometry {
     pub bins: BrdfBins,
     pub weighting: Weighting,
+    /// Bins whose incident or outgoing zenith centre lies beyond this (degrees) get weight 0.
+    pub max_zenith_deg: f64,
     /// `POINTS_PER_BIN` direction pairs per bin.
     dirs: Vec<Dirs>,
     /// Per-bin weight, Σ = 1.
@@ -48,7 +57,12 @@ pub struct FitGeometry {
 }
 
 impl FitGeometry {
+    /// Bins with both zenith centres up to [`DEFAULT_MAX_ZENITH_DEG`].
     pub fn new(bins: BrdfBins, weighting: Weighting) -> Self {
+        Self::with_cutoff(bins, weighting, DEFAULT_MAX_ZENITH_DEG)
+    }
+
+    pub fn with_cutoff(bins: BrdfBins, weighting: Weighting, max_zenith_deg: f64) -> Self {
         let (ni, no, np) = (bins.theta_in, bins.theta_out, bins.phi);
         let mut dirs = Vec::with_capacity(bins.len() * POINTS_PER_BIN);
         let mut weight = Vec::with_capacity(bins.len());
@@ -75,9 +89,13 @@ impl FitGeometry {
                     }
                     let ci = ((ti as f64 + 0.5) * FRAC_PI_2 / ni as f64).cos();
                     let co = ((to as f64 + 0.5) * FRAC_PI_2 / no as f64).cos();
-                    weight.push(match weighting {
-                        Weighting::Cosine => ci * co,
-                        Weighting::Uniform => 1.0,
+                    let zi = (ti as f64 + 0.5) * 90.0 / ni as f64;
+                    let zo = (to as f64 + 0.5) * 90.0 / no as f64;
+                    let keep = zi <= max_zenith_deg && zo <= max_zenith_deg;
+                    weight.push(match (keep, weighting) {
+                        (false, _) => 0.0,
+                        (true, Weighting::Cosine) => ci * co,
+                        (true, Weighting::Uniform) => 1.0,
                     });
                 }
             }
@@ -87,6 +105,7 @@ impl FitGeometry {
         Self {
             bins,
             weighting,
+            max_zenith_deg,
             dirs,
             weight,
         }
@@ -311,7 +330,7 @@ mod tests {
             (ModelKind::Kelemen, vec![0.55, 0.35, 0.25, 0.6, 0.35]),
             (
                 ModelKind::SkinDualLobe,
-                vec![0.55, 0.35, 0.25, 0.3, 0.7, 0.2, 0.8],
+                vec![0.55, 0.35, 0.25, 0.3, 0.7, 0.4, 0.2, 0.8, 0.5],
             ),
         ];
         for (kind, p) in truth {
@@ -341,7 +360,11 @@ mod tests {
         assert!((g.weight.iter().sum::<f64>() - 1.0).abs() < 1e-12);
         assert!(g.weight[0] > g.weight[g.len() - 1]);
         let u = FitGeometry::new(bins(), Weighting::Uniform);
-        assert!((u.weight[0] - u.weight[u.len() - 1]).abs() < 1e-15);
+        // Bin (θi 75°, θo 75°, last φ) is kept and weighs like bin 0; θo = 85° is cut off.
+        assert!((u.weight[0] - u.weight[bins().index(7, 7, 11)]).abs() < 1e-15);
+        assert_eq!(u.weight[bins().index(7, 8, 11)], 0.0);
+        let all = FitGeometry::with_cutoff(bins(), Weighting::Uniform, 90.0);
+        assert!(all.weight.iter().all(|&w| w > 0.0));
     }
 
     #[test]

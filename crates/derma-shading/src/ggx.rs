@@ -44,7 +44,7 @@ impl RenderModel for GltfGgx {
         Basis {
             offset: f * ggx_d(d.n_h, alpha) * ggx_smith_visibility(d.n_l, d.n_v, alpha),
             diffuse: (1.0 - f) * FRAC_1_PI,
-            lobes: [0.0; 2],
+            lobes: [0.0; 3],
         }
     }
 }

@@ -42,6 +42,7 @@ impl RenderModel for KelemenSzirmayKalos {
             lobes: [
                 beckmann_d(d.n_h, theta[0]) * schlick(SKIN_F0, d.h_l) / (4.0 * hl2),
                 0.0,
+                0.0,
             ],
         }
     }

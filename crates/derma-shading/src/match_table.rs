@@ -25,6 +25,8 @@ pub struct MatchOptions {
     pub fit: FitOptions,
     /// Gaussians in the sum-of-Gaussians profile fit (d'Eon et al. use 6 for skin).
     pub gaussians: usize,
+    /// BRDF bins beyond this zenith (degrees) are left out of the fit.
+    pub max_zenith_deg: f64,
 }
 
 impl Default for MatchOptions {
@@ -34,6 +36,7 @@ impl Default for MatchOptions {
             weighting: Weighting::Cosine,
             fit: FitOptions::default(),
             gaussians: 6,
+            max_zenith_deg: crate::brdf_fit::DEFAULT_MAX_ZENITH_DEG,
         }
     }
 }
@@ -123,7 +126,7 @@ pub fn fit_table(
         bins: grid.profile_bins,
         d_max_mm: grid.profile_d_max_mm,
     };
-    let geom = FitGeometry::new(bins, opts.weighting);
+    let geom = FitGeometry::with_cutoff(bins, opts.weighting, opts.max_zenith_deg);
     let nodes = pre.header.nodes();
     // Check the values are there before spending minutes.
     for name in ["linear_srgb", "brdf_rgb", "profile_rgb"] {
@@ -169,6 +172,7 @@ pub fn fit_table(
         "kind": "derma match table",
         "models": models,
         "weighting": opts.weighting.name(),
+        "max_zenith_deg": opts.max_zenith_deg,
         "anneal_steps": opts.fit.schedule.steps,
         "seed": opts.fit.seed,
         "precompute": pre.header.meta,

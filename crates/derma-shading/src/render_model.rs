@@ -11,7 +11,7 @@ use crate::kelemen::KelemenSzirmayKalos;
 use crate::skin_dual_lobe::SkinDualLobe;
 
 /// At most this many shared linear lobes.
-pub const MAX_LOBES: usize = 2;
+pub const MAX_LOBES: usize = 3;
 
 /// The cosines a BRDF needs, for light direction l and view direction v (both leaving the
 /// surface, unit length, z up) and their half vector h.

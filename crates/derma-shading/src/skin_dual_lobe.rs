@@ -1,14 +1,19 @@
 //! derma's skin render model (thesis §7.2 asks for one suited to skin): two GGX lobes with the
-//! exact Fresnel of the stratum corneum, over a Fresnel-transmitted diffuse term.
+//! exact Fresnel of the stratum corneum, a Charlie sheen lobe, and a Fresnel-transmitted
+//! diffuse term; every piece exists in glTF (`KHR_materials_specular`, `KHR_materials_sheen`)
+//! and in Unreal's and Unity's skin shading, so a fit drops into engines.
 //!
 //! Why this shape: skin's surface reflection has two scales — the oily film and the stratum
 //! corneum's micro-folds — which d'Eon & Luebke 2007 (GPU Gems 3, ch. 14) capture with two
-//! specular lobes and Unreal's skin shading with "dual lobe specular"; light that entered the
-//! skin leaves through the same interface, so the diffuse part is shaped by Fresnel
-//! transmittance at entry and exit, T(θi)·T(θo) (Jensen et al. 2001, "A practical model for
-//! subsurface light transport", eq. 5), which darkens it at grazing angles where Lambert does
-//! not. f = kd · T(θi) T(θo) / (π t̄²) + Σ_k s_k · F(h·l) D_k V_k, t̄ = 1 − F_dr so that kd is
-//! the albedo under uniform light. The index is BioSpec's stratum corneum, 1.55.
+//! specular lobes and Unreal with "dual lobe specular"; skin brightens towards grazing views on
+//! both sides of the normal (Marschner et al. 1999, "Image-based BRDF measurement including
+//! human skin"; the Monte Carlo skin does so strongly), which a sheen lobe (Estevez & Kulla
+//! 2017) produces and a Lambert or GGX term cannot; and light that entered the skin leaves
+//! through the same interface, so the diffuse part is shaped by Fresnel transmittance at entry
+//! and exit, T(θi)·T(θo) (Jensen et al. 2001, "A practical model for subsurface light
+//! transport", eq. 5), which darkens it at grazing angles where Lambert does not.
+//! f = kd T_i T_o / (π t̄²) + Σ_k s_k F(h·l) D_k V_k + s_sheen D_sheen V_sheen, t̄ = 1 − F_dr so
+//! that kd is the albedo under uniform light; index 1.55, BioSpec's stratum corneum.
 
 use crate::fresnel::{diffuse_reflectance, fresnel_unpolarised};
 use crate::microfacet_terms::{ggx_d, ggx_smith_visibility};
@@ -21,7 +26,17 @@ pub const SKIN_SURFACE_INDEX: f64 = derma_optics::specimen::LAYER_INDEX[0];
 
 pub struct SkinDualLobe;
 
-const SHAPE: [ShapeParam; 2] = [
+/// Charlie sheen lobe (Estevez & Kulla 2017, "Production friendly microfacet sheen BRDF",
+/// eq. 2) with Neubelt & Pettineo's 2013 visibility 1/(4(n·l + n·v − n·l n·v)), the pair the
+/// glTF `KHR_materials_sheen` extension specifies.
+pub fn charlie_sheen(d: &Dirs, r: f64) -> f64 {
+    let inv = 1.0 / r;
+    let sin_h = (1.0 - d.n_h * d.n_h).max(0.0).sqrt();
+    let dist = (2.0 + inv) * sin_h.powf(inv) / (2.0 * std::f64::consts::PI);
+    dist / (4.0 * (d.n_l + d.n_v - d.n_l * d.n_v))
+}
+
+const SHAPE: [ShapeParam; 3] = [
     ShapeParam {
         name: "alpha_narrow",
         lo: 0.02,
@@ -32,6 +47,12 @@ const SHAPE: [ShapeParam; 2] = [
         name: "alpha_wide",
         lo: 0.45,
         hi: 1.5,
+        log: false,
+    },
+    ShapeParam {
+        name: "sheen_roughness",
+        lo: 0.1,
+        hi: 1.0,
         log: false,
     },
 ];
@@ -50,7 +71,7 @@ impl RenderModel for SkinDualLobe {
         &SHAPE
     }
     fn lobes(&self) -> &'static [(&'static str, f64)] {
-        &[("s_narrow", 5.0), ("s_wide", 5.0)]
+        &[("s_narrow", 5.0), ("s_wide", 5.0), ("s_sheen", 5.0)]
     }
     #[inline]
     fn basis(&self, theta: &[f64], d: &Dirs) -> Basis {
@@ -66,7 +87,7 @@ impl RenderModel for SkinDualLobe {
         Basis {
             offset: 0.0,
             diffuse: ti * to * FRAC_1_PI / (t * t),
-            lobes: [lobe(theta[0]), lobe(theta[1])],
+            lobes: [lobe(theta[0]), lobe(theta[1]), charlie_sheen(d, theta[2])],
         }
     }
 }
@@ -77,8 +98,28 @@ mod tests {
     use crate::render_model::checks::{albedo, assert_reciprocal};
 
     #[test]
+    fn sheen_closed_form() {
+        // Normal view and light: h = n, sinθh = 0 → D = 0 for r < ∞; at θh = 90° (l, v grazing
+        // opposite) D = (2 + 1/r)/(2π).
+        let d = Dirs::from_angles(0.0, 0.0, 0.0);
+        assert_eq!(charlie_sheen(&d, 0.5), 0.0);
+        let r: f64 = 0.5;
+        let d = Dirs {
+            n_l: 0.2,
+            n_v: 0.3,
+            n_h: 0.0,
+            h_l: 0.5,
+        };
+        let want = (2.0 + 1.0 / r) / (2.0 * std::f64::consts::PI) / (4.0 * (0.5 - 0.06));
+        assert!((charlie_sheen(&d, r) - want).abs() < 1e-12);
+    }
+
+    #[test]
     fn reciprocal_and_energy_bounded() {
-        assert_reciprocal(&SkinDualLobe, &[0.5, 0.4, 0.3, 0.4, 0.6, 0.15, 0.8]);
+        assert_reciprocal(
+            &SkinDualLobe,
+            &[0.5, 0.4, 0.3, 0.4, 0.6, 0.3, 0.15, 0.8, 0.5],
+        );
         // kd = 1 alone: albedo averaged over incidence (cosine-weighted) is 1 by construction.
         let mut avg = 0.0;
         let n = 24;
@@ -87,7 +128,7 @@ mod tests {
             let u: f64 = (i as f64 + 0.5) / n as f64;
             avg += albedo(
                 &SkinDualLobe,
-                &[1.0, 1.0, 1.0, 0.0, 0.0, 0.3, 0.8],
+                &[1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.3, 0.8, 0.5],
                 u.sqrt().asin(),
             )[0];
         }
@@ -95,8 +136,22 @@ mod tests {
         assert!((avg - 1.0).abs() < 5e-3, "{avg}");
         // One full lobe with weight 1 reflects at most the Fresnel share (< 1).
         for ti in [0.0, 0.8, 1.3] {
-            let s = albedo(&SkinDualLobe, &[0.0, 0.0, 0.0, 0.0, 1.0, 0.3, 0.8], ti);
+            let s = albedo(
+                &SkinDualLobe,
+                &[0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.3, 0.8, 0.5],
+                ti,
+            );
             assert!(s[0] > 0.0 && s[0] < 0.5, "{s:?}");
+            // The sheen lobe with weight 1 reflects less than all the light at any roughness
+            // (Estevez & Kulla's albedo tables stay below ~0.6).
+            for r in [0.3, 0.6, 1.0] {
+                let s = albedo(
+                    &SkinDualLobe,
+                    &[0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.3, 0.8, r],
+                    ti,
+                );
+                assert!(s[0] > 0.0 && s[0] < 1.0, "r={r} θi={ti}: {s:?}");
+            }
         }
     }
 }

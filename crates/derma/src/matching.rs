@@ -48,6 +48,9 @@ pub struct FitArgs {
     anneal_steps: usize,
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Leave BRDF bins beyond this zenith angle (degrees, incident or outgoing) out of the fit.
+    #[arg(long, default_value_t = derma_shading::brdf_fit::DEFAULT_MAX_ZENITH_DEG)]
+    max_zenith: f64,
     /// Gaussians in the sum-of-Gaussians profile fit.
     #[arg(long, default_value_t = 6)]
     gaussians: usize,
@@ -135,7 +138,11 @@ fn fit(a: FitArgs, quiet: bool) -> Result<()> {
             ..FitOptions::default()
         },
         gaussians: a.gaussians.clamp(1, 6),
+        max_zenith_deg: a.max_zenith,
     };
+    if !(a.max_zenith > 0.0 && a.max_zenith <= 90.0) {
+        bail!("--max-zenith {}: expected degrees in (0, 90]", a.max_zenith);
+    }
     let nodes = pre.header.nodes();
     let pb = bar(nodes as u64, quiet, "fit");
     let t0 = Instant::now();
@@ -272,7 +279,7 @@ fn write_plots(
         theta_out: grid.brdf[1],
         phi: grid.brdf[2],
     };
-    let geom = FitGeometry::new(bins, opts.weighting);
+    let geom = FitGeometry::with_cutoff(bins, opts.weighting, opts.max_zenith_deg);
     let pstride = pre.header.stride();
     let mstride = mt.dtab.header.stride();
     let (bo, bl) = pre
