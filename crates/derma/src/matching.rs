@@ -438,9 +438,13 @@ fn describe_node(pre: &Dtab, node: usize) -> String {
     for k in (0..axes.len()).rev() {
         let n = axes[k].values.len();
         parts[k] = format!("{} {}", axes[k].name, axes[k].values[rest % n]);
+        if axes[k].name != "melanin" && axes[k].name != "blood" {
+            parts[k].clear();
+        }
         rest /= n;
     }
-    parts[..4.min(parts.len())].join(", ")
+    parts.retain(|p| !p.is_empty());
+    parts.join(", ")
 }
 
 fn lut(a: LutArgs, quiet: bool) -> Result<()> {
