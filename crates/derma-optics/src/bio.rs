@@ -22,6 +22,19 @@ pub struct BioTexel {
 }
 
 impl BioTexel {
+    /// The fields in the order of the precompute grid's axes (`precompute::AXES`).
+    #[inline]
+    pub fn to_array(&self) -> [f32; 6] {
+        [
+            self.melanin,
+            self.pheomelanin,
+            self.blood,
+            self.oxygenation,
+            self.stratum_corneum_um,
+            self.epidermis_um,
+        ]
+    }
+
     /// Typical fair adult facial skin: BioSpec defaults (Krishnaswamy & Baranoski 2004, as used by
     /// the RISE renderer): melanosomes 10 % of the epidermis would be dark skin, so the fair value
     /// 2 % from Jacques 1998 ("skin optics summary": 1.3–6.3 % for light-skinned adults) is used;

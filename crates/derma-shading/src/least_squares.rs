@@ -107,6 +107,10 @@ pub fn nnls_normal(ata: &[f64], atb: &[f64], n: usize) -> Vec<f64> {
     x
 }
 
+/// Residual function of [`levenberg_marquardt`]: fills r (length m) and, when given, the m × n
+/// Jacobian row-major.
+pub type ResidualFn<'a> = dyn FnMut(&[f64], &mut [f64], Option<&mut [f64]>) + 'a;
+
 /// Options of [`levenberg_marquardt`].
 #[derive(Clone, Copy, Debug)]
 pub struct LmOptions {
@@ -128,7 +132,7 @@ impl Default for LmOptions {
 /// fills r (length m) and, when `jac` is given, the m × n Jacobian row-major. Returns the best
 /// parameters and ‖r‖².
 pub fn levenberg_marquardt(
-    residuals: &mut dyn FnMut(&[f64], &mut [f64], Option<&mut [f64]>),
+    residuals: &mut ResidualFn,
     p0: &[f64],
     lo: &[f64],
     hi: &[f64],

@@ -338,14 +338,7 @@ impl MatchTable {
 
     /// Table coordinates of a texel.
     pub fn coords(&self, bio: &derma_optics::BioTexel) -> Vec<f64> {
-        let v = [
-            bio.melanin,
-            bio.pheomelanin,
-            bio.blood,
-            bio.oxygenation,
-            bio.stratum_corneum_um,
-            bio.epidermis_um,
-        ];
+        let v = bio.to_array();
         let mut p = vec![0.0; self.dtab.header.axes.len()];
         for k in 0..6 {
             p[self.bio_axis[k]] = v[k] as f64;

@@ -175,14 +175,7 @@ impl TableAppearance {
     /// The values at `bio` with the given interpolation.
     #[inline]
     pub fn lookup_with(&self, bio: &BioTexel, interpolation: Interpolation) -> [f32; N] {
-        let f = [
-            bio.melanin,
-            bio.pheomelanin,
-            bio.blood,
-            bio.oxygenation,
-            bio.stratum_corneum_um,
-            bio.epidermis_um,
-        ];
+        let f = bio.to_array();
         let d = self.d;
         let mut base = 0usize;
         let mut t = [0.0f32; MAX_AXES];

@@ -54,54 +54,54 @@ pub fn convert(
 ) -> RenderMaps {
     let (w, h) = (bio.width, bio.height);
     let n = w * h;
-    let mut rgb = vec![[0.0f32; 3]; n];
-    let mut rough = vec![0.0f32; n];
-    let mut spec = vec![0.0f32; n];
-    let mut sss = vec![[0.0f32; 6]; n];
     let has_sss = appearance.subsurface(&bio.texels[0].texel()).is_some();
-    rgb.par_chunks_mut(w)
-        .zip(rough.par_chunks_mut(w))
-        .zip(spec.par_chunks_mut(w))
-        .zip(sss.par_chunks_mut(w))
-        .enumerate()
-        .for_each(|(y, (((c, r), s), ss))| {
-            for x in 0..w {
-                let t = &bio.texels[y * w + x];
-                let (a, sub) = appearance.shade(&t.texel());
-                if let Some(sub) = sub {
-                    ss[x] = [
-                        sub.color[0],
-                        sub.color[1],
-                        sub.color[2],
-                        sub.radius_mm[0],
-                        sub.radius_mm[1],
-                        sub.radius_mm[2],
-                    ];
-                }
-                let ea = t.extra[3].clamp(0.0, 1.0);
-                c[x] = std::array::from_fn(|k| a[k] + (t.extra[k] - a[k]) * ea);
-                let base_r = material.roughness_skin
-                    + (material.roughness_lips - material.roughness_skin) * t.lips;
-                r[x] = base_r + (material.roughness_hair - base_r) * ea;
-                s[x] =
-                    (material.specular_f0 + (HAIR_F0 - material.specular_f0) * ea) / SPECULAR_SCALE;
+    // One planar buffer per output channel: base colour (3), roughness, specular, and with a
+    // subsurface-aware appearance its colour (3) and scatter distance (3). Rows are handed out
+    // in parallel, each row getting its slice of every channel.
+    let n_ch = if has_sss { 11 } else { 5 };
+    let mut chans: Vec<Vec<f32>> = (0..n_ch).map(|_| vec![0.0f32; n]).collect();
+    let mut rows: Vec<Vec<&mut [f32]>> = (0..h).map(|_| Vec::with_capacity(n_ch)).collect();
+    for c in chans.iter_mut() {
+        for (row, chunk) in rows.iter_mut().zip(c.chunks_mut(w)) {
+            row.push(chunk);
+        }
+    }
+    rows.into_par_iter().enumerate().for_each(|(y, mut ch)| {
+        for x in 0..w {
+            let t = &bio.texels[y * w + x];
+            let (a, sub) = appearance.shade(&t.texel());
+            let ea = t.extra[3].clamp(0.0, 1.0);
+            for k in 0..3 {
+                ch[k][x] = a[k] + (t.extra[k] - a[k]) * ea;
             }
-        });
+            let base_r = material.roughness_skin
+                + (material.roughness_lips - material.roughness_skin) * t.lips;
+            ch[3][x] = base_r + (material.roughness_hair - base_r) * ea;
+            ch[4][x] =
+                (material.specular_f0 + (HAIR_F0 - material.specular_f0) * ea) / SPECULAR_SCALE;
+            if let Some(sub) = sub {
+                for k in 0..3 {
+                    ch[5 + k][x] = sub.color[k];
+                    ch[8 + k][x] = sub.radius_mm[k];
+                }
+            }
+        }
+    });
+    let mut maps = chans
+        .into_iter()
+        .map(|v| Map::from_vec(w, h, v).expect("size"));
+    let mut next = || maps.next().expect("channel");
+    let base_color = [next(), next(), next()];
+    let roughness = next();
+    let specular = next();
+    let subsurface = has_sss.then(|| SubsurfaceMaps {
+        color: [next(), next(), next()],
+        radius_mm: [next(), next(), next()],
+    });
     let height_mm = bio.channel(|s| s.height_mm);
     // Normals use only texels on the surface (one-sided differences at chart borders), then are
     // dilated themselves; every other map derives from already dilated bio samples.
     let mut normal = crate::normal_map::normals_from_height(surface, &height_mm);
-    let base_color =
-        [0, 1, 2].map(|k| Map::from_vec(w, h, rgb.iter().map(|c| c[k]).collect()).expect("size"));
-    let roughness = Map::from_vec(w, h, rough).expect("size");
-    let subsurface = has_sss.then(|| {
-        let ch = |k: usize| Map::from_vec(w, h, sss.iter().map(|v| v[k]).collect()).expect("size");
-        SubsurfaceMaps {
-            color: [ch(0), ch(1), ch(2)],
-            radius_mm: [ch(3), ch(4), ch(5)],
-        }
-    });
-    let specular = Map::from_vec(w, h, spec).expect("size");
     if let Some(src) = dilation {
         normal
             .par_iter_mut()
