@@ -121,8 +121,17 @@ impl FitGeometry {
 
     /// Bin-averaged basis of `model` at shape `theta`.
     pub fn basis(&self, model: &dyn RenderModel, theta: &[f64], out: &mut [Basis]) {
+        self.basis_where(model, theta, out, false)
+    }
+
+    /// As [`Self::basis`]; with `fit_only`, bins of weight 0 are skipped (left zero).
+    fn basis_where(&self, model: &dyn RenderModel, theta: &[f64], out: &mut [Basis], fit_only: bool) {
         let inv = 1.0 / POINTS_PER_BIN as f64;
         for (b, o) in out.iter_mut().enumerate() {
+            if fit_only && self.weight[b] == 0.0 {
+                *o = Basis::default();
+                continue;
+            }
             let mut acc = Basis::default();
             for d in &self.dirs[b * POINTS_PER_BIN..(b + 1) * POINTS_PER_BIN] {
                 let x = model.basis(theta, d);
@@ -240,13 +249,13 @@ pub fn fit_brdf(
     // 1. Anneal over the shape parameters, linear weights solved exactly.
     let mut cost_u = |u: &[f64]| -> f64 {
         let theta: Vec<f64> = shape.iter().zip(u).map(|(p, &x)| warp(p, x)).collect();
-        geom.basis(model, &theta, &mut basis);
+        geom.basis_where(model, &theta, &mut basis, true);
         linear_weights(&basis, data, &geom.weight, nl).1
     };
     let start = vec![0.5; shape.len()];
     let (u, _) = anneal(&mut cost_u, &start, opts.schedule, opts.seed, stream);
     let theta: Vec<f64> = shape.iter().zip(&u).map(|(p, &x)| warp(p, x)).collect();
-    geom.basis(model, &theta, &mut basis);
+    geom.basis_where(model, &theta, &mut basis, true);
     let (lin, _) = linear_weights(&basis, data, &geom.weight, nl);
     let mut p0 = lin;
     p0.extend_from_slice(&theta);
@@ -258,7 +267,7 @@ pub fn fit_brdf(
     let m = 3 * geom.len();
     let mut bplus = vec![Basis::default(); geom.len()];
     let mut residuals = |p: &[f64], r: &mut [f64], jac: Option<&mut [f64]>| {
-        geom.basis(model, &p[3 + nl..], &mut basis);
+        geom.basis_where(model, &p[3 + nl..], &mut basis, true);
         for (b, ((x, y), s)) in basis.iter().zip(data).zip(&sw).enumerate() {
             let f = combine(x, p, nl);
             for c in 0..3 {
@@ -281,7 +290,7 @@ pub fn fit_brdf(
             let h = 1e-6 * (sp.hi - sp.lo).max(th[t].abs());
             let h = if th[t] + h > sp.hi { -h } else { h };
             th[t] += h;
-            geom.basis(model, &th, &mut bplus);
+            geom.basis_where(model, &th, &mut bplus, true);
             for (b, ((x0, x1), s)) in basis.iter().zip(&bplus).zip(&sw).enumerate() {
                 let f0 = combine(x0, p, nl);
                 let f1 = combine(x1, p, nl);
