@@ -125,7 +125,13 @@ impl FitGeometry {
     }
 
     /// As [`Self::basis`]; with `fit_only`, bins of weight 0 are skipped (left zero).
-    fn basis_where(&self, model: &dyn RenderModel, theta: &[f64], out: &mut [Basis], fit_only: bool) {
+    fn basis_where(
+        &self,
+        model: &dyn RenderModel,
+        theta: &[f64],
+        out: &mut [Basis],
+        fit_only: bool,
+    ) {
         let inv = 1.0 / POINTS_PER_BIN as f64;
         for (b, o) in out.iter_mut().enumerate() {
             if fit_only && self.weight[b] == 0.0 {

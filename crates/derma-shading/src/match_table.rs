@@ -208,9 +208,14 @@ fn fit_node(
         )));
     }
     let mut row: Vec<f32> = albedo.to_vec();
-    for (k, m) in opts.models.iter().enumerate() {
-        // One annealing stream per (node, model).
-        let stream = (node * ModelKind::ALL.len() + k) as u32;
+    for m in &opts.models {
+        // One annealing stream per (node, model kind): a model fitted alone or with others
+        // gives the same parameters.
+        let kind = ModelKind::ALL
+            .iter()
+            .position(|k| k == m)
+            .expect("a known model");
+        let stream = (node * ModelKind::ALL.len() + kind) as u32;
         let f = fit_brdf(m.model(), geom, &brdf, &opts.fit, stream);
         row.extend(f.params.iter().map(|&v| v as f32));
         row.push(f.relative_rms as f32);

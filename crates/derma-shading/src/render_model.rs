@@ -22,6 +22,12 @@ pub struct Dirs {
     pub n_h: f64,
     /// h·l = h·v.
     pub h_l: f64,
+    /// Exact Fresnel reflectance of the skin surface (index
+    /// [`crate::skin_dual_lobe::SKIN_SURFACE_INDEX`]) at h·l, n·l and n·v: geometry only, so
+    /// computed once per direction pair rather than at every fit step.
+    pub skin_fresnel: [f64; 3],
+    /// ln sinθh (−∞ at the normal), for the sheen distribution's power of sinθh.
+    pub ln_sin_h: f64,
 }
 
 impl Dirs {
@@ -29,11 +35,26 @@ impl Dirs {
         let s = [l[0] + v[0], l[1] + v[1], l[2] + v[2]];
         let len = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt().max(1e-300);
         let h = s.map(|x| x / len);
+        Self::from_cosines(
+            l[2],
+            v[2],
+            h[2],
+            (h[0] * l[0] + h[1] * l[1] + h[2] * l[2]).clamp(0.0, 1.0),
+        )
+    }
+
+    /// From the four cosines.
+    pub fn from_cosines(n_l: f64, n_v: f64, n_h: f64, h_l: f64) -> Self {
+        let f = |c: f64| {
+            crate::fresnel::fresnel_unpolarised(c, 1.0, crate::skin_dual_lobe::SKIN_SURFACE_INDEX)
+        };
         Self {
-            n_l: l[2],
-            n_v: v[2],
-            n_h: h[2],
-            h_l: (h[0] * l[0] + h[1] * l[1] + h[2] * l[2]).clamp(0.0, 1.0),
+            n_l,
+            n_v,
+            n_h,
+            h_l,
+            skin_fresnel: [f(h_l), f(n_l), f(n_v)],
+            ln_sin_h: (1.0 - n_h * n_h).max(0.0).sqrt().ln(),
         }
     }
 

@@ -15,7 +15,7 @@
 //! f = kd T_i T_o / (π t̄²) + Σ_k s_k F(h·l) D_k V_k + s_sheen D_sheen V_sheen, t̄ = 1 − F_dr so
 //! that kd is the albedo under uniform light; index 1.55, BioSpec's stratum corneum.
 
-use crate::fresnel::{diffuse_reflectance, fresnel_unpolarised};
+use crate::fresnel::diffuse_reflectance;
 use crate::microfacet_terms::{ggx_d, ggx_smith_visibility};
 use crate::render_model::{Basis, Dirs, RenderModel, ShapeParam};
 use std::f64::consts::FRAC_1_PI;
@@ -31,8 +31,7 @@ pub struct SkinDualLobe;
 /// glTF `KHR_materials_sheen` extension specifies.
 pub fn charlie_sheen(d: &Dirs, r: f64) -> f64 {
     let inv = 1.0 / r;
-    let sin_h = (1.0 - d.n_h * d.n_h).max(0.0).sqrt();
-    let dist = (2.0 + inv) * sin_h.powf(inv) / (2.0 * std::f64::consts::PI);
+    let dist = (2.0 + inv) * (inv * d.ln_sin_h).exp() / (2.0 * std::f64::consts::PI);
     dist / (4.0 * (d.n_l + d.n_v - d.n_l * d.n_v))
 }
 
@@ -78,10 +77,8 @@ impl RenderModel for SkinDualLobe {
         if d.n_l <= 0.0 || d.n_v <= 0.0 {
             return Basis::default();
         }
-        let n = SKIN_SURFACE_INDEX;
-        let f = fresnel_unpolarised(d.h_l, 1.0, n);
-        let ti = 1.0 - fresnel_unpolarised(d.n_l, 1.0, n);
-        let to = 1.0 - fresnel_unpolarised(d.n_v, 1.0, n);
+        let [f, fl, fv] = d.skin_fresnel;
+        let (ti, to) = (1.0 - fl, 1.0 - fv);
         let t = mean_transmittance();
         let lobe = |a: f64| f * ggx_d(d.n_h, a) * ggx_smith_visibility(d.n_l, d.n_v, a);
         Basis {
@@ -104,12 +101,7 @@ mod tests {
         let d = Dirs::from_angles(0.0, 0.0, 0.0);
         assert_eq!(charlie_sheen(&d, 0.5), 0.0);
         let r: f64 = 0.5;
-        let d = Dirs {
-            n_l: 0.2,
-            n_v: 0.3,
-            n_h: 0.0,
-            h_l: 0.5,
-        };
+        let d = Dirs::from_cosines(0.2, 0.3, 0.0, 0.5);
         let want = (2.0 + 1.0 / r) / (2.0 * std::f64::consts::PI) / (4.0 * (0.5 - 0.06));
         assert!((charlie_sheen(&d, r) - want).abs() < 1e-12);
     }
