@@ -35,7 +35,7 @@ pub enum Interpolation {
     Multilinear,
     /// Kuhn-simplex interpolation in the same cell (Kasson, Nin, Plouffe & Hafner 1995): d + 1
     /// reads; equal to multilinear at nodes and along cell edges, piecewise linear inside.
-    /// The texture-set default: a 4096² set in well under half a second on two cores.
+    /// The texture-set default: about half the time of multilinear (BENCHMARKS.md).
     Simplex,
 }
 
