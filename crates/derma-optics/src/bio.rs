@@ -22,6 +22,18 @@ pub struct BioTexel {
 }
 
 impl BioTexel {
+    /// A texel from its fields in the order of [`Self::to_array`].
+    pub fn from_array(v: [f32; 6]) -> Self {
+        Self {
+            melanin: v[0],
+            pheomelanin: v[1],
+            blood: v[2],
+            oxygenation: v[3],
+            stratum_corneum_um: v[4],
+            epidermis_um: v[5],
+        }
+    }
+
     /// The fields in the order of the precompute grid's axes (`precompute::AXES`).
     #[inline]
     pub fn to_array(&self) -> [f32; 6] {

@@ -170,14 +170,7 @@ impl Grid {
             v[k] = axes[k][rest % n];
             rest /= n;
         }
-        BioTexel {
-            melanin: v[0] as f32,
-            pheomelanin: v[1] as f32,
-            blood: v[2] as f32,
-            oxygenation: v[3] as f32,
-            stratum_corneum_um: v[4] as f32,
-            epidermis_um: v[5] as f32,
-        }
+        BioTexel::from_array(v.map(|x| x as f32))
     }
 
     /// Simulation settings of node `i`: its own seed so entries are independent of sharding.

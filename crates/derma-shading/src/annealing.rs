@@ -18,6 +18,9 @@ pub struct Schedule {
 }
 
 impl Default for Schedule {
+    /// Authored (the thesis gives no schedule, only 5 minutes per entry): 300 steps from
+    /// T = 0.5 to 10⁻³ in log cost, steps of 0.3 of the box; chosen so that every model
+    /// recovers its own parameters to 1 % (test `recovers_parameters_of_its_own_model`).
     fn default() -> Self {
         Self {
             steps: 300,

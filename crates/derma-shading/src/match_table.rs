@@ -364,6 +364,11 @@ impl MatchTable {
         Some(out)
     }
 
+    /// Node stride of each table axis (first axis slowest).
+    pub fn strides(&self) -> &[usize] {
+        &self.cube.strides
+    }
+
     /// Names of the models fitted in this table.
     pub fn models(&self) -> Vec<ModelKind> {
         ModelKind::ALL

@@ -7,7 +7,7 @@
 //! its parameters: neighbouring entries share their random paths and differ only by physics.
 
 use crate::error::{Result, ShadingError};
-use derma_core::color::{reflectance_to_linear_srgb, Spectrum, N_WAVELENGTHS};
+use derma_core::color::{reflectance_to_linear_srgb, Spectrum};
 use derma_core::dtab::{Dtab, DtabAxis, DtabHeader, DtabValue};
 use derma_optics::run::{Device, Run};
 use derma_optics::specimen::skin_stacks_with_epidermal_blood;
@@ -84,7 +84,6 @@ pub fn entry_color(opts: &LutOptions, c_m: f64, c_hd: f64, device: Device) -> Re
     let t = derma_optics::backend::run_on(&run, device, &|_| {})?;
     let r: Spectrum =
         std::array::from_fn(|i| t.per_lambda[i][R_DIFFUSE] / t.per_lambda_count[i].max(1) as f64);
-    debug_assert_eq!(r.len(), N_WAVELENGTHS);
     Ok(reflectance_to_linear_srgb(&r))
 }
 

@@ -88,10 +88,7 @@ impl TableAppearance {
                 v
             })
             .collect();
-        let mut strides = vec![1usize; h.axes.len()];
-        for k in (0..h.axes.len().saturating_sub(1)).rev() {
-            strides[k] = strides[k + 1] * h.axes[k + 1].values.len();
-        }
+        let strides = table.strides();
         let mut active = Vec::new();
         for (field, name) in crate::match_table::BIO_AXES.iter().enumerate() {
             let k = h
@@ -303,14 +300,7 @@ mod tests {
     }
 
     fn texel(p: &[f64]) -> BioTexel {
-        BioTexel {
-            melanin: p[0] as f32,
-            pheomelanin: p[1] as f32,
-            blood: p[2] as f32,
-            oxygenation: p[3] as f32,
-            stratum_corneum_um: p[4] as f32,
-            epidermis_um: p[5] as f32,
-        }
+        BioTexel::from_array(std::array::from_fn(|k| p[k] as f32))
     }
 
     #[test]

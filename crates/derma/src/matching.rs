@@ -10,7 +10,6 @@ use derma_shading::match_table::{self, MatchOptions, MatchTable};
 use derma_shading::render_model::ModelKind;
 use derma_shading::skin_color_lut::{LutOptions, SkinColorLut};
 use derma_shading::{burley, sum_of_gaussians};
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -87,19 +86,6 @@ pub fn run(cmd: MatchCommand, quiet: bool) -> Result<()> {
     }
 }
 
-fn bar(total: u64, quiet: bool, msg: &str) -> Option<ProgressBar> {
-    (!quiet).then(|| {
-        let b = ProgressBar::new(total);
-        b.set_style(
-            ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} {elapsed} (eta {eta})")
-                .expect("template")
-                .progress_chars("=> "),
-        );
-        b.set_message(msg.to_string());
-        b
-    })
-}
-
 fn parse_models(names: &[String]) -> Result<Vec<ModelKind>> {
     if names.iter().any(|n| n == "all") {
         return Ok(ModelKind::ALL.to_vec());
@@ -144,7 +130,7 @@ fn fit(a: FitArgs, quiet: bool) -> Result<()> {
         bail!("--max-zenith {}: expected degrees in (0, 90]", a.max_zenith);
     }
     let nodes = pre.header.nodes();
-    let pb = bar(nodes as u64, quiet, "fit");
+    let pb = crate::optics::progress_bar(nodes as u64, quiet, "fit", "entries");
     let t0 = Instant::now();
     let (table, summary) = match_table::fit_table(&pre, &opts, &|done| {
         if let Some(b) = &pb {
@@ -217,12 +203,7 @@ fn residual_csv(table: &Dtab, opts: &MatchOptions) -> String {
     let stride = h.stride();
     for node in 0..h.nodes() {
         s.push_str(&node.to_string());
-        let mut rest = node;
-        let mut idx = vec![0; h.axes.len()];
-        for k in (0..h.axes.len()).rev() {
-            idx[k] = rest % h.axes[k].values.len();
-            rest /= h.axes[k].values.len();
-        }
+        let idx = node_indices(&h.axes, node);
         for (k, ax) in h.axes.iter().enumerate() {
             s.push_str(&format!(",{}", ax.values[idx[k]]));
         }
@@ -257,6 +238,17 @@ fn default_plot_nodes(pre: &Dtab) -> Vec<usize> {
             flat
         })
         .collect()
+}
+
+/// Per-axis node indices of flat node `node` (first axis slowest, as `.dtab` stores them).
+fn node_indices(axes: &[derma_core::dtab::DtabAxis], node: usize) -> Vec<usize> {
+    let mut rest = node;
+    let mut idx = vec![0; axes.len()];
+    for k in (0..axes.len()).rev() {
+        idx[k] = rest % axes[k].values.len();
+        rest /= axes[k].values.len();
+    }
+    idx
 }
 
 const COLOURS: [&str; 4] = ["#d62728", "#1f77b4", "#2ca02c", "#9467bd"];
@@ -433,18 +425,13 @@ fn write_plots(
 
 fn describe_node(pre: &Dtab, node: usize) -> String {
     let axes = &pre.header.axes;
-    let mut rest = node;
-    let mut parts = vec![String::new(); axes.len()];
-    for k in (0..axes.len()).rev() {
-        let n = axes[k].values.len();
-        parts[k] = format!("{} {}", axes[k].name, axes[k].values[rest % n]);
-        if axes[k].name != "melanin" && axes[k].name != "blood" {
-            parts[k].clear();
-        }
-        rest /= n;
-    }
-    parts.retain(|p| !p.is_empty());
-    parts.join(", ")
+    node_indices(axes, node)
+        .iter()
+        .zip(axes)
+        .filter(|(_, a)| a.name == "melanin" || a.name == "blood")
+        .map(|(&i, a)| format!("{} {}", a.name, a.values[i]))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 fn lut(a: LutArgs, quiet: bool) -> Result<()> {
@@ -461,7 +448,12 @@ fn lut(a: LutArgs, quiet: bool) -> Result<()> {
         ..LutOptions::default()
     };
     let device = crate::optics::resolve(a.device);
-    let pb = bar((a.size * a.size) as u64, quiet, "skin colour LUT");
+    let pb = crate::optics::progress_bar(
+        (a.size * a.size) as u64,
+        quiet,
+        "skin colour LUT",
+        "entries",
+    );
     let t0 = Instant::now();
     let lut = SkinColorLut::build(opts, device, &|d| {
         if let Some(b) = &pb {

@@ -143,12 +143,17 @@ pub fn run(cmd: OpticsCommand, quiet: bool) -> Result<()> {
 }
 
 fn bar(total: u64, quiet: bool, msg: &str) -> Option<ProgressBar> {
+    progress_bar(total, quiet, msg, "photons")
+}
+
+/// A progress bar counting `unit` (none when `quiet`).
+pub fn progress_bar(total: u64, quiet: bool, msg: &str, unit: &str) -> Option<ProgressBar> {
     (!quiet).then(|| {
         let b = ProgressBar::new(total);
         b.set_style(
-            ProgressStyle::with_template(
-                "{msg} [{bar:30}] {pos}/{len} photons {elapsed} (eta {eta})",
-            )
+            ProgressStyle::with_template(&format!(
+                "{{msg}} [{{bar:30}}] {{pos}}/{{len}} {unit} {{elapsed}} (eta {{eta}})"
+            ))
             .expect("template")
             .progress_chars("=> "),
         );
