@@ -15,6 +15,9 @@ use derma_optics::tally::R_DIFFUSE;
 use derma_optics::transport::Incidence;
 use derma_optics::BioTexel;
 
+/// The committed table (see [`SkinColorLut::builtin`]).
+pub const BUILTIN_LUT: &[u8] = include_bytes!("../data/skin-color-lut.dtab");
+
 /// Settings of the LUT.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LutOptions {
@@ -193,6 +196,63 @@ impl SkinColorLut {
         }
     }
 
+    /// Reads a table written by [`Self::to_dtab`]; `what` names it in errors.
+    pub fn from_dtab(t: &Dtab, what: &str) -> Result<Self> {
+        let bad = |d: String| ShadingError::Invalid(format!("skin-colour LUT {what}: {d}"));
+        let axes = &t.header.axes;
+        if axes.len() != 2 || axes[0].name != "blood_cbrt" || axes[1].name != "melanin_cbrt" {
+            return Err(bad(format!(
+                "expected axes blood_cbrt, melanin_cbrt; found {:?}",
+                axes.iter().map(|a| a.name.as_str()).collect::<Vec<_>>()
+            )));
+        }
+        let n = axes[0].values.len();
+        if n < 2 || axes[1].values.len() != n || t.header.offset("linear_srgb") != Some((0, 3)) {
+            return Err(bad(
+                "expected a square table of at least 2×2 linear_srgb triples".into(),
+            ));
+        }
+        let top = |a: &derma_core::dtab::DtabAxis| a.values[n - 1].powi(3);
+        let meta = &t.header.meta;
+        let num = |k: &str, default: f64| meta.get(k).and_then(|v| v.as_f64()).unwrap_or(default);
+        let d = LutOptions::default();
+        let options = LutOptions {
+            size: n,
+            photons: meta
+                .get("photons_per_entry")
+                .and_then(|v| v.as_u64())
+                .unwrap_or(d.photons),
+            seed: meta.get("seed").and_then(|v| v.as_u64()).unwrap_or(d.seed),
+            eumelanin: num("eumelanin_blend", d.eumelanin),
+            epidermal_ratio: num("epidermal_hemoglobin_ratio", d.epidermal_ratio),
+            melanin_max: top(&axes[1]),
+            blood_max: top(&axes[0]),
+            oxygenation: num("oxygenation", d.oxygenation),
+            stratum_corneum_um: num("stratum_corneum_um", d.stratum_corneum_um),
+            epidermis_um: num("epidermis_um", d.epidermis_um),
+        };
+        if !(options.melanin_max > 0.0 && options.blood_max > 0.0) {
+            return Err(bad("axis tops must be positive".into()));
+        }
+        let rgb = t
+            .data
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect::<Vec<_>>();
+        if rgb.len() != n * n || rgb.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(bad("payload is not n² finite triples".into()));
+        }
+        Ok(Self { options, rgb })
+    }
+
+    /// The committed 32 × 32 table (`data/skin-color-lut.dtab`, built by `derma match lut`;
+    /// see docs/matching.md), so the rig and the main job need no precompute.
+    pub fn builtin() -> Self {
+        let t = Dtab::from_bytes(BUILTIN_LUT, std::path::Path::new("skin-color-lut.dtab"))
+            .expect("the committed LUT parses (tested)");
+        Self::from_dtab(&t, "builtin").expect("the committed LUT is valid (tested)")
+    }
+
     /// The table as images: three channels of `size × size`, linear.
     pub fn channels(&self) -> [derma_core::Map; 3] {
         let n = self.options.size;
@@ -241,6 +301,24 @@ mod tests {
         assert!((c[0] - lut.rgb[1][0] as f64).abs() < 1e-6);
         let (u, _) = lut.uv(0.5 / 27.0, 0.0);
         assert!((u - 1.0 / 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn dtab_round_trip_and_builtin() {
+        let lut = small();
+        let back = SkinColorLut::from_dtab(&lut.to_dtab(), "test").unwrap();
+        assert_eq!(back.rgb, lut.rgb);
+        assert!((back.options.blood_max - 0.32).abs() < 1e-12);
+        assert!((back.options.melanin_max - 0.5).abs() < 1e-12);
+        let b = SkinColorLut::builtin();
+        assert_eq!(b.options.size, 32);
+        assert!((b.options.eumelanin - 0.61).abs() < 1e-12);
+        // Fair skin (C_m 0.02, C_hd 0.012): a light, red-leaning colour.
+        let c = b.lookup(0.02, 0.012);
+        assert!(c[0] > c[1] && c[1] > c[2] && c[0] > 0.3, "{c:?}");
+        let mut t = lut.to_dtab();
+        t.header.axes.swap(0, 1);
+        assert!(SkinColorLut::from_dtab(&t, "swapped").is_err());
     }
 
     #[test]

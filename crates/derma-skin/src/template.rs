@@ -170,8 +170,9 @@ pub fn head_mesh() -> TriMesh {
     m
 }
 
-/// Face coordinates and frontness of a template point.
-fn face_coords(p: Vec3) -> (f32, f32, f32) {
+/// Face coordinates of a template point: x (mm, the head's left positive), y (mm, up; eyes at
+/// 21, mouth line at −46, chin at −76) and frontness in [0, 1] (1 on the face, 0 behind it).
+pub fn face_coords(p: Vec3) -> (f32, f32, f32) {
     let d = p.normalize_or(Vec3::Y);
     (p.x, p.y, smoothstep(0.15, 0.45, d.z))
 }

@@ -1,0 +1,297 @@
+//! The built-in expression library: the six basic emotions (Ekman 1972) plus exercise and
+//! alcohol, as regional changes of the local hemoglobin statistics on derma's face template.
+//!
+//! These are AUTHORED APPROXIMATIONS of the observations in Jimenez et al. 2010 (§3.1, figures
+//! 1, 2, 5, 10–13), not measurements: the paper publishes its maps only as figures. Each region
+//! is an anisotropic Gaussian in the template's face coordinates (mm; eyes at y = 21, mouth line
+//! at y = −46), mirrored for paired regions, with a gain on the local mean (perfusion) and on the
+//! local standard deviation (contrast of the vascular pattern). Gains combine multiplicatively
+//! (in log space), so overlapping regions stay positive and smooth.
+
+use derma_core::Map;
+use derma_skin::template;
+use glam::Vec3;
+
+/// One region of change.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Region {
+    /// Centre (x, y) in template face millimetres; `x` is mirrored when `paired`.
+    pub centre: (f32, f32),
+    /// Standard deviations of the Gaussian along x and y (mm).
+    pub size: (f32, f32),
+    pub paired: bool,
+    /// Factor on the local mean hemoglobin at the centre.
+    pub mean_gain: f32,
+    /// Factor on the local standard deviation at the centre.
+    pub sigma_gain: f32,
+}
+
+/// Whether an entry follows geometry (an expression, driven by the blend-shape weights) or is a
+/// global physiological state with its own rig parameter (Jimenez et al. 2010 §5).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Kind {
+    Expression,
+    Global,
+}
+
+/// A library entry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Expression {
+    pub name: &'static str,
+    pub kind: Kind,
+    /// Suggested global hemoglobin scale at full weight (§7: anger ×1.27, fear ×0.81; 1 for the
+    /// rest); `derma rig eval --global-scale auto` blends these by weight.
+    pub global_scale: f32,
+    /// Gain on the local mean over the whole face (global states), before the regions.
+    pub face_gain: f32,
+    pub regions: &'static [Region],
+    /// What the entry encodes and which observation it follows.
+    pub notes: &'static str,
+}
+
+const fn r(
+    centre: (f32, f32),
+    size: (f32, f32),
+    paired: bool,
+    mean_gain: f32,
+    sigma_gain: f32,
+) -> Region {
+    Region {
+        centre,
+        size,
+        paired,
+        mean_gain,
+        sigma_gain,
+    }
+}
+
+/// The library, in a fixed order (the order of `derma rig library`).
+pub const LIBRARY: [Expression; 8] = [
+    Expression {
+        name: "happiness",
+        kind: Kind::Expression,
+        global_scale: 1.0,
+        face_gain: 1.0,
+        regions: &[
+            // Cheekbones raised and bulging: perfusion rises over them during a smile (§3.1,
+            // observation 2).
+            r((40.0, 4.0), (13.0, 11.0), true, 1.35, 1.2),
+            // Compressed skin drains (observation 2): crow's feet, lower lids, nasolabial folds.
+            r((50.0, 18.0), (6.0, 5.0), true, 0.8, 0.85),
+            r((22.0, -28.0), (4.0, 12.0), true, 0.8, 0.85),
+            // Lips stretched over the teeth.
+            r((0.0, -46.0), (18.0, 6.0), false, 0.9, 0.9),
+        ],
+        notes: "smile: cheekbone perfusion up, crow's feet, nasolabial folds and stretched lips drained (Jimenez et al. 2010 §3.1 obs. 2, fig. 1 'sad smile')",
+    },
+    Expression {
+        name: "sadness",
+        kind: Kind::Expression,
+        global_scale: 1.0,
+        face_gain: 1.0,
+        regions: &[
+            // Inner brows raised: the central forehead bunches and drains.
+            r((12.0, 50.0), (9.0, 7.0), true, 0.85, 0.9),
+            // Mentalis raises the chin boss: compressed, drained.
+            r((0.0, -68.0), (11.0, 7.0), false, 0.8, 0.85),
+            // Reddening around the eyes and nose tip.
+            r((22.0, 14.0), (8.0, 6.0), true, 1.15, 1.1),
+            r((0.0, -6.0), (7.0, 7.0), false, 1.12, 1.05),
+        ],
+        notes: "inner brows up and chin boss compressed (drained); eyes and nose tip redder (authored after fig. 12)",
+    },
+    Expression {
+        name: "anger",
+        kind: Kind::Expression,
+        global_scale: 1.27,
+        face_gain: 1.0,
+        regions: &[
+            // Brows lowered and drawn together: the glabella is compressed.
+            r((0.0, 34.0), (7.0, 7.0), false, 0.8, 0.85),
+            // Lips pressed together.
+            r((0.0, -46.0), (18.0, 6.0), false, 0.75, 0.8),
+            // Forehead above the knitted brows and the nostril wings flush.
+            r((0.0, 54.0), (26.0, 8.0), false, 1.12, 1.1),
+            r((11.0, -10.0), (5.0, 5.0), true, 1.15, 1.1),
+        ],
+        notes: "glabella and pressed lips drained, forehead and nostrils flushed; global blushing ×1.27 (Jimenez et al. 2010 §7, fig. 1)",
+    },
+    Expression {
+        name: "fear",
+        kind: Kind::Expression,
+        global_scale: 0.81,
+        face_gain: 1.0,
+        regions: &[
+            // Brows raised and drawn together: horizontal forehead compression.
+            r((0.0, 56.0), (24.0, 7.0), false, 0.85, 0.9),
+            // Lips stretched sideways.
+            r((0.0, -46.0), (20.0, 6.0), false, 0.85, 0.85),
+            // Upper lids raised: stretched, drained.
+            r((32.0, 27.0), (9.0, 4.0), true, 0.88, 0.9),
+        ],
+        notes: "forehead, stretched lips and upper lids drained; global pallor ×0.81 (Jimenez et al. 2010 §7, fig. 1)",
+    },
+    Expression {
+        name: "surprise",
+        kind: Kind::Expression,
+        global_scale: 1.0,
+        face_gain: 1.0,
+        regions: &[
+            // Brows raised high: the whole forehead folds and drains in bands.
+            r((0.0, 56.0), (36.0, 8.0), false, 0.82, 0.88),
+            // Upper lids stretched open.
+            r((32.0, 27.0), (10.0, 4.0), true, 0.85, 0.9),
+            // Jaw dropped: lips and chin stretched.
+            r((0.0, -46.0), (18.0, 7.0), false, 0.85, 0.9),
+            r((0.0, -72.0), (12.0, 8.0), false, 0.9, 0.95),
+        ],
+        notes: "raised brows fold and drain the forehead, open lids and dropped jaw stretch (drain) lids, lips and chin (fig. 11)",
+    },
+    Expression {
+        name: "disgust",
+        kind: Kind::Expression,
+        global_scale: 1.0,
+        face_gain: 1.0,
+        regions: &[
+            // Nose wrinkler: the sides of the nasal bridge compress.
+            r((10.0, 14.0), (5.0, 7.0), true, 0.75, 0.8),
+            // Upper lip raised and everted: the philtrum area fills.
+            r((0.0, -30.0), (12.0, 6.0), false, 1.18, 1.1),
+            // Cheeks pushed up.
+            r((36.0, 0.0), (11.0, 10.0), true, 1.2, 1.1),
+        ],
+        notes: "nasal bridge compressed (drained), raised upper lip and cheeks flushed (Jimenez et al. 2010 fig. 1, 13)",
+    },
+    Expression {
+        name: "exercise",
+        kind: Kind::Global,
+        global_scale: 1.0,
+        face_gain: 1.12,
+        regions: &[
+            // After exertion the lateral cheeks and the forehead flush most.
+            r((44.0, -6.0), (16.0, 16.0), true, 1.4, 1.15),
+            r((0.0, 56.0), (34.0, 10.0), false, 1.22, 1.1),
+            r((0.0, -74.0), (12.0, 8.0), false, 1.12, 1.05),
+        ],
+        notes: "global state: the whole face +12 %, lateral cheeks and forehead most (authored after fig. 5 top and fig. 10; obs. 5: a spatial pattern of its own)",
+    },
+    Expression {
+        name: "alcohol",
+        kind: Kind::Global,
+        global_scale: 1.0,
+        face_gain: 1.08,
+        regions: &[
+            // Alcohol flushing concentrates centrally: nose, medial cheeks, around the eyes.
+            r((0.0, -4.0), (8.0, 12.0), false, 1.35, 1.15),
+            r((26.0, -6.0), (10.0, 10.0), true, 1.3, 1.15),
+            r((24.0, 20.0), (9.0, 5.0), true, 1.12, 1.05),
+        ],
+        notes: "global state: the whole face +8 %, nose and medial cheeks most, a pattern distinct from exercise (authored after fig. 5 top and fig. 10; obs. 5)",
+    },
+];
+
+/// The library entry called `name`.
+pub fn find(name: &str) -> Option<&'static Expression> {
+    LIBRARY.iter().find(|e| e.name == name)
+}
+
+impl Expression {
+    /// (mean gain, σ gain) at template point `p`.
+    pub fn gains_at(&self, p: Vec3) -> (f32, f32) {
+        let (x, y, front) = template::face_coords(p);
+        if front <= 0.0 {
+            return (1.0, 1.0);
+        }
+        let (mut lm, mut ls) = (self.face_gain.ln(), 0.0f32);
+        for reg in self.regions {
+            let g = |cx: f32| {
+                (-0.5
+                    * (((x - cx) / reg.size.0).powi(2) + ((y - reg.centre.1) / reg.size.1).powi(2)))
+                .exp()
+            };
+            let w = if reg.paired {
+                g(reg.centre.0).max(g(-reg.centre.0))
+            } else {
+                g(reg.centre.0)
+            };
+            lm += w * reg.mean_gain.ln();
+            ls += w * reg.sigma_gain.ln();
+        }
+        ((front * lm).exp(), (front * ls).exp())
+    }
+}
+
+/// Template surface points of a `w × h` UV grid (texel centres), `None` outside the chart.
+pub fn template_points(w: usize, h: usize) -> Vec<Option<Vec3>> {
+    let mesh = template::head_mesh();
+    let raster = derma_core::raster::UvRaster::new(&mesh, w, h);
+    (0..w * h)
+        .map(|i| raster.covered(i).then(|| raster.position[i]))
+        .collect()
+}
+
+/// Gain maps (mean, σ) of `e` on a `w × h` grid of the template's UV layout, from `points`
+/// ([`template_points`]); 1 outside the chart.
+pub fn gain_maps(e: &Expression, points: &[Option<Vec3>], w: usize, h: usize) -> (Map, Map) {
+    let (gm, gs): (Vec<f32>, Vec<f32>) = points
+        .iter()
+        .map(|p| p.map_or((1.0, 1.0), |p| e.gains_at(p)))
+        .unzip();
+    (
+        Map::from_vec(w, h, gm).expect("size"),
+        Map::from_vec(w, h, gs).expect("size"),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn face(x: f32, y: f32) -> Vec3 {
+        Vec3::new(x, y, 95.0)
+    }
+
+    #[test]
+    fn library_follows_the_papers_observations() {
+        assert_eq!(LIBRARY.len(), 8);
+        let names: Vec<_> = LIBRARY.iter().map(|e| e.name).collect();
+        for n in [
+            "happiness",
+            "sadness",
+            "anger",
+            "fear",
+            "surprise",
+            "disgust",
+            "exercise",
+            "alcohol",
+        ] {
+            assert!(names.contains(&n), "{n}");
+        }
+        // §7: anger ×1.27, fear ×0.81.
+        assert_eq!(find("anger").unwrap().global_scale, 1.27);
+        assert_eq!(find("fear").unwrap().global_scale, 0.81);
+        // Obs. 2: a smile raises perfusion over the cheekbones and drains compressed skin.
+        let smile = find("happiness").unwrap();
+        assert!(smile.gains_at(face(40.0, 4.0)).0 > 1.25);
+        assert!(smile.gains_at(face(-40.0, 4.0)).0 > 1.25, "mirrored");
+        assert!(smile.gains_at(face(22.0, -28.0)).0 < 0.9);
+        // Behind the face nothing changes.
+        assert_eq!(smile.gains_at(Vec3::new(0.0, 0.0, -100.0)), (1.0, 1.0));
+        // Obs. 5: the two global states have different spatial patterns.
+        let (ex, al) = (find("exercise").unwrap(), find("alcohol").unwrap());
+        let lateral = face(46.0, -6.0);
+        let nose = face(0.0, -4.0);
+        assert!(ex.gains_at(lateral).0 > ex.gains_at(nose).0);
+        assert!(al.gains_at(nose).0 > al.gains_at(lateral).0);
+    }
+
+    #[test]
+    fn gain_maps_cover_the_face_of_the_template() {
+        let (w, h) = (64, 64);
+        let pts = template_points(w, h);
+        let (gm, _) = gain_maps(find("happiness").unwrap(), &pts, w, h);
+        let st = gm.stats(None);
+        assert!(st.max > 1.2 && st.min < 0.92, "{st:?}");
+    }
+}
