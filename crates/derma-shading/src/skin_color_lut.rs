@@ -212,7 +212,8 @@ impl SkinColorLut {
                 "expected a square table of at least 2×2 linear_srgb triples".into(),
             ));
         }
-        let top = |a: &derma_core::dtab::DtabAxis| a.values[n - 1].powi(3);
+        // The axis stores cube roots: undo, rounded to 12 decimals (0.5, not 0.5000000000000001).
+        let top = |a: &derma_core::dtab::DtabAxis| (a.values[n - 1].powi(3) * 1e12).round() / 1e12;
         let meta = &t.header.meta;
         let num = |k: &str, default: f64| meta.get(k).and_then(|v| v.as_f64()).unwrap_or(default);
         let d = LutOptions::default();

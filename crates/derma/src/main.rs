@@ -3,6 +3,7 @@
 
 mod matching;
 mod optics;
+mod rig;
 mod skin;
 
 use clap::{Parser, Subcommand};
@@ -34,6 +35,9 @@ enum Command {
     /// Model matching: fit render models to the optics, and the skin-colour LUT.
     #[command(subcommand)]
     Match(matching::MatchCommand),
+    /// Dynamic facial colour: the skin appearance rig (hemoglobin by expression and emotion).
+    #[command(subcommand)]
+    Rig(rig::RigCommand),
 }
 
 fn main() {
@@ -51,6 +55,7 @@ fn main() {
         Command::Skin(args) => skin::run(args, cli.quiet),
         Command::Optics(cmd) => optics::run(cmd, cli.quiet),
         Command::Match(cmd) => matching::run(cmd, cli.quiet),
+        Command::Rig(cmd) => rig::run(cmd, cli.quiet),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");
