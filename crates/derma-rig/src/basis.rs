@@ -185,16 +185,14 @@ pub fn scale_map(sigma_i: &Map, sigma_n: &Map, eps: f32) -> Map {
 fn mean_free(neutral: &Map, mean_n: &Map) -> Map {
     let (w, h) = (neutral.width(), neutral.height());
     let up = Upsampler::new((mean_n.width(), mean_n.height()), (w, h));
+    let wide = up.widen(mean_n.data());
     let mut out = vec![0.0f32; w * h];
-    out.par_chunks_mut(w).enumerate().for_each_init(
-        || vec![0.0f32; mean_n.width()],
-        |scratch, (y, row)| {
-            up.row(mean_n.data(), y, scratch, row);
-            for (o, &hn) in row.iter_mut().zip(&neutral.data()[y * w..(y + 1) * w]) {
-                *o = hn - *o;
-            }
-        },
-    );
+    out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        up.row_of_wide(&wide, y, row);
+        for (o, &hn) in row.iter_mut().zip(&neutral.data()[y * w..(y + 1) * w]) {
+            *o = hn - *o;
+        }
+    });
     Map::from_vec(w, h, out).expect("size")
 }
 

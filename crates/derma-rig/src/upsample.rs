@@ -100,15 +100,46 @@ impl Upsampler {
         }
     }
 
+    /// Horizontal pass only: every source row resampled to the output width (`src.1 × dst.0`).
+    /// With it, each output row is a contiguous lerp of two wide rows ([`Self::row_of_wide`]),
+    /// which vectorises, instead of a gather per texel.
+    pub fn widen(&self, map: &[f32]) -> Vec<f32> {
+        let (sw, sh) = self.src;
+        let dw = self.dst.0;
+        let mut out = vec![0.0f32; sh * dw];
+        out.par_chunks_mut(dw).enumerate().for_each(|(j, row)| {
+            let src = &map[j * sw..(j + 1) * sw];
+            for (o, c) in row.iter_mut().zip(&self.cols) {
+                let (p, q) = (src[c.i0 as usize], src[c.i1 as usize]);
+                *o = p + (q - p) * c.t;
+            }
+        });
+        out
+    }
+
+    /// Output row `y` from a [`Self::widen`]ed map.
+    #[inline]
+    pub fn row_of_wide(&self, wide: &[f32], y: usize, out: &mut [f32]) {
+        let dw = self.dst.0;
+        let r = self.rows[y];
+        let (a, b) = (
+            &wide[r.i0 as usize * dw..][..dw],
+            &wide[r.i1 as usize * dw..][..dw],
+        );
+        for ((o, &p), &q) in out.iter_mut().zip(a).zip(b) {
+            *o = p + (q - p) * r.t;
+        }
+    }
+
     /// The whole upsampled map.
     pub fn apply(&self, map: &Map) -> Map {
         debug_assert_eq!((map.width(), map.height()), self.src);
         let (w, h) = self.dst;
+        let wide = self.widen(map.data());
         let mut out = vec![0.0f32; w * h];
-        out.par_chunks_mut(w).enumerate().for_each_init(
-            || vec![0.0f32; self.src.0],
-            |scratch, (y, row)| self.row(map.data(), y, scratch, row),
-        );
+        out.par_chunks_mut(w)
+            .enumerate()
+            .for_each(|(y, row)| self.row_of_wide(&wide, y, row));
         Map::from_vec(w, h, out).expect("size")
     }
 }

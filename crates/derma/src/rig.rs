@@ -4,11 +4,16 @@
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
-use derma_core::image_io::{read_exr_channels, read_grey, write_exr, write_png16, write_png8_srgb, ExrPrecision};
+use derma_core::image_io::{
+    read_exr_channels, read_grey, write_exr, write_png16, write_png8_srgb, ExrPrecision,
+};
 use derma_core::Map;
 use derma_rig::evaluate::{color, hemoglobin, unpack_rgba8, FramePlan};
 use derma_rig::weights::{global_scale, resolve};
-use derma_rig::{expression, rig_dir, BasisOptions, GlobalScale, Normalization, Rig, TargetSource, TargetSpec, TransferMode, WeightSpec};
+use derma_rig::{
+    expression, rig_dir, BasisOptions, GlobalScale, Normalization, Rig, TargetSource, TargetSpec,
+    TransferMode, WeightSpec,
+};
 use derma_shading::skin_color_lut::SkinColorLut;
 use sha2::Digest;
 use std::path::{Path, PathBuf};
@@ -215,7 +220,9 @@ impl Quantity {
 
 /// Reads a scalar map: EXR by channel name, other images as grey × the quantity's scale.
 fn read_map(path: &Path, q: Quantity) -> Result<Map> {
-    let is_exr = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    let is_exr = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
     if is_exr {
         let chans = read_exr_channels(path)?;
         if chans.len() == 1 {
@@ -235,11 +242,18 @@ fn read_map(path: &Path, q: Quantity) -> Result<Map> {
     }
     let img = read_grey(path)?;
     if img.is_colour {
-        tracing::warn!("'{}' is a colour image; using its luminance", path.display());
+        tracing::warn!(
+            "'{}' is a colour image; using its luminance",
+            path.display()
+        );
     }
     let m = img.channels.into_iter().next().expect("grey");
     let s = q.png_scale();
-    Ok(Map::from_vec(m.width(), m.height(), m.data().iter().map(|v| v * s).collect())?)
+    Ok(Map::from_vec(
+        m.width(),
+        m.height(),
+        m.data().iter().map(|v| v * s).collect(),
+    )?)
 }
 
 /// Refuses outputs that would overwrite an input.
@@ -290,21 +304,43 @@ fn build(a: BuildArgs, quiet: bool) -> Result<()> {
     check_inputs_outside(&a.out, &inputs)?;
     let lut = load_lut(a.lut.as_deref())?;
     let neutral = read_map(&a.neutral, Quantity::Hemoglobin)?;
-    let melanin = a.melanin.as_deref().map(|p| read_map(p, Quantity::Melanin)).transpose()?;
-    let mask = a.mask.as_deref().map(|p| read_map(p, Quantity::Mask)).transpose()?;
+    let melanin = a
+        .melanin
+        .as_deref()
+        .map(|p| read_map(p, Quantity::Melanin))
+        .transpose()?;
+    let mask = a
+        .mask
+        .as_deref()
+        .map(|p| read_map(p, Quantity::Mask))
+        .transpose()?;
     let maps: Vec<(String, Map)> = parsed
         .iter()
-        .map(|(n, p)| Ok((n.clone(), read_map(p, Quantity::Hemoglobin).with_context(|| format!("target '{n}'"))?)))
+        .map(|(n, p)| {
+            Ok((
+                n.clone(),
+                read_map(p, Quantity::Hemoglobin).with_context(|| format!("target '{n}'"))?,
+            ))
+        })
         .collect::<Result<_>>()?;
     let mut globals = std::collections::HashMap::new();
     for g in &a.globals {
-        let (n, s) = g.split_once('=').with_context(|| format!("--global '{g}': expected NAME=S"))?;
-        let s: f32 = s.trim().parse().with_context(|| format!("--global '{g}': '{s}' is not a number"))?;
+        let (n, s) = g
+            .split_once('=')
+            .with_context(|| format!("--global '{g}': expected NAME=S"))?;
+        let s: f32 = s
+            .trim()
+            .parse()
+            .with_context(|| format!("--global '{g}': '{s}' is not a number"))?;
         globals.insert(n.trim().to_string(), s);
     }
     let mut specs: Vec<TargetSpec> = maps
         .iter()
-        .map(|(n, m)| TargetSpec { name: n.clone(), source: TargetSource::Map(m), global_scale: globals.get(n).copied() })
+        .map(|(n, m)| TargetSpec {
+            name: n.clone(),
+            source: TargetSource::Map(m),
+            global_scale: globals.get(n).copied(),
+        })
         .collect();
     let builtin: Vec<&'static expression::Expression> = if a.builtin.iter().any(|b| b == "all") {
         expression::LIBRARY.iter().collect()
@@ -316,14 +352,22 @@ fn build(a: BuildArgs, quiet: bool) -> Result<()> {
                 expression::find(b).with_context(|| {
                     format!(
                         "--builtin '{b}': not in the library ({})",
-                        expression::LIBRARY.iter().map(|e| e.name).collect::<Vec<_>>().join(", ")
+                        expression::LIBRARY
+                            .iter()
+                            .map(|e| e.name)
+                            .collect::<Vec<_>>()
+                            .join(", ")
                     )
                 })
             })
             .collect::<Result<_>>()?
     };
     for e in builtin {
-        specs.push(TargetSpec { name: e.name.into(), source: TargetSource::Builtin(e), global_scale: globals.get(e.name).copied() });
+        specs.push(TargetSpec {
+            name: e.name.into(),
+            source: TargetSource::Builtin(e),
+            global_scale: globals.get(e.name).copied(),
+        });
     }
     for n in globals.keys() {
         if !specs.iter().any(|s| &s.name == n) {
@@ -333,7 +377,11 @@ fn build(a: BuildArgs, quiet: bool) -> Result<()> {
     if specs.is_empty() {
         bail!("no targets: give --target NAME=FILE and/or --builtin NAMES|all");
     }
-    let opts = BasisOptions { radius: a.radius, basis_size: (a.basis_size, a.basis_size), sigma_floor: a.sigma_floor };
+    let opts = BasisOptions {
+        radius: a.radius,
+        basis_size: (a.basis_size, a.basis_size),
+        sigma_floor: a.sigma_floor,
+    };
     let t_read = t0.elapsed();
     let t1 = Instant::now();
     let rig = Rig::build(&neutral, mask.as_ref(), melanin, &specs, &opts)?;
@@ -365,8 +413,16 @@ fn transfer(a: TransferArgs, quiet: bool) -> Result<()> {
     check_inputs_outside(&a.out, &inputs)?;
     let (rig, lut, _) = rig_dir::load(&a.rig)?;
     let neutral = read_map(&a.neutral, Quantity::Hemoglobin)?;
-    let melanin = a.melanin.as_deref().map(|p| read_map(p, Quantity::Melanin)).transpose()?;
-    let mask = a.mask.as_deref().map(|p| read_map(p, Quantity::Mask)).transpose()?;
+    let melanin = a
+        .melanin
+        .as_deref()
+        .map(|p| read_map(p, Quantity::Melanin))
+        .transpose()?;
+    let mask = a
+        .mask
+        .as_deref()
+        .map(|p| read_map(p, Quantity::Mask))
+        .transpose()?;
     let mode = match a.mode {
         ModeArg::Absolute => TransferMode::Absolute,
         ModeArg::Relative => TransferMode::Relative,
@@ -374,15 +430,29 @@ fn transfer(a: TransferArgs, quiet: bool) -> Result<()> {
     let moved = rig.transfer(&neutral, mask.as_ref(), melanin, mode, a.sigma_floor)?;
     rig_dir::save(&moved, &lut, &a.out)?;
     if !quiet {
-        eprintln!("transferred {} targets onto '{}' → {}", moved.targets.len(), a.neutral.display(), a.out.display());
+        eprintln!(
+            "transferred {} targets onto '{}' → {}",
+            moved.targets.len(),
+            a.neutral.display(),
+            a.out.display()
+        );
     }
     Ok(())
 }
 
 /// Weights w_0… and the global scale of one frame.
-fn frame_weights(rig: &Rig, spec: &WeightSpec, opts: &FrameOptions, scale_override: Option<f32>) -> Result<(Vec<f32>, f32)> {
+fn frame_weights(
+    rig: &Rig,
+    spec: &WeightSpec,
+    opts: &FrameOptions,
+    scale_override: Option<f32>,
+) -> Result<(Vec<f32>, f32)> {
     let names: Vec<&str> = rig.targets.iter().map(|t| t.name.as_str()).collect();
-    let norm = if opts.normalize { Normalization::Rescale } else { Normalization::NeutralTakesRest };
+    let norm = if opts.normalize {
+        Normalization::Rescale
+    } else {
+        Normalization::NeutralTakesRest
+    };
     let w = resolve(&names, spec, norm)?;
     let g = match scale_override {
         Some(s) => s,
@@ -400,7 +470,14 @@ fn melanin_for(rig: &Rig, opts: &FrameOptions) -> Result<Option<Map>> {
         Some(p) => {
             let m = read_map(p, Quantity::Melanin)?;
             if (m.width(), m.height()) != rig.size() {
-                bail!("melanin '{}' is {}×{}; the rig's maps are {}×{}", p.display(), m.width(), m.height(), rig.size().0, rig.size().1);
+                bail!(
+                    "melanin '{}' is {}×{}; the rig's maps are {}×{}",
+                    p.display(),
+                    m.width(),
+                    m.height(),
+                    rig.size().0,
+                    rig.size().1
+                );
             }
             Ok(Some(m))
         }
@@ -414,7 +491,11 @@ fn is_exr(p: &Path) -> bool {
 
 fn write_color(path: &Path, rgb: &[Map; 3]) -> Result<()> {
     if is_exr(path) {
-        write_exr(path, &[("R", &rgb[0]), ("G", &rgb[1]), ("B", &rgb[2])], ExrPrecision::F32)?;
+        write_exr(
+            path,
+            &[("R", &rgb[0]), ("G", &rgb[1]), ("B", &rgb[2])],
+            ExrPrecision::F32,
+        )?;
     } else {
         write_png8_srgb(path, &[&rgb[0], &rgb[1], &rgb[2]])?;
     }
@@ -425,7 +506,11 @@ fn write_hemoglobin(path: &Path, h: &Map) -> Result<()> {
     if is_exr(path) {
         write_exr(path, &[("blood", h)], ExrPrecision::F32)?;
     } else {
-        let v = Map::from_vec(h.width(), h.height(), h.data().iter().map(|x| x / 0.32).collect())?;
+        let v = Map::from_vec(
+            h.width(),
+            h.height(),
+            h.data().iter().map(|x| x / 0.32).collect(),
+        )?;
         write_png16(path, &[&v])?;
     }
     Ok(())
@@ -460,7 +545,12 @@ fn eval(a: EvalArgs) -> Result<()> {
     println!(
         "weights: neutral={:.4}{} global scale {g:.4}",
         w[0],
-        rig.targets.iter().zip(&w[1..]).filter(|(_, x)| **x > 0.0).map(|(t, x)| format!(", {}={x:.4}", t.name)).collect::<String>()
+        rig.targets
+            .iter()
+            .zip(&w[1..])
+            .filter(|(_, x)| **x > 0.0)
+            .map(|(t, x)| format!(", {}={x:.4}", t.name))
+            .collect::<String>()
     );
     Ok(())
 }
@@ -489,10 +579,27 @@ fn preview(rgb: &[Map; 3], h: &Map) -> Result<[Map; 3]> {
         subsurface: None,
     };
     let shade = |m: &RenderMaps| {
-        render(&mesh, &tangents, &derma_skin::preview::Textures { maps: m, wrap: false, uv_scale: glam::Vec2::ONE }, 0.0, PANEL)
+        render(
+            &mesh,
+            &tangents,
+            &derma_skin::preview::Textures {
+                maps: m,
+                wrap: false,
+                uv_scale: glam::Vec2::ONE,
+            },
+            0.0,
+            PANEL,
+        )
     };
     let colour = shade(&maps(rgb.clone()));
-    let grey = Map::from_vec(w, hh, h.data().iter().map(|v| derma_core::color::srgb_decode((1.0 - v / PREVIEW_BLOOD_TOP).clamp(0.0, 1.0))).collect())?;
+    let grey = Map::from_vec(
+        w,
+        hh,
+        h.data()
+            .iter()
+            .map(|v| derma_core::color::srgb_decode((1.0 - v / PREVIEW_BLOOD_TOP).clamp(0.0, 1.0)))
+            .collect(),
+    )?;
     let blood = shade(&maps([grey.clone(), grey.clone(), grey]));
     Ok([0, 1, 2].map(|k| {
         let mut out = Map::filled(2 * PANEL, PANEL, 0.0);
@@ -538,34 +645,69 @@ fn animate(a: AnimateArgs, quiet: bool) -> Result<()> {
             bail!(
                 "curve '{n}' in '{}' names no target of the rig ({})",
                 a.curves.display(),
-                rig.targets.iter().map(|t| t.name.as_str()).collect::<Vec<_>>().join(", ")
+                rig.targets
+                    .iter()
+                    .map(|t| t.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
             );
         }
     }
     let mel = melanin_for(&rig, &a.frame)?.ok_or_else(no_melanin)?;
     let times = curves.frame_times(fps);
-    let fmt = if a.format == FrameFormat::Png { "png" } else { "exr" };
+    let fmt = if a.format == FrameFormat::Png {
+        "png"
+    } else {
+        "exr"
+    };
     let mut frames = Vec::with_capacity(times.len());
     for (k, &t) in times.iter().enumerate() {
         let spec = curves.weights_at(t);
-        let (w, g) = frame_weights(&rig, &spec, &a.frame, curves.global_scale.as_ref().map(|c| c.at(t)))
-            .with_context(|| format!("frame {k} (t = {t:.3} s)"))?;
+        let (w, g) = frame_weights(
+            &rig,
+            &spec,
+            &a.frame,
+            curves.global_scale.as_ref().map(|c| c.at(t)),
+        )
+        .with_context(|| format!("frame {k} (t = {t:.3} s)"))?;
         let mut files = vec![format!("color_{k:05}.{fmt}")];
         if a.hemoglobin {
             files.push(format!("hemoglobin_{k:05}.exr"));
         }
         let mut names = vec![("neutral".to_string(), w[0])];
-        names.extend(rig.targets.iter().zip(&w[1..]).map(|(t, x)| (t.name.clone(), *x)));
-        frames.push(FrameJson { index: k, time: t, weights: names, global_scale: g, files });
+        names.extend(
+            rig.targets
+                .iter()
+                .zip(&w[1..])
+                .map(|(t, x)| (t.name.clone(), *x)),
+        );
+        frames.push(FrameJson {
+            index: k,
+            time: t,
+            weights: names,
+            global_scale: g,
+            files,
+        });
     }
     let key = {
         let mut h = sha2::Sha256::new();
         h.update(std::fs::read(a.rig.join("rig.json"))?);
         h.update(std::fs::read(&a.curves)?);
-        h.update(format!("{fps} {fmt} {} {} {:?}", a.hemoglobin, a.frame.global_scale, a.frame.melanin).as_bytes());
+        h.update(
+            format!(
+                "{fps} {fmt} {} {} {:?}",
+                a.hemoglobin, a.frame.global_scale, a.frame.melanin
+            )
+            .as_bytes(),
+        );
         format!("{:x}", h.finalize())
     };
-    let json = AnimationJson { key: key.clone(), fps, format: fmt.into(), frames };
+    let json = AnimationJson {
+        key: key.clone(),
+        fps,
+        format: fmt.into(),
+        frames,
+    };
     let jp = a.out.join("animation.json");
     if let Ok(old) = std::fs::read_to_string(&jp) {
         let same = serde_json::from_str::<AnimationJson>(&old).is_ok_and(|o| o.key == key);
@@ -582,7 +724,9 @@ fn animate(a: AnimateArgs, quiet: bool) -> Result<()> {
         }
     }
     derma_core::atomic::write_bytes(&jp, serde_json::to_string_pretty(&json)?.as_bytes())?;
-    let plan = (a.format == FrameFormat::Png).then(|| FramePlan::new(&rig, &mel, &lut)).transpose()?;
+    let plan = (a.format == FrameFormat::Png)
+        .then(|| FramePlan::new(&rig, &mel, &lut))
+        .transpose()?;
     let (fw, fh) = rig.size();
     let mut buf = vec![0u32; fw * fh];
     let bar = crate::optics::progress_bar(json.frames.len() as u64, quiet, "frames", "frames");
@@ -599,7 +743,10 @@ fn animate(a: AnimateArgs, quiet: bool) -> Result<()> {
                     let rgb = unpack_rgba8(&buf, fw, fh);
                     derma_core::image_io::write_png8(&cp, &[&rgb[0], &rgb[1], &rgb[2]])?;
                     if a.hemoglobin {
-                        write_hemoglobin(&a.out.join(&f.files[1]), &hemoglobin(&rig, &w, f.global_scale)?)?;
+                        write_hemoglobin(
+                            &a.out.join(&f.files[1]),
+                            &hemoglobin(&rig, &w, f.global_scale)?,
+                        )?;
                     }
                 }
                 None => {
