@@ -420,6 +420,7 @@ fn save_load_round_trip_and_frame_path_matches_the_exact_colour() {
             worst = worst.max((a - want).abs() * 255.0);
         }
     }
+    println!("frame path vs exact colour: worst {worst} levels");
     assert!(
         worst <= 2.0,
         "frame path differs from the exact colour by {worst} levels"
