@@ -73,7 +73,7 @@ fn frame(c: &mut Criterion) {
     drop(targets);
     let lut = SkinColorLut::builtin();
     let weights = vec![0.2, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1];
-    let plan = FramePlan::new(&rig, &melanin, &lut).unwrap();
+    let mut plan = FramePlan::new(&rig, &melanin, &lut).unwrap();
     let mut out = vec![0u32; w * w];
     let mut g = c.benchmark_group("rig_frame_2048_8_targets");
     g.sample_size(30);

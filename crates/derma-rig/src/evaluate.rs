@@ -19,6 +19,20 @@ use rayon::prelude::*;
 /// Σ w_i bias_i and Σ w_i scale_i at basis resolution, both multiplied by the global scale `g`.
 /// `w` holds w_0 (neutral) first.
 pub fn combine(rig: &Rig, w: &[f32], g: f32) -> Result<(Map, Map)> {
+    let (bw, bh) = rig.basis_size();
+    let (mut bias, mut scale) = (vec![0.0f32; bw * bh], vec![0.0f32; bw * bh]);
+    combine_into(rig, w, g, &mut bias, &mut scale)?;
+    Ok((Map::from_vec(bw, bh, bias)?, Map::from_vec(bw, bh, scale)?))
+}
+
+/// [`combine`] into the caller's buffers (basis size each).
+pub fn combine_into(
+    rig: &Rig,
+    w: &[f32],
+    g: f32,
+    bias: &mut [f32],
+    scale: &mut [f32],
+) -> Result<()> {
     if w.len() != rig.targets.len() + 1 {
         return Err(invalid(
             "weights",
@@ -29,9 +43,11 @@ pub fn combine(rig: &Rig, w: &[f32], g: f32) -> Result<(Map, Map)> {
             ),
         ));
     }
-    let (bw, bh) = rig.basis_size();
-    let mut bias: Vec<f32> = rig.neutral_mean.data().iter().map(|&m| w[0] * m).collect();
-    let mut scale = vec![w[0]; bw * bh];
+    let bw = rig.basis_size().0;
+    for (b, &m) in bias.iter_mut().zip(rig.neutral_mean.data()) {
+        *b = w[0] * m;
+    }
+    scale.fill(w[0]);
     let active: Vec<_> = rig
         .targets
         .iter()
@@ -60,7 +76,7 @@ pub fn combine(rig: &Rig, w: &[f32], g: f32) -> Result<(Map, Map)> {
                 *s *= g;
             }
         });
-    Ok((Map::from_vec(bw, bh, bias)?, Map::from_vec(bw, bh, scale)?))
+    Ok(())
 }
 
 /// The hemoglobin map (dermal blood volume fraction) of weights `w` under global scale `g`,
@@ -139,6 +155,16 @@ pub struct FramePlan {
     /// `lut8[j * 256 + i]` (the cube root of eq. 7 folded into the rows).
     lut8: Vec<u32>,
     inv_blood_max: f32,
+    /// Per-frame buffers, kept so frames after the first allocate (and page-fault) nothing.
+    scratch: Scratch,
+}
+
+#[derive(Default)]
+struct Scratch {
+    bias: Vec<f32>,
+    scale: Vec<f32>,
+    wide_bias: Vec<f32>,
+    wide_scale: Vec<f32>,
 }
 
 impl FramePlan {
@@ -180,11 +206,12 @@ impl FramePlan {
             u_index,
             lut8,
             inv_blood_max: (1.0 / bmax) as f32,
+            scratch: Scratch::default(),
         })
     }
 
     /// Renders one frame into `out` (RGBA8 little-endian per texel, sRGB, row-major from the top).
-    pub fn render(&self, rig: &Rig, w: &[f32], g: f32, out: &mut [u32]) -> Result<()> {
+    pub fn render(&mut self, rig: &Rig, w: &[f32], g: f32, out: &mut [u32]) -> Result<()> {
         let (fw, fh) = rig.size();
         if out.len() != fw * fh {
             return Err(invalid(
@@ -192,10 +219,23 @@ impl FramePlan {
                 format!("{} texels; expected {}", out.len(), fw * fh),
             ));
         }
-        let (bias, scale) = combine(rig, w, g)?;
+        if self.up.src != rig.basis_size() || self.up.dst != (fw, fh) {
+            return Err(invalid("rig", "not the rig this frame plan was made for"));
+        }
+        let (bw, bh) = rig.basis_size();
+        let sc = &mut self.scratch;
+        sc.bias.resize(bw * bh, 0.0);
+        sc.scale.resize(bw * bh, 0.0);
+        sc.wide_bias.resize(bh * fw, 0.0);
+        sc.wide_scale.resize(bh * fw, 0.0);
+        combine_into(rig, w, g, &mut sc.bias, &mut sc.scale)?;
+        self.up.widen_into(&sc.bias, &mut sc.wide_bias);
+        self.up.widen_into(&sc.scale, &mut sc.wide_scale);
+        let (wb, ws) = (&sc.wide_bias, &sc.wide_scale);
         let k = self.inv_blood_max * (CBRT_STEPS - 1) as f32;
         let top = (CBRT_STEPS - 1) as f32;
-        let (wb, ws) = (self.up.widen(bias.data()), self.up.widen(scale.data()));
+        #[cfg(target_arch = "x86_64")]
+        let avx2 = std::arch::is_x86_feature_detected!("avx2");
         out.par_chunks_mut(fw).enumerate().for_each_init(
             || vec![0u32; fw],
             |vrow, (y, row)| {
@@ -212,26 +252,91 @@ impl FramePlan {
                     &ws[r.i0 as usize * fw..][..fw],
                     &ws[r.i1 as usize * fw..][..fw],
                 );
-                let t = r.t;
-                let rows = b0.iter().zip(b1).zip(s0.iter().zip(s1));
-                for ((v, &d), ((&p0, &p1), (&q0, &q1))) in vrow.iter_mut().zip(h0).zip(rows) {
-                    let b = p0 + (p1 - p0) * t;
-                    let s = q0 + (q1 - q0) * t;
-                    let h = ((b + d * s) * k).max(0.0).min(top);
-                    *v = (h + 8_388_608.0).to_bits() & (CBRT_STEPS as u32 - 1);
-                }
-                // One table read per texel (fixed-size table, masked index: no bounds check).
                 let u = &self.u_index[y * fw..(y + 1) * fw];
                 let lut: &[u32; CBRT_STEPS * FRAME_LUT_LEVELS] =
                     self.lut8[..].try_into().expect("table size");
-                for ((o, &v), &u) in row.iter_mut().zip(vrow.iter()).zip(u) {
-                    *o =
-                        lut[((v as usize) << 8 | u as usize) & (CBRT_STEPS * FRAME_LUT_LEVELS - 1)];
+                let rows = RowInputs {
+                    b0,
+                    b1,
+                    s0,
+                    s1,
+                    t: r.t,
+                    h0,
+                    u,
+                    k,
+                    top,
+                };
+                #[cfg(target_arch = "x86_64")]
+                if avx2 {
+                    // SAFETY: AVX2 was detected at run time just above.
+                    unsafe { frame_row_avx2(&rows, lut, vrow, row) };
+                    return;
                 }
+                frame_row(&rows, lut, vrow, row);
             },
         );
         Ok(())
     }
+}
+
+/// One output row's inputs.
+struct RowInputs<'a> {
+    b0: &'a [f32],
+    b1: &'a [f32],
+    s0: &'a [f32],
+    s1: &'a [f32],
+    t: f32,
+    h0: &'a [f32],
+    u: &'a [u8],
+    k: f32,
+    top: f32,
+}
+
+/// One row of a frame. The same arithmetic whatever the instruction set (no fused multiply-add
+/// is enabled), so frames are bit-identical on every x86-64.
+#[inline(always)]
+fn frame_row_body(
+    r: &RowInputs,
+    lut: &[u32; CBRT_STEPS * FRAME_LUT_LEVELS],
+    vrow: &mut [u32],
+    row: &mut [u32],
+) {
+    // Vectorised part: the basis rows interpolated vertically (the horizontal pass is in
+    // `widen`), H, and its step in the cube-root table, rounded by the 2²³ trick (adding 2²³
+    // leaves round(x) in the low mantissa bits; NaN → 0 by max).
+    let (t, k, top) = (r.t, r.k, r.top);
+    let rows = r.b0.iter().zip(r.b1).zip(r.s0.iter().zip(r.s1));
+    for ((v, &d), ((&p0, &p1), (&q0, &q1))) in vrow.iter_mut().zip(r.h0).zip(rows) {
+        let b = p0 + (p1 - p0) * t;
+        let s = q0 + (q1 - q0) * t;
+        let h = ((b + d * s) * k).max(0.0).min(top);
+        *v = (h + 8_388_608.0).to_bits() & (CBRT_STEPS as u32 - 1);
+    }
+    // One table read per texel (fixed-size table, masked index: no bounds check).
+    for ((o, &v), &u) in row.iter_mut().zip(vrow.iter()).zip(r.u) {
+        *o = lut[((v as usize) << 8 | u as usize) & (CBRT_STEPS * FRAME_LUT_LEVELS - 1)];
+    }
+}
+
+fn frame_row(
+    r: &RowInputs,
+    lut: &[u32; CBRT_STEPS * FRAME_LUT_LEVELS],
+    vrow: &mut [u32],
+    row: &mut [u32],
+) {
+    frame_row_body(r, lut, vrow, row)
+}
+
+/// [`frame_row`] compiled for AVX2 (8 lanes, hardware gathers for the table).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn frame_row_avx2(
+    r: &RowInputs,
+    lut: &[u32; CBRT_STEPS * FRAME_LUT_LEVELS],
+    vrow: &mut [u32],
+    row: &mut [u32],
+) {
+    frame_row_body(r, lut, vrow, row)
 }
 
 /// Unpacks an RGBA8 frame into three maps of encoded [0, 1] values (for writing a PNG).

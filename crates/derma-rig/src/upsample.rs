@@ -104,9 +104,15 @@ impl Upsampler {
     /// With it, each output row is a contiguous lerp of two wide rows ([`Self::row_of_wide`]),
     /// which vectorises, instead of a gather per texel.
     pub fn widen(&self, map: &[f32]) -> Vec<f32> {
-        let (sw, sh) = self.src;
+        let mut out = vec![0.0f32; self.src.1 * self.dst.0];
+        self.widen_into(map, &mut out);
+        out
+    }
+
+    /// [`Self::widen`] into a caller's buffer (reused across frames: no page faults).
+    pub fn widen_into(&self, map: &[f32], out: &mut [f32]) {
+        let sw = self.src.0;
         let dw = self.dst.0;
-        let mut out = vec![0.0f32; sh * dw];
         out.par_chunks_mut(dw).enumerate().for_each(|(j, row)| {
             let src = &map[j * sw..(j + 1) * sw];
             for (o, c) in row.iter_mut().zip(&self.cols) {
@@ -114,7 +120,6 @@ impl Upsampler {
                 *o = p + (q - p) * c.t;
             }
         });
-        out
     }
 
     /// Output row `y` from a [`Self::widen`]ed map.

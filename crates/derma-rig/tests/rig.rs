@@ -409,7 +409,7 @@ fn save_load_round_trip_and_frame_path_matches_the_exact_colour() {
     let wts = vec![0.3, 0.5, 0.2];
     let h = hemoglobin(&rig, &wts, 1.1).unwrap();
     let c = color(&h, &mel, &lut).unwrap();
-    let plan = FramePlan::new(&rig, &mel, &lut).unwrap();
+    let mut plan = FramePlan::new(&rig, &mel, &lut).unwrap();
     let mut frame = vec![0u32; w * w];
     plan.render(&rig, &wts, 1.1, &mut frame).unwrap();
     let f = unpack_rgba8(&frame, w, w);

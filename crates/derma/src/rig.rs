@@ -724,7 +724,7 @@ fn animate(a: AnimateArgs, quiet: bool) -> Result<()> {
         }
     }
     derma_core::atomic::write_bytes(&jp, serde_json::to_string_pretty(&json)?.as_bytes())?;
-    let plan = (a.format == FrameFormat::Png)
+    let mut plan = (a.format == FrameFormat::Png)
         .then(|| FramePlan::new(&rig, &mel, &lut))
         .transpose()?;
     let (fw, fh) = rig.size();
@@ -737,7 +737,7 @@ fn animate(a: AnimateArgs, quiet: bool) -> Result<()> {
         } else {
             let w: Vec<f32> = f.weights.iter().map(|x| x.1).collect();
             let cp = a.out.join(&f.files[0]);
-            match &plan {
+            match &mut plan {
                 Some(p) => {
                     p.render(&rig, &w, f.global_scale, &mut buf)?;
                     let rgb = unpack_rgba8(&buf, fw, fh);

@@ -13,7 +13,11 @@ fn tmp(tag: &str) -> PathBuf {
 }
 
 fn run(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_derma")).args(args).arg("--quiet").output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_derma"))
+        .args(args)
+        .arg("--quiet")
+        .output()
+        .unwrap();
     (
         out.status.success(),
         String::from_utf8_lossy(&out.stdout).into_owned(),
@@ -26,7 +30,12 @@ fn s(p: &Path) -> &str {
 }
 
 fn blood(p: &Path) -> derma_core::Map {
-    derma_core::image_io::read_exr_channels(p).unwrap().into_iter().find(|c| c.0 == "blood").unwrap().1
+    derma_core::image_io::read_exr_channels(p)
+        .unwrap()
+        .into_iter()
+        .find(|c| c.0 == "blood")
+        .unwrap()
+        .1
 }
 
 #[test]
@@ -37,34 +46,96 @@ fn build_eval_animate_transfer_from_skin_maps() {
     assert!(ok, "{err}");
     // A painted target: the neutral map scaled by 1.5 (an affine target, eq. 3).
     let neutral = blood(&skin.join("hemoglobin.exr"));
-    let flushed = derma_core::Map::from_vec(256, 256, neutral.data().iter().map(|v| 1.5 * v).collect()).unwrap();
+    let flushed =
+        derma_core::Map::from_vec(256, 256, neutral.data().iter().map(|v| 1.5 * v).collect())
+            .unwrap();
     let target = d.join("flush.exr");
-    derma_core::image_io::write_exr(&target, &[("blood", &flushed)], derma_core::image_io::ExrPrecision::F32).unwrap();
+    derma_core::image_io::write_exr(
+        &target,
+        &[("blood", &flushed)],
+        derma_core::image_io::ExrPrecision::F32,
+    )
+    .unwrap();
     let rig = d.join("rig");
     let tgt = format!("flush={}", s(&target));
     let (ok, _, err) = run(&[
-        "rig", "build", "--neutral", s(&skin.join("hemoglobin.exr")), "--melanin", s(&skin.join("melanin.exr")),
-        "--builtin", "all", "--target", &tgt, "--global", "flush=1.1", "--radius", "8", "--basis-size", "64",
+        "rig",
+        "build",
+        "--neutral",
+        s(&skin.join("hemoglobin.exr")),
+        "--melanin",
+        s(&skin.join("melanin.exr")),
+        "--builtin",
+        "all",
+        "--target",
+        &tgt,
+        "--global",
+        "flush=1.1",
+        "--radius",
+        "8",
+        "--basis-size",
+        "64",
         // No σ floor: eq. 3 is then exact everywhere, flat regions included.
-        "--sigma-floor", "0", "--out", s(&rig),
+        "--sigma-floor",
+        "0",
+        "--out",
+        s(&rig),
     ]);
     assert!(ok, "{err}");
-    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(rig.join("rig.json")).unwrap()).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(rig.join("rig.json")).unwrap()).unwrap();
     assert_eq!(json["targets"].as_array().unwrap().len(), 9);
     assert_eq!(json["basis_size"][0], 64);
-    for f in ["h0.exr", "neutral.exr", "melanin.exr", "skin_color_lut.png", "skin_color_lut.exr", "targets/anger.exr", "targets/flush.exr"] {
+    for f in [
+        "h0.exr",
+        "neutral.exr",
+        "melanin.exr",
+        "skin_color_lut.png",
+        "skin_color_lut.exr",
+        "targets/anger.exr",
+        "targets/flush.exr",
+    ] {
         assert!(rig.join(f).exists(), "{f}");
     }
 
     // One frame: the affine target comes back exactly; the global scale from --global applies.
     let h = d.join("h.exr");
-    let (ok, out, err) = run(&["rig", "eval", "--rig", s(&rig), "--weights", "flush=1", "--global-scale", "1", "--hemoglobin", s(&h), "--out", s(&d.join("c.png")), "--preview", s(&d.join("p.png"))]);
+    let (ok, out, err) = run(&[
+        "rig",
+        "eval",
+        "--rig",
+        s(&rig),
+        "--weights",
+        "flush=1",
+        "--global-scale",
+        "1",
+        "--hemoglobin",
+        s(&h),
+        "--out",
+        s(&d.join("c.png")),
+        "--preview",
+        s(&d.join("p.png")),
+    ]);
     assert!(ok, "{err}");
     assert!(out.contains("flush=1.0000"), "{out}");
     let got = blood(&h);
-    let worst = got.data().iter().zip(flushed.data()).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+    let worst = got
+        .data()
+        .iter()
+        .zip(flushed.data())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
     assert!(worst < 1e-5, "affine target off by {worst}");
-    let (ok, out, _) = run(&["rig", "eval", "--rig", s(&rig), "--weights", "anger=0.5,flush=0.5", "--out", s(&d.join("c2.exr"))]);
+    let (ok, out, _) = run(&[
+        "rig",
+        "eval",
+        "--rig",
+        s(&rig),
+        "--weights",
+        "anger=0.5,flush=0.5",
+        "--out",
+        s(&d.join("c2.exr")),
+    ]);
     assert!(ok);
     // auto global scale: 1 + 0.5·0.27 + 0.5·0.1.
     assert!(out.contains("global scale 1.1850"), "{out}");
@@ -75,33 +146,104 @@ fn build_eval_animate_transfer_from_skin_maps() {
     let curves = d.join("curves.csv");
     std::fs::write(&curves, "time,happiness,anger\n0,0,0\n0.5,1,0\n1,0,1\n").unwrap();
     let anim = d.join("anim");
-    let (ok, _, err) = run(&["rig", "animate", "--rig", s(&rig), "--curves", s(&curves), "--fps", "4", "--hemoglobin", "--out", s(&anim)]);
+    let (ok, _, err) = run(&[
+        "rig",
+        "animate",
+        "--rig",
+        s(&rig),
+        "--curves",
+        s(&curves),
+        "--fps",
+        "4",
+        "--hemoglobin",
+        "--out",
+        s(&anim),
+    ]);
     assert!(ok, "{err}");
-    let frames: serde_json::Value = serde_json::from_slice(&std::fs::read(anim.join("animation.json")).unwrap()).unwrap();
+    let frames: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(anim.join("animation.json")).unwrap()).unwrap();
     assert_eq!(frames["frames"].as_array().unwrap().len(), 5);
     let f2 = &frames["frames"][2];
-    assert_eq!(f2["weights"][2], serde_json::json!(["happiness", 1.0]), "t = 0.5: {f2}");
+    assert_eq!(
+        f2["weights"][2],
+        serde_json::json!(["happiness", 1.0]),
+        "t = 0.5: {f2}"
+    );
     assert!(anim.join("color_00004.png").exists() && anim.join("hemoglobin_00004.exr").exists());
-    let before = std::fs::metadata(anim.join("color_00001.png")).unwrap().modified().unwrap();
+    let before = std::fs::metadata(anim.join("color_00001.png"))
+        .unwrap()
+        .modified()
+        .unwrap();
     std::fs::remove_file(anim.join("color_00003.png")).unwrap();
-    let (ok, _, err) = run(&["rig", "animate", "--rig", s(&rig), "--curves", s(&curves), "--fps", "4", "--hemoglobin", "--out", s(&anim)]);
+    let (ok, _, err) = run(&[
+        "rig",
+        "animate",
+        "--rig",
+        s(&rig),
+        "--curves",
+        s(&curves),
+        "--fps",
+        "4",
+        "--hemoglobin",
+        "--out",
+        s(&anim),
+    ]);
     assert!(ok, "{err}");
     assert!(anim.join("color_00003.png").exists(), "resumed frame");
-    assert_eq!(std::fs::metadata(anim.join("color_00001.png")).unwrap().modified().unwrap(), before, "kept frame");
-    let (ok, _, err) = run(&["rig", "animate", "--rig", s(&rig), "--curves", s(&curves), "--fps", "8", "--out", s(&anim)]);
+    assert_eq!(
+        std::fs::metadata(anim.join("color_00001.png"))
+            .unwrap()
+            .modified()
+            .unwrap(),
+        before,
+        "kept frame"
+    );
+    let (ok, _, err) = run(&[
+        "rig",
+        "animate",
+        "--rig",
+        s(&rig),
+        "--curves",
+        s(&curves),
+        "--fps",
+        "8",
+        "--out",
+        s(&anim),
+    ]);
     assert!(!ok && err.contains("different animation"), "{err}");
 
     // Transfer onto another character (a different seed of the skin).
     let skin2 = d.join("skin2");
     assert!(run(&["skin", "--size", "256", "--seed", "7", "--out", s(&skin2)]).0);
     let rig2 = d.join("rig2");
-    let (ok, _, err) = run(&["rig", "transfer", "--rig", s(&rig), "--neutral", s(&skin2.join("hemoglobin.exr")), "--melanin", s(&skin2.join("melanin.exr")), "--mode", "relative", "--out", s(&rig2)]);
+    let (ok, _, err) = run(&[
+        "rig",
+        "transfer",
+        "--rig",
+        s(&rig),
+        "--neutral",
+        s(&skin2.join("hemoglobin.exr")),
+        "--melanin",
+        s(&skin2.join("melanin.exr")),
+        "--mode",
+        "relative",
+        "--out",
+        s(&rig2),
+    ]);
     assert!(ok, "{err}");
     let h2 = d.join("h2.exr");
     assert!(run(&["rig", "eval", "--rig", s(&rig2), "--hemoglobin", s(&h2)]).0);
     let n2 = blood(&skin2.join("hemoglobin.exr"));
-    let worst = blood(&h2).data().iter().zip(n2.data()).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
-    assert!(worst < 1e-6, "transferred neutral pose is the new character: {worst}");
+    let worst = blood(&h2)
+        .data()
+        .iter()
+        .zip(n2.data())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    assert!(
+        worst < 1e-6,
+        "transferred neutral pose is the new character: {worst}"
+    );
     std::fs::remove_dir_all(&d).unwrap();
 }
 
@@ -115,39 +257,141 @@ fn rig_errors_name_the_problem() {
     let d = tmp("err");
     let n = derma_core::Map::filled(64, 64, 0.02);
     let np = d.join("n.exr");
-    derma_core::image_io::write_exr(&np, &[("blood", &n)], derma_core::image_io::ExrPrecision::F32).unwrap();
+    derma_core::image_io::write_exr(
+        &np,
+        &[("blood", &n)],
+        derma_core::image_io::ExrPrecision::F32,
+    )
+    .unwrap();
     let small = d.join("small.exr");
-    derma_core::image_io::write_exr(&small, &[("blood", &derma_core::Map::filled(32, 32, 0.02))], derma_core::image_io::ExrPrecision::F32).unwrap();
+    derma_core::image_io::write_exr(
+        &small,
+        &[("blood", &derma_core::Map::filled(32, 32, 0.02))],
+        derma_core::image_io::ExrPrecision::F32,
+    )
+    .unwrap();
     let bad = d.join("bad.exr");
-    derma_core::image_io::write_exr(&bad, &[("blood", &derma_core::Map::filled(64, 64, 1.5))], derma_core::image_io::ExrPrecision::F32).unwrap();
+    derma_core::image_io::write_exr(
+        &bad,
+        &[("blood", &derma_core::Map::filled(64, 64, 1.5))],
+        derma_core::image_io::ExrPrecision::F32,
+    )
+    .unwrap();
     let rig = d.join("rig");
     let cases: Vec<(Vec<String>, &str)> = vec![
         (vec!["--target".into(), format!("t={}", s(&small))], "32×32"),
-        (vec!["--target".into(), format!("t={}", s(&bad))], "volume fraction"),
-        (vec!["--target".into(), format!("neutral={}", s(&np))], "not 'neutral'"),
+        (
+            vec!["--target".into(), format!("t={}", s(&bad))],
+            "volume fraction",
+        ),
+        (
+            vec!["--target".into(), format!("neutral={}", s(&np))],
+            "not 'neutral'",
+        ),
         (vec!["--builtin".into(), "joy".into()], "not in the library"),
         (vec!["--target".into(), s(&np).into()], "NAME=FILE"),
         (vec![], "no targets"),
     ];
     for (extra, want) in cases {
-        let mut args = vec!["rig", "build", "--neutral", s(&np), "--radius", "4", "--basis-size", "16", "--out", s(&rig)];
+        let mut args = vec![
+            "rig",
+            "build",
+            "--neutral",
+            s(&np),
+            "--radius",
+            "4",
+            "--basis-size",
+            "16",
+            "--out",
+            s(&rig),
+        ];
         args.extend(extra.iter().map(|x| x.as_str()));
         let (ok, _, err) = run(&args);
         assert!(!ok && err.contains(want), "{extra:?}: {err}");
     }
-    let (ok, _, err) = run(&["rig", "build", "--neutral", s(&np), "--builtin", "anger", "--radius", "4", "--basis-size", "48", "--out", s(&rig)]);
+    let (ok, _, err) = run(&[
+        "rig",
+        "build",
+        "--neutral",
+        s(&np),
+        "--builtin",
+        "anger",
+        "--radius",
+        "4",
+        "--basis-size",
+        "48",
+        "--out",
+        s(&rig),
+    ]);
     assert!(!ok && err.contains("does not divide"), "{err}");
     // Inputs are never overwritten: an output directory holding an input is refused.
-    let (ok, _, err) = run(&["rig", "build", "--neutral", s(&np), "--builtin", "anger", "--radius", "4", "--out", s(&d)]);
+    let (ok, _, err) = run(&[
+        "rig",
+        "build",
+        "--neutral",
+        s(&np),
+        "--builtin",
+        "anger",
+        "--radius",
+        "4",
+        "--out",
+        s(&d),
+    ]);
     assert!(!ok && err.contains("inside the output directory"), "{err}");
-    assert!(run(&["rig", "build", "--neutral", s(&np), "--builtin", "anger,fear", "--radius", "4", "--basis-size", "16", "--out", s(&rig)]).0);
-    for (w, want) in [("anger=0.8,fear=0.5", "--normalize"), ("smile=1", "no target 'smile'"), ("anger", "NAME=WEIGHT")] {
-        let (ok, _, err) = run(&["rig", "eval", "--rig", s(&rig), "--weights", w, "--hemoglobin", s(&d.join("x.exr"))]);
+    assert!(
+        run(&[
+            "rig",
+            "build",
+            "--neutral",
+            s(&np),
+            "--builtin",
+            "anger,fear",
+            "--radius",
+            "4",
+            "--basis-size",
+            "16",
+            "--out",
+            s(&rig)
+        ])
+        .0
+    );
+    for (w, want) in [
+        ("anger=0.8,fear=0.5", "--normalize"),
+        ("smile=1", "no target 'smile'"),
+        ("anger", "NAME=WEIGHT"),
+    ] {
+        let (ok, _, err) = run(&[
+            "rig",
+            "eval",
+            "--rig",
+            s(&rig),
+            "--weights",
+            w,
+            "--hemoglobin",
+            s(&d.join("x.exr")),
+        ]);
         assert!(!ok && err.contains(want), "{w}: {err}");
     }
-    let (ok, _, _) = run(&["rig", "eval", "--rig", s(&rig), "--weights", "anger=0.8,fear=0.5", "--normalize", "--hemoglobin", s(&d.join("x.exr"))]);
+    let (ok, _, _) = run(&[
+        "rig",
+        "eval",
+        "--rig",
+        s(&rig),
+        "--weights",
+        "anger=0.8,fear=0.5",
+        "--normalize",
+        "--hemoglobin",
+        s(&d.join("x.exr")),
+    ]);
     assert!(ok);
-    let (ok, _, err) = run(&["rig", "eval", "--rig", s(&rig), "--out", s(&d.join("x.png"))]);
+    let (ok, _, err) = run(&[
+        "rig",
+        "eval",
+        "--rig",
+        s(&rig),
+        "--out",
+        s(&d.join("x.png")),
+    ]);
     assert!(!ok && err.contains("no melanin"), "{err}");
     let (ok, _, err) = run(&["rig", "eval", "--rig", s(&d), "--out", s(&d.join("x.png"))]);
     assert!(!ok && err.contains("rig.json"), "{err}");
