@@ -57,6 +57,16 @@ fn opts(r: f64, basis: usize) -> BasisOptions {
     }
 }
 
+/// A rig of `neutral` with one map target.
+fn single_target_rig(neutral: &Map, name: &str, target: &Map, o: BasisOptions) -> Rig {
+    let spec = TargetSpec {
+        name: name.into(),
+        source: TargetSource::Map(target),
+        global_scale: None,
+    };
+    Rig::build(neutral, None, None, &[spec], &o).unwrap()
+}
+
 fn one_hot(rig: &Rig, name: &str) -> Vec<f32> {
     let names: Vec<&str> = rig.targets.iter().map(|t| t.name.as_str()).collect();
     let spec: WeightSpec = format!("{name}=1").parse().unwrap();
@@ -76,18 +86,7 @@ fn eq3_affine_target_is_reproduced_exactly_and_neutral_pose_is_the_neutral() {
     let n = blood_map(128, 128, 1, 0.02);
     let affine =
         Map::from_vec(128, 128, n.data().iter().map(|v| 1.6 * v + 0.004).collect()).unwrap();
-    let rig = Rig::build(
-        &n,
-        None,
-        None,
-        &[TargetSpec {
-            name: "flush".into(),
-            source: TargetSource::Map(&affine),
-            global_scale: None,
-        }],
-        &opts(12.0, 32),
-    )
-    .unwrap();
+    let rig = single_target_rig(&n, "flush", &affine, opts(12.0, 32));
     let h = hemoglobin(&rig, &one_hot(&rig, "flush"), 1.0).unwrap();
     // Eq. 3: μ_i = 1.6 μ_n + 0.004 and σ_i = 1.6 σ_n everywhere, so H = 1.6 H_n + 0.004 exactly
     // (to float rounding), whatever the upsampling of the basis.
@@ -124,18 +123,7 @@ fn one_hot_weights_reproduce_the_targets_local_statistics() {
             .collect(),
     )
     .unwrap();
-    let rig = Rig::build(
-        &n,
-        None,
-        None,
-        &[TargetSpec {
-            name: "t".into(),
-            source: TargetSource::Map(&t),
-            global_scale: None,
-        }],
-        &opts(r, 64),
-    )
-    .unwrap();
+    let rig = single_target_rig(&n, "t", &t, opts(r, 64));
     let h = hemoglobin(&rig, &one_hot(&rig, "t"), 1.0).unwrap();
     let got = local_stats_exact(&h, None, r).unwrap();
     let want = local_stats_exact(&t, None, r).unwrap();
@@ -202,18 +190,7 @@ fn transfer_keeps_the_new_characters_fine_structure_and_takes_the_targets_statis
     let a = blood_map(w, w, 10, 0.015);
     let target = blood_map(w, w, 11, 0.03);
     let b = blood_map(w, w, 12, 0.01);
-    let rig = Rig::build(
-        &a,
-        None,
-        None,
-        &[TargetSpec {
-            name: "t".into(),
-            source: TargetSource::Map(&target),
-            global_scale: None,
-        }],
-        &opts(r, 64),
-    )
-    .unwrap();
+    let rig = single_target_rig(&a, "t", &target, opts(r, 64));
     let moved = rig
         .transfer(&b, None, None, TransferMode::Absolute, 0.05)
         .unwrap();
@@ -275,18 +252,7 @@ fn whole_map_radius_agrees_with_skimage_match_histograms() {
     let r: Reference = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
     let n = Map::from_vec(r.width, r.height, r.neutral).unwrap();
     let t = Map::from_vec(r.width, r.height, r.target).unwrap();
-    let rig = Rig::build(
-        &n,
-        None,
-        None,
-        &[TargetSpec {
-            name: "t".into(),
-            source: TargetSource::Map(&t),
-            global_scale: None,
-        }],
-        &opts(1000.0, 16),
-    )
-    .unwrap();
+    let rig = single_target_rig(&n, "t", &t, opts(1000.0, 16));
     let h = hemoglobin(&rig, &one_hot(&rig, "t"), 1.0).unwrap();
     let sd_t = {
         let m = t.data().iter().map(|&v| v as f64).sum::<f64>() / t.data().len() as f64;
@@ -335,18 +301,7 @@ fn flat_neutral_regions_do_not_spike() {
         }
     }
     let t = blood_map(w, w, 21, 0.03);
-    let rig = Rig::build(
-        &n,
-        None,
-        None,
-        &[TargetSpec {
-            name: "t".into(),
-            source: TargetSource::Map(&t),
-            global_scale: None,
-        }],
-        &opts(8.0, 32),
-    )
-    .unwrap();
+    let rig = single_target_rig(&n, "t", &t, opts(8.0, 32));
     let h = hemoglobin(&rig, &one_hot(&rig, "t"), 1.0).unwrap();
     assert!(h.data().iter().all(|v| v.is_finite()));
     let ts = local_stats_exact(&t, None, 8.0).unwrap();
@@ -438,18 +393,7 @@ fn deterministic_across_thread_counts() {
             .build()
             .unwrap()
             .install(|| {
-                let rig = Rig::build(
-                    &n,
-                    None,
-                    None,
-                    &[TargetSpec {
-                        name: "t".into(),
-                        source: TargetSource::Map(&t),
-                        global_scale: None,
-                    }],
-                    &opts(40.0, 32),
-                )
-                .unwrap();
+                let rig = single_target_rig(&n, "t", &t, opts(40.0, 32));
                 hemoglobin(&rig, &[0.4, 0.6], 1.0).unwrap()
             })
     };

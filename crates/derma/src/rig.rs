@@ -33,8 +33,9 @@ pub enum RigCommand {
     Library,
 }
 
+/// A character's maps.
 #[derive(Args)]
-pub struct BuildArgs {
+struct CharacterArgs {
     /// Neutral hemoglobin map H_n: EXR (dermal blood volume fraction; channel blood, hemoglobin,
     /// Y or the only one) or PNG (grey × 0.32, the LUT's top, Jimenez et al. 2010 table 1).
     #[arg(long)]
@@ -45,6 +46,30 @@ pub struct BuildArgs {
     /// Mask of the skin (grey, > 0 = skin): texels outside are left out of the statistics.
     #[arg(long)]
     mask: Option<PathBuf>,
+}
+
+impl CharacterArgs {
+    fn paths(&self) -> Vec<&Path> {
+        let mut v: Vec<&Path> = vec![&self.neutral];
+        v.extend(self.melanin.as_deref());
+        v.extend(self.mask.as_deref());
+        v
+    }
+
+    /// (neutral, melanin, mask).
+    fn read(&self) -> Result<(Map, Option<Map>, Option<Map>)> {
+        Ok((
+            read_map(&self.neutral, Quantity::Hemoglobin)?,
+            read_optional(self.melanin.as_deref(), Quantity::Melanin)?,
+            read_optional(self.mask.as_deref(), Quantity::Mask)?,
+        ))
+    }
+}
+
+#[derive(Args)]
+pub struct BuildArgs {
+    #[command(flatten)]
+    character: CharacterArgs,
     /// A measured or painted target hemoglobin map, aligned with the neutral: NAME=FILE (repeat).
     #[arg(long = "target", value_name = "NAME=FILE")]
     targets: Vec<String>,
@@ -85,14 +110,9 @@ pub struct TransferArgs {
     /// Rig directory to transfer from.
     #[arg(long)]
     rig: PathBuf,
-    /// The other character's neutral hemoglobin map.
-    #[arg(long)]
-    neutral: PathBuf,
-    /// The other character's melanin map.
-    #[arg(long)]
-    melanin: Option<PathBuf>,
-    #[arg(long)]
-    mask: Option<PathBuf>,
+    /// The other character's maps.
+    #[command(flatten)]
+    character: CharacterArgs,
     #[arg(long, value_enum, default_value = "absolute")]
     mode: ModeArg,
     #[arg(long, default_value_t = derma_rig::basis::DEFAULT_SIGMA_FLOOR)]
@@ -256,6 +276,11 @@ fn read_map(path: &Path, q: Quantity) -> Result<Map> {
     )?)
 }
 
+/// [`read_map`] of an optional path.
+fn read_optional(path: Option<&Path>, q: Quantity) -> Result<Option<Map>> {
+    path.map(|p| read_map(p, q)).transpose()
+}
+
 /// Refuses outputs that would overwrite an input.
 fn check_inputs_outside(out: &Path, inputs: &[&Path]) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("cannot create '{}'", out.display()))?;
@@ -286,9 +311,7 @@ fn load_lut(path: Option<&Path>) -> Result<SkinColorLut> {
 
 fn build(a: BuildArgs, quiet: bool) -> Result<()> {
     let t0 = Instant::now();
-    let mut inputs: Vec<&Path> = vec![&a.neutral];
-    inputs.extend(a.melanin.as_deref());
-    inputs.extend(a.mask.as_deref());
+    let mut inputs = a.character.paths();
     let parsed: Vec<(String, PathBuf)> = a
         .targets
         .iter()
@@ -303,17 +326,7 @@ fn build(a: BuildArgs, quiet: bool) -> Result<()> {
     }
     check_inputs_outside(&a.out, &inputs)?;
     let lut = load_lut(a.lut.as_deref())?;
-    let neutral = read_map(&a.neutral, Quantity::Hemoglobin)?;
-    let melanin = a
-        .melanin
-        .as_deref()
-        .map(|p| read_map(p, Quantity::Melanin))
-        .transpose()?;
-    let mask = a
-        .mask
-        .as_deref()
-        .map(|p| read_map(p, Quantity::Mask))
-        .transpose()?;
+    let (neutral, melanin, mask) = a.character.read()?;
     let maps: Vec<(String, Map)> = parsed
         .iter()
         .map(|(n, p)| {
@@ -407,22 +420,11 @@ fn build(a: BuildArgs, quiet: bool) -> Result<()> {
 }
 
 fn transfer(a: TransferArgs, quiet: bool) -> Result<()> {
-    let mut inputs: Vec<&Path> = vec![&a.neutral, &a.rig];
-    inputs.extend(a.melanin.as_deref());
-    inputs.extend(a.mask.as_deref());
+    let mut inputs = a.character.paths();
+    inputs.push(&a.rig);
     check_inputs_outside(&a.out, &inputs)?;
     let (rig, lut, _) = rig_dir::load(&a.rig)?;
-    let neutral = read_map(&a.neutral, Quantity::Hemoglobin)?;
-    let melanin = a
-        .melanin
-        .as_deref()
-        .map(|p| read_map(p, Quantity::Melanin))
-        .transpose()?;
-    let mask = a
-        .mask
-        .as_deref()
-        .map(|p| read_map(p, Quantity::Mask))
-        .transpose()?;
+    let (neutral, melanin, mask) = a.character.read()?;
     let mode = match a.mode {
         ModeArg::Absolute => TransferMode::Absolute,
         ModeArg::Relative => TransferMode::Relative,
@@ -433,7 +435,7 @@ fn transfer(a: TransferArgs, quiet: bool) -> Result<()> {
         eprintln!(
             "transferred {} targets onto '{}' → {}",
             moved.targets.len(),
-            a.neutral.display(),
+            a.character.neutral.display(),
             a.out.display()
         );
     }

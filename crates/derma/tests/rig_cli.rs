@@ -29,6 +29,11 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+fn write_blood(p: &Path, m: &derma_core::Map) {
+    derma_core::image_io::write_exr(p, &[("blood", m)], derma_core::image_io::ExrPrecision::F32)
+        .unwrap();
+}
+
 fn blood(p: &Path) -> derma_core::Map {
     derma_core::image_io::read_exr_channels(p)
         .unwrap()
@@ -50,12 +55,7 @@ fn build_eval_animate_transfer_from_skin_maps() {
         derma_core::Map::from_vec(256, 256, neutral.data().iter().map(|v| 1.5 * v).collect())
             .unwrap();
     let target = d.join("flush.exr");
-    derma_core::image_io::write_exr(
-        &target,
-        &[("blood", &flushed)],
-        derma_core::image_io::ExrPrecision::F32,
-    )
-    .unwrap();
+    write_blood(&target, &flushed);
     let rig = d.join("rig");
     let tgt = format!("flush={}", s(&target));
     let (ok, _, err) = run(&[
@@ -146,19 +146,22 @@ fn build_eval_animate_transfer_from_skin_maps() {
     let curves = d.join("curves.csv");
     std::fs::write(&curves, "time,happiness,anger\n0,0,0\n0.5,1,0\n1,0,1\n").unwrap();
     let anim = d.join("anim");
-    let (ok, _, err) = run(&[
-        "rig",
-        "animate",
-        "--rig",
-        s(&rig),
-        "--curves",
-        s(&curves),
-        "--fps",
-        "4",
-        "--hemoglobin",
-        "--out",
-        s(&anim),
-    ]);
+    let animate = || {
+        run(&[
+            "rig",
+            "animate",
+            "--rig",
+            s(&rig),
+            "--curves",
+            s(&curves),
+            "--fps",
+            "4",
+            "--hemoglobin",
+            "--out",
+            s(&anim),
+        ])
+    };
+    let (ok, _, err) = animate();
     assert!(ok, "{err}");
     let frames: serde_json::Value =
         serde_json::from_slice(&std::fs::read(anim.join("animation.json")).unwrap()).unwrap();
@@ -175,19 +178,7 @@ fn build_eval_animate_transfer_from_skin_maps() {
         .modified()
         .unwrap();
     std::fs::remove_file(anim.join("color_00003.png")).unwrap();
-    let (ok, _, err) = run(&[
-        "rig",
-        "animate",
-        "--rig",
-        s(&rig),
-        "--curves",
-        s(&curves),
-        "--fps",
-        "4",
-        "--hemoglobin",
-        "--out",
-        s(&anim),
-    ]);
+    let (ok, _, err) = animate();
     assert!(ok, "{err}");
     assert!(anim.join("color_00003.png").exists(), "resumed frame");
     assert_eq!(
@@ -257,26 +248,11 @@ fn rig_errors_name_the_problem() {
     let d = tmp("err");
     let n = derma_core::Map::filled(64, 64, 0.02);
     let np = d.join("n.exr");
-    derma_core::image_io::write_exr(
-        &np,
-        &[("blood", &n)],
-        derma_core::image_io::ExrPrecision::F32,
-    )
-    .unwrap();
+    write_blood(&np, &n);
     let small = d.join("small.exr");
-    derma_core::image_io::write_exr(
-        &small,
-        &[("blood", &derma_core::Map::filled(32, 32, 0.02))],
-        derma_core::image_io::ExrPrecision::F32,
-    )
-    .unwrap();
+    write_blood(&small, &derma_core::Map::filled(32, 32, 0.02));
     let bad = d.join("bad.exr");
-    derma_core::image_io::write_exr(
-        &bad,
-        &[("blood", &derma_core::Map::filled(64, 64, 1.5))],
-        derma_core::image_io::ExrPrecision::F32,
-    )
-    .unwrap();
+    write_blood(&bad, &derma_core::Map::filled(64, 64, 1.5));
     let rig = d.join("rig");
     let cases: Vec<(Vec<String>, &str)> = vec![
         (vec!["--target".into(), format!("t={}", s(&small))], "32×32"),
