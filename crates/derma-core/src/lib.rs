@@ -13,6 +13,7 @@ mod cie_table;
 pub mod color;
 pub mod dtab;
 pub mod error;
+pub mod gpu;
 pub mod image_io;
 pub mod map;
 pub mod mesh;

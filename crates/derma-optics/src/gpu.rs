@@ -15,60 +15,18 @@ const WORKGROUP: u32 = 64;
 /// Fixed-point scale of the tallies (2^24 units per photon weight).
 const FIXED: f64 = 16_777_216.0;
 
+/// The shared device and the transport pipeline.
 struct Gpu {
-    device: wgpu::Device,
-    queue: wgpu::Queue,
+    ctx: &'static derma_core::gpu::Gpu,
     pipeline: wgpu::ComputePipeline,
-    name: String,
 }
 
 static GPU: OnceLock<std::result::Result<Gpu, String>> = OnceLock::new();
 
 fn init() -> std::result::Result<Gpu, String> {
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-        power_preference: wgpu::PowerPreference::HighPerformance,
-        force_fallback_adapter: false,
-        compatible_surface: None,
-        apply_limit_buckets: false,
-    }))
-    .map_err(|e| {
-        format!("no GPU adapter found ({e}); on Linux without a GPU install Mesa's lavapipe (apt-get install mesa-vulkan-drivers)")
-    })?;
-    let info = adapter.get_info();
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        label: Some("derma-optics"),
-        required_features: wgpu::Features::empty(),
-        required_limits: adapter.limits(),
-        ..Default::default()
-    }))
-    .map_err(|e| format!("could not open the GPU device {}: {e}", info.name))?;
-    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("optics.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(SHADER.into()),
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("photon transport"),
-        layout: None,
-        module: &module,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    if let Some(e) = pollster::block_on(scope.pop()) {
-        return Err(format!(
-            "the transport shader did not compile on {}: {e}",
-            info.name
-        ));
-    }
-    Ok(Gpu {
-        device,
-        queue,
-        pipeline,
-        name: format!("{} ({:?})", info.name, info.backend),
-    })
+    let ctx = derma_core::gpu::context()?;
+    let pipeline = ctx.compute_pipeline("the transport shader (optics.wgsl)", SHADER, "main")?;
+    Ok(Gpu { ctx, pipeline })
 }
 
 fn gpu() -> Result<&'static Gpu> {
@@ -79,7 +37,7 @@ fn gpu() -> Result<&'static Gpu> {
 
 /// Whether a GPU adapter can be opened, and its name.
 pub fn available() -> Option<String> {
-    gpu().ok().map(|g| g.name.clone())
+    gpu().ok().map(|g| g.ctx.name.clone())
 }
 
 #[repr(C)]
@@ -164,7 +122,7 @@ pub fn run_gpu(run: &Run, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
         Bottom::Medium { n } => (0, n as f32),
         Bottom::Lambertian { albedo } => (1, albedo as f32),
     };
-    let d = &g.device;
+    let d = &g.ctx.device;
     let storage = |label, bytes: &[u8], usage| {
         d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(label),
@@ -254,7 +212,8 @@ pub fn run_gpu(run: &Run, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
             profile_bins: pbins as u32,
             profile_dmax: pdmax as f32,
         };
-        g.queue
+        g.ctx
+            .queue
             .write_buffer(&params_buf, 0, bytemuck::bytes_of(&params));
         let mut enc = d.create_command_encoder(&Default::default());
         {
@@ -263,7 +222,7 @@ pub fn run_gpu(run: &Run, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
             pass.set_bind_group(0, &bind, &[]);
             pass.dispatch_workgroups(threads / WORKGROUP, 1, 1);
         }
-        g.queue.submit([enc.finish()]);
+        g.ctx.queue.submit([enc.finish()]);
         d.poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| OpticsError::Gpu(format!("waiting for the device: {e}")))?;
         offset += count as u64;
@@ -307,26 +266,5 @@ pub fn run_gpu(run: &Run, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
 }
 
 fn read_back(g: &Gpu, buf: &wgpu::Buffer, len: usize) -> Result<Vec<u32>> {
-    let size = (len * 4) as u64;
-    let staging = g.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("read back"),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut enc = g.device.create_command_encoder(&Default::default());
-    enc.copy_buffer_to_buffer(buf, 0, &staging, 0, size);
-    g.queue.submit([enc.finish()]);
-    let slice = staging.slice(..);
-    slice.map_async(wgpu::MapMode::Read, |_| {});
-    g.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| OpticsError::Gpu(format!("reading results back: {e}")))?;
-    let data = slice
-        .get_mapped_range()
-        .map_err(|e| OpticsError::Gpu(format!("mapping results: {e}")))?;
-    let out = bytemuck::cast_slice(&data).to_vec();
-    drop(data);
-    staging.unmap();
-    Ok(out)
+    g.ctx.read_back(buf, len).map_err(OpticsError::Gpu)
 }
