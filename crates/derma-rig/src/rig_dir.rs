@@ -45,6 +45,8 @@ pub struct Files {
     pub lut_dtab: String,
     pub lut_exr: String,
     pub lut_png: String,
+    /// The run-time evaluation as a WGSL compute shader (the one derma's GPU path runs).
+    pub shader: String,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -130,6 +132,7 @@ pub fn save(rig: &Rig, lut: &SkinColorLut, dir: &Path) -> Result<RigJson> {
         &dir.join("skin_color_lut.png"),
         &[&enc(&r), &enc(&g), &enc(&b)],
     )?;
+    derma_core::atomic::write_bytes(&dir.join("rig.wgsl"), crate::gpu_eval::SHADER.as_bytes())?;
     let (w, h) = rig.size();
     let (bw, bh) = rig.basis_size();
     let json = RigJson {
@@ -148,6 +151,7 @@ pub fn save(rig: &Rig, lut: &SkinColorLut, dir: &Path) -> Result<RigJson> {
             lut_dtab: "skin_color_lut.dtab".into(),
             lut_exr: "skin_color_lut.exr".into(),
             lut_png: "skin_color_lut.png".into(),
+            shader: "rig.wgsl".into(),
         },
         lut: lut_json(lut),
         targets,

@@ -151,10 +151,19 @@ pub struct EvalArgs {
     /// Hemoglobin map: .exr (volume fraction, channel blood) or .png (16-bit, value / 0.32).
     #[arg(long)]
     hemoglobin: Option<PathBuf>,
+    /// Where to evaluate: cpu, or gpu (the rig's `rig.wgsl` on wgpu).
+    #[arg(long, value_enum, default_value = "cpu")]
+    device: DeviceArg,
     /// A preview: the face template rendered with the colour, beside its hemoglobin map (dark =
     /// more blood, as Jimenez et al. 2010 fig. 2). Needs maps on the template's UV layout.
     #[arg(long)]
     preview: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, ValueEnum, PartialEq)]
+enum DeviceArg {
+    Cpu,
+    Gpu,
 }
 
 #[derive(Clone, Copy, ValueEnum, PartialEq)]
@@ -529,18 +538,36 @@ fn eval(a: EvalArgs) -> Result<()> {
     let (rig, lut, _) = rig_dir::load(&a.rig)?;
     let spec: WeightSpec = a.weights.parse()?;
     let (w, g) = frame_weights(&rig, &spec, &a.frame, None)?;
-    let h = hemoglobin(&rig, &w, g)?;
+    let wants_colour = a.out.is_some() || a.preview.is_some();
+    let mel = melanin_for(&rig, &a.frame)?;
+    if wants_colour && mel.is_none() {
+        return Err(no_melanin());
+    }
+    let (h, rgb) = match a.device {
+        DeviceArg::Cpu => {
+            let h = hemoglobin(&rig, &w, g)?;
+            let rgb = match (&mel, wants_colour) {
+                (Some(m), true) => Some(color(&h, m, &lut)?),
+                _ => None,
+            };
+            (h, rgb)
+        }
+        DeviceArg::Gpu => {
+            // Without melanin only the hemoglobin is wanted; colour with C_m = 0 is discarded.
+            let m = mel.unwrap_or_else(|| Map::filled(rig.size().0, rig.size().1, 0.0));
+            let (h, rgb) = derma_rig::gpu_eval::GpuRig::new(&rig, &m, &lut)?.render(&w, g)?;
+            (h, wants_colour.then_some(rgb))
+        }
+    };
     if let Some(p) = &a.hemoglobin {
         write_hemoglobin(p, &h)?;
     }
-    if a.out.is_some() || a.preview.is_some() {
-        let mel = melanin_for(&rig, &a.frame)?.ok_or_else(no_melanin)?;
-        let rgb = color(&h, &mel, &lut)?;
+    if let Some(rgb) = &rgb {
         if let Some(p) = &a.out {
-            write_color(p, &rgb)?;
+            write_color(p, rgb)?;
         }
         if let Some(p) = &a.preview {
-            let img = preview(&rgb, &h)?;
+            let img = preview(rgb, &h)?;
             write_png8_srgb(p, &[&img[0], &img[1], &img[2]])?;
         }
     }

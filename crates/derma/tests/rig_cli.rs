@@ -139,6 +139,38 @@ fn build_eval_animate_transfer_from_skin_maps() {
     assert!(ok);
     // auto global scale: 1 + 0.5·0.27 + 0.5·0.1.
     assert!(out.contains("global scale 1.1850"), "{out}");
+    assert!(rig.join("rig.wgsl").exists());
+    // The shipped shader on the GPU gives the CPU's map (lavapipe in CI).
+    if derma_rig::gpu_eval::available().is_some() {
+        let hg = d.join("hg.exr");
+        let (ok, _, err) = run(&[
+            "rig",
+            "eval",
+            "--rig",
+            s(&rig),
+            "--weights",
+            "flush=1",
+            "--global-scale",
+            "1",
+            "--device",
+            "gpu",
+            "--hemoglobin",
+            s(&hg),
+        ]);
+        assert!(ok, "{err}");
+        let dg = blood(&hg)
+            .data()
+            .iter()
+            .zip(got.data())
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        assert!(dg < 1e-6, "GPU vs CPU: {dg}");
+    } else {
+        assert!(
+            std::env::var("DERMA_REQUIRE_GPU").is_err(),
+            "DERMA_REQUIRE_GPU is set but no GPU adapter"
+        );
+    }
     let png = image_dims(&d.join("p.png"));
     assert_eq!(png, (1024, 512));
 

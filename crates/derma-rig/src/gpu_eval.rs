@@ -1,0 +1,213 @@
+//! Rig evaluation on the GPU (`rig.wgsl` on wgpu; Mesa's lavapipe in CI): the run-time form the
+//! paper argues for (Jimenez et al. 2010 §6), with the same arithmetic as the CPU path in
+//! `evaluate.rs`. Static inputs are uploaded once; a frame uploads only its weights.
+
+use crate::basis::Rig;
+use crate::error::{invalid, Result};
+use derma_core::Map;
+use derma_shading::skin_color_lut::SkinColorLut;
+use std::sync::OnceLock;
+use wgpu::util::DeviceExt;
+
+/// The shader, also written into every rig directory as `rig.wgsl` for engines.
+pub const SHADER: &str = include_str!("rig.wgsl");
+const WORKGROUP: u32 = 64;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    width: u32,
+    height: u32,
+    basis_width: u32,
+    basis_height: u32,
+    layers: u32,
+    lut_n: u32,
+    global_scale: f32,
+    melanin_max: f32,
+    blood_max: f32,
+    pad: [u32; 3],
+}
+
+fn gpu_error(detail: String) -> crate::error::RigError {
+    invalid("GPU", detail)
+}
+
+static PIPELINE: OnceLock<std::result::Result<wgpu::ComputePipeline, String>> = OnceLock::new();
+
+fn pipeline() -> Result<(
+    &'static derma_core::gpu::Gpu,
+    &'static wgpu::ComputePipeline,
+)> {
+    let ctx = derma_core::gpu::context().map_err(gpu_error)?;
+    let p = PIPELINE
+        .get_or_init(|| ctx.compute_pipeline("the rig shader (rig.wgsl)", SHADER, "main"))
+        .as_ref()
+        .map_err(|e| gpu_error(e.clone()))?;
+    Ok((ctx, p))
+}
+
+/// Whether a GPU can evaluate rigs, and its name.
+pub fn available() -> Option<String> {
+    pipeline().ok().map(|(g, _)| g.name.clone())
+}
+
+/// A rig resident on the GPU.
+pub struct GpuRig {
+    size: (usize, usize),
+    layers: usize,
+    params: Params,
+    params_buf: wgpu::Buffer,
+    weights_buf: wgpu::Buffer,
+    hemoglobin_buf: wgpu::Buffer,
+    color_buf: wgpu::Buffer,
+    bind: wgpu::BindGroup,
+}
+
+impl GpuRig {
+    /// Uploads `rig`, `melanin` (full resolution) and `lut`.
+    pub fn new(rig: &Rig, melanin: &Map, lut: &SkinColorLut) -> Result<Self> {
+        let (ctx, pipe) = pipeline()?;
+        let (w, h) = rig.size();
+        if (melanin.width(), melanin.height()) != (w, h) {
+            return Err(invalid(
+                "melanin map",
+                format!(
+                    "{}×{}; expected the rig's {w}×{h}",
+                    melanin.width(),
+                    melanin.height()
+                ),
+            ));
+        }
+        let (bw, bh) = rig.basis_size();
+        let layers = rig.targets.len() + 1;
+        let mut basis = Vec::with_capacity(layers * 2 * bw * bh);
+        basis.extend_from_slice(rig.neutral_mean.data());
+        basis.extend(std::iter::repeat_n(1.0f32, bw * bh));
+        for t in &rig.targets {
+            basis.extend_from_slice(t.bias.data());
+            basis.extend_from_slice(t.scale.data());
+        }
+        let lut_data: Vec<f32> = lut.rgb.iter().flatten().copied().collect();
+        let d = &ctx.device;
+        let init = |label, bytes: &[u8], usage| {
+            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytes,
+                usage,
+            })
+        };
+        let read = wgpu::BufferUsages::STORAGE;
+        let h0_buf = init("h0", bytemuck::cast_slice(rig.h0.data()), read);
+        let mel_buf = init("melanin", bytemuck::cast_slice(melanin.data()), read);
+        let basis_buf = init("basis", bytemuck::cast_slice(&basis), read);
+        let lut_buf = init("lut", bytemuck::cast_slice(&lut_data), read);
+        let weights_buf = init(
+            "weights",
+            bytemuck::cast_slice(&vec![0.0f32; layers]),
+            read | wgpu::BufferUsages::COPY_DST,
+        );
+        let out = |label, bytes: u64| {
+            d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        };
+        let hemoglobin_buf = out("hemoglobin", (w * h * 4) as u64);
+        let color_buf = out("colour", (w * h * 16) as u64);
+        let params = Params {
+            width: w as u32,
+            height: h as u32,
+            basis_width: bw as u32,
+            basis_height: bh as u32,
+            layers: layers as u32,
+            lut_n: lut.options.size as u32,
+            global_scale: 1.0,
+            melanin_max: lut.options.melanin_max as f32,
+            blood_max: lut.options.blood_max as f32,
+            pad: [0; 3],
+        };
+        let params_buf = init(
+            "params",
+            bytemuck::bytes_of(&params),
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        let layout = pipe.get_bind_group_layout(0);
+        let entries: Vec<wgpu::BindGroupEntry> = [
+            &params_buf,
+            &weights_buf,
+            &h0_buf,
+            &mel_buf,
+            &basis_buf,
+            &lut_buf,
+            &hemoglobin_buf,
+            &color_buf,
+        ]
+        .iter()
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+        let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("rig"),
+            layout: &layout,
+            entries: &entries,
+        });
+        Ok(Self {
+            size: (w, h),
+            layers,
+            params,
+            params_buf,
+            weights_buf,
+            hemoglobin_buf,
+            color_buf,
+            bind,
+        })
+    }
+
+    /// Evaluates weights `w` (w_0 first) under global scale `g`: the hemoglobin map and the
+    /// linear-sRGB colour maps.
+    pub fn render(&self, w: &[f32], g: f32) -> Result<(Map, [Map; 3])> {
+        if w.len() != self.layers {
+            return Err(invalid(
+                "weights",
+                format!(
+                    "{} weights for {} layers (neutral + targets)",
+                    w.len(),
+                    self.layers
+                ),
+            ));
+        }
+        let (ctx, pipe) = pipeline()?;
+        let params = Params {
+            global_scale: g,
+            ..self.params
+        };
+        ctx.queue
+            .write_buffer(&self.params_buf, 0, bytemuck::bytes_of(&params));
+        ctx.queue
+            .write_buffer(&self.weights_buf, 0, bytemuck::cast_slice(w));
+        let (fw, fh) = self.size;
+        let groups = (fw * fh).div_ceil(WORKGROUP as usize) as u32;
+        let gx = groups.min(65_535);
+        let gy = groups.div_ceil(gx);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(pipe);
+            pass.set_bind_group(0, &self.bind, &[]);
+            pass.dispatch_workgroups(gx, gy, 1);
+        }
+        ctx.queue.submit([enc.finish()]);
+        let hb: Vec<f32> = ctx
+            .read_back(&self.hemoglobin_buf, fw * fh)
+            .map_err(gpu_error)?;
+        let cb: Vec<[f32; 4]> = ctx.read_back(&self.color_buf, fw * fh).map_err(gpu_error)?;
+        let rgb = [0, 1, 2]
+            .map(|c| Map::from_vec(fw, fh, cb.iter().map(|p| p[c]).collect()).expect("size"));
+        Ok((Map::from_vec(fw, fh, hb)?, rgb))
+    }
+}
