@@ -68,16 +68,7 @@ impl GpuRig {
     pub fn new(rig: &Rig, melanin: &Map, lut: &SkinColorLut) -> Result<Self> {
         let (ctx, pipe) = pipeline()?;
         let (w, h) = rig.size();
-        if (melanin.width(), melanin.height()) != (w, h) {
-            return Err(invalid(
-                "melanin map",
-                format!(
-                    "{}×{}; expected the rig's {w}×{h}",
-                    melanin.width(),
-                    melanin.height()
-                ),
-            ));
-        }
+        crate::evaluate::check_melanin(rig, melanin)?;
         let (bw, bh) = rig.basis_size();
         let layers = rig.targets.len() + 1;
         let mut basis = Vec::with_capacity(layers * 2 * bw * bh);
