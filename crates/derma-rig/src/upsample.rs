@@ -81,24 +81,6 @@ impl Upsampler {
         }
     }
 
-    /// Writes output row `y` of `map` (of size `src`) into `out` (length `dst.0`), using
-    /// `scratch` (length `src.0`) for the vertically interpolated source row.
-    #[inline]
-    pub fn row(&self, map: &[f32], y: usize, scratch: &mut [f32], out: &mut [f32]) {
-        let w = self.src.0;
-        let r = self.rows[y];
-        let (a, b) = (
-            &map[r.i0 as usize * w..][..w],
-            &map[r.i1 as usize * w..][..w],
-        );
-        for ((s, &p), &q) in scratch.iter_mut().zip(a).zip(b) {
-            *s = p + (q - p) * r.t;
-        }
-        for (o, c) in out.iter_mut().zip(&self.cols) {
-            let (p, q) = (scratch[c.i0 as usize], scratch[c.i1 as usize]);
-            *o = p + (q - p) * c.t;
-        }
-    }
 
     /// Horizontal pass only: every source row resampled to the output width (`src.1 × dst.0`).
     /// With it, each output row is a contiguous lerp of two wide rows ([`Self::row_of_wide`]),
