@@ -81,7 +81,6 @@ impl Upsampler {
         }
     }
 
-
     /// Horizontal pass only: every source row resampled to the output width (`src.1 × dst.0`).
     /// With it, each output row is a contiguous lerp of two wide rows ([`Self::row_of_wide`]),
     /// which vectorises, instead of a gather per texel.
