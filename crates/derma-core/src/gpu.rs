@@ -107,3 +107,18 @@ impl Gpu {
         Ok(out)
     }
 }
+
+/// For tests that need a GPU: true (skip) when `available` is false, after a note on stderr;
+/// panics instead when `DERMA_REQUIRE_GPU` is set (CI runs the GPU tests on Mesa's lavapipe,
+/// so a missing driver must fail there, not pass silently).
+pub fn skip_test_without_gpu(available: bool) -> bool {
+    if available {
+        return false;
+    }
+    assert!(
+        std::env::var("DERMA_REQUIRE_GPU").is_err(),
+        "DERMA_REQUIRE_GPU is set but no GPU adapter (lavapipe: apt-get install mesa-vulkan-drivers)"
+    );
+    eprintln!("skipped: no GPU adapter");
+    true
+}

@@ -269,12 +269,7 @@ fn sampled_brdf_is_reciprocal() {
 
 #[test]
 fn cpu_and_gpu_agree() {
-    if derma_optics::gpu::available().is_none() {
-        assert!(
-            std::env::var("DERMA_REQUIRE_GPU").is_err(),
-            "DERMA_REQUIRE_GPU is set but no GPU adapter (lavapipe: apt-get install mesa-vulkan-drivers)"
-        );
-        eprintln!("skipped: no GPU adapter");
+    if derma_core::gpu::skip_test_without_gpu(derma_optics::gpu::available().is_some()) {
         return;
     }
     let run = Run::totals(
