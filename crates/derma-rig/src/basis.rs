@@ -124,12 +124,23 @@ fn same_size(what: &str, m: &Map, w: usize, h: usize) -> Result<()> {
 
 /// Checks that a hemoglobin or melanin map holds volume fractions.
 pub fn check_fractions(what: &str, m: &Map) -> Result<()> {
-    if let Some((i, v)) = m
+    // Both cores over chunks, and still the first offending texel (first chunk, then first
+    // texel in it), so the message is the same whatever the thread count.
+    let ok = |v: &f32| v.is_finite() && (0.0..=1.0).contains(v);
+    const CHUNK: usize = 1 << 16;
+    let bad = m
         .data()
-        .iter()
-        .enumerate()
-        .find(|(_, v)| !(v.is_finite() && (0.0..=1.0).contains(*v)))
-    {
+        .par_chunks(CHUNK)
+        .position_first(|c| !c.iter().all(ok))
+        .and_then(|k| {
+            let c = &m.data()[k * CHUNK..];
+            c.iter()
+                .take(CHUNK)
+                .position(|v| !ok(v))
+                .map(|j| k * CHUNK + j)
+        });
+    if let Some(i) = bad {
+        let v = m.data()[i];
         return Err(invalid(
             what,
             format!(
