@@ -28,8 +28,7 @@ pub struct Region {
 
 /// Whether an entry follows geometry (an expression, driven by the blend-shape weights) or is a
 /// global physiological state with its own rig parameter (Jimenez et al. 2010 §5).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
     Expression,
     Global,
