@@ -1,13 +1,25 @@
 //! derma-synth: exemplar-based synthesis of skin detail, after Shen et al., "GPU-based skin
 //! texture synthesis for digital human model" (`../shared/seeds/gpu-skin-texture-synthesis-shen.txt`).
 //!
-//! So far: the multi-channel texture type the synthesis works on ([`texture`]) and the quality
-//! metrics that judge it without neural networks ([`quality`]): a patch-statistics distance,
-//! a verbatim-copy ratio and a seam energy.
+//! [`synthesize`] grows a texture of any size from one or more exemplars: white noise, a patch
+//! pass ([`patch_pass`]), then self-adaptive optimisation passes ([`optimize`]). Every
+//! best-match search is the exact integer search of [`search`], run by a [`Matcher`]: the CPU
+//! one ([`CpuMatcher`], rayon) or the GPU one (`gpu::GpuMatcher`, WGSL), which give identical
+//! answers, so a seed gives the same texture on either. [`quality`] holds the metrics that
+//! judge the result without neural networks.
 
+pub mod canvas;
 pub mod error;
+pub mod exemplar;
+pub mod optimize;
+pub mod patch_pass;
 pub mod quality;
+pub mod search;
+pub mod synthesize;
 pub mod texture;
 
 pub use error::{Result, SynthError};
+pub use exemplar::{Exemplar, ExemplarSet, Quantizer};
+pub use search::{CpuMatcher, Match, Matcher, Query};
+pub use synthesize::{synthesize, Guide, ProgressSink, SynthOptions, Synthesis};
 pub use texture::Texture;

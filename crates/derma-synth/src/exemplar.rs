@@ -1,0 +1,228 @@
+//! Exemplars as the search sees them: each channel quantised to 8 bits over the exemplar set's
+//! range, so the L2 distance of Shen et al. §3.2, eq. 1 is an exact integer on CPU and GPU alike.
+
+use crate::error::{invalid, Result};
+use crate::texture::Texture;
+
+/// Per-channel affine map from the exemplar set's values to 0..=255 (and back). One quantiser
+/// serves every exemplar of a set, so distances between regions drawn from different exemplars
+/// stay comparable.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Quantizer {
+    pub lo: Vec<f32>,
+    pub hi: Vec<f32>,
+}
+
+impl Quantizer {
+    /// The range of each channel over all textures.
+    pub fn fit(textures: &[&Texture]) -> Self {
+        let c = textures[0].channels;
+        let mut lo = vec![f32::INFINITY; c];
+        let mut hi = vec![f32::NEG_INFINITY; c];
+        for t in textures {
+            for px in t.data.chunks_exact(c) {
+                for k in 0..c {
+                    lo[k] = lo[k].min(px[k]);
+                    hi[k] = hi[k].max(px[k]);
+                }
+            }
+        }
+        Self { lo, hi }
+    }
+
+    #[inline]
+    pub fn quantize(&self, k: usize, v: f32) -> u8 {
+        let span = self.hi[k] - self.lo[k];
+        if span <= 0.0 {
+            return 0;
+        }
+        ((v - self.lo[k]) / span * 255.0).round().clamp(0.0, 255.0) as u8
+    }
+
+    #[inline]
+    pub fn dequantize(&self, k: usize, q: f32) -> f32 {
+        self.lo[k] + q / 255.0 * (self.hi[k] - self.lo[k])
+    }
+
+    pub fn quantize_all(&self, data: &[f32], out: &mut [u8]) {
+        let c = self.lo.len();
+        for (i, (o, &v)) in out.iter_mut().zip(data).enumerate() {
+            *o = self.quantize(i % c, v);
+        }
+    }
+}
+
+/// One exemplar: its values (copied into the output) and their 8-bit codes (searched).
+#[derive(Clone, Debug)]
+pub struct Exemplar {
+    pub texture: Texture,
+    pub codes: Vec<u8>,
+}
+
+impl Exemplar {
+    pub fn width(&self) -> usize {
+        self.texture.width
+    }
+    pub fn height(&self) -> usize {
+        self.texture.height
+    }
+    pub fn channels(&self) -> usize {
+        self.texture.channels
+    }
+
+    /// Candidate window positions for a window of side `w`: (columns, rows).
+    pub fn candidates(&self, w: usize) -> (usize, usize) {
+        (self.width() + 1 - w, self.height() + 1 - w)
+    }
+
+    /// Sums of each channel's codes over every `b × b` block: plane `c` holds
+    /// `(width − b + 1) × (height − b + 1)` values (exact integers in f32 for b ≤ 256).
+    pub fn block_sums(&self, b: usize) -> Vec<Vec<f32>> {
+        let (w, h, c) = (self.width(), self.height(), self.channels());
+        let (pw, ph) = (w + 1 - b, h + 1 - b);
+        (0..c)
+            .map(|k| {
+                // Horizontal running sums, then vertical ones, in integers.
+                let mut horiz = vec![0u32; pw * h];
+                for y in 0..h {
+                    let row = &self.codes[y * w * c..(y + 1) * w * c];
+                    let mut s: u32 = (0..b).map(|x| row[x * c + k] as u32).sum();
+                    horiz[y * pw] = s;
+                    for x in 1..pw {
+                        s = s + row[(x + b - 1) * c + k] as u32 - row[(x - 1) * c + k] as u32;
+                        horiz[y * pw + x] = s;
+                    }
+                }
+                let mut out = vec![0f32; pw * ph];
+                for x in 0..pw {
+                    let mut s: u32 = (0..b).map(|y| horiz[y * pw + x]).sum();
+                    out[x] = s as f32;
+                    for y in 1..ph {
+                        s = s + horiz[(y + b - 1) * pw + x] - horiz[(y - 1) * pw + x];
+                        out[y * pw + x] = s as f32;
+                    }
+                }
+                out
+            })
+            .collect()
+    }
+}
+
+/// The exemplars one synthesis draws from (one, or several chosen by a guide), sharing a
+/// channel layout and a quantiser.
+#[derive(Clone, Debug)]
+pub struct ExemplarSet {
+    pub exemplars: Vec<Exemplar>,
+    pub quantizer: Quantizer,
+}
+
+impl ExemplarSet {
+    /// Checks the exemplars agree in channels, hold finite values and are large enough for
+    /// patches of side `patch` (at least twice the patch in each direction, so the search has
+    /// a real choice: (side − patch + 1)² ≥ (patch + 1)² candidate positions).
+    pub fn new(textures: Vec<Texture>, patch: usize) -> Result<Self> {
+        let first = textures
+            .first()
+            .ok_or_else(|| invalid("exemplars", "none given"))?;
+        let c = first.channels;
+        for (i, t) in textures.iter().enumerate() {
+            if t.channels != c {
+                return Err(invalid(
+                    format!("exemplar {}", i + 1),
+                    format!("has {} channels, the first has {c}", t.channels),
+                ));
+            }
+            if t.width < 2 * patch || t.height < 2 * patch {
+                return Err(invalid(
+                    format!("exemplar {}", i + 1),
+                    format!(
+                        "is {}×{}, too small for {patch}×{patch} patches: it must be at least \
+                         {}×{} (or choose a smaller --patch)",
+                        t.width,
+                        t.height,
+                        2 * patch,
+                        2 * patch
+                    ),
+                ));
+            }
+            if let Some(j) = t.data.iter().position(|v| !v.is_finite()) {
+                return Err(invalid(
+                    format!("exemplar {}", i + 1),
+                    format!(
+                        "texel ({}, {}) holds a non-finite value",
+                        (j / c) % t.width,
+                        (j / c) / t.width
+                    ),
+                ));
+            }
+        }
+        let quantizer = Quantizer::fit(&textures.iter().collect::<Vec<_>>());
+        let exemplars = textures
+            .into_iter()
+            .map(|texture| {
+                let mut codes = vec![0u8; texture.data.len()];
+                quantizer.quantize_all(&texture.data, &mut codes);
+                Exemplar { texture, codes }
+            })
+            .collect();
+        Ok(Self {
+            exemplars,
+            quantizer,
+        })
+    }
+
+    pub fn channels(&self) -> usize {
+        self.exemplars[0].channels()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ramp(w: usize, h: usize, c: usize) -> Texture {
+        let data = (0..w * h * c)
+            .map(|i| ((i * 37) % 101) as f32 / 100.0)
+            .collect();
+        Texture::new(w, h, c, data).unwrap()
+    }
+
+    #[test]
+    fn block_sums_match_direct_sums() {
+        let set = ExemplarSet::new(vec![ramp(20, 17, 2)], 4).unwrap();
+        let e = &set.exemplars[0];
+        let b = 3;
+        let sums = e.block_sums(b);
+        let pw = 20 + 1 - b;
+        for k in 0..2 {
+            for (y, x) in [(0, 0), (5, 7), (14, 17)] {
+                let direct: u32 = (0..b)
+                    .flat_map(|dy| (0..b).map(move |dx| (dx, dy)))
+                    .map(|(dx, dy)| e.codes[((y + dy) * 20 + x + dx) * 2 + k] as u32)
+                    .sum();
+                assert_eq!(sums[k][y * pw + x], direct as f32);
+            }
+        }
+    }
+
+    #[test]
+    fn quantiser_spans_the_set_and_inverts() {
+        let set = ExemplarSet::new(vec![ramp(16, 16, 1)], 8).unwrap();
+        let q = &set.quantizer;
+        assert_eq!(q.quantize(0, q.lo[0]), 0);
+        assert_eq!(q.quantize(0, q.hi[0]), 255);
+        let v = 0.37;
+        assert!((q.dequantize(0, q.quantize(0, v) as f32) - v).abs() <= 0.5 / 255.0 + 1e-6);
+    }
+
+    #[test]
+    fn too_small_or_mismatched_exemplars_are_named() {
+        let e = ExemplarSet::new(vec![ramp(30, 40, 1)], 16).unwrap_err();
+        assert!(
+            e.to_string().contains("30×40") && e.to_string().contains("32×32"),
+            "{e}"
+        );
+        let e = ExemplarSet::new(vec![ramp(40, 40, 1), ramp(40, 40, 3)], 16).unwrap_err();
+        assert!(e.to_string().contains("exemplar 2"), "{e}");
+    }
+}

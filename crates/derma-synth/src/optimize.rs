@@ -1,0 +1,208 @@
+//! Self-adaptive global optimisation of Shen et al. §3.3: Kwatra et al. (2005) texture energy
+//! E = Σ_p ω_p ‖x_p − z_p‖² over overlapping neighbourhoods, reweighted so one solve per pass
+//! suffices, with the neighbourhood shrunk to a quarter of its area after each pass.
+//!
+//! One pass with windows of side w every w/2 texels (each texel in four windows):
+//! 1. M-step: z_p = best match of each window x_p (the exact search of [`crate::search`]).
+//! 2. Weights ω_p = P(x_p) · ‖x_p − z_p‖^(r−2), r = 0.8 (§3.3; Kwatra's robust exponent).
+//!    ‖·‖ is the RMS code difference per value in units of the code range, floored at one
+//!    code (1/255) so exact matches get a large but finite weight. P(x_p) is the frequency
+//!    with which this pass's best matches land in the exemplar region (a w × w bin) that z_p
+//!    lies in: the paper's "probability of finding the best match in a high frequency
+//!    success match region".
+//! 3. E-step: each texel becomes Σ ω_p z_p / Σ ω_p over the windows covering it — the
+//!    minimiser of the weighted energy for fixed z and ω. Its source becomes that of the
+//!    window of largest weight.
+
+use crate::canvas::{origins, Canvas, NO_SOURCE};
+use crate::error::Result;
+use crate::exemplar::ExemplarSet;
+use crate::search::{Match, Matcher, Query, Search, Tolerance};
+use crate::synthesize::{Guide, ProgressSink};
+use derma_core::rng::Philox;
+use rayon::prelude::*;
+
+/// Kwatra et al. 2005, §3 (robust norm exponent), as adopted by Shen et al. §3.3.
+pub const KWATRA_R: f32 = 0.8;
+
+/// Queries per batch handed to the matcher (bounds memory; one progress step each).
+const BATCH: usize = 16_384;
+/// Philox stream of the salts of the tie-breaking choice (one sub-stream per window side).
+const PICK_STREAM: u32 = 0x5e_0003;
+
+/// One optimisation pass with windows of side `w`.
+pub(crate) fn optimise_pass(
+    canvas: &mut Canvas,
+    set: &ExemplarSet,
+    matcher: &dyn Matcher,
+    w: usize,
+    r: f32,
+    seed: u64,
+    guide: Option<&Guide>,
+    progress: &ProgressSink,
+) -> Result<()> {
+    let rng = Philox::new(seed, PICK_STREAM);
+    let step = (w / 2).max(1);
+    // Offset by a quarter window, so no window edge lies on the patch grid (multiples of D)
+    // or on the previous pass's window edges: every seam falls inside the windows that
+    // straddle it, whose best matches are coherent across it.
+    let offset = w / 4;
+    let xs = origins(canvas.width, w, step, offset, canvas.tile);
+    let ys = origins(canvas.height, w, step, offset, canvas.tile);
+    let windows: Vec<(usize, usize)> = ys
+        .iter()
+        .flat_map(|&y| xs.iter().map(move |&x| (x, y)))
+        .collect();
+    progress.stage(&format!("optimisation {w}×{w}"), windows.len() as u64);
+    let c = canvas.channels;
+    let centre = [(w / 2, w / 2), (0, 0), (w - 1, w - 1)];
+
+    // M-step.
+    let mut exemplar_of = Vec::with_capacity(windows.len());
+    let mut matches: Vec<Match> = Vec::with_capacity(windows.len());
+    for (b, chunk) in windows.chunks(BATCH).enumerate() {
+        let queries: Vec<Query> = chunk
+            .par_iter()
+            .enumerate()
+            .map(|(i, &(px, py))| {
+                let ex = guide.map_or(0, |g| g.at(canvas, px + w / 2, py + w / 2));
+                Query {
+                    exemplar: ex as u32,
+                    codes: canvas.window_codes(px, py, w),
+                    mask: None,
+                    guess: canvas.coherent_guess(set, ex, px, py, w, &centre),
+                    salt: rng.u32x4_sub((b * BATCH + i) as u64, w as u32)[0],
+                }
+            })
+            .collect();
+        exemplar_of.extend(queries.iter().map(|q| q.exemplar as usize));
+        let search = Search {
+            w,
+            tol: Tolerance(0),
+            penalty: None,
+        };
+        matches.extend(matcher.best_matches(set, &search, &queries)?);
+        progress.advance(chunk.len() as u64);
+    }
+
+    // Weights: P from the histogram of match bins, then the robust factor.
+    let bins: Vec<(usize, usize, usize)> = matches
+        .iter()
+        .zip(&exemplar_of)
+        .map(|(m, &ex)| {
+            let e = &set.exemplars[ex];
+            let cw = e.width() + 1 - w;
+            let (mx, my) = (m.index as usize % cw, m.index as usize / cw);
+            (ex, (mx + w / 2) / w, (my + w / 2) / w)
+        })
+        .collect();
+    let bins_x: Vec<usize> = set.exemplars.iter().map(|e| e.width() / w + 1).collect();
+    let offsets: Vec<usize> = set
+        .exemplars
+        .iter()
+        .scan(0, |acc, e| {
+            let o = *acc;
+            *acc += (e.width() / w + 1) * (e.height() / w + 1);
+            Some(o)
+        })
+        .collect();
+    let total_bins: usize = set
+        .exemplars
+        .iter()
+        .map(|e| (e.width() / w + 1) * (e.height() / w + 1))
+        .sum();
+    let bin_index = |&(ex, bx, by): &(usize, usize, usize)| offsets[ex] + by * bins_x[ex] + bx;
+    let mut hist = vec![0u32; total_bins];
+    for b in &bins {
+        hist[bin_index(b)] += 1;
+    }
+    let n_windows = windows.len() as f64;
+    let values_per_window = (w * w * c) as f64;
+    let weights: Vec<f32> = matches
+        .iter()
+        .zip(&bins)
+        .map(|(m, b)| {
+            let p = hist[bin_index(b)] as f64 / n_windows;
+            let rms = (m.ssd as f64 / values_per_window).sqrt() / 255.0;
+            (p * rms.max(1.0 / 255.0).powf(r as f64 - 2.0)) as f32
+        })
+        .collect();
+
+    // Which windows cover each column and row, with the offset into the window.
+    let cover = |len: usize, origins: &[usize]| -> Vec<Vec<(u32, u32)>> {
+        let mut v = vec![Vec::new(); len];
+        for (k, &o) in origins.iter().enumerate() {
+            for d in 0..w {
+                let p = if canvas.tile { (o + d) % len } else { o + d };
+                v[p].push((k as u32, d as u32));
+            }
+        }
+        v
+    };
+    let cover_x = cover(canvas.width, &xs);
+    let cover_y = cover(canvas.height, &ys);
+
+    // E-step, texel by texel in a fixed order of windows: the same sums on any thread count.
+    let nwx = xs.len();
+    let width = canvas.width;
+    let placed: Vec<(usize, usize, usize)> = matches
+        .iter()
+        .zip(&exemplar_of)
+        .map(|(m, &ex)| {
+            let cw = set.exemplars[ex].width() + 1 - w;
+            (ex, m.index as usize % cw, m.index as usize / cw)
+        })
+        .collect();
+    let (values, srcs): (Vec<Vec<f32>>, Vec<Vec<(u8, u32)>>) = (0..canvas.height)
+        .into_par_iter()
+        .map(|y| {
+            let mut row = vec![0f32; width * c];
+            let mut src_row = vec![(0u8, NO_SOURCE); width];
+            let mut acc = vec![0f64; c];
+            for x in 0..width {
+                acc.iter_mut().for_each(|a| *a = 0.0);
+                let mut wsum = 0f64;
+                let mut best = (f32::NEG_INFINITY, 0u8, NO_SOURCE);
+                for &(jy, oy) in &cover_y[y] {
+                    for &(ix, ox) in &cover_x[x] {
+                        let k = jy as usize * nwx + ix as usize;
+                        let (ex, mx, my) = placed[k];
+                        let e = &set.exemplars[ex];
+                        let s = (my + oy as usize) * e.width() + mx + ox as usize;
+                        let wk = weights[k];
+                        for (a, &v) in acc.iter_mut().zip(&e.texture.data[s * c..(s + 1) * c]) {
+                            *a += wk as f64 * v as f64;
+                        }
+                        wsum += wk as f64;
+                        if wk > best.0 {
+                            best = (wk, ex as u8, s as u32);
+                        }
+                    }
+                }
+                for k in 0..c {
+                    row[x * c + k] = (acc[k] / wsum) as f32;
+                }
+                src_row[x] = (best.1, best.2);
+            }
+            (row, src_row)
+        })
+        .unzip();
+    for (y, (row, src_row)) in values.into_iter().zip(srcs).enumerate() {
+        canvas.values[y * width * c..(y + 1) * width * c].copy_from_slice(&row);
+        for (x, (ex, s)) in src_row.into_iter().enumerate() {
+            canvas.src_exemplar[y * width + x] = ex;
+            canvas.src[y * width + x] = s;
+        }
+    }
+    let q = &set.quantizer;
+    canvas
+        .codes
+        .par_chunks_mut(c)
+        .zip(canvas.values.par_chunks(c))
+        .for_each(|(code, v)| {
+            for k in 0..c {
+                code[k] = q.quantize(k, v[k]);
+            }
+        });
+    Ok(())
+}

@@ -1,0 +1,248 @@
+//! The patch pass of Shen et al. §3.1–3.2: white-noise initialisation, then N × N patches
+//! every D = N/2 texels in scanline order, each replaced by its best match in the exemplar
+//! over the overlap already synthesised.
+//!
+//! A deterministic best match drifts: continuing the previous patch walks the source towards an
+//! exemplar edge, where the search keeps choosing the same few windows (a failure the
+//! paper does not discuss). Two measures keep the exemplar in use as a whole: the choice among
+//! near-best patches ([`crate::search::Tolerance`], image quilting's ε) and an occurrence
+//! penalty after Kaspar et al. 2015 ("Self tuning texture optimization", §4.2): a candidate
+//! whose window has been copied more than its share pays, per known texel,
+//! λ · C · v̄ · max(0, O/(N² ō) − 1), where O is the number of output texels now drawn from its
+//! N × N window, ō the mean number per exemplar texel, C the channels and v̄ the exemplars'
+//! mean code variance (so λ = 1 charges one typical squared difference per unit of overuse).
+//!
+//! Patches run in anti-diagonal wavefronts, t = i + 2j (column i, row j): a patch overlaps
+//! earlier ones only at (i−1, j), (i−1, j−1), (i, j−1) and (i+1, j−1), all of smaller t, so one
+//! wavefront's searches are independent and the result equals the scanline order. Where the
+//! output wraps (tileable) or the last patch is pulled in to the edge, the order is simply
+//! wavefront by wavefront, and within one, scanline.
+
+use crate::canvas::{origins, Canvas, NO_SOURCE};
+use crate::error::Result;
+use crate::exemplar::ExemplarSet;
+use crate::search::{Matcher, Query, Search, Tolerance, MAX_PENALTY_TOTAL};
+use crate::synthesize::{Guide, ProgressSink};
+use derma_core::rng::Philox;
+
+/// Philox stream of the initial noise (DESIGN.md: one stream per random decision).
+const NOISE_STREAM: u32 = 0x5e_0001;
+/// Philox stream of the salts of the near-best choice.
+const PICK_STREAM: u32 = 0x5e_0002;
+
+/// Fills the canvas with white Gaussian noise (§3.1), channel by channel with the mean and
+/// standard deviation of the exemplars' codes, so the noise is in the exemplars' range.
+pub(crate) fn initialise_noise(canvas: &mut Canvas, set: &ExemplarSet, seed: u64) {
+    let c = canvas.channels;
+    let mut mean = vec![0f64; c];
+    let mut sq = vec![0f64; c];
+    let mut n = 0f64;
+    for e in &set.exemplars {
+        for px in e.codes.chunks_exact(c) {
+            for k in 0..c {
+                mean[k] += px[k] as f64;
+                sq[k] += (px[k] as f64).powi(2);
+            }
+        }
+        n += (e.width() * e.height()) as f64;
+    }
+    let rng = Philox::new(seed, NOISE_STREAM);
+    let q = &set.quantizer;
+    for (i, code) in canvas.codes.iter_mut().enumerate() {
+        let k = i % c;
+        let mu = mean[k] / n;
+        let sigma = (sq[k] / n - mu * mu).max(0.0).sqrt();
+        let z = rng.normal2(i as u64, 0)[0] as f64;
+        *code = (mu + sigma * z).round().clamp(0.0, 255.0) as u8;
+        canvas.values[i] = q.dequantize(k, *code as f32);
+    }
+}
+
+/// Which texels of the window at (px, py) are already synthesised: `None` when all are, and
+/// also when none is — the first patch is matched against the noise over its whole window,
+/// which makes it "completely random" (§3.2); every later one against its overlap alone.
+fn known_mask(canvas: &Canvas, px: usize, py: usize, n: usize) -> Option<Vec<u8>> {
+    let m: Vec<u8> = (0..n * n)
+        .map(|t| u8::from(canvas.src[canvas.at(px, py, t % n, t / n)] != NO_SOURCE))
+        .collect();
+    let known = m.iter().filter(|&&k| k != 0).count();
+    (known != 0 && known != n * n).then_some(m)
+}
+
+/// Runs the patch pass with patches of side `n`.
+pub(crate) fn patch_pass(
+    canvas: &mut Canvas,
+    set: &ExemplarSet,
+    matcher: &dyn Matcher,
+    n: usize,
+    tol: Tolerance,
+    occurrence: f64,
+    seed: u64,
+    guide: Option<&Guide>,
+    progress: &ProgressSink,
+) -> Result<()> {
+    let rng = Philox::new(seed, PICK_STREAM);
+    let d = n / 2;
+    let xs = origins(canvas.width, n, d, 0, canvas.tile);
+    let ys = origins(canvas.height, n, d, 0, canvas.tile);
+    let (nx, ny) = (xs.len(), ys.len());
+    progress.stage("patch pass", (nx * ny) as u64);
+    // Probes for the coherent guess: the known corners of a patch (top-left from the patch
+    // above-left, left half from the previous patch, top half from the row above).
+    let probes = [(0, 0), (0, d), (d, 0), (n - 1, 0)];
+    let mut occ = Occurrence::new(set, n, occurrence);
+    for t in 0..nx + 2 * ny - 2 {
+        let patches: Vec<(usize, usize, usize)> = (0..ny)
+            .filter_map(|j| {
+                t.checked_sub(2 * j)
+                    .filter(|&i| i < nx)
+                    .map(|i| (xs[i], ys[j], j * nx + i))
+            })
+            .collect();
+        if patches.is_empty() {
+            continue;
+        }
+        let queries: Vec<Query> = patches
+            .iter()
+            .map(|&(px, py, k)| {
+                let ex = guide.map_or(0, |g| g.at(canvas, px + d, py + d));
+                Query {
+                    exemplar: ex as u32,
+                    codes: canvas.window_codes(px, py, n),
+                    mask: known_mask(canvas, px, py, n),
+                    guess: canvas.coherent_guess(set, ex, px, py, n, &probes),
+                    salt: rng.u32x4(k as u64)[0],
+                }
+            })
+            .collect();
+        let penalty = occ.penalties();
+        let search = Search {
+            w: n,
+            tol,
+            penalty: penalty.as_deref(),
+        };
+        let matches = matcher.best_matches(set, &search, &queries)?;
+        for ((&(px, py, _), q), m) in patches.iter().zip(&queries).zip(&matches) {
+            occ.remove(canvas, px, py, n);
+            canvas.paste(set, q.exemplar as usize, m.index, px, py, n);
+            occ.add(canvas, px, py, n);
+        }
+        progress.advance(patches.len() as u64);
+    }
+    Ok(())
+}
+
+/// How often each exemplar texel is the source of an output texel, and the penalties that
+/// follow (see the module comment).
+struct Occurrence {
+    lambda: f64,
+    n: usize,
+    /// C · v̄: channels times the mean code variance per value.
+    scale: f64,
+    sizes: Vec<(usize, usize)>,
+    count: Vec<Vec<u32>>,
+    total: Vec<u64>,
+}
+
+impl Occurrence {
+    fn new(set: &ExemplarSet, n: usize, lambda: f64) -> Self {
+        let c = set.channels();
+        let mut var = 0f64;
+        for k in 0..c {
+            let (mut s, mut s2, mut m) = (0f64, 0f64, 0f64);
+            for e in &set.exemplars {
+                for px in e.codes.chunks_exact(c) {
+                    s += px[k] as f64;
+                    s2 += (px[k] as f64).powi(2);
+                    m += 1.0;
+                }
+            }
+            var += (s2 / m - (s / m).powi(2)).max(0.0);
+        }
+        Self {
+            lambda,
+            n,
+            scale: var,
+            sizes: set
+                .exemplars
+                .iter()
+                .map(|e| (e.width(), e.height()))
+                .collect(),
+            count: set
+                .exemplars
+                .iter()
+                .map(|e| vec![0; e.width() * e.height()])
+                .collect(),
+            total: vec![0; set.exemplars.len()],
+        }
+    }
+
+    fn remove(&mut self, canvas: &Canvas, px: usize, py: usize, n: usize) {
+        for dy in 0..n {
+            for dx in 0..n {
+                let t = canvas.at(px, py, dx, dy);
+                if canvas.src[t] != NO_SOURCE {
+                    let ex = canvas.src_exemplar[t] as usize;
+                    self.count[ex][canvas.src[t] as usize] -= 1;
+                    self.total[ex] -= 1;
+                }
+            }
+        }
+    }
+
+    fn add(&mut self, canvas: &Canvas, px: usize, py: usize, n: usize) {
+        for dy in 0..n {
+            for dx in 0..n {
+                let t = canvas.at(px, py, dx, dy);
+                let ex = canvas.src_exemplar[t] as usize;
+                self.count[ex][canvas.src[t] as usize] += 1;
+                self.total[ex] += 1;
+            }
+        }
+    }
+
+    /// Per exemplar, per candidate: the penalty per known texel; `None` when λ = 0.
+    fn penalties(&self) -> Option<Vec<Vec<u32>>> {
+        if self.lambda <= 0.0 {
+            return None;
+        }
+        let n = self.n;
+        let cap = MAX_PENALTY_TOTAL / (n * n) as u32;
+        Some(
+            self.count
+                .iter()
+                .zip(&self.sizes)
+                .zip(&self.total)
+                .map(|((count, &(w, h)), &total)| {
+                    let (cw, ch) = (w + 1 - n, h + 1 - n);
+                    if total == 0 {
+                        return vec![0; cw * ch];
+                    }
+                    let mean = total as f64 / (w * h) as f64;
+                    // Summed-area table of the counts.
+                    let mut sat = vec![0u64; (w + 1) * (h + 1)];
+                    for y in 0..h {
+                        let mut row = 0u64;
+                        for x in 0..w {
+                            row += count[y * w + x] as u64;
+                            sat[(y + 1) * (w + 1) + x + 1] = sat[y * (w + 1) + x + 1] + row;
+                        }
+                    }
+                    let expected = (n * n) as f64 * mean;
+                    let mut out = vec![0u32; cw * ch];
+                    for y in 0..ch {
+                        for x in 0..cw {
+                            let o = sat[(y + n) * (w + 1) + x + n] + sat[y * (w + 1) + x]
+                                - sat[y * (w + 1) + x + n]
+                                - sat[(y + n) * (w + 1) + x];
+                            let excess = (o as f64 / expected - 1.0).max(0.0);
+                            out[y * cw + x] =
+                                (self.lambda * self.scale * excess).floor().min(cap as f64) as u32;
+                        }
+                    }
+                    out
+                })
+                .collect(),
+        )
+    }
+}

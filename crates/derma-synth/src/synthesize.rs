@@ -1,0 +1,258 @@
+//! Orchestration of the two passes of Shen et al. §3: noise, patch pass, then optimisation
+//! passes with shrinking neighbourhoods; options, guidance and progress reporting.
+
+use crate::canvas::Canvas;
+use crate::error::{invalid, Result};
+use crate::exemplar::ExemplarSet;
+use crate::optimize::{optimise_pass, KWATRA_R};
+use crate::patch_pass::{initialise_noise, patch_pass};
+use crate::search::{window_fits, Matcher, Tolerance};
+use crate::texture::Texture;
+
+/// What to synthesise.
+#[derive(Clone, Debug)]
+pub struct SynthOptions {
+    pub width: usize,
+    pub height: usize,
+    /// Patch side N (even); the displacement is D = N/2 (§3.2).
+    pub patch: usize,
+    /// Optimisation passes (§3.3: at least three); pass k uses windows of side N/2ᵏ.
+    pub passes: usize,
+    /// Kwatra's robust exponent r (§3.3: 0.8).
+    pub r: f32,
+    /// Tolerance of the patch pass's choice among near-best patches (image quilting's ε,
+    /// Efros & Freeman 2001 §2.1: 0.1); 0 takes the best match only.
+    pub tolerance: f64,
+    /// Weight λ of the patch pass's occurrence penalty (0 = off); see [`crate::patch_pass`].
+    pub occurrence: f64,
+    pub seed: u64,
+    /// Tileable output: the texture wraps at its edges.
+    pub tile: bool,
+}
+
+impl Default for SynthOptions {
+    fn default() -> Self {
+        Self {
+            width: 512,
+            height: 512,
+            patch: 32,
+            passes: 3,
+            r: KWATRA_R,
+            tolerance: 0.1,
+            occurrence: 1.0,
+            seed: 1,
+            tile: false,
+        }
+    }
+}
+
+impl SynthOptions {
+    /// Window sides of the optimisation passes: N, N/2, N/4, … (area a quarter each time).
+    pub fn pass_windows(&self) -> Vec<usize> {
+        (0..self.passes).map(|k| self.patch >> k).collect()
+    }
+
+    fn validate(&self, channels: usize) -> Result<()> {
+        if self.patch < 4 || self.patch % 2 != 0 {
+            return Err(invalid(
+                "patch size",
+                format!("{} (expected an even number ≥ 4)", self.patch),
+            ));
+        }
+        if !window_fits(self.patch, channels) {
+            return Err(invalid(
+                "patch size",
+                format!(
+                    "{0}×{0} patches of {channels} channels overflow the 32-bit distance; \
+                     use fewer channels or a smaller patch",
+                    self.patch
+                ),
+            ));
+        }
+        if let Some(&w) = self.pass_windows().last() {
+            if w < 2 {
+                return Err(invalid(
+                    "passes",
+                    format!(
+                        "{} passes shrink {}-texel patches below 2 texels; use at most {}",
+                        self.passes,
+                        self.patch,
+                        self.patch.ilog2()
+                    ),
+                ));
+            }
+        }
+        if self.width == 0 || self.height == 0 {
+            return Err(invalid("output size", "zero width or height"));
+        }
+        if self.tile && (self.width < self.patch || self.height < self.patch) {
+            return Err(invalid(
+                "output size",
+                format!(
+                    "a tileable {}×{} texture needs at least the patch size {} on each side",
+                    self.width, self.height, self.patch
+                ),
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.tolerance) {
+            return Err(invalid(
+                "tolerance",
+                format!("{} (expected 0 ≤ ε ≤ 1)", self.tolerance),
+            ));
+        }
+        if !(self.occurrence >= 0.0 && self.occurrence.is_finite()) {
+            return Err(invalid(
+                "occurrence weight",
+                format!("{} (expected a finite λ ≥ 0)", self.occurrence),
+            ));
+        }
+        if !(self.r > 0.0 && self.r <= 2.0) {
+            return Err(invalid("r", format!("{} (expected 0 < r ≤ 2)", self.r)));
+        }
+        Ok(())
+    }
+}
+
+/// Region guidance: which exemplar each output texel draws from.
+#[derive(Clone, Debug)]
+pub struct Guide {
+    pub width: usize,
+    pub height: usize,
+    pub exemplar: Vec<u8>,
+}
+
+impl Guide {
+    /// A guide from a grey map: value v selects exemplar round(v · (count − 1)). The map is
+    /// sampled at the nearest texel when its size differs from the output's.
+    pub fn from_levels(width: usize, height: usize, levels: &[f32], count: usize) -> Self {
+        let exemplar = levels
+            .iter()
+            .map(|&v| (v.clamp(0.0, 1.0) * (count - 1) as f32).round() as u8)
+            .collect();
+        Self {
+            width,
+            height,
+            exemplar,
+        }
+    }
+
+    pub(crate) fn at(&self, canvas: &Canvas, x: usize, y: usize) -> usize {
+        let (x, y) = (x % canvas.width, y % canvas.height);
+        let gx = (x * self.width / canvas.width).min(self.width - 1);
+        let gy = (y * self.height / canvas.height).min(self.height - 1);
+        self.exemplar[gy * self.width + gx] as usize
+    }
+}
+
+/// Progress callbacks (the CLI draws a bar); both default to nothing.
+#[derive(Default)]
+pub struct ProgressSink {
+    pub on_stage: Option<Box<dyn Fn(&str, u64) + Sync>>,
+    pub on_advance: Option<Box<dyn Fn(u64) + Sync>>,
+}
+
+impl ProgressSink {
+    pub(crate) fn stage(&self, name: &str, total: u64) {
+        if let Some(f) = &self.on_stage {
+            f(name, total)
+        }
+    }
+    pub(crate) fn advance(&self, n: u64) {
+        if let Some(f) = &self.on_advance {
+            f(n)
+        }
+    }
+}
+
+/// A synthesised texture and, per texel, the exemplar texel it came from last.
+pub struct Synthesis {
+    pub texture: Texture,
+    /// Exemplar index of each texel's source.
+    pub source_exemplar: Vec<u8>,
+    /// Source texel index (y · exemplar width + x).
+    pub source: Vec<u32>,
+}
+
+/// Grows a `width × height` texture from the exemplar set.
+pub fn synthesize(
+    set: &ExemplarSet,
+    opts: &SynthOptions,
+    guide: Option<&Guide>,
+    matcher: &dyn Matcher,
+    progress: &ProgressSink,
+) -> Result<Synthesis> {
+    let c = set.channels();
+    opts.validate(c)?;
+    for (i, e) in set.exemplars.iter().enumerate() {
+        if e.width() < 2 * opts.patch || e.height() < 2 * opts.patch {
+            return Err(invalid(
+                format!("exemplar {}", i + 1),
+                format!(
+                    "is {}×{}, too small for {}×{} patches (needs at least twice the patch)",
+                    e.width(),
+                    e.height(),
+                    opts.patch,
+                    opts.patch
+                ),
+            ));
+        }
+    }
+    if let Some(g) = guide {
+        if let Some(&bad) = g
+            .exemplar
+            .iter()
+            .find(|&&k| k as usize >= set.exemplars.len())
+        {
+            return Err(invalid(
+                "guide",
+                format!("selects exemplar {} of {}", bad + 1, set.exemplars.len()),
+            ));
+        }
+    }
+    // A plane smaller than a patch is grown at the patch size and cropped.
+    let (w, h) = if opts.tile {
+        (opts.width, opts.height)
+    } else {
+        (opts.width.max(opts.patch), opts.height.max(opts.patch))
+    };
+    let mut canvas = Canvas::new(w, h, c, opts.tile);
+    initialise_noise(&mut canvas, set, opts.seed);
+    let tol = Tolerance::from_fraction(opts.tolerance);
+    patch_pass(
+        &mut canvas,
+        set,
+        matcher,
+        opts.patch,
+        tol,
+        opts.occurrence,
+        opts.seed,
+        guide,
+        progress,
+    )?;
+    for w in opts.pass_windows() {
+        optimise_pass(
+            &mut canvas,
+            set,
+            matcher,
+            w,
+            opts.r,
+            opts.seed,
+            guide,
+            progress,
+        )?;
+    }
+    let (ow, oh) = (opts.width, opts.height);
+    let mut data = Vec::with_capacity(ow * oh * c);
+    let mut source = Vec::with_capacity(ow * oh);
+    let mut source_exemplar = Vec::with_capacity(ow * oh);
+    for y in 0..oh {
+        data.extend_from_slice(&canvas.values[y * w * c..(y * w + ow) * c]);
+        source.extend_from_slice(&canvas.src[y * w..y * w + ow]);
+        source_exemplar.extend_from_slice(&canvas.src_exemplar[y * w..y * w + ow]);
+    }
+    Ok(Synthesis {
+        texture: Texture::new(ow, oh, c, data)?,
+        source_exemplar,
+        source,
+    })
+}
