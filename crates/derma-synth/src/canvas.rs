@@ -64,9 +64,9 @@ impl Canvas {
         out
     }
 
-    /// A starting guess for the search of the window at (px, py) in exemplar `ex`: the
-    /// position that continues the source of the first of `probes` (offsets in the window)
-    /// already drawn from that exemplar, clamped to the candidate range; 0 when none is.
+    /// Starting guesses for the search of the window at (px, py) in exemplar `ex`: the
+    /// positions that continue the sources of `probes` (offsets in the window) already drawn
+    /// from that exemplar, clamped to the candidate range, without repeats; `[0]` when none is.
     pub fn coherent_guess(
         &self,
         set: &ExemplarSet,
@@ -75,9 +75,10 @@ impl Canvas {
         py: usize,
         w: usize,
         probes: &[(usize, usize)],
-    ) -> u32 {
+    ) -> Vec<u32> {
         let e = &set.exemplars[ex];
         let (cw, ch) = e.candidates(w);
+        let mut out = Vec::with_capacity(probes.len());
         for &(dx, dy) in probes {
             let t = self.at(px, py, dx, dy);
             if self.src[t] == NO_SOURCE || self.src_exemplar[t] as usize != ex {
@@ -89,9 +90,15 @@ impl Canvas {
             );
             let x = sx.saturating_sub(dx).min(cw - 1);
             let y = sy.saturating_sub(dy).min(ch - 1);
-            return (y * cw + x) as u32;
+            let g = (y * cw + x) as u32;
+            if !out.contains(&g) {
+                out.push(g);
+            }
         }
-        0
+        if out.is_empty() {
+            out.push(0);
+        }
+        out
     }
 
     /// Copies the exemplar window at candidate `index` over the window at (px, py).

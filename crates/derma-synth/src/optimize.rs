@@ -16,9 +16,8 @@
 
 use crate::canvas::{origins, Canvas, NO_SOURCE};
 use crate::error::Result;
-use crate::exemplar::ExemplarSet;
-use crate::search::{Match, Matcher, Query, Search, Tolerance};
-use crate::synthesize::{Guide, ProgressSink};
+use crate::search::{Match, Query, Search, Tolerance};
+use crate::synthesize::PassContext;
 use derma_core::rng::Philox;
 use rayon::prelude::*;
 
@@ -33,15 +32,12 @@ const PICK_STREAM: u32 = 0x5e_0003;
 /// One optimisation pass with windows of side `w`.
 pub(crate) fn optimise_pass(
     canvas: &mut Canvas,
-    set: &ExemplarSet,
-    matcher: &dyn Matcher,
+    ctx: &PassContext,
     w: usize,
     r: f32,
-    seed: u64,
-    guide: Option<&Guide>,
-    progress: &ProgressSink,
 ) -> Result<()> {
-    let rng = Philox::new(seed, PICK_STREAM);
+    let (set, guide, progress) = (ctx.set, ctx.guide, ctx.progress);
+    let rng = Philox::new(ctx.seed, PICK_STREAM);
     let step = (w / 2).max(1);
     // Offset by a quarter window, so no window edge lies on the patch grid (multiples of D)
     // or on the previous pass's window edges: every seam falls inside the windows that
@@ -55,7 +51,13 @@ pub(crate) fn optimise_pass(
         .collect();
     progress.stage(&format!("optimisation {w}×{w}"), windows.len() as u64);
     let c = canvas.channels;
-    let centre = [(w / 2, w / 2), (0, 0), (w - 1, w - 1)];
+    let probes = [
+        (w / 2, w / 2),
+        (0, 0),
+        (w - 1, 0),
+        (0, w - 1),
+        (w - 1, w - 1),
+    ];
 
     // M-step.
     let mut exemplar_of = Vec::with_capacity(windows.len());
@@ -70,7 +72,7 @@ pub(crate) fn optimise_pass(
                     exemplar: ex as u32,
                     codes: canvas.window_codes(px, py, w),
                     mask: None,
-                    guess: canvas.coherent_guess(set, ex, px, py, w, &centre),
+                    guesses: canvas.coherent_guess(set, ex, px, py, w, &probes),
                     salt: rng.u32x4_sub((b * BATCH + i) as u64, w as u32)[0],
                 }
             })
@@ -81,7 +83,7 @@ pub(crate) fn optimise_pass(
             tol: Tolerance(0),
             penalty: None,
         };
-        matches.extend(matcher.best_matches(set, &search, &queries)?);
+        matches.extend(ctx.matcher.best_matches(set, &search, &queries)?);
         progress.advance(chunk.len() as u64);
     }
 
@@ -153,6 +155,7 @@ pub(crate) fn optimise_pass(
             (ex, m.index as usize % cw, m.index as usize / cw)
         })
         .collect();
+    type Row = (Vec<f32>, Vec<(u8, u32)>);
     let (values, srcs): (Vec<Vec<f32>>, Vec<Vec<(u8, u32)>>) = (0..canvas.height)
         .into_par_iter()
         .map(|y| {
@@ -186,6 +189,8 @@ pub(crate) fn optimise_pass(
             }
             (row, src_row)
         })
+        .collect::<Vec<Row>>()
+        .into_iter()
         .unzip();
     for (y, (row, src_row)) in values.into_iter().zip(srcs).enumerate() {
         canvas.values[y * width * c..(y + 1) * width * c].copy_from_slice(&row);

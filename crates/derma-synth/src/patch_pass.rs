@@ -21,8 +21,8 @@
 use crate::canvas::{origins, Canvas, NO_SOURCE};
 use crate::error::Result;
 use crate::exemplar::ExemplarSet;
-use crate::search::{Matcher, Query, Search, Tolerance, MAX_PENALTY_TOTAL};
-use crate::synthesize::{Guide, ProgressSink};
+use crate::search::{Query, Search, Tolerance, MAX_PENALTY_TOTAL};
+use crate::synthesize::PassContext;
 use derma_core::rng::Philox;
 
 /// Philox stream of the initial noise (DESIGN.md: one stream per random decision).
@@ -72,16 +72,13 @@ fn known_mask(canvas: &Canvas, px: usize, py: usize, n: usize) -> Option<Vec<u8>
 /// Runs the patch pass with patches of side `n`.
 pub(crate) fn patch_pass(
     canvas: &mut Canvas,
-    set: &ExemplarSet,
-    matcher: &dyn Matcher,
+    ctx: &PassContext,
     n: usize,
     tol: Tolerance,
     occurrence: f64,
-    seed: u64,
-    guide: Option<&Guide>,
-    progress: &ProgressSink,
 ) -> Result<()> {
-    let rng = Philox::new(seed, PICK_STREAM);
+    let (set, guide, progress) = (ctx.set, ctx.guide, ctx.progress);
+    let rng = Philox::new(ctx.seed, PICK_STREAM);
     let d = n / 2;
     let xs = origins(canvas.width, n, d, 0, canvas.tile);
     let ys = origins(canvas.height, n, d, 0, canvas.tile);
@@ -110,7 +107,7 @@ pub(crate) fn patch_pass(
                     exemplar: ex as u32,
                     codes: canvas.window_codes(px, py, n),
                     mask: known_mask(canvas, px, py, n),
-                    guess: canvas.coherent_guess(set, ex, px, py, n, &probes),
+                    guesses: canvas.coherent_guess(set, ex, px, py, n, &probes),
                     salt: rng.u32x4(k as u64)[0],
                 }
             })
@@ -121,7 +118,7 @@ pub(crate) fn patch_pass(
             tol,
             penalty: penalty.as_deref(),
         };
-        let matches = matcher.best_matches(set, &search, &queries)?;
+        let matches = ctx.matcher.best_matches(set, &search, &queries)?;
         for ((&(px, py, _), q), m) in patches.iter().zip(&queries).zip(&matches) {
             occ.remove(canvas, px, py, n);
             canvas.paste(set, q.exemplar as usize, m.index, px, py, n);

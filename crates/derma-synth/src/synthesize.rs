@@ -53,7 +53,7 @@ impl SynthOptions {
     }
 
     fn validate(&self, channels: usize) -> Result<()> {
-        if self.patch < 4 || self.patch % 2 != 0 {
+        if self.patch < 4 || !self.patch.is_multiple_of(2) {
             return Err(invalid(
                 "patch size",
                 format!("{} (expected an even number ≥ 4)", self.patch),
@@ -144,11 +144,25 @@ impl Guide {
     }
 }
 
+/// Called at the start of each stage with its name and number of steps.
+pub type StageFn = Box<dyn Fn(&str, u64) + Sync>;
+/// Called with the number of steps done since the last call.
+pub type AdvanceFn = Box<dyn Fn(u64) + Sync>;
+
 /// Progress callbacks (the CLI draws a bar); both default to nothing.
 #[derive(Default)]
 pub struct ProgressSink {
-    pub on_stage: Option<Box<dyn Fn(&str, u64) + Sync>>,
-    pub on_advance: Option<Box<dyn Fn(u64) + Sync>>,
+    pub on_stage: Option<StageFn>,
+    pub on_advance: Option<AdvanceFn>,
+}
+
+/// What every pass needs besides the canvas.
+pub(crate) struct PassContext<'a> {
+    pub set: &'a ExemplarSet,
+    pub matcher: &'a dyn Matcher,
+    pub guide: Option<&'a Guide>,
+    pub progress: &'a ProgressSink,
+    pub seed: u64,
 }
 
 impl ProgressSink {
@@ -217,29 +231,17 @@ pub fn synthesize(
     };
     let mut canvas = Canvas::new(w, h, c, opts.tile);
     initialise_noise(&mut canvas, set, opts.seed);
-    let tol = Tolerance::from_fraction(opts.tolerance);
-    patch_pass(
-        &mut canvas,
+    let ctx = PassContext {
         set,
         matcher,
-        opts.patch,
-        tol,
-        opts.occurrence,
-        opts.seed,
         guide,
         progress,
-    )?;
+        seed: opts.seed,
+    };
+    let tol = Tolerance::from_fraction(opts.tolerance);
+    patch_pass(&mut canvas, &ctx, opts.patch, tol, opts.occurrence)?;
     for w in opts.pass_windows() {
-        optimise_pass(
-            &mut canvas,
-            set,
-            matcher,
-            w,
-            opts.r,
-            opts.seed,
-            guide,
-            progress,
-        )?;
+        optimise_pass(&mut canvas, &ctx, w, opts.r)?;
     }
     let (ow, oh) = (opts.width, opts.height);
     let mut data = Vec::with_capacity(ow * oh * c);
