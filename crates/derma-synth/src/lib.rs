@@ -11,6 +11,7 @@
 pub mod canvas;
 pub mod error;
 pub mod exemplar;
+pub mod gpu;
 pub mod optimize;
 pub mod patch_pass;
 pub mod quality;
@@ -20,6 +21,7 @@ pub mod texture;
 
 pub use error::{Result, SynthError};
 pub use exemplar::{Exemplar, ExemplarSet, Quantizer};
-pub use search::{CpuMatcher, Match, Matcher, Query};
+pub use gpu::GpuMatcher;
+pub use search::{CpuMatcher, Match, Matcher, Query, Search, Tolerance};
 pub use synthesize::{synthesize, Guide, ProgressSink, SynthOptions, Synthesis};
 pub use texture::Texture;

@@ -245,6 +245,21 @@ pub fn best_match_brute(set: &ExemplarSet, s: &Search, q: &Query) -> Match {
     Match { ssd, index }
 }
 
+/// The least cost among a query's guesses: where both backends start (an upper bound of d*).
+pub fn initial_cost(set: &ExemplarSet, s: &Search, q: &Query) -> u32 {
+    let e = &set.exemplars[q.exemplar as usize];
+    let (cw, ch) = e.candidates(s.w);
+    let known = known_texels(q, s.w);
+    q.guesses
+        .iter()
+        .map(|&g| {
+            let g = (g as usize).min(cw * ch - 1);
+            ssd_at(e, s.w, q, g % cw, g / cw) + s.penalty_of(q.exemplar as usize, g, known)
+        })
+        .min()
+        .unwrap_or(u32::MAX)
+}
+
 /// The CPU backend: queries spread over all cores with rayon; each search prunes with the
 /// quadrant-sum bound. Block sums are prepared once per (exemplar, window side).
 pub struct CpuMatcher;

@@ -1,0 +1,295 @@
+//! The GPU backend of the best-match search (Shen et al. §3.4): `search.wgsl` on wgpu — one
+//! thread per exemplar position and query, reduced with atomics — returning exactly what the
+//! CPU search returns (the definition is in [`crate::search`]).
+
+use crate::error::{invalid, Result, SynthError};
+use crate::exemplar::ExemplarSet;
+use crate::search::{index_of_key, initial_cost, ssd_at, Match, Matcher, Query, Search};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+use wgpu::util::DeviceExt;
+
+/// The shader.
+pub const SHADER: &str = include_str!("search.wgsl");
+const WORKGROUP: usize = 64;
+/// Largest query upload per dispatch, in bytes.
+const MAX_QUERY_BYTES: usize = 64 << 20;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    ex_width: u32,
+    channels: u32,
+    w: u32,
+    cand_w: u32,
+    cand_h: u32,
+    plane_w: u32,
+    plane_len: u32,
+    tol: u32,
+    has_penalty: u32,
+    info_stride: u32,
+    n_queries: u32,
+    pad: u32,
+}
+
+fn gpu_error(detail: String) -> SynthError {
+    invalid("GPU", detail)
+}
+
+struct Pipelines {
+    min_cost: wgpu::ComputePipeline,
+    pick: wgpu::ComputePipeline,
+}
+
+static PIPELINES: OnceLock<std::result::Result<Pipelines, String>> = OnceLock::new();
+
+fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
+    let ctx = derma_core::gpu::context().map_err(gpu_error)?;
+    let p = PIPELINES
+        .get_or_init(|| {
+            Ok(Pipelines {
+                min_cost: ctx.compute_pipeline("search.wgsl (min_cost)", SHADER, "min_cost")?,
+                pick: ctx.compute_pipeline("search.wgsl (pick)", SHADER, "pick")?,
+            })
+        })
+        .as_ref()
+        .map_err(|e| gpu_error(e.clone()))?;
+    Ok((ctx, p))
+}
+
+/// Whether the GPU search can run here, and on what.
+pub fn available() -> Option<String> {
+    pipelines().ok().map(|(g, _)| g.name.clone())
+}
+
+/// An exemplar's codes and block sums for one window side, resident on the GPU.
+struct Resident {
+    codes: wgpu::Buffer,
+    sums: wgpu::Buffer,
+    plane_w: usize,
+    plane_len: usize,
+}
+
+/// The GPU matcher. Exemplar uploads are kept for the matcher's life, keyed by exemplar and
+/// window side (one matcher serves one exemplar set).
+pub struct GpuMatcher {
+    resident: Mutex<HashMap<(usize, usize), Arc<Resident>>>,
+    name: String,
+}
+
+impl GpuMatcher {
+    /// Opens the GPU; the error says why none could be opened.
+    pub fn new() -> Result<Self> {
+        let (ctx, _) = pipelines()?;
+        Ok(Self {
+            resident: Mutex::new(HashMap::new()),
+            name: ctx.name.clone(),
+        })
+    }
+
+    fn resident(&self, set: &ExemplarSet, ex: usize, w: usize) -> Result<Arc<Resident>> {
+        let mut map = self
+            .resident
+            .lock()
+            .map_err(|_| gpu_error("a previous search panicked".into()))?;
+        if let Some(r) = map.get(&(ex, w)) {
+            return Ok(r.clone());
+        }
+        let (ctx, _) = pipelines()?;
+        let e = &set.exemplars[ex];
+        let half = w / 2;
+        let plane_w = e.width() + 1 - half;
+        let plane_len = plane_w * (e.height() + 1 - half);
+        let codes: Vec<u32> = e.codes.iter().map(|&v| v as u32).collect();
+        let sums: Vec<f32> = e.block_sums(half).into_iter().flatten().collect();
+        let init = |label, bytes: &[u8]| {
+            ctx.device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents: bytes,
+                    usage: wgpu::BufferUsages::STORAGE,
+                })
+        };
+        let r = Arc::new(Resident {
+            codes: init("exemplar codes", bytemuck::cast_slice(&codes)),
+            sums: init("exemplar block sums", bytemuck::cast_slice(&sums)),
+            plane_w,
+            plane_len,
+        });
+        map.insert((ex, w), r.clone());
+        Ok(r)
+    }
+
+    /// One dispatch pair for queries of one exemplar.
+    fn run(
+        &self,
+        set: &ExemplarSet,
+        s: &Search,
+        ex: usize,
+        queries: &[&Query],
+    ) -> Result<Vec<Match>> {
+        let (ctx, pipes) = pipelines()?;
+        let w = s.w;
+        let e = &set.exemplars[ex];
+        let c = e.channels();
+        let (cw, ch) = e.candidates(w);
+        let res = self.resident(set, ex, w)?;
+        let half = w / 2;
+        let info_stride = 4 + 4 * c;
+        let mut qcodes: Vec<u32> = Vec::with_capacity(queries.len() * w * w * c);
+        let mut info: Vec<u32> = Vec::with_capacity(queries.len() * info_stride);
+        let mut result: Vec<u32> = Vec::with_capacity(queries.len() * 2);
+        for q in queries {
+            let known = |t: usize| q.mask.as_ref().is_none_or(|m| m[t] != 0);
+            qcodes.extend(q.codes.iter().enumerate().map(|(i, &v)| {
+                if known(i / c) {
+                    v as u32
+                } else {
+                    256
+                }
+            }));
+            let mut quad_mask = 0u32;
+            let mut quad_sums = vec![0f32; 4 * c];
+            for quad in 0..4 {
+                let (ox, oy) = ((quad & 1) * half, (quad >> 1) * half);
+                let full = (0..half).all(|dy| (0..half).all(|dx| known((oy + dy) * w + ox + dx)));
+                if !full {
+                    continue;
+                }
+                quad_mask |= 1 << quad;
+                for dy in 0..half {
+                    for dx in 0..half {
+                        let t = (oy + dy) * w + ox + dx;
+                        for k in 0..c {
+                            quad_sums[quad * c + k] += q.codes[t * c + k] as f32;
+                        }
+                    }
+                }
+            }
+            let known_count = crate::search::known_texels(q, w);
+            info.extend_from_slice(&[known_count, q.salt, quad_mask, 0]);
+            info.extend(quad_sums.iter().map(|v| v.to_bits()));
+            result.extend_from_slice(&[initial_cost(set, s, q), u32::MAX]);
+        }
+        let penalty: Vec<u32> = s.penalty.map_or_else(|| vec![0], |p| p[ex].clone());
+        let params = Params {
+            ex_width: e.width() as u32,
+            channels: c as u32,
+            w: w as u32,
+            cand_w: cw as u32,
+            cand_h: ch as u32,
+            plane_w: res.plane_w as u32,
+            plane_len: res.plane_len as u32,
+            tol: s.tol.0,
+            has_penalty: u32::from(s.penalty.is_some()),
+            info_stride: info_stride as u32,
+            n_queries: queries.len() as u32,
+            pad: 0,
+        };
+        let d = &ctx.device;
+        let init = |label, bytes: &[u8], usage| {
+            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytes,
+                usage,
+            })
+        };
+        let storage = wgpu::BufferUsages::STORAGE;
+        let params_buf = init(
+            "params",
+            bytemuck::bytes_of(&params),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let qcodes_buf = init("query codes", bytemuck::cast_slice(&qcodes), storage);
+        let info_buf = init("query info", bytemuck::cast_slice(&info), storage);
+        let penalty_buf = init("penalty", bytemuck::cast_slice(&penalty), storage);
+        let result_buf = init(
+            "result",
+            bytemuck::cast_slice(&result),
+            storage | wgpu::BufferUsages::COPY_SRC,
+        );
+        let buffers = [
+            &params_buf,
+            &res.codes,
+            &res.sums,
+            &qcodes_buf,
+            &info_buf,
+            &penalty_buf,
+            &result_buf,
+        ];
+        let bind = |pipe: &wgpu::ComputePipeline| {
+            let entries: Vec<wgpu::BindGroupEntry> = buffers
+                .iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupEntry {
+                    binding: i as u32,
+                    resource: b.as_entire_binding(),
+                })
+                .collect();
+            d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("search"),
+                layout: &pipe.get_bind_group_layout(0),
+                entries: &entries,
+            })
+        };
+        let groups_x = (cw * ch).div_ceil(WORKGROUP) as u32;
+        let mut enc = d.create_command_encoder(&Default::default());
+        for pipe in [&pipes.min_cost, &pipes.pick] {
+            let group = bind(pipe);
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(pipe);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(groups_x, queries.len() as u32, 1);
+        }
+        ctx.queue.submit([enc.finish()]);
+        let out: Vec<u32> = ctx
+            .read_back(&result_buf, queries.len() * 2)
+            .map_err(gpu_error)?;
+        queries
+            .iter()
+            .enumerate()
+            .map(|(i, q)| {
+                let key = out[2 * i + 1];
+                let index = index_of_key(q.salt, key);
+                if key == u32::MAX && index as usize >= cw * ch {
+                    return Err(gpu_error("the search returned no position".into()));
+                }
+                if index as usize >= cw * ch {
+                    return Err(gpu_error(format!(
+                        "the search returned position {index} of {}",
+                        cw * ch
+                    )));
+                }
+                let (x, y) = (index as usize % cw, index as usize / cw);
+                let ssd = ssd_at(e, w, q, x, y)
+                    + s.penalty_of(ex, index as usize, crate::search::known_texels(q, w));
+                Ok(Match { ssd, index })
+            })
+            .collect()
+    }
+}
+
+impl Matcher for GpuMatcher {
+    fn best_matches(&self, set: &ExemplarSet, s: &Search, queries: &[Query]) -> Result<Vec<Match>> {
+        let c = set.channels();
+        let per_query = s.w * s.w * c * 4;
+        let chunk = (MAX_QUERY_BYTES / per_query).clamp(1, 65_535);
+        let mut out = vec![Match { ssd: 0, index: 0 }; queries.len()];
+        for ex in 0..set.exemplars.len() {
+            let mine: Vec<usize> = (0..queries.len())
+                .filter(|&i| queries[i].exemplar as usize == ex)
+                .collect();
+            for part in mine.chunks(chunk) {
+                let qs: Vec<&Query> = part.iter().map(|&i| &queries[i]).collect();
+                for (&i, m) in part.iter().zip(self.run(set, s, ex, &qs)?) {
+                    out[i] = m;
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    fn name(&self) -> String {
+        format!("GPU ({})", self.name)
+    }
+}

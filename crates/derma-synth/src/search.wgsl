@@ -1,0 +1,140 @@
+// The best-match search of derma-synth on the GPU (Shen et al. §3.4: one thread per exemplar
+// position, then a reduction), computing exactly the search defined in search.rs:
+//   cost(p) = Σ over known texels and channels (code_e − code_q)²  +  penalty[p] · known
+//   d* = min cost;  T = d* + ⌊d*·ε₁₆/2¹⁶⌋;  answer = argmin over cost ≤ T of pick_key(salt, p)
+// Pass `min_cost` reduces d* with atomicMin; pass `pick` reduces the least key. Both skip a
+// position when the quadrant block-sum bound already exceeds the limit (a safe lower bound,
+// so the answer is unchanged). Integers throughout the decision: CPU and GPU agree exactly.
+
+struct Params {
+    ex_width: u32,     // exemplar width
+    channels: u32,
+    w: u32,            // window side
+    cand_w: u32,       // candidate columns = ex_width − w + 1
+    cand_h: u32,
+    plane_w: u32,      // block-sum plane width = ex_width − w/2 + 1
+    plane_len: u32,    // block-sum plane size (one per channel)
+    tol: u32,          // ε·2¹⁶
+    has_penalty: u32,
+    info_stride: u32,  // u32 words per query in `info`
+    n_queries: u32,
+    pad: u32,
+}
+
+@group(0) @binding(0) var<uniform> p: Params;
+// Exemplar codes, one value per word, texels row-major, channels interleaved.
+@group(0) @binding(1) var<storage, read> ex: array<u32>;
+// Per channel, sums of codes over (w/2)² blocks at every position.
+@group(0) @binding(2) var<storage, read> sums: array<f32>;
+// Per query w·w·C codes; 256 marks a texel that is not known.
+@group(0) @binding(3) var<storage, read> qcodes: array<u32>;
+// Per query: known texels, salt, quadrant mask (bit q: quadrant q fully known), 0, then 4·C
+// quadrant sums (f32 bits).
+@group(0) @binding(4) var<storage, read> info: array<u32>;
+// Per candidate: occurrence penalty per known texel (when has_penalty).
+@group(0) @binding(5) var<storage, read> penalty: array<u32>;
+// Per query: [d* (starts at the guesses' cost), least key].
+@group(0) @binding(6) var<storage, read_write> result: array<atomic<u32>>;
+
+fn pick_key(salt: u32, index: u32) -> u32 {
+    var x = index + salt;
+    x = x ^ (x >> 16u);
+    x = x * 0x7feb352du;
+    x = x ^ (x >> 15u);
+    x = x * 0x846ca68bu;
+    x = x ^ (x >> 16u);
+    return x;
+}
+
+// T = d + ⌊d·ε₁₆/2¹⁶⌋, saturating, in 32-bit products only.
+fn tolerance_limit(d: u32) -> u32 {
+    let e = min(p.tol, 65536u);
+    let hi = (d >> 16u) * e;
+    let lo = ((d & 0xffffu) * e) >> 16u;
+    var t = d + hi;
+    if (t < d) { return 0xffffffffu; }
+    let t2 = t + lo;
+    if (t2 < t) { return 0xffffffffu; }
+    return t2;
+}
+
+// Whether the block-sum bound of candidate (x, y) exceeds `limit` (then it cannot qualify).
+fn bound_exceeds(q: u32, x: u32, y: u32, limit: u32) -> bool {
+    let base = q * p.info_stride;
+    let mask = info[base + 2u];
+    let half = p.w / 2u;
+    var bound = 0.0;
+    for (var quad = 0u; quad < 4u; quad++) {
+        if ((mask & (1u << quad)) == 0u) { continue; }
+        let ox = (quad & 1u) * half;
+        let oy = (quad >> 1u) * half;
+        let at = (y + oy) * p.plane_w + x + ox;
+        for (var k = 0u; k < p.channels; k++) {
+            let d = sums[k * p.plane_len + at] - bitcast<f32>(info[base + 4u + quad * p.channels + k]);
+            bound += d * d;
+        }
+    }
+    let area = f32(half * half);
+    return bound > f32(limit) * area * (1.0 + 1.0 / 65536.0) + 1.0;
+}
+
+// The exact distance, or any value above `limit` once the partial sum passes it.
+fn distance(q: u32, x: u32, y: u32, limit: u32) -> u32 {
+    let row_len = p.w * p.channels;
+    let qbase = q * p.w * row_len;
+    var total = 0u;
+    for (var r = 0u; r < p.w; r++) {
+        let e0 = ((y + r) * p.ex_width + x) * p.channels;
+        let q0 = qbase + r * row_len;
+        for (var i = 0u; i < row_len; i++) {
+            let qv = qcodes[q0 + i];
+            if (qv < 256u) {
+                let d = i32(ex[e0 + i]) - i32(qv);
+                total += u32(d * d);
+            }
+        }
+        if (total > limit) { return total; }
+    }
+    return total;
+}
+
+fn candidate_penalty(q: u32, index: u32) -> u32 {
+    if (p.has_penalty == 0u) { return 0u; }
+    return penalty[index] * info[q * p.info_stride];
+}
+
+@compute @workgroup_size(64)
+fn min_cost(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let q = gid.y;
+    let index = gid.x;
+    if (q >= p.n_queries || index >= p.cand_w * p.cand_h) { return; }
+    let x = index % p.cand_w;
+    let y = index / p.cand_w;
+    let best = atomicLoad(&result[2u * q]);
+    let pen = candidate_penalty(q, index);
+    if (pen > best) { return; }
+    let limit = best - pen;
+    if (bound_exceeds(q, x, y, limit)) { return; }
+    let d = distance(q, x, y, limit);
+    if (d <= limit) {
+        atomicMin(&result[2u * q], d + pen);
+    }
+}
+
+@compute @workgroup_size(64)
+fn pick(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let q = gid.y;
+    let index = gid.x;
+    if (q >= p.n_queries || index >= p.cand_w * p.cand_h) { return; }
+    let x = index % p.cand_w;
+    let y = index / p.cand_w;
+    let t = tolerance_limit(atomicLoad(&result[2u * q]));
+    let pen = candidate_penalty(q, index);
+    if (pen > t) { return; }
+    let limit = t - pen;
+    if (bound_exceeds(q, x, y, limit)) { return; }
+    let d = distance(q, x, y, limit);
+    if (d <= limit) {
+        atomicMin(&result[2u * q + 1u], pick_key(info[q * p.info_stride + 1u], index));
+    }
+}

@@ -1,0 +1,98 @@
+//! The GPU search returns exactly the CPU search's answers, and so a seed gives the same
+//! texture on either (Shen et al. §3.4 run on both backends). Runs on Mesa's lavapipe in CI.
+
+use derma_core::gpu::skip_test_without_gpu;
+use derma_core::rng::Philox;
+use derma_synth::{
+    synthesize, CpuMatcher, ExemplarSet, GpuMatcher, Matcher, ProgressSink, Query, Search,
+    SynthOptions, Texture, Tolerance,
+};
+
+fn exemplar(w: usize, h: usize, c: usize, seed: u64) -> Texture {
+    let rng = Philox::new(seed, 0);
+    let data = (0..w * h * c)
+        .map(|i| {
+            let (t, k) = (i / c, i % c);
+            let (x, y) = ((t % w) as f32, (t / w) as f32);
+            0.5 + 0.3 * ((x * 0.31 + k as f32).sin() * (y * 0.17).cos())
+                + 0.2 * rng.uniform4(i as u64, 0)[0]
+        })
+        .collect();
+    Texture::new(w, h, c, data).unwrap()
+}
+
+#[test]
+fn gpu_search_equals_cpu_search() {
+    // Skip only without an adapter; a shader that does not compile must fail.
+    if skip_test_without_gpu(derma_core::gpu::context().is_ok()) {
+        return;
+    }
+    let gpu = GpuMatcher::new().unwrap();
+    let set = ExemplarSet::new(vec![exemplar(40, 36, 3, 1), exemplar(34, 40, 3, 2)], 8).unwrap();
+    let rng = Philox::new(9, 1);
+    let w = 8;
+    let queries: Vec<Query> = (0..24u64)
+        .map(|i| {
+            let r = rng.u32x4(i);
+            let ex = (i % 2) as u32;
+            let codes = (0..w * w * 3)
+                .map(|j| (rng.u32x4_sub(i, j as u32 + 1)[0] % 256) as u8)
+                .collect();
+            let mask = (i % 3 == 0).then(|| {
+                (0..w * w)
+                    .map(|t| u8::from(t % w < w / 2 || t / w < w / 2))
+                    .collect()
+            });
+            Query {
+                exemplar: ex,
+                codes,
+                mask,
+                guesses: vec![r[0] % 500, r[1] % 700],
+                salt: r[2],
+            }
+        })
+        .collect();
+    let pen: Vec<Vec<u32>> = set
+        .exemplars
+        .iter()
+        .map(|e| {
+            let (cw, ch) = e.candidates(w);
+            (0..cw * ch)
+                .map(|k| ((k * 7919) % 11) as u32 * 50)
+                .collect()
+        })
+        .collect();
+    for tol in [Tolerance(0), Tolerance::from_fraction(0.1)] {
+        for penalty in [None, Some(&pen[..])] {
+            let s = Search { w, tol, penalty };
+            let a = CpuMatcher.best_matches(&set, &s, &queries).unwrap();
+            let b = gpu.best_matches(&set, &s, &queries).unwrap();
+            assert_eq!(a, b, "tolerance {tol:?}, penalty {}", penalty.is_some());
+        }
+    }
+}
+
+#[test]
+fn a_seed_gives_the_same_texture_on_cpu_and_gpu() {
+    // Skip only without an adapter; a shader that does not compile must fail.
+    if skip_test_without_gpu(derma_core::gpu::context().is_ok()) {
+        return;
+    }
+    let gpu = GpuMatcher::new().unwrap();
+    let set = ExemplarSet::new(vec![exemplar(48, 48, 2, 5)], 16).unwrap();
+    for tile in [false, true] {
+        let opts = SynthOptions {
+            width: 80,
+            height: 64,
+            patch: 16,
+            seed: 42,
+            tile,
+            ..Default::default()
+        };
+        let none = ProgressSink::default();
+        let a = synthesize(&set, &opts, None, &CpuMatcher, &none).unwrap();
+        let b = synthesize(&set, &opts, None, &gpu, &none).unwrap();
+        assert_eq!(a.texture, b.texture, "tile {tile}");
+        assert_eq!(a.source, b.source);
+    }
+}
