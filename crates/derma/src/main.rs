@@ -5,6 +5,7 @@ mod matching;
 mod optics;
 mod rig;
 mod skin;
+mod synth;
 
 use clap::{Parser, Subcommand};
 
@@ -38,6 +39,8 @@ enum Command {
     /// Dynamic facial colour: the skin appearance rig (hemoglobin by expression and emotion).
     #[command(subcommand)]
     Rig(rig::RigCommand),
+    /// Exemplar synthesis: grow skin detail of any size from a small sample (CPU and GPU).
+    Synth(synth::SynthArgs),
 }
 
 fn main() {
@@ -56,6 +59,7 @@ fn main() {
         Command::Optics(cmd) => optics::run(cmd, cli.quiet),
         Command::Match(cmd) => matching::run(cmd, cli.quiet),
         Command::Rig(cmd) => rig::run(cmd, cli.quiet),
+        Command::Synth(args) => synth::run(args, cli.quiet),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");
