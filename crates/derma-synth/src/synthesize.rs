@@ -185,6 +185,8 @@ pub struct Synthesis {
     pub source_exemplar: Vec<u8>,
     /// Source texel index (y · exemplar width + x).
     pub source: Vec<u32>,
+    /// Wall-clock seconds of each stage (patch pass, then each optimisation pass).
+    pub stage_seconds: Vec<(String, f64)>,
 }
 
 /// Grows a `width × height` texture from the exemplar set.
@@ -239,9 +241,14 @@ pub fn synthesize(
         seed: opts.seed,
     };
     let tol = Tolerance::from_fraction(opts.tolerance);
+    let mut stage_seconds = Vec::new();
+    let t = std::time::Instant::now();
     patch_pass(&mut canvas, &ctx, opts.patch, tol, opts.occurrence)?;
+    stage_seconds.push(("patch pass".to_string(), t.elapsed().as_secs_f64()));
     for w in opts.pass_windows() {
+        let t = std::time::Instant::now();
         optimise_pass(&mut canvas, &ctx, w, opts.r)?;
+        stage_seconds.push((format!("optimisation {w}×{w}"), t.elapsed().as_secs_f64()));
     }
     let (ow, oh) = (opts.width, opts.height);
     let mut data = Vec::with_capacity(ow * oh * c);
@@ -256,5 +263,6 @@ pub fn synthesize(
         texture: Texture::new(ow, oh, c, data)?,
         source_exemplar,
         source,
+        stage_seconds,
     })
 }

@@ -326,10 +326,18 @@ pub fn run(args: SynthArgs, quiet: bool) -> Result<()> {
                 .join(", ")
         );
     }
+    for (stage, s) in &out.stage_seconds {
+        tracing::info!("{stage}: {s:.3} s");
+    }
     if args.metrics {
         let ex = &set.exemplars[0].texture;
         println!(
-            "{{\"seconds\": {secs:.4}, \"patch_swd\": {:.6}, \"verbatim_copy_ratio\": {:.6}, \"seam_energy\": {:.6}}}",
+            "{{\"seconds\": {secs:.4}, \"stages\": {{{}}}, \"patch_swd\": {:.6}, \"verbatim_copy_ratio\": {:.6}, \"seam_energy\": {:.6}}}",
+            out.stage_seconds
+                .iter()
+                .map(|(k, v)| format!("\"{k}\": {v:.4}"))
+                .collect::<Vec<_>>()
+                .join(", "),
             patch_swd(&out.texture, ex, &SwdOptions::default())?,
             verbatim_copy_ratio(&out.texture, ex, 32)?,
             seam_energy(&out.texture, args.patch / 2)?
