@@ -54,6 +54,18 @@ impl Gpu {
         source: &str,
         entry: &str,
     ) -> Result<wgpu::ComputePipeline, String> {
+        self.compute_pipeline_with(label, source, entry, None)
+    }
+
+    /// As [`Gpu::compute_pipeline`], with an explicit layout (so several entry points of one
+    /// shader can share one bind group even when each uses only some of its bindings).
+    pub fn compute_pipeline_with(
+        &self,
+        label: &str,
+        source: &str,
+        entry: &str,
+        layout: Option<&wgpu::PipelineLayout>,
+    ) -> Result<wgpu::ComputePipeline, String> {
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = self
             .device
@@ -65,7 +77,7 @@ impl Gpu {
             .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(label),
-                layout: None,
+                layout,
                 module: &module,
                 entry_point: Some(entry),
                 compilation_options: Default::default(),

@@ -5,6 +5,7 @@
 use crate::error::{invalid, Result, SynthError};
 use crate::exemplar::ExemplarSet;
 use crate::search::{index_of_key, initial_cost, ssd_at, Match, Matcher, Query, Search};
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 use wgpu::util::DeviceExt;
@@ -37,7 +38,9 @@ fn gpu_error(detail: String) -> SynthError {
 }
 
 struct Pipelines {
+    layout: wgpu::BindGroupLayout,
     min_cost: wgpu::ComputePipeline,
+    settle: wgpu::ComputePipeline,
     pick: wgpu::ComputePipeline,
 }
 
@@ -47,9 +50,55 @@ fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
     let ctx = derma_core::gpu::context().map_err(gpu_error)?;
     let p = PIPELINES
         .get_or_init(|| {
+            // One layout for the three entry points: binding 0 uniform, 1–5 read-only
+            // storage, 6–7 read-write storage.
+            let entry = |binding: u32, ty| wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty,
+                count: None,
+            };
+            let storage = |read_only| wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            };
+            let mut entries = vec![entry(
+                0,
+                wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+            )];
+            entries.extend((1..=5).map(|b| entry(b, storage(true))));
+            entries.extend((6..=7).map(|b| entry(b, storage(false))));
+            let layout = ctx
+                .device
+                .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some("search"),
+                    entries: &entries,
+                });
+            let pipeline_layout =
+                ctx.device
+                    .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                        label: Some("search"),
+                        bind_group_layouts: &[Some(&layout)],
+                        immediate_size: 0,
+                    });
+            let make = |entry: &str| {
+                ctx.compute_pipeline_with(
+                    &format!("search.wgsl ({entry})"),
+                    SHADER,
+                    entry,
+                    Some(&pipeline_layout),
+                )
+            };
             Ok(Pipelines {
-                min_cost: ctx.compute_pipeline("search.wgsl (min_cost)", SHADER, "min_cost")?,
-                pick: ctx.compute_pipeline("search.wgsl (pick)", SHADER, "pick")?,
+                min_cost: make("min_cost")?,
+                settle: make("settle")?,
+                pick: make("pick")?,
+                layout,
             })
         })
         .as_ref()
@@ -129,6 +178,7 @@ impl GpuMatcher {
         queries: &[&Query],
     ) -> Result<Vec<Match>> {
         let (ctx, pipes) = pipelines()?;
+        let t0 = std::time::Instant::now();
         let w = s.w;
         let e = &set.exemplars[ex];
         let c = e.channels();
@@ -136,40 +186,49 @@ impl GpuMatcher {
         let res = self.resident(set, ex, w)?;
         let half = w / 2;
         let info_stride = 4 + 4 * c;
-        let mut qcodes: Vec<u32> = Vec::with_capacity(queries.len() * w * w * c);
-        let mut info: Vec<u32> = Vec::with_capacity(queries.len() * info_stride);
-        let mut result: Vec<u32> = Vec::with_capacity(queries.len() * 2);
-        for q in queries {
-            let known = |t: usize| q.mask.as_ref().is_none_or(|m| m[t] != 0);
-            qcodes.extend(q.codes.iter().enumerate().map(|(i, &v)| {
-                if known(i / c) {
-                    v as u32
-                } else {
-                    256
-                }
-            }));
-            let mut quad_mask = 0u32;
-            let mut quad_sums = vec![0f32; 4 * c];
-            for quad in 0..4 {
-                let (ox, oy) = ((quad & 1) * half, (quad >> 1) * half);
-                let full = (0..half).all(|dy| (0..half).all(|dx| known((oy + dy) * w + ox + dx)));
-                if !full {
-                    continue;
-                }
-                quad_mask |= 1 << quad;
-                for dy in 0..half {
-                    for dx in 0..half {
-                        let t = (oy + dy) * w + ox + dx;
-                        for k in 0..c {
-                            quad_sums[quad * c + k] += q.codes[t * c + k] as f32;
+        // Per query, in parallel: codes (256 where unknown), then info and the first result.
+        let prepared: Vec<(Vec<u32>, Vec<u32>, u32)> = queries
+            .par_iter()
+            .map(|q| {
+                let known = |t: usize| q.mask.as_ref().is_none_or(|m| m[t] != 0);
+                let codes: Vec<u32> = q
+                    .codes
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &v)| if known(i / c) { v as u32 } else { 256 })
+                    .collect();
+                let mut quad_mask = 0u32;
+                let mut quad_sums = vec![0f32; 4 * c];
+                for quad in 0..4 {
+                    let (ox, oy) = ((quad & 1) * half, (quad >> 1) * half);
+                    let full = (0..half)
+                        .all(|dy| (0..half).all(|dx| known((oy + dy) * w + ox + dx)));
+                    if !full {
+                        continue;
+                    }
+                    quad_mask |= 1 << quad;
+                    for dy in 0..half {
+                        for dx in 0..half {
+                            let t = (oy + dy) * w + ox + dx;
+                            for k in 0..c {
+                                quad_sums[quad * c + k] += q.codes[t * c + k] as f32;
+                            }
                         }
                     }
                 }
-            }
-            let known_count = crate::search::known_texels(q, w);
-            info.extend_from_slice(&[known_count, q.salt, quad_mask, 0]);
-            info.extend(quad_sums.iter().map(|v| v.to_bits()));
-            result.extend_from_slice(&[initial_cost(set, s, q), u32::MAX]);
+                let first = initial_cost(set, s, q);
+                let mut info = vec![crate::search::known_texels(q, w), q.salt, quad_mask, first];
+                info.extend(quad_sums.iter().map(|v| v.to_bits()));
+                (codes, info, first)
+            })
+            .collect();
+        let mut qcodes: Vec<u32> = Vec::with_capacity(queries.len() * w * w * c);
+        let mut info: Vec<u32> = Vec::with_capacity(queries.len() * info_stride);
+        let mut result: Vec<u32> = Vec::with_capacity(queries.len() * 2);
+        for (codes, inf, first) in prepared {
+            qcodes.extend_from_slice(&codes);
+            info.extend_from_slice(&inf);
+            result.extend_from_slice(&[first, u32::MAX]);
         }
         let penalty: Vec<u32> = s.penalty.map_or_else(|| vec![0], |p| p[ex].clone());
         let params = Params {
@@ -208,6 +267,12 @@ impl GpuMatcher {
             bytemuck::cast_slice(&result),
             storage | wgpu::BufferUsages::COPY_SRC,
         );
+        let limits_buf = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("limits"),
+            size: (queries.len() * 4) as u64,
+            usage: storage,
+            mapped_at_creation: false,
+        });
         let buffers = [
             &params_buf,
             &res.codes,
@@ -216,36 +281,41 @@ impl GpuMatcher {
             &info_buf,
             &penalty_buf,
             &result_buf,
+            &limits_buf,
         ];
-        let bind = |pipe: &wgpu::ComputePipeline| {
-            let entries: Vec<wgpu::BindGroupEntry> = buffers
-                .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: i as u32,
-                    resource: b.as_entire_binding(),
-                })
-                .collect();
-            d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("search"),
-                layout: &pipe.get_bind_group_layout(0),
-                entries: &entries,
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
             })
-        };
+            .collect();
+        let group = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("search"),
+            layout: &pipes.layout,
+            entries: &entries,
+        });
+        let t1 = std::time::Instant::now();
         let groups_x = (cw * ch).div_ceil(WORKGROUP) as u32;
         let mut enc = d.create_command_encoder(&Default::default());
-        for pipe in [&pipes.min_cost, &pipes.pick] {
-            let group = bind(pipe);
+        let settle_groups = queries.len().div_ceil(WORKGROUP) as u32;
+        for (pipe, dims) in [
+            (&pipes.min_cost, (groups_x, queries.len() as u32)),
+            (&pipes.settle, (settle_groups, 1)),
+            (&pipes.pick, (groups_x, queries.len() as u32)),
+        ] {
             let mut pass = enc.begin_compute_pass(&Default::default());
             pass.set_pipeline(pipe);
             pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(groups_x, queries.len() as u32, 1);
+            pass.dispatch_workgroups(dims.0, dims.1, 1);
         }
         ctx.queue.submit([enc.finish()]);
         let out: Vec<u32> = ctx
             .read_back(&result_buf, queries.len() * 2)
             .map_err(gpu_error)?;
-        queries
+        let t2 = std::time::Instant::now();
+        let out = queries
             .iter()
             .enumerate()
             .map(|(i, q)| {
@@ -265,7 +335,15 @@ impl GpuMatcher {
                     + s.penalty_of(ex, index as usize, crate::search::known_texels(q, w));
                 Ok(Match { ssd, index })
             })
-            .collect()
+            .collect();
+        tracing::debug!(
+            "GPU search: {} queries of side {w}: prepare {:.2} ms, GPU {:.2} ms, finish {:.2} ms",
+            queries.len(),
+            (t1 - t0).as_secs_f64() * 1e3,
+            (t2 - t1).as_secs_f64() * 1e3,
+            t2.elapsed().as_secs_f64() * 1e3
+        );
+        out
     }
 }
 

@@ -2,9 +2,10 @@
 // position, then a reduction), computing exactly the search defined in search.rs:
 //   cost(p) = Σ over known texels and channels (code_e − code_q)²  +  penalty[p] · known
 //   d* = min cost;  T = d* + ⌊d*·ε₁₆/2¹⁶⌋;  answer = argmin over cost ≤ T of pick_key(salt, p)
-// Pass `min_cost` reduces d* with atomicMin; pass `pick` reduces the least key. Both skip a
-// position when the quadrant block-sum bound already exceeds the limit (a safe lower bound,
-// so the answer is unchanged). Integers throughout the decision: CPU and GPU agree exactly.
+// Pass `min_cost` reduces d* with atomicMin (pruning with the guesses' cost, an upper bound
+// of d* the CPU computed), `settle` copies d*'s limit T out of the atomics, and `pick` reduces
+// the least key. Positions whose quadrant block-sum bound already exceeds the limit are skipped
+// (a safe lower bound, so the answer is unchanged). Integers decide: CPU and GPU agree exactly.
 
 struct Params {
     ex_width: u32,     // exemplar width
@@ -28,13 +29,15 @@ struct Params {
 @group(0) @binding(2) var<storage, read> sums: array<f32>;
 // Per query w·w·C codes; 256 marks a texel that is not known.
 @group(0) @binding(3) var<storage, read> qcodes: array<u32>;
-// Per query: known texels, salt, quadrant mask (bit q: quadrant q fully known), 0, then 4·C
-// quadrant sums (f32 bits).
+// Per query: known texels, salt, quadrant mask (bit q: quadrant q fully known), the guesses'
+// cost, then 4·C quadrant sums (f32 bits).
 @group(0) @binding(4) var<storage, read> info: array<u32>;
 // Per candidate: occurrence penalty per known texel (when has_penalty).
 @group(0) @binding(5) var<storage, read> penalty: array<u32>;
 // Per query: [d* (starts at the guesses' cost), least key].
 @group(0) @binding(6) var<storage, read_write> result: array<atomic<u32>>;
+// Per query: the limit T of the choice (written by `settle`).
+@group(0) @binding(7) var<storage, read_write> limits: array<u32>;
 
 fn pick_key(salt: u32, index: u32) -> u32 {
     var x = index + salt;
@@ -110,7 +113,7 @@ fn min_cost(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (q >= p.n_queries || index >= p.cand_w * p.cand_h) { return; }
     let x = index % p.cand_w;
     let y = index / p.cand_w;
-    let best = atomicLoad(&result[2u * q]);
+    let best = info[q * p.info_stride + 3u];
     let pen = candidate_penalty(q, index);
     if (pen > best) { return; }
     let limit = best - pen;
@@ -122,13 +125,20 @@ fn min_cost(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 
 @compute @workgroup_size(64)
+fn settle(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let q = gid.x;
+    if (q >= p.n_queries) { return; }
+    limits[q] = tolerance_limit(atomicLoad(&result[2u * q]));
+}
+
+@compute @workgroup_size(64)
 fn pick(@builtin(global_invocation_id) gid: vec3<u32>) {
     let q = gid.y;
     let index = gid.x;
     if (q >= p.n_queries || index >= p.cand_w * p.cand_h) { return; }
     let x = index % p.cand_w;
     let y = index / p.cand_w;
-    let t = tolerance_limit(atomicLoad(&result[2u * q]));
+    let t = limits[q];
     let pen = candidate_penalty(q, index);
     if (pen > t) { return; }
     let limit = t - pen;

@@ -48,7 +48,8 @@ fn main() {
     let level = match cli.verbose {
         0 => "warn",
         1 => "info",
-        _ => "debug",
+        // Debug output of derma's own crates only (wgpu and naga are very chatty).
+        _ => "info,derma=debug,derma_core=debug,derma_skin=debug,derma_optics=debug,derma_shading=debug,derma_rig=debug,derma_synth=debug",
     };
     tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::new(level))
