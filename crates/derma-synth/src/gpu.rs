@@ -15,6 +15,8 @@ pub const SHADER: &str = include_str!("search.wgsl");
 const WORKGROUP: usize = 64;
 /// Largest query upload per dispatch, in bytes.
 const MAX_QUERY_BYTES: usize = 64 << 20;
+/// Room for candidates that pass the bound in one compacted search (12 bytes each).
+const MAX_SURVIVORS: usize = 8 << 20;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -30,7 +32,7 @@ struct Params {
     has_penalty: u32,
     info_stride: u32,
     n_queries: u32,
-    pad: u32,
+    capacity: u32,
 }
 
 fn gpu_error(detail: String) -> SynthError {
@@ -42,6 +44,9 @@ struct Pipelines {
     min_cost: wgpu::ComputePipeline,
     settle: wgpu::ComputePipeline,
     pick: wgpu::ComputePipeline,
+    screen: wgpu::ComputePipeline,
+    cost: wgpu::ComputePipeline,
+    choose: wgpu::ComputePipeline,
 }
 
 static PIPELINES: OnceLock<std::result::Result<Pipelines, String>> = OnceLock::new();
@@ -50,8 +55,8 @@ fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
     let ctx = derma_core::gpu::context().map_err(gpu_error)?;
     let p = PIPELINES
         .get_or_init(|| {
-            // One layout for the three entry points: binding 0 uniform, 1–5 read-only
-            // storage, 6–7 read-write storage.
+            // One layout for all entry points: binding 0 uniform, 1–5 read-only storage,
+            // 6–9 read-write storage.
             let entry = |binding: u32, ty| wgpu::BindGroupLayoutEntry {
                 binding,
                 visibility: wgpu::ShaderStages::COMPUTE,
@@ -72,7 +77,7 @@ fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
                 },
             )];
             entries.extend((1..=5).map(|b| entry(b, storage(true))));
-            entries.extend((6..=7).map(|b| entry(b, storage(false))));
+            entries.extend((6..=9).map(|b| entry(b, storage(false))));
             let layout = ctx
                 .device
                 .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -98,6 +103,9 @@ fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
                 min_cost: make("min_cost")?,
                 settle: make("settle")?,
                 pick: make("pick")?,
+                screen: make("screen")?,
+                cost: make("cost")?,
+                choose: make("choose")?,
                 layout,
             })
         })
@@ -124,6 +132,7 @@ struct Resident {
 pub struct GpuMatcher {
     resident: Mutex<HashMap<(usize, usize), Arc<Resident>>>,
     name: String,
+    max_survivors: usize,
 }
 
 impl GpuMatcher {
@@ -133,6 +142,16 @@ impl GpuMatcher {
         Ok(Self {
             resident: Mutex::new(HashMap::new()),
             name: ctx.name.clone(),
+            max_survivors: MAX_SURVIVORS,
+        })
+    }
+
+    /// As [`GpuMatcher::new`] with room for at most `n` bound survivors per dispatch (tests
+    /// use it to exercise the uncompacted fallback).
+    pub fn with_survivor_room(n: usize) -> Result<Self> {
+        Ok(Self {
+            max_survivors: n.max(1),
+            ..Self::new()?
         })
     }
 
@@ -201,8 +220,8 @@ impl GpuMatcher {
                 let mut quad_sums = vec![0f32; 4 * c];
                 for quad in 0..4 {
                     let (ox, oy) = ((quad & 1) * half, (quad >> 1) * half);
-                    let full = (0..half)
-                        .all(|dy| (0..half).all(|dx| known((oy + dy) * w + ox + dx)));
+                    let full =
+                        (0..half).all(|dy| (0..half).all(|dx| known((oy + dy) * w + ox + dx)));
                     if !full {
                         continue;
                     }
@@ -230,6 +249,11 @@ impl GpuMatcher {
             info.extend_from_slice(&inf);
             result.extend_from_slice(&[first, u32::MAX]);
         }
+        // The survivor counter follows the per-query results.
+        result.push(0);
+        let candidates = cw * ch;
+        let capacity = (queries.len() * candidates / 4)
+            .clamp(self.max_survivors.min(1 << 16), self.max_survivors);
         let penalty: Vec<u32> = s.penalty.map_or_else(|| vec![0], |p| p[ex].clone());
         let params = Params {
             ex_width: e.width() as u32,
@@ -243,7 +267,7 @@ impl GpuMatcher {
             has_penalty: u32::from(s.penalty.is_some()),
             info_stride: info_stride as u32,
             n_queries: queries.len() as u32,
-            pad: 0,
+            capacity: capacity as u32,
         };
         let d = &ctx.device;
         let init = |label, bytes: &[u8], usage| {
@@ -265,7 +289,7 @@ impl GpuMatcher {
         let result_buf = init(
             "result",
             bytemuck::cast_slice(&result),
-            storage | wgpu::BufferUsages::COPY_SRC,
+            storage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         );
         let limits_buf = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("limits"),
@@ -273,6 +297,16 @@ impl GpuMatcher {
             usage: storage,
             mapped_at_creation: false,
         });
+        let scratch = |label, bytes: usize| {
+            d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes as u64,
+                usage: storage,
+                mapped_at_creation: false,
+            })
+        };
+        let survivors_buf = scratch("survivors", capacity * 8);
+        let costs_buf = scratch("costs", capacity * 4);
         let buffers = [
             &params_buf,
             &res.codes,
@@ -282,6 +316,8 @@ impl GpuMatcher {
             &penalty_buf,
             &result_buf,
             &limits_buf,
+            &survivors_buf,
+            &costs_buf,
         ];
         let entries: Vec<wgpu::BindGroupEntry> = buffers
             .iter()
@@ -298,22 +334,49 @@ impl GpuMatcher {
         });
         let t1 = std::time::Instant::now();
         let groups_x = (cw * ch).div_ceil(WORKGROUP) as u32;
-        let mut enc = d.create_command_encoder(&Default::default());
+        let nq = queries.len() as u32;
         let settle_groups = queries.len().div_ceil(WORKGROUP) as u32;
-        for (pipe, dims) in [
-            (&pipes.min_cost, (groups_x, queries.len() as u32)),
+        let survivor_groups = capacity.div_ceil(WORKGROUP);
+        let survivor_dims = (
+            survivor_groups.min(65_535) as u32,
+            survivor_groups.div_ceil(65_535) as u32,
+        );
+        let submit = |steps: &[(&wgpu::ComputePipeline, (u32, u32))]| {
+            let mut enc = d.create_command_encoder(&Default::default());
+            for (pipe, dims) in steps {
+                let mut pass = enc.begin_compute_pass(&Default::default());
+                pass.set_pipeline(pipe);
+                pass.set_bind_group(0, &group, &[]);
+                pass.dispatch_workgroups(dims.0, dims.1, 1);
+            }
+            ctx.queue.submit([enc.finish()]);
+        };
+        submit(&[
+            (&pipes.screen, (groups_x, nq)),
+            (&pipes.cost, survivor_dims),
             (&pipes.settle, (settle_groups, 1)),
-            (&pipes.pick, (groups_x, queries.len() as u32)),
-        ] {
-            let mut pass = enc.begin_compute_pass(&Default::default());
-            pass.set_pipeline(pipe);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(dims.0, dims.1, 1);
-        }
-        ctx.queue.submit([enc.finish()]);
-        let out: Vec<u32> = ctx
-            .read_back(&result_buf, queries.len() * 2)
+            (&pipes.choose, survivor_dims),
+        ]);
+        let mut out: Vec<u32> = ctx
+            .read_back(&result_buf, queries.len() * 2 + 1)
             .map_err(gpu_error)?;
+        if out[queries.len() * 2] as usize > capacity {
+            // More passed the bound than there was room for: the uncompacted search.
+            tracing::debug!(
+                "GPU search: {} candidates passed the bound, room for {capacity}; searching uncompacted",
+                out[queries.len() * 2]
+            );
+            ctx.queue
+                .write_buffer(&result_buf, 0, bytemuck::cast_slice(&result));
+            submit(&[
+                (&pipes.min_cost, (groups_x, nq)),
+                (&pipes.settle, (settle_groups, 1)),
+                (&pipes.pick, (groups_x, nq)),
+            ]);
+            out = ctx
+                .read_back(&result_buf, queries.len() * 2)
+                .map_err(gpu_error)?;
+        }
         let t2 = std::time::Instant::now();
         let out = queries
             .iter()

@@ -19,7 +19,7 @@ struct Params {
     has_penalty: u32,
     info_stride: u32,  // u32 words per query in `info`
     n_queries: u32,
-    pad: u32,
+    capacity: u32,     // room in `survivors`
 }
 
 @group(0) @binding(0) var<uniform> p: Params;
@@ -38,6 +38,10 @@ struct Params {
 @group(0) @binding(6) var<storage, read_write> result: array<atomic<u32>>;
 // Per query: the limit T of the choice (written by `settle`).
 @group(0) @binding(7) var<storage, read_write> limits: array<u32>;
+// Compacted search: (query, position) of the candidates that pass the bound, and their costs.
+// `result[2·n_queries]` counts them; `p.capacity` is the room.
+@group(0) @binding(8) var<storage, read_write> survivors: array<vec2<u32>>;
+@group(0) @binding(9) var<storage, read_write> costs: array<u32>;
 
 fn pick_key(salt: u32, index: u32) -> u32 {
     var x = index + salt;
@@ -146,5 +150,63 @@ fn pick(@builtin(global_invocation_id) gid: vec3<u32>) {
     let d = distance(q, x, y, limit);
     if (d <= limit) {
         atomicMin(&result[2u * q + 1u], pick_key(info[q * p.info_stride + 1u], index));
+    }
+}
+
+// The compacted search, which keeps whole warps busy with exact distances instead of leaving
+// most lanes idle behind one survivor: `screen` keeps the candidates whose bound passes the
+// largest limit the answer can have (T of the guesses' cost, ≥ T of d*), `cost` computes their
+// exact costs and reduces d*, `settle` gives T, `choose` reduces the least key among cost ≤ T.
+// When more candidates pass than there is room for, the host reruns the batch with
+// `min_cost`/`pick` above (same answer).
+
+@compute @workgroup_size(64)
+fn screen(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let q = gid.y;
+    let index = gid.x;
+    if (q >= p.n_queries || index >= p.cand_w * p.cand_h) { return; }
+    let x = index % p.cand_w;
+    let y = index / p.cand_w;
+    let upper = tolerance_limit(info[q * p.info_stride + 3u]);
+    let pen = candidate_penalty(q, index);
+    if (pen > upper) { return; }
+    if (bound_exceeds(q, x, y, upper - pen)) { return; }
+    let slot = atomicAdd(&result[2u * p.n_queries], 1u);
+    if (slot < p.capacity) {
+        survivors[slot] = vec2<u32>(q, index);
+    }
+}
+
+fn survivor_slot(gid: vec3<u32>) -> u32 {
+    return gid.x + gid.y * 65535u * 64u;
+}
+
+@compute @workgroup_size(64)
+fn cost(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let slot = survivor_slot(gid);
+    let count = min(atomicLoad(&result[2u * p.n_queries]), p.capacity);
+    if (slot >= count) { return; }
+    let s = survivors[slot];
+    let q = s.x;
+    let index = s.y;
+    let upper = tolerance_limit(info[q * p.info_stride + 3u]);
+    let pen = candidate_penalty(q, index);
+    let d = distance(q, index % p.cand_w, index / p.cand_w, upper - pen);
+    if (d <= upper - pen) {
+        costs[slot] = d + pen;
+        atomicMin(&result[2u * q], d + pen);
+    } else {
+        costs[slot] = 0xffffffffu;
+    }
+}
+
+@compute @workgroup_size(64)
+fn choose(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let slot = survivor_slot(gid);
+    let count = min(atomicLoad(&result[2u * p.n_queries]), p.capacity);
+    if (slot >= count) { return; }
+    let s = survivors[slot];
+    if (costs[slot] <= limits[s.x]) {
+        atomicMin(&result[2u * s.x + 1u], pick_key(info[s.x * p.info_stride + 1u], s.y));
     }
 }

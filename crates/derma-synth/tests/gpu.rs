@@ -62,12 +62,21 @@ fn gpu_search_equals_cpu_search() {
                 .collect()
         })
         .collect();
+    // Room for only 100 survivors forces the uncompacted fallback.
+    let cramped = GpuMatcher::with_survivor_room(100).unwrap();
     for tol in [Tolerance(0), Tolerance::from_fraction(0.1)] {
         for penalty in [None, Some(&pen[..])] {
             let s = Search { w, tol, penalty };
             let a = CpuMatcher.best_matches(&set, &s, &queries).unwrap();
             let b = gpu.best_matches(&set, &s, &queries).unwrap();
             assert_eq!(a, b, "tolerance {tol:?}, penalty {}", penalty.is_some());
+            let c = cramped.best_matches(&set, &s, &queries).unwrap();
+            assert_eq!(
+                a,
+                c,
+                "uncompacted, tolerance {tol:?}, penalty {}",
+                penalty.is_some()
+            );
         }
     }
 }
