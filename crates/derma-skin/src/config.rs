@@ -33,6 +33,42 @@ pub struct SkinConfig {
     pub follicle: FollicleConfig,
     pub eyebrow: FollicleConfig,
     pub material: MaterialConfig,
+    pub detail: DetailConfig,
+}
+
+/// Exemplar micro-detail (see `detail.rs`): off while both paths are empty.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DetailConfig {
+    pub height: String,
+    pub albedo: String,
+    pub tile_size: u32,
+    pub repeat: f32,
+    pub patch: u32,
+    pub highpass_texels: u32,
+    pub height_mm: f32,
+    pub albedo_contrast: f32,
+}
+
+impl Default for DetailConfig {
+    fn default() -> Self {
+        Self {
+            height: String::new(),
+            albedo: String::new(),
+            tile_size: 512,
+            repeat: 8.0,
+            patch: 32,
+            highpass_texels: 6,
+            height_mm: 0.01,
+            albedo_contrast: 1.0,
+        }
+    }
+}
+
+impl DetailConfig {
+    pub fn enabled(&self) -> bool {
+        !self.height.trim().is_empty() || !self.albedo.trim().is_empty()
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -182,6 +218,7 @@ impl Default for SkinConfig {
             follicle: FollicleConfig::default(),
             eyebrow: FollicleConfig::eyebrow(),
             material: MaterialConfig::default(),
+            detail: DetailConfig::default(),
         }
     }
 }
@@ -455,6 +492,14 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("material.roughness_skin", "-", 0.0, 1.0, "glTF perceptual roughness of skin: √α with α ≈ m = 0.3–0.45 (Weyrich et al. 2006, Torrance–Sparrow fits of faces) → 0.6"),
     k("material.roughness_lips", "-", 0.0, 1.0, "roughness on the lips (moist, glossier; authored)"),
     k("material.roughness_hair", "-", 0.0, 1.0, "roughness under hair (authored)"),
+    k("detail.height", "path", 0.0, 0.0, "grey exemplar of fine relief (PNG/EXR; empty = none), synthesised into a tileable tile by derma-synth and added to the height (and so the normals)"),
+    k("detail.albedo", "path", 0.0, 0.0, "colour exemplar of fine skin colour (empty = none; registered with detail.height when both are given); its luminance contrast modulates melanin"),
+    k("detail.tile_size", "texels", 64.0, 4096.0, "side of the synthesised tileable detail tile"),
+    k("detail.repeat", "-", 0.01, 1000.0, "times the tile repeats across the texture's UV range"),
+    k("detail.patch", "texels", 4.0, 128.0, "synthesis patch side N (even; exemplars at least 2N)"),
+    k("detail.highpass_texels", "texels", 1.0, 256.0, "box high-pass radius on the tile: keeps detail finer than 2r + 1 tile texels, below the procedural features"),
+    k("detail.height_mm", "mm", 0.0, 10.0, "RMS of the added relief (authored; skin micro-relief is tens of µm)"),
+    k("detail.albedo_contrast", "-", 0.0, 10.0, "gain of the colour exemplar's relative luminance contrast on melanin (1 = as in the exemplar, to first order)"),
     k("material.specular_f0", "-", 0.0, 1.0, "normal-incidence reflectance ((n−1)/(n+1))² for n = 1.4 (Donner & Jensen 2006) = 0.028"),
 ];
 

@@ -278,10 +278,18 @@ pub fn generate(cfg: &SkinConfig, inputs: &Inputs, progress: &dyn Progress) -> R
     let mut bio = crate::paint::paint(cfg, &surface, &fields, &features, &|rows| {
         progress.advance_to(rows as u64)
     })?;
+    lap("paint", &mut timings);
+    if cfg.detail.enabled() {
+        progress.stage("detail", 1);
+        let path = |p: &str| (!p.trim().is_empty()).then(|| resolve(inputs, p.trim()));
+        let (h, a) = (path(&cfg.detail.height), path(&cfg.detail.albedo));
+        let tile = crate::detail::build(&cfg.detail, h.as_deref(), a.as_deref(), cfg.seed)?;
+        tile.apply(&cfg.detail, &mut bio.texels, bio.width);
+        lap("detail", &mut timings);
+    }
     if let Some(src) = &dilation {
         bio.dilate(src);
     }
-    lap("paint", &mut timings);
 
     progress.stage("convert", 1);
     let analytic;

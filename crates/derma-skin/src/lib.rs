@@ -15,6 +15,7 @@
 //! → [`texture_set`] (render maps through `derma_shading::Appearance`) → files.
 
 pub mod config;
+pub mod detail;
 pub mod features;
 pub mod field;
 pub mod generate;

@@ -16,7 +16,7 @@ const WORKGROUP: usize = 64;
 /// Largest query upload per dispatch, in bytes.
 const MAX_QUERY_BYTES: usize = 64 << 20;
 /// Room for candidates that pass the bound in one compacted search (12 bytes each).
-const MAX_SURVIVORS: usize = 8 << 20;
+const MAX_SURVIVORS: usize = 32 << 20;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
