@@ -119,6 +119,79 @@ pub fn available() -> Option<String> {
     pipelines().ok().map(|(g, _)| g.name.clone())
 }
 
+/// A buffer that is replaced by a larger one (the next power of two) when a batch needs more.
+struct Growing {
+    buf: wgpu::Buffer,
+    size: u64,
+    usage: wgpu::BufferUsages,
+    label: &'static str,
+}
+
+impl Growing {
+    fn new(d: &wgpu::Device, label: &'static str, usage: wgpu::BufferUsages) -> Self {
+        let size = 256;
+        Self {
+            buf: d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            }),
+            size,
+            usage,
+            label,
+        }
+    }
+
+    fn fit(&mut self, d: &wgpu::Device, bytes: u64) {
+        if bytes > self.size {
+            self.size = bytes.next_power_of_two();
+            self.buf = d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(self.label),
+                size: self.size,
+                usage: self.usage,
+                mapped_at_creation: false,
+            });
+        }
+    }
+}
+
+/// The per-batch buffers, kept between batches.
+struct Scratch {
+    params: wgpu::Buffer,
+    qcodes: Growing,
+    info: Growing,
+    penalty: Growing,
+    result: Growing,
+    limits: Growing,
+    survivors: Growing,
+    costs: Growing,
+    staging: Growing,
+}
+
+impl Scratch {
+    fn new(d: &wgpu::Device) -> Self {
+        use wgpu::BufferUsages as U;
+        let input = U::STORAGE | U::COPY_DST;
+        Self {
+            params: d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("params"),
+                size: std::mem::size_of::<Params>() as u64,
+                usage: U::UNIFORM | U::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            qcodes: Growing::new(d, "query codes", input),
+            info: Growing::new(d, "query info", input),
+            penalty: Growing::new(d, "penalty", input),
+            result: Growing::new(d, "result", input | U::COPY_SRC),
+            limits: Growing::new(d, "limits", U::STORAGE),
+            survivors: Growing::new(d, "survivors", U::STORAGE),
+            costs: Growing::new(d, "costs", U::STORAGE),
+            staging: Growing::new(d, "read back", U::MAP_READ | U::COPY_DST),
+        }
+    }
+}
+
 /// An exemplar's codes and block sums for one window side, resident on the GPU.
 struct Resident {
     codes: wgpu::Buffer,
@@ -131,6 +204,7 @@ struct Resident {
 /// window side (one matcher serves one exemplar set).
 pub struct GpuMatcher {
     resident: Mutex<HashMap<(usize, usize), Arc<Resident>>>,
+    scratch: Mutex<Option<Scratch>>,
     name: String,
     max_survivors: usize,
 }
@@ -141,6 +215,7 @@ impl GpuMatcher {
         let (ctx, _) = pipelines()?;
         Ok(Self {
             resident: Mutex::new(HashMap::new()),
+            scratch: Mutex::new(None),
             name: ctx.name.clone(),
             max_survivors: MAX_SURVIVORS,
         })
@@ -270,54 +345,39 @@ impl GpuMatcher {
             capacity: capacity as u32,
         };
         let d = &ctx.device;
-        let init = |label, bytes: &[u8], usage| {
-            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
-                usage,
-            })
-        };
-        let storage = wgpu::BufferUsages::STORAGE;
-        let params_buf = init(
-            "params",
-            bytemuck::bytes_of(&params),
-            wgpu::BufferUsages::UNIFORM,
-        );
-        let qcodes_buf = init("query codes", bytemuck::cast_slice(&qcodes), storage);
-        let info_buf = init("query info", bytemuck::cast_slice(&info), storage);
-        let penalty_buf = init("penalty", bytemuck::cast_slice(&penalty), storage);
-        let result_buf = init(
-            "result",
-            bytemuck::cast_slice(&result),
-            storage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-        );
-        let limits_buf = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("limits"),
-            size: (queries.len() * 4) as u64,
-            usage: storage,
-            mapped_at_creation: false,
-        });
-        let scratch = |label, bytes: usize| {
-            d.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes as u64,
-                usage: storage,
-                mapped_at_creation: false,
-            })
-        };
-        let survivors_buf = scratch("survivors", capacity * 8);
-        let costs_buf = scratch("costs", capacity * 4);
+        // Buffers live as long as the matcher and grow when a batch needs more; one batch runs
+        // at a time, holding them.
+        let mut guard = self
+            .scratch
+            .lock()
+            .map_err(|_| gpu_error("a previous search panicked".into()))?;
+        let sc = guard.get_or_insert_with(|| Scratch::new(d));
+        let bytes = |v: &[u32]| std::mem::size_of_val(v) as u64;
+        sc.qcodes.fit(d, bytes(&qcodes));
+        sc.info.fit(d, bytes(&info));
+        sc.penalty.fit(d, bytes(&penalty));
+        sc.result.fit(d, bytes(&result));
+        sc.limits.fit(d, (queries.len() * 4) as u64);
+        sc.survivors.fit(d, (capacity * 8) as u64);
+        sc.costs.fit(d, (capacity * 4) as u64);
+        sc.staging.fit(d, bytes(&result));
+        let q = &ctx.queue;
+        q.write_buffer(&sc.params, 0, bytemuck::bytes_of(&params));
+        q.write_buffer(&sc.qcodes.buf, 0, bytemuck::cast_slice(&qcodes));
+        q.write_buffer(&sc.info.buf, 0, bytemuck::cast_slice(&info));
+        q.write_buffer(&sc.penalty.buf, 0, bytemuck::cast_slice(&penalty));
+        q.write_buffer(&sc.result.buf, 0, bytemuck::cast_slice(&result));
         let buffers = [
-            &params_buf,
+            &sc.params,
             &res.codes,
             &res.sums,
-            &qcodes_buf,
-            &info_buf,
-            &penalty_buf,
-            &result_buf,
-            &limits_buf,
-            &survivors_buf,
-            &costs_buf,
+            &sc.qcodes.buf,
+            &sc.info.buf,
+            &sc.penalty.buf,
+            &sc.result.buf,
+            &sc.limits.buf,
+            &sc.survivors.buf,
+            &sc.costs.buf,
         ];
         let entries: Vec<wgpu::BindGroupEntry> = buffers
             .iter()
@@ -341,7 +401,9 @@ impl GpuMatcher {
             survivor_groups.min(65_535) as u32,
             survivor_groups.div_ceil(65_535) as u32,
         );
-        let submit = |steps: &[(&wgpu::ComputePipeline, (u32, u32))]| {
+        let result_words = queries.len() * 2 + 1;
+        // Runs the steps, copies the result words into the staging buffer and reads them.
+        let run_steps = |steps: &[(&wgpu::ComputePipeline, (u32, u32))]| -> Result<Vec<u32>> {
             let mut enc = d.create_command_encoder(&Default::default());
             for (pipe, dims) in steps {
                 let mut pass = enc.begin_compute_pass(&Default::default());
@@ -349,33 +411,39 @@ impl GpuMatcher {
                 pass.set_bind_group(0, &group, &[]);
                 pass.dispatch_workgroups(dims.0, dims.1, 1);
             }
-            ctx.queue.submit([enc.finish()]);
+            let size = (result_words * 4) as u64;
+            enc.copy_buffer_to_buffer(&sc.result.buf, 0, &sc.staging.buf, 0, size);
+            q.submit([enc.finish()]);
+            let slice = sc.staging.buf.slice(..size);
+            slice.map_async(wgpu::MapMode::Read, |_| {});
+            d.poll(wgpu::PollType::wait_indefinitely())
+                .map_err(|e| gpu_error(format!("reading results back: {e}")))?;
+            let data = slice
+                .get_mapped_range()
+                .map_err(|e| gpu_error(format!("mapping results: {e}")))?;
+            let out = bytemuck::cast_slice(&data).to_vec();
+            drop(data);
+            sc.staging.buf.unmap();
+            Ok(out)
         };
-        submit(&[
+        let mut out = run_steps(&[
             (&pipes.screen, (groups_x, nq)),
             (&pipes.cost, survivor_dims),
             (&pipes.settle, (settle_groups, 1)),
             (&pipes.choose, survivor_dims),
-        ]);
-        let mut out: Vec<u32> = ctx
-            .read_back(&result_buf, queries.len() * 2 + 1)
-            .map_err(gpu_error)?;
+        ])?;
         if out[queries.len() * 2] as usize > capacity {
             // More passed the bound than there was room for: the uncompacted search.
             tracing::debug!(
                 "GPU search: {} candidates passed the bound, room for {capacity}; searching uncompacted",
                 out[queries.len() * 2]
             );
-            ctx.queue
-                .write_buffer(&result_buf, 0, bytemuck::cast_slice(&result));
-            submit(&[
+            q.write_buffer(&sc.result.buf, 0, bytemuck::cast_slice(&result));
+            out = run_steps(&[
                 (&pipes.min_cost, (groups_x, nq)),
                 (&pipes.settle, (settle_groups, 1)),
                 (&pipes.pick, (groups_x, nq)),
-            ]);
-            out = ctx
-                .read_back(&result_buf, queries.len() * 2)
-                .map_err(gpu_error)?;
+            ])?;
         }
         let t2 = std::time::Instant::now();
         let out = queries

@@ -160,20 +160,41 @@ fn pick(@builtin(global_invocation_id) gid: vec3<u32>) {
 // When more candidates pass than there is room for, the host reruns the batch with
 // `min_cost`/`pick` above (same answer).
 
+// Survivors of one workgroup, gathered in workgroup memory so the global counter takes one
+// atomicAdd per workgroup instead of one per survivor.
+var<workgroup> wg_count: atomic<u32>;
+var<workgroup> wg_base: u32;
+
 @compute @workgroup_size(64)
-fn screen(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn screen(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    if (lid == 0u) { atomicStore(&wg_count, 0u); }
+    workgroupBarrier();
     let q = gid.y;
     let index = gid.x;
-    if (q >= p.n_queries || index >= p.cand_w * p.cand_h) { return; }
-    let x = index % p.cand_w;
-    let y = index / p.cand_w;
-    let upper = tolerance_limit(info[q * p.info_stride + 3u]);
-    let pen = candidate_penalty(q, index);
-    if (pen > upper) { return; }
-    if (bound_exceeds(q, x, y, upper - pen)) { return; }
-    let slot = atomicAdd(&result[2u * p.n_queries], 1u);
-    if (slot < p.capacity) {
-        survivors[slot] = vec2<u32>(q, index);
+    var passes = false;
+    var local = 0u;
+    if (q < p.n_queries && index < p.cand_w * p.cand_h) {
+        let upper = tolerance_limit(info[q * p.info_stride + 3u]);
+        let pen = candidate_penalty(q, index);
+        if (pen <= upper && !bound_exceeds(q, index % p.cand_w, index / p.cand_w, upper - pen)) {
+            passes = true;
+            local = atomicAdd(&wg_count, 1u);
+        }
+    }
+    workgroupBarrier();
+    if (lid == 0u) {
+        let n = atomicLoad(&wg_count);
+        if (n > 0u) { wg_base = atomicAdd(&result[2u * p.n_queries], n); }
+    }
+    workgroupBarrier();
+    if (passes) {
+        let slot = wg_base + local;
+        if (slot < p.capacity) {
+            survivors[slot] = vec2<u32>(q, index);
+        }
     }
 }
 

@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# Exemplar synthesis against the peer (BENCHMARKS.md): derma synth and Embark's texture-synthesis
+# CLI (installed here from crates.io, never vendored) on the same skin exemplars, same machine,
+# same run, at 512², 1024² and 2048² from 128² and 256² exemplars. Times are whole-process wall
+# clock (load, synthesise, write); the quality metrics of both outputs come from one program
+# (derma-synth's 02_quality example: patch SWD, verbatim-copy ratio, seam energy).
+#   bash bench/synth.sh [SIZES...]      (default: 512 1024 2048)
+# Needs ../shared/data (the skin crops) and python3 with Pillow (for cropping and the figure).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+sizes=("${@:-512 1024 2048}")
+read -r -a sizes <<<"${sizes[*]}"
+data=../shared/data
+out=bench/out/synth
+mkdir -p "$out"
+peer_root=target/peer
+if [ ! -x "$peer_root/bin/texture-synthesis" ]; then
+  cargo install --locked texture-synthesis-cli --version 0.8.3 --root "$peer_root"
+fi
+peer="$peer_root/bin/texture-synthesis"
+python3 -c "import PIL" 2>/dev/null || python3 -m pip install -q pillow
+cargo build --release -q -p derma -p derma-synth --example 02_quality
+derma=target/release/derma
+quality=target/release/examples/02_quality
+
+# The exemplars: the forehead displacement crop at 128² and 256², the forehead albedo crop
+# (256×128, colour). Provenance: ../shared/data/skin_exemplars.PROVENANCE.txt.
+python3 - "$data" "$out" <<'PY'
+import sys
+from PIL import Image
+data, out = sys.argv[1], sys.argv[2]
+d = Image.open(f"{data}/skin_displacement_forehead_512.png")
+d.crop((0, 0, 128, 128)).save(f"{out}/disp128.png")
+d.crop((0, 0, 256, 256)).save(f"{out}/disp256.png")
+Image.open(f"{data}/skin_albedo_forehead_256x128.png").convert("RGB").save(f"{out}/albedo256x128.png")
+PY
+
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
+csv="$out/results.csv"
+echo "exemplar,size,tool,seconds,patch_swd,verbatim_copy_ratio,seam_energy" >"$csv"
+wall() { # seconds of wall clock of a command
+  local t0 t1
+  t0=$(date +%s.%N)
+  "$@" >/dev/null 2>&1
+  t1=$(date +%s.%N)
+  python3 -c "print(f'{$t1 - $t0:.2f}')"
+}
+for ex in disp128 disp256 albedo256x128; do
+  for s in "${sizes[@]}"; do
+    d_s=$(wall "$derma" synth -q --exemplar "$out/$ex.png" --size "$s" --seed 1 --out "$out/${ex}_${s}_derma.png")
+    p_s=$(wall "$peer" --no-progress --seed 1 --out-size "$s" --out "$out/${ex}_${s}_peer.png" generate "$out/$ex.png")
+    for tool in derma peer; do
+      secs=$d_s; [ $tool = peer ] && secs=$p_s
+      read -r _ swd _ verb _ seam < <("$quality" "$out/$ex.png" "$out/${ex}_${s}_${tool}.png" 16)
+      echo "$ex,$s,$tool,$secs,$swd,$verb,$seam" >>"$csv"
+    done
+    python3 -c "print(f'$ex {$s}²: derma {$d_s} s, peer {$p_s} s, ratio {$p_s/$d_s:.1f}×')" 2>/dev/null \
+      || echo "$ex ${s}²: derma $d_s s, peer $p_s s"
+  done
+done
+column -s, -t "$csv"
