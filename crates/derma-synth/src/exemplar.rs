@@ -194,13 +194,13 @@ mod tests {
         let b = 3;
         let sums = e.block_sums(b);
         let pw = 20 + 1 - b;
-        for k in 0..2 {
+        for (k, plane) in sums.iter().enumerate() {
             for (y, x) in [(0, 0), (5, 7), (14, 17)] {
                 let direct: u32 = (0..b)
                     .flat_map(|dy| (0..b).map(move |dx| (dx, dy)))
                     .map(|(dx, dy)| e.codes[((y + dy) * 20 + x + dx) * 2 + k] as u32)
                     .sum();
-                assert_eq!(sums[k][y * pw + x], direct as f32);
+                assert_eq!(plane[y * pw + x], direct as f32);
             }
         }
     }

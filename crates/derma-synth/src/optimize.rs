@@ -155,8 +155,10 @@ pub(crate) fn optimise_pass(
             (ex, m.index as usize % cw, m.index as usize / cw)
         })
         .collect();
-    type Row = (Vec<f32>, Vec<(u8, u32)>);
-    let (values, srcs): (Vec<Vec<f32>>, Vec<Vec<(u8, u32)>>) = (0..canvas.height)
+    // One output row: its values and, per texel, (source exemplar, source texel).
+    type Sources = Vec<(u8, u32)>;
+    type Row = (Vec<f32>, Sources);
+    let (values, srcs): (Vec<Vec<f32>>, Vec<Sources>) = (0..canvas.height)
         .into_par_iter()
         .map(|y| {
             let mut row = vec![0f32; width * c];
