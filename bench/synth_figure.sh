@@ -15,11 +15,16 @@ cols = ["exemplar", "derma synth", "texture-synthesis (peer)"]
 fig = Image.new("RGB", (3 * cell + 4 * pad, len(rows) * (cell + label_h + pad) + pad), "white")
 draw = ImageDraw.Draw(fig)
 for r, ex in enumerate(rows):
-    e = Image.open(f"{src}/{ex}.png")
-    grey = e.mode in ("L", "I", "I;16")
-    imgs = [e, Image.open(f"{src}/{ex}_512_derma.png"), Image.open(f"{src}/{ex}_512_peer.png")]
+    def load(path):
+        im = Image.open(path)
+        if im.mode in ("I", "I;16"):  # 16-bit grey (derma writes single channels so): to 8 bits
+            im = im.convert("I").point(lambda v: v * (1 / 257)).convert("L")
+        return im
+    e = load(f"{src}/{ex}.png")
+    grey = e.mode == "L"
+    imgs = [e, load(f"{src}/{ex}_512_derma.png"), load(f"{src}/{ex}_512_peer.png")]
     if grey:
-        vals = sorted(e.convert("L").getdata())
+        vals = sorted(e.convert("L").tobytes())
         lo, hi = vals[len(vals) // 100], vals[len(vals) * 99 // 100]
         lut = [max(0, min(255, round((v - lo) * 255 / max(1, hi - lo)))) for v in range(256)]
         imgs = [i.convert("L").point(lut).convert("RGB") for i in imgs]
@@ -32,7 +37,7 @@ for r, ex in enumerate(rows):
             fig.paste(im, (x + (cell - im.width) // 2, y + label_h + (cell - im.height) // 2))
         else:
             fig.paste(im.resize((cell, cell), Image.LANCZOS), (x, y + label_h))
-        draw.text((x, y + 4), f"{cols[c]}" + (f" ({ex}, {e.width}×{e.height})" if c == 0 else " 512²"), fill="black")
+        draw.text((x, y + 4), f"{cols[c]}" + (f" ({ex}, {e.width}x{e.height})" if c == 0 else ", 512x512"), fill="black")
 fig.save(dst, optimize=True)
 print(dst, fig.size)
 PY
