@@ -89,6 +89,28 @@ impl Gpu {
         Ok(pipeline)
     }
 
+    /// A bind group of whole buffers at bindings 0, 1, 2, … in the order given.
+    pub fn bind_buffers(
+        &self,
+        label: &str,
+        layout: &wgpu::BindGroupLayout,
+        buffers: &[&wgpu::Buffer],
+    ) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(label),
+            layout,
+            entries: &entries,
+        })
+    }
+
     /// Copies the first `len` 32-bit words of `buf` (which needs COPY_SRC) back to the host.
     pub fn read_back<T: bytemuck::Pod>(
         &self,

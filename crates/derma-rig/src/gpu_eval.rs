@@ -124,29 +124,20 @@ impl GpuRig {
             bytemuck::bytes_of(&params),
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        let layout = pipe.get_bind_group_layout(0);
-        let entries: Vec<wgpu::BindGroupEntry> = [
-            &params_buf,
-            &weights_buf,
-            &h0_buf,
-            &mel_buf,
-            &basis_buf,
-            &lut_buf,
-            &hemoglobin_buf,
-            &color_buf,
-        ]
-        .iter()
-        .enumerate()
-        .map(|(i, b)| wgpu::BindGroupEntry {
-            binding: i as u32,
-            resource: b.as_entire_binding(),
-        })
-        .collect();
-        let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("rig"),
-            layout: &layout,
-            entries: &entries,
-        });
+        let bind = ctx.bind_buffers(
+            "rig",
+            &pipe.get_bind_group_layout(0),
+            &[
+                &params_buf,
+                &weights_buf,
+                &h0_buf,
+                &mel_buf,
+                &basis_buf,
+                &lut_buf,
+                &hemoglobin_buf,
+                &color_buf,
+            ],
+        );
         Ok(Self {
             size: (w, h),
             layers,

@@ -379,19 +379,7 @@ impl GpuMatcher {
             &sc.survivors.buf,
             &sc.costs.buf,
         ];
-        let entries: Vec<wgpu::BindGroupEntry> = buffers
-            .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
-        let group = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("search"),
-            layout: &pipes.layout,
-            entries: &entries,
-        });
+        let group = ctx.bind_buffers("search", &pipes.layout, &buffers);
         let t1 = std::time::Instant::now();
         let groups_x = (cw * ch).div_ceil(WORKGROUP) as u32;
         let nq = queries.len() as u32;

@@ -584,6 +584,16 @@ mod tests {
         }
     }
 
+    /// The CPU answer to one query of side 8, best match only.
+    fn best_of(set: &ExemplarSet, q: Query) -> Vec<Match> {
+        let s = Search {
+            w: 8,
+            tol: Tolerance(0),
+            penalty: None,
+        };
+        CpuMatcher.best_matches(set, &s, &[q]).unwrap()
+    }
+
     #[test]
     fn an_exact_window_is_found_at_distance_zero_and_ties_go_to_the_least_key() {
         // A constant exemplar: every window ties, so the least key over all 625 must win.
@@ -596,17 +606,7 @@ mod tests {
             salt: 12345,
             mask: None,
         };
-        let m = CpuMatcher
-            .best_matches(
-                &set,
-                &Search {
-                    w: 8,
-                    tol: Tolerance(0),
-                    penalty: None,
-                },
-                &[q],
-            )
-            .unwrap();
+        let m = best_of(&set, q);
         let want = (0..625u32).min_by_key(|&i| pick_key(12345, i)).unwrap();
         assert_eq!(m[0].index, want);
 
@@ -619,17 +619,7 @@ mod tests {
             salt: 9,
             mask: None,
         };
-        let m = CpuMatcher
-            .best_matches(
-                &set,
-                &Search {
-                    w: 8,
-                    tol: Tolerance(0),
-                    penalty: None,
-                },
-                &[q],
-            )
-            .unwrap();
+        let m = best_of(&set, q);
         assert_eq!(
             m[0],
             Match {
