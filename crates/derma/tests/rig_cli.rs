@@ -2,31 +2,13 @@
 //! and a painted target, eval (colour, hemoglobin, preview), animate with resume, transfer, and
 //! the errors users meet.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn tmp(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("derma-rigcli-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use common::{run, s};
+use std::path::Path;
 
-fn run(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_derma"))
-        .args(args)
-        .arg("--quiet")
-        .output()
-        .unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
+fn tmp(tag: &str) -> std::path::PathBuf {
+    common::tmp("rigcli", tag)
 }
 
 fn write_blood(p: &Path, m: &derma_core::Map) {

@@ -1,34 +1,20 @@
 //! End-to-end tests of `derma synth`: joint channels with files beside the output, the same
 //! seed giving the same bytes, a guide, and the errors users meet.
 
+mod common;
+
+use common::s;
 use derma_core::image_io::{read_rgb, write_png16, write_png8};
 use derma_core::Map;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn tmp(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("derma-synthcli-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::tmp("synthcli", tag)
 }
 
+/// `derma synth ARGS --quiet`.
 fn run(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_derma"))
-        .arg("synth")
-        .args(args)
-        .arg("--quiet")
-        .output()
-        .unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
+    common::run(&[&["synth"], args].concat())
 }
 
 /// A grey "relief" and a registered colour image of the same bumps.
