@@ -117,17 +117,28 @@ impl Gpu {
         buf: &wgpu::Buffer,
         len: usize,
     ) -> Result<Vec<T>, String> {
-        let size = (len * std::mem::size_of::<T>()) as u64;
         let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("read back"),
-            size,
+            size: (len * std::mem::size_of::<T>()) as u64,
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        self.read_back_with(buf, &staging, len)
+    }
+
+    /// As [`Gpu::read_back`], through a staging buffer the caller keeps (MAP_READ | COPY_DST,
+    /// at least `len` elements), for read-backs on a hot path.
+    pub fn read_back_with<T: bytemuck::Pod>(
+        &self,
+        buf: &wgpu::Buffer,
+        staging: &wgpu::Buffer,
+        len: usize,
+    ) -> Result<Vec<T>, String> {
+        let size = (len * std::mem::size_of::<T>()) as u64;
         let mut enc = self.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(buf, 0, &staging, 0, size);
+        enc.copy_buffer_to_buffer(buf, 0, staging, 0, size);
         self.queue.submit([enc.finish()]);
-        let slice = staging.slice(..);
+        let slice = staging.slice(..size);
         slice.map_async(wgpu::MapMode::Read, |_| {});
         self.device
             .poll(wgpu::PollType::wait_indefinitely())

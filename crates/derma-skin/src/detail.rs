@@ -21,8 +21,8 @@ use std::path::Path;
 /// contrast (L_hp / L_lp), each present when its exemplar was given.
 pub struct DetailTile {
     pub size: usize,
-    pub height: Option<Vec<f32>>,
-    pub contrast: Option<Vec<f32>>,
+    pub height: Option<Map>,
+    pub contrast: Option<Map>,
 }
 
 fn config_error(detail: String) -> SkinError {
@@ -91,7 +91,8 @@ pub fn build(
         let hp = high_pass(h.data(), size, radius);
         let rms = (hp.iter().map(|v| (*v as f64).powi(2)).sum::<f64>() / hp.len() as f64).sqrt();
         let scale = if rms > 0.0 { (1.0 / rms) as f32 } else { 0.0 };
-        hp.into_iter().map(|v| v * scale).collect()
+        let d = hp.into_iter().map(|v| v * scale).collect();
+        Map::from_vec(size, size, d).expect("tile size")
     });
     let contrast = albedo_channels.map(|_| {
         let lum: Vec<f32> = (0..size * size)
@@ -103,10 +104,12 @@ pub fn build(
             })
             .collect();
         let low = box_blur_wrapped(&lum, size, radius);
-        lum.iter()
+        let contrast = lum
+            .iter()
             .zip(&low)
             .map(|(&l, &m)| if m > 1e-6 { (l - m) / m } else { 0.0 })
-            .collect()
+            .collect();
+        Map::from_vec(size, size, contrast).expect("tile size")
     });
     Ok(DetailTile {
         size,
@@ -144,18 +147,10 @@ fn box_blur_wrapped(v: &[f32], n: usize, r: usize) -> Vec<f32> {
 }
 
 impl DetailTile {
-    /// Bilinear, wrapping sample of `data` at tile coordinates (tx, ty).
-    fn sample(&self, data: &[f32], tx: f32, ty: f32) -> f32 {
-        let n = self.size;
-        let (fx, fy) = (tx - 0.5, ty - 0.5);
-        let (x0, y0) = (fx.floor(), fy.floor());
-        let (ax, ay) = (fx - x0, fy - y0);
-        let wrap = |v: f32| (v as i64).rem_euclid(n as i64) as usize;
-        let (x0, y0) = (wrap(x0), wrap(y0));
-        let (x1, y1) = ((x0 + 1) % n, (y0 + 1) % n);
-        let v = |x: usize, y: usize| data[y * n + x];
-        (v(x0, y0) * (1.0 - ax) + v(x1, y0) * ax) * (1.0 - ay)
-            + (v(x0, y1) * (1.0 - ax) + v(x1, y1) * ax) * ay
+    /// Bilinear, wrapping sample of a tile map at tile coordinates (tx, ty) (texel centres at
+    /// half-integers).
+    fn sample(map: &Map, tx: f32, ty: f32) -> f32 {
+        map.sample_texel(tx - 0.5, ty - 0.5, true)
     }
 
     /// Adds the detail to painted texels of a `width × height` texture (texel centres mapped
@@ -171,10 +166,10 @@ impl DetailTile {
                 for (x, t) in row.iter_mut().enumerate() {
                     let (tx, ty) = ((x as f32 + 0.5) * scale_x, (y as f32 + 0.5) * scale_y);
                     if let Some(h) = &self.height {
-                        t.height_mm += cfg.height_mm * self.sample(h, tx, ty);
+                        t.height_mm += cfg.height_mm * Self::sample(h, tx, ty);
                     }
                     if let Some(c) = &self.contrast {
-                        let f = 1.0 - cfg.albedo_contrast * self.sample(c, tx, ty);
+                        let f = 1.0 - cfg.albedo_contrast * Self::sample(c, tx, ty);
                         t.melanin = (t.melanin * f.max(0.0)).clamp(0.0, 1.0);
                     }
                 }
@@ -283,15 +278,10 @@ mod tests {
 
     #[test]
     fn sampling_wraps_and_interpolates() {
-        let tile = DetailTile {
-            size: 4,
-            height: None,
-            contrast: None,
-        };
-        let data: Vec<f32> = (0..16).map(|i| (i % 4) as f32).collect();
+        let data = Map::from_vec(4, 4, (0..16).map(|i| (i % 4) as f32).collect()).unwrap();
         // Texel centres return texel values; between the last and the first column, the mean.
-        assert_eq!(tile.sample(&data, 1.5, 0.5), 1.0);
-        assert!((tile.sample(&data, 4.0, 0.5) - 1.5).abs() < 1e-6);
-        assert_eq!(tile.sample(&data, 5.5, 4.5), 1.0);
+        assert_eq!(DetailTile::sample(&data, 1.5, 0.5), 1.0);
+        assert!((DetailTile::sample(&data, 4.0, 0.5) - 1.5).abs() < 1e-6);
+        assert_eq!(DetailTile::sample(&data, 5.5, 4.5), 1.0);
     }
 }

@@ -118,8 +118,7 @@ pub struct ExemplarSet {
 
 impl ExemplarSet {
     /// Checks the exemplars agree in channels, hold finite values and are large enough for
-    /// patches of side `patch` (at least twice the patch in each direction, so the search has
-    /// a real choice: (side − patch + 1)² ≥ (patch + 1)² candidate positions).
+    /// patches of side `patch` (see [`ExemplarSet::check_patch`]).
     pub fn new(textures: Vec<Texture>, patch: usize) -> Result<Self> {
         let first = textures
             .first()
@@ -132,19 +131,7 @@ impl ExemplarSet {
                     format!("has {} channels, the first has {c}", t.channels),
                 ));
             }
-            if t.width < 2 * patch || t.height < 2 * patch {
-                return Err(invalid(
-                    format!("exemplar {}", i + 1),
-                    format!(
-                        "is {}×{}, too small for {patch}×{patch} patches: it must be at least \
-                         {}×{} (or choose a smaller --patch)",
-                        t.width,
-                        t.height,
-                        2 * patch,
-                        2 * patch
-                    ),
-                ));
-            }
+            check_size(i, t.width, t.height, patch)?;
             if let Some(j) = t.data.iter().position(|v| !v.is_finite()) {
                 return Err(invalid(
                     format!("exemplar {}", i + 1),
@@ -174,6 +161,53 @@ impl ExemplarSet {
     pub fn channels(&self) -> usize {
         self.exemplars[0].channels()
     }
+
+    /// Mean and variance of each channel's codes over all exemplars.
+    pub fn code_stats(&self) -> Vec<(f64, f64)> {
+        let c = self.channels();
+        let mut sum = vec![0f64; c];
+        let mut sq = vec![0f64; c];
+        let mut n = 0f64;
+        for e in &self.exemplars {
+            for px in e.codes.chunks_exact(c) {
+                for k in 0..c {
+                    sum[k] += px[k] as f64;
+                    sq[k] += (px[k] as f64).powi(2);
+                }
+            }
+            n += (e.width() * e.height()) as f64;
+        }
+        (0..c)
+            .map(|k| {
+                let mean = sum[k] / n;
+                (mean, (sq[k] / n - mean * mean).max(0.0))
+            })
+            .collect()
+    }
+
+    /// Checks every exemplar is large enough for patches of side `patch`.
+    pub fn check_patch(&self, patch: usize) -> Result<()> {
+        for (i, e) in self.exemplars.iter().enumerate() {
+            check_size(i, e.width(), e.height(), patch)?;
+        }
+        Ok(())
+    }
+}
+
+/// Exemplar `i` (0-based) must be at least twice the patch on each side, so the search has a
+/// real choice: (side − patch + 1)² ≥ (patch + 1)² candidate positions.
+fn check_size(i: usize, width: usize, height: usize, patch: usize) -> Result<()> {
+    if width < 2 * patch || height < 2 * patch {
+        return Err(invalid(
+            format!("exemplar {}", i + 1),
+            format!(
+                "is {width}×{height}, too small for {patch}×{patch} patches: it must be at least \
+                 {0}×{0} (or choose a smaller --patch)",
+                2 * patch
+            ),
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

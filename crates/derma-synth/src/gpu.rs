@@ -4,7 +4,10 @@
 
 use crate::error::{invalid, Result, SynthError};
 use crate::exemplar::ExemplarSet;
-use crate::search::{index_of_key, initial_cost, ssd_at, Match, Matcher, Query, Search};
+use crate::search::{
+    index_of_key, initial_cost, known_block_sums, known_texels, ssd_at, Match, Matcher, Query,
+    Search,
+};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -200,10 +203,10 @@ struct Resident {
     plane_len: usize,
 }
 
-/// The GPU matcher. Exemplar uploads are kept for the matcher's life, keyed by exemplar and
-/// window side (one matcher serves one exemplar set).
+/// The GPU matcher. Exemplar uploads are kept for the matcher's life, keyed by the exemplar's
+/// codes (address and length) and the window side; one matcher is meant for one exemplar set.
 pub struct GpuMatcher {
-    resident: Mutex<HashMap<(usize, usize), Arc<Resident>>>,
+    resident: Mutex<HashMap<(usize, usize, usize), Arc<Resident>>>,
     scratch: Mutex<Option<Scratch>>,
     name: String,
     max_survivors: usize,
@@ -235,11 +238,12 @@ impl GpuMatcher {
             .resident
             .lock()
             .map_err(|_| gpu_error("a previous search panicked".into()))?;
-        if let Some(r) = map.get(&(ex, w)) {
+        let e = &set.exemplars[ex];
+        let key = (e.codes.as_ptr() as usize, e.codes.len(), w);
+        if let Some(r) = map.get(&key) {
             return Ok(r.clone());
         }
         let (ctx, _) = pipelines()?;
-        let e = &set.exemplars[ex];
         let half = w / 2;
         let plane_w = e.width() + 1 - half;
         let plane_len = plane_w * (e.height() + 1 - half);
@@ -259,11 +263,12 @@ impl GpuMatcher {
             plane_w,
             plane_len,
         });
-        map.insert((ex, w), r.clone());
+        map.insert(key, r.clone());
         Ok(r)
     }
 
-    /// One dispatch pair for queries of one exemplar.
+    /// One batch of queries of one exemplar: the compacted search, or the uncompacted one when
+    /// more candidates survive the bound than there is room for.
     fn run(
         &self,
         set: &ExemplarSet,
@@ -291,27 +296,16 @@ impl GpuMatcher {
                     .enumerate()
                     .map(|(i, &v)| if known(i / c) { v as u32 } else { 256 })
                     .collect();
+                // The fully known quadrants (bit q of the mask) and their sums, as on the CPU.
                 let mut quad_mask = 0u32;
                 let mut quad_sums = vec![0f32; 4 * c];
-                for quad in 0..4 {
-                    let (ox, oy) = ((quad & 1) * half, (quad >> 1) * half);
-                    let full =
-                        (0..half).all(|dy| (0..half).all(|dx| known((oy + dy) * w + ox + dx)));
-                    if !full {
-                        continue;
-                    }
+                for (ox, oy, sum) in known_block_sums(q, w, c, half) {
+                    let quad = usize::from(ox > 0) + 2 * usize::from(oy > 0);
                     quad_mask |= 1 << quad;
-                    for dy in 0..half {
-                        for dx in 0..half {
-                            let t = (oy + dy) * w + ox + dx;
-                            for k in 0..c {
-                                quad_sums[quad * c + k] += q.codes[t * c + k] as f32;
-                            }
-                        }
-                    }
+                    quad_sums[quad * c..(quad + 1) * c].copy_from_slice(&sum);
                 }
                 let first = initial_cost(set, s, q);
-                let mut info = vec![crate::search::known_texels(q, w), q.salt, quad_mask, first];
+                let mut info = vec![known_texels(q, w), q.salt, quad_mask, first];
                 info.extend(quad_sums.iter().map(|v| v.to_bits()));
                 (codes, info, first)
             })
@@ -329,7 +323,7 @@ impl GpuMatcher {
         let candidates = cw * ch;
         let capacity = (queries.len() * candidates / 4)
             .clamp(self.max_survivors.min(1 << 16), self.max_survivors);
-        let penalty: Vec<u32> = s.penalty.map_or_else(|| vec![0], |p| p[ex].clone());
+        let penalty: &[u32] = s.penalty.map_or(&[0], |p| &p[ex]);
         let params = Params {
             ex_width: e.width() as u32,
             channels: c as u32,
@@ -355,7 +349,7 @@ impl GpuMatcher {
         let bytes = |v: &[u32]| std::mem::size_of_val(v) as u64;
         sc.qcodes.fit(d, bytes(&qcodes));
         sc.info.fit(d, bytes(&info));
-        sc.penalty.fit(d, bytes(&penalty));
+        sc.penalty.fit(d, bytes(penalty));
         sc.result.fit(d, bytes(&result));
         sc.limits.fit(d, (queries.len() * 4) as u64);
         sc.survivors.fit(d, (capacity * 8) as u64);
@@ -365,7 +359,7 @@ impl GpuMatcher {
         q.write_buffer(&sc.params, 0, bytemuck::bytes_of(&params));
         q.write_buffer(&sc.qcodes.buf, 0, bytemuck::cast_slice(&qcodes));
         q.write_buffer(&sc.info.buf, 0, bytemuck::cast_slice(&info));
-        q.write_buffer(&sc.penalty.buf, 0, bytemuck::cast_slice(&penalty));
+        q.write_buffer(&sc.penalty.buf, 0, bytemuck::cast_slice(penalty));
         q.write_buffer(&sc.result.buf, 0, bytemuck::cast_slice(&result));
         let buffers = [
             &sc.params,
@@ -390,7 +384,7 @@ impl GpuMatcher {
             survivor_groups.div_ceil(65_535) as u32,
         );
         let result_words = queries.len() * 2 + 1;
-        // Runs the steps, copies the result words into the staging buffer and reads them.
+        // Runs the steps and reads the result words back through the kept staging buffer.
         let run_steps = |steps: &[(&wgpu::ComputePipeline, (u32, u32))]| -> Result<Vec<u32>> {
             let mut enc = d.create_command_encoder(&Default::default());
             for (pipe, dims) in steps {
@@ -399,20 +393,9 @@ impl GpuMatcher {
                 pass.set_bind_group(0, &group, &[]);
                 pass.dispatch_workgroups(dims.0, dims.1, 1);
             }
-            let size = (result_words * 4) as u64;
-            enc.copy_buffer_to_buffer(&sc.result.buf, 0, &sc.staging.buf, 0, size);
             q.submit([enc.finish()]);
-            let slice = sc.staging.buf.slice(..size);
-            slice.map_async(wgpu::MapMode::Read, |_| {});
-            d.poll(wgpu::PollType::wait_indefinitely())
-                .map_err(|e| gpu_error(format!("reading results back: {e}")))?;
-            let data = slice
-                .get_mapped_range()
-                .map_err(|e| gpu_error(format!("mapping results: {e}")))?;
-            let out = bytemuck::cast_slice(&data).to_vec();
-            drop(data);
-            sc.staging.buf.unmap();
-            Ok(out)
+            ctx.read_back_with(&sc.result.buf, &sc.staging.buf, result_words)
+                .map_err(gpu_error)
         };
         let mut out = run_steps(&[
             (&pipes.screen, (groups_x, nq)),
@@ -440,19 +423,16 @@ impl GpuMatcher {
             .map(|(i, q)| {
                 let key = out[2 * i + 1];
                 let index = index_of_key(q.salt, key);
-                if key == u32::MAX && index as usize >= cw * ch {
-                    return Err(gpu_error("the search returned no position".into()));
-                }
                 if index as usize >= cw * ch {
                     return Err(gpu_error(format!(
-                        "the search returned position {index} of {}",
+                        "the search returned key {key}, position {index} of {}",
                         cw * ch
                     )));
                 }
                 let (x, y) = (index as usize % cw, index as usize / cw);
-                let ssd = ssd_at(e, w, q, x, y)
-                    + s.penalty_of(ex, index as usize, crate::search::known_texels(q, w));
-                Ok(Match { ssd, index })
+                let cost =
+                    ssd_at(e, w, q, x, y) + s.penalty_of(ex, index as usize, known_texels(q, w));
+                Ok(Match { cost, index })
             })
             .collect();
         tracing::debug!(
@@ -471,7 +451,7 @@ impl Matcher for GpuMatcher {
         let c = set.channels();
         let per_query = s.w * s.w * c * 4;
         let chunk = (MAX_QUERY_BYTES / per_query).clamp(1, 65_535);
-        let mut out = vec![Match { ssd: 0, index: 0 }; queries.len()];
+        let mut out = vec![Match { cost: 0, index: 0 }; queries.len()];
         for ex in 0..set.exemplars.len() {
             let mine: Vec<usize> = (0..queries.len())
                 .filter(|&i| queries[i].exemplar as usize == ex)

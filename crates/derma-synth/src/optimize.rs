@@ -87,45 +87,44 @@ pub(crate) fn optimise_pass(
         progress.advance(chunk.len() as u64);
     }
 
-    // Weights: P from the histogram of match bins, then the robust factor.
-    let bins: Vec<(usize, usize, usize)> = matches
+    // Where each match lies: (exemplar, x, y) of its window.
+    let placed: Vec<(usize, usize, usize)> = matches
         .iter()
         .zip(&exemplar_of)
         .map(|(m, &ex)| {
-            let e = &set.exemplars[ex];
-            let cw = e.width() + 1 - w;
-            let (mx, my) = (m.index as usize % cw, m.index as usize / cw);
-            (ex, (mx + w / 2) / w, (my + w / 2) / w)
+            let cw = set.exemplars[ex].width() + 1 - w;
+            (ex, m.index as usize % cw, m.index as usize / cw)
         })
         .collect();
+
+    // Weights: P from the histogram of the matches over w × w bins of the exemplars (numbered
+    // exemplar by exemplar), then the robust factor.
     let bins_x: Vec<usize> = set.exemplars.iter().map(|e| e.width() / w + 1).collect();
-    let offsets: Vec<usize> = set
+    let first_bin: Vec<usize> = set
         .exemplars
         .iter()
         .scan(0, |acc, e| {
-            let o = *acc;
+            let first = *acc;
             *acc += (e.width() / w + 1) * (e.height() / w + 1);
-            Some(o)
+            Some(first)
         })
         .collect();
-    let total_bins: usize = set
-        .exemplars
+    let bin_of: Vec<usize> = placed
         .iter()
-        .map(|e| (e.width() / w + 1) * (e.height() / w + 1))
-        .sum();
-    let bin_index = |&(ex, bx, by): &(usize, usize, usize)| offsets[ex] + by * bins_x[ex] + bx;
-    let mut hist = vec![0u32; total_bins];
-    for b in &bins {
-        hist[bin_index(b)] += 1;
+        .map(|&(ex, mx, my)| first_bin[ex] + (my + w / 2) / w * bins_x[ex] + (mx + w / 2) / w)
+        .collect();
+    let mut hist = vec![0u32; bin_of.iter().max().map_or(0, |&b| b + 1)];
+    for &b in &bin_of {
+        hist[b] += 1;
     }
     let n_windows = windows.len() as f64;
     let values_per_window = (w * w * c) as f64;
     let weights: Vec<f32> = matches
         .iter()
-        .zip(&bins)
-        .map(|(m, b)| {
-            let p = hist[bin_index(b)] as f64 / n_windows;
-            let rms = (m.ssd as f64 / values_per_window).sqrt() / 255.0;
+        .zip(&bin_of)
+        .map(|(m, &b)| {
+            let p = hist[b] as f64 / n_windows;
+            let rms = (m.cost as f64 / values_per_window).sqrt() / 255.0;
             (p * rms.max(1.0 / 255.0).powf(r as f64 - 2.0)) as f32
         })
         .collect();
@@ -147,14 +146,6 @@ pub(crate) fn optimise_pass(
     // E-step, texel by texel in a fixed order of windows: the same sums on any thread count.
     let nwx = xs.len();
     let width = canvas.width;
-    let placed: Vec<(usize, usize, usize)> = matches
-        .iter()
-        .zip(&exemplar_of)
-        .map(|(m, &ex)| {
-            let cw = set.exemplars[ex].width() + 1 - w;
-            (ex, m.index as usize % cw, m.index as usize / cw)
-        })
-        .collect();
     // One output row: its values and, per texel, (source exemplar, source texel).
     type Sources = Vec<(u8, u32)>;
     type Row = (Vec<f32>, Sources);

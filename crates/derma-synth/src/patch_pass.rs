@@ -34,24 +34,13 @@ const PICK_STREAM: u32 = 0x5e_0002;
 /// standard deviation of the exemplars' codes, so the noise is in the exemplars' range.
 pub(crate) fn initialise_noise(canvas: &mut Canvas, set: &ExemplarSet, seed: u64) {
     let c = canvas.channels;
-    let mut mean = vec![0f64; c];
-    let mut sq = vec![0f64; c];
-    let mut n = 0f64;
-    for e in &set.exemplars {
-        for px in e.codes.chunks_exact(c) {
-            for k in 0..c {
-                mean[k] += px[k] as f64;
-                sq[k] += (px[k] as f64).powi(2);
-            }
-        }
-        n += (e.width() * e.height()) as f64;
-    }
+    let stats = set.code_stats();
     let rng = Philox::new(seed, NOISE_STREAM);
     let q = &set.quantizer;
     for (i, code) in canvas.codes.iter_mut().enumerate() {
         let k = i % c;
-        let mu = mean[k] / n;
-        let sigma = (sq[k] / n - mu * mu).max(0.0).sqrt();
+        let (mu, var) = stats[k];
+        let sigma = var.sqrt();
         let z = rng.normal2(i as u64, 0)[0] as f64;
         *code = (mu + sigma * z).round().clamp(0.0, 255.0) as u8;
         canvas.values[i] = q.dequantize(k, *code as f32);
@@ -143,19 +132,7 @@ struct Occurrence {
 
 impl Occurrence {
     fn new(set: &ExemplarSet, n: usize, lambda: f64) -> Self {
-        let c = set.channels();
-        let mut var = 0f64;
-        for k in 0..c {
-            let (mut s, mut s2, mut m) = (0f64, 0f64, 0f64);
-            for e in &set.exemplars {
-                for px in e.codes.chunks_exact(c) {
-                    s += px[k] as f64;
-                    s2 += (px[k] as f64).powi(2);
-                    m += 1.0;
-                }
-            }
-            var += (s2 / m - (s / m).powi(2)).max(0.0);
-        }
+        let var: f64 = set.code_stats().iter().map(|s| s.1).sum();
         Self {
             lambda,
             n,

@@ -2,23 +2,25 @@
 //! least L2 distance to a query window, over every position. Exact, so CPU and GPU agree.
 //!
 //! Definition (both backends compute exactly this): windows are `w × w` texels of 8-bit codes
-//! (see [`crate::exemplar`]); the distance d is the integer sum of squared code differences
-//! over the query's known texels (all, or those its mask marks) and all channels; with d* the least distance over all positions and
+//! (see [`crate::exemplar`]). The distance d is the integer sum of squared code differences
+//! over the query's known texels (all, or those its mask marks) and all channels; where the
+//! patch pass asks for it, an occurrence penalty `penalty[index] · known texels` is added
+//! (see [`crate::patch_pass`]), giving the cost. With d* the least cost over all positions and
 //! T = d* + ⌊d* · ε₁₆ / 2¹⁶⌋ (ε₁₆ = ε·2¹⁶, the tolerance), the answer is, among the positions
-//! with d ≤ T, the one with the least key `pick_key(salt, index)`, index =
+//! with cost ≤ T, the one with the least key `pick_key(salt, index)`, index =
 //! `y · (exemplar width − w + 1) + x`. The key is a bijection of the index for a given salt,
 //! so the answer is unique; integers make every sum independent of summation order.
-//! Optionally a per-candidate occurrence penalty is added to d first (see
-//! [`crate::patch_pass`]): `penalty[index] · known texels`.
 //! With ε = 0 this is the best match of eq. 1, ties broken at random; with ε > 0 it is image
 //! quilting's choice among the near-best (Efros & Freeman 2001 §2.1, the paper's ref. [8]),
 //! which keeps a deterministic best match from copying the same chain of patches over and over.
 //!
 //! The CPU search prunes without changing that answer (successive elimination, Li & Salari
-//! 1995): the sums `S` of a window's fully known `w/2 × w/2` quadrants bound the distance from
-//! below, Σ (S_e − S_q)² / (w/2)² ≤ distance (Cauchy–Schwarz on each quadrant), and a candidate
-//! whose bound exceeds the limit of the best distance found so far cannot be chosen. The search starts from a coherent
-//! guess (the continuation of the neighbouring texels' sources), which makes the bound tight.
+//! 1995): the sums `S` of a window's fully known `b × b` blocks bound the distance from below,
+//! Σ (S_e − S_q)² / b² ≤ distance (Cauchy–Schwarz on each block). It bounds with the w/2
+//! quadrants (16 candidates at a time, vectorised), then with w/4 blocks, then computes the
+//! exact distance with early exit; a candidate whose bound exceeds the limit of the best cost
+//! found so far cannot be chosen. It starts from coherent guesses (positions continuing the
+//! neighbouring texels' sources), which make the first limit tight.
 
 use crate::error::Result;
 use crate::exemplar::{Exemplar, ExemplarSet};
@@ -103,11 +105,20 @@ const fn inverse_mod_2_32(a: u32) -> u32 {
     x
 }
 
-/// The answer: position index and its distance.
+/// The answer: position index and its cost (distance plus any occurrence penalty).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Match {
-    pub ssd: u32,
+    pub cost: u32,
     pub index: u32,
+}
+
+/// The threshold of the bound test `bound > limit · b²` in f32, with a margin that covers the
+/// rounding of a sum of n squares of exact integers (relative error ≤ n · 2⁻²⁴): a bound has
+/// at most 16 · channels terms, which [`window_fits`] keeps ≤ 33 024 (w ≥ 4), so the error is
+/// ≤ 2⁻⁹ < 2⁻⁸, and a candidate is only ever skipped when its distance exceeds `limit`.
+#[inline]
+pub(crate) fn bound_limit(limit: u32, b: usize) -> f32 {
+    (limit as f64 * (b * b) as f64 * (1.0 + 1.0 / 256.0) + 1.0) as f32
 }
 
 /// Largest window the 32-bit cost can hold: w² · channels · 255² < 2³¹, leaving the other half
@@ -237,31 +248,51 @@ pub fn best_match_brute(set: &ExemplarSet, s: &Search, q: &Query) -> Match {
         .collect();
     let best = all.iter().map(|a| a.0).min().unwrap_or(u32::MAX);
     let limit = s.tol.limit(best);
-    let (ssd, index) = all
+    choose(q.salt, all, limit)
+}
+
+/// Among `(cost, index)` candidates, the one with cost ≤ `limit` and the least key.
+fn choose(salt: u32, candidates: Vec<(u32, u32)>, limit: u32) -> Match {
+    let (cost, index) = candidates
         .into_iter()
         .filter(|a| a.0 <= limit)
-        .min_by_key(|a| pick_key(q.salt, a.1))
-        .expect("at least one candidate");
-    Match { ssd, index }
+        .min_by_key(|a| pick_key(salt, a.1))
+        .expect("at least one candidate within the limit");
+    Match { cost, index }
+}
+
+/// A query's guesses, clamped to the candidate range and without repeats, with their costs.
+fn guess_costs(e: &Exemplar, s: &Search, q: &Query, runs: &Runs) -> Vec<(u32, u32)> {
+    let (cw, ch) = e.candidates(s.w);
+    let known = known_texels(q, s.w);
+    let mut guesses: Vec<usize> = q
+        .guesses
+        .iter()
+        .map(|&g| (g as usize).min(cw * ch - 1))
+        .collect();
+    guesses.sort_unstable();
+    guesses.dedup();
+    guesses
+        .into_iter()
+        .map(|g| {
+            let d = ssd_at_bounded(e, runs, &q.codes, g % cw, g / cw, u32::MAX);
+            (d + s.penalty_of(q.exemplar as usize, g, known), g as u32)
+        })
+        .collect()
 }
 
 /// The least cost among a query's guesses: where both backends start (an upper bound of d*).
 pub fn initial_cost(set: &ExemplarSet, s: &Search, q: &Query) -> u32 {
     let e = &set.exemplars[q.exemplar as usize];
-    let (cw, ch) = e.candidates(s.w);
-    let known = known_texels(q, s.w);
-    q.guesses
+    guess_costs(e, s, q, &Runs::of(q, s.w))
         .iter()
-        .map(|&g| {
-            let g = (g as usize).min(cw * ch - 1);
-            ssd_at(e, s.w, q, g % cw, g / cw) + s.penalty_of(q.exemplar as usize, g, known)
-        })
+        .map(|g| g.0)
         .min()
         .unwrap_or(u32::MAX)
 }
 
 /// The CPU backend: queries spread over all cores with rayon; each search prunes with the
-/// quadrant-sum bound. Block sums are prepared once per (exemplar, window side).
+/// block-sum bounds. The exemplars' block sums are prepared once per batch of queries.
 pub struct CpuMatcher;
 
 /// Quadrant block sums of each exemplar for one window side.
@@ -294,7 +325,12 @@ impl Prepared {
 
 /// The sums of the query's fully known `b × b` blocks (of a window of side `w` tiled by
 /// them): (x offset, y offset, one sum per channel), as exact integers in f32.
-fn known_block_sums(q: &Query, w: usize, c: usize, b: usize) -> Vec<(usize, usize, Vec<f32>)> {
+pub(crate) fn known_block_sums(
+    q: &Query,
+    w: usize,
+    c: usize,
+    b: usize,
+) -> Vec<(usize, usize, Vec<f32>)> {
     let is_known = |dx: usize, dy: usize| q.mask.as_ref().is_none_or(|m| m[dy * w + dx] != 0);
     let mut out = Vec::new();
     for oy in (0..w).step_by(b) {
@@ -386,31 +422,14 @@ fn best_match_pruned_body(set: &ExemplarSet, prep: &Prepared, s: &Search, q: &Qu
     let fine_sums = prep.fine_sums.get(ex);
     let runs = Runs::of(q, w);
 
-    // Prune when bound · b² > limit · b² · (1 + 2⁻¹⁶) + 1: the margin covers f32 rounding of
-    // the sum of squares of exact integers (relative error ≤ terms · 2⁻²⁴ ≪ 2⁻¹⁶).
-    let scaled =
-        |limit: u32, b: usize| (limit as f64 * (b * b) as f64 * (1.0 + 1.0 / 65536.0) + 1.0) as f32;
-
-    let mut guesses: Vec<usize> = q
-        .guesses
-        .iter()
-        .map(|&g| (g as usize).min(cw * ch - 1))
-        .collect();
-    guesses.sort_unstable();
-    guesses.dedup();
     // Candidates are kept while their cost is within the tolerance of the best so far; as
     // the best only falls, every candidate within the final limit is among them.
-    let mut kept: Vec<(u32, u32)> = guesses
-        .iter()
-        .map(|&g| {
-            let d = ssd_at_bounded(e, &runs, &q.codes, g % cw, g / cw, u32::MAX);
-            (d + s.penalty_of(ex, g, known), g as u32)
-        })
-        .collect();
+    let mut kept = guess_costs(e, s, q, &runs);
+    let guesses: Vec<usize> = kept.iter().map(|g| g.1 as usize).collect();
     let mut best = kept.iter().map(|k| k.0).min().unwrap_or(u32::MAX);
     let mut limit = tol.limit(best);
-    let mut coarse_limit = scaled(limit, half);
-    let mut fine_limit = scaled(limit, fine);
+    let mut coarse_limit = bound_limit(limit, half);
+    let mut fine_limit = bound_limit(limit, fine);
     let penalties = s.penalty.map(|p| &p[ex]);
     let mut acc = vec![0f32; cw];
     for y in 0..ch {
@@ -462,8 +481,8 @@ fn best_match_pruned_body(set: &ExemplarSet, prep: &Prepared, s: &Search, q: &Qu
                 let own_limit = if pen == 0 {
                     limit
                 } else if pen > limit
-                    || bound > scaled(limit - pen, half)
-                    || fine_bound[j] > scaled(limit - pen, fine)
+                    || bound > bound_limit(limit - pen, half)
+                    || fine_bound[j] > bound_limit(limit - pen, fine)
                 {
                     continue;
                 } else {
@@ -481,18 +500,13 @@ fn best_match_pruned_body(set: &ExemplarSet, prep: &Prepared, s: &Search, q: &Qu
                 if cost < best {
                     best = cost;
                     limit = tol.limit(best);
-                    coarse_limit = scaled(limit, half);
-                    fine_limit = scaled(limit, fine);
+                    coarse_limit = bound_limit(limit, half);
+                    fine_limit = bound_limit(limit, fine);
                 }
             }
         }
     }
-    let (ssd, index) = kept
-        .into_iter()
-        .filter(|a| a.0 <= limit)
-        .min_by_key(|a| pick_key(q.salt, a.1))
-        .expect("the guesses are always kept");
-    Match { ssd, index }
+    choose(q.salt, kept, limit)
 }
 
 #[cfg(test)]
@@ -623,7 +637,7 @@ mod tests {
         assert_eq!(
             m[0],
             Match {
-                ssd: 0,
+                cost: 0,
                 index: (21 * 33 + 13) as u32
             }
         );

@@ -81,8 +81,9 @@ fn bound_exceeds(q: u32, x: u32, y: u32, limit: u32) -> bool {
             bound += d * d;
         }
     }
+    // The CPU's margin (search.rs, bound_limit): covers f32 rounding of the sum of squares.
     let area = f32(half * half);
-    return bound > f32(limit) * area * (1.0 + 1.0 / 65536.0) + 1.0;
+    return bound > f32(limit) * area * (1.0 + 1.0 / 256.0) + 1.0;
 }
 
 // The exact distance, or any value above `limit` once the partial sum passes it.
@@ -110,21 +111,28 @@ fn candidate_penalty(q: u32, index: u32) -> u32 {
     return penalty[index] * info[q * p.info_stride];
 }
 
+const NONE: u32 = 0xffffffffu;
+
+// The cost of candidate `index` for query q when it is at most `limit`, else NONE.
+fn cost_within(q: u32, index: u32, limit: u32) -> u32 {
+    let pen = candidate_penalty(q, index);
+    if (pen > limit) { return NONE; }
+    let x = index % p.cand_w;
+    let y = index / p.cand_w;
+    if (bound_exceeds(q, x, y, limit - pen)) { return NONE; }
+    let d = distance(q, x, y, limit - pen);
+    if (d > limit - pen) { return NONE; }
+    return d + pen;
+}
+
 @compute @workgroup_size(64)
 fn min_cost(@builtin(global_invocation_id) gid: vec3<u32>) {
     let q = gid.y;
     let index = gid.x;
     if (q >= p.n_queries || index >= p.cand_w * p.cand_h) { return; }
-    let x = index % p.cand_w;
-    let y = index / p.cand_w;
-    let best = info[q * p.info_stride + 3u];
-    let pen = candidate_penalty(q, index);
-    if (pen > best) { return; }
-    let limit = best - pen;
-    if (bound_exceeds(q, x, y, limit)) { return; }
-    let d = distance(q, x, y, limit);
-    if (d <= limit) {
-        atomicMin(&result[2u * q], d + pen);
+    let c = cost_within(q, index, info[q * p.info_stride + 3u]);
+    if (c != NONE) {
+        atomicMin(&result[2u * q], c);
     }
 }
 
@@ -140,15 +148,7 @@ fn pick(@builtin(global_invocation_id) gid: vec3<u32>) {
     let q = gid.y;
     let index = gid.x;
     if (q >= p.n_queries || index >= p.cand_w * p.cand_h) { return; }
-    let x = index % p.cand_w;
-    let y = index / p.cand_w;
-    let t = limits[q];
-    let pen = candidate_penalty(q, index);
-    if (pen > t) { return; }
-    let limit = t - pen;
-    if (bound_exceeds(q, x, y, limit)) { return; }
-    let d = distance(q, x, y, limit);
-    if (d <= limit) {
+    if (cost_within(q, index, limits[q]) != NONE) {
         atomicMin(&result[2u * q + 1u], pick_key(info[q * p.info_stride + 1u], index));
     }
 }
@@ -208,16 +208,10 @@ fn cost(@builtin(global_invocation_id) gid: vec3<u32>) {
     let count = min(atomicLoad(&result[2u * p.n_queries]), p.capacity);
     if (slot >= count) { return; }
     let s = survivors[slot];
-    let q = s.x;
-    let index = s.y;
-    let upper = tolerance_limit(info[q * p.info_stride + 3u]);
-    let pen = candidate_penalty(q, index);
-    let d = distance(q, index % p.cand_w, index / p.cand_w, upper - pen);
-    if (d <= upper - pen) {
-        costs[slot] = d + pen;
-        atomicMin(&result[2u * q], d + pen);
-    } else {
-        costs[slot] = 0xffffffffu;
+    let c = cost_within(s.x, s.y, tolerance_limit(info[s.x * p.info_stride + 3u]));
+    costs[slot] = c;
+    if (c != NONE) {
+        atomicMin(&result[2u * s.x], c);
     }
 }
 

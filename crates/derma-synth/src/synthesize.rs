@@ -199,20 +199,7 @@ pub fn synthesize(
 ) -> Result<Synthesis> {
     let c = set.channels();
     opts.validate(c)?;
-    for (i, e) in set.exemplars.iter().enumerate() {
-        if e.width() < 2 * opts.patch || e.height() < 2 * opts.patch {
-            return Err(invalid(
-                format!("exemplar {}", i + 1),
-                format!(
-                    "is {}×{}, too small for {}×{} patches (needs at least twice the patch)",
-                    e.width(),
-                    e.height(),
-                    opts.patch,
-                    opts.patch
-                ),
-            ));
-        }
-    }
+    set.check_patch(opts.patch)?;
     if let Some(g) = guide {
         if let Some(&bad) = g
             .exemplar

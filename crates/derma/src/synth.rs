@@ -331,17 +331,19 @@ pub fn run(args: SynthArgs, quiet: bool) -> Result<()> {
     }
     if args.metrics {
         let ex = &set.exemplars[0].texture;
-        println!(
-            "{{\"seconds\": {secs:.4}, \"stages\": {{{}}}, \"patch_swd\": {:.6}, \"verbatim_copy_ratio\": {:.6}, \"seam_energy\": {:.6}}}",
-            out.stage_seconds
-                .iter()
-                .map(|(k, v)| format!("\"{k}\": {v:.4}"))
-                .collect::<Vec<_>>()
-                .join(", "),
-            patch_swd(&out.texture, ex, &SwdOptions::default())?,
-            verbatim_copy_ratio(&out.texture, ex, 32)?,
-            seam_energy(&out.texture, args.patch / 2)?
-        );
+        let stages: serde_json::Map<String, serde_json::Value> = out
+            .stage_seconds
+            .iter()
+            .map(|(k, v)| (k.clone(), serde_json::json!(v)))
+            .collect();
+        let metrics = serde_json::json!({
+            "seconds": secs,
+            "stages": stages,
+            "patch_swd": patch_swd(&out.texture, ex, &SwdOptions::default())?,
+            "verbatim_copy_ratio": verbatim_copy_ratio(&out.texture, ex, 32)?,
+            "seam_energy": seam_energy(&out.texture, args.patch / 2)?,
+        });
+        println!("{metrics}");
     }
     Ok(())
 }
