@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# Runs two derma binaries on the same inputs and seeds and compares everything they write
+# (bench/compare_outputs.py): the full `derma skin --size 512` set (head, and an analytic patch),
+# `derma synth` (grey and joint colour + height, tileable), a rig (build, frame, preview,
+# animation), the optics (`slab --json`, `simulate --json --plot`), a skin-colour LUT and a
+# model fit with its plots. Used to show that a refactor changed no output.
+#   bash bench/same_outputs.sh BEFORE_BINARY AFTER_BINARY [WORK_DIR]
+# Exit status 0 when every file is identical or equal in content (see compare_outputs.py).
+set -euo pipefail
+before=$(realpath "$1"); after=$(realpath "$2")
+work=${3:-$(mktemp -d)}
+here=$(cd "$(dirname "$0")" && pwd)
+python3 -m pip install --quiet numpy OpenEXR >/dev/null 2>&1 || true
+mkdir -p "$work/inputs"
+in=$work/inputs
+# Shared inputs, made once by the first binary: both binaries then read the same bytes.
+"$before" skin --size 256 --seed 11 --out "$in/skin" --quiet
+"$before" skin --patch 30 --size 256 --seed 5 --out "$in/patch" --quiet
+cat > "$in/curves.csv" <<'CSV'
+time,happiness,anger
+0,0,0
+0.1,0.6,0
+0.2,0.2,0.5
+CSV
+cat > "$in/grid.toml" <<'TOML'
+photons = 3000
+seed = 2
+brdf = [3, 3, 4]
+profile_bins = 8
+profile_d_max_mm = 4.0
+[axes]
+melanin = [0.02, 0.2]
+pheomelanin = [0.3]
+blood = [0.02]
+oxygenation = [0.75]
+stratum_corneum_um = [15.0]
+epidermis_um = [60.0]
+TOML
+"$before" optics precompute --grid "$in/grid.toml" --out "$in/pre" --device cpu --quiet
+"$before" optics merge "$in/pre" --out "$in/pre.dtab" >/dev/null
+
+run() { # run BINARY OUT_DIR
+  local d=$1 o=$2
+  mkdir -p "$o"
+  "$d" skin --size 512 --seed 3 --out "$o/skin" --quiet
+  "$d" skin --patch 30 --size 256 --seed 5 --appearance analytic --out "$o/patch" --quiet
+  "$d" synth --exemplar "$in/patch/height.png" --size 160 --seed 2 --device cpu --out "$o/synth/grey.png" --quiet
+  "$d" synth --exemplar "$in/patch/base_color.png" --exemplar-channels "height=$in/patch/height.png" \
+       --size 128 --tile --seed 4 --device cpu --out "$o/synth/joint.exr" --quiet
+  "$d" rig build --neutral "$in/skin/hemoglobin.exr" --melanin "$in/skin/melanin.exr" --builtin all \
+       --radius 24 --out "$o/rig" --quiet
+  mkdir -p "$o/frame" "$o/fit" "$o/lut"
+  "$d" rig eval --rig "$o/rig" --weights happiness=0.7,anger=0.3 --device cpu --out "$o/frame/color.png" \
+       --hemoglobin "$o/frame/hemoglobin.exr" --preview "$o/frame/preview.png" > "$o/frame/stdout.txt"
+  "$d" rig animate --rig "$o/rig" --curves "$in/curves.csv" --fps 10 --out "$o/animation" --quiet
+  "$d" optics slab --layer 1,1,100,0.9,1.4 --photons 200000 --device cpu --json > "$o/slab.json"
+  "$d" optics simulate --melanin 0.05 --photons 50000 --device cpu --out "$o/simulate" --plot --quiet > /dev/null
+  "$d" match lut --size 6 --photons 2000 --device cpu --out "$o/lut/lut.png" --out "$o/lut/lut.dtab" --quiet > /dev/null
+  "$d" match fit --grid "$in/pre.dtab" --anneal-steps 300 --out "$o/fit/table.dtab" --plots "$o/fit/plots" --quiet | sed -E -e "s/ in [0-9.]+ s/ in (time) s/" -e "s|$o|OUT|g" > "$o/fit/stdout.txt"
+}
+rm -rf "$work/before" "$work/after"
+run "$before" "$work/before"
+run "$after" "$work/after"
+python3 "$here/compare_outputs.py" "$work/before" "$work/after"
