@@ -3,9 +3,10 @@
 
 Each file is reported as one of:
   identical       the bytes are the same;
-  same content    JSON equal once run-dependent keys (timings, seconds) are dropped and numbers
+  same content    JSON equal once run-dependent keys (timings, seconds) are dropped, numbers
                   are compared at the f32 precision derma computes them in (a float printed
-                  '0.04' instead of '0.03999999910593033' is the same value);
+                  '0.04' instead of '0.03999999910593033' is the same value) and the renames
+                  of TEXT_RENAMES are applied;
   same data       OpenEXR channels with equal pixels, where a channel was renamed as listed in
                   RENAMED (e.g. hemoglobin.exr's 'blood' → 'hemoglobin');
   DIFFERENT       anything else (exit status 1).
@@ -20,6 +21,15 @@ from pathlib import Path
 VOLATILE = {"seconds", "photons_per_s", "timings_s", "stages"}
 # Channel renames between the two trees (old name → new name).
 RENAMED = {"blood": "hemoglobin"}
+# The same renames in identifiers and prose of JSON files (a key spelled `colour_space` before
+# and `color_space` after, a manifest describing hemoglobin.exr's channel).
+TEXT_RENAMES = [("colour", "color"), ("(blood)", "(hemoglobin)")]
+
+
+def renamed(text):
+    for old, new in TEXT_RENAMES:
+        text = text.replace(old, new)
+    return text
 
 
 def f32(x):
@@ -32,7 +42,7 @@ def same_json(a, b, path="$"):
         ka = {k for k in a if k not in VOLATILE}
         kb = {k for k in b if k not in VOLATILE}
         # A key renamed by the change (colour_space → color_space) counts as the same key.
-        norm = lambda k: k.replace("colour", "color")
+        norm = renamed
         if {norm(k) for k in ka} != {norm(k) for k in kb}:
             return f"{path}: keys {sorted(ka ^ kb)}"
         by_norm = {norm(k): k for k in kb}
@@ -54,7 +64,7 @@ def same_json(a, b, path="$"):
             return None
         return f"{path}: {a} vs {b}"
     if isinstance(a, str) and isinstance(b, str):
-        if a == b or a.replace("colour", "color") == b.replace("colour", "color"):
+        if a == b or renamed(a) == renamed(b):
             return None
         return f"{path}: {a!r} vs {b!r}"
     return None if a == b else f"{path}: {a!r} vs {b!r}"

@@ -60,6 +60,75 @@ pub fn ensure_writable_dir(dir: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Fails before any work when writing `outputs` would touch an input: an output that is an
+/// input file, an input inside an output directory (a directory derma fills, such as a rig),
+/// or an output inside an input directory (a fields directory, say). Paths that do not exist
+/// yet are compared by their nearest existing ancestor.
+pub fn check_inputs_spared(outputs: &[PathBuf], inputs: &[&Path]) -> Result<()> {
+    let refuse = |message: String| {
+        Err(CoreError::Invalid {
+            what: "output".into(),
+            detail: format!("{message}; derma never writes over its inputs — pick another output"),
+        })
+    };
+    for o in outputs {
+        let oc = canonical(o);
+        for i in inputs {
+            let Ok(ic) = i.canonicalize() else { continue };
+            if ic == oc {
+                return refuse(format!(
+                    "output '{}' is the input '{}'",
+                    o.display(),
+                    i.display()
+                ));
+            }
+            if ic.starts_with(&oc) {
+                return refuse(format!(
+                    "input '{}' lies inside the output directory '{}'",
+                    i.display(),
+                    o.display()
+                ));
+            }
+            if oc.starts_with(&ic) {
+                let same = oc.parent() == Some(ic.as_path());
+                return refuse(format!(
+                    "output '{}' would be written into the input directory '{}'{}",
+                    o.display(),
+                    i.display(),
+                    if same {
+                        " (input and output are the same directory)"
+                    } else {
+                        ""
+                    }
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `p` made absolute through its nearest existing ancestor (the rest appended as given).
+fn canonical(p: &Path) -> PathBuf {
+    let mut tail = Vec::new();
+    let mut head = p;
+    loop {
+        if let Ok(c) = head.canonicalize() {
+            return tail.iter().rev().fold(c, |acc: PathBuf, t| acc.join(t));
+        }
+        match (head.parent(), head.file_name()) {
+            (Some(parent), Some(name)) => {
+                tail.push(name.to_os_string());
+                head = if parent.as_os_str().is_empty() {
+                    Path::new(".")
+                } else {
+                    parent
+                };
+            }
+            _ => return p.to_path_buf(),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -82,6 +151,28 @@ mod tests {
         assert!(!temp_path(&target).exists());
         write_bytes(&target, b"new").unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"new");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn inputs_are_spared() {
+        let dir = std::env::temp_dir().join(format!("derma-spare-{}", std::process::id()));
+        let fields = dir.join("fields");
+        std::fs::create_dir_all(&fields).unwrap();
+        let mesh = dir.join("head.obj");
+        std::fs::write(&mesh, b"v 0 0 0").unwrap();
+        let out = |names: &[&str]| -> Vec<PathBuf> { names.iter().map(|n| dir.join(n)).collect() };
+        // Files beside an input, and new directories, are fine.
+        check_inputs_spared(&out(&["base_color.png", "new/x.png"]), &[&mesh, &fields]).unwrap();
+        // The same file, through another spelling of the path.
+        let e = check_inputs_spared(&[dir.join("fields/../head.obj")], &[&mesh]).unwrap_err();
+        assert!(e.to_string().contains("is the input"), "{e}");
+        // An output written into an input directory.
+        let e = check_inputs_spared(&[fields.join("base_color.png")], &[&fields]).unwrap_err();
+        assert!(e.to_string().contains("same directory"), "{e}");
+        // An input inside a directory derma fills.
+        let e = check_inputs_spared(&[dir.clone()], &[&mesh]).unwrap_err();
+        assert!(e.to_string().contains("inside the output directory"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -70,6 +70,32 @@ pub fn reflectance_to_linear_srgb(r: &Spectrum) -> [f64; 3] {
     xyz_to_linear_srgb(reflectance_to_xyz(r))
 }
 
+/// Relative luminance of linear Rec. 709 / sRGB primaries (ITU-R BT.709-6, item 3.2; the Y row
+/// of the sRGB → XYZ matrix): 0.2126 R + 0.7152 G + 0.0722 B, in f32 or f64.
+#[inline]
+pub fn luminance<T: Luminance>(rgb: [T; 3]) -> T {
+    T::luminance(rgb)
+}
+
+/// The float types [`luminance`] works in (each in its own precision).
+pub trait Luminance: Copy {
+    /// See [`luminance`].
+    fn luminance(rgb: [Self; 3]) -> Self;
+}
+
+macro_rules! luminance_in {
+    ($t:ty) => {
+        impl Luminance for $t {
+            #[inline]
+            fn luminance(c: [$t; 3]) -> $t {
+                0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+            }
+        }
+    };
+}
+luminance_in!(f32);
+luminance_in!(f64);
+
 /// sRGB opto-electronic transfer function (IEC 61966-2-1), linear [0,1] → encoded [0,1].
 #[inline]
 pub fn srgb_encode(x: f32) -> f32 {
@@ -131,6 +157,14 @@ mod tests {
         // Σ ȳ Δλ ≈ 106.86 for the 1931 observer (CIE 15:2004).
         let s: f64 = (0..N_WAVELENGTHS).map(|i| cmf(i)[1] * 10.0).sum();
         assert!((s - 106.86).abs() < 0.5, "{s}");
+    }
+
+    #[test]
+    fn luminance_is_the_y_row_of_the_srgb_matrix() {
+        for rgb in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.2, 0.5, 0.8]] {
+            assert!((luminance(rgb) - linear_srgb_to_xyz(rgb)[1]).abs() < 1e-12);
+        }
+        assert_eq!(luminance([1.0f32; 3]), 1.0);
     }
 
     #[test]

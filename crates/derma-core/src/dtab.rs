@@ -42,6 +42,27 @@ impl DtabHeader {
         self.values.iter().map(|v| v.len).sum()
     }
 
+    /// Per-axis node indices of flat node `node` (first axis slowest, as the payload stores
+    /// them).
+    pub fn node_indices(&self, node: usize) -> Vec<usize> {
+        let mut rest = node;
+        let mut idx = vec![0; self.axes.len()];
+        for (k, axis) in self.axes.iter().enumerate().rev() {
+            let n = axis.values.len().max(1);
+            idx[k] = rest % n;
+            rest /= n;
+        }
+        idx
+    }
+
+    /// Flat node of per-axis indices `idx` (the inverse of [`DtabHeader::node_indices`]).
+    pub fn node_of(&self, idx: &[usize]) -> usize {
+        self.axes
+            .iter()
+            .zip(idx)
+            .fold(0, |flat, (axis, &i)| flat * axis.values.len() + i)
+    }
+
     /// Offset of value `name` within a node's vector.
     pub fn offset(&self, name: &str) -> Option<(usize, usize)> {
         let mut o = 0;
@@ -186,5 +207,25 @@ mod tests {
         let e = Dtab::from_bytes(&c, p).unwrap_err().to_string();
         assert!(e.contains("checksum"), "{e}");
         assert!(Dtab::from_bytes(&b[..b.len() - 8], p).is_err());
+    }
+
+    #[test]
+    fn node_indices_invert_node_of() {
+        let axis = |name: &str, n: usize| DtabAxis {
+            name: name.into(),
+            values: (0..n).map(|i| i as f64).collect(),
+        };
+        let h = DtabHeader {
+            axes: vec![axis("a", 3), axis("b", 4), axis("c", 2)],
+            values: vec![],
+            meta: serde_json::Value::Null,
+        };
+        assert_eq!(h.node_indices(0), vec![0, 0, 0]);
+        // First axis slowest: node 1 steps the last axis.
+        assert_eq!(h.node_indices(1), vec![0, 0, 1]);
+        assert_eq!(h.node_indices(23), vec![2, 3, 1]);
+        for n in 0..h.nodes() {
+            assert_eq!(h.node_of(&h.node_indices(n)), n);
+        }
     }
 }

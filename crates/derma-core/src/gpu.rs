@@ -1,19 +1,122 @@
-//! The shared GPU context (wgpu: Vulkan, Metal, DX12; Mesa's lavapipe in CI): one adapter and
-//! device per process, opened on first use, and the buffer read-back every backend needs.
-//! Crates build their own pipelines on it (DESIGN.md §3: one algorithm, two backends).
+//! The shared GPU context (wgpu: Vulkan, Metal, DX12; Mesa's lavapipe in CI): the [`Device`]
+//! choice every command offers (`--device auto|cpu|gpu`), one adapter and device per process
+//! opened on first use, typed [`GpuError`]s, per-crate pipelines built once ([`GpuCell`]) and
+//! the buffer read-back every backend needs. Crates build their own pipelines on it (one
+//! algorithm, two backends: the CPU path is the reference, the WGSL path differs only in dispatch).
 
+use serde::{Deserialize, Serialize};
 use std::sync::OnceLock;
+
+/// Where a job runs: the user's choice, the same on every command.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Device {
+    /// A hardware GPU when one can be opened, else the CPU (a software adapter such as Mesa's
+    /// lavapipe is slower than the CPU path, so `auto` does not pick it).
+    #[default]
+    Auto,
+    /// The CPU (rayon): the reference path, always available.
+    Cpu,
+    /// The GPU adapter wgpu opens, hardware or software; an error when there is none.
+    Gpu,
+}
+
+impl Device {
+    /// Every choice, in the order `--help` lists them.
+    pub const ALL: [Device; 3] = [Device::Auto, Device::Cpu, Device::Gpu];
+
+    /// The choice as written on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Device::Auto => "auto",
+            Device::Cpu => "cpu",
+            Device::Gpu => "gpu",
+        }
+    }
+
+    /// The device a job runs on, `Cpu` or `Gpu`: `Auto` becomes `Gpu` when a hardware GPU
+    /// opens and `Cpu` otherwise; `Gpu` opens the GPU now, so a missing one is reported before
+    /// any work.
+    pub fn resolve(self) -> Result<Device, GpuError> {
+        match self {
+            Device::Cpu => Ok(Device::Cpu),
+            Device::Gpu => context().map(|_| Device::Gpu),
+            Device::Auto => Ok(match context() {
+                Ok(g) if g.hardware => Device::Gpu,
+                _ => Device::Cpu,
+            }),
+        }
+    }
+}
+
+impl std::fmt::Display for Device {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Device {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Device::ALL
+            .into_iter()
+            .find(|d| d.name().eq_ignore_ascii_case(s.trim()))
+            .ok_or_else(|| format!("device '{s}': expected auto, cpu or gpu"))
+    }
+}
+
+/// Why the GPU could not be used.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum GpuError {
+    /// wgpu found no adapter at all.
+    #[error("no GPU adapter found ({detail}); on Linux without a GPU install Mesa's lavapipe (apt-get install mesa-vulkan-drivers)")]
+    NoAdapter {
+        /// wgpu's reason.
+        detail: String,
+    },
+    /// The adapter exists but its device could not be opened.
+    #[error("could not open the GPU device {adapter}: {detail}")]
+    NoDevice {
+        /// The adapter's name and backend.
+        adapter: String,
+        /// wgpu's reason.
+        detail: String,
+    },
+    /// A shader failed validation on this adapter.
+    #[error("{shader} did not compile on {adapter}: {detail}")]
+    Compile {
+        /// Which shader (and entry point).
+        shader: String,
+        /// The adapter's name and backend.
+        adapter: String,
+        /// The validation error.
+        detail: String,
+    },
+    /// The device failed while work was running or results were read back.
+    #[error("the GPU failed while {during}: {detail}")]
+    Device {
+        /// What derma was doing.
+        during: &'static str,
+        /// wgpu's reason.
+        detail: String,
+    },
+}
 
 /// The device, its queue and a human-readable name.
 pub struct Gpu {
+    /// The wgpu device.
     pub device: wgpu::Device,
+    /// Its queue.
     pub queue: wgpu::Queue,
+    /// Adapter name and backend, e.g. "NVIDIA H200 (Vulkan)".
     pub name: String,
+    /// False for software adapters (Mesa's lavapipe, WARP), which [`Device::Auto`] passes over.
+    pub hardware: bool,
 }
 
-static GPU: OnceLock<Result<Gpu, String>> = OnceLock::new();
+static GPU: OnceLock<Result<Gpu, GpuError>> = OnceLock::new();
 
-fn open() -> Result<Gpu, String> {
+fn open() -> Result<Gpu, GpuError> {
     let instance =
         wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
     let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
@@ -22,41 +125,85 @@ fn open() -> Result<Gpu, String> {
         compatible_surface: None,
         apply_limit_buckets: false,
     }))
-    .map_err(|e| {
-        format!("no GPU adapter found ({e}); on Linux without a GPU install Mesa's lavapipe (apt-get install mesa-vulkan-drivers)")
+    .map_err(|e| GpuError::NoAdapter {
+        detail: e.to_string(),
     })?;
     let info = adapter.get_info();
+    let name = format!("{} ({:?})", info.name, info.backend);
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some("derma"),
         required_features: wgpu::Features::empty(),
         required_limits: adapter.limits(),
         ..Default::default()
     }))
-    .map_err(|e| format!("could not open the GPU device {}: {e}", info.name))?;
+    .map_err(|e| GpuError::NoDevice {
+        adapter: name.clone(),
+        detail: e.to_string(),
+    })?;
     Ok(Gpu {
         device,
         queue,
-        name: format!("{} ({:?})", info.name, info.backend),
+        name,
+        hardware: info.device_type != wgpu::DeviceType::Cpu,
     })
 }
 
 /// The process's GPU, opened on first call; the error says why none could be opened.
-pub fn context() -> Result<&'static Gpu, String> {
-    GPU.get_or_init(open).as_ref().map_err(|e| e.clone())
+pub fn context() -> Result<&'static Gpu, GpuError> {
+    GPU.get_or_init(open).as_ref().map_err(Clone::clone)
+}
+
+/// The name of the GPU when one can be opened.
+pub fn available() -> Option<&'static str> {
+    context().ok().map(|g| g.name.as_str())
+}
+
+/// GPU objects a crate builds once per process (its pipelines), on the shared context.
+pub struct GpuCell<T> {
+    cell: OnceLock<Result<T, GpuError>>,
+}
+
+impl<T> GpuCell<T> {
+    /// An empty cell, for a `static`.
+    pub const fn new() -> Self {
+        Self {
+            cell: OnceLock::new(),
+        }
+    }
+
+    /// The context and the objects, built by `init` on first use; a failure is kept and
+    /// returned to every later caller.
+    pub fn get_or_init(
+        &self,
+        init: impl FnOnce(&'static Gpu) -> Result<T, GpuError>,
+    ) -> Result<(&'static Gpu, &T), GpuError> {
+        let ctx = context()?;
+        let value = self
+            .cell
+            .get_or_init(|| init(ctx))
+            .as_ref()
+            .map_err(Clone::clone)?;
+        Ok((ctx, value))
+    }
+}
+
+impl<T> Default for GpuCell<T> {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl Gpu {
     /// Compiles `source` (WGSL) into a compute pipeline with entry point `entry`; shader
-    /// validation errors come back as text instead of a panic.
+    /// validation errors come back as [`GpuError::Compile`] instead of a panic.
     pub fn compute_pipeline(
         &self,
         label: &str,
         source: &str,
         entry: &str,
-    ) -> Result<wgpu::ComputePipeline, String> {
+    ) -> Result<wgpu::ComputePipeline, GpuError> {
         self.compute_pipeline_with(label, source, entry, None)
     }
-
     /// As [`Gpu::compute_pipeline`], with an explicit layout (so several entry points of one
     /// shader can share one bind group even when each uses only some of its bindings).
     pub fn compute_pipeline_with(
@@ -65,7 +212,7 @@ impl Gpu {
         source: &str,
         entry: &str,
         layout: Option<&wgpu::PipelineLayout>,
-    ) -> Result<wgpu::ComputePipeline, String> {
+    ) -> Result<wgpu::ComputePipeline, GpuError> {
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = self
             .device
@@ -84,7 +231,11 @@ impl Gpu {
                 cache: None,
             });
         if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(format!("{label} did not compile on {}: {e}", self.name));
+            return Err(GpuError::Compile {
+                shader: label.to_string(),
+                adapter: self.name.clone(),
+                detail: e.to_string(),
+            });
         }
         Ok(pipeline)
     }
@@ -116,7 +267,7 @@ impl Gpu {
         &self,
         buf: &wgpu::Buffer,
         len: usize,
-    ) -> Result<Vec<T>, String> {
+    ) -> Result<Vec<T>, GpuError> {
         let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("read back"),
             size: (len * std::mem::size_of::<T>()) as u64,
@@ -133,37 +284,32 @@ impl Gpu {
         buf: &wgpu::Buffer,
         staging: &wgpu::Buffer,
         len: usize,
-    ) -> Result<Vec<T>, String> {
+    ) -> Result<Vec<T>, GpuError> {
         let size = (len * std::mem::size_of::<T>()) as u64;
         let mut enc = self.device.create_command_encoder(&Default::default());
         enc.copy_buffer_to_buffer(buf, 0, staging, 0, size);
         self.queue.submit([enc.finish()]);
         let slice = staging.slice(..size);
         slice.map_async(wgpu::MapMode::Read, |_| {});
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| format!("reading results back: {e}"))?;
-        let data = slice
-            .get_mapped_range()
-            .map_err(|e| format!("mapping results: {e}"))?;
+        self.wait("reading results back")?;
+        let data = slice.get_mapped_range().map_err(|e| GpuError::Device {
+            during: "mapping results",
+            detail: e.to_string(),
+        })?;
         let out = bytemuck::cast_slice(&data).to_vec();
         drop(data);
         staging.unmap();
         Ok(out)
     }
-}
 
-/// For tests that need a GPU: true (skip) when `available` is false, after a note on stderr;
-/// panics instead when `DERMA_REQUIRE_GPU` is set (CI runs the GPU tests on Mesa's lavapipe,
-/// so a missing driver must fail there, not pass silently).
-pub fn skip_test_without_gpu(available: bool) -> bool {
-    if available {
-        return false;
+    /// Waits until the device has finished the work submitted so far.
+    pub fn wait(&self, during: &'static str) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Device {
+                during,
+                detail: e.to_string(),
+            })
     }
-    assert!(
-        std::env::var("DERMA_REQUIRE_GPU").is_err(),
-        "DERMA_REQUIRE_GPU is set but no GPU adapter (lavapipe: apt-get install mesa-vulkan-drivers)"
-    );
-    eprintln!("skipped: no GPU adapter");
-    true
 }

@@ -13,7 +13,7 @@ use std::path::Path;
 pub struct LoadedImage {
     pub channels: Vec<Map>,
     /// True when the file had colour channels that differ from each other.
-    pub is_colour: bool,
+    pub is_color: bool,
 }
 
 fn decode(path: &Path) -> Result<image::DynamicImage> {
@@ -48,7 +48,7 @@ pub fn read_rgb(path: &Path) -> Result<LoadedImage> {
         Vec::with_capacity(w * h),
         Vec::with_capacity(w * h),
     ];
-    let mut is_colour = false;
+    let mut is_color = false;
     for p in img.pixels() {
         for k in 0..3 {
             let v = p.0[k];
@@ -61,7 +61,7 @@ pub fn read_rgb(path: &Path) -> Result<LoadedImage> {
             ch[k].push(v);
         }
         if (p.0[0] - p.0[1]).abs() > 1.0 / 255.0 || (p.0[0] - p.0[2]).abs() > 1.0 / 255.0 {
-            is_colour = true;
+            is_color = true;
         }
     }
     let [r, g, b] = ch;
@@ -71,32 +71,34 @@ pub fn read_rgb(path: &Path) -> Result<LoadedImage> {
             Map::from_vec(w, h, g)?,
             Map::from_vec(w, h, b)?,
         ],
-        is_colour,
+        is_color,
     })
 }
 
 /// Loads a greyscale image. Colour images are converted by Rec. 709 luminance and reported
-/// through `is_colour` so the caller can warn.
+/// through `is_color` so the caller can warn.
 pub fn read_grey(path: &Path) -> Result<LoadedImage> {
     let rgb = read_rgb(path)?;
-    if !rgb.is_colour {
+    if !rgb.is_color {
         let r = rgb.channels.into_iter().next().expect("three channels");
         return Ok(LoadedImage {
             channels: vec![r],
-            is_colour: false,
+            is_color: false,
         });
     }
     let (w, h) = (rgb.channels[0].width(), rgb.channels[0].height());
     let d: Vec<f32> = (0..w * h)
         .map(|i| {
-            0.2126 * rgb.channels[0].data()[i]
-                + 0.7152 * rgb.channels[1].data()[i]
-                + 0.0722 * rgb.channels[2].data()[i]
+            crate::color::luminance([
+                rgb.channels[0].data()[i],
+                rgb.channels[1].data()[i],
+                rgb.channels[2].data()[i],
+            ])
         })
         .collect();
     Ok(LoadedImage {
         channels: vec![Map::from_vec(w, h, d)?],
-        is_colour: true,
+        is_color: true,
     })
 }
 
@@ -129,7 +131,7 @@ fn read_exr_rgb(path: &Path) -> Result<LoadedImage> {
     {
         return Err(bad("contains NaN or infinite values"));
     }
-    let is_colour = r
+    let is_color = r
         .data()
         .iter()
         .zip(g.data())
@@ -137,7 +139,7 @@ fn read_exr_rgb(path: &Path) -> Result<LoadedImage> {
         .any(|((r, g), b)| (r - g).abs() > 1.0 / 255.0 || (r - b).abs() > 1.0 / 255.0);
     Ok(LoadedImage {
         channels: vec![r, g, b],
-        is_colour,
+        is_color,
     })
 }
 
@@ -363,7 +365,7 @@ mod tests {
         let p = d.join("g.png");
         write_png16(&p, &[&m]).unwrap();
         let back = read_grey(&p).unwrap();
-        assert!(!back.is_colour);
+        assert!(!back.is_color);
         for (a, b) in back.channels[0].data().iter().zip(m.data()) {
             assert!((a - b).abs() < 1.0 / 65535.0 + 1e-6);
         }
@@ -403,7 +405,7 @@ mod tests {
         let p = d.join("moles.exr");
         write_exr(&p, &[("Y", &m)], ExrPrecision::F32).unwrap();
         let g = read_grey(&p).unwrap();
-        assert!(!g.is_colour);
+        assert!(!g.is_color);
         assert_eq!((g.channels[0].width(), g.channels[0].height()), (6, 4));
         assert!(
             (g.channels[0].get(0, 0) - 0.25).abs() < 1e-6
@@ -420,7 +422,7 @@ mod tests {
         let p = d.join("c.png");
         write_png8(&p, &[&r, &z, &z]).unwrap();
         let g = read_grey(&p).unwrap();
-        assert!(g.is_colour);
+        assert!(g.is_color);
         assert!((g.channels[0].get(0, 0) - 0.2126).abs() < 1e-3);
         std::fs::remove_dir_all(&d).unwrap();
     }

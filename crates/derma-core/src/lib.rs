@@ -17,8 +17,11 @@ pub mod gpu;
 pub mod image_io;
 pub mod map;
 pub mod mesh;
+pub mod numerics;
 pub mod plot;
+pub mod progress;
 pub mod raster;
+pub mod report;
 pub mod rng;
 
 pub use error::{CoreError, Result};

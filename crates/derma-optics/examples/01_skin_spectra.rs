@@ -5,6 +5,7 @@
 
 use derma_core::plot::{Plot, Series};
 use derma_optics::simulate::{simulate_skin, SkinSimConfig};
+use derma_core::progress::Silent;
 use derma_optics::{BioTexel, Device};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -25,7 +26,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             melanin,
             ..BioTexel::FAIR
         };
-        let r = simulate_skin(&bio, &cfg, Device::Cpu, &|_| {})?;
+        let r = simulate_skin(&bio, &cfg, Device::Cpu, &Silent)?;
         println!(
             "{label}: linear sRGB {:.3?}, {:.1} s",
             r.linear_srgb, r.seconds

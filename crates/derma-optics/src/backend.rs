@@ -1,13 +1,18 @@
-//! Chooses the backend for a run: the CPU path, or the GPU kernel when asked for.
+//! Chooses the backend for a run: the CPU path, or the GPU kernel, as the [`Device`] says.
 
 use crate::error::Result;
-use crate::run::{run_cpu, Device, Run};
+use crate::run::{run_cpu, Run};
 use crate::tally::Tally;
+use derma_core::gpu::Device;
+use derma_core::progress::Progress;
 
-/// Runs `run` on `device`.
-pub fn run_on(run: &Run, device: Device, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
-    match device {
-        Device::Cpu => run_cpu(run, progress),
-        Device::Gpu => crate::gpu::run_gpu(run, progress),
-    }
+/// Runs `run` on `device` (resolved first: `Auto` picks a hardware GPU when there is one);
+/// returns the tally and the device it ran on. `progress` advances by photons.
+pub fn run_on(run: &Run, device: Device, progress: &dyn Progress) -> Result<(Tally, Device)> {
+    let device = device.resolve()?;
+    let tally = match device {
+        Device::Gpu => crate::gpu::run_gpu(run, progress)?,
+        _ => run_cpu(run, progress)?,
+    };
+    Ok((tally, device))
 }

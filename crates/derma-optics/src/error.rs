@@ -16,8 +16,8 @@ pub enum OpticsError {
     },
     #[error(transparent)]
     Core(#[from] derma_core::CoreError),
-    #[error("GPU: {0}")]
-    Gpu(String),
+    #[error(transparent)]
+    Gpu(#[from] derma_core::gpu::GpuError),
 }
 
 pub type Result<T> = std::result::Result<T, OpticsError>;

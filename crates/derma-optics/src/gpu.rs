@@ -2,12 +2,13 @@
 //! algorithm and random stream as the CPU path, in f32, with tallies in 64-bit fixed point so
 //! that GPU results are bit-identical from run to run.
 
-use crate::error::{OpticsError, Result};
+use crate::error::Result;
 use crate::layer::{Bottom, Surface, N_ABSORBERS};
 use crate::run::Run;
 use crate::tally::Tally;
 use crate::transport::{Incidence, Prepared};
-use std::sync::OnceLock;
+use derma_core::gpu::{GpuCell, GpuError};
+use derma_core::progress::Progress;
 use wgpu::util::DeviceExt;
 
 const SHADER: &str = include_str!("optics.wgsl");
@@ -15,29 +16,19 @@ const WORKGROUP: u32 = 64;
 /// Fixed-point scale of the tallies (2^24 units per photon weight).
 const FIXED: f64 = 16_777_216.0;
 
-/// The shared device and the transport pipeline.
-struct Gpu {
-    ctx: &'static derma_core::gpu::Gpu,
-    pipeline: wgpu::ComputePipeline,
-}
+/// The transport pipeline, compiled once per process.
+static PIPELINE: GpuCell<wgpu::ComputePipeline> = GpuCell::new();
 
-static GPU: OnceLock<std::result::Result<Gpu, String>> = OnceLock::new();
-
-fn init() -> std::result::Result<Gpu, String> {
-    let ctx = derma_core::gpu::context()?;
-    let pipeline = ctx.compute_pipeline("the transport shader (optics.wgsl)", SHADER, "main")?;
-    Ok(Gpu { ctx, pipeline })
-}
-
-fn gpu() -> Result<&'static Gpu> {
-    GPU.get_or_init(init)
-        .as_ref()
-        .map_err(|e| OpticsError::Gpu(e.clone()))
-}
-
-/// Whether a GPU adapter can be opened, and its name.
-pub fn available() -> Option<String> {
-    gpu().ok().map(|g| g.ctx.name.clone())
+fn pipeline() -> std::result::Result<
+    (
+        &'static derma_core::gpu::Gpu,
+        &'static wgpu::ComputePipeline,
+    ),
+    GpuError,
+> {
+    PIPELINE.get_or_init(|ctx| {
+        ctx.compute_pipeline("the transport shader (optics.wgsl)", SHADER, "main")
+    })
 }
 
 #[repr(C)]
@@ -69,10 +60,10 @@ fn fixed_to_f64(lo: u32, hi: u32) -> f64 {
     (((hi as u64) << 32 | lo as u64) as i64) as f64 / FIXED
 }
 
-/// Runs `run` on the GPU.
-pub fn run_gpu(run: &Run, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
+/// Runs `run` on the GPU; `progress` advances by the photons of each dispatch.
+pub fn run_gpu(run: &Run, progress: &dyn Progress) -> Result<Tally> {
     run.validate()?;
-    let g = gpu()?;
+    let (ctx, pipeline) = pipeline()?;
     let prepared: Vec<Prepared> = run.stacks.iter().map(Prepared::new).collect();
     let nl = prepared.len() as u32;
     let n_layers = prepared[0].mut_.len() as u32;
@@ -122,7 +113,7 @@ pub fn run_gpu(run: &Run, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
         Bottom::Medium { n } => (0, n as f32),
         Bottom::Lambertian { albedo } => (1, albedo as f32),
     };
-    let d = &g.ctx.device;
+    let d = &ctx.device;
     let storage = |label, bytes: &[u8], usage| {
         d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(label),
@@ -159,33 +150,12 @@ pub fn run_gpu(run: &Run, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
         usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    let layout = g.pipeline.get_bind_group_layout(0);
-    let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: params_buf.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: layers_buf.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: chan_buf.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: acc_buf.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 4,
-                resource: counts_buf.as_entire_binding(),
-            },
-        ],
-    });
+    let layout = pipeline.get_bind_group_layout(0);
+    let bind = ctx.bind_buffers(
+        "optics",
+        &layout,
+        &[&params_buf, &layers_buf, &chan_buf, &acc_buf, &counts_buf],
+    );
 
     let mut offset = 0u64;
     while offset < run.photons {
@@ -212,25 +182,23 @@ pub fn run_gpu(run: &Run, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
             profile_bins: pbins as u32,
             profile_dmax: pdmax as f32,
         };
-        g.ctx
-            .queue
+        ctx.queue
             .write_buffer(&params_buf, 0, bytemuck::bytes_of(&params));
         let mut enc = d.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&g.pipeline);
+            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &bind, &[]);
             pass.dispatch_workgroups(threads / WORKGROUP, 1, 1);
         }
-        g.ctx.queue.submit([enc.finish()]);
-        d.poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| OpticsError::Gpu(format!("waiting for the device: {e}")))?;
+        ctx.queue.submit([enc.finish()]);
+        ctx.wait("tracing photons")?;
         offset += count as u64;
-        progress(offset);
+        progress.advance(count as u64);
     }
 
-    let acc = read_back(g, &acc_buf, 2 * slots as usize)?;
-    let counts = read_back(g, &counts_buf, n_counts as usize)?;
+    let acc: Vec<u32> = ctx.read_back(&acc_buf, 2 * slots as usize)?;
+    let counts: Vec<u32> = ctx.read_back(&counts_buf, n_counts as usize)?;
     let val = |slot: u32| fixed_to_f64(acc[2 * slot as usize], acc[2 * slot as usize + 1]);
 
     let mut t = run.empty_tally();
@@ -263,8 +231,4 @@ pub fn run_gpu(run: &Run, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
         *v = val(prof0 + i as u32);
     }
     Ok(t)
-}
-
-fn read_back(g: &Gpu, buf: &wgpu::Buffer, len: usize) -> Result<Vec<u32>> {
-    g.ctx.read_back(buf, len).map_err(OpticsError::Gpu)
 }

@@ -16,6 +16,7 @@ mod hemoglobin_table;
 pub mod layer;
 pub mod microfacet;
 pub mod photon_rng;
+pub mod plots;
 pub mod precompute;
 pub mod run;
 pub mod simulate;
@@ -25,9 +26,10 @@ pub mod tally;
 pub mod transport;
 
 pub use bio::BioTexel;
+pub use derma_core::gpu::Device;
 pub use error::{OpticsError, Result};
 pub use layer::{Bottom, Layer, Stack, Surface};
-pub use run::{Device, Run};
+pub use run::Run;
 pub use tally::Tally;
 
 /// Most layers a stack may have (the GPU kernel's fixed arrays).

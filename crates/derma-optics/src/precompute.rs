@@ -9,22 +9,16 @@
 
 use crate::bio::BioTexel;
 use crate::error::{OpticsError, Result};
-use crate::run::Device;
 use crate::simulate::{simulate_skin, SkinResult, SkinSimConfig};
 use crate::tally::{BrdfBins, ProfileBins};
 use derma_core::dtab::{Dtab, DtabAxis, DtabHeader, DtabValue};
+use derma_core::gpu::Device;
+use derma_core::progress::{Folded, Note, Progress, Unit};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// Names of the grid axes, in table order (the bio parameters of thesis §5.2).
-pub const AXES: [&str; 6] = [
-    "melanin",
-    "pheomelanin",
-    "blood",
-    "oxygenation",
-    "stratum_corneum_um",
-    "epidermis_um",
-];
+pub const AXES: [&str; 6] = BioTexel::NAMES;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -93,6 +87,20 @@ impl Grid {
         Ok(g)
     }
 
+    /// The grid `spec` names: `default` (the built-in grid) or a TOML file.
+    pub fn load(spec: &str) -> Result<Self> {
+        if spec == "default" {
+            return Ok(Self::default_grid());
+        }
+        let p = Path::new(spec);
+        let text = std::fs::read_to_string(p).map_err(|e| OpticsError::Io {
+            path: p.to_path_buf(),
+            source: e,
+        })?;
+        Self::parse(&text, p)
+    }
+
+    /// The built-in grid ([`DEFAULT_GRID`]).
     pub fn default_grid() -> Self {
         Self::parse(DEFAULT_GRID, Path::new("<built-in default grid>"))
             .expect("the built-in grid parses")
@@ -257,12 +265,67 @@ pub fn compute_entry(
     grid: &Grid,
     i: usize,
     device: Device,
-    progress: &(dyn Fn(u64) + Sync),
+    progress: &dyn Progress,
 ) -> Result<SkinResult> {
     let r = simulate_skin(&grid.node(i), &grid.config(i), device, progress)?;
     let json = serde_json::to_vec(&r).map_err(|e| OpticsError::Invalid(e.to_string()))?;
     derma_core::atomic::write_bytes(&entry_path(dir, i), &json)?;
     Ok(r)
+}
+
+/// What [`run_shard`] did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShardRun {
+    /// Grid nodes the shard owns.
+    pub owned: usize,
+    /// Of those, entries already in the directory (kept, not recomputed).
+    pub already_done: usize,
+    /// Entries computed by this run.
+    pub computed: usize,
+    /// The device they ran on.
+    pub device: Device,
+}
+
+/// Runs shard `shard` of `grid` into `dir`: computes every owned node not there yet, one
+/// entry file each, so an interrupted run resumes where it stopped. Notes what it will do,
+/// then reports one stage of all the photons to simulate.
+pub fn run_shard(
+    dir: &Path,
+    grid: &Grid,
+    shard: Shard,
+    device: Device,
+    progress: &dyn Progress,
+) -> Result<ShardRun> {
+    prepare_dir(dir, grid)?;
+    let owned = (0..grid.len()).filter(|&i| shard.owns(i)).count();
+    let todo = pending(dir, grid, shard);
+    let device = device.resolve()?;
+    progress.note(Note::info(format!(
+        "grid: {} entries × {} photons; shard {}/{} owns {owned}, {} already done, {} to go, on {device}",
+        grid.len(),
+        grid.photons,
+        shard.k,
+        shard.n,
+        owned - todo.len(),
+        todo.len(),
+    )));
+    progress.stage(
+        "precompute",
+        todo.len() as u64 * grid.photons,
+        Unit::Photons,
+    );
+    for &i in &todo {
+        compute_entry(dir, grid, i, device, &Folded(progress)).map_err(|e| match e {
+            OpticsError::Invalid(m) => OpticsError::Invalid(format!("grid entry {i}: {m}")),
+            other => other,
+        })?;
+    }
+    Ok(ShardRun {
+        owned,
+        already_done: owned - todo.len(),
+        computed: todo.len(),
+        device,
+    })
 }
 
 fn read_entry(path: &Path) -> Result<SkinResult> {

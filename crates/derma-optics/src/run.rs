@@ -6,25 +6,8 @@ use crate::error::{OpticsError, Result};
 use crate::layer::Stack;
 use crate::tally::{BrdfBins, ProfileBins, Tally};
 use crate::transport::{trace, Incidence, Prepared, Recorder};
+use derma_core::progress::Progress;
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
-
-/// Where photons run.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Device {
-    Cpu,
-    Gpu,
-}
-
-impl Device {
-    pub fn name(&self) -> &'static str {
-        match self {
-            Device::Cpu => "cpu",
-            Device::Gpu => "gpu",
-        }
-    }
-}
 
 /// One simulation: stacks per wavelength (photon k runs in stack k mod len), and what to record.
 #[derive(Clone, Debug)]
@@ -135,13 +118,12 @@ pub fn trace_range(run: &Run, prepared: &[Prepared], range: std::ops::Range<u64>
     t
 }
 
-/// Runs on the CPU with rayon; `progress` is called with the photons done so far.
-pub fn run_cpu(run: &Run, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
+/// Runs on the CPU with rayon; `progress` advances by the photons of each finished batch.
+pub fn run_cpu(run: &Run, progress: &dyn Progress) -> Result<Tally> {
     run.validate()?;
     let prepared: Vec<Prepared> = run.stacks.iter().map(Prepared::new).collect();
     let bs = run.batch_size();
     let batches = run.photons.div_ceil(bs);
-    let done = std::sync::atomic::AtomicU64::new(0);
     let mut total = run.empty_tally();
     // Merge in groups so memory stays bounded for runs with many batches.
     let group = 64u64;
@@ -154,8 +136,7 @@ pub fn run_cpu(run: &Run, progress: &(dyn Fn(u64) + Sync)) -> Result<Tally> {
                 let r = b * bs..((b + 1) * bs).min(run.photons);
                 let n = r.end - r.start;
                 let t = trace_range(run, &prepared, r);
-                let d = done.fetch_add(n, std::sync::atomic::Ordering::Relaxed) + n;
-                progress(d);
+                progress.advance(n);
                 t
             })
             .collect();

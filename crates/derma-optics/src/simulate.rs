@@ -7,13 +7,15 @@
 use crate::bio::BioTexel;
 use crate::error::Result;
 use crate::layer::{ABSORBER_NAMES, N_ABSORBERS};
-use crate::run::{Device, Run};
+use crate::run::Run;
 use crate::specimen::{skin_stacks, SKIN_LAYER_NAMES};
 use crate::tally::{BrdfBins, ProfileBins, Tally, R_DIFFUSE, R_SPECULAR, TRANSMITTED};
 use crate::transport::Incidence;
 use derma_core::color::{
     cmf, reflectance_to_xyz, wavelength_nm, xyz_to_linear_srgb, Spectrum, D65_10NM, N_WAVELENGTHS,
 };
+use derma_core::gpu::Device;
+use derma_core::progress::{Progress, Unit};
 use serde::{Deserialize, Serialize};
 
 /// What to record and how many photons.
@@ -187,16 +189,19 @@ pub fn skin_result(
     }
 }
 
-/// Simulates `bio` on `device` (CPU; GPU through [`crate::gpu`]).
+/// Simulates `bio` on `device` (the CPU, or the GPU through [`crate::gpu`]); reports a stage
+/// of `cfg.photons` photons. The result records the device it ran on.
 pub fn simulate_skin(
     bio: &BioTexel,
     cfg: &SkinSimConfig,
     device: Device,
-    progress: &(dyn Fn(u64) + Sync),
+    progress: &dyn Progress,
 ) -> Result<SkinResult> {
+    bio.validate()?;
     let run = skin_run(bio, cfg);
+    progress.stage("simulate", cfg.photons, Unit::Photons);
     let t0 = std::time::Instant::now();
-    let tally = crate::backend::run_on(&run, device, progress)?;
+    let (tally, device) = crate::backend::run_on(&run, device, progress)?;
     Ok(skin_result(
         bio,
         cfg,

@@ -1,6 +1,7 @@
 //! Shards, resume and merge of the precompute grid.
 
 use derma_optics::precompute::{self, Grid, Shard};
+use derma_core::progress::Silent;
 use derma_optics::Device;
 use std::path::PathBuf;
 
@@ -29,7 +30,7 @@ fn fill(dir: &PathBuf, grid: &Grid, shard: Shard) -> usize {
     precompute::prepare_dir(dir, grid).unwrap();
     let todo = precompute::pending(dir, grid, shard);
     for &i in &todo {
-        precompute::compute_entry(dir, grid, i, Device::Cpu, &|_| {}).unwrap();
+        precompute::compute_entry(dir, grid, i, Device::Cpu, &Silent).unwrap();
     }
     todo.len()
 }

@@ -8,10 +8,11 @@ use derma_optics::simulate::{skin_result, skin_run, SkinSimConfig};
 use derma_optics::slab::{parse_layer, slab_stack, SlabResult};
 use derma_optics::tally::{BrdfBins, Tally};
 use derma_optics::transport::Incidence;
+use derma_core::progress::Silent;
 use derma_optics::{BioTexel, Device};
 
 fn slab(run: &Run) -> SlabResult {
-    let t = run_cpu(run, &|_| {}).unwrap();
+    let t = run_cpu(run, &Silent).unwrap();
     SlabResult::from_tally(&t, 1.0, "cpu")
 }
 
@@ -136,7 +137,7 @@ fn skin_tally(bio: &BioTexel, photons: u64) -> (Run, Tally) {
         ..SkinSimConfig::default()
     };
     let run = skin_run(bio, &cfg);
-    let t = run_cpu(&run, &|_| {}).unwrap();
+    let t = run_cpu(&run, &Silent).unwrap();
     (run, t)
 }
 
@@ -168,7 +169,7 @@ fn energy_bookkeeping_is_exact() {
         ),
     ];
     for run in runs {
-        let t = run_cpu(&run, &|_| {}).unwrap();
+        let t = run_cpu(&run, &Silent).unwrap();
         assert!(
             t.bookkeeping_error().abs() <= 1e-9 * t.weight_total(),
             "bookkeeping error {}",
@@ -212,15 +213,15 @@ fn results_do_not_depend_on_thread_count() {
         .num_threads(2)
         .build()
         .unwrap();
-    let a = one.install(|| run_cpu(&run, &|_| {}).unwrap());
-    let b = two.install(|| run_cpu(&run, &|_| {}).unwrap());
+    let a = one.install(|| run_cpu(&run, &Silent).unwrap());
+    let b = two.install(|| run_cpu(&run, &Silent).unwrap());
     assert_eq!(a, b);
     let c = run_cpu(
         &Run {
             seed: 2,
             ..run.clone()
         },
-        &|_| {},
+        &Silent,
     )
     .unwrap();
     assert_ne!(a.sum, c.sum, "another seed gives another sample");
@@ -250,7 +251,7 @@ fn sampled_brdf_is_reciprocal() {
         profile: None,
         channel_weights: Vec::new(),
     };
-    let t = run_cpu(&run, &|_| {}).unwrap();
+    let t = run_cpu(&run, &Silent).unwrap();
     let f = |ti: usize, to: usize| -> f64 {
         (0..bins.phi)
             .map(|p| t.brdf[bins.index(ti, to, p)])
@@ -269,7 +270,7 @@ fn sampled_brdf_is_reciprocal() {
 
 #[test]
 fn cpu_and_gpu_agree() {
-    if derma_core::gpu::skip_test_without_gpu(derma_optics::gpu::available().is_some()) {
+    if derma_test_support::skip_without_gpu() {
         return;
     }
     let run = Run::totals(
@@ -278,7 +279,7 @@ fn cpu_and_gpu_agree() {
         4,
     );
     let c = slab(&run);
-    let tg = derma_optics::gpu::run_gpu(&run, &|_| {}).unwrap();
+    let tg = derma_optics::gpu::run_gpu(&run, &Silent).unwrap();
     let g = SlabResult::from_tally(&tg, 1.0, "gpu");
     // Same photons, same random streams: f32 paths track the f64 ones, so the two agree far
     // better than two independent samples; the test still only asks for statistical agreement.
@@ -298,7 +299,7 @@ fn cpu_and_gpu_agree() {
         "GPU books balance to f32 precision"
     );
     // The GPU is deterministic too (integer tallies).
-    assert_eq!(tg, derma_optics::gpu::run_gpu(&run, &|_| {}).unwrap());
+    assert_eq!(tg, derma_optics::gpu::run_gpu(&run, &Silent).unwrap());
     // And the skin specimen (micro-facet surface, white hypodermis) agrees in colour.
     let cfg = SkinSimConfig {
         photons: 41_000,
@@ -308,14 +309,14 @@ fn cpu_and_gpu_agree() {
     let a = skin_result(
         &BioTexel::FAIR,
         &cfg,
-        &run_cpu(&sr, &|_| {}).unwrap(),
+        &run_cpu(&sr, &Silent).unwrap(),
         Device::Cpu,
         1.0,
     );
     let b = skin_result(
         &BioTexel::FAIR,
         &cfg,
-        &derma_optics::gpu::run_gpu(&sr, &|_| {}).unwrap(),
+        &derma_optics::gpu::run_gpu(&sr, &Silent).unwrap(),
         Device::Gpu,
         1.0,
     );

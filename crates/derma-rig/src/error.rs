@@ -19,6 +19,8 @@ pub enum RigError {
         want_w: usize,
         want_h: usize,
     },
+    #[error(transparent)]
+    Gpu(#[from] derma_core::gpu::GpuError),
     #[error("invalid {what}: {detail}")]
     Invalid { what: String, detail: String },
     #[error("'{path}': {detail}")]

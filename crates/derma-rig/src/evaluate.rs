@@ -155,6 +155,39 @@ struct Scratch {
     wide_scale: Vec<f32>,
 }
 
+/// One frame on `device` (resolved: `Auto` picks a hardware GPU when there is one): the
+/// hemoglobin map, and with `melanin` its colour through `lut` (the CPU's exact path, or
+/// `rig.wgsl` on the GPU). `w` holds w_0 first; `g` is the global scale.
+pub fn evaluate_frame(
+    rig: &Rig,
+    lut: &SkinColorLut,
+    w: &[f32],
+    g: f32,
+    melanin: Option<&Map>,
+    device: derma_core::gpu::Device,
+) -> Result<(Map, Option<[Map; 3]>)> {
+    match device.resolve()? {
+        derma_core::gpu::Device::Gpu => {
+            // Without melanin only the hemoglobin is wanted; colour with C_m = 0 is discarded.
+            let zero;
+            let m = match melanin {
+                Some(m) => m,
+                None => {
+                    zero = Map::filled(rig.size().0, rig.size().1, 0.0);
+                    &zero
+                }
+            };
+            let (h, rgb) = crate::gpu_eval::GpuRig::new(rig, m, lut)?.render(w, g)?;
+            Ok((h, melanin.is_some().then_some(rgb)))
+        }
+        _ => {
+            let h = hemoglobin(rig, w, g)?;
+            let rgb = melanin.map(|m| color(&h, m, lut)).transpose()?;
+            Ok((h, rgb))
+        }
+    }
+}
+
 /// Checks that `melanin` has the rig's full resolution.
 pub(crate) fn check_melanin(rig: &Rig, melanin: &Map) -> Result<()> {
     let (w, h) = rig.size();

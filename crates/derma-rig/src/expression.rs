@@ -191,6 +191,30 @@ pub const LIBRARY: [Expression; 8] = [
 ];
 
 /// The library entry called `name`.
+/// The entries `names` selects: each by name, or every entry for "all"; an unknown name is an
+/// error listing the library.
+pub fn select(names: &[String]) -> crate::Result<Vec<&'static Expression>> {
+    if names.iter().any(|n| n == "all") {
+        return Ok(LIBRARY.iter().collect());
+    }
+    names
+        .iter()
+        .filter(|n| !n.is_empty())
+        .map(|n| {
+            find(n).ok_or_else(|| {
+                crate::error::invalid(
+                    "built-in expression",
+                    format!(
+                        "'{n}' is not in the library ({})",
+                        LIBRARY.iter().map(|e| e.name).collect::<Vec<_>>().join(", ")
+                    ),
+                )
+            })
+        })
+        .collect()
+}
+
+/// The library entry named `name`.
 pub fn find(name: &str) -> Option<&'static Expression> {
     LIBRARY.iter().find(|e| e.name == name)
 }

@@ -6,7 +6,7 @@ use crate::basis::Rig;
 use crate::error::{invalid, Result};
 use derma_core::Map;
 use derma_shading::skin_color_lut::SkinColorLut;
-use std::sync::OnceLock;
+use derma_core::gpu::GpuCell;
 use wgpu::util::DeviceExt;
 
 /// The shader, also written into every rig directory as `rig.wgsl` for engines.
@@ -28,27 +28,14 @@ struct Params {
     pad: [u32; 3],
 }
 
-fn gpu_error(detail: String) -> crate::error::RigError {
-    invalid("GPU", detail)
-}
-
-static PIPELINE: OnceLock<std::result::Result<wgpu::ComputePipeline, String>> = OnceLock::new();
+/// The rig pipeline, compiled once per process.
+static PIPELINE: GpuCell<wgpu::ComputePipeline> = GpuCell::new();
 
 fn pipeline() -> Result<(
     &'static derma_core::gpu::Gpu,
     &'static wgpu::ComputePipeline,
 )> {
-    let ctx = derma_core::gpu::context().map_err(gpu_error)?;
-    let p = PIPELINE
-        .get_or_init(|| ctx.compute_pipeline("the rig shader (rig.wgsl)", SHADER, "main"))
-        .as_ref()
-        .map_err(|e| gpu_error(e.clone()))?;
-    Ok((ctx, p))
-}
-
-/// Whether a GPU can evaluate rigs, and its name.
-pub fn available() -> Option<String> {
-    pipeline().ok().map(|(g, _)| g.name.clone())
+    Ok(PIPELINE.get_or_init(|ctx| ctx.compute_pipeline("the rig shader (rig.wgsl)", SHADER, "main"))?)
 }
 
 /// A rig resident on the GPU.
@@ -184,10 +171,8 @@ impl GpuRig {
             pass.dispatch_workgroups(gx, gy, 1);
         }
         ctx.queue.submit([enc.finish()]);
-        let hb: Vec<f32> = ctx
-            .read_back(&self.hemoglobin_buf, fw * fh)
-            .map_err(gpu_error)?;
-        let cb: Vec<[f32; 4]> = ctx.read_back(&self.color_buf, fw * fh).map_err(gpu_error)?;
+        let hb: Vec<f32> = ctx.read_back(&self.hemoglobin_buf, fw * fh)?;
+        let cb: Vec<[f32; 4]> = ctx.read_back(&self.color_buf, fw * fh)?;
         let rgb = [0, 1, 2]
             .map(|c| Map::from_vec(fw, fh, cb.iter().map(|p| p[c]).collect()).expect("size"));
         Ok((Map::from_vec(fw, fh, hb)?, rgb))

@@ -19,7 +19,10 @@ pub mod evaluate;
 pub mod expression;
 pub mod gpu_eval;
 pub mod local_stats;
+pub mod maps;
+pub mod preview;
 pub mod rig_dir;
+pub mod sequence;
 pub mod upsample;
 pub mod weights;
 

@@ -5,6 +5,7 @@
 //! w_0 = 1 − Σ w_i, which is the normalisation eq. 6 implies for partial weights. Weights over
 //! one are an error unless [`Normalization::Rescale`] is asked for (then w_i / Σ w_i, w_0 = 0).
 
+use crate::basis::Rig;
 use crate::error::{invalid, Result};
 
 /// Tolerance on "sums to one".
@@ -111,11 +112,22 @@ pub fn resolve(names: &[&str], spec: &WeightSpec, norm: Normalization) -> Result
 }
 
 /// The global hemoglobin scale of a frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum GlobalScale {
+    /// This factor.
     Fixed(f32),
     /// 1 + Σ w_i (g_i − 1): each target's suggested scale at its weight.
+    #[default]
     Auto,
+}
+
+impl std::fmt::Display for GlobalScale {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            GlobalScale::Auto => f.write_str("auto"),
+            GlobalScale::Fixed(g) => write!(f, "{g}"),
+        }
+    }
 }
 
 impl std::str::FromStr for GlobalScale {
@@ -132,6 +144,21 @@ impl std::str::FromStr for GlobalScale {
             )),
         }
     }
+}
+
+/// Weights w_0, w_1 … w_k and the global scale of one frame of `rig`: `spec` resolved against
+/// its targets with `norm`, and `global` (Auto: each target's suggested scale at its weight).
+pub fn frame_weights(
+    rig: &Rig,
+    spec: &WeightSpec,
+    norm: Normalization,
+    global: GlobalScale,
+) -> Result<(Vec<f32>, f32)> {
+    let names: Vec<&str> = rig.targets.iter().map(|t| t.name.as_str()).collect();
+    let w = resolve(&names, spec, norm)?;
+    let suggested: Vec<f32> = rig.targets.iter().map(|t| t.global_scale).collect();
+    let g = global_scale(global, &w, &suggested);
+    Ok((w, g))
 }
 
 /// The scale for weights `w` (w_0 first) given each target's suggested scale.

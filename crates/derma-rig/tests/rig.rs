@@ -407,7 +407,7 @@ fn deterministic_across_thread_counts() {
 
 #[test]
 fn gpu_shader_agrees_with_the_cpu_path() {
-    if derma_core::gpu::skip_test_without_gpu(derma_rig::gpu_eval::available().is_some()) {
+    if derma_test_support::skip_without_gpu() {
         return;
     }
     // Non-square, non-power-of-two ratio between map and basis, several targets, a partial

@@ -7,7 +7,8 @@
 
 use derma_core::color::{linear_srgb_to_xyz, xyz_to_lab};
 use derma_core::rng::Philox;
-use derma_optics::run::Device;
+use derma_core::gpu::Device;
+use derma_core::progress::Silent;
 use derma_optics::simulate::{simulate_skin, SkinSimConfig};
 use derma_shading::{Appearance, BioTexel, SpectralKubelkaMunk, TableAppearance};
 
@@ -49,7 +50,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             seed: 100 + k,
             ..SkinSimConfig::default()
         };
-        let mc = simulate_skin(&bio, &cfg, Device::Cpu, &|_| {})?.linear_srgb;
+        let mc = simulate_skin(&bio, &cfg, Device::Cpu, &Silent)?.linear_srgb;
         let t = table.albedo(&bio).map(|x| x as f64);
         let a = analytic.albedo(&bio).map(|x| x as f64);
         let (et, ea) = (delta_e(t, mc), delta_e(a, mc));

@@ -7,8 +7,8 @@
 //! measures the Monte Carlo tallies bins with), so bins are compared like for like.
 
 use crate::annealing::{anneal, Schedule};
-use crate::least_squares::{levenberg_marquardt, nnls_normal, LmOptions};
 use crate::render_model::{bounds, combine, n_params, Basis, Dirs, RenderModel, MAX_LOBES};
+use derma_core::numerics::{levenberg_marquardt, nnls_normal, LmOptions};
 use derma_optics::tally::BrdfBins;
 use std::f64::consts::{FRAC_PI_2, PI};
 
@@ -322,7 +322,7 @@ pub fn fit_brdf(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render_model::ModelKind;
+    use crate::model_kind::ModelKind;
 
     fn bins() -> BrdfBins {
         BrdfBins {

@@ -5,7 +5,7 @@
 //! R(r) = A (e^{−r/d} + e^{−r/(3d)}) / (8π d r); its integral over the plane is A, and the energy
 //! inside radius r is A (1 − e^{−r/d}/4 − 3 e^{−r/(3d)}/4), so ring averages are exact.
 
-use crate::least_squares::{levenberg_marquardt, LmOptions};
+use derma_core::numerics::{levenberg_marquardt, LmOptions};
 use derma_optics::tally::ProfileBins;
 use std::f64::consts::PI;
 

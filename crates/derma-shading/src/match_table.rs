@@ -5,14 +5,15 @@
 
 use crate::brdf_fit::{fit_brdf, FitGeometry, FitOptions, Weighting};
 use crate::error::{Result, ShadingError};
-use crate::render_model::{n_params, param_names, ModelKind};
+use crate::model_kind::ModelKind;
+use crate::render_model::{n_params, param_names};
 use crate::{burley, sum_of_gaussians};
 use derma_core::dtab::{Dtab, DtabHeader, DtabValue};
+use derma_core::progress::{Progress, Unit};
 use derma_optics::precompute::Grid;
 use derma_optics::tally::ProfileBins;
 use rayon::prelude::*;
 use std::path::Path;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// The precompute grid's axes in [`derma_optics::BioTexel`] order.
 pub const BIO_AXES: [&str; 6] = derma_optics::precompute::AXES;
@@ -110,11 +111,11 @@ pub fn value_layout(opts: &MatchOptions) -> Vec<DtabValue> {
     out
 }
 
-/// Fits every node of precompute table `pre`. `progress` gets the number of nodes done.
+/// Fits every node of precompute table `pre` (one stage, advancing by entries).
 pub fn fit_table(
     pre: &Dtab,
     opts: &MatchOptions,
-    progress: &(dyn Fn(usize) + Sync),
+    progress: &dyn Progress,
 ) -> Result<(Dtab, Vec<ResidualSummary>)> {
     let grid = precompute_grid(pre)?;
     let bins = derma_optics::tally::BrdfBins {
@@ -132,12 +133,12 @@ pub fn fit_table(
     for name in ["linear_srgb", "brdf_rgb", "profile_rgb"] {
         slice(pre, 0, name)?;
     }
-    let done = AtomicUsize::new(0);
+    progress.stage("fit", nodes as u64, Unit::Entries);
     let rows: Vec<Vec<f32>> = (0..nodes)
         .into_par_iter()
         .map(|node| -> Result<Vec<f32>> {
             let row = fit_node(pre, node, &geom, &pbins, opts)?;
-            progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+            progress.advance(1);
             Ok(row)
         })
         .collect::<Result<_>>()?;

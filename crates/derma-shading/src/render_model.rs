@@ -4,11 +4,7 @@
 //!
 //! The split lets the fitter solve the linear weights exactly for every θ it tries (variable
 //! projection) and anneal only over θ. Directions are in the local frame, z = surface normal.
-
-use crate::ashikhmin_shirley::AshikhminShirley;
-use crate::ggx::GltfGgx;
-use crate::kelemen::KelemenSzirmayKalos;
-use crate::skin_dual_lobe::SkinDualLobe;
+//! The models themselves live one per module; [`crate::model_kind`] lists them.
 
 /// At most this many shared linear lobes.
 pub const MAX_LOBES: usize = 3;
@@ -151,41 +147,6 @@ pub fn eval(m: &dyn RenderModel, params: &[f64], d: &Dirs) -> [f64; 3] {
     let nl = m.lobes().len();
     let b = m.basis(&params[3 + nl..], d);
     combine(&b, params, nl)
-}
-
-/// The models derma can fit.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum ModelKind {
-    Ggx,
-    AshikhminShirley,
-    Kelemen,
-    SkinDualLobe,
-}
-
-impl ModelKind {
-    pub const ALL: [ModelKind; 4] = [
-        ModelKind::Ggx,
-        ModelKind::AshikhminShirley,
-        ModelKind::Kelemen,
-        ModelKind::SkinDualLobe,
-    ];
-
-    pub fn model(self) -> &'static dyn RenderModel {
-        match self {
-            ModelKind::Ggx => &GltfGgx,
-            ModelKind::AshikhminShirley => &AshikhminShirley,
-            ModelKind::Kelemen => &KelemenSzirmayKalos,
-            ModelKind::SkinDualLobe => &SkinDualLobe,
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        self.model().name()
-    }
-
-    pub fn parse(s: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|k| k.name() == s)
-    }
 }
 
 #[cfg(test)]

@@ -9,7 +9,9 @@
 use crate::error::{Result, ShadingError};
 use derma_core::color::{reflectance_to_linear_srgb, Spectrum};
 use derma_core::dtab::{Dtab, DtabAxis, DtabHeader, DtabValue};
-use derma_optics::run::{Device, Run};
+use derma_core::gpu::Device;
+use derma_core::progress::{Progress, Silent, Unit};
+use derma_optics::run::Run;
 use derma_optics::specimen::skin_stacks_with_epidermal_blood;
 use derma_optics::tally::R_DIFFUSE;
 use derma_optics::transport::Incidence;
@@ -84,7 +86,7 @@ pub fn entry_color(opts: &LutOptions, c_m: f64, c_hd: f64, device: Device) -> Re
         profile: None,
         channel_weights: Vec::new(),
     };
-    let t = derma_optics::backend::run_on(&run, device, &|_| {})?;
+    let (t, _) = derma_optics::backend::run_on(&run, device, &Silent)?;
     let r: Spectrum =
         std::array::from_fn(|i| t.per_lambda[i][R_DIFFUSE] / t.per_lambda_count[i].max(1) as f64);
     Ok(reflectance_to_linear_srgb(&r))
@@ -97,8 +99,8 @@ impl SkinColorLut {
         u * u * u
     }
 
-    /// Simulates every entry; `progress` gets the entries done.
-    pub fn build(opts: LutOptions, device: Device, progress: &dyn Fn(usize)) -> Result<Self> {
+    /// Simulates every entry (one stage, advancing by entries).
+    pub fn build(opts: LutOptions, device: Device, progress: &dyn Progress) -> Result<Self> {
         if opts.size < 2 || opts.photons == 0 {
             return Err(ShadingError::Invalid(format!(
                 "LUT size {} and photons {} must be at least 2 and 1",
@@ -115,6 +117,12 @@ impl SkinColorLut {
                 return Err(ShadingError::Invalid(format!("{name} {v} outside [0, 1]")));
             }
         }
+        let device = device.resolve().map_err(derma_optics::OpticsError::from)?;
+        progress.stage(
+            "skin-color LUT",
+            (opts.size * opts.size) as u64,
+            Unit::Entries,
+        );
         let mut lut = Self {
             options: opts,
             rgb: Vec::with_capacity(opts.size * opts.size),
@@ -128,7 +136,7 @@ impl SkinColorLut {
                     device,
                 )?;
                 lut.rgb.push(c.map(|x| x as f32));
-                progress(lut.rgb.len());
+                progress.advance(1);
             }
         }
         Ok(lut)
@@ -254,6 +262,30 @@ impl SkinColorLut {
         Self::from_dtab(&t, "builtin").expect("the committed LUT is valid (tested)")
     }
 
+    /// Writes the table by `path`'s extension: `.dtab` (linear, with its JSON sidecar) or
+    /// `.png` (16-bit, sRGB-encoded, u along x and v down, for engines and viewers).
+    pub fn write(&self, path: &std::path::Path) -> Result<()> {
+        match path.extension().and_then(|e| e.to_str()) {
+            Some("dtab") => Ok(self.to_dtab().write(path)?),
+            Some("png") => {
+                let ch = self.channels().map(|mut m| {
+                    m.data_mut()
+                        .iter_mut()
+                        .for_each(|v| *v = derma_core::color::srgb_encode(v.clamp(0.0, 1.0)));
+                    m
+                });
+                Ok(derma_core::image_io::write_png16(
+                    path,
+                    &[&ch[0], &ch[1], &ch[2]],
+                )?)
+            }
+            _ => Err(ShadingError::Invalid(format!(
+                "{}: expected a .png or .dtab file name for the skin-color LUT",
+                path.display()
+            ))),
+        }
+    }
+
     /// The table as images: three channels of `size × size`, linear.
     pub fn channels(&self) -> [derma_core::Map; 3] {
         let n = self.options.size;
@@ -273,7 +305,7 @@ mod tests {
             photons: 6000,
             ..Default::default()
         };
-        SkinColorLut::build(o, Device::Cpu, &|_| {}).unwrap()
+        SkinColorLut::build(o, Device::Cpu, &Silent).unwrap()
     }
 
     #[test]
@@ -329,8 +361,8 @@ mod tests {
             photons: 2000,
             ..Default::default()
         };
-        let a = SkinColorLut::build(o, Device::Cpu, &|_| {}).unwrap();
-        let b = SkinColorLut::build(o, Device::Cpu, &|_| {}).unwrap();
+        let a = SkinColorLut::build(o, Device::Cpu, &Silent).unwrap();
+        let b = SkinColorLut::build(o, Device::Cpu, &Silent).unwrap();
         assert_eq!(a, b);
     }
 }

@@ -3,7 +3,7 @@
 //! G(v, r) = e^{−r²/(2v)} / (2πv), variances shared by the colour channels, weights per channel,
 //! fitted by minimising ∫ r (R − Σ)² dr as they do.
 
-use crate::least_squares::{levenberg_marquardt, nnls_normal, LmOptions};
+use derma_core::numerics::{levenberg_marquardt, nnls_normal, LmOptions};
 use derma_optics::tally::ProfileBins;
 
 /// d'Eon et al. 2007's six variances (mm²) for skin's three-layer profile (GPU Gems 3,

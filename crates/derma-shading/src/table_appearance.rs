@@ -5,7 +5,7 @@
 use crate::appearance::{Appearance, BioTexel, Subsurface};
 use crate::error::{Result, ShadingError};
 use crate::match_table::MatchTable;
-use crate::render_model::ModelKind;
+use crate::model_kind::ModelKind;
 use std::path::Path;
 
 /// Values kept per node: base colour (3), subsurface colour (3), scatter distance (3), padded

@@ -507,7 +507,7 @@ impl SkinConfig {
     /// Parses TOML, rejecting unknown keys and out-of-range values. `source` names the file.
     pub fn from_toml(text: &str, source: &str) -> Result<SkinConfig, crate::SkinError> {
         let cfg: SkinConfig = toml::from_str(text).map_err(|e| crate::SkinError::Config {
-            file: source.into(),
+            origin: source.into(),
             detail: e.to_string(),
         })?;
         cfg.validate(source)?;
@@ -517,7 +517,7 @@ impl SkinConfig {
     /// Checks every numeric value against its documented range (NaN is always rejected).
     pub fn validate(&self, source: &str) -> Result<(), crate::SkinError> {
         let value = toml::Value::try_from(self).map_err(|e| crate::SkinError::Config {
-            file: source.into(),
+            origin: source.into(),
             detail: e.to_string(),
         })?;
         let mut problems = Vec::new();
@@ -568,7 +568,7 @@ impl SkinConfig {
             Ok(())
         } else {
             Err(crate::SkinError::Config {
-                file: source.into(),
+                origin: source.into(),
                 detail: problems.join("; "),
             })
         }
@@ -576,8 +576,9 @@ impl SkinConfig {
 
     /// The full default configuration as commented TOML (`derma skin --print-config`).
     pub fn print_default() -> String {
-        let value =
+        let mut value =
             toml::Value::try_from(SkinConfig::default()).expect("default config serializes");
+        tidy_floats(&mut value);
         let mut out = String::from(
             "# derma skin configuration: every key, its unit, default and source.\n# Unknown keys are errors. Lengths in mm, layer thicknesses in µm, fractions in [0, 1].\n",
         );
@@ -609,6 +610,17 @@ impl SkinConfig {
             }
         }
         out
+    }
+}
+
+/// Prints every float as the value written in the source (0.04, not 0.03999999910593033): the
+/// config's fields are f32, which TOML serializes through f64.
+fn tidy_floats(v: &mut toml::Value) {
+    match v {
+        toml::Value::Float(x) => *x = derma_core::report::as_written(*x),
+        toml::Value::Array(a) => a.iter_mut().for_each(tidy_floats),
+        toml::Value::Table(t) => t.iter_mut().for_each(|(_, v)| tidy_floats(v)),
+        _ => {}
     }
 }
 
@@ -671,6 +683,9 @@ mod tests {
         let back = SkinConfig::from_toml(&printed, "printed").unwrap();
         assert_eq!(back, SkinConfig::default());
         assert!(printed.contains("Jacques 1998"));
+        // Floats print as written: 0.028, not the f32's binary value in full.
+        assert!(printed.contains("specular_f0 = 0.028\n"), "{printed}");
+        assert!(!printed.contains("0.0279999"), "{printed}");
     }
 
     #[test]

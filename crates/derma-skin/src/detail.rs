@@ -13,7 +13,10 @@ use crate::features::BioSample;
 use crate::SkinError;
 use derma_core::image_io::read_rgb;
 use derma_core::Map;
-use derma_synth::{synthesize, CpuMatcher, ExemplarSet, ProgressSink, SynthOptions, Texture};
+use derma_core::color::luminance;
+use derma_core::gpu::Device;
+use derma_core::progress::Progress;
+use derma_synth::{Synthesizer, Texture};
 use rayon::prelude::*;
 use std::path::Path;
 
@@ -26,22 +29,25 @@ pub struct DetailTile {
 }
 
 fn config_error(detail: String) -> SkinError {
-    SkinError::Config {
-        file: "detail".into(),
+    SkinError::Key {
+        key: "detail".into(),
         detail,
     }
 }
 
-/// Loads the exemplars, synthesises the tile and high-passes it.
+/// Loads the exemplars, synthesises the tile on `device` (identical on every device) and
+/// high-passes it.
 pub fn build(
     cfg: &DetailConfig,
     height: Option<&Path>,
     albedo: Option<&Path>,
     seed: u64,
+    device: Device,
+    progress: &dyn Progress,
 ) -> Result<DetailTile, SkinError> {
     let mut maps: Vec<Map> = Vec::new();
     let mut size: Option<(usize, usize, std::path::PathBuf)> = None;
-    let mut add = |path: &Path, colour: bool, maps: &mut Vec<Map>| -> Result<usize, SkinError> {
+    let mut add = |path: &Path, color: bool, maps: &mut Vec<Map>| -> Result<usize, SkinError> {
         let img = read_rgb(path)?;
         let (w, h) = (img.channels[0].width(), img.channels[0].height());
         if let Some((w0, h0, p0)) = &size {
@@ -56,7 +62,7 @@ pub fn build(
         } else {
             size = Some((w, h, path.to_path_buf()));
         }
-        let n = if colour { 3 } else { 1 };
+        let n = if color { 3 } else { 1 };
         maps.extend(img.channels.into_iter().take(n));
         Ok(n)
     };
@@ -69,18 +75,15 @@ pub fn build(
     }
     let texture = Texture::from_maps(&maps.iter().collect::<Vec<_>>())
         .map_err(|e| config_error(e.to_string()))?;
-    let patch = cfg.patch as usize;
-    let set = ExemplarSet::new(vec![texture], patch).map_err(|e| config_error(e.to_string()))?;
     let size = cfg.tile_size as usize;
-    let opts = SynthOptions {
-        width: size,
-        height: size,
-        patch,
-        seed,
-        tile: true,
-        ..Default::default()
-    };
-    let tile = synthesize(&set, &opts, None, &CpuMatcher, &ProgressSink::default())
+    let tile = Synthesizer::new(texture)
+        .size(size, size)
+        .patch(cfg.patch as usize)
+        .seed(seed)
+        .tile(true)
+        .device(device)
+        .progress(progress)
+        .run()
         .map_err(|e| config_error(e.to_string()))?
         .texture;
     let radius = cfg.highpass_texels as usize;
@@ -97,10 +100,8 @@ pub fn build(
     let contrast = albedo_channels.map(|_| {
         let lum: Vec<f32> = (0..size * size)
             .map(|i| {
-                // Rec. 709 luminance of the stored values.
-                0.2126 * tile.data[i * tile.channels + k]
-                    + 0.7152 * tile.data[i * tile.channels + k + 1]
-                    + 0.0722 * tile.data[i * tile.channels + k + 2]
+                let t = &tile.data[i * tile.channels + k..];
+                luminance([t[0], t[1], t[2]])
             })
             .collect();
         let low = box_blur_wrapped(&lum, size, radius);
@@ -170,7 +171,7 @@ impl DetailTile {
                     }
                     if let Some(c) = &self.contrast {
                         let f = 1.0 - cfg.albedo_contrast * Self::sample(c, tx, ty);
-                        t.melanin = (t.melanin * f.max(0.0)).clamp(0.0, 1.0);
+                        t.tissue.melanin = (t.tissue.melanin * f.max(0.0)).clamp(0.0, 1.0);
                     }
                 }
             });
@@ -225,11 +226,17 @@ mod tests {
             height_mm: 0.02,
             ..Default::default()
         };
-        let tile = build(&cfg, Some(&dir.join("h.png")), Some(&dir.join("a.png")), 3).unwrap();
-        let base = BioSample {
-            melanin: 0.05,
-            ..Default::default()
-        };
+        let tile = build(
+            &cfg,
+            Some(&dir.join("h.png")),
+            Some(&dir.join("a.png")),
+            3,
+            Device::Cpu,
+            &derma_core::progress::Silent,
+        )
+        .unwrap();
+        let mut base = BioSample::default();
+        base.tissue.melanin = 0.05;
         let w = 128;
         let mut texels = vec![base; w * w];
         tile.apply(&cfg, &mut texels, w);
@@ -243,7 +250,7 @@ mod tests {
         );
         // Melanin varies about its painted value, higher where the colour is darker, which in
         // these exemplars is where the relief is high.
-        let mel: Vec<f64> = texels.iter().map(|t| t.melanin as f64 / 0.05).collect();
+        let mel: Vec<f64> = texels.iter().map(|t| t.tissue.melanin as f64 / 0.05).collect();
         let m_mean = mel.iter().sum::<f64>() / mel.len() as f64;
         assert!((m_mean - 1.0).abs() < 0.05, "mean melanin factor {m_mean}");
         let cov: f64 = mel
@@ -268,6 +275,8 @@ mod tests {
             Some(&dir.join("h.png")),
             Some(&dir.join("a.png")),
             1,
+            Device::Cpu,
+            &derma_core::progress::Silent,
         )
         .err()
         .unwrap()

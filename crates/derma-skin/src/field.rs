@@ -4,6 +4,7 @@
 
 use crate::{Result, SkinError};
 use derma_core::image_io;
+use derma_core::progress::{Note, Progress};
 use derma_core::Map;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -14,8 +15,6 @@ pub struct FieldSet {
     pub scalars: BTreeMap<String, Map>,
     /// Vector fields: direction (R, G in [0,1], 0.5 = zero) and length B.
     pub vectors: BTreeMap<String, [Map; 3]>,
-    /// Messages for the user (colour images converted, uniform fallbacks…).
-    pub notes: Vec<String>,
 }
 
 /// A vector read from a vector field: a unit direction in UV space and a length in [0, 1].
@@ -55,8 +54,9 @@ impl FieldSet {
         })
     }
 
-    /// Loads every `NAME.png`/`NAME.exr` of `dir` as field NAME (`*_vectors` files as vector fields).
-    pub fn load_dir(&mut self, dir: &Path) -> Result<()> {
+    /// Loads every `NAME.png`/`NAME.exr` of `dir` as field NAME (`*_vectors` files as vector
+    /// fields); suspicious inputs (colour, out of range) are noted on `progress`.
+    pub fn load_dir(&mut self, dir: &Path, progress: &dyn Progress) -> Result<()> {
         let entries = std::fs::read_dir(dir).map_err(|source| derma_core::CoreError::Read {
             path: dir.to_path_buf(),
             source,
@@ -75,20 +75,20 @@ impl FieldSet {
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_default();
-            self.load_file(&name, &p)?;
+            self.load_file(&name, &p, progress)?;
         }
         Ok(())
     }
 
     /// Loads one file as field `name`.
-    pub fn load_file(&mut self, name: &str, path: &Path) -> Result<()> {
+    pub fn load_file(&mut self, name: &str, path: &Path, progress: &dyn Progress) -> Result<()> {
         if name.ends_with("_vectors") {
             let img = image_io::read_rgb(path)?;
-            if !img.is_colour {
-                self.notes.push(format!(
-                    "warning: vector field '{name}' ({}) is greyscale (R = G = B); expected RGB: R, G the direction (0.5 = 0) and B the length",
+            if !img.is_color {
+                progress.note(Note::warning(format!(
+                    "vector field '{name}' ({}) is greyscale (R = G = B); expected RGB: R, G the direction (0.5 = 0) and B the length",
                     path.display()
-                ));
+                )));
             }
             let [r, g, b]: [Map; 3] = img.channels.try_into().map_err(|_| SkinError::Field {
                 name: name.into(),
@@ -97,18 +97,18 @@ impl FieldSet {
             self.vectors.insert(name.into(), [r, g, b]);
         } else {
             let img = image_io::read_grey(path)?;
-            if img.is_colour {
-                self.notes.push(format!(
-                    "warning: field '{name}' ({}) is a colour image; converted to greyscale by luminance (paint probability fields in grey)",
+            if img.is_color {
+                progress.note(Note::warning(format!(
+                    "field '{name}' ({}) is a colour image; converted to greyscale by luminance (paint probability fields in grey)",
                     path.display()
-                ));
+                )));
             }
             let m = img.channels.into_iter().next().expect("one channel");
             if m.data().iter().any(|&v| !(0.0..=1.0).contains(&v)) {
-                self.notes.push(format!(
-                    "warning: field '{name}' ({}) has values outside [0, 1]; clamped",
+                progress.note(Note::warning(format!(
+                    "field '{name}' ({}) has values outside [0, 1]; clamped",
                     path.display()
-                ));
+                )));
             }
             self.scalars.insert(name.into(), m);
         }

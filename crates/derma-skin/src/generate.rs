@@ -1,37 +1,33 @@
-//! The main job end to end: surface → fields → features → bio maps → texture set → files, with
-//! per-stage timings. Orchestration only; the physics lives in the modules it calls.
+//! The main job end to end — surface → fields → features → bio maps → texture set → files —
+//! behind a builder with documented defaults ([`SkinGenerator`]), and the result it produces
+//! ([`TextureSet`]), which writes every file of [`crate::outputs`]. Orchestration only; the
+//! physics lives in the modules it calls.
+//!
+//! ```no_run
+//! # fn main() -> derma_skin::Result<()> {
+//! use derma_skin::{SkinConfig, SkinGenerator};
+//! let set = SkinGenerator::new(SkinConfig { size: 512, ..SkinConfig::default() }).threads(2).run()?;
+//! set.write(std::path::Path::new("out"), &derma_core::progress::Silent)?;
+//! # Ok(())
+//! # }
+//! ```
 
 use crate::config::{SkinConfig, SurfaceKind};
 use crate::field::FieldSet;
+use crate::outputs;
 use crate::paint::BioMaps;
 use crate::placement::FeatureSet;
 use crate::surface::Surface;
-use crate::texture_set::{OutputEntry, RenderMaps};
+use crate::texture_set::{HeightRange, RenderMaps};
 use crate::{Result, SkinError};
+use derma_core::gpu::Device;
 use derma_core::mesh::{LengthUnit, TriMesh};
+use derma_core::progress::{Job, Log, Note, Prefixed, Progress, Silent, Unit};
 use derma_core::Map;
 use derma_shading::Appearance;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
-
-/// Every file `derma skin` writes into its output directory.
-pub const OUTPUT_FILES: [&str; 15] = [
-    "base_color.png",
-    "sss_color.png",
-    "sss_radius.png",
-    "normal.png",
-    "height.exr",
-    "height.png",
-    "roughness.png",
-    "specular.png",
-    "melanin.exr",
-    "hemoglobin.exr",
-    "bio.exr",
-    "features.json",
-    "preview.png",
-    "manifest.json",
-    "report.json",
-];
 
 /// Which bio → render conversion the texture set uses.
 #[derive(Clone, Default)]
@@ -42,7 +38,7 @@ pub enum AppearanceChoice {
     /// The analytic spectral Kubelka–Munk model.
     Analytic,
     /// A match table read by the caller.
-    Table(std::sync::Arc<derma_shading::TableAppearance>),
+    Table(Arc<derma_shading::TableAppearance>),
 }
 
 impl std::fmt::Debug for AppearanceChoice {
@@ -53,44 +49,6 @@ impl std::fmt::Debug for AppearanceChoice {
             AppearanceChoice::Table(_) => "Table",
         })
     }
-}
-
-/// Files given on the command line (they override the config's `surface.mesh`).
-#[derive(Clone, Debug, Default)]
-pub struct Inputs {
-    pub appearance: AppearanceChoice,
-    pub mesh: Option<PathBuf>,
-    pub fields_dir: Option<PathBuf>,
-    /// Directory relative to which paths in the config are resolved.
-    pub config_dir: Option<PathBuf>,
-}
-
-/// Progress reporting (the CLI shows bars; libraries never print).
-pub trait Progress: Sync {
-    fn stage(&self, _name: &str, _total: u64) {}
-    fn advance_to(&self, _done: u64) {}
-    fn note(&self, _message: &str) {}
-}
-
-/// Progress that ignores everything.
-pub struct NoProgress;
-impl Progress for NoProgress {}
-
-/// Everything the main job produced, in memory.
-pub struct Generated {
-    pub surface: Surface,
-    pub fields: FieldSet,
-    pub features: FeatureSet,
-    pub bio: BioMaps,
-    pub render: RenderMaps,
-    pub dilation: Option<Vec<u32>>,
-    pub notes: Vec<String>,
-    pub timings: Vec<(String, f64)>,
-    pub surface_area_mm2: f64,
-    pub mesh_unit: Option<LengthUnit>,
-    /// Mesh and tangents used for the preview (template, user mesh, or none for patches).
-    pub preview_mesh: Option<(TriMesh, Vec<[f32; 4]>)>,
-    pub appearance: &'static str,
 }
 
 /// Bytes of memory per output texel at the pipeline's peak: measured peak resident memory of
@@ -122,22 +80,321 @@ pub fn check_memory(size: usize) -> Result<()> {
     Ok(())
 }
 
-fn resolve(inputs: &Inputs, p: &str) -> PathBuf {
-    let p = Path::new(p);
-    match (&inputs.config_dir, p.is_absolute()) {
-        (Some(d), false) => d.join(p),
-        _ => p.to_path_buf(),
+/// Builds a skin texture set. Defaults: the given config, the built-in head (or the config's
+/// surface), its template fields, the Monte Carlo match table, [`Device::Auto`] for the
+/// exemplar detail, all cores, no progress shown.
+pub struct SkinGenerator<'a> {
+    config: SkinConfig,
+    config_path: Option<PathBuf>,
+    mesh: Option<PathBuf>,
+    fields: Option<PathBuf>,
+    appearance: AppearanceChoice,
+    device: Device,
+    threads: Option<usize>,
+    progress: &'a dyn Progress,
+}
+
+impl<'a> SkinGenerator<'a> {
+    /// A generator for `config`.
+    pub fn new(config: SkinConfig) -> Self {
+        Self {
+            config,
+            config_path: None,
+            mesh: None,
+            fields: None,
+            appearance: AppearanceChoice::Default,
+            device: Device::Auto,
+            threads: None,
+            progress: &Silent,
+        }
+    }
+
+    /// A generator for the TOML config at `path` (paths inside it are relative to its
+    /// directory; report.json records its hash).
+    pub fn from_config_file(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|source| {
+            SkinError::Core(derma_core::CoreError::Read {
+                path: path.to_path_buf(),
+                source,
+            })
+        })?;
+        let config = SkinConfig::from_toml(&text, &path.display().to_string())?;
+        Ok(Self {
+            config_path: Some(path.to_path_buf()),
+            ..Self::new(config)
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &SkinConfig {
+        &self.config
+    }
+
+    /// The configuration, to override keys (size, seed, surface…) after loading.
+    pub fn config_mut(&mut self) -> &mut SkinConfig {
+        &mut self.config
+    }
+
+    /// A mesh with UVs (OBJ, glTF, GLB) instead of the config's surface.
+    pub fn mesh(mut self, path: impl Into<PathBuf>) -> Self {
+        self.mesh = Some(path.into());
+        self
+    }
+
+    /// A directory of painted fields (NAME.png / NAME.exr), over the defaults.
+    pub fn fields(mut self, dir: impl Into<PathBuf>) -> Self {
+        self.fields = Some(dir.into());
+        self
+    }
+
+    /// The bio → render conversion (default: the built-in match table).
+    pub fn appearance(mut self, appearance: AppearanceChoice) -> Self {
+        self.appearance = appearance;
+        self
+    }
+
+    /// Where `[detail]`'s exemplar synthesis runs (default [`Device::Auto`]; identical results).
+    pub fn device(mut self, device: Device) -> Self {
+        self.device = device;
+        self
+    }
+
+    /// Worker threads (default: all cores); outputs are identical for any number.
+    pub fn threads(mut self, threads: usize) -> Self {
+        self.threads = Some(threads);
+        self
+    }
+
+    /// Where progress and notes go (default nowhere).
+    pub fn progress(mut self, progress: &'a dyn Progress) -> Self {
+        self.progress = progress;
+        self
+    }
+
+    /// The configuration's directory, against which its relative paths resolve.
+    fn resolve(&self, p: &str) -> PathBuf {
+        let p = Path::new(p);
+        match self.config_path.as_ref().and_then(|c| c.parent()) {
+            Some(d) if !p.is_absolute() => d.join(p),
+            _ => p.to_path_buf(),
+        }
+    }
+
+    /// The mesh to use: `--mesh`, else the config's (with `surface.kind = "mesh"`).
+    fn mesh_path(&self) -> Option<PathBuf> {
+        self.mesh.clone().or_else(|| {
+            (self.config.surface.kind == SurfaceKind::Mesh && !self.config.surface.mesh.is_empty())
+                .then(|| self.resolve(&self.config.surface.mesh))
+        })
+    }
+
+    /// Every file the set writes into `dir` (whatever the appearance, for the overwrite check).
+    pub fn output_files(dir: &Path) -> Vec<PathBuf> {
+        outputs::OUTPUTS.iter().map(|o| dir.join(o.file)).collect()
+    }
+
+    /// Checks before any work that the config is valid, the set fits in memory, `dir` can be
+    /// written and no input would be overwritten.
+    pub fn check_output(&self, dir: &Path) -> Result<()> {
+        self.config.validate("the configuration")?;
+        check_memory(self.config.size as usize)?;
+        for (what, p) in [("mesh", &self.mesh), ("fields", &self.fields)] {
+            if let Some(p) = p {
+                if !p.exists() {
+                    return Err(SkinError::Input {
+                        path: p.clone(),
+                        detail: format!("the {what} does not exist"),
+                    });
+                }
+            }
+        }
+        derma_core::atomic::ensure_writable_dir(dir)?;
+        let mesh = self.mesh_path();
+        let inputs: Vec<&Path> = [&mesh, &self.config_path, &self.fields]
+            .into_iter()
+            .flatten()
+            .map(PathBuf::as_path)
+            .collect();
+        derma_core::atomic::check_inputs_spared(&Self::output_files(dir), &inputs)?;
+        Ok(())
+    }
+
+    /// Runs the main job in memory (in its own thread pool when [`Self::threads`] was given).
+    pub fn run(&self) -> Result<TextureSet> {
+        let pool = match self.threads {
+            Some(n) => Some(Arc::new(
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .build()
+                    .map_err(|e| SkinError::Input {
+                        path: PathBuf::from("threads"),
+                        detail: format!("cannot start {n} worker threads: {e}"),
+                    })?,
+            )),
+            None => None,
+        };
+        let mut set = match &pool {
+            Some(p) => p.install(|| self.generate()),
+            None => self.generate(),
+        }?;
+        set.pool = pool;
+        Ok(set)
+    }
+
+    fn generate(&self) -> Result<TextureSet> {
+        let started = Instant::now();
+        let cfg = &self.config;
+        cfg.validate("the configuration")?;
+        let size = cfg.size as usize;
+        check_memory(size)?;
+        let job = Job::new(self.progress);
+
+        // Surface.
+        job.stage("surface", 1, Unit::Steps);
+        let mesh_path = self.mesh_path();
+        let kind = if mesh_path.is_some() {
+            SurfaceKind::Mesh
+        } else {
+            cfg.surface.kind
+        };
+        if kind == SurfaceKind::Mesh && mesh_path.is_none() {
+            return Err(SkinError::Key {
+                key: "surface.kind".into(),
+                detail: "\"mesh\" needs surface.mesh or --mesh".into(),
+            });
+        }
+        let mut mesh_unit = None;
+        let mesh = match kind {
+            SurfaceKind::Template => Some(crate::template::head_mesh()),
+            SurfaceKind::Mesh => {
+                let p = mesh_path.clone().expect("checked");
+                let (m, u) = load_mesh(&p, &cfg.surface.unit, &job)?;
+                mesh_unit = Some(u);
+                Some(m)
+            }
+            SurfaceKind::Patch => None,
+        };
+        let sr = cfg.scatter_resolution as usize;
+        let (surface, scatter_surface, preview_mesh) = match &mesh {
+            Some(m) => {
+                let tangents = crate::surface::mikktspace_tangents(m);
+                let s = Surface::mesh(m, &tangents, size, size);
+                let ss = Surface::mesh(m, &tangents, sr, sr);
+                check_raster(&s, mesh_path.as_deref(), &job)?;
+                (s, ss, Some((m.clone(), tangents)))
+            }
+            None => {
+                let [w, h] = cfg.surface.patch_size_mm;
+                (
+                    Surface::patch(size, size, [w, h], cfg.surface.tileable),
+                    Surface::patch(sr, sr, [w, h], cfg.surface.tileable),
+                    None,
+                )
+            }
+        };
+        let dilation = surface.dilation();
+
+        // Fields: template defaults, or uniform ones; then a fields directory; then config entries.
+        job.stage("fields", 1, Unit::Steps);
+        let mut fields = if kind == SurfaceKind::Template {
+            crate::template::default_fields(mesh.as_ref().expect("template mesh"))
+        } else {
+            if self.fields.is_none() && cfg.fields.is_empty() {
+                job.note(Note::info("no --fields given: uniform fields are used (moles, freckles, cysts and pores everywhere; no lips, hair or wrinkles); paint fields to place them"));
+            }
+            uniform_fields()
+        };
+        if let Some(dir) = &self.fields {
+            fields.load_dir(dir, &job)?;
+        }
+        for (name, value) in &cfg.fields {
+            let v = value.trim();
+            let lower = v.to_ascii_lowercase();
+            if lower.ends_with(".png") || lower.ends_with(".exr") {
+                fields.load_file(name, &self.resolve(v), &job)?;
+            } else {
+                fields.define(name, v)?;
+            }
+        }
+
+        job.stage("scatter", 1, Unit::Steps);
+        let features = crate::placement::place(cfg, &fields, &scatter_surface, size)?;
+        drop(scatter_surface);
+
+        let mut bio = crate::paint::paint(cfg, &surface, &fields, &features, &job)?;
+        if cfg.detail.enabled() {
+            job.stage("detail", 1, Unit::Steps);
+            let path = |p: &str| (!p.trim().is_empty()).then(|| self.resolve(p.trim()));
+            let (h, a) = (path(&cfg.detail.height), path(&cfg.detail.albedo));
+            let tile = crate::detail::build(
+                &cfg.detail,
+                h.as_deref(),
+                a.as_deref(),
+                cfg.seed,
+                self.device,
+                &Prefixed::new(&job, "detail"),
+            )?;
+            job.stage("detail / apply", 1, Unit::Steps);
+            tile.apply(&cfg.detail, &mut bio.texels, bio.width);
+        }
+        if let Some(src) = &dilation {
+            bio.dilate(src);
+        }
+
+        job.stage("convert", 1, Unit::Steps);
+        let analytic;
+        let builtin;
+        let appearance: &dyn Appearance = match &self.appearance {
+            AppearanceChoice::Analytic => {
+                analytic = derma_shading::SpectralKubelkaMunk::default();
+                &analytic
+            }
+            AppearanceChoice::Default => {
+                builtin = derma_shading::TableAppearance::builtin();
+                &builtin
+            }
+            AppearanceChoice::Table(t) => t.as_ref(),
+        };
+        let render = crate::texture_set::convert(
+            &bio,
+            &surface,
+            appearance,
+            &cfg.material,
+            dilation.as_deref(),
+        );
+        Ok(TextureSet {
+            surface_area_mm2: surface.area_mm2(),
+            surface,
+            fields,
+            features,
+            bio,
+            render,
+            dilation,
+            mesh_unit,
+            preview_mesh,
+            appearance: appearance.name(),
+            config: cfg.clone(),
+            inputs: InputFiles {
+                config: self.config_path.clone(),
+                mesh: mesh_path,
+                fields: self.fields.clone(),
+                surface: kind,
+            },
+            log: job.finish(),
+            started,
+            pool: None,
+        })
     }
 }
 
-/// Loads a mesh, detects its unit and reports overlaps.
-fn load_mesh(path: &Path, unit: &str, notes: &mut Vec<String>) -> Result<(TriMesh, LengthUnit)> {
+/// Loads a mesh, detects its unit (noting the guess) and converts it to millimetres.
+fn load_mesh(path: &Path, unit: &str, progress: &dyn Progress) -> Result<(TriMesh, LengthUnit)> {
     let mut mesh = TriMesh::load(path)?;
     let extent = mesh.extent();
     let unit = match unit {
         "auto" => {
             let u = LengthUnit::guess_from_extent(extent);
-            notes.push(format!(
+            progress.note(Note::info(format!(
                 "mesh '{}': largest extent {extent:.3} units, read as {} (a head is 150–250 mm; set surface.unit to override)",
                 path.display(),
                 match u {
@@ -145,15 +402,15 @@ fn load_mesh(path: &Path, unit: &str, notes: &mut Vec<String>) -> Result<(TriMes
                     LengthUnit::Cm => "centimetres",
                     LengthUnit::M => "metres",
                 }
-            ));
+            )));
             u
         }
         "mm" => LengthUnit::Mm,
         "cm" => LengthUnit::Cm,
         "m" => LengthUnit::M,
         other => {
-            return Err(SkinError::Config {
-                file: "surface.unit".into(),
+            return Err(SkinError::Key {
+                key: "surface.unit".into(),
                 detail: format!("'{other}': expected auto, mm, cm or m"),
             })
         }
@@ -162,176 +419,35 @@ fn load_mesh(path: &Path, unit: &str, notes: &mut Vec<String>) -> Result<(TriMes
     Ok((mesh, unit))
 }
 
-/// Runs the main job in memory.
-pub fn generate(cfg: &SkinConfig, inputs: &Inputs, progress: &dyn Progress) -> Result<Generated> {
-    cfg.validate("config")?;
-    let size = cfg.size as usize;
-    check_memory(size)?;
-    let mut timings = Vec::new();
-    let mut notes = Vec::new();
-    let mut t0 = Instant::now();
-    let mut lap = |name: &str, timings: &mut Vec<(String, f64)>| {
-        timings.push((name.to_string(), t0.elapsed().as_secs_f64()));
-        t0 = Instant::now();
+/// Notes UV overlaps and charts outside [0, 1]; fails when no triangle covers a texel.
+fn check_raster(s: &Surface, mesh: Option<&Path>, progress: &dyn Progress) -> Result<()> {
+    let Some(ms) = s.mesh_surface() else {
+        return Ok(());
     };
-
-    // Surface.
-    progress.stage("surface", 1);
-    let mesh_path = inputs.mesh.clone().or_else(|| {
-        (cfg.surface.kind == SurfaceKind::Mesh && !cfg.surface.mesh.is_empty())
-            .then(|| resolve(inputs, &cfg.surface.mesh))
-    });
-    let kind = if mesh_path.is_some() {
-        SurfaceKind::Mesh
-    } else {
-        cfg.surface.kind
-    };
-    if kind == SurfaceKind::Mesh && mesh_path.is_none() {
-        return Err(SkinError::Config {
-            file: "surface.kind".into(),
-            detail: "\"mesh\" needs surface.mesh or --mesh".into(),
+    if ms.raster.overlapping_triangles > 0 {
+        progress.note(Note::warning(format!(
+            "{} triangles overlap others in UV space; overlapping texels take the triangle nearest its interior, so the other surface goes unpainted",
+            ms.raster.overlapping_triangles
+        )));
+    }
+    if ms.raster.triangles_outside_unit_square > 0 {
+        progress.note(Note::warning(format!(
+            "{} triangles have UVs outside [0, 1]; only the part inside is painted",
+            ms.raster.triangles_outside_unit_square
+        )));
+    }
+    if ms.raster.coverage() == 0.0 {
+        return Err(SkinError::Mesh {
+            path: mesh.map_or_else(|| "mesh".into(), |p| p.display().to_string()),
+            detail: "no triangle covers any texel (degenerate UVs?)".into(),
         });
     }
-    let mut mesh_unit = None;
-    let mut fields = FieldSet::default();
-    let (mesh, template) = match kind {
-        SurfaceKind::Template => (Some(crate::template::head_mesh()), true),
-        SurfaceKind::Mesh => {
-            let p = mesh_path.expect("checked");
-            let (m, u) = load_mesh(&p, &cfg.surface.unit, &mut notes)?;
-            mesh_unit = Some(u);
-            (Some(m), false)
-        }
-        SurfaceKind::Patch => (None, false),
-    };
-    let (surface, scatter_surface, preview_mesh) = match &mesh {
-        Some(m) => {
-            let tangents = crate::surface::mikktspace_tangents(m);
-            let s = Surface::mesh(m, &tangents, size, size);
-            let sr = cfg.scatter_resolution as usize;
-            let ss = Surface::mesh(m, &tangents, sr, sr);
-            if let Some(ms) = s.mesh_surface() {
-                if ms.raster.overlapping_triangles > 0 {
-                    notes.push(format!(
-                        "warning: {} triangles overlap others in UV space; overlapping texels take the triangle nearest its interior, so the other surface goes unpainted",
-                        ms.raster.overlapping_triangles
-                    ));
-                }
-                if ms.raster.triangles_outside_unit_square > 0 {
-                    notes.push(format!("warning: {} triangles have UVs outside [0, 1]; only the part inside is painted", ms.raster.triangles_outside_unit_square));
-                }
-                if ms.raster.coverage() == 0.0 {
-                    return Err(SkinError::Mesh {
-                        path: "mesh".into(),
-                        detail: "no triangle covers any texel (degenerate UVs?)".into(),
-                    });
-                }
-            }
-            (s, ss, Some((m.clone(), tangents)))
-        }
-        None => {
-            let [w, h] = cfg.surface.patch_size_mm;
-            let sr = cfg.scatter_resolution as usize;
-            (
-                Surface::patch(size, size, [w, h], cfg.surface.tileable),
-                Surface::patch(sr, sr, [w, h], cfg.surface.tileable),
-                None,
-            )
-        }
-    };
-    let dilation = surface.dilation();
-    lap("surface", &mut timings);
-
-    // Fields: template defaults, or uniform ones; then a fields directory; then config entries.
-    progress.stage("fields", 1);
-    if template {
-        fields = crate::template::default_fields(mesh.as_ref().expect("template mesh"));
-    } else {
-        uniform_fields(&mut fields);
-        if inputs.fields_dir.is_none() && cfg.fields.is_empty() {
-            notes.push(
-                "no --fields given: uniform fields are used (moles, freckles, cysts and pores everywhere; no lips, hair or wrinkles); paint fields to place them".into(),
-            );
-        }
-    }
-    if let Some(dir) = &inputs.fields_dir {
-        fields.load_dir(dir)?;
-    }
-    for (name, value) in &cfg.fields {
-        let v = value.trim();
-        let lower = v.to_ascii_lowercase();
-        if lower.ends_with(".png") || lower.ends_with(".exr") {
-            fields.load_file(name, &resolve(inputs, v))?;
-        } else {
-            fields.define(name, v)?;
-        }
-    }
-    notes.append(&mut fields.notes);
-    lap("fields", &mut timings);
-
-    progress.stage("scatter", 1);
-    let features = crate::placement::place(cfg, &fields, &scatter_surface, size)?;
-    drop(scatter_surface);
-    lap("scatter+index", &mut timings);
-
-    progress.stage("paint", size as u64);
-    let mut bio = crate::paint::paint(cfg, &surface, &fields, &features, &|rows| {
-        progress.advance_to(rows as u64)
-    })?;
-    lap("paint", &mut timings);
-    if cfg.detail.enabled() {
-        progress.stage("detail", 1);
-        let path = |p: &str| (!p.trim().is_empty()).then(|| resolve(inputs, p.trim()));
-        let (h, a) = (path(&cfg.detail.height), path(&cfg.detail.albedo));
-        let tile = crate::detail::build(&cfg.detail, h.as_deref(), a.as_deref(), cfg.seed)?;
-        tile.apply(&cfg.detail, &mut bio.texels, bio.width);
-        lap("detail", &mut timings);
-    }
-    if let Some(src) = &dilation {
-        bio.dilate(src);
-    }
-
-    progress.stage("convert", 1);
-    let analytic;
-    let builtin;
-    let appearance: &dyn Appearance = match &inputs.appearance {
-        AppearanceChoice::Analytic => {
-            analytic = derma_shading::SpectralKubelkaMunk::default();
-            &analytic
-        }
-        AppearanceChoice::Default => {
-            builtin = derma_shading::TableAppearance::builtin();
-            &builtin
-        }
-        AppearanceChoice::Table(t) => t.as_ref(),
-    };
-    let render = crate::texture_set::convert(
-        &bio,
-        &surface,
-        appearance,
-        &cfg.material,
-        dilation.as_deref(),
-    );
-    lap("convert", &mut timings);
-
-    Ok(Generated {
-        surface_area_mm2: surface.area_mm2(),
-        surface,
-        fields,
-        features,
-        bio,
-        render,
-        dilation,
-        notes,
-        timings,
-        mesh_unit,
-        preview_mesh,
-        appearance: appearance.name(),
-    })
+    Ok(())
 }
 
 /// Uniform defaults for surfaces without painted fields.
-fn uniform_fields(f: &mut FieldSet) {
+fn uniform_fields() -> FieldSet {
+    let mut f = FieldSet::default();
     let one = |v: f32| Map::filled(4, 4, v);
     for name in ["moles", "freckles", "cysts", "pores", "face"] {
         f.scalars.insert(name.into(), one(1.0));
@@ -341,126 +457,125 @@ fn uniform_fields(f: &mut FieldSet) {
     }
     f.vectors
         .insert("wrinkle_vectors".into(), [one(0.5), one(0.5), one(0.0)]);
+    f
 }
 
-/// Writes the texture set, features.json and preview.png into `dir`; returns the manifest entries.
-pub fn write_outputs(
-    dir: &Path,
-    g: &Generated,
-    timings: &mut Vec<(String, f64)>,
-) -> Result<(Vec<OutputEntry>, crate::texture_set::HeightRange)> {
-    let t = Instant::now();
-    let (mut entries, range) = crate::texture_set::write_maps(dir, &g.bio, &g.render)?;
-    let features = serde_json::to_vec(&g.features.to_json()).map_err(|e| SkinError::Field {
-        name: "features.json".into(),
-        detail: e.to_string(),
-    })?;
-    derma_core::atomic::write_bytes(&dir.join("features.json"), &features)?;
-    entries.push(OutputEntry {
-        file: "features.json".into(),
-        colour_space: "-".into(),
-        meaning: "every placed feature with its parameters (mm)".into(),
-    });
-    timings.push(("encode/write".into(), t.elapsed().as_secs_f64()));
-
-    let t = Instant::now();
-    let preview = preview_image(g);
-    derma_core::image_io::write_png8(
-        &dir.join("preview.png"),
-        &[&preview[0], &preview[1], &preview[2]],
-    )?;
-    entries.push(OutputEntry {
-        file: "preview.png".into(),
-        colour_space: "sRGB".into(),
-        meaning: "shaded preview and a contact sheet of the maps".into(),
-    });
-    timings.push(("preview".into(), t.elapsed().as_secs_f64()));
-    Ok((entries, range))
+/// The files a run read.
+#[derive(Clone, Debug)]
+pub struct InputFiles {
+    /// The TOML config, when one was read.
+    pub config: Option<PathBuf>,
+    /// The mesh, when one was used.
+    pub mesh: Option<PathBuf>,
+    /// The fields directory, when given.
+    pub fields: Option<PathBuf>,
+    /// The kind of surface painted.
+    pub surface: SurfaceKind,
 }
 
-/// Shaded views plus the contact sheet (base colour, normal, height, roughness, melanin, blood).
-pub fn preview_image(g: &Generated) -> [Map; 3] {
-    use crate::preview::{compose, normalised, render, sphere, tile, Textures};
-    const PANEL: usize = 512;
-    let r = &g.render;
-    let renders = match &g.preview_mesh {
-        Some((m, t)) => {
-            let tex = Textures {
-                maps: r,
-                wrap: false,
-                uv_scale: glam::Vec2::ONE,
-            };
-            vec![
-                render(m, t, &tex, 0.0, PANEL),
-                render(m, t, &tex, 0.6, PANEL),
-            ]
+/// Everything the main job produced, in memory; [`TextureSet::write`] writes its files.
+pub struct TextureSet {
+    /// Texel → point on the surface.
+    pub surface: Surface,
+    /// The probability and vector fields used.
+    pub fields: FieldSet,
+    /// Every placed feature.
+    pub features: FeatureSet,
+    /// The painted bio parameters per texel.
+    pub bio: BioMaps,
+    /// The render maps.
+    pub render: RenderMaps,
+    /// Gutter dilation sources on meshes (texel → covered texel).
+    pub dilation: Option<Vec<u32>>,
+    /// Surface area painted, mm².
+    pub surface_area_mm2: f64,
+    /// The unit a user mesh was read in.
+    pub mesh_unit: Option<LengthUnit>,
+    /// Mesh and tangents for the preview (template, user mesh, or none for patches).
+    pub preview_mesh: Option<(TriMesh, Vec<[f32; 4]>)>,
+    /// Name of the appearance that made the colours.
+    pub appearance: &'static str,
+    /// The configuration used.
+    pub config: SkinConfig,
+    /// The files read.
+    pub inputs: InputFiles,
+    /// Stage timings and notes of the generation.
+    pub log: Log,
+    started: Instant,
+    pool: Option<Arc<rayon::ThreadPool>>,
+}
+
+/// What [`TextureSet::write`] wrote.
+#[derive(Clone, Debug)]
+pub struct Written {
+    /// Every file, in manifest order.
+    pub files: Vec<&'static str>,
+    /// Range of height.png, mm.
+    pub height_range: HeightRange,
+    /// Timings and notes of the whole run, generation and writing.
+    pub log: Log,
+}
+
+impl TextureSet {
+    /// Worker threads the set was made with.
+    pub fn threads(&self) -> usize {
+        self.pool
+            .as_ref()
+            .map_or_else(rayon::current_num_threads, |p| p.current_num_threads())
+    }
+
+    /// Writes every file of [`outputs::OUTPUTS`] into `dir` — the maps, features.json,
+    /// preview.png, then manifest.json and report.json — each atomically.
+    pub fn write(&self, dir: &Path, progress: &dyn Progress) -> Result<Written> {
+        match &self.pool {
+            Some(p) => p.install(|| self.write_files(dir, progress)),
+            None => self.write_files(dir, progress),
         }
-        None => {
-            let (sx, sy) = match &g.surface.geometry {
-                crate::surface::Geometry::Patch { size_mm, .. } => (size_mm[0], size_mm[1]),
-                _ => (1.0, 1.0),
-            };
-            // A sphere of radius 1.2 patch widths, the patch repeated at its physical size.
-            let radius = 1.2 * sx;
-            let (sm, st) = sphere(radius, 96);
-            let scale = glam::Vec2::new(
-                2.0 * std::f32::consts::PI * radius / sx,
-                std::f32::consts::PI * radius / sy,
-            );
-            let (tm, tt) = tile(sx);
-            vec![
-                render(
-                    &sm,
-                    &st,
-                    &Textures {
-                        maps: r,
-                        wrap: true,
-                        uv_scale: scale,
-                    },
-                    0.0,
-                    PANEL,
-                ),
-                render(
-                    &tm,
-                    &tt,
-                    &Textures {
-                        maps: r,
-                        wrap: true,
-                        uv_scale: glam::Vec2::ONE,
-                    },
-                    0.0,
-                    PANEL,
-                ),
-            ]
-        }
-    };
-    // Thumbnails are downsampled first (area-averaged), then encoded or normalised.
-    let t = PANEL / 2;
-    let small = |m: &Map| m.resized(t, t);
-    let enc = |m: &Map| {
-        let mut m = small(m);
-        m.data_mut()
-            .iter_mut()
-            .for_each(|v| *v = derma_core::color::srgb_encode(*v));
-        m
-    };
-    let half = |m: &Map| {
-        let mut m = small(m);
-        m.data_mut().iter_mut().for_each(|v| *v = 0.5 * *v + 0.5);
-        m
-    };
-    let rough = small(&r.roughness);
-    let sheet = vec![
-        [
-            enc(&r.base_color[0]),
-            enc(&r.base_color[1]),
-            enc(&r.base_color[2]),
-        ],
-        [half(&r.normal[0]), half(&r.normal[1]), half(&r.normal[2])],
-        normalised(&small(&r.height_mm)),
-        [rough.clone(), rough.clone(), rough],
-        normalised(&small(&g.bio.channel(|s| s.melanin))),
-        normalised(&small(&g.bio.channel(|s| s.blood))),
-    ];
-    compose(&renders, &sheet, PANEL)
+    }
+
+    fn write_files(&self, dir: &Path, progress: &dyn Progress) -> Result<Written> {
+        derma_core::atomic::ensure_writable_dir(dir)?;
+        let job = Job::new(progress);
+        job.stage("write", 1, Unit::Steps);
+        let (mut files, height_range) =
+            crate::texture_set::write_maps(dir, &self.bio, &self.render)?;
+        let features =
+            serde_json::to_vec(&self.features.to_json()).map_err(|e| SkinError::Field {
+                name: outputs::FEATURES.into(),
+                detail: e.to_string(),
+            })?;
+        derma_core::atomic::write_bytes(&dir.join(outputs::FEATURES), &features)?;
+        files.push(outputs::FEATURES);
+        job.stage("preview", 1, Unit::Steps);
+        let preview = crate::preview::contact_sheet(
+            &self.render,
+            &self.bio,
+            &self.surface,
+            self.preview_mesh.as_ref(),
+        );
+        derma_core::image_io::write_png8(
+            &dir.join(outputs::PREVIEW),
+            &[&preview[0], &preview[1], &preview[2]],
+        )?;
+        files.push(outputs::PREVIEW);
+        let mut log = self.log.clone();
+        let written = job.finish();
+        log.timings.extend(written.timings);
+        log.notes.extend(written.notes);
+        log.timings.push(derma_core::progress::Timing {
+            stage: "total".into(),
+            seconds: self.started.elapsed().as_secs_f64(),
+        });
+        files.push(outputs::REPORT);
+        let manifest = crate::report::manifest(self, &files);
+        derma_core::atomic::write_bytes(&dir.join(outputs::MANIFEST), &manifest)?;
+        let report = crate::report::report(self, &height_range, &log);
+        derma_core::atomic::write_bytes(&dir.join(outputs::REPORT), &report)?;
+        files.insert(files.len() - 1, outputs::MANIFEST);
+        Ok(Written {
+            files,
+            height_range,
+            log,
+        })
+    }
 }

@@ -3,16 +3,22 @@
 //! paint the biological parameters per texel, and convert them into a renderer's texture set.
 //!
 //! ```no_run
-//! use derma_skin::{config::SkinConfig, generate::{generate, Inputs}};
-//! let cfg = SkinConfig { size: 512, ..SkinConfig::default() };
-//! let result = generate(&cfg, &Inputs::default(), &derma_skin::generate::NoProgress).unwrap();
-//! println!("{} features", result.features.total());
+//! # fn main() -> derma_skin::Result<()> {
+//! use derma_skin::{SkinConfig, SkinGenerator};
+//! let set = SkinGenerator::new(SkinConfig { size: 512, ..SkinConfig::default() }).run()?;
+//! println!("{} features", set.features.total());
+//! set.write(std::path::Path::new("out"), &derma_core::progress::Silent)?;
+//! # Ok(())
+//! # }
 //! ```
 //!
-//! Data flow: [`surface`] (texel → point on the surface) → [`field`] (probability and vector
-//! fields) → [`scatter`] (feature centres by density per unit area) → [`features`] (each
-//! biological feature, thesis §5.3) in a [`index::Grid`] → [`paint`] (bio maps, by priority)
-//! → [`texture_set`] (render maps through `derma_shading::Appearance`) → files.
+//! Data flow ([`SkinGenerator`]): [`surface`] (texel → point on the surface) → [`field`]
+//! (probability and vector fields) → [`scatter`] (feature centres by density per unit area) →
+//! [`features`] (each biological feature, thesis §5.3), one entry per kind in [`kinds`], placed
+//! and indexed by [`placement`] → [`paint`] (bio maps, kinds in table order) → [`detail`]
+//! (optional exemplar micro-detail) → [`texture_set`] (render maps through
+//! `derma_shading::Appearance`) → [`TextureSet::write`]: the files of [`outputs`], with
+//! [`report`]'s manifest.json and report.json.
 
 pub mod config;
 pub mod detail;
@@ -20,11 +26,14 @@ pub mod features;
 pub mod field;
 pub mod generate;
 pub mod index;
+pub mod kinds;
 pub mod noise;
 pub mod normal_map;
+pub mod outputs;
 pub mod paint;
 pub mod placement;
 pub mod preview;
+pub mod report;
 pub mod scatter;
 pub mod surface;
 pub mod template;
@@ -33,8 +42,30 @@ pub mod texture_set;
 /// Errors of the skin pipeline, each naming the input at fault.
 #[derive(Debug, thiserror::Error)]
 pub enum SkinError {
-    #[error("config '{file}': {detail}")]
-    Config { file: String, detail: String },
+    /// A config as a whole is invalid (TOML syntax, values out of range).
+    #[error("config '{origin}': {detail}")]
+    Config {
+        /// Where the config came from: its file, or "the configuration".
+        origin: String,
+        /// What is wrong, naming the keys.
+        detail: String,
+    },
+    /// One config key has a bad value.
+    #[error("config key '{key}': {detail}")]
+    Key {
+        /// The key, e.g. "surface.unit".
+        key: String,
+        /// What is wrong and what was expected.
+        detail: String,
+    },
+    /// An input file or directory is missing or unusable.
+    #[error("'{path}': {detail}")]
+    Input {
+        /// The file or directory.
+        path: std::path::PathBuf,
+        /// What is wrong.
+        detail: String,
+    },
     #[error("field '{name}': {detail}")]
     Field { name: String, detail: String },
     #[error("mesh '{path}': {detail}")]
@@ -50,4 +81,8 @@ pub enum SkinError {
     },
 }
 
+/// Result type of derma-skin.
 pub type Result<T> = std::result::Result<T, SkinError>;
+
+pub use config::SkinConfig;
+pub use generate::{AppearanceChoice, SkinGenerator, TextureSet, Written};

@@ -15,6 +15,9 @@ use glam::Vec3;
 /// Eight channels of noise in [0, 1] from one set of lattice look-ups.
 pub const CHANNELS: usize = 8;
 
+/// Philox stream of the baseline noise's seed (stable; the feature kinds use 1–7).
+pub const NOISE_STREAM: u32 = 100;
+
 /// One octave: lattice spacing and optional periods (in cells) for a tileable patch.
 #[derive(Clone, Copy, Debug)]
 struct Octave {

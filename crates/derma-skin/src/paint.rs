@@ -1,18 +1,19 @@
 //! Painting the bio maps (thesis §4.8.8, the second loop of TexGen): for every texel, the baseline
-//! skin, then each feature kind present at its surface point in priority order
-//! ([`crate::features::PRIORITY`]). Texels are independent, so rows are painted in parallel and
-//! the result does not depend on the number of threads.
+//! skin and the lips, then each feature kind present at its surface point in the table's order
+//! ([`crate::kinds::KINDS`]). Texels are independent, so rows are painted in parallel and the
+//! result does not depend on the number of threads.
 
 use crate::config::SkinConfig;
-use crate::features::follicle::FollicleParams;
 use crate::features::lips::{apply_lips, LipParams};
-use crate::features::pore::PoreParams;
-use crate::features::{BioSample, Feature, PaintPoint};
+use crate::features::{BioSample, PaintPoint};
 use crate::index::GridCursor;
-use crate::noise::BandNoise;
-use crate::placement::{stream, FeatureSet, Kind};
+use crate::noise::{BandNoise, NOISE_STREAM};
+use crate::placement::FeatureSet;
 use crate::surface::Surface;
+use derma_core::progress::{Progress, Unit};
 use derma_core::Map;
+use derma_optics::bio::names;
+use derma_shading::BioTexel;
 use rayon::prelude::*;
 
 /// Painted bio parameters of every texel (array of structs: painting touches all of a texel's
@@ -25,12 +26,12 @@ pub struct BioMaps {
 
 /// Names of the bio channels as written to bio.exr, with their accessor.
 pub const BIO_CHANNELS: [(&str, fn(&BioSample) -> f32); 12] = [
-    ("melanin", |s| s.melanin),
-    ("pheomelanin", |s| s.pheomelanin),
-    ("blood", |s| s.blood),
-    ("oxygenation", |s| s.oxygenation),
-    ("stratum_corneum_um", |s| s.stratum_corneum_um),
-    ("epidermis_um", |s| s.epidermis_um),
+    (names::MELANIN, |s| s.tissue.melanin),
+    (names::PHEOMELANIN, |s| s.tissue.pheomelanin),
+    (names::BLOOD, |s| s.tissue.blood),
+    (names::OXYGENATION, |s| s.tissue.oxygenation),
+    (names::STRATUM_CORNEUM_UM, |s| s.tissue.stratum_corneum_um),
+    (names::EPIDERMIS_UM, |s| s.tissue.epidermis_um),
     ("height_mm", |s| s.height_mm),
     ("extra.R", |s| s.extra[0]),
     ("extra.G", |s| s.extra[1]),
@@ -66,17 +67,18 @@ impl BioMaps {
 const ROWS_PER_TASK: usize = 8;
 
 /// Paints every covered texel of `surface`; uncovered texels keep the default sample and are
-/// filled by dilation later.
+/// filled by dilation later. One stage, advancing by rows.
 pub fn paint(
     cfg: &SkinConfig,
     surface: &Surface,
     fields: &crate::field::FieldSet,
     features: &FeatureSet,
-    progress: &(dyn Fn(usize) + Sync),
+    progress: &dyn Progress,
 ) -> crate::Result<BioMaps> {
+    progress.stage("paint", surface.height as u64, Unit::Rows);
     let b = &cfg.baseline;
     let noise = BandNoise::new(
-        derma_core::rng::Philox::new(cfg.seed, stream::NOISE).u32x4(0)[0] as u64,
+        derma_core::rng::Philox::new(cfg.seed, NOISE_STREAM).u32x4(0)[0] as u64,
         b.noise_wavelengths_mm,
         surface.period(),
     );
@@ -90,17 +92,7 @@ pub fn paint(
         pheomelanin: cfg.lips.pheomelanin,
         epidermis_um: cfg.lips.epidermis_um,
     };
-    let pore = PoreParams {
-        depth_mm: cfg.pore.depth_mm,
-        melanin_add: cfg.pore.melanin_add,
-    };
-    let hair = |f: &crate::config::FollicleConfig| FollicleParams {
-        hair_color: f.hair_color,
-        height_mm: f.height_mm,
-        blood_reduction: f.blood_reduction,
-        gland_radius_mm: f.gland_radius_mm,
-    };
-    let (scalp, brow) = (hair(&cfg.follicle), hair(&cfg.eyebrow));
+    let kinds: Vec<_> = features.kinds().map(|(_, k)| k).collect();
     let phi = b.phi;
     let amp = |r: crate::config::Range| (r.min, phi * (r.max - r.min));
     let chans = [
@@ -115,12 +107,12 @@ pub fn paint(
     let wrap = surface.period().is_some();
     let w = surface.width;
     let mut texels = vec![BioSample::default(); surface.len()];
-    let done = std::sync::atomic::AtomicUsize::new(0);
     texels
         .par_chunks_mut(w * ROWS_PER_TASK)
         .enumerate()
         .for_each(|(task, rows)| {
-            let mut cur = Cursors::new(features);
+            let mut cursors: Vec<GridCursor> =
+                kinds.iter().map(|k| GridCursor::new(k.grid())).collect();
             let mut noise_cache = crate::noise::NoiseCache::default();
             for (k, s) in rows.iter_mut().enumerate() {
                 let i = task * w * ROWS_PER_TASK + k;
@@ -131,12 +123,14 @@ pub fn paint(
                 let n = noise.eval_cached(p, &mut noise_cache);
                 let v = |c: usize| chans[c].0 + chans[c].1 * n[c];
                 *s = BioSample {
-                    melanin: v(0),
-                    pheomelanin: v(1),
-                    blood: v(2),
-                    oxygenation: v(3),
-                    stratum_corneum_um: v(4),
-                    epidermis_um: v(5),
+                    tissue: BioTexel {
+                        melanin: v(0),
+                        pheomelanin: v(1),
+                        blood: v(2),
+                        oxygenation: v(3),
+                        stratum_corneum_um: v(4),
+                        epidermis_um: v(5),
+                    },
                     height_mm: v(6),
                     extra: [0.0; 4],
                     lips: 0.0,
@@ -149,60 +143,18 @@ pub fn paint(
                     p,
                     n: surface.normal(i),
                 };
-                apply_kind(&features.cysts, &mut cur.cyst, &(), &q, s);
-                apply_kind(&features.moles, &mut cur.mole, &(), &q, s);
-                apply_kind(&features.freckles, &mut cur.freckle, &(), &q, s);
-                apply_kind(&features.wrinkles, &mut cur.wrinkle, &(), &q, s);
-                apply_kind(&features.pores, &mut cur.pore, &pore, &q, s);
-                apply_kind(&features.follicles, &mut cur.follicle, &scalp, &q, s);
-                apply_kind(&features.eyebrows, &mut cur.eyebrow, &brow, &q, s);
-                s.melanin = s.melanin.clamp(0.0, 1.0);
-                s.pheomelanin = s.pheomelanin.clamp(0.0, 1.0);
-                s.blood = s.blood.clamp(0.0, 1.0);
+                for (kind, cursor) in kinds.iter().zip(cursors.iter_mut()) {
+                    kind.paint(cursor.query(q.p), &q, s);
+                }
+                s.tissue.melanin = s.tissue.melanin.clamp(0.0, 1.0);
+                s.tissue.pheomelanin = s.tissue.pheomelanin.clamp(0.0, 1.0);
+                s.tissue.blood = s.tissue.blood.clamp(0.0, 1.0);
             }
-            let d = done.fetch_add(rows.len() / w, std::sync::atomic::Ordering::Relaxed);
-            progress(d + rows.len() / w);
+            progress.advance((rows.len() / w) as u64);
         });
     Ok(BioMaps {
         width: surface.width,
         height: surface.height,
         texels,
     })
-}
-
-#[inline]
-fn apply_kind<T: Feature>(
-    kind: &Kind<T>,
-    cursor: &mut GridCursor<'_>,
-    prm: &T::Params,
-    q: &PaintPoint,
-    s: &mut BioSample,
-) {
-    for &id in cursor.query(q.p) {
-        kind.items[id as usize].apply(prm, q, s);
-    }
-}
-
-struct Cursors<'a> {
-    cyst: GridCursor<'a>,
-    mole: GridCursor<'a>,
-    freckle: GridCursor<'a>,
-    wrinkle: GridCursor<'a>,
-    pore: GridCursor<'a>,
-    follicle: GridCursor<'a>,
-    eyebrow: GridCursor<'a>,
-}
-
-impl<'a> Cursors<'a> {
-    fn new(f: &'a FeatureSet) -> Self {
-        Self {
-            cyst: GridCursor::new(&f.cysts.grid),
-            mole: GridCursor::new(&f.moles.grid),
-            freckle: GridCursor::new(&f.freckles.grid),
-            wrinkle: GridCursor::new(&f.wrinkles.grid),
-            pore: GridCursor::new(&f.pores.grid),
-            follicle: GridCursor::new(&f.follicles.grid),
-            eyebrow: GridCursor::new(&f.eyebrows.grid),
-        }
-    }
 }

@@ -1,18 +1,14 @@
-//! Placing features (thesis §4.8.8, the first loop of TexGen): for each feature kind, draw its
-//! count from the density field and the surface area, then its centre and parameters from the
-//! counter-based RNG keyed by (seed, kind, index), and build the kind's spatial index.
+//! Placing features (thesis §4.8.8, the first loop of TexGen): for each kind of the table
+//! ([`crate::kinds::KINDS`]), draw its count from the density field and the surface area, then
+//! its centres and parameters from the counter-based RNG keyed by (seed, kind, index), and build
+//! the kind's spatial index. [`FeatureSet`] holds the result in painting order.
 
 use crate::config::SkinConfig;
 use crate::features::bezier::CubicBezier;
-use crate::features::cyst::Cyst;
-use crate::features::follicle::Follicle;
-use crate::features::freckle::Freckle;
-use crate::features::mole::Mole;
-use crate::features::pore::Pore;
-use crate::features::wrinkle::Wrinkle;
-use crate::features::Feature;
+use crate::features::{BioSample, Feature, PaintPoint};
 use crate::field::FieldSet;
 use crate::index::Grid;
+use crate::kinds::{KindEntry, KINDS};
 use crate::scatter::{Sampler, SurfacePoint};
 use crate::surface::Surface;
 use crate::Result;
@@ -21,28 +17,24 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-/// RNG streams, one per feature kind (stable numbers: changing one changes a kind's features).
-pub mod stream {
-    pub const CYST: u32 = 1;
-    pub const MOLE: u32 = 2;
-    pub const FRECKLE: u32 = 3;
-    pub const WRINKLE: u32 = 4;
-    pub const PORE: u32 = 5;
-    pub const FOLLICLE: u32 = 6;
-    pub const EYEBROW: u32 = 7;
-    pub const NOISE: u32 = 100;
-}
-
-/// The features of one kind, with ghost copies (tileable patches) and their index.
-pub struct Kind<T> {
+/// The features of one kind, with ghost copies (tileable patches), their index and the
+/// parameters every feature of the kind shares.
+pub struct Scattered<T: Feature> {
+    /// The features, then their ghost copies.
     pub items: Vec<T>,
     /// Number of real features; items past it are ghost copies across a tileable patch's edges.
     pub originals: usize,
+    /// The spatial index over every item's bounds.
     pub grid: Grid,
+    /// Parameters shared by the kind.
+    pub params: T::Params,
+    json: fn(&[T]) -> serde_json::Value,
 }
 
-impl<T: Feature> Kind<T> {
-    pub fn new(mut items: Vec<T>, period: Option<[f32; 2]>, cell_mm: f32) -> Self {
+impl<T: Feature + 'static> Scattered<T> {
+    /// Indexes `items` in cells of `cell_mm`, adding ghost copies when `period` (a tileable
+    /// patch's size) is given.
+    pub fn new(mut items: Vec<T>, period: Option<[f32; 2]>, cell_mm: f32, params: T::Params) -> Self {
         let originals = items.len();
         if let Some([px, py]) = period {
             let mut ghosts = Vec::new();
@@ -68,12 +60,19 @@ impl<T: Feature> Kind<T> {
             items,
             originals,
             grid,
+            params,
+            json: |items| serde_json::to_value(items).unwrap_or_default(),
         }
     }
 
-    /// Cells twice the largest reach of the kind's features (so most features touch few cells),
-    /// capped at `max_cell_mm`.
-    fn with_auto_cell(items: Vec<T>, period: Option<[f32; 2]>, max_cell_mm: f32) -> Self {
+    /// As [`Scattered::new`] with cells twice the largest reach of the kind's features (so
+    /// most features touch few cells), capped at `max_cell_mm`.
+    pub fn with_auto_cell(
+        items: Vec<T>,
+        period: Option<[f32; 2]>,
+        max_cell_mm: f32,
+        params: T::Params,
+    ) -> Self {
         let reach = items
             .iter()
             .map(|f| {
@@ -81,87 +80,159 @@ impl<T: Feature> Kind<T> {
                 (hi - lo).max_element() * 0.5
             })
             .fold(0.0f32, f32::max);
-        Self::new(items, period, (2.0 * reach).clamp(0.05, max_cell_mm))
+        Self::new(items, period, (2.0 * reach).clamp(0.05, max_cell_mm), params)
     }
 
+    /// features.json lists the kind through `json` instead of every parameter.
+    pub fn listed_as(mut self, json: fn(&[T]) -> serde_json::Value) -> Self {
+        self.json = json;
+        self
+    }
+
+    /// The real features (no ghosts).
     pub fn originals(&self) -> &[T] {
         &self.items[..self.originals]
     }
 }
 
-/// Every scattered feature.
-pub struct FeatureSet {
-    pub cysts: Kind<Cyst>,
-    pub moles: Kind<Mole>,
-    pub freckles: Kind<Freckle>,
-    pub wrinkles: Kind<Wrinkle>,
-    pub pores: Kind<Pore>,
-    pub follicles: Kind<Follicle>,
-    pub eyebrows: Kind<Follicle>,
+/// A placed kind as painting and reporting see it, whatever its feature type.
+pub trait PlacedKind: Send + Sync {
+    /// Number of real features.
+    fn count(&self) -> usize;
+    /// The spatial index.
+    fn grid(&self) -> &Grid;
+    /// Applies the features `ids` (from the grid) at `q`, in order.
+    fn paint(&self, ids: &[u32], q: &PaintPoint, s: &mut BioSample);
+    /// The real features for features.json.
+    fn to_json(&self) -> serde_json::Value;
+    /// The concrete [`Scattered`], for callers that know the type.
+    fn as_any(&self) -> &dyn std::any::Any;
 }
 
-/// Counts per kind, for reports.
-#[derive(Clone, Debug, Default, Serialize)]
-pub struct FeatureCounts {
-    pub cyst: usize,
-    pub mole: usize,
-    pub freckle: usize,
-    pub wrinkle: usize,
-    pub pore: usize,
-    pub follicle: usize,
-    pub eyebrow: usize,
+impl<T: Feature + 'static> PlacedKind for Scattered<T>
+where
+    T::Params: Send + Sync,
+{
+    fn count(&self) -> usize {
+        self.originals
+    }
+    fn grid(&self) -> &Grid {
+        &self.grid
+    }
+    #[inline]
+    fn paint(&self, ids: &[u32], q: &PaintPoint, s: &mut BioSample) {
+        for &id in ids {
+            self.items[id as usize].apply(&self.params, q, s);
+        }
+    }
+    fn to_json(&self) -> serde_json::Value {
+        (self.json)(self.originals())
+    }
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+}
+
+/// Every scattered feature, kind by kind in painting order.
+#[derive(Default)]
+pub struct FeatureSet {
+    kinds: Vec<(&'static KindEntry, Box<dyn PlacedKind>)>,
 }
 
 impl FeatureSet {
-    pub fn counts(&self) -> FeatureCounts {
-        FeatureCounts {
-            cyst: self.cysts.originals,
-            mole: self.moles.originals,
-            freckle: self.freckles.originals,
-            wrinkle: self.wrinkles.originals,
-            pore: self.pores.originals,
-            follicle: self.follicles.originals,
-            eyebrow: self.eyebrows.originals,
-        }
+    /// Adds a kind; kinds paint in the order they are added.
+    pub fn push(&mut self, entry: &'static KindEntry, placed: Box<dyn PlacedKind>) {
+        self.kinds.push((entry, placed));
     }
 
+    /// The kinds in painting order.
+    pub fn kinds(&self) -> impl Iterator<Item = (&'static KindEntry, &dyn PlacedKind)> {
+        self.kinds.iter().map(|(e, k)| (*e, k.as_ref()))
+    }
+
+    /// The features of kind `name` as their type (`None` for another name or type).
+    pub fn get<T: Feature + 'static>(&self, name: &str) -> Option<&Scattered<T>> {
+        self.kinds
+            .iter()
+            .find(|(e, _)| e.name == name)
+            .and_then(|(_, k)| k.as_any().downcast_ref())
+    }
+
+    /// Counts per kind, for reports.
+    pub fn counts(&self) -> FeatureCounts {
+        FeatureCounts(self.kinds.iter().map(|(e, k)| (*e, k.count())).collect())
+    }
+
+    /// Number of real features of every kind.
     pub fn total(&self) -> usize {
-        let c = self.counts();
-        c.cyst + c.mole + c.freckle + c.wrinkle + c.pore + c.follicle + c.eyebrow
+        self.kinds.iter().map(|(_, k)| k.count()).sum()
     }
 
     /// Every placed feature with its parameters (features.json).
     pub fn to_json(&self) -> serde_json::Value {
-        serde_json::json!({
-            "units": "positions and lengths in mm on the surface",
-            "cyst": self.cysts.originals(),
-            "mole": self.moles.originals(),
-            "freckle": self.freckles.originals(),
-            "wrinkle": self.wrinkles.originals(),
-            "pore": self.pores.originals(),
-            "follicle": self.follicles.originals().iter().map(|f| f.center).collect::<Vec<_>>(),
-            "eyebrow": self.eyebrows.originals().iter().map(|f| f.center).collect::<Vec<_>>(),
-        })
+        let mut m = serde_json::Map::new();
+        m.insert(
+            "units".into(),
+            "positions and lengths in mm on the surface".into(),
+        );
+        for (e, k) in &self.kinds {
+            m.insert(e.name.into(), k.to_json());
+        }
+        serde_json::Value::Object(m)
+    }
+}
+
+/// Features per kind, in painting order; serializes as a map from kind name to count.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FeatureCounts(pub Vec<(&'static KindEntry, usize)>);
+
+impl FeatureCounts {
+    /// The count of kind `name` (0 for an unknown name).
+    pub fn get(&self, name: &str) -> usize {
+        self.0
+            .iter()
+            .find(|(e, _)| e.name == name)
+            .map_or(0, |(_, n)| *n)
+    }
+
+    /// "5000 cysts, 700 moles, …" for a summary line.
+    pub fn summary(&self) -> String {
+        self.0
+            .iter()
+            .map(|(e, n)| format!("{n} {}", e.label))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+impl Serialize for FeatureCounts {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (e, n) in &self.0 {
+            m.serialize_entry(e.name, n)?;
+        }
+        m.end()
     }
 }
 
 /// Output texel pitch (mm) at a scatter point.
-fn pitch(frame: &crate::surface::Frame, size: usize) -> f32 {
+pub(crate) fn pitch(frame: &crate::surface::Frame, size: usize) -> f32 {
     frame.texel_area(size, size).sqrt()
 }
 
 /// What to scatter for one kind: its density field (raised to `power`), peak density per cm²,
 /// whether it is enabled, and its RNG stream.
-struct Spec<'a> {
-    field: &'a str,
-    power: f32,
-    density: f32,
-    enabled: bool,
-    stream: u32,
+pub(crate) struct Spec<'a> {
+    pub field: &'a str,
+    pub power: f32,
+    pub density: f32,
+    pub enabled: bool,
+    pub stream: u32,
 }
 
 impl<'a> Spec<'a> {
-    fn new(field: &'a str, density: f32, enabled: bool, stream: u32) -> Self {
+    pub fn new(field: &'a str, density: f32, enabled: bool, stream: u32) -> Self {
         Self {
             field,
             power: 1.0,
@@ -172,16 +243,32 @@ impl<'a> Spec<'a> {
     }
 }
 
-/// Scatters kinds over one surface.
-struct Scatter<'a> {
-    surface: &'a Surface,
-    fields: &'a FieldSet,
-    seed: u64,
+/// What placing a kind needs: the config, the fields, the surface at scatter resolution and
+/// the output size (for anti-aliasing sub-texel features).
+pub struct Placing<'a> {
+    /// The run's configuration.
+    pub cfg: &'a SkinConfig,
+    /// The probability and vector fields.
+    pub fields: &'a FieldSet,
+    /// The surface at scatter resolution.
+    pub surface: &'a Surface,
+    /// Output resolution (texels per side).
+    pub size: usize,
 }
 
-impl Scatter<'_> {
+impl Placing<'_> {
+    /// Output texel pitch (mm) at a scatter point.
+    pub(crate) fn pitch(&self, p: &SurfacePoint) -> f32 {
+        pitch(&p.frame, self.size)
+    }
+
+    /// The patch period when the surface tiles.
+    pub(crate) fn period(&self) -> Option<[f32; 2]> {
+        self.surface.period()
+    }
+
     /// Scatters one kind in parallel; the i-th feature depends only on (seed, stream, i).
-    fn kind<T: Send>(
+    pub(crate) fn scatter<T: Send>(
         &self,
         spec: Spec,
         make: impl Fn(&Philox, u64, SurfacePoint) -> Option<T> + Sync,
@@ -205,7 +292,7 @@ impl Scatter<'_> {
             .collect();
         let sampler = Sampler::new(s, |i| weights[i]);
         let n = sampler.count(spec.density);
-        let rng = Philox::new(self.seed, spec.stream);
+        let rng = Philox::new(self.cfg.seed, spec.stream);
         Ok((0..n as u64)
             .into_par_iter()
             .filter_map(|k| sampler.sample(&rng, k).and_then(|p| make(&rng, k, p)))
@@ -213,7 +300,7 @@ impl Scatter<'_> {
     }
 }
 
-/// Places every feature kind of `cfg` on `scatter_surface` (the surface at scatter resolution);
+/// Places every kind of the table on `scatter_surface` (the surface at scatter resolution);
 /// `size` is the output resolution, used for anti-aliasing sub-texel features.
 pub fn place(
     cfg: &SkinConfig,
@@ -221,104 +308,17 @@ pub fn place(
     scatter_surface: &Surface,
     size: usize,
 ) -> Result<FeatureSet> {
-    let s = scatter_surface;
-    let sc = Scatter {
-        surface: s,
+    let ctx = Placing {
+        cfg,
         fields,
-        seed: cfg.seed,
+        surface: scatter_surface,
+        size,
     };
-    let period = s.period();
-    let px = |p: &SurfacePoint| pitch(&p.frame, size);
-
-    let c = &cfg.cyst;
-    let cysts = sc.kind(
-        Spec::new(&c.field, c.density_per_cm2, c.enabled, stream::CYST),
-        |r, k, p| {
-            Some(Cyst::new(
-                p.position,
-                c,
-                r.normal2(k, 1)[0],
-                r.uniform4(k, 2)[0],
-                px(&p),
-            ))
-        },
-    )?;
-    let m = &cfg.mole;
-    let moles = sc.kind(
-        Spec::new(&m.field, m.density_per_cm2, m.enabled, stream::MOLE),
-        |r, k, p| {
-            let (z, u, v) = (r.normal2(k, 1)[0], r.uniform4(k, 2), r.uniform4(k, 3));
-            Some(Mole::new(
-                p.position,
-                p.frame.t,
-                p.frame.b,
-                m,
-                z,
-                u,
-                v,
-                px(&p),
-            ))
-        },
-    )?;
-    let f = &cfg.freckle;
-    let freckle_spec = Spec {
-        power: f.power,
-        ..Spec::new(&f.field, f.density_per_cm2, f.enabled, stream::FRECKLE)
-    };
-    let freckles = sc.kind(freckle_spec, |r, k, p| {
-        let (z, u, v) = (r.normal2(k, 1)[0], r.uniform4(k, 2), r.uniform4(k, 3));
-        Some(Freckle::new(
-            p.position,
-            p.frame.t,
-            p.frame.b,
-            f,
-            z,
-            u,
-            v,
-            px(&p),
-        ))
-    })?;
-    let pc = &cfg.pore;
-    let pores = sc.kind(
-        Spec::new(&pc.field, pc.density_per_cm2, pc.enabled, stream::PORE),
-        |r, k, p| Some(Pore::new(p.position, pc, r.normal2(k, 1)[0], px(&p))),
-    )?;
-    let hair = |fc: &crate::config::FollicleConfig, stream| {
-        sc.kind(
-            Spec::new(&fc.field, fc.density_per_cm2, fc.enabled, stream),
-            |_, _, p| Some(Follicle::new(p.position, fc, px(&p))),
-        )
-    };
-    let follicles = hair(&cfg.follicle, stream::FOLLICLE)?;
-    let eyebrows = hair(&cfg.eyebrow, stream::EYEBROW)?;
-
-    let w = &cfg.wrinkle;
-    if w.enabled && w.density_per_cm2 > 0.0 && !fields.vectors.contains_key(&w.vector_field) {
-        return Err(crate::SkinError::Field {
-            name: w.vector_field.clone(),
-            detail: "wrinkles need this vector field (RGB: R,G direction, B length)".into(),
-        });
+    let mut set = FeatureSet::default();
+    for entry in &KINDS {
+        set.push(entry, (entry.place)(&ctx)?);
     }
-    let wrinkles = sc.kind(
-        Spec::new(&w.field, w.density_per_cm2, w.enabled, stream::WRINKLE),
-        |r, k, p| {
-            let u = r.uniform4(k, 1);
-            let curve = walk_wrinkle(s, fields, &w.vector_field, w.max_length_mm, p)?;
-            let width = w.width_mm.min + (w.width_mm.max - w.width_mm.min) * u[0];
-            let depth = w.depth_mm.min + (w.depth_mm.max - w.depth_mm.min) * u[1];
-            Some(Wrinkle::new(curve, width, depth, px(&p)))
-        },
-    )?;
-
-    Ok(FeatureSet {
-        cysts: Kind::with_auto_cell(cysts, period, 8.0),
-        moles: Kind::with_auto_cell(moles, period, 8.0),
-        freckles: Kind::with_auto_cell(freckles, period, 8.0),
-        wrinkles: Kind::new(wrinkles, period, 4.0),
-        pores: Kind::with_auto_cell(pores, period, 4.0),
-        follicles: Kind::with_auto_cell(follicles, period, 4.0),
-        eyebrows: Kind::with_auto_cell(eyebrows, period, 4.0),
-    })
+    Ok(set)
 }
 
 /// Builds a wrinkle's cubic Bézier by walking the vector field (thesis §5.3.7): the length l is

@@ -2,6 +2,8 @@
 //! diffuse plus a GGX specular lobe, Walter et al. 2007) next to a contact sheet of the maps.
 //! A small software rasteriser: enough to judge a texture set at a glance without a renderer.
 
+use crate::paint::BioMaps;
+use crate::surface::Surface;
 use crate::texture_set::RenderMaps;
 use derma_core::color::srgb_encode;
 use derma_core::mesh::TriMesh;
@@ -242,4 +244,96 @@ pub fn normalised(m: &Map) -> [Map; 3] {
         .iter_mut()
         .for_each(|v| *v = (*v - s.min) / span);
     [n.clone(), n.clone(), n]
+}
+
+/// Shaded views of `render` on its mesh (or a sphere and a tile for patches) plus the contact
+/// sheet (base colour, normal, height, roughness, melanin, blood): preview.png.
+pub fn contact_sheet(
+    render_maps: &RenderMaps,
+    bio: &BioMaps,
+    surface: &Surface,
+    mesh: Option<&(TriMesh, Vec<[f32; 4]>)>,
+) -> [Map; 3] {
+    const PANEL: usize = 512;
+    let r = render_maps;
+    let renders = match mesh {
+        Some((m, t)) => {
+            let tex = Textures {
+                maps: r,
+                wrap: false,
+                uv_scale: glam::Vec2::ONE,
+            };
+            vec![
+                render(m, t, &tex, 0.0, PANEL),
+                render(m, t, &tex, 0.6, PANEL),
+            ]
+        }
+        None => {
+            let (sx, sy) = match &surface.geometry {
+                crate::surface::Geometry::Patch { size_mm, .. } => (size_mm[0], size_mm[1]),
+                _ => (1.0, 1.0),
+            };
+            // A sphere of radius 1.2 patch widths, the patch repeated at its physical size.
+            let radius = 1.2 * sx;
+            let (sm, st) = sphere(radius, 96);
+            let scale = glam::Vec2::new(
+                2.0 * std::f32::consts::PI * radius / sx,
+                std::f32::consts::PI * radius / sy,
+            );
+            let (tm, tt) = tile(sx);
+            vec![
+                render(
+                    &sm,
+                    &st,
+                    &Textures {
+                        maps: r,
+                        wrap: true,
+                        uv_scale: scale,
+                    },
+                    0.0,
+                    PANEL,
+                ),
+                render(
+                    &tm,
+                    &tt,
+                    &Textures {
+                        maps: r,
+                        wrap: true,
+                        uv_scale: glam::Vec2::ONE,
+                    },
+                    0.0,
+                    PANEL,
+                ),
+            ]
+        }
+    };
+    // Thumbnails are downsampled first (area-averaged), then encoded or normalised.
+    let t = PANEL / 2;
+    let small = |m: &Map| m.resized(t, t);
+    let enc = |m: &Map| {
+        let mut m = small(m);
+        m.data_mut()
+            .iter_mut()
+            .for_each(|v| *v = derma_core::color::srgb_encode(*v));
+        m
+    };
+    let half = |m: &Map| {
+        let mut m = small(m);
+        m.data_mut().iter_mut().for_each(|v| *v = 0.5 * *v + 0.5);
+        m
+    };
+    let rough = small(&r.roughness);
+    let sheet = vec![
+        [
+            enc(&r.base_color[0]),
+            enc(&r.base_color[1]),
+            enc(&r.base_color[2]),
+        ],
+        [half(&r.normal[0]), half(&r.normal[1]), half(&r.normal[2])],
+        normalised(&small(&r.height_mm)),
+        [rough.clone(), rough.clone(), rough],
+        normalised(&small(&bio.channel(|s| s.tissue.melanin))),
+        normalised(&small(&bio.channel(|s| s.tissue.blood))),
+    ];
+    compose(&renders, &sheet, PANEL)
 }

@@ -4,8 +4,9 @@
 use derma_skin::config::{SkinConfig, SurfaceKind};
 use derma_skin::features::mole::Mole;
 use derma_skin::features::perimeter::Perimeter;
-use derma_skin::generate::{generate, Inputs, NoProgress};
-use derma_skin::placement::{FeatureSet, Kind};
+use derma_core::progress::Silent;
+use derma_skin::placement::{FeatureSet, Scattered};
+use derma_skin::{SkinGenerator, TextureSet};
 use glam::Vec3;
 
 fn small(size: u32) -> SkinConfig {
@@ -16,12 +17,11 @@ fn small(size: u32) -> SkinConfig {
     }
 }
 
-fn run_with_threads(cfg: &SkinConfig, threads: usize) -> derma_skin::generate::Generated {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap();
-    pool.install(|| generate(cfg, &Inputs::default(), &NoProgress).unwrap())
+fn run_with_threads(cfg: &SkinConfig, threads: usize) -> TextureSet {
+    SkinGenerator::new(cfg.clone())
+        .threads(threads)
+        .run()
+        .unwrap()
 }
 
 #[test]
@@ -77,29 +77,25 @@ fn a_mole_straddling_the_template_seam_paints_both_sides() {
         r_eff: 3.0,
         amp: 1.0,
     };
-    let empty = FeatureSet {
-        cysts: Kind::new(vec![], None, 1.0),
-        moles: Kind::new(vec![mole], None, 8.0),
-        freckles: Kind::new(vec![], None, 1.0),
-        wrinkles: Kind::new(vec![], None, 1.0),
-        pores: Kind::new(vec![], None, 1.0),
-        follicles: Kind::new(vec![], None, 1.0),
-        eyebrows: Kind::new(vec![], None, 1.0),
-    };
-    let bio = derma_skin::paint::paint(&cfg, s, &g.fields, &empty, &|_| {}).unwrap();
+    let mut moles_only = FeatureSet::default();
+    moles_only.push(
+        derma_skin::kinds::entry("mole").unwrap(),
+        Box::new(Scattered::new(vec![mole], None, 8.0, ())),
+    );
+    let bio = derma_skin::paint::paint(&cfg, s, &g.fields, &moles_only, &Silent).unwrap();
     let base = cfg.baseline.melanin.max;
     assert!(
-        bio.texels[left].melanin > base + 0.05,
+        bio.texels[left].tissue.melanin > base + 0.05,
         "left of the seam: {}",
-        bio.texels[left].melanin
+        bio.texels[left].tissue.melanin
     );
     assert!(
-        bio.texels[right].melanin > base + 0.05,
+        bio.texels[right].tissue.melanin > base + 0.05,
         "right of the seam: {}",
-        bio.texels[right].melanin
+        bio.texels[right].tissue.melanin
     );
     assert!(
-        (bio.texels[left].melanin - bio.texels[right].melanin).abs() < 0.05,
+        (bio.texels[left].tissue.melanin - bio.texels[right].tissue.melanin).abs() < 0.05,
         "continuous across the seam"
     );
 }
@@ -113,7 +109,7 @@ fn tileable_patch_wraps_seamlessly() {
     cfg.mole.density_per_cm2 = 40.0;
     let g = run_with_threads(&cfg, 2);
     let (w, h) = (g.bio.width, g.bio.height);
-    let m = |x: usize, y: usize| g.bio.texels[y * w + x].melanin;
+    let m = |x: usize, y: usize| g.bio.texels[y * w + x].tissue.melanin;
     // The jump across the wrap edge is no larger than jumps between interior neighbours.
     let (mut edge, mut inner) = (0.0f64, 0.0f64);
     for y in 0..h {
@@ -144,18 +140,21 @@ fn density_is_per_unit_area_on_patches_and_faces() {
     cfg.eyebrow.enabled = false;
     let g = run_with_threads(&cfg, 2);
     let c = g.features.counts();
-    assert_eq!(c.mole, (cfg.mole.density_per_cm2 * 100.0).round() as usize);
     assert_eq!(
-        c.freckle,
+        c.get("mole"),
+        (cfg.mole.density_per_cm2 * 100.0).round() as usize
+    );
+    assert_eq!(
+        c.get("freckle"),
         (cfg.freckle.density_per_cm2 * 100.0).round() as usize
     );
     // On the template, the thesis' counts (§5.3) come out.
     let t = run_with_threads(&small(64), 2).features.counts();
     for (got, want) in [
-        (t.cyst, 5000),
-        (t.mole, 700),
-        (t.freckle, 3000),
-        (t.follicle, 170_000),
+        (t.get("cyst"), 5000),
+        (t.get("mole"), 700),
+        (t.get("freckle"), 3000),
+        (t.get("follicle"), 170_000),
     ] {
         assert!(
             (got as f64 - want as f64).abs() <= 0.02 * want as f64,
@@ -172,7 +171,7 @@ fn moles_are_darker_than_their_surroundings() {
     cfg.mole.density_per_cm2 = 3.0;
     cfg.freckle.enabled = false;
     let g = run_with_threads(&cfg, 2);
-    let moles = g.features.moles.originals();
+    let moles = g.features.get::<Mole>("mole").unwrap().originals();
     assert!(!moles.is_empty());
     let w = g.bio.width;
     let texel = |p: Vec3| {
@@ -182,9 +181,9 @@ fn moles_are_darker_than_their_surroundings() {
     };
     let mut darker = 0;
     for m in moles {
-        let inside = g.bio.texels[texel(m.center)].melanin;
+        let inside = g.bio.texels[texel(m.center)].tissue.melanin;
         let ring = m.center + Vec3::new(3.0 * m.r_eff + 0.5, 0.0, 0.0);
-        if ring.x < 30.0 && inside > g.bio.texels[texel(ring)].melanin {
+        if ring.x < 30.0 && inside > g.bio.texels[texel(ring)].tissue.melanin {
             darker += 1;
         }
     }

@@ -4,6 +4,8 @@
 pub enum SynthError {
     #[error(transparent)]
     Core(#[from] derma_core::CoreError),
+    #[error(transparent)]
+    Gpu(#[from] derma_core::gpu::GpuError),
     #[error("invalid {what}: {detail}")]
     Invalid { what: String, detail: String },
 }

@@ -8,9 +8,10 @@ use crate::search::{
     index_of_key, initial_cost, known_block_sums, known_texels, ssd_at, Match, Matcher, Query,
     Search,
 };
+use derma_core::gpu::GpuCell;
 use rayon::prelude::*;
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, Mutex};
 use wgpu::util::DeviceExt;
 
 /// The shader.
@@ -39,7 +40,7 @@ struct Params {
 }
 
 fn gpu_error(detail: String) -> SynthError {
-    invalid("GPU", detail)
+    invalid("GPU search", detail)
 }
 
 struct Pipelines {
@@ -52,74 +53,65 @@ struct Pipelines {
     choose: wgpu::ComputePipeline,
 }
 
-static PIPELINES: OnceLock<std::result::Result<Pipelines, String>> = OnceLock::new();
+/// The search pipelines, compiled once per process.
+static PIPELINES: GpuCell<Pipelines> = GpuCell::new();
 
 fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
-    let ctx = derma_core::gpu::context().map_err(gpu_error)?;
-    let p = PIPELINES
-        .get_or_init(|| {
-            // One layout for all entry points: binding 0 uniform, 1–5 read-only storage,
-            // 6–9 read-write storage.
-            let entry = |binding: u32, ty| wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty,
-                count: None,
-            };
-            let storage = |read_only| wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
+    Ok(PIPELINES.get_or_init(|ctx| {
+        // One layout for all entry points: binding 0 uniform, 1–5 read-only storage,
+        // 6–9 read-write storage.
+        let entry = |binding: u32, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty,
+            count: None,
+        };
+        let storage = |read_only| wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        };
+        let mut entries = vec![entry(
+            0,
+            wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
                 has_dynamic_offset: false,
                 min_binding_size: None,
-            };
-            let mut entries = vec![entry(
-                0,
-                wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-            )];
-            entries.extend((1..=5).map(|b| entry(b, storage(true))));
-            entries.extend((6..=9).map(|b| entry(b, storage(false))));
-            let layout = ctx
-                .device
-                .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                    label: Some("search"),
-                    entries: &entries,
-                });
-            let pipeline_layout =
-                ctx.device
-                    .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                        label: Some("search"),
-                        bind_group_layouts: &[Some(&layout)],
-                        immediate_size: 0,
-                    });
-            let make = |entry: &str| {
-                ctx.compute_pipeline_with(
-                    &format!("search.wgsl ({entry})"),
-                    SHADER,
-                    entry,
-                    Some(&pipeline_layout),
-                )
-            };
-            Ok(Pipelines {
-                min_cost: make("min_cost")?,
-                settle: make("settle")?,
-                pick: make("pick")?,
-                screen: make("screen")?,
-                cost: make("cost")?,
-                choose: make("choose")?,
-                layout,
-            })
+            },
+        )];
+        entries.extend((1..=5).map(|b| entry(b, storage(true))));
+        entries.extend((6..=9).map(|b| entry(b, storage(false))));
+        let layout = ctx
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("search"),
+                entries: &entries,
+            });
+        let pipeline_layout = ctx
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("search"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            });
+        let make = |entry: &str| {
+            ctx.compute_pipeline_with(
+                &format!("search.wgsl ({entry})"),
+                SHADER,
+                entry,
+                Some(&pipeline_layout),
+            )
+        };
+        Ok(Pipelines {
+            min_cost: make("min_cost")?,
+            settle: make("settle")?,
+            pick: make("pick")?,
+            screen: make("screen")?,
+            cost: make("cost")?,
+            choose: make("choose")?,
+            layout,
         })
-        .as_ref()
-        .map_err(|e| gpu_error(e.clone()))?;
-    Ok((ctx, p))
-}
-
-/// Whether the GPU search can run here, and on what.
-pub fn available() -> Option<String> {
-    pipelines().ok().map(|(g, _)| g.name.clone())
+    })?)
 }
 
 /// A buffer that is replaced by a larger one (the next power of two) when a batch needs more.
@@ -394,8 +386,7 @@ impl GpuMatcher {
                 pass.dispatch_workgroups(dims.0, dims.1, 1);
             }
             q.submit([enc.finish()]);
-            ctx.read_back_with(&sc.result.buf, &sc.staging.buf, result_words)
-                .map_err(gpu_error)
+            Ok(ctx.read_back_with(&sc.result.buf, &sc.staging.buf, result_words)?)
         };
         let mut out = run_steps(&[
             (&pipes.screen, (groups_x, nq)),

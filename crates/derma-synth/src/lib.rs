@@ -11,17 +11,21 @@
 pub mod canvas;
 pub mod error;
 pub mod exemplar;
+pub mod files;
 pub mod gpu;
 pub mod optimize;
+mod pass_context;
 pub mod patch_pass;
 pub mod quality;
 pub mod search;
 pub mod synthesize;
+pub mod synthesizer;
 pub mod texture;
 
 pub use error::{Result, SynthError};
 pub use exemplar::{Exemplar, ExemplarSet, Quantizer};
 pub use gpu::GpuMatcher;
 pub use search::{CpuMatcher, Match, Matcher, Query, Search, Tolerance};
-pub use synthesize::{synthesize, Guide, ProgressSink, SynthOptions, Synthesis};
+pub use synthesize::{synthesize, Guide, SynthOptions, Synthesis};
+pub use synthesizer::{matcher_for, Synthesizer};
 pub use texture::Texture;

@@ -16,8 +16,9 @@
 
 use crate::canvas::{origins, Canvas, NO_SOURCE};
 use crate::error::Result;
+use crate::pass_context::PassContext;
 use crate::search::{Match, Query, Search, Tolerance};
-use crate::synthesize::PassContext;
+use derma_core::progress::Unit;
 use derma_core::rng::Philox;
 use rayon::prelude::*;
 
@@ -49,7 +50,11 @@ pub(crate) fn optimise_pass(
         .iter()
         .flat_map(|&y| xs.iter().map(move |&x| (x, y)))
         .collect();
-    progress.stage(&format!("optimisation {w}×{w}"), windows.len() as u64);
+    progress.stage(
+        &format!("optimisation {w}×{w}"),
+        windows.len() as u64,
+        Unit::Windows,
+    );
     let c = canvas.channels;
     let probes = [
         (w / 2, w / 2),

@@ -21,8 +21,9 @@
 use crate::canvas::{origins, Canvas, NO_SOURCE};
 use crate::error::Result;
 use crate::exemplar::ExemplarSet;
+use crate::pass_context::PassContext;
 use crate::search::{Query, Search, Tolerance, MAX_PENALTY_TOTAL};
-use crate::synthesize::PassContext;
+use derma_core::progress::Unit;
 use derma_core::rng::Philox;
 
 /// Philox stream of the initial noise (DESIGN.md: one stream per random decision).
@@ -72,7 +73,7 @@ pub(crate) fn patch_pass(
     let xs = origins(canvas.width, n, d, 0, canvas.tile);
     let ys = origins(canvas.height, n, d, 0, canvas.tile);
     let (nx, ny) = (xs.len(), ys.len());
-    progress.stage("patch pass", (nx * ny) as u64);
+    progress.stage("patch pass", (nx * ny) as u64, Unit::Windows);
     // Probes for the coherent guess: the known corners of a patch (top-left from the patch
     // above-left, left half from the previous patch, top half from the row above).
     let probes = [(0, 0), (0, d), (d, 0), (n - 1, 0)];

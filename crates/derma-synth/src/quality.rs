@@ -18,6 +18,28 @@ use derma_core::rng::Philox;
 use rayon::prelude::*;
 use std::collections::HashMap;
 
+/// The three quality figures of a synthesis against its exemplar (`derma synth --metrics`).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Metrics {
+    /// [`patch_swd`] with default settings (lower is closer to the exemplar).
+    pub patch_swd: f64,
+    /// [`verbatim_copy_ratio`] for 32 × 32 blocks.
+    pub verbatim_copy_ratio: f64,
+    /// [`seam_energy`] along the patch pass's grid (step N/2).
+    pub seam_energy: f64,
+}
+
+impl Metrics {
+    /// Measures `output` against `exemplar`, synthesised with patches of side `patch`.
+    pub fn measure(output: &Texture, exemplar: &Texture, patch: usize) -> Result<Self> {
+        Ok(Self {
+            patch_swd: patch_swd(output, exemplar, &SwdOptions::default())?,
+            verbatim_copy_ratio: verbatim_copy_ratio(output, exemplar, 32)?,
+            seam_energy: seam_energy(output, patch / 2)?,
+        })
+    }
+}
+
 /// Settings of [`patch_swd`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SwdOptions {

@@ -5,9 +5,11 @@ use crate::canvas::Canvas;
 use crate::error::{invalid, Result};
 use crate::exemplar::ExemplarSet;
 use crate::optimize::{optimise_pass, KWATRA_R};
+use crate::pass_context::PassContext;
 use crate::patch_pass::{initialise_noise, patch_pass};
 use crate::search::{window_fits, Matcher, Tolerance};
 use crate::texture::Texture;
+use derma_core::progress::{Job, Progress, Timing};
 
 /// What to synthesise.
 #[derive(Clone, Debug)]
@@ -136,45 +138,12 @@ impl Guide {
         }
     }
 
+    /// The exemplar texel (x, y) of `canvas` draws from.
     pub(crate) fn at(&self, canvas: &Canvas, x: usize, y: usize) -> usize {
         let (x, y) = (x % canvas.width, y % canvas.height);
         let gx = (x * self.width / canvas.width).min(self.width - 1);
         let gy = (y * self.height / canvas.height).min(self.height - 1);
         self.exemplar[gy * self.width + gx] as usize
-    }
-}
-
-/// Called at the start of each stage with its name and number of steps.
-pub type StageFn = Box<dyn Fn(&str, u64) + Sync>;
-/// Called with the number of steps done since the last call.
-pub type AdvanceFn = Box<dyn Fn(u64) + Sync>;
-
-/// Progress callbacks (the CLI draws a bar); both default to nothing.
-#[derive(Default)]
-pub struct ProgressSink {
-    pub on_stage: Option<StageFn>,
-    pub on_advance: Option<AdvanceFn>,
-}
-
-/// What every pass needs besides the canvas.
-pub(crate) struct PassContext<'a> {
-    pub set: &'a ExemplarSet,
-    pub matcher: &'a dyn Matcher,
-    pub guide: Option<&'a Guide>,
-    pub progress: &'a ProgressSink,
-    pub seed: u64,
-}
-
-impl ProgressSink {
-    pub(crate) fn stage(&self, name: &str, total: u64) {
-        if let Some(f) = &self.on_stage {
-            f(name, total)
-        }
-    }
-    pub(crate) fn advance(&self, n: u64) {
-        if let Some(f) = &self.on_advance {
-            f(n)
-        }
     }
 }
 
@@ -186,16 +155,18 @@ pub struct Synthesis {
     /// Source texel index (y · exemplar width + x).
     pub source: Vec<u32>,
     /// Wall-clock seconds of each stage (patch pass, then each optimisation pass).
-    pub stage_seconds: Vec<(String, f64)>,
+    pub timings: Vec<Timing>,
+    /// What ran the searches ("CPU", "GPU (NVIDIA H200 (Vulkan))").
+    pub matcher: String,
 }
 
-/// Grows a `width × height` texture from the exemplar set.
+/// Grows a `width × height` texture from the exemplar set; reports a stage per pass.
 pub fn synthesize(
     set: &ExemplarSet,
     opts: &SynthOptions,
     guide: Option<&Guide>,
     matcher: &dyn Matcher,
-    progress: &ProgressSink,
+    progress: &dyn Progress,
 ) -> Result<Synthesis> {
     let c = set.channels();
     opts.validate(c)?;
@@ -220,23 +191,20 @@ pub fn synthesize(
     };
     let mut canvas = Canvas::new(w, h, c, opts.tile);
     initialise_noise(&mut canvas, set, opts.seed);
+    let job = Job::new(progress);
     let ctx = PassContext {
         set,
         matcher,
         guide,
-        progress,
+        progress: &job,
         seed: opts.seed,
     };
     let tol = Tolerance::from_fraction(opts.tolerance);
-    let mut stage_seconds = Vec::new();
-    let t = std::time::Instant::now();
     patch_pass(&mut canvas, &ctx, opts.patch, tol, opts.occurrence)?;
-    stage_seconds.push(("patch pass".to_string(), t.elapsed().as_secs_f64()));
     for w in opts.pass_windows() {
-        let t = std::time::Instant::now();
         optimise_pass(&mut canvas, &ctx, w, opts.r)?;
-        stage_seconds.push((format!("optimisation {w}×{w}"), t.elapsed().as_secs_f64()));
     }
+    let timings = job.finish().timings;
     let (ow, oh) = (opts.width, opts.height);
     let mut data = Vec::with_capacity(ow * oh * c);
     let mut source = Vec::with_capacity(ow * oh);
@@ -250,6 +218,7 @@ pub fn synthesize(
         texture: Texture::new(ow, oh, c, data)?,
         source_exemplar,
         source,
-        stage_seconds,
+        timings,
+        matcher: matcher.name(),
     })
 }

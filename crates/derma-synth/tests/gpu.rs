@@ -1,10 +1,11 @@
 //! The GPU search returns exactly the CPU search's answers, and so a seed gives the same
 //! texture on either (Shen et al. §3.4 run on both backends). Runs on Mesa's lavapipe in CI.
 
-use derma_core::gpu::skip_test_without_gpu;
+use derma_core::progress::Silent;
+use derma_test_support::skip_without_gpu;
 use derma_core::rng::Philox;
 use derma_synth::{
-    synthesize, CpuMatcher, ExemplarSet, GpuMatcher, Matcher, ProgressSink, Query, Search,
+    synthesize, CpuMatcher, ExemplarSet, GpuMatcher, Matcher, Query, Search,
     SynthOptions, Texture, Tolerance,
 };
 
@@ -24,7 +25,7 @@ fn exemplar(w: usize, h: usize, c: usize, seed: u64) -> Texture {
 #[test]
 fn gpu_search_equals_cpu_search() {
     // Skip only without an adapter; a shader that does not compile must fail.
-    if skip_test_without_gpu(derma_core::gpu::context().is_ok()) {
+    if skip_without_gpu() {
         return;
     }
     let gpu = GpuMatcher::new().unwrap();
@@ -84,7 +85,7 @@ fn gpu_search_equals_cpu_search() {
 #[test]
 fn a_seed_gives_the_same_texture_on_cpu_and_gpu() {
     // Skip only without an adapter; a shader that does not compile must fail.
-    if skip_test_without_gpu(derma_core::gpu::context().is_ok()) {
+    if skip_without_gpu() {
         return;
     }
     let gpu = GpuMatcher::new().unwrap();
@@ -98,7 +99,7 @@ fn a_seed_gives_the_same_texture_on_cpu_and_gpu() {
             tile,
             ..Default::default()
         };
-        let none = ProgressSink::default();
+        let none = Silent;
         let a = synthesize(&set, &opts, None, &CpuMatcher, &none).unwrap();
         let b = synthesize(&set, &opts, None, &gpu, &none).unwrap();
         assert_eq!(a.texture, b.texture, "tile {tile}");

@@ -1,10 +1,11 @@
 //! Properties of whole syntheses: determinism whatever the thread count, tileability,
 //! guidance, what the optimisation passes buy, and the errors users meet.
 
+use derma_core::progress::Silent;
 use derma_core::rng::Philox;
 use derma_synth::quality::{patch_swd, seam_energy, SwdOptions};
 use derma_synth::{
-    synthesize, CpuMatcher, ExemplarSet, Guide, ProgressSink, SynthOptions, Texture,
+    synthesize, CpuMatcher, ExemplarSet, Guide, SynthOptions, Texture,
 };
 
 /// A stationary test texture: blobs of random phase plus fine noise, `c` channels.
@@ -48,7 +49,7 @@ fn discs(w: usize, h: usize, seed: u64) -> Texture {
 }
 
 fn run(set: &ExemplarSet, opts: &SynthOptions, guide: Option<&Guide>) -> Texture {
-    synthesize(set, opts, guide, &CpuMatcher, &ProgressSink::default())
+    synthesize(set, opts, guide, &CpuMatcher, &Silent)
         .unwrap()
         .texture
 }
@@ -148,7 +149,7 @@ fn a_guide_draws_each_region_from_its_exemplar() {
         &opts,
         Some(&guide),
         &CpuMatcher,
-        &ProgressSink::default(),
+        &Silent,
     )
     .unwrap();
     let mean = |x0: usize, x1: usize| {
@@ -227,7 +228,7 @@ fn the_optimisation_passes_remove_the_patch_seams_and_the_output_resembles_the_e
 fn bad_requests_are_refused_with_the_value_named() {
     let set = ExemplarSet::new(vec![blobs(40, 40, 1, 6, 0.5)], 16).unwrap();
     let err = |opts: SynthOptions| {
-        synthesize(&set, &opts, None, &CpuMatcher, &ProgressSink::default())
+        synthesize(&set, &opts, None, &CpuMatcher, &Silent)
             .err()
             .expect("an error")
             .to_string()

@@ -1,8 +1,10 @@
-//! `derma`: the command-line tool. Thin: parses flags and config, calls the libraries, shows
-//! progress, and writes report.json and manifest.json.
+//! `derma`: the command-line tool. Thin: parses flags, calls the libraries, shows their
+//! progress and notes, and prints results; the libraries do the work and write the files.
 
 mod matching;
 mod optics;
+mod output;
+mod progress;
 mod rig;
 mod skin;
 mod synth;
@@ -43,6 +45,19 @@ enum Command {
     Synth(synth::SynthArgs),
 }
 
+/// `--device`, the same on every command that can use a GPU.
+#[derive(clap::Args, Clone, Copy)]
+pub struct DeviceArg {
+    /// Where to run: auto (a hardware GPU when there is one, else the CPU), cpu, or gpu (any
+    /// adapter, software ones such as Mesa's lavapipe included).
+    #[arg(long, default_value = "auto", value_parser = parse_device)]
+    pub device: derma_core::gpu::Device,
+}
+
+fn parse_device(s: &str) -> Result<derma_core::gpu::Device, String> {
+    s.parse()
+}
+
 fn main() {
     let cli = Cli::parse();
     let level = match cli.verbose {
@@ -55,14 +70,20 @@ fn main() {
         .with_env_filter(tracing_subscriber::EnvFilter::new(level))
         .with_writer(std::io::stderr)
         .init();
+    let bars = progress::Bars::new(cli.quiet);
     let result = match cli.command {
-        Command::Skin(args) => skin::run(args, cli.quiet),
-        Command::Optics(cmd) => optics::run(cmd, cli.quiet),
-        Command::Match(cmd) => matching::run(cmd, cli.quiet),
-        Command::Rig(cmd) => rig::run(cmd, cli.quiet),
-        Command::Synth(args) => synth::run(args, cli.quiet),
+        Command::Skin(args) => skin::run(args, &bars),
+        Command::Optics(cmd) => optics::run(cmd, &bars),
+        Command::Match(cmd) => matching::run(cmd, &bars),
+        Command::Rig(cmd) => rig::run(cmd, &bars),
+        Command::Synth(args) => synth::run(args, &bars),
     };
+    bars.finish();
     if let Err(e) = result {
+        if output::is_closed_pipe(&e) {
+            // `derma … | head`: the reader has what it wanted.
+            std::process::exit(0);
+        }
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }

@@ -22,7 +22,7 @@ fn run(args: &[&str]) -> (bool, String) {
     )
 }
 
-const ALL: [&str; 15] = derma_skin::generate::OUTPUT_FILES;
+const ALL: [derma_skin::outputs::OutputFile; 15] = derma_skin::outputs::OUTPUTS;
 
 fn report(dir: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
@@ -33,7 +33,7 @@ fn default_run_writes_the_whole_set_with_plausible_statistics() {
     let d = tmp("default");
     let (ok, err) = run(&["skin", "--size", "128", "--out", d.to_str().unwrap()]);
     assert!(ok, "{err}");
-    for f in ALL {
+    for f in ALL.map(|o| o.file) {
         assert!(d.join(f).exists(), "{f} missing");
     }
     // No temporary files left behind.
@@ -77,7 +77,7 @@ fn default_run_writes_the_whole_set_with_plausible_statistics() {
     ]);
     assert!(ok);
     // Every file but report.json (which records timings) is byte-identical.
-    for f in ALL.iter().filter(|f| **f != "report.json") {
+    for f in ALL.map(|o| o.file).iter().filter(|f| **f != "report.json") {
         assert!(
             std::fs::read(d.join(f)).unwrap() == std::fs::read(d2.join(f)).unwrap(),
             "{f} differs"

@@ -123,7 +123,7 @@ fn build_eval_animate_transfer_from_skin_maps() {
     assert!(out.contains("global scale 1.1850"), "{out}");
     assert!(rig.join("rig.wgsl").exists());
     // The shipped shader on the GPU gives the CPU's map (lavapipe in CI).
-    if !derma_core::gpu::skip_test_without_gpu(derma_rig::gpu_eval::available().is_some()) {
+    if !derma_test_support::skip_without_gpu() {
         let hg = d.join("hg.exr");
         let (ok, _, err) = run(&[
             "rig",

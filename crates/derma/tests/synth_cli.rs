@@ -63,7 +63,7 @@ fn joint_channels_are_written_beside_the_output_and_a_seed_repeats_bytes() {
         (grey.channels[0].width(), grey.channels[0].height()),
         (100, 80)
     );
-    assert!(colour.is_colour);
+    assert!(colour.is_color);
     // Registered: the colour is (within 8-bit rounding) 0.8 × the relief in green.
     let (hv, gv) = (grey.channels[0].data(), colour.channels[1].data());
     let worst = hv

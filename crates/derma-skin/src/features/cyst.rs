@@ -92,6 +92,6 @@ mod tests {
             &mut s,
         );
         assert!((s.height_mm - 0.4 * sigmoid_profile(1.0, 1.0)).abs() < 1e-6);
-        assert!(s.melanin == 0.0 && s.blood == 0.0);
+        assert!(s.tissue.melanin == 0.0 && s.tissue.blood == 0.0);
     }
 }

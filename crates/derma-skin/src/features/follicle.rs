@@ -62,7 +62,7 @@ impl Feature for Follicle {
         if d >= self.reach {
             return;
         }
-        s.blood *= 1.0 - prm.blood_reduction * smooth_bump(d, prm.gland_radius_mm);
+        s.tissue.blood *= 1.0 - prm.blood_reduction * smooth_bump(d, prm.gland_radius_mm);
         if d < self.r_outer {
             let a = follicle_alpha(d, self.r_inner, self.r_outer) * self.amp;
             s.add_extra(prm.hair_color, a);
@@ -88,7 +88,10 @@ mod tests {
         };
         let f = Follicle::new(Vec3::ZERO, &cfg, 0.001);
         let mut s = BioSample {
-            blood: 0.02,
+            tissue: derma_shading::BioTexel {
+                blood: 0.02,
+                ..Default::default()
+            },
             ..Default::default()
         };
         f.apply(
@@ -101,10 +104,13 @@ mod tests {
         );
         assert!((s.extra[3] - 1.0).abs() < 1e-6 && (s.extra[0] - 0.1).abs() < 1e-6);
         assert!((s.height_mm - 0.02).abs() < 1e-7);
-        assert!(s.blood < 0.02 && s.blood > 0.01);
+        assert!(s.tissue.blood < 0.02 && s.tissue.blood > 0.01);
         // Outside r_o but inside the gland: blood reduced, no colour.
         let mut s = BioSample {
-            blood: 0.02,
+            tissue: derma_shading::BioTexel {
+                blood: 0.02,
+                ..Default::default()
+            },
             ..Default::default()
         };
         f.apply(
@@ -116,6 +122,6 @@ mod tests {
             &mut s,
         );
         assert_eq!(s.extra[3], 0.0);
-        assert!(s.blood < 0.02);
+        assert!(s.tissue.blood < 0.02);
     }
 }

@@ -78,8 +78,8 @@ impl Feature for Freckle {
             return;
         }
         let a = freckle_amount(d, self.r_eff * self.perimeter.scale(off)) * self.amp;
-        s.melanin += a * self.melanin;
-        s.pheomelanin = (s.pheomelanin + a * self.pheomelanin).min(1.0);
+        s.tissue.melanin += a * self.melanin;
+        s.tissue.pheomelanin = (s.tissue.pheomelanin + a * self.pheomelanin).min(1.0);
     }
 }
 
@@ -116,7 +116,7 @@ mod tests {
             &mut s,
         );
         // a = 1 − 1.2·0.5 = 0.4
-        assert!((s.melanin - 0.4 * 0.06).abs() < 1e-6);
+        assert!((s.tissue.melanin - 0.4 * 0.06).abs() < 1e-6);
         let mut s = BioSample::default();
         f.apply(
             &(),
@@ -126,6 +126,6 @@ mod tests {
             },
             &mut s,
         );
-        assert_eq!(s.melanin, 0.0);
+        assert_eq!(s.tissue.melanin, 0.0);
     }
 }

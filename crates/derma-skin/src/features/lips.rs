@@ -18,9 +18,9 @@ pub fn apply_lips(prm: &LipParams, field: f32, s: &mut BioSample) {
         return;
     }
     let f = field.min(1.0);
-    s.blood += (prm.blood - s.blood) * f;
-    s.pheomelanin += (prm.pheomelanin - s.pheomelanin) * f;
-    s.epidermis_um += (prm.epidermis_um - s.epidermis_um) * f;
+    s.tissue.blood += (prm.blood - s.tissue.blood) * f;
+    s.tissue.pheomelanin += (prm.pheomelanin - s.tissue.pheomelanin) * f;
+    s.tissue.epidermis_um += (prm.epidermis_um - s.tissue.epidermis_um) * f;
     s.lips = f;
 }
 
@@ -36,21 +36,27 @@ mod tests {
             epidermis_um: 40.0,
         };
         let mut s = BioSample {
-            blood: 0.01,
-            pheomelanin: 0.3,
-            epidermis_um: 80.0,
+            tissue: derma_shading::BioTexel {
+                blood: 0.01,
+                pheomelanin: 0.3,
+                epidermis_um: 80.0,
+                ..Default::default()
+            },
             ..Default::default()
         };
         apply_lips(&prm, 1.0, &mut s);
         assert_eq!(
-            (s.blood, s.pheomelanin, s.epidermis_um, s.lips),
+            (s.tissue.blood, s.tissue.pheomelanin, s.tissue.epidermis_um, s.lips),
             (0.08, 0.6, 40.0, 1.0)
         );
         let mut s = BioSample {
-            blood: 0.01,
+            tissue: derma_shading::BioTexel {
+                blood: 0.01,
+                ..Default::default()
+            },
             ..Default::default()
         };
         apply_lips(&prm, 0.5, &mut s);
-        assert!((s.blood - 0.045).abs() < 1e-7);
+        assert!((s.tissue.blood - 0.045).abs() < 1e-7);
     }
 }

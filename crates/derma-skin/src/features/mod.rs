@@ -1,6 +1,6 @@
 //! Biological features (thesis §4.8.5, §5.3): each maps the feature's parameters and a point on
 //! the surface to changes of the bio parameters there. One module per feature; the order in
-//! which kinds are applied is their priority ([`PRIORITY`]).
+//! which kinds are applied is the table's ([`crate::kinds::KINDS`]).
 
 pub mod bezier;
 pub mod cyst;
@@ -13,19 +13,19 @@ pub mod pore;
 pub mod profile;
 pub mod wrinkle;
 
+use derma_shading::BioTexel;
 use glam::Vec3;
 use serde::Serialize;
 
-/// Every bio parameter of one texel while it is painted (thesis §5.2 plus a lip mask that the
-/// material stage uses for roughness).
+/// Every bio parameter of one texel while it is painted (thesis §5.2): the tissue the optics
+/// turn into colour, plus displacement, an extra colour and a lip mask that the material stage
+/// uses for roughness.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct BioSample {
-    pub melanin: f32,
-    pub pheomelanin: f32,
-    pub blood: f32,
-    pub oxygenation: f32,
-    pub stratum_corneum_um: f32,
-    pub epidermis_um: f32,
+    /// Melanin, blood, oxygenation and layer thicknesses: what an
+    /// [`derma_shading::Appearance`] turns into colour.
+    pub tissue: BioTexel,
+    /// Displacement p_z from the mean skin surface, mm.
     pub height_mm: f32,
     /// Extra colour p_c (linear RGB) and its coverage α (thesis §5.2), e.g. hair.
     pub extra: [f32; 4],
@@ -34,19 +34,6 @@ pub struct BioSample {
 }
 
 impl BioSample {
-    /// The parameters that determine colour, for an [`derma_shading::Appearance`].
-    #[inline]
-    pub fn texel(&self) -> derma_shading::BioTexel {
-        derma_shading::BioTexel {
-            melanin: self.melanin,
-            pheomelanin: self.pheomelanin,
-            blood: self.blood,
-            oxygenation: self.oxygenation,
-            stratum_corneum_um: self.stratum_corneum_um,
-            epidermis_um: self.epidermis_um,
-        }
-    }
-
     /// Composites colour `rgb` with coverage `a` over the extra colour ("over" operator).
     #[inline]
     pub fn add_extra(&mut self, rgb: [f32; 3], a: f32) {
@@ -81,13 +68,6 @@ pub trait Feature: Clone + Serialize + Send + Sync {
     /// Modifies the bio parameters at `q`.
     fn apply(&self, params: &Self::Params, q: &PaintPoint, s: &mut BioSample);
 }
-
-/// Application order (thesis §4.8.5): features that add melanin or height come first, then
-/// wrinkles and pores that carve the surface, and follicles last because they reduce the blood
-/// that the others have set and cover everything with hair colour.
-pub const PRIORITY: [&str; 8] = [
-    "baseline", "lips", "cyst", "mole", "freckle", "wrinkle", "pore", "follicle",
-];
 
 /// Anti-aliasing of features smaller than a texel: the radius is widened to at least
 /// `MIN_TEXELS` texels and the amplitude scaled by (r / r_eff)², which keeps the feature's

@@ -44,7 +44,7 @@ impl Feature for Mole {
         let r = self.r_eff * self.perimeter.scale(off);
         if d < SIGMOID_SUPPORT * r {
             let m = sigmoid_profile(d, r) * self.melanin * self.amp;
-            s.melanin += m;
+            s.tissue.melanin += m;
             s.height_mm += self.height * m;
         }
     }
@@ -107,7 +107,10 @@ mod tests {
         assert!((m.radius - 1.0).abs() < 1e-6);
         let at = |x: f32| {
             let mut s = BioSample {
-                melanin: 0.02,
+                tissue: derma_shading::BioTexel {
+                    melanin: 0.02,
+                    ..Default::default()
+                },
                 ..Default::default()
             };
             m.apply(
@@ -121,9 +124,9 @@ mod tests {
             s
         };
         let c = at(0.0);
-        assert!((c.melanin - (0.02 + m.melanin)).abs() < 1e-6);
+        assert!((c.tissue.melanin - (0.02 + m.melanin)).abs() < 1e-6);
         assert!((c.height_mm - m.height * m.melanin).abs() < 1e-6);
-        assert!(at(0.5).melanin > at(1.0).melanin && at(1.0).melanin > at(1.5).melanin);
-        assert_eq!(at(2.5).melanin, 0.02);
+        assert!(at(0.5).tissue.melanin > at(1.0).tissue.melanin && at(1.0).tissue.melanin > at(1.5).tissue.melanin);
+        assert_eq!(at(2.5).tissue.melanin, 0.02);
     }
 }

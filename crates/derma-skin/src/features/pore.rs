@@ -55,7 +55,7 @@ impl Feature for Pore {
         if d < self.r_eff {
             let w = smooth_bump(d, self.r_eff) * self.amp;
             s.height_mm -= prm.depth_mm * w;
-            s.melanin += prm.melanin_add * w;
+            s.tissue.melanin += prm.melanin_add * w;
         }
     }
 }
@@ -81,7 +81,7 @@ mod tests {
             },
             &mut s,
         );
-        assert!((s.height_mm + 0.03).abs() < 1e-7 && (s.melanin - 0.01).abs() < 1e-7);
+        assert!((s.height_mm + 0.03).abs() < 1e-7 && (s.tissue.melanin - 0.01).abs() < 1e-7);
         let mut s = BioSample::default();
         p.apply(
             &prm,

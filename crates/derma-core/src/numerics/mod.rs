@@ -1,0 +1,51 @@
+//! Numerics shared by every crate: small dense solves, non-negative least squares,
+//! Levenberg–Marquardt, and on `faer` the decompositions larger problems need (LU, Cholesky,
+//! least squares by QR, SVD, symmetric eigen, sparse Cholesky).
+//!
+//! The model matcher's systems are tiny (3–12 unknowns, solved millions of times), where the
+//! hand-written elimination of [`dense::solve`] is faster than a general library
+//! (BENCHMARKS.md, "Numerics"); everything else goes through `faer`, which is pure Rust,
+//! runs here without its thread pool (so results never depend on the thread count) and is
+//! re-exported as [`faer`] for callers that need its full API.
+
+pub mod dense;
+pub mod levenberg_marquardt;
+pub mod nnls;
+pub mod sparse;
+
+pub use dense::{solve, Eigen, Matrix, Svd};
+pub use faer;
+pub use levenberg_marquardt::{levenberg_marquardt, LmOptions, ResidualFn};
+pub use nnls::nnls_normal;
+pub use sparse::SparseCholesky;
+
+/// Why a decomposition or solve failed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum NumericsError {
+    /// The matrix is singular (or numerically so).
+    #[error("the {what} matrix is singular")]
+    Singular {
+        /// Which matrix.
+        what: &'static str,
+    },
+    /// A Cholesky factorisation met a non-positive pivot.
+    #[error("the {what} matrix is not positive definite")]
+    NotPositiveDefinite {
+        /// Which matrix.
+        what: &'static str,
+    },
+    /// An iterative decomposition (SVD, eigen) did not converge.
+    #[error("the {what} did not converge")]
+    NoConvergence {
+        /// Which decomposition.
+        what: &'static str,
+    },
+    /// Operands whose sizes do not fit together.
+    #[error("{what}: {detail}")]
+    Shape {
+        /// Which operation.
+        what: &'static str,
+        /// The sizes found.
+        detail: String,
+    },
+}

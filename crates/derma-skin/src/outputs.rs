@@ -1,0 +1,91 @@
+//! The files of a texture set (the project's design, §3 "Outputs"): every name, its colour
+//! space and meaning, defined once. Writing, manifest.json and the check that no input is
+//! overwritten all read this table. Names follow the Substance/Unreal convention.
+
+/// `base_color.png`: diffuse albedo.
+pub const BASE_COLOR: &str = "base_color.png";
+/// `normal.png`: tangent-space normal.
+pub const NORMAL: &str = "normal.png";
+/// `height.exr`: displacement in mm.
+pub const HEIGHT_EXR: &str = "height.exr";
+/// `height.png`: displacement, normalised.
+pub const HEIGHT_PNG: &str = "height.png";
+/// `roughness.png`.
+pub const ROUGHNESS: &str = "roughness.png";
+/// `specular.png`.
+pub const SPECULAR: &str = "specular.png";
+/// `melanin.exr`.
+pub const MELANIN: &str = "melanin.exr";
+/// `hemoglobin.exr`.
+pub const HEMOGLOBIN: &str = "hemoglobin.exr";
+/// `bio.exr`: every bio parameter.
+pub const BIO: &str = "bio.exr";
+/// `sss_color.png` (with a subsurface-aware appearance).
+pub const SSS_COLOR: &str = "sss_color.png";
+/// `sss_radius.png` (with a subsurface-aware appearance).
+pub const SSS_RADIUS: &str = "sss_radius.png";
+/// `features.json`: every placed feature.
+pub const FEATURES: &str = "features.json";
+/// `preview.png`.
+pub const PREVIEW: &str = "preview.png";
+/// `manifest.json`: this table, for the files written.
+pub const MANIFEST: &str = "manifest.json";
+/// `report.json`: the run.
+pub const REPORT: &str = "report.json";
+
+/// One output file as manifest.json lists it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct OutputFile {
+    /// File name inside the output directory.
+    pub file: &'static str,
+    /// How its values are encoded ("sRGB", "linear", "linear (non-color)", "-").
+    pub color_space: &'static str,
+    /// What it holds, for a user opening it in an engine.
+    pub meaning: &'static str,
+}
+
+const fn out(file: &'static str, color_space: &'static str, meaning: &'static str) -> OutputFile {
+    OutputFile {
+        file,
+        color_space,
+        meaning,
+    }
+}
+
+/// Every file `derma skin` writes, in manifest order.
+pub const OUTPUTS: [OutputFile; 15] = [
+    out(BASE_COLOR, "sRGB", "diffuse albedo (glTF baseColor / Unreal Base Color), 8-bit sRGB"),
+    out(NORMAL, "linear (non-colour)", "tangent-space normal, OpenGL +Y (green up), MikkTSpace frame on meshes; 16-bit, n·½+½"),
+    out(HEIGHT_EXR, "linear", "displacement in mm from the mean skin surface (float32)"),
+    out(HEIGHT_PNG, "linear (non-colour)", "displacement, 16-bit, 0 ↔ height_range.min_mm and 1 ↔ max_mm (report.json)"),
+    out(ROUGHNESS, "linear (non-colour)", "glTF perceptual roughness (Unreal Roughness), 8-bit"),
+    out(SPECULAR, "linear (non-colour)", "specular level F0/0.08 (Unreal/Substance Specular: 0.5 ↔ F0 = 4 %), 8-bit"),
+    out(MELANIN, "linear", "melanosome volume fraction of the epidermis (melanin) and pheomelanin share"),
+    out(HEMOGLOBIN, "linear", "whole-blood volume fraction of the dermis (hemoglobin) and its oxygenation"),
+    out(BIO, "linear", "every bio parameter as a channel (half float): melanin, pheomelanin, blood, oxygenation, stratum_corneum_um, epidermis_um, height_mm, extra.RGBA, lips"),
+    out(SSS_COLOR, "sRGB", "subsurface colour: Burley 2015 surface albedo A of the fitted diffusion profile (Unreal Subsurface Color, Blender Subsurface Color), 8-bit sRGB"),
+    out(SSS_RADIUS, "linear (non-colour)", "subsurface scatter distance per channel (Christensen & Burley 2015 mean free path, Blender Subsurface Radius), 16-bit, 0 ↔ 0 mm and 1 ↔ 8 mm"),
+    out(FEATURES, "-", "every placed feature with its parameters (mm)"),
+    out(PREVIEW, "sRGB", "shaded preview and a contact sheet of the maps"),
+    out(MANIFEST, "-", "this list: every file with its colour space and meaning"),
+    out(REPORT, "-", "run report: version, seed, inputs with hashes, counts, statistics, timings"),
+];
+
+/// The table's entry for `file`.
+pub fn output(file: &str) -> Option<&'static OutputFile> {
+    OUTPUTS.iter().find(|o| o.file == file)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_name_is_listed_once() {
+        let mut names: Vec<&str> = OUTPUTS.iter().map(|o| o.file).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), OUTPUTS.len());
+        assert!(output(SSS_RADIUS).is_some() && output("bio.png").is_none());
+    }
+}
