@@ -208,6 +208,22 @@ fn mean_free(neutral: &Map, mean_n: &Map) -> Map {
 }
 
 impl Rig {
+    /// Checks that `melanin` has the rig's full resolution.
+    pub fn check_melanin(&self, melanin: &Map) -> Result<()> {
+        let (w, h) = self.size();
+        if (melanin.width(), melanin.height()) != (w, h) {
+            return Err(invalid(
+                "melanin map",
+                format!(
+                    "{}×{}; expected the rig's {w}×{h}",
+                    melanin.width(),
+                    melanin.height()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// Builds the basis of `neutral` (dermal hemoglobin C_hd, volume fraction) for `targets`.
     /// `mask` (optional) weights texels in the statistics (0 = not skin).
     pub fn build(

@@ -188,26 +188,10 @@ pub fn evaluate_frame(
     }
 }
 
-/// Checks that `melanin` has the rig's full resolution.
-pub(crate) fn check_melanin(rig: &Rig, melanin: &Map) -> Result<()> {
-    let (w, h) = rig.size();
-    if (melanin.width(), melanin.height()) != (w, h) {
-        return Err(invalid(
-            "melanin map",
-            format!(
-                "{}×{}; expected the rig's {w}×{h}",
-                melanin.width(),
-                melanin.height()
-            ),
-        ));
-    }
-    Ok(())
-}
-
 impl FramePlan {
     pub fn new(rig: &Rig, melanin: &Map, lut: &SkinColorLut) -> Result<Self> {
         let (w, h) = rig.size();
-        check_melanin(rig, melanin)?;
+        rig.check_melanin(melanin)?;
         let n = FRAME_LUT_LEVELS;
         let (mmax, bmax) = (lut.options.melanin_max, lut.options.blood_max);
         let u_index = melanin

@@ -55,7 +55,7 @@ impl GpuRig {
     pub fn new(rig: &Rig, melanin: &Map, lut: &SkinColorLut) -> Result<Self> {
         let (ctx, pipe) = pipeline()?;
         let (w, h) = rig.size();
-        crate::evaluate::check_melanin(rig, melanin)?;
+        rig.check_melanin(melanin)?;
         let (bw, bh) = rig.basis_size();
         let layers = rig.targets.len() + 1;
         let mut basis = Vec::with_capacity(layers * 2 * bw * bh);

@@ -6,6 +6,10 @@
 //! projection) and anneal only over θ. Directions are in the local frame, z = surface normal.
 //! The models themselves live one per module; [`crate::model_kind`] lists them.
 
+/// Refractive index of the skin surface, the stratum corneum's 1.55 (BioSpec, Krishnaswamy &
+/// Baranoski 2004; as in the optics): the Fresnel terms [`Dirs`] caches for the skin model.
+pub const SKIN_SURFACE_INDEX: f64 = derma_optics::specimen::LAYER_INDEX[0];
+
 /// At most this many shared linear lobes.
 pub const MAX_LOBES: usize = 3;
 
@@ -18,8 +22,8 @@ pub struct Dirs {
     pub n_h: f64,
     /// h·l = h·v.
     pub h_l: f64,
-    /// Exact Fresnel reflectance of the skin surface (index
-    /// [`crate::skin_dual_lobe::SKIN_SURFACE_INDEX`]) at h·l, n·l and n·v: geometry only, so
+    /// Exact Fresnel reflectance of the skin surface (index [`SKIN_SURFACE_INDEX`]) at h·l,
+    /// n·l and n·v: geometry only, so
     /// computed once per direction pair rather than at every fit step.
     pub skin_fresnel: [f64; 3],
     /// ln sinθh (−∞ at the normal), for the sheen distribution's power of sinθh.
@@ -42,7 +46,7 @@ impl Dirs {
     /// From the four cosines.
     pub fn from_cosines(n_l: f64, n_v: f64, n_h: f64, h_l: f64) -> Self {
         let f = |c: f64| {
-            crate::fresnel::fresnel_unpolarised(c, 1.0, crate::skin_dual_lobe::SKIN_SURFACE_INDEX)
+            crate::fresnel::fresnel_unpolarised(c, 1.0, SKIN_SURFACE_INDEX)
         };
         Self {
             n_l,

@@ -21,8 +21,7 @@ use crate::render_model::{Basis, Dirs, RenderModel, ShapeParam};
 use std::f64::consts::FRAC_1_PI;
 use std::sync::OnceLock;
 
-/// Stratum corneum index 1.55 (BioSpec, Krishnaswamy & Baranoski 2004; as in the optics).
-pub const SKIN_SURFACE_INDEX: f64 = derma_optics::specimen::LAYER_INDEX[0];
+pub use crate::render_model::SKIN_SURFACE_INDEX;
 
 pub struct SkinDualLobe;
 

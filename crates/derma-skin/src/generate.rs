@@ -15,8 +15,9 @@
 use crate::config::{SkinConfig, SurfaceKind};
 use crate::field::FieldSet;
 use crate::outputs;
+use crate::report::InputFiles;
 use crate::paint::BioMaps;
-use crate::placement::FeatureSet;
+use crate::feature_set::FeatureSet;
 use crate::surface::Surface;
 use crate::texture_set::{HeightRange, RenderMaps};
 use crate::{Result, SkinError};
@@ -208,7 +209,10 @@ impl<'a> SkinGenerator<'a> {
                 }
             }
         }
-        derma_core::atomic::ensure_writable_dir(dir)?;
+        derma_core::atomic::ensure_writable_dir(dir).map_err(|e| SkinError::Input {
+            path: dir.to_path_buf(),
+            detail: format!("the output directory is not writable ({e})"),
+        })?;
         let mesh = self.mesh_path();
         let inputs: Vec<&Path> = [&mesh, &self.config_path, &self.fields]
             .into_iter()
@@ -318,7 +322,7 @@ impl<'a> SkinGenerator<'a> {
         }
 
         job.stage("scatter", 1, Unit::Steps);
-        let features = crate::placement::place(cfg, &fields, &scatter_surface, size)?;
+        let features = crate::feature_set::place(cfg, &fields, &scatter_surface, size)?;
         drop(scatter_surface);
 
         let mut bio = crate::paint::paint(cfg, &surface, &fields, &features, &job)?;
@@ -460,19 +464,6 @@ fn uniform_fields() -> FieldSet {
     f
 }
 
-/// The files a run read.
-#[derive(Clone, Debug)]
-pub struct InputFiles {
-    /// The TOML config, when one was read.
-    pub config: Option<PathBuf>,
-    /// The mesh, when one was used.
-    pub mesh: Option<PathBuf>,
-    /// The fields directory, when given.
-    pub fields: Option<PathBuf>,
-    /// The kind of surface painted.
-    pub surface: SurfaceKind,
-}
-
 /// Everything the main job produced, in memory; [`TextureSet::write`] writes its files.
 pub struct TextureSet {
     /// Texel → point on the surface.
@@ -567,9 +558,21 @@ impl TextureSet {
             seconds: self.started.elapsed().as_secs_f64(),
         });
         files.push(outputs::REPORT);
-        let manifest = crate::report::manifest(self, &files);
+        let manifest = crate::report::manifest(self.config.size, &files);
         derma_core::atomic::write_bytes(&dir.join(outputs::MANIFEST), &manifest)?;
-        let report = crate::report::report(self, &height_range, &log);
+        let report = crate::report::report(&crate::report::Run {
+            config: &self.config,
+            inputs: &self.inputs,
+            mesh_unit: self.mesh_unit,
+            threads: self.threads(),
+            appearance: self.appearance,
+            surface: &self.surface,
+            bio: &self.bio,
+            base_color: &self.render.base_color,
+            counts: self.features.counts(),
+            height_range,
+            log: &log,
+        });
         derma_core::atomic::write_bytes(&dir.join(outputs::REPORT), &report)?;
         files.insert(files.len() - 1, outputs::MANIFEST);
         Ok(Written {

@@ -22,6 +22,7 @@
 
 pub mod config;
 pub mod detail;
+pub mod feature_set;
 pub mod features;
 pub mod field;
 pub mod generate;

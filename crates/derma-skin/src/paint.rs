@@ -8,7 +8,7 @@ use crate::features::lips::{apply_lips, LipParams};
 use crate::features::{BioSample, PaintPoint};
 use crate::index::GridCursor;
 use crate::noise::{BandNoise, NOISE_STREAM};
-use crate::placement::FeatureSet;
+use crate::feature_set::FeatureSet;
 use crate::surface::Surface;
 use derma_core::progress::{Progress, Unit};
 use derma_core::Map;

@@ -1,21 +1,19 @@
-//! Placing features (thesis §4.8.8, the first loop of TexGen): for each kind of the table
-//! ([`crate::kinds::KINDS`]), draw its count from the density field and the surface area, then
-//! its centres and parameters from the counter-based RNG keyed by (seed, kind, index), and build
-//! the kind's spatial index. [`FeatureSet`] holds the result in painting order.
+//! Placing features (thesis §4.8.8, the first loop of TexGen): for a kind, draw its count from
+//! the density field and the surface area, then its centres and parameters from the
+//! counter-based RNG keyed by (seed, kind, index), and build the kind's spatial index
+//! ([`Scattered`]); wrinkles walk the vector field. `kinds.rs` applies this to every kind.
 
 use crate::config::SkinConfig;
 use crate::features::bezier::CubicBezier;
 use crate::features::{BioSample, Feature, PaintPoint};
 use crate::field::FieldSet;
 use crate::index::Grid;
-use crate::kinds::{KindEntry, KINDS};
 use crate::scatter::{Sampler, SurfacePoint};
 use crate::surface::Surface;
 use crate::Result;
 use derma_core::rng::Philox;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
-use serde::Serialize;
 
 /// The features of one kind, with ghost copies (tileable patches), their index and the
 /// parameters every feature of the kind shares.
@@ -133,89 +131,6 @@ where
     }
 }
 
-/// Every scattered feature, kind by kind in painting order.
-#[derive(Default)]
-pub struct FeatureSet {
-    kinds: Vec<(&'static KindEntry, Box<dyn PlacedKind>)>,
-}
-
-impl FeatureSet {
-    /// Adds a kind; kinds paint in the order they are added.
-    pub fn push(&mut self, entry: &'static KindEntry, placed: Box<dyn PlacedKind>) {
-        self.kinds.push((entry, placed));
-    }
-
-    /// The kinds in painting order.
-    pub fn kinds(&self) -> impl Iterator<Item = (&'static KindEntry, &dyn PlacedKind)> {
-        self.kinds.iter().map(|(e, k)| (*e, k.as_ref()))
-    }
-
-    /// The features of kind `name` as their type (`None` for another name or type).
-    pub fn get<T: Feature + 'static>(&self, name: &str) -> Option<&Scattered<T>> {
-        self.kinds
-            .iter()
-            .find(|(e, _)| e.name == name)
-            .and_then(|(_, k)| k.as_any().downcast_ref())
-    }
-
-    /// Counts per kind, for reports.
-    pub fn counts(&self) -> FeatureCounts {
-        FeatureCounts(self.kinds.iter().map(|(e, k)| (*e, k.count())).collect())
-    }
-
-    /// Number of real features of every kind.
-    pub fn total(&self) -> usize {
-        self.kinds.iter().map(|(_, k)| k.count()).sum()
-    }
-
-    /// Every placed feature with its parameters (features.json).
-    pub fn to_json(&self) -> serde_json::Value {
-        let mut m = serde_json::Map::new();
-        m.insert(
-            "units".into(),
-            "positions and lengths in mm on the surface".into(),
-        );
-        for (e, k) in &self.kinds {
-            m.insert(e.name.into(), k.to_json());
-        }
-        serde_json::Value::Object(m)
-    }
-}
-
-/// Features per kind, in painting order; serializes as a map from kind name to count.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FeatureCounts(pub Vec<(&'static KindEntry, usize)>);
-
-impl FeatureCounts {
-    /// The count of kind `name` (0 for an unknown name).
-    pub fn get(&self, name: &str) -> usize {
-        self.0
-            .iter()
-            .find(|(e, _)| e.name == name)
-            .map_or(0, |(_, n)| *n)
-    }
-
-    /// "5000 cysts, 700 moles, …" for a summary line.
-    pub fn summary(&self) -> String {
-        self.0
-            .iter()
-            .map(|(e, n)| format!("{n} {}", e.label))
-            .collect::<Vec<_>>()
-            .join(", ")
-    }
-}
-
-impl Serialize for FeatureCounts {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut m = s.serialize_map(Some(self.0.len()))?;
-        for (e, n) in &self.0 {
-            m.serialize_entry(e.name, n)?;
-        }
-        m.end()
-    }
-}
-
 /// Output texel pitch (mm) at a scatter point.
 pub(crate) fn pitch(frame: &crate::surface::Frame, size: usize) -> f32 {
     frame.texel_area(size, size).sqrt()
@@ -298,27 +213,6 @@ impl Placing<'_> {
             .filter_map(|k| sampler.sample(&rng, k).and_then(|p| make(&rng, k, p)))
             .collect())
     }
-}
-
-/// Places every kind of the table on `scatter_surface` (the surface at scatter resolution);
-/// `size` is the output resolution, used for anti-aliasing sub-texel features.
-pub fn place(
-    cfg: &SkinConfig,
-    fields: &FieldSet,
-    scatter_surface: &Surface,
-    size: usize,
-) -> Result<FeatureSet> {
-    let ctx = Placing {
-        cfg,
-        fields,
-        surface: scatter_surface,
-        size,
-    };
-    let mut set = FeatureSet::default();
-    for entry in &KINDS {
-        set.push(entry, (entry.place)(&ctx)?);
-    }
-    Ok(set)
 }
 
 /// Builds a wrinkle's cubic Bézier by walking the vector field (thesis §5.3.7): the length l is

@@ -2,21 +2,66 @@
 //! and meaning, for engines and pipelines) and report.json (version, seed, inputs with their
 //! hashes, counts, statistics, notes and stage timings), numbers as the user wrote them.
 
-use crate::config::SurfaceKind;
-use crate::generate::TextureSet;
+use crate::config::{SkinConfig, SurfaceKind};
+use crate::feature_set::FeatureCounts;
 use crate::outputs;
+use crate::paint::BioMaps;
+use crate::surface::Surface;
 use crate::texture_set::HeightRange;
+use derma_core::mesh::LengthUnit;
 use derma_core::progress::Log;
+use derma_core::Map;
+use std::path::PathBuf;
 use derma_core::report::{pretty_json, sha256_file};
 use derma_optics::bio::names;
 use serde_json::json;
 
-/// manifest.json listing `files` (the maps, features.json, preview.png and report.json).
-pub fn manifest(set: &TextureSet, files: &[&str]) -> Vec<u8> {
+/// The files a run read.
+#[derive(Clone, Debug)]
+pub struct InputFiles {
+    /// The TOML config, when one was read.
+    pub config: Option<PathBuf>,
+    /// The mesh, when one was used.
+    pub mesh: Option<PathBuf>,
+    /// The fields directory, when given.
+    pub fields: Option<PathBuf>,
+    /// The kind of surface painted.
+    pub surface: SurfaceKind,
+}
+
+/// What report.json describes.
+pub struct Run<'a> {
+    /// The configuration used.
+    pub config: &'a SkinConfig,
+    /// The files read.
+    pub inputs: &'a InputFiles,
+    /// The unit a user mesh was read in.
+    pub mesh_unit: Option<LengthUnit>,
+    /// Worker threads.
+    pub threads: usize,
+    /// Name of the appearance that made the colours.
+    pub appearance: &'a str,
+    /// The surface (its chart coverage masks the statistics).
+    pub surface: &'a Surface,
+    /// The painted bio maps.
+    pub bio: &'a BioMaps,
+    /// The base colour maps, linear.
+    pub base_color: &'a [Map; 3],
+    /// Features per kind.
+    pub counts: FeatureCounts,
+    /// Range of height.png.
+    pub height_range: HeightRange,
+    /// Timings and notes of the whole run.
+    pub log: &'a Log,
+}
+
+/// manifest.json of a `size`² set listing `files` (the maps, features.json, preview.png and
+/// report.json).
+pub fn manifest(size: u32, files: &[&str]) -> Vec<u8> {
     let maps: Vec<&outputs::OutputFile> = files.iter().filter_map(|f| outputs::output(f)).collect();
     let manifest = json!({
         "generator": format!("derma {}", env!("CARGO_PKG_VERSION")),
-        "size": [set.config.size, set.config.size],
+        "size": [size, size],
         "conventions": {
             "uv": "OpenGL: v up; row 0 of every image is v = 1",
             "normal": "tangent space, OpenGL +Y (green up); MikkTSpace tangents on meshes",
@@ -27,8 +72,8 @@ pub fn manifest(set: &TextureSet, files: &[&str]) -> Vec<u8> {
     pretty_json(&manifest).expect("the manifest serializes")
 }
 
-/// report.json of `set` with the whole run's `log`.
-pub fn report(set: &TextureSet, height_range: &HeightRange, log: &Log) -> Vec<u8> {
+/// report.json of a run.
+pub fn report(set: &Run) -> Vec<u8> {
     let mask: Option<Vec<bool>> = set
         .surface
         .mesh_surface()
@@ -36,7 +81,7 @@ pub fn report(set: &TextureSet, height_range: &HeightRange, log: &Log) -> Vec<u8
     let stat = |f: fn(&crate::features::BioSample) -> f32| {
         set.bio.channel(f).stats(mask.as_deref())
     };
-    let bc = &set.render.base_color;
+    let bc = set.base_color;
     let file = |p: &Option<std::path::PathBuf>| {
         p.as_ref()
             .map(|p| json!({"path": p.display().to_string(), "sha256": sha256_file(p)}))
@@ -55,7 +100,7 @@ pub fn report(set: &TextureSet, height_range: &HeightRange, log: &Log) -> Vec<u8
         "command": "skin",
         "seed": set.config.seed,
         "size": set.config.size,
-        "threads": set.threads(),
+        "threads": set.threads,
         "appearance": set.appearance,
         "inputs": {
             "config": file(&set.inputs.config),
@@ -64,9 +109,9 @@ pub fn report(set: &TextureSet, height_range: &HeightRange, log: &Log) -> Vec<u8
             "surface": surface,
         },
         "config": set.config,
-        "surface_area_cm2": set.surface_area_mm2 / 100.0,
-        "counts": set.features.counts(),
-        "height_range": height_range,
+        "surface_area_cm2": set.surface.area_mm2() / 100.0,
+        "counts": set.counts,
+        "height_range": set.height_range,
         "statistics": {
             names::MELANIN: stat(|s| s.tissue.melanin),
             names::PHEOMELANIN: stat(|s| s.tissue.pheomelanin),
@@ -76,8 +121,8 @@ pub fn report(set: &TextureSet, height_range: &HeightRange, log: &Log) -> Vec<u8
             "height_mm": stat(|s| s.height_mm),
             "base_color_linear": [bc[0].stats(mask.as_deref()), bc[1].stats(mask.as_deref()), bc[2].stats(mask.as_deref())],
         },
-        "notes": log.notes,
-        "timings_s": log.timings,
+        "notes": set.log.notes,
+        "timings_s": set.log.timings,
     });
     pretty_json(&report).expect("the report serializes")
 }

@@ -3,9 +3,8 @@
 //! group of a result written to its own file beside the main output.
 
 use crate::error::{invalid, Result};
-use crate::synthesize::Guide;
 use crate::texture::Texture;
-use derma_core::image_io::{read_grey, read_rgb, write_exr, write_png16, write_png8, ExrPrecision};
+use derma_core::image_io::{read_rgb, write_exr, write_png16, write_png8, ExrPrecision};
 use derma_core::Map;
 use std::path::{Path, PathBuf};
 
@@ -171,19 +170,4 @@ pub fn write_outputs(paths: &[PathBuf], groups: &[ChannelGroup], texture: &Textu
         write_group(path, &maps)?;
     }
     Ok(())
-}
-
-impl Guide {
-    /// A guide from a grey image: level v selects exemplar round(v · (count − 1)).
-    pub fn read(path: &Path, count: usize) -> Result<Self> {
-        if count < 2 {
-            return Err(invalid(
-                "guide",
-                "a guide chooses among exemplars: give at least two",
-            ));
-        }
-        let g = read_grey(path)?;
-        let m = &g.channels[0];
-        Ok(Guide::from_levels(m.width(), m.height(), m.data(), count))
-    }
 }

@@ -8,6 +8,7 @@ use crate::optimize::{optimise_pass, KWATRA_R};
 use crate::pass_context::PassContext;
 use crate::patch_pass::{initialise_noise, patch_pass};
 use crate::search::{window_fits, Matcher, Tolerance};
+use crate::guide::Guide;
 use crate::texture::Texture;
 use derma_core::progress::{Job, Progress, Timing};
 
@@ -112,38 +113,6 @@ impl SynthOptions {
             return Err(invalid("r", format!("{} (expected 0 < r ≤ 2)", self.r)));
         }
         Ok(())
-    }
-}
-
-/// Region guidance: which exemplar each output texel draws from.
-#[derive(Clone, Debug)]
-pub struct Guide {
-    pub width: usize,
-    pub height: usize,
-    pub exemplar: Vec<u8>,
-}
-
-impl Guide {
-    /// A guide from a grey map: value v selects exemplar round(v · (count − 1)). The map is
-    /// sampled at the nearest texel when its size differs from the output's.
-    pub fn from_levels(width: usize, height: usize, levels: &[f32], count: usize) -> Self {
-        let exemplar = levels
-            .iter()
-            .map(|&v| (v.clamp(0.0, 1.0) * (count - 1) as f32).round() as u8)
-            .collect();
-        Self {
-            width,
-            height,
-            exemplar,
-        }
-    }
-
-    /// The exemplar texel (x, y) of `canvas` draws from.
-    pub(crate) fn at(&self, canvas: &Canvas, x: usize, y: usize) -> usize {
-        let (x, y) = (x % canvas.width, y % canvas.height);
-        let gx = (x * self.width / canvas.width).min(self.width - 1);
-        let gy = (y * self.height / canvas.height).min(self.height - 1);
-        self.exemplar[gy * self.width + gx] as usize
     }
 }
 

@@ -446,7 +446,7 @@ fn optics_slab_json_and_errors() {
     let (ok, err) = run(&["optics", "slab", "--layer", "0.2,ten,90,0.5,1"]);
     assert!(!ok && err.contains("mua_per_cm = 'ten'"), "{err}");
     let (ok, err) = run(&["optics", "simulate", "--melanin", "1.5", "--device", "cpu"]);
-    assert!(!ok && err.contains("--melanin 1.5"), "{err}");
+    assert!(!ok && err.contains("melanin = 1.5"), "{err}");
 }
 
 #[test]

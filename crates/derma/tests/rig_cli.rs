@@ -11,6 +11,8 @@ fn tmp(tag: &str) -> std::path::PathBuf {
     common::tmp("rigcli", tag)
 }
 
+/// Writes a hemoglobin map under the channel name older derma versions used (`blood`): it
+/// must still read.
 fn write_blood(p: &Path, m: &derma_core::Map) {
     derma_core::image_io::write_exr(p, &[("blood", m)], derma_core::image_io::ExrPrecision::F32)
         .unwrap();
@@ -20,7 +22,7 @@ fn blood(p: &Path) -> derma_core::Map {
     derma_core::image_io::read_exr_channels(p)
         .unwrap()
         .into_iter()
-        .find(|c| c.0 == "blood")
+        .find(|c| c.0 == "hemoglobin")
         .unwrap()
         .1
 }
