@@ -4,8 +4,8 @@
 //! `cargo run --release -p derma-optics --example 01_skin_spectra -- [OUT.svg] [PHOTONS]`
 
 use derma_core::plot::{Plot, Series};
-use derma_optics::simulate::{simulate_skin, SkinSimConfig};
 use derma_core::progress::Silent;
+use derma_optics::simulate::{simulate_skin, SkinSimConfig};
 use derma_optics::{BioTexel, Device};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -1,7 +1,7 @@
 //! Shards, resume and merge of the precompute grid.
 
-use derma_optics::precompute::{self, Grid, Shard};
 use derma_core::progress::Silent;
+use derma_optics::precompute::{self, Grid, Shard};
 use derma_optics::Device;
 use std::path::PathBuf;
 

@@ -2,13 +2,13 @@
 //! by scripts/iad_reference.py), van de Hulst's table and MCML's published results, exact
 //! conservation, reciprocity, determinism, CPU/GPU agreement and the shape of skin spectra.
 
+use derma_core::progress::Silent;
 use derma_optics::layer::{Bottom, Layer, Stack, Surface};
 use derma_optics::run::{run_cpu, Run};
 use derma_optics::simulate::{skin_result, skin_run, SkinSimConfig};
 use derma_optics::slab::{parse_layer, slab_stack, SlabResult};
 use derma_optics::tally::{BrdfBins, Tally};
 use derma_optics::transport::Incidence;
-use derma_core::progress::Silent;
 use derma_optics::{BioTexel, Device};
 
 fn slab(run: &Run) -> SlabResult {

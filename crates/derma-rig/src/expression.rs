@@ -206,7 +206,11 @@ pub fn select(names: &[String]) -> crate::Result<Vec<&'static Expression>> {
                     "built-in expression",
                     format!(
                         "'{n}' is not in the library ({})",
-                        LIBRARY.iter().map(|e| e.name).collect::<Vec<_>>().join(", ")
+                        LIBRARY
+                            .iter()
+                            .map(|e| e.name)
+                            .collect::<Vec<_>>()
+                            .join(", ")
                     ),
                 )
             })

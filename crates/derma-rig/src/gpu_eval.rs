@@ -4,9 +4,9 @@
 
 use crate::basis::Rig;
 use crate::error::{invalid, Result};
+use derma_core::gpu::GpuCell;
 use derma_core::Map;
 use derma_shading::skin_color_lut::SkinColorLut;
-use derma_core::gpu::GpuCell;
 use wgpu::util::DeviceExt;
 
 /// The shader, also written into every rig directory as `rig.wgsl` for engines.
@@ -35,7 +35,8 @@ fn pipeline() -> Result<(
     &'static derma_core::gpu::Gpu,
     &'static wgpu::ComputePipeline,
 )> {
-    Ok(PIPELINE.get_or_init(|ctx| ctx.compute_pipeline("the rig shader (rig.wgsl)", SHADER, "main"))?)
+    Ok(PIPELINE
+        .get_or_init(|ctx| ctx.compute_pipeline("the rig shader (rig.wgsl)", SHADER, "main"))?)
 }
 
 /// A rig resident on the GPU.

@@ -4,7 +4,9 @@
 //! frames as sRGB PNG or linear EXR.
 
 use crate::error::{Result, RigError};
-use derma_core::image_io::{read_exr_channels, read_grey, write_exr, write_png16, write_png8_srgb, ExrPrecision};
+use derma_core::image_io::{
+    read_exr_channels, read_grey, write_exr, write_png16, write_png8_srgb, ExrPrecision,
+};
 use derma_core::progress::{Note, Progress};
 use derma_core::Map;
 use derma_optics::bio::names;
@@ -50,7 +52,12 @@ fn is_exr(p: &Path) -> bool {
 
 /// Reads a scalar map: EXR by channel name (see [`Quantity::channels`]), other images as grey
 /// × [`Quantity::png_scale`]. A colour image is read by its luminance, with a note.
-pub fn read_map(path: &Path, q: Quantity, lut: &LutOptions, progress: &dyn Progress) -> Result<Map> {
+pub fn read_map(
+    path: &Path,
+    q: Quantity,
+    lut: &LutOptions,
+    progress: &dyn Progress,
+) -> Result<Map> {
     if is_exr(path) {
         let chans = read_exr_channels(path)?;
         if chans.len() == 1 {
@@ -174,11 +181,22 @@ mod tests {
         // EXR: written under `hemoglobin`, read back exactly; an old `blood` channel reads too.
         let p = dir.join("h.exr");
         write_hemoglobin(&p, &h, &lut).unwrap();
-        assert_eq!(read_map(&p, Quantity::Hemoglobin, &lut, &Silent).unwrap(), h);
+        assert_eq!(
+            read_map(&p, Quantity::Hemoglobin, &lut, &Silent).unwrap(),
+            h
+        );
         let old = dir.join("old.exr");
         let o = Map::filled(4, 3, 0.6);
-        write_exr(&old, &[(names::BLOOD, &h), (names::OXYGENATION, &o)], ExrPrecision::F32).unwrap();
-        assert_eq!(read_map(&old, Quantity::Hemoglobin, &lut, &Silent).unwrap(), h);
+        write_exr(
+            &old,
+            &[(names::BLOOD, &h), (names::OXYGENATION, &o)],
+            ExrPrecision::F32,
+        )
+        .unwrap();
+        assert_eq!(
+            read_map(&old, Quantity::Hemoglobin, &lut, &Silent).unwrap(),
+            h
+        );
         let e = read_map(&old, Quantity::Melanin, &lut, &Silent).unwrap_err();
         assert!(e.to_string().contains("old.exr"), "{e}");
         // PNG: grey 1 is the LUT's top (0.32 for blood), within 16-bit precision.

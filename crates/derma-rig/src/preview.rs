@@ -63,7 +63,6 @@ pub fn preview(rgb: &[Map; 3], h: &Map) -> Result<[Map; 3]> {
     }))
 }
 
-
 /// Writes [`preview`] as an 8-bit sRGB PNG.
 pub fn write_preview(path: &std::path::Path, rgb: &[Map; 3], h: &Map) -> Result<()> {
     let img = preview(rgb, h)?;

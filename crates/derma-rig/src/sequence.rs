@@ -97,7 +97,10 @@ pub fn render_sequence(
     let curves = Curves::read(curves_path)?;
     let fps = opts.fps.or(curves.fps).unwrap_or(24.0);
     if !(fps.is_finite() && fps > 0.0) {
-        return Err(invalid("frame rate", format!("{fps}: expected a positive rate")));
+        return Err(invalid(
+            "frame rate",
+            format!("{fps}: expected a positive rate"),
+        ));
     }
     for (n, _) in &curves.weights {
         if n != "neutral" && rig.target_index(n).is_none() {
@@ -125,7 +128,12 @@ pub fn render_sequence(
             files.push(format!("hemoglobin_{k:05}.exr"));
         }
         let mut weights = vec![("neutral".to_string(), w[0])];
-        weights.extend(rig.targets.iter().zip(&w[1..]).map(|(t, x)| (t.name.clone(), *x)));
+        weights.extend(
+            rig.targets
+                .iter()
+                .zip(&w[1..])
+                .map(|(t, x)| (t.name.clone(), *x)),
+        );
         frames.push(FrameJson {
             index: k,
             time: t,
@@ -234,7 +242,8 @@ fn start_or_resume(out: &Path, json: &AnimationJson, force: bool) -> Result<()> 
             }
         }
     }
-    let bytes = serde_json::to_string_pretty(json).map_err(|e| invalid("animation.json", e.to_string()))?;
+    let bytes =
+        serde_json::to_string_pretty(json).map_err(|e| invalid("animation.json", e.to_string()))?;
     derma_core::atomic::write_bytes(&jp, bytes.as_bytes())?;
     Ok(())
 }

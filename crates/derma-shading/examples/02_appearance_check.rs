@@ -6,9 +6,9 @@
 //! cargo run --release -p derma-shading --example 02_appearance_check [points] [photons]
 
 use derma_core::color::{linear_srgb_to_xyz, xyz_to_lab};
-use derma_core::rng::Philox;
 use derma_core::gpu::Device;
 use derma_core::progress::Silent;
+use derma_core::rng::Philox;
 use derma_optics::simulate::{simulate_skin, SkinSimConfig};
 use derma_shading::{Appearance, BioTexel, SpectralKubelkaMunk, TableAppearance};
 

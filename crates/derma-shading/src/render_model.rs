@@ -45,9 +45,7 @@ impl Dirs {
 
     /// From the four cosines.
     pub fn from_cosines(n_l: f64, n_v: f64, n_h: f64, h_l: f64) -> Self {
-        let f = |c: f64| {
-            crate::fresnel::fresnel_unpolarised(c, 1.0, SKIN_SURFACE_INDEX)
-        };
+        let f = |c: f64| crate::fresnel::fresnel_unpolarised(c, 1.0, SKIN_SURFACE_INDEX);
         Self {
             n_l,
             n_v,

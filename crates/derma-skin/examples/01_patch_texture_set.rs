@@ -6,9 +6,12 @@ use derma_skin::config::{Range, SurfaceKind};
 use derma_skin::{SkinConfig, SkinGenerator};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let out = std::env::args()
-        .nth(1)
-        .unwrap_or_else(|| std::env::temp_dir().join("derma-patch").display().to_string());
+    let out = std::env::args().nth(1).unwrap_or_else(|| {
+        std::env::temp_dir()
+            .join("derma-patch")
+            .display()
+            .to_string()
+    });
     let mut cfg = SkinConfig {
         size: 256,
         seed: 3,

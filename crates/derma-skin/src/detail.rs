@@ -11,11 +11,11 @@
 use crate::config::DetailConfig;
 use crate::features::BioSample;
 use crate::SkinError;
-use derma_core::image_io::read_rgb;
-use derma_core::Map;
 use derma_core::color::luminance;
 use derma_core::gpu::Device;
+use derma_core::image_io::read_rgb;
 use derma_core::progress::Progress;
+use derma_core::Map;
 use derma_synth::{Synthesizer, Texture};
 use rayon::prelude::*;
 use std::path::Path;
@@ -250,7 +250,10 @@ mod tests {
         );
         // Melanin varies about its painted value, higher where the colour is darker, which in
         // these exemplars is where the relief is high.
-        let mel: Vec<f64> = texels.iter().map(|t| t.tissue.melanin as f64 / 0.05).collect();
+        let mel: Vec<f64> = texels
+            .iter()
+            .map(|t| t.tissue.melanin as f64 / 0.05)
+            .collect();
         let m_mean = mel.iter().sum::<f64>() / mel.len() as f64;
         assert!((m_mean - 1.0).abs() < 0.05, "mean melanin factor {m_mean}");
         let cov: f64 = mel

@@ -13,11 +13,11 @@
 //! ```
 
 use crate::config::{SkinConfig, SurfaceKind};
+use crate::feature_set::FeatureSet;
 use crate::field::FieldSet;
 use crate::outputs;
-use crate::report::InputFiles;
 use crate::paint::BioMaps;
-use crate::feature_set::FeatureSet;
+use crate::report::InputFiles;
 use crate::surface::Surface;
 use crate::texture_set::{HeightRange, RenderMaps};
 use crate::{Result, SkinError};

@@ -108,7 +108,12 @@ fn place_cysts(ctx: &Placing) -> Result<Box<dyn PlacedKind>> {
             ctx.pitch(&p),
         ))
     })?;
-    Ok(Box::new(Scattered::with_auto_cell(items, ctx.period(), 8.0, ())))
+    Ok(Box::new(Scattered::with_auto_cell(
+        items,
+        ctx.period(),
+        8.0,
+        (),
+    )))
 }
 
 fn place_moles(ctx: &Placing) -> Result<Box<dyn PlacedKind>> {
@@ -119,7 +124,12 @@ fn place_moles(ctx: &Placing) -> Result<Box<dyn PlacedKind>> {
         let px = ctx.pitch(&p);
         Some(Mole::new(p.position, p.frame.t, p.frame.b, m, z, u, v, px))
     })?;
-    Ok(Box::new(Scattered::with_auto_cell(items, ctx.period(), 8.0, ())))
+    Ok(Box::new(Scattered::with_auto_cell(
+        items,
+        ctx.period(),
+        8.0,
+        (),
+    )))
 }
 
 fn place_freckles(ctx: &Placing) -> Result<Box<dyn PlacedKind>> {
@@ -131,9 +141,16 @@ fn place_freckles(ctx: &Placing) -> Result<Box<dyn PlacedKind>> {
     let items = ctx.scatter(spec, |r, k, p| {
         let (z, u, v) = (r.normal2(k, 1)[0], r.uniform4(k, 2), r.uniform4(k, 3));
         let px = ctx.pitch(&p);
-        Some(Freckle::new(p.position, p.frame.t, p.frame.b, f, z, u, v, px))
+        Some(Freckle::new(
+            p.position, p.frame.t, p.frame.b, f, z, u, v, px,
+        ))
     })?;
-    Ok(Box::new(Scattered::with_auto_cell(items, ctx.period(), 8.0, ())))
+    Ok(Box::new(Scattered::with_auto_cell(
+        items,
+        ctx.period(),
+        8.0,
+        (),
+    )))
 }
 
 fn place_wrinkles(ctx: &Placing) -> Result<Box<dyn PlacedKind>> {
@@ -166,7 +183,12 @@ fn place_pores(ctx: &Placing) -> Result<Box<dyn PlacedKind>> {
         depth_mm: pc.depth_mm,
         melanin_add: pc.melanin_add,
     };
-    Ok(Box::new(Scattered::with_auto_cell(items, ctx.period(), 4.0, params)))
+    Ok(Box::new(Scattered::with_auto_cell(
+        items,
+        ctx.period(),
+        4.0,
+        params,
+    )))
 }
 
 /// Follicles of scalp or eyebrow hair: features.json lists their centres only (170 000 of them).

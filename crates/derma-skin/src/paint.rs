@@ -4,11 +4,11 @@
 //! result does not depend on the number of threads.
 
 use crate::config::SkinConfig;
+use crate::feature_set::FeatureSet;
 use crate::features::lips::{apply_lips, LipParams};
 use crate::features::{BioSample, PaintPoint};
 use crate::index::GridCursor;
 use crate::noise::{BandNoise, NOISE_STREAM};
-use crate::feature_set::FeatureSet;
 use crate::surface::Surface;
 use derma_core::progress::{Progress, Unit};
 use derma_core::Map;

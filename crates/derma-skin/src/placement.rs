@@ -32,7 +32,12 @@ pub struct Scattered<T: Feature> {
 impl<T: Feature + 'static> Scattered<T> {
     /// Indexes `items` in cells of `cell_mm`, adding ghost copies when `period` (a tileable
     /// patch's size) is given.
-    pub fn new(mut items: Vec<T>, period: Option<[f32; 2]>, cell_mm: f32, params: T::Params) -> Self {
+    pub fn new(
+        mut items: Vec<T>,
+        period: Option<[f32; 2]>,
+        cell_mm: f32,
+        params: T::Params,
+    ) -> Self {
         let originals = items.len();
         if let Some([px, py]) = period {
             let mut ghosts = Vec::new();
@@ -78,7 +83,12 @@ impl<T: Feature + 'static> Scattered<T> {
                 (hi - lo).max_element() * 0.5
             })
             .fold(0.0f32, f32::max);
-        Self::new(items, period, (2.0 * reach).clamp(0.05, max_cell_mm), params)
+        Self::new(
+            items,
+            period,
+            (2.0 * reach).clamp(0.05, max_cell_mm),
+            params,
+        )
     }
 
     /// features.json lists the kind through `json` instead of every parameter.

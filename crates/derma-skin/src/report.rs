@@ -10,11 +10,11 @@ use crate::surface::Surface;
 use crate::texture_set::HeightRange;
 use derma_core::mesh::LengthUnit;
 use derma_core::progress::Log;
-use derma_core::Map;
-use std::path::PathBuf;
 use derma_core::report::{pretty_json, sha256_file};
+use derma_core::Map;
 use derma_optics::bio::names;
 use serde_json::json;
+use std::path::PathBuf;
 
 /// The files a run read.
 #[derive(Clone, Debug)]
@@ -74,13 +74,13 @@ pub fn manifest(size: u32, files: &[&str]) -> Vec<u8> {
 
 /// report.json of a run.
 pub fn report(set: &Run) -> Vec<u8> {
-    let mask: Option<Vec<bool>> = set
-        .surface
-        .mesh_surface()
-        .map(|m| (0..set.surface.len()).map(|i| m.raster.covered(i)).collect());
-    let stat = |f: fn(&crate::features::BioSample) -> f32| {
-        set.bio.channel(f).stats(mask.as_deref())
-    };
+    let mask: Option<Vec<bool>> = set.surface.mesh_surface().map(|m| {
+        (0..set.surface.len())
+            .map(|i| m.raster.covered(i))
+            .collect()
+    });
+    let stat =
+        |f: fn(&crate::features::BioSample) -> f32| set.bio.channel(f).stats(mask.as_deref());
     let bc = set.base_color;
     let file = |p: &Option<std::path::PathBuf>| {
         p.as_ref()

@@ -3,17 +3,17 @@
 //! height and normal maps; dilation into the UV gutter; and the map files of [`crate::outputs`].
 
 use crate::config::MaterialConfig;
-use crate::paint::{BioMaps, BIO_CHANNELS};
 use crate::outputs;
+use crate::paint::{BioMaps, BIO_CHANNELS};
 use crate::surface::Surface;
 use derma_core::image_io::{self, ExrPrecision};
-use derma_optics::bio::names;
 use derma_core::Map;
+use derma_optics::bio::names;
 use derma_shading::Appearance;
 use rayon::prelude::*;
-use std::slice::ChunksMut;
 use serde::Serialize;
 use std::path::Path;
+use std::slice::ChunksMut;
 
 /// Normal-incidence reflectance of hair keratin, n ≈ 1.55 (Stamm, Garcia & Fuchs 1977, "The optical
 /// properties of human hair"): ((1.55 − 1)/(1.55 + 1))² = 0.0465.

@@ -1,11 +1,11 @@
 //! Pipeline properties: determinism across thread counts, seams on meshes, tiling patches,
 //! densities per unit area.
 
+use derma_core::progress::Silent;
 use derma_skin::config::{SkinConfig, SurfaceKind};
+use derma_skin::feature_set::FeatureSet;
 use derma_skin::features::mole::Mole;
 use derma_skin::features::perimeter::Perimeter;
-use derma_core::progress::Silent;
-use derma_skin::feature_set::FeatureSet;
 use derma_skin::placement::Scattered;
 use derma_skin::{SkinGenerator, TextureSet};
 use glam::Vec3;

@@ -56,13 +56,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         4 * n,
         4 * n,
         1,
-        (0..16 * n * n).map(|i| ex.data[((i / (4 * n)) % n) * n + (i % (4 * n)) % n]).collect(),
+        (0..16 * n * n)
+            .map(|i| ex.data[((i / (4 * n)) % n) * n + (i % (4 * n)) % n])
+            .collect(),
     )?;
     let noise = Texture::new(
         4 * n,
         4 * n,
         1,
-        (0..16 * n * n).map(|i| rng.uniform4(1 + i as u64, 0)[0]).collect(),
+        (0..16 * n * n)
+            .map(|i| rng.uniform4(1 + i as u64, 0)[0])
+            .collect(),
     )?;
     println!("exemplar tiled 4×4: {}", score(&tiled, &ex, n)?);
     println!("white noise:        {}", score(&noise, &ex, n)?);

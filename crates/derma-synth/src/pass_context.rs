@@ -2,8 +2,8 @@
 //! exemplars, the matcher that runs the searches, the guide, progress and the seed.
 
 use crate::exemplar::ExemplarSet;
-use crate::search::Matcher;
 use crate::guide::Guide;
+use crate::search::Matcher;
 use derma_core::progress::Progress;
 
 /// The shared inputs of the patch pass and the optimisation passes.

@@ -4,11 +4,11 @@
 use crate::canvas::Canvas;
 use crate::error::{invalid, Result};
 use crate::exemplar::ExemplarSet;
+use crate::guide::Guide;
 use crate::optimize::{optimise_pass, KWATRA_R};
 use crate::pass_context::PassContext;
 use crate::patch_pass::{initialise_noise, patch_pass};
 use crate::search::{window_fits, Matcher, Tolerance};
-use crate::guide::Guide;
 use crate::texture::Texture;
 use derma_core::progress::{Job, Progress, Timing};
 

@@ -15,8 +15,8 @@
 use crate::error::Result;
 use crate::exemplar::ExemplarSet;
 use crate::gpu::GpuMatcher;
-use crate::search::{CpuMatcher, Matcher};
 use crate::guide::Guide;
+use crate::search::{CpuMatcher, Matcher};
 use crate::synthesize::{synthesize, SynthOptions, Synthesis};
 use crate::texture::Texture;
 use derma_core::gpu::Device;

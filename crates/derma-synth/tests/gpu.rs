@@ -2,12 +2,12 @@
 //! texture on either (Shen et al. §3.4 run on both backends). Runs on Mesa's lavapipe in CI.
 
 use derma_core::progress::Silent;
-use derma_test_support::skip_without_gpu;
 use derma_core::rng::Philox;
 use derma_synth::{
-    synthesize, CpuMatcher, ExemplarSet, GpuMatcher, Matcher, Query, Search,
-    SynthOptions, Texture, Tolerance,
+    synthesize, CpuMatcher, ExemplarSet, GpuMatcher, Matcher, Query, Search, SynthOptions, Texture,
+    Tolerance,
 };
+use derma_test_support::skip_without_gpu;
 
 fn exemplar(w: usize, h: usize, c: usize, seed: u64) -> Texture {
     let rng = Philox::new(seed, 0);

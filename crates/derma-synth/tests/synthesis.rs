@@ -4,9 +4,7 @@
 use derma_core::progress::Silent;
 use derma_core::rng::Philox;
 use derma_synth::quality::{patch_swd, seam_energy, SwdOptions};
-use derma_synth::{
-    synthesize, CpuMatcher, ExemplarSet, Guide, SynthOptions, Texture,
-};
+use derma_synth::{synthesize, CpuMatcher, ExemplarSet, Guide, SynthOptions, Texture};
 
 /// A stationary test texture: blobs of random phase plus fine noise, `c` channels.
 fn blobs(w: usize, h: usize, c: usize, seed: u64, offset: f32) -> Texture {
@@ -144,14 +142,7 @@ fn a_guide_draws_each_region_from_its_exemplar() {
         patch: 16,
         ..Default::default()
     };
-    let out = synthesize(
-        &set,
-        &opts,
-        Some(&guide),
-        &CpuMatcher,
-        &Silent,
-    )
-    .unwrap();
+    let out = synthesize(&set, &opts, Some(&guide), &CpuMatcher, &Silent).unwrap();
     let mean = |x0: usize, x1: usize| {
         let mut s = 0.0;
         for y in 0..h {

@@ -6,6 +6,7 @@ mod optics;
 mod output;
 mod progress;
 mod rig;
+mod rig_args;
 mod skin;
 mod synth;
 
@@ -40,7 +41,7 @@ enum Command {
     Match(matching::MatchCommand),
     /// Dynamic facial colour: the skin appearance rig (hemoglobin by expression and emotion).
     #[command(subcommand)]
-    Rig(rig::RigCommand),
+    Rig(rig_args::RigCommand),
     /// Exemplar synthesis: grow skin detail of any size from a small sample (CPU and GPU).
     Synth(synth::SynthArgs),
 }

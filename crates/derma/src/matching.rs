@@ -139,8 +139,11 @@ fn fit(a: FitArgs, bars: &Bars) -> Result<()> {
         .write(&a.out)
         .with_context(|| format!("writing {}", a.out.display()))?;
     let csv_path = a.out.with_extension("residuals.csv");
-    derma_core::atomic::write_bytes(&csv_path, match_report::residual_csv(&table, &opts).as_bytes())
-        .with_context(|| format!("writing {}", csv_path.display()))?;
+    derma_core::atomic::write_bytes(
+        &csv_path,
+        match_report::residual_csv(&table, &opts).as_bytes(),
+    )
+    .with_context(|| format!("writing {}", csv_path.display()))?;
     line(format!(
         "fitted {} entries × {} models in {secs:.1} s ({} weighting) → {}",
         pre.header.nodes(),

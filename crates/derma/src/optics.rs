@@ -135,10 +135,19 @@ fn slab(a: SlabArgs) -> Result<()> {
         return line(serde_json::to_string(&r)?);
     }
     let s = &r.stderr;
-    line(format!("specular R   {:.6} ± {:.6}", r.r_specular, s.r_specular))?;
-    line(format!("diffuse R    {:.6} ± {:.6}", r.r_diffuse, s.r_diffuse))?;
+    line(format!(
+        "specular R   {:.6} ± {:.6}",
+        r.r_specular, s.r_specular
+    ))?;
+    line(format!(
+        "diffuse R    {:.6} ± {:.6}",
+        r.r_diffuse, s.r_diffuse
+    ))?;
     line(format!("total T      {:.6} ± {:.6}", r.t_total, s.t_total))?;
-    line(format!("absorbed A   {:.6} ± {:.6}", r.absorbed, s.absorbed))?;
+    line(format!(
+        "absorbed A   {:.6} ± {:.6}",
+        r.absorbed, s.absorbed
+    ))?;
     for (i, v) in r.absorbed_per_layer.iter().enumerate() {
         line(format!("  layer {}    {v:.6}", i + 1))?;
     }

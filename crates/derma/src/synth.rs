@@ -86,7 +86,9 @@ fn parse_channels(spec: &str) -> std::result::Result<Vec<(String, PathBuf)>, Str
                     .chars()
                     .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
             {
-                return Err(format!("the name '{name}' must be letters, digits, '_' or '-'"));
+                return Err(format!(
+                    "the name '{name}' must be letters, digits, '_' or '-'"
+                ));
             }
             Ok((name.to_string(), PathBuf::from(file.trim())))
         })

@@ -46,7 +46,12 @@ mod tests {
         };
         apply_lips(&prm, 1.0, &mut s);
         assert_eq!(
-            (s.tissue.blood, s.tissue.pheomelanin, s.tissue.epidermis_um, s.lips),
+            (
+                s.tissue.blood,
+                s.tissue.pheomelanin,
+                s.tissue.epidermis_um,
+                s.lips
+            ),
             (0.08, 0.6, 40.0, 1.0)
         );
         let mut s = BioSample {

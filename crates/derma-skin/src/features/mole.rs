@@ -126,7 +126,10 @@ mod tests {
         let c = at(0.0);
         assert!((c.tissue.melanin - (0.02 + m.melanin)).abs() < 1e-6);
         assert!((c.height_mm - m.height * m.melanin).abs() < 1e-6);
-        assert!(at(0.5).tissue.melanin > at(1.0).tissue.melanin && at(1.0).tissue.melanin > at(1.5).tissue.melanin);
+        assert!(
+            at(0.5).tissue.melanin > at(1.0).tissue.melanin
+                && at(1.0).tissue.melanin > at(1.5).tissue.melanin
+        );
         assert_eq!(at(2.5).tissue.melanin, 0.02);
     }
 }

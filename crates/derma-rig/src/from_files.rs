@@ -1,0 +1,160 @@
+//! A rig from files, as `derma rig build` and `derma rig transfer` make one: a character's maps
+//! (neutral hemoglobin, melanin, mask), target maps and built-in library entries are read,
+//! checked against the output directory (no input is ever overwritten), built (Jimenez et al.
+//! 2010 eq. 4–5) or transferred (§5), and saved as a rig directory.
+
+use crate::basis::{BasisOptions, Rig, TargetSource, TargetSpec, TransferMode};
+use crate::error::{invalid, Result};
+use crate::expression;
+use crate::maps::{read_map, read_optional, Quantity};
+use crate::rig_dir::{self, RigJson};
+use derma_core::progress::Progress;
+use derma_core::Map;
+use derma_shading::skin_color_lut::{LutOptions, SkinColorLut};
+use std::path::{Path, PathBuf};
+
+/// A character's maps on disk.
+#[derive(Clone, Debug, Default)]
+pub struct CharacterFiles {
+    /// Neutral hemoglobin map H_n.
+    pub neutral: PathBuf,
+    /// Melanin map C_m, for colour output.
+    pub melanin: Option<PathBuf>,
+    /// Skin mask (> 0 = skin): texels outside are left out of the statistics.
+    pub mask: Option<PathBuf>,
+}
+
+impl CharacterFiles {
+    /// Every file, to keep outputs away from them.
+    pub fn paths(&self) -> Vec<&Path> {
+        let mut v: Vec<&Path> = vec![&self.neutral];
+        v.extend(self.melanin.as_deref());
+        v.extend(self.mask.as_deref());
+        v
+    }
+
+    /// (neutral, melanin, mask), PNGs scaled by `lut`'s axis tops.
+    pub fn read(
+        &self,
+        lut: &LutOptions,
+        progress: &dyn Progress,
+    ) -> Result<(Map, Option<Map>, Option<Map>)> {
+        Ok((
+            read_map(&self.neutral, Quantity::Hemoglobin, lut, progress)?,
+            read_optional(self.melanin.as_deref(), Quantity::Melanin, lut, progress)?,
+            read_optional(self.mask.as_deref(), Quantity::Mask, lut, progress)?,
+        ))
+    }
+}
+
+/// What a rig is built from.
+#[derive(Clone, Debug, Default)]
+pub struct BuildFiles {
+    /// The character.
+    pub character: CharacterFiles,
+    /// Measured or painted target hemoglobin maps, aligned with the neutral: (name, file).
+    pub targets: Vec<(String, PathBuf)>,
+    /// Built-in library entries by name, or "all" (they assume the face template's UVs).
+    pub builtin: Vec<String>,
+    /// Suggested global hemoglobin scale of targets at full weight: (name, scale).
+    pub globals: Vec<(String, f32)>,
+    /// A skin-colour LUT (.dtab); `None` for the built-in one.
+    pub lut: Option<PathBuf>,
+}
+
+/// The built-in skin-colour LUT, or the one at `path`.
+pub fn load_lut(path: Option<&Path>) -> Result<SkinColorLut> {
+    match path {
+        None => Ok(SkinColorLut::builtin()),
+        Some(p) => {
+            let t = derma_core::dtab::Dtab::read(p)?;
+            Ok(SkinColorLut::from_dtab(&t, &p.display().to_string())?)
+        }
+    }
+}
+
+/// Fails before any work when the rig directory `out` would hold an input.
+pub fn check_out(out: &Path, inputs: &[&Path]) -> Result<()> {
+    derma_core::atomic::ensure_writable_dir(out)?;
+    derma_core::atomic::check_inputs_spared(&[out.to_path_buf()], inputs)?;
+    Ok(())
+}
+
+/// Builds a rig from `files` with `opts` and saves it into `out`.
+pub fn build(
+    files: &BuildFiles,
+    opts: &BasisOptions,
+    out: &Path,
+    progress: &dyn Progress,
+) -> Result<(Rig, RigJson)> {
+    let mut inputs = files.character.paths();
+    inputs.extend(files.targets.iter().map(|(_, p)| p.as_path()));
+    check_out(out, &inputs)?;
+    let lut = load_lut(files.lut.as_deref())?;
+    let (neutral, melanin, mask) = files.character.read(&lut.options, progress)?;
+    let maps: Vec<(String, Map)> = files
+        .targets
+        .iter()
+        .map(|(n, p)| {
+            Ok((
+                n.clone(),
+                read_map(p, Quantity::Hemoglobin, &lut.options, progress)?,
+            ))
+        })
+        .collect::<Result<_>>()?;
+    let global = |name: &str| files.globals.iter().find(|(n, _)| n == name).map(|g| g.1);
+    let mut specs: Vec<TargetSpec> = maps
+        .iter()
+        .map(|(n, m)| TargetSpec {
+            name: n.clone(),
+            source: TargetSource::Map(m),
+            global_scale: global(n),
+        })
+        .collect();
+    for e in expression::select(&files.builtin)? {
+        specs.push(TargetSpec {
+            name: e.name.into(),
+            source: TargetSource::Builtin(e),
+            global_scale: global(e.name),
+        });
+    }
+    if let Some((n, _)) = files
+        .globals
+        .iter()
+        .find(|(n, _)| !specs.iter().any(|s| &s.name == n))
+    {
+        return Err(invalid(
+            "global scale",
+            format!("'{n}': no target of that name"),
+        ));
+    }
+    if specs.is_empty() {
+        return Err(invalid(
+            "rig",
+            "no targets: give target maps (NAME=FILE) and/or built-in library entries",
+        ));
+    }
+    let rig = Rig::build(&neutral, mask.as_ref(), melanin, &specs, opts)?;
+    let json = rig_dir::save(&rig, &lut, out)?;
+    Ok((rig, json))
+}
+
+/// Transfers the rig in `rig_dir` onto `character` (Jimenez et al. 2010 §5) and saves the
+/// result into `out`.
+pub fn transfer(
+    rig_dir: &Path,
+    character: &CharacterFiles,
+    mode: TransferMode,
+    sigma_floor: f32,
+    out: &Path,
+    progress: &dyn Progress,
+) -> Result<Rig> {
+    let mut inputs = character.paths();
+    inputs.push(rig_dir);
+    check_out(out, &inputs)?;
+    let (rig, lut, _) = rig_dir::load(rig_dir)?;
+    let (neutral, melanin, mask) = character.read(&lut.options, progress)?;
+    let moved = rig.transfer(&neutral, mask.as_ref(), melanin, mode, sigma_floor)?;
+    rig_dir::save(&moved, &lut, out)?;
+    Ok(moved)
+}
