@@ -171,7 +171,7 @@ mod tests {
         let e = check_inputs_spared(&[fields.join("base_color.png")], &[&fields]).unwrap_err();
         assert!(e.to_string().contains("same directory"), "{e}");
         // An input inside a directory derma fills.
-        let e = check_inputs_spared(&[dir.clone()], &[&mesh]).unwrap_err();
+        let e = check_inputs_spared(std::slice::from_ref(&dir), &[&mesh]).unwrap_err();
         assert!(e.to_string().contains("inside the output directory"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }

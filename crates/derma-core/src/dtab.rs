@@ -9,35 +9,48 @@ use crate::error::{CoreError, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// The file's first four bytes.
 pub const MAGIC: &[u8; 4] = b"DTAB";
+/// The format version this code reads and writes.
 pub const VERSION: u32 = 1;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// One axis of the grid: its name and node values (increasing).
 pub struct DtabAxis {
+    /// Name, e.g. "melanin".
     pub name: String,
+    /// Node values along the axis.
     pub values: Vec<f64>,
 }
 
 /// A named slice of each node's vector.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DtabValue {
+    /// Name, e.g. "linear_srgb".
     pub name: String,
+    /// Number of f32 values.
     pub len: usize,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// The JSON header: the grid's axes, the layout of each node's vector, metadata.
 pub struct DtabHeader {
+    /// The axes, first one slowest in the payload.
     pub axes: Vec<DtabAxis>,
+    /// The named slices of each node's vector, in order.
     pub values: Vec<DtabValue>,
     #[serde(default)]
+    /// Free-form metadata (what made the table, its units).
     pub meta: serde_json::Value,
 }
 
 impl DtabHeader {
+    /// Number of grid nodes (the product of the axes' lengths).
     pub fn nodes(&self) -> usize {
         self.axes.iter().map(|a| a.values.len()).product()
     }
 
+    /// Values per node (the sum of the value lengths).
     pub fn stride(&self) -> usize {
         self.values.iter().map(|v| v.len).sum()
     }
@@ -77,8 +90,11 @@ impl DtabHeader {
 }
 
 #[derive(Clone, Debug, PartialEq)]
+/// A table in memory: its header and the payload, node-major.
 pub struct Dtab {
+    /// Axes, value layout and metadata.
     pub header: DtabHeader,
+    /// `nodes() × stride()` values.
     pub data: Vec<f32>,
 }
 
@@ -99,6 +115,7 @@ pub fn crc32(bytes: &[u8]) -> u32 {
 }
 
 impl Dtab {
+    /// The file's bytes (magic, version, header, payload, CRC-32).
     pub fn to_bytes(&self) -> Vec<u8> {
         let header = serde_json::to_vec(&self.header).unwrap_or_default();
         let mut out = Vec::with_capacity(16 + header.len() + 4 * self.data.len());
@@ -114,6 +131,7 @@ impl Dtab {
         out
     }
 
+    /// Parses a table from its bytes; `path` names it in errors (bad magic, version, checksum, sizes).
     pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<Self> {
         let bad = |m: &str| CoreError::Format {
             path: path.to_path_buf(),
@@ -164,6 +182,7 @@ impl Dtab {
         crate::atomic::write_bytes(Path::new(&side), &json)
     }
 
+    /// Reads and checks the table at `path`.
     pub fn read(path: &Path) -> Result<Self> {
         let bytes = std::fs::read(path).map_err(|e| CoreError::Read {
             path: path.to_path_buf(),

@@ -6,26 +6,62 @@ use std::path::PathBuf;
 /// Errors raised by derma-core.
 #[derive(Debug, thiserror::Error)]
 pub enum CoreError {
+    /// A file could not be read.
     #[error("cannot read '{path}'")]
     Read {
+        /// The file.
         path: PathBuf,
+        /// The system's reason.
         source: std::io::Error,
     },
+    /// A file or directory could not be written.
     #[error("cannot write '{path}'")]
     Write {
+        /// The file or directory.
         path: PathBuf,
+        /// The system's reason.
         source: std::io::Error,
     },
+    /// A file is not an image derma reads.
     #[error("'{path}' is not a readable image ({detail}); expected a PNG or OpenEXR file")]
-    Image { path: PathBuf, detail: String },
+    Image {
+        /// The file.
+        path: PathBuf,
+        /// What the decoder found.
+        detail: String,
+    },
+    /// An image could not be encoded.
     #[error("cannot encode '{path}': {detail}")]
-    Encode { path: PathBuf, detail: String },
+    Encode {
+        /// The file being written.
+        path: PathBuf,
+        /// What went wrong.
+        detail: String,
+    },
+    /// A mesh file cannot be used.
     #[error("'{path}' is not a usable mesh: {detail}")]
-    Mesh { path: PathBuf, detail: String },
+    Mesh {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        detail: String,
+    },
+    /// A derma file (a table, say) is malformed.
     #[error("'{path}': {message}")]
-    Format { path: PathBuf, message: String },
+    Format {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// A value is out of its range or inconsistent.
     #[error("invalid value for {what}: {detail}")]
-    Invalid { what: String, detail: String },
+    Invalid {
+        /// Which value.
+        what: String,
+        /// What is wrong and what was expected.
+        detail: String,
+    },
 }
 
 /// Result type of derma-core.

@@ -11,6 +11,7 @@ use std::path::Path;
 /// A decoded image as linear-in-file values in [0, 1] (PNG values are used as stored, i.e. an
 /// artist's grey level is the probability; EXR values are taken as they are).
 pub struct LoadedImage {
+    /// The channels: three (R, G, B) from [`read_rgb`], one from [`read_grey`].
     pub channels: Vec<Map>,
     /// True when the file had colour channels that differ from each other.
     pub is_color: bool,
@@ -50,15 +51,14 @@ pub fn read_rgb(path: &Path) -> Result<LoadedImage> {
     ];
     let mut is_color = false;
     for p in img.pixels() {
-        for k in 0..3 {
-            let v = p.0[k];
+        for (c, &v) in ch.iter_mut().zip(&p.0) {
             if !v.is_finite() {
                 return Err(CoreError::Image {
                     path: path.to_path_buf(),
                     detail: "contains NaN or infinite values".into(),
                 });
             }
-            ch[k].push(v);
+            c.push(v);
         }
         if (p.0[0] - p.0[1]).abs() > 1.0 / 255.0 || (p.0[0] - p.0[2]).abs() > 1.0 / 255.0 {
             is_color = true;
@@ -264,7 +264,9 @@ fn check_maps(
 /// Sample precision of an EXR layer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ExrPrecision {
+    /// 32-bit float.
     F32,
+    /// 16-bit half float.
     F16,
 }
 

@@ -8,6 +8,8 @@
 //! - [`mesh`]: OBJ and glTF/GLB loading, unit detection, and [`raster`]: UV-space rasterisation
 //!   of a mesh into per-texel surface points.
 
+#![warn(missing_docs)]
+
 pub mod atomic;
 mod cie_table;
 pub mod color;

@@ -40,27 +40,34 @@ impl Map {
         })
     }
 
+    /// Width in texels.
     pub fn width(&self) -> usize {
         self.width
     }
+    /// Height in texels.
     pub fn height(&self) -> usize {
         self.height
     }
+    /// The texels, row-major from the top row.
     pub fn data(&self) -> &[f32] {
         &self.data
     }
+    /// The texels, writable.
     pub fn data_mut(&mut self) -> &mut [f32] {
         &mut self.data
     }
+    /// The texels, by value.
     pub fn into_vec(self) -> Vec<f32> {
         self.data
     }
 
     #[inline]
+    /// The texel at column `x`, row `y`.
     pub fn get(&self, x: usize, y: usize) -> f32 {
         self.data[y * self.width + x]
     }
     #[inline]
+    /// Sets the texel at column `x`, row `y`.
     pub fn set(&mut self, x: usize, y: usize, v: f32) {
         self.data[y * self.width + x] = v;
     }
@@ -182,9 +189,13 @@ impl Map {
 /// Summary statistics of a map.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct MapStats {
+    /// Mean of the texels counted.
     pub mean: f64,
+    /// Smallest texel counted.
     pub min: f32,
+    /// Largest texel counted.
     pub max: f32,
+    /// Number of texels counted.
     pub count: usize,
 }
 

@@ -9,9 +9,13 @@ use std::path::Path;
 /// [`TriMesh::to_millimetres`] has been applied.
 #[derive(Clone, Debug, Default)]
 pub struct TriMesh {
+    /// Vertex positions.
     pub positions: Vec<Vec3>,
+    /// Vertex normals (computed when the file has none).
     pub normals: Vec<Vec3>,
+    /// Texture coordinates per vertex, v up (OpenGL).
     pub uvs: Vec<Vec2>,
+    /// Triangles as vertex indices.
     pub triangles: Vec<[u32; 3]>,
 }
 
@@ -19,12 +23,16 @@ pub struct TriMesh {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum LengthUnit {
+    /// Millimetres.
     Mm,
+    /// Centimetres.
     Cm,
+    /// Metres.
     M,
 }
 
 impl LengthUnit {
+    /// Millimetres per unit.
     pub fn to_mm(self) -> f32 {
         match self {
             LengthUnit::Mm => 1.0,
@@ -98,6 +106,7 @@ impl TriMesh {
         (hi - lo).max_element()
     }
 
+    /// The axis-aligned bounding box (min, max).
     pub fn bounds(&self) -> (Vec3, Vec3) {
         self.positions.iter().fold(
             (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),

@@ -3,18 +3,27 @@
 
 use std::fmt::Write;
 
+/// One line of a plot.
 pub struct Series {
+    /// Legend text.
     pub label: String,
     /// CSS colour.
     pub color: String,
+    /// (x, y) points, in drawing order.
     pub points: Vec<(f64, f64)>,
 }
 
+/// A line plot, rendered as SVG.
 pub struct Plot {
+    /// Title above the plot.
     pub title: String,
+    /// Label of the x axis.
     pub x_label: String,
+    /// Label of the y axis.
     pub y_label: String,
+    /// Logarithmic y axis.
     pub log_y: bool,
+    /// The lines.
     pub series: Vec<Series>,
 }
 
@@ -60,6 +69,7 @@ fn esc(s: &str) -> String {
 }
 
 impl Plot {
+    /// The plot as a standalone SVG document.
     pub fn to_svg(&self) -> String {
         let ty = |y: f64| if self.log_y { y.max(1e-30).log10() } else { y };
         let pts: Vec<(f64, f64)> = self

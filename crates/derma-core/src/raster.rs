@@ -11,7 +11,9 @@ pub const NO_TRIANGLE: u32 = u32::MAX;
 /// Per-texel surface samples of a mesh rasterised in UV space. Row 0 is the top of the image
 /// (v = 1); texel (x, y) is sampled at its centre u = (x+½)/w, v = 1 − (y+½)/h.
 pub struct UvRaster {
+    /// Width of the raster in texels.
     pub width: usize,
+    /// Height of the raster in texels.
     pub height: usize,
     /// Triangle covering each texel, or [`NO_TRIANGLE`].
     pub triangle: Vec<u32>,
@@ -49,8 +51,8 @@ impl UvRaster {
             if y0 > y1 || y0 >= height {
                 continue;
             }
-            for b in (y0 / BAND_ROWS)..=(y1 / BAND_ROWS) {
-                bins[b].push(ti as u32);
+            for bin in &mut bins[y0 / BAND_ROWS..=y1 / BAND_ROWS] {
+                bin.push(ti as u32);
             }
         }
         let mut triangle = vec![NO_TRIANGLE; n];
@@ -132,6 +134,7 @@ impl UvRaster {
     }
 
     #[inline]
+    /// Whether texel `i` lies on a triangle.
     pub fn covered(&self, i: usize) -> bool {
         self.triangle[i] != NO_TRIANGLE
     }

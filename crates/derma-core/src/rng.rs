@@ -39,6 +39,7 @@ pub struct Philox {
 }
 
 impl Philox {
+    /// The stream `stream` of generator `seed`.
     pub fn new(seed: u64, stream: u32) -> Self {
         Self {
             key: [seed as u32, (seed >> 32) as u32],
@@ -56,6 +57,7 @@ impl Philox {
     }
 
     #[inline]
+    /// Four independent 32-bit words for `index`.
     pub fn u32x4(&self, index: u64) -> [u32; 4] {
         self.u32x4_sub(index, 0)
     }

@@ -2,22 +2,36 @@
 
 use std::path::PathBuf;
 
+/// Errors of the optics, each naming the value or file at fault.
 #[derive(Debug, thiserror::Error)]
 pub enum OpticsError {
+    /// A value out of range or inconsistent (a layer, a photon count, bins).
     #[error("invalid optical input: {0}")]
     Invalid(String),
+    /// A grid or precompute file with bad content.
     #[error("{path}: {message}")]
-    File { path: PathBuf, message: String },
+    File {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// A file that could not be read or written.
     #[error("{path}")]
     Io {
+        /// The file.
         path: PathBuf,
+        /// The system's reason.
         #[source]
         source: std::io::Error,
     },
+    /// From derma-core (atomic writes, tables).
     #[error(transparent)]
     Core(#[from] derma_core::CoreError),
+    /// The GPU backend could not run.
     #[error(transparent)]
     Gpu(#[from] derma_core::gpu::GpuError),
 }
 
+/// Result type of derma-optics.
 pub type Result<T> = std::result::Result<T, OpticsError>;

@@ -20,6 +20,7 @@ pub const MEDIUM: usize = 4;
 /// One homogeneous layer. Lengths in mm, coefficients in mm⁻¹.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Layer {
+    /// Thickness in mm.
     pub thickness_mm: f64,
     /// Absorption coefficient μa (mm⁻¹).
     pub mua: f64,
@@ -57,11 +58,17 @@ impl Layer {
 /// What lies below the last layer.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Bottom {
-    /// A semi-infinite clear medium of this index: light crossing into it is transmitted.
-    Medium { n: f64 },
+    /// A semi-infinite clear medium: light crossing into it is transmitted.
+    Medium {
+        /// Its refractive index.
+        n: f64,
+    },
     /// A diffusely (Lambertian) reflecting surface of this albedo, BioSpec's white hypodermis
     /// (thesis §2.1); what it does not reflect counts as transmitted.
-    Lambertian { albedo: f64 },
+    Lambertian {
+        /// Its albedo.
+        albedo: f64,
+    },
 }
 
 /// The top surface between the ambient medium and the first layer.
@@ -69,17 +76,23 @@ pub enum Bottom {
 pub enum Surface {
     /// A flat interface.
     Smooth,
-    /// Micro-facets with Trowbridge–Reitz normals of this aspect ratio σ (thesis §4.5.1).
-    TrowbridgeReitz { sigma: f64 },
+    /// Micro-facets with Trowbridge–Reitz normals (thesis §4.5.1).
+    TrowbridgeReitz {
+        /// Their aspect ratio σ.
+        sigma: f64,
+    },
 }
 
 /// A stack of layers at one wavelength.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Stack {
+    /// The layers, top first.
     pub layers: Vec<Layer>,
     /// Index of the medium above (1 for air).
     pub n_above: f64,
+    /// What lies below the last layer.
     pub bottom: Bottom,
+    /// The top surface.
     pub surface: Surface,
 }
 

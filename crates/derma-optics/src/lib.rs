@@ -6,6 +6,8 @@
 //! ([`tally`]: sampled BRDF, spectrum, radial profile, absorption per layer and chromophore),
 //! and the precompute grid over bio parameters ([`precompute`]).
 
+#![warn(missing_docs)]
+
 pub mod backend;
 pub mod bio;
 pub mod chromophore;

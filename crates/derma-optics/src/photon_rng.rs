@@ -16,6 +16,7 @@ pub struct PhotonRng {
 
 impl PhotonRng {
     #[inline]
+    /// Photon `photon`'s stream under `seed` (the counter starts at its first block).
     pub fn new(seed: u64, photon: u64) -> Self {
         Self {
             key: [seed as u32, (seed >> 32) as u32],
@@ -26,6 +27,7 @@ impl PhotonRng {
     }
 
     #[inline]
+    /// The next 32-bit word of the stream.
     pub fn next_u32(&mut self) -> u32 {
         if self.pos == 4 {
             self.buf = philox4x32_10(self.ctr, self.key);

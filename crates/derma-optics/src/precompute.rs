@@ -22,27 +22,40 @@ pub const AXES: [&str; 6] = BioTexel::NAMES;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
+/// The node values of each bio parameter (thesis §5.2), each strictly increasing.
 pub struct GridAxes {
+    /// Melanosome volume fraction of the epidermis.
     pub melanin: Vec<f64>,
+    /// Pheomelanin share of the melanin.
     pub pheomelanin: Vec<f64>,
+    /// Whole-blood volume fraction of the dermis.
     pub blood: Vec<f64>,
+    /// Oxygenated share of the hemoglobin.
     pub oxygenation: Vec<f64>,
+    /// Stratum corneum thickness, µm.
     pub stratum_corneum_um: Vec<f64>,
+    /// Living epidermis thickness, µm.
     pub epidermis_um: Vec<f64>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
+/// A precompute grid: the nodes over the bio parameters and what to simulate at each.
 pub struct Grid {
+    /// Photons per node.
     pub photons: u64,
+    /// Base seed (each node derives its own, see [`Grid::config`]).
     pub seed: u64,
     /// BRDF bins [θi, θo, Δφ].
     #[serde(default = "default_brdf")]
     pub brdf: [usize; 3],
     #[serde(default = "default_profile_bins")]
+    /// Rings of the radial profile.
     pub profile_bins: usize,
     #[serde(default = "default_dmax")]
+    /// Outer radius of the radial profile, mm.
     pub profile_d_max_mm: f64,
+    /// The axes.
     pub axes: GridAxes,
 }
 
@@ -78,6 +91,7 @@ epidermis_um = [20.0, 60.0, 120.0, 200.0]
 "#;
 
 impl Grid {
+    /// Parses a grid from TOML; `origin` names it in errors (unknown keys, ranges, order).
     pub fn parse(text: &str, origin: &Path) -> Result<Self> {
         let g: Grid = toml::from_str(text).map_err(|e| OpticsError::File {
             path: origin.to_path_buf(),
@@ -106,6 +120,7 @@ impl Grid {
             .expect("the built-in grid parses")
     }
 
+    /// The six axes in [`AXES`] order.
     pub fn axes(&self) -> [&Vec<f64>; 6] {
         let a = &self.axes;
         [
@@ -149,10 +164,7 @@ impl Grid {
                 }
             }
         }
-        if self.brdf.iter().any(|&b| b == 0)
-            || self.profile_bins == 0
-            || !(self.profile_d_max_mm > 0.0)
-        {
+        if self.brdf.contains(&0) || self.profile_bins == 0 || !(self.profile_d_max_mm > 0.0) {
             return Err(bad(
                 "brdf bins, profile_bins and profile_d_max_mm must be positive".into(),
             ));
@@ -160,10 +172,12 @@ impl Grid {
         Ok(())
     }
 
+    /// Number of nodes (the product of the axes' lengths).
     pub fn len(&self) -> usize {
         self.axes().iter().map(|a| a.len()).product()
     }
 
+    /// True when an axis is empty.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -202,11 +216,14 @@ impl Grid {
 /// A shard `k/n` (1-based k).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Shard {
+    /// This shard, 1 ≤ k ≤ n.
     pub k: usize,
+    /// Number of shards.
     pub n: usize,
 }
 
 impl Shard {
+    /// Parses "k/n".
     pub fn parse(s: &str) -> Result<Self> {
         let bad = || OpticsError::Invalid(format!("--shard '{s}': expected k/n with 1 ≤ k ≤ n"));
         let (a, b) = s.split_once('/').ok_or_else(bad)?;
@@ -218,6 +235,7 @@ impl Shard {
         Ok(Self { k, n })
     }
 
+    /// Whether node `i` belongs to this shard (i mod n = k − 1).
     pub fn owns(&self, i: usize) -> bool {
         i % self.n == self.k - 1
     }

@@ -12,11 +12,17 @@ use rayon::prelude::*;
 /// One simulation: stacks per wavelength (photon k runs in stack k mod len), and what to record.
 #[derive(Clone, Debug)]
 pub struct Run {
+    /// One stack per wavelength sample; photon k runs in stack k mod len.
     pub stacks: Vec<Stack>,
+    /// Photons to launch.
     pub photons: u64,
+    /// Seed of the photons' streams.
     pub seed: u64,
+    /// How light arrives.
     pub incidence: Incidence,
+    /// Bins of the sampled BRDF, when recorded.
     pub brdf: Option<BrdfBins>,
+    /// Bins of the radial exit profile, when recorded.
     pub profile: Option<ProfileBins>,
     /// BRDF channel weights per wavelength (`[stacks.len()][channels]`); empty → one channel
     /// of weight 1.
@@ -37,6 +43,7 @@ impl Run {
         }
     }
 
+    /// Checks the stacks, counts and bins; the error says which is wrong.
     pub fn validate(&self) -> Result<()> {
         if self.stacks.is_empty() {
             return Err(OpticsError::Invalid("no stacks to simulate".into()));
@@ -76,6 +83,7 @@ impl Run {
         Ok(())
     }
 
+    /// Number of BRDF channels (1 without channel weights).
     pub fn channels(&self) -> usize {
         self.channel_weights.first().map_or(1, |c| c.len())
     }

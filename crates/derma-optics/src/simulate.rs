@@ -21,9 +21,13 @@ use serde::{Deserialize, Serialize};
 /// What to record and how many photons.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SkinSimConfig {
+    /// Photons, spread evenly over the wavelength samples.
     pub photons: u64,
+    /// Seed of the photons' streams.
     pub seed: u64,
+    /// Bins of the sampled BRDF.
     pub brdf: BrdfBins,
+    /// Bins of the radial exit profile.
     pub profile: ProfileBins,
 }
 
@@ -64,31 +68,46 @@ pub fn rgb_weights() -> Vec<[f64; 3]> {
 /// Results of one skin simulation. Fractions are per launched photon.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SkinResult {
+    /// The simulated bio parameters.
     pub bio: BioTexel,
+    /// What was simulated.
     pub config: SkinSimConfig,
+    /// The device it ran on (`cpu` or `gpu`).
     pub device: Device,
+    /// Wall-clock seconds of the transport.
     pub seconds: f64,
+    /// The wavelength samples, nm.
     pub wavelengths_nm: Vec<f64>,
     /// Diffuse (subsurface) reflectance per wavelength under the arcsin-distributed incidence,
     /// i.e. the albedo under uniform diffuse light, specular surface reflection excluded.
     pub r_diffuse: Vec<f64>,
+    /// Standard error of `r_diffuse` per wavelength.
     pub r_diffuse_stderr: Vec<f64>,
     /// Surface (specular) reflectance per wavelength.
     pub r_specular: Vec<f64>,
+    /// CIE 1931 XYZ of the diffuse reflectance under D65 (Y = 1 for white).
     pub xyz: [f64; 3],
+    /// The same colour in linear sRGB.
     pub linear_srgb: [f64; 3],
+    /// Bins of `brdf_rgb`.
     pub brdf_bins: BrdfBins,
     /// Sampled BRDF (sr⁻¹), linear sRGB, indexed `[(θi · nθo + θo) · nφ + φ]`.
     pub brdf_rgb: Vec<[f64; 3]>,
+    /// Bins of the profiles.
     pub profile_bins: ProfileBins,
     /// Radial exit profile R(r) (mm⁻², per launched photon of that wavelength), wavelength-major.
     pub profile: Vec<Vec<f64>>,
+    /// Radial exit profile in linear sRGB under D65, mm⁻².
     pub profile_rgb: Vec<[f64; 3]>,
+    /// Names of the four layers, top first.
     pub layer_names: Vec<String>,
+    /// Names of the absorber classes of `absorbed`.
     pub absorber_names: Vec<String>,
     /// Absorbed fraction per layer and absorber.
     pub absorbed: Vec<[f64; N_ABSORBERS]>,
+    /// Specular (surface) reflectance, all wavelengths.
     pub reflected_specular: f64,
+    /// Diffuse (subsurface) reflectance, all wavelengths.
     pub reflected_diffuse: f64,
     /// Weight not reflected by the hypodermis (zero for BioSpec's white hypodermis).
     pub transmitted: f64,

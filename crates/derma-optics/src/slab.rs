@@ -42,30 +42,45 @@ pub fn slab_stack(layers: Vec<Layer>, n_above: f64, n_below: f64) -> Stack {
 /// prints them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SlabTotals {
+    /// Standard error of the specular reflectance.
     pub r_specular: f64,
+    /// Standard error of the diffuse reflectance.
     pub r_diffuse: f64,
+    /// Standard error of the total transmittance.
     pub t_total: f64,
+    /// Standard error of the absorbance.
     pub absorbed: f64,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// Totals of a slab run, per launched photon, as `derma optics slab --json` prints them.
 pub struct SlabResult {
+    /// Specular (surface) reflectance.
     pub r_specular: f64,
+    /// Diffuse reflectance.
     pub r_diffuse: f64,
+    /// Total transmittance.
     pub t_total: f64,
+    /// Absorbance.
     pub absorbed: f64,
+    /// Standard errors of the four totals.
     pub stderr: SlabTotals,
     /// Absorbed fraction per layer, top first.
     pub absorbed_per_layer: Vec<f64>,
     /// R + T + A − launched weight (photons + roulette's net creation), per photon.
     pub bookkeeping_error: f64,
+    /// Photons launched.
     pub photons: u64,
+    /// Throughput of the transport.
     pub photons_per_s: f64,
+    /// Wall-clock seconds of the transport.
     pub seconds: f64,
+    /// The device it ran on.
     pub device: String,
 }
 
 impl SlabResult {
+    /// The totals of tally `t`, which took `seconds` on `device`.
     pub fn from_tally(t: &Tally, seconds: f64, device: &str) -> Self {
         let n = t.photons.max(1) as f64;
         Self {

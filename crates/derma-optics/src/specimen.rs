@@ -19,6 +19,7 @@ pub const RETICULAR_BLOOD_PER_PAPILLARY: f64 = 0.91 / 1.2;
 /// alternative to Bruls & van der Leun's (1984) measured phase functions that BioSpec's author
 /// lists.
 pub const G_STRATUM_CORNEUM: f64 = 0.917;
+/// See [`G_STRATUM_CORNEUM`].
 pub const G_EPIDERMIS: f64 = 0.781;
 
 /// Dermal anisotropy g(λ) = 0.62 + 0.29·10⁻³ λ (λ in nm; van Gemert, Jacques, Sterenborg & Star

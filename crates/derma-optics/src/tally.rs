@@ -10,24 +10,31 @@ use std::f64::consts::FRAC_PI_2;
 /// azimuth difference folded onto [0, π] (isotropic specimens are mirror symmetric).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BrdfBins {
+    /// Bins of the incident zenith θi over [0, π/2).
     pub theta_in: usize,
+    /// Bins of the outgoing zenith θo over [0, π/2).
     pub theta_out: usize,
+    /// Bins of the azimuth difference Δφ over [0, π] (the BRDF is symmetric in ±Δφ).
     pub phi: usize,
 }
 
 impl BrdfBins {
+    /// Number of bins.
     pub fn len(&self) -> usize {
         self.theta_in * self.theta_out * self.phi
     }
 
+    /// True when any dimension has no bins.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
+    /// The θi bin of zenith `theta` (radians).
     pub fn theta_in_bin(&self, theta: f64) -> usize {
         ((theta / FRAC_PI_2 * self.theta_in as f64) as usize).min(self.theta_in - 1)
     }
 
+    /// Flat index of bin (θi, θo, Δφ).
     pub fn index(&self, ti: usize, to: usize, p: usize) -> usize {
         (ti * self.theta_out + to) * self.phi + p
     }
@@ -64,11 +71,14 @@ impl BrdfBins {
 /// Bins of the radial exit profile: `bins` rings of equal width up to `d_max_mm`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ProfileBins {
+    /// Number of rings.
     pub bins: usize,
+    /// Outer radius, mm.
     pub d_max_mm: f64,
 }
 
 impl ProfileBins {
+    /// The ring of radius `r` (mm), or `None` beyond the last.
     pub fn bin(&self, r: f64) -> Option<usize> {
         let b = (r / self.d_max_mm * self.bins as f64) as usize;
         (b < self.bins).then_some(b)
@@ -83,13 +93,17 @@ impl ProfileBins {
 
 /// Index of the per-photon totals.
 pub const R_SPECULAR: usize = 0;
+/// Index of the diffuse reflectance.
 pub const R_DIFFUSE: usize = 1;
+/// Index of the transmittance.
 pub const TRANSMITTED: usize = 2;
+/// Index of the absorbance.
 pub const ABSORBED: usize = 3;
 
 /// Accumulated weight of a batch of photons. All weights are in units of one launched photon.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Tally {
+    /// Photons tallied.
     pub photons: u64,
     /// Σ over photons of (specular R, diffuse R, T, A).
     pub sum: [f64; 4],
@@ -101,16 +115,20 @@ pub struct Tally {
     pub roulette: f64,
     /// Photons launched per wavelength, and their (specular R, diffuse R, T, A) sums.
     pub per_lambda_count: Vec<u64>,
+    /// See `per_lambda_count`.
     pub per_lambda: Vec<[f64; 4]>,
     /// Incoming photons per θi bin and reflected weight per BRDF bin and channel.
     pub brdf_in: Vec<u64>,
+    /// See `brdf_in`: `[bin × channels + channel]`.
     pub brdf: Vec<f64>,
+    /// Channels per BRDF bin.
     pub brdf_channels: usize,
     /// Diffusely reflected weight per wavelength and ring (wavelength-major).
     pub profile: Vec<f64>,
 }
 
 impl Tally {
+    /// An empty tally for `layers` layers, `n_lambda` wavelengths and the given BRDF (with its channel count) and profile bins.
     pub fn new(
         layers: usize,
         n_lambda: usize,

@@ -21,6 +21,7 @@ use std::f64::consts::TAU;
 
 /// Russian roulette threshold and survival odds (MCML defaults, Wang et al. 1995 §3.9).
 pub const ROULETTE_WEIGHT: f64 = 1e-4;
+/// See [`ROULETTE_WEIGHT`].
 pub const ROULETTE_CHANCE: f64 = 0.1;
 /// Interactions after which a photon is abandoned (never reached in practice; bounds GPU loops).
 pub const MAX_STEPS: u64 = 100_000_000;
@@ -39,19 +40,30 @@ pub enum Incidence {
 
 /// A stack flattened for the inner loop: per-layer arrays (structure of arrays).
 pub struct Prepared {
+    /// Depths of the layer boundaries, mm (layers + 1 values, from 0).
     pub z: Vec<f64>,
+    /// Total interaction coefficient μt = μa + μs per layer, mm⁻¹.
     pub mut_: Vec<f64>,
+    /// Albedo complement μa / μt per layer.
     pub mua_over_mut: Vec<f64>,
+    /// 1 / μt per layer (0 for a clear layer).
     pub inv_mut: Vec<f64>,
+    /// Henyey–Greenstein anisotropy per layer.
     pub g: Vec<f64>,
+    /// Refractive index per layer.
     pub n: Vec<f64>,
+    /// Share of each absorber class in μa per layer.
     pub share: Vec<[f64; N_ABSORBERS]>,
+    /// Index of the medium above.
     pub n_above: f64,
+    /// What lies below.
     pub bottom: Bottom,
+    /// The top surface.
     pub surface: Surface,
 }
 
 impl Prepared {
+    /// Flattens `s`.
     pub fn new(s: &Stack) -> Self {
         let mut_: Vec<f64> = s.layers.iter().map(|l| l.mua + l.mus).collect();
         Self {
@@ -79,11 +91,14 @@ impl Prepared {
 
 /// Where to record exits, and with which per-channel weights for this photon's wavelength.
 pub struct Recorder<'a> {
+    /// Bins of the sampled BRDF, when recorded.
     pub brdf: Option<BrdfBins>,
+    /// Bins of the radial exit profile, when recorded.
     pub profile: Option<ProfileBins>,
     /// BRDF channel weights of this wavelength (e.g. its linear-sRGB share × number of
     /// wavelengths), one per channel.
     pub channel_weights: &'a [f64],
+    /// The photon's wavelength sample.
     pub lambda: usize,
 }
 

@@ -3,7 +3,7 @@
 use derma_core::progress::Silent;
 use derma_optics::precompute::{self, Grid, Shard};
 use derma_optics::Device;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 const GRID: &str = r#"
 photons = 2050
@@ -26,7 +26,7 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
-fn fill(dir: &PathBuf, grid: &Grid, shard: Shard) -> usize {
+fn fill(dir: &Path, grid: &Grid, shard: Shard) -> usize {
     precompute::prepare_dir(dir, grid).unwrap();
     let todo = precompute::pending(dir, grid, shard);
     for &i in &todo {
@@ -53,7 +53,7 @@ fn shards_merge_to_the_same_table_and_resume_skips_finished_entries() {
     let (a, b) = (tmp("a"), tmp("b"));
     assert_eq!(fill(&a, &grid, Shard::parse("1/2").unwrap()), 2);
     assert_eq!(fill(&b, &grid, Shard::parse("2/2").unwrap()), 2);
-    let t1 = precompute::merge(&[whole.clone()]).unwrap();
+    let t1 = precompute::merge(std::slice::from_ref(&whole)).unwrap();
     let t2 = precompute::merge(&[b.clone(), a.clone()]).unwrap();
     assert_eq!(
         t1.to_bytes(),
@@ -67,7 +67,9 @@ fn shards_merge_to_the_same_table_and_resume_skips_finished_entries() {
     assert!(t1.data[2 * s + o + 1] < t1.data[o + 1]);
 
     // A missing shard is a clear error; a different grid in the same directory is refused.
-    let e = precompute::merge(&[a.clone()]).unwrap_err().to_string();
+    let e = precompute::merge(std::slice::from_ref(&a))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("2 of 4 entries are missing"), "{e}");
     let other = Grid {
         photons: 999,

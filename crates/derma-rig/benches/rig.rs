@@ -23,7 +23,9 @@ fn blood(w: usize, seed: u32) -> Map {
             let n = (x >> 8) as f32 / (1u32 << 24) as f32;
             let (u, v) = ((i % w) as f32 / w as f32, (i / w) as f32 / w as f32);
             0.012
-                * (1.0 + 0.3 * (6.283 * u).sin() * (3.1416 * v).sin() + 0.2 * seed as f32 / 8.0)
+                * (1.0
+                    + 0.3 * (std::f32::consts::TAU * u).sin() * (std::f32::consts::PI * v).sin()
+                    + 0.2 * seed as f32 / 8.0)
                 * (0.6 + 0.8 * n)
         })
         .collect();

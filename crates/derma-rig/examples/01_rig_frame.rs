@@ -26,7 +26,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         n,
         n,
         (0..n * n)
-            .map(|i| 0.012 * (0.7 + 0.6 * rng.uniform4(i as u64, 0)[0] as f32))
+            .map(|i| 0.012 * (0.7 + 0.6 * rng.uniform4(i as u64, 0)[0]))
             .collect(),
     )?;
     let melanin = Map::filled(n, n, 0.02);

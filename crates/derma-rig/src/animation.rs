@@ -12,10 +12,12 @@ use std::path::Path;
 /// One piecewise-linear curve: (time s, value), times strictly increasing.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Curve {
+    /// The keys.
     pub keys: Vec<(f64, f32)>,
 }
 
 impl Curve {
+    /// The value at time `t` (seconds): linear between keys, held outside them.
     pub fn at(&self, t: f64) -> f32 {
         let k = &self.keys;
         if t <= k[0].0 {
@@ -34,8 +36,11 @@ impl Curve {
 /// Named weight curves and an optional global-scale curve.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Curves {
+    /// Frame rate the file asks for, if any.
     pub fps: Option<f64>,
+    /// A curve per target name (or "neutral").
     pub weights: Vec<(String, Curve)>,
+    /// A curve of the global hemoglobin scale, if the file has one.
     pub global_scale: Option<Curve>,
 }
 
@@ -78,6 +83,7 @@ impl Curves {
         }
     }
 
+    /// Parses CSV keyframes; `path` names the file in errors.
     pub fn from_csv(text: &str, path: &Path) -> Result<Self> {
         let bad = |line: usize, detail: String| RigError::File {
             path: path.to_path_buf(),
@@ -135,6 +141,7 @@ impl Curves {
         Ok(out)
     }
 
+    /// Parses JSON keyframes; `path` names the file in errors.
     pub fn from_json(text: &str, path: &Path) -> Result<Self> {
         #[derive(serde::Deserialize)]
         #[serde(deny_unknown_fields)]

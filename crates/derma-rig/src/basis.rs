@@ -34,6 +34,7 @@ pub struct BasisOptions {
 }
 
 impl BasisOptions {
+    /// Options for disk radius `radius` (texels) with the default basis size and σ floor.
     pub fn new(radius: f64) -> Self {
         Self {
             radius,
@@ -53,7 +54,9 @@ pub enum TargetSource<'a> {
 
 /// A target to build.
 pub struct TargetSpec<'a> {
+    /// The target's name (letters, digits, `_`, `-`).
     pub name: String,
+    /// Where its statistics come from.
     pub source: TargetSource<'a>,
     /// Global hemoglobin scale suggested at full weight (1 when not given).
     pub global_scale: Option<f32>,
@@ -62,6 +65,7 @@ pub struct TargetSpec<'a> {
 /// One target of the basis, at basis resolution.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Target {
+    /// The target's name.
     pub name: String,
     /// bias_i = μ_i.
     pub bias: Map,
@@ -69,6 +73,7 @@ pub struct Target {
     pub sigma: Map,
     /// scale_i = σ_i / max(σ_n, ε).
     pub scale: Map,
+    /// Global hemoglobin scale suggested at full weight.
     pub global_scale: f32,
     /// "map" or "builtin:NAME".
     pub source: String,
@@ -87,6 +92,7 @@ pub struct Rig {
     pub neutral_sigma: Map,
     /// ε (absolute, volume fraction).
     pub sigma_floor: f32,
+    /// The targets, in weight order.
     pub targets: Vec<Target>,
     /// Static melanin C_m at full resolution, when given (melanin does not change with
     /// expression: Jimenez et al. 2010 §1).
@@ -156,7 +162,7 @@ pub fn check_fractions(what: &str, m: &Map) -> Result<()> {
 /// The basis grid for a map: `want` clamped to the map, and checked to divide it.
 pub fn basis_grid(w: usize, h: usize, want: (usize, usize)) -> Result<(usize, usize)> {
     let g = (want.0.min(w).max(1), want.1.min(h).max(1));
-    if w % g.0 != 0 || h % g.1 != 0 {
+    if !w.is_multiple_of(g.0) || !h.is_multiple_of(g.1) {
         return Err(invalid(
             "basis size",
             format!(
@@ -424,6 +430,8 @@ impl Rig {
 /// How [`Rig::transfer`] carries targets to a new character.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TransferMode {
+    /// Keep the targets' local statistics (eq. 6 as written).
     Absolute,
+    /// Carry each target's change relative to the source neutral over to the new character.
     Relative,
 }

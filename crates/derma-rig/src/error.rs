@@ -3,30 +3,53 @@
 
 use std::path::PathBuf;
 
+/// Errors of derma-rig.
 #[derive(Debug, thiserror::Error)]
 pub enum RigError {
+    /// From derma-core (image files).
     #[error(transparent)]
     Core(#[from] derma_core::CoreError),
+    /// From derma-shading (the skin-colour LUT).
     #[error(transparent)]
     Shading(#[from] derma_shading::ShadingError),
+    /// A map whose size differs from the rig's.
     #[error(
         "map '{what}' is {got_w}×{got_h}; expected {want_w}×{want_h} (the neutral map's size)"
     )]
     Size {
+        /// Which map.
         what: String,
+        /// Its width.
         got_w: usize,
+        /// Its height.
         got_h: usize,
+        /// The rig's width.
         want_w: usize,
+        /// The rig's height.
         want_h: usize,
     },
+    /// The GPU evaluation could not run.
     #[error(transparent)]
     Gpu(#[from] derma_core::gpu::GpuError),
+    /// A value out of range or inconsistent.
     #[error("invalid {what}: {detail}")]
-    Invalid { what: String, detail: String },
+    Invalid {
+        /// Which value.
+        what: String,
+        /// What is wrong and what was expected.
+        detail: String,
+    },
+    /// A file with bad content.
     #[error("'{path}': {detail}")]
-    File { path: PathBuf, detail: String },
+    File {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        detail: String,
+    },
 }
 
+/// Result type of derma-rig.
 pub type Result<T> = std::result::Result<T, RigError>;
 
 /// Shorthand for [`RigError::Invalid`].

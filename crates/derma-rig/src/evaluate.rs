@@ -189,6 +189,7 @@ pub fn evaluate_frame(
 }
 
 impl FramePlan {
+    /// Prepares frames of `rig` coloured with `melanin` through `lut`.
     pub fn new(rig: &Rig, melanin: &Map, lut: &SkinColorLut) -> Result<Self> {
         let (w, h) = rig.size();
         rig.check_melanin(melanin)?;

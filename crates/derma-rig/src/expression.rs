@@ -19,6 +19,7 @@ pub struct Region {
     pub centre: (f32, f32),
     /// Standard deviations of the Gaussian along x and y (mm).
     pub size: (f32, f32),
+    /// Mirrored across the face's midline (a pair of regions).
     pub paired: bool,
     /// Factor on the local mean hemoglobin at the centre.
     pub mean_gain: f32,
@@ -30,20 +31,25 @@ pub struct Region {
 /// global physiological state with its own rig parameter (Jimenez et al. 2010 §5).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
+    /// Follows geometry: driven by the blend-shape weights.
     Expression,
+    /// A physiological state of the whole face with its own rig parameter.
     Global,
 }
 
 /// A library entry.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Expression {
+    /// Its name in the library.
     pub name: &'static str,
+    /// Expression or global state.
     pub kind: Kind,
     /// Suggested global hemoglobin scale at full weight (§7: anger ×1.27, fear ×0.81; 1 for the
     /// rest); `derma rig eval --global-scale auto` blends these by weight.
     pub global_scale: f32,
     /// Gain on the local mean over the whole face (global states), before the regions.
     pub face_gain: f32,
+    /// The regions of local change.
     pub regions: &'static [Region],
     /// What the entry encodes and which observation it follows.
     pub notes: &'static str,

@@ -12,6 +12,8 @@
 //! [`evaluate::hemoglobin`] / [`evaluate::color`] per frame, or [`evaluate::FramePlan`] for
 //! real-time frames; [`animation`] samples keyframed weight curves.
 
+#![warn(missing_docs)]
+
 pub mod animation;
 pub mod basis;
 pub mod error;

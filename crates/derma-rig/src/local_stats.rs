@@ -23,21 +23,28 @@ pub const MIN_RHO: f64 = 8.0;
 /// Sums of the weight m, m·(H − c) and m·(H − c)² over the texels of each cell of a grid.
 #[derive(Clone, Debug)]
 pub struct Moments {
+    /// Cells along x.
     pub width: usize,
+    /// Cells along y.
     pub height: usize,
     /// Texels per cell along x and y.
     pub block: (usize, usize),
     /// The offset c.
     pub offset: f64,
+    /// Σ m per cell.
     pub m0: Vec<f64>,
+    /// Σ m·(H − c) per cell.
     pub m1: Vec<f64>,
+    /// Σ m·(H − c)² per cell.
     pub m2: Vec<f64>,
 }
 
 /// Local mean and standard deviation maps.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Stats {
+    /// Local mean μ.
     pub mean: Map,
+    /// Local standard deviation σ.
     pub sigma: Map,
 }
 

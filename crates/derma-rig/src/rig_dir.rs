@@ -12,28 +12,42 @@ use derma_shading::skin_color_lut::SkinColorLut;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// The `format` of rig.json.
 pub const FORMAT: &str = "derma-rig";
+/// The `version` of rig.json this code reads and writes.
 pub const VERSION: u32 = 1;
 
 /// `rig.json`.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RigJson {
+    /// Always [`FORMAT`].
     pub format: String,
+    /// Always [`VERSION`].
     pub version: u32,
+    /// The evaluation, as a formula an engine can implement.
     pub model: String,
+    /// Units of the maps.
     pub units: String,
+    /// Full-resolution map size [w, h].
     pub map_size: [usize; 2],
+    /// Basis texture size [w, h].
     pub basis_size: [usize; 2],
+    /// Disk radius r of the local statistics, texels.
     pub radius_texels: f64,
+    /// σ floor ε (absolute).
     pub sigma_floor: f32,
+    /// The rig's files.
     pub files: Files,
+    /// The skin-colour LUT's layout.
     pub lut: LutJson,
+    /// The targets, in weight order.
     pub targets: Vec<TargetJson>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
+/// The files of a rig directory, relative to it.
 pub struct Files {
     /// Full resolution, channel `h0`: H_0 = H_n − μ_n (float).
     pub h0: String,
@@ -43,7 +57,9 @@ pub struct Files {
     pub melanin: Option<String>,
     /// The LUT as derma's table, as linear float RGB, and as a 16-bit sRGB PNG.
     pub lut_dtab: String,
+    /// See `lut_dtab`.
     pub lut_exr: String,
+    /// See `lut_dtab`.
     pub lut_png: String,
     /// The run-time evaluation as a WGSL compute shader (the one derma's GPU path runs).
     pub shader: String,
@@ -51,20 +67,29 @@ pub struct Files {
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
+/// The skin-colour LUT as rig.json describes it.
 pub struct LutJson {
+    /// Entries per axis.
     pub size: usize,
+    /// Top of the melanin axis (volume fraction).
     pub melanin_max: f64,
+    /// Top of the dermal blood axis (volume fraction).
     pub blood_max: f64,
+    /// How the image is laid out.
     pub layout: String,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
+/// One target as rig.json lists it.
 pub struct TargetJson {
+    /// Its name (a weight name).
     pub name: String,
     /// Basis resolution, channels `scale`, `bias` and `sigma` (σ_i, for transfer).
     pub file: String,
+    /// Global hemoglobin scale suggested at full weight.
     pub global_scale: f32,
+    /// "map" or "builtin:NAME".
     pub source: String,
 }
 

@@ -10,8 +10,11 @@ use rayon::prelude::*;
 /// Source taps of one output coordinate: the two neighbours and the weight of the second.
 #[derive(Clone, Copy, Debug)]
 pub struct Tap {
+    /// First source index.
     pub i0: u32,
+    /// Second source index.
     pub i1: u32,
+    /// Weight of the second.
     pub t: f32,
 }
 
@@ -55,13 +58,18 @@ pub fn taps_extrapolating(src: usize, dst: usize) -> Vec<Tap> {
 /// A bilinear upsampler from a `src_w × src_h` grid to `dst_w × dst_h`.
 #[derive(Clone, Debug)]
 pub struct Upsampler {
+    /// Source size (w, h).
     pub src: (usize, usize),
+    /// Output size (w, h).
     pub dst: (usize, usize),
+    /// Taps per output column.
     pub cols: Vec<Tap>,
+    /// Taps per output row.
     pub rows: Vec<Tap>,
 }
 
 impl Upsampler {
+    /// An upsampler from `src` to `dst` that holds edge values.
     pub fn new(src: (usize, usize), dst: (usize, usize)) -> Self {
         Self {
             src,

@@ -14,6 +14,7 @@ pub const SUM_TOLERANCE: f32 = 1e-4;
 /// Named weights as given by a user or a curve (`smile=0.7,anger=0.3`; `neutral` may be named).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct WeightSpec {
+    /// (name, weight) pairs in the order given.
     pub entries: Vec<(String, f32)>,
 }
 

@@ -42,7 +42,9 @@ fn blood_map_with(w: usize, h: usize, seed: u32, base: f32, low: f32, texture: f
         .map(|i| {
             let (x, y) = (i % w, i / w);
             let low = 1.0
-                + low * (x as f32 * 6.283 / w as f32).sin() * (y as f32 * 3.14 / h as f32).sin();
+                + low
+                    * (x as f32 * std::f32::consts::TAU / w as f32).sin()
+                    * (y as f32 * std::f32::consts::PI / h as f32).sin();
             base * low * (1.0 - 0.5 * texture + texture * smooth(x, y))
         })
         .collect();

@@ -9,9 +9,11 @@ use derma_core::rng::Philox;
 /// Annealing schedule.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Schedule {
+    /// Number of annealing steps.
     pub steps: usize,
     /// Start and end temperature, in units of log cost.
     pub t_start: f64,
+    /// See `t_start`.
     pub t_end: f64,
     /// Step standard deviation in the unit cube at t_start (shrinks with √T).
     pub step: f64,

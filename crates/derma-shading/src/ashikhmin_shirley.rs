@@ -9,6 +9,7 @@ use crate::microfacet_terms::schlick;
 use crate::render_model::{Basis, Dirs, RenderModel, ShapeParam};
 use std::f64::consts::PI;
 
+/// The Ashikhmin–Shirley model (module docs).
 pub struct AshikhminShirley;
 
 const SHAPE: [ShapeParam; 2] = [

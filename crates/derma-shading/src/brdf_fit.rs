@@ -24,6 +24,7 @@ pub enum Weighting {
 }
 
 impl Weighting {
+    /// The weighting's command-line name.
     pub fn name(self) -> &'static str {
         match self {
             Weighting::Cosine => "cosine",
@@ -46,7 +47,9 @@ pub const POINTS_PER_BIN: usize = 8;
 
 /// Directions and weights for a bin layout, shared by every entry of a table.
 pub struct FitGeometry {
+    /// The BRDF bins of the precompute table.
     pub bins: BrdfBins,
+    /// How bins count in the residual.
     pub weighting: Weighting,
     /// Bins whose incident or outgoing zenith centre lies beyond this (degrees) get weight 0.
     pub max_zenith_deg: f64,
@@ -62,6 +65,7 @@ impl FitGeometry {
         Self::with_cutoff(bins, weighting, DEFAULT_MAX_ZENITH_DEG)
     }
 
+    /// The geometry of `bins`, leaving out bins beyond `max_zenith_deg` (their Monte Carlo estimates are noisiest and the skin surface has no masking yet).
     pub fn with_cutoff(bins: BrdfBins, weighting: Weighting, max_zenith_deg: f64) -> Self {
         let (ni, no, np) = (bins.theta_in, bins.theta_out, bins.phi);
         let mut dirs = Vec::with_capacity(bins.len() * POINTS_PER_BIN);
@@ -111,10 +115,12 @@ impl FitGeometry {
         }
     }
 
+    /// Number of bins.
     pub fn len(&self) -> usize {
         self.weight.len()
     }
 
+    /// True without bins.
     pub fn is_empty(&self) -> bool {
         self.weight.is_empty()
     }
@@ -166,8 +172,11 @@ impl FitGeometry {
 /// Fit settings.
 #[derive(Clone, Copy, Debug)]
 pub struct FitOptions {
+    /// The annealing over shape parameters.
     pub schedule: Schedule,
+    /// The Levenberg–Marquardt polish after it.
     pub lm: LmOptions,
+    /// Seed of the annealing's random steps.
     pub seed: u64,
 }
 

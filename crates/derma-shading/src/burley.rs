@@ -29,8 +29,11 @@ pub fn mean_free_path(a: f64, d: f64) -> f64 {
 /// One channel's fit.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BurleyFit {
+    /// Surface albedo A.
     pub albedo: f64,
+    /// Shape parameter d, mm.
     pub d_mm: f64,
+    /// Mean free path ℓ (Christensen & Burley 2015's scatter distance), mm.
     pub mfp_mm: f64,
     /// RMS of the r-weighted residual relative to the r-weighted data (d'Eon et al. 2007's
     /// error ∫ r (R − R_fit)² dr).

@@ -2,16 +2,27 @@
 
 use std::path::PathBuf;
 
+/// Errors of the shading crate, each naming the table or value at fault.
 #[derive(Debug, thiserror::Error)]
 pub enum ShadingError {
+    /// A table with the wrong layout.
     #[error("{path}: {message}")]
-    Table { path: PathBuf, message: String },
+    Table {
+        /// The table file.
+        path: PathBuf,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// A value out of range or inconsistent.
     #[error("{0}")]
     Invalid(String),
+    /// From derma-core (files, tables).
     #[error(transparent)]
     Core(#[from] derma_core::CoreError),
+    /// From the optics (simulations for the LUT).
     #[error(transparent)]
     Optics(#[from] derma_optics::OpticsError),
 }
 
+/// Result type of derma-shading.
 pub type Result<T> = std::result::Result<T, ShadingError>;

@@ -9,6 +9,7 @@ use crate::microfacet_terms::{ggx_d, ggx_smith_visibility, schlick};
 use crate::render_model::{Basis, Dirs, RenderModel, ShapeParam};
 use std::f64::consts::FRAC_1_PI;
 
+/// glTF's GGX with `KHR_materials_specular` (module docs).
 pub struct GltfGgx;
 
 const SHAPE: [ShapeParam; 2] = [

@@ -11,6 +11,7 @@ use std::f64::consts::FRAC_1_PI;
 /// F0 of skin in the Kelemen model: 0.028 (d'Eon & Luebke 2007, §14.3).
 pub const SKIN_F0: f64 = 0.028;
 
+/// The Kelemen & Szirmay-Kalos model (module docs).
 pub struct KelemenSzirmayKalos;
 
 const SHAPE: [ShapeParam; 1] = [ShapeParam {

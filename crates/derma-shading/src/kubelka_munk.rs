@@ -5,7 +5,9 @@
 /// Reflectance and transmittance of a layer for diffuse light.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LayerRT {
+    /// Diffuse reflectance R.
     pub r: f64,
+    /// Diffuse transmittance T.
     pub t: f64,
 }
 

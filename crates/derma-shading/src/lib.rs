@@ -7,6 +7,8 @@
 //! observer under D65 to linear sRGB. A lookup table with simplex interpolation
 //! ([`lut`]) makes it fast enough for 16-megapixel texture sets.
 
+#![warn(missing_docs)]
+
 pub mod annealing;
 pub mod appearance;
 pub mod ashikhmin_shirley;

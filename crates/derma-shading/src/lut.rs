@@ -5,6 +5,7 @@
 /// How an axis maps its parameter to grid coordinates.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum AxisScale {
+    /// Nodes evenly spaced in the parameter.
     Linear,
     /// Grid uniform in ∛x, dense where colour changes fastest (as Jimenez et al. 2010 §6 do for
     /// melanin and hemoglobin).
@@ -29,9 +30,13 @@ pub fn fast_cbrt(x: f32) -> f32 {
 /// One axis of a table: `n` nodes from `min` to `max`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Axis {
+    /// Value of the first node.
     pub min: f32,
+    /// Value of the last node.
     pub max: f32,
+    /// Number of nodes.
     pub n: usize,
+    /// How the nodes are spaced.
     pub scale: AxisScale,
 }
 
@@ -112,6 +117,7 @@ impl<const D: usize> GridLut<D> {
         }
     }
 
+    /// The table's axes.
     pub fn axes(&self) -> &[Axis; D] {
         &self.axes
     }

@@ -21,8 +21,11 @@ pub const BIO_AXES: [&str; 6] = derma_optics::precompute::AXES;
 /// What to fit.
 #[derive(Clone, Debug)]
 pub struct MatchOptions {
+    /// Render BRDF models to fit.
     pub models: Vec<ModelKind>,
+    /// How BRDF bins count in the residual.
     pub weighting: Weighting,
+    /// Annealing and polish settings.
     pub fit: FitOptions,
     /// Gaussians in the sum-of-Gaussians profile fit (d'Eon et al. use 6 for skin).
     pub gaussians: usize,
@@ -45,10 +48,15 @@ impl Default for MatchOptions {
 /// Residual statistics of one fitted quantity over the grid (relative RMS).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct ResidualSummary {
+    /// The model or profile ("ggx", "burley", "sog").
     pub name: String,
+    /// Mean over the nodes.
     pub mean: f64,
+    /// Median over the nodes.
     pub median: f64,
+    /// 90th percentile over the nodes.
     pub p90: f64,
+    /// Largest over the nodes.
     pub max: f64,
     /// Node with the largest residual.
     pub worst_node: usize,
@@ -253,6 +261,7 @@ pub struct Hypercube {
 }
 
 impl Hypercube {
+    /// A grid over `axes` (node values per axis, first axis slowest).
     pub fn new(axes: Vec<Vec<f64>>) -> Self {
         let mut strides = vec![1; axes.len()];
         for k in (0..axes.len().saturating_sub(1)).rev() {
@@ -304,6 +313,7 @@ impl Hypercube {
 
 /// A match table read from disk or built in.
 pub struct MatchTable {
+    /// The table's contents.
     pub dtab: Dtab,
     cube: Hypercube,
     /// For each bio axis, its index in the table's axes.
@@ -311,6 +321,7 @@ pub struct MatchTable {
 }
 
 impl MatchTable {
+    /// Checks `dtab` is a match table (its axes are bio parameters, its values fitted models); `origin` names it in errors.
     pub fn new(dtab: Dtab, origin: &Path) -> Result<Self> {
         let bad = |m: String| ShadingError::Table {
             path: origin.to_path_buf(),
@@ -338,6 +349,7 @@ impl MatchTable {
         })
     }
 
+    /// Reads and checks the match table at `path`.
     pub fn read(path: &Path) -> Result<Self> {
         Self::new(Dtab::read(path)?, path)
     }

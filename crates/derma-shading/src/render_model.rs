@@ -17,8 +17,11 @@ pub const MAX_LOBES: usize = 3;
 /// surface, unit length, z up) and their half vector h.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Dirs {
+    /// cos θ of the light direction.
     pub n_l: f64,
+    /// cos θ of the view direction.
     pub n_v: f64,
+    /// cos θ of the half vector.
     pub n_h: f64,
     /// h·l = h·v.
     pub h_l: f64,
@@ -31,6 +34,7 @@ pub struct Dirs {
 }
 
 impl Dirs {
+    /// From light direction `l` and view direction `v` (unit, leaving the surface, z up).
     pub fn new(l: [f64; 3], v: [f64; 3]) -> Self {
         let s = [l[0] + v[0], l[1] + v[1], l[2] + v[2]];
         let len = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt().max(1e-300);
@@ -83,8 +87,11 @@ pub struct Basis {
 /// One shape parameter and its search range.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShapeParam {
+    /// Name in tables ("alpha").
     pub name: &'static str,
+    /// Lower bound.
     pub lo: f64,
+    /// Upper bound.
     pub hi: f64,
     /// Anneal in log space (for parameters spanning decades).
     pub log: bool,

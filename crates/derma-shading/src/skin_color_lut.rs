@@ -25,7 +25,9 @@ pub const BUILTIN_LUT: &[u8] = include_bytes!("../data/skin-color-lut.dtab");
 pub struct LutOptions {
     /// Entries per axis.
     pub size: usize,
+    /// Photons per entry.
     pub photons: u64,
+    /// Seed of the simulations.
     pub seed: u64,
     /// Eumelanin share of melanin, β_m = 0.61 (Jimenez et al. 2010, fig. 9).
     pub eumelanin: f64,
@@ -37,7 +39,9 @@ pub struct LutOptions {
     pub blood_max: f64,
     /// The rest of the specimen: BioSpec's fair defaults ([`BioTexel::FAIR`]).
     pub oxygenation: f64,
+    /// Stratum corneum thickness, µm.
     pub stratum_corneum_um: f64,
+    /// Epidermis thickness, µm.
     pub epidermis_um: f64,
 }
 
@@ -63,7 +67,9 @@ impl Default for LutOptions {
 /// The table: `rgb[v * size + u]`, linear sRGB under D65.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SkinColorLut {
+    /// How the table was made (and its axis tops).
     pub options: LutOptions,
+    /// Entries `rgb[v × size + u]`, linear sRGB under D65.
     pub rgb: Vec<[f32; 3]>,
 }
 

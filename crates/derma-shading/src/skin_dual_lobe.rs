@@ -23,6 +23,7 @@ use std::sync::OnceLock;
 
 pub use crate::render_model::SKIN_SURFACE_INDEX;
 
+/// derma's skin model (module docs).
 pub struct SkinDualLobe;
 
 /// Charlie sheen lobe (Estevez & Kulla 2017, "Production friendly microfacet sheen BRDF",

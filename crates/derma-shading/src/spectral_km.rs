@@ -151,6 +151,7 @@ impl SpectralKubelkaMunk {
             .map(|c| c.clamp(0.0, 1.0) as f32)
     }
 
+    /// The layer model it evaluates.
     pub fn layers(&self) -> &SkinLayers {
         &self.layers
     }

@@ -13,6 +13,7 @@ pub const DEON_VARIANCES_MM2: [f64; 6] = [0.0064, 0.0484, 0.187, 0.567, 1.99, 7.
 /// A fitted sum of Gaussians.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SogFit {
+    /// Variances v_k, mm².
     pub variances_mm2: Vec<f64>,
     /// Weights [k][channel].
     pub weights: Vec<[f64; 3]>,

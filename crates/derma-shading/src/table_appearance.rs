@@ -41,6 +41,7 @@ pub enum Interpolation {
 
 /// An [`Appearance`] backed by a match table.
 pub struct TableAppearance {
+    /// How values are interpolated between nodes.
     pub interpolation: Interpolation,
     /// Axes with ≥ 2 nodes, in fixed arrays for the inner loop: how many, their BioTexel
     /// field, node positions (padded with +∞), reciprocal node spacings and node strides.
@@ -54,6 +55,7 @@ pub struct TableAppearance {
     /// index: upper node on active axis k); axis 0 is folded in while gathering.
     corner: Vec<usize>,
     values: Vec<[f32; N]>,
+    /// Where the base colour comes from.
     pub base: BaseColor,
 }
 
@@ -159,6 +161,7 @@ impl TableAppearance {
         Self::new(&t).expect("the built-in match table has the values")
     }
 
+    /// Reads a match table (.dtab from `derma match fit`).
     pub fn read(path: &Path) -> Result<Self> {
         Self::new(&MatchTable::read(path)?)
     }

@@ -2,6 +2,10 @@
 //! [`KEY_DOCS`] documents each key; `--print-config` and validation are generated from it, and a
 //! test checks that it and the serialized defaults name exactly the same keys.
 
+// The keys (these structs' fields) are documented once, in KEY_DOCS, with unit, range and source;
+// a doc comment per field would be a second copy to keep in step.
+#![allow(missing_docs)]
+
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -16,6 +20,7 @@ pub struct Range {
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
+/// Every option of the main job, as `derma skin --config` reads it (keys documented in [`KEY_DOCS`]).
 pub struct SkinConfig {
     pub seed: u64,
     pub size: u32,
@@ -66,6 +71,7 @@ impl Default for DetailConfig {
 }
 
 impl DetailConfig {
+    /// Whether an exemplar is given (the detail is synthesised and added).
     pub fn enabled(&self) -> bool {
         !self.height.trim().is_empty() || !self.albedo.trim().is_empty()
     }
@@ -73,6 +79,7 @@ impl DetailConfig {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+/// What the texture set is painted on.
 pub enum SurfaceKind {
     /// The built-in head template.
     Template,
@@ -84,6 +91,7 @@ pub enum SurfaceKind {
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
+/// `[surface]`: what to paint on.
 pub struct SurfaceConfig {
     pub kind: SurfaceKind,
     pub patch_size_mm: [f32; 2],
@@ -94,6 +102,7 @@ pub struct SurfaceConfig {
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
+/// `[baseline]`: the skin between features (thesis §5.3.1).
 pub struct BaselineConfig {
     pub phi: f32,
     pub noise_wavelengths_mm: [f32; 3],
@@ -108,6 +117,7 @@ pub struct BaselineConfig {
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
+/// `[lips]` (thesis §5.3.6).
 pub struct LipsConfig {
     pub enabled: bool,
     pub field: String,
@@ -118,6 +128,7 @@ pub struct LipsConfig {
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
+/// `[cyst]` (thesis §5.3.2).
 pub struct CystConfig {
     pub enabled: bool,
     pub field: String,
@@ -129,6 +140,7 @@ pub struct CystConfig {
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
+/// `[mole]` (thesis §5.3.3).
 pub struct MoleConfig {
     pub enabled: bool,
     pub field: String,
@@ -141,6 +153,7 @@ pub struct MoleConfig {
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
+/// `[freckle]` (thesis §5.3.5).
 pub struct FreckleConfig {
     pub enabled: bool,
     pub field: String,
@@ -155,6 +168,7 @@ pub struct FreckleConfig {
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
+/// `[wrinkle]` (thesis §5.3.7).
 pub struct WrinkleConfig {
     pub enabled: bool,
     pub field: String,
@@ -167,6 +181,7 @@ pub struct WrinkleConfig {
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
+/// `[pore]` (ours; thesis §7.4 lists pores as missing).
 pub struct PoreConfig {
     pub enabled: bool,
     pub field: String,
@@ -179,6 +194,7 @@ pub struct PoreConfig {
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
+/// `[follicle]` and `[eyebrow]` (thesis §5.3.4).
 pub struct FollicleConfig {
     pub enabled: bool,
     pub field: String,
@@ -193,6 +209,7 @@ pub struct FollicleConfig {
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
+/// `[material]`: specular and roughness of skin, lips and hair.
 pub struct MaterialConfig {
     pub roughness_skin: f32,
     pub roughness_lips: f32,

@@ -23,8 +23,11 @@ use std::path::Path;
 /// The high-passed detail tile: per texel, height detail (unit RMS) and relative luminance
 /// contrast (L_hp / L_lp), each present when its exemplar was given.
 pub struct DetailTile {
+    /// Side of the tile in texels.
     pub size: usize,
+    /// High-passed height detail, unit RMS (with a height exemplar).
     pub height: Option<Map>,
+    /// Relative luminance contrast L_hp / L_lp (with a colour exemplar).
     pub contrast: Option<Map>,
 }
 

@@ -12,6 +12,7 @@ use std::path::Path;
 /// A named set of scalar fields and vector fields, all in UV space.
 #[derive(Default, Clone)]
 pub struct FieldSet {
+    /// Scalar (probability) fields by name.
     pub scalars: BTreeMap<String, Map>,
     /// Vector fields: direction (R, G in [0,1], 0.5 = zero) and length B.
     pub vectors: BTreeMap<String, [Map; 3]>,
@@ -20,11 +21,14 @@ pub struct FieldSet {
 /// A vector read from a vector field: a unit direction in UV space and a length in [0, 1].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct UvVector {
+    /// Unit direction in UV space (zero where the field has none).
     pub dir: glam::Vec2,
+    /// Length in [0, 1].
     pub length: f32,
 }
 
 impl FieldSet {
+    /// The scalar field `name`; the error lists the known ones.
     pub fn scalar(&self, name: &str) -> Result<&Map> {
         self.scalars.get(name).ok_or_else(|| SkinError::Field {
             name: name.into(),

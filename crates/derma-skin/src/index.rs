@@ -125,6 +125,7 @@ pub struct GridCursor<'a> {
 }
 
 impl<'a> GridCursor<'a> {
+    /// A cursor over `grid`.
     pub fn new(grid: &'a Grid) -> Self {
         Self {
             grid,
@@ -136,6 +137,7 @@ impl<'a> GridCursor<'a> {
     }
 
     #[inline]
+    /// The items whose bounds may contain `p` (those of its cell).
     pub fn query(&mut self, p: Vec3) -> &'a [u32] {
         if p.cmpge(self.lo).all() && p.cmplt(self.hi).all() {
             return self.last;

@@ -20,6 +20,8 @@
 //! `derma_shading::Appearance`) → [`TextureSet::write`]: the files of [`outputs`], with
 //! [`report`]'s manifest.json and report.json.
 
+#![warn(missing_docs)]
+
 pub mod config;
 pub mod detail;
 pub mod feature_set;
@@ -67,17 +69,35 @@ pub enum SkinError {
         /// What is wrong.
         detail: String,
     },
+    /// A field is missing, malformed or badly defined.
     #[error("field '{name}': {detail}")]
-    Field { name: String, detail: String },
+    Field {
+        /// The field's name.
+        name: String,
+        /// What is wrong.
+        detail: String,
+    },
+    /// A mesh cannot be painted.
     #[error("mesh '{path}': {detail}")]
-    Mesh { path: String, detail: String },
+    Mesh {
+        /// The mesh file.
+        path: String,
+        /// What is wrong with it.
+        detail: String,
+    },
+    /// From derma-core (files, meshes).
     #[error(transparent)]
     Core(#[from] derma_core::CoreError),
+    /// The texture set would not fit in memory.
     #[error("output of {width}x{height} texels needs about {need_gib:.1} GiB of memory; {have_gib:.1} GiB are available: choose a smaller --size")]
     TooLarge {
+        /// Width asked for.
         width: usize,
+        /// Height asked for.
         height: usize,
+        /// Memory it needs, GiB.
         need_gib: f64,
+        /// Memory available, GiB.
         have_gib: f64,
     },
 }

@@ -19,13 +19,19 @@ use rayon::prelude::*;
 /// Painted bio parameters of every texel (array of structs: painting touches all of a texel's
 /// parameters at once).
 pub struct BioMaps {
+    /// Width in texels.
     pub width: usize,
+    /// Height in texels.
     pub height: usize,
+    /// One sample per texel, row-major.
     pub texels: Vec<BioSample>,
 }
 
+/// A named bio channel and how to read it from a sample.
+pub type BioChannel = (&'static str, fn(&BioSample) -> f32);
+
 /// Names of the bio channels as written to bio.exr, with their accessor.
-pub const BIO_CHANNELS: [(&str, fn(&BioSample) -> f32); 12] = [
+pub const BIO_CHANNELS: [BioChannel; 12] = [
     (names::MELANIN, |s| s.tissue.melanin),
     (names::PHEOMELANIN, |s| s.tissue.pheomelanin),
     (names::BLOOD, |s| s.tissue.blood),

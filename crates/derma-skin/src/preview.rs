@@ -14,6 +14,7 @@ use std::f32::consts::PI;
 
 /// Textures the renderer samples.
 pub struct Textures<'a> {
+    /// The render maps.
     pub maps: &'a RenderMaps,
     /// Repeat the texture (tileable patches).
     pub wrap: bool,

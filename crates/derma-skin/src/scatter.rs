@@ -9,8 +9,11 @@ use glam::{Vec2, Vec3};
 /// A sampled point on the surface.
 #[derive(Clone, Copy, Debug)]
 pub struct SurfacePoint {
+    /// Position on the surface (mm).
     pub position: Vec3,
+    /// Texture coordinates.
     pub uv: Vec2,
+    /// Tangent frame there.
     pub frame: Frame,
 }
 
@@ -116,7 +119,7 @@ mod tests {
         let s = Surface::patch(32, 32, [10.0, 10.0], false);
         let sm = Sampler::new(&s, |i| if i % 32 < 16 { 1.0 } else { 0.0 });
         let rng = Philox::new(1, 2);
-        let mut left_quarter = 0;
+        let mut left_quarter = 0i32;
         for k in 0..2000 {
             let p = sm.sample(&rng, k).unwrap();
             assert!(p.position.x < 5.0 + 1e-4);
@@ -125,6 +128,6 @@ mod tests {
             }
         }
         // uniform within the allowed half: about 1000 of 2000 in its left half
-        assert!((left_quarter as i32 - 1000).abs() < 120, "{left_quarter}");
+        assert!((left_quarter - 1000).abs() < 120, "{left_quarter}");
     }
 }

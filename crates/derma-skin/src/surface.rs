@@ -16,6 +16,7 @@ pub struct Frame {
     pub b: Vec3,
     /// ∂P/∂u and ∂P/∂v in mm per unit of texture coordinate.
     pub dpdu: Vec3,
+    /// See `dpdu`.
     pub dpdv: Vec3,
 }
 
@@ -28,13 +29,22 @@ impl Frame {
 
 /// What a surface is made of.
 pub enum Geometry {
-    Patch { size_mm: [f32; 2], tileable: bool },
+    /// A flat rectangle.
+    Patch {
+        /// Its width and height, mm.
+        size_mm: [f32; 2],
+        /// Whether it wraps around (a modulo space, thesis §3.3).
+        tileable: bool,
+    },
+    /// A mesh rasterised in UV space.
     Mesh(Box<MeshSurface>),
 }
 
 /// A mesh in millimetres with its UV raster and per-corner MikkTSpace tangents.
 pub struct MeshSurface {
+    /// The mesh, in mm.
     pub mesh: TriMesh,
+    /// Its UV rasterisation at the output size.
     pub raster: UvRaster,
     /// Per triangle corner (3 per triangle): tangent xyz and bitangent sign.
     pub tangents: Vec<[f32; 4]>,
@@ -44,12 +54,16 @@ pub struct MeshSurface {
 
 /// A texture-sized sampling of a surface.
 pub struct Surface {
+    /// Width in texels.
     pub width: usize,
+    /// Height in texels.
     pub height: usize,
+    /// Patch or mesh.
     pub geometry: Geometry,
 }
 
 impl Surface {
+    /// A flat `size_mm` patch at `width × height` texels, tiling when `tileable`.
     pub fn patch(width: usize, height: usize, size_mm: [f32; 2], tileable: bool) -> Surface {
         Surface {
             width,
@@ -90,11 +104,13 @@ impl Surface {
     }
 
     #[inline]
+    /// Number of texels.
     pub fn len(&self) -> usize {
         self.width * self.height
     }
 
     #[inline]
+    /// True without texels.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -129,6 +145,7 @@ impl Surface {
     }
 
     #[inline]
+    /// Whether texel `i` lies on the surface (always on a patch).
     pub fn covered(&self, i: usize) -> bool {
         match &self.geometry {
             Geometry::Patch { .. } => true,

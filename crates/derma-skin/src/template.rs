@@ -26,11 +26,17 @@ pub const FIELD_RESOLUTION: usize = 1024;
 /// template with its default fields: density = count / ∫ field dA. The integrals are recomputed
 /// by the test `default_densities_reproduce_thesis_counts`.
 pub struct Densities {
+    /// Cysts.
     pub cyst: f32,
+    /// Moles.
     pub mole: f32,
+    /// Freckles.
     pub freckle: f32,
+    /// Wrinkle start points.
     pub wrinkle: f32,
+    /// Scalp follicles.
     pub follicle: f32,
+    /// Eyebrow follicles.
     pub eyebrow: f32,
 }
 
@@ -249,12 +255,15 @@ fn field_values(p: Vec3) -> ([f32; 10], [f32; 3]) {
     )
 }
 
+/// The scalar fields (in [`FIELD_NAMES`] order) and the wrinkle vector at one texel.
+type FieldTexel = ([f32; 10], [f32; 3]);
+
 /// The template's default fields, rasterised at [`FIELD_RESOLUTION`] and dilated into the gutter.
 pub fn default_fields(mesh: &TriMesh) -> FieldSet {
     let n = FIELD_RESOLUTION;
     let raster = UvRaster::new(mesh, n, n);
     let covered: Vec<bool> = (0..n * n).map(|i| raster.covered(i)).collect();
-    let values: Vec<([f32; 10], [f32; 3])> = {
+    let values: Vec<FieldTexel> = {
         use rayon::prelude::*;
         (0..n * n)
             .into_par_iter()
@@ -268,7 +277,7 @@ pub fn default_fields(mesh: &TriMesh) -> FieldSet {
             .collect()
     };
     let src = dilation_sources(&covered, n, n);
-    let mk = |f: &dyn Fn(&([f32; 10], [f32; 3])) -> f32| {
+    let mk = |f: &dyn Fn(&FieldTexel) -> f32| {
         let mut m = Map::from_vec(n, n, values.iter().map(f).collect()).expect("size");
         if let Some(src) = &src {
             apply_dilation(m.data_mut(), src);

@@ -25,11 +25,13 @@ pub const SPECULAR_SCALE: f32 = 0.08;
 pub struct RenderMaps {
     /// Diffuse albedo, linear sRGB.
     pub base_color: [Map; 3],
+    /// glTF perceptual roughness.
     pub roughness: Map,
     /// F0 / 0.08.
     pub specular: Map,
     /// Tangent-space normal in [−1, 1].
     pub normal: [Map; 3],
+    /// Displacement from the mean skin surface, mm.
     pub height_mm: Map,
     /// Subsurface maps, when the appearance provides them (the match table does).
     pub subsurface: Option<SubsurfaceMaps>,
@@ -46,13 +48,18 @@ pub struct SubsurfaceMaps {
 /// sss_radius.png stores ℓ / SSS_RADIUS_RANGE_MM (16-bit): 0–8 mm, the radial profile's range.
 pub const SSS_RADIUS_RANGE_MM: f32 = 8.0;
 
+/// One row of three colour channels.
+type RgbRow<'a> = [&'a mut [f32]; 3];
+/// Three planar colour channels.
+type RgbPlanes = [Vec<f32>; 3];
+
 /// One row of every output channel of [`convert`], by name.
 struct RowOut<'a> {
     base_color: [&'a mut [f32]; 3],
     roughness: &'a mut [f32],
     specular: &'a mut [f32],
     /// Subsurface colour and scatter distance, with a subsurface-aware appearance.
-    subsurface: Option<([&'a mut [f32]; 3], [&'a mut [f32]; 3])>,
+    subsurface: Option<(RgbRow<'a>, RgbRow<'a>)>,
 }
 
 /// Planar output channels of [`convert`].
@@ -60,7 +67,7 @@ struct Channels {
     base_color: [Vec<f32>; 3],
     roughness: Vec<f32>,
     specular: Vec<f32>,
-    subsurface: Option<([Vec<f32>; 3], [Vec<f32>; 3])>,
+    subsurface: Option<(RgbPlanes, RgbPlanes)>,
 }
 
 impl Channels {

@@ -9,7 +9,9 @@ use crate::texture::Texture;
 /// stay comparable.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Quantizer {
+    /// Value of code 0 per channel.
     pub lo: Vec<f32>,
+    /// Value of code 255 per channel.
     pub hi: Vec<f32>,
 }
 
@@ -31,6 +33,7 @@ impl Quantizer {
     }
 
     #[inline]
+    /// Code of value `v` of channel `k`.
     pub fn quantize(&self, k: usize, v: f32) -> u8 {
         let span = self.hi[k] - self.lo[k];
         if span <= 0.0 {
@@ -40,10 +43,12 @@ impl Quantizer {
     }
 
     #[inline]
+    /// Value of (fractional) code `q` of channel `k`.
     pub fn dequantize(&self, k: usize, q: f32) -> f32 {
         self.lo[k] + q / 255.0 * (self.hi[k] - self.lo[k])
     }
 
+    /// Codes of interleaved texels `data` into `out`.
     pub fn quantize_all(&self, data: &[f32], out: &mut [u8]) {
         let c = self.lo.len();
         for (i, (o, &v)) in out.iter_mut().zip(data).enumerate() {
@@ -55,17 +60,22 @@ impl Quantizer {
 /// One exemplar: its values (copied into the output) and their 8-bit codes (searched).
 #[derive(Clone, Debug)]
 pub struct Exemplar {
+    /// The values.
     pub texture: Texture,
+    /// 8-bit codes of the values, interleaved like them.
     pub codes: Vec<u8>,
 }
 
 impl Exemplar {
+    /// Width in texels.
     pub fn width(&self) -> usize {
         self.texture.width
     }
+    /// Height in texels.
     pub fn height(&self) -> usize {
         self.texture.height
     }
+    /// Channels per texel.
     pub fn channels(&self) -> usize {
         self.texture.channels
     }
@@ -112,7 +122,9 @@ impl Exemplar {
 /// channel layout and a quantiser.
 #[derive(Clone, Debug)]
 pub struct ExemplarSet {
+    /// The exemplars.
     pub exemplars: Vec<Exemplar>,
+    /// The quantiser they share.
     pub quantizer: Quantizer,
 }
 
@@ -158,6 +170,7 @@ impl ExemplarSet {
         })
     }
 
+    /// Channels per texel (the same for every exemplar).
     pub fn channels(&self) -> usize {
         self.exemplars[0].channels()
     }

@@ -8,8 +8,11 @@ use std::path::Path;
 /// Region guidance: which exemplar each output texel draws from.
 #[derive(Clone, Debug)]
 pub struct Guide {
+    /// Width of the guide map.
     pub width: usize,
+    /// Height of the guide map.
     pub height: usize,
+    /// Exemplar index per guide texel.
     pub exemplar: Vec<u8>,
 }
 

@@ -8,6 +8,8 @@
 //! answers, so a seed gives the same texture on either. [`quality`] holds the metrics that
 //! judge the result without neural networks.
 
+#![warn(missing_docs)]
+
 pub mod canvas;
 pub mod error;
 pub mod exemplar;

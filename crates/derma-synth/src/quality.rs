@@ -49,6 +49,7 @@ pub struct SwdOptions {
     pub directions: usize,
     /// Patches sampled per texture (all positions when there are fewer).
     pub samples: usize,
+    /// Seed of the directions and samples.
     pub seed: u64,
 }
 

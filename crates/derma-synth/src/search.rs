@@ -48,6 +48,7 @@ pub struct Query {
 pub struct Tolerance(pub u32);
 
 impl Tolerance {
+    /// The tolerance ε as a fraction of the best cost (image quilting's 0.1).
     pub fn from_fraction(eps: f64) -> Self {
         Self((eps.clamp(0.0, 1.0) * 65536.0).round() as u32)
     }
@@ -108,7 +109,9 @@ const fn inverse_mod_2_32(a: u32) -> u32 {
 /// The answer: position index and its cost (distance plus any occurrence penalty).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Match {
+    /// Distance plus occurrence penalty.
     pub cost: u32,
+    /// Exemplar position, y · candidates_per_row + x.
     pub index: u32,
 }
 
@@ -135,6 +138,7 @@ pub const MAX_PENALTY_TOTAL: u32 = 1 << 31;
 pub struct Search<'a> {
     /// Window side.
     pub w: usize,
+    /// Near-best tolerance of the choice.
     pub tol: Tolerance,
     /// Per exemplar, per candidate index: occurrence penalty per known texel, each at most
     /// `MAX_PENALTY_TOTAL / w²` (the patch pass's; `None` elsewhere).
@@ -160,6 +164,7 @@ pub fn known_texels(q: &Query, w: usize) -> u32 {
 pub trait Matcher: Sync {
     /// The answer of each query (all of window side `w`), in order.
     fn best_matches(&self, set: &ExemplarSet, s: &Search, queries: &[Query]) -> Result<Vec<Match>>;
+    /// What runs the searches, for reports ("CPU", "GPU (…)").
     fn name(&self) -> String;
 }
 

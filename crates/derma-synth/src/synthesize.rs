@@ -15,7 +15,9 @@ use derma_core::progress::{Job, Progress, Timing};
 /// What to synthesise.
 #[derive(Clone, Debug)]
 pub struct SynthOptions {
+    /// Output width in texels.
     pub width: usize,
+    /// Output height in texels.
     pub height: usize,
     /// Patch side N (even); the displacement is D = N/2 (§3.2).
     pub patch: usize,
@@ -28,6 +30,7 @@ pub struct SynthOptions {
     pub tolerance: f64,
     /// Weight λ of the patch pass's occurrence penalty (0 = off); see [`crate::patch_pass`].
     pub occurrence: f64,
+    /// Random seed: the same seed gives the same texture on any device and thread count.
     pub seed: u64,
     /// Tileable output: the texture wraps at its edges.
     pub tile: bool,
@@ -118,6 +121,7 @@ impl SynthOptions {
 
 /// A synthesised texture and, per texel, the exemplar texel it came from last.
 pub struct Synthesis {
+    /// The texture.
     pub texture: Texture,
     /// Exemplar index of each texel's source.
     pub source_exemplar: Vec<u8>,

@@ -7,13 +7,18 @@ use derma_core::Map;
 /// `width × height` texels of `channels` f32 values each, rows from the top.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
+    /// Width in texels.
     pub width: usize,
+    /// Height in texels.
     pub height: usize,
+    /// Values per texel.
     pub channels: usize,
+    /// The values, texel-major.
     pub data: Vec<f32>,
 }
 
 impl Texture {
+    /// A texture from interleaved values; fails when the length does not match the size.
     pub fn new(width: usize, height: usize, channels: usize, data: Vec<f32>) -> Result<Self> {
         if width == 0 || height == 0 || channels == 0 || data.len() != width * height * channels {
             return Err(invalid(

@@ -175,7 +175,7 @@ fn quad_glb() -> Vec<u8> {
         .for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
     idx.iter()
         .for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let json = format!(

@@ -7,6 +7,7 @@ use glam::Vec3;
 /// A cubic Bézier curve with control points `p` (Foley et al., §11.2).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct CubicBezier {
+    /// Control points P₀ … P₃ (mm).
     pub p: [Vec3; 4],
 }
 

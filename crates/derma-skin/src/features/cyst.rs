@@ -7,15 +7,19 @@ use glam::Vec3;
 use serde::Serialize;
 
 #[derive(Clone, Debug, Serialize)]
+/// A cyst (thesis §5.3.2): a raised sigmoid bump.
 pub struct Cyst {
+    /// Centre on the surface (mm).
     pub center: Vec3,
     /// Radius r (mm) as drawn.
     pub radius: f32,
     /// Maximum height h (mm) as drawn.
     pub height: f32,
     #[serde(skip)]
+    /// Radius widened to at least [`super::MIN_TEXELS`] texels (anti-aliasing).
     pub r_eff: f32,
     #[serde(skip)]
+    /// Amplitude factor that keeps the widened bump's integral.
     pub amp: f32,
 }
 

@@ -9,13 +9,18 @@ use glam::Vec3;
 use serde::Serialize;
 
 #[derive(Clone, Debug, Serialize)]
+/// A hair follicle (thesis §5.3.4): a hair stalk's colour and height, and the sebaceous gland's blood reduction around it.
 pub struct Follicle {
+    /// Centre on the surface (mm).
     pub center: Vec3,
     #[serde(skip)]
+    /// Stalk radius r_i (mm), widened like `r_outer`.
     pub r_inner: f32,
     #[serde(skip)]
+    /// Visible radius r_o (mm), widened to at least [`super::MIN_TEXELS`] texels.
     pub r_outer: f32,
     #[serde(skip)]
+    /// Amplitude factor that keeps the widened follicle's integral.
     pub amp: f32,
     /// Reach of the feature: max(r_o, gland radius).
     #[serde(skip)]
@@ -24,13 +29,18 @@ pub struct Follicle {
 
 /// Parameters shared by a follicle set (scalp or eyebrow).
 pub struct FollicleParams {
+    /// Hair colour p_c, linear RGB.
     pub hair_color: [f32; 3],
+    /// Displacement of the stalk, mm.
     pub height_mm: f32,
+    /// Share of the blood removed at the gland.
     pub blood_reduction: f32,
+    /// Radius of the blood reduction, mm.
     pub gland_radius_mm: f32,
 }
 
 impl Follicle {
+    /// A follicle at `center` with the kind's config, on texels of `pitch_mm`.
     pub fn new(center: Vec3, cfg: &crate::config::FollicleConfig, pitch_mm: f32) -> Self {
         let (r_outer, amp) = widen(cfg.outer_radius_mm, pitch_mm);
         // The stalk keeps its share of the (widened) disc so coverage is conserved too.

@@ -10,21 +10,31 @@ use glam::Vec3;
 use serde::Serialize;
 
 #[derive(Clone, Debug, Serialize)]
+/// A freckle (thesis §5.3.5): melanin and pheomelanin added in a soft spot with an irregular edge.
 pub struct Freckle {
+    /// Centre on the surface (mm).
     pub center: Vec3,
+    /// Radius r (mm) as drawn.
     pub radius: f32,
     /// M·U: melanin added at the centre.
     pub melanin: f32,
     /// H·U: pheomelanin ratio added at the centre.
     pub pheomelanin: f32,
+    /// The irregular edge.
     pub perimeter: Perimeter,
     #[serde(skip)]
+    /// Radius widened to at least [`super::MIN_TEXELS`] texels (anti-aliasing).
     pub r_eff: f32,
     #[serde(skip)]
+    /// Amplitude factor that keeps the widened spot's integral.
     pub amp: f32,
 }
 
 impl Freckle {
+    // The centre, its tangent frame, the kind's config, the feature's random draws (z, u, v)
+    // and the texel pitch: the thesis' inputs, kept apart so each stays named.
+    #[allow(clippy::too_many_arguments)]
+    /// From the sampled centre and frame, the kind's config, a standard normal `z`, uniforms `u` and `v`, and the texel pitch.
     pub fn new(
         center: Vec3,
         t: Vec3,

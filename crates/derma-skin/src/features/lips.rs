@@ -7,12 +7,16 @@ use super::BioSample;
 
 /// Lip values B, H and epidermis thickness.
 pub struct LipParams {
+    /// Blood ratio B inside the lips.
     pub blood: f32,
+    /// Pheomelanin ratio H inside the lips.
     pub pheomelanin: f32,
+    /// Epidermis thickness inside the lips, µm.
     pub epidermis_um: f32,
 }
 
 #[inline]
+/// Blends the lip parameters into `s` by the lip field value ∆(p) (thesis §5.3.6) and records it for the material stage.
 pub fn apply_lips(prm: &LipParams, field: f32, s: &mut BioSample) {
     if field <= 0.0 {
         return;

@@ -53,7 +53,9 @@ impl BioSample {
 /// The point being painted: position (mm) and surface normal.
 #[derive(Clone, Copy, Debug)]
 pub struct PaintPoint {
+    /// Position (mm).
     pub p: Vec3,
+    /// Unit surface normal.
     pub n: Vec3,
 }
 

@@ -9,17 +9,23 @@ use glam::Vec3;
 use serde::Serialize;
 
 #[derive(Clone, Debug, Serialize)]
+/// A mole (thesis §5.3.3): melanin added and the surface raised in a sigmoid spot with an irregular edge.
 pub struct Mole {
+    /// Centre on the surface (mm).
     pub center: Vec3,
+    /// Radius r (mm) as drawn.
     pub radius: f32,
     /// Maximum melanocyte ratio M.
     pub melanin: f32,
     /// Height per unit melanocyte ratio h (mm).
     pub height: f32,
+    /// The irregular edge.
     pub perimeter: Perimeter,
     #[serde(skip)]
+    /// Radius widened to at least [`super::MIN_TEXELS`] texels (anti-aliasing).
     pub r_eff: f32,
     #[serde(skip)]
+    /// Amplitude factor that keeps the widened spot's integral.
     pub amp: f32,
 }
 
@@ -51,6 +57,10 @@ impl Feature for Mole {
 }
 
 impl Mole {
+    // The centre, its tangent frame, the kind's config, the feature's random draws (z, u, v)
+    // and the texel pitch: the thesis' inputs, kept apart so each stays named.
+    #[allow(clippy::too_many_arguments)]
+    /// From the sampled centre and frame, the kind's config, a standard normal `z`, uniforms `u` and `v`, and the texel pitch.
     pub fn new(
         center: Vec3,
         t: Vec3,

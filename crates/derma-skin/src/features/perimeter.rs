@@ -7,11 +7,15 @@ use glam::Vec3;
 use serde::Serialize;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+/// An irregular edge: four random harmonics of the polar angle in the tangent plane.
 pub struct Perimeter {
+    /// Relative amplitude of harmonics 2–5.
     pub amplitude: [f32; 4],
+    /// Their phases (radians).
     pub phase: [f32; 4],
     /// Tangent-plane axes at the centre, for the angle θ.
     pub t: Vec3,
+    /// See `t`.
     pub b: Vec3,
 }
 

@@ -10,22 +10,30 @@ use glam::Vec3;
 use serde::Serialize;
 
 #[derive(Clone, Debug, Serialize)]
+/// A pore (ours; thesis §7.4 lists them as missing): a small pit with a slightly darker ostium.
 pub struct Pore {
+    /// Centre on the surface (mm).
     pub center: Vec3,
+    /// Radius (mm) as drawn.
     pub radius: f32,
     #[serde(skip)]
+    /// Radius widened to at least [`super::MIN_TEXELS`] texels (anti-aliasing).
     pub r_eff: f32,
     #[serde(skip)]
+    /// Amplitude factor that keeps the widened pit's integral.
     pub amp: f32,
 }
 
 /// Shared pore parameters.
 pub struct PoreParams {
+    /// Depth at the centre, mm.
     pub depth_mm: f32,
+    /// Melanin added at the centre (volume fraction).
     pub melanin_add: f32,
 }
 
 impl Pore {
+    /// A pore at `center` with radius mean + σ·`z`, on texels of `pitch_mm`.
     pub fn new(center: Vec3, cfg: &crate::config::PoreConfig, z: f32, pitch_mm: f32) -> Self {
         let radius = (cfg.radius_mean_mm + cfg.radius_sigma_mm * z).max(0.01);
         let (r_eff, amp) = widen(radius, pitch_mm);

@@ -16,13 +16,16 @@ use serde::Serialize;
 pub const NORMAL_REACH: f32 = 6.0;
 
 #[derive(Clone, Debug, Serialize)]
+/// A wrinkle (thesis §5.3.7): a crease along a cubic Bézier on the surface.
 pub struct Wrinkle {
+    /// Its centre line (mm).
     pub curve: CubicBezier,
     /// Maximum half-width w (mm).
     pub width: f32,
     /// Maximum depth h (mm).
     pub depth: f32,
     #[serde(skip)]
+    /// Amplitude factor that keeps a widened crease's cross-section.
     pub amp: f32,
     /// Largest distance of the curve from its chord P₀P₃ (bounded by the control points, since
     /// the curve lies in their convex hull): lets most texels skip the closest-point search.
@@ -39,6 +42,7 @@ fn segment_distance(p: Vec3, a: Vec3, b: Vec3) -> f32 {
 }
 
 impl Wrinkle {
+    /// A crease along `curve` of half-width `width` and depth `depth` (mm), on texels of `pitch_mm`.
     pub fn new(curve: CubicBezier, width: f32, depth: f32, pitch_mm: f32) -> Self {
         // A crease narrower than a texel keeps its cross-section integral (depth × width).
         let w_eff = width.max(super::MIN_TEXELS * pitch_mm);
