@@ -49,8 +49,9 @@ fn ring_means(bins: &ProfileBins, d: f64, out: &mut [f64]) {
     }
 }
 
-/// Fits A and d to ring averages `data` (mm⁻²) of one channel, weighting ring i by r_i Δr.
-pub fn fit(bins: &ProfileBins, data: &[f64]) -> BurleyFit {
+/// Fits A and d to ring averages `data` (mm⁻²) of one channel, weighting ring i by r_i Δr;
+/// `lm` sets the final Levenberg–Marquardt polish.
+pub fn fit(bins: &ProfileBins, data: &[f64], lm: LmOptions) -> BurleyFit {
     let n = bins.bins;
     let dr = bins.d_max_mm / n as f64;
     let sw: Vec<f64> = (0..n)
@@ -96,7 +97,7 @@ pub fn fit(bins: &ProfileBins, data: &[f64]) -> BurleyFit {
         &[0.0, 0.001],
         &[2.0, 100.0],
         n,
-        LmOptions::default(),
+        lm,
     );
     let data_sq: f64 = (0..n).map(|i| (sw[i] * data[i]).powi(2)).sum();
     BurleyFit {
@@ -151,7 +152,7 @@ mod tests {
             let mut data = vec![0.0; 64];
             ring_means(&bins, d, &mut data);
             data.iter_mut().for_each(|v| *v *= a);
-            let f = fit(&bins, &data);
+            let f = fit(&bins, &data, LmOptions::default());
             assert!(((f.albedo - a) / a).abs() < 1e-3, "{f:?}");
             assert!(((f.d_mm - d) / d).abs() < 1e-3, "{f:?}");
             assert!(f.relative_rms < 1e-4);

@@ -232,14 +232,14 @@ fn fit_node(
     let fits: Vec<burley::BurleyFit> = (0..3)
         .map(|c| {
             let d: Vec<f64> = profile.iter().map(|p| p[c]).collect();
-            burley::fit(pbins, &d)
+            burley::fit(pbins, &d, opts.fit.lm)
         })
         .collect();
     row.extend(fits.iter().map(|f| f.albedo as f32));
     row.extend(fits.iter().map(|f| f.d_mm as f32));
     row.extend(fits.iter().map(|f| f.mfp_mm as f32));
     row.push(fits.iter().map(|f| f.relative_rms).fold(0.0, f64::max) as f32);
-    let sog = sum_of_gaussians::fit(pbins, &profile, opts.gaussians);
+    let sog = sum_of_gaussians::fit(pbins, &profile, opts.gaussians, opts.fit.lm);
     let mut v = sog.variances_mm2.clone();
     let mut w = sog.weights.clone();
     // Pad when fewer Gaussians were usable (never in practice: fit keeps k).

@@ -92,8 +92,9 @@ impl Problem<'_> {
     }
 }
 
-/// Fits `k` Gaussians (k ≤ 6, started from d'Eon's variances) to ring averages `data`.
-pub fn fit(bins: &ProfileBins, data: &[[f64; 3]], k: usize) -> SogFit {
+/// Fits `k` Gaussians (k ≤ 6, started from d'Eon's variances) to ring averages `data`; `lm`
+/// sets the Levenberg–Marquardt fit of the variances.
+pub fn fit(bins: &ProfileBins, data: &[[f64; 3]], k: usize, lm: LmOptions) -> SogFit {
     let k = k.clamp(1, DEON_VARIANCES_MM2.len());
     let n = bins.bins;
     let dr = bins.d_max_mm / n as f64;
@@ -131,7 +132,7 @@ pub fn fit(bins: &ProfileBins, data: &[[f64; 3]], k: usize) -> SogFit {
     };
     let lo = vec![(1e-4f64).ln(); k];
     let hi = vec![(100.0f64).ln(); k];
-    let (p, cost) = levenberg_marquardt(&mut res, &start, &lo, &hi, m, LmOptions::default());
+    let (p, cost) = levenberg_marquardt(&mut res, &start, &lo, &hi, m, lm);
     let mut v: Vec<f64> = p.iter().map(|x| x.exp()).collect();
     v.sort_by(f64::total_cmp);
     let mut r = vec![0.0; m];
@@ -176,7 +177,7 @@ mod tests {
                 std::array::from_fn(|c| (0..3).map(|k| truth.weights[k][c] * cols[k][i]).sum())
             })
             .collect();
-        let f = fit(&bins, &data, 3);
+        let f = fit(&bins, &data, 3, LmOptions::default());
         assert!(f.relative_rms < 1e-3, "{f:?}");
         for (a, b) in f.variances_mm2.iter().zip(&truth.variances_mm2) {
             assert!(((a - b) / b).abs() < 0.01, "{f:?}");

@@ -10,6 +10,32 @@ pub type ResidualFn<'a> = dyn FnMut(&[f64], &mut [f64], Option<&mut [f64]>) + 'a
 /// A solver of the damped normal equations: (A row-major n × n, b, n) → x, `None` if singular.
 pub type LinearSolve = fn(&[f64], &[f64], usize) -> Option<Vec<f64>>;
 
+/// Which solver [`levenberg_marquardt`] uses for its damped normal equations.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DenseSolver {
+    /// Gaussian elimination with partial pivoting ([`solve`]): fastest for the model matcher's
+    /// few unknowns (BENCHMARKS.md, "Numerics").
+    #[default]
+    Elimination,
+    /// faer's Cholesky factorisation.
+    Cholesky,
+}
+
+impl DenseSolver {
+    /// The solver as a function.
+    pub fn function(self) -> LinearSolve {
+        match self {
+            DenseSolver::Elimination => solve,
+            DenseSolver::Cholesky => cholesky,
+        }
+    }
+}
+
+fn cholesky(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
+    let m = super::dense::matrix_from_rows(n, n, a).ok()?;
+    super::dense::cholesky_solve(&m, b).ok()
+}
+
 /// Options of [`levenberg_marquardt`].
 #[derive(Clone, Copy, Debug)]
 pub struct LmOptions {
@@ -17,6 +43,8 @@ pub struct LmOptions {
     pub max_iterations: usize,
     /// Stop when the relative decrease of the cost falls below this.
     pub tolerance: f64,
+    /// The solver of the damped normal equations.
+    pub solver: DenseSolver,
 }
 
 impl Default for LmOptions {
@@ -24,6 +52,7 @@ impl Default for LmOptions {
         Self {
             max_iterations: 40,
             tolerance: 1e-10,
+            solver: DenseSolver::Elimination,
         }
     }
 }
@@ -39,11 +68,12 @@ pub fn levenberg_marquardt(
     m: usize,
     opts: LmOptions,
 ) -> (Vec<f64>, f64) {
-    levenberg_marquardt_with(residuals, p0, lo, hi, m, opts, solve)
+    levenberg_marquardt_with(residuals, p0, lo, hi, m, opts, opts.solver.function())
 }
 
-/// [`levenberg_marquardt`] with another solver for the damped normal equations (the numerics
-/// benchmark compares [`solve`] with faer's decompositions through it).
+/// [`levenberg_marquardt`] with any solver of the damped normal equations (the numerics
+/// benchmark compares [`solve`] with faer's decompositions through it; `opts.solver` is
+/// ignored).
 pub fn levenberg_marquardt_with(
     residuals: &mut ResidualFn,
     p0: &[f64],

@@ -15,7 +15,7 @@ pub mod sparse;
 
 pub use dense::{solve, Eigen, Matrix, Svd};
 pub use faer;
-pub use levenberg_marquardt::{levenberg_marquardt, LmOptions, ResidualFn};
+pub use levenberg_marquardt::{levenberg_marquardt, DenseSolver, LmOptions, ResidualFn};
 pub use nnls::nnls_normal;
 pub use sparse::SparseCholesky;
 
