@@ -324,9 +324,45 @@ pub fn write_exr(path: &Path, channels: &[(&str, &Map)], precision: ExrPrecision
     })
 }
 
-/// Reads every channel of an OpenEXR file's first layer, by name (for tests and round trips).
+/// Most samples an EXR file may promise per byte of its size. Lossless EXR compressors expand
+/// far less (RLE at most 64:1, ZIP's deflate about 1032:1 per block): a header promising more
+/// is damaged, and is refused before its samples are allocated (a flipped bit in the data
+/// window can otherwise claim gigabytes).
+const MAX_EXR_EXPANSION: u64 = 4096;
+
+/// Refuses an EXR whose headers promise more sample bytes than its size can hold.
+fn check_exr_size(path: &Path) -> Result<()> {
+    let bad = |detail: String| CoreError::Image {
+        path: path.to_path_buf(),
+        detail,
+    };
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| bad(e.to_string()))?;
+    let len = std::fs::metadata(path)
+        .map_err(|source| CoreError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?
+        .len();
+    let promised: u64 = meta
+        .headers
+        .iter()
+        .map(|h| h.layer_size.area() as u64 * h.channels.bytes_per_pixel as u64)
+        .sum();
+    if promised > len.saturating_mul(MAX_EXR_EXPANSION) {
+        let size = meta.headers.first().map(|h| h.layer_size);
+        return Err(bad(format!(
+            "its header promises {} texels ({} MB of samples) in a {len}-byte file: it is damaged",
+            size.map_or("?".into(), |s| format!("{}×{}", s.width(), s.height())),
+            promised >> 20
+        )));
+    }
+    Ok(())
+}
+
+/// Reads every channel of an OpenEXR file's first layer, by name.
 pub fn read_exr_channels(path: &Path) -> Result<Vec<(String, Map)>> {
     use exr::prelude::*;
+    check_exr_size(path)?;
     let img = read_all_flat_layers_from_file(path).map_err(|e| CoreError::Image {
         path: path.to_path_buf(),
         detail: e.to_string(),

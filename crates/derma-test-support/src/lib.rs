@@ -5,6 +5,7 @@
 //! - [`skip_without_gpu`]: GPU tests skip (with a note) on machines without an adapter, but
 //!   fail where `DERMA_REQUIRE_GPU` is set (CI, on Mesa's lavapipe).
 //! - [`shared_data`]: the reference data beside the repository (`../shared/data`), or a skip.
+//! - [`quad_glb`]: a minimal valid GLB, for mesh loaders.
 
 #![warn(missing_docs)]
 
@@ -49,4 +50,48 @@ pub fn shared_data(name: &str) -> Option<PathBuf> {
         );
         None
     }
+}
+
+/// A minimal GLB (glTF 2.0 binary): one 200 mm quad with positions, UVs and indices.
+pub fn quad_glb() -> Vec<u8> {
+    let pos: [f32; 12] = [
+        0.0, 0.0, 0.0, 200.0, 0.0, 0.0, 200.0, 200.0, 0.0, 0.0, 200.0, 0.0,
+    ];
+    let uv: [f32; 8] = [0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0];
+    let idx: [u16; 6] = [0, 1, 2, 0, 2, 3];
+    let mut bin: Vec<u8> = Vec::new();
+    pos.iter()
+        .for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
+    uv.iter()
+        .for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
+    idx.iter()
+        .for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1}},"indices":2}}]}}],
+"buffers":[{{"byteLength":{}}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":32}},{{"buffer":0,"byteOffset":80,"byteLength":12}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[200,200,0]}},
+{{"bufferView":1,"componentType":5126,"count":4,"type":"VEC2"}},{{"bufferView":2,"componentType":5123,"count":6,"type":"SCALAR"}}]}}"#,
+        bin.len()
+    );
+    let mut j = json.into_bytes();
+    while j.len() % 4 != 0 {
+        j.push(b' ');
+    }
+    let total = 12 + 8 + j.len() + 8 + bin.len();
+    let mut out = Vec::new();
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(j.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&j);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
 }
