@@ -18,6 +18,7 @@ pub mod error;
 pub mod gpu;
 pub mod image_io;
 pub mod map;
+pub mod memory;
 pub mod mesh;
 pub mod numerics;
 pub mod plot;

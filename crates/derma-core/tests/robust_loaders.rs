@@ -130,7 +130,9 @@ proptest! {
 #[test]
 fn a_png_claiming_a_huge_size_is_refused_without_allocating_it() {
     // A valid 1×1 PNG header rewritten to claim 60000 × 60000 pixels (14 GB as RGB f32).
-    let mut b = valid("one.png", |p| write_png8(p, &[&Map::filled(1, 1, 0.5)]).unwrap());
+    let mut b = valid("one.png", |p| {
+        write_png8(p, &[&Map::filled(1, 1, 0.5)]).unwrap()
+    });
     b[16..20].copy_from_slice(&60000u32.to_be_bytes());
     b[20..24].copy_from_slice(&60000u32.to_be_bytes());
     // The IHDR chunk's CRC (PNG uses the same CRC-32 as .dtab) over its type and data.

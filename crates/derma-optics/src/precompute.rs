@@ -164,10 +164,24 @@ impl Grid {
                 }
             }
         }
-        if self.brdf.contains(&0) || self.profile_bins == 0 || !(self.profile_d_max_mm > 0.0) {
+        if self.brdf.contains(&0)
+            || self.profile_bins == 0
+            || !(self.profile_d_max_mm > 0.0 && self.profile_d_max_mm.is_finite())
+        {
             return Err(bad(
                 "brdf bins, profile_bins and profile_d_max_mm must be positive".into(),
             ));
+        }
+        if self.brdf.iter().any(|&b| b > crate::tally::MAX_BRDF_BINS)
+            || self.profile_bins > crate::tally::MAX_PROFILE_BINS
+        {
+            return Err(bad(format!(
+                "brdf {:?} and profile_bins {}: at most {} bins per BRDF angle and {} rings",
+                self.brdf,
+                self.profile_bins,
+                crate::tally::MAX_BRDF_BINS,
+                crate::tally::MAX_PROFILE_BINS
+            )));
         }
         Ok(())
     }

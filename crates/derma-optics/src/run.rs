@@ -67,9 +67,16 @@ impl Run {
             if b.is_empty() {
                 return Err(OpticsError::Invalid("BRDF bins must all be ≥ 1".into()));
             }
+            let most = crate::tally::MAX_BRDF_BINS;
+            if b.theta_in > most || b.theta_out > most || b.phi > most {
+                return Err(OpticsError::Invalid(format!(
+                    "BRDF bins {}×{}×{}: at most {most} per angle",
+                    b.theta_in, b.theta_out, b.phi
+                )));
+            }
         }
         if let Some(p) = self.profile {
-            if p.bins == 0 || !(p.d_max_mm > 0.0) {
+            if p.bins == 0 || p.bins > crate::tally::MAX_PROFILE_BINS || !(p.d_max_mm > 0.0) {
                 return Err(OpticsError::Invalid(
                     "radial profile needs ≥ 1 bin and D_max > 0".into(),
                 ));

@@ -91,6 +91,12 @@ impl ProfileBins {
     }
 }
 
+/// Most bins along one BRDF angle: 1/4° in zenith, 1/2° in azimuth — far finer than a million
+/// photons can fill, and a bound on the tally's size.
+pub const MAX_BRDF_BINS: usize = 360;
+/// Most rings of a radial profile.
+pub const MAX_PROFILE_BINS: usize = 1 << 16;
+
 /// Index of the per-photon totals.
 pub const R_SPECULAR: usize = 0;
 /// Index of the diffuse reflectance.

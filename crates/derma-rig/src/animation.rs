@@ -194,15 +194,22 @@ impl Curves {
         })
     }
 
-    /// Frame times from the first to the last key at `fps` (the last key included when it falls
-    /// on a frame).
-    pub fn frame_times(&self, fps: f64) -> Vec<f64> {
+    /// Number of frames from the first to the last key at `fps` (without making them).
+    pub fn frame_count(&self, fps: f64) -> usize {
         let (t0, t1) = self.span();
         if !t0.is_finite() {
-            return Vec::new();
+            return 0;
         }
-        let n = ((t1 - t0) * fps + 1e-9).floor() as usize + 1;
-        (0..n).map(|k| t0 + k as f64 / fps).collect()
+        ((t1 - t0) * fps + 1e-9).floor() as usize + 1
+    }
+
+    /// Frame times from the first to the last key at `fps` (the last key included when it falls
+    /// on a frame); see [`Curves::frame_count`] for how many.
+    pub fn frame_times(&self, fps: f64) -> Vec<f64> {
+        let t0 = self.span().0;
+        (0..self.frame_count(fps))
+            .map(|k| t0 + k as f64 / fps)
+            .collect()
     }
 
     /// The weights at time `t` as NAME=W entries.

@@ -15,6 +15,10 @@ use serde::{Deserialize, Serialize};
 use sha2::Digest;
 use std::path::{Path, PathBuf};
 
+/// Most frames of one sequence: 11.5 hours at 24 fps (a key time in milliseconds read as
+/// seconds would otherwise ask for billions).
+pub const MAX_FRAMES: usize = 1_000_000;
+
 /// The format of the colour frames.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum FrameFormat {
@@ -101,6 +105,16 @@ pub fn render_sequence(
             "frame rate",
             format!("{fps}: expected a positive rate"),
         ));
+    }
+    let count = curves.frame_count(fps);
+    if count > MAX_FRAMES {
+        let (t0, t1) = curves.span();
+        return Err(RigError::File {
+            path: curves_path.to_path_buf(),
+            detail: format!(
+                "the keys span {t0} s to {t1} s: {count} frames at {fps} fps, more than {MAX_FRAMES} (are the times in seconds?)"
+            ),
+        });
     }
     for (n, _) in &curves.weights {
         if n != "neutral" && rig.target_index(n).is_none() {

@@ -121,6 +121,15 @@ impl FieldSet {
 
     /// Defines field `name` by an expression over existing fields (e.g. "face - eyes - lips").
     pub fn define(&mut self, name: &str, expr: &str) -> Result<()> {
+        if expr.len() > MAX_EXPRESSION_LEN {
+            return Err(SkinError::Field {
+                name: name.into(),
+                detail: format!(
+                    "the expression is {} characters long; at most {MAX_EXPRESSION_LEN} are read",
+                    expr.len()
+                ),
+            });
+        }
         let ast = Parser::new(expr)
             .parse()
             .map_err(|detail| SkinError::Field {
@@ -212,9 +221,15 @@ impl Expr {
     }
 }
 
+/// Longest expression read (its tree's depth, and so the evaluation's recursion, stays small).
+const MAX_EXPRESSION_LEN: usize = 1000;
+/// Deepest nesting of parentheses, signs and calls.
+const MAX_NESTING: usize = 64;
+
 struct Parser<'a> {
     s: &'a [u8],
     i: usize,
+    depth: usize,
 }
 
 impl<'a> Parser<'a> {
@@ -222,6 +237,7 @@ impl<'a> Parser<'a> {
         Self {
             s: s.as_bytes(),
             i: 0,
+            depth: 0,
         }
     }
     fn ws(&mut self) {
@@ -261,6 +277,15 @@ impl<'a> Parser<'a> {
         Ok(e)
     }
     fn unary(&mut self) -> std::result::Result<Expr, String> {
+        self.depth += 1;
+        if self.depth > MAX_NESTING {
+            return Err(format!("nested more than {MAX_NESTING} deep"));
+        }
+        let e = self.atom();
+        self.depth -= 1;
+        e
+    }
+    fn atom(&mut self) -> std::result::Result<Expr, String> {
         match self.peek() {
             Some(b'-') => {
                 self.i += 1;

@@ -58,27 +58,16 @@ impl std::fmt::Debug for AppearanceChoice {
 /// rounded up for a margin.
 pub const BYTES_PER_TEXEL: f64 = 200.0;
 
-fn available_memory_bytes() -> Option<f64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024.0)
-}
-
 /// Fails early when a `size`² texture set would not fit in memory.
 pub fn check_memory(size: usize) -> Result<()> {
-    let need = BYTES_PER_TEXEL * (size * size) as f64;
-    if let Some(have) = available_memory_bytes() {
-        if need > 0.9 * have {
-            return Err(SkinError::TooLarge {
-                width: size,
-                height: size,
-                need_gib: need / 1073741824.0,
-                have_gib: have / 1073741824.0,
-            });
-        }
-    }
-    Ok(())
+    derma_core::memory::check_fits(BYTES_PER_TEXEL * (size * size) as f64).map_err(
+        |(need_gib, have_gib)| SkinError::TooLarge {
+            width: size,
+            height: size,
+            need_gib,
+            have_gib,
+        },
+    )
 }
 
 /// Builds a skin texture set. Defaults: the given config, the built-in head (or the config's

@@ -12,6 +12,13 @@ use crate::search::{window_fits, Matcher, Tolerance};
 use crate::texture::Texture;
 use derma_core::progress::{Job, Progress, Timing};
 
+/// Peak bytes per output texel: the canvas (values f32, codes u8, source u32 and exemplar u8 per
+/// texel), the output texture (f32 per channel) and the optimisation's weighted sums (f64 per
+/// channel and a weight), rounded up.
+fn bytes_per_texel(channels: usize) -> f64 {
+    (4 + 1 + 4 + 8) as f64 * channels as f64 + 16.0
+}
+
 /// What to synthesise.
 #[derive(Clone, Debug)]
 pub struct SynthOptions {
@@ -58,7 +65,8 @@ impl SynthOptions {
         (0..self.passes).map(|k| self.patch >> k).collect()
     }
 
-    fn validate(&self, channels: usize) -> Result<()> {
+    /// Checks the options for exemplars of `channels` channels (before any work).
+    pub(crate) fn validate(&self, channels: usize) -> Result<()> {
         if self.patch < 4 || !self.patch.is_multiple_of(2) {
             return Err(invalid(
                 "patch size",
@@ -90,6 +98,18 @@ impl SynthOptions {
         }
         if self.width == 0 || self.height == 0 {
             return Err(invalid("output size", "zero width or height"));
+        }
+        let texels = self.width as f64 * self.height as f64;
+        if let Err((need, have)) =
+            derma_core::memory::check_fits(texels * bytes_per_texel(channels))
+        {
+            return Err(invalid(
+                "output size",
+                format!(
+                    "{}×{} texels of {channels} channels need about {need:.1} GiB; {have:.1} GiB are available",
+                    self.width, self.height
+                ),
+            ));
         }
         if self.tile && (self.width < self.patch || self.height < self.patch) {
             return Err(invalid(

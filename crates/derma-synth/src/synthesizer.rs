@@ -131,6 +131,7 @@ impl<'a> Synthesizer<'a> {
     /// Runs the synthesis.
     pub fn run(self) -> Result<Synthesis> {
         let set = ExemplarSet::new(self.exemplars, self.options.patch)?;
+        self.options.validate(set.channels())?;
         let matcher = matcher_for(self.device)?;
         synthesize(
             &set,
