@@ -1,14 +1,32 @@
 #!/usr/bin/env bash
-# The project's test command (README.md; CI runs it on a fresh machine):
-# installs what the tests need, checks the committed adding-doubling references against
-# iadpython and the histogram-matching reference against scikit-image, and runs the workspace tests with the GPU tests required (on Mesa's lavapipe).
+# The project's test command (README.md; CI runs it on a fresh machine): installs what the tests
+# need; checks formatting and lints; checks the committed adding-doubling references against
+# iadpython and the histogram-matching reference against scikit-image; runs the workspace tests
+# with the GPU tests required (on Mesa's lavapipe); and runs every numbered example.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if ! ls /usr/share/vulkan/icd.d/lvp_icd*.json >/dev/null 2>&1; then
   apt-get install -y mesa-vulkan-drivers || { apt-get update && apt-get install -y mesa-vulkan-drivers; }
 fi
 python3 -m pip install --quiet iadpython scipy scikit-image
+cargo fmt --all -- --check
+cargo clippy --workspace --all-targets -- -D warnings
 python3 scripts/iad_reference.py --check
 python3 scripts/histmatch_reference.py --check
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 DERMA_REQUIRE_GPU=1 cargo test --workspace --release
+# Every numbered example runs (the Monte Carlo ones with fewer photons than their defaults).
+tmp=$(mktemp -d)
+for f in crates/*/examples/[0-9][0-9]_*.rs; do
+  crate=$(basename "$(dirname "$(dirname "$f")")")
+  ex=$(basename "$f" .rs)
+  case "$ex" in
+    01_skin_spectra) args=("$tmp/spectra.svg" 41000) ;;
+    02_appearance_check) args=(3 41000) ;;
+    *) args=() ;;
+  esac
+  echo "example $crate $ex"
+  cargo run --release -q -p "$crate" --example "$ex" -- "${args[@]}" > "$tmp/$ex.log" 2>&1 \
+    || { cat "$tmp/$ex.log"; exit 1; }
+done
+rm -rf "$tmp"

@@ -10,7 +10,12 @@ use derma_optics::{BioTexel, Device};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
-    let out = args.next().unwrap_or_else(|| "optics-spectra.svg".into());
+    let out = args.next().unwrap_or_else(|| {
+        std::env::temp_dir()
+            .join("derma-optics-spectra.svg")
+            .display()
+            .to_string()
+    });
     let photons: u64 = args.next().map_or(Ok(2_050_000), |s| s.parse())?;
     let cfg = SkinSimConfig {
         photons,

@@ -17,7 +17,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let out = std::path::PathBuf::from(
         std::env::args()
             .nth(1)
-            .unwrap_or_else(|| "rig_example".into()),
+            .unwrap_or_else(|| std::env::temp_dir().join("derma-rig-example").display().to_string()),
     );
     std::fs::create_dir_all(&out)?;
     let n = 1024;

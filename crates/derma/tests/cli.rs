@@ -588,3 +588,29 @@ fn match_lut_png_and_dtab() {
     ]);
     assert!(!ok && err.contains(".png or .dtab"), "{err}");
 }
+
+#[test]
+fn a_closed_pipe_ends_the_command_quietly() {
+    // `derma … | head`: the reader is gone before derma writes; derma must exit quietly, not
+    // panic on the broken pipe.
+    for args in [
+        vec!["skin", "--print-config"],
+        vec!["rig", "library"],
+        vec!["optics", "precompute", "--print-grid"],
+    ] {
+        let mut child = derma()
+            .args(&args)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            out.status.success() && !err.contains("panicked"),
+            "{args:?}: {:?} {err}",
+            out.status
+        );
+    }
+}
