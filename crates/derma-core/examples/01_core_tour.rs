@@ -47,7 +47,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     assert_eq!(noise, sequential);
     let map = Map::from_vec(256, 256, noise)?;
-    println!("bilinear sample at uv (0.5, 0.5): {:.4}", map.sample_uv(0.5, 0.5, true));
+    println!(
+        "bilinear sample at uv (0.5, 0.5): {:.4}",
+        map.sample_uv(0.5, 0.5, true)
+    );
 
     // Files are written to a temporary name and renamed: a crash never leaves half a PNG.
     job.stage("files", 1, Unit::Steps);
@@ -60,17 +63,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .zip(map.data())
         .map(|(a, b)| (a - b).abs())
         .fold(0.0f32, f32::max);
-    println!("16-bit PNG round trip: worst error {worst:.2e} (one code is {:.2e})", 1.0 / 65535.0);
+    println!(
+        "16-bit PNG round trip: worst error {worst:.2e} (one code is {:.2e})",
+        1.0 / 65535.0
+    );
 
     // Colour: a flat 50 % reflector under D65 is mid grey in linear sRGB.
     job.stage("colour", 1, Unit::Steps);
     let grey = reflectance_to_linear_srgb(&[0.5; N_WAVELENGTHS]);
-    println!("50 % reflector: linear sRGB {grey:.3?}, luminance {:.3}", luminance(grey));
+    println!(
+        "50 % reflector: linear sRGB {grey:.3?}, luminance {:.3}",
+        luminance(grey)
+    );
 
     // Numerics: the singular values of a 2 × 3 matrix (√12 and √10).
     job.stage("numerics", 1, Unit::Steps);
     let a = matrix_from_rows(2, 3, &[3.0, 1.0, 1.0, -1.0, 3.0, 1.0])?;
-    println!("singular values {:.6?} (expected √12 = 3.464102, √10 = 3.162278)", svd(&a)?.s);
+    println!(
+        "singular values {:.6?} (expected √12 = 3.464102, √10 = 3.162278)",
+        svd(&a)?.s
+    );
     job.note(Note::info(format!("wrote {}", png.display())));
 
     for t in job.finish().timings {

@@ -14,11 +14,12 @@ use derma_rig::{
 use derma_shading::skin_color_lut::SkinColorLut;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let out = std::path::PathBuf::from(
-        std::env::args()
-            .nth(1)
-            .unwrap_or_else(|| std::env::temp_dir().join("derma-rig-example").display().to_string()),
-    );
+    let out = std::path::PathBuf::from(std::env::args().nth(1).unwrap_or_else(|| {
+        std::env::temp_dir()
+            .join("derma-rig-example")
+            .display()
+            .to_string()
+    }));
     std::fs::create_dir_all(&out)?;
     let n = 1024;
     let rng = derma_core::rng::Philox::new(1, 0);

@@ -23,7 +23,11 @@ fn main() {
         "{:<22} {:>7}  {:<30} {:<30} {:>15}",
         "skin", "blood", "match table: base (sRGB)", "analytic: base (sRGB)", "scatter R,G,B mm"
     );
-    for (label, melanin) in [("fair (melanin 2 %)", 0.02), ("medium (10 %)", 0.10), ("dark (35 %)", 0.35)] {
+    for (label, melanin) in [
+        ("fair (melanin 2 %)", 0.02),
+        ("medium (10 %)", 0.10),
+        ("dark (35 %)", 0.35),
+    ] {
         for blood in [0.01, 0.05] {
             let bio = BioTexel {
                 melanin,
@@ -44,12 +48,18 @@ fn main() {
         }
     }
     // The rig's LUT: colour by melanin and dermal hemoglobin (eq. 7).
-    println!("\nskin-colour LUT ({}² entries), sRGB hex:", lut.options.size);
+    println!(
+        "\nskin-colour LUT ({}² entries), sRGB hex:",
+        lut.options.size
+    );
     for blood in [0.005, 0.02, 0.08] {
         let row: Vec<String> = [0.02, 0.1, 0.35]
             .iter()
             .map(|&m| hex(lut.lookup(m, blood).map(|c| c as f32)))
             .collect();
-        println!("  hemoglobin {blood:<5}  melanin 2 % / 10 % / 35 %: {}", row.join("  "));
+        println!(
+            "  hemoglobin {blood:<5}  melanin 2 % / 10 % / 35 %: {}",
+            row.join("  ")
+        );
     }
 }
