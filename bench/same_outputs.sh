@@ -22,20 +22,10 @@ time,happiness,anger
 0.1,0.6,0
 0.2,0.2,0.5
 CSV
-cat > "$in/grid.toml" <<'TOML'
-photons = 3000
-seed = 2
-brdf = [3, 3, 4]
-profile_bins = 8
-profile_d_max_mm = 4.0
-[axes]
-melanin = [0.02, 0.2]
-pheomelanin = [0.3]
-blood = [0.02]
-oxygenation = [0.75]
-stratum_corneum_um = [15.0]
-epidermis_um = [60.0]
-TOML
+# A two-node grid with coarse bins (the axes as one inline table).
+printf '%s\n' 'photons = 3000' 'seed = 2' 'brdf = [3, 3, 4]' 'profile_bins = 8' \
+  'axes = { melanin = [0.02, 0.2], pheomelanin = [0.3], blood = [0.02], oxygenation = [0.75], stratum_corneum_um = [15.0], epidermis_um = [60.0] }' \
+  > "$in/grid.toml"
 "$before" optics precompute --grid "$in/grid.toml" --out "$in/pre" --device cpu --quiet
 "$before" optics merge "$in/pre" --out "$in/pre.dtab" >/dev/null
 

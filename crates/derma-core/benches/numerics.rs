@@ -38,7 +38,7 @@ fn faer_cholesky(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
     cholesky_solve(&matrix_from_rows(n, n, a).ok()?, b).ok()
 }
 
-const SOLVERS: [(&'static str, LinearSolve); 3] = [
+const SOLVERS: [(&str, LinearSolve); 3] = [
     ("elimination", solve),
     ("faer LU", faer_lu),
     ("faer Cholesky", faer_cholesky),

@@ -135,8 +135,7 @@ mod tests {
 
     #[test]
     fn failed_write_leaves_target_untouched() {
-        let dir = std::env::temp_dir().join(format!("derma-atomic-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = derma_test_support::scratch_dir("atomic");
         let target = dir.join("a.txt");
         std::fs::write(&target, b"old").unwrap();
         let r = write_with(&target, |tmp| {
@@ -156,7 +155,7 @@ mod tests {
 
     #[test]
     fn inputs_are_spared() {
-        let dir = std::env::temp_dir().join(format!("derma-spare-{}", std::process::id()));
+        let dir = derma_test_support::scratch_dir("spare");
         let fields = dir.join("fields");
         std::fs::create_dir_all(&fields).unwrap();
         let mesh = dir.join("head.obj");

@@ -388,9 +388,7 @@ mod tests {
     use super::*;
 
     fn tmpdir(tag: &str) -> std::path::PathBuf {
-        let d = std::env::temp_dir().join(format!("derma-io-{tag}-{}", std::process::id()));
-        std::fs::create_dir_all(&d).unwrap();
-        d
+        derma_test_support::scratch_dir(&format!("io-{tag}"))
     }
 
     #[test]

@@ -314,8 +314,7 @@ mod tests {
 
     #[test]
     fn obj_without_uvs_is_a_clear_error() {
-        let d = std::env::temp_dir().join(format!("derma-mesh-{}", std::process::id()));
-        std::fs::create_dir_all(&d).unwrap();
+        let d = derma_test_support::scratch_dir("mesh");
         let p = d.join("nouv.obj");
         std::fs::write(&p, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
         let e = TriMesh::load(&p).unwrap_err().to_string();

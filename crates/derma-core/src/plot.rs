@@ -13,6 +13,21 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
 }
 
+impl Series {
+    /// A series of `points` drawn in `color` and labelled `label`.
+    pub fn new(
+        label: impl Into<String>,
+        color: impl Into<String>,
+        points: impl IntoIterator<Item = (f64, f64)>,
+    ) -> Self {
+        Self {
+            label: label.into(),
+            color: color.into(),
+            points: points.into_iter().collect(),
+        }
+    }
+}
+
 /// A line plot, rendered as SVG.
 pub struct Plot {
     /// Title above the plot.
@@ -69,6 +84,30 @@ fn esc(s: &str) -> String {
 }
 
 impl Plot {
+    /// A plot with a linear y axis (see [`Plot::with_log_y`]).
+    pub fn new(
+        title: impl Into<String>,
+        x_label: impl Into<String>,
+        y_label: impl Into<String>,
+        series: Vec<Series>,
+    ) -> Self {
+        Self {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            log_y: false,
+            series,
+        }
+    }
+
+    /// The same plot with a logarithmic y axis.
+    pub fn with_log_y(self) -> Self {
+        Self {
+            log_y: true,
+            ..self
+        }
+    }
+
     /// The plot as a standalone SVG document.
     pub fn to_svg(&self) -> String {
         let ty = |y: f64| if self.log_y { y.max(1e-30).log10() } else { y };

@@ -71,7 +71,7 @@ mod tests {
 
     #[test]
     fn sha256_of_a_known_file() {
-        let p = std::env::temp_dir().join(format!("derma-sha-{}", std::process::id()));
+        let p = derma_test_support::scratch_dir("sha").join("abc");
         std::fs::write(&p, b"abc").unwrap();
         // FIPS 180-2, appendix B.1.
         assert_eq!(

@@ -6,6 +6,7 @@ use derma_core::dtab::{Dtab, DtabAxis, DtabHeader, DtabValue};
 use derma_core::image_io::{read_grey, read_rgb, write_exr, write_png16, write_png8, ExrPrecision};
 use derma_core::mesh::TriMesh;
 use derma_core::Map;
+use derma_test_support::damaged;
 use proptest::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -24,16 +25,6 @@ fn valid(name: &str, write: impl Fn(&Path)) -> Vec<u8> {
 
 fn gradient() -> Map {
     Map::from_vec(7, 5, (0..35).map(|i| i as f32 / 34.0).collect()).unwrap()
-}
-
-/// `bytes` truncated to `cut` (as a fraction) with byte `at` xored by `flip`.
-fn damaged(bytes: &[u8], cut: f64, at: f64, flip: u8) -> Vec<u8> {
-    let mut b = bytes[..((bytes.len() as f64 * cut) as usize).min(bytes.len())].to_vec();
-    if !b.is_empty() {
-        let i = ((b.len() - 1) as f64 * at) as usize;
-        b[i] ^= flip;
-    }
-    b
 }
 
 /// Loads `bytes` as a file named `name` with every loader that reads that kind of file; only
@@ -72,18 +63,10 @@ fn table() -> Dtab {
     }
 }
 
-/// 48 cases per property in the test command; more with PROPTEST_CASES.
-fn cases() -> u32 {
-    std::env::var("PROPTEST_CASES")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(48)
-}
-
 const OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n";
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(cases()))]
+    #![proptest_config(ProptestConfig::with_cases(derma_test_support::proptest_cases(48)))]
 
     #[test]
     fn arbitrary_bytes_are_errors_not_panics(bytes in proptest::collection::vec(any::<u8>(), 0..512)) {

@@ -3,8 +3,9 @@
 //!
 //! `cargo run --release -p derma-optics --example 01_skin_spectra -- [OUT.svg] [PHOTONS]`
 
-use derma_core::plot::{Plot, Series};
+use derma_core::plot::Plot;
 use derma_core::progress::Silent;
+use derma_optics::plots::spectrum_series;
 use derma_optics::simulate::{simulate_skin, SkinSimConfig};
 use derma_optics::{BioTexel, Device};
 
@@ -36,24 +37,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "{label}: linear sRGB {:.3?}, {:.1} s",
             r.linear_srgb, r.seconds
         );
-        series.push(Series {
-            label: label.into(),
-            color: color.into(),
-            points: r
-                .wavelengths_nm
-                .iter()
-                .copied()
-                .zip(r.r_diffuse.iter().copied())
-                .collect(),
-        });
+        series.push(spectrum_series(label, color, &r, &r.r_diffuse));
     }
-    let plot = Plot {
-        title: format!("Skin diffuse reflectance, Monte Carlo ({photons} photons each)"),
-        x_label: "wavelength (nm)".into(),
-        y_label: "diffuse reflectance".into(),
-        log_y: false,
+    let plot = Plot::new(
+        format!("Skin diffuse reflectance, Monte Carlo ({photons} photons each)"),
+        "wavelength (nm)",
+        "diffuse reflectance",
         series,
-    };
+    );
     derma_core::atomic::write_bytes(std::path::Path::new(&out), plot.to_svg().as_bytes())?;
     println!("wrote {out}");
     Ok(())

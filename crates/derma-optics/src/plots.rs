@@ -10,38 +10,28 @@ const COLORS: [&str; 6] = [
     "#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b",
 ];
 
+/// A spectrum of `r` (one value per wavelength sample) as a plot series.
+pub fn spectrum_series(label: &str, color: &str, r: &SkinResult, values: &[f64]) -> Series {
+    Series::new(
+        label,
+        color,
+        r.wavelengths_nm.iter().copied().zip(values.iter().copied()),
+    )
+}
+
 /// The plots of one skin simulation: diffuse and specular spectra (`spectrum.svg`), the
 /// sampled BRDF in the plane of incidence at four incident angles (`brdf.svg`), and the radial
 /// exit profile per channel (`profile.svg`).
 pub fn skin_plots(r: &SkinResult) -> [(&'static str, Plot); 3] {
-    let spectrum = Plot {
-        title: "Diffuse reflectance of the skin specimen".into(),
-        x_label: "wavelength (nm)".into(),
-        y_label: "reflectance".into(),
-        log_y: false,
-        series: vec![
-            Series {
-                label: "diffuse".into(),
-                color: COLORS[0].into(),
-                points: r
-                    .wavelengths_nm
-                    .iter()
-                    .copied()
-                    .zip(r.r_diffuse.iter().copied())
-                    .collect(),
-            },
-            Series {
-                label: "specular".into(),
-                color: COLORS[1].into(),
-                points: r
-                    .wavelengths_nm
-                    .iter()
-                    .copied()
-                    .zip(r.r_specular.iter().copied())
-                    .collect(),
-            },
+    let spectrum = Plot::new(
+        "Diffuse reflectance of the skin specimen",
+        "wavelength (nm)",
+        "reflectance",
+        vec![
+            spectrum_series("diffuse", COLORS[0], r, &r.r_diffuse),
+            spectrum_series("specular", COLORS[1], r, &r.r_specular),
         ],
-    };
+    );
     let b = r.brdf_bins;
     // In-plane slices (Δφ bins nearest 0 and π) for a few incident angles, luminance-like green.
     let mut brdf_series = Vec::new();
@@ -68,31 +58,30 @@ pub fn skin_plots(r: &SkinResult) -> [(&'static str, Plot); 3] {
             points: pts,
         });
     }
-    let brdf = Plot {
-        title: "Sampled BRDF, plane of incidence (G channel)".into(),
-        x_label: "outgoing zenith (°; negative = mirror side)".into(),
-        y_label: "BRDF (1/sr)".into(),
-        log_y: false,
-        series: brdf_series,
-    };
+    let brdf = Plot::new(
+        "Sampled BRDF, plane of incidence (G channel)",
+        "outgoing zenith (°; negative = mirror side)",
+        "BRDF (1/sr)",
+        brdf_series,
+    );
     let pb = r.profile_bins;
     let dr = pb.d_max_mm / pb.bins as f64;
     let names = ["R", "G", "B"];
-    let profile = Plot {
-        title: "Radial exit profile R(r)".into(),
-        x_label: "r (mm)".into(),
-        y_label: "R(r) (1/mm²)".into(),
-        log_y: true,
-        series: (0..3)
-            .map(|c| Series {
-                label: names[c].into(),
-                color: ["#d62728", "#2ca02c", "#1f77b4"][c].into(),
-                points: (0..pb.bins)
-                    .map(|i| ((i as f64 + 0.5) * dr, r.profile_rgb[i][c]))
-                    .collect(),
+    let profile = Plot::new(
+        "Radial exit profile R(r)",
+        "r (mm)",
+        "R(r) (1/mm²)",
+        (0..3)
+            .map(|c| {
+                Series::new(
+                    names[c],
+                    ["#d62728", "#2ca02c", "#1f77b4"][c],
+                    (0..pb.bins).map(|i| ((i as f64 + 0.5) * dr, r.profile_rgb[i][c])),
+                )
             })
             .collect(),
-    };
+    )
+    .with_log_y();
     [
         ("spectrum.svg", spectrum),
         ("brdf.svg", brdf),

@@ -9,18 +9,10 @@ use derma_optics::slab::parse_layer;
 use proptest::prelude::*;
 use std::path::Path;
 
-/// 48 cases per property in the test command; more with PROPTEST_CASES.
-fn cases() -> u32 {
-    std::env::var("PROPTEST_CASES")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(48)
-}
-
 const GRID: &str = "photons = 200\nseed = 1\nbrdf = [2, 2, 2]\nprofile_bins = 4\n[axes]\nmelanin = [0.05]\npheomelanin = [0.3]\nblood = [0.02]\noxygenation = [0.7]\nstratum_corneum_um = [15.0]\nepidermis_um = [60.0]\n";
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(cases()))]
+    #![proptest_config(ProptestConfig::with_cases(derma_test_support::proptest_cases(48)))]
 
     #[test]
     fn arbitrary_text_is_not_a_panic(text in "\\PC{0,200}") {
@@ -64,12 +56,7 @@ proptest! {
             std::fs::copy(&entry, dir.join("good.json")).unwrap();
         }
         let good = std::fs::read(dir.join("good.json")).unwrap();
-        let mut b = good[..((good.len() as f64 * cut) as usize)].to_vec();
-        if !b.is_empty() {
-            let i = ((b.len() - 1) as f64 * at) as usize;
-            b[i] ^= flip;
-        }
-        std::fs::write(&entry, &b).unwrap();
+        std::fs::write(&entry, derma_test_support::damaged(&good, cut, at, flip)).unwrap();
         let _ = precompute::merge(std::slice::from_ref(&dir));
     }
 }

@@ -173,8 +173,7 @@ mod tests {
 
     #[test]
     fn exr_channels_by_name_png_by_scale_and_hemoglobin_round_trips() {
-        let dir = std::env::temp_dir().join(format!("derma-rig-maps-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = derma_test_support::scratch_dir("rig-maps");
         let lut = LutOptions::default();
         let mut h = Map::filled(4, 3, 0.02);
         h.set(3, 2, 0.3);

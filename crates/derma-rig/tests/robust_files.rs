@@ -6,17 +6,10 @@ use derma_core::Map;
 use derma_rig::animation::Curves;
 use derma_rig::{rig_dir, BasisOptions, GlobalScale, Rig, TargetSource, TargetSpec, WeightSpec};
 use derma_shading::skin_color_lut::SkinColorLut;
+use derma_test_support::damaged;
 use proptest::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
-
-/// 32 cases per property in the test command; more with PROPTEST_CASES.
-fn cases() -> u32 {
-    std::env::var("PROPTEST_CASES")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(32)
-}
 
 fn scratch(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("derma-robust-rig-{}", std::process::id()));
@@ -76,17 +69,8 @@ fn walk(dir: &Path) -> Vec<PathBuf> {
     out
 }
 
-fn damaged(bytes: &[u8], cut: f64, at: f64, flip: u8) -> Vec<u8> {
-    let mut b = bytes[..((bytes.len() as f64 * cut) as usize).min(bytes.len())].to_vec();
-    if !b.is_empty() {
-        let i = ((b.len() - 1) as f64 * at) as usize;
-        b[i] ^= flip;
-    }
-    b
-}
-
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(cases()))]
+    #![proptest_config(ProptestConfig::with_cases(derma_test_support::proptest_cases(32)))]
 
     #[test]
     fn damaged_rig_files_are_errors_or_a_valid_rig(

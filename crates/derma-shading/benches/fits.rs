@@ -13,17 +13,7 @@ use derma_optics::precompute::{self, Grid, Shard};
 use derma_shading::brdf_fit::FitOptions;
 use derma_shading::match_table::{fit_table, MatchOptions};
 
-const GRID: &str = r#"
-photons = 20000
-seed = 3
-[axes]
-melanin = [0.02, 0.2]
-pheomelanin = [0.3]
-blood = [0.01, 0.08]
-oxygenation = [0.75]
-stratum_corneum_um = [15.0]
-epidermis_um = [60.0]
-"#;
+const GRID: &str = "photons = 20000\nseed = 3\naxes = { melanin = [0.02, 0.2], pheomelanin = [0.3], blood = [0.01, 0.08], oxygenation = [0.75], stratum_corneum_um = [15.0], epidermis_um = [60.0] }\n";
 
 fn fits(c: &mut Criterion) {
     let dir = std::env::temp_dir().join(format!("derma-bench-fits-{}", std::process::id()));

@@ -168,15 +168,15 @@ pub fn write_plots(
                 });
             }
             let theta_deg = (ti as f64 + 0.5) * 90.0 / bins.theta_in as f64;
-            let plot = Plot {
-                title: format!(
+            let plot = Plot::new(
+                format!(
                     "BRDF in the plane of incidence, θi ≈ {theta_deg:.0}°, node {node} ({bio})"
                 ),
-                x_label: "θo (°): negative towards the light, positive on the mirror side".into(),
-                y_label: "BRDF luminance (1/sr)".into(),
-                log_y: true,
+                "θo (°): negative towards the light, positive on the mirror side",
+                "BRDF luminance (1/sr)",
                 series,
-            };
+            )
+            .with_log_y();
             let name = format!("brdf-node{node}-theta{theta_deg:.0}.svg");
             derma_core::atomic::write_bytes(&dir.join(&name), plot.to_svg().as_bytes())?;
             count += 1;
@@ -233,13 +233,13 @@ pub fn write_plots(
                     .collect(),
             });
         }
-        let plot = Plot {
-            title: format!("Radial diffusion profile, node {node} ({bio})"),
-            x_label: "r (mm)".into(),
-            y_label: "R(r) (1/mm²)".into(),
-            log_y: true,
+        let plot = Plot::new(
+            format!("Radial diffusion profile, node {node} ({bio})"),
+            "r (mm)",
+            "R(r) (1/mm²)",
             series,
-        };
+        )
+        .with_log_y();
         let name = format!("profile-node{node}.svg");
         derma_core::atomic::write_bytes(&dir.join(&name), plot.to_svg().as_bytes())?;
         count += 1;

@@ -202,8 +202,7 @@ mod tests {
 
     #[test]
     fn detail_adds_relief_of_the_configured_rms_and_modulates_melanin_about_one() {
-        let dir = std::env::temp_dir().join(format!("derma-detail-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = derma_test_support::scratch_dir("detail");
         // Registered exemplars: bumps in the height, the same bumps darker in the colour.
         let n = 72;
         let bump = |x: usize, y: usize| {
@@ -270,8 +269,7 @@ mod tests {
 
     #[test]
     fn unregistered_exemplars_are_refused_by_name() {
-        let dir = std::env::temp_dir().join(format!("derma-detail-bad-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = derma_test_support::scratch_dir("detail-bad");
         derma_core::image_io::write_png16(&dir.join("h.png"), &[&Map::filled(64, 64, 0.5)])
             .unwrap();
         let m = Map::filled(80, 64, 0.5);

@@ -8,14 +8,6 @@ use derma_skin::config::SkinConfig;
 use derma_skin::field::FieldSet;
 use proptest::prelude::*;
 
-/// 64 cases per property in the test command; more with PROPTEST_CASES.
-fn cases() -> u32 {
-    std::env::var("PROPTEST_CASES")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(64)
-}
-
 fn fields() -> FieldSet {
     let mut f = FieldSet::default();
     f.scalars.insert("face".into(), Map::filled(4, 4, 0.5));
@@ -36,7 +28,7 @@ const KEYS: [(&str, &str); 8] = [
 ];
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(cases()))]
+    #![proptest_config(ProptestConfig::with_cases(derma_test_support::proptest_cases(64)))]
 
     #[test]
     fn arbitrary_text_is_not_a_panic(text in "\\PC{0,200}") {

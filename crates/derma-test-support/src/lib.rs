@@ -6,6 +6,7 @@
 //!   fail where `DERMA_REQUIRE_GPU` is set (CI, on Mesa's lavapipe).
 //! - [`shared_data`]: the reference data beside the repository (`../shared/data`), or a skip.
 //! - [`quad_glb`]: a minimal valid GLB, for mesh loaders.
+//! - [`proptest_cases`]: how many cases a property test runs.
 
 #![warn(missing_docs)]
 
@@ -33,6 +34,26 @@ pub fn skip_without_gpu() -> bool {
             true
         }
     }
+}
+
+/// `bytes` truncated to the fraction `cut` of its length, with the byte at fraction `at` of
+/// what remains xored by `flip`: a damaged file for loaders to refuse.
+pub fn damaged(bytes: &[u8], cut: f64, at: f64, flip: u8) -> Vec<u8> {
+    let mut b = bytes[..((bytes.len() as f64 * cut) as usize).min(bytes.len())].to_vec();
+    if !b.is_empty() {
+        let i = ((b.len() - 1) as f64 * at) as usize;
+        b[i] ^= flip;
+    }
+    b
+}
+
+/// Cases per property test: `default` in the test command, or `PROPTEST_CASES` for a deeper
+/// run (`PROPTEST_CASES=20000 cargo test --release robust`).
+pub fn proptest_cases(default: u32) -> u32 {
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
 }
 
 /// `../shared/data/NAME` beside the workspace, or `None` after a note on stderr (tests that

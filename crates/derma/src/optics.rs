@@ -37,8 +37,17 @@ pub struct SlabArgs {
     /// Refractive index below the slab.
     #[arg(long, default_value_t = 1.0)]
     below: f64,
+    #[command(flatten)]
+    run: RunArgs,
+}
+
+/// What every simulation takes: how many photons, their seed, where they run, the output form.
+#[derive(Args)]
+pub struct RunArgs {
+    /// Photons to trace.
     #[arg(long, default_value_t = 1_000_000)]
     photons: u64,
+    /// Seed of the photons' random streams.
     #[arg(long, default_value_t = 1)]
     seed: u64,
     #[command(flatten)]
@@ -68,21 +77,14 @@ pub struct SimulateArgs {
     /// Epidermis thickness (µm).
     #[arg(long, default_value_t = BioTexel::FAIR.epidermis_um)]
     epidermis_um: f32,
-    #[arg(long, default_value_t = 1_000_000)]
-    photons: u64,
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
     #[command(flatten)]
-    device: DeviceArg,
+    run: RunArgs,
     /// Directory for result.json (and the plots).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Also write spectrum.svg, brdf.svg and profile.svg.
     #[arg(long, requires = "out")]
     plot: bool,
-    /// Print the whole result as JSON.
-    #[arg(long)]
-    json: bool,
 }
 
 #[derive(Args)]
@@ -127,11 +129,15 @@ fn slab(a: SlabArgs) -> Result<()> {
         .iter()
         .map(|l| parse_layer(l))
         .collect::<std::result::Result<Vec<_>, _>>()?;
-    let run = Run::totals(slab_stack(layers, a.above, a.below), a.photons, a.seed);
+    let run = Run::totals(
+        slab_stack(layers, a.above, a.below),
+        a.run.photons,
+        a.run.seed,
+    );
     let t0 = Instant::now();
-    let (tally, device) = derma_optics::backend::run_on(&run, a.device.device, &Silent)?;
+    let (tally, device) = derma_optics::backend::run_on(&run, a.run.device.device, &Silent)?;
     let r = SlabResult::from_tally(&tally, t0.elapsed().as_secs_f64(), device.name());
-    if a.json {
+    if a.run.json {
         return line(serde_json::to_string(&r)?);
     }
     let s = &r.stderr;
@@ -167,16 +173,16 @@ fn simulate(a: SimulateArgs, bars: &Bars) -> Result<()> {
         epidermis_um: a.epidermis_um,
     };
     let cfg = SkinSimConfig {
-        photons: a.photons,
-        seed: a.seed,
+        photons: a.run.photons,
+        seed: a.run.seed,
         ..SkinSimConfig::default()
     };
-    let r = simulate_skin(&bio, &cfg, a.device.device, bars)?;
+    let r = simulate_skin(&bio, &cfg, a.run.device.device, bars)?;
     bars.finish();
     if let Some(dir) = &a.out {
         derma_optics::plots::write_result(&r, dir, a.plot)?;
     }
-    if a.json {
+    if a.run.json {
         return line(serde_json::to_string(&r)?);
     }
     let c = r.linear_srgb;

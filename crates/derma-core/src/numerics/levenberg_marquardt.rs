@@ -59,7 +59,7 @@ impl Default for LmOptions {
 
 /// Minimises ½‖r(p)‖² within the box [lo, hi] (steps are clipped to it). `residuals(p, r, jac)`
 /// fills r (length m) and, when `jac` is given, the m × n Jacobian row-major. Returns the best
-/// parameters and ‖r‖².
+/// parameters and ‖r‖². `opts.solver` solves the damped normal equations.
 pub fn levenberg_marquardt(
     residuals: &mut ResidualFn,
     p0: &[f64],
@@ -68,21 +68,7 @@ pub fn levenberg_marquardt(
     m: usize,
     opts: LmOptions,
 ) -> (Vec<f64>, f64) {
-    levenberg_marquardt_with(residuals, p0, lo, hi, m, opts, opts.solver.function())
-}
-
-/// [`levenberg_marquardt`] with any solver of the damped normal equations (the numerics
-/// benchmark compares [`solve`] with faer's decompositions through it; `opts.solver` is
-/// ignored).
-pub fn levenberg_marquardt_with(
-    residuals: &mut ResidualFn,
-    p0: &[f64],
-    lo: &[f64],
-    hi: &[f64],
-    m: usize,
-    opts: LmOptions,
-    linear_solve: LinearSolve,
-) -> (Vec<f64>, f64) {
+    let linear_solve = opts.solver.function();
     let n = p0.len();
     let mut p: Vec<f64> = (0..n).map(|i| p0[i].clamp(lo[i], hi[i])).collect();
     let mut r = vec![0.0; m];
