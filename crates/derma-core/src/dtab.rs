@@ -1,5 +1,6 @@
-//! `.dtab`, derma's binary table (DESIGN.md §3): a grid over named axes, a fixed-length f32
-//! vector per grid node, little-endian, checked by CRC-32, with a JSON sidecar for humans.
+//! `.dtab`, derma's binary table (the table format of the project's design): a grid over named
+//! axes, a fixed-length f32 vector per grid node, little-endian, checked by CRC-32, with a JSON
+//! sidecar for humans.
 //!
 //! Layout: b"DTAB", u32 version (1), u32 header length, header (JSON: axes with node values,
 //! value names and lengths, free-form metadata), f32 payload (node-major, axes row-major with

@@ -7,6 +7,17 @@
 //! - [`image_io`]: PNG (8/16-bit) and OpenEXR reading and atomic writing.
 //! - [`mesh`]: OBJ and glTF/GLB loading, unit detection, and [`raster`]: UV-space rasterisation
 //!   of a mesh into per-texel surface points.
+//! - [`progress`]: the one way a long job reports (stages, units, steps, notes, timings).
+//! - [`gpu`]: the one device choice ([`Device`]: auto, cpu, gpu), the shared wgpu context and
+//!   typed [`GpuError`]s.
+//! - [`numerics`]: the one numerics module (small dense solves, Levenberg–Marquardt, NNLS;
+//!   faer's decompositions).
+//! - [`atomic`], [`report`], [`memory`], [`dtab`], [`plot`]: atomic outputs that spare inputs,
+//!   reports with hashes, memory checks, derma's table format, SVG plots.
+//!
+//! Data flow: every crate reads inputs through [`image_io`] and [`mesh`], draws its random
+//! numbers from [`rng`], reports through [`progress`], runs on the [`Device`] of [`gpu`] and
+//! writes through [`atomic`].
 
 #![warn(missing_docs)]
 
@@ -28,4 +39,6 @@ pub mod report;
 pub mod rng;
 
 pub use error::{CoreError, Result};
+pub use gpu::{Device, GpuError};
 pub use map::Map;
+pub use progress::{Note, Progress, Silent, Unit};

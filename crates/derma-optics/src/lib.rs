@@ -5,6 +5,12 @@
 //! thesis §4.4–4.5 ([`transport`]) on the CPU ([`run`]) and the GPU ([`gpu`]), its tallies
 //! ([`tally`]: sampled BRDF, spectrum, radial profile, absorption per layer and chromophore),
 //! and the precompute grid over bio parameters ([`precompute`]).
+//!
+//! Data flow: a [`BioTexel`] → [`specimen::skin_stacks`] (a [`Stack`] per wavelength) →
+//! [`simulate::simulate_skin`] on a [`Device`] ([`backend::run_on`]: [`run::run_cpu`] or
+//! [`gpu::run_gpu`], the same random stream per photon) → a [`Tally`] → a
+//! [`simulate::SkinResult`] (spectrum, colour, BRDF, profile; [`plots`] draws them). Over a grid:
+//! [`precompute::run_shard`] per shard → [`precompute::merge`] → a `.dtab` for derma-shading.
 
 #![warn(missing_docs)]
 
@@ -32,6 +38,7 @@ pub use derma_core::gpu::Device;
 pub use error::{OpticsError, Result};
 pub use layer::{Bottom, Layer, Stack, Surface};
 pub use run::Run;
+pub use simulate::{simulate_skin, SkinResult, SkinSimConfig};
 pub use tally::Tally;
 
 /// Most layers a stack may have (the GPU kernel's fixed arrays).

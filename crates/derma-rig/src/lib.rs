@@ -9,8 +9,11 @@
 //!
 //! Data flow: neutral map + targets (maps or the built-in [`expression`] library) →
 //! [`basis::Rig::build`] → [`rig_dir::save`] (run-time textures + rig.json) →
-//! [`evaluate::hemoglobin`] / [`evaluate::color`] per frame, or [`evaluate::FramePlan`] for
-//! real-time frames; [`animation`] samples keyframed weight curves.
+//! [`evaluate::hemoglobin`] / [`evaluate::color`] per frame ([`evaluate_frame`] on the CPU or
+//! the GPU), or [`evaluate::FramePlan`] for real-time frames; [`animation`] samples keyframed
+//! weight curves and [`sequence`] renders them to a resumable image sequence; [`from_files`]
+//! builds a rig directory from files, [`maps`] reads and writes the maps, [`preview`] shows a
+//! frame on the face template.
 
 #![warn(missing_docs)]
 
@@ -30,5 +33,7 @@ pub mod upsample;
 pub mod weights;
 
 pub use basis::{BasisOptions, Rig, TargetSource, TargetSpec, TransferMode};
+pub use evaluate::{evaluate_frame, FramePlan};
+pub use sequence::{render_sequence, SequenceOptions};
 pub use error::{Result, RigError};
 pub use weights::{GlobalScale, Normalization, WeightSpec};

@@ -1,11 +1,18 @@
-//! From biology to render parameters.
+//! From biology to render parameters: what colour and subsurface scattering the skin that
+//! derma paints has, and how render BRDF models match the optics' simulated skin.
 //!
-//! The [`Appearance`] trait turns the bio parameters derma paints per texel (melanin, blood,
-//! oxygenation, layer thicknesses…) into what a renderer takes. Its first implementation,
-//! [`SpectralKubelkaMunk`], computes a layered Kubelka–Munk diffuse reflectance per wavelength
-//! from published chromophore spectra ([`chromophore`]) and integrates it with the CIE 1931
-//! observer under D65 to linear sRGB. A lookup table with simplex interpolation
-//! ([`lut`]) makes it fast enough for 16-megapixel texture sets.
+//! - [`Appearance`]: bio parameters ([`BioTexel`]) → base colour and optional [`Subsurface`].
+//!   [`TableAppearance`] (the default) interpolates a [`MatchTable`] fitted to derma's Monte Carlo
+//!   skin; [`SpectralKubelkaMunk`] is the analytic alternative (chromophore spectra, layered
+//!   Kubelka–Munk, CIE 1931 under D65, served from a simplex [`lut`]).
+//! - Model matching (thesis §4.6): a precompute table from derma-optics →
+//!   [`match_table::fit_table`] fits every render BRDF model ([`model_kind`], one module each:
+//!   [`ggx`], [`ashikhmin_shirley`], [`kelemen`], [`skin_dual_lobe`]; [`brdf_fit`] with
+//!   [`annealing`] and derma-core's Levenberg–Marquardt) and the subsurface profiles
+//!   ([`burley`], [`sum_of_gaussians`]) per entry → a match table `.dtab` (the committed one is
+//!   `data/match-table.dtab`), with [`match_report`]'s residuals and plots.
+//! - [`SkinColorLut`]: melanin × hemoglobin → colour (Jimenez et al. 2010), simulated with the
+//!   same optics; the rig colours with it.
 
 #![warn(missing_docs)]
 
@@ -35,5 +42,7 @@ pub mod table_appearance;
 pub use appearance::{Appearance, BioTexel, Subsurface};
 pub use error::{Result, ShadingError};
 pub use match_table::MatchTable;
+pub use model_kind::ModelKind;
+pub use skin_color_lut::{LutOptions, SkinColorLut};
 pub use spectral_km::{SkinLayers, SpectralKubelkaMunk};
 pub use table_appearance::TableAppearance;

@@ -1,6 +1,7 @@
 //! Probability fields and vector fields (thesis §5.1, §5.3.7): greyscale maps in UV space read as
-//! densities per unit surface area (fixing the thesis' per-texel bias, DESIGN §3), RGB maps read
-//! as vectors, and a small expression language to composite them (thesis §7.5).
+//! densities per unit surface area (fixing the per-texel bias the thesis notes, by weighting
+//! with texel area), RGB maps read as vectors, and a small expression language to composite
+//! them (thesis §7.5).
 
 use crate::{Result, SkinError};
 use derma_core::image_io;

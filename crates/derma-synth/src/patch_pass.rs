@@ -26,7 +26,7 @@ use crate::search::{Query, Search, Tolerance, MAX_PENALTY_TOTAL};
 use derma_core::progress::Unit;
 use derma_core::rng::Philox;
 
-/// Philox stream of the initial noise (DESIGN.md: one stream per random decision).
+/// Philox stream of the initial noise (one stream per random decision, as every draw in derma).
 const NOISE_STREAM: u32 = 0x5e_0001;
 /// Philox stream of the salts of the near-best choice.
 const PICK_STREAM: u32 = 0x5e_0002;
