@@ -33,7 +33,7 @@ pub mod upsample;
 pub mod weights;
 
 pub use basis::{BasisOptions, Rig, TargetSource, TargetSpec, TransferMode};
+pub use error::{Result, RigError};
 pub use evaluate::{evaluate_frame, FramePlan};
 pub use sequence::{render_sequence, SequenceOptions};
-pub use error::{Result, RigError};
 pub use weights::{GlobalScale, Normalization, WeightSpec};
