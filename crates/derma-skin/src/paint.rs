@@ -150,7 +150,10 @@ pub fn paint(
                     n: surface.normal(i),
                 };
                 for (kind, cursor) in kinds.iter().zip(cursors.iter_mut()) {
-                    kind.paint(cursor.query(q.p), &q, s);
+                    let ids = cursor.query(q.p);
+                    if !ids.is_empty() {
+                        kind.paint(ids, &q, s);
+                    }
                 }
                 s.tissue.melanin = s.tissue.melanin.clamp(0.0, 1.0);
                 s.tissue.pheomelanin = s.tissue.pheomelanin.clamp(0.0, 1.0);
