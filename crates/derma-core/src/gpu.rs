@@ -153,11 +153,6 @@ pub fn context() -> Result<&'static Gpu, GpuError> {
     GPU.get_or_init(open).as_ref().map_err(Clone::clone)
 }
 
-/// The name of the GPU when one can be opened.
-pub fn available() -> Option<&'static str> {
-    context().ok().map(|g| g.name.as_str())
-}
-
 /// GPU objects a crate builds once per process (its pipelines), on the shared context.
 pub struct GpuCell<T> {
     cell: OnceLock<Result<T, GpuError>>,

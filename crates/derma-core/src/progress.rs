@@ -171,7 +171,7 @@ impl<'a> Job<'a> {
     }
 
     /// Ends the current stage (its time is recorded) without starting another.
-    pub fn end_stage(&self) {
+    fn end_stage(&self) {
         let mut s = self.state();
         if let Some((name, t0)) = s.current.take() {
             s.log.timings.push(Timing {
@@ -179,20 +179,6 @@ impl<'a> Job<'a> {
                 seconds: t0.elapsed().as_secs_f64(),
             });
         }
-    }
-
-    /// Records `seconds` for `stage` without running it through the sink (a stage timed
-    /// elsewhere, such as the whole job).
-    pub fn record(&self, stage: &str, seconds: f64) {
-        self.state().log.timings.push(Timing {
-            stage: stage.to_string(),
-            seconds,
-        });
-    }
-
-    /// The timings and notes so far (the current stage not included).
-    pub fn log(&self) -> Log {
-        self.state().log.clone()
     }
 
     /// Ends the current stage and returns the timings and notes.
