@@ -451,7 +451,7 @@ mod tests {
     }
 
     #[test]
-    fn colour_image_is_flagged_and_converted() {
+    fn color_image_is_flagged_and_converted() {
         let d = tmpdir("col");
         let r = Map::filled(2, 2, 1.0);
         let z = Map::filled(2, 2, 0.0);

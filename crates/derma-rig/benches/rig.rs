@@ -86,7 +86,7 @@ fn frame(c: &mut Criterion) {
     g.bench_function("exact_hemoglobin", |b| {
         b.iter(|| hemoglobin(&rig, &weights, 1.1).unwrap())
     });
-    g.bench_function("exact_hemoglobin_and_colour", |b| {
+    g.bench_function("exact_hemoglobin_and_color", |b| {
         b.iter(|| color(&hemoglobin(&rig, &weights, 1.1).unwrap(), &melanin, &lut).unwrap())
     });
     g.finish();

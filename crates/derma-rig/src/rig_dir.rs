@@ -8,6 +8,7 @@ use crate::error::{Result, RigError};
 use derma_core::dtab::Dtab;
 use derma_core::image_io::{read_exr_channels, write_exr, write_png16, ExrPrecision};
 use derma_core::Map;
+use derma_optics::bio::names;
 use derma_shading::skin_color_lut::SkinColorLut;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -119,7 +120,7 @@ pub fn save(rig: &Rig, lut: &SkinColorLut, dir: &Path) -> Result<RigJson> {
     if let Some(m) = &rig.melanin {
         write_exr(
             &dir.join("melanin.exr"),
-            &[("melanin", m)],
+            &[(names::MELANIN, m)],
             ExrPrecision::F32,
         )?;
     }
@@ -251,7 +252,7 @@ pub fn load(dir: &Path) -> Result<(Rig, SkinColorLut, RigJson)> {
     let melanin = match &json.files.melanin {
         Some(f) => {
             let (p, c) = read(f)?;
-            Some(channel(&p, &c, "melanin", full)?)
+            Some(channel(&p, &c, names::MELANIN, full)?)
         }
         None => None,
     };

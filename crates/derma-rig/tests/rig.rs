@@ -328,7 +328,7 @@ fn flat_neutral_regions_do_not_spike() {
 }
 
 #[test]
-fn save_load_round_trip_and_frame_path_matches_the_exact_colour() {
+fn save_load_round_trip_and_frame_path_matches_the_exact_color() {
     let w = 128;
     let n = blood_map(w, w, 30, 0.012);
     let mel = Map::from_vec(

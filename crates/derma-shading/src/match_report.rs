@@ -10,6 +10,7 @@ use crate::{burley, sum_of_gaussians};
 use derma_core::color::luminance;
 use derma_core::dtab::Dtab;
 use derma_core::plot::{Plot, Series};
+use derma_optics::bio::names;
 use std::path::Path;
 
 /// The per-entry residuals of a fitted table as CSV: node, its axis values, then each model's
@@ -49,7 +50,10 @@ pub fn residual_csv(table: &Dtab, opts: &MatchOptions) -> String {
 /// axis at its middle node.
 pub fn default_plot_nodes(pre: &Dtab) -> Vec<usize> {
     let axes = &pre.header.axes;
-    let mel = axes.iter().position(|a| a.name == "melanin").unwrap_or(0);
+    let mel = axes
+        .iter()
+        .position(|a| a.name == names::MELANIN)
+        .unwrap_or(0);
     let n_mel = axes[mel].values.len();
     let mut picks: Vec<usize> = vec![0, n_mel / 2, n_mel - 1];
     picks.dedup();
@@ -254,7 +258,7 @@ pub fn describe_node(pre: &Dtab, node: usize) -> String {
         .node_indices(node)
         .iter()
         .zip(axes)
-        .filter(|(_, a)| a.name == "melanin" || a.name == "blood")
+        .filter(|(_, a)| a.name == names::MELANIN || a.name == names::BLOOD)
         .map(|(&i, a)| format!("{} {}", a.name, a.values[i]))
         .collect::<Vec<_>>()
         .join(", ")

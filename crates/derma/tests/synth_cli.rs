@@ -39,7 +39,7 @@ fn joint_channels_are_written_beside_the_output_and_a_seed_repeats_bytes() {
     let d = tmp("joint");
     let (h, c) = exemplars(&d, 72, 0.5);
     let out = d.join("o.png");
-    let chan = format!("colour={}", s(&c));
+    let chan = format!("color={}", s(&c));
     let args = [
         "--exemplar",
         s(&h),
@@ -58,14 +58,14 @@ fn joint_channels_are_written_beside_the_output_and_a_seed_repeats_bytes() {
     let (ok, _, err) = run(&args);
     assert!(ok, "{err}");
     let grey = read_rgb(&out).unwrap();
-    let colour = read_rgb(&d.join("o_colour.png")).unwrap();
+    let color = read_rgb(&d.join("o_color.png")).unwrap();
     assert_eq!(
         (grey.channels[0].width(), grey.channels[0].height()),
         (100, 80)
     );
-    assert!(colour.is_color);
+    assert!(color.is_color);
     // Registered: the colour is (within 8-bit rounding) 0.8 × the relief in green.
-    let (hv, gv) = (grey.channels[0].data(), colour.channels[1].data());
+    let (hv, gv) = (grey.channels[0].data(), color.channels[1].data());
     let worst = hv
         .iter()
         .zip(gv)

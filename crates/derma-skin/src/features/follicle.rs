@@ -88,7 +88,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn follicle_colours_the_stalk_and_reduces_blood() {
+    fn follicle_colors_the_stalk_and_reduces_blood() {
         let cfg = crate::config::FollicleConfig::default();
         let prm = FollicleParams {
             hair_color: [0.1, 0.05, 0.02],

@@ -108,7 +108,7 @@ mod tests {
     }
 
     #[test]
-    fn extra_colour_composites_over() {
+    fn extra_color_composites_over() {
         let mut s = BioSample::default();
         s.add_extra([1.0, 0.0, 0.0], 0.5);
         s.add_extra([0.0, 0.0, 1.0], 0.5);
