@@ -60,6 +60,12 @@ fn parse_device(s: &str) -> Result<derma_core::gpu::Device, String> {
 }
 
 fn main() {
+    // Mesa's Vulkan drivers print "XDG_RUNTIME_DIR is invalid or not set" (looking like an error
+    // of derma's) when wgpu opens them without one, as on headless servers; give them the
+    // temporary directory. Set before any thread starts.
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir());
+    }
     let cli = Cli::parse();
     let level = match cli.verbose {
         0 => "warn",
