@@ -219,8 +219,8 @@ impl<'a> SkinGenerator<'a> {
                 rayon::ThreadPoolBuilder::new()
                     .num_threads(n)
                     .build()
-                    .map_err(|e| SkinError::Input {
-                        path: PathBuf::from("threads"),
+                    .map_err(|e| SkinError::Key {
+                        key: "threads".into(),
                         detail: format!("cannot start {n} worker threads: {e}"),
                     })?,
             )),
@@ -356,7 +356,6 @@ impl<'a> SkinGenerator<'a> {
             dilation.as_deref(),
         );
         Ok(TextureSet {
-            surface_area_mm2: surface.area_mm2(),
             surface,
             fields,
             features,
@@ -467,8 +466,6 @@ pub struct TextureSet {
     pub render: RenderMaps,
     /// Gutter dilation sources on meshes (texel → covered texel).
     pub dilation: Option<Vec<u32>>,
-    /// Surface area painted, mm².
-    pub surface_area_mm2: f64,
     /// The unit a user mesh was read in.
     pub mesh_unit: Option<LengthUnit>,
     /// Mesh and tangents for the preview (template, user mesh, or none for patches).
@@ -519,11 +516,7 @@ impl TextureSet {
         job.stage("write", 1, Unit::Steps);
         let (mut files, height_range) =
             crate::texture_set::write_maps(dir, &self.bio, &self.render)?;
-        let features =
-            serde_json::to_vec(&self.features.to_json()).map_err(|e| SkinError::Field {
-                name: outputs::FEATURES.into(),
-                detail: e.to_string(),
-            })?;
+        let features = serde_json::to_vec(&self.features.to_json()).expect("JSON values serialize");
         derma_core::atomic::write_bytes(&dir.join(outputs::FEATURES), &features)?;
         files.push(outputs::FEATURES);
         job.stage("preview", 1, Unit::Steps);
@@ -547,6 +540,7 @@ impl TextureSet {
             seconds: self.started.elapsed().as_secs_f64(),
         });
         files.push(outputs::REPORT);
+        // The manifest lists every file but itself.
         let manifest = crate::report::manifest(self.config.size, &files);
         derma_core::atomic::write_bytes(&dir.join(outputs::MANIFEST), &manifest)?;
         let report = crate::report::report(&crate::report::Run {
@@ -563,7 +557,7 @@ impl TextureSet {
             log: &log,
         });
         derma_core::atomic::write_bytes(&dir.join(outputs::REPORT), &report)?;
-        files.insert(files.len() - 1, outputs::MANIFEST);
+        files.insert(files.len() - 1, outputs::MANIFEST); // manifest order: before report.json
         Ok(Written {
             files,
             height_range,

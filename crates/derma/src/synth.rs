@@ -109,7 +109,8 @@ pub fn run(args: SynthArgs, bars: &Bars) -> Result<()> {
     derma_core::atomic::check_inputs_spared(&outputs, &inputs)?;
     let mut textures = files.textures.into_iter();
     let first = textures.next().context("no exemplar")?;
-    let exemplar = first.clone();
+    // The metrics compare with the first exemplar; keep a copy only when they are asked for.
+    let exemplar = args.metrics.then(|| first.clone());
     let mut synth = Synthesizer::new(first)
         .options(SynthOptions {
             width: args.size.0,
@@ -156,13 +157,13 @@ pub fn run(args: SynthArgs, bars: &Bars) -> Result<()> {
     for timing in &out.timings {
         tracing::info!("{}: {:.3} s", timing.stage, timing.seconds);
     }
-    if args.metrics {
+    if let Some(exemplar) = &exemplar {
         let stages: serde_json::Map<String, serde_json::Value> = out
             .timings
             .iter()
             .map(|t| (t.stage.clone(), serde_json::json!(t.seconds)))
             .collect();
-        let m = Metrics::measure(&out.texture, &exemplar, args.patch)?;
+        let m = Metrics::measure(&out.texture, exemplar, args.patch)?;
         let metrics = serde_json::json!({
             "seconds": secs,
             "stages": stages,

@@ -26,7 +26,7 @@ pub fn matrix_from_rows(rows: usize, cols: usize, data: &[f64]) -> Result<Matrix
 
 /// Solves A x = b for a small square A (row-major n × n) by Gaussian elimination with partial
 /// pivoting; `None` when a pivot falls below 10⁻¹⁴ of the largest diagonal entry. For the
-/// matcher's 3–12 unknowns it is 1.6–9× faster than faer's factorisations (BENCHMARKS.md,
+/// matcher's 3–12 unknowns it is 1.3–9× faster than faer's factorisations (BENCHMARKS.md,
 /// "Numerics"); badly scaled systems, whose pivots that threshold rejects, want
 /// [`cholesky_solve`] instead.
 pub fn solve(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
