@@ -1,0 +1,93 @@
+//! The eye globes: spheres at the centres and radii of head.json, meshed with their own UVs —
+//! an azimuthal equidistant map around the optical axis (+Z), so the iris and pupil sit at the
+//! centre of the texture and the sclera around them, as iris textures are usually authored.
+
+use derma_core::mesh::TriMesh;
+use glam::{Vec2, Vec3};
+use std::f32::consts::{PI, TAU};
+
+/// Rings from the front pole to the back pole, and segments around the axis.
+const RINGS: usize = 48;
+const SEGMENTS: usize = 64;
+
+/// One eye: centre and radius (mm) and the direction it looks in the neutral pose.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Eye {
+    /// Centre of the globe (mm, head coordinates).
+    pub centre: Vec3,
+    /// Radius of the globe (mm).
+    pub radius: f32,
+    /// Neutral gaze direction (unit; +Z, straight ahead).
+    pub forward: Vec3,
+}
+
+/// UV of a point on the unit sphere at angle `theta` from the optical axis and azimuth `phi`.
+pub fn uv_of(theta: f32, phi: f32) -> Vec2 {
+    Vec2::splat(0.5) + 0.5 * (theta / PI) * Vec2::new(phi.cos(), phi.sin())
+}
+
+impl Eye {
+    /// The globe as a triangle mesh with normals and its own UVs.
+    pub fn mesh(&self) -> TriMesh {
+        let mut m = TriMesh::default();
+        for r in 0..=RINGS {
+            let theta = PI * r as f32 / RINGS as f32;
+            for s in 0..=SEGMENTS {
+                let phi = TAU * s as f32 / SEGMENTS as f32;
+                let n = Vec3::new(
+                    theta.sin() * phi.cos(),
+                    theta.sin() * phi.sin(),
+                    theta.cos(),
+                );
+                m.positions.push(self.centre + self.radius * n);
+                m.normals.push(n);
+                m.uvs.push(uv_of(theta, phi));
+            }
+        }
+        let row = SEGMENTS as u32 + 1;
+        for r in 0..RINGS as u32 {
+            for s in 0..SEGMENTS as u32 {
+                let (a, b, c, d) = (
+                    r * row + s,
+                    r * row + s + 1,
+                    (r + 1) * row + s,
+                    (r + 1) * row + s + 1,
+                );
+                // Counter-clockwise seen from outside.
+                if r > 0 {
+                    m.triangles.push([a, c, b]);
+                }
+                if r + 1 < RINGS as u32 {
+                    m.triangles.push([b, c, d]);
+                }
+            }
+        }
+        m
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn globe_is_a_closed_sphere_facing_out_with_the_iris_at_the_uv_centre() {
+        let e = Eye {
+            centre: Vec3::new(30.0, 0.0, 60.0),
+            radius: 12.0,
+            forward: Vec3::Z,
+        };
+        let m = e.mesh();
+        let area = m.area();
+        let want = 4.0 * PI as f64 * 144.0;
+        assert!((area - want).abs() < 0.01 * want, "{area} vs {want}");
+        for t in &m.triangles {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            let n = (b - a).cross(c - a);
+            assert!(n.dot((a + b + c) / 3.0 - e.centre) > 0.0, "inward triangle");
+        }
+        // The front pole maps to the UV centre.
+        assert_eq!(m.uvs[0], Vec2::splat(0.5));
+        assert!((m.positions[0] - Vec3::new(30.0, 0.0, 72.0)).length() < 1e-4);
+    }
+}

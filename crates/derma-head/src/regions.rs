@@ -1,0 +1,316 @@
+//! Named regions of the face as soft masks (0–1), built from the landmarks: where the regional
+//! biology, the default feature fields and the expression library apply. Sizes are adult
+//! anthropometry (Farkas 1994) unless noted; borders blend over a few millimetres.
+
+use crate::landmarks::Landmarks;
+use glam::{Vec2, Vec3};
+
+/// Every region, in a fixed order (the order of [`Regions::weights`]).
+pub const REGIONS: [&str; 16] = [
+    "scalp",
+    "forehead",
+    "eyebrows",
+    "periorbital",
+    "eyelids",
+    "nose",
+    "cheeks",
+    "ears",
+    "upper_lip",
+    "beard",
+    "lips",
+    "chin",
+    "neck",
+    "face",
+    "mouth_interior",
+    "eye_sockets",
+];
+
+/// Index of a region name in [`REGIONS`].
+pub fn index(name: &str) -> Option<usize> {
+    REGIONS.iter().position(|r| *r == name)
+}
+
+#[inline]
+fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
+    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// Piecewise-linear interpolation through (x, y) knots sorted by x, clamped at the ends.
+fn pwl(knots: &[(f32, f32)], x: f32) -> f32 {
+    if x <= knots[0].0 {
+        return knots[0].1;
+    }
+    for w in knots.windows(2) {
+        if x <= w[1].0 {
+            let t = (x - w[0].0) / (w[1].0 - w[0].0);
+            return w[0].1 + t * (w[1].1 - w[0].1);
+        }
+    }
+    knots[knots.len() - 1].1
+}
+
+/// UV rectangle [u0, v0, u1, v1] of a chart that is not skin (mouth cavity, eye sockets).
+pub type Rect = [f32; 4];
+
+/// The regions of one head: landmark-derived constants plus the non-skin UV charts.
+#[derive(Clone, Debug)]
+pub struct Regions {
+    lm: Landmarks,
+    /// Depth of the head's vertical axis (mean of the ears' z).
+    axis_z: f32,
+    /// Non-skin charts: mouth cavity, then eye sockets.
+    mouth_charts: Vec<Rect>,
+    socket_charts: Vec<Rect>,
+}
+
+/// Region weights at one point, in [`REGIONS`] order.
+pub type Weights = [f32; REGIONS.len()];
+
+impl Regions {
+    /// Regions from landmarks (all of [`crate::landmarks::NAMES`]) and the UV rectangles of
+    /// non-skin charts (empty for user meshes without such charts).
+    pub fn new(lm: Landmarks, mouth_charts: Vec<Rect>, socket_charts: Vec<Rect>) -> Self {
+        let axis_z = 0.5 * (lm.get("ear_left").z + lm.get("ear_right").z);
+        Self {
+            lm,
+            axis_z,
+            mouth_charts,
+            socket_charts,
+        }
+    }
+
+    /// The landmarks the regions follow.
+    pub fn landmarks(&self) -> &Landmarks {
+        &self.lm
+    }
+
+    /// Frontness: the cosine of the point's azimuth about the head's vertical axis (1 straight
+    /// ahead, 0 at the sides, −1 at the back).
+    pub fn azimuth_cos(&self, p: Vec3) -> f32 {
+        let z = p.z - self.axis_z;
+        z / (p.x * p.x + z * z).sqrt().max(1e-6)
+    }
+
+    /// Height of the scalp hairline at azimuth cosine `c`: the trichion in front, receding at the
+    /// temples, above the ears, down to the nape (authored on the landmarks).
+    pub fn hairline_y(&self, c: f32) -> f32 {
+        let t = self.lm.get("hairline").y;
+        let ear = 0.5 * (self.lm.get("ear_left").y + self.lm.get("ear_right").y);
+        pwl(
+            &[
+                (-1.0, ear - 50.0),
+                (-0.5, ear - 25.0),
+                (-0.15, ear + 35.0),
+                (0.2, ear + 40.0),
+                (0.55, t - 14.0),
+                (0.85, t),
+            ],
+            c,
+        )
+    }
+
+    fn in_rects(rects: &[Rect], uv: Vec2) -> f32 {
+        let inside = rects
+            .iter()
+            .any(|r| uv.x >= r[0] && uv.x <= r[2] && uv.y >= r[1] && uv.y <= r[3]);
+        if inside {
+            1.0
+        } else {
+            0.0
+        }
+    }
+
+    /// Weights of every region at surface point `p` with texture coordinate `uv`.
+    pub fn weights(&self, p: Vec3, uv: Vec2) -> Weights {
+        let lm = &self.lm;
+        let mouth_interior = Self::in_rects(&self.mouth_charts, uv);
+        let eye_sockets = Self::in_rects(&self.socket_charts, uv);
+        let skin = 1.0 - mouth_interior.max(eye_sockets);
+        let c = self.azimuth_cos(p);
+        let front = smoothstep(0.1, 0.35, c);
+        let (x, y) = (p.x, p.y);
+        let side = if x >= 0.0 { "left" } else { "right" };
+        let s = Landmarks::side_sign(side);
+        let ax = x * s; // distance towards this side
+        let eye = lm.get(&format!("eye_centre_{side}"));
+        let ci = lm.get(&format!("canthus_inner_{side}"));
+        let co = lm.get(&format!("canthus_outer_{side}"));
+        let ear_p = lm.get(&format!("ear_{side}"));
+        let mc = lm.get(&format!("mouth_corner_{side}"));
+        let (nose_tip, subnasale) = (lm.get("nose_tip"), lm.get("subnasale"));
+        let (chin, menton) = (lm.get("chin"), lm.get("menton"));
+
+        // Ears: the auricle, ~63 × 35 mm (Farkas 1994), standing out from the side of the head.
+        let ey = (y - ear_p.y) / 33.0;
+        let ez = (p.z - ear_p.z) / 20.0;
+        let ears = skin
+            * smoothstep(1.1, 0.9, (ey * ey + ez * ez).sqrt())
+            * smoothstep(ear_p.x.abs() - 16.0, ear_p.x.abs() - 11.0, ax);
+
+        let hy = self.hairline_y(c);
+        let scalp = skin * (1.0 - ears) * smoothstep(hy - 3.0, hy + 4.0, y);
+
+        // Eyelids: from the canthi ± 2 mm, 13 mm above the eye centre (lid to crease and fold)
+        // and 9 mm below (lower lid to the lid–cheek junction).
+        let xm = 0.5 * (ci.x + co.x) * s;
+        let hw = 0.5 * (co.x - ci.x).abs() + 2.0;
+        let du = (ax - xm) / hw;
+        let dv = if y > eye.y {
+            (y - eye.y) / 13.0
+        } else {
+            (eye.y - y) / 9.0
+        };
+        let lid_r = (du * du + dv * dv).sqrt();
+        let ahead = smoothstep(eye.z - 8.0, eye.z - 2.0, p.z);
+        let eyelids = skin * ahead * smoothstep(1.1, 0.9, lid_r);
+
+        // Eyebrows: an arch over the supraorbital rim from 3 mm medial of the inner canthus to
+        // 10 mm beyond the outer one; 18–22 mm above the eye centre, 10 mm tall medially
+        // tapering to 5 mm at the tail.
+        let b0 = ci.x.abs() - 3.0;
+        let b1 = co.x.abs() + 10.0;
+        let t = (2.0 * (ax - b0) / (b1 - b0) - 1.0).clamp(-1.5, 1.5);
+        let brow_y = eye.y + 18.0 + 4.0 * (1.0 - ((t - 0.2) / 1.2).powi(2)).max(0.0);
+        let brow_h = 5.0 - 2.5 * (0.5 * (t + 1.0)).clamp(0.0, 1.0);
+        let eyebrows = skin
+            * front
+            * smoothstep(1.05, 0.9, t.abs())
+            * smoothstep(1.0, 0.7, (y - brow_y).abs() / brow_h);
+
+        // Periorbital: the ring around the lids out to the orbital rim (~12 mm beyond the lids
+        // sideways, 20 mm below the eye centre), darker and bluish in many people (Freitag &
+        // Cestari 2007, J Cosmet Dermatol 6:211).
+        let pv = if y > eye.y {
+            (y - eye.y) / 22.0
+        } else {
+            (eye.y - y) / 21.0
+        };
+        let pu = (ax - xm) / (hw + 10.0);
+        let orbit = ahead * smoothstep(1.1, 0.9, (pu * pu + pv * pv).sqrt());
+        let periorbital = (skin * orbit - eyelids - eyebrows).clamp(0.0, 1.0);
+
+        // Nose: 9 mm either side of the midline at the nasion widening to the alae (alar width
+        // ~35 mm, Farkas 1994), from 8 mm above the eye centres to the subnasale.
+        let w = pwl(
+            &[
+                (subnasale.y, 18.0),
+                (nose_tip.y, 17.0),
+                (eye.y - 12.0, 10.0),
+                (eye.y + 8.0, 8.0),
+            ],
+            y,
+        );
+        let nose = (skin
+            * front
+            * smoothstep(1.05, 0.85, x.abs() / w)
+            * smoothstep(subnasale.y - 2.0, subnasale.y + 1.0, y)
+            * smoothstep(eye.y + 10.0, eye.y + 6.0, y)
+            - eyelids)
+            .clamp(0.0, 1.0);
+
+        // Lips (vermilion): from corner to corner, the upper vermilion 8 mm tall with a cupid's
+        // bow, the lower 10 mm (vermilion heights ls–sto ≈ 8, sto–li ≈ 10 mm; Farkas 1994).
+        let mouth_y = 0.5 * (lm.get("mouth_corner_left").y + lm.get("mouth_corner_right").y);
+        let half = mc.x.abs();
+        let lip_h = if y > mouth_y {
+            8.0 - 1.5 * (-(x / 4.0).powi(2)).exp() + 1.0 * (-((x.abs() - 6.0) / 4.0).powi(2)).exp()
+        } else {
+            10.0
+        };
+        let lip_r = (((y - mouth_y) / lip_h).powi(2) + (x.abs() / half).powf(2.5)).sqrt();
+        let lips = skin * smoothstep(mc.z - 8.0, mc.z - 3.0, p.z) * smoothstep(1.1, 0.92, lip_r);
+
+        // Upper lip (skin): between the vermilion and the subnasale, as wide as the mouth.
+        let upper_lip = (skin
+            * front
+            * smoothstep(mouth_y, mouth_y + 6.0, y)
+            * smoothstep(subnasale.y + 1.0, subnasale.y - 2.0, y)
+            * smoothstep(half + 6.0, half + 1.0, x.abs())
+            - lips
+            - nose)
+            .clamp(0.0, 1.0);
+
+        // Chin: around the pogonion, below the lower lip.
+        let cu = x / 22.0;
+        let cv = (y - chin.y) / 16.0;
+        let chin_w = (skin * front * smoothstep(1.1, 0.9, (cu * cu + cv * cv).sqrt()) - lips)
+            .clamp(0.0, 1.0);
+
+        // Neck: below the jaw line, which runs from under the menton to 38 mm below the ears.
+        let ear_y = 0.5 * (lm.get("ear_left").y + lm.get("ear_right").y);
+        let jaw_y = pwl(
+            &[
+                (-1.0, ear_y - 50.0),
+                (0.0, ear_y - 38.0),
+                (0.5, 0.5 * (menton.y + ear_y) - 15.0),
+                (1.0, menton.y - 2.0),
+            ],
+            c,
+        );
+        let neck = skin * (1.0 - ears) * (1.0 - scalp) * smoothstep(jaw_y + 4.0, jaw_y - 4.0, y);
+
+        // Cheeks: below the lids, beside the nose, above the mouth corners' level, in front of
+        // the ears.
+        let cx = (ax - 42.0) / 26.0;
+        let cy = (y - (eye.y - 32.0)) / 24.0;
+        let cheeks = (skin * front * smoothstep(1.1, 0.85, (cx * cx + cy * cy).sqrt())
+            - nose
+            - lips
+            - eyelids
+            - periorbital
+            - upper_lip)
+            .clamp(0.0, 1.0);
+
+        // Forehead: above the brows to the hairline, between the temples.
+        let forehead = (skin
+            * smoothstep(0.35, 0.55, c)
+            * (1.0 - scalp)
+            * smoothstep(eye.y + 20.0, eye.y + 27.0, y)
+            * smoothstep(co.x.abs() + 16.0, co.x.abs() + 8.0, x.abs())
+            - eyebrows)
+            .clamp(0.0, 1.0);
+
+        // Beard area (terminal hair in men): the upper lip, cheeks below a line from the
+        // nasolabial region to the sideburns, chin, jaw and upper neck.
+        let top = pwl(
+            &[
+                (0.0, subnasale.y - 2.0),
+                (half + 8.0, subnasale.y - 6.0),
+                (45.0, eye.y - 35.0),
+                (62.0, ear_y),
+                (75.0, ear_y + 30.0),
+            ],
+            x.abs(),
+        );
+        let beard = (skin
+            * (1.0 - scalp)
+            * (1.0 - ears)
+            * smoothstep(-0.1, 0.1, c)
+            * smoothstep(top + 3.0, top - 3.0, y)
+            * smoothstep(jaw_y - 40.0, jaw_y - 25.0, y)
+            - lips
+            - nose)
+            .clamp(0.0, 1.0);
+
+        let face = (skin * front * (1.0 - scalp) * (1.0 - neck) * (1.0 - ears)).clamp(0.0, 1.0);
+        [
+            scalp,
+            forehead,
+            eyebrows,
+            periorbital,
+            eyelids,
+            nose,
+            cheeks,
+            ears,
+            upper_lip,
+            beard,
+            lips,
+            chin_w,
+            neck,
+            face,
+            mouth_interior,
+            eye_sockets,
+        ]
+    }
+}
