@@ -13,8 +13,20 @@ use std::path::Path;
 /// glTF metres per derma millimetre.
 const M_PER_MM: f32 = 1e-3;
 
-/// Writes `head.obj` (mm; objects `skin`, `eye_left`, …) atomically.
-pub fn write_obj(head: &Head, path: &Path) -> crate::Result<()> {
+/// Writes the skin alone as `path` (the mesh `derma skin --mesh` paints) and every other part as
+/// named objects in `parts_path` (`eye_left`, `eye_right`, `eyelashes_left`, …), OBJ in mm,
+/// atomically.
+pub fn write_obj(head: &Head, path: &Path, parts_path: &Path) -> crate::Result<()> {
+    write_objects(path, &[("skin", &head.skin)])?;
+    let parts: Vec<(&str, &TriMesh)> = head
+        .parts
+        .iter()
+        .map(|p| (p.name.as_str(), &p.mesh))
+        .collect();
+    write_objects(parts_path, &parts)
+}
+
+fn write_objects(path: &Path, meshes: &[(&str, &TriMesh)]) -> crate::Result<()> {
     use std::fmt::Write;
     let mut s = String::new();
     let _ = writeln!(
@@ -22,9 +34,7 @@ pub fn write_obj(head: &Head, path: &Path) -> crate::Result<()> {
         "# derma built-in head (MakeHuman base mesh, CC0 1.0), millimetres"
     );
     let mut base = 1usize;
-    let meshes = std::iter::once(("skin", &head.skin))
-        .chain(head.parts.iter().map(|p| (p.name.as_str(), &p.mesh)));
-    for (name, m) in meshes {
+    for &(name, m) in meshes {
         let _ = writeln!(s, "o {name}");
         for p in &m.positions {
             let _ = writeln!(s, "v {} {} {}", p.x, p.y, p.z);
@@ -55,7 +65,7 @@ struct Glb {
 
 impl Glb {
     fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let mut v = json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()});
@@ -210,10 +220,10 @@ pub fn write_glb(head: &Head, path: &Path) -> crate::Result<()> {
         "accessors": g.accessors,
     });
     let mut js = serde_json::to_vec(&doc).expect("JSON");
-    while js.len() % 4 != 0 {
+    while !js.len().is_multiple_of(4) {
         js.push(b' ');
     }
-    while g.bin.len() % 4 != 0 {
+    while !g.bin.len().is_multiple_of(4) {
         g.bin.push(0);
     }
     let total = 12 + 8 + js.len() + 8 + g.bin.len();

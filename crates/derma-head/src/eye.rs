@@ -66,6 +66,30 @@ impl Eye {
     }
 }
 
+/// Iris radius in UV: the visible iris is ~11.7 mm across (horizontal visible iris diameter,
+/// Rüfer et al. 2005, Cornea 24:259), asin(5.85 / 12) ≈ 29° from the axis on a 12 mm globe, and
+/// [`uv_of`] maps θ to a UV radius of 0.5 θ / π.
+pub const IRIS_UV_RADIUS: f32 = 0.5 * 29.0 / 180.0;
+/// Pupil radius (UV): a 4 mm pupil in indoor light, asin(2 / 12) ≈ 9.6°.
+pub const PUPIL_UV_RADIUS: f32 = 0.5 * 9.6 / 180.0;
+
+/// The default eye albedo (linear) at a UV of the globe: a dark pupil, a brown iris with radial
+/// striations and a darker limbal ring, and an off-white sclera.
+pub fn default_albedo(uv: Vec2) -> Vec3 {
+    let d = uv - Vec2::splat(0.5);
+    let r = d.length();
+    if r < PUPIL_UV_RADIUS {
+        return Vec3::splat(0.01);
+    }
+    if r < IRIS_UV_RADIUS {
+        let t = (r - PUPIL_UV_RADIUS) / (IRIS_UV_RADIUS - PUPIL_UV_RADIUS);
+        let stria = 0.85 + 0.15 * (d.y.atan2(d.x) * 37.0).sin();
+        let limbus = 1.0 - 0.6 * ((t - 0.85) / 0.15).clamp(0.0, 1.0);
+        return Vec3::new(0.16, 0.075, 0.03) * stria * limbus * (0.8 + 0.4 * t);
+    }
+    Vec3::new(0.72, 0.68, 0.63)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

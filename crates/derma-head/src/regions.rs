@@ -314,3 +314,25 @@ impl Regions {
         ]
     }
 }
+
+impl Regions {
+    /// Canonical face coordinates of a point, for content authored on a generic face: x in mm
+    /// from the midline scaled so the eye centres sit at ±32, y piecewise linear through the
+    /// landmarks so the eye line is at 21, the mouth line at −46 and the menton at −96, and
+    /// frontness in [0, 1] (1 on the face, 0 at the sides and behind). The rig's expression
+    /// library is authored in this frame and follows any head through its landmarks.
+    pub fn face_coords(&self, p: Vec3) -> (f32, f32, f32) {
+        let lm = &self.lm;
+        let eye = 0.5 * (lm.get("eye_centre_left") + lm.get("eye_centre_right"));
+        let half_ipd = 0.5 * (lm.get("eye_centre_left").x - lm.get("eye_centre_right").x).abs();
+        let mouth = 0.5 * (lm.get("mouth_corner_left").y + lm.get("mouth_corner_right").y);
+        let menton = lm.get("menton").y;
+        let y = if p.y >= mouth {
+            21.0 + (p.y - eye.y) * (21.0 + 46.0) / (eye.y - mouth)
+        } else {
+            -46.0 + (p.y - mouth) * (96.0 - 46.0) / (mouth - menton)
+        };
+        let x = (p.x - eye.x) * 32.0 / half_ipd;
+        (x, y, smoothstep(0.15, 0.45, self.azimuth_cos(p)))
+    }
+}

@@ -212,7 +212,8 @@ fn glb_and_obj_export_load_back_with_named_parts_and_targets() {
     let head = Head::builtin();
     let dir = derma_test_support::scratch_dir("head-export");
     derma_head::export::write_glb(head, &dir.join("head.glb")).unwrap();
-    derma_head::export::write_obj(head, &dir.join("head.obj")).unwrap();
+    derma_head::export::write_obj(head, &dir.join("head.obj"), &dir.join("head_parts.obj"))
+        .unwrap();
     let (doc, buffers, _) = gltf::import(dir.join("head.glb")).unwrap();
     let names: Vec<String> = doc
         .meshes()
@@ -252,6 +253,10 @@ fn glb_and_obj_export_load_back_with_named_parts_and_targets() {
     }
     let extras = skin.extras().as_ref().unwrap().get();
     assert!(extras.contains("eyeBlinkLeft") && extras.contains("tongueOut"));
-    let obj = std::fs::read_to_string(dir.join("head.obj")).unwrap();
-    assert!(obj.contains("o skin") && obj.contains("o tongue"));
+    let skin = derma_core::mesh::TriMesh::load(&dir.join("head.obj")).unwrap();
+    assert_eq!(skin.triangles.len(), head.skin.triangles.len());
+    let parts = std::fs::read_to_string(dir.join("head_parts.obj")).unwrap();
+    assert!(
+        parts.contains("o eye_left") && parts.contains("o tongue") && !parts.contains("o skin")
+    );
 }

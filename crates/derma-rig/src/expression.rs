@@ -1,15 +1,15 @@
 //! The built-in expression library: the six basic emotions (Ekman 1972) plus exercise and
-//! alcohol, as regional changes of the local hemoglobin statistics on derma's face template.
+//! alcohol, as regional changes of the local hemoglobin statistics on derma's built-in head.
 //!
 //! These are AUTHORED APPROXIMATIONS of the observations in Jimenez et al. 2010 (§3.1, figures
 //! 1, 2, 5, 10–13), not measurements: the paper publishes its maps only as figures. Each region
-//! is an anisotropic Gaussian in the template's face coordinates (mm; eyes at y = 21, mouth line
-//! at y = −46), mirrored for paired regions, with a gain on the local mean (perfusion) and on the
+//! is an anisotropic Gaussian in canonical face coordinates (mm; eyes at y = 21, mouth line at
+//! y = −46; `derma_head::Regions::face_coords` maps any head there through its landmarks), mirrored for paired regions, with a gain on the local mean (perfusion) and on the
 //! local standard deviation (contrast of the vascular pattern). Gains combine multiplicatively
 //! (in log space), so overlapping regions stay positive and smooth.
 
 use derma_core::Map;
-use derma_skin::template;
+use derma_head::Head;
 use glam::Vec3;
 
 /// One region of change.
@@ -232,7 +232,7 @@ pub fn find(name: &str) -> Option<&'static Expression> {
 impl Expression {
     /// (mean gain, σ gain) at template point `p`.
     pub fn gains_at(&self, p: Vec3) -> (f32, f32) {
-        let (x, y, front) = template::face_coords(p);
+        let (x, y, front) = Head::builtin().regions.face_coords(p);
         if front <= 0.0 {
             return (1.0, 1.0);
         }
@@ -257,8 +257,7 @@ impl Expression {
 
 /// Template surface points of a `w × h` UV grid (texel centres), `None` outside the chart.
 pub fn template_points(w: usize, h: usize) -> Vec<Option<Vec3>> {
-    let mesh = template::head_mesh();
-    let raster = derma_core::raster::UvRaster::new(&mesh, w, h);
+    let raster = derma_core::raster::UvRaster::new(&Head::builtin().skin, w, h);
     (0..w * h)
         .map(|i| raster.covered(i).then(|| raster.position[i]))
         .collect()
@@ -281,8 +280,19 @@ pub fn gain_maps(e: &Expression, points: &[Option<Vec3>], w: usize, h: usize) ->
 mod tests {
     use super::*;
 
+    /// The skin point of the built-in head nearest canonical face coordinates (x, y).
     fn face(x: f32, y: f32) -> Vec3 {
-        Vec3::new(x, y, 95.0)
+        let head = Head::builtin();
+        let d = |p: &Vec3| {
+            let (fx, fy, front) = head.regions.face_coords(*p);
+            (fx - x).powi(2) + (fy - y).powi(2) + if front < 0.99 { 1e6 } else { 0.0 }
+        };
+        *head
+            .skin
+            .positions
+            .iter()
+            .min_by(|a, b| d(a).total_cmp(&d(b)))
+            .unwrap()
     }
 
     #[test]

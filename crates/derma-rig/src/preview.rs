@@ -15,7 +15,7 @@ pub fn preview(rgb: &[Map; 3], h: &Map) -> Result<[Map; 3]> {
     use derma_skin::preview::render;
     use derma_skin::texture_set::RenderMaps;
     const PANEL: usize = 512;
-    let mesh = derma_skin::template::head_mesh();
+    let mesh = derma_skin::builtin_head::head_mesh();
     let tangents = derma_skin::surface::mikktspace_tangents(&mesh);
     let (w, hh) = (h.width(), h.height());
     let flat = |v: f32| Map::filled(w, hh, v);

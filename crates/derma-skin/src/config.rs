@@ -39,6 +39,21 @@ pub struct SkinConfig {
     pub eyebrow: FollicleConfig,
     pub material: MaterialConfig,
     pub detail: DetailConfig,
+    pub person: crate::regional::Person,
+    pub regional: RegionalConfig,
+}
+
+/// `[regional]`: the regional biology of the built-in head (see `regional.rs`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RegionalConfig {
+    pub enabled: bool,
+}
+
+impl Default for RegionalConfig {
+    fn default() -> Self {
+        Self { enabled: true }
+    }
 }
 
 /// Exemplar micro-detail (see `detail.rs`): off while both paths are empty.
@@ -81,7 +96,7 @@ impl DetailConfig {
 #[serde(rename_all = "lowercase")]
 /// What the texture set is painted on.
 pub enum SurfaceKind {
-    /// The built-in head template.
+    /// The built-in head (derma-head).
     Template,
     /// A flat patch of `patch_size_mm`.
     Patch,
@@ -236,6 +251,8 @@ impl Default for SkinConfig {
             eyebrow: FollicleConfig::eyebrow(),
             material: MaterialConfig::default(),
             detail: DetailConfig::default(),
+            person: crate::regional::Person::default(),
+            regional: RegionalConfig::default(),
         }
     }
 }
@@ -266,8 +283,8 @@ impl Default for BaselineConfig {
                 max: 0.45,
             },
             blood: Range {
-                min: 0.01,
-                max: 0.04,
+                min: 0.012,
+                max: 0.05,
             },
             oxygenation: Range { min: 0.6, max: 0.9 },
             stratum_corneum_um: Range {
@@ -291,7 +308,7 @@ impl Default for LipsConfig {
         Self {
             enabled: true,
             field: "lips".into(),
-            blood: 0.08,
+            blood: 0.1,
             pheomelanin: 0.6,
             epidermis_um: 40.0,
         }
@@ -303,7 +320,7 @@ impl Default for CystConfig {
         Self {
             enabled: true,
             field: "cysts".into(),
-            density_per_cm2: crate::template::DEFAULT_DENSITY.cyst,
+            density_per_cm2: crate::builtin_head::DEFAULT_DENSITY.cyst,
             radius_sigma_mm: 0.2,
             radius_offset_mm: 0.01,
             height_max_mm: 0.5,
@@ -316,7 +333,7 @@ impl Default for MoleConfig {
         Self {
             enabled: true,
             field: "moles".into(),
-            density_per_cm2: crate::template::DEFAULT_DENSITY.mole,
+            density_per_cm2: crate::builtin_head::DEFAULT_DENSITY.mole,
             radius_sigma_mm: 0.4,
             melanin: Range { min: 0.1, max: 0.4 },
             height_mm: Range { min: 0.3, max: 1.0 },
@@ -331,7 +348,7 @@ impl Default for FreckleConfig {
             enabled: true,
             field: "freckles".into(),
             power: 1.0,
-            density_per_cm2: crate::template::DEFAULT_DENSITY.freckle,
+            density_per_cm2: crate::builtin_head::DEFAULT_DENSITY.freckle,
             radius_mean_mm: 0.8,
             radius_sigma_mm: 0.4,
             melanin_max: 0.12,
@@ -347,7 +364,7 @@ impl Default for WrinkleConfig {
             enabled: true,
             field: "wrinkles".into(),
             vector_field: "wrinkle_vectors".into(),
-            density_per_cm2: crate::template::DEFAULT_DENSITY.wrinkle,
+            density_per_cm2: crate::builtin_head::DEFAULT_DENSITY.wrinkle,
             max_length_mm: 40.0,
             width_mm: Range { min: 0.4, max: 1.2 },
             depth_mm: Range {
@@ -377,7 +394,7 @@ impl Default for FollicleConfig {
         Self {
             enabled: true,
             field: "scalp".into(),
-            density_per_cm2: crate::template::DEFAULT_DENSITY.follicle,
+            density_per_cm2: crate::builtin_head::DEFAULT_DENSITY.follicle,
             inner_radius_mm: 0.04,
             outer_radius_mm: 0.1,
             hair_color: [0.03, 0.018, 0.012],
@@ -392,7 +409,7 @@ impl FollicleConfig {
     fn eyebrow() -> Self {
         Self {
             field: "eyebrows".into(),
-            density_per_cm2: crate::template::DEFAULT_DENSITY.eyebrow,
+            density_per_cm2: crate::builtin_head::DEFAULT_DENSITY.eyebrow,
             outer_radius_mm: 0.12,
             ..Self::default()
         }
@@ -432,7 +449,7 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("seed", "-", 0.0, 1.8446744073709552e19, "random seed; same seed → bit-identical outputs at any thread count"),
     k("size", "texels", 16.0, 16384.0, "texture width and height"),
     k("scatter_resolution", "texels", 64.0, 8192.0, "resolution at which features are scattered; fixed so that the same seed places the same features at any output size"),
-    k("surface.kind", "-", 0.0, 0.0, "\"template\" (built-in head), \"patch\" (flat patch) or \"mesh\" (surface.mesh)"),
+    k("surface.kind", "-", 0.0, 0.0, "\"template\" (the built-in head, derma-head), \"patch\" (flat patch) or \"mesh\" (surface.mesh)"),
     k("surface.patch_size_mm", "mm", 0.1, 10000.0, "physical width and height of a patch"),
     k("surface.tileable", "-", 0.0, 0.0, "patch wraps around so the output tiles seamlessly (thesis §3.3, a modulo space)"),
     k("surface.mesh", "path", 0.0, 0.0, "OBJ, glTF or GLB mesh with UVs (kind = \"mesh\")"),
@@ -442,14 +459,14 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("baseline.noise_wavelengths_mm", "mm", 0.01, 1000.0, "wavelengths of the three band-limited noise octaves (weights ½, ⅓, ⅙)"),
     k("baseline.melanin", "volume fraction", 0.0, 1.0, "melanosome fraction of the epidermis; default 1.3–6.3 % for light-skinned adults (Jacques 1998, skin optics summary); moderately pigmented 11–16 %, dark 18–43 %"),
     k("baseline.pheomelanin", "fraction", 0.0, 1.0, "pheomelanin share of melanin; around Jimenez et al. 2010 §6 (eumelanin 0.61 → pheomelanin 0.39), spread authored"),
-    k("baseline.blood", "volume fraction", 0.0, 1.0, "whole-blood fraction of the dermis; min ≈ BioSpec's papillary 1.2 %, max within Jacques' 0.2–7 %"),
+    k("baseline.blood", "volume fraction", 0.0, 1.0, "whole-blood fraction of the dermis before the regional gains; min ≈ BioSpec's papillary 1.2 % (within Jacques' 0.2–7 %), the regions multiply it (regional.rs)"),
     k("baseline.oxygenation", "fraction", 0.0, 1.0, "oxygenated share of hemoglobin; BioSpec default 0.75 lies inside"),
     k("baseline.stratum_corneum_um", "µm", 0.0, 1000.0, "stratum corneum thickness; BioSpec default 10 µm as minimum"),
     k("baseline.epidermis_um", "µm", 0.0, 2000.0, "living epidermis thickness; BioSpec 100 µm, facial epidermis thinner (Sandby-Møller et al. 2003)"),
     k("baseline.height_mm", "mm", -10.0, 10.0, "baseline displacement range"),
     k("lips.enabled", "-", 0.0, 0.0, "paint lips (thesis §5.3.6)"),
     k("lips.field", "field", 0.0, 0.0, "lip field ∆(p)"),
-    k("lips.blood", "volume fraction", 0.0, 1.0, "lip blood ratio B (authored: the vermilion is highly vascular)"),
+    k("lips.blood", "volume fraction", 0.0, 1.0, "lip blood ratio B (authored: the vermilion is highly vascular; 10 %, the top node of the built-in match table, so the lips stay redder than the well-perfused cheeks)"),
     k("lips.pheomelanin", "fraction", 0.0, 1.0, "lip pheomelanin ratio H (authored)"),
     k("lips.epidermis_um", "µm", 0.0, 2000.0, "epidermis thickness inside the lips (thin vermilion epidermis; authored)"),
     k("cyst.enabled", "-", 0.0, 0.0, "scatter cysts (thesis §5.3.2)"),
@@ -517,6 +534,11 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("detail.highpass_texels", "texels", 1.0, 256.0, "box high-pass radius on the tile: keeps detail finer than 2r + 1 tile texels, below the procedural features"),
     k("detail.height_mm", "mm", 0.0, 10.0, "RMS of the added relief (authored; skin micro-relief is tens of µm)"),
     k("detail.albedo_contrast", "-", 0.0, 10.0, "gain of the colour exemplar's relative luminance contrast on melanin (1 = as in the exemplar, to first order)"),
+    k("person.ita_deg", "°", -90.0, 90.0, "skin tone as the individual typology angle of cheeks and forehead, atan((L*−50)/b*) (Chardon et al. 1991): very light > 55, light 41–55, intermediate 28–41, tan 10–28, brown −30–10, dark < −30; default 48 (light)"),
+    k("person.calibrate_melanin", "-", 0.0, 0.0, "set baseline.melanin so the mean cheek/forehead colour has person.ita_deg under the chosen appearance (bisection on melanin); false keeps baseline.melanin as given"),
+    k("person.sex", "-", 0.0, 0.0, "\"male\" (terminal beard follicles on the beard region, builtin_head::BEARD_TO_SCALP) or \"female\" (vellus only)"),
+    k("person.age_years", "years", 10.0, 100.0, "age: wrinkle density × age_factor and depth × √age_factor (1 at 40, 0.2 at ≤ 20, 2.2 at ≥ 70; regional::age_factor)"),
+    k("regional.enabled", "-", 0.0, 0.0, "regional biology of the built-in head (regional.rs GAINS): blood, melanin, oxygenation and epidermis by region"),
     k("material.specular_f0", "-", 0.0, 1.0, "normal-incidence reflectance ((n−1)/(n+1))² for n = 1.4 (Donner & Jensen 2006) = 0.028"),
 ];
 
@@ -614,7 +636,7 @@ impl SkinConfig {
         }
         out.push_str("\n[fields]\n# ");
         out.push_str(doc("fields").map(|d| d.doc).unwrap_or(""));
-        out.push_str("\n# built-in names on the template: scalp, eyebrows, lips, freckles, moles, cysts, pores, wrinkles, wrinkle_vectors, face, eyes\n");
+        out.push_str("\n# built-in names on the head: scalp, eyebrows, lips, freckles, moles, cysts, pores, wrinkles, wrinkle_vectors, face, eyes, every region (forehead, periorbital, eyelids, nose, cheeks, ears, upper_lip, beard, chin, neck, mouth_interior, eye_sockets) and regional_blood/melanin/oxygenation/epidermis\n");
         for (k, v) in table {
             if let Some(t) = v.as_table() {
                 if k == "fields" {

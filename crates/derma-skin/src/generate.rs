@@ -236,8 +236,26 @@ impl<'a> SkinGenerator<'a> {
 
     fn generate(&self) -> Result<TextureSet> {
         let started = Instant::now();
-        let cfg = &self.config;
-        cfg.validate("the configuration")?;
+        self.config.validate("the configuration")?;
+        let analytic;
+        let builtin;
+        let appearance: &dyn Appearance = match &self.appearance {
+            AppearanceChoice::Analytic => {
+                analytic = derma_shading::SpectralKubelkaMunk::default();
+                &analytic
+            }
+            AppearanceChoice::Default => {
+                builtin = derma_shading::TableAppearance::builtin();
+                &builtin
+            }
+            AppearanceChoice::Table(t) => t.as_ref(),
+        };
+        let on_head =
+            self.mesh_path().is_none() && self.config.surface.kind == SurfaceKind::Template;
+        let regional_gains = on_head && self.config.regional.enabled;
+        let (person_cfg, melanin) =
+            crate::regional::apply_person(&self.config, appearance, regional_gains)?;
+        let cfg = &person_cfg;
         let size = cfg.size as usize;
         check_memory(size)?;
         let job = Job::new(self.progress);
@@ -258,7 +276,7 @@ impl<'a> SkinGenerator<'a> {
         }
         let mut mesh_unit = None;
         let mesh = match kind {
-            SurfaceKind::Template => Some(crate::template::head_mesh()),
+            SurfaceKind::Template => Some(crate::builtin_head::head_mesh()),
             SurfaceKind::Mesh => {
                 let p = mesh_path.clone().expect("checked");
                 let (m, u) = load_mesh(&p, &cfg.surface.unit, &job)?;
@@ -289,8 +307,15 @@ impl<'a> SkinGenerator<'a> {
 
         // Fields: template defaults, or uniform ones; then a fields directory; then config entries.
         job.stage("fields", 1, Unit::Steps);
+        if let Some(m) = melanin {
+            job.note(Note::info(format!(
+                "person: ITA {:.0}° → mean baseline melanin {m:.4} (cheeks and forehead, '{}' appearance)",
+                cfg.person.ita_deg,
+                appearance.name()
+            )));
+        }
         let mut fields = if kind == SurfaceKind::Template {
-            crate::template::default_fields(mesh.as_ref().expect("template mesh"))
+            crate::builtin_head::default_fields(mesh.as_ref().expect("template mesh"), &cfg.person)
         } else {
             if self.fields.is_none() && cfg.fields.is_empty() {
                 job.note(Note::info("no --fields given: uniform fields are used (moles, freckles, cysts and pores everywhere; no lips, hair or wrinkles); paint fields to place them"));
@@ -335,19 +360,6 @@ impl<'a> SkinGenerator<'a> {
         }
 
         job.stage("convert", 1, Unit::Steps);
-        let analytic;
-        let builtin;
-        let appearance: &dyn Appearance = match &self.appearance {
-            AppearanceChoice::Analytic => {
-                analytic = derma_shading::SpectralKubelkaMunk::default();
-                &analytic
-            }
-            AppearanceChoice::Default => {
-                builtin = derma_shading::TableAppearance::builtin();
-                &builtin
-            }
-            AppearanceChoice::Table(t) => t.as_ref(),
-        };
         let render = crate::texture_set::convert(
             &bio,
             &surface,
@@ -520,11 +532,17 @@ impl TextureSet {
         derma_core::atomic::write_bytes(&dir.join(outputs::FEATURES), &features)?;
         files.push(outputs::FEATURES);
         job.stage("preview", 1, Unit::Steps);
+        let props = if self.inputs.surface == SurfaceKind::Template {
+            crate::builtin_head::props()
+        } else {
+            Vec::new()
+        };
         let preview = crate::preview::contact_sheet(
             &self.render,
             &self.bio,
             &self.surface,
             self.preview_mesh.as_ref(),
+            &props,
         );
         derma_core::image_io::write_png8(
             &dir.join(outputs::PREVIEW),

@@ -22,6 +22,8 @@
 
 #![warn(missing_docs)]
 
+pub mod builtin_head;
+pub mod color_stats;
 pub mod config;
 pub mod detail;
 pub mod feature_set;
@@ -36,10 +38,10 @@ pub mod outputs;
 pub mod paint;
 pub mod placement;
 pub mod preview;
+pub mod regional;
 pub mod report;
 pub mod scatter;
 pub mod surface;
-pub mod template;
 pub mod texture_set;
 
 /// Errors of the skin pipeline, each naming the input at fault.
@@ -100,6 +102,19 @@ pub enum SkinError {
         /// Memory available, GiB.
         have_gib: f64,
     },
+}
+
+impl SkinError {
+    /// A derma-head error (its only fallible parts write files) as a skin error.
+    pub fn from_head(e: derma_head::HeadError) -> Self {
+        match e {
+            derma_head::HeadError::Core(c) => SkinError::Core(c),
+            other => SkinError::Field {
+                name: "landmarks".into(),
+                detail: other.to_string(),
+            },
+        }
+    }
 }
 
 /// Result type of derma-skin.

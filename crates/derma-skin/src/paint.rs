@@ -98,6 +98,16 @@ pub fn paint(
         pheomelanin: cfg.lips.pheomelanin,
         epidermis_um: cfg.lips.epidermis_um,
     };
+    // Regional biology (regional.rs): gains on blood, melanin and epidermis and a shift of
+    // oxygenation, where the fields carry them (the built-in head) and they are enabled.
+    let regional: Option<Vec<&Map>> = if cfg.regional.enabled {
+        crate::regional::CHANNELS
+            .iter()
+            .map(|c| fields.scalars.get(*c))
+            .collect()
+    } else {
+        None
+    };
     let kinds: Vec<_> = features.kinds().map(|(_, k)| k).collect();
     let phi = b.phi;
     let amp = |r: crate::config::Range| (r.min, phi * (r.max - r.min));
@@ -141,6 +151,14 @@ pub fn paint(
                     extra: [0.0; 4],
                     lips: 0.0,
                 };
+                if let Some(r) = &regional {
+                    let uv = surface.uv(i);
+                    let at = |k: usize| r[k].sample_uv(uv.x, uv.y, wrap);
+                    s.tissue.blood *= at(0);
+                    s.tissue.melanin *= at(1);
+                    s.tissue.oxygenation = (s.tissue.oxygenation + at(2)).clamp(0.0, 1.0);
+                    s.tissue.epidermis_um *= at(3);
+                }
                 if let Some(m) = lips_map {
                     let uv = surface.uv(i);
                     apply_lips(&lip, m.sample_uv(uv.x, uv.y, wrap).clamp(0.0, 1.0), s);

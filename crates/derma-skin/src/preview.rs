@@ -22,12 +22,38 @@ pub struct Textures<'a> {
     pub uv_scale: Vec2,
 }
 
+/// A part drawn beside the textured surface with its own simple material (eyes, teeth, lashes):
+/// albedo as a function of its UV, one roughness and one F0.
+pub struct Prop<'a> {
+    /// Its mesh (same space as the surface), with normals and UVs.
+    pub mesh: &'a TriMesh,
+    /// Linear albedo at a texture coordinate.
+    pub albedo: &'a (dyn Fn(Vec2) -> Vec3 + Sync),
+    /// GGX roughness (perceptual).
+    pub roughness: f32,
+    /// Normal-incidence Fresnel reflectance.
+    pub f0: f32,
+}
+
 /// Renders `mesh` (with per-corner tangents) seen from direction `view_yaw` (radians about +Y,
 /// 0 = from +Z) into a `size`×`size` linear RGB image with a dark background.
 pub fn render(
     mesh: &TriMesh,
     tangents: &[[f32; 4]],
     tex: &Textures,
+    view_yaw: f32,
+    size: usize,
+) -> [Map; 3] {
+    render_with(mesh, tangents, tex, &[], view_yaw, size)
+}
+
+/// [`render`] with props (drawn with their own materials, depth-tested against the surface);
+/// the view is framed on the surface alone.
+pub fn render_with(
+    mesh: &TriMesh,
+    tangents: &[[f32; 4]],
+    tex: &Textures,
+    props: &[Prop],
     view_yaw: f32,
     size: usize,
 ) -> [Map; 3] {
@@ -46,34 +72,38 @@ pub fn render(
             p.z,
         )
     };
-    let scr: Vec<Vec3> = pts.iter().map(|&p| to_screen(p)).collect();
-    // G-buffer: triangle and barycentrics of the nearest surface per pixel.
+    // G-buffer: object (0 = the surface, k + 1 = prop k), triangle and barycentrics of the
+    // nearest surface per pixel.
     let mut depth = vec![f32::NEG_INFINITY; size * size];
-    let mut gbuf = vec![(u32::MAX, 0.0f32, 0.0f32); size * size];
-    for (ti, t) in mesh.triangles.iter().enumerate() {
-        let [a, b, c] = t.map(|i| scr[i as usize]);
-        let area = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
-        if area.abs() < 1e-12 {
-            continue;
-        }
-        let x0 = a.x.min(b.x).min(c.x).floor().max(0.0) as usize;
-        let x1 = (a.x.max(b.x).max(c.x).ceil() as usize).min(size - 1);
-        let y0 = a.y.min(b.y).min(c.y).floor().max(0.0) as usize;
-        let y1 = (a.y.max(b.y).max(c.y).ceil() as usize).min(size - 1);
-        for y in y0..=y1 {
-            for x in x0..=x1 {
-                let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);
-                let w1 = ((px - a.x) * (c.y - a.y) - (c.x - a.x) * (py - a.y)) / area;
-                let w2 = ((b.x - a.x) * (py - a.y) - (px - a.x) * (b.y - a.y)) / area;
-                let w0 = 1.0 - w1 - w2;
-                if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
-                    continue;
-                }
-                let z = a.z * w0 + b.z * w1 + c.z * w2;
-                let k = y * size + x;
-                if z > depth[k] {
-                    depth[k] = z;
-                    gbuf[k] = (ti as u32, w1, w2);
+    let mut gbuf = vec![(u32::MAX, u32::MAX, 0.0f32, 0.0f32); size * size];
+    let objects = std::iter::once(mesh).chain(props.iter().map(|p| p.mesh));
+    for (obj, m) in objects.enumerate() {
+        let scr: Vec<Vec3> = m.positions.iter().map(|&p| to_screen(rot * p)).collect();
+        for (ti, t) in m.triangles.iter().enumerate() {
+            let [a, b, c] = t.map(|i| scr[i as usize]);
+            let area = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+            if area.abs() < 1e-12 {
+                continue;
+            }
+            let x0 = a.x.min(b.x).min(c.x).floor().max(0.0) as usize;
+            let x1 = (a.x.max(b.x).max(c.x).ceil() as usize).min(size - 1);
+            let y0 = a.y.min(b.y).min(c.y).floor().max(0.0) as usize;
+            let y1 = (a.y.max(b.y).max(c.y).ceil() as usize).min(size - 1);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);
+                    let w1 = ((px - a.x) * (c.y - a.y) - (c.x - a.x) * (py - a.y)) / area;
+                    let w2 = ((b.x - a.x) * (py - a.y) - (px - a.x) * (b.y - a.y)) / area;
+                    let w0 = 1.0 - w1 - w2;
+                    if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
+                        continue;
+                    }
+                    let z = a.z * w0 + b.z * w1 + c.z * w2;
+                    let k = y * size + x;
+                    if z > depth[k] {
+                        depth[k] = z;
+                        gbuf[k] = (obj as u32, ti as u32, w1, w2);
+                    }
                 }
             }
         }
@@ -93,12 +123,25 @@ pub fn render(
     let view = Vec3::Z;
     let pixels: Vec<Vec3> = gbuf
         .par_iter()
-        .map(|&(ti, w1, w2)| {
+        .map(|&(obj, ti, w1, w2)| {
             if ti == u32::MAX {
                 return Vec3::splat(0.02);
             }
-            let t = mesh.triangles[ti as usize];
             let w0 = 1.0 - w1 - w2;
+            if obj > 0 {
+                let p = &props[obj as usize - 1];
+                let t = p.mesh.triangles[ti as usize];
+                let at = |v: &[Vec3]| {
+                    v[t[0] as usize] * w0 + v[t[1] as usize] * w1 + v[t[2] as usize] * w2
+                };
+                let uv = p.mesh.uvs[t[0] as usize] * w0
+                    + p.mesh.uvs[t[1] as usize] * w1
+                    + p.mesh.uvs[t[2] as usize] * w2;
+                let n = (rot * at(&p.mesh.normals)).normalize_or(Vec3::Z);
+                let alpha = (p.roughness * p.roughness).max(0.02);
+                return shade(n, (p.albedo)(uv), alpha, p.f0, &lights, ambient, view);
+            }
+            let t = mesh.triangles[ti as usize];
             let uv = (mesh.uvs[t[0] as usize] * w0
                 + mesh.uvs[t[1] as usize] * w1
                 + mesh.uvs[t[2] as usize] * w2)
@@ -126,27 +169,40 @@ pub fn render(
             let nn = (tan * nt.x + bit * nt.y + n * nt.z).normalize_or(n);
             let alpha = s(&tex.maps.roughness).powi(2).max(0.02);
             let f0 = s(&tex.maps.specular) * crate::texture_set::SPECULAR_SCALE;
-            let mut c = albedo * ambient;
-            for (l, e) in lights {
-                let nl = nn.dot(l);
-                if nl <= 0.0 {
-                    continue;
-                }
-                let h = (l + view).normalize();
-                let nh = nn.dot(h).max(0.0);
-                let nv = nn.dot(view).max(1e-3);
-                let d = alpha * alpha / (PI * (nh * nh * (alpha * alpha - 1.0) + 1.0).powi(2));
-                let f = f0 + (1.0 - f0) * (1.0 - view.dot(h).max(0.0)).powi(5);
-                let k = alpha * 0.5;
-                let g = (nl / (nl * (1.0 - k) + k)) * (nv / (nv * (1.0 - k) + k));
-                let spec = d * f * g / (4.0 * nl * nv);
-                c += e * nl * (albedo * (1.0 - f) / PI + Vec3::splat(spec));
-            }
-            c
+            shade(nn, albedo, alpha, f0, &lights, ambient, view)
         })
         .collect();
     [0, 1, 2]
         .map(|k| Map::from_vec(size, size, pixels.iter().map(|p| p[k]).collect()).expect("size"))
+}
+
+/// Lambert diffuse plus a GGX lobe (Smith–Schlick visibility) under `lights` and an ambient term.
+fn shade(
+    nn: Vec3,
+    albedo: Vec3,
+    alpha: f32,
+    f0: f32,
+    lights: &[(Vec3, Vec3)],
+    ambient: Vec3,
+    view: Vec3,
+) -> Vec3 {
+    let mut c = albedo * ambient;
+    for &(l, e) in lights {
+        let nl = nn.dot(l);
+        if nl <= 0.0 {
+            continue;
+        }
+        let h = (l + view).normalize();
+        let nh = nn.dot(h).max(0.0);
+        let nv = nn.dot(view).max(1e-3);
+        let d = alpha * alpha / (PI * (nh * nh * (alpha * alpha - 1.0) + 1.0).powi(2));
+        let f = f0 + (1.0 - f0) * (1.0 - view.dot(h).max(0.0)).powi(5);
+        let k = alpha * 0.5;
+        let g = (nl / (nl * (1.0 - k) + k)) * (nv / (nv * (1.0 - k) + k));
+        let spec = d * f * g / (4.0 * nl * nv);
+        c += e * nl * (albedo * (1.0 - f) / PI + Vec3::splat(spec));
+    }
+    c
 }
 
 /// A UV sphere of `radius` mm with per-corner tangents (for previewing patches).
@@ -254,6 +310,7 @@ pub fn contact_sheet(
     bio: &BioMaps,
     surface: &Surface,
     mesh: Option<&(TriMesh, Vec<[f32; 4]>)>,
+    props: &[Prop],
 ) -> [Map; 3] {
     const PANEL: usize = 512;
     let r = render_maps;
@@ -264,9 +321,10 @@ pub fn contact_sheet(
                 wrap: false,
                 uv_scale: glam::Vec2::ONE,
             };
+            // Front and three-quarter (45°) views.
             vec![
-                render(m, t, &tex, 0.0, PANEL),
-                render(m, t, &tex, 0.6, PANEL),
+                render_with(m, t, &tex, props, 0.0, PANEL),
+                render_with(m, t, &tex, props, std::f32::consts::FRAC_PI_4, PANEL),
             ]
         }
         None => {

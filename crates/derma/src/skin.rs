@@ -40,8 +40,10 @@ pub struct SkinArgs {
     /// Print the full default configuration with units and sources, then exit.
     #[arg(long)]
     print_config: bool,
-    /// Write the built-in head (head.obj, mm) and its default fields (PNG) into DIR, then exit:
-    /// paint over the fields and run `derma skin --mesh DIR/head.obj --fields DIR`.
+    /// Write the built-in head (head.obj: the skin in mm; head_parts.obj: eyes, lashes, teeth,
+    /// tongue; head.glb: every part a named node, metres, the 52 face units as morph targets) and
+    /// its default fields, regions and regional biology (PNG) into DIR, then exit: paint over
+    /// the fields and run `derma skin --mesh DIR/head.obj --fields DIR`.
     #[arg(long, value_name = "DIR")]
     export_template: Option<PathBuf>,
     /// Bio → render conversion: `table` (the Monte Carlo match table, default; adds
@@ -51,6 +53,16 @@ pub struct SkinArgs {
     /// A match table from `derma match fit` instead of the built-in one (implies table).
     #[arg(long, value_name = "FILE.dtab", conflicts_with = "appearance")]
     table: Option<PathBuf>,
+    /// Skin tone preset (ITA° bands of Chardon et al. 1991); sets person.ita_deg. Default: the
+    /// config's person (light, 48°).
+    #[arg(long, value_parser = parse_preset)]
+    preset: Option<derma_skin::regional::Preset>,
+    /// Sex of the person (beard follicles for male). Overrides person.sex.
+    #[arg(long, value_enum)]
+    sex: Option<SexArg>,
+    /// Age in years (wrinkles). Overrides person.age_years.
+    #[arg(long)]
+    age: Option<f32>,
     /// Where `[detail]`'s exemplar synthesis runs (the same files on every device).
     #[command(flatten)]
     device: crate::DeviceArg,
@@ -60,6 +72,40 @@ pub struct SkinArgs {
 pub enum AppearanceArg {
     Table,
     Analytic,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SexArg {
+    Male,
+    Female,
+}
+
+fn parse_preset(s: &str) -> std::result::Result<derma_skin::regional::Preset, String> {
+    derma_skin::regional::Preset::parse(s).ok_or_else(|| {
+        format!(
+            "'{s}': expected one of {}",
+            derma_skin::regional::Preset::ALL
+                .map(|p| p.name())
+                .join(", ")
+        )
+    })
+}
+
+/// Applies --preset, --sex and --age to the config's person.
+fn apply_person(cfg: &mut SkinConfig, args: &SkinArgs) {
+    use derma_skin::regional::Sex;
+    if let Some(s) = args.sex {
+        cfg.person.sex = match s {
+            SexArg::Male => Sex::Male,
+            SexArg::Female => Sex::Female,
+        };
+    }
+    if let Some(a) = args.age {
+        cfg.person.age_years = a;
+    }
+    if let Some(p) = args.preset {
+        cfg.person = p.person(cfg.person.sex, cfg.person.age_years);
+    }
 }
 
 fn parse_patch(s: &str) -> std::result::Result<[f32; 2], String> {
@@ -82,7 +128,9 @@ pub fn run(args: SkinArgs, bars: &Bars) -> Result<()> {
         return crate::output::text(&SkinConfig::print_default());
     }
     if let Some(dir) = &args.export_template {
-        let files = derma_skin::template::export(dir)
+        let mut cfg = SkinConfig::default();
+        apply_person(&mut cfg, &args);
+        let files = derma_skin::builtin_head::export(dir, &cfg.person)
             .with_context(|| format!("cannot export the template to '{}'", dir.display()))?;
         bars.say(format!(
             "wrote {} files to {}: {}",
@@ -104,6 +152,7 @@ pub fn run(args: SkinArgs, bars: &Bars) -> Result<()> {
     if let Some(s) = args.seed {
         cfg.seed = s;
     }
+    apply_person(cfg, &args);
     if let Some(p) = args.patch {
         cfg.surface.kind = SurfaceKind::Patch;
         cfg.surface.patch_size_mm = p;

@@ -170,6 +170,9 @@ fn exported_template_round_trips_through_mesh_and_fields() {
     assert!(ok, "{err}");
     for f in [
         "head.obj",
+        "head.glb",
+        "cheeks.png",
+        "regional_blood.png",
         "scalp.png",
         "lips.png",
         "freckles.png",
@@ -191,14 +194,15 @@ fn exported_template_round_trips_through_mesh_and_fields() {
     ]);
     assert!(ok, "{err}");
     let r = report(&out);
-    // The same thesis counts as the built-in default (fields quantised to 16 bits; ±2 %).
-    for (kind, want) in [
-        ("follicle", 170_000.0),
-        ("freckle", 3000.0),
-        ("mole", 700.0),
-    ] {
+    let def = d.join("default");
+    let (ok, err) = run(&["skin", "--size", "64", "--out", def.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let rd = report(&def);
+    // The same counts as the built-in default (fields quantised to 16 bits; ±2 %).
+    for kind in ["follicle", "freckle", "mole"] {
         let got = r["counts"][kind].as_f64().unwrap();
-        assert!((got - want).abs() < 0.02 * want, "{kind}: {got}");
+        let want = rd["counts"][kind].as_f64().unwrap();
+        assert!((got - want).abs() < 0.02 * want, "{kind}: {got} vs {want}");
     }
     assert!(r["counts"]["wrinkle"].as_u64().unwrap() > 0);
 }

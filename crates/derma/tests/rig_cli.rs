@@ -103,13 +103,30 @@ fn build_eval_animate_transfer_from_skin_maps() {
     assert!(ok, "{err}");
     assert!(out.contains("flush=1.0000"), "{out}");
     let got = blood(&h);
+    // On the head's surface (the gutter between UV charts, flat after dilation, has σ_n = 0 at
+    // some basis nodes, where eq. 3's ratio is undefined and the floor takes over).
+    let raster =
+        derma_core::raster::UvRaster::new(&derma_skin::builtin_head::head_mesh(), 256, 256);
     let worst = got
         .data()
         .iter()
         .zip(flushed.data())
-        .map(|(a, b)| (a - b).abs())
+        .enumerate()
+        .filter(|(i, _)| raster.covered(*i))
+        .map(|(_, (a, b))| (a - b).abs())
         .fold(0.0f32, f32::max);
-    assert!(worst < 1e-5, "affine target off by {worst}");
+    let at = got
+        .data()
+        .iter()
+        .zip(flushed.data())
+        .position(|(a, b)| (a - b).abs() == worst)
+        .unwrap();
+    assert!(
+        worst < 1e-5,
+        "affine target off by {worst} at {at}: {} vs {}",
+        got.data()[at],
+        flushed.data()[at]
+    );
     let (ok, out, _) = run(&[
         "rig",
         "eval",

@@ -1,0 +1,485 @@
+//! The default fields on derma's built-in head (`derma-head`): feature probability fields,
+//! wrinkle vector fields and the regional biology maps, all built from the head's named regions
+//! and landmarks and rasterised on its UV layout.
+//!
+//! Feature fields follow thesis §5.3 (cysts, moles, freckles, follicles, wrinkles) on the real
+//! regions; pores follow the regional follicle densities of Pagnoni et al. 1994; the wrinkle
+//! families (forehead, glabellar, crow's feet, nasolabial, under-eye) follow the face's
+//! expression lines. The regional biology is in [`crate::regional`].
+
+use crate::field::FieldSet;
+use crate::regional::{self, Person};
+use derma_core::mesh::TriMesh;
+use derma_core::raster::{apply_dilation, dilation_sources, UvRaster};
+use derma_core::Map;
+use derma_head::{regions, Head, Regions, REGIONS};
+use glam::{Vec2, Vec3};
+
+/// Resolution of the generated fields.
+pub const FIELD_RESOLUTION: usize = 1024;
+
+/// Peak densities (1/cm² where the field is 1) that reproduce the thesis' counts (§5.3) on the
+/// built-in head with its default fields: density = count / ∫ field dA. The integrals are
+/// recomputed by the test `default_densities_reproduce_thesis_counts`.
+pub struct Densities {
+    /// Cysts.
+    pub cyst: f32,
+    /// Moles.
+    pub mole: f32,
+    /// Freckles.
+    pub freckle: f32,
+    /// Wrinkle start points.
+    pub wrinkle: f32,
+    /// Scalp follicles.
+    pub follicle: f32,
+    /// Eyebrow follicles.
+    pub eyebrow: f32,
+}
+
+/// Counts the densities are derived from: thesis §5.3 (cysts 5000, moles 700, freckles 3000,
+/// follicles 170 000 on the scalp); eyebrows ≈ 250 hairs per brow; 40 wrinkles (authored).
+pub const THESIS_COUNTS: [(&str, f32); 6] = [
+    ("cysts", 5000.0),
+    ("moles", 700.0),
+    ("freckles", 3000.0),
+    ("wrinkles", 40.0),
+    ("scalp", 170_000.0),
+    ("eyebrows", 500.0),
+];
+
+/// Field integrals on the built-in head (cm², printed by the test): cysts 461.98, moles 784.60,
+/// freckles 105.39, wrinkles 99.050, scalp 531.29 (without the beard), eyebrows 6.139. The wrinkle
+/// count is for age 40 (`regional::age_factor` = 1).
+pub const DEFAULT_DENSITY: Densities = Densities {
+    cyst: 10.823,
+    mole: 0.89218,
+    freckle: 28.465,
+    wrinkle: 0.40383,
+    follicle: 319.98,
+    eyebrow: 81.444,
+};
+
+/// Beard follicles relative to the scalp follicles' peak density: in men the follicle field is
+/// scalp + 0.17 · beard, about 57 terminal hairs/cm² on the beard area at the default scalp
+/// density — an authored figure of the order of the beard densities reported in grooming and
+/// hair-transplant practice (tens per cm², several times below the scalp's); women keep vellus
+/// hair, which is not painted.
+pub const BEARD_TO_SCALP: f32 = 0.17;
+
+#[inline]
+fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
+    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// The built-in head's skin mesh (mm).
+pub fn head_mesh() -> TriMesh {
+    Head::builtin().skin.clone()
+}
+
+/// Names of the feature fields, in the order [`feature_values`] returns them.
+pub const FIELD_NAMES: [&str; 10] = [
+    "scalp", "eyebrows", "eyes", "lips", "face", "freckles", "moles", "cysts", "pores", "wrinkles",
+];
+
+/// Distance from `p` to the segment a–b in the xy plane, and the unit direction of the segment.
+fn segment(p: Vec2, a: Vec2, b: Vec2) -> (f32, Vec2) {
+    let ab = b - a;
+    let t = ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+    ((p - (a + t * ab)).length(), ab.normalize())
+}
+
+/// Feature fields and the wrinkle direction (a 3D direction in the skin, and a length in [0, 1])
+/// at one surface point with region weights `w`.
+fn feature_values(
+    r: &Regions,
+    w: &regions::Weights,
+    p: Vec3,
+    person: &Person,
+) -> ([f32; 10], Vec3, f32) {
+    let g = |name: &str| w[regions::index(name).expect("region")];
+    let lm = r.landmarks();
+    let skin = 1.0 - g("mouth_interior").max(g("eye_sockets"));
+    let scalp = g("scalp");
+    let beard = if person.sex == regional::Sex::Male {
+        BEARD_TO_SCALP * g("beard")
+    } else {
+        0.0
+    };
+    let eyebrows = g("eyebrows");
+    let eyes = (g("eyelids") + g("eye_sockets")).min(1.0);
+    let lips = g("lips");
+    let face = g("face");
+    // Freckles: where the sun falls — cheeks, nose, forehead (thesis §5.3.5).
+    let freckles = (g("cheeks") + 0.9 * g("nose") + 0.35 * g("forehead") + 0.3 * g("upper_lip")
+        - lips
+        - eyebrows)
+        .clamp(0.0, 1.0);
+    let moles = (skin * (1.0 - 0.7 * scalp) - lips).clamp(0.0, 1.0);
+    let cysts = (face * (1.0 - eyes) * (1.0 - lips)).clamp(0.0, 1.0);
+    // Pores: facial follicle density is highest on the nose, then cheeks and chin, lower on the
+    // forehead and the rest of the face (Pagnoni et al. 1994, Br J Dermatol 131:862, cyanoacrylate
+    // biopsies by region); relative weights authored in that order.
+    let pores = (g("nose")
+        + 0.75 * g("cheeks")
+        + 0.6 * g("chin")
+        + 0.55 * g("forehead")
+        + 0.35 * (face - g("nose") - g("cheeks") - g("chin") - g("forehead")).max(0.0)
+        - eyes
+        - lips
+        - eyebrows)
+        .clamp(0.0, 1.0);
+    // Wrinkle families and their directions.
+    let eye_l = lm.get("eye_centre_left");
+    let side = if p.x >= 0.0 { "left" } else { "right" };
+    let s = if p.x >= 0.0 { 1.0 } else { -1.0 };
+    let eye = lm.get(&format!("eye_centre_{side}"));
+    let co = lm.get(&format!("canthus_outer_{side}"));
+    let mc = lm.get(&format!("mouth_corner_{side}"));
+    let sn = lm.get("subnasale");
+    let q = Vec2::new(p.x, p.y);
+    let mut best = (0.0f32, Vec3::ZERO, 0.0f32);
+    let mut consider = |weight: f32, dir: Vec3, len: f32| {
+        if weight > best.0 {
+            best = (weight, dir, len);
+        }
+    };
+    // Forehead lines: horizontal, across the middle of the forehead.
+    consider(
+        g("forehead") * smoothstep(eye_l.y + 28.0, eye_l.y + 36.0, p.y),
+        Vec3::X,
+        0.9,
+    );
+    // Glabellar lines: vertical between the brows.
+    let glab = face
+        * smoothstep(9.0, 5.0, p.x.abs())
+        * smoothstep(eye.y + 8.0, eye.y + 14.0, p.y)
+        * smoothstep(eye.y + 32.0, eye.y + 26.0, p.y);
+    consider(glab, Vec3::Y, 0.35);
+    // Crow's feet: radiating from the outer canthus, 5–18 mm lateral of it.
+    let dc = Vec2::new(p.x - co.x, p.y - co.y);
+    let crow =
+        face * (1.0 - eyes) * smoothstep(20.0, 12.0, dc.length()) * smoothstep(0.0, 4.0, dc.x * s);
+    let radial = dc.normalize_or(Vec2::X);
+    consider(crow, Vec3::new(radial.x, radial.y, 0.0), 0.3);
+    // Nasolabial folds: from beside the nasal ala to 8 mm beyond the mouth corner.
+    let a = Vec2::new(s * 20.0, sn.y + 6.0);
+    let b = Vec2::new(mc.x + s * 8.0, mc.y - 10.0);
+    let (d, along) = segment(q, a, b);
+    consider(
+        face * (1.0 - lips) * smoothstep(5.0, 2.0, d),
+        Vec3::new(along.x, along.y, 0.0),
+        0.8,
+    );
+    // Under-eye lines: a band 9–14 mm below the eye centre across the lower lid.
+    let under = face
+        * smoothstep(eye.y - 16.0, eye.y - 12.0, p.y)
+        * smoothstep(eye.y - 8.0, eye.y - 11.0, p.y)
+        * smoothstep(16.0, 10.0, (p.x - eye.x).abs());
+    consider(under, Vec3::X, 0.35);
+    let wrinkles = best.0 * (1.0 - lips);
+    (
+        [
+            (scalp + beard).clamp(0.0, 1.0),
+            eyebrows,
+            eyes,
+            lips,
+            face,
+            freckles,
+            moles,
+            cysts,
+            pores,
+            wrinkles,
+        ]
+        .map(|v| v.clamp(0.0, 1.0)),
+        best.1,
+        best.2,
+    )
+}
+
+/// Per-texel values: feature fields, wrinkle vector (UV direction encoded, length), regional
+/// biology, region weights.
+struct Texel {
+    f: [f32; 10],
+    wv: [f32; 3],
+    bio: [f32; regional::CHANNELS.len()],
+    regions: regions::Weights,
+}
+
+/// The default fields of the built-in head for `person`: feature fields ([`FIELD_NAMES`]), the
+/// wrinkle vector field, every region mask (by region name, where it does not clash with a
+/// feature field) and the regional biology maps ([`regional::CHANNELS`]); rasterised at
+/// [`FIELD_RESOLUTION`] on `mesh` (the built-in skin) and dilated into the gutter.
+pub fn default_fields(mesh: &TriMesh, person: &Person) -> FieldSet {
+    fields_on(mesh, &Head::builtin().regions, person)
+}
+
+/// The default fields of any mesh whose landmarks define `regions`.
+pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet {
+    use rayon::prelude::*;
+    let n = FIELD_RESOLUTION;
+    let raster = UvRaster::new(mesh, n, n);
+    let covered: Vec<bool> = (0..n * n).map(|i| raster.covered(i)).collect();
+    let gains = smoothed_gains(mesh, regions, person, BIO_SMOOTHING_MM);
+    let uv_of = |i: usize| {
+        Vec2::new(
+            ((i % n) as f32 + 0.5) / n as f32,
+            1.0 - ((i / n) as f32 + 0.5) / n as f32,
+        )
+    };
+    let values: Vec<Texel> = (0..n * n)
+        .into_par_iter()
+        .map(|i| {
+            if !covered[i] {
+                return Texel {
+                    f: [0.0; 10],
+                    wv: [0.5, 0.5, 0.0],
+                    bio: regional::NEUTRAL,
+                    regions: [0.0; REGIONS.len()],
+                };
+            }
+            let p = raster.position[i];
+            let w = regions.weights(p, uv_of(i));
+            let (f, dir3, len) = feature_values(regions, &w, p, person);
+            // The 3D wrinkle direction in UV coordinates: least squares on the texel's Jacobian
+            // (central differences of the rasterised positions).
+            let (x, y) = (i % n, i / n);
+            let at = |xx: usize, yy: usize| {
+                let j = yy * n + xx;
+                covered[j].then(|| raster.position[j])
+            };
+            let du = match (at((x + 1).min(n - 1), y), at(x.saturating_sub(1), y)) {
+                (Some(a), Some(b)) => (a - b) * (n as f32 / 2.0),
+                _ => Vec3::ZERO,
+            };
+            let dv = match (at(x, y.saturating_sub(1)), at(x, (y + 1).min(n - 1))) {
+                (Some(a), Some(b)) => (a - b) * (n as f32 / 2.0),
+                _ => Vec3::ZERO,
+            };
+            let (a11, a12, a22) = (du.dot(du), du.dot(dv), dv.dot(dv));
+            let det = a11 * a22 - a12 * a12;
+            let wv = if len > 0.0 && det > 1e-9 {
+                let (b1, b2) = (du.dot(dir3), dv.dot(dir3));
+                let d = Vec2::new(a22 * b1 - a12 * b2, a11 * b2 - a12 * b1).normalize_or_zero();
+                [0.5 + 0.5 * d.x, 0.5 + 0.5 * d.y, len]
+            } else {
+                [0.5, 0.5, 0.0]
+            };
+            let t = mesh.triangles[raster.triangle[i] as usize];
+            let [b1, b2] = raster.bary[i];
+            let bio = [0, 1, 2, 3].map(|c| {
+                gains[t[0] as usize][c] * (1.0 - b1 - b2)
+                    + gains[t[1] as usize][c] * b1
+                    + gains[t[2] as usize][c] * b2
+            });
+            Texel {
+                f,
+                wv,
+                bio,
+                regions: w,
+            }
+        })
+        .collect();
+    let src = dilation_sources(&covered, n, n);
+    let mk = |f: &(dyn Fn(&Texel) -> f32 + Sync)| {
+        let mut m = Map::from_vec(n, n, values.par_iter().map(f).collect()).expect("size");
+        if let Some(src) = &src {
+            apply_dilation(m.data_mut(), src);
+        }
+        m
+    };
+    let mut set = FieldSet::default();
+    for (k, name) in FIELD_NAMES.iter().enumerate() {
+        set.scalars.insert((*name).into(), mk(&|v| v.f[k]));
+    }
+    for (k, name) in REGIONS.iter().enumerate() {
+        set.scalars
+            .entry((*name).into())
+            .or_insert_with(|| mk(&|v| v.regions[k]));
+    }
+    for (k, name) in regional::CHANNELS.iter().enumerate() {
+        set.scalars.insert((*name).into(), mk(&|v| v.bio[k]));
+    }
+    set.vectors.insert(
+        "wrinkle_vectors".into(),
+        [mk(&|v| v.wv[0]), mk(&|v| v.wv[1]), mk(&|v| v.wv[2])],
+    );
+    set
+}
+
+/// Smoothing of the regional biology over the surface (mm): no anatomical boundary is sharp in
+/// blood or pigment; facial hemoglobin maps vary smoothly on the scale of a centimetre
+/// (Jimenez et al. 2010, fig. 4).
+pub const BIO_SMOOTHING_MM: f32 = 8.0;
+
+/// Regional biology per vertex of `mesh`, diffused over the surface to a Gaussian of about
+/// `sigma_mm`: vertices at one position (UV seams) are welded, then uniform Laplacian smoothing
+/// x ← (x + Σ neighbours) / (1 + degree) runs N = (7/3)(σ/ē)² times (ē the mean edge length; each
+/// step adds about (3/7) ē² of variance per axis on a triangulated quad grid).
+fn smoothed_gains(
+    mesh: &TriMesh,
+    regions: &Regions,
+    person: &Person,
+    sigma_mm: f32,
+) -> Vec<[f32; 4]> {
+    use std::collections::HashMap;
+    let key = |p: Vec3| (p * 1e3).round().as_ivec3().to_array();
+    let mut weld: HashMap<[i32; 3], u32> = HashMap::new();
+    let id: Vec<u32> = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            let n = weld.len() as u32;
+            *weld.entry(key(*p)).or_insert(n)
+        })
+        .collect();
+    let n = weld.len();
+    let mut value = vec![[0.0f32; 4]; n];
+    let mut seen = vec![false; n];
+    for (v, &w) in id.iter().enumerate() {
+        if !seen[w as usize] {
+            seen[w as usize] = true;
+            let r = regions.weights(mesh.positions[v], mesh.uvs[v]);
+            value[w as usize] = regional::gains(&r, person);
+        }
+    }
+    let mut nbrs: Vec<Vec<u32>> = vec![Vec::new(); n];
+    let (mut edge_sum, mut edges) = (0.0f64, 0usize);
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
+            let (wa, wb) = (id[a], id[b]);
+            if wa != wb && !nbrs[wa as usize].contains(&wb) {
+                nbrs[wa as usize].push(wb);
+                nbrs[wb as usize].push(wa);
+                edge_sum += (mesh.positions[a] - mesh.positions[b]).length() as f64;
+                edges += 1;
+            }
+        }
+    }
+    let e = (edge_sum / edges.max(1) as f64) as f32;
+    let steps = ((7.0 / 3.0) * (sigma_mm / e).powi(2)).ceil() as usize;
+    let mut next = value.clone();
+    for _ in 0..steps {
+        for i in 0..n {
+            let mut acc = value[i];
+            for &j in &nbrs[i] {
+                for c in 0..4 {
+                    acc[c] += value[j as usize][c];
+                }
+            }
+            let k = 1.0 / (1 + nbrs[i].len()) as f32;
+            next[i] = acc.map(|x| x * k);
+        }
+        std::mem::swap(&mut value, &mut next);
+    }
+    id.iter().map(|&w| value[w as usize]).collect()
+}
+
+/// The head's parts for the preview: eyes (derma-head's default iris and sclera), eyelashes,
+/// teeth and tongue, with flat materials.
+pub fn props() -> Vec<crate::preview::Prop<'static>> {
+    // Linear albedos: enamel ~0.6–0.7 (ivory), tongue mucosa pink, lashes near black.
+    static TEETH: fn(Vec2) -> Vec3 = |_| Vec3::new(0.62, 0.56, 0.45);
+    static TONGUE: fn(Vec2) -> Vec3 = |_| Vec3::new(0.42, 0.12, 0.11);
+    static LASHES: fn(Vec2) -> Vec3 = |_| Vec3::new(0.02, 0.015, 0.012);
+    static EYE: fn(Vec2) -> Vec3 = derma_head::eye::default_albedo;
+    Head::builtin()
+        .parts
+        .iter()
+        .map(|p| {
+            let (albedo, roughness, f0): (&'static (dyn Fn(Vec2) -> Vec3 + Sync), f32, f32) =
+                if p.name.starts_with("eye_") {
+                    // The cornea's tear film: glossy, F0 of water/cornea (n ≈ 1.376) ≈ 0.025.
+                    (&EYE, 0.08, 0.025)
+                } else if p.name.starts_with("teeth") {
+                    (&TEETH, 0.3, 0.04)
+                } else if p.name == "tongue" {
+                    (&TONGUE, 0.35, 0.03)
+                } else {
+                    (&LASHES, 0.6, 0.04)
+                };
+            crate::preview::Prop {
+                mesh: &p.mesh,
+                albedo,
+                roughness,
+                f0,
+            }
+        })
+        .collect()
+}
+
+/// Writes the built-in head for artists to start from: `head.obj` (the skin, mm), `head_parts.obj`
+/// (eyes, lashes, teeth, tongue as named objects), `head.glb` (metres, every part a named node,
+/// the 52 face units as morph targets) and every default field as a 16-bit PNG (`NAME.png`,
+/// `wrinkle_vectors.png` as RGB) — the layout `--fields` reads.
+pub fn export(dir: &std::path::Path, person: &Person) -> crate::Result<Vec<String>> {
+    derma_core::atomic::ensure_writable_dir(dir)?;
+    let head = Head::builtin();
+    derma_head::export::write_obj(head, &dir.join("head.obj"), &dir.join("head_parts.obj"))
+        .map_err(crate::SkinError::from_head)?;
+    derma_head::export::write_glb(head, &dir.join("head.glb"))
+        .map_err(crate::SkinError::from_head)?;
+    let fields = default_fields(&head.skin, person);
+    let mut written = vec![
+        "head.obj".to_string(),
+        "head_parts.obj".to_string(),
+        "head.glb".to_string(),
+    ];
+    for (name, m) in &fields.scalars {
+        derma_core::image_io::write_png16(&dir.join(format!("{name}.png")), &[m])?;
+        written.push(format!("{name}.png"));
+    }
+    for (name, [r, g, b]) in &fields.vectors {
+        derma_core::image_io::write_png16(&dir.join(format!("{name}.png")), &[r, g, b])?;
+        written.push(format!("{name}.png"));
+    }
+    Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// ∫ field dA (cm²) of each default field on the head at the default scatter resolution
+    /// (for a woman: the scalp field without the beard, whose follicles come on top in men).
+    fn field_areas() -> Vec<(&'static str, f64)> {
+        let m = head_mesh();
+        let person = Person {
+            sex: regional::Sex::Female,
+            ..Person::default()
+        };
+        let fields = default_fields(&m, &person);
+        let tangents = crate::surface::mikktspace_tangents(&m);
+        let s = crate::surface::Surface::mesh(&m, &tangents, 1024, 1024);
+        THESIS_COUNTS
+            .iter()
+            .map(|(name, _)| {
+                let f = &fields.scalars[*name];
+                let sm = crate::scatter::Sampler::new(&s, |i| {
+                    let uv = s.uv(i);
+                    f.sample_uv(uv.x, uv.y, false).clamp(0.0, 1.0)
+                });
+                (*name, sm.weighted_area_mm2() / 100.0)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn default_densities_reproduce_thesis_counts() {
+        let d = &DEFAULT_DENSITY;
+        let dens = [d.cyst, d.mole, d.freckle, d.wrinkle, d.follicle, d.eyebrow];
+        let mut ok = true;
+        for (((name, area), (_, count)), density) in
+            field_areas().into_iter().zip(THESIS_COUNTS).zip(dens)
+        {
+            println!(
+                "{name}: area {area:.3} cm², density for {count} = {:.5}",
+                count as f64 / area
+            );
+            let got = density as f64 * area;
+            ok &= (got - count as f64).abs() <= 0.01 * count as f64;
+        }
+        assert!(ok, "densities out of date (see the printed values)");
+    }
+}

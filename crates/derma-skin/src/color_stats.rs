@@ -1,0 +1,105 @@
+//! Colour statistics of a texture set by region: mean CIELAB (D65) and ITA° of the base colour
+//! and the standard deviation of its coarse (block-averaged) variation — the figures the
+//! regional biology is checked against (Chardon et al. 1991 for ITA°).
+
+use crate::regional::ita_deg;
+use crate::TextureSet;
+use derma_core::color::{linear_srgb_to_xyz, xyz_to_lab};
+
+/// Mean colour of one region.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RegionColor {
+    /// Region (a field of the set: a derma-head region name).
+    pub region: String,
+    /// Mean CIELAB (D65) of the texels' base colour (L*, a*, b* averaged in Lab).
+    pub lab: [f64; 3],
+    /// ITA° of the mean.
+    pub ita_deg: f64,
+    /// Texels averaged.
+    pub texels: usize,
+}
+
+/// Lab of every texel of the base colour.
+fn lab_map(set: &TextureSet) -> Vec<[f64; 3]> {
+    let [r, g, b] = &set.render.base_color;
+    (0..r.data().len())
+        .map(|i| {
+            let rgb = [r.data()[i], g.data()[i], b.data()[i]].map(f64::from);
+            xyz_to_lab(linear_srgb_to_xyz(rgb))
+        })
+        .collect()
+}
+
+/// Texels where the field `region` exceeds 0.7 (and the surface is covered).
+fn in_region(set: &TextureSet, region: &str) -> crate::Result<Vec<bool>> {
+    let f = set.fields.scalar(region)?;
+    let s = &set.surface;
+    Ok((0..s.len())
+        .map(|i| {
+            let uv = s.uv(i);
+            s.covered(i) && f.sample_uv(uv.x, uv.y, false) > 0.7
+        })
+        .collect())
+}
+
+/// Mean colour of each named region.
+pub fn region_colors(set: &TextureSet, regions: &[&str]) -> crate::Result<Vec<RegionColor>> {
+    let lab = lab_map(set);
+    regions
+        .iter()
+        .map(|name| {
+            let mask = in_region(set, name)?;
+            let (mut sum, mut n) = ([0.0f64; 3], 0usize);
+            for (l, _) in lab.iter().zip(&mask).filter(|(_, m)| **m) {
+                for k in 0..3 {
+                    sum[k] += l[k];
+                }
+                n += 1;
+            }
+            let mean = sum.map(|v| v / n.max(1) as f64);
+            Ok(RegionColor {
+                region: (*name).into(),
+                lab: mean,
+                ita_deg: ita_deg(mean),
+                texels: n,
+            })
+        })
+        .collect()
+}
+
+/// Standard deviation of L*, a*, b* over `region` after averaging the texels in blocks of about
+/// `block_mm` (blocks wholly inside the region only): the coarse colour variation.
+pub fn coarse_std(set: &TextureSet, region: &str, block_mm: f32) -> crate::Result<[f64; 3]> {
+    let lab = lab_map(set);
+    let mask = in_region(set, region)?;
+    let s = &set.surface;
+    let (w, h) = (s.width, s.height);
+    // Texel size from the mean of the covered texels' areas.
+    let (mut area, mut n) = (0.0f64, 0usize);
+    for i in (0..s.len()).filter(|&i| mask[i]) {
+        area += s.frame(i).texel_area(w, h) as f64;
+        n += 1;
+    }
+    let texel_mm = (area / n.max(1) as f64).sqrt();
+    let b = ((block_mm as f64 / texel_mm).round() as usize).max(1);
+    let mut means: Vec<[f64; 3]> = Vec::new();
+    for by in 0..h / b {
+        for bx in 0..w / b {
+            let idx: Vec<usize> = (0..b * b)
+                .map(|k| (by * b + k / b) * w + bx * b + k % b)
+                .collect();
+            if idx.iter().all(|&i| mask[i]) {
+                let mut m = [0.0f64; 3];
+                for &i in &idx {
+                    for c in 0..3 {
+                        m[c] += lab[i][c] / idx.len() as f64;
+                    }
+                }
+                means.push(m);
+            }
+        }
+    }
+    let k = means.len().max(1) as f64;
+    let mean: [f64; 3] = [0, 1, 2].map(|c| means.iter().map(|m| m[c]).sum::<f64>() / k);
+    Ok([0, 1, 2].map(|c| (means.iter().map(|m| (m[c] - mean[c]).powi(2)).sum::<f64>() / k).sqrt()))
+}

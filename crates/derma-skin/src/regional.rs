@@ -1,0 +1,316 @@
+//! Regional biology and the person: blood volume, oxygenation, melanin and epidermal thickness
+//! vary over a face by region, and skin tone (ITA°), sex and age set the rest. Region gains
+//! multiply the baseline skin of thesis §5.3.1 before features are painted.
+//!
+//! Directions of the regional differences come from the literature cited per row of [`GAINS`];
+//! their magnitudes are authored so that the default head's colour statistics land in the
+//! ranges measured on real faces (see docs/head.md and the `regional_color` tests).
+
+use derma_head::regions::{self, Weights};
+use serde::{Deserialize, Serialize};
+
+/// Names of the regional biology maps (fields), in [`gains`]' order.
+pub const CHANNELS: [&str; 4] = [
+    "regional_blood",
+    "regional_melanin",
+    "regional_oxygenation",
+    "regional_epidermis",
+];
+
+/// The values where no region changes anything: gains 1, oxygenation shift 0.
+pub const NEUTRAL: [f32; 4] = [1.0, 1.0, 0.0, 1.0];
+
+/// Regional change: blood ×, melanin ×, oxygenation + (fraction), epidermis ×.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Gain {
+    /// Region name (derma-head's [`regions::REGIONS`]).
+    pub region: &'static str,
+    /// Factor on the blood volume fraction.
+    pub blood: f32,
+    /// Factor on the melanin volume fraction.
+    pub melanin: f32,
+    /// Added to the oxygen saturation.
+    pub oxygenation: f32,
+    /// Factor on the epidermal thickness.
+    pub epidermis: f32,
+}
+
+const fn g(
+    region: &'static str,
+    blood: f32,
+    melanin: f32,
+    oxygenation: f32,
+    epidermis: f32,
+) -> Gain {
+    Gain {
+        region,
+        blood,
+        melanin,
+        oxygenation,
+        epidermis,
+    }
+}
+
+/// The regional table.
+pub const GAINS: [Gain; 12] = [
+    // Cheeks, nose, forehead and chin carry more superficial blood than the neck: the neutral
+    // hemoglobin maps of Jimenez et al. 2010 (fig. 4) are darkest (most blood) over the cheeks,
+    // nose and around the mouth; facial erythema is highest on the cheeks and nose. Where the
+    // flow is higher the tissue extracts a smaller fraction of the oxygen (Fick's principle), so
+    // the well-perfused regions also carry more oxygenated blood: +0.12–0.2 saturation.
+    g("cheeks", 5.5, 1.0, 0.2, 1.0),
+    g("nose", 6.0, 1.0, 0.2, 1.0),
+    g("forehead", 3.6, 1.0, 0.12, 1.0),
+    g("chin", 2.6, 1.0, 0.0, 1.0),
+    g("upper_lip", 2.8, 1.0, 0.0, 1.0),
+    // The auricle is thin and well perfused and reads redder than the scalp around it (as in
+    // the reference head scan of the issue this follows).
+    g("ears", 4.5, 1.0, 0.15, 1.0),
+    // Periorbital skin: darker and bluish — venous blood of the orbicularis plexus seen through
+    // thin skin, and more melanin (Freitag & Cestari 2007, "What causes dark circles under the
+    // eyes?", J Cosmet Dermatol 6:211–215).
+    g("periorbital", 2.5, 1.5, -0.3, 0.85),
+    // Eyelid skin is the thinnest of the face (Ha et al. 2005, Plast Reconstr Surg 115:1769).
+    g("eyelids", 3.0, 1.3, -0.2, 0.6),
+    // The neck is paler than the face.
+    // The lip vermilion: the lips feature sets its blood (thesis §5.3.6); its capillary loops
+    // lie close under a thin epidermis and carry well-oxygenated blood.
+    g("lips", 1.0, 1.0, 0.2, 1.0),
+    g("neck", 0.9, 0.95, 0.0, 1.0),
+    g("scalp", 1.0, 1.0, 0.0, 1.0),
+    g("eyebrows", 1.2, 1.0, 0.0, 1.0),
+];
+
+/// Regional biology at a point with region weights `w`: 1 + Σ wᵣ (gainᵣ − 1) per channel.
+pub fn gains(w: &Weights, _person: &Person) -> [f32; 4] {
+    let mut out = NEUTRAL;
+    for r in &GAINS {
+        let k = w[regions::index(r.region).expect("a region of derma-head")];
+        out[0] += k * (r.blood - 1.0);
+        out[1] += k * (r.melanin - 1.0);
+        out[2] += k * r.oxygenation;
+        out[3] += k * (r.epidermis - 1.0);
+    }
+    out[0] = out[0].max(0.1);
+    out[1] = out[1].max(0.1);
+    out[3] = out[3].max(0.2);
+    out
+}
+
+/// Sex, for the beard area.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Sex {
+    /// Terminal beard follicles on the beard area.
+    Male,
+    /// Vellus hair only.
+    Female,
+}
+
+/// The person the skin belongs to (`[person]`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Person {
+    /// Skin tone as the individual typology angle of the cheeks and forehead (°).
+    pub ita_deg: f32,
+    /// Set the baseline melanin so the cheeks and forehead come out at `ita_deg`.
+    pub calibrate_melanin: bool,
+    /// Sex.
+    pub sex: Sex,
+    /// Age (years): wrinkle count and depth, lentigines.
+    pub age_years: f32,
+}
+
+impl Default for Person {
+    fn default() -> Self {
+        Preset::Light.person(Sex::Male, 35.0)
+    }
+}
+
+/// The six ITA° skin-colour categories of Chardon et al. 1991 (Int J Cosmet Sci 13:191–208):
+/// very light > 55°, light 41–55°, intermediate 28–41°, tan 10–28°, brown −30–10°, dark < −30°.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Preset {
+    /// ITA > 55°.
+    VeryLight,
+    /// 41–55°.
+    Light,
+    /// 28–41°.
+    Intermediate,
+    /// 10–28°.
+    Tan,
+    /// −30–10°.
+    Brown,
+    /// < −30°.
+    Dark,
+}
+
+impl Preset {
+    /// All presets, lightest first.
+    pub const ALL: [Preset; 6] = [
+        Preset::VeryLight,
+        Preset::Light,
+        Preset::Intermediate,
+        Preset::Tan,
+        Preset::Brown,
+        Preset::Dark,
+    ];
+
+    /// Its command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::VeryLight => "very-light",
+            Preset::Light => "light",
+            Preset::Intermediate => "intermediate",
+            Preset::Tan => "tan",
+            Preset::Brown => "brown",
+            Preset::Dark => "dark",
+        }
+    }
+
+    /// Parses a command-line name.
+    pub fn parse(s: &str) -> Option<Preset> {
+        Preset::ALL.into_iter().find(|p| p.name() == s)
+    }
+
+    /// The ITA° band (Chardon et al. 1991); open ends closed at ±70° for the targets.
+    pub fn band(self) -> (f32, f32) {
+        match self {
+            Preset::VeryLight => (55.0, 70.0),
+            Preset::Light => (41.0, 55.0),
+            Preset::Intermediate => (28.0, 41.0),
+            Preset::Tan => (10.0, 28.0),
+            Preset::Brown => (-30.0, 10.0),
+            Preset::Dark => (-70.0, -30.0),
+        }
+    }
+
+    /// The person of this preset: the middle of the band (−45° for dark).
+    pub fn person(self, sex: Sex, age_years: f32) -> Person {
+        let (lo, hi) = self.band();
+        Person {
+            ita_deg: 0.5 * (lo + hi),
+            calibrate_melanin: true,
+            sex,
+            age_years,
+        }
+    }
+}
+
+/// Individual typology angle (°) of a CIELAB colour: atan((L* − 50) / b*) (Chardon et al. 1991),
+/// computed as atan2 so that it stays monotonic where b* ≤ 0 (the same value for every b* > 0,
+/// which skin always has).
+pub fn ita_deg(lab: [f64; 3]) -> f64 {
+    (lab[0] - 50.0).atan2(lab[2]).to_degrees()
+}
+
+/// Wrinkle count and depth factor for an age: 1 at 40, rising linearly from 0.2 at ≤ 20 to 2.2
+/// at ≥ 70 (authored; wrinkles deepen and multiply with age, e.g. Lemperle et al. 2001's
+/// wrinkle severity grades rise steadily with age).
+pub fn age_factor(age_years: f32) -> f32 {
+    (0.2 + (age_years - 20.0) * 0.04).clamp(0.2, 2.2)
+}
+
+/// The config with the person applied: wrinkles scaled by age, and (with
+/// `person.calibrate_melanin`) the baseline melanin range shifted so that the mean cheek and
+/// forehead texel has the person's ITA° under `appearance`. Returns the config and the
+/// calibrated mean melanin fraction, if calibrated.
+pub fn apply_person(
+    cfg: &crate::SkinConfig,
+    appearance: &dyn derma_shading::Appearance,
+    regional_gains: bool,
+) -> crate::Result<(crate::SkinConfig, Option<f32>)> {
+    let mut out = cfg.clone();
+    let p = &cfg.person;
+    let age = age_factor(p.age_years);
+    out.wrinkle.density_per_cm2 *= age;
+    out.wrinkle.depth_mm.min *= age.sqrt();
+    out.wrinkle.depth_mm.max *= age.sqrt();
+    if !p.calibrate_melanin {
+        return Ok((out, None));
+    }
+    let b = &cfg.baseline;
+    let mid = |r: crate::config::Range| r.min + 0.5 * b.phi * (r.max - r.min);
+    // The cheeks' and forehead's mean blood gain.
+    let gain = |name: &str| {
+        GAINS
+            .iter()
+            .find(|g| g.region == name)
+            .map_or(1.0, |g| g.blood)
+    };
+    let blood_gain = if regional_gains {
+        0.5 * (gain("cheeks") + gain("forehead"))
+    } else {
+        1.0
+    };
+    let texel = |melanin: f32| derma_shading::BioTexel {
+        melanin,
+        pheomelanin: mid(b.pheomelanin),
+        blood: mid(b.blood) * blood_gain,
+        oxygenation: mid(b.oxygenation),
+        stratum_corneum_um: mid(b.stratum_corneum_um),
+        epidermis_um: mid(b.epidermis_um),
+    };
+    let ita_of = |m: f32| {
+        let rgb = appearance.albedo(&texel(m)).map(f64::from);
+        ita_deg(derma_core::color::xyz_to_lab(
+            derma_core::color::linear_srgb_to_xyz(rgb),
+        ))
+    };
+    // ITA falls monotonically as melanin rises; bisect on [0.001, 0.6].
+    let (mut lo, mut hi) = (0.001f32, 0.6f32);
+    let target = p.ita_deg as f64;
+    if ita_of(lo) < target || ita_of(hi) > target {
+        return Err(crate::SkinError::Key {
+            key: "person.ita_deg".into(),
+            detail: format!(
+                "{target}° is outside what melanin 0.001–0.6 reaches under the '{}' appearance ({:.1}° to {:.1}°)",
+                appearance.name(),
+                ita_of(hi),
+                ita_of(lo)
+            ),
+        });
+    }
+    for _ in 0..40 {
+        let m = 0.5 * (lo + hi);
+        if ita_of(m) > target {
+            lo = m;
+        } else {
+            hi = m;
+        }
+    }
+    let m = 0.5 * (lo + hi);
+    // Shift the range so its mean under the baseline noise is m, keeping its width.
+    let half = 0.5 * b.phi * (b.melanin.max - b.melanin.min);
+    let shift = m - (b.melanin.min + half);
+    out.baseline.melanin.min = (b.melanin.min + shift).max(0.0);
+    out.baseline.melanin.max = (b.melanin.max + shift).max(out.baseline.melanin.min);
+    Ok((out, Some(m)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ita_follows_chardon() {
+        // L* = 50 is 0° whatever b*; L* 60, b* 10 is 45°.
+        assert!((ita_deg([50.0, 10.0, 15.0])).abs() < 1e-9);
+        assert!((ita_deg([60.0, 10.0, 10.0]) - 45.0).abs() < 1e-9);
+        for p in Preset::ALL {
+            let (lo, hi) = p.band();
+            let t = p.person(Sex::Female, 30.0).ita_deg;
+            assert!(lo < t && t < hi, "{}", p.name());
+        }
+    }
+
+    #[test]
+    fn regional_gains_are_neutral_outside_regions_and_blend_inside() {
+        let none = [0.0; regions::REGIONS.len()];
+        assert_eq!(gains(&none, &Person::default()), NEUTRAL);
+        let mut w = none;
+        w[regions::index("cheeks").unwrap()] = 0.5;
+        let c = gains(&w, &Person::default());
+        assert!((c[0] - (1.0 + 0.5 * (5.5 - 1.0))).abs() < 1e-6);
+    }
+}
