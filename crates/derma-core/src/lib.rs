@@ -33,6 +33,7 @@ pub mod memory;
 pub mod mesh;
 pub mod numerics;
 pub mod plot;
+pub mod preview;
 pub mod progress;
 pub mod raster;
 pub mod report;

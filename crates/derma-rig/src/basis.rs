@@ -48,7 +48,7 @@ impl BasisOptions {
 pub enum TargetSource<'a> {
     /// A measured or painted hemoglobin map, aligned with the neutral.
     Map(&'a Map),
-    /// A built-in library entry, applied to the neutral's own statistics (template UV layout).
+    /// A built-in library entry, applied to the neutral's own statistics (the built-in head's UV layout).
     Builtin(&'static Expression),
 }
 
@@ -273,10 +273,10 @@ impl Rig {
         }
         let neutral_stats = stats_on_grid(neutral, mask, opts.radius, gw, gh)?;
         let eps = floor_of(&neutral_stats.sigma, opts.sigma_floor);
-        let needs_template = targets
+        let needs_head = targets
             .iter()
             .any(|t| matches!(t.source, TargetSource::Builtin(_)));
-        let points = needs_template.then(|| expression::template_points(gw, gh));
+        let points = needs_head.then(|| expression::head_points(gw, gh));
         let built: Vec<Target> = targets
             .par_iter()
             .map(|t| -> Result<Target> {

@@ -15,7 +15,8 @@ use glam::Vec3;
 /// One region of change.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Region {
-    /// Centre (x, y) in template face millimetres; `x` is mirrored when `paired`.
+    /// Centre (x, y) in canonical face millimetres ([`derma_head::Regions::face_coords`]); `x`
+    /// is mirrored when `paired`.
     pub centre: (f32, f32),
     /// Standard deviations of the Gaussian along x and y (mm).
     pub size: (f32, f32),
@@ -230,7 +231,7 @@ pub fn find(name: &str) -> Option<&'static Expression> {
 }
 
 impl Expression {
-    /// (mean gain, σ gain) at template point `p`.
+    /// (mean gain, σ gain) at point `p` of the built-in head.
     pub fn gains_at(&self, p: Vec3) -> (f32, f32) {
         let (x, y, front) = Head::builtin().regions.face_coords(p);
         if front <= 0.0 {
@@ -255,16 +256,17 @@ impl Expression {
     }
 }
 
-/// Template surface points of a `w × h` UV grid (texel centres), `None` outside the chart.
-pub fn template_points(w: usize, h: usize) -> Vec<Option<Vec3>> {
+/// Surface points of the built-in head on a `w × h` UV grid (texel centres), `None` outside
+/// its charts.
+pub fn head_points(w: usize, h: usize) -> Vec<Option<Vec3>> {
     let raster = derma_core::raster::UvRaster::new(&Head::builtin().skin, w, h);
     (0..w * h)
         .map(|i| raster.covered(i).then(|| raster.position[i]))
         .collect()
 }
 
-/// Gain maps (mean, σ) of `e` on a `w × h` grid of the template's UV layout, from `points`
-/// ([`template_points`]); 1 outside the chart.
+/// Gain maps (mean, σ) of `e` on a `w × h` grid of the built-in head's UV layout, from
+/// `points` ([`head_points`]); 1 outside the charts.
 pub fn gain_maps(e: &Expression, points: &[Option<Vec3>], w: usize, h: usize) -> (Map, Map) {
     let (gm, gs): (Vec<f32>, Vec<f32>) = points
         .iter()
@@ -330,9 +332,9 @@ mod tests {
     }
 
     #[test]
-    fn gain_maps_cover_the_face_of_the_template() {
+    fn gain_maps_cover_the_face_of_the_head() {
         let (w, h) = (64, 64);
-        let pts = template_points(w, h);
+        let pts = head_points(w, h);
         let (gm, _) = gain_maps(find("happiness").unwrap(), &pts, w, h);
         let st = gm.stats(None);
         assert!(st.max > 1.2 && st.min < 0.92, "{st:?}");

@@ -54,7 +54,7 @@ pub struct BuildFiles {
     pub character: CharacterFiles,
     /// Measured or painted target hemoglobin maps, aligned with the neutral: (name, file).
     pub targets: Vec<(String, PathBuf)>,
-    /// Built-in library entries by name, or "all" (they assume the face template's UVs).
+    /// Built-in library entries by name, or "all" (they assume the built-in head's UVs).
     pub builtin: Vec<String>,
     /// Suggested global hemoglobin scale of targets at full weight: (name, scale).
     pub globals: Vec<(String, f32)>,

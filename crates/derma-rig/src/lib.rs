@@ -13,7 +13,7 @@
 //! the GPU), or [`evaluate::FramePlan`] for real-time frames; [`animation`] samples keyframed
 //! weight curves and [`sequence`] renders them to a resumable image sequence; [`from_files`]
 //! builds a rig directory from files, [`maps`] reads and writes the maps, [`preview`] shows a
-//! frame on the face template.
+//! frame on the built-in head.
 
 #![warn(missing_docs)]
 

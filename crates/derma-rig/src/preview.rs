@@ -1,6 +1,6 @@
-//! A look at a frame (Jimenez et al. 2010 fig. 2): the face template rendered with the frame's
+//! A look at a frame (Jimenez et al. 2010 fig. 2): the built-in head rendered with the frame's
 //! colour as base colour, beside the same head shaded by its hemoglobin map as grey (dark =
-//! more blood). Needs maps on the template's UV layout (those `derma skin` paints).
+//! more blood). Needs maps on the built-in head's UV layout (those `derma skin` paints).
 
 use crate::error::Result;
 use derma_core::Map;
@@ -9,39 +9,39 @@ use derma_core::Map;
 /// dark = more blood, clipped (lips and moles saturate so the face's variation shows).
 pub const PREVIEW_BLOOD_TOP: f32 = 0.03;
 
-/// The template head rendered with `rgb` as base colour, and again with the hemoglobin map as
+/// The built-in head rendered with `rgb` as base colour, and again with the hemoglobin map as
 /// display grey (dark = more blood), side by side (linear RGB).
 pub fn preview(rgb: &[Map; 3], h: &Map) -> Result<[Map; 3]> {
-    use derma_skin::preview::render;
-    use derma_skin::texture_set::RenderMaps;
+    use derma_core::preview::{render_with, Textures};
     const PANEL: usize = 512;
-    let mesh = derma_skin::builtin_head::head_mesh();
-    let tangents = derma_skin::surface::mikktspace_tangents(&mesh);
+    let head = derma_head::Head::builtin();
+    let mesh = &head.skin;
+    let tangents = derma_core::mesh::mikktspace_tangents(mesh);
+    let props = head.preview_props();
     let (w, hh) = (h.width(), h.height());
     let flat = |v: f32| Map::filled(w, hh, v);
-    let maps = |base: [Map; 3]| RenderMaps {
-        base_color: base,
-        // Skin-like specular (F0 2.8 %, Kelemen/Jimenez) and roughness, flat normals.
-        roughness: flat(0.45),
-        specular: flat(0.35),
-        normal: [flat(0.0), flat(0.0), flat(1.0)],
-        height_mm: flat(0.0),
-        subsurface: None,
-    };
-    let shade = |m: &RenderMaps| {
-        render(
-            &mesh,
+    // Skin-like specular (F0 = 0.35 × 0.08 = 2.8 %, Kelemen/Jimenez) and roughness, flat normals.
+    let (roughness, specular) = (flat(0.45), flat(0.35));
+    let normal = [flat(0.0), flat(0.0), flat(1.0)];
+    let shade = |base: &[Map; 3]| {
+        render_with(
+            mesh,
             &tangents,
-            &derma_skin::preview::Textures {
-                maps: m,
+            &Textures {
+                base_color: base,
+                normal: &normal,
+                roughness: &roughness,
+                specular: &specular,
+                specular_scale: 0.08,
                 wrap: false,
                 uv_scale: glam::Vec2::ONE,
             },
+            &props,
             0.0,
             PANEL,
         )
     };
-    let color = shade(&maps(rgb.clone()));
+    let color = shade(rgb);
     let grey = Map::from_vec(
         w,
         hh,
@@ -50,7 +50,7 @@ pub fn preview(rgb: &[Map; 3], h: &Map) -> Result<[Map; 3]> {
             .map(|v| derma_core::color::srgb_decode((1.0 - v / PREVIEW_BLOOD_TOP).clamp(0.0, 1.0)))
             .collect(),
     )?;
-    let blood = shade(&maps([grey.clone(), grey.clone(), grey]));
+    let blood = shade(&[grey.clone(), grey.clone(), grey]);
     Ok([0, 1, 2].map(|k| {
         let mut out = Map::filled(2 * PANEL, PANEL, 0.0);
         for y in 0..PANEL {

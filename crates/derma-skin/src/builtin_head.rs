@@ -376,39 +376,6 @@ fn smoothed_gains(
     id.iter().map(|&w| value[w as usize]).collect()
 }
 
-/// The head's parts for the preview: eyes (derma-head's default iris and sclera), eyelashes,
-/// teeth and tongue, with flat materials.
-pub fn props() -> Vec<crate::preview::Prop<'static>> {
-    // Linear albedos: enamel ~0.6–0.7 (ivory), tongue mucosa pink, lashes near black.
-    static TEETH: fn(Vec2) -> Vec3 = |_| Vec3::new(0.62, 0.56, 0.45);
-    static TONGUE: fn(Vec2) -> Vec3 = |_| Vec3::new(0.42, 0.12, 0.11);
-    static LASHES: fn(Vec2) -> Vec3 = |_| Vec3::new(0.02, 0.015, 0.012);
-    static EYE: fn(Vec2) -> Vec3 = derma_head::eye::default_albedo;
-    Head::builtin()
-        .parts
-        .iter()
-        .map(|p| {
-            let (albedo, roughness, f0): (&'static (dyn Fn(Vec2) -> Vec3 + Sync), f32, f32) =
-                if p.name.starts_with("eye_") {
-                    // The cornea's tear film: glossy, F0 of water/cornea (n ≈ 1.376) ≈ 0.025.
-                    (&EYE, 0.08, 0.025)
-                } else if p.name.starts_with("teeth") {
-                    (&TEETH, 0.3, 0.04)
-                } else if p.name == "tongue" {
-                    (&TONGUE, 0.35, 0.03)
-                } else {
-                    (&LASHES, 0.6, 0.04)
-                };
-            crate::preview::Prop {
-                mesh: &p.mesh,
-                albedo,
-                roughness,
-                f0,
-            }
-        })
-        .collect()
-}
-
 /// Writes the built-in head for artists to start from: `head.obj` (the skin, mm), `head_parts.obj`
 /// (eyes, lashes, teeth, tongue as named objects), `head.glb` (metres, every part a named node,
 /// the 52 face units as morph targets) and every default field as a 16-bit PNG (`NAME.png`,

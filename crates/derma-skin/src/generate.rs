@@ -71,7 +71,7 @@ pub fn check_memory(size: usize) -> Result<()> {
 }
 
 /// Builds a skin texture set. Defaults: the given config, the built-in head (or the config's
-/// surface), its template fields, the Monte Carlo match table, [`Device::Auto`] for the
+/// surface), its default fields and regional biology, the Monte Carlo match table, [`Device::Auto`] for the
 /// exemplar detail, all cores, no progress shown.
 pub struct SkinGenerator<'a> {
     config: SkinConfig,
@@ -305,7 +305,8 @@ impl<'a> SkinGenerator<'a> {
         };
         let dilation = surface.dilation();
 
-        // Fields: template defaults, or uniform ones; then a fields directory; then config entries.
+        // Fields: the built-in head's defaults, or uniform ones; then a fields directory; then
+        // config entries.
         job.stage("fields", 1, Unit::Steps);
         if let Some(m) = melanin {
             job.note(Note::info(format!(
@@ -533,7 +534,7 @@ impl TextureSet {
         files.push(outputs::FEATURES);
         job.stage("preview", 1, Unit::Steps);
         let props = if self.inputs.surface == SurfaceKind::Template {
-            crate::builtin_head::props()
+            derma_head::Head::builtin().preview_props()
         } else {
             Vec::new()
         };

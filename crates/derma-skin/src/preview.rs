@@ -1,306 +1,27 @@
-//! The preview: the texture set shaded on its surface under a key and a fill light (Lambert
-//! diffuse plus a GGX specular lobe, Walter et al. 2007) next to a contact sheet of the maps.
-//! A small software rasteriser: enough to judge a texture set at a glance without a renderer.
+//! The texture set's preview: its maps shaded on its surface (derma-core's software renderer,
+//! [`derma_core::preview`]) in front and three-quarter views, next to a contact sheet of the
+//! maps.
 
 use crate::paint::BioMaps;
 use crate::surface::Surface;
 use crate::texture_set::RenderMaps;
-use derma_core::color::srgb_encode;
 use derma_core::mesh::TriMesh;
+use derma_core::preview::{compose, normalised, render, render_with, sphere, tile, Prop, Textures};
 use derma_core::Map;
-use glam::{Mat3, Vec2, Vec3};
-use rayon::prelude::*;
-use std::f32::consts::PI;
 
-/// Textures the renderer samples.
-pub struct Textures<'a> {
-    /// The render maps.
-    pub maps: &'a RenderMaps,
-    /// Repeat the texture (tileable patches).
-    pub wrap: bool,
-    /// UV scale applied before sampling (tiling a patch over the preview sphere).
-    pub uv_scale: Vec2,
-}
-
-/// A part drawn beside the textured surface with its own simple material (eyes, teeth, lashes):
-/// albedo as a function of its UV, one roughness and one F0.
-pub struct Prop<'a> {
-    /// Its mesh (same space as the surface), with normals and UVs.
-    pub mesh: &'a TriMesh,
-    /// Linear albedo at a texture coordinate.
-    pub albedo: &'a (dyn Fn(Vec2) -> Vec3 + Sync),
-    /// GGX roughness (perceptual).
-    pub roughness: f32,
-    /// Normal-incidence Fresnel reflectance.
-    pub f0: f32,
-}
-
-/// Renders `mesh` (with per-corner tangents) seen from direction `view_yaw` (radians about +Y,
-/// 0 = from +Z) into a `size`×`size` linear RGB image with a dark background.
-pub fn render(
-    mesh: &TriMesh,
-    tangents: &[[f32; 4]],
-    tex: &Textures,
-    view_yaw: f32,
-    size: usize,
-) -> [Map; 3] {
-    render_with(mesh, tangents, tex, &[], view_yaw, size)
-}
-
-/// [`render`] with props (drawn with their own materials, depth-tested against the surface);
-/// the view is framed on the surface alone.
-pub fn render_with(
-    mesh: &TriMesh,
-    tangents: &[[f32; 4]],
-    tex: &Textures,
-    props: &[Prop],
-    view_yaw: f32,
-    size: usize,
-) -> [Map; 3] {
-    let rot = Mat3::from_rotation_y(-view_yaw);
-    let pts: Vec<Vec3> = mesh.positions.iter().map(|&p| rot * p).collect();
-    let (lo, hi) = pts.iter().fold(
-        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-        |(a, b), &p| (a.min(p), b.max(p)),
-    );
-    let centre = 0.5 * (lo + hi);
-    let scale = 0.92 * size as f32 / (hi - lo).x.max((hi - lo).y);
-    let to_screen = |p: Vec3| {
-        Vec3::new(
-            (p.x - centre.x) * scale + 0.5 * size as f32,
-            (centre.y - p.y) * scale + 0.5 * size as f32,
-            p.z,
-        )
-    };
-    // G-buffer: object (0 = the surface, k + 1 = prop k), triangle and barycentrics of the
-    // nearest surface per pixel.
-    let mut depth = vec![f32::NEG_INFINITY; size * size];
-    let mut gbuf = vec![(u32::MAX, u32::MAX, 0.0f32, 0.0f32); size * size];
-    let objects = std::iter::once(mesh).chain(props.iter().map(|p| p.mesh));
-    for (obj, m) in objects.enumerate() {
-        let scr: Vec<Vec3> = m.positions.iter().map(|&p| to_screen(rot * p)).collect();
-        for (ti, t) in m.triangles.iter().enumerate() {
-            let [a, b, c] = t.map(|i| scr[i as usize]);
-            let area = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
-            if area.abs() < 1e-12 {
-                continue;
-            }
-            let x0 = a.x.min(b.x).min(c.x).floor().max(0.0) as usize;
-            let x1 = (a.x.max(b.x).max(c.x).ceil() as usize).min(size - 1);
-            let y0 = a.y.min(b.y).min(c.y).floor().max(0.0) as usize;
-            let y1 = (a.y.max(b.y).max(c.y).ceil() as usize).min(size - 1);
-            for y in y0..=y1 {
-                for x in x0..=x1 {
-                    let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);
-                    let w1 = ((px - a.x) * (c.y - a.y) - (c.x - a.x) * (py - a.y)) / area;
-                    let w2 = ((b.x - a.x) * (py - a.y) - (px - a.x) * (b.y - a.y)) / area;
-                    let w0 = 1.0 - w1 - w2;
-                    if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
-                        continue;
-                    }
-                    let z = a.z * w0 + b.z * w1 + c.z * w2;
-                    let k = y * size + x;
-                    if z > depth[k] {
-                        depth[k] = z;
-                        gbuf[k] = (obj as u32, ti as u32, w1, w2);
-                    }
-                }
-            }
+impl RenderMaps {
+    /// The maps as the software renderer's textures.
+    pub fn textures(&self, wrap: bool, uv_scale: glam::Vec2) -> Textures<'_> {
+        Textures {
+            base_color: &self.base_color,
+            normal: &self.normal,
+            roughness: &self.roughness,
+            specular: &self.specular,
+            specular_scale: crate::texture_set::SPECULAR_SCALE,
+            wrap,
+            uv_scale,
         }
     }
-    // Lights in view space: warm key from upper left, cool fill from the right (radiance units).
-    let lights = [
-        (
-            Vec3::new(-0.55, 0.55, 0.63).normalize(),
-            Vec3::new(3.0, 2.85, 2.6),
-        ),
-        (
-            Vec3::new(0.8, 0.1, 0.6).normalize(),
-            Vec3::new(0.55, 0.6, 0.7),
-        ),
-    ];
-    let ambient = Vec3::new(0.08, 0.085, 0.1);
-    let view = Vec3::Z;
-    let pixels: Vec<Vec3> = gbuf
-        .par_iter()
-        .map(|&(obj, ti, w1, w2)| {
-            if ti == u32::MAX {
-                return Vec3::splat(0.02);
-            }
-            let w0 = 1.0 - w1 - w2;
-            if obj > 0 {
-                let p = &props[obj as usize - 1];
-                let t = p.mesh.triangles[ti as usize];
-                let at = |v: &[Vec3]| {
-                    v[t[0] as usize] * w0 + v[t[1] as usize] * w1 + v[t[2] as usize] * w2
-                };
-                let uv = p.mesh.uvs[t[0] as usize] * w0
-                    + p.mesh.uvs[t[1] as usize] * w1
-                    + p.mesh.uvs[t[2] as usize] * w2;
-                let n = (rot * at(&p.mesh.normals)).normalize_or(Vec3::Z);
-                let alpha = (p.roughness * p.roughness).max(0.02);
-                return shade(n, (p.albedo)(uv), alpha, p.f0, &lights, ambient, view);
-            }
-            let t = mesh.triangles[ti as usize];
-            let uv = (mesh.uvs[t[0] as usize] * w0
-                + mesh.uvs[t[1] as usize] * w1
-                + mesh.uvs[t[2] as usize] * w2)
-                * tex.uv_scale;
-            let n = (rot
-                * (mesh.normals[t[0] as usize] * w0
-                    + mesh.normals[t[1] as usize] * w1
-                    + mesh.normals[t[2] as usize] * w2))
-                .normalize_or(Vec3::Z);
-            let tc = |k: usize| Vec3::from_slice(&tangents[3 * ti as usize + k][..3]);
-            let tan = rot * (tc(0) * w0 + tc(1) * w1 + tc(2) * w2);
-            let tan = (tan - n * n.dot(tan)).normalize_or(n.any_orthonormal_vector());
-            let bit = n.cross(tan) * tangents[3 * ti as usize][3];
-            let s = |m: &Map| m.sample_uv(uv.x, uv.y, tex.wrap);
-            let albedo = Vec3::new(
-                s(&tex.maps.base_color[0]),
-                s(&tex.maps.base_color[1]),
-                s(&tex.maps.base_color[2]),
-            );
-            let nt = Vec3::new(
-                s(&tex.maps.normal[0]),
-                s(&tex.maps.normal[1]),
-                s(&tex.maps.normal[2]),
-            );
-            let nn = (tan * nt.x + bit * nt.y + n * nt.z).normalize_or(n);
-            let alpha = s(&tex.maps.roughness).powi(2).max(0.02);
-            let f0 = s(&tex.maps.specular) * crate::texture_set::SPECULAR_SCALE;
-            shade(nn, albedo, alpha, f0, &lights, ambient, view)
-        })
-        .collect();
-    [0, 1, 2]
-        .map(|k| Map::from_vec(size, size, pixels.iter().map(|p| p[k]).collect()).expect("size"))
-}
-
-/// Lambert diffuse plus a GGX lobe (Smith–Schlick visibility) under `lights` and an ambient term.
-fn shade(
-    nn: Vec3,
-    albedo: Vec3,
-    alpha: f32,
-    f0: f32,
-    lights: &[(Vec3, Vec3)],
-    ambient: Vec3,
-    view: Vec3,
-) -> Vec3 {
-    let mut c = albedo * ambient;
-    for &(l, e) in lights {
-        let nl = nn.dot(l);
-        if nl <= 0.0 {
-            continue;
-        }
-        let h = (l + view).normalize();
-        let nh = nn.dot(h).max(0.0);
-        let nv = nn.dot(view).max(1e-3);
-        let d = alpha * alpha / (PI * (nh * nh * (alpha * alpha - 1.0) + 1.0).powi(2));
-        let f = f0 + (1.0 - f0) * (1.0 - view.dot(h).max(0.0)).powi(5);
-        let k = alpha * 0.5;
-        let g = (nl / (nl * (1.0 - k) + k)) * (nv / (nv * (1.0 - k) + k));
-        let spec = d * f * g / (4.0 * nl * nv);
-        c += e * nl * (albedo * (1.0 - f) / PI + Vec3::splat(spec));
-    }
-    c
-}
-
-/// A UV sphere of `radius` mm with per-corner tangents (for previewing patches).
-pub fn sphere(radius: f32, seg: usize) -> (TriMesh, Vec<[f32; 4]>) {
-    let mut m = TriMesh::default();
-    for j in 0..=seg {
-        let v = j as f32 / seg as f32;
-        let phi = v * PI;
-        for i in 0..=2 * seg {
-            let u = i as f32 / (2 * seg) as f32;
-            let th = u * 2.0 * PI;
-            let d = Vec3::new(phi.sin() * th.sin(), phi.cos(), phi.sin() * th.cos());
-            m.positions.push(d * radius);
-            m.normals.push(d);
-            m.uvs.push(Vec2::new(u, 1.0 - v));
-        }
-    }
-    let row = 2 * seg as u32 + 1;
-    for j in 0..seg as u32 {
-        for i in 0..2 * seg as u32 {
-            let (a, b, c, d) = (
-                j * row + i,
-                j * row + i + 1,
-                (j + 1) * row + i,
-                (j + 1) * row + i + 1,
-            );
-            m.triangles.push([a, c, b]);
-            m.triangles.push([b, c, d]);
-        }
-    }
-    let tangents = crate::surface::mikktspace_tangents(&m);
-    (m, tangents)
-}
-
-/// A flat square of `size` mm facing +Z with UVs over [0, 1]².
-pub fn tile(size: f32) -> (TriMesh, Vec<[f32; 4]>) {
-    let s = 0.5 * size;
-    let m = TriMesh {
-        positions: vec![
-            Vec3::new(-s, -s, 0.0),
-            Vec3::new(s, -s, 0.0),
-            Vec3::new(s, s, 0.0),
-            Vec3::new(-s, s, 0.0),
-        ],
-        normals: vec![Vec3::Z; 4],
-        uvs: vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y],
-        triangles: vec![[0, 1, 2], [0, 2, 3]],
-    };
-    let t = crate::surface::mikktspace_tangents(&m);
-    (m, t)
-}
-
-/// Lays out the preview: the render(s) on the left, a 3×2 contact sheet of maps on the right.
-/// Returns encoded sRGB channels.
-pub fn compose(renders: &[[Map; 3]], sheet: &[[Map; 3]], panel: usize) -> [Map; 3] {
-    let thumb = panel / 2;
-    let width = panel * renders.len() + thumb * 3;
-    let height = panel;
-    let mut out = [
-        Map::filled(width, height, 0.0),
-        Map::filled(width, height, 0.0),
-        Map::filled(width, height, 0.0),
-    ];
-    let mut blit = |img: &[Map; 3], x0: usize, y0: usize, n: usize, encode: bool| {
-        for k in 0..3 {
-            let r = img[k].resized(n, n);
-            for y in 0..n {
-                for x in 0..n {
-                    let v = r.get(x, y);
-                    out[k].set(x0 + x, y0 + y, if encode { srgb_encode(v) } else { v });
-                }
-            }
-        }
-    };
-    for (i, r) in renders.iter().enumerate() {
-        blit(r, i * panel, 0, panel, true);
-    }
-    for (i, s) in sheet.iter().take(6).enumerate() {
-        blit(
-            s,
-            panel * renders.len() + (i % 3) * thumb,
-            (i / 3) * thumb,
-            thumb,
-            false,
-        );
-    }
-    out
-}
-
-/// Greyscale thumbnail channels of `m` normalised to its [min, max].
-pub fn normalised(m: &Map) -> [Map; 3] {
-    let s = m.stats(None);
-    let span = (s.max - s.min).max(1e-12);
-    let mut n = m.clone();
-    n.data_mut()
-        .iter_mut()
-        .for_each(|v| *v = (*v - s.min) / span);
-    [n.clone(), n.clone(), n]
 }
 
 /// Shaded views of `render` on its mesh (or a sphere and a tile for patches) plus the contact
@@ -316,11 +37,7 @@ pub fn contact_sheet(
     let r = render_maps;
     let renders = match mesh {
         Some((m, t)) => {
-            let tex = Textures {
-                maps: r,
-                wrap: false,
-                uv_scale: glam::Vec2::ONE,
-            };
+            let tex = r.textures(false, glam::Vec2::ONE);
             // Front and three-quarter (45°) views.
             vec![
                 render_with(m, t, &tex, props, 0.0, PANEL),
@@ -341,28 +58,8 @@ pub fn contact_sheet(
             );
             let (tm, tt) = tile(sx);
             vec![
-                render(
-                    &sm,
-                    &st,
-                    &Textures {
-                        maps: r,
-                        wrap: true,
-                        uv_scale: scale,
-                    },
-                    0.0,
-                    PANEL,
-                ),
-                render(
-                    &tm,
-                    &tt,
-                    &Textures {
-                        maps: r,
-                        wrap: true,
-                        uv_scale: glam::Vec2::ONE,
-                    },
-                    0.0,
-                    PANEL,
-                ),
+                render(&sm, &st, &r.textures(true, scale), 0.0, PANEL),
+                render(&tm, &tt, &r.textures(true, glam::Vec2::ONE), 0.0, PANEL),
             ]
         }
     };

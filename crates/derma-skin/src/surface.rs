@@ -251,47 +251,7 @@ impl Surface {
     }
 }
 
-/// MikkTSpace tangents of a mesh, per triangle corner (xyz, sign).
-pub fn mikktspace_tangents(mesh: &TriMesh) -> Vec<[f32; 4]> {
-    struct G<'a> {
-        m: &'a TriMesh,
-        out: Vec<[f32; 4]>,
-    }
-    impl bevy_mikktspace::Geometry for G<'_> {
-        fn num_faces(&self) -> usize {
-            self.m.triangles.len()
-        }
-        fn num_vertices_of_face(&self, _face: usize) -> usize {
-            3
-        }
-        fn position(&self, face: usize, vert: usize) -> [f32; 3] {
-            self.m.positions[self.m.triangles[face][vert] as usize].to_array()
-        }
-        fn normal(&self, face: usize, vert: usize) -> [f32; 3] {
-            self.m.normals[self.m.triangles[face][vert] as usize].to_array()
-        }
-        fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
-            self.m.uvs[self.m.triangles[face][vert] as usize].to_array()
-        }
-        fn set_tangent(
-            &mut self,
-            ts: Option<bevy_mikktspace::TangentSpace>,
-            face: usize,
-            vert: usize,
-        ) {
-            if let Some(ts) = ts {
-                self.out[3 * face + vert] = ts.tangent_encoded();
-            }
-        }
-    }
-    let mut g = G {
-        m: mesh,
-        out: vec![[1.0, 0.0, 0.0, 1.0]; mesh.triangles.len() * 3],
-    };
-    // Degenerate input only leaves the default frame in place; it is not fatal.
-    let _ = bevy_mikktspace::generate_tangents(&mut g);
-    g.out
-}
+pub use derma_core::mesh::mikktspace_tangents;
 
 #[cfg(test)]
 mod tests {

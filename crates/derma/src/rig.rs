@@ -31,7 +31,7 @@ pub fn run(cmd: RigCommand, bars: &Bars) -> Result<()> {
                     e.notes
                 ))?;
             }
-            line("(authored approximations of Jimenez et al. 2010's observations on derma's face template, not measurements)")
+            line("(authored approximations of Jimenez et al. 2010's observations on derma's built-in head, not measurements)")
         }
     }
 }

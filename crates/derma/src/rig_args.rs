@@ -54,7 +54,7 @@ pub struct BuildArgs {
     #[arg(long = "target", value_name = "NAME=FILE", value_parser = target_arg)]
     pub targets: Vec<(String, PathBuf)>,
     /// Built-in library entries to add (comma-separated names, or "all"); they assume derma's
-    /// face-template UV layout (e.g. maps from `derma skin`). See `derma rig library`.
+    /// built-in head's UV layout (e.g. maps from `derma skin`). See `derma rig library`.
     #[arg(long, value_delimiter = ',')]
     pub builtin: Vec<String>,
     /// Suggested global hemoglobin scale of a target at full weight: NAME=S (repeat).
@@ -164,8 +164,8 @@ pub struct EvalArgs {
     /// Where to evaluate: the CPU's exact path, or the rig's `rig.wgsl` on a GPU.
     #[command(flatten)]
     pub device: DeviceArg,
-    /// A preview: the face template rendered with the colour, beside its hemoglobin map (dark =
-    /// more blood, as Jimenez et al. 2010 fig. 2). Needs maps on the template's UV layout.
+    /// A preview: the built-in head rendered with the colour, beside its hemoglobin map (dark =
+    /// more blood, as Jimenez et al. 2010 fig. 2). Needs maps on the head's UV layout.
     #[arg(long)]
     pub preview: Option<PathBuf>,
 }
