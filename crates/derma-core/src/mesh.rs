@@ -41,18 +41,48 @@ impl LengthUnit {
         }
     }
 
-    /// Guesses the unit of a human head or face from its largest bounding-box extent: an adult
-    /// head is about 150–250 mm across (a face mask about 120–200 mm), so an extent of 0.05–2 is
-    /// read as metres, 2–60 as centimetres and anything larger as millimetres.
-    pub fn guess_from_extent(extent: f32) -> LengthUnit {
-        if extent <= 2.0 {
-            LengthUnit::M
-        } else if extent <= 60.0 {
-            LengthUnit::Cm
-        } else {
-            LengthUnit::Mm
+    /// The unit that puts a head or face of largest extent `extent` within [`HEAD_EXTENT_MM`]:
+    /// millimetres, else centimetres, else metres; `None` when no unit does (fit it instead).
+    pub fn for_head(extent: f32) -> Option<LengthUnit> {
+        [LengthUnit::Mm, LengthUnit::Cm, LengthUnit::M]
+            .into_iter()
+            .find(|u| (HEAD_EXTENT_MM.0..=HEAD_EXTENT_MM.1).contains(&(extent * u.to_mm())))
+    }
+
+    /// Its name in words ("millimetres").
+    pub fn long_name(self) -> &'static str {
+        match self {
+            LengthUnit::Mm => "millimetres",
+            LengthUnit::Cm => "centimetres",
+            LengthUnit::M => "metres",
         }
     }
+
+    /// Its name as written in configs and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            LengthUnit::Mm => "mm",
+            LengthUnit::Cm => "cm",
+            LengthUnit::M => "m",
+        }
+    }
+}
+
+/// Largest bounding-box extent (mm) of a head or face mesh: from a face mask (~120 mm wide) to a
+/// whole head with its neck (~300 mm tall), with a margin.
+pub const HEAD_EXTENT_MM: (f32, f32) = (100.0, 350.0);
+
+/// The extent a mesh in no recognisable unit is scaled to (mm): the vertex–gnathion height of an
+/// adult head, about 215–230 mm (Farkas 1994, "Anthropometry of the Head and Face").
+pub const NOMINAL_HEAD_EXTENT_MM: f32 = 225.0;
+
+/// How a mesh's coordinates became millimetres.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct MeshScale {
+    /// The length unit, or `None` when the mesh was fitted to [`NOMINAL_HEAD_EXTENT_MM`].
+    pub unit: Option<LengthUnit>,
+    /// Millimetres per mesh unit.
+    pub mm_per_unit: f32,
 }
 
 impl TriMesh {
@@ -116,7 +146,11 @@ impl TriMesh {
 
     /// Scales positions from `unit` to millimetres.
     pub fn to_millimetres(&mut self, unit: LengthUnit) {
-        let s = unit.to_mm();
+        self.scale(unit.to_mm());
+    }
+
+    /// Multiplies every position by `s`.
+    pub fn scale(&mut self, s: f32) {
         for p in &mut self.positions {
             *p *= s;
         }
@@ -348,10 +382,14 @@ mod tests {
     use super::*;
 
     #[test]
-    fn unit_guess_for_heads() {
-        assert_eq!(LengthUnit::guess_from_extent(0.22), LengthUnit::M);
-        assert_eq!(LengthUnit::guess_from_extent(15.0), LengthUnit::Cm);
-        assert_eq!(LengthUnit::guess_from_extent(230.0), LengthUnit::Mm);
+    fn head_units_follow_the_head_size_range() {
+        assert_eq!(LengthUnit::for_head(0.22), Some(LengthUnit::M));
+        assert_eq!(LengthUnit::for_head(15.0), Some(LengthUnit::Cm));
+        assert_eq!(LengthUnit::for_head(230.0), Some(LengthUnit::Mm));
+        // A head scan whose largest extent is 8.6 units is 86 mm in cm and 8.6 m in metres:
+        // no unit makes it a head, so it is fitted.
+        assert_eq!(LengthUnit::for_head(8.6), None);
+        assert_eq!(LengthUnit::for_head(2.0), None);
     }
 
     #[test]

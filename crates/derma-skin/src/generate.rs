@@ -22,7 +22,7 @@ use crate::surface::Surface;
 use crate::texture_set::{HeightRange, RenderMaps};
 use crate::{Result, SkinError};
 use derma_core::gpu::Device;
-use derma_core::mesh::{LengthUnit, TriMesh};
+use derma_core::mesh::{LengthUnit, MeshScale, TriMesh};
 use derma_core::progress::{Job, Log, Note, Prefixed, Progress, Silent, Unit};
 use derma_core::Map;
 use derma_shading::Appearance;
@@ -274,13 +274,13 @@ impl<'a> SkinGenerator<'a> {
                 detail: "\"mesh\" needs surface.mesh or --mesh".into(),
             });
         }
-        let mut mesh_unit = None;
+        let mut mesh_scale = None;
         let mesh = match kind {
             SurfaceKind::Template => Some(crate::builtin_head::head_mesh()),
             SurfaceKind::Mesh => {
                 let p = mesh_path.clone().expect("checked");
                 let (m, u) = load_mesh(&p, &cfg.surface.unit, &job)?;
-                mesh_unit = Some(u);
+                mesh_scale = Some(u);
                 Some(m)
             }
             SurfaceKind::Patch => None,
@@ -375,7 +375,7 @@ impl<'a> SkinGenerator<'a> {
             bio,
             render,
             dilation,
-            mesh_unit,
+            mesh_scale,
             preview_mesh,
             appearance: appearance.name(),
             config: cfg.clone(),
@@ -392,36 +392,70 @@ impl<'a> SkinGenerator<'a> {
     }
 }
 
-/// Loads a mesh, detects its unit (noting the guess) and converts it to millimetres.
-fn load_mesh(path: &Path, unit: &str, progress: &dyn Progress) -> Result<(TriMesh, LengthUnit)> {
+/// Loads a mesh and converts it to millimetres: by its unit (`mm`, `cm`, `m`), by the unit that
+/// makes it head-sized (`auto`), or by scaling it to a nominal head (`fit`, and `auto` when no
+/// unit makes it head-sized); the choice is noted.
+fn load_mesh(path: &Path, unit: &str, progress: &dyn Progress) -> Result<(TriMesh, MeshScale)> {
+    use derma_core::mesh::{HEAD_EXTENT_MM, NOMINAL_HEAD_EXTENT_MM};
     let mut mesh = TriMesh::load(path)?;
     let extent = mesh.extent();
-    let unit = match unit {
-        "auto" => {
-            let u = LengthUnit::guess_from_extent(extent);
+    let fit = || MeshScale {
+        unit: None,
+        mm_per_unit: NOMINAL_HEAD_EXTENT_MM / extent,
+    };
+    let of = |u: LengthUnit| MeshScale {
+        unit: Some(u),
+        mm_per_unit: u.to_mm(),
+    };
+    let (lo, hi) = HEAD_EXTENT_MM;
+    let scale = match unit {
+        "auto" => match LengthUnit::for_head(extent) {
+            Some(u) => {
+                progress.note(Note::info(format!(
+                    "mesh '{}': largest extent {extent:.3} units, read as {} ({:.0} mm; a head or face is {lo:.0}–{hi:.0} mm; set surface.unit to override)",
+                    path.display(),
+                    u.long_name(),
+                    extent * u.to_mm()
+                )));
+                of(u)
+            }
+            None => {
+                let s = fit();
+                progress.note(Note::warning(format!(
+                    "mesh '{}': largest extent {extent:.3} units is no head in mm, cm or m ({lo:.0}–{hi:.0} mm); scaled ×{:.4} to a nominal {NOMINAL_HEAD_EXTENT_MM:.0} mm head (surface.unit = \"fit\"; set a unit to override)",
+                    path.display(),
+                    s.mm_per_unit
+                )));
+                s
+            }
+        },
+        "fit" => {
+            let s = fit();
             progress.note(Note::info(format!(
-                "mesh '{}': largest extent {extent:.3} units, read as {} (a head is 150–250 mm; set surface.unit to override)",
+                "mesh '{}': scaled ×{:.4} so its largest extent is {NOMINAL_HEAD_EXTENT_MM:.0} mm",
                 path.display(),
-                match u {
-                    LengthUnit::Mm => "millimetres",
-                    LengthUnit::Cm => "centimetres",
-                    LengthUnit::M => "metres",
-                }
+                s.mm_per_unit
             )));
-            u
+            s
         }
-        "mm" => LengthUnit::Mm,
-        "cm" => LengthUnit::Cm,
-        "m" => LengthUnit::M,
+        "mm" => of(LengthUnit::Mm),
+        "cm" => of(LengthUnit::Cm),
+        "m" => of(LengthUnit::M),
         other => {
             return Err(SkinError::Key {
                 key: "surface.unit".into(),
-                detail: format!("'{other}': expected auto, mm, cm or m"),
+                detail: format!("'{other}': expected auto, fit, mm, cm or m"),
             })
         }
     };
-    mesh.to_millimetres(unit);
-    Ok((mesh, unit))
+    if !(extent > 0.0 && extent.is_finite()) {
+        return Err(SkinError::Mesh {
+            path: path.display().to_string(),
+            detail: format!("its largest extent is {extent}; expected a positive size"),
+        });
+    }
+    mesh.scale(scale.mm_per_unit);
+    Ok((mesh, scale))
 }
 
 /// Notes UV overlaps and charts outside [0, 1]; fails when no triangle covers a texel.
@@ -480,7 +514,7 @@ pub struct TextureSet {
     /// Gutter dilation sources on meshes (texel → covered texel).
     pub dilation: Option<Vec<u32>>,
     /// The unit a user mesh was read in.
-    pub mesh_unit: Option<LengthUnit>,
+    pub mesh_scale: Option<MeshScale>,
     /// Mesh and tangents for the preview (template, user mesh, or none for patches).
     pub preview_mesh: Option<(TriMesh, Vec<[f32; 4]>)>,
     /// Name of the appearance that made the colours.
@@ -565,7 +599,7 @@ impl TextureSet {
         let report = crate::report::report(&crate::report::Run {
             config: &self.config,
             inputs: &self.inputs,
-            mesh_unit: self.mesh_unit,
+            mesh_scale: self.mesh_scale,
             threads: self.threads(),
             appearance: self.appearance,
             surface: &self.surface,

@@ -8,7 +8,7 @@ use crate::outputs;
 use crate::paint::BioMaps;
 use crate::surface::Surface;
 use crate::texture_set::HeightRange;
-use derma_core::mesh::LengthUnit;
+use derma_core::mesh::MeshScale;
 use derma_core::progress::Log;
 use derma_core::report::{pretty_json, sha256_file};
 use derma_core::Map;
@@ -35,8 +35,8 @@ pub struct Run<'a> {
     pub config: &'a SkinConfig,
     /// The files read.
     pub inputs: &'a InputFiles,
-    /// The unit a user mesh was read in.
-    pub mesh_unit: Option<LengthUnit>,
+    /// How a user mesh became millimetres (its unit, or the fitted scale).
+    pub mesh_scale: Option<MeshScale>,
     /// Worker threads.
     pub threads: usize,
     /// Name of the appearance that made the colours.
@@ -87,8 +87,9 @@ pub fn report(set: &Run) -> Vec<u8> {
             .map(|p| json!({"path": p.display().to_string(), "sha256": sha256_file(p)}))
     };
     let mut mesh = file(&set.inputs.mesh);
-    if let (Some(m), Some(unit)) = (mesh.as_mut(), set.mesh_unit) {
-        m["unit"] = json!(unit);
+    if let (Some(m), Some(scale)) = (mesh.as_mut(), set.mesh_scale) {
+        m["unit"] = json!(scale.unit.map_or("fit", |u| u.name()));
+        m["mm_per_unit"] = json!(derma_core::report::as_written(scale.mm_per_unit as f64));
     }
     let surface = match set.inputs.surface {
         SurfaceKind::Template => "template",

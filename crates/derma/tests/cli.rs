@@ -144,6 +144,32 @@ fn user_meshes_obj_and_glb_any_scale() {
     let r = report(&out);
     assert!((r["surface_area_cm2"].as_f64().unwrap() - 400.0).abs() < 1.0);
 
+    // A mesh no length unit makes head-sized (8.6 units: 86 mm in cm, 8.6 m in metres) is
+    // scaled to a nominal 225 mm head, said so, and the scale reported.
+    let odd = d.join("odd.obj");
+    write_quad_obj(&odd, 8.6);
+    let out3 = d.join("out3");
+    let o = derma()
+        .args([
+            "skin",
+            "--mesh",
+            odd.to_str().unwrap(),
+            "--size",
+            "64",
+            "--out",
+            out3.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("nominal 225 mm head"), "{err}");
+    let r = report(&out3);
+    assert_eq!(r["inputs"]["mesh"]["unit"], "fit", "{r}");
+    let k = r["inputs"]["mesh"]["mm_per_unit"].as_f64().unwrap();
+    assert!((k - 225.0 / 8.6).abs() < 1e-3, "{k}");
+    assert!((r["surface_area_cm2"].as_f64().unwrap() - 506.25).abs() < 1.0);
+
     // The same quad as a binary glTF.
     let glb = d.join("quad.glb");
     std::fs::write(&glb, derma_test_support::quad_glb()).unwrap();
