@@ -68,6 +68,40 @@ impl LengthUnit {
     }
 }
 
+/// The vertex positions of a mesh file in the file's own order (OBJ `v` lines; glTF/GLB as
+/// loaded), unscaled: what topology-indexed landmarks (MediaPipe's 468 points) refer to. Loading
+/// for painting may reorder vertices (it splits them at UV seams).
+pub fn file_positions(path: &Path) -> Result<Vec<Vec3>> {
+    let is_obj = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    if !is_obj {
+        return Ok(TriMesh::load(path)?.positions);
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| CoreError::Read {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    text.lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .enumerate()
+        .map(|(i, l)| {
+            let v: Vec<f32> = l
+                .split_whitespace()
+                .take(3)
+                .filter_map(|t| t.parse().ok())
+                .collect();
+            match v[..] {
+                [x, y, z] => Ok(Vec3::new(x, y, z)),
+                _ => Err(CoreError::Mesh {
+                    path: path.to_path_buf(),
+                    detail: format!("vertex {} is not three numbers: 'v {l}'", i + 1),
+                }),
+            }
+        })
+        .collect()
+}
+
 /// Largest bounding-box extent (mm) of a head or face mesh: from a face mask (~120 mm wide) to a
 /// whole head with its neck (~300 mm tall), with a margin.
 pub const HEAD_EXTENT_MM: (f32, f32) = (100.0, 350.0);

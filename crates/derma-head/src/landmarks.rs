@@ -43,6 +43,18 @@ pub enum LandmarkError {
     /// A landmark the regions need is missing.
     #[error("landmark '{0}' is missing; the regions need all of: {all}", all = NAMES.join(", "))]
     Missing(String),
+    /// A landmark name derma does not know.
+    #[error("unknown landmark '{0}'; expected names: {all}", all = NAMES.join(", "))]
+    Unknown(String),
+    /// The landmark file is not the expected JSON.
+    #[error("landmarks: {0}; expected a JSON object {{\"name\": [x, y, z], …}}")]
+    Json(String),
+    /// The mesh does not have MediaPipe's topology.
+    #[error("the mesh has {0} vertices; MediaPipe's face mesh topology has 468 (vertex index = landmark id)")]
+    Topology(usize),
+    /// The landmarks contradict the axis convention.
+    #[error("landmarks: {0}")]
+    Orientation(String),
 }
 
 impl Landmarks {
@@ -67,5 +79,105 @@ impl Landmarks {
         } else {
             -1.0
         }
+    }
+}
+
+/// Landmark ids of MediaPipe's 468-point face mesh (vertex index = landmark id; checked against
+/// `canonical_face_model.obj`, whose +x is the subject's left): name → id. Eye centres are not
+/// among the 468 points; they are placed 6 mm behind the middle of the canthi (the built-in head's
+/// canthi lie 6 mm in front of its eye centres).
+pub const MEDIAPIPE: [(&str, usize); 17] = [
+    ("canthus_inner_left", 362),
+    ("canthus_inner_right", 133),
+    ("canthus_outer_left", 263),
+    ("canthus_outer_right", 33),
+    ("lid_upper_left", 386),
+    ("lid_upper_right", 159),
+    ("lid_lower_left", 374),
+    ("lid_lower_right", 145),
+    ("glabella", 9),
+    ("nose_tip", 4),
+    ("subnasale", 164),
+    ("mouth_corner_left", 291),
+    ("mouth_corner_right", 61),
+    ("chin", 199),
+    ("menton", 152),
+    // The mask's lateral edge at the tragus: the closest the 468 points come to the ears.
+    ("ear_left", 454),
+    ("ear_right", 234),
+];
+
+/// The hairline of a MediaPipe mesh: the top of its forehead (id 10).
+pub const MEDIAPIPE_HAIRLINE: usize = 10;
+
+/// Depth of the eye centre behind the middle of the canthi (mm), as on the built-in head.
+pub const EYE_CENTRE_BEHIND_CANTHI_MM: f32 = 6.0;
+
+impl Landmarks {
+    /// Landmarks of a mesh in MediaPipe's 468-point topology, from its vertex positions in
+    /// file order (mm, +Y up, facing +Z).
+    pub fn mediapipe(positions: &[Vec3]) -> Result<Landmarks, LandmarkError> {
+        if positions.len() < 468 {
+            return Err(LandmarkError::Topology(positions.len()));
+        }
+        let mut points: BTreeMap<String, Vec3> = MEDIAPIPE
+            .iter()
+            .map(|&(n, i)| (n.to_string(), positions[i]))
+            .collect();
+        points.insert("hairline".into(), positions[MEDIAPIPE_HAIRLINE]);
+        for side in ["left", "right"] {
+            let mid = 0.5
+                * (points[&format!("canthus_inner_{side}")]
+                    + points[&format!("canthus_outer_{side}")]);
+            points.insert(
+                format!("eye_centre_{side}"),
+                mid - Vec3::Z * EYE_CENTRE_BEHIND_CANTHI_MM,
+            );
+        }
+        let lm = Landmarks { points };
+        lm.check()?;
+        lm.check_orientation()?;
+        Ok(lm)
+    }
+
+    /// Landmarks from JSON: `{"name": [x, y, z], …}` in the mesh's units, scaled by
+    /// `mm_per_unit`; every name of [`NAMES`] is required.
+    pub fn from_json(text: &str, mm_per_unit: f32) -> Result<Landmarks, LandmarkError> {
+        let raw: BTreeMap<String, [f32; 3]> =
+            serde_json::from_str(text).map_err(|e| LandmarkError::Json(e.to_string()))?;
+        if let Some(unknown) = raw.keys().find(|k| !NAMES.contains(&k.as_str())) {
+            return Err(LandmarkError::Unknown(unknown.clone()));
+        }
+        let lm = Landmarks {
+            points: raw
+                .into_iter()
+                .map(|(k, v)| (k, Vec3::from(v) * mm_per_unit))
+                .collect(),
+        };
+        lm.check()?;
+        lm.check_orientation()?;
+        Ok(lm)
+    }
+
+    /// Checks the convention the regions assume: +Y up, the face towards +Z, +X the head's left.
+    pub fn check_orientation(&self) -> Result<(), LandmarkError> {
+        let g = |n: &str| self.get(n);
+        if !(g("eye_centre_left").x > g("eye_centre_right").x) {
+            return Err(LandmarkError::Orientation(
+                "the left eye is not at +x of the right one (+X must be the head's left)".into(),
+            ));
+        }
+        if !(g("hairline").y > g("nose_tip").y && g("nose_tip").y > g("menton").y) {
+            return Err(LandmarkError::Orientation(
+                "hairline, nose tip and menton are not in descending y (+Y must be up)".into(),
+            ));
+        }
+        let ears = 0.5 * (g("ear_left").z + g("ear_right").z);
+        if !(g("nose_tip").z > ears) {
+            return Err(LandmarkError::Orientation(
+                "the nose tip is not in front of the ears (the face must look towards +Z)".into(),
+            ));
+        }
+        Ok(())
     }
 }

@@ -113,6 +113,7 @@ pub struct SurfaceConfig {
     pub tileable: bool,
     pub mesh: String,
     pub unit: String,
+    pub landmarks: String,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -265,6 +266,7 @@ impl Default for SurfaceConfig {
             tileable: true,
             mesh: String::new(),
             unit: "auto".into(),
+            landmarks: String::new(),
         }
     }
 }
@@ -454,6 +456,7 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("surface.tileable", "-", 0.0, 0.0, "patch wraps around so the output tiles seamlessly (thesis §3.3, a modulo space)"),
     k("surface.mesh", "path", 0.0, 0.0, "OBJ, glTF or GLB mesh with UVs (kind = \"mesh\")"),
     k("surface.unit", "-", 0.0, 0.0, "mesh length unit: \"auto\" (the unit of mm, cm, m that makes its largest extent a head or face, 100–350 mm; otherwise as \"fit\"), \"fit\" (scaled so its largest extent is 225 mm, adult vertex–gnathion height, Farkas 1994), \"mm\", \"cm\" or \"m\""),
+    k("surface.landmarks", "-", 0.0, 0.0, "landmarks of a user mesh, so the built-in head's default fields and regional biology follow it: \"mediapipe\" (the mesh has MediaPipe's 468-point topology, vertex index = landmark id) or a JSON file {\"name\": [x, y, z]} in the mesh's units with every name of derma_head::landmarks::NAMES; +Y up, facing +Z; empty = none"),
     k("fields", "-", 0.0, 0.0, "named fields: name = \"file.png\" or an expression such as \"face - eyes - lips\" (operators + - * and min, max, clamp, pow, smooth)"),
     k("baseline.phi", "-", 0.0, 1.0, "noise amplitude as a share of each parameter's plausible range (thesis §5.3.1: φ = 0.1)"),
     k("baseline.noise_wavelengths_mm", "mm", 0.01, 1000.0, "wavelengths of the three band-limited noise octaves (weights ½, ⅓, ⅙)"),

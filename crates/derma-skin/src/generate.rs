@@ -203,7 +203,9 @@ impl<'a> SkinGenerator<'a> {
             detail: format!("the output directory is not writable ({e})"),
         })?;
         let mesh = self.mesh_path();
-        let inputs: Vec<&Path> = [&mesh, &self.config_path, &self.fields]
+        let lm = self.config.surface.landmarks.trim();
+        let landmarks = (!lm.is_empty() && lm != "mediapipe").then(|| self.resolve(lm));
+        let inputs: Vec<&Path> = [&mesh, &self.config_path, &self.fields, &landmarks]
             .into_iter()
             .flatten()
             .map(PathBuf::as_path)
@@ -252,7 +254,8 @@ impl<'a> SkinGenerator<'a> {
         };
         let on_head =
             self.mesh_path().is_none() && self.config.surface.kind == SurfaceKind::Template;
-        let regional_gains = on_head && self.config.regional.enabled;
+        let has_landmarks = !self.config.surface.landmarks.trim().is_empty();
+        let regional_gains = (on_head || has_landmarks) && self.config.regional.enabled;
         let (person_cfg, melanin) =
             crate::regional::apply_person(&self.config, appearance, regional_gains)?;
         let cfg = &person_cfg;
@@ -275,16 +278,27 @@ impl<'a> SkinGenerator<'a> {
             });
         }
         let mut mesh_scale = None;
+        let mut user_regions = None;
         let mesh = match kind {
             SurfaceKind::Template => Some(crate::builtin_head::head_mesh()),
             SurfaceKind::Mesh => {
                 let p = mesh_path.clone().expect("checked");
                 let (m, u) = load_mesh(&p, &cfg.surface.unit, &job)?;
+                if has_landmarks {
+                    let lm = self.landmarks(&p, u.mm_per_unit)?;
+                    user_regions = Some(derma_head::Regions::new(lm, Vec::new(), Vec::new()));
+                }
                 mesh_scale = Some(u);
                 Some(m)
             }
             SurfaceKind::Patch => None,
         };
+        if has_landmarks && user_regions.is_none() {
+            return Err(SkinError::Key {
+                key: "surface.landmarks".into(),
+                detail: "landmarks place the built-in head's fields on a user mesh; give one with --mesh or surface.mesh".into(),
+            });
+        }
         let sr = cfg.scatter_resolution as usize;
         let (surface, scatter_surface, preview_mesh) = match &mesh {
             Some(m) => {
@@ -317,6 +331,11 @@ impl<'a> SkinGenerator<'a> {
         }
         let mut fields = if kind == SurfaceKind::Template {
             crate::builtin_head::default_fields(mesh.as_ref().expect("template mesh"), &cfg.person)
+        } else if let Some(regions) = &user_regions {
+            job.note(Note::info(
+                "default fields and regional biology placed on the mesh by its landmarks",
+            ));
+            crate::builtin_head::fields_on(mesh.as_ref().expect("a mesh"), regions, &cfg.person)
         } else {
             if self.fields.is_none() && cfg.fields.is_empty() {
                 job.note(Note::info("no --fields given: uniform fields are used (moles, freckles, cysts and pores everywhere; no lips, hair or wrinkles); paint fields to place them"));
@@ -388,6 +407,32 @@ impl<'a> SkinGenerator<'a> {
             log: job.finish(),
             started,
             pool: None,
+        })
+    }
+}
+
+impl SkinGenerator<'_> {
+    /// The user mesh's landmarks (`surface.landmarks`), in millimetres.
+    fn landmarks(&self, mesh: &Path, mm_per_unit: f32) -> Result<derma_head::Landmarks> {
+        let v = self.config.surface.landmarks.trim();
+        if v == "mediapipe" {
+            let pts: Vec<glam::Vec3> = derma_core::mesh::file_positions(mesh)?
+                .into_iter()
+                .map(|p| p * mm_per_unit)
+                .collect();
+            return derma_head::Landmarks::mediapipe(&pts).map_err(|e| SkinError::Mesh {
+                path: mesh.display().to_string(),
+                detail: e.to_string(),
+            });
+        }
+        let path = self.resolve(v);
+        let text = std::fs::read_to_string(&path).map_err(|e| SkinError::Input {
+            path: path.clone(),
+            detail: format!("cannot read the landmarks ({e})"),
+        })?;
+        derma_head::Landmarks::from_json(&text, mm_per_unit).map_err(|e| SkinError::Input {
+            path,
+            detail: e.to_string(),
         })
     }
 }

@@ -22,6 +22,11 @@ pub struct SkinArgs {
     /// Mesh with UVs (OBJ, glTF, GLB) instead of the built-in head.
     #[arg(long, conflicts_with = "patch")]
     mesh: Option<PathBuf>,
+    /// Landmarks of the --mesh: `mediapipe` (MediaPipe's 468-point topology) or a JSON file
+    /// {"name": [x, y, z]} (see --print-config, surface.landmarks); the built-in head's default
+    /// fields and regional biology then follow the mesh.
+    #[arg(long, value_name = "mediapipe|FILE.json", requires = "mesh")]
+    landmarks: Option<String>,
     /// Directory of fields: NAME.png / NAME.exr (greyscale), NAME_vectors.png (RGB vector fields).
     #[arg(long)]
     fields: Option<PathBuf>,
@@ -153,6 +158,9 @@ pub fn run(args: SkinArgs, bars: &Bars) -> Result<()> {
         cfg.seed = s;
     }
     apply_person(cfg, &args);
+    if let Some(l) = &args.landmarks {
+        cfg.surface.landmarks = l.clone();
+    }
     if let Some(p) = args.patch {
         cfg.surface.kind = SurfaceKind::Patch;
         cfg.surface.patch_size_mm = p;

@@ -262,6 +262,61 @@ fn canonical_face_model_from_shared_data() {
     let a = r["surface_area_cm2"].as_f64().unwrap();
     assert!((100.0..600.0).contains(&a), "{a}");
     assert!(r["counts"]["mole"].as_u64().unwrap() > 0);
+    // With its landmarks (MediaPipe topology), the head's default fields and regional biology
+    // follow the mask: lips, eyebrows and wrinkles appear, the cheeks are redder than the chin's
+    // neighbourhood would be without regions.
+    let d2 = tmp("canon-lm");
+    let o = derma()
+        .args([
+            "skin",
+            "--mesh",
+            p.to_str().unwrap(),
+            "--landmarks",
+            "mediapipe",
+            "--size",
+            "128",
+            "--out",
+            d2.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("placed on the mesh by its landmarks"), "{err}");
+    let r = report(&d2);
+    assert!(
+        r["counts"]["eyebrow"].as_u64().unwrap() > 50,
+        "{}",
+        r["counts"]
+    );
+    assert!(
+        r["counts"]["wrinkle"].as_u64().unwrap() > 0,
+        "{}",
+        r["counts"]
+    );
+    // A landmark file missing names is a clear error naming the missing one.
+    let bad = d2.join("lm.json");
+    std::fs::write(&bad, r#"{"nose_tip": [0, 0, 10]}"#).unwrap();
+    let o = derma()
+        .args([
+            "skin",
+            "--mesh",
+            p.to_str().unwrap(),
+            "--landmarks",
+            bad.to_str().unwrap(),
+            "--size",
+            "64",
+            "--out",
+            d2.join("x").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("lm.json") && err.contains("is missing"),
+        "{err}"
+    );
 }
 
 #[test]
