@@ -181,3 +181,72 @@ impl Landmarks {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn json_of(lm: &Landmarks) -> String {
+        let m: BTreeMap<&str, [f32; 3]> = lm
+            .points
+            .iter()
+            .map(|(k, v)| (k.as_str(), v.to_array()))
+            .collect();
+        serde_json::to_string(&m).unwrap()
+    }
+
+    #[test]
+    fn json_landmarks_round_trip_and_bad_ones_are_named() {
+        let head = crate::Head::builtin();
+        let text = json_of(&head.landmarks);
+        // In centimetres: scaled back to mm.
+        let cm: BTreeMap<String, [f32; 3]> = serde_json::from_str(&text).unwrap();
+        let cm: BTreeMap<String, [f32; 3]> = cm
+            .into_iter()
+            .map(|(k, v)| (k, v.map(|x| x / 10.0)))
+            .collect();
+        let back = Landmarks::from_json(&serde_json::to_string(&cm).unwrap(), 10.0).unwrap();
+        for (k, v) in &head.landmarks.points {
+            assert!((back.get(k) - *v).length() < 1e-3, "{k}");
+        }
+        let mut missing = head.landmarks.clone();
+        missing.points.remove("chin");
+        assert_eq!(
+            Landmarks::from_json(&json_of(&missing), 1.0),
+            Err(LandmarkError::Missing("chin".into()))
+        );
+        let mut unknown = head.landmarks.clone();
+        unknown.points.insert("nose".into(), Vec3::ZERO);
+        assert_eq!(
+            Landmarks::from_json(&json_of(&unknown), 1.0),
+            Err(LandmarkError::Unknown("nose".into()))
+        );
+        // Upside down: named as an orientation error.
+        let mut flipped = head.landmarks.clone();
+        flipped.points.values_mut().for_each(|p| p.y = -p.y);
+        assert!(matches!(
+            Landmarks::from_json(&json_of(&flipped), 1.0),
+            Err(LandmarkError::Orientation(_))
+        ));
+    }
+
+    #[test]
+    fn mediapipe_ids_land_on_the_canonical_face() {
+        let Some(path) = derma_test_support::shared_data("canonical_face_model.obj") else {
+            return;
+        };
+        let pts = derma_core::mesh::file_positions(&path).unwrap();
+        // The canonical model is in centimetres.
+        let pts: Vec<Vec3> = pts.iter().map(|p| *p * 10.0).collect();
+        let lm = Landmarks::mediapipe(&pts).unwrap();
+        // Anthropometry of the canonical face (Farkas 1994 adult ranges, generous): fissure
+        // width en–ex 25–35 mm, mouth width ch–ch 40–60 mm, nose tip the most prominent point.
+        let fissure = (lm.get("canthus_outer_left") - lm.get("canthus_inner_left")).length();
+        assert!((25.0..35.0).contains(&fissure), "{fissure}");
+        let mouth = (lm.get("mouth_corner_left") - lm.get("mouth_corner_right")).length();
+        assert!((40.0..60.0).contains(&mouth), "{mouth}");
+        let tip = lm.get("nose_tip").z;
+        assert!(lm.points.values().all(|p| p.z <= tip + 1e-3));
+        assert!(Landmarks::mediapipe(&pts[..400]).is_err());
+    }
+}
