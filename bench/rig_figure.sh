@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's expression figure (docs/images/rig-expressions.png): the face template painted by
+# The README's expression figure (docs/images/rig-expressions.png): the built-in head painted by
 # `derma skin`, rigged with the built-in library, under the neutral pose and each entry, with
 # its hemoglobin map beside it (dark = more blood, as Jimenez et al. 2010 fig. 2).
 # Needs python3 with Pillow to tile the panels.

@@ -13,8 +13,8 @@ millimetres with the same axes):
   2. Keeps the helper meshes the face needs (eyelashes, upper and lower teeth, tongue) and fits a
      sphere to each eye helper (the eye globes are rebuilt from centre and radius by derma-head,
      with their own UVs).
-  3. Packs the four skin charts into [0, 1]^2, keeping their relative texel densities: the
-     head chart fills the height on the left; mouth and sockets go to the right column.
+  3. Turns the skin charts upright and packs them into [0, 1]^2 at one texel density: the head
+     chart fills the width at the top; mouth and sockets go in a row below it.
   4. Finds the landmarks from geometry and from the face units (see `landmarks`).
   5. Writes head.obj (quads; groups skin, mouth, socket_left, socket_right, eyelashes_left,
      eyelashes_right, teeth_upper, teeth_lower, tongue), faceunits.txt (52 sparse morph targets, mm) and head.json (eye
@@ -148,29 +148,30 @@ def main():
     density = {k: area3(V, F, fs) / area_uv(VT, F, fs) for k, fs in named.items()}
 
     # --- pack the skin charts -------------------------------------------------------------
+    # MakeHuman lays the head chart on its side (the face's up is −u); turn it a quarter turn
+    # (u, v) → (v, −u), a rotation, not a mirror, so the face stands upright with the head's
+    # left (+x) to the right, as artists paint faces. The cavity charts turn with it.
+    VR = np.stack([VT[:, 1], -VT[:, 0]], axis=1)
+
     def bbox(fs):
-        t = VT[sorted({b for i in fs for _, b in F[i]})]
+        t = VR[sorted({b for i in fs for _, b in F[i]})]
         return t.min(0), t.max(0)
 
     lo, hi = bbox(head)
-    s = (1.0 - 2 * MARGIN) / (hi[1] - lo[1])
+    s = (1.0 - 2 * MARGIN) / (hi[0] - lo[0])
+    head_h = (hi[1] - lo[1]) * s
     place = {}
-    place["skin"] = (lo, s, np.array([MARGIN, MARGIN]))
-    x0 = MARGIN + (hi[0] - lo[0]) * s + 2 * MARGIN
-    # Sockets side by side at the bottom of the right column, the mouth above them; each keeps
-    # its texel density relative to the head's.
-    y = MARGIN
-    xe = x0
+    place["skin"] = (lo, s, np.array([MARGIN, 1.0 - MARGIN - head_h]))
+    # Sockets and mouth side by side below the head chart, at the head's texel density.
+    x = MARGIN
     row_h = 0.0
-    for k in ["socket_left", "socket_right"]:
+    for k in ["socket_left", "socket_right", "mouth"]:
         l, h = bbox(named[k])
-        place[k] = (l, s, np.array([xe, y]))
-        xe += (h[0] - l[0]) * s + 2 * MARGIN
+        place[k] = (l, s, np.array([x, MARGIN]))
+        x += (h[0] - l[0]) * s + 2 * MARGIN
         row_h = max(row_h, (h[1] - l[1]) * s)
-    l, h = bbox(mouth)
-    place["mouth"] = (l, s, np.array([x0, y + row_h + 2 * MARGIN]))
-    assert x0 + (h[0] - l[0]) * s <= 1.0 - MARGIN
-    assert y + row_h + 2 * MARGIN + (h[1] - l[1]) * s <= 1.0 - MARGIN
+    assert x - 2 * MARGIN <= 1.0 - MARGIN
+    assert MARGIN + row_h + 2 * MARGIN <= 1.0 - MARGIN - head_h
 
     # --- skin vertices and face corners -----------------------------------------------------
     chart_names = ["skin", "mouth", "socket_left", "socket_right"]
@@ -318,7 +319,7 @@ def main():
         if key not in uv_index:
             l, sc, off = place[chart]
             uv_index[key] = len(uvs)
-            uvs.append((VT[t] - l) * sc + off)
+            uvs.append(((VR if chart in chart_names else VT)[t] - l) * sc + off)
         return uv_index[key] + 1
 
     lines_f = {k: [] for k in chart_names}

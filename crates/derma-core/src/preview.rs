@@ -257,11 +257,12 @@ pub fn tile(size: f32) -> (TriMesh, Vec<[f32; 4]>) {
     (m, t)
 }
 
-/// Lays out the preview: the render(s) on the left, a 3×2 contact sheet of maps on the right.
+/// Lays out the preview: the render(s) on the left, a 3×2 contact sheet of maps on the right
+/// (none when `sheet` is empty).
 /// Returns encoded sRGB channels.
 pub fn compose(renders: &[[Map; 3]], sheet: &[[Map; 3]], panel: usize) -> [Map; 3] {
     let thumb = panel / 2;
-    let width = panel * renders.len() + thumb * 3;
+    let width = panel * renders.len() + if sheet.is_empty() { 0 } else { thumb * 3 };
     let height = panel;
     let mut out = [
         Map::filled(width, height, 0.0),

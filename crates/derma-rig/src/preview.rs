@@ -6,8 +6,9 @@ use crate::error::Result;
 use derma_core::Map;
 
 /// Top of the preview's hemoglobin scale (volume fraction): grey = 1 − H / PREVIEW_BLOOD_TOP,
-/// dark = more blood, clipped (lips and moles saturate so the face's variation shows).
-pub const PREVIEW_BLOOD_TOP: f32 = 0.03;
+/// dark = more blood, clipped: 0.1, the lips' blood and the top of the built-in match table, so
+/// the face's regional variation (1–8 %) shows.
+pub const PREVIEW_BLOOD_TOP: f32 = 0.1;
 
 /// The built-in head rendered with `rgb` as base colour, and again with the hemoglobin map as
 /// display grey (dark = more blood), side by side (linear RGB).

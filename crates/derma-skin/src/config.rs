@@ -538,7 +538,7 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("detail.height_mm", "mm", 0.0, 10.0, "RMS of the added relief (authored; skin micro-relief is tens of µm)"),
     k("detail.albedo_contrast", "-", 0.0, 10.0, "gain of the colour exemplar's relative luminance contrast on melanin (1 = as in the exemplar, to first order)"),
     k("person.ita_deg", "°", -90.0, 90.0, "skin tone as the individual typology angle of cheeks and forehead, atan((L*−50)/b*) (Chardon et al. 1991): very light > 55, light 41–55, intermediate 28–41, tan 10–28, brown −30–10, dark < −30; default 48 (light)"),
-    k("person.calibrate_melanin", "-", 0.0, 0.0, "set baseline.melanin so the mean cheek/forehead colour has person.ita_deg under the chosen appearance (bisection on melanin); false keeps baseline.melanin as given"),
+    k("person.calibrate_melanin", "-", 0.0, 0.0, "set baseline.melanin so the mean cheek/forehead colour has person.ita_deg under the chosen appearance (bisection on melanin); false keeps baseline.melanin as given — a config that sets baseline.melanin without this key means false"),
     k("person.sex", "-", 0.0, 0.0, "\"male\" (terminal beard follicles on the beard region, builtin_head::BEARD_TO_SCALP) or \"female\" (vellus only)"),
     k("person.age_years", "years", 10.0, 100.0, "age: wrinkle density × age_factor and depth × √age_factor (1 at 40, 0.2 at ≤ 20, 2.2 at ≥ 70; regional::age_factor)"),
     k("regional.enabled", "-", 0.0, 0.0, "regional biology of the built-in head (regional.rs GAINS): blood, melanin, oxygenation and epidermis by region"),
@@ -547,11 +547,27 @@ pub const KEY_DOCS: &[KeyDoc] = &[
 
 impl SkinConfig {
     /// Parses TOML, rejecting unknown keys and out-of-range values. `source` names the file.
+    ///
+    /// A config that sets `baseline.melanin` and says nothing of `person.calibrate_melanin`
+    /// means that melanin: calibration to `person.ita_deg` is then off.
     pub fn from_toml(text: &str, source: &str) -> Result<SkinConfig, crate::SkinError> {
-        let cfg: SkinConfig = toml::from_str(text).map_err(|e| crate::SkinError::Config {
+        let mut cfg: SkinConfig = toml::from_str(text).map_err(|e| crate::SkinError::Config {
             origin: source.into(),
             detail: e.to_string(),
         })?;
+        let table: toml::Table = toml::from_str(text).map_err(|e| crate::SkinError::Config {
+            origin: source.into(),
+            detail: e.to_string(),
+        })?;
+        let has = |section: &str, key: &str| {
+            table
+                .get(section)
+                .and_then(|t| t.as_table())
+                .is_some_and(|t| t.contains_key(key))
+        };
+        if has("baseline", "melanin") && !has("person", "calibrate_melanin") {
+            cfg.person.calibrate_melanin = false;
+        }
         cfg.validate(source)?;
         Ok(cfg)
     }
@@ -728,6 +744,25 @@ mod tests {
         // Floats print as written: 0.028, not the f32's binary value in full.
         assert!(printed.contains("specular_f0 = 0.028\n"), "{printed}");
         assert!(!printed.contains("0.0279999"), "{printed}");
+    }
+
+    #[test]
+    fn a_config_that_sets_melanin_keeps_it() {
+        let c =
+            SkinConfig::from_toml("[baseline]\nmelanin = { min = 0.1, max = 0.2 }\n", "m").unwrap();
+        assert!(!c.person.calibrate_melanin);
+        let c = SkinConfig::from_toml(
+            "[baseline]\nmelanin = { min = 0.1, max = 0.2 }\n[person]\ncalibrate_melanin = true\n",
+            "m",
+        )
+        .unwrap();
+        assert!(c.person.calibrate_melanin);
+        assert!(
+            SkinConfig::from_toml("seed = 3\n", "m")
+                .unwrap()
+                .person
+                .calibrate_melanin
+        );
     }
 
     #[test]

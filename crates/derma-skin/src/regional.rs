@@ -69,7 +69,7 @@ pub const GAINS: [Gain; 12] = [
     // Periorbital skin: darker and bluish — venous blood of the orbicularis plexus seen through
     // thin skin, and more melanin (Freitag & Cestari 2007, "What causes dark circles under the
     // eyes?", J Cosmet Dermatol 6:211–215).
-    g("periorbital", 2.5, 1.5, -0.3, 0.85),
+    g("periorbital", 4.0, 1.25, -0.4, 0.85),
     // Eyelid skin is the thinnest of the face (Ha et al. 2005, Plast Reconstr Surg 115:1769).
     g("eyelids", 3.0, 1.3, -0.2, 0.6),
     // The neck is paler than the face.

@@ -61,13 +61,13 @@ fn a_mole_straddling_a_uv_seam_of_the_head_paints_both_sides() {
     );
     let s = &g.surface;
     let head = &derma_head::Head::builtin().skin;
-    // A skin vertex with two texture coordinates far apart, both in the head chart (u < 0.5),
+    // A skin vertex with two texture coordinates far apart, both in the head chart (the top half),
     // on the back of the head (z < −40 mm).
     let mut first: std::collections::HashMap<[i32; 3], usize> = Default::default();
     let mut seam = None;
     for i in 0..head.positions.len() {
         let p = head.positions[i];
-        if p.z > -40.0 || head.uvs[i].x > 0.5 {
+        if p.z > -40.0 || head.uvs[i].y < 0.5 {
             continue;
         }
         let key = (p * 1e3).round().as_ivec3().to_array();

@@ -21,8 +21,16 @@ fn every_preset_lands_in_its_ita_band_with_real_face_redness() {
             ..SkinConfig::default()
         };
         let set = SkinGenerator::new(cfg).threads(2).run().unwrap();
-        let c = region_colors(&set, &["cheeks", "forehead", "neck"]).unwrap();
-        let (cheeks, forehead, neck) = (&c[0], &c[1], &c[2]);
+        let c = region_colors(&set, &["cheeks", "forehead", "neck", "periorbital"]).unwrap();
+        let (cheeks, forehead, neck, orbit) = (&c[0], &c[1], &c[2], &c[3]);
+        // Periorbital skin darker and bluer than the forehead (Freitag & Cestari 2007).
+        assert!(
+            orbit.lab[0] < forehead.lab[0] && orbit.lab[2] < forehead.lab[2],
+            "{}: periorbital {:?} vs forehead {:?}",
+            p.name(),
+            orbit.lab,
+            forehead.lab
+        );
         assert!(cheeks.texels > 500 && forehead.texels > 500 && neck.texels > 500);
         // Cheeks and forehead together (texel-weighted) in the band.
         let n = (cheeks.texels + forehead.texels) as f64;

@@ -1,0 +1,84 @@
+//! The built-in head as data: prints its parts, landmarks and face units, poses it with two face
+//! units and writes it as OBJ and GLB (with the 52 face units as morph targets).
+//! Run: `cargo run --release -p derma-head --example 01_head_export [OUT_DIR]`.
+
+use derma_head::{export, Head, REGIONS};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let out =
+        std::path::PathBuf::from(std::env::args().nth(1).unwrap_or_else(|| "head-out".into()));
+    std::fs::create_dir_all(&out)?;
+    let head = Head::builtin();
+    let (lo, hi) = head.skin.bounds();
+    println!(
+        "skin: {} vertices, {} triangles, {:.0} cm², bounds {:.0} × {:.0} × {:.0} mm",
+        head.skin.positions.len(),
+        head.skin.triangles.len(),
+        head.skin.area() / 100.0,
+        hi.x - lo.x,
+        hi.y - lo.y,
+        hi.z - lo.z
+    );
+    for p in &head.parts {
+        println!(
+            "{}: {} vertices, {} triangles",
+            p.name,
+            p.mesh.positions.len(),
+            p.mesh.triangles.len()
+        );
+    }
+    for (name, p) in &head.landmarks.points {
+        println!("landmark {name}: ({:.1}, {:.1}, {:.1}) mm", p.x, p.y, p.z);
+    }
+    println!("regions: {}", REGIONS.join(", "));
+    let units = head.face_units();
+    println!(
+        "{} face units: {}",
+        units.len(),
+        units
+            .iter()
+            .map(|u| u.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    // A half smile with the jaw a little open: the posed skin as OBJ.
+    let posed = head.posed_skin(&[
+        ("mouthSmileLeft", 0.6),
+        ("mouthSmileRight", 0.6),
+        ("jawOpen", 0.3),
+    ]);
+    posed.write_obj(&out.join("smile.obj"))?;
+    // A look at it: neutral and posed, side by side, in derma-core's software preview.
+    let flat = |v: f32| derma_core::Map::filled(1, 1, v);
+    let (base, normal) = (
+        [flat(0.45), flat(0.33), flat(0.28)],
+        [flat(0.0), flat(0.0), flat(1.0)],
+    );
+    let (rough, spec) = (flat(0.5), flat(0.35));
+    let tex = derma_core::preview::Textures {
+        base_color: &base,
+        normal: &normal,
+        roughness: &rough,
+        specular: &spec,
+        specular_scale: 0.08,
+        wrap: false,
+        uv_scale: glam::Vec2::ONE,
+    };
+    let props = head.preview_props();
+    let views: Vec<[derma_core::Map; 3]> = [&head.skin, &posed]
+        .iter()
+        .map(|m| {
+            let t = derma_core::mesh::mikktspace_tangents(m);
+            derma_core::preview::render_with(m, &t, &tex, &props, 0.35, 512)
+        })
+        .collect();
+    let sheet = derma_core::preview::compose(&views, &[], 512);
+    derma_core::image_io::write_png8(&out.join("smile.png"), &[&sheet[0], &sheet[1], &sheet[2]])?;
+    export::write_obj(head, &out.join("head.obj"), &out.join("head_parts.obj"))?;
+    export::write_glb(head, &out.join("head.glb"))?;
+    println!(
+        "wrote {}/head.obj, head_parts.obj, head.glb, smile.obj, smile.png",
+        out.display()
+    );
+    Ok(())
+}
