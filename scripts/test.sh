@@ -2,7 +2,8 @@
 # The project's test command (README.md; CI runs it on a fresh machine): installs what the tests
 # need; checks formatting and lints; checks the committed adding-doubling references against
 # iadpython and the histogram-matching reference against scikit-image; runs the workspace tests
-# with the GPU tests required (on Mesa's lavapipe); and runs every numbered example.
+# with the GPU tests required (on Mesa's lavapipe); validates the exported head's GLB with
+# Khronos' glTF-Validator; and runs every numbered example.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if ! ls /usr/share/vulkan/icd.d/lvp_icd*.json >/dev/null 2>&1; then
@@ -18,6 +19,8 @@ python3 scripts/iad_reference.py --check
 python3 scripts/histmatch_reference.py --check
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 DERMA_REQUIRE_GPU=1 cargo test --workspace --release
+# The exported head opens without errors or warnings in Khronos' glTF-Validator.
+bash scripts/validate_gltf.sh
 # Every numbered example runs (the Monte Carlo ones with fewer photons than their defaults),
 # built once with the workspace's features (a per-crate `cargo run -p` would rebuild its
 # dependencies with another feature set).

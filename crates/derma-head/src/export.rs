@@ -112,9 +112,13 @@ impl Glb {
             .collect();
         let iv = self.view(&idx, None);
         let vv = self.view(&val, None);
+        // min/max over the accessor after substitution: the zeros count unless every vertex is
+        // listed (glTF 2.0 §3.6.2.4, sparse accessors).
         let (mut lo, mut hi) = bounds(offs.iter().map(|o| o.1 * M_PER_MM));
-        lo = lo.min(Vec3::ZERO);
-        hi = hi.max(Vec3::ZERO);
+        if offs.len() < count {
+            lo = lo.min(Vec3::ZERO);
+            hi = hi.max(Vec3::ZERO);
+        }
         self.accessor(json!({
             "componentType": 5126, "count": count, "type": "VEC3",
             "min": lo.to_array(), "max": hi.to_array(),

@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# Exports the built-in head (`derma skin --export-template`) and checks head.glb with Khronos'
+# glTF-Validator from npm (installed here into a temporary directory, with Node.js from apt when
+# the machine lacks it). Run by scripts/test.sh.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+if ! command -v npm >/dev/null 2>&1; then
+  apt-get install -y nodejs npm || { apt-get update && apt-get install -y nodejs npm; }
+fi
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+npm install --silent --prefix "$work/v" gltf-validator@2.0.0-dev.3.10 >/dev/null
+cargo build --release -q -p derma
+target/release/derma skin --export-template "$work/head" --quiet
+node scripts/validate_gltf.js "$work/v" "$work/head/head.glb"
