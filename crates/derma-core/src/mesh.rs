@@ -102,6 +102,37 @@ pub fn file_positions(path: &Path) -> Result<Vec<Vec3>> {
         .collect()
 }
 
+/// Writes several meshes into one Wavefront OBJ, each a named object (`o NAME`) with positions,
+/// UVs and normals (one index per corner), after a `# header` comment line; atomically.
+pub fn write_obj_objects(path: &Path, header: &str, objects: &[(&str, &TriMesh)]) -> Result<()> {
+    use std::fmt::Write;
+    let size: usize = objects
+        .iter()
+        .map(|(_, m)| m.positions.len() * 80 + m.triangles.len() * 40)
+        .sum();
+    let mut s = String::with_capacity(size);
+    let _ = writeln!(s, "# {header}");
+    let mut base = 1usize;
+    for &(name, m) in objects {
+        let _ = writeln!(s, "o {name}");
+        for p in &m.positions {
+            let _ = writeln!(s, "v {} {} {}", p.x, p.y, p.z);
+        }
+        for t in &m.uvs {
+            let _ = writeln!(s, "vt {} {}", t.x, t.y);
+        }
+        for n in &m.normals {
+            let _ = writeln!(s, "vn {} {} {}", n.x, n.y, n.z);
+        }
+        for t in &m.triangles {
+            let [a, b, c] = t.map(|i| i as usize + base);
+            let _ = writeln!(s, "f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}");
+        }
+        base += m.positions.len();
+    }
+    crate::atomic::write_bytes(path, s.as_bytes())
+}
+
 /// Largest bounding-box extent (mm) of a head or face mesh: from a face mask (~120 mm wide) to a
 /// whole head with its neck (~300 mm tall), with a margin.
 pub const HEAD_EXTENT_MM: (f32, f32) = (100.0, 350.0);
@@ -203,23 +234,7 @@ impl TriMesh {
 
     /// Writes the mesh as Wavefront OBJ (positions, UVs, normals; one index per corner), atomically.
     pub fn write_obj(&self, path: &Path) -> Result<()> {
-        use std::fmt::Write;
-        let mut s = String::with_capacity(self.positions.len() * 80 + self.triangles.len() * 40);
-        let _ = writeln!(s, "# written by derma");
-        for p in &self.positions {
-            let _ = writeln!(s, "v {} {} {}", p.x, p.y, p.z);
-        }
-        for t in &self.uvs {
-            let _ = writeln!(s, "vt {} {}", t.x, t.y);
-        }
-        for n in &self.normals {
-            let _ = writeln!(s, "vn {} {} {}", n.x, n.y, n.z);
-        }
-        for t in &self.triangles {
-            let [a, b, c] = t.map(|i| i + 1);
-            let _ = writeln!(s, "f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}");
-        }
-        crate::atomic::write_bytes(path, s.as_bytes())
+        write_obj_objects(path, "written by derma", &[("mesh", self)])
     }
 
     /// Recomputes area-weighted vertex normals (used when the file has none).

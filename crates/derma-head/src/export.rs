@@ -27,32 +27,8 @@ pub fn write_obj(head: &Head, path: &Path, parts_path: &Path) -> crate::Result<(
 }
 
 fn write_objects(path: &Path, meshes: &[(&str, &TriMesh)]) -> crate::Result<()> {
-    use std::fmt::Write;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# derma built-in head (MakeHuman base mesh, CC0 1.0), millimetres"
-    );
-    let mut base = 1usize;
-    for &(name, m) in meshes {
-        let _ = writeln!(s, "o {name}");
-        for p in &m.positions {
-            let _ = writeln!(s, "v {} {} {}", p.x, p.y, p.z);
-        }
-        for t in &m.uvs {
-            let _ = writeln!(s, "vt {} {}", t.x, t.y);
-        }
-        for n in &m.normals {
-            let _ = writeln!(s, "vn {} {} {}", n.x, n.y, n.z);
-        }
-        for t in &m.triangles {
-            let [a, b, c] = t.map(|i| i as usize + base);
-            let _ = writeln!(s, "f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}");
-        }
-        base += m.positions.len();
-    }
-    derma_core::atomic::write_bytes(path, s.as_bytes())?;
-    Ok(())
+    let header = "derma built-in head (MakeHuman base mesh, CC0 1.0), millimetres";
+    Ok(derma_core::mesh::write_obj_objects(path, header, meshes)?)
 }
 
 /// A GLB under construction: the binary chunk and the JSON arrays.

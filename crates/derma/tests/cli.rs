@@ -14,6 +14,15 @@ fn tmp(tag: &str) -> PathBuf {
     d
 }
 
+/// Runs derma with its notes on stderr (no --quiet).
+fn run_loud(args: &[&str]) -> (bool, String) {
+    let out = derma().args(args).output().unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
 fn run(args: &[&str]) -> (bool, String) {
     let out = derma().args(args).arg("--quiet").output().unwrap();
     (
@@ -149,21 +158,17 @@ fn user_meshes_obj_and_glb_any_scale() {
     let odd = d.join("odd.obj");
     write_quad_obj(&odd, 8.6);
     let out3 = d.join("out3");
-    let o = derma()
-        .args([
-            "skin",
-            "--mesh",
-            odd.to_str().unwrap(),
-            "--size",
-            "64",
-            "--out",
-            out3.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{err}");
-    assert!(err.contains("nominal 225 mm head"), "{err}");
+    let odd_s = odd.to_str().unwrap();
+    let (ok, err) = run_loud(&[
+        "skin",
+        "--mesh",
+        odd_s,
+        "--size",
+        "64",
+        "--out",
+        out3.to_str().unwrap(),
+    ]);
+    assert!(ok && err.contains("nominal 225 mm head"), "{err}");
     let r = report(&out3);
     assert_eq!(r["inputs"]["mesh"]["unit"], "fit", "{r}");
     let k = r["inputs"]["mesh"]["mm_per_unit"].as_f64().unwrap();
@@ -242,21 +247,17 @@ fn canonical_face_model_from_shared_data() {
         return;
     }
     let d = tmp("canon");
-    let o = derma()
-        .args([
-            "skin",
-            "--mesh",
-            p.to_str().unwrap(),
-            "--size",
-            "128",
-            "--out",
-            d.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{err}");
-    assert!(err.contains("centimetres"), "unit note: {err}");
+    let mesh = p.to_str().unwrap();
+    let (ok, err) = run_loud(&[
+        "skin",
+        "--mesh",
+        mesh,
+        "--size",
+        "128",
+        "--out",
+        d.to_str().unwrap(),
+    ]);
+    assert!(ok && err.contains("centimetres"), "unit note: {err}");
     let r = report(&d);
     // A face mask of ~15 cm × 20 cm: a few hundred cm².
     let a = r["surface_area_cm2"].as_f64().unwrap();
@@ -266,23 +267,20 @@ fn canonical_face_model_from_shared_data() {
     // follow the mask: lips, eyebrows and wrinkles appear, the cheeks are redder than the chin's
     // neighbourhood would be without regions.
     let d2 = tmp("canon-lm");
-    let o = derma()
-        .args([
-            "skin",
-            "--mesh",
-            p.to_str().unwrap(),
-            "--landmarks",
-            "mediapipe",
-            "--size",
-            "128",
-            "--out",
-            d2.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{err}");
-    assert!(err.contains("placed on the mesh by its landmarks"), "{err}");
+    let out = d2.to_str().unwrap();
+    let (ok, err) = run_loud(&[
+        "skin",
+        "--mesh",
+        mesh,
+        "--landmarks",
+        "mediapipe",
+        "--out",
+        out,
+    ]);
+    assert!(
+        ok && err.contains("placed on the mesh by its landmarks"),
+        "{err}"
+    );
     let r = report(&d2);
     assert!(
         r["counts"]["eyebrow"].as_u64().unwrap() > 50,
@@ -297,22 +295,17 @@ fn canonical_face_model_from_shared_data() {
     // A landmark file missing names is a clear error naming the missing one.
     let bad = d2.join("lm.json");
     std::fs::write(&bad, r#"{"nose_tip": [0, 0, 10]}"#).unwrap();
-    let o = derma()
-        .args([
-            "skin",
-            "--mesh",
-            p.to_str().unwrap(),
-            "--landmarks",
-            bad.to_str().unwrap(),
-            "--size",
-            "64",
-            "--out",
-            d2.join("x").to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success());
+    let x = d2.join("x");
+    let (ok, err) = run(&[
+        "skin",
+        "--mesh",
+        mesh,
+        "--landmarks",
+        bad.to_str().unwrap(),
+        "--out",
+        x.to_str().unwrap(),
+    ]);
+    assert!(!ok);
     assert!(
         err.contains("lm.json") && err.contains("is missing"),
         "{err}"
