@@ -43,6 +43,9 @@ pub enum LandmarkError {
     /// A landmark the regions need is missing.
     #[error("landmark '{0}' is missing; the regions need all of: {all}", all = NAMES.join(", "))]
     Missing(String),
+    /// A landmark is NaN or infinite (after scaling to millimetres).
+    #[error("landmark '{0}' is {1:?} mm; expected finite coordinates")]
+    NotFinite(String, [f32; 3]),
     /// A landmark name derma does not know.
     #[error("unknown landmark '{0}'; expected names: {all}", all = NAMES.join(", "))]
     Unknown(String),
@@ -64,10 +67,13 @@ impl Landmarks {
         self.points[name]
     }
 
-    /// Checks that every landmark of [`NAMES`] is present.
+    /// Checks that every landmark of [`NAMES`] is present and finite.
     pub fn check(&self) -> Result<(), LandmarkError> {
-        match NAMES.iter().find(|n| !self.points.contains_key(**n)) {
-            Some(n) => Err(LandmarkError::Missing((*n).into())),
+        if let Some(n) = NAMES.iter().find(|n| !self.points.contains_key(**n)) {
+            return Err(LandmarkError::Missing((*n).into()));
+        }
+        match self.points.iter().find(|(_, p)| !p.is_finite()) {
+            Some((n, p)) => Err(LandmarkError::NotFinite(n.clone(), p.to_array())),
             None => Ok(()),
         }
     }
