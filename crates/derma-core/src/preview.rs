@@ -39,6 +39,16 @@ pub struct Prop<'a> {
     pub roughness: f32,
     /// Normal-incidence Fresnel reflectance.
     pub f0: f32,
+    /// Coverage in [0, 1] at a texture coordinate, for cards such as eyelashes: a pixel is drawn
+    /// where the coverage exceeds an ordered-dither threshold (no blending). `None`: opaque.
+    pub coverage: Option<&'a (dyn Fn(Vec2) -> f32 + Sync)>,
+}
+
+/// Threshold in [0, 1) of pixel (x, y): the 4×4 Bayer matrix, so a coverage c draws about c of
+/// the pixels, evenly spread.
+fn dither(x: usize, y: usize) -> f32 {
+    const BAYER: [[u8; 4]; 4] = [[0, 8, 2, 10], [12, 4, 14, 6], [3, 11, 1, 9], [15, 7, 13, 5]];
+    (BAYER[y % 4][x % 4] as f32 + 0.5) / 16.0
 }
 
 /// Renders `mesh` (with per-corner tangents) seen from direction `view_yaw` (radians about +Y,
@@ -82,8 +92,8 @@ pub fn render_with(
     // nearest surface per pixel.
     let mut depth = vec![f32::NEG_INFINITY; size * size];
     let mut gbuf = vec![(u32::MAX, u32::MAX, 0.0f32, 0.0f32); size * size];
-    let objects = std::iter::once(mesh).chain(props.iter().map(|p| p.mesh));
-    for (obj, m) in objects.enumerate() {
+    let objects = std::iter::once((mesh, None)).chain(props.iter().map(|p| (p.mesh, p.coverage)));
+    for (obj, (m, coverage)) in objects.enumerate() {
         let scr: Vec<Vec3> = m.positions.iter().map(|&p| to_screen(rot * p)).collect();
         for (ti, t) in m.triangles.iter().enumerate() {
             let [a, b, c] = t.map(|i| scr[i as usize]);
@@ -106,6 +116,14 @@ pub fn render_with(
                     }
                     let z = a.z * w0 + b.z * w1 + c.z * w2;
                     let k = y * size + x;
+                    if let Some(cov) = coverage {
+                        let uv = m.uvs[t[0] as usize] * w0
+                            + m.uvs[t[1] as usize] * w1
+                            + m.uvs[t[2] as usize] * w2;
+                        if cov(uv) <= dither(x, y) {
+                            continue;
+                        }
+                    }
                     if z > depth[k] {
                         depth[k] = z;
                         gbuf[k] = (obj as u32, ti as u32, w1, w2);
@@ -304,4 +322,66 @@ pub fn normalised(m: &Map) -> [Map; 3] {
         .iter_mut()
         .for_each(|v| *v = (*v - s.min) / span);
     [n.clone(), n.clone(), n]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn flat(v: f32) -> Map {
+        Map::filled(1, 1, v)
+    }
+
+    /// A white tile seen head-on with a red prop card in front of it.
+    fn scene(coverage: Option<&(dyn Fn(Vec2) -> f32 + Sync)>) -> [Map; 3] {
+        let (m, t) = tile(10.0);
+        let (base, normal) = (
+            [flat(0.8), flat(0.8), flat(0.8)],
+            [flat(0.0), flat(0.0), flat(1.0)],
+        );
+        let (rough, spec) = (flat(0.5), flat(0.0));
+        let tex = Textures {
+            base_color: &base,
+            normal: &normal,
+            roughness: &rough,
+            specular: &spec,
+            specular_scale: 0.08,
+            wrap: false,
+            uv_scale: Vec2::ONE,
+        };
+        let mut card = tile(4.0).0;
+        card.positions.iter_mut().for_each(|p| p.z = 1.0);
+        let red = |_: Vec2| Vec3::new(0.8, 0.0, 0.0);
+        let prop = Prop {
+            mesh: &card,
+            albedo: &red,
+            roughness: 0.5,
+            f0: 0.0,
+            coverage,
+        };
+        render_with(&m, &t, &tex, &[prop], 0.0, 64)
+    }
+
+    /// Share of the pixels in the card's footprint that show the card (red, no green).
+    fn card_share(img: &[Map; 3]) -> f32 {
+        let (mut red, mut n) = (0, 0);
+        for y in 26..38 {
+            for x in 26..38 {
+                n += 1;
+                if img[1].get(x, y) < 0.01 && img[0].get(x, y) > 0.05 {
+                    red += 1;
+                }
+            }
+        }
+        red as f32 / n as f32
+    }
+
+    #[test]
+    fn props_draw_in_front_and_coverage_thins_them() {
+        assert_eq!(card_share(&scene(None)), 1.0);
+        assert_eq!(card_share(&scene(Some(&|_| 0.0))), 0.0);
+        // Half coverage draws half of the pixels, evenly (the 4×4 ordered dither).
+        let half = card_share(&scene(Some(&|_| 0.5)));
+        assert!((half - 0.5).abs() < 0.05, "{half}");
+    }
 }

@@ -263,7 +263,7 @@ impl Head {
 
     /// The parts as props for derma-core's software preview, with simple materials: the eyes
     /// with [`eye::default_albedo`] under a glossy tear film, ivory teeth, a pink tongue and
-    /// near-black lashes.
+    /// near-black lashes thinning to their tips ([`eye::lash_coverage`]).
     pub fn preview_props(&self) -> Vec<derma_core::preview::Prop<'_>> {
         // Linear albedos: enamel ivory, tongue mucosa pink, lashes near black (authored).
         static TEETH: fn(Vec2) -> Vec3 = |_| Vec3::new(0.62, 0.56, 0.45);
@@ -284,11 +284,15 @@ impl Head {
                 } else {
                     (&LASHES, 0.6, 0.04)
                 };
+                static LASH_COVERAGE: fn(Vec2) -> f32 = eye::lash_coverage;
+                let coverage: Option<&(dyn Fn(Vec2) -> f32 + Sync)> =
+                    p.name.starts_with("eyelashes").then_some(&LASH_COVERAGE);
                 derma_core::preview::Prop {
                     mesh: &p.mesh,
                     albedo,
                     roughness,
                     f0,
+                    coverage,
                 }
             })
             .collect()
