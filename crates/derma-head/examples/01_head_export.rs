@@ -1,12 +1,16 @@
 //! The built-in head as data: prints its parts, landmarks and face units, poses it with two face
 //! units and writes it as OBJ and GLB (with the 52 face units as morph targets).
-//! Run: `cargo run --release -p derma-head --example 01_head_export [OUT_DIR]`.
+//! Run: `cargo run --release -p derma-head --example 01_head_export [OUT_DIR]` (default: a
+//! `derma-head` folder in the temporary directory).
 
 use derma_head::{export, Head, REGIONS};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let out =
-        std::path::PathBuf::from(std::env::args().nth(1).unwrap_or_else(|| "head-out".into()));
+    // Default: a directory in the system's temporary folder (never the working tree).
+    let out = std::env::args().nth(1).map_or_else(
+        || std::env::temp_dir().join("derma-head"),
+        std::path::PathBuf::from,
+    );
     std::fs::create_dir_all(&out)?;
     let head = Head::builtin();
     let (lo, hi) = head.skin.bounds();
