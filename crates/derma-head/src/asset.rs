@@ -99,6 +99,7 @@ pub fn parse() -> Asset {
         }
     }
     let meta: Meta = serde_json::from_str(HEAD_JSON).expect("head.json");
+    assert_eq!(meta.unit, "mm", "the head asset is in millimetres");
     let mut targets: Vec<SparseTarget> = Vec::new();
     for line in FACEUNITS.lines() {
         if line.starts_with('#') || line.is_empty() {

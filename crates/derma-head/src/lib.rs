@@ -46,9 +46,6 @@ pub enum HeadError {
     /// A core error (writing files).
     #[error(transparent)]
     Core(#[from] derma_core::CoreError),
-    /// Landmarks are incomplete.
-    #[error(transparent)]
-    Landmarks(#[from] landmarks::LandmarkError),
 }
 
 /// Result of the head crate.

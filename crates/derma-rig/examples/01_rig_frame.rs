@@ -1,4 +1,4 @@
-//! The rig through the library API: a neutral hemoglobin map on the face template's UV layout
+//! The rig through the library API: a neutral hemoglobin map on the built-in head's UV layout
 //! (here synthetic: 1.2 % dermal blood with vascular-like noise), the built-in expression
 //! library, one blended frame through the exact path and the real-time path.
 //!

@@ -220,7 +220,7 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
     let n = FIELD_RESOLUTION;
     let raster = UvRaster::new(mesh, n, n);
     let covered: Vec<bool> = (0..n * n).map(|i| raster.covered(i)).collect();
-    let gains = smoothed_gains(mesh, regions, person, BIO_SMOOTHING_MM);
+    let gains = smoothed_gains(mesh, regions, BIO_SMOOTHING_MM);
     let uv_of = |i: usize| {
         Vec2::new(
             ((i % n) as f32 + 0.5) / n as f32,
@@ -316,12 +316,7 @@ pub const BIO_SMOOTHING_MM: f32 = 8.0;
 /// `sigma_mm`: vertices at one position (UV seams) are welded, then uniform Laplacian smoothing
 /// x ← (x + Σ neighbours) / (1 + degree) runs N = (7/3)(σ/ē)² times (ē the mean edge length; each
 /// step adds about (3/7) ē² of variance per axis on a triangulated quad grid).
-fn smoothed_gains(
-    mesh: &TriMesh,
-    regions: &Regions,
-    person: &Person,
-    sigma_mm: f32,
-) -> Vec<[f32; 4]> {
+fn smoothed_gains(mesh: &TriMesh, regions: &Regions, sigma_mm: f32) -> Vec<[f32; 4]> {
     use std::collections::HashMap;
     let key = |p: Vec3| (p * 1e3).round().as_ivec3().to_array();
     let mut weld: HashMap<[i32; 3], u32> = HashMap::new();
@@ -340,7 +335,7 @@ fn smoothed_gains(
         if !seen[w as usize] {
             seen[w as usize] = true;
             let r = regions.weights(mesh.positions[v], mesh.uvs[v]);
-            value[w as usize] = regional::gains(&r, person);
+            value[w as usize] = regional::gains(&r);
         }
     }
     let mut nbrs: Vec<Vec<u32>> = vec![Vec::new(); n];

@@ -109,10 +109,6 @@ impl SkinError {
     pub fn from_head(e: derma_head::HeadError) -> Self {
         match e {
             derma_head::HeadError::Core(c) => SkinError::Core(c),
-            other => SkinError::Field {
-                name: "landmarks".into(),
-                detail: other.to_string(),
-            },
         }
     }
 }

@@ -82,7 +82,7 @@ pub const GAINS: [Gain; 12] = [
 ];
 
 /// Regional biology at a point with region weights `w`: 1 + Σ wᵣ (gainᵣ − 1) per channel.
-pub fn gains(w: &Weights, _person: &Person) -> [f32; 4] {
+pub fn gains(w: &Weights) -> [f32; 4] {
     let mut out = NEUTRAL;
     for r in &GAINS {
         let k = w[regions::index(r.region).expect("a region of derma-head")];
@@ -307,10 +307,10 @@ mod tests {
     #[test]
     fn regional_gains_are_neutral_outside_regions_and_blend_inside() {
         let none = [0.0; regions::REGIONS.len()];
-        assert_eq!(gains(&none, &Person::default()), NEUTRAL);
+        assert_eq!(gains(&none), NEUTRAL);
         let mut w = none;
         w[regions::index("cheeks").unwrap()] = 0.5;
-        let c = gains(&w, &Person::default());
+        let c = gains(&w);
         assert!((c[0] - (1.0 + 0.5 * (5.5 - 1.0))).abs() < 1e-6);
     }
 }
