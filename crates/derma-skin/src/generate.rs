@@ -324,9 +324,11 @@ impl<'a> SkinGenerator<'a> {
         job.stage("fields", 1, Unit::Steps);
         if let Some(m) = melanin {
             job.note(Note::info(format!(
-                "person: ITA {:.0}° → mean baseline melanin {m:.4} (cheeks and forehead, '{}' appearance)",
+                "person: ITA {:.0}° → mean baseline melanin {m:.4} (cheeks and forehead, '{}' appearance); age {:.0} → wrinkle density ×{:.2}",
                 cfg.person.ita_deg,
-                appearance.name()
+                appearance.name(),
+                cfg.person.age_years,
+                crate::regional::age_factor(cfg.person.age_years)
             )));
         }
         let mut fields = if kind == SurfaceKind::Template {
@@ -397,7 +399,9 @@ impl<'a> SkinGenerator<'a> {
             mesh_scale,
             preview_mesh,
             appearance: appearance.name(),
-            config: cfg.clone(),
+            // As given (the person's derived melanin and wrinkles are in the notes): rerunning
+            // report.json's config reproduces the set.
+            config: self.config.clone(),
             inputs: InputFiles {
                 config: self.config_path.clone(),
                 mesh: mesh_path,
@@ -564,7 +568,8 @@ pub struct TextureSet {
     pub preview_mesh: Option<(TriMesh, Vec<[f32; 4]>)>,
     /// Name of the appearance that made the colours.
     pub appearance: &'static str,
-    /// The configuration used.
+    /// The configuration as given (before the person's calibration and age scaling, which
+    /// `generate` derives again from it).
     pub config: SkinConfig,
     /// The files read.
     pub inputs: InputFiles,
