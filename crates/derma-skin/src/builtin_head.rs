@@ -202,6 +202,9 @@ fn feature_values(
 struct Texel {
     f: [f32; 10],
     wv: [f32; 3],
+    /// Relief depth scale and the tension-line direction (UV, encoded like `wv`).
+    relief: f32,
+    tv: [f32; 3],
     bio: [f32; regional::CHANNELS.len()],
     regions: regions::Weights,
 }
@@ -234,6 +237,8 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
                 return Texel {
                     f: [0.0; 10],
                     wv: [0.5, 0.5, 0.0],
+                    relief: 0.0,
+                    tv: [0.5, 0.5, 0.0],
                     bio: regional::NEUTRAL,
                     regions: [0.0; REGIONS.len()],
                 };
@@ -258,13 +263,36 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
             };
             let (a11, a12, a22) = (du.dot(du), du.dot(dv), dv.dot(dv));
             let det = a11 * a22 - a12 * a12;
-            let wv = if len > 0.0 && det > 1e-9 {
-                let (b1, b2) = (du.dot(dir3), dv.dot(dir3));
-                let d = Vec2::new(a22 * b1 - a12 * b2, a11 * b2 - a12 * b1).normalize_or_zero();
-                [0.5 + 0.5 * d.x, 0.5 + 0.5 * d.y, len]
-            } else {
-                [0.5, 0.5, 0.0]
+            let to_uv = |dir3: Vec3, len: f32| {
+                if len > 0.0 && det > 1e-9 {
+                    let (b1, b2) = (du.dot(dir3), dv.dot(dir3));
+                    let d = Vec2::new(a22 * b1 - a12 * b2, a11 * b2 - a12 * b1).normalize_or_zero();
+                    [0.5 + 0.5 * d.x, 0.5 + 0.5 * d.y, len]
+                } else {
+                    [0.5, 0.5, 0.0]
+                }
             };
+            let wv = to_uv(dir3, len);
+            // Tension lines: relaxed skin tension lines run with the expression lines (Borges
+            // 1984) — the wrinkle families' directions where they are, horizontal elsewhere (as
+            // RSTLs run on the forehead, temples and neck).
+            let tension = if f[9] > 0.05 && len > 0.0 {
+                dir3
+            } else {
+                Vec3::X
+            };
+            let tv = to_uv(tension, 1.0);
+            let g = |name: &str| w[regions::index(name).expect("region")];
+            let skin = 1.0 - g("mouth_interior").max(g("eye_sockets"));
+            // Relief depth by region (authored): coarser on the nose, finest on the eyelids,
+            // none on the lip vermilion (its own vertical folds are not modelled).
+            let relief = (skin
+                * (1.0 - g("lips"))
+                * (1.0 + 0.3 * g("nose")
+                    - 0.5 * g("eyelids")
+                    - 0.2 * g("scalp")
+                    - 0.2 * g("ears")))
+            .clamp(0.0, 1.5);
             let t = mesh.triangles[raster.triangle[i] as usize];
             let [b1, b2] = raster.bary[i];
             let bio = [0, 1, 2, 3].map(|c| {
@@ -275,6 +303,8 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
             Texel {
                 f,
                 wv,
+                relief,
+                tv,
                 bio,
                 regions: w,
             }
@@ -303,6 +333,11 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
     set.vectors.insert(
         "wrinkle_vectors".into(),
         [mk(&|v| v.wv[0]), mk(&|v| v.wv[1]), mk(&|v| v.wv[2])],
+    );
+    set.scalars.insert("relief".into(), mk(&|v| v.relief));
+    set.vectors.insert(
+        "tension_vectors".into(),
+        [mk(&|v| v.tv[0]), mk(&|v| v.tv[1]), mk(&|v| v.tv[2])],
     );
     set
 }

@@ -1,4 +1,4 @@
-//! Colour statistics of a texture set by region: mean CIELAB (D65) and ITA° of the base colour
+//! Statistics of a texture set by region: mean CIELAB (D65) and ITA° of the base colour
 //! and the standard deviation of its coarse (block-averaged) variation — the figures the
 //! regional biology is checked against (Chardon et al. 1991 for ITA°).
 
@@ -102,4 +102,40 @@ pub fn coarse_std(set: &TextureSet, region: &str, block_mm: f32) -> crate::Resul
     let k = means.len().max(1) as f64;
     let mean: [f64; 3] = [0, 1, 2].map(|c| means.iter().map(|m| m[c]).sum::<f64>() / k);
     Ok([0, 1, 2].map(|c| (means.iter().map(|m| (m[c] - mean[c]).powi(2)).sum::<f64>() / k).sqrt()))
+}
+
+/// Tilt statistics of the normal map over a region (degrees from the unperturbed normal).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TiltStats {
+    /// Median tilt (°).
+    pub median_deg: f64,
+    /// 90th percentile (°).
+    pub p90_deg: f64,
+    /// Share of texels tilted more than 2°.
+    pub over_2deg: f64,
+    /// Share of texels tilted more than 5°.
+    pub over_5deg: f64,
+}
+
+/// Tilt of the tangent-space normal map from +Z over the texels of `region` (mask > 0.7).
+pub fn normal_tilt(set: &TextureSet, region: &str) -> crate::Result<TiltStats> {
+    let mask = in_region(set, region)?;
+    let z = set.render.normal[2].data();
+    let mut t: Vec<f64> = (0..z.len())
+        .filter(|&i| mask[i])
+        .map(|i| (z[i].clamp(-1.0, 1.0) as f64).acos().to_degrees())
+        .collect();
+    t.sort_by(f64::total_cmp);
+    let n = t.len().max(1) as f64;
+    let q = |p: f64| {
+        t.get(((t.len() as f64 - 1.0) * p).round() as usize)
+            .copied()
+            .unwrap_or(0.0)
+    };
+    Ok(TiltStats {
+        median_deg: q(0.5),
+        p90_deg: q(0.9),
+        over_2deg: t.iter().filter(|&&d| d > 2.0).count() as f64 / n,
+        over_5deg: t.iter().filter(|&&d| d > 5.0).count() as f64 / n,
+    })
 }

@@ -39,8 +39,38 @@ pub struct SkinConfig {
     pub eyebrow: FollicleConfig,
     pub material: MaterialConfig,
     pub detail: DetailConfig,
+    pub relief: ReliefConfig,
     pub person: crate::regional::Person,
     pub regional: RegionalConfig,
+}
+
+/// `[relief]`: the micro-relief furrow network (see `features/relief.rs`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ReliefConfig {
+    pub enabled: bool,
+    pub field: String,
+    pub vector_field: String,
+    pub cell_mm: [f32; 3],
+    pub depth_mm: [f32; 3],
+    pub width_fraction: f32,
+    pub dome_fraction: f32,
+    pub anisotropy: f32,
+}
+
+impl Default for ReliefConfig {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            field: "relief".into(),
+            vector_field: "tension_vectors".into(),
+            cell_mm: [3.2, 1.1, 0.35],
+            depth_mm: [0.06, 0.03, 0.012],
+            width_fraction: 0.12,
+            dome_fraction: 0.8,
+            anisotropy: 0.6,
+        }
+    }
 }
 
 /// `[regional]`: the regional biology of the built-in head (see `regional.rs`).
@@ -252,6 +282,7 @@ impl Default for SkinConfig {
             eyebrow: FollicleConfig::eyebrow(),
             material: MaterialConfig::default(),
             detail: DetailConfig::default(),
+            relief: ReliefConfig::default(),
             person: crate::regional::Person::default(),
             regional: RegionalConfig::default(),
         }
@@ -537,6 +568,14 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("detail.highpass_texels", "texels", 1.0, 256.0, "box high-pass radius on the tile: keeps detail finer than 2r + 1 tile texels, below the procedural features"),
     k("detail.height_mm", "mm", 0.0, 10.0, "RMS of the added relief (authored; skin micro-relief is tens of µm)"),
     k("detail.albedo_contrast", "-", 0.0, 10.0, "gain of the colour exemplar's relative luminance contrast on melanin (1 = as in the exemplar, to first order)"),
+    k("relief.enabled", "-", 0.0, 0.0, "the micro-relief furrow network between features (features/relief.rs), on by default"),
+    k("relief.field", "-", 0.0, 0.0, "field scaling the furrow depth (built-in head: by region; patches and meshes without landmarks: 1)"),
+    k("relief.vector_field", "-", 0.0, 0.0, "vector field of the skin's tension lines (relaxed skin tension lines, Borges 1984); furrows along it are the deep ones; absent: isotropic"),
+    k("relief.cell_mm", "mm", 0.01, 20.0, "plateau size of the three octaves: secondary lines divide the skin into plateaus of 0.1–0.5 mm and primary lines outline polygons of about 0.5–2 mm (skin-replica studies, e.g. Hashimoto 1974); the coarsest octave (3.2 mm) is larger, authored so the normal map's tilt statistics at 1024² reach a head scan's (issue 21)"),
+    k("relief.depth_mm", "mm", 0.0, 0.5, "furrow depth per octave: primary lines ≈ 20–100 µm, secondary ≈ 5–40 µm (replica profilometry, Hashimoto 1974); deeper with age (× √ of regional::age_factor)"),
+    k("relief.width_fraction", "-", 0.0, 0.5, "furrow half-width as a fraction of the cell size (authored; never below ¾ texel, cross-section kept)"),
+    k("relief.dome_fraction", "-", 0.0, 2.0, "plateau dome height as a fraction of the octave's furrow depth (authored)"),
+    k("relief.anisotropy", "-", 0.0, 1.0, "how much shallower furrows across the tension lines are (0 isotropic, 1 only parallel ones; authored)"),
     k("person.ita_deg", "°", -90.0, 90.0, "skin tone as the individual typology angle of cheeks and forehead, atan((L*−50)/b*) (Chardon et al. 1991): very light > 55, light 41–55, intermediate 28–41, tan 10–28, brown −30–10, dark < −30; default 48 (light)"),
     k("person.calibrate_melanin", "-", 0.0, 0.0, "set baseline.melanin so the mean cheek/forehead colour has person.ita_deg under the chosen appearance (bisection on melanin); false keeps baseline.melanin as given — a config that sets baseline.melanin without this key means false"),
     k("person.sex", "-", 0.0, 0.0, "\"male\" (terminal beard follicles on the beard region, builtin_head::BEARD_TO_SCALP) or \"female\" (vellus only)"),

@@ -537,7 +537,7 @@ fn check_raster(s: &Surface, mesh: Option<&Path>, progress: &dyn Progress) -> Re
 fn uniform_fields() -> FieldSet {
     let mut f = FieldSet::default();
     let one = |v: f32| Map::filled(4, 4, v);
-    for name in ["moles", "freckles", "cysts", "pores", "face"] {
+    for name in ["moles", "freckles", "cysts", "pores", "face", "relief"] {
         f.scalars.insert(name.into(), one(1.0));
     }
     for name in ["lips", "scalp", "eyebrows", "wrinkles", "eyes"] {

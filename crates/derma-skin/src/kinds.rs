@@ -231,5 +231,6 @@ mod tests {
         let streams: Vec<u32> = KINDS.iter().map(|k| k.stream).collect();
         assert_eq!(streams, [1, 2, 3, 4, 5, 6, 7]);
         assert!(streams.iter().all(|&s| s != crate::noise::NOISE_STREAM));
+        assert!(streams.iter().all(|&s| s != crate::noise::RELIEF_STREAM));
     }
 }

@@ -18,6 +18,9 @@ pub const CHANNELS: usize = 8;
 /// Philox stream of the baseline noise's seed (stable; the feature kinds use 1–7).
 pub const NOISE_STREAM: u32 = 100;
 
+/// Philox stream of the micro-relief's site jitter seed (features/relief.rs).
+pub const RELIEF_STREAM: u32 = 101;
+
 /// One octave: lattice spacing and optional periods (in cells) for a tileable patch.
 #[derive(Clone, Copy, Debug)]
 struct Octave {

@@ -6,9 +6,10 @@
 use crate::config::SkinConfig;
 use crate::feature_set::FeatureSet;
 use crate::features::lips::{apply_lips, LipParams};
+use crate::features::relief::{self, ReliefParams};
 use crate::features::{BioSample, PaintPoint};
 use crate::index::GridCursor;
-use crate::noise::{BandNoise, NOISE_STREAM};
+use crate::noise::{BandNoise, NOISE_STREAM, RELIEF_STREAM};
 use crate::surface::Surface;
 use derma_core::progress::{Progress, Unit};
 use derma_core::Map;
@@ -108,6 +109,28 @@ pub fn paint(
     } else {
         None
     };
+    // Micro-relief (features/relief.rs): its depth field and, if given, the tension lines.
+    let relief = if cfg.relief.enabled {
+        let r = &cfg.relief;
+        Some((
+            ReliefParams {
+                cell_mm: r.cell_mm,
+                depth_mm: r.depth_mm,
+                width_fraction: r.width_fraction,
+                dome_fraction: r.dome_fraction,
+                anisotropy: r.anisotropy,
+                seed: derma_core::rng::Philox::new(cfg.seed, RELIEF_STREAM).u32x4(0)[0],
+                period: surface.period(),
+            },
+            fields.scalar(&r.field)?,
+            fields
+                .vectors
+                .contains_key(&r.vector_field)
+                .then_some(r.vector_field.as_str()),
+        ))
+    } else {
+        None
+    };
     let kinds: Vec<_> = features.kinds().map(|(_, k)| k).collect();
     let phi = b.phi;
     let amp = |r: crate::config::Range| (r.min, phi * (r.max - r.min));
@@ -158,6 +181,21 @@ pub fn paint(
                     s.tissue.melanin *= at(1);
                     s.tissue.oxygenation = (s.tissue.oxygenation + at(2)).clamp(0.0, 1.0);
                     s.tissue.epidermis_um *= at(3);
+                }
+                if let Some((prm, depth, tension)) = &relief {
+                    let uv = surface.uv(i);
+                    let scale = depth.sample_uv(uv.x, uv.y, wrap).max(0.0);
+                    if scale > 0.0 {
+                        let f = surface.frame(i);
+                        let t = tension
+                            .and_then(|name| fields.vector(name, uv.x, uv.y, wrap).ok())
+                            .map_or(glam::Vec3::ZERO, |v| {
+                                let d = f.dpdu * v.dir.x + f.dpdv * v.dir.y;
+                                (d - f.n * f.n.dot(d)).normalize_or_zero()
+                            });
+                        let texel = f.texel_area(surface.width, surface.height).sqrt();
+                        s.height_mm += relief::height(prm, p, f.n, t, scale, texel);
+                    }
                 }
                 if let Some(m) = lips_map {
                     let uv = surface.uv(i);

@@ -226,6 +226,7 @@ pub fn apply_person(
     out.wrinkle.density_per_cm2 *= age;
     out.wrinkle.depth_mm.min *= age.sqrt();
     out.wrinkle.depth_mm.max *= age.sqrt();
+    out.relief.depth_mm = out.relief.depth_mm.map(|d| d * age.sqrt());
     if !p.calibrate_melanin {
         return Ok((out, None));
     }

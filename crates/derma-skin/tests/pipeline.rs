@@ -111,6 +111,35 @@ fn a_mole_straddling_a_uv_seam_of_the_head_paints_both_sides() {
         (bio.texels[left].tissue.melanin - bio.texels[right].tissue.melanin).abs() < 0.05,
         "continuous across the seam"
     );
+    // The micro-relief is a function of the surface point: evaluated at the seam point with each
+    // side's normal, tension direction, depth and texel size (as painting does), it agrees.
+    let r = &g.config.relief;
+    let prm = derma_skin::features::relief::ReliefParams {
+        cell_mm: r.cell_mm,
+        depth_mm: r.depth_mm,
+        width_fraction: r.width_fraction,
+        dome_fraction: r.dome_fraction,
+        anisotropy: r.anisotropy,
+        seed: 5,
+        period: None,
+    };
+    let side = |k: usize, uv: glam::Vec2| {
+        let f = s.frame(k);
+        let v = g.fields.vector(&r.vector_field, uv.x, uv.y, false).unwrap();
+        let t = (f.dpdu * v.dir.x + f.dpdv * v.dir.y).normalize_or_zero();
+        let depth = g
+            .fields
+            .scalar(&r.field)
+            .unwrap()
+            .sample_uv(uv.x, uv.y, false);
+        // At 4096², where every octave is painted.
+        derma_skin::features::relief::height(&prm, centre, f.n, t, depth, 0.06)
+    };
+    let (ha, hb) = (side(left, ua), side(right, ub));
+    assert!(
+        ha != 0.0 && (ha - hb).abs() <= 0.1 * ha.abs().max(0.005),
+        "relief {ha} vs {hb}"
+    );
 }
 
 #[test]

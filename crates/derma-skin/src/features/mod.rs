@@ -11,6 +11,7 @@ pub mod mole;
 pub mod perimeter;
 pub mod pore;
 pub mod profile;
+pub mod relief;
 pub mod wrinkle;
 
 use derma_shading::BioTexel;

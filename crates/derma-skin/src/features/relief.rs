@@ -1,0 +1,298 @@
+//! Skin micro-relief: the network of furrows that divides the skin between features into small
+//! plateaus (the "primary" and "secondary" lines of skin-replica studies; thesis §7.4 lists fine
+//! surface detail as missing). Generated in 3D on the surface, so it is seamless across UV charts
+//! and its sizes are millimetres whatever the texel density.
+//!
+//! Model: per octave, a Voronoi (Worley) partition of space with one jittered site per cell of
+//! size `cell_mm`; the surface's plateaus are the cells, the furrows their borders. A texel at
+//! distance d from the nearest border (the bisector of its two nearest sites) is lowered by
+//! depth·(1 − (d/w)²)² for d < w (a rounded V of half-width w), and each plateau domes gently
+//! towards its site. Furrows parallel to the skin's tension lines are the deep ones (Borges 1984,
+//! relaxed skin tension lines): depth × (1 − anisotropy·(1 − cos²θ)), θ the angle between the
+//! furrow and the tension direction. Octaves smaller than two texels are faded out and furrows
+//! are never narrower than ¾ texel (their cross-section kept), so the relief is band-limited at
+//! the output resolution: no aliasing at 1024², more detail as the size grows.
+
+use glam::Vec3;
+
+/// Parameters of the relief (config `[relief]`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReliefParams {
+    /// Plateau (cell) size of each octave, mm.
+    pub cell_mm: [f32; 3],
+    /// Furrow depth of each octave, mm.
+    pub depth_mm: [f32; 3],
+    /// Furrow half-width as a fraction of the octave's cell size.
+    pub width_fraction: f32,
+    /// Dome height of a plateau as a fraction of its octave's furrow depth.
+    pub dome_fraction: f32,
+    /// How much shallower furrows across the tension lines are (0 = isotropic, 1 = only parallel
+    /// furrows).
+    pub anisotropy: f32,
+    /// Seed of the site jitter.
+    pub seed: u32,
+    /// Period (mm) in x and y of a tileable patch: each octave's cells are resized to fit a
+    /// whole number of times and their sites repeat, so the relief tiles. `None` on meshes.
+    pub period: Option<[f32; 2]>,
+}
+
+/// A 32-bit integer hash (lowbias32, Chris Wellons' hash-prospector): cell coordinates and seed
+/// → uniformly mixed bits. Pure, so the relief does not depend on evaluation order.
+#[inline]
+fn hash(mut x: u32) -> u32 {
+    x ^= x >> 16;
+    x = x.wrapping_mul(0x7feb_352d);
+    x ^= x >> 15;
+    x = x.wrapping_mul(0x846c_a68b);
+    x ^= x >> 16;
+    x
+}
+
+/// The jittered site of integer cell `c` (in cell units), octave `o`; with `wrap` cells (x, y)
+/// the sites repeat with that period.
+#[inline]
+fn site_wrapped(c: [i32; 3], o: u32, seed: u32, wrap: Option<[i32; 2]>) -> Vec3 {
+    match wrap {
+        None => site(c, o, seed),
+        Some([nx, ny]) => {
+            let (wx, wy) = (c[0].rem_euclid(nx), c[1].rem_euclid(ny));
+            site([wx, wy, c[2]], o, seed) + Vec3::new((c[0] - wx) as f32, (c[1] - wy) as f32, 0.0)
+        }
+    }
+}
+
+/// The jittered site of integer cell `c` (in cell units), octave `o`.
+#[inline]
+fn site(c: [i32; 3], o: u32, seed: u32) -> Vec3 {
+    let h = hash(
+        (c[0] as u32).wrapping_mul(0x9e37_79b1)
+            ^ (c[1] as u32).wrapping_mul(0x85eb_ca77)
+            ^ (c[2] as u32).wrapping_mul(0xc2b2_ae3d)
+            ^ seed.wrapping_mul(0x27d4_eb2f)
+            ^ o.wrapping_mul(0x1656_67b1),
+    );
+    let u = |k: u32| (hash(h ^ k) >> 8) as f32 / (1u32 << 24) as f32;
+    Vec3::new(c[0] as f32 + u(1), c[1] as f32 + u(2), c[2] as f32 + u(3))
+}
+
+/// The two nearest sites of `q` (in cell units) and their squared distances.
+#[inline]
+fn nearest_two(q: Vec3, o: u32, seed: u32, wrap: Option<[i32; 2]>) -> (Vec3, f32, Vec3, f32) {
+    let base = q.floor();
+    let b = [base.x as i32, base.y as i32, base.z as i32];
+    let (mut s1, mut d1, mut s2, mut d2) = (Vec3::ZERO, f32::MAX, Vec3::ZERO, f32::MAX);
+    for dz in -1..=1 {
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                let c = [b[0] + dx, b[1] + dy, b[2] + dz];
+                // Skip cells whose box is farther than the second-nearest site so far.
+                let lo = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
+                let gap = (lo - q).max(q - (lo + Vec3::ONE)).max(Vec3::ZERO);
+                if gap.length_squared() >= d2 {
+                    continue;
+                }
+                let s = site_wrapped(c, o, seed, wrap);
+                let d = (s - q).length_squared();
+                if d < d1 {
+                    (s2, d2) = (s1, d1);
+                    (s1, d1) = (s, d);
+                } else if d < d2 {
+                    (s2, d2) = (s, d);
+                }
+            }
+        }
+    }
+    (s1, d1, s2, d2)
+}
+
+/// Weight of an octave of cell size `cell` at texel size `texel` (both mm): 0 below two texels,
+/// 1 from four, smooth between.
+#[inline]
+pub fn octave_weight(cell: f32, texel: f32) -> f32 {
+    let t = ((cell / texel.max(1e-6) - 2.0) / 2.0).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// Height (mm, ≤ dome) of the relief at surface point `p` with unit normal `n`, unit tension
+/// direction `tension` (zero: isotropic), depth scale `scale` and texel size `texel_mm`.
+pub fn height(
+    prm: &ReliefParams,
+    p: Vec3,
+    n: Vec3,
+    tension: Vec3,
+    scale: f32,
+    texel_mm: f32,
+) -> f32 {
+    if scale <= 0.0 {
+        return 0.0;
+    }
+    let mut h = 0.0f32;
+    for (o, (&cell, &depth)) in prm.cell_mm.iter().zip(&prm.depth_mm).enumerate() {
+        let w_oct = octave_weight(cell, texel_mm);
+        if w_oct <= 0.0 || depth <= 0.0 {
+            continue;
+        }
+        // On a tileable patch the cells fit the period a whole number of times (cell sizes
+        // change by at most half a cell per period).
+        let (cell3, wrap) = match prm.period {
+            None => (Vec3::splat(cell), None),
+            Some([px, py]) => {
+                let (nx, ny) = ((px / cell).round().max(1.0), (py / cell).round().max(1.0));
+                (
+                    Vec3::new(px / nx, py / ny, cell),
+                    Some([nx as i32, ny as i32]),
+                )
+            }
+        };
+        let q = p / cell3;
+        let (s1, d1, s2, _) = nearest_two(q, o as u32, prm.seed, wrap);
+        let sep = s2 - s1;
+        let len = sep.length().max(1e-6);
+        // Distance (mm) from p to the bisector plane of the two nearest sites (cells are cubes,
+        // or nearly so on patches, so cell units scale by the mean cell size).
+        let d_border = (sep.dot(0.5 * (s1 + s2) - q) / len).abs() * cell;
+        // Furrow direction: in the tangent plane, across the separation of the two sites.
+        let along = n.cross(sep).normalize_or_zero();
+        let c = along.dot(tension);
+        let orient = if tension == Vec3::ZERO {
+            1.0
+        } else {
+            1.0 - prm.anisotropy * (1.0 - c * c)
+        };
+        let w_nom = prm.width_fraction * cell;
+        let w = w_nom.max(0.75 * texel_mm);
+        let furrow_depth = depth * orient * (w_nom / w);
+        let furrow = if d_border < w {
+            let t = d_border / w;
+            -furrow_depth * (1.0 - t * t) * (1.0 - t * t)
+        } else {
+            0.0
+        };
+        // The plateau domes towards its site: highest at the site, level with the furrow rim.
+        let r = (d1.sqrt() * cell / (0.5 * cell)).min(1.0);
+        let dome = prm.dome_fraction * depth * (1.0 - r * r);
+        h += w_oct * (furrow + dome);
+    }
+    h * scale
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn prm() -> ReliefParams {
+        ReliefParams {
+            cell_mm: [1.0, 0.4, 0.15],
+            depth_mm: [0.03, 0.015, 0.006],
+            width_fraction: 0.12,
+            dome_fraction: 0.3,
+            anisotropy: 0.6,
+            seed: 7,
+            period: None,
+        }
+    }
+
+    #[test]
+    fn octaves_fade_below_two_texels() {
+        assert_eq!(octave_weight(0.2, 0.1), 0.0);
+        assert_eq!(octave_weight(0.4, 0.1), 1.0);
+        assert!((octave_weight(0.3, 0.1) - 0.5).abs() < 1e-6);
+        // With texels larger than every octave's cell, the surface is flat.
+        let p = Vec3::new(1.3, 2.7, -0.4);
+        assert_eq!(height(&prm(), p, Vec3::Z, Vec3::X, 1.0, 10.0), 0.0);
+    }
+
+    #[test]
+    fn nearest_sites_are_the_true_nearest() {
+        // Against brute force over a 5×5×5 neighbourhood.
+        for k in 0..200 {
+            let q = Vec3::new(
+                k as f32 * 0.37,
+                (k * 7 % 13) as f32 * 0.41,
+                -(k as f32) * 0.23,
+            );
+            let (s1, d1, _, d2) = nearest_two(q, 0, 3, None);
+            let b = q.floor();
+            let mut all: Vec<f32> = Vec::new();
+            for dz in -2..=2 {
+                for dy in -2..=2 {
+                    for dx in -2..=2 {
+                        let c = [b.x as i32 + dx, b.y as i32 + dy, b.z as i32 + dz];
+                        all.push((site(c, 0, 3) - q).length_squared());
+                    }
+                }
+            }
+            all.sort_by(f32::total_cmp);
+            assert_eq!((d1, d2), (all[0], all[1]), "at {q}");
+            assert!((s1 - q).length_squared() == d1);
+        }
+    }
+
+    #[test]
+    fn furrows_are_bounded_and_follow_the_tension_lines() {
+        // Points over a flat skin (n = +Z) with tension along +X: the relief stays within the
+        // octaves' depths and domes, reaches into the furrows, and its slopes across x-running
+        // furrows (∂h/∂y) outweigh those across y-running ones (∂h/∂x).
+        let p = prm();
+        let (mut min, mut max) = (0.0f32, 0.0f32);
+        let (mut gx, mut gy) = (0.0f64, 0.0f64);
+        let e = 0.002;
+        let at = |q: Vec3| height(&p, q, Vec3::Z, Vec3::X, 1.0, 0.01);
+        for i in 0..40_000 {
+            let q = Vec3::new((i % 200) as f32 * 0.031, (i / 200) as f32 * 0.029, 0.0);
+            let h = at(q);
+            min = min.min(h);
+            max = max.max(h);
+            gx += ((at(q + Vec3::X * e) - at(q - Vec3::X * e)) as f64).powi(2);
+            gy += ((at(q + Vec3::Y * e) - at(q - Vec3::Y * e)) as f64).powi(2);
+        }
+        let total: f32 = p.depth_mm.iter().sum();
+        assert!(min >= -total && min < -0.5 * p.depth_mm[0], "{min}");
+        assert!(max <= p.dome_fraction * total + 1e-6, "{max}");
+        assert!(gy > 1.5 * gx, "{gy} vs {gx}");
+        // Isotropic when there is no tension direction.
+        let mut g = [0.0f64; 2];
+        for i in 0..40_000 {
+            let q = Vec3::new((i % 200) as f32 * 0.031, (i / 200) as f32 * 0.029, 0.0);
+            let f = |d: Vec3| height(&p, q + d * e, Vec3::Z, Vec3::ZERO, 1.0, 0.01) as f64;
+            g[0] += (f(Vec3::X) - f(-Vec3::X)).powi(2);
+            g[1] += (f(Vec3::Y) - f(-Vec3::Y)).powi(2);
+        }
+        assert!((g[0] / g[1] - 1.0).abs() < 0.15, "{g:?}");
+    }
+
+    #[test]
+    fn a_periodic_relief_tiles() {
+        let p = ReliefParams {
+            period: Some([20.0, 30.0]),
+            ..prm()
+        };
+        for k in 0..50 {
+            let q = Vec3::new(k as f32 * 0.37 % 20.0, k as f32 * 0.61 % 30.0, 0.0);
+            let h = |d: Vec3| height(&p, q + d, Vec3::Z, Vec3::X, 1.0, 0.01);
+            let h0 = h(Vec3::ZERO);
+            assert!((h0 - h(Vec3::new(20.0, 0.0, 0.0))).abs() < 1e-6);
+            let far = h(Vec3::new(-20.0, 30.0, 0.0));
+            assert!((h0 - far).abs() < 1e-5, "{h0} vs {far} at {q}");
+        }
+    }
+
+    #[test]
+    fn the_relief_is_a_pure_function_of_the_point() {
+        let p = Vec3::new(12.3, -4.5, 77.7);
+        let a = height(&prm(), p, Vec3::Y, Vec3::X, 1.0, 0.05);
+        let b = height(&prm(), p, Vec3::Y, Vec3::X, 1.0, 0.05);
+        assert_eq!(a.to_bits(), b.to_bits());
+        assert_ne!(
+            a,
+            height(
+                &ReliefParams { seed: 8, ..prm() },
+                p,
+                Vec3::Y,
+                Vec3::X,
+                1.0,
+                0.05
+            )
+        );
+    }
+}
