@@ -46,19 +46,27 @@ impl FieldSet {
             name: name.into(),
             detail: "no such vector field".into(),
         })?;
-        let x = 2.0 * f[0].sample_uv(u, v, wrap) - 1.0;
-        let y = 2.0 * f[1].sample_uv(u, v, wrap) - 1.0;
-        let d = glam::Vec2::new(x, y);
-        Ok(UvVector {
-            dir: d.normalize_or_zero(),
-            length: if d.length() < 1e-3 {
-                0.0
-            } else {
-                f[2].sample_uv(u, v, wrap).clamp(0.0, 1.0)
-            },
-        })
+        Ok(decode_vector(f, u, v, wrap))
     }
+}
 
+/// The vector at (u, v) of a vector field's three maps (direction R, G with 0.5 = 0; length B).
+#[inline]
+pub fn decode_vector(f: &[Map; 3], u: f32, v: f32, wrap: bool) -> UvVector {
+    let x = 2.0 * f[0].sample_uv(u, v, wrap) - 1.0;
+    let y = 2.0 * f[1].sample_uv(u, v, wrap) - 1.0;
+    let d = glam::Vec2::new(x, y);
+    UvVector {
+        dir: d.normalize_or_zero(),
+        length: if d.length() < 1e-3 {
+            0.0
+        } else {
+            f[2].sample_uv(u, v, wrap).clamp(0.0, 1.0)
+        },
+    }
+}
+
+impl FieldSet {
     /// Loads every `NAME.png`/`NAME.exr` of `dir` as field NAME (`*_vectors` files as vector
     /// fields); suspicious inputs (colour, out of range) are noted on `progress`.
     pub fn load_dir(&mut self, dir: &Path, progress: &dyn Progress) -> Result<()> {

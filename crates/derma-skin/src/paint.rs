@@ -123,10 +123,7 @@ pub fn paint(
                 period: surface.period(),
             },
             fields.scalar(&r.field)?,
-            fields
-                .vectors
-                .contains_key(&r.vector_field)
-                .then_some(r.vector_field.as_str()),
+            fields.vectors.get(&r.vector_field),
         ))
     } else {
         None
@@ -153,6 +150,7 @@ pub fn paint(
             let mut cursors: Vec<GridCursor> =
                 kinds.iter().map(|k| GridCursor::new(k.grid())).collect();
             let mut noise_cache = crate::noise::NoiseCache::default();
+            let mut relief_cache = relief::ReliefCache::default();
             for (k, s) in rows.iter_mut().enumerate() {
                 let i = task * w * ROWS_PER_TASK + k;
                 if !surface.covered(i) {
@@ -188,13 +186,14 @@ pub fn paint(
                     if scale > 0.0 {
                         let f = surface.frame(i);
                         let t = tension
-                            .and_then(|name| fields.vector(name, uv.x, uv.y, wrap).ok())
+                            .map(|maps| crate::field::decode_vector(maps, uv.x, uv.y, wrap))
                             .map_or(glam::Vec3::ZERO, |v| {
                                 let d = f.dpdu * v.dir.x + f.dpdv * v.dir.y;
                                 (d - f.n * f.n.dot(d)).normalize_or_zero()
                             });
                         let texel = f.texel_area(surface.width, surface.height).sqrt();
-                        s.height_mm += relief::height(prm, p, f.n, t, scale, texel);
+                        s.height_mm +=
+                            relief::height_cached(prm, p, f.n, t, scale, texel, &mut relief_cache);
                     }
                 }
                 if let Some(m) = lips_map {

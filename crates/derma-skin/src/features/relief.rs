@@ -61,7 +61,8 @@ fn site_wrapped(c: [i32; 3], o: u32, seed: u32, wrap: Option<[i32; 2]>) -> Vec3 
     }
 }
 
-/// The jittered site of integer cell `c` (in cell units), octave `o`.
+/// The jittered site of integer cell `c` (in cell units), octave `o`: one hash, three 10-bit
+/// jitters.
 #[inline]
 fn site(c: [i32; 3], o: u32, seed: u32) -> Vec3 {
     let h = hash(
@@ -71,35 +72,80 @@ fn site(c: [i32; 3], o: u32, seed: u32) -> Vec3 {
             ^ seed.wrapping_mul(0x27d4_eb2f)
             ^ o.wrapping_mul(0x1656_67b1),
     );
-    let u = |k: u32| (hash(h ^ k) >> 8) as f32 / (1u32 << 24) as f32;
-    Vec3::new(c[0] as f32 + u(1), c[1] as f32 + u(2), c[2] as f32 + u(3))
+    let u = |shift: u32| (((h >> shift) & 1023) as f32 + 0.5) / 1024.0;
+    Vec3::new(c[0] as f32 + u(0), c[1] as f32 + u(10), c[2] as f32 + u(20))
+}
+
+/// The 27 neighbour offsets, nearest classes first (own cell, faces, edges, corners), so the
+/// search below can skip most of the far ones.
+const NEIGHBOURS: [[i32; 3]; 27] = {
+    let mut out = [[0i32; 3]; 27];
+    let mut k = 0;
+    let mut class = 0;
+    while class <= 3 {
+        let mut i = 0;
+        while i < 27 {
+            let d = [i as i32 % 3 - 1, (i as i32 / 3) % 3 - 1, i as i32 / 9 - 1];
+            if d[0].abs() + d[1].abs() + d[2].abs() == class {
+                out[k] = d;
+                k += 1;
+            }
+            i += 1;
+        }
+        class += 1;
+    }
+    out
+};
+
+/// The 27 sites around one cell of one octave, kept while consecutive texels stay in that cell
+/// (texels are much smaller than cells, so most texels reuse them).
+#[derive(Clone, Copy, Debug)]
+struct CellSites {
+    base: [i32; 3],
+    sites: [Vec3; 27],
+}
+
+/// Per-thread cache of the sites around the last cell of each octave (results do not depend on
+/// it: a cache miss recomputes the same sites).
+#[derive(Clone, Debug, Default)]
+pub struct ReliefCache {
+    octaves: [Option<CellSites>; 3],
 }
 
 /// The two nearest sites of `q` (in cell units) and their squared distances.
 #[inline]
-fn nearest_two(q: Vec3, o: u32, seed: u32, wrap: Option<[i32; 2]>) -> (Vec3, f32, Vec3, f32) {
+fn nearest_two(
+    q: Vec3,
+    o: usize,
+    seed: u32,
+    wrap: Option<[i32; 2]>,
+    cache: &mut ReliefCache,
+) -> (Vec3, f32, Vec3, f32) {
     let base = q.floor();
     let b = [base.x as i32, base.y as i32, base.z as i32];
-    let (mut s1, mut d1, mut s2, mut d2) = (Vec3::ZERO, f32::MAX, Vec3::ZERO, f32::MAX);
-    for dz in -1..=1 {
-        for dy in -1..=1 {
-            for dx in -1..=1 {
-                let c = [b[0] + dx, b[1] + dy, b[2] + dz];
-                // Skip cells whose box is farther than the second-nearest site so far.
-                let lo = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
-                let gap = (lo - q).max(q - (lo + Vec3::ONE)).max(Vec3::ZERO);
-                if gap.length_squared() >= d2 {
-                    continue;
-                }
-                let s = site_wrapped(c, o, seed, wrap);
-                let d = (s - q).length_squared();
-                if d < d1 {
-                    (s2, d2) = (s1, d1);
-                    (s1, d1) = (s, d);
-                } else if d < d2 {
-                    (s2, d2) = (s, d);
-                }
+    let cell = match &cache.octaves[o] {
+        Some(c) if c.base == b => c,
+        _ => {
+            let mut sites = [Vec3::ZERO; 27];
+            for (s, off) in sites.iter_mut().zip(NEIGHBOURS) {
+                *s = site_wrapped(
+                    [b[0] + off[0], b[1] + off[1], b[2] + off[2]],
+                    o as u32,
+                    seed,
+                    wrap,
+                );
             }
+            cache.octaves[o].insert(CellSites { base: b, sites })
+        }
+    };
+    let (mut s1, mut d1, mut s2, mut d2) = (Vec3::ZERO, f32::MAX, Vec3::ZERO, f32::MAX);
+    for &s in &cell.sites {
+        let d = (s - q).length_squared();
+        if d < d1 {
+            (s2, d2) = (s1, d1);
+            (s1, d1) = (s, d);
+        } else if d < d2 {
+            (s2, d2) = (s, d);
         }
     }
     (s1, d1, s2, d2)
@@ -123,6 +169,27 @@ pub fn height(
     scale: f32,
     texel_mm: f32,
 ) -> f32 {
+    height_cached(
+        prm,
+        p,
+        n,
+        tension,
+        scale,
+        texel_mm,
+        &mut ReliefCache::default(),
+    )
+}
+
+/// [`height`] reusing the sites of the previous call's cells (the same value, faster).
+pub fn height_cached(
+    prm: &ReliefParams,
+    p: Vec3,
+    n: Vec3,
+    tension: Vec3,
+    scale: f32,
+    texel_mm: f32,
+    cache: &mut ReliefCache,
+) -> f32 {
     if scale <= 0.0 {
         return 0.0;
     }
@@ -145,7 +212,7 @@ pub fn height(
             }
         };
         let q = p / cell3;
-        let (s1, d1, s2, _) = nearest_two(q, o as u32, prm.seed, wrap);
+        let (s1, d1, s2, _) = nearest_two(q, o, prm.seed, wrap, cache);
         let sep = s2 - s1;
         let len = sep.length().max(1e-6);
         // Distance (mm) from p to the bisector plane of the two nearest sites (cells are cubes,
@@ -211,7 +278,7 @@ mod tests {
                 (k * 7 % 13) as f32 * 0.41,
                 -(k as f32) * 0.23,
             );
-            let (s1, d1, _, d2) = nearest_two(q, 0, 3, None);
+            let (s1, d1, _, d2) = nearest_two(q, 0, 3, None, &mut ReliefCache::default());
             let b = q.floor();
             let mut all: Vec<f32> = Vec::new();
             for dz in -2..=2 {
