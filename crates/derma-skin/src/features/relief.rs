@@ -85,7 +85,7 @@ const NEIGHBOURS: [[i32; 3]; 27] = {
     while class <= 3 {
         let mut i = 0;
         while i < 27 {
-            let d = [i as i32 % 3 - 1, (i as i32 / 3) % 3 - 1, i as i32 / 9 - 1];
+            let d = [i % 3 - 1, (i / 3) % 3 - 1, i / 9 - 1];
             if d[0].abs() + d[1].abs() + d[2].abs() == class {
                 out[k] = d;
                 k += 1;
