@@ -81,9 +81,9 @@ fn site(c: [i32; 3], o: u32, seed: u32) -> Vec3 {
 const NEIGHBOURS: [[i32; 3]; 27] = {
     let mut out = [[0i32; 3]; 27];
     let mut k = 0;
-    let mut class = 0;
+    let mut class: i32 = 0;
     while class <= 3 {
-        let mut i = 0;
+        let mut i: i32 = 0;
         while i < 27 {
             let d = [i % 3 - 1, (i / 3) % 3 - 1, i / 9 - 1];
             if d[0].abs() + d[1].abs() + d[2].abs() == class {
