@@ -73,6 +73,32 @@ pub fn render_with(
     view_yaw: f32,
     size: usize,
 ) -> [Map; 3] {
+    render_lit(mesh, tangents, tex, props, view_yaw, size, &STUDIO)
+}
+
+/// A directional light in view space: unit direction towards the light and radiance.
+pub type Light = (Vec3, Vec3);
+
+/// The default lighting: a warm key from the upper left and a cool fill from the right
+/// (radiance units), with a faint ambient term.
+pub const STUDIO: [Light; 2] = [
+    (
+        Vec3::new(-0.5495, 0.5495, 0.6294),
+        Vec3::new(3.0, 2.85, 2.6),
+    ),
+    (Vec3::new(0.7960, 0.0995, 0.5970), Vec3::new(0.55, 0.6, 0.7)),
+];
+
+/// [`render_with`] under the given lights (view space; the view looks down −Z).
+pub fn render_lit(
+    mesh: &TriMesh,
+    tangents: &[[f32; 4]],
+    tex: &Textures,
+    props: &[Prop],
+    view_yaw: f32,
+    size: usize,
+    lights: &[Light],
+) -> [Map; 3] {
     let rot = Mat3::from_rotation_y(-view_yaw);
     let pts: Vec<Vec3> = mesh.positions.iter().map(|&p| rot * p).collect();
     let (lo, hi) = pts.iter().fold(
@@ -132,17 +158,6 @@ pub fn render_with(
             }
         }
     }
-    // Lights in view space: warm key from upper left, cool fill from the right (radiance units).
-    let lights = [
-        (
-            Vec3::new(-0.55, 0.55, 0.63).normalize(),
-            Vec3::new(3.0, 2.85, 2.6),
-        ),
-        (
-            Vec3::new(0.8, 0.1, 0.6).normalize(),
-            Vec3::new(0.55, 0.6, 0.7),
-        ),
-    ];
     let ambient = Vec3::new(0.08, 0.085, 0.1);
     let view = Vec3::Z;
     let pixels: Vec<Vec3> = gbuf
@@ -163,7 +178,7 @@ pub fn render_with(
                     + p.mesh.uvs[t[2] as usize] * w2;
                 let n = (rot * at(&p.mesh.normals)).normalize_or(Vec3::Z);
                 let alpha = (p.roughness * p.roughness).max(0.02);
-                return shade(n, (p.albedo)(uv), alpha, p.f0, &lights, ambient, view);
+                return shade(n, (p.albedo)(uv), alpha, p.f0, lights, ambient, view);
             }
             let t = mesh.triangles[ti as usize];
             let uv = (mesh.uvs[t[0] as usize] * w0
@@ -189,7 +204,7 @@ pub fn render_with(
             let nn = (tan * nt.x + bit * nt.y + n * nt.z).normalize_or(n);
             let alpha = s(tex.roughness).powi(2).max(0.02);
             let f0 = s(tex.specular) * tex.specular_scale;
-            shade(nn, albedo, alpha, f0, &lights, ambient, view)
+            shade(nn, albedo, alpha, f0, lights, ambient, view)
         })
         .collect();
     [0, 1, 2]
