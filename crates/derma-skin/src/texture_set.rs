@@ -109,6 +109,48 @@ impl Channels {
     }
 }
 
+/// Depth (mm) below the mean of its 3×3 neighbourhood at which a texel counts as fully inside a
+/// cavity (furrows of the micro-relief, pores, wrinkles).
+pub const CAVITY_DEPTH_MM: f32 = 0.02;
+
+/// Cavity of every texel: how far it lies below the mean of its 3×3 neighbourhood, over
+/// [`CAVITY_DEPTH_MM`], in [0, 1].
+pub fn cavity(height_mm: &Map) -> Vec<f32> {
+    let (w, h) = (height_mm.width(), height_mm.height());
+    let d = height_mm.data();
+    (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let mut sum = 0.0f32;
+            for yy in y.saturating_sub(1)..=(y + 1).min(h - 1) {
+                for xx in x.saturating_sub(1)..=(x + 1).min(w - 1) {
+                    sum += d[yy * w + xx];
+                }
+            }
+            let n = ((y + 1).min(h - 1) - y.saturating_sub(1) + 1)
+                * ((x + 1).min(w - 1) - x.saturating_sub(1) + 1);
+            ((sum / n as f32 - d[i]) / CAVITY_DEPTH_MM).clamp(0.0, 1.0)
+        })
+        .collect()
+}
+
+/// Roughness and specular occlusion in cavities: inside a furrow the walls hide part of the
+/// specular lobe (specular occlusion, as Jimenez et al. 2016, "Practical realtime strategies for
+/// accurate indirect occlusion", apply it to cavities), so specular falls by up to 60 %, and the
+/// furrow's floor scatters more (roughness + 0.15 at most; authored).
+pub fn occlude_cavities(height_mm: &Map, roughness: &mut [f32], specular: &mut [f32]) {
+    let c = cavity(height_mm);
+    roughness
+        .par_iter_mut()
+        .zip(specular.par_iter_mut())
+        .zip(c.par_iter())
+        .for_each(|((r, s), &c)| {
+            *r = (*r + 0.15 * c).min(1.0);
+            *s *= 1.0 - 0.6 * c;
+        });
+}
+
 /// Converts painted bio maps (already dilated on meshes, see [`BioMaps::dilate`]) to render maps;
 /// `dilation` fills the normal map's texels outside the UV charts.
 pub fn convert(
@@ -155,6 +197,8 @@ pub fn convert(
         subsurface,
     } = channels;
     let height_mm = bio.channel(|s| s.height_mm);
+    let (mut roughness, mut specular) = (roughness, specular);
+    occlude_cavities(&height_mm, &mut roughness, &mut specular);
     // Normals use only texels on the surface (one-sided differences at chart borders), then are
     // dilated themselves; every other map derives from already dilated bio samples.
     let mut normal = crate::normal_map::normals_from_height(surface, &height_mm);
@@ -337,4 +381,31 @@ pub fn write_maps(
         .map(|(_, j)| j())
         .collect::<crate::Result<Vec<()>>>()?;
     Ok((files, range))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn furrows_are_rougher_and_less_specular_flat_skin_is_unchanged() {
+        // A flat 9×9 map with a one-texel groove 0.03 mm deep down column 4.
+        let (w, h) = (9, 9);
+        let height = Map::from_vec(
+            w,
+            h,
+            (0..w * h)
+                .map(|i| if i % w == 4 { -0.03 } else { 0.0 })
+                .collect(),
+        )
+        .unwrap();
+        let (mut r, mut s) = (vec![0.5; w * h], vec![0.35; w * h]);
+        occlude_cavities(&height, &mut r, &mut s);
+        let groove = 4 * w + 4;
+        // The groove lies 0.03 − 0.03/3 = 0.02 mm below its neighbourhood's mean: full cavity.
+        assert!((r[groove] - 0.65).abs() < 1e-6 && (s[groove] - 0.35 * 0.4).abs() < 1e-6);
+        // Far from it nothing changes; beside it (above the mean) nothing either.
+        assert_eq!((r[4 * w], s[4 * w]), (0.5, 0.35));
+        assert_eq!((r[4 * w + 3], s[4 * w + 3]), (0.5, 0.35));
+    }
 }
