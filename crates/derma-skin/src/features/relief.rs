@@ -13,7 +13,7 @@
 //! are never narrower than ¾ texel (their cross-section kept), so the relief is band-limited at
 //! the output resolution: no aliasing at 1024², more detail as the size grows.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// Parameters of the relief (config `[relief]`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -102,7 +102,7 @@ const NEIGHBOURS: [[i32; 3]; 27] = {
 #[derive(Clone, Copy, Debug)]
 struct CellSites {
     base: [i32; 3],
-    sites: [Vec3; 27],
+    sites: [Vec3A; 27],
 }
 
 /// Per-thread cache of the sites around the last cell of each octave (results do not depend on
@@ -126,21 +126,22 @@ fn nearest_two(
     let cell = match &cache.octaves[o] {
         Some(c) if c.base == b => c,
         _ => {
-            let mut sites = [Vec3::ZERO; 27];
+            let mut sites = [Vec3A::ZERO; 27];
             for (s, off) in sites.iter_mut().zip(NEIGHBOURS) {
-                *s = site_wrapped(
+                *s = Vec3A::from(site_wrapped(
                     [b[0] + off[0], b[1] + off[1], b[2] + off[2]],
                     o as u32,
                     seed,
                     wrap,
-                );
+                ));
             }
             cache.octaves[o].insert(CellSites { base: b, sites })
         }
     };
-    let (mut s1, mut d1, mut s2, mut d2) = (Vec3::ZERO, f32::MAX, Vec3::ZERO, f32::MAX);
+    let qa = Vec3A::from(q);
+    let (mut s1, mut d1, mut s2, mut d2) = (Vec3A::ZERO, f32::MAX, Vec3A::ZERO, f32::MAX);
     for &s in &cell.sites {
-        let d = (s - q).length_squared();
+        let d = (s - qa).length_squared();
         if d < d1 {
             (s2, d2) = (s1, d1);
             (s1, d1) = (s, d);
@@ -148,7 +149,7 @@ fn nearest_two(
             (s2, d2) = (s, d);
         }
     }
-    (s1, d1, s2, d2)
+    (Vec3::from(s1), d1, Vec3::from(s2), d2)
 }
 
 /// Weight of an octave of cell size `cell` at texel size `texel` (both mm): 0 below two texels,
