@@ -113,15 +113,11 @@ pub fn paint(
     let relief = if cfg.relief.enabled {
         let r = &cfg.relief;
         Some((
-            ReliefParams {
-                cell_mm: r.cell_mm,
-                depth_mm: r.depth_mm,
-                width_fraction: r.width_fraction,
-                dome_fraction: r.dome_fraction,
-                anisotropy: r.anisotropy,
-                seed: derma_core::rng::Philox::new(cfg.seed, RELIEF_STREAM).u32x4(0)[0],
-                period: surface.period(),
-            },
+            ReliefParams::from_config(
+                r,
+                derma_core::rng::Philox::new(cfg.seed, RELIEF_STREAM).u32x4(0)[0],
+                surface.period(),
+            ),
             fields.scalar(&r.field)?,
             fields.vectors.get(&r.vector_field),
         ))

@@ -114,15 +114,7 @@ fn a_mole_straddling_a_uv_seam_of_the_head_paints_both_sides() {
     // The micro-relief is a function of the surface point: evaluated at the seam point with each
     // side's normal, tension direction, depth and texel size (as painting does), it agrees.
     let r = &g.config.relief;
-    let prm = derma_skin::features::relief::ReliefParams {
-        cell_mm: r.cell_mm,
-        depth_mm: r.depth_mm,
-        width_fraction: r.width_fraction,
-        dome_fraction: r.dome_fraction,
-        anisotropy: r.anisotropy,
-        seed: 5,
-        period: None,
-    };
+    let prm = derma_skin::features::relief::ReliefParams::from_config(r, 5, None);
     let side = |k: usize, uv: glam::Vec2| {
         let f = s.frame(k);
         let v = g.fields.vector(&r.vector_field, uv.x, uv.y, false).unwrap();

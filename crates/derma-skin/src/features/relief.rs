@@ -36,6 +36,25 @@ pub struct ReliefParams {
     pub period: Option<[f32; 2]>,
 }
 
+impl ReliefParams {
+    /// The parameters of config `[relief]` with a jitter seed and a tiling period.
+    pub fn from_config(
+        c: &crate::config::ReliefConfig,
+        seed: u32,
+        period: Option<[f32; 2]>,
+    ) -> Self {
+        Self {
+            cell_mm: c.cell_mm,
+            depth_mm: c.depth_mm,
+            width_fraction: c.width_fraction,
+            dome_fraction: c.dome_fraction,
+            anisotropy: c.anisotropy,
+            seed,
+            period,
+        }
+    }
+}
+
 /// A 32-bit integer hash (lowbias32, Chris Wellons' hash-prospector): cell coordinates and seed
 /// → uniformly mixed bits. Pure, so the relief does not depend on evaluation order.
 #[inline]
