@@ -98,6 +98,8 @@ pub struct DetailConfig {
     pub highpass_texels: u32,
     pub height_mm: f32,
     pub albedo_contrast: f32,
+    /// Region (field) name → height exemplar for that region.
+    pub regions: BTreeMap<String, String>,
 }
 
 impl Default for DetailConfig {
@@ -111,6 +113,7 @@ impl Default for DetailConfig {
             highpass_texels: 6,
             height_mm: 0.01,
             albedo_contrast: 1.0,
+            regions: BTreeMap::new(),
         }
     }
 }
@@ -118,7 +121,7 @@ impl Default for DetailConfig {
 impl DetailConfig {
     /// Whether an exemplar is given (the detail is synthesised and added).
     pub fn enabled(&self) -> bool {
-        !self.height.trim().is_empty() || !self.albedo.trim().is_empty()
+        !self.height.trim().is_empty() || !self.albedo.trim().is_empty() || !self.regions.is_empty()
     }
 }
 
@@ -567,6 +570,7 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("detail.patch", "texels", 4.0, 128.0, "synthesis patch side N (even; exemplars at least 2N)"),
     k("detail.highpass_texels", "texels", 1.0, 256.0, "box high-pass radius on the tile: keeps detail finer than 2r + 1 tile texels, below the procedural features"),
     k("detail.height_mm", "mm", 0.0, 10.0, "RMS of the added relief (authored; skin micro-relief is tens of µm)"),
+    k("detail.regions", "-", 0.0, 0.0, "one height exemplar per region, as Graham et al. 2013 grow measured microgeometry per facial region: a table region = path (a field name, e.g. the built-in head's cheeks, forehead, nose); each grows its own tile, blended by the region's mask, the global exemplar (if any) filling the rest"),
     k("detail.albedo_contrast", "-", 0.0, 10.0, "gain of the colour exemplar's relative luminance contrast on melanin (1 = as in the exemplar, to first order)"),
     k("relief.enabled", "-", 0.0, 0.0, "the micro-relief furrow network between features (features/relief.rs), on by default"),
     k("relief.field", "-", 0.0, 0.0, "field scaling the furrow depth (built-in head: by region; patches and meshes without landmarks: 1)"),
@@ -768,6 +772,7 @@ mod tests {
             keys.insert(doc_key_for(k));
         });
         keys.insert("fields".to_string());
+        keys.insert("detail.regions".to_string());
         let documented: std::collections::BTreeSet<String> =
             KEY_DOCS.iter().map(|d| d.key.to_string()).collect();
         assert_eq!(keys, documented);

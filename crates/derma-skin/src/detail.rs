@@ -160,6 +160,18 @@ impl DetailTile {
     /// Adds the detail to painted texels of a `width × height` texture (texel centres mapped
     /// to UV, the tile repeated `repeat` times across it).
     pub fn apply(&self, cfg: &DetailConfig, texels: &mut [BioSample], width: usize) {
+        self.apply_weighted(cfg, texels, width, &|_, _| 1.0);
+    }
+
+    /// [`Self::apply`] with a weight per texel (x, y) in [0, 1]: the detail is scaled by it (the
+    /// per-region exemplars blend by their regions' masks).
+    pub fn apply_weighted(
+        &self,
+        cfg: &DetailConfig,
+        texels: &mut [BioSample],
+        width: usize,
+        weight: &(dyn Fn(usize, usize) -> f32 + Sync),
+    ) {
         let height = texels.len() / width;
         let scale_x = cfg.repeat * self.size as f32 / width as f32;
         let scale_y = cfg.repeat * self.size as f32 / height as f32;
@@ -168,12 +180,16 @@ impl DetailTile {
             .enumerate()
             .for_each(|(y, row)| {
                 for (x, t) in row.iter_mut().enumerate() {
+                    let w = weight(x, y);
+                    if w <= 0.0 {
+                        continue;
+                    }
                     let (tx, ty) = ((x as f32 + 0.5) * scale_x, (y as f32 + 0.5) * scale_y);
                     if let Some(h) = &self.height {
-                        t.height_mm += cfg.height_mm * Self::sample(h, tx, ty);
+                        t.height_mm += w * cfg.height_mm * Self::sample(h, tx, ty);
                     }
                     if let Some(c) = &self.contrast {
-                        let f = 1.0 - cfg.albedo_contrast * Self::sample(c, tx, ty);
+                        let f = 1.0 - w * cfg.albedo_contrast * Self::sample(c, tx, ty);
                         t.tissue.melanin = (t.tissue.melanin * f.max(0.0)).clamp(0.0, 1.0);
                     }
                 }

@@ -363,19 +363,7 @@ impl<'a> SkinGenerator<'a> {
 
         let mut bio = crate::paint::paint(cfg, &surface, &fields, &features, &job)?;
         if cfg.detail.enabled() {
-            job.stage("detail", 1, Unit::Steps);
-            let path = |p: &str| (!p.trim().is_empty()).then(|| self.resolve(p.trim()));
-            let (h, a) = (path(&cfg.detail.height), path(&cfg.detail.albedo));
-            let tile = crate::detail::build(
-                &cfg.detail,
-                h.as_deref(),
-                a.as_deref(),
-                cfg.seed,
-                self.device,
-                &Prefixed::new(&job, "detail"),
-            )?;
-            job.stage("detail / apply", 1, Unit::Steps);
-            tile.apply(&cfg.detail, &mut bio.texels, bio.width);
+            self.apply_detail(cfg, &surface, &fields, &mut bio, &job)?;
         }
         if let Some(src) = &dilation {
             bio.dilate(src);
@@ -416,6 +404,74 @@ impl<'a> SkinGenerator<'a> {
 }
 
 impl SkinGenerator<'_> {
+    /// `[detail]`: the global exemplar's tile where no region claims the texel, each region's
+    /// own tile by its mask (masks summing past 1 are normalised).
+    fn apply_detail(
+        &self,
+        cfg: &SkinConfig,
+        surface: &Surface,
+        fields: &FieldSet,
+        bio: &mut BioMaps,
+        job: &Job,
+    ) -> Result<()> {
+        let d = &cfg.detail;
+        let path = |p: &str| (!p.trim().is_empty()).then(|| self.resolve(p.trim()));
+        let (h, a) = (path(&d.height), path(&d.albedo));
+        let wrap = surface.period().is_some();
+        let masks: Vec<(&Map, PathBuf)> = d
+            .regions
+            .iter()
+            .map(|(name, p)| Ok((fields.scalar(name)?, self.resolve(p.trim()))))
+            .collect::<Result<_>>()?;
+        let (w, ht) = (bio.width, bio.height);
+        let uv = |x: usize, y: usize| {
+            (
+                (x as f32 + 0.5) / w as f32,
+                1.0 - (y as f32 + 0.5) / ht as f32,
+            )
+        };
+        let claimed = |x: usize, y: usize| {
+            let (u, v) = uv(x, y);
+            masks
+                .iter()
+                .map(|(m, _)| m.sample_uv(u, v, wrap).clamp(0.0, 1.0))
+                .sum::<f32>()
+        };
+        if h.is_some() || a.is_some() {
+            job.stage("detail", 1, Unit::Steps);
+            let tile = crate::detail::build(
+                d,
+                h.as_deref(),
+                a.as_deref(),
+                cfg.seed,
+                self.device,
+                &Prefixed::new(job, "detail"),
+            )?;
+            job.stage("detail / apply", 1, Unit::Steps);
+            tile.apply_weighted(d, &mut bio.texels, w, &|x, y| {
+                (1.0 - claimed(x, y)).max(0.0)
+            });
+        }
+        for (k, (mask, p)) in masks.iter().enumerate() {
+            job.stage("detail / region", 1, Unit::Steps);
+            // Each region grows its own tile from its own seed.
+            let seed = cfg.seed ^ (0x9e37_79b9_7f4a_7c15u64.wrapping_mul(k as u64 + 1));
+            let tile = crate::detail::build(
+                d,
+                Some(p),
+                None,
+                seed,
+                self.device,
+                &Prefixed::new(job, "detail"),
+            )?;
+            tile.apply_weighted(d, &mut bio.texels, w, &|x, y| {
+                let (u, v) = uv(x, y);
+                mask.sample_uv(u, v, wrap).clamp(0.0, 1.0) / claimed(x, y).max(1.0)
+            });
+        }
+        Ok(())
+    }
+
     /// The user mesh's landmarks (`surface.landmarks`), in millimetres.
     fn landmarks(&self, mesh: &Path, mm_per_unit: f32) -> Result<derma_head::Landmarks> {
         let v = self.config.surface.landmarks.trim();
