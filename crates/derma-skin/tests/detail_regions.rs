@@ -27,7 +27,9 @@ fn a_region_exemplar_changes_only_its_region() {
         ..SkinConfig::default()
     };
     let mut with = base.clone();
-    with.detail.regions.insert("cheeks".into(), ex.display().to_string());
+    with.detail
+        .regions
+        .insert("cheeks".into(), ex.display().to_string());
     with.detail.tile_size = 64;
     with.detail.patch = 16;
     with.detail.height_mm = 0.05;
@@ -57,7 +59,9 @@ fn a_region_exemplar_changes_only_its_region() {
     assert_eq!(outside_changed, 0, "detail outside the cheeks");
     // An unknown region is a clear error naming it.
     let mut bad = with.clone();
-    bad.detail.regions.insert("elbow".into(), ex.display().to_string());
+    bad.detail
+        .regions
+        .insert("elbow".into(), ex.display().to_string());
     let e = SkinGenerator::new(bad).run().err().unwrap().to_string();
     assert!(e.contains("elbow"), "{e}");
 }
