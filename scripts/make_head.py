@@ -22,7 +22,6 @@ millimetres with the same axes):
 """
 
 import glob
-import gzip  # noqa: F401  (kept for readers who want to inspect the package's gz tables)
 import json
 import os
 import subprocess

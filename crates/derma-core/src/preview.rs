@@ -10,6 +10,47 @@ use glam::{Mat3, Vec2, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::PI;
 
+/// Specular maps store F0 / 0.08 (the Unreal/Substance "specular" convention: 0.5 ↔ F0 = 4 %).
+pub const SPECULAR_SCALE: f32 = 0.08;
+
+/// A uniform material for surfaces without maps of their own: flat normals, one perceptual
+/// roughness and one specular level (F0 / [`SPECULAR_SCALE`]), as 1×1 maps.
+pub struct FlatMaterial {
+    normal: [Map; 3],
+    roughness: Map,
+    specular: Map,
+}
+
+impl FlatMaterial {
+    /// Roughness and specular level of the material.
+    pub fn new(roughness: f32, specular: f32) -> Self {
+        let one = |v: f32| Map::filled(1, 1, v);
+        Self {
+            normal: [one(0.0), one(0.0), one(1.0)],
+            roughness: one(roughness),
+            specular: one(specular),
+        }
+    }
+
+    /// The material with `base_color` (any size; not repeated).
+    pub fn textures<'a>(&'a self, base_color: &'a [Map; 3]) -> Textures<'a> {
+        Textures {
+            base_color,
+            normal: &self.normal,
+            roughness: &self.roughness,
+            specular: &self.specular,
+            specular_scale: SPECULAR_SCALE,
+            wrap: false,
+            uv_scale: Vec2::ONE,
+        }
+    }
+}
+
+/// A uniform linear colour as 1×1 maps.
+pub fn uniform_color(rgb: [f32; 3]) -> [Map; 3] {
+    rgb.map(|v| Map::filled(1, 1, v))
+}
+
 /// Textures the renderer samples (glTF metallic-roughness conventions, dielectric).
 pub struct Textures<'a> {
     /// Diffuse albedo, linear sRGB.
@@ -343,27 +384,11 @@ pub fn normalised(m: &Map) -> [Map; 3] {
 mod tests {
     use super::*;
 
-    fn flat(v: f32) -> Map {
-        Map::filled(1, 1, v)
-    }
-
     /// A white tile seen head-on with a red prop card in front of it.
     fn scene(coverage: Option<&(dyn Fn(Vec2) -> f32 + Sync)>) -> [Map; 3] {
         let (m, t) = tile(10.0);
-        let (base, normal) = (
-            [flat(0.8), flat(0.8), flat(0.8)],
-            [flat(0.0), flat(0.0), flat(1.0)],
-        );
-        let (rough, spec) = (flat(0.5), flat(0.0));
-        let tex = Textures {
-            base_color: &base,
-            normal: &normal,
-            roughness: &rough,
-            specular: &spec,
-            specular_scale: 0.08,
-            wrap: false,
-            uv_scale: Vec2::ONE,
-        };
+        let (base, material) = (uniform_color([0.8; 3]), FlatMaterial::new(0.5, 0.0));
+        let tex = material.textures(&base);
         let mut card = tile(4.0).0;
         card.positions.iter_mut().for_each(|p| p.z = 1.0);
         let red = |_: Vec2| Vec3::new(0.8, 0.0, 0.0);

@@ -53,21 +53,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     ]);
     posed.write_obj(&out.join("smile.obj"))?;
     // A look at it: neutral and posed, side by side, in derma-core's software preview.
-    let flat = |v: f32| derma_core::Map::filled(1, 1, v);
-    let (base, normal) = (
-        [flat(0.45), flat(0.33), flat(0.28)],
-        [flat(0.0), flat(0.0), flat(1.0)],
-    );
-    let (rough, spec) = (flat(0.5), flat(0.35));
-    let tex = derma_core::preview::Textures {
-        base_color: &base,
-        normal: &normal,
-        roughness: &rough,
-        specular: &spec,
-        specular_scale: 0.08,
-        wrap: false,
-        uv_scale: glam::Vec2::ONE,
-    };
+    let base = derma_core::preview::uniform_color([0.45, 0.33, 0.28]);
+    let material = derma_core::preview::FlatMaterial::new(0.5, 0.35);
+    let tex = material.textures(&base);
     let props = head.preview_props();
     let views: Vec<[derma_core::Map; 3]> = [&head.skin, &posed]
         .iter()

@@ -10,15 +10,13 @@ use std::f32::consts::{PI, TAU};
 const RINGS: usize = 48;
 const SEGMENTS: usize = 64;
 
-/// One eye: centre and radius (mm) and the direction it looks in the neutral pose.
+/// One eye: centre and radius (mm).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Eye {
     /// Centre of the globe (mm, head coordinates).
     pub centre: Vec3,
-    /// Radius of the globe (mm).
+    /// Radius of the globe (mm). The neutral gaze, the optical axis of the UVs, is +Z.
     pub radius: f32,
-    /// Neutral gaze direction (unit; +Z, straight ahead).
-    pub forward: Vec3,
 }
 
 /// UV of a point on the unit sphere at angle `theta` from the optical axis and azimuth `phi`.
@@ -116,7 +114,6 @@ mod tests {
         let e = Eye {
             centre: Vec3::new(30.0, 0.0, 60.0),
             radius: 12.0,
-            forward: Vec3::Z,
         };
         let m = e.mesh();
         let area = m.area();

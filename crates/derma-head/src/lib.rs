@@ -176,6 +176,11 @@ impl Head {
         let a = asset::parse();
         let (coarse_skin, coarse) =
             local_quads(&a, &["skin", "mouth", "socket_left", "socket_right"]);
+        assert_eq!(
+            coarse.len(),
+            a.meta.skin_vertices,
+            "head.json's skin vertex count"
+        );
         let (fine, stencils) = subdivide(&coarse_skin, SKIN_LEVELS);
         let (skin, vertex) = to_trimesh(&fine);
         // Local skin vertex of each asset vertex (the script numbers skin vertices first, so the
@@ -190,7 +195,6 @@ impl Head {
             Eye {
                 centre: v3(e.centre),
                 radius: e.radius,
-                forward: Vec3::Z,
             }
         };
         let eyes = [eye("left"), eye("right")];

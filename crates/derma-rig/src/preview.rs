@@ -13,30 +13,20 @@ pub const PREVIEW_BLOOD_TOP: f32 = 0.1;
 /// The built-in head rendered with `rgb` as base colour, and again with the hemoglobin map as
 /// display grey (dark = more blood), side by side (linear RGB).
 pub fn preview(rgb: &[Map; 3], h: &Map) -> Result<[Map; 3]> {
-    use derma_core::preview::{render_with, Textures};
+    use derma_core::preview::{render_with, FlatMaterial};
     const PANEL: usize = 512;
     let head = derma_head::Head::builtin();
     let mesh = &head.skin;
     let tangents = derma_core::mesh::mikktspace_tangents(mesh);
     let props = head.preview_props();
     let (w, hh) = (h.width(), h.height());
-    let flat = |v: f32| Map::filled(w, hh, v);
     // Skin-like specular (F0 = 0.35 × 0.08 = 2.8 %, Kelemen/Jimenez) and roughness, flat normals.
-    let (roughness, specular) = (flat(0.45), flat(0.35));
-    let normal = [flat(0.0), flat(0.0), flat(1.0)];
+    let material = FlatMaterial::new(0.45, 0.35);
     let shade = |base: &[Map; 3]| {
         render_with(
             mesh,
             &tangents,
-            &Textures {
-                base_color: base,
-                normal: &normal,
-                roughness: &roughness,
-                specular: &specular,
-                specular_scale: 0.08,
-                wrap: false,
-                uv_scale: glam::Vec2::ONE,
-            },
+            &material.textures(base),
             &props,
             0.0,
             PANEL,

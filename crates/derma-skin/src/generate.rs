@@ -252,8 +252,13 @@ impl<'a> SkinGenerator<'a> {
             }
             AppearanceChoice::Table(t) => t.as_ref(),
         };
-        let on_head =
-            self.mesh_path().is_none() && self.config.surface.kind == SurfaceKind::Template;
+        let mesh_path = self.mesh_path();
+        let kind = if mesh_path.is_some() {
+            SurfaceKind::Mesh
+        } else {
+            self.config.surface.kind
+        };
+        let on_head = kind == SurfaceKind::Template;
         let has_landmarks = !self.config.surface.landmarks.trim().is_empty();
         let regional_gains = (on_head || has_landmarks) && self.config.regional.enabled;
         let (person_cfg, melanin) =
@@ -265,12 +270,6 @@ impl<'a> SkinGenerator<'a> {
 
         // Surface.
         job.stage("surface", 1, Unit::Steps);
-        let mesh_path = self.mesh_path();
-        let kind = if mesh_path.is_some() {
-            SurfaceKind::Mesh
-        } else {
-            cfg.surface.kind
-        };
         if kind == SurfaceKind::Mesh && mesh_path.is_none() {
             return Err(SkinError::Key {
                 key: "surface.kind".into(),

@@ -17,7 +17,7 @@ impl RenderMaps {
             normal: &self.normal,
             roughness: &self.roughness,
             specular: &self.specular,
-            specular_scale: crate::texture_set::SPECULAR_SCALE,
+            specular_scale: derma_core::preview::SPECULAR_SCALE,
             wrap,
             uv_scale,
         }

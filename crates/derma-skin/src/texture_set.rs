@@ -18,8 +18,7 @@ use std::slice::ChunksMut;
 /// Normal-incidence reflectance of hair keratin, n ≈ 1.55 (Stamm, Garcia & Fuchs 1977, "The optical
 /// properties of human hair"): ((1.55 − 1)/(1.55 + 1))² = 0.0465.
 pub const HAIR_F0: f32 = 0.0465;
-/// Specular maps store F0 / 0.08 (the Unreal/Substance "specular" convention: 0.5 ↔ F0 = 4 %).
-pub const SPECULAR_SCALE: f32 = 0.08;
+pub use derma_core::preview::SPECULAR_SCALE;
 
 /// The render maps, linear values.
 pub struct RenderMaps {
