@@ -22,6 +22,7 @@
 #![warn(missing_docs)]
 
 pub mod atomic;
+pub mod bvh;
 mod cie_table;
 pub mod color;
 pub mod dtab;

@@ -126,7 +126,11 @@ pub fn write_obj_objects(path: &Path, header: &str, objects: &[(&str, &TriMesh)]
         }
         for t in &m.triangles {
             let [a, b, c] = t.map(|i| i as usize + base);
-            let _ = writeln!(s, "f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}");
+            if m.uvs.is_empty() {
+                let _ = writeln!(s, "f {a}//{a} {b}//{b} {c}//{c}");
+            } else {
+                let _ = writeln!(s, "f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}");
+            }
         }
         base += m.positions.len();
     }
@@ -151,8 +155,21 @@ pub struct MeshScale {
 }
 
 impl TriMesh {
-    /// Loads an OBJ, glTF or GLB file (by extension).
+    /// Loads an OBJ, glTF or GLB file (by extension); it must have UVs.
     pub fn load(path: &Path) -> Result<TriMesh> {
+        let mesh = Self::load_geometry(path)?;
+        if mesh.uvs.is_empty() {
+            return Err(CoreError::Mesh {
+                path: path.to_path_buf(),
+                detail: "it has no texture coordinates (UVs); derma paints textures in UV space, so unwrap the mesh first (`derma photo unwrap` makes a single-chart UV layout)".into(),
+            });
+        }
+        Ok(mesh)
+    }
+
+    /// Loads an OBJ, glTF or GLB file (by extension) whether or not it has UVs: without them
+    /// `uvs` is empty (for the tools that make UVs, such as `derma photo unwrap`).
+    pub fn load_geometry(path: &Path) -> Result<TriMesh> {
         let ext = path
             .extension()
             .map(|e| e.to_string_lossy().to_ascii_lowercase())
@@ -181,8 +198,8 @@ impl TriMesh {
         if self.triangles.is_empty() {
             return err("it contains no triangles".into());
         }
-        if self.uvs.len() != self.positions.len() {
-            return err("it has no texture coordinates (UVs); derma paints textures in UV space, so unwrap the mesh first".into());
+        if !self.uvs.is_empty() && self.uvs.len() != self.positions.len() {
+            return err("only some vertices have texture coordinates (UVs); give every vertex one, or none".into());
         }
         let n = self.positions.len() as u32;
         if self.triangles.iter().any(|t| t.iter().any(|&i| i >= n)) {
@@ -270,15 +287,18 @@ fn load_obj(path: &Path) -> Result<TriMesh> {
     })?;
     let mut mesh = TriMesh::default();
     let mut any_missing_normals = false;
+    let mut any_missing_uvs = false;
     for m in models {
         let m = m.mesh;
         let base = mesh.positions.len() as u32;
         let nv = m.positions.len() / 3;
-        if m.texcoords.len() / 2 != nv {
-            return Err(CoreError::Mesh {
-                path: path.to_path_buf(),
-                detail: "it has no texture coordinates (vt) for every vertex; derma paints textures in UV space, so unwrap the mesh first".into(),
-            });
+        if m.texcoords.len() / 2 == nv {
+            for i in 0..nv {
+                mesh.uvs
+                    .push(Vec2::new(m.texcoords[2 * i], m.texcoords[2 * i + 1]));
+            }
+        } else {
+            any_missing_uvs = true;
         }
         for i in 0..nv {
             mesh.positions.push(Vec3::new(
@@ -286,8 +306,6 @@ fn load_obj(path: &Path) -> Result<TriMesh> {
                 m.positions[3 * i + 1],
                 m.positions[3 * i + 2],
             ));
-            mesh.uvs
-                .push(Vec2::new(m.texcoords[2 * i], m.texcoords[2 * i + 1]));
         }
         if m.normals.len() / 3 == nv {
             for i in 0..nv {
@@ -303,6 +321,10 @@ fn load_obj(path: &Path) -> Result<TriMesh> {
         for t in m.indices.chunks_exact(3) {
             mesh.triangles.push([base + t[0], base + t[1], base + t[2]]);
         }
+    }
+    if any_missing_uvs {
+        // Some objects without UVs: the mesh as a whole has none.
+        mesh.uvs.clear();
     }
     if any_missing_normals {
         mesh.compute_normals();
@@ -373,10 +395,8 @@ fn load_gltf(path: &Path) -> Result<TriMesh> {
         }
     }
     if missing_uvs {
-        return Err(CoreError::Mesh {
-            path: path.to_path_buf(),
-            detail: "a primitive has no TEXCOORD_0; derma paints textures in UV space, so unwrap the mesh first".into(),
-        });
+        // A primitive without TEXCOORD_0: the mesh as a whole has none.
+        mesh.uvs.clear();
     }
     if missing_normals {
         mesh.compute_normals();
@@ -451,6 +471,14 @@ mod tests {
             e.contains("nouv.obj") && e.contains("texture coordinates"),
             "{e}"
         );
+        // Geometry alone loads (for the tools that make UVs), and writes back without UVs.
+        let g = TriMesh::load_geometry(&p).unwrap();
+        assert!(g.uvs.is_empty() && g.normals.len() == 3);
+        let pg = d.join("geom.obj");
+        g.write_obj(&pg).unwrap();
+        let g2 = TriMesh::load_geometry(&pg).unwrap();
+        assert_eq!(g2.positions, g.positions);
+        assert!(g2.uvs.is_empty());
         let p2 = d.join("ok.obj");
         std::fs::write(
             &p2,
