@@ -16,6 +16,9 @@
 pub mod camera;
 pub mod error;
 pub mod resection;
+pub mod synthetic;
+pub mod topology;
+pub mod unwrap;
 
 pub use camera::Camera;
 pub use error::{PhotoError, Result};
