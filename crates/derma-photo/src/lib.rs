@@ -13,8 +13,11 @@
 
 #![warn(missing_docs)]
 
+pub mod blend;
 pub mod camera;
 pub mod error;
+pub mod gain;
+pub mod photo;
 pub mod resection;
 pub mod synthetic;
 pub mod topology;
