@@ -120,58 +120,50 @@ pub fn default_levels(width: usize, height: usize) -> usize {
     n
 }
 
-/// Blends `images` by `masks` (same size; masks ≥ 0, normalised per pixel and level here) with
-/// a multiresolution spline of `levels` levels. Memory: one image's pyramid at a time plus the
-/// masks' pyramids and the result's.
-pub fn multiband(images: &[&Plane], masks: &[Plane], levels: usize) -> Plane {
-    assert_eq!(images.len(), masks.len());
-    let (w, h) = (images[0].width, images[0].height);
-    // Gaussian pyramids of the masks, normalised to sum 1 per pixel at every level.
-    let mut mask_pyr: Vec<Vec<Plane>> = masks.iter().map(|m| gaussian_pyramid(m, levels)).collect();
+/// Gaussian pyramids of `masks`, normalised to sum 1 per pixel at every level; where no mask
+/// covers a pixel at some level the last mask (the complement) takes it.
+fn mask_pyramids(masks: &[Plane], levels: usize) -> Vec<Vec<Plane>> {
+    let mut pyr: Vec<Vec<Plane>> = masks.iter().map(|m| gaussian_pyramid(m, levels)).collect();
+    let last = pyr.len() - 1;
     for l in 0..levels {
-        let n = mask_pyr[0][l].data.len();
+        let n = pyr[0][l].data.len();
         let sums: Vec<f32> = (0..n)
             .into_par_iter()
-            .map(|i| mask_pyr.iter().map(|p| p[l].data[i]).sum::<f32>())
+            .map(|i| pyr.iter().map(|p| p[l].data[i]).sum::<f32>())
             .collect();
-        for p in &mut mask_pyr {
+        for (k, p) in pyr.iter_mut().enumerate() {
             p[l].data.par_iter_mut().zip(&sums).for_each(|(v, s)| {
-                *v = if *s > 1e-12 { *v / s } else { 0.0 };
-            });
-        }
-        // A pixel no mask covers at this level takes the first image (the complement).
-        if let Some(first) = mask_pyr.first_mut() {
-            first[l].data.par_iter_mut().zip(&sums).for_each(|(v, s)| {
-                if *s <= 1e-12 {
-                    *v = 1.0;
-                }
+                *v = if *s > 1e-12 {
+                    *v / s
+                } else {
+                    (k == last) as u8 as f32
+                };
             });
         }
     }
-    let mut acc: Vec<Plane> = mask_pyr[0]
-        .iter()
-        .map(|p| Plane::new(p.width, p.height, vec![0.0; p.data.len()]))
-        .collect();
-    for (img, mp) in images.iter().zip(&mask_pyr) {
-        assert_eq!((img.width, img.height), (w, h));
-        let g = gaussian_pyramid(img, levels);
-        for l in 0..levels {
-            // Laplacian level: G_l − EXPAND(G_{l+1}); the top level is G_top itself.
-            let lap: Vec<f32> = if l + 1 < levels {
-                let e = expand(&g[l + 1], g[l].width, g[l].height);
-                g[l].data.par_iter().zip(&e.data).map(|(a, b)| a - b).collect()
-            } else {
-                g[l].data.clone()
-            };
-            acc[l]
-                .data
-                .par_iter_mut()
-                .zip(&lap)
-                .zip(&mp[l].data)
-                .for_each(|((a, v), m)| *a += v * m);
-        }
+    pyr
+}
+
+/// Adds image `img`'s Laplacian pyramid weighted by its mask pyramid `mp` into `acc`.
+fn accumulate(img: &Plane, mp: &[Plane], acc: &mut [Plane]) {
+    let levels = acc.len();
+    let g = gaussian_pyramid(img, levels);
+    for l in 0..levels {
+        // Laplacian level: G_l − EXPAND(G_{l+1}); the top level is G_top itself.
+        let e = (l + 1 < levels).then(|| expand(&g[l + 1], g[l].width, g[l].height));
+        let gl = &g[l].data;
+        acc[l]
+            .data
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(i, a)| {
+                let lap = gl[i] - e.as_ref().map_or(0.0, |e| e.data[i]);
+                *a += lap * mp[l].data[i];
+            });
     }
-    // Collapse.
+}
+
+fn collapse(mut acc: Vec<Plane>) -> Plane {
     let mut out = acc.pop().expect("a level");
     while let Some(level) = acc.pop() {
         let mut e = expand(&out, level.width, level.height);
@@ -179,6 +171,44 @@ pub fn multiband(images: &[&Plane], masks: &[Plane], levels: usize) -> Plane {
         out = e;
     }
     out
+}
+
+fn zero_pyramid(like: &[Plane]) -> Vec<Plane> {
+    like.iter()
+        .map(|p| Plane::new(p.width, p.height, vec![0.0; p.data.len()]))
+        .collect()
+}
+
+/// Blends `images` by `masks` (same size, ≥ 0; normalised per pixel and level here, the last
+/// mask taking pixels none covers) with a multiresolution spline of `levels` levels.
+pub fn multiband(images: &[&Plane], masks: &[Plane], levels: usize) -> Plane {
+    assert_eq!(images.len(), masks.len());
+    let mp = mask_pyramids(masks, levels);
+    let mut acc = zero_pyramid(&mp[0]);
+    for (img, m) in images.iter().zip(&mp) {
+        accumulate(img, m, &mut acc);
+    }
+    collapse(acc)
+}
+
+/// [`multiband`] for RGB images made one at a time by `image(k)` (interleaved, the masks'
+/// size), so that only one image and its pyramid are in memory at once.
+pub fn multiband_rgb(
+    masks: &[Plane],
+    levels: usize,
+    image: impl Fn(usize) -> Vec<[f32; 3]>,
+) -> [Plane; 3] {
+    let (w, h) = (masks[0].width, masks[0].height);
+    let mp = mask_pyramids(masks, levels);
+    let mut acc: [Vec<Plane>; 3] = std::array::from_fn(|_| zero_pyramid(&mp[0]));
+    for (k, m) in mp.iter().enumerate() {
+        let img = image(k);
+        for (c, a) in acc.iter_mut().enumerate() {
+            let plane = Plane::new(w, h, img.iter().map(|p| p[c]).collect());
+            accumulate(&plane, m, a);
+        }
+    }
+    acc.map(collapse)
 }
 
 #[cfg(test)]

@@ -13,6 +13,7 @@
 
 #![warn(missing_docs)]
 
+pub mod bake;
 pub mod blend;
 pub mod camera;
 pub mod error;

@@ -7,6 +7,7 @@ use crate::topology::fill_holes;
 use derma_core::mesh::TriMesh;
 use derma_head::regions::index;
 use derma_head::Head;
+use glam::Vec3;
 
 /// The built-in head's skin without the mouth cavity and eye sockets, the openings closed as a
 /// scanner closes them: a disc bounded at the neck, as Tarini et al. 2002 §3.1 assume.
@@ -90,4 +91,173 @@ pub fn largest_component(mesh: &TriMesh) -> TriMesh {
     let mut out = mesh.clone();
     out.triangles.retain(|t| Some(find(&mut parent, t[0])) == best);
     out
+}
+
+/// Known chromophores on the surface, as solid fields of the 3D position (mm) so that they can
+/// be compared in any UV layout: melanin C_m and dermal blood C_hd with smooth regional
+/// variation (a redder lower face, darker sides) and freckles of 1–2 mm on a jittered 4 mm grid.
+pub fn chromophores_at(p: Vec3, seed: u64) -> (f32, f32) {
+    let wave = |k: Vec3, phase: f32| (p.dot(k) + phase).sin();
+    let m = 0.06
+        + 0.012 * wave(Vec3::new(0.031, 0.017, 0.009), 0.3)
+        + 0.008 * wave(Vec3::new(-0.013, 0.041, 0.02), 1.1)
+        + 0.004 * wave(Vec3::new(0.19, -0.11, 0.07), 2.0);
+    let h = 0.045
+        + 0.015 * wave(Vec3::new(0.012, -0.035, 0.01), 0.7)
+        + 0.006 * wave(Vec3::new(0.05, 0.06, -0.03), 0.2)
+        + 0.003 * wave(Vec3::new(-0.23, 0.17, 0.11), 1.4);
+    // Freckles: one candidate per 4 mm cell, a third of them present.
+    let rng = derma_core::rng::Philox::new(seed, 7);
+    let cell = (p / 4.0).floor();
+    let mut spot = 0.0f32;
+    for dz in -1..=1 {
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                let c = cell + Vec3::new(dx as f32, dy as f32, dz as f32);
+                let key = ((c.x as i64 + 512) as u64) | (((c.y as i64 + 512) as u64) << 11) | (((c.z as i64 + 512) as u64) << 22);
+                let u = rng.uniform4(key, 0);
+                if u[3] > 0.33 {
+                    continue;
+                }
+                let centre = (c + Vec3::new(u[0], u[1], u[2])) * 4.0;
+                let r = 0.5 + 0.5 * rng.uniform4(key, 1)[0];
+                let d = (p - centre).length() / r;
+                spot = spot.max((-d * d).exp());
+            }
+        }
+    }
+    ((m + 0.08 * spot).clamp(0.0, 0.5), h.clamp(0.0, 0.32))
+}
+
+/// One synthetic photo's set-up: camera direction, light, exposure, white balance, vignetting.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View {
+    /// Azimuth of the camera around the head (degrees, 0 = in front, + = the head's left).
+    pub azimuth_deg: f32,
+    /// Elevation (degrees).
+    pub elevation_deg: f32,
+    /// Direction toward the key light (world).
+    pub light: Vec3,
+    /// Exposure factor.
+    pub exposure: f32,
+    /// White-balance factors per channel.
+    pub white_balance: [f32; 3],
+    /// Vignetting: brightness falls as 1 − v r² (r = 1 at the image corner).
+    pub vignetting: f32,
+}
+
+/// Five views as a photographer would take them (front, ±35°, ±70°), each with its own key
+/// light, exposure (×0.7–1.3), white balance and vignetting.
+pub fn default_views() -> Vec<View> {
+    vec![
+        View { azimuth_deg: 0.0, elevation_deg: 5.0, light: Vec3::new(0.3, 0.4, 1.0), exposure: 1.0, white_balance: [1.0, 1.0, 1.0], vignetting: 0.2 },
+        View { azimuth_deg: 35.0, elevation_deg: 0.0, light: Vec3::new(0.8, 0.3, 0.6), exposure: 1.3, white_balance: [1.08, 1.0, 0.9], vignetting: 0.3 },
+        View { azimuth_deg: -35.0, elevation_deg: 0.0, light: Vec3::new(-0.6, 0.5, 0.7), exposure: 0.7, white_balance: [0.93, 1.0, 1.1], vignetting: 0.25 },
+        View { azimuth_deg: 70.0, elevation_deg: -5.0, light: Vec3::new(1.0, 0.2, 0.2), exposure: 1.15, white_balance: [1.0, 0.97, 0.95], vignetting: 0.3 },
+        View { azimuth_deg: -70.0, elevation_deg: 10.0, light: Vec3::new(-1.0, 0.1, 0.3), exposure: 0.85, white_balance: [0.97, 1.0, 1.05], vignetting: 0.2 },
+    ]
+}
+
+/// Share of diffuse ambient light in the synthetic photos (the rest from the key light): the
+/// "uniform, diffuse illumination" Tarini et al. §3 recommend, not perfectly achieved.
+pub const AMBIENT: f32 = 0.7;
+
+/// A camera for `view` framing the head's face from `distance_mm`.
+pub fn camera_for(head: &Head, view: &View, width: u32, height: u32, distance_mm: f32) -> crate::Camera {
+    let target = 0.5 * (head.landmarks.get("nose_tip") + head.landmarks.get("menton"));
+    let target = Vec3::new(0.0, target.y + 15.0, target.z - 40.0);
+    let (a, e) = (view.azimuth_deg.to_radians(), view.elevation_deg.to_radians());
+    let eye = target + distance_mm * Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos());
+    // 50 mm on a full-frame sensor: f = 50/36 of the width.
+    crate::Camera::look_at(width, height, eye, target, Vec3::Y, width as f64 * 50.0 / 36.0)
+}
+
+/// Renders a photo of `mesh` (with `albedo` per surface point) by ray casting through each pixel
+/// (one ray per pixel), shaded by ambient plus a Lambertian key light, times exposure, white
+/// balance and vignetting, then stored as 8-bit sRGB as a camera would.
+pub fn render(
+    mesh: &TriMesh,
+    bvh: &derma_core::bvh::Bvh,
+    cam: &crate::Camera,
+    view: &View,
+    albedo: &(dyn Fn(Vec3) -> [f32; 3] + Sync),
+) -> crate::photo::RgbImage {
+    use rayon::prelude::*;
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let rt = cam.rotation_matrix().transpose();
+    let origin = cam.centre().as_vec3();
+    let light = view.light.normalize();
+    let half_diag = ((w * w + h * h) as f32).sqrt() / 2.0;
+    let mut data = vec![[0.0f32; 3]; w * h];
+    data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, out) in row.iter_mut().enumerate() {
+            let (px, py) = (x as f64 + 0.5, y as f64 + 0.5);
+            let d = glam::DVec3::new((px - cam.principal[0]) / cam.focal_px, (py - cam.principal[1]) / cam.focal_px, 1.0);
+            let dir = (rt * d).normalize().as_vec3();
+            let r = ((x as f32 + 0.5 - w as f32 / 2.0).powi(2) + (y as f32 + 0.5 - h as f32 / 2.0).powi(2)).sqrt() / half_diag;
+            let vig = 1.0 - view.vignetting * r * r;
+            let c = match bvh.nearest(origin, dir, 0.0, f32::INFINITY) {
+                Some(hit) => {
+                    let t = mesh.triangles[hit.triangle as usize];
+                    let [b1, b2] = hit.bary;
+                    let n = (mesh.normals[t[0] as usize] * (1.0 - b1 - b2)
+                        + mesh.normals[t[1] as usize] * b1
+                        + mesh.normals[t[2] as usize] * b2)
+                        .normalize_or(Vec3::Z);
+                    let p = origin + dir * hit.t;
+                    let shade = AMBIENT + (1.0 - AMBIENT) * n.dot(light).max(0.0) / 0.75;
+                    albedo(p).map(|a| a * shade)
+                }
+                // A grey backdrop.
+                None => [0.18, 0.19, 0.2],
+            };
+            *out = std::array::from_fn(|k| c[k] * view.exposure * view.white_balance[k] * vig);
+        }
+    });
+    crate::photo::RgbImage { width: w, height: h, data }.quantised_8bit()
+}
+
+/// The head's landmarks seen by `cam` (not hidden by the mesh, eye centres left out: they lie
+/// inside the head) with Gaussian pixel noise of `noise_px`, as a person would click them.
+pub fn landmark_points(
+    head: &Head,
+    bvh: &derma_core::bvh::Bvh,
+    cam: &crate::Camera,
+    name: &str,
+    noise_px: f64,
+    seed: u64,
+) -> crate::resection::PhotoPoints {
+    let rng = derma_core::rng::Philox::new(seed, 11);
+    let centre = cam.centre().as_vec3();
+    let points = derma_head::landmarks::NAMES
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| !n.starts_with("eye_centre"))
+        .filter_map(|(i, n)| {
+            let p = head.landmarks.get(n);
+            let to = centre - p;
+            let dist = to.length();
+            let dir = to / dist;
+            if bvh.occluded(p + dir * 0.5, dir, 0.0, dist) {
+                return None;
+            }
+            let px = cam.project(p.as_dvec3())?;
+            if !cam.in_image(px) {
+                return None;
+            }
+            let g = rng.normal2(i as u64, 0);
+            Some(crate::resection::Correspondence {
+                label: n.to_string(),
+                pixel: px + noise_px * glam::DVec2::new(g[0] as f64, g[1] as f64),
+                world: p.as_dvec3(),
+            })
+        })
+        .collect();
+    crate::resection::PhotoPoints {
+        name: name.to_string(),
+        width: cam.width,
+        height: cam.height,
+        focal_px: None,
+        points,
+    }
 }

@@ -1,0 +1,540 @@
+//! Texture resampling from calibrated photos (Tarini et al. 2002 §3.2): vertex-to-photo binding
+//! with visibility by ray casting and a silhouette test; per-texel blending weighted by ⟨N, Vᵢ⟩;
+//! the paper's three triangle cases; the one-ring colour fill (80/60/40/20 %) so no region stays
+//! empty; gains solved globally first; then the multiresolution spline with shrunk masks.
+
+use crate::blend::{default_levels, multiband_rgb, Plane};
+use crate::error::{PhotoError, Result};
+use crate::gain::Overlaps;
+use crate::photo::{Photo, RgbImage};
+use crate::topology::Topology;
+use derma_core::bvh::Bvh;
+use derma_core::mesh::TriMesh;
+use derma_core::progress::{Progress, Unit};
+use derma_core::raster::{dilation_sources, UvRaster, NO_TRIANGLE};
+use glam::Vec3;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// The most photos one bake takes (one bit each per vertex).
+pub const MAX_PHOTOS: usize = 32;
+/// [`Baked::source`] of a texel coloured by interpolating vertex colours (cases 2 and 3).
+pub const SOURCE_INTERPOLATED: u8 = 254;
+/// [`Baked::source`] of a texel outside the chart.
+pub const SOURCE_NONE: u8 = 255;
+
+/// Settings of [`bake`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BakeOptions {
+    /// Texture width and height in texels.
+    pub size: usize,
+    /// Solve per-photo gains and white balance before blending (Brown & Lowe 2007).
+    pub gain_compensation: bool,
+    /// Blend with multiresolution splines (Burt & Adelson 1983); else the weighted mean.
+    pub multiband: bool,
+    /// Pyramid levels (`None`: down to about 8 texels).
+    pub levels: Option<usize>,
+    /// ⟨N, V⟩ below which a photo's weight is 0 and above which its smooth ramp is done:
+    /// a smooth falloff instead of a hard angle cut.
+    pub falloff: [f32; 2],
+    /// Ray offset for the visibility test, as a fraction of the mesh's extent.
+    pub ray_offset: f32,
+}
+
+impl Default for BakeOptions {
+    fn default() -> Self {
+        Self {
+            size: 2048,
+            gain_compensation: true,
+            multiband: true,
+            levels: None,
+            // cos 84° and cos 60°.
+            falloff: [0.1, 0.5],
+            ray_offset: 1e-3,
+        }
+    }
+}
+
+/// What happened to each photo.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PhotoReport {
+    /// The photo.
+    pub name: String,
+    /// Gain per channel applied before blending.
+    pub gain: [f32; 3],
+    /// Vertices bound to it.
+    pub bound_vertices: usize,
+    /// Share of the chart's texels where it is the best view.
+    pub best_share: f64,
+}
+
+/// A summary of a bake.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BakeReport {
+    /// Per photo.
+    pub photos: Vec<PhotoReport>,
+    /// Triangles in the paper's cases 1 (a common photo), 2 (all bound, none common) and 3
+    /// (an unbound vertex).
+    pub triangle_cases: [usize; 3],
+    /// Vertices bound to no photo, coloured by the one-ring fill.
+    pub unbound_vertices: usize,
+    /// Share of the chart's texels coloured from photos directly (case 1).
+    pub photo_coverage: f64,
+}
+
+/// A baked texture.
+pub struct Baked {
+    /// Linear RGB, row 0 at v = 1.
+    pub texture: RgbImage,
+    /// Per texel: the best photo's index, [`SOURCE_INTERPOLATED`] or [`SOURCE_NONE`].
+    pub source: Vec<u8>,
+    /// The summary.
+    pub report: BakeReport,
+}
+
+fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
+    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// A photo's weight at a surface point with unit normal `n`: ⟨N, V⟩ with a smooth falloff at
+/// grazing angles and at the image border (2 % of its size).
+fn weight(photo: &Photo, p: Vec3, n: Vec3, falloff: [f32; 2]) -> Option<(f32, glam::DVec2)> {
+    let c = photo.camera.centre();
+    let v = (c - p.as_dvec3()).normalize();
+    let cos = n.as_dvec3().dot(v) as f32;
+    if cos <= falloff[0] {
+        return None;
+    }
+    let px = photo.camera.project(p.as_dvec3())?;
+    if !photo.camera.in_image(px) {
+        return None;
+    }
+    let (w, h) = (photo.camera.width as f64, photo.camera.height as f64);
+    let edge = px.x.min(px.y).min(w - px.x).min(h - px.y) as f32;
+    let border = smoothstep(0.0, 0.02 * w.max(h) as f32, edge);
+    let wgt = cos * smoothstep(falloff[0], falloff[1], cos) * border;
+    (wgt > 0.0).then_some((wgt, px))
+}
+
+/// Vertex-to-photo binding (Rocchini et al. 1999 as in §3.2): bit i is set when vertex v
+/// projects into photo i, faces it, is not on its silhouette (every triangle of its fan faces
+/// the camera) and nothing lies between it and the camera (a ray from v, offset along its
+/// normal, to the camera centre).
+pub fn bind(topo: &Topology, normals: &[Vec3], photos: &[Photo], bvh: &Bvh, offset: f32) -> Vec<u32> {
+    let n = topo.positions.len();
+    let mut fan_ok = vec![u32::MAX; n];
+    for t in &topo.triangles {
+        let [a, b, c] = t.map(|i| topo.positions[i as usize]);
+        let fnrm = (b - a).cross(c - a);
+        let centre = (a + b + c) / 3.0;
+        for (i, ph) in photos.iter().enumerate() {
+            let cam = ph.camera.centre();
+            if fnrm.as_dvec3().dot(cam - centre.as_dvec3()) <= 0.0 {
+                for &v in t {
+                    fan_ok[v as usize] &= !(1 << i);
+                }
+            }
+        }
+    }
+    (0..n)
+        .into_par_iter()
+        .map(|v| {
+            let p = topo.positions[v];
+            let nrm = normals[v];
+            let mut m = 0u32;
+            for (i, ph) in photos.iter().enumerate() {
+                if fan_ok[v] & (1 << i) == 0 {
+                    continue;
+                }
+                let cam = ph.camera.centre();
+                let to = cam - p.as_dvec3();
+                if nrm.as_dvec3().dot(to) <= 0.0 {
+                    continue;
+                }
+                let Some(px) = ph.camera.project(p.as_dvec3()) else { continue };
+                if !ph.camera.in_image(px) {
+                    continue;
+                }
+                let dist = to.length() as f32;
+                let dir = (to / to.length()).as_vec3();
+                let origin = p + nrm * offset;
+                if !bvh.occluded(origin, dir, 0.0, dist) {
+                    m |= 1 << i;
+                }
+            }
+            m
+        })
+        .collect()
+}
+
+/// The one-ring colour fill of §3.2: unbound vertices take the mean colour of their coloured
+/// neighbours once at least p = 80 %, then 60, 40, 20 % of the one-ring is coloured, and finally
+/// any coloured neighbour will do; repeated at each p until nothing changes. Returns how many
+/// vertices were filled.
+pub fn fill_vertex_colors(neighbours: &[Vec<u32>], colors: &mut [Option<[f32; 3]>]) -> usize {
+    let mut filled = 0;
+    for p in [0.8f32, 0.6, 0.4, 0.2, 0.0] {
+        loop {
+            let mut changed = 0;
+            // Gauss–Seidel order over vertices, as the paper loops over them.
+            for v in 0..colors.len() {
+                if colors[v].is_some() || neighbours[v].is_empty() {
+                    continue;
+                }
+                let nb = &neighbours[v];
+                let (mut sum, mut k) = ([0.0f32; 3], 0usize);
+                for &w in nb {
+                    if let Some(c) = colors[w as usize] {
+                        for j in 0..3 {
+                            sum[j] += c[j];
+                        }
+                        k += 1;
+                    }
+                }
+                if k > 0 && k as f32 >= p * nb.len() as f32 {
+                    colors[v] = Some(sum.map(|s| s / k as f32));
+                    changed += 1;
+                }
+            }
+            filled += changed;
+            if changed == 0 {
+                break;
+            }
+        }
+    }
+    filled
+}
+
+/// Resamples a UV-mapped mesh's texture from calibrated photos.
+pub fn bake(mesh: &TriMesh, photos: &[Photo], opts: &BakeOptions, progress: &dyn Progress) -> Result<Baked> {
+    if photos.is_empty() {
+        return Err(PhotoError::Invalid("no photos to bake from".into()));
+    }
+    if photos.len() > MAX_PHOTOS {
+        return Err(PhotoError::Invalid(format!(
+            "{} photos; at most {MAX_PHOTOS} per bake",
+            photos.len()
+        )));
+    }
+    if mesh.uvs.len() != mesh.positions.len() {
+        return Err(PhotoError::Mesh(
+            "the mesh has no UVs; unwrap it first (derma photo unwrap)".into(),
+        ));
+    }
+    if !(16..=16384).contains(&opts.size) {
+        return Err(PhotoError::Invalid(format!(
+            "texture size {}; expected 16–16384",
+            opts.size
+        )));
+    }
+    for p in photos {
+        p.check()?;
+    }
+    let size = opts.size;
+    progress.stage("bind vertices to photos", 0, Unit::Steps);
+    let topo = Topology::new(mesh)?;
+    let mut wnormals = vec![Vec3::ZERO; topo.positions.len()];
+    for t in &topo.triangles {
+        let [a, b, c] = t.map(|i| topo.positions[i as usize]);
+        let f = (b - a).cross(c - a);
+        for &v in t {
+            wnormals[v as usize] += f;
+        }
+    }
+    let wnormals: Vec<Vec3> = wnormals.into_iter().map(|n| n.normalize_or(Vec3::Z)).collect();
+    let bvh = Bvh::new(&topo.positions, &topo.triangles);
+    let extent = mesh.extent();
+    let masks = bind(&topo, &wnormals, photos, &bvh, opts.ray_offset * extent);
+    // Gains from every vertex seen by two or more photos.
+    let samples_at = |v: usize, gains: Option<&[[f32; 3]]>| -> Vec<(usize, [f32; 3], f32)> {
+        let p = topo.positions[v];
+        (0..photos.len())
+            .filter(|i| masks[v] & (1 << i) != 0)
+            .filter_map(|i| {
+                let (w, px) = weight(&photos[i], p, wnormals[v], opts.falloff)?;
+                let mut c = photos[i].image.sample(px);
+                if let Some(g) = gains {
+                    for k in 0..3 {
+                        c[k] *= g[i][k];
+                    }
+                }
+                Some((i, c, w))
+            })
+            .collect()
+    };
+    let gains: Vec<[f32; 3]> = if opts.gain_compensation {
+        let o = (0..topo.positions.len())
+            .into_par_iter()
+            .fold(
+                || Overlaps::new(photos.len()),
+                |mut o, v| {
+                    let s = samples_at(v, None);
+                    if s.len() >= 2 {
+                        let pairs: Vec<(usize, [f32; 3])> = s.iter().map(|(i, c, _)| (*i, *c)).collect();
+                        o.add(&pairs);
+                    }
+                    o
+                },
+            )
+            .reduce(|| Overlaps::new(photos.len()), |a, b| a.merge(&b));
+        o.gains()
+    } else {
+        vec![[1.0; 3]; photos.len()]
+    };
+    // Vertex colours (case 2) and the fill (case 3).
+    let mut vcolor: Vec<Option<[f32; 3]>> = (0..topo.positions.len())
+        .into_par_iter()
+        .map(|v| {
+            let s = samples_at(v, Some(&gains));
+            let wsum: f32 = s.iter().map(|x| x.2).sum();
+            (wsum > 0.0).then(|| {
+                let mut c = [0.0f32; 3];
+                for (_, col, w) in &s {
+                    for k in 0..3 {
+                        c[k] += col[k] * w / wsum;
+                    }
+                }
+                c
+            })
+        })
+        .collect();
+    let unbound = vcolor.iter().filter(|c| c.is_none()).count();
+    fill_vertex_colors(&topo.neighbours, &mut vcolor);
+    let vcolor: Vec<[f32; 3]> = vcolor.into_iter().map(|c| c.unwrap_or([0.0; 3])).collect();
+    // Per triangle: the paper's case, and the best photo at its centroid (for the masks).
+    let tri_w: Vec<[u32; 3]> = mesh.triangles.iter().map(|t| t.map(|i| topo.weld[i as usize])).collect();
+    let mut cases = [0usize; 3];
+    let best: Vec<u8> = tri_w
+        .iter()
+        .map(|t| {
+            let common = masks[t[0] as usize] & masks[t[1] as usize] & masks[t[2] as usize];
+            if common != 0 {
+                cases[0] += 1;
+                let p = t.map(|v| topo.positions[v as usize]);
+                let c = (p[0] + p[1] + p[2]) / 3.0;
+                let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or(Vec3::Z);
+                let mut b = (SOURCE_INTERPOLATED, 0.0f32);
+                for i in 0..photos.len() {
+                    if common & (1 << i) != 0 {
+                        if let Some((w, _)) = weight(&photos[i], c, n, opts.falloff) {
+                            if w > b.1 {
+                                b = (i as u8, w);
+                            }
+                        }
+                    }
+                }
+                b.0
+            } else if t.iter().all(|&v| masks[v as usize] != 0) {
+                cases[1] += 1;
+                SOURCE_INTERPOLATED
+            } else {
+                cases[2] += 1;
+                SOURCE_INTERPOLATED
+            }
+        })
+        .collect();
+    progress.stage("resample texels", 0, Unit::Steps);
+    let raster = UvRaster::new(mesh, size, size);
+    let n_tex = size * size;
+    // The weighted blend (or interpolated vertex colours) per texel: the paper's resampled
+    // texture, and the complement image of the spline.
+    let texel_normal = |i: usize| -> Vec3 {
+        let t = mesh.triangles[raster.triangle[i] as usize];
+        let [b1, b2] = raster.bary[i];
+        let n = mesh.normals.get(t[0] as usize).copied();
+        match n {
+            Some(_) if mesh.normals.len() == mesh.positions.len() => (mesh.normals[t[0] as usize] * (1.0 - b1 - b2)
+                + mesh.normals[t[1] as usize] * b1
+                + mesh.normals[t[2] as usize] * b2)
+                .normalize_or(Vec3::Z),
+            _ => {
+                let w = tri_w[raster.triangle[i] as usize];
+                (wnormals[w[0] as usize] * (1.0 - b1 - b2) + wnormals[w[1] as usize] * b1 + wnormals[w[2] as usize] * b2)
+                    .normalize_or(Vec3::Z)
+            }
+        }
+    };
+    let interpolate = |i: usize| -> [f32; 3] {
+        let w = tri_w[raster.triangle[i] as usize];
+        let [b1, b2] = raster.bary[i];
+        let b0 = 1.0 - b1 - b2;
+        std::array::from_fn(|k| {
+            vcolor[w[0] as usize][k] * b0 + vcolor[w[1] as usize][k] * b1 + vcolor[w[2] as usize][k] * b2
+        })
+    };
+    let common_of = |i: usize| -> u32 {
+        let w = tri_w[raster.triangle[i] as usize];
+        masks[w[0] as usize] & masks[w[1] as usize] & masks[w[2] as usize]
+    };
+    let sample = |i: usize, k: usize| -> Option<([f32; 3], f32)> {
+        let (w, px) = weight(&photos[k], raster.position[i], texel_normal(i), opts.falloff)?;
+        let mut c = photos[k].image.sample(px);
+        for j in 0..3 {
+            c[j] *= gains[k][j];
+        }
+        Some((c, w))
+    };
+    let mut blended = vec![[0.0f32; 3]; n_tex];
+    let mut source = vec![SOURCE_NONE; n_tex];
+    blended
+        .par_chunks_mut(size)
+        .zip(source.par_chunks_mut(size))
+        .enumerate()
+        .for_each(|(y, (row, srow))| {
+            for x in 0..size {
+                let i = y * size + x;
+                if raster.triangle[i] == NO_TRIANGLE {
+                    continue;
+                }
+                let common = common_of(i);
+                let (mut acc, mut wsum) = ([0.0f32; 3], 0.0f32);
+                for k in 0..photos.len() {
+                    if common & (1 << k) == 0 {
+                        continue;
+                    }
+                    if let Some((c, w)) = sample(i, k) {
+                        for j in 0..3 {
+                            acc[j] += c[j] * w;
+                        }
+                        wsum += w;
+                    }
+                }
+                if wsum > 0.0 {
+                    row[x] = acc.map(|a| a / wsum);
+                    srow[x] = best[raster.triangle[i] as usize];
+                } else {
+                    row[x] = interpolate(i);
+                    srow[x] = SOURCE_INTERPOLATED;
+                }
+            }
+        });
+    let covered: Vec<bool> = raster.triangle.iter().map(|t| *t != NO_TRIANGLE).collect();
+    let dil = dilation_sources(&covered, size, size)
+        .ok_or_else(|| PhotoError::Mesh("no triangle covers a texel: are the UVs inside [0, 1]²?".into()))?;
+    let dilate_rgb = |img: &mut Vec<[f32; 3]>| {
+        for (i, &s) in dil.iter().enumerate() {
+            if s as usize != i {
+                img[i] = img[s as usize];
+            }
+        }
+    };
+    dilate_rgb(&mut blended);
+    let mut texture = blended.clone();
+    if opts.multiband && photos.len() > 1 {
+        progress.stage("multiresolution spline", 0, Unit::Steps);
+        // Shrunk masks: a vertex is inside region r when all its triangles are best seen from
+        // r; a triangle stays in r's mask when its three vertices are inside (the outmost ring
+        // of triangles removed, §3.2).
+        let nv = topo.positions.len();
+        let mut region = vec![u8::MAX - 1; nv];
+        for (t, &b) in tri_w.iter().zip(&best) {
+            for &v in t {
+                let r = &mut region[v as usize];
+                if *r == u8::MAX - 1 {
+                    *r = b;
+                } else if *r != b {
+                    *r = u8::MAX;
+                }
+            }
+        }
+        let tri_mask: Vec<u8> = tri_w
+            .iter()
+            .zip(&best)
+            .map(|(t, &b)| {
+                if (b as usize) < photos.len() && t.iter().all(|&v| region[v as usize] == b) {
+                    b
+                } else {
+                    SOURCE_INTERPOLATED
+                }
+            })
+            .collect();
+        let mut mask_planes: Vec<Plane> = (0..=photos.len())
+            .map(|_| Plane::new(size, size, vec![0.0; n_tex]))
+            .collect();
+        for i in 0..n_tex {
+            let k = match raster.triangle[i] {
+                NO_TRIANGLE => photos.len(),
+                t => match tri_mask[t as usize] {
+                    m if (m as usize) < photos.len() => m as usize,
+                    _ => photos.len(),
+                },
+            };
+            mask_planes[k].data[i] = 1.0;
+        }
+        let levels = opts.levels.unwrap_or_else(|| default_levels(size, size));
+        let out = multiband_rgb(&mask_planes, levels, |k| {
+            // Image k: photo k's own resampling where it sees the texel, the blend elsewhere;
+            // the last image is the blend itself (the complement mask's image).
+            let mut img = blended.clone();
+            if k < photos.len() {
+                img.par_chunks_mut(size).enumerate().for_each(|(y, row)| {
+                    for x in 0..size {
+                        let i = y * size + x;
+                        if raster.triangle[i] == NO_TRIANGLE || common_of(i) & (1 << k) == 0 {
+                            continue;
+                        }
+                        if let Some((c, _)) = sample(i, k) {
+                            row[x] = c;
+                        }
+                    }
+                });
+            }
+            img
+        });
+        for (i, t) in texture.iter_mut().enumerate() {
+            *t = [out[0].data[i], out[1].data[i], out[2].data[i]].map(|v| v.max(0.0));
+        }
+        dilate_rgb(&mut texture);
+    }
+    let chart = covered.iter().filter(|c| **c).count().max(1);
+    let photo_coverage = source.iter().filter(|s| (**s as usize) < photos.len()).count() as f64 / chart as f64;
+    let report = BakeReport {
+        photos: photos
+            .iter()
+            .enumerate()
+            .map(|(i, p)| PhotoReport {
+                name: p.name.clone(),
+                gain: gains[i],
+                bound_vertices: masks.iter().filter(|m| *m & (1 << i) != 0).count(),
+                best_share: source.iter().filter(|s| **s as usize == i).count() as f64 / chart as f64,
+            })
+            .collect(),
+        triangle_cases: cases,
+        unbound_vertices: unbound,
+        photo_coverage,
+    };
+    Ok(Baked {
+        texture: RgbImage {
+            width: size,
+            height: size,
+            data: texture,
+        },
+        source,
+        report,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_fill_colours_every_vertex_of_a_connected_mesh() {
+        // A path 0–1–2–3–4 with only vertex 0 coloured: all get its colour, in order.
+        let nb: Vec<Vec<u32>> = vec![vec![1], vec![0, 2], vec![1, 3], vec![2, 4], vec![3]];
+        let mut c = vec![Some([1.0, 0.5, 0.25]), None, None, None, None];
+        let n = fill_vertex_colors(&nb, &mut c);
+        assert_eq!(n, 4);
+        assert!(c.iter().all(|x| *x == Some([1.0, 0.5, 0.25])));
+    }
+
+    #[test]
+    fn the_fill_prefers_well_surrounded_vertices() {
+        // Vertex 2 has 2 of 2 neighbours coloured (100 %): filled first with their mean.
+        let nb: Vec<Vec<u32>> = vec![vec![2], vec![2], vec![0, 1]];
+        let mut c = vec![Some([0.0; 3]), Some([1.0; 3]), None];
+        fill_vertex_colors(&nb, &mut c);
+        assert_eq!(c[2], Some([0.5; 3]));
+    }
+}
