@@ -226,7 +226,9 @@ mod tests {
             let a = u(1000 + r, 0);
             let o = Vec3::new(a[0], a[1], -1.0);
             let d = (Vec3::new(a[2], a[3], 2.0) - o).normalize();
-            let got = bvh.nearest(o, d, 0.0, f32::INFINITY).map(|h| (h.triangle, h.t));
+            let got = bvh
+                .nearest(o, d, 0.0, f32::INFINITY)
+                .map(|h| (h.triangle, h.t));
             assert_eq!(got, brute(&tris, o, d), "ray {r}");
             assert_eq!(bvh.occluded(o, d, 0.0, f32::INFINITY), got.is_some());
             hits += got.is_some() as usize;

@@ -199,7 +199,10 @@ impl TriMesh {
             return err("it contains no triangles".into());
         }
         if !self.uvs.is_empty() && self.uvs.len() != self.positions.len() {
-            return err("only some vertices have texture coordinates (UVs); give every vertex one, or none".into());
+            return err(
+                "only some vertices have texture coordinates (UVs); give every vertex one, or none"
+                    .into(),
+            );
         }
         let n = self.positions.len() as u32;
         if self.triangles.iter().any(|t| t.iter().any(|&i| i >= n)) {

@@ -121,7 +121,13 @@ fn weight(photo: &Photo, p: Vec3, n: Vec3, falloff: [f32; 2]) -> Option<(f32, gl
 /// projects into photo i, faces it, is not on its silhouette (every triangle of its fan faces
 /// the camera) and nothing lies between it and the camera (a ray from v, offset along its
 /// normal, to the camera centre).
-pub fn bind(topo: &Topology, normals: &[Vec3], photos: &[Photo], bvh: &Bvh, offset: f32) -> Vec<u32> {
+pub fn bind(
+    topo: &Topology,
+    normals: &[Vec3],
+    photos: &[Photo],
+    bvh: &Bvh,
+    offset: f32,
+) -> Vec<u32> {
     let n = topo.positions.len();
     let mut fan_ok = vec![u32::MAX; n];
     for t in &topo.triangles {
@@ -152,7 +158,9 @@ pub fn bind(topo: &Topology, normals: &[Vec3], photos: &[Photo], bvh: &Bvh, offs
                 if nrm.as_dvec3().dot(to) <= 0.0 {
                     continue;
                 }
-                let Some(px) = ph.camera.project(p.as_dvec3()) else { continue };
+                let Some(px) = ph.camera.project(p.as_dvec3()) else {
+                    continue;
+                };
                 if !ph.camera.in_image(px) {
                     continue;
                 }
@@ -207,7 +215,12 @@ pub fn fill_vertex_colors(neighbours: &[Vec<u32>], colors: &mut [Option<[f32; 3]
 }
 
 /// Resamples a UV-mapped mesh's texture from calibrated photos.
-pub fn bake(mesh: &TriMesh, photos: &[Photo], opts: &BakeOptions, progress: &dyn Progress) -> Result<Baked> {
+pub fn bake(
+    mesh: &TriMesh,
+    photos: &[Photo],
+    opts: &BakeOptions,
+    progress: &dyn Progress,
+) -> Result<Baked> {
     if photos.is_empty() {
         return Err(PhotoError::Invalid("no photos to bake from".into()));
     }
@@ -242,7 +255,10 @@ pub fn bake(mesh: &TriMesh, photos: &[Photo], opts: &BakeOptions, progress: &dyn
             wnormals[v as usize] += f;
         }
     }
-    let wnormals: Vec<Vec3> = wnormals.into_iter().map(|n| n.normalize_or(Vec3::Z)).collect();
+    let wnormals: Vec<Vec3> = wnormals
+        .into_iter()
+        .map(|n| n.normalize_or(Vec3::Z))
+        .collect();
     let bvh = Bvh::new(&topo.positions, &topo.triangles);
     let extent = mesh.extent();
     let masks = bind(&topo, &wnormals, photos, &bvh, opts.ray_offset * extent);
@@ -264,20 +280,20 @@ pub fn bake(mesh: &TriMesh, photos: &[Photo], opts: &BakeOptions, progress: &dyn
             .collect()
     };
     let gains: Vec<[f32; 3]> = if opts.gain_compensation {
-        let o = (0..topo.positions.len())
+        // Samples in parallel, sums in vertex order: the same gains at any thread count.
+        let samples: Vec<Vec<(usize, [f32; 3])>> = (0..topo.positions.len())
             .into_par_iter()
-            .fold(
-                || Overlaps::new(photos.len()),
-                |mut o, v| {
-                    let s = samples_at(v, None);
-                    if s.len() >= 2 {
-                        let pairs: Vec<(usize, [f32; 3])> = s.iter().map(|(i, c, _)| (*i, *c)).collect();
-                        o.add(&pairs);
-                    }
-                    o
-                },
-            )
-            .reduce(|| Overlaps::new(photos.len()), |a, b| a.merge(&b));
+            .map(|v| {
+                samples_at(v, None)
+                    .into_iter()
+                    .map(|(i, c, _)| (i, c))
+                    .collect()
+            })
+            .collect();
+        let mut o = Overlaps::new(photos.len());
+        for s in samples.iter().filter(|s| s.len() >= 2) {
+            o.add(s);
+        }
         o.gains()
     } else {
         vec![[1.0; 3]; photos.len()]
@@ -303,7 +319,11 @@ pub fn bake(mesh: &TriMesh, photos: &[Photo], opts: &BakeOptions, progress: &dyn
     fill_vertex_colors(&topo.neighbours, &mut vcolor);
     let vcolor: Vec<[f32; 3]> = vcolor.into_iter().map(|c| c.unwrap_or([0.0; 3])).collect();
     // Per triangle: the paper's case, and the best photo at its centroid (for the masks).
-    let tri_w: Vec<[u32; 3]> = mesh.triangles.iter().map(|t| t.map(|i| topo.weld[i as usize])).collect();
+    let tri_w: Vec<[u32; 3]> = mesh
+        .triangles
+        .iter()
+        .map(|t| t.map(|i| topo.weld[i as usize]))
+        .collect();
     let mut cases = [0usize; 3];
     let best: Vec<u8> = tri_w
         .iter()
@@ -344,13 +364,16 @@ pub fn bake(mesh: &TriMesh, photos: &[Photo], opts: &BakeOptions, progress: &dyn
         let [b1, b2] = raster.bary[i];
         let n = mesh.normals.get(t[0] as usize).copied();
         match n {
-            Some(_) if mesh.normals.len() == mesh.positions.len() => (mesh.normals[t[0] as usize] * (1.0 - b1 - b2)
+            Some(_) if mesh.normals.len() == mesh.positions.len() => (mesh.normals[t[0] as usize]
+                * (1.0 - b1 - b2)
                 + mesh.normals[t[1] as usize] * b1
                 + mesh.normals[t[2] as usize] * b2)
                 .normalize_or(Vec3::Z),
             _ => {
                 let w = tri_w[raster.triangle[i] as usize];
-                (wnormals[w[0] as usize] * (1.0 - b1 - b2) + wnormals[w[1] as usize] * b1 + wnormals[w[2] as usize] * b2)
+                (wnormals[w[0] as usize] * (1.0 - b1 - b2)
+                    + wnormals[w[1] as usize] * b1
+                    + wnormals[w[2] as usize] * b2)
                     .normalize_or(Vec3::Z)
             }
         }
@@ -360,7 +383,9 @@ pub fn bake(mesh: &TriMesh, photos: &[Photo], opts: &BakeOptions, progress: &dyn
         let [b1, b2] = raster.bary[i];
         let b0 = 1.0 - b1 - b2;
         std::array::from_fn(|k| {
-            vcolor[w[0] as usize][k] * b0 + vcolor[w[1] as usize][k] * b1 + vcolor[w[2] as usize][k] * b2
+            vcolor[w[0] as usize][k] * b0
+                + vcolor[w[1] as usize][k] * b1
+                + vcolor[w[2] as usize][k] * b2
         })
     };
     let common_of = |i: usize| -> u32 {
@@ -368,7 +393,12 @@ pub fn bake(mesh: &TriMesh, photos: &[Photo], opts: &BakeOptions, progress: &dyn
         masks[w[0] as usize] & masks[w[1] as usize] & masks[w[2] as usize]
     };
     let sample = |i: usize, k: usize| -> Option<([f32; 3], f32)> {
-        let (w, px) = weight(&photos[k], raster.position[i], texel_normal(i), opts.falloff)?;
+        let (w, px) = weight(
+            &photos[k],
+            raster.position[i],
+            texel_normal(i),
+            opts.falloff,
+        )?;
         let mut c = photos[k].image.sample(px);
         for j in 0..3 {
             c[j] *= gains[k][j];
@@ -410,8 +440,9 @@ pub fn bake(mesh: &TriMesh, photos: &[Photo], opts: &BakeOptions, progress: &dyn
             }
         });
     let covered: Vec<bool> = raster.triangle.iter().map(|t| *t != NO_TRIANGLE).collect();
-    let dil = dilation_sources(&covered, size, size)
-        .ok_or_else(|| PhotoError::Mesh("no triangle covers a texel: are the UVs inside [0, 1]²?".into()))?;
+    let dil = dilation_sources(&covered, size, size).ok_or_else(|| {
+        PhotoError::Mesh("no triangle covers a texel: are the UVs inside [0, 1]²?".into())
+    })?;
     let dilate_rgb = |img: &mut Vec<[f32; 3]>| {
         for (i, &s) in dil.iter().enumerate() {
             if s as usize != i {
@@ -488,7 +519,11 @@ pub fn bake(mesh: &TriMesh, photos: &[Photo], opts: &BakeOptions, progress: &dyn
         dilate_rgb(&mut texture);
     }
     let chart = covered.iter().filter(|c| **c).count().max(1);
-    let photo_coverage = source.iter().filter(|s| (**s as usize) < photos.len()).count() as f64 / chart as f64;
+    let photo_coverage = source
+        .iter()
+        .filter(|s| (**s as usize) < photos.len())
+        .count() as f64
+        / chart as f64;
     let report = BakeReport {
         photos: photos
             .iter()
@@ -497,7 +532,8 @@ pub fn bake(mesh: &TriMesh, photos: &[Photo], opts: &BakeOptions, progress: &dyn
                 name: p.name.clone(),
                 gain: gains[i],
                 bound_vertices: masks.iter().filter(|m| *m & (1 << i) != 0).count(),
-                best_share: source.iter().filter(|s| **s as usize == i).count() as f64 / chart as f64,
+                best_share: source.iter().filter(|s| **s as usize == i).count() as f64
+                    / chart as f64,
             })
             .collect(),
         triangle_cases: cases,

@@ -152,14 +152,10 @@ fn accumulate(img: &Plane, mp: &[Plane], acc: &mut [Plane]) {
         // Laplacian level: G_l − EXPAND(G_{l+1}); the top level is G_top itself.
         let e = (l + 1 < levels).then(|| expand(&g[l + 1], g[l].width, g[l].height));
         let gl = &g[l].data;
-        acc[l]
-            .data
-            .par_iter_mut()
-            .enumerate()
-            .for_each(|(i, a)| {
-                let lap = gl[i] - e.as_ref().map_or(0.0, |e| e.data[i]);
-                *a += lap * mp[l].data[i];
-            });
+        acc[l].data.par_iter_mut().enumerate().for_each(|(i, a)| {
+            let lap = gl[i] - e.as_ref().map_or(0.0, |e| e.data[i]);
+            *a += lap * mp[l].data[i];
+        });
     }
 }
 
@@ -167,7 +163,10 @@ fn collapse(mut acc: Vec<Plane>) -> Plane {
     let mut out = acc.pop().expect("a level");
     while let Some(level) = acc.pop() {
         let mut e = expand(&out, level.width, level.height);
-        e.data.par_iter_mut().zip(&level.data).for_each(|(a, b)| *a += b);
+        e.data
+            .par_iter_mut()
+            .zip(&level.data)
+            .for_each(|(a, b)| *a += b);
         out = e;
     }
     out
@@ -224,7 +223,12 @@ mod tests {
         let img = ramp(37, 29, |x, y| ((x * 7 + y * 13) % 17) as f32 / 17.0);
         let mask = Plane::new(37, 29, vec![1.0; 37 * 29]);
         let out = multiband(&[&img], &[mask], default_levels(37, 29));
-        let err = out.data.iter().zip(&img.data).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+        let err = out
+            .data
+            .iter()
+            .zip(&img.data)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f32::max);
         assert!(err < 1e-5, "{err}");
     }
 
@@ -234,7 +238,11 @@ mod tests {
         let r = reduce(&c);
         assert!(r.data.iter().all(|v| (v - 0.3).abs() < 1e-6));
         let e = expand(&r, 20, 14);
-        assert!(e.data.iter().all(|v| (v - 0.3).abs() < 1e-6), "{:?}", &e.data[..5]);
+        assert!(
+            e.data.iter().all(|v| (v - 0.3).abs() < 1e-6),
+            "{:?}",
+            &e.data[..5]
+        );
     }
 
     #[test]
@@ -246,16 +254,37 @@ mod tests {
         let b = ramp(w, h, |x, y| 1.3 * detail(x, y));
         let left = ramp(w, h, |x, _| (x < w / 2) as u8 as f32);
         let right = ramp(w, h, |x, _| (x >= w / 2) as u8 as f32);
-        let hard: Vec<f32> = (0..w * h).map(|i| if i % w < w / 2 { a.data[i] } else { b.data[i] }).collect();
+        let hard: Vec<f32> = (0..w * h)
+            .map(|i| if i % w < w / 2 { a.data[i] } else { b.data[i] })
+            .collect();
         let out = multiband(&[&a, &b], &[left, right], default_levels(w, h));
         // The largest jump of the local mean across the seam: row means over 4-pixel columns.
-        let col_mean = |d: &[f32], x: usize| (0..h).map(|y| (0..4).map(|k| d[y * w + x + k]).sum::<f32>()).sum::<f32>() / (4 * h) as f32;
-        let jump = |d: &[f32]| (0..w - 8).step_by(4).map(|x| (col_mean(d, x + 4) - col_mean(d, x)).abs()).fold(0.0, f32::max);
-        assert!(jump(&out.data) < 0.5 * jump(&hard), "{} vs {}", jump(&out.data), jump(&hard));
+        let col_mean = |d: &[f32], x: usize| {
+            (0..h)
+                .map(|y| (0..4).map(|k| d[y * w + x + k]).sum::<f32>())
+                .sum::<f32>()
+                / (4 * h) as f32
+        };
+        let jump = |d: &[f32]| {
+            (0..w - 8)
+                .step_by(4)
+                .map(|x| (col_mean(d, x + 4) - col_mean(d, x)).abs())
+                .fold(0.0, f32::max)
+        };
+        assert!(
+            jump(&out.data) < 0.5 * jump(&hard),
+            "{} vs {}",
+            jump(&out.data),
+            jump(&hard)
+        );
         // Far from the seam the detail is that of the chosen image.
         for y in 0..h {
             for x in [2, 8, w - 9, w - 3] {
-                let want = if x < w / 2 { a.data[y * w + x] } else { b.data[y * w + x] };
+                let want = if x < w / 2 {
+                    a.data[y * w + x]
+                } else {
+                    b.data[y * w + x]
+                };
                 let got = out.data[y * w + x];
                 assert!((got - want).abs() < 0.06, "({x}, {y}) {got} vs {want}");
             }

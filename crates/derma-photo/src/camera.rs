@@ -58,7 +58,14 @@ pub fn rotation_vector(m: DMat3) -> [f64; 3] {
 impl Camera {
     /// A camera at `eye` looking at `target` with `up` roughly up in the image, focal length
     /// `focal_px`, principal point at the image centre and no distortion.
-    pub fn look_at(width: u32, height: u32, eye: Vec3, target: Vec3, up: Vec3, focal_px: f64) -> Self {
+    pub fn look_at(
+        width: u32,
+        height: u32,
+        eye: Vec3,
+        target: Vec3,
+        up: Vec3,
+        focal_px: f64,
+    ) -> Self {
         let (eye, target, up) = (eye.as_dvec3(), target.as_dvec3(), up.as_dvec3());
         let z = (target - eye).normalize();
         let x = z.cross(up).normalize();
@@ -127,7 +134,12 @@ mod tests {
 
     #[test]
     fn rodrigues_round_trips() {
-        for r in [[0.1, -0.2, 0.3], [1.5, 0.2, -0.7], [0.0, 0.0, 1e-14], [0.0, 3.0, 0.0]] {
+        for r in [
+            [0.1, -0.2, 0.3],
+            [1.5, 0.2, -0.7],
+            [0.0, 0.0, 1e-14],
+            [0.0, 3.0, 0.0],
+        ] {
             let m = rodrigues(r);
             let back = rodrigues(rotation_vector(m));
             assert!((m - back).abs_diff_eq(DMat3::ZERO, 1e-9), "{r:?}");
@@ -137,7 +149,14 @@ mod tests {
 
     #[test]
     fn look_at_puts_the_target_at_the_principal_point() {
-        let cam = Camera::look_at(800, 600, Vec3::new(0.0, 0.0, 500.0), Vec3::ZERO, Vec3::Y, 1000.0);
+        let cam = Camera::look_at(
+            800,
+            600,
+            Vec3::new(0.0, 0.0, 500.0),
+            Vec3::ZERO,
+            Vec3::Y,
+            1000.0,
+        );
         let px = cam.project(DVec3::ZERO).unwrap();
         assert!((px - DVec2::new(400.0, 300.0)).length() < 1e-9);
         // World +Y (up) goes up in the image (smaller row), world +X to the right (viewer's

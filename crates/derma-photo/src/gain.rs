@@ -45,17 +45,6 @@ impl Overlaps {
         }
     }
 
-    /// Merges another set of statistics (for parallel accumulation).
-    pub fn merge(mut self, o: &Overlaps) -> Self {
-        for k in 0..self.count.len() {
-            self.count[k] += o.count[k];
-            for c in 0..3 {
-                self.sum[k][c] += o.sum[k][c];
-            }
-        }
-        self
-    }
-
     /// The gains g_i per channel minimising eq. 29; photos without overlap keep gain 1.
     pub fn gains(&self) -> Vec<[f32; 3]> {
         let n = self.n;
@@ -72,7 +61,8 @@ impl Overlaps {
                     }
                     let iij = self.sum[i * n + j][c] / nij;
                     let iji = self.sum[j * n + i][c] / nij;
-                    a[i * n + i] += nij * (iij * iij / (SIGMA_N * SIGMA_N) + 1.0 / (SIGMA_G * SIGMA_G));
+                    a[i * n + i] +=
+                        nij * (iij * iij / (SIGMA_N * SIGMA_N) + 1.0 / (SIGMA_G * SIGMA_G));
                     a[i * n + j] -= nij * iij * iji / (SIGMA_N * SIGMA_N);
                     b[i] += nij / (SIGMA_G * SIGMA_G);
                 }

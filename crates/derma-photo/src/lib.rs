@@ -16,8 +16,10 @@
 pub mod bake;
 pub mod blend;
 pub mod camera;
+pub mod chromophores;
 pub mod error;
 pub mod gain;
+pub mod iris;
 pub mod photo;
 pub mod resection;
 pub mod synthetic;

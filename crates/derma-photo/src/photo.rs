@@ -32,7 +32,9 @@ impl RgbImage {
     /// Reads an image file; PNG/JPEG are sRGB-decoded to linear, EXR is taken as linear.
     pub fn read(path: &Path) -> Result<Self> {
         let img = read_rgb(path)?;
-        let linear = !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+        let linear = !path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
         let (w, h) = (img.channels[0].width(), img.channels[0].height());
         let [r, g, b] = [0, 1, 2].map(|c| img.channels[c].data());
         let f = |v: f32| if linear { srgb_decode(v) } else { v };
@@ -54,7 +56,10 @@ impl RgbImage {
                 )
             })
             .collect::<std::result::Result<_, _>>()?;
-        if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
+        if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+        {
             derma_core::image_io::write_exr(
                 path,
                 &[("R", &maps[0]), ("G", &maps[1]), ("B", &maps[2])],
@@ -106,7 +111,9 @@ pub struct Photo {
 impl Photo {
     /// Checks that the image and camera agree in size.
     pub fn check(&self) -> Result<()> {
-        if (self.image.width, self.image.height) != (self.camera.width as usize, self.camera.height as usize) {
+        if (self.image.width, self.image.height)
+            != (self.camera.width as usize, self.camera.height as usize)
+        {
             return Err(PhotoError::Camera {
                 photo: self.name.clone(),
                 detail: format!(

@@ -109,8 +109,18 @@ pub fn dlt(photo: &PhotoPoints) -> Result<Camera> {
     // Hartley normalisation: centroid at the origin, mean distance √2 (image) and √3 (world).
     let c2 = photo.points.iter().map(|p| p.pixel).sum::<DVec2>() / n as f64;
     let c3 = photo.points.iter().map(|p| p.world).sum::<DVec3>() / n as f64;
-    let d2 = photo.points.iter().map(|p| (p.pixel - c2).length()).sum::<f64>() / n as f64;
-    let d3 = photo.points.iter().map(|p| (p.world - c3).length()).sum::<f64>() / n as f64;
+    let d2 = photo
+        .points
+        .iter()
+        .map(|p| (p.pixel - c2).length())
+        .sum::<f64>()
+        / n as f64;
+    let d3 = photo
+        .points
+        .iter()
+        .map(|p| (p.world - c3).length())
+        .sum::<f64>()
+        / n as f64;
     if d2 < 1e-9 || d3 < 1e-9 {
         return Err(err("all correspondences coincide".into()));
     }
@@ -147,15 +157,21 @@ pub fn dlt(photo: &PhotoPoints) -> Result<Camera> {
             row[3] - s3 * (row[0] * c3.x + row[1] * c3.y + row[2] * c3.z),
         ]
     };
-    let rows: [[f64; 4]; 3] = std::array::from_fn(|r| t3([pn[4 * r], pn[4 * r + 1], pn[4 * r + 2], pn[4 * r + 3]]));
+    let rows: [[f64; 4]; 3] =
+        std::array::from_fn(|r| t3([pn[4 * r], pn[4 * r + 1], pn[4 * r + 2], pn[4 * r + 3]]));
     for k in 0..4 {
         p[0][k] = rows[0][k] / s2 + c2.x * rows[2][k];
         p[1][k] = rows[1][k] / s2 + c2.y * rows[2][k];
         p[2][k] = rows[2][k];
     }
     // Sign: most points in front of the camera.
-    let depth = |p: &[[f64; 4]; 3], w: DVec3| p[2][0] * w.x + p[2][1] * w.y + p[2][2] * w.z + p[2][3];
-    let front = photo.points.iter().filter(|c| depth(&p, c.world) > 0.0).count();
+    let depth =
+        |p: &[[f64; 4]; 3], w: DVec3| p[2][0] * w.x + p[2][1] * w.y + p[2][2] * w.z + p[2][3];
+    let front = photo
+        .points
+        .iter()
+        .filter(|c| depth(&p, c.world) > 0.0)
+        .count();
     if 2 * front < n {
         for row in &mut p {
             for v in row.iter_mut() {
@@ -334,7 +350,12 @@ fn refine(
                 c.translation = [p[o + 3], p[o + 4], p[o + 5]];
                 let rot = c.rotation_matrix();
                 let t = DVec3::from(c.translation);
-                for (pt, _) in photos[i].points.iter().zip(&use_point[i]).filter(|(_, u)| **u) {
+                for (pt, _) in photos[i]
+                    .points
+                    .iter()
+                    .zip(&use_point[i])
+                    .filter(|(_, u)| **u)
+                {
                     let q = rot * pt.world + t;
                     // Behind the camera: a large, smooth penalty instead of a projection.
                     let px = if q.z > 1e-9 {
@@ -538,7 +559,8 @@ mod tests {
                     let n = rng.normal2(i as u64, 0);
                     Correspondence {
                         label: format!("v{i}"),
-                        pixel: cam.project(w).unwrap() + noise_px * DVec2::new(n[0] as f64, n[1] as f64),
+                        pixel: cam.project(w).unwrap()
+                            + noise_px * DVec2::new(n[0] as f64, n[1] as f64),
                         world: w,
                     }
                 })
@@ -558,7 +580,11 @@ mod tests {
     fn dlt_recovers_an_exact_camera() {
         let cam = camera(20.0);
         let got = dlt(&photo(&cam, 0.0, 1)).unwrap();
-        assert!((got.focal_px / cam.focal_px - 1.0).abs() < 1e-6, "{}", got.focal_px);
+        assert!(
+            (got.focal_px / cam.focal_px - 1.0).abs() < 1e-6,
+            "{}",
+            got.focal_px
+        );
         assert!((got.centre() - cam.centre()).length() < 1e-4);
         for p in face_points() {
             assert!((got.project(p).unwrap() - cam.project(p).unwrap()).length() < 1e-5);
@@ -594,7 +620,12 @@ mod tests {
         let mut p = photo(&cam, 0.5, 3);
         p.points[4].pixel += DVec2::new(60.0, -40.0);
         let r = &resect(&[p], &ResectionOptions::default()).unwrap()[0];
-        let flagged: Vec<&str> = r.points.iter().filter(|e| e.outlier).map(|e| e.label.as_str()).collect();
+        let flagged: Vec<&str> = r
+            .points
+            .iter()
+            .filter(|e| e.outlier)
+            .map(|e| e.label.as_str())
+            .collect();
         assert_eq!(flagged, ["v4"]);
         assert!(r.rms_px < 1.5, "{}", r.rms_px);
     }
@@ -624,8 +655,14 @@ mod tests {
         p.points[2].pixel = DVec2::new(1500.0, 1000.0);
         let r = resect(&[p], &ResectionOptions::default());
         match r {
-            Err(e) => assert!(e.to_string().contains("behind the camera") || e.to_string().contains("v2"), "{e}"),
-            Ok(r) => assert!(r[0].points[2].outlier, "the impossible point must at least be an outlier"),
+            Err(e) => assert!(
+                e.to_string().contains("behind the camera") || e.to_string().contains("v2"),
+                "{e}"
+            ),
+            Ok(r) => assert!(
+                r[0].points[2].outlier,
+                "the impossible point must at least be an outlier"
+            ),
         }
     }
 }

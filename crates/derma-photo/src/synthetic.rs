@@ -87,9 +87,13 @@ pub fn largest_component(mesh: &TriMesh) -> TriMesh {
     for t in &mesh.triangles {
         *count.entry(find(&mut parent, t[0])).or_insert(0usize) += 1;
     }
-    let best = count.iter().max_by_key(|(k, c)| (**c, std::cmp::Reverse(**k))).map(|(k, _)| *k);
+    let best = count
+        .iter()
+        .max_by_key(|(k, c)| (**c, std::cmp::Reverse(**k)))
+        .map(|(k, _)| *k);
     let mut out = mesh.clone();
-    out.triangles.retain(|t| Some(find(&mut parent, t[0])) == best);
+    out.triangles
+        .retain(|t| Some(find(&mut parent, t[0])) == best);
     out
 }
 
@@ -114,7 +118,9 @@ pub fn chromophores_at(p: Vec3, seed: u64) -> (f32, f32) {
         for dy in -1..=1 {
             for dx in -1..=1 {
                 let c = cell + Vec3::new(dx as f32, dy as f32, dz as f32);
-                let key = ((c.x as i64 + 512) as u64) | (((c.y as i64 + 512) as u64) << 11) | (((c.z as i64 + 512) as u64) << 22);
+                let key = ((c.x as i64 + 512) as u64)
+                    | (((c.y as i64 + 512) as u64) << 11)
+                    | (((c.z as i64 + 512) as u64) << 22);
                 let u = rng.uniform4(key, 0);
                 if u[3] > 0.33 {
                     continue;
@@ -150,11 +156,46 @@ pub struct View {
 /// light, exposure (×0.7–1.3), white balance and vignetting.
 pub fn default_views() -> Vec<View> {
     vec![
-        View { azimuth_deg: 0.0, elevation_deg: 5.0, light: Vec3::new(0.3, 0.4, 1.0), exposure: 1.0, white_balance: [1.0, 1.0, 1.0], vignetting: 0.2 },
-        View { azimuth_deg: 35.0, elevation_deg: 0.0, light: Vec3::new(0.8, 0.3, 0.6), exposure: 1.3, white_balance: [1.08, 1.0, 0.9], vignetting: 0.3 },
-        View { azimuth_deg: -35.0, elevation_deg: 0.0, light: Vec3::new(-0.6, 0.5, 0.7), exposure: 0.7, white_balance: [0.93, 1.0, 1.1], vignetting: 0.25 },
-        View { azimuth_deg: 70.0, elevation_deg: -5.0, light: Vec3::new(1.0, 0.2, 0.2), exposure: 1.15, white_balance: [1.0, 0.97, 0.95], vignetting: 0.3 },
-        View { azimuth_deg: -70.0, elevation_deg: 10.0, light: Vec3::new(-1.0, 0.1, 0.3), exposure: 0.85, white_balance: [0.97, 1.0, 1.05], vignetting: 0.2 },
+        View {
+            azimuth_deg: 0.0,
+            elevation_deg: 5.0,
+            light: Vec3::new(0.3, 0.4, 1.0),
+            exposure: 1.0,
+            white_balance: [1.0, 1.0, 1.0],
+            vignetting: 0.2,
+        },
+        View {
+            azimuth_deg: 35.0,
+            elevation_deg: 0.0,
+            light: Vec3::new(0.8, 0.3, 0.6),
+            exposure: 1.3,
+            white_balance: [1.08, 1.0, 0.9],
+            vignetting: 0.3,
+        },
+        View {
+            azimuth_deg: -35.0,
+            elevation_deg: 0.0,
+            light: Vec3::new(-0.6, 0.5, 0.7),
+            exposure: 0.7,
+            white_balance: [0.93, 1.0, 1.1],
+            vignetting: 0.25,
+        },
+        View {
+            azimuth_deg: 70.0,
+            elevation_deg: -5.0,
+            light: Vec3::new(1.0, 0.2, 0.2),
+            exposure: 1.15,
+            white_balance: [1.0, 0.97, 0.95],
+            vignetting: 0.3,
+        },
+        View {
+            azimuth_deg: -70.0,
+            elevation_deg: 10.0,
+            light: Vec3::new(-1.0, 0.1, 0.3),
+            exposure: 0.85,
+            white_balance: [0.97, 1.0, 1.05],
+            vignetting: 0.2,
+        },
     ]
 }
 
@@ -163,13 +204,29 @@ pub fn default_views() -> Vec<View> {
 pub const AMBIENT: f32 = 0.7;
 
 /// A camera for `view` framing the head's face from `distance_mm`.
-pub fn camera_for(head: &Head, view: &View, width: u32, height: u32, distance_mm: f32) -> crate::Camera {
+pub fn camera_for(
+    head: &Head,
+    view: &View,
+    width: u32,
+    height: u32,
+    distance_mm: f32,
+) -> crate::Camera {
     let target = 0.5 * (head.landmarks.get("nose_tip") + head.landmarks.get("menton"));
     let target = Vec3::new(0.0, target.y + 15.0, target.z - 40.0);
-    let (a, e) = (view.azimuth_deg.to_radians(), view.elevation_deg.to_radians());
+    let (a, e) = (
+        view.azimuth_deg.to_radians(),
+        view.elevation_deg.to_radians(),
+    );
     let eye = target + distance_mm * Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos());
     // 50 mm on a full-frame sensor: f = 50/36 of the width.
-    crate::Camera::look_at(width, height, eye, target, Vec3::Y, width as f64 * 50.0 / 36.0)
+    crate::Camera::look_at(
+        width,
+        height,
+        eye,
+        target,
+        Vec3::Y,
+        width as f64 * 50.0 / 36.0,
+    )
 }
 
 /// Renders a photo of `mesh` (with `albedo` per surface point) by ray casting through each pixel
@@ -192,9 +249,16 @@ pub fn render(
     data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         for (x, out) in row.iter_mut().enumerate() {
             let (px, py) = (x as f64 + 0.5, y as f64 + 0.5);
-            let d = glam::DVec3::new((px - cam.principal[0]) / cam.focal_px, (py - cam.principal[1]) / cam.focal_px, 1.0);
+            let d = glam::DVec3::new(
+                (px - cam.principal[0]) / cam.focal_px,
+                (py - cam.principal[1]) / cam.focal_px,
+                1.0,
+            );
             let dir = (rt * d).normalize().as_vec3();
-            let r = ((x as f32 + 0.5 - w as f32 / 2.0).powi(2) + (y as f32 + 0.5 - h as f32 / 2.0).powi(2)).sqrt() / half_diag;
+            let r = ((x as f32 + 0.5 - w as f32 / 2.0).powi(2)
+                + (y as f32 + 0.5 - h as f32 / 2.0).powi(2))
+            .sqrt()
+                / half_diag;
             let vig = 1.0 - view.vignetting * r * r;
             let c = match bvh.nearest(origin, dir, 0.0, f32::INFINITY) {
                 Some(hit) => {
@@ -214,13 +278,52 @@ pub fn render(
             *out = std::array::from_fn(|k| c[k] * view.exposure * view.white_balance[k] * vig);
         }
     });
-    crate::photo::RgbImage { width: w, height: h, data }.quantised_8bit()
+    crate::photo::RgbImage {
+        width: w,
+        height: h,
+        data,
+    }
+    .quantised_8bit()
 }
 
-/// The head's landmarks seen by `cam` (not hidden by the mesh, eye centres left out: they lie
-/// inside the head) with Gaussian pixel noise of `noise_px`, as a person would click them.
-pub fn landmark_points(
-    head: &Head,
+/// Feature points a person would click: the head's named landmarks (without the eye centres,
+/// which lie inside the head) and skin features at a grid of canonical face coordinates
+/// (x ∈ {−60, −30, 0, 30, 60}, y ∈ {−80, −40, 0, 40, 70}), snapped to the nearest vertex of
+/// `mesh` and labelled by it.
+pub fn feature_points(head: &Head, mesh: &TriMesh) -> Vec<(String, Vec3)> {
+    let mut out: Vec<(String, Vec3)> = derma_head::landmarks::NAMES
+        .iter()
+        .filter(|n| !n.starts_with("eye_centre"))
+        .map(|n| (n.to_string(), head.landmarks.get(n)))
+        .collect();
+    for y in [-80.0f32, -40.0, 0.0, 40.0, 70.0] {
+        for x in [-60.0f32, -30.0, 0.0, 30.0, 60.0] {
+            let best = mesh
+                .positions
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| head.regions.face_coords(**p).2 > 0.5)
+                .min_by(|(_, a), (_, b)| {
+                    let d = |p: Vec3| {
+                        let (fx, fy, _) = head.regions.face_coords(p);
+                        (fx - x).powi(2) + (fy - y).powi(2)
+                    };
+                    d(**a)
+                        .total_cmp(&d(**b))
+                        .then(a.z.total_cmp(&b.z).reverse())
+                });
+            if let Some((i, p)) = best {
+                out.push((format!("v{i}"), *p));
+            }
+        }
+    }
+    out
+}
+
+/// The `features` seen by `cam` (not hidden by the mesh, inside the image) with Gaussian pixel
+/// noise of `noise_px`, as a person would click them.
+pub fn clicked_points(
+    features: &[(String, Vec3)],
     bvh: &derma_core::bvh::Bvh,
     cam: &crate::Camera,
     name: &str,
@@ -229,12 +332,11 @@ pub fn landmark_points(
 ) -> crate::resection::PhotoPoints {
     let rng = derma_core::rng::Philox::new(seed, 11);
     let centre = cam.centre().as_vec3();
-    let points = derma_head::landmarks::NAMES
+    let points = features
         .iter()
         .enumerate()
-        .filter(|(_, n)| !n.starts_with("eye_centre"))
-        .filter_map(|(i, n)| {
-            let p = head.landmarks.get(n);
+        .filter_map(|(i, (label, p))| {
+            let p = *p;
             let to = centre - p;
             let dist = to.length();
             let dir = to / dist;
@@ -247,7 +349,7 @@ pub fn landmark_points(
             }
             let g = rng.normal2(i as u64, 0);
             Some(crate::resection::Correspondence {
-                label: n.to_string(),
+                label: label.clone(),
                 pixel: px + noise_px * glam::DVec2::new(g[0] as f64, g[1] as f64),
                 world: p.as_dvec3(),
             })
@@ -259,5 +361,85 @@ pub fn landmark_points(
         height: cam.height,
         focal_px: None,
         points,
+    }
+}
+
+/// How close a baked texture comes to the truth.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct TextureScores {
+    /// PSNR (dB, peak 1) over texels coloured from photos, after the one per-channel scale
+    /// that best matches the truth (exposure and shading level are not recoverable).
+    pub psnr_db: f64,
+    /// Mean squared gradient of the error (recovered − scaled truth) across seams: between
+    /// neighbouring texels whose best photo differs.
+    pub seam_gradient_energy: f64,
+    /// Seam texel pairs measured.
+    pub seam_pairs: usize,
+}
+
+/// Scores `baked` (on `mesh`'s UVs) against `truth` per surface point.
+pub fn evaluate(
+    mesh: &TriMesh,
+    baked: &crate::bake::Baked,
+    truth: &(dyn Fn(Vec3) -> [f32; 3] + Sync),
+) -> TextureScores {
+    let size = baked.texture.width;
+    let raster = derma_core::raster::UvRaster::new(mesh, size, size);
+    let n_photos = baked.report.photos.len();
+    let seen = |i: usize| (baked.source[i] as usize) < n_photos && raster.covered(i);
+    let t: Vec<[f32; 3]> = (0..size * size)
+        .map(|i| {
+            if raster.covered(i) {
+                truth(raster.position[i])
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect();
+    let r = &baked.texture.data;
+    // Per-channel scale: s = Σ r t / Σ t².
+    let mut scale = [0.0f64; 3];
+    for c in 0..3 {
+        let (mut rt, mut tt) = (0.0f64, 0.0f64);
+        for i in (0..size * size).filter(|&i| seen(i)) {
+            rt += r[i][c] as f64 * t[i][c] as f64;
+            tt += (t[i][c] as f64).powi(2);
+        }
+        scale[c] = rt / tt.max(1e-30);
+    }
+    let err = |i: usize| -> [f64; 3] {
+        std::array::from_fn(|c| r[i][c] as f64 - scale[c] * t[i][c] as f64)
+    };
+    let (mut se, mut k) = (0.0, 0usize);
+    for i in (0..size * size).filter(|&i| seen(i)) {
+        se += err(i).iter().map(|e| e * e).sum::<f64>();
+        k += 3;
+    }
+    let mse = se / k.max(1) as f64;
+    let (mut seam, mut pairs) = (0.0, 0usize);
+    for y in 0..size {
+        for x in 0..size {
+            let i = y * size + x;
+            if !seen(i) {
+                continue;
+            }
+            for j in [i + 1, i + size] {
+                if (j == i + 1 && x + 1 >= size)
+                    || j >= size * size
+                    || !seen(j)
+                    || baked.source[j] == baked.source[i]
+                {
+                    continue;
+                }
+                let (a, b) = (err(i), err(j));
+                seam += (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>();
+                pairs += 1;
+            }
+        }
+    }
+    TextureScores {
+        psnr_db: -10.0 * mse.max(1e-30).log10(),
+        seam_gradient_energy: seam / pairs.max(1) as f64,
+        seam_pairs: pairs,
     }
 }

@@ -38,10 +38,12 @@ impl Topology {
             .positions
             .iter()
             .map(|p| {
-                *index.entry(p.to_array().map(f32::to_bits)).or_insert_with(|| {
-                    positions.push(*p);
-                    (positions.len() - 1) as u32
-                })
+                *index
+                    .entry(p.to_array().map(f32::to_bits))
+                    .or_insert_with(|| {
+                        positions.push(*p);
+                        (positions.len() - 1) as u32
+                    })
             })
             .collect();
         let triangles: Vec<[u32; 3]> = mesh
@@ -62,7 +64,10 @@ impl Topology {
             }
         }
         let positions = used;
-        let triangles: Vec<[u32; 3]> = triangles.iter().map(|t| t.map(|v| remap[v as usize])).collect();
+        let triangles: Vec<[u32; 3]> = triangles
+            .iter()
+            .map(|t| t.map(|v| remap[v as usize]))
+            .collect();
         let weld: Vec<u32> = weld.iter().map(|&w| remap[w as usize]).collect();
         // Directed edges: an interior edge appears once each way, a boundary edge once.
         let mut directed: HashMap<(u32, u32), u32> = HashMap::with_capacity(3 * triangles.len());
@@ -181,7 +186,9 @@ pub fn fill_holes(mesh: &TriMesh) -> Result<(TriMesh, usize)> {
     let t = Topology::new(mesh)?;
     let length = |l: &Vec<u32>| -> f32 {
         (0..l.len())
-            .map(|i| (t.positions[l[(i + 1) % l.len()] as usize] - t.positions[l[i] as usize]).length())
+            .map(|i| {
+                (t.positions[l[(i + 1) % l.len()] as usize] - t.positions[l[i] as usize]).length()
+            })
             .sum()
     };
     let outer = (0..t.boundary_loops.len())
@@ -303,7 +310,10 @@ mod tests {
         let head = derma_head::Head::builtin();
         let t = Topology::new(&head.skin).unwrap();
         t.check_disc().unwrap();
-        assert!(t.positions.len() < head.skin.positions.len(), "UV seams are welded");
+        assert!(
+            t.positions.len() < head.skin.positions.len(),
+            "UV seams are welded"
+        );
         let mut closed = grid_mesh(4, |_, _| 0.0);
         closed.triangles.clear();
         assert!(Topology::new(&closed).unwrap().check_disc().is_err());

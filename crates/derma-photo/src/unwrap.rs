@@ -148,7 +148,8 @@ fn triangle_stretch(j: [[f64; 2]; 2]) -> Option<(f64, f64)> {
 }
 
 fn measure(frames: &[Frame], tris: &[[u32; 3]], uv: &[DVec2]) -> Stretch {
-    let (mut sum, mut wsum, mut area3, mut warea, mut area2, mut linf) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0f64);
+    let (mut sum, mut wsum, mut area3, mut warea, mut area2, mut linf) =
+        (0.0, 0.0, 0.0, 0.0, 0.0, 0.0f64);
     let mut flipped = 0;
     for (f, t) in frames.iter().zip(tris) {
         let c = t.map(|i| uv[i as usize]);
@@ -179,7 +180,12 @@ fn measure(frames: &[Frame], tris: &[[u32; 3]], uv: &[DVec2]) -> Stretch {
 /// The symmetric Dirichlet energy Σ c (‖J/s‖² + ‖(J/s)⁻¹‖²) (Smith & Schaefer 2015 eq. 2 with
 /// §3.1's per-triangle target scale s), infinite when a triangle flips; with its gradient per
 /// vertex when asked.
-fn sd_energy(frames: &[Frame], tris: &[[u32; 3]], uv: &[DVec2], gradient: bool) -> (f64, Vec<DVec2>) {
+fn sd_energy(
+    frames: &[Frame],
+    tris: &[[u32; 3]],
+    uv: &[DVec2],
+    gradient: bool,
+) -> (f64, Vec<DVec2>) {
     let per: Vec<(f64, [[f64; 2]; 2])> = frames
         .par_iter()
         .zip(tris)
@@ -196,7 +202,9 @@ fn sd_energy(frames: &[Frame], tris: &[[u32; 3]], uv: &[DVec2], gradient: bool) 
             let cof = [[j[1][1], -j[1][0]], [-j[0][1], j[0][0]]];
             let a = 2.0 / s2 + 2.0 * s2 / (det * det);
             let b = 2.0 * s2 * n2 / (det * det * det);
-            let dj = std::array::from_fn(|r| std::array::from_fn(|c| f.c * (a * j[r][c] - b * cof[r][c])));
+            let dj = std::array::from_fn(|r| {
+                std::array::from_fn(|c| f.c * (a * j[r][c] - b * cof[r][c]))
+            });
             (e, dj)
         })
         .collect();
@@ -263,7 +271,9 @@ fn tutte(topo: &Topology, p: &[DVec3]) -> Result<Vec<DVec2>> {
     let mut uv = vec![DVec2::ZERO; n];
     let mut is_b = vec![false; n];
     let len: Vec<f64> = (0..boundary.len())
-        .map(|i| (p[boundary[(i + 1) % boundary.len()] as usize] - p[boundary[i] as usize]).length())
+        .map(|i| {
+            (p[boundary[(i + 1) % boundary.len()] as usize] - p[boundary[i] as usize]).length()
+        })
         .collect();
     let total: f64 = len.iter().sum();
     let mut s = 0.0;
@@ -351,13 +361,24 @@ fn lscm(topo: &Topology, p: &[DVec3], frames: &[Frame]) -> Result<Option<Vec<DVe
     let a = boundary[0] as usize;
     let b = *boundary
         .iter()
-        .max_by(|x, y| (p[**x as usize] - p[a]).length().total_cmp(&(p[**y as usize] - p[a]).length()))
+        .max_by(|x, y| {
+            (p[**x as usize] - p[a])
+                .length()
+                .total_cmp(&(p[**y as usize] - p[a]).length())
+        })
         .expect("a boundary") as usize;
     let a = *boundary
         .iter()
-        .max_by(|x, y| (p[**x as usize] - p[b]).length().total_cmp(&(p[**y as usize] - p[b]).length()))
+        .max_by(|x, y| {
+            (p[**x as usize] - p[b])
+                .length()
+                .total_cmp(&(p[**y as usize] - p[b]).length())
+        })
         .expect("a boundary") as usize;
-    let pin = [(a, DVec2::ZERO), (b, DVec2::new((p[b] - p[a]).length(), 0.0))];
+    let pin = [
+        (a, DVec2::ZERO),
+        (b, DVec2::new((p[b] - p[a]).length(), 0.0)),
+    ];
     let mut index = vec![usize::MAX; n];
     let mut m = 0;
     for v in 0..n {
@@ -374,11 +395,19 @@ fn lscm(topo: &Topology, p: &[DVec3], frames: &[Frame]) -> Result<Option<Vec<DVe
         // Coefficients (vertex, is_v, value) of the two residuals.
         let r1: [(usize, usize, f64); 6] = std::array::from_fn(|k| {
             let c = k % 3;
-            if k < 3 { (t[c] as usize, 0, f.g[0][c]) } else { (t[c] as usize, 1, -f.g[1][c]) }
+            if k < 3 {
+                (t[c] as usize, 0, f.g[0][c])
+            } else {
+                (t[c] as usize, 1, -f.g[1][c])
+            }
         });
         let r2: [(usize, usize, f64); 6] = std::array::from_fn(|k| {
             let c = k % 3;
-            if k < 3 { (t[c] as usize, 0, f.g[1][c]) } else { (t[c] as usize, 1, f.g[0][c]) }
+            if k < 3 {
+                (t[c] as usize, 0, f.g[1][c])
+            } else {
+                (t[c] as usize, 1, f.g[0][c])
+            }
         });
         for r in [r1, r2] {
             for &(v1, c1, x1) in &r {
@@ -426,7 +455,9 @@ fn lscm(topo: &Topology, p: &[DVec3], frames: &[Frame]) -> Result<Option<Vec<DVe
     }
     if positive == 0 {
         // Mirrored: flip v.
-        return Ok(Some(uv.into_iter().map(|q| DVec2::new(q.x, -q.y)).collect()));
+        return Ok(Some(
+            uv.into_iter().map(|q| DVec2::new(q.x, -q.y)).collect(),
+        ));
     }
     Ok(None)
 }
@@ -518,7 +549,11 @@ pub fn unwrap(mesh: &TriMesh, opts: &UnwrapOptions) -> Result<Unwrap> {
         iterations += 1;
         // Nesterov-style extrapolation (Kovalsky et al. 2016 §4), kept only when flip-free.
         let theta = (1.0 - (2.0f64).sqrt() / (it as f64 + 2.0).sqrt()).clamp(0.0, 0.9);
-        let ext: Vec<DVec2> = uv.iter().zip(&prev).map(|(u, p)| *u + theta * (*u - *p)).collect();
+        let ext: Vec<DVec2> = uv
+            .iter()
+            .zip(&prev)
+            .map(|(u, p)| *u + theta * (*u - *p))
+            .collect();
         let (ext, ext_energy) = {
             let (e, _) = sd_energy(&frames, &topo.triangles, &ext, false);
             if e.is_finite() && e <= energy {
@@ -564,7 +599,10 @@ pub fn unwrap(mesh: &TriMesh, opts: &UnwrapOptions) -> Result<Unwrap> {
     let mut out = TriMesh {
         positions: topo.positions.clone(),
         normals: Vec::new(),
-        uvs: uv.iter().map(|q| Vec2::new(q.x as f32, q.y as f32)).collect(),
+        uvs: uv
+            .iter()
+            .map(|q| Vec2::new(q.x as f32, q.y as f32))
+            .collect(),
         triangles: topo.triangles.clone(),
     };
     out.compute_normals();
@@ -585,9 +623,15 @@ fn fit_to_square(uv: &[DVec2], p: &[DVec3], view: Option<DVec3>, margin: f32) ->
     // head's right appears on the image's left as in a photo.
     let right = v.cross(up).normalize();
     let up = right.cross(v).normalize();
-    let target: Vec<DVec2> = p.iter().map(|q| DVec2::new(q.dot(right), q.dot(up))).collect();
+    let target: Vec<DVec2> = p
+        .iter()
+        .map(|q| DVec2::new(q.dot(right), q.dot(up)))
+        .collect();
     let n = uv.len() as f64;
-    let (cu, ct) = (uv.iter().sum::<DVec2>() / n, target.iter().sum::<DVec2>() / n);
+    let (cu, ct) = (
+        uv.iter().sum::<DVec2>() / n,
+        target.iter().sum::<DVec2>() / n,
+    );
     // 2D Procrustes rotation: θ = atan2(Σ a×b, Σ a·b).
     let (mut sdot, mut scross) = (0.0, 0.0);
     for (a, b) in uv.iter().zip(&target) {
@@ -666,7 +710,10 @@ mod tests {
         };
         m.compute_normals();
         let s = stretch_of(&m, None, 1.2).unwrap();
-        assert!((s.l2 - (0.625f64).sqrt() * 2f64.sqrt()).abs() < 1e-9, "{s:?}");
+        assert!(
+            (s.l2 - (0.625f64).sqrt() * 2f64.sqrt()).abs() < 1e-9,
+            "{s:?}"
+        );
         assert!((s.linf - 2f64.sqrt()).abs() < 1e-9);
     }
 
@@ -707,7 +754,10 @@ mod tests {
             for t in &u.mesh.triangles {
                 let [a, b, c] = t.map(|i| u.mesh.uvs[i as usize]);
                 let ar = 0.5 * (b - a).perp_dot(c - a).abs();
-                let centre = (u.mesh.positions[t[0] as usize] + u.mesh.positions[t[1] as usize] + u.mesh.positions[t[2] as usize]) / 3.0;
+                let centre = (u.mesh.positions[t[0] as usize]
+                    + u.mesh.positions[t[1] as usize]
+                    + u.mesh.positions[t[2] as usize])
+                    / 3.0;
                 all += ar;
                 if centre.x.abs() < 0.15 {
                     f += ar;
@@ -729,7 +779,10 @@ mod tests {
         let mut m = grid_mesh(8, |_, _| 0.0);
         let mid = 2 * (4 * 8 + 4);
         m.triangles.drain(mid..mid + 2);
-        let e = unwrap(&m, &UnwrapOptions::default()).err().unwrap().to_string();
+        let e = unwrap(&m, &UnwrapOptions::default())
+            .err()
+            .unwrap()
+            .to_string();
         assert!(e.contains("2 boundary loops"), "{e}");
     }
 }

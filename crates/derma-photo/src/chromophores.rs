@@ -1,0 +1,354 @@
+//! Melanin and hemoglobin maps from a baked photo texture (beyond Tarini et al. 2002; as
+//! Jimenez et al. 2010 §3 turn acquired colour into chromophores): each texel's colour is
+//! matched in CIELAB to derma's skin-colour LUT (eq. 7, the optics behind `derma skin`'s colours),
+//! over its continuous (∛C_m, ∛C_hd) domain, clamped to the gamut with the residual ΔE*ab kept.
+
+use crate::error::{PhotoError, Result};
+use crate::photo::RgbImage;
+use derma_core::color::{linear_srgb_to_xyz, xyz_to_lab};
+use derma_core::Map;
+use derma_shading::skin_color_lut::SkinColorLut;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Chromophore maps of a texture.
+pub struct Chromophores {
+    /// Melanosome volume fraction C_m per texel.
+    pub melanin: Map,
+    /// Dermal blood volume fraction C_hd per texel (the rig's hemoglobin).
+    pub hemoglobin: Map,
+    /// ΔE*ab between the texel's colour and the LUT's colour of the result.
+    pub residual: Map,
+    /// Summary.
+    pub report: ChromophoreReport,
+}
+
+/// A summary of an inversion.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ChromophoreReport {
+    /// The exposure factor the texture was divided by before matching.
+    pub exposure: f64,
+    /// Median ΔE*ab over the texels inverted.
+    pub median_delta_e: f64,
+    /// 95th percentile ΔE*ab.
+    pub p95_delta_e: f64,
+    /// Share of texels whose best match lies on the gamut's edge (clamped).
+    pub clamped_share: f64,
+    /// Texels inverted.
+    pub texels: usize,
+}
+
+/// The LUT resampled in Lab for matching, with its bilinear evaluation in (u, v) ∈ [0, 1]².
+struct LabTable<'a> {
+    lut: &'a SkinColorLut,
+}
+
+fn lab_of(rgb: [f64; 3]) -> [f64; 3] {
+    xyz_to_lab(linear_srgb_to_xyz(rgb.map(|v| v.max(0.0))))
+}
+
+impl LabTable<'_> {
+    /// The LUT's linear RGB at (u, v), bilinear as [`SkinColorLut::lookup`].
+    fn rgb(&self, u: f64, v: f64) -> [f64; 3] {
+        let o = &self.lut.options;
+        self.lut
+            .lookup(u.powi(3) * o.melanin_max, v.powi(3) * o.blood_max)
+    }
+
+    fn lab(&self, u: f64, v: f64) -> [f64; 3] {
+        lab_of(self.rgb(u, v))
+    }
+}
+
+fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum()
+}
+
+/// (u, v, ΔE, clamped) of the LUT colour closest in Lab to `target`: a search over a 17 × 17
+/// grid, then damped Gauss–Newton steps in the box [0, 1]² from the three best grid points (the
+/// table is nearly flat in blood where blood saturates the colour; one start can stall there).
+fn invert_one(
+    t: &LabTable,
+    target: [f64; 3],
+    coarse: &[(f64, f64, [f64; 3])],
+) -> (f64, f64, f64, bool) {
+    let mut starts: Vec<(f64, f64, f64)> = coarse
+        .iter()
+        .map(|(u, v, lab)| (*u, *v, dist2(*lab, target)))
+        .collect();
+    starts.select_nth_unstable_by(3, |a, b| {
+        a.2.total_cmp(&b.2)
+            .then(a.0.total_cmp(&b.0))
+            .then(a.1.total_cmp(&b.1))
+    });
+    starts.truncate(3);
+    starts.sort_by(|a, b| {
+        a.2.total_cmp(&b.2)
+            .then(a.0.total_cmp(&b.0))
+            .then(a.1.total_cmp(&b.1))
+    });
+    let mut best = (0.0, 0.0, f64::INFINITY);
+    for &(u0, v0, _) in &starts {
+        let r = refine(t, target, u0, v0);
+        if r.2 < best.2 {
+            best = r;
+        }
+        // Good enough (ΔE < 0.1): the other starts are not needed.
+        if best.2 < 0.01 {
+            break;
+        }
+    }
+    let (u, v, cur) = best;
+    let edge = 1e-6;
+    let clamped = u <= edge || v <= edge || u >= 1.0 - edge || v >= 1.0 - edge;
+    (u, v, cur.sqrt(), clamped)
+}
+
+/// Damped Gauss–Newton from (u, v): (u, v, squared ΔE).
+fn refine(t: &LabTable, target: [f64; 3], mut u: f64, mut v: f64) -> (f64, f64, f64) {
+    let mut cur = dist2(t.lab(u, v), target);
+    let mut lambda = 1e-3;
+    for _ in 0..20 {
+        let h = 1e-4;
+        let l0 = t.lab(u, v);
+        let lu = t.lab((u + h).min(1.0), v);
+        let lv = t.lab(u, (v + h).min(1.0));
+        let (hu, hv) = ((u + h).min(1.0) - u, (v + h).min(1.0) - v);
+        let ju: [f64; 3] =
+            std::array::from_fn(|k| if hu > 0.0 { (lu[k] - l0[k]) / hu } else { 0.0 });
+        let jv: [f64; 3] =
+            std::array::from_fn(|k| if hv > 0.0 { (lv[k] - l0[k]) / hv } else { 0.0 });
+        let r: [f64; 3] = std::array::from_fn(|k| l0[k] - target[k]);
+        let (a11, a12, a22) = (
+            ju.iter().map(|x| x * x).sum::<f64>(),
+            ju.iter().zip(&jv).map(|(a, b)| a * b).sum::<f64>(),
+            jv.iter().map(|x| x * x).sum::<f64>(),
+        );
+        let (g1, g2) = (
+            ju.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>(),
+            jv.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>(),
+        );
+        let mut improved = false;
+        for _ in 0..8 {
+            let (d11, d22) = (a11 * (1.0 + lambda) + 1e-12, a22 * (1.0 + lambda) + 1e-12);
+            let det = d11 * d22 - a12 * a12;
+            if det.abs() < 1e-300 {
+                lambda *= 10.0;
+                continue;
+            }
+            let du = -(d22 * g1 - a12 * g2) / det;
+            let dv = -(-a12 * g1 + d11 * g2) / det;
+            let (nu, nv) = ((u + du).clamp(0.0, 1.0), (v + dv).clamp(0.0, 1.0));
+            let c = dist2(t.lab(nu, nv), target);
+            if c < cur {
+                let step = (nu - u).abs() + (nv - v).abs();
+                let gain = cur - c;
+                u = nu;
+                v = nv;
+                cur = c;
+                lambda = (lambda * 0.3).max(1e-9);
+                // Stop once a step no longer changes ΔE² by 10⁻⁶.
+                improved = step > 1e-9 && gain > 1e-6;
+                break;
+            }
+            lambda *= 10.0;
+        }
+        if !improved {
+            break;
+        }
+    }
+    (u, v, cur)
+}
+
+fn coarse_grid(t: &LabTable) -> Vec<(f64, f64, [f64; 3])> {
+    let n = 17;
+    let mut g = Vec::with_capacity(n * n);
+    for j in 0..n {
+        for i in 0..n {
+            let (u, v) = (i as f64 / (n - 1) as f64, j as f64 / (n - 1) as f64);
+            g.push((u, v, t.lab(u, v)));
+        }
+    }
+    g
+}
+
+/// The exposure factor that best explains a texture as LUT colours: the mean ΔE*ab of the best
+/// 90 % of a sample of texels is minimised over factors 0.25–4 (golden-section search in log
+/// space).
+pub fn fit_exposure(lut: &SkinColorLut, texels: &[[f32; 3]]) -> f64 {
+    let t = LabTable { lut };
+    let coarse = coarse_grid(&t);
+    let step = (texels.len() / 2000).max(1);
+    let sample: Vec<[f32; 3]> = texels.iter().step_by(step).copied().collect();
+    let cost = |log_e: f64| -> f64 {
+        let e = log_e.exp();
+        let mut d: Vec<f64> = sample
+            .par_iter()
+            .map(|c| invert_one(&t, lab_of(c.map(|x| x as f64 / e)), &coarse).2)
+            .collect();
+        d.sort_by(f64::total_cmp);
+        // The mean of the best 90 %: robust to outliers (hair, shadows) yet sensitive to the
+        // whole distribution, unlike the median.
+        let k = (d.len() * 9 / 10).max(1);
+        d[..k].iter().sum::<f64>() / k as f64
+    };
+    let (mut a, mut b) = (0.25f64.ln(), 4.0f64.ln());
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    let (mut x1, mut x2) = (b - g * (b - a), a + g * (b - a));
+    let (mut f1, mut f2) = (cost(x1), cost(x2));
+    for _ in 0..30 {
+        if f1 < f2 {
+            b = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = b - g * (b - a);
+            f1 = cost(x1);
+        } else {
+            a = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = a + g * (b - a);
+            f2 = cost(x2);
+        }
+        if b - a < 1e-3 {
+            break;
+        }
+    }
+    (0.5 * (a + b)).exp()
+}
+
+/// Inverts the LUT for every texel where `mask` holds (all when `None`), after dividing the
+/// texture by `exposure`. Texels outside the mask get C_m = C_hd = 0 and residual 0.
+pub fn invert(
+    lut: &SkinColorLut,
+    texture: &RgbImage,
+    mask: Option<&[bool]>,
+    exposure: f64,
+) -> Result<Chromophores> {
+    if !(exposure > 0.0 && exposure.is_finite()) {
+        return Err(PhotoError::Invalid(format!(
+            "exposure {exposure}; expected a positive number"
+        )));
+    }
+    let n = texture.width * texture.height;
+    if let Some(m) = mask {
+        if m.len() != n {
+            return Err(PhotoError::Invalid(format!(
+                "mask of {} texels for a {}×{} texture",
+                m.len(),
+                texture.width,
+                texture.height
+            )));
+        }
+    }
+    let t = LabTable { lut };
+    let coarse = coarse_grid(&t);
+    let o = &lut.options;
+    let res: Vec<(f32, f32, f32, bool, bool)> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            if mask.is_some_and(|m| !m[i]) {
+                return (0.0, 0.0, 0.0, false, false);
+            }
+            let c = texture.data[i].map(|x| x as f64 / exposure);
+            let (u, v, de, clamped) = invert_one(&t, lab_of(c), &coarse);
+            (
+                (u.powi(3) * o.melanin_max) as f32,
+                (v.powi(3) * o.blood_max) as f32,
+                de as f32,
+                clamped,
+                true,
+            )
+        })
+        .collect();
+    let used: Vec<&(f32, f32, f32, bool, bool)> = res.iter().filter(|r| r.4).collect();
+    let mut de: Vec<f64> = used.iter().map(|r| r.2 as f64).collect();
+    de.sort_by(f64::total_cmp);
+    let pct = |p: f64| {
+        de.get(((de.len() as f64 - 1.0) * p).round() as usize)
+            .copied()
+            .unwrap_or(0.0)
+    };
+    let report = ChromophoreReport {
+        exposure,
+        median_delta_e: pct(0.5),
+        p95_delta_e: pct(0.95),
+        clamped_share: used.iter().filter(|r| r.3).count() as f64 / used.len().max(1) as f64,
+        texels: used.len(),
+    };
+    let map = |f: &dyn Fn(&(f32, f32, f32, bool, bool)) -> f32| {
+        Map::from_vec(texture.width, texture.height, res.iter().map(f).collect())
+    };
+    Ok(Chromophores {
+        melanin: map(&|r| r.0)?,
+        hemoglobin: map(&|r| r.1)?,
+        residual: map(&|r| r.2)?,
+        report,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lut_colours_invert_to_their_chromophores() {
+        let lut = SkinColorLut::builtin();
+        let cases = [
+            (0.02, 0.01),
+            (0.08, 0.05),
+            (0.2, 0.12),
+            (0.4, 0.03),
+            (0.05, 0.25),
+        ];
+        let tex = RgbImage {
+            width: cases.len(),
+            height: 1,
+            data: cases
+                .iter()
+                .map(|&(m, h)| lut.lookup(m, h).map(|v| v as f32))
+                .collect(),
+        };
+        let c = invert(&lut, &tex, None, 1.0).unwrap();
+        for (i, &(m, h)) in cases.iter().enumerate() {
+            let (gm, gh) = (c.melanin.data()[i] as f64, c.hemoglobin.data()[i] as f64);
+            assert!(
+                (gm - m).abs() < 0.01 * m.max(0.05) + 2e-3,
+                "melanin {gm} vs {m}"
+            );
+            assert!(
+                (gh - h).abs() < 0.02 * h.max(0.05) + 2e-3,
+                "hemoglobin {gh} vs {h}"
+            );
+            assert!(c.residual.data()[i] < 0.5, "ΔE {}", c.residual.data()[i]);
+        }
+        assert!(c.report.median_delta_e < 0.5);
+    }
+
+    #[test]
+    fn a_colour_outside_the_gamut_is_clamped_with_its_residual() {
+        let lut = SkinColorLut::builtin();
+        // Saturated blue: no skin has it.
+        let tex = RgbImage::filled(1, 1, [0.05, 0.1, 0.6]);
+        let c = invert(&lut, &tex, None, 1.0).unwrap();
+        assert!(c.residual.data()[0] > 20.0, "ΔE {}", c.residual.data()[0]);
+        assert_eq!(c.report.clamped_share, 1.0);
+        assert!(c.melanin.data()[0].is_finite() && c.hemoglobin.data()[0].is_finite());
+    }
+
+    #[test]
+    fn the_exposure_of_a_scaled_texture_is_found() {
+        let lut = SkinColorLut::builtin();
+        let texels: Vec<[f32; 3]> = (0..200)
+            .map(|i| {
+                let (m, h) = (
+                    0.02 + 0.1 * (i % 10) as f64 / 10.0,
+                    0.01 + 0.08 * (i / 10) as f64 / 20.0,
+                );
+                lut.lookup(m, h).map(|v| (v * 1.6) as f32)
+            })
+            .collect();
+        let e = fit_exposure(&lut, &texels);
+        assert!((e / 1.6 - 1.0).abs() < 0.05, "exposure {e}");
+    }
+}
