@@ -23,6 +23,7 @@ pub mod iris;
 pub mod photo;
 pub mod resection;
 pub mod synthetic;
+pub mod teeth;
 pub mod topology;
 pub mod unwrap;
 

@@ -1,0 +1,428 @@
+//! A teeth texture from one photo (Tarini et al. 2002 §4.2): voids and gums found by the largest
+//! jumps in histograms of colour distances (to black, to red), the six front teeth's colour
+//! equalised in six vertical stripes, and the result composited as a billboard into a generic
+//! texture of `derma-head`'s teeth, fading out at the canines.
+
+use crate::error::{PhotoError, Result};
+use crate::photo::RgbImage;
+use derma_core::color::luminance;
+use derma_core::mesh::TriMesh;
+use derma_core::raster::UvRaster;
+use serde::Serialize;
+
+/// What a photo pixel is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Label {
+    /// A tooth.
+    Tooth,
+    /// Gums, lips or skin (red-ish).
+    Gum,
+    /// A void (the dark mouth behind and between teeth): transparent.
+    Void,
+}
+
+/// Settings of [`teeth_texture`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TeethOptions {
+    /// Texture size (texels, square; the teeth use its lower part, as their UVs do).
+    pub size: usize,
+    /// Luminance the teeth are equalised to (linear; §4.2's "predefined value"): 0.55, a
+    /// tooth's albedo in linear light is about 0.5–0.6 (enamel L* ≈ 75–80).
+    pub target_luminance: f32,
+    /// Half-width of the photographed front teeth on the model (mm): up to the canines.
+    pub canine_x_mm: f32,
+    /// Gum colour, linear RGB (a healthy attached gingiva, L* ≈ 55, a* ≈ 25).
+    pub gum: [f32; 3],
+}
+
+impl Default for TeethOptions {
+    fn default() -> Self {
+        Self {
+            size: 1024,
+            target_luminance: 0.55,
+            canine_x_mm: 17.0,
+            gum: [0.42, 0.16, 0.16],
+        }
+    }
+}
+
+/// A summary.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TeethReport {
+    /// Colour distance below which a pixel is a void.
+    pub void_threshold: f32,
+    /// Chromatic distance to red below which a pixel is gum.
+    pub gum_threshold: f32,
+    /// Shares of tooth, gum and void pixels.
+    pub shares: [f64; 3],
+    /// The equalisation target (linear RGB).
+    pub target: [f32; 3],
+    /// Stripe averages before equalisation.
+    pub stripes_before: Vec<[f32; 3]>,
+    /// Bounding box of the teeth in the photo (x0, y0, x1, y1).
+    pub bbox: [usize; 4],
+    /// Row of the gap between upper and lower teeth.
+    pub gap_row: usize,
+}
+
+/// A teeth texture: RGBA (alpha 0 on voids) in the teeth meshes' UVs.
+pub struct TeethTexture {
+    /// Linear RGB.
+    pub rgb: RgbImage,
+    /// Alpha per texel.
+    pub alpha: Vec<f32>,
+    /// The equalised photo (linear RGB) and its labels.
+    pub equalised: RgbImage,
+    /// Pixel labels.
+    pub labels: Vec<Label>,
+    /// The summary.
+    pub report: TeethReport,
+}
+
+/// The threshold at the biggest jump of the distances: sorted, the largest step between
+/// neighbours (the empty stretch of the histogram between the near-target class and the rest),
+/// looked for between the 1st and 90th percentiles, the threshold in its middle.
+pub fn biggest_jump_threshold(d: &[f32]) -> f32 {
+    let mut s: Vec<f32> = d.iter().copied().filter(|v| v.is_finite()).collect();
+    if s.len() < 2 {
+        return 0.0;
+    }
+    s.sort_by(f32::total_cmp);
+    let (a, b) = (
+        s.len() / 100,
+        (s.len() * 9 / 10).max(s.len() / 100 + 1).min(s.len() - 1),
+    );
+    let mut best = (f32::NEG_INFINITY, a);
+    for i in a..b {
+        let gap = s[i + 1] - s[i];
+        if gap > best.0 {
+            best = (gap, i);
+        }
+    }
+    0.5 * (s[best.1] + s[best.1 + 1])
+}
+
+/// A pixel too red to be a tooth whatever the histogram says: red chromaticity above 0.45
+/// (enamel's is about 0.37, gingiva's 0.55–0.65).
+fn too_red(d_red: f32) -> bool {
+    // d_red < 0.62 ⇔ roughly r/(r+g+b) > 0.45 for skin-like g ≈ b.
+    d_red < 0.62
+}
+
+fn chroma(c: [f32; 3]) -> [f32; 3] {
+    let s = (c[0] + c[1] + c[2]).max(1e-6);
+    c.map(|v| v / s)
+}
+
+/// Labels each pixel (§4.2).
+pub fn label(img: &RgbImage) -> (Vec<Label>, f32, f32) {
+    let d_black: Vec<f32> = img
+        .data
+        .iter()
+        .map(|c| (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt())
+        .collect();
+    let void_t = biggest_jump_threshold(&d_black);
+    let d_red: Vec<f32> = img
+        .data
+        .iter()
+        .map(|c| {
+            let q = chroma(*c);
+            ((q[0] - 1.0).powi(2) + q[1].powi(2) + q[2].powi(2)).sqrt()
+        })
+        .collect();
+    // Gum threshold among the non-void pixels only.
+    let nonvoid: Vec<f32> = d_red
+        .iter()
+        .zip(&d_black)
+        .filter(|(_, b)| **b >= void_t)
+        .map(|(r, _)| *r)
+        .collect();
+    let gum_t = biggest_jump_threshold(&nonvoid);
+    let labels = d_black
+        .iter()
+        .zip(&d_red)
+        .map(|(&b, &r)| {
+            if b < void_t {
+                Label::Void
+            } else if r < gum_t || too_red(r) {
+                Label::Gum
+            } else {
+                Label::Tooth
+            }
+        })
+        .collect();
+    (labels, void_t, gum_t)
+}
+
+/// Runs §4.2 on a photo of the subject's teeth (linear RGB), mapping the result onto the teeth
+/// meshes `upper` and `lower` (derma-head's, or any with the same convention: mm, +Y up, +Z
+/// forward, front teeth at x ≈ 0).
+pub fn teeth_texture(
+    img: &RgbImage,
+    upper: &TriMesh,
+    lower: &TriMesh,
+    opts: &TeethOptions,
+) -> Result<TeethTexture> {
+    if img.width < 24 || img.height < 12 {
+        return Err(PhotoError::Invalid(format!(
+            "teeth photo of {}×{} pixels; at least 24×12 expected",
+            img.width, img.height
+        )));
+    }
+    let (labels, void_t, gum_t) = label(img);
+    let (w, h) = (img.width, img.height);
+    let teeth: Vec<usize> = (0..w * h).filter(|&i| labels[i] == Label::Tooth).collect();
+    if teeth.len() < 50 {
+        return Err(PhotoError::Invalid(format!(
+            "only {} tooth pixels found (thresholds: void {void_t:.3}, gum {gum_t:.3}); is the photo of teeth?",
+            teeth.len()
+        )));
+    }
+    let (mut x0, mut y0, mut x1, mut y1) = (w, h, 0, 0);
+    for &i in &teeth {
+        let (x, y) = (i % w, i / w);
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    // The gap: the row inside the box with the fewest tooth pixels in its middle half.
+    let mid = (x0 + 3 * (x1 - x0) / 8)..(x0 + 5 * (x1 - x0) / 8 + 1);
+    let gap_row = (y0 + (y1 - y0) / 4..=y0 + 3 * (y1 - y0) / 4)
+        .min_by_key(|&y| {
+            (
+                mid.clone()
+                    .filter(|&x| labels[y * w + x] == Label::Tooth)
+                    .count(),
+                (y as i64 - ((y0 + y1) / 2) as i64).abs(),
+            )
+        })
+        .unwrap_or((y0 + y1) / 2);
+    // Target: the teeth's mean colour with its luminance set to the target.
+    let mut mean = [0.0f32; 3];
+    for &i in &teeth {
+        for k in 0..3 {
+            mean[k] += img.data[i][k] / teeth.len() as f32;
+        }
+    }
+    let s = opts.target_luminance / luminance(mean).max(1e-6);
+    let target = mean.map(|v| v * s);
+    // Six stripes over the box; the correction (target − stripe mean) is interpolated linearly
+    // between stripe centres, column by column.
+    let stripe_w = (x1 - x0 + 1) as f32 / 6.0;
+    let mut stripes = vec![[0.0f32; 3]; 6];
+    let mut counts = [0usize; 6];
+    for &i in &teeth {
+        let k = (((i % w - x0) as f32 / stripe_w) as usize).min(5);
+        for c in 0..3 {
+            stripes[k][c] += img.data[i][c];
+        }
+        counts[k] += 1;
+    }
+    for k in 0..6 {
+        if counts[k] > 0 {
+            stripes[k] = stripes[k].map(|v| v / counts[k] as f32);
+        } else {
+            stripes[k] = target;
+        }
+    }
+    let correction = |x: usize| -> [f32; 3] {
+        let f = ((x as f32 - x0 as f32) / stripe_w - 0.5).clamp(0.0, 5.0);
+        let (k, t) = ((f as usize).min(4), f - (f as usize).min(4) as f32);
+        std::array::from_fn(|c| {
+            (target[c] - stripes[k][c]) * (1.0 - t) + (target[c] - stripes[k + 1][c]) * t
+        })
+    };
+    let mut eq = img.clone();
+    for (i, p) in eq.data.iter_mut().enumerate() {
+        match labels[i] {
+            Label::Tooth => {
+                let corr = correction(i % w);
+                for c in 0..3 {
+                    p[c] = (p[c] + corr[c]).max(0.0);
+                }
+            }
+            Label::Gum => *p = opts.gum,
+            Label::Void => *p = [0.0, 0.0, 1.0],
+        }
+    }
+    // Composite: the generic texture (target colour, shaded toward the back of the arch), the
+    // photo's front teeth mapped orthographically onto the front of each arch.
+    let size = opts.size;
+    let mut rgb = RgbImage::filled(size, size, target);
+    let mut alpha = vec![1.0f32; size * size];
+    for (mesh, is_upper) in [(upper, true), (lower, false)] {
+        if mesh.uvs.len() != mesh.positions.len() {
+            return Err(PhotoError::Mesh("a teeth mesh has no UVs".into()));
+        }
+        let (lo, hi) = mesh.bounds();
+        let raster = UvRaster::new(mesh, size, size);
+        // Front teeth's vertical extent: incisal edge to the gum line (the arch's other end).
+        for i in 0..size * size {
+            if !raster.covered(i) {
+                continue;
+            }
+            let p = raster.position[i];
+            let depth = ((hi.z - p.z) / (hi.z - lo.z).max(1e-6)).clamp(0.0, 1.0);
+            let generic = target.map(|v| v * (1.0 - 0.45 * depth));
+            let xf = p.x.abs();
+            let wf = 1.0 - smooth(opts.canine_x_mm - 2.0, opts.canine_x_mm + 2.0, xf);
+            let mut c = generic;
+            let mut a = 1.0;
+            if wf > 0.0 && p.z > hi.z - 12.0 {
+                // Photo coordinates: x across the box, y from the gap (incisal edges) outward.
+                let u = (p.x / (opts.canine_x_mm + 2.0) * 0.5 + 0.5).clamp(0.0, 1.0);
+                let (ey, ry) = if is_upper { (lo.y, hi.y) } else { (hi.y, lo.y) };
+                let v = ((p.y - ey) / (ry - ey)).clamp(0.0, 1.0);
+                let px = x0 as f32 + u * (x1 - x0) as f32;
+                let py = if is_upper {
+                    gap_row as f32 - v * (gap_row - y0) as f32
+                } else {
+                    gap_row as f32 + v * (y1 - gap_row) as f32
+                };
+                let j = (py.round() as usize).min(h - 1) * w + (px.round() as usize).min(w - 1);
+                let (pc, pa) = match labels[j] {
+                    Label::Void => (generic, 0.0),
+                    _ => (eq.data[j], 1.0),
+                };
+                c = std::array::from_fn(|k| pc[k] * wf + generic[k] * (1.0 - wf));
+                a = pa * wf + (1.0 - wf);
+            }
+            rgb.data[i] = c;
+            alpha[i] = a;
+        }
+    }
+    let n = (w * h) as f64;
+    let count = |l: Label| labels.iter().filter(|x| **x == l).count() as f64 / n;
+    Ok(TeethTexture {
+        rgb,
+        alpha,
+        equalised: eq,
+        report: TeethReport {
+            void_threshold: void_t,
+            gum_threshold: gum_t,
+            shares: [count(Label::Tooth), count(Label::Gum), count(Label::Void)],
+            target,
+            stripes_before: stripes,
+            bbox: [x0, y0, x1, y1],
+            gap_row,
+        },
+        labels,
+    })
+}
+
+fn smooth(a: f32, b: f32, x: f32) -> f32 {
+    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// A synthetic smile for tests and examples: a dark mouth, gums, six upper and six lower teeth
+/// with dark gaps between them, lips around, lit unevenly (brighter on the left). Returns the
+/// image and the true label of each pixel.
+pub fn synthetic_smile(width: usize, height: usize) -> (RgbImage, Vec<Label>) {
+    let mut data = vec![[0.0f32; 3]; width * height];
+    let mut labels = vec![Label::Void; width * height];
+    let (cx, cy) = (width as f32 / 2.0, height as f32 / 2.0);
+    for y in 0..height {
+        for x in 0..width {
+            let (fx, fy) = (
+                (x as f32 + 0.5 - cx) / (0.45 * width as f32),
+                (y as f32 + 0.5 - cy) / (0.4 * height as f32),
+            );
+            let light = 1.25 - 0.5 * (x as f32 / width as f32);
+            let r = fx * fx + fy * fy;
+            let (c, l) = if r > 1.0 {
+                ([0.45, 0.12, 0.12], Label::Gum) // lips
+            } else if fy.abs() < 0.06 {
+                ([0.015, 0.01, 0.01], Label::Void) // the gap
+            } else if fy.abs() > 0.75 {
+                ([0.4, 0.13, 0.14], Label::Gum) // gums
+            } else {
+                let tooth = ((fx + 1.0) * 6.0).fract();
+                if !(0.06..=0.94).contains(&tooth) || fx.abs() > 0.95 {
+                    ([0.02, 0.015, 0.015], Label::Void)
+                } else {
+                    ([0.62, 0.58, 0.48], Label::Tooth)
+                }
+            };
+            data[y * width + x] = c.map(|v| v * light);
+            labels[y * width + x] = l;
+        }
+    }
+    (
+        RgbImage {
+            width,
+            height,
+            data,
+        },
+        labels,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn labels_match_the_synthetic_smile() {
+        let (img, truth) = synthetic_smile(240, 120);
+        let (l, _, _) = label(&img);
+        let agree = l.iter().zip(&truth).filter(|(a, b)| a == b).count() as f64 / l.len() as f64;
+        assert!(agree > 0.97, "agreement {agree}");
+    }
+
+    #[test]
+    fn equalisation_evens_out_the_stripes() {
+        let (img, _) = synthetic_smile(240, 120);
+        let head = derma_head::Head::builtin();
+        let (u, lo) = (
+            &head.part("teeth_upper").unwrap().mesh,
+            &head.part("teeth_lower").unwrap().mesh,
+        );
+        let t = teeth_texture(
+            &img,
+            u,
+            lo,
+            &TeethOptions {
+                size: 256,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        // Before: the left stripe is much brighter than the right (uneven light).
+        let sb = &t.report.stripes_before;
+        assert!(luminance(sb[0]) > 1.3 * luminance(sb[5]));
+        // After: every stripe's mean tooth luminance is within 5 % of the target.
+        let (x0, x1) = (t.report.bbox[0], t.report.bbox[2]);
+        let sw = (x1 - x0 + 1) as f32 / 6.0;
+        for k in 0..6 {
+            let px: Vec<[f32; 3]> = (0..img.width * img.height)
+                .filter(|&i| {
+                    t.labels[i] == Label::Tooth
+                        && (((i % img.width - x0) as f32 / sw) as usize).min(5) == k
+                })
+                .map(|i| t.equalised.data[i])
+                .collect();
+            let m: f32 = px.iter().map(|c| luminance(*c)).sum::<f32>() / px.len() as f32;
+            assert!((m / 0.55 - 1.0).abs() < 0.05, "stripe {k}: {m}");
+        }
+        // Voids became transparent somewhere on the front teeth, and the rest is opaque.
+        assert!(t.alpha.iter().any(|a| *a < 0.5));
+        assert!(t.alpha.iter().filter(|a| **a >= 0.99).count() > t.alpha.len() / 2);
+    }
+
+    #[test]
+    fn a_photo_without_teeth_is_refused() {
+        let img = RgbImage::filled(64, 32, [0.4, 0.12, 0.12]);
+        let head = derma_head::Head::builtin();
+        let (u, lo) = (
+            &head.part("teeth_upper").unwrap().mesh,
+            &head.part("teeth_lower").unwrap().mesh,
+        );
+        let e = teeth_texture(&img, u, lo, &TeethOptions::default())
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("tooth pixels"), "{e}");
+    }
+}
