@@ -17,6 +17,7 @@ pub mod bake;
 pub mod blend;
 pub mod camera;
 pub mod chromophores;
+pub mod correspondences;
 pub mod error;
 pub mod gain;
 pub mod iris;
