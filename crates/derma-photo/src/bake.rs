@@ -3,7 +3,8 @@
 //! the paper's three triangle cases; the one-ring colour fill (80/60/40/20 %) so no region stays
 //! empty; gains solved globally first; then the multiresolution spline with shrunk masks.
 
-use crate::blend::{default_levels, multiband_rgb, Plane};
+use crate::blend::{default_levels, multiband_with, Image, Plane};
+use crate::camera::Prepared;
 use crate::error::{PhotoError, Result};
 use crate::gain::Overlaps;
 use crate::photo::{Photo, RgbImage};
@@ -99,18 +100,17 @@ fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
 
 /// A photo's weight at a surface point with unit normal `n`: ⟨N, V⟩ with a smooth falloff at
 /// grazing angles and at the image border (2 % of its size).
-fn weight(photo: &Photo, p: Vec3, n: Vec3, falloff: [f32; 2]) -> Option<(f32, glam::DVec2)> {
-    let c = photo.camera.centre();
-    let v = (c - p.as_dvec3()).normalize();
+fn weight(cam: &Prepared, p: Vec3, n: Vec3, falloff: [f32; 2]) -> Option<(f32, glam::DVec2)> {
+    let v = (cam.centre - p.as_dvec3()).normalize();
     let cos = n.as_dvec3().dot(v) as f32;
     if cos <= falloff[0] {
         return None;
     }
-    let px = photo.camera.project(p.as_dvec3())?;
-    if !photo.camera.in_image(px) {
+    let px = cam.project(p.as_dvec3())?;
+    if !cam.camera.in_image(px) {
         return None;
     }
-    let (w, h) = (photo.camera.width as f64, photo.camera.height as f64);
+    let (w, h) = (cam.camera.width as f64, cam.camera.height as f64);
     let edge = px.x.min(px.y).min(w - px.x).min(h - px.y) as f32;
     let border = smoothstep(0.0, 0.02 * w.max(h) as f32, edge);
     let wgt = cos * smoothstep(falloff[0], falloff[1], cos) * border;
@@ -262,13 +262,14 @@ pub fn bake(
     let bvh = Bvh::new(&topo.positions, &topo.triangles);
     let extent = mesh.extent();
     let masks = bind(&topo, &wnormals, photos, &bvh, opts.ray_offset * extent);
+    let cams: Vec<Prepared> = photos.iter().map(|p| Prepared::new(&p.camera)).collect();
     // Gains from every vertex seen by two or more photos.
     let samples_at = |v: usize, gains: Option<&[[f32; 3]]>| -> Vec<(usize, [f32; 3], f32)> {
         let p = topo.positions[v];
         (0..photos.len())
             .filter(|i| masks[v] & (1 << i) != 0)
             .filter_map(|i| {
-                let (w, px) = weight(&photos[i], p, wnormals[v], opts.falloff)?;
+                let (w, px) = weight(&cams[i], p, wnormals[v], opts.falloff)?;
                 let mut c = photos[i].image.sample(px);
                 if let Some(g) = gains {
                     for k in 0..3 {
@@ -337,7 +338,7 @@ pub fn bake(
                 let mut b = (SOURCE_INTERPOLATED, 0.0f32);
                 for i in 0..photos.len() {
                     if common & (1 << i) != 0 {
-                        if let Some((w, _)) = weight(&photos[i], c, n, opts.falloff) {
+                        if let Some((w, _)) = weight(&cams[i], c, n, opts.falloff) {
                             if w > b.1 {
                                 b = (i as u8, w);
                             }
@@ -393,19 +394,14 @@ pub fn bake(
         masks[w[0] as usize] & masks[w[1] as usize] & masks[w[2] as usize]
     };
     let sample = |i: usize, k: usize| -> Option<([f32; 3], f32)> {
-        let (w, px) = weight(
-            &photos[k],
-            raster.position[i],
-            texel_normal(i),
-            opts.falloff,
-        )?;
+        let (w, px) = weight(&cams[k], raster.position[i], texel_normal(i), opts.falloff)?;
         let mut c = photos[k].image.sample(px);
         for j in 0..3 {
             c[j] *= gains[k][j];
         }
         Some((c, w))
     };
-    let mut blended = vec![[0.0f32; 3]; n_tex];
+    let mut blended: Vec<[f32; 3]> = crate::blend::zeroed(n_tex);
     let mut source = vec![SOURCE_NONE; n_tex];
     blended
         .par_chunks_mut(size)
@@ -491,10 +487,10 @@ pub fn bake(
                     _ => photos.len(),
                 },
             };
-            mask_planes[k].data[i] = 1.0;
+            mask_planes[k].data[i] = [1.0];
         }
         let levels = opts.levels.unwrap_or_else(|| default_levels(size, size));
-        let out = multiband_rgb(&mask_planes, levels, |k| {
+        let out = multiband_with(&mask_planes, levels, |k| {
             // Image k: photo k's own resampling where it sees the texel, the blend elsewhere;
             // the last image is the blend itself (the complement mask's image).
             let mut img = blended.clone();
@@ -511,10 +507,14 @@ pub fn bake(
                     }
                 });
             }
-            img
+            Image {
+                width: size,
+                height: size,
+                data: img,
+            }
         });
-        for (i, t) in texture.iter_mut().enumerate() {
-            *t = [out[0].data[i], out[1].data[i], out[2].data[i]].map(|v| v.max(0.0));
+        for (t, o) in texture.iter_mut().zip(&out.data) {
+            *t = o.map(|v| v.max(0.0));
         }
         dilate_rgb(&mut texture);
     }

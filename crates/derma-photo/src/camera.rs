@@ -55,6 +55,37 @@ pub fn rotation_vector(m: DMat3) -> [f64; 3] {
     (axis * angle).to_array()
 }
 
+/// A camera with its rotation matrix and centre computed once, for projecting many points.
+#[derive(Clone, Copy, Debug)]
+pub struct Prepared {
+    /// The camera.
+    pub camera: Camera,
+    /// Rotation world → camera.
+    pub rotation: DMat3,
+    /// Translation.
+    pub translation: DVec3,
+    /// Centre in world coordinates.
+    pub centre: DVec3,
+}
+
+impl Prepared {
+    /// Prepares `camera`.
+    pub fn new(camera: &Camera) -> Self {
+        Self {
+            camera: *camera,
+            rotation: camera.rotation_matrix(),
+            translation: DVec3::from(camera.translation),
+            centre: camera.centre(),
+        }
+    }
+
+    /// Pixel of a world point, or `None` behind the camera (as [`Camera::project`]).
+    pub fn project(&self, p: DVec3) -> Option<DVec2> {
+        let c = self.rotation * p + self.translation;
+        (c.z > 1e-9).then(|| self.camera.pixel_of_camera_point(c))
+    }
+}
+
 impl Camera {
     /// A camera at `eye` looking at `target` with `up` roughly up in the image, focal length
     /// `focal_px`, principal point at the image centre and no distortion.

@@ -19,6 +19,7 @@ pub mod camera;
 pub mod chromophores;
 pub mod correspondences;
 pub mod error;
+pub mod files;
 pub mod gain;
 pub mod iris;
 pub mod photo;

@@ -4,6 +4,7 @@
 mod matching;
 mod optics;
 mod output;
+mod photo;
 mod progress;
 mod rig;
 mod rig_args;
@@ -44,6 +45,9 @@ enum Command {
     Rig(rig_args::RigCommand),
     /// Exemplar synthesis: grow skin detail of any size from a small sample (CPU and GPU).
     Synth(synth::SynthArgs),
+    /// Faces from photographs: calibrate, unwrap, bake, iris, teeth, chromophore maps.
+    #[command(subcommand)]
+    Photo(photo::PhotoCommand),
 }
 
 /// `--device`, the same on every command that can use a GPU.
@@ -71,7 +75,7 @@ fn main() {
         0 => "warn",
         1 => "info",
         // Debug output of derma's own crates only (wgpu and naga are very chatty).
-        _ => "info,derma=debug,derma_core=debug,derma_skin=debug,derma_optics=debug,derma_shading=debug,derma_rig=debug,derma_synth=debug",
+        _ => "info,derma=debug,derma_core=debug,derma_skin=debug,derma_optics=debug,derma_shading=debug,derma_rig=debug,derma_synth=debug,derma_photo=debug",
     };
     tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::new(level))
@@ -84,6 +88,7 @@ fn main() {
         Command::Match(cmd) => matching::run(cmd, &bars),
         Command::Rig(cmd) => rig::run(cmd, &bars),
         Command::Synth(args) => synth::run(args, &bars),
+        Command::Photo(cmd) => photo::run(cmd, &bars),
     };
     bars.finish();
     if let Err(e) = result {

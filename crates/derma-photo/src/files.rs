@@ -1,0 +1,474 @@
+//! The photo pipeline from files, as `derma photo …` runs it: each step reads its inputs, checks
+//! that no output would overwrite one, and writes atomically (a temporary name, then a rename).
+//! The built-in head stands in when no mesh is given.
+
+use crate::bake::{bake, BakeOptions, BakeReport, SOURCE_INTERPOLATED, SOURCE_NONE};
+use crate::camera::Camera;
+use crate::chromophores::{fit_exposure, invert, ChromophoreReport};
+use crate::correspondences::{self, exif_focal_px, Surface};
+use crate::error::{PhotoError, Result};
+use crate::iris::{iris_texture, IrisOptions, IrisReport};
+use crate::photo::{Photo, RgbImage};
+use crate::resection::{resect, Resection, ResectionOptions};
+use crate::synthetic;
+use crate::teeth::{teeth_texture, TeethOptions, TeethReport};
+use crate::unwrap::{unwrap, Stretch, UnwrapOptions};
+use derma_core::atomic::{check_inputs_spared, ensure_writable_dir, write_bytes};
+use derma_core::image_io::{write_exr, write_png8, ExrPrecision};
+use derma_core::mesh::TriMesh;
+use derma_core::progress::{Progress, Unit};
+use derma_core::report::pretty_json;
+use derma_core::Map;
+use derma_head::Head;
+use derma_shading::skin_color_lut::SkinColorLut;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// A mesh to work on: a file or the built-in head's face (a disc, see
+/// [`synthetic::face_disc`]) with its landmarks.
+pub enum MeshSource {
+    /// The built-in head's face disc.
+    Builtin,
+    /// A mesh file (OBJ, glTF, GLB), UVs optional.
+    File(PathBuf),
+}
+
+impl MeshSource {
+    /// Loads the mesh (without its UVs requirement).
+    pub fn load(&self) -> Result<TriMesh> {
+        match self {
+            MeshSource::Builtin => synthetic::face_disc(Head::builtin()),
+            MeshSource::File(p) => Ok(TriMesh::load_geometry(p)?),
+        }
+    }
+
+    fn inputs(&self) -> Vec<&Path> {
+        match self {
+            MeshSource::Builtin => vec![],
+            MeshSource::File(p) => vec![p.as_path()],
+        }
+    }
+}
+
+fn json_out(path: &Path, value: &impl Serialize) -> Result<()> {
+    let bytes = pretty_json(value).map_err(|e| PhotoError::Invalid(format!("JSON: {e}")))?;
+    Ok(write_bytes(path, &bytes)?)
+}
+
+/// `cameras.json`: each photo's camera and errors.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CamerasFile {
+    /// One entry per photo.
+    pub photos: Vec<CameraEntry>,
+}
+
+/// One photo of `cameras.json`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CameraEntry {
+    /// The image file (relative to `cameras.json`'s folder when it lies below it).
+    pub image: PathBuf,
+    /// The camera.
+    pub camera: Camera,
+    /// RMS reprojection error of the inliers (pixels).
+    pub rms_px: f64,
+    /// Points flagged as outliers.
+    pub outliers: Vec<String>,
+}
+
+/// Options of [`calibrate`] beyond the resection's.
+pub struct CalibrateInputs<'a> {
+    /// The correspondence file (JSON or CSV).
+    pub correspondences: &'a Path,
+    /// The mesh the 3D points lie on.
+    pub mesh: &'a MeshSource,
+    /// Named landmarks of a file mesh (derma-head's JSON format), if any.
+    pub landmarks: Option<&'a Path>,
+    /// The mesh is in MediaPipe's 468-vertex topology.
+    pub mediapipe_topology: bool,
+    /// Take each photo's focal length from its EXIF when the file does not give one.
+    pub exif: bool,
+}
+
+/// Resects every photo of a correspondence file and writes `out` (cameras.json).
+pub fn calibrate(
+    inp: &CalibrateInputs,
+    opts: &ResectionOptions,
+    out: &Path,
+    progress: &dyn Progress,
+) -> Result<Vec<Resection>> {
+    let mut inputs = inp.mesh.inputs();
+    inputs.push(inp.correspondences);
+    inputs.extend(inp.landmarks);
+    check_inputs_spared(&[out.to_path_buf()], &inputs)?;
+    progress.stage("calibrate cameras", 0, Unit::Steps);
+    let mesh = inp.mesh.load()?;
+    let head = Head::builtin();
+    let file_landmarks = match inp.landmarks {
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .map_err(|e| PhotoError::Invalid(format!("{}: {e}", p.display())))?;
+            Some(
+                derma_head::Landmarks::from_json(&text, 1.0)
+                    .map_err(|e| PhotoError::Invalid(format!("{}: {e}", p.display())))?,
+            )
+        }
+        None => None,
+    };
+    let landmarks = match (&inp.mesh, &file_landmarks) {
+        (_, Some(l)) => Some(l),
+        (MeshSource::Builtin, None) => Some(&head.landmarks),
+        _ => None,
+    };
+    let surface = Surface {
+        mesh: &mesh,
+        landmarks,
+        mediapipe_topology: inp.mediapipe_topology,
+    };
+    let size = |p: &Path| -> Result<(u32, u32)> {
+        let img = RgbImage::read(p)?;
+        Ok((img.width as u32, img.height as u32))
+    };
+    let mut entries = correspondences::read(inp.correspondences, &surface, &size)?;
+    if inp.exif {
+        for e in &mut entries {
+            if e.points.focal_px.is_none() {
+                if let Ok(bytes) = std::fs::read(&e.image) {
+                    e.points.focal_px = exif_focal_px(&bytes, e.points.width, e.points.height);
+                }
+            }
+        }
+    }
+    let photos: Vec<_> = entries.iter().map(|e| e.points.clone()).collect();
+    let res = resect(&photos, opts)?;
+    let dir = out.parent().unwrap_or(Path::new("."));
+    let file = CamerasFile {
+        photos: entries
+            .iter()
+            .zip(&res)
+            .map(|(e, r)| CameraEntry {
+                image: relative(&e.image, dir),
+                camera: r.camera,
+                rms_px: r.rms_px,
+                outliers: r
+                    .points
+                    .iter()
+                    .filter(|p| p.outlier)
+                    .map(|p| p.label.clone())
+                    .collect(),
+            })
+            .collect(),
+    };
+    json_out(out, &file)?;
+    Ok(res)
+}
+
+fn relative(p: &Path, dir: &Path) -> PathBuf {
+    let canon = |x: &Path| std::fs::canonicalize(x).unwrap_or_else(|_| x.to_path_buf());
+    let (cp, cd) = (canon(p), canon(dir));
+    cp.strip_prefix(&cd).map(Path::to_path_buf).unwrap_or(cp)
+}
+
+/// Unwraps a mesh into one chart and writes it as OBJ with UVs.
+pub fn unwrap_file(
+    mesh: &MeshSource,
+    opts: &UnwrapOptions,
+    out: &Path,
+    progress: &dyn Progress,
+) -> Result<(Stretch, Stretch, usize, usize)> {
+    check_inputs_spared(&[out.to_path_buf()], &mesh.inputs())?;
+    progress.stage("unwrap", 0, Unit::Steps);
+    let m = mesh.load()?;
+    let u = unwrap(&m, opts)?;
+    u.mesh.write_obj(out)?;
+    Ok((
+        u.stretch,
+        u.tutte_stretch,
+        u.iterations,
+        u.mesh.triangles.len(),
+    ))
+}
+
+/// Reads `cameras.json` with its images.
+pub fn read_photos(cameras: &Path) -> Result<Vec<Photo>> {
+    let text = std::fs::read_to_string(cameras)
+        .map_err(|e| PhotoError::Invalid(format!("{}: {e}", cameras.display())))?;
+    let file: CamerasFile = serde_json::from_str(&text).map_err(|e| {
+        PhotoError::Invalid(format!(
+            "{}: not a cameras file ({e}); make one with `derma photo calibrate`",
+            cameras.display()
+        ))
+    })?;
+    let dir = cameras.parent().unwrap_or(Path::new("."));
+    file.photos
+        .iter()
+        .map(|e| {
+            let path = dir.join(&e.image);
+            let p = Photo {
+                name: e.image.display().to_string(),
+                image: RgbImage::read(&path)?,
+                camera: e.camera,
+            };
+            p.check()?;
+            Ok(p)
+        })
+        .collect()
+}
+
+/// Bakes a texture from calibrated photos onto a UV-mapped mesh; writes `texture.png` (sRGB),
+/// `texture.exr` (linear), `source.png` (which photo each texel came from) and `bake.json`.
+pub fn bake_files(
+    mesh: &Path,
+    cameras: &Path,
+    opts: &BakeOptions,
+    out_dir: &Path,
+    progress: &dyn Progress,
+) -> Result<BakeReport> {
+    ensure_writable_dir(out_dir)?;
+    let names = ["texture.png", "texture.exr", "source.png", "bake.json"];
+    let outs: Vec<PathBuf> = names.iter().map(|n| out_dir.join(n)).collect();
+    let photos = read_photos(cameras)?;
+    let mut inputs = vec![mesh, cameras];
+    let photo_paths: Vec<PathBuf> = {
+        let text = std::fs::read_to_string(cameras).unwrap_or_default();
+        let file: Option<CamerasFile> = serde_json::from_str(&text).ok();
+        let dir = cameras.parent().unwrap_or(Path::new("."));
+        file.map(|f| f.photos.iter().map(|e| dir.join(&e.image)).collect())
+            .unwrap_or_default()
+    };
+    inputs.extend(photo_paths.iter().map(PathBuf::as_path));
+    check_inputs_spared(&outs, &inputs)?;
+    let m = TriMesh::load(mesh)?;
+    let b = bake(&m, &photos, opts, progress)?;
+    progress.stage("write", 0, Unit::Steps);
+    b.texture.write(&outs[0])?;
+    b.texture.write(&outs[1])?;
+    let n = photos.len().max(1);
+    let src: Vec<f32> = b
+        .source
+        .iter()
+        .map(|s| match *s {
+            SOURCE_NONE => 0.0,
+            SOURCE_INTERPOLATED => 0.15,
+            k => 0.3 + 0.7 * k as f32 / n as f32,
+        })
+        .collect();
+    write_png8(
+        &outs[2],
+        &[&Map::from_vec(b.texture.width, b.texture.height, src)?],
+    )?;
+    json_out(&outs[3], &b.report)?;
+    Ok(b.report)
+}
+
+/// Makes the iris texture of an eye photo; writes `eye.png` (sRGB), `eye.exr`, `iris_polar.png`
+/// and `iris.json`.
+pub fn iris_files(
+    photo: &Path,
+    opts: &IrisOptions,
+    out_dir: &Path,
+    progress: &dyn Progress,
+) -> Result<IrisReport> {
+    ensure_writable_dir(out_dir)?;
+    let outs: Vec<PathBuf> = ["eye.png", "eye.exr", "iris_polar.png", "iris.json"]
+        .iter()
+        .map(|n| out_dir.join(n))
+        .collect();
+    check_inputs_spared(&outs, &[photo])?;
+    progress.stage("iris", 0, Unit::Steps);
+    let img = RgbImage::read(photo)?;
+    let t = iris_texture(&img, opts)?;
+    t.texture.write(&outs[0])?;
+    t.texture.write(&outs[1])?;
+    t.polar.write(&outs[2])?;
+    json_out(&outs[3], &t.report)?;
+    Ok(t.report)
+}
+
+/// Makes the teeth texture of a smile photo for the built-in head's teeth; writes `teeth.png`
+/// (sRGB with alpha), `teeth_equalised.png` and `teeth.json`.
+pub fn teeth_files(
+    photo: &Path,
+    opts: &TeethOptions,
+    out_dir: &Path,
+    progress: &dyn Progress,
+) -> Result<TeethReport> {
+    ensure_writable_dir(out_dir)?;
+    let outs: Vec<PathBuf> = ["teeth.png", "teeth_equalised.png", "teeth.json"]
+        .iter()
+        .map(|n| out_dir.join(n))
+        .collect();
+    check_inputs_spared(&outs, &[photo])?;
+    progress.stage("teeth", 0, Unit::Steps);
+    let img = RgbImage::read(photo)?;
+    let head = Head::builtin();
+    let part = |n: &str| {
+        head.part(n)
+            .map(|p| &p.mesh)
+            .ok_or_else(|| PhotoError::Mesh(format!("the built-in head has no {n}")))
+    };
+    let t = teeth_texture(&img, part("teeth_upper")?, part("teeth_lower")?, opts)?;
+    let s = t.rgb.width;
+    let ch = |c: usize| {
+        Map::from_vec(
+            s,
+            s,
+            t.rgb
+                .data
+                .iter()
+                .map(|p| derma_core::color::srgb_encode(p[c].clamp(0.0, 1.0)))
+                .collect(),
+        )
+    };
+    let alpha = Map::from_vec(s, s, t.alpha.clone())?;
+    write_png8(&outs[0], &[&ch(0)?, &ch(1)?, &ch(2)?, &alpha])?;
+    t.equalised.write(&outs[1])?;
+    json_out(&outs[2], &t.report)?;
+    Ok(t.report)
+}
+
+/// Turns a baked texture into melanin and hemoglobin maps; writes `melanin.exr`,
+/// `hemoglobin.exr` (the channels `derma rig` and `derma skin` read), `residual.exr` (ΔE*ab)
+/// and `chromophores.json`. `exposure`: `None` fits it.
+pub fn chromophore_files(
+    texture: &Path,
+    mask: Option<&Path>,
+    exposure: Option<f64>,
+    out_dir: &Path,
+    progress: &dyn Progress,
+) -> Result<ChromophoreReport> {
+    use derma_optics::bio::names;
+    ensure_writable_dir(out_dir)?;
+    let outs: Vec<PathBuf> = [
+        "melanin.exr",
+        "hemoglobin.exr",
+        "residual.exr",
+        "chromophores.json",
+    ]
+    .iter()
+    .map(|n| out_dir.join(n))
+    .collect();
+    let mut inputs = vec![texture];
+    inputs.extend(mask);
+    check_inputs_spared(&outs, &inputs)?;
+    progress.stage("invert the skin-colour LUT", 0, Unit::Steps);
+    let tex = RgbImage::read(texture)?;
+    let m: Option<Vec<bool>> = match mask {
+        Some(p) => {
+            let g = derma_core::image_io::read_grey(p)?;
+            let g = &g.channels[0];
+            if (g.width(), g.height()) != (tex.width, tex.height) {
+                return Err(PhotoError::Invalid(format!(
+                    "mask {} is {}×{}; the texture is {}×{}",
+                    p.display(),
+                    g.width(),
+                    g.height(),
+                    tex.width,
+                    tex.height
+                )));
+            }
+            Some(g.data().iter().map(|v| *v > 0.5).collect())
+        }
+        None => None,
+    };
+    let lut = SkinColorLut::builtin();
+    let e = match exposure {
+        Some(e) => e,
+        None => {
+            let sel: Vec<[f32; 3]> = tex
+                .data
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| m.as_ref().is_none_or(|m| m[*i]))
+                .map(|(_, c)| *c)
+                .collect();
+            fit_exposure(&lut, &sel)
+        }
+    };
+    let c = invert(&lut, &tex, m.as_deref(), e)?;
+    write_exr(&outs[0], &[(names::MELANIN, &c.melanin)], ExrPrecision::F32)?;
+    write_exr(
+        &outs[1],
+        &[(names::HEMOGLOBIN, &c.hemoglobin)],
+        ExrPrecision::F32,
+    )?;
+    write_exr(&outs[2], &[("delta_e", &c.residual)], ExrPrecision::F32)?;
+    json_out(&outs[3], &c.report)?;
+    Ok(c.report)
+}
+
+/// Settings of [`synthetic_set`].
+#[derive(Clone, Copy, Debug)]
+pub struct SyntheticOptions {
+    /// Photo width (height is ¾ of it).
+    pub width: u32,
+    /// Landmark noise (pixels, per axis).
+    pub noise_px: f64,
+    /// Seed of the freckles and the noise.
+    pub seed: u64,
+}
+
+/// Writes a synthetic photo set of the built-in head's face: `face.obj` (no UVs),
+/// `photoN.png` from five cameras (varied light, exposure, white balance, vignetting),
+/// `points.json` (clicked feature points, 1.5 px noise), and `truth.json` (the true cameras).
+pub fn synthetic_set(
+    opts: &SyntheticOptions,
+    out_dir: &Path,
+    progress: &dyn Progress,
+) -> Result<()> {
+    ensure_writable_dir(out_dir)?;
+    let head = Head::builtin();
+    let lut = SkinColorLut::builtin();
+    let views = synthetic::default_views();
+    progress.stage("render synthetic photos", views.len() as u64, Unit::Steps);
+    let mesh = synthetic::face_disc(head)?;
+    let mut face = mesh.clone();
+    face.uvs.clear();
+    face.write_obj(&out_dir.join("face.obj"))?;
+    let bvh = derma_core::bvh::Bvh::new(&mesh.positions, &mesh.triangles);
+    let seed = opts.seed;
+    let albedo = move |p: glam::Vec3| {
+        let (m, h) = synthetic::chromophores_at(p, seed);
+        lut.lookup(m as f64, h as f64).map(|v| v as f32)
+    };
+    let feats = synthetic::feature_points(head, &mesh);
+    let (w, h) = (opts.width, opts.width * 3 / 4);
+    let mut photos_json = Vec::new();
+    let mut truth = Vec::new();
+    for (i, v) in views.iter().enumerate() {
+        let cam = synthetic::camera_for(head, v, w, h, 550.0);
+        let img = synthetic::render(&mesh, &bvh, &cam, v, &albedo);
+        let name = format!("photo{i}.png");
+        img.write(&out_dir.join(&name))?;
+        let pts = synthetic::clicked_points(
+            &feats,
+            &bvh,
+            &cam,
+            &name,
+            opts.noise_px,
+            seed * 1000 + i as u64,
+        );
+        photos_json.push(serde_json::json!({
+            "image": name,
+            "width": w,
+            "height": h,
+            "points": pts.points.iter().map(|c| {
+                if c.label.starts_with('v') {
+                    serde_json::json!({"world": c.world.to_array(), "pixel": c.pixel.to_array()})
+                } else {
+                    serde_json::json!({"name": c.label, "pixel": c.pixel.to_array()})
+                }
+            }).collect::<Vec<_>>(),
+        }));
+        truth.push(serde_json::json!({"image": name, "camera": cam}));
+        progress.advance(1);
+    }
+    json_out(
+        &out_dir.join("points.json"),
+        &serde_json::json!({"photos": photos_json}),
+    )?;
+    json_out(
+        &out_dir.join("truth.json"),
+        &serde_json::json!({"photos": truth}),
+    )?;
+    Ok(())
+}
