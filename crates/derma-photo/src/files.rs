@@ -215,7 +215,8 @@ pub fn read_photos(cameras: &Path) -> Result<Vec<Photo>> {
 }
 
 /// Bakes a texture from calibrated photos onto a UV-mapped mesh; writes `texture.png` (sRGB),
-/// `texture.exr` (linear), `source.png` (which photo each texel came from) and `bake.json`.
+/// `texture.exr` (linear), `source.png` (which photo each texel came from), `mask.png` (texels
+/// coloured from photos: the input of `derma photo chromophores --mask`) and `bake.json`.
 pub fn bake_files(
     mesh: &Path,
     cameras: &Path,
@@ -224,7 +225,13 @@ pub fn bake_files(
     progress: &dyn Progress,
 ) -> Result<BakeReport> {
     ensure_writable_dir(out_dir)?;
-    let names = ["texture.png", "texture.exr", "source.png", "bake.json"];
+    let names = [
+        "texture.png",
+        "texture.exr",
+        "source.png",
+        "bake.json",
+        "mask.png",
+    ];
     let outs: Vec<PathBuf> = names.iter().map(|n| out_dir.join(n)).collect();
     let photos = read_photos(cameras)?;
     let mut inputs = vec![mesh, cameras];
@@ -257,6 +264,15 @@ pub fn bake_files(
         &[&Map::from_vec(b.texture.width, b.texture.height, src)?],
     )?;
     json_out(&outs[3], &b.report)?;
+    let mask: Vec<f32> = b
+        .source
+        .iter()
+        .map(|s| ((*s as usize) < photos.len()) as u8 as f32)
+        .collect();
+    write_png8(
+        &outs[4],
+        &[&Map::from_vec(b.texture.width, b.texture.height, mask)?],
+    )?;
     Ok(b.report)
 }
 
