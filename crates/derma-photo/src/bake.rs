@@ -81,6 +81,8 @@ pub struct BakeReport {
     pub unbound_vertices: usize,
     /// Share of the chart's texels coloured from photos directly (case 1).
     pub photo_coverage: f64,
+    /// Wall-clock seconds of the stages: binding and gains, resampling, spline blending.
+    pub seconds: [f64; 3],
 }
 
 /// A baked texture.
@@ -245,6 +247,7 @@ pub fn bake(
         p.check()?;
     }
     let size = opts.size;
+    let t0 = std::time::Instant::now();
     progress.stage("bind vertices to photos", 0, Unit::Steps);
     let topo = Topology::new(mesh)?;
     let mut wnormals = vec![Vec3::ZERO; topo.positions.len()];
@@ -355,6 +358,7 @@ pub fn bake(
             }
         })
         .collect();
+    let t_bind = t0.elapsed().as_secs_f64();
     progress.stage("resample texels", 0, Unit::Steps);
     let raster = UvRaster::new(mesh, size, size);
     let n_tex = size * size;
@@ -447,6 +451,7 @@ pub fn bake(
         }
     };
     dilate_rgb(&mut blended);
+    let t_resample = t0.elapsed().as_secs_f64() - t_bind;
     let mut texture = blended.clone();
     if opts.multiband && photos.len() > 1 {
         progress.stage("multiresolution spline", 0, Unit::Steps);
@@ -476,43 +481,53 @@ pub fn bake(
                 }
             })
             .collect();
-        let mut mask_planes: Vec<Plane> = (0..=photos.len())
-            .map(|_| Plane::new(size, size, vec![0.0; n_tex]))
-            .collect();
-        for i in 0..n_tex {
-            let k = match raster.triangle[i] {
-                NO_TRIANGLE => photos.len(),
+        // Each texel's mask: its triangle's shrunk region, else the complement (the last).
+        let label: Vec<u8> = (0..n_tex)
+            .into_par_iter()
+            .map(|i| match raster.triangle[i] {
+                NO_TRIANGLE => photos.len() as u8,
                 t => match tri_mask[t as usize] {
-                    m if (m as usize) < photos.len() => m as usize,
-                    _ => photos.len(),
+                    m if (m as usize) < photos.len() => m,
+                    _ => photos.len() as u8,
                 },
-            };
-            mask_planes[k].data[i] = [1.0];
-        }
+            })
+            .collect();
         let levels = opts.levels.unwrap_or_else(|| default_levels(size, size));
-        let out = multiband_with(&mask_planes, levels, |k| {
-            // Image k: photo k's own resampling where it sees the texel, the blend elsewhere;
-            // the last image is the blend itself (the complement mask's image).
-            let mut img = blended.clone();
-            if k < photos.len() {
-                img.par_chunks_mut(size).enumerate().for_each(|(y, row)| {
-                    for x in 0..size {
-                        let i = y * size + x;
-                        if raster.triangle[i] == NO_TRIANGLE || common_of(i) & (1 << k) == 0 {
-                            continue;
-                        }
-                        if let Some((c, _)) = sample(i, k) {
-                            row[x] = c;
-                        }
-                    }
-                });
-            }
-            Image {
-                width: size,
-                height: size,
-                data: img,
-            }
-        });
+        let mask = |k: usize, m: &mut Plane| {
+            m.data
+                .par_iter_mut()
+                .zip(&label)
+                .for_each(|(v, l)| v[0] = (*l as usize == k) as u8 as f32);
+        };
+        let out = multiband_with(
+            size,
+            size,
+            photos.len() + 1,
+            levels,
+            mask,
+            |k, img: &mut Image<3>| {
+                // Image k: photo k's own resampling where it sees the texel, the blend elsewhere;
+                // the last image is the blend itself (the complement mask's image).
+                img.data.copy_from_slice(&blended);
+                if k < photos.len() {
+                    img.data
+                        .par_chunks_mut(size)
+                        .enumerate()
+                        .for_each(|(y, row)| {
+                            for x in 0..size {
+                                let i = y * size + x;
+                                if raster.triangle[i] == NO_TRIANGLE || common_of(i) & (1 << k) == 0
+                                {
+                                    continue;
+                                }
+                                if let Some((c, _)) = sample(i, k) {
+                                    row[x] = c;
+                                }
+                            }
+                        });
+                }
+            },
+        );
         for (t, o) in texture.iter_mut().zip(&out.data) {
             *t = o.map(|v| v.max(0.0));
         }
@@ -539,6 +554,11 @@ pub fn bake(
         triangle_cases: cases,
         unbound_vertices: unbound,
         photo_coverage,
+        seconds: [
+            t_bind,
+            t_resample,
+            t0.elapsed().as_secs_f64() - t_bind - t_resample,
+        ],
     };
     Ok(Baked {
         texture: RgbImage {

@@ -66,56 +66,95 @@ fn madd<const C: usize>(acc: &mut [f32; C], k: f32, v: &[f32; C]) {
 
 /// REDUCE: blur with the 5-tap kernel and keep every second sample (borders clamped).
 pub fn reduce<const C: usize>(p: &Image<C>) -> Image<C> {
+    let mut out = Image::zeros(p.width.div_ceil(2), p.height.div_ceil(2));
+    reduce_into(p, &mut out, &mut Vec::new());
+    out
+}
+
+/// [`reduce`] into `out` (of the halved size), with `tmp` as scratch (grown as needed).
+fn reduce_into<const C: usize>(p: &Image<C>, out: &mut Image<C>, tmp: &mut Vec<[f32; C]>) {
     let (w, h) = (p.width, p.height);
     let (w2, h2) = (w.div_ceil(2), h.div_ceil(2));
+    assert_eq!((out.width, out.height), (w2, h2));
+    if tmp.len() < w * h2 {
+        *tmp = zeroed(w * h2);
+    }
     // Vertical pass on every second row, then horizontal on every second column.
-    let mut tmp: Vec<[f32; C]> = zeroed(w * h2);
-    tmp.par_chunks_mut(w).enumerate().for_each(|(y2, row)| {
-        let y = 2 * y2 as isize;
-        for (k, kv) in KERNEL.iter().enumerate() {
-            let yi = (y + k as isize - 2).clamp(0, h as isize - 1) as usize;
-            let src = &p.data[yi * w..(yi + 1) * w];
-            for (o, s) in row.iter_mut().zip(src) {
-                madd(o, *kv, s);
+    tmp[..w * h2]
+        .par_chunks_mut(w)
+        .enumerate()
+        .for_each(|(y2, row)| {
+            let y = 2 * y2 as isize;
+            row.fill([0.0; C]);
+            for (k, kv) in KERNEL.iter().enumerate() {
+                let yi = (y + k as isize - 2).clamp(0, h as isize - 1) as usize;
+                let src = &p.data[yi * w..(yi + 1) * w];
+                for (o, s) in row.iter_mut().zip(src) {
+                    madd(o, *kv, s);
+                }
             }
-        }
-    });
-    let mut out = Image::zeros(w2, h2);
+        });
+    let tmp = &tmp[..w * h2];
     out.data
         .par_chunks_mut(w2)
         .enumerate()
         .for_each(|(y2, row)| {
             let src = &tmp[y2 * w..(y2 + 1) * w];
+            let at = |x: isize| &src[x.clamp(0, w as isize - 1) as usize];
             for (x2, o) in row.iter_mut().enumerate() {
-                let x = 2 * x2 as isize;
-                for (k, kv) in KERNEL.iter().enumerate() {
-                    let xi = (x + k as isize - 2).clamp(0, w as isize - 1) as usize;
-                    madd(o, *kv, &src[xi]);
+                let x = 2 * x2;
+                let mut acc = [0.0f32; C];
+                if x >= 2 && x + 2 < w {
+                    // Interior: no clamping.
+                    for (k, kv) in KERNEL.iter().enumerate() {
+                        madd(&mut acc, *kv, &src[x + k - 2]);
+                    }
+                } else {
+                    for (k, kv) in KERNEL.iter().enumerate() {
+                        madd(&mut acc, *kv, at(x as isize + k as isize - 2));
+                    }
                 }
+                *o = acc;
             }
         });
-    out
 }
 
 /// EXPAND `p` to `into`'s size by interpolating with the kernel (×4 gain on the inserted zeros,
 /// ×2 per axis) and add `sign` × the result to `into`.
-fn expand_into<const C: usize>(p: &Image<C>, into: &mut Image<C>, sign: f32) {
+fn expand_into<const C: usize>(
+    p: &Image<C>,
+    into: &mut Image<C>,
+    sign: f32,
+    tmp: &mut Vec<[f32; C]>,
+) {
     let (w, h) = (p.width, p.height);
     let width = into.width;
-    // Horizontal: out[x] = 2 Σ_k K[k] in[(x − k + 2)/2] over integer positions.
-    let mut tmp: Vec<[f32; C]> = zeroed(width * h);
-    tmp.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
-        let src = &p.data[y * w..(y + 1) * w];
-        for (x, out) in row.iter_mut().enumerate() {
-            for (k, kv) in KERNEL.iter().enumerate() {
-                let t = x as isize - k as isize + 2;
-                if t % 2 == 0 {
-                    let xi = (t / 2).clamp(0, w as isize - 1) as usize;
-                    madd(out, 2.0 * kv, &src[xi]);
+    if tmp.len() < width * h {
+        *tmp = zeroed(width * h);
+    }
+    // Horizontal: out[x] = 2 Σ_k K[k] in[(x − k + 2)/2] over integer positions: even x take
+    // K0, K2, K4 at x/2 + 1, x/2, x/2 − 1; odd x take K1, K3 at (x + 1)/2, (x − 1)/2.
+    tmp[..width * h]
+        .par_chunks_mut(width)
+        .enumerate()
+        .for_each(|(y, row)| {
+            let src = &p.data[y * w..(y + 1) * w];
+            let at = |i: isize| &src[i.clamp(0, w as isize - 1) as usize];
+            for (x, out) in row.iter_mut().enumerate() {
+                let mut acc = [0.0f32; C];
+                let half = (x / 2) as isize;
+                if x % 2 == 0 {
+                    madd(&mut acc, 2.0 * KERNEL[2], at(half));
+                    madd(&mut acc, 2.0 * KERNEL[0], at(half + 1));
+                    madd(&mut acc, 2.0 * KERNEL[4], at(half - 1));
+                } else {
+                    madd(&mut acc, 2.0 * KERNEL[1], at(half + 1));
+                    madd(&mut acc, 2.0 * KERNEL[3], at(half));
                 }
+                *out = acc;
             }
-        }
-    });
+        });
+    let tmp = &tmp[..width * h];
     into.data
         .par_chunks_mut(width)
         .enumerate()
@@ -137,7 +176,7 @@ fn expand_into<const C: usize>(p: &Image<C>, into: &mut Image<C>, sign: f32) {
 /// EXPAND: upsample `p` to `width` × `height` by interpolating with the kernel.
 pub fn expand<const C: usize>(p: &Image<C>, width: usize, height: usize) -> Image<C> {
     let mut out = Image::zeros(width, height);
-    expand_into(p, &mut out, 1.0);
+    expand_into(p, &mut out, 1.0, &mut Vec::new());
     out
 }
 
@@ -162,88 +201,114 @@ pub fn default_levels(width: usize, height: usize) -> usize {
     n
 }
 
-/// Gaussian pyramids of `masks`, normalised to sum 1 per pixel at every level; where no mask
-/// covers a pixel at some level the last mask (the complement) takes it.
-fn mask_pyramids(masks: &[Plane], levels: usize) -> Vec<Vec<Plane>> {
-    let mut pyr: Vec<Vec<Plane>> = masks
-        .iter()
-        .map(|m| gaussian_pyramid(m.clone(), levels))
-        .collect();
-    let last = pyr.len() - 1;
-    for l in 0..levels {
-        let n = pyr[0][l].data.len();
-        let sums: Vec<f32> = (0..n)
-            .into_par_iter()
-            .map(|i| pyr.iter().map(|p| p[l].data[i][0]).sum::<f32>())
-            .collect();
-        for (k, p) in pyr.iter_mut().enumerate() {
-            p[l].data.par_iter_mut().zip(&sums).for_each(|(v, s)| {
-                v[0] = if *s > 1e-12 {
-                    v[0] / s
-                } else {
-                    (k == last) as u8 as f32
-                };
-            });
-        }
-    }
-    pyr
-}
-
-/// Adds image `img`'s Laplacian pyramid weighted by its mask pyramid `mp` into `acc`.
-fn accumulate<const C: usize>(img: Image<C>, mp: &[Plane], acc: &mut [Image<C>]) {
+/// Adds the Laplacian pyramid of the image in `g[0]` (its Gaussian levels built in `g`, then
+/// turned into Laplacian levels in place) weighted by its mask pyramid `mp` into `acc`.
+fn accumulate<const C: usize>(
+    g: &mut [Image<C>],
+    mp: &[Plane],
+    acc: &mut [Image<C>],
+    tmp: &mut Vec<[f32; C]>,
+) {
     let levels = acc.len();
-    let mut g = gaussian_pyramid(img, levels);
+    build_gaussian(g, tmp);
     for l in 0..levels {
         // Laplacian level in place: G_l − EXPAND(G_{l+1}) (G_{l+1} still Gaussian); the top
-        // level is G_top itself. Level l is freed once added.
+        // level is G_top itself.
         let (lo, hi) = g.split_at_mut(l + 1);
         if let Some(next) = hi.first() {
-            expand_into(next, &mut lo[l], -1.0);
+            expand_into(next, &mut lo[l], -1.0, tmp);
         }
-        let gl = std::mem::replace(&mut lo[l], Image::zeros(0, 0));
         acc[l]
             .data
             .par_iter_mut()
-            .zip(&gl.data)
+            .zip(&lo[l].data)
             .zip(&mp[l].data)
             .for_each(|((a, v), m)| madd(a, m[0], v));
     }
 }
 
-fn collapse<const C: usize>(mut acc: Vec<Image<C>>) -> Image<C> {
+fn collapse<const C: usize>(mut acc: Vec<Image<C>>, tmp: &mut Vec<[f32; C]>) -> Image<C> {
     let mut out = acc.pop().expect("a level");
     while let Some(mut level) = acc.pop() {
-        expand_into(&out, &mut level, 1.0);
+        expand_into(&out, &mut level, 1.0, tmp);
         out = level;
     }
     out
 }
 
-fn zero_pyramid<const C: usize>(like: &[Plane]) -> Vec<Image<C>> {
-    like.iter()
-        .map(|p| Image::zeros(p.width, p.height))
-        .collect()
+/// Zero images of a pyramid's level sizes.
+fn zero_pyramid<const C: usize>(width: usize, height: usize, levels: usize) -> Vec<Image<C>> {
+    let mut out = Vec::with_capacity(levels);
+    let (mut w, mut h) = (width, height);
+    for _ in 0..levels {
+        out.push(Image::zeros(w, h));
+        w = w.div_ceil(2);
+        h = h.div_ceil(2);
+    }
+    out
+}
+
+/// Fills levels 1… of `g` by REDUCE from level 0.
+fn build_gaussian<const C: usize>(g: &mut [Image<C>], tmp: &mut Vec<[f32; C]>) {
+    for l in 1..g.len() {
+        let (lo, hi) = g.split_at_mut(l);
+        reduce_into(&lo[l - 1], &mut hi[0], tmp);
+    }
 }
 
 /// Blends `images` by `masks` (same size, ≥ 0; normalised per pixel and level here, the last
 /// mask taking pixels none covers) with a multiresolution spline of `levels` levels.
 pub fn multiband(images: &[&Plane], masks: &[Plane], levels: usize) -> Plane {
-    multiband_with(masks, levels, |k| images[k].clone())
+    assert_eq!(images.len(), masks.len());
+    let (w, h) = (masks[0].width, masks[0].height);
+    // Normalise at full resolution (the last mask takes pixels none covers); REDUCE is linear
+    // and keeps constants, so the sum stays 1 at every level.
+    let sums: Vec<f32> = (0..w * h)
+        .map(|i| masks.iter().map(|m| m.data[i][0]).sum())
+        .collect();
+    let last = masks.len() - 1;
+    multiband_with(
+        w,
+        h,
+        masks.len(),
+        levels,
+        |k, out| {
+            for (i, o) in out.data.iter_mut().enumerate() {
+                o[0] = if sums[i] > 1e-12 {
+                    masks[k].data[i][0] / sums[i]
+                } else {
+                    (k == last) as u8 as f32
+                };
+            }
+        },
+        |k, out| out.data.copy_from_slice(&images[k].data),
+    )
 }
 
-/// [`multiband`] for images made one at a time by `image(k)` (the masks' size), so that only
-/// one image and its pyramid are in memory at once.
+/// The spline of `n` images of `width` × `height`, each image and its mask written one at a
+/// time by `image(k, out)` and `mask(k, out)`; the masks must sum to 1 at every pixel (then
+/// their Gaussian pyramids do at every level, REDUCE being linear). One image's and one mask's
+/// pyramid are in memory at once, in buffers reused for the next (fresh pages cost more than
+/// the filtering: the kernel zeroes every one).
 pub fn multiband_with<const C: usize>(
-    masks: &[Plane],
+    width: usize,
+    height: usize,
+    n: usize,
     levels: usize,
-    image: impl Fn(usize) -> Image<C>,
+    mask: impl Fn(usize, &mut Plane),
+    image: impl Fn(usize, &mut Image<C>),
 ) -> Image<C> {
-    let mp = mask_pyramids(masks, levels);
-    let mut acc: Vec<Image<C>> = zero_pyramid(&mp[0]);
-    for (k, m) in mp.iter().enumerate() {
-        accumulate(image(k), m, &mut acc);
+    let mut acc: Vec<Image<C>> = zero_pyramid(width, height, levels);
+    let mut g: Vec<Image<C>> = zero_pyramid(width, height, levels);
+    let mut mp: Vec<Plane> = zero_pyramid(width, height, levels);
+    let (mut tmp, mut mtmp) = (Vec::new(), Vec::new());
+    for k in 0..n {
+        mask(k, &mut mp[0]);
+        build_gaussian(&mut mp, &mut mtmp);
+        image(k, &mut g[0]);
+        accumulate(&mut g, &mp, &mut acc, &mut tmp);
     }
-    collapse(acc)
+    collapse(acc, &mut tmp)
 }
 
 #[cfg(test)]
