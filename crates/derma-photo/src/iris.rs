@@ -201,6 +201,43 @@ fn refine_circle(img: &RgbImage, c: DVec2, r: f64, sclera_thr: f32) -> (DVec2, f
     }
 }
 
+/// Saturation (max − min)/max of a colour.
+fn saturation(c: [f32; 3]) -> f32 {
+    let (mx, mn) = (c[0].max(c[1]).max(c[2]), c[0].min(c[1]).min(c[2]));
+    if mx > 0.0 {
+        (mx - mn) / mx
+    } else {
+        0.0
+    }
+}
+
+/// The sclera beside the iris: of the samples 1.05–1.8 R within 25° of the horizontal (where
+/// the lids leave the sclera visible), the fifth that is brightest and least saturated. When
+/// even those are skin-saturated (a narrow eye in a small photo), derma-head's default sclera
+/// stands in, tinted by the photo's light.
+fn sclera_colour(img: &RgbImage, c: DVec2, radius: f64) -> [f32; 3] {
+    let mut s: Vec<[f32; 3]> = Vec::new();
+    for side in [0.0f64, 180.0] {
+        for a in -5..=5 {
+            let t = (side + 5.0 * a as f64).to_radians();
+            for k in 0..8 {
+                let r = radius * (1.05 + 0.75 * k as f64 / 7.0);
+                s.push(img.sample(c + r * DVec2::new(t.cos(), t.sin())));
+            }
+        }
+    }
+    s.sort_by(|a, b| (lum(*b) - 2.0 * saturation(*b)).total_cmp(&(lum(*a) - 2.0 * saturation(*a))));
+    let top = &s[..(s.len() / 5).max(1)];
+    let mean: [f32; 3] =
+        std::array::from_fn(|k| top.iter().map(|c| c[k]).sum::<f32>() / top.len() as f32);
+    if saturation(mean) <= 0.3 {
+        return mean;
+    }
+    let d = derma_head::eye::default_albedo(Vec2::new(0.5 + 0.2, 0.5));
+    let l = lum(mean).max(0.05) / lum([d.x, d.y, d.z]).max(0.05);
+    [d.x * l, d.y * l, d.z * l]
+}
+
 /// Polar samples of the iris: `nr` radii from `r0` to `r1`, `na` angles (row = angle).
 fn polar(img: &RgbImage, c: DVec2, r0: f64, r1: f64, nr: usize, na: usize) -> Vec<[f32; 3]> {
     let mut out = Vec::with_capacity(nr * na);
@@ -246,23 +283,27 @@ pub fn iris_texture(img: &RgbImage, opts: &IrisOptions) -> Result<IrisTexture> {
         v[24]
     };
     let (l0, l1) = (ring(0.05 * radius), ring(0.7 * radius));
-    let mut pupil = 0.2 * radius;
-    for k in 1..60 {
-        let r = radius * k as f64 / 100.0;
-        if ring(r) > 0.5 * (l0 + l1) {
-            pupil = r;
-            break;
+    // Without a visible pupil (dark irises, small photos: under 15 % contrast), the texture's
+    // own pupil-to-iris ratio (4 mm in 11.7 mm) stands in.
+    let mut pupil = radius * (PUPIL_UV_RADIUS / IRIS_UV_RADIUS) as f64;
+    if l1 > 1.15 * l0 {
+        for k in 5..60 {
+            let r = radius * k as f64 / 100.0;
+            if ring(r) > 0.5 * (l0 + l1) {
+                pupil = r;
+                break;
+            }
         }
     }
     // Polar image of the iris, pupil edge to limbus: radius samples at the photo's resolution.
     let nr = ((radius - pupil).round() as usize).clamp(4, 256);
     let na = ((std::f64::consts::TAU * radius).round() as usize).clamp(32, 2048);
     let samples = polar(img, c, pupil, radius * 0.97, nr, na);
-    // Skin colour: the median colour of the ring 1.4–2 R that is not sclera (the darker half).
+    // Skin colour: the lower quartile (by luminance) of the ring 1.4–2 R, mostly lids.
     let mut outer: Vec<[f32; 3]> = polar(img, c, 1.4 * radius, 2.0 * radius, 8, 96);
     outer.sort_by(|a, b| lum(*a).total_cmp(&lum(*b)));
     let skin = outer[outer.len() / 4];
-    let sclera = outer[outer.len() * 9 / 10];
+    let sclera = sclera_colour(img, c, radius);
     let mut valid: Vec<bool> = samples
         .iter()
         .map(|s| dist2(*s, skin) > 0.25 * dist2(skin, [0.0; 3]).max(1e-6) * 0.25)
@@ -330,11 +371,31 @@ pub fn iris_texture(img: &RgbImage, opts: &IrisOptions) -> Result<IrisTexture> {
     let rng = Philox::new(opts.seed, 31);
     // The neighbourhood: 3 × 6 (radius × angle) for an 80-px iris diameter, scaled (§4.1).
     let k_ang = ((6.0 * 2.0 * radius / 80.0).round() as usize).clamp(2, 16);
+    // Per-radius means of the valid samples, to stand in for the few removed samples a
+    // reference row may still hold (highlights, lash shadows).
+    let radius_mean: Vec<[f32; 3]> = (0..nr)
+        .map(|i| {
+            let col: Vec<[f32; 3]> = (0..na)
+                .filter(|a| valid[a * nr + i])
+                .map(|a| samples[a * nr + i])
+                .collect();
+            let n = col.len().max(1) as f32;
+            std::array::from_fn(|k| col.iter().map(|c| c[k]).sum::<f32>() / n)
+        })
+        .collect();
     let (out_rows, synthesis) = if sector_deg >= opts.min_sector_deg as f64 {
         let reference: Vec<Vec<[f32; 3]>> = (0..sector_cols)
             .map(|j| {
                 let a = (best_start + j) % na;
-                (0..nr).map(|i| samples[a * nr + i]).collect()
+                (0..nr)
+                    .map(|i| {
+                        if valid[a * nr + i] {
+                            samples[a * nr + i]
+                        } else {
+                            radius_mean[i]
+                        }
+                    })
+                    .collect()
             })
             .collect();
         (
