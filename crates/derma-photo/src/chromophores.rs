@@ -220,6 +220,16 @@ pub fn fit_exposure(lut: &SkinColorLut, texels: &[[f32; 3]]) -> f64 {
     (0.5 * (a + b)).exp()
 }
 
+/// One texel's inversion.
+#[derive(Clone, Copy, Default)]
+struct Texel {
+    melanin: f32,
+    hemoglobin: f32,
+    delta_e: f32,
+    clamped: bool,
+    used: bool,
+}
+
 /// Inverts the LUT for every texel where `mask` holds (all when `None`), after dividing the
 /// texture by `exposure`. Texels outside the mask get C_m = C_hd = 0 and residual 0.
 pub fn invert(
@@ -247,25 +257,25 @@ pub fn invert(
     let t = LabTable { lut };
     let coarse = coarse_grid(&t);
     let o = &lut.options;
-    let res: Vec<(f32, f32, f32, bool, bool)> = (0..n)
+    let res: Vec<Texel> = (0..n)
         .into_par_iter()
         .map(|i| {
             if mask.is_some_and(|m| !m[i]) {
-                return (0.0, 0.0, 0.0, false, false);
+                return Texel::default();
             }
             let c = texture.data[i].map(|x| x as f64 / exposure);
             let (u, v, de, clamped) = invert_one(&t, lab_of(c), &coarse);
-            (
-                (u.powi(3) * o.melanin_max) as f32,
-                (v.powi(3) * o.blood_max) as f32,
-                de as f32,
+            Texel {
+                melanin: (u.powi(3) * o.melanin_max) as f32,
+                hemoglobin: (v.powi(3) * o.blood_max) as f32,
+                delta_e: de as f32,
                 clamped,
-                true,
-            )
+                used: true,
+            }
         })
         .collect();
-    let used: Vec<&(f32, f32, f32, bool, bool)> = res.iter().filter(|r| r.4).collect();
-    let mut de: Vec<f64> = used.iter().map(|r| r.2 as f64).collect();
+    let used: Vec<&Texel> = res.iter().filter(|r| r.used).collect();
+    let mut de: Vec<f64> = used.iter().map(|r| r.delta_e as f64).collect();
     de.sort_by(f64::total_cmp);
     let pct = |p: f64| {
         de.get(((de.len() as f64 - 1.0) * p).round() as usize)
@@ -276,16 +286,16 @@ pub fn invert(
         exposure,
         median_delta_e: pct(0.5),
         p95_delta_e: pct(0.95),
-        clamped_share: used.iter().filter(|r| r.3).count() as f64 / used.len().max(1) as f64,
+        clamped_share: used.iter().filter(|r| r.clamped).count() as f64 / used.len().max(1) as f64,
         texels: used.len(),
     };
-    let map = |f: &dyn Fn(&(f32, f32, f32, bool, bool)) -> f32| {
+    let map = |f: fn(&Texel) -> f32| {
         Map::from_vec(texture.width, texture.height, res.iter().map(f).collect())
     };
     Ok(Chromophores {
-        melanin: map(&|r| r.0)?,
-        hemoglobin: map(&|r| r.1)?,
-        residual: map(&|r| r.2)?,
+        melanin: map(|r| r.melanin)?,
+        hemoglobin: map(|r| r.hemoglobin)?,
+        residual: map(|r| r.delta_e)?,
         report,
     })
 }
