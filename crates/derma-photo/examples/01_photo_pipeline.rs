@@ -9,7 +9,7 @@ use derma_photo::bake::{bake, BakeOptions};
 use derma_photo::chromophores::invert;
 use derma_photo::photo::Photo;
 use derma_photo::resection::{resect, ResectionOptions};
-use derma_photo::synthetic::{self, camera_for, chromophores_at, default_views, evaluate};
+use derma_photo::synthetic::{self, chromophores_at, evaluate};
 use derma_photo::unwrap::{unwrap, UnwrapOptions};
 use derma_shading::skin_color_lut::SkinColorLut;
 use glam::Vec3;
@@ -38,30 +38,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         u.stretch.flipped
     );
     let mesh = u.mesh;
-    let bvh = derma_core::bvh::Bvh::new(&mesh.positions, &mesh.triangles);
     let albedo = |p: Vec3| {
         let (m, h) = chromophores_at(p, 1);
         lut.lookup(m as f64, h as f64).map(|v| v as f32)
     };
-    let feats = synthetic::feature_points(head, &mesh);
-    let (mut photos, mut points) = (Vec::new(), Vec::new());
-    for (i, v) in default_views().iter().enumerate() {
-        let cam = camera_for(head, v, 1200, 900, 550.0);
-        let image = synthetic::render(&mesh, &bvh, &cam, v, &albedo);
-        points.push(synthetic::clicked_points(
-            &feats,
-            &bvh,
-            &cam,
-            &format!("photo{i}"),
-            1.5,
-            i as u64,
-        ));
-        photos.push(Photo {
-            name: format!("photo{i}"),
-            image,
-            camera: cam,
-        });
-    }
+    let (photos, points) = synthetic::photo_set(head, &mesh, &albedo, (1200, 900), 1.5, 0);
     let res = resect(&points, &ResectionOptions::default())?;
     for (r, p) in res.iter().zip(&photos) {
         println!(

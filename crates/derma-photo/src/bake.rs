@@ -250,18 +250,14 @@ pub fn bake(
     let t0 = std::time::Instant::now();
     progress.stage("bind vertices to photos", 0, Unit::Steps);
     let topo = Topology::new(mesh)?;
-    let mut wnormals = vec![Vec3::ZERO; topo.positions.len()];
-    for t in &topo.triangles {
-        let [a, b, c] = t.map(|i| topo.positions[i as usize]);
-        let f = (b - a).cross(c - a);
-        for &v in t {
-            wnormals[v as usize] += f;
-        }
-    }
-    let wnormals: Vec<Vec3> = wnormals
-        .into_iter()
-        .map(|n| n.normalize_or(Vec3::Z))
-        .collect();
+    // Area-weighted normals of the welded mesh (continuous across UV seams).
+    let mut welded = TriMesh {
+        positions: topo.positions.clone(),
+        triangles: topo.triangles.clone(),
+        ..Default::default()
+    };
+    welded.compute_normals();
+    let wnormals = welded.normals;
     let bvh = Bvh::new(&topo.positions, &topo.triangles);
     let extent = mesh.extent();
     let masks = bind(&topo, &wnormals, photos, &bvh, opts.ray_offset * extent);

@@ -440,33 +440,21 @@ pub fn synthetic_set(
     let mut face = mesh.clone();
     face.uvs.clear();
     face.write_obj(&out_dir.join("face.obj"))?;
-    let bvh = derma_core::bvh::Bvh::new(&mesh.positions, &mesh.triangles);
     let seed = opts.seed;
     let albedo = move |p: glam::Vec3| {
         let (m, h) = synthetic::chromophores_at(p, seed);
         lut.lookup(m as f64, h as f64).map(|v| v as f32)
     };
-    let feats = synthetic::feature_points(head, &mesh);
-    let (w, h) = (opts.width, opts.width * 3 / 4);
+    let size = (opts.width, opts.width * 3 / 4);
+    let (photos, points) = synthetic::photo_set(head, &mesh, &albedo, size, opts.noise_px, seed);
     let mut photos_json = Vec::new();
     let mut truth = Vec::new();
-    for (i, v) in views.iter().enumerate() {
-        let cam = synthetic::camera_for(head, v, w, h, 550.0);
-        let img = synthetic::render(&mesh, &bvh, &cam, v, &albedo);
-        let name = format!("photo{i}.png");
-        img.write(&out_dir.join(&name))?;
-        let pts = synthetic::clicked_points(
-            &feats,
-            &bvh,
-            &cam,
-            &name,
-            opts.noise_px,
-            seed * 1000 + i as u64,
-        );
+    for (photo, pts) in photos.iter().zip(&points) {
+        photo.image.write(&out_dir.join(&photo.name))?;
         photos_json.push(serde_json::json!({
-            "image": name,
-            "width": w,
-            "height": h,
+            "image": photo.name,
+            "width": size.0,
+            "height": size.1,
             "points": pts.points.iter().map(|c| {
                 if c.label.starts_with('v') {
                     serde_json::json!({"world": c.world.to_array(), "pixel": c.pixel.to_array()})
@@ -475,7 +463,7 @@ pub fn synthetic_set(
                 }
             }).collect::<Vec<_>>(),
         }));
-        truth.push(serde_json::json!({"image": name, "camera": cam}));
+        truth.push(serde_json::json!({"image": photo.name, "camera": photo.camera}));
         progress.advance(1);
     }
     json_out(

@@ -364,6 +364,40 @@ pub fn clicked_points(
     }
 }
 
+/// Photos of `mesh` (with `albedo` per surface point) from [`default_views`]' cameras at
+/// 550 mm, named `photoN.png`, and the [`feature_points`] each one shows, clicked with
+/// `noise_px` of noise (seeded per photo from `seed`).
+pub fn photo_set(
+    head: &Head,
+    mesh: &TriMesh,
+    albedo: &(dyn Fn(Vec3) -> [f32; 3] + Sync),
+    (width, height): (u32, u32),
+    noise_px: f64,
+    seed: u64,
+) -> (Vec<crate::photo::Photo>, Vec<crate::resection::PhotoPoints>) {
+    let bvh = derma_core::bvh::Bvh::new(&mesh.positions, &mesh.triangles);
+    let feats = feature_points(head, mesh);
+    default_views()
+        .iter()
+        .enumerate()
+        .map(|(i, v)| {
+            let cam = camera_for(head, v, width, height, 550.0);
+            let name = format!("photo{i}.png");
+            let points =
+                clicked_points(&feats, &bvh, &cam, &name, noise_px, seed * 1000 + i as u64);
+            let image = render(mesh, &bvh, &cam, v, albedo);
+            (
+                crate::photo::Photo {
+                    name,
+                    image,
+                    camera: cam,
+                },
+                points,
+            )
+        })
+        .unzip()
+}
+
 /// How close a baked texture comes to the truth.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct TextureScores {
