@@ -186,6 +186,25 @@ fn sd_energy(
     uv: &[DVec2],
     gradient: bool,
 ) -> (f64, Vec<DVec2>) {
+    if !gradient {
+        // Energy only: per-triangle terms collected, then summed in triangle order (the same
+        // sum at any thread count).
+        let per: Vec<f64> = frames
+            .par_iter()
+            .zip(tris)
+            .map(|(f, t)| {
+                let j = jacobian(f, t.map(|i| uv[i as usize]));
+                let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+                if det <= 0.0 {
+                    return f64::INFINITY;
+                }
+                let n2 = j[0][0].powi(2) + j[0][1].powi(2) + j[1][0].powi(2) + j[1][1].powi(2);
+                let s2 = f.s * f.s;
+                f.c * (n2 / s2 + s2 * n2 / (det * det))
+            })
+            .collect();
+        return (per.iter().sum(), Vec::new());
+    }
     let per: Vec<(f64, [[f64; 2]; 2])> = frames
         .par_iter()
         .zip(tris)
@@ -545,6 +564,8 @@ pub fn unwrap(mesh: &TriMesh, opts: &UnwrapOptions) -> Result<Unwrap> {
     let (mut energy, _) = sd_energy(&frames, &topo.triangles, &uv, false);
     let mut prev = uv.clone();
     let mut history: Vec<f64> = vec![energy];
+    let mut last_alpha = 1.0f64;
+    let mut trial = uv.clone();
     for it in 0..opts.iterations {
         iterations += 1;
         // Nesterov-style extrapolation (Kovalsky et al. 2016 §4), kept only when flip-free.
@@ -566,27 +587,35 @@ pub fn unwrap(mesh: &TriMesh, opts: &UnwrapOptions) -> Result<Unwrap> {
         // Direction: the Laplacian proxy's Newton step, −K⁻¹∇E, vertex 0 fixed.
         let gu: Vec<f64> = grad[1..].iter().map(|g| -g.x).collect();
         let gv: Vec<f64> = grad[1..].iter().map(|g| -g.y).collect();
-        let (xu, xv) = rayon::join(|| chol.solve(&gu), || chol.solve(&gv));
-        let (xu, xv) = (xu?, xv?);
+        let x = chol.solve_many(&[&gu, &gv])?;
+        let (xu, xv) = (&x[0], &x[1]);
         d[0] = DVec2::ZERO;
         for v in 1..n {
             d[v] = DVec2::new(xu[v - 1], xv[v - 1]);
         }
         let slope: f64 = grad.iter().zip(&d).map(|(g, d)| g.dot(*d)).sum();
-        // Backtracking on the true energy from the largest flip-free step (Armijo).
-        let mut alpha = max_flip_free_step(&topo.triangles, &ext, &d);
+        // Backtracking on the true energy (Armijo) from the largest flip-free step, or twice
+        // the last accepted step when that is shorter (the proxy's step length is steady).
+        let mut alpha = max_flip_free_step(&topo.triangles, &ext, &d).min(2.0 * last_alpha);
         let mut accepted = None;
         for _ in 0..30 {
-            let trial: Vec<DVec2> = ext.iter().zip(&d).map(|(u, d)| *u + alpha * *d).collect();
+            trial
+                .par_iter_mut()
+                .zip(&ext)
+                .zip(&d)
+                .for_each(|((t, u), d)| *t = *u + alpha * *d);
             let (e, _) = sd_energy(&frames, &topo.triangles, &trial, false);
             if e.is_finite() && e <= ext_energy + 1e-4 * alpha * slope {
-                accepted = Some((trial, e));
+                accepted = Some(e);
                 break;
             }
             alpha *= 0.5;
         }
-        let Some((next, e)) = accepted else { break };
-        prev = std::mem::replace(&mut uv, next);
+        let Some(e) = accepted else { break };
+        last_alpha = alpha;
+        // uv ← trial, prev ← the old uv; the old prev becomes the next trial buffer.
+        std::mem::swap(&mut prev, &mut uv);
+        std::mem::swap(&mut uv, &mut trial);
         energy = e;
         history.push(e);
         // Converged when ten iterations together lowered the energy by less than 10 × tolerance.
@@ -772,6 +801,25 @@ mod tests {
             frontal(&plain)
         );
         assert!(viewed.stretch.weighted_l2 < viewed.stretch.l2);
+    }
+
+    #[test]
+    fn the_layout_is_the_same_at_any_thread_count() {
+        let m = grid_mesh(24, |x, y| {
+            0.6 * (x - 0.5) * (y - 0.5) * 4.0 + 0.2 * (3.0 * x).sin()
+        });
+        let opts = UnwrapOptions {
+            view: Some(Vec3::NEG_Z),
+            ..Default::default()
+        };
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let a = one.install(|| unwrap(&m, &opts).unwrap());
+        let b = unwrap(&m, &opts).unwrap();
+        assert_eq!(a.mesh.uvs, b.mesh.uvs);
+        assert_eq!(a.iterations, b.iterations);
     }
 
     #[test]

@@ -42,6 +42,28 @@ impl SparseCholesky {
         Ok(Self { n, llt })
     }
 
+    /// The solutions of A X = B for several right-hand sides at once (one pass over the factor
+    /// for all of them: faster than one solve each).
+    pub fn solve_many(&self, b: &[&[f64]]) -> Result<Vec<Vec<f64>>, NumericsError> {
+        if let Some(bad) = b.iter().find(|c| c.len() != self.n) {
+            return Err(NumericsError::Shape {
+                what: "sparse Cholesky solve",
+                detail: format!(
+                    "right-hand side of {} for a {} × {} matrix",
+                    bad.len(),
+                    self.n,
+                    self.n
+                ),
+            });
+        }
+        let x = self
+            .llt
+            .solve(faer::Mat::from_fn(self.n, b.len(), |i, j| b[j][i]));
+        Ok((0..b.len())
+            .map(|j| (0..self.n).map(|i| x[(i, j)]).collect())
+            .collect())
+    }
+
     /// The solution x of A x = b.
     pub fn solve(&self, b: &[f64]) -> Result<Vec<f64>, NumericsError> {
         if b.len() != self.n {
@@ -80,11 +102,21 @@ mod tests {
             }
         }
         let b: Vec<f64> = (0..n).map(|i| ((i * 7) % 5) as f64 - 2.0).collect();
-        let x = SparseCholesky::new(n, &entries).unwrap().solve(&b).unwrap();
+        let chol = SparseCholesky::new(n, &entries).unwrap();
+        let x = chol.solve(&b).unwrap();
         let want = super::super::dense::solve(&dense, &b, n).unwrap();
         for (a, w) in x.iter().zip(&want) {
             assert!((a - w).abs() < 1e-10, "{a} vs {w}");
         }
+        // Several right-hand sides at once give each one's solution.
+        let b2: Vec<f64> = b.iter().map(|v| 3.0 - v).collect();
+        let many = chol.solve_many(&[&b, &b2]).unwrap();
+        assert_eq!(many[0], x);
+        let want2 = super::super::dense::solve(&dense, &b2, n).unwrap();
+        for (a, w) in many[1].iter().zip(&want2) {
+            assert!((a - w).abs() < 1e-10, "{a} vs {w}");
+        }
+        assert!(chol.solve_many(&[&b, &b2[1..]]).is_err());
     }
 
     #[test]
