@@ -119,6 +119,21 @@ fn weight(cam: &Prepared, p: Vec3, n: Vec3, falloff: [f32; 2]) -> Option<(f32, g
     (wgt > 0.0).then_some((wgt, px))
 }
 
+/// The weight of a texel at pixel `px` whose surface has ⟨N, V⟩ = `cos`: as [`weight`].
+fn texel_weight(cam: &crate::Camera, px: [f32; 2], cos: f32, falloff: [f32; 2]) -> Option<f32> {
+    if cos <= falloff[0] {
+        return None;
+    }
+    let (w, h) = (cam.width as f32, cam.height as f32);
+    let edge = px[0].min(px[1]).min(w - px[0]).min(h - px[1]);
+    if edge <= 0.0 {
+        return None;
+    }
+    let wgt =
+        cos * smoothstep(falloff[0], falloff[1], cos) * smoothstep(0.0, 0.02 * w.max(h), edge);
+    (wgt > 0.0).then_some(wgt)
+}
+
 /// Vertex-to-photo binding (Rocchini et al. 1999 as in §3.2): bit i is set when vertex v
 /// projects into photo i, faces it, is not on its silhouette (every triangle of its fan faces
 /// the camera) and nothing lies between it and the camera (a ray from v, offset along its
@@ -360,25 +375,32 @@ pub fn bake(
     let n_tex = size * size;
     // The weighted blend (or interpolated vertex colours) per texel: the paper's resampled
     // texture, and the complement image of the spline.
-    let texel_normal = |i: usize| -> Vec3 {
-        let t = mesh.triangles[raster.triangle[i] as usize];
-        let [b1, b2] = raster.bary[i];
-        let n = mesh.normals.get(t[0] as usize).copied();
-        match n {
-            Some(_) if mesh.normals.len() == mesh.positions.len() => (mesh.normals[t[0] as usize]
-                * (1.0 - b1 - b2)
-                + mesh.normals[t[1] as usize] * b1
-                + mesh.normals[t[2] as usize] * b2)
-                .normalize_or(Vec3::Z),
-            _ => {
-                let w = tri_w[raster.triangle[i] as usize];
-                (wnormals[w[0] as usize] * (1.0 - b1 - b2)
-                    + wnormals[w[1] as usize] * b1
-                    + wnormals[w[2] as usize] * b2)
-                    .normalize_or(Vec3::Z)
-            }
+    // Each mesh vertex projected into each photo once, with ⟨N, V⟩ there; a texel's pixel
+    // and cosine are interpolated from its triangle's corners. The projection is projective,
+    // not affine, but across a 1–2 mm triangle at half a metre the difference is ~0.005 px.
+    let vertex_normal = |v: usize| -> Vec3 {
+        if mesh.normals.len() == mesh.positions.len() {
+            mesh.normals[v]
+        } else {
+            wnormals[topo.weld[v] as usize]
         }
     };
+    let projected: Vec<Vec<Option<([f32; 2], f32)>>> = cams
+        .iter()
+        .map(|cam| {
+            (0..mesh.positions.len())
+                .into_par_iter()
+                .map(|v| {
+                    let p = mesh.positions[v].as_dvec3();
+                    let px = cam.project(p)?;
+                    let cos = vertex_normal(v)
+                        .as_dvec3()
+                        .dot((cam.centre - p).normalize());
+                    Some(([px.x as f32, px.y as f32], cos as f32))
+                })
+                .collect()
+        })
+        .collect();
     let interpolate = |i: usize| -> [f32; 3] {
         let w = tri_w[raster.triangle[i] as usize];
         let [b1, b2] = raster.bary[i];
@@ -394,7 +416,18 @@ pub fn bake(
         masks[w[0] as usize] & masks[w[1] as usize] & masks[w[2] as usize]
     };
     let sample = |i: usize, k: usize| -> Option<([f32; 3], f32)> {
-        let (w, px) = weight(&cams[k], raster.position[i], texel_normal(i), opts.falloff)?;
+        let t = mesh.triangles[raster.triangle[i] as usize];
+        let [b1, b2] = raster.bary[i];
+        let (c0, c1, c2) = (
+            projected[k][t[0] as usize]?,
+            projected[k][t[1] as usize]?,
+            projected[k][t[2] as usize]?,
+        );
+        let b0 = 1.0 - b1 - b2;
+        let cos = b0 * c0.1 + b1 * c1.1 + b2 * c2.1;
+        let px = [0, 1].map(|a| b0 * c0.0[a] + b1 * c1.0[a] + b2 * c2.0[a]);
+        let w = texel_weight(&cams[k].camera, px, cos, opts.falloff)?;
+        let px = glam::DVec2::new(px[0] as f64, px[1] as f64);
         let mut c = photos[k].image.sample(px);
         for j in 0..3 {
             c[j] *= gains[k][j];
