@@ -34,7 +34,7 @@ pub struct ChromophoreReport {
     pub p95_delta_e: f64,
     /// Share of texels whose best match lies on the gamut's edge (clamped).
     pub clamped_share: f64,
-    /// Texels inverted.
+    /// Texels the statistics cover (the mask's).
     pub texels: usize,
 }
 
@@ -221,7 +221,7 @@ pub fn fit_exposure(lut: &SkinColorLut, texels: &[[f32; 3]]) -> f64 {
 }
 
 /// One texel's inversion.
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy)]
 struct Texel {
     melanin: f32,
     hemoglobin: f32,
@@ -230,8 +230,10 @@ struct Texel {
     used: bool,
 }
 
-/// Inverts the LUT for every texel where `mask` holds (all when `None`), after dividing the
-/// texture by `exposure`. Texels outside the mask get C_m = C_hd = 0 and residual 0.
+/// Inverts the LUT for every texel after dividing the texture by `exposure`; the report's
+/// statistics cover the texels where `mask` holds (all when `None`) — e.g. those coloured from
+/// photos, not interpolated or in the gutter — while every texel gets its maps, so they can
+/// drive a whole UV layout (`derma skin`'s `baseline.melanin_map`).
 pub fn invert(
     lut: &SkinColorLut,
     texture: &RgbImage,
@@ -260,9 +262,6 @@ pub fn invert(
     let res: Vec<Texel> = (0..n)
         .into_par_iter()
         .map(|i| {
-            if mask.is_some_and(|m| !m[i]) {
-                return Texel::default();
-            }
             let c = texture.data[i].map(|x| x as f64 / exposure);
             let (u, v, de, clamped) = invert_one(&t, lab_of(c), &coarse);
             Texel {
@@ -270,7 +269,7 @@ pub fn invert(
                 hemoglobin: (v.powi(3) * o.blood_max) as f32,
                 delta_e: de as f32,
                 clamped,
-                used: true,
+                used: mask.is_none_or(|m| m[i]),
             }
         })
         .collect();

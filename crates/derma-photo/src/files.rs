@@ -344,7 +344,8 @@ pub fn teeth_files(
 
 /// Turns a baked texture into melanin and hemoglobin maps; writes `melanin.exr`,
 /// `hemoglobin.exr` (the channels `derma rig` and `derma skin` read), `residual.exr` (ΔE*ab)
-/// and `chromophores.json`. `exposure`: `None` fits it.
+/// and `chromophores.json`. `exposure`: `None` fits it. The mask selects the texels the fit and
+/// the report use; every texel gets its maps.
 pub fn chromophore_files(
     texture: &Path,
     mask: Option<&Path>,

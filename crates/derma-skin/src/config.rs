@@ -155,6 +155,11 @@ pub struct SurfaceConfig {
 pub struct BaselineConfig {
     pub phi: f32,
     pub noise_wavelengths_mm: [f32; 3],
+    /// A melanin map in the mesh's UV layout (e.g. from `derma photo chromophores`) that
+    /// replaces the baseline's melanin and its regional gain; empty = none.
+    pub melanin_map: String,
+    /// A dermal blood (hemoglobin) map, as `melanin_map`.
+    pub blood_map: String,
     pub melanin: Range,
     pub pheomelanin: Range,
     pub blood: Range,
@@ -310,6 +315,8 @@ impl Default for BaselineConfig {
         Self {
             phi: 0.1,
             noise_wavelengths_mm: [24.0, 6.0, 1.5],
+            melanin_map: String::new(),
+            blood_map: String::new(),
             melanin: Range {
                 min: 0.013,
                 max: 0.063,
@@ -494,6 +501,8 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("fields", "-", 0.0, 0.0, "named fields: name = \"file.png\" or an expression such as \"face - eyes - lips\" (operators + - * and min, max, clamp, pow, smooth)"),
     k("baseline.phi", "-", 0.0, 1.0, "noise amplitude as a share of each parameter's plausible range (thesis §5.3.1: φ = 0.1)"),
     k("baseline.noise_wavelengths_mm", "mm", 0.01, 1000.0, "wavelengths of the three band-limited noise octaves (weights ½, ⅓, ⅙)"),
+    k("baseline.melanin_map", "path", 0.0, 0.0, "melanin map in the mesh's UV layout (EXR channel melanin, or PNG grey × 0.5, the skin-colour LUT's top) replacing the baseline melanin and its regional gain, e.g. from `derma photo chromophores` (empty = none); features paint on top"),
+    k("baseline.blood_map", "path", 0.0, 0.0, "dermal blood map as baseline.melanin_map (EXR channel hemoglobin or blood, or PNG grey × 0.32)"),
     k("baseline.melanin", "volume fraction", 0.0, 1.0, "melanosome fraction of the epidermis; default 1.3–6.3 % for light-skinned adults (Jacques 1998, skin optics summary); moderately pigmented 11–16 %, dark 18–43 %"),
     k("baseline.pheomelanin", "fraction", 0.0, 1.0, "pheomelanin share of melanin; around Jimenez et al. 2010 §6 (eumelanin 0.61 → pheomelanin 0.39), spread authored"),
     k("baseline.blood", "volume fraction", 0.0, 1.0, "whole-blood fraction of the dermis before the regional gains; min ≈ BioSpec's papillary 1.2 % (within Jacques' 0.2–7 %), the regions multiply it (regional.rs)"),

@@ -330,6 +330,17 @@ impl<'a> SkinGenerator<'a> {
                 crate::regional::age_factor(cfg.person.age_years)
             )));
         }
+        for (key, path) in [
+            ("baseline.melanin_map", &cfg.baseline.melanin_map),
+            ("baseline.blood_map", &cfg.baseline.blood_map),
+        ] {
+            if !path.trim().is_empty() {
+                job.note(Note::info(format!(
+                    "{key}: the baseline comes from '{}' (regional gains and the person's calibration do not apply to it)",
+                    path.trim()
+                )));
+            }
+        }
         let mut fields = if kind == SurfaceKind::Template {
             crate::builtin_head::default_fields(mesh.as_ref().expect("template mesh"), &cfg.person)
         } else if let Some(regions) = &user_regions {
@@ -360,7 +371,8 @@ impl<'a> SkinGenerator<'a> {
         let features = crate::feature_set::place(cfg, &fields, &scatter_surface, size)?;
         drop(scatter_surface);
 
-        let mut bio = crate::paint::paint(cfg, &surface, &fields, &features, &job)?;
+        let measured = self.baseline_maps(cfg)?;
+        let mut bio = crate::paint::paint_with(cfg, &surface, &fields, &features, &measured, &job)?;
         if cfg.detail.enabled() {
             self.apply_detail(cfg, &surface, &fields, &mut bio, &job)?;
         }
@@ -403,6 +415,59 @@ impl<'a> SkinGenerator<'a> {
 }
 
 impl SkinGenerator<'_> {
+    /// `baseline.melanin_map` and `baseline.blood_map`, read and checked against the texture.
+    fn baseline_maps(&self, cfg: &SkinConfig) -> Result<crate::paint::BaselineMaps> {
+        use derma_optics::bio::names;
+        let lut = derma_shading::skin_color_lut::LutOptions::default();
+        let read = |key: &str, p: &str, chans: &[&str], png_top: f64| -> Result<Option<Map>> {
+            if p.trim().is_empty() {
+                return Ok(None);
+            }
+            let path = self.resolve(p.trim());
+            let bad = |detail: String| SkinError::Config {
+                origin: key.into(),
+                detail: format!("'{}': {detail}", path.display()),
+            };
+            let map = if path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+            {
+                let c = derma_core::image_io::read_exr_channels(&path)?;
+                if c.len() == 1 {
+                    c.into_iter().next().expect("one").1
+                } else {
+                    c.into_iter()
+                        .find(|(n, _)| chans.iter().any(|w| n.eq_ignore_ascii_case(w)))
+                        .map(|(_, m)| m)
+                        .ok_or_else(|| bad(format!("none of the channels {chans:?}")))?
+                }
+            } else {
+                let g = derma_core::image_io::read_grey(&path)?.channels.remove(0);
+                let d: Vec<f32> = g.data().iter().map(|v| v * png_top as f32).collect();
+                Map::from_vec(g.width(), g.height(), d)?
+            };
+            if map.data().iter().any(|v| !(0.0..=1.0).contains(v)) {
+                return Err(bad("values must be volume fractions in [0, 1]".into()));
+            }
+            Ok(Some(map))
+        };
+        let b = &cfg.baseline;
+        Ok(crate::paint::BaselineMaps {
+            melanin: read(
+                "baseline.melanin_map",
+                &b.melanin_map,
+                &[names::MELANIN, "Y", "R"],
+                lut.melanin_max,
+            )?,
+            blood: read(
+                "baseline.blood_map",
+                &b.blood_map,
+                &[names::HEMOGLOBIN, names::BLOOD, "Y", "R"],
+                lut.blood_max,
+            )?,
+        })
+    }
+
     /// `[detail]`: the global exemplar's tile where no region claims the texel, each region's
     /// own tile by its mask (masks summing past 1 are normalised).
     fn apply_detail(

@@ -73,6 +73,16 @@ impl BioMaps {
 /// Rows painted per parallel task.
 const ROWS_PER_TASK: usize = 8;
 
+/// Measured chromophore maps that replace the baseline's (`baseline.melanin_map`,
+/// `baseline.blood_map`): volume fractions in the surface's UV layout.
+#[derive(Clone, Debug, Default)]
+pub struct BaselineMaps {
+    /// Melanosome volume fraction C_m.
+    pub melanin: Option<Map>,
+    /// Dermal blood volume fraction C_hd.
+    pub blood: Option<Map>,
+}
+
 /// Paints every covered texel of `surface`; uncovered texels keep the default sample and are
 /// filled by dilation later. One stage, advancing by rows.
 pub fn paint(
@@ -80,6 +90,26 @@ pub fn paint(
     surface: &Surface,
     fields: &crate::field::FieldSet,
     features: &FeatureSet,
+    progress: &dyn Progress,
+) -> crate::Result<BioMaps> {
+    paint_with(
+        cfg,
+        surface,
+        fields,
+        features,
+        &BaselineMaps::default(),
+        progress,
+    )
+}
+
+/// [`paint`] with measured baseline maps (a photographed face's chromophores): where given,
+/// they replace the baseline's melanin or blood and its regional gain; features paint on top.
+pub fn paint_with(
+    cfg: &SkinConfig,
+    surface: &Surface,
+    fields: &crate::field::FieldSet,
+    features: &FeatureSet,
+    measured: &BaselineMaps,
     progress: &dyn Progress,
 ) -> crate::Result<BioMaps> {
     progress.stage("paint", surface.height as u64, Unit::Rows);
@@ -175,6 +205,15 @@ pub fn paint(
                     s.tissue.melanin *= at(1);
                     s.tissue.oxygenation = (s.tissue.oxygenation + at(2)).clamp(0.0, 1.0);
                     s.tissue.epidermis_um *= at(3);
+                }
+                if measured.melanin.is_some() || measured.blood.is_some() {
+                    let uv = surface.uv(i);
+                    if let Some(m) = &measured.melanin {
+                        s.tissue.melanin = m.sample_uv(uv.x, uv.y, wrap);
+                    }
+                    if let Some(m) = &measured.blood {
+                        s.tissue.blood = m.sample_uv(uv.x, uv.y, wrap);
+                    }
                 }
                 if let Some((prm, depth, tension)) = &relief {
                     let uv = surface.uv(i);

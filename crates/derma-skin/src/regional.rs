@@ -227,7 +227,8 @@ pub fn apply_person(
     out.wrinkle.depth_mm.min *= age.sqrt();
     out.wrinkle.depth_mm.max *= age.sqrt();
     out.relief.depth_mm = out.relief.depth_mm.map(|d| d * age.sqrt());
-    if !p.calibrate_melanin {
+    // A measured melanin map (baseline.melanin_map) is the person's own: nothing to calibrate.
+    if !p.calibrate_melanin || !cfg.baseline.melanin_map.trim().is_empty() {
         return Ok((out, None));
     }
     let b = &cfg.baseline;

@@ -235,3 +235,52 @@ fn moles_are_darker_than_their_surroundings() {
     assert!(means[0] > means[1] && means[1] > means[2], "{means:?}");
     assert!((0.2..0.7).contains(&means[0]), "{means:?}");
 }
+
+#[test]
+fn measured_chromophore_maps_replace_the_baseline() {
+    // A photographed face's maps (as `derma photo chromophores` writes them) drive the baseline
+    // melanin and blood; features still paint on top.
+    let d = derma_test_support::scratch_dir("baseline_maps");
+    let (w, h) = (64, 64);
+    let mel = derma_core::Map::from_vec(
+        w,
+        h,
+        (0..w * h)
+            .map(|i| 0.02 + 0.2 * (i % w) as f32 / w as f32)
+            .collect(),
+    )
+    .unwrap();
+    let blood = derma_core::Map::filled(w, h, 0.07);
+    let f32 = derma_core::image_io::ExrPrecision::F32;
+    derma_core::image_io::write_exr(&d.join("melanin.exr"), &[("melanin", &mel)], f32).unwrap();
+    derma_core::image_io::write_exr(&d.join("hemoglobin.exr"), &[("hemoglobin", &blood)], f32)
+        .unwrap();
+    let mut cfg = small(128);
+    cfg.baseline.melanin_map = d.join("melanin.exr").display().to_string();
+    cfg.baseline.blood_map = d.join("hemoglobin.exr").display().to_string();
+    let g = run_with_threads(&cfg, 2);
+    // Median over the painted texels: the map's (features are sparse).
+    let mut blood_v: Vec<f32> = g.bio.texels.iter().map(|t| t.tissue.blood).collect();
+    blood_v.sort_by(f32::total_cmp);
+    let med = blood_v[blood_v.len() / 2];
+    assert!((med - 0.07).abs() < 0.005, "median blood {med}");
+    // Melanin follows the map's left-to-right ramp.
+    let bw = g.bio.width;
+    let col_median = |x: usize| {
+        let mut v: Vec<f32> = (0..bw)
+            .map(|y| g.bio.texels[y * bw + x].tissue.melanin)
+            .collect();
+        v.sort_by(f32::total_cmp);
+        v[bw / 2]
+    };
+    assert!(col_median(bw * 7 / 8) > col_median(bw / 8) + 0.1);
+    // A map outside [0, 1] is a clear error naming the key.
+    let bad = derma_core::Map::filled(4, 4, 2.0);
+    derma_core::image_io::write_exr(&d.join("bad.exr"), &[("melanin", &bad)], f32).unwrap();
+    cfg.baseline.melanin_map = d.join("bad.exr").display().to_string();
+    let e = SkinGenerator::new(cfg).run().err().unwrap().to_string();
+    assert!(
+        e.contains("baseline.melanin_map") && e.contains("[0, 1]"),
+        "{e}"
+    );
+}

@@ -115,7 +115,8 @@ pub struct ChromophoreArgs {
     /// Texture (PNG sRGB or linear EXR), e.g. a baked texture.png.
     #[arg(long)]
     texture: PathBuf,
-    /// Grey mask: only texels > 0.5 are inverted.
+    /// Grey mask: texels > 0.5 are the ones the exposure fit and the report use (e.g. the
+    /// bake's mask.png: texels coloured from photos); every texel gets its maps.
     #[arg(long)]
     mask: Option<PathBuf>,
     /// Exposure the texture is divided by, or "auto" to fit it.
