@@ -119,6 +119,9 @@ fn weight(cam: &Prepared, p: Vec3, n: Vec3, falloff: [f32; 2]) -> Option<(f32, g
     (wgt > 0.0).then_some((wgt, px))
 }
 
+/// A mesh vertex seen from a photo: its pixel and ⟨N, V⟩.
+type Corner = ([f32; 2], f32);
+
 /// The weight of a texel at pixel `px` whose surface has ⟨N, V⟩ = `cos`: as [`weight`].
 fn texel_weight(cam: &crate::Camera, px: [f32; 2], cos: f32, falloff: [f32; 2]) -> Option<f32> {
     if cos <= falloff[0] {
@@ -385,7 +388,7 @@ pub fn bake(
             wnormals[topo.weld[v] as usize]
         }
     };
-    let projected: Vec<Vec<Option<([f32; 2], f32)>>> = cams
+    let projected: Vec<Vec<Option<Corner>>> = cams
         .iter()
         .map(|cam| {
             (0..mesh.positions.len())
