@@ -377,23 +377,18 @@ fn lscm(topo: &Topology, p: &[DVec3], frames: &[Frame]) -> Result<Option<Vec<DVe
     let n = p.len();
     let boundary = &topo.boundary_loops[0];
     // Pins: a boundary vertex and the boundary vertex farthest from it, at their 3D distance.
-    let a = boundary[0] as usize;
-    let b = *boundary
-        .iter()
-        .max_by(|x, y| {
-            (p[**x as usize] - p[a])
-                .length()
-                .total_cmp(&(p[**y as usize] - p[a]).length())
-        })
-        .expect("a boundary") as usize;
-    let a = *boundary
-        .iter()
-        .max_by(|x, y| {
-            (p[**x as usize] - p[b])
-                .length()
-                .total_cmp(&(p[**y as usize] - p[b]).length())
-        })
-        .expect("a boundary") as usize;
+    let farthest_from = |v: usize| -> usize {
+        *boundary
+            .iter()
+            .max_by(|x, y| {
+                (p[**x as usize] - p[v])
+                    .length()
+                    .total_cmp(&(p[**y as usize] - p[v]).length())
+            })
+            .expect("a boundary") as usize
+    };
+    let b = farthest_from(boundary[0] as usize);
+    let a = farthest_from(b);
     let pin = [
         (a, DVec2::ZERO),
         (b, DVec2::new((p[b] - p[a]).length(), 0.0)),
