@@ -355,20 +355,20 @@ fn tutte(topo: &Topology, p: &[DVec3]) -> Result<Vec<DVec2>> {
         }
     }
     // Orientation: the embedding must keep the triangles counter-clockwise.
-    let signed: f64 = topo
-        .triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| uv[i as usize]);
-            (b - a).perp_dot(c - a)
-        })
-        .sum();
-    if signed < 0.0 {
+    if signed_areas(&topo.triangles, &uv).sum::<f64>() < 0.0 {
         for q in &mut uv {
             q.y = -q.y;
         }
     }
     Ok(uv)
+}
+
+/// Twice the signed texture area of each triangle (positive: counter-clockwise).
+fn signed_areas<'a>(tris: &'a [[u32; 3]], uv: &'a [DVec2]) -> impl Iterator<Item = f64> + 'a {
+    tris.iter().map(|t| {
+        let [a, b, c] = t.map(|i| uv[i as usize]);
+        (b - a).perp_dot(c - a)
+    })
 }
 
 /// Least-squares conformal map (Lévy et al. 2002): free boundary, the two boundary vertices
@@ -455,16 +455,10 @@ fn lscm(topo: &Topology, p: &[DVec3], frames: &[Frame]) -> Result<Option<Vec<DVe
             i => DVec2::new(x[2 * i], x[2 * i + 1]),
         };
     }
-    let signed: Vec<f64> = topo
-        .triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| uv[i as usize]);
-            (b - a).perp_dot(c - a)
-        })
-        .collect();
-    let positive = signed.iter().filter(|s| **s > 0.0).count();
-    if positive == signed.len() {
+    let positive = signed_areas(&topo.triangles, &uv)
+        .filter(|s| *s > 0.0)
+        .count();
+    if positive == topo.triangles.len() {
         return Ok(Some(uv));
     }
     if positive == 0 {
