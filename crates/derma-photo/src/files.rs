@@ -73,6 +73,9 @@ pub struct CameraEntry {
     pub rms_px: f64,
     /// Points flagged as outliers.
     pub outliers: Vec<String>,
+    /// Every point's reprojection error under the camera.
+    #[serde(default)]
+    pub points: Vec<crate::resection::PointError>,
 }
 
 /// Options of [`calibrate`] beyond the resection's.
@@ -155,6 +158,7 @@ pub fn calibrate(
                     .filter(|p| p.outlier)
                     .map(|p| p.label.clone())
                     .collect(),
+                points: r.points.clone(),
             })
             .collect(),
     };

@@ -64,7 +64,7 @@ impl Default for ResectionOptions {
 }
 
 /// A point's reprojection error under the final camera.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct PointError {
     /// The point's label.
     pub label: String,
