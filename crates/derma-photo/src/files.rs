@@ -192,8 +192,9 @@ pub fn unwrap_file(
     ))
 }
 
-/// Reads `cameras.json` with its images.
-pub fn read_photos(cameras: &Path) -> Result<Vec<Photo>> {
+/// Reads `cameras.json`: each photo's image path (resolved against the file's folder), name
+/// and camera.
+pub fn read_cameras(cameras: &Path) -> Result<Vec<(PathBuf, String, Camera)>> {
     let text = std::fs::read_to_string(cameras)
         .map_err(|e| PhotoError::Invalid(format!("{}: {e}", cameras.display())))?;
     let file: CamerasFile = serde_json::from_str(&text).map_err(|e| {
@@ -203,14 +204,21 @@ pub fn read_photos(cameras: &Path) -> Result<Vec<Photo>> {
         ))
     })?;
     let dir = cameras.parent().unwrap_or(Path::new("."));
-    file.photos
-        .iter()
-        .map(|e| {
-            let path = dir.join(&e.image);
+    Ok(file
+        .photos
+        .into_iter()
+        .map(|e| (dir.join(&e.image), e.image.display().to_string(), e.camera))
+        .collect())
+}
+
+/// Reads the photos of [`read_cameras`]' list, each checked against its camera's size.
+pub fn read_photos(list: &[(PathBuf, String, Camera)]) -> Result<Vec<Photo>> {
+    list.iter()
+        .map(|(path, name, camera)| {
             let p = Photo {
-                name: e.image.display().to_string(),
-                image: RgbImage::read(&path)?,
-                camera: e.camera,
+                name: name.clone(),
+                image: RgbImage::read(path)?,
+                camera: *camera,
             };
             p.check()?;
             Ok(p)
@@ -237,17 +245,11 @@ pub fn bake_files(
         "mask.png",
     ];
     let outs: Vec<PathBuf> = names.iter().map(|n| out_dir.join(n)).collect();
-    let photos = read_photos(cameras)?;
+    let list = read_cameras(cameras)?;
     let mut inputs = vec![mesh, cameras];
-    let photo_paths: Vec<PathBuf> = {
-        let text = std::fs::read_to_string(cameras).unwrap_or_default();
-        let file: Option<CamerasFile> = serde_json::from_str(&text).ok();
-        let dir = cameras.parent().unwrap_or(Path::new("."));
-        file.map(|f| f.photos.iter().map(|e| dir.join(&e.image)).collect())
-            .unwrap_or_default()
-    };
-    inputs.extend(photo_paths.iter().map(PathBuf::as_path));
+    inputs.extend(list.iter().map(|(p, _, _)| p.as_path()));
     check_inputs_spared(&outs, &inputs)?;
+    let photos = read_photos(&list)?;
     let m = TriMesh::load(mesh)?;
     let b = bake(&m, &photos, opts, progress)?;
     progress.stage("write", 0, Unit::Steps);

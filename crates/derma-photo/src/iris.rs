@@ -8,7 +8,7 @@ use crate::error::{PhotoError, Result};
 use crate::photo::RgbImage;
 use derma_core::color::luminance;
 use derma_core::rng::Philox;
-use derma_head::eye::{uv_of, IRIS_UV_RADIUS, PUPIL_UV_RADIUS};
+use derma_head::eye::{IRIS_UV_RADIUS, PUPIL_UV_RADIUS};
 use glam::{DVec2, Vec2};
 use serde::Serialize;
 
@@ -574,7 +574,6 @@ fn globe_texture(polar: &RgbImage, pupil: [f32; 3], sclera: [f32; 3], size: usiz
             data[y * size + x] = c;
         }
     }
-    let _ = uv_of;
     RgbImage {
         width: size,
         height: size,
