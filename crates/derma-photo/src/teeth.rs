@@ -27,11 +27,13 @@ pub struct TeethOptions {
     /// Texture size (texels, square; the teeth use its lower part, as their UVs do).
     pub size: usize,
     /// Luminance the teeth are equalised to (linear; §4.2's "predefined value"): 0.55, a
-    /// tooth's albedo in linear light is about 0.5–0.6 (enamel L* ≈ 75–80).
+    /// tooth's albedo in linear light is about 0.5–0.6 (authored: lightness L* ≈ 75–80, the range
+    /// of common tooth shade guides, is a linear luminance of 0.48–0.57).
     pub target_luminance: f32,
     /// Half-width of the photographed front teeth on the model (mm): up to the canines.
     pub canine_x_mm: f32,
-    /// Gum colour, linear RGB (a healthy attached gingiva, L* ≈ 55, a* ≈ 25).
+    /// Gum colour, linear RGB (authored: a pink of L* ≈ 55, a* ≈ 25, the look of healthy
+    /// attached gingiva; §4.2 only says "some standard gums color").
     pub gum: [f32; 3],
 }
 
@@ -103,7 +105,7 @@ pub fn biggest_jump_threshold(d: &[f32]) -> f32 {
 }
 
 /// A pixel too red to be a tooth whatever the histogram says: red chromaticity above 0.45
-/// (enamel's is about 0.37, gingiva's 0.55–0.65).
+/// (authored, between the synthetic smile's teeth at 0.37 and its gums and lips at 0.60–0.65).
 fn too_red(d_red: f32) -> bool {
     // d_red < 0.62 ⇔ roughly r/(r+g+b) > 0.45 for skin-like g ≈ b.
     d_red < 0.62
