@@ -259,20 +259,39 @@ pub fn invert(
     let t = LabTable { lut };
     let coarse = coarse_grid(&t);
     let o = &lut.options;
-    let res: Vec<Texel> = (0..n)
-        .into_par_iter()
-        .map(|i| {
+    // Rows in parallel; a texel with exactly its left neighbour's colour (a texture's dilated
+    // gutter, flat regions) reuses its result — the same answer, computed once.
+    let w = texture.width;
+    let mut res: Vec<Texel> = Vec::with_capacity(n);
+    res.resize(
+        n,
+        Texel {
+            melanin: 0.0,
+            hemoglobin: 0.0,
+            delta_e: 0.0,
+            clamped: false,
+            used: false,
+        },
+    );
+    res.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for x in 0..w {
+            let i = y * w + x;
+            let used = mask.is_none_or(|m| m[i]);
+            if x > 0 && texture.data[i] == texture.data[i - 1] {
+                row[x] = Texel { used, ..row[x - 1] };
+                continue;
+            }
             let c = texture.data[i].map(|x| x as f64 / exposure);
             let (u, v, de, clamped) = invert_one(&t, lab_of(c), &coarse);
-            Texel {
+            row[x] = Texel {
                 melanin: (u.powi(3) * o.melanin_max) as f32,
                 hemoglobin: (v.powi(3) * o.blood_max) as f32,
                 delta_e: de as f32,
                 clamped,
-                used: mask.is_none_or(|m| m[i]),
-            }
-        })
-        .collect();
+                used,
+            };
+        }
+    });
     let used: Vec<&Texel> = res.iter().filter(|r| r.used).collect();
     let mut de: Vec<f64> = used.iter().map(|r| r.delta_e as f64).collect();
     de.sort_by(f64::total_cmp);
