@@ -437,55 +437,108 @@ pub fn bake(
         }
         Some((c, w))
     };
-    let mut blended: Vec<[f32; 3]> = crate::blend::zeroed(n_tex);
-    let mut source = vec![SOURCE_NONE; n_tex];
-    blended
-        .par_chunks_mut(size)
-        .zip(source.par_chunks_mut(size))
-        .enumerate()
-        .for_each(|(y, (row, srow))| {
-            for x in 0..size {
-                let i = y * size + x;
-                if raster.triangle[i] == NO_TRIANGLE {
-                    continue;
-                }
-                let common = common_of(i);
-                let (mut acc, mut wsum) = ([0.0f32; 3], 0.0f32);
-                for k in 0..photos.len() {
-                    if common & (1 << k) == 0 {
-                        continue;
-                    }
-                    if let Some((c, w)) = sample(i, k) {
-                        for j in 0..3 {
-                            acc[j] += c[j] * w;
-                        }
-                        wsum += w;
-                    }
-                }
-                if wsum > 0.0 {
-                    row[x] = acc.map(|a| a / wsum);
-                    srow[x] = best[raster.triangle[i] as usize];
-                } else {
-                    row[x] = interpolate(i);
-                    srow[x] = SOURCE_INTERPOLATED;
-                }
-            }
-        });
     let covered: Vec<bool> = raster.triangle.iter().map(|t| *t != NO_TRIANGLE).collect();
     let dil = dilation_sources(&covered, size, size).ok_or_else(|| {
         PhotoError::Mesh("no triangle covers a texel: are the UVs inside [0, 1]²?".into())
     })?;
-    let dilate_rgb = |img: &mut Vec<[f32; 3]>| {
+    let dilate_rgb = |img: &mut [[f32; 3]]| {
         for (i, &s) in dil.iter().enumerate() {
             if s as usize != i {
                 img[i] = img[s as usize];
             }
         }
     };
-    dilate_rgb(&mut blended);
+    // The weighted blend of the photos per texel (§3.2 case 1), accumulated photo by photo in
+    // photo order — the same sums whether one pass does all photos or each photo's pass adds
+    // its own — then divided, or the interpolated vertex colours where no photo sees (cases 2
+    // and 3). `source` records which.
+    // Gutter texels (no triangle) take the value of their dilation source, computed there.
+    let finish_blend = |acc: &[[f32; 3]], wsum: &[f32], out: &mut [[f32; 3]], source: &mut [u8]| {
+        let blend_at = |i: usize| {
+            if wsum[i] > 0.0 {
+                acc[i].map(|a| a / wsum[i])
+            } else {
+                interpolate(i)
+            }
+        };
+        out.par_chunks_mut(size)
+            .zip(source.par_chunks_mut(size))
+            .enumerate()
+            .for_each(|(y, (row, srow))| {
+                for x in 0..size {
+                    let i = y * size + x;
+                    if raster.triangle[i] == NO_TRIANGLE {
+                        row[x] = blend_at(dil[i] as usize);
+                        continue;
+                    }
+                    row[x] = blend_at(i);
+                    srow[x] = if wsum[i] > 0.0 {
+                        best[raster.triangle[i] as usize]
+                    } else {
+                        SOURCE_INTERPOLATED
+                    };
+                }
+            });
+    };
+    // Adds photo k's samples to the sums; writes them (or the interpolated vertex colours where
+    // photo k does not see the texel) into `img` when given.
+    let add_row = |k: usize,
+                   y: usize,
+                   arow: &mut [[f32; 3]],
+                   wrow: &mut [f32],
+                   mut irow: Option<&mut [[f32; 3]]>| {
+        for x in 0..size {
+            let i = y * size + x;
+            if raster.triangle[i] == NO_TRIANGLE {
+                continue;
+            }
+            let seen = if common_of(i) & (1 << k) != 0 {
+                sample(i, k)
+            } else {
+                None
+            };
+            let c = match seen {
+                Some((c, w)) => {
+                    for j in 0..3 {
+                        arow[x][j] += c[j] * w;
+                    }
+                    wrow[x] += w;
+                    c
+                }
+                None if irow.is_some() => interpolate(i),
+                None => continue,
+            };
+            if let Some(r) = irow.as_deref_mut() {
+                r[x] = c;
+            }
+        }
+    };
+    let add_photo =
+        |k: usize, acc: &mut [[f32; 3]], wsum: &mut [f32], img: Option<&mut [[f32; 3]]>| {
+            let rows = acc.par_chunks_mut(size).zip(wsum.par_chunks_mut(size));
+            match img {
+                Some(img) => rows
+                    .zip(img.par_chunks_mut(size))
+                    .enumerate()
+                    .for_each(|(y, ((a, w), r))| add_row(k, y, a, w, Some(r))),
+                None => rows
+                    .enumerate()
+                    .for_each(|(y, (a, w))| add_row(k, y, a, w, None)),
+            }
+        };
+    let mut acc: Vec<[f32; 3]> = crate::blend::zeroed(n_tex);
+    let mut wsum: Vec<f32> = vec![0.0; n_tex];
+    let mut source = vec![SOURCE_NONE; n_tex];
+    let multiband = opts.multiband && photos.len() > 1;
+    let mut texture: Vec<[f32; 3]> = crate::blend::zeroed(n_tex);
+    if !multiband {
+        for k in 0..photos.len() {
+            add_photo(k, &mut acc, &mut wsum, None);
+        }
+        finish_blend(&acc, &wsum, &mut texture, &mut source);
+    }
     let t_resample = t0.elapsed().as_secs_f64() - t_bind;
-    let mut texture = blended.clone();
-    if opts.multiband && photos.len() > 1 {
+    if multiband {
         progress.stage("multiresolution spline", 0, Unit::Steps);
         // Shrunk masks: a vertex is inside region r when all its triangles are best seen from
         // r; a triangle stays in r's mask when its three vertices are inside (the outmost ring
@@ -531,6 +584,10 @@ pub fn bake(
                 .zip(&label)
                 .for_each(|(v, l)| v[0] = (*l as usize == k) as u8 as f32);
         };
+        // One pass per photo: its image for the spline (its own samples where it sees the
+        // texel, the interpolated vertex colours elsewhere, dilated into the gutter) and its
+        // share of the blend; the last image is the finished blend (the complement's image).
+        let sums = std::cell::RefCell::new((&mut acc, &mut wsum, &mut source));
         let out = multiband_with(
             size,
             size,
@@ -538,26 +595,14 @@ pub fn bake(
             levels,
             mask,
             |k, img: &mut Image<3>| {
-                // Image k: photo k's own resampling where it sees the texel, the blend elsewhere;
-                // the last image is the blend itself (the complement mask's image).
-                img.data.copy_from_slice(&blended);
+                let mut s = sums.borrow_mut();
+                let (acc, wsum, source) = &mut *s;
                 if k < photos.len() {
-                    img.data
-                        .par_chunks_mut(size)
-                        .enumerate()
-                        .for_each(|(y, row)| {
-                            for x in 0..size {
-                                let i = y * size + x;
-                                if raster.triangle[i] == NO_TRIANGLE || common_of(i) & (1 << k) == 0
-                                {
-                                    continue;
-                                }
-                                if let Some((c, _)) = sample(i, k) {
-                                    row[x] = c;
-                                }
-                            }
-                        });
+                    add_photo(k, acc, wsum, Some(&mut img.data));
+                } else {
+                    finish_blend(acc, wsum, &mut img.data, source);
                 }
+                dilate_rgb(&mut img.data);
             },
         );
         for (t, o) in texture.iter_mut().zip(&out.data) {
