@@ -7,9 +7,8 @@
 
 use derma_photo::bake::{bake, BakeOptions};
 use derma_photo::chromophores::invert;
-use derma_photo::photo::Photo;
 use derma_photo::resection::{resect, ResectionOptions};
-use derma_photo::synthetic::{self, chromophores_at, evaluate};
+use derma_photo::synthetic::{self, evaluate};
 use derma_photo::unwrap::{unwrap, UnwrapOptions};
 use derma_shading::skin_color_lut::SkinColorLut;
 use glam::Vec3;
@@ -38,10 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         u.stretch.flipped
     );
     let mesh = u.mesh;
-    let albedo = |p: Vec3| {
-        let (m, h) = chromophores_at(p, 1);
-        lut.lookup(m as f64, h as f64).map(|v| v as f32)
-    };
+    let albedo = synthetic::truth_albedo(&lut, 1);
     let (photos, points) = synthetic::photo_set(head, &mesh, &albedo, (1200, 900), 1.5, 0);
     let res = resect(&points, &ResectionOptions::default())?;
     for (r, p) in res.iter().zip(&photos) {
@@ -53,14 +49,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             (r.camera.centre() - p.camera.centre()).length()
         );
     }
-    let recovered: Vec<Photo> = photos
-        .iter()
-        .zip(&res)
-        .map(|(p, r)| Photo {
-            camera: r.camera,
-            ..p.clone()
-        })
-        .collect();
+    let recovered = synthetic::with_cameras(&photos, &res);
     for (gain, multiband) in [(false, false), (true, false), (true, true)] {
         let opts = BakeOptions {
             size: 1024,

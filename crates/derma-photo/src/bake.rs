@@ -281,58 +281,48 @@ pub fn bake(
     let masks = bind(&topo, &wnormals, photos, &bvh, opts.ray_offset * extent);
     let cams: Vec<Prepared> = photos.iter().map(|p| Prepared::new(&p.camera)).collect();
     // Gains from every vertex seen by two or more photos.
-    let samples_at = |v: usize, gains: Option<&[[f32; 3]]>| -> Vec<(usize, [f32; 3], f32)> {
-        let p = topo.positions[v];
-        (0..photos.len())
-            .filter(|i| masks[v] & (1 << i) != 0)
-            .filter_map(|i| {
-                let (w, px) = weight(&cams[i], p, wnormals[v], opts.falloff)?;
-                let mut c = photos[i].image.sample(px);
-                if let Some(g) = gains {
-                    for k in 0..3 {
-                        c[k] *= g[i][k];
-                    }
-                }
-                Some((i, c, w))
-            })
-            .collect()
-    };
+    // Each vertex sampled once in every photo it is bound to: (photo, colour, weight).
+    let samples: Vec<Vec<(usize, [f32; 3], f32)>> = (0..topo.positions.len())
+        .into_par_iter()
+        .map(|v| {
+            let p = topo.positions[v];
+            (0..photos.len())
+                .filter(|i| masks[v] & (1 << i) != 0)
+                .filter_map(|i| {
+                    let (w, px) = weight(&cams[i], p, wnormals[v], opts.falloff)?;
+                    Some((i, photos[i].image.sample(px), w))
+                })
+                .collect()
+        })
+        .collect();
     let gains: Vec<[f32; 3]> = if opts.gain_compensation {
-        // Samples in parallel, sums in vertex order: the same gains at any thread count.
-        let samples: Vec<Vec<(usize, [f32; 3])>> = (0..topo.positions.len())
-            .into_par_iter()
-            .map(|v| {
-                samples_at(v, None)
-                    .into_iter()
-                    .map(|(i, c, _)| (i, c))
-                    .collect()
-            })
-            .collect();
+        // Sums in vertex order: the same gains at any thread count.
         let mut o = Overlaps::new(photos.len());
         for s in samples.iter().filter(|s| s.len() >= 2) {
-            o.add(s);
+            let pairs: Vec<(usize, [f32; 3])> = s.iter().map(|(i, c, _)| (*i, *c)).collect();
+            o.add(&pairs);
         }
         o.gains()
     } else {
         vec![[1.0; 3]; photos.len()]
     };
-    // Vertex colours (case 2) and the fill (case 3).
-    let mut vcolor: Vec<Option<[f32; 3]>> = (0..topo.positions.len())
-        .into_par_iter()
-        .map(|v| {
-            let s = samples_at(v, Some(&gains));
+    // Vertex colours (case 2) and the fill (case 3), from the gain-corrected samples.
+    let mut vcolor: Vec<Option<[f32; 3]>> = samples
+        .par_iter()
+        .map(|s| {
             let wsum: f32 = s.iter().map(|x| x.2).sum();
             (wsum > 0.0).then(|| {
                 let mut c = [0.0f32; 3];
-                for (_, col, w) in &s {
+                for (i, col, w) in s {
                     for k in 0..3 {
-                        c[k] += col[k] * w / wsum;
+                        c[k] += col[k] * gains[*i][k] * w / wsum;
                     }
                 }
                 c
             })
         })
         .collect();
+    drop(samples);
     let unbound = vcolor.iter().filter(|c| c.is_none()).count();
     fill_vertex_colors(&topo.neighbours, &mut vcolor);
     let vcolor: Vec<[f32; 3]> = vcolor.into_iter().map(|c| c.unwrap_or([0.0; 3])).collect();

@@ -448,10 +448,7 @@ pub fn synthetic_set(
     face.uvs.clear();
     face.write_obj(&out_dir.join("face.obj"))?;
     let seed = opts.seed;
-    let albedo = move |p: glam::Vec3| {
-        let (m, h) = synthetic::chromophores_at(p, seed);
-        lut.lookup(m as f64, h as f64).map(|v| v as f32)
-    };
+    let albedo = synthetic::truth_albedo(&lut, seed);
     let size = (opts.width, opts.width * 3 / 4);
     let (photos, points) = synthetic::photo_set(head, &mesh, &albedo, size, opts.noise_px, seed);
     let mut photos_json = Vec::new();

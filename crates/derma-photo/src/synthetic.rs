@@ -135,6 +135,32 @@ pub fn chromophores_at(p: Vec3, seed: u64) -> (f32, f32) {
     ((m + 0.08 * spot).clamp(0.0, 0.5), h.clamp(0.0, 0.32))
 }
 
+/// The true albedo (linear RGB) of [`chromophores_at`] through the skin-colour LUT.
+pub fn truth_albedo(
+    lut: &derma_shading::skin_color_lut::SkinColorLut,
+    seed: u64,
+) -> impl Fn(Vec3) -> [f32; 3] + Sync + '_ {
+    move |p| {
+        let (m, h) = chromophores_at(p, seed);
+        lut.lookup(m as f64, h as f64).map(|v| v as f32)
+    }
+}
+
+/// `photos` with the recovered cameras of `resections` (same order).
+pub fn with_cameras(
+    photos: &[crate::photo::Photo],
+    resections: &[crate::resection::Resection],
+) -> Vec<crate::photo::Photo> {
+    photos
+        .iter()
+        .zip(resections)
+        .map(|(p, r)| crate::photo::Photo {
+            camera: r.camera,
+            ..p.clone()
+        })
+        .collect()
+}
+
 /// One synthetic photo's set-up: camera direction, light, exposure, white balance, vignetting.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct View {

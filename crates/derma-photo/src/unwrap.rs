@@ -186,22 +186,24 @@ fn sd_energy(
     uv: &[DVec2],
     gradient: bool,
 ) -> (f64, Vec<DVec2>) {
+    // One triangle's term: (J, det J, ‖J‖², s², energy), or `None` when it is flipped.
+    let term = |f: &Frame, t: &[u32; 3]| {
+        let j = jacobian(f, t.map(|i| uv[i as usize]));
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        if det <= 0.0 {
+            return None;
+        }
+        let n2 = j[0][0].powi(2) + j[0][1].powi(2) + j[1][0].powi(2) + j[1][1].powi(2);
+        let s2 = f.s * f.s;
+        Some((j, det, n2, s2, f.c * (n2 / s2 + s2 * n2 / (det * det))))
+    };
     if !gradient {
         // Energy only: per-triangle terms collected, then summed in triangle order (the same
         // sum at any thread count).
         let per: Vec<f64> = frames
             .par_iter()
             .zip(tris)
-            .map(|(f, t)| {
-                let j = jacobian(f, t.map(|i| uv[i as usize]));
-                let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-                if det <= 0.0 {
-                    return f64::INFINITY;
-                }
-                let n2 = j[0][0].powi(2) + j[0][1].powi(2) + j[1][0].powi(2) + j[1][1].powi(2);
-                let s2 = f.s * f.s;
-                f.c * (n2 / s2 + s2 * n2 / (det * det))
-            })
+            .map(|(f, t)| term(f, t).map_or(f64::INFINITY, |x| x.4))
             .collect();
         return (per.iter().sum(), Vec::new());
     }
@@ -209,14 +211,9 @@ fn sd_energy(
         .par_iter()
         .zip(tris)
         .map(|(f, t)| {
-            let j = jacobian(f, t.map(|i| uv[i as usize]));
-            let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-            if det <= 0.0 {
+            let Some((j, det, n2, s2, e)) = term(f, t) else {
                 return (f64::INFINITY, [[0.0; 2]; 2]);
-            }
-            let n2 = j[0][0].powi(2) + j[0][1].powi(2) + j[1][0].powi(2) + j[1][1].powi(2);
-            let s2 = f.s * f.s;
-            let e = f.c * (n2 / s2 + s2 * n2 / (det * det));
+            };
             // ∂/∂J: 2J/s² + s² (2J/det² − 2‖J‖² cof(J)/det³).
             let cof = [[j[1][1], -j[1][0]], [-j[0][1], j[0][0]]];
             let a = 2.0 / s2 + 2.0 * s2 / (det * det);

@@ -33,20 +33,10 @@ fn set() -> Set {
     .unwrap();
     assert_eq!(u.stretch.flipped, 0);
     let mesh = u.mesh;
-    let albedo = |p: Vec3| {
-        let (m, h) = chromophores_at(p, 1);
-        lut.lookup(m as f64, h as f64).map(|v| v as f32)
-    };
+    let albedo = synthetic::truth_albedo(&lut, 1);
     let (photos, points) = synthetic::photo_set(head, &mesh, &albedo, (960, 720), 1.5, 0);
     let res = resect(&points, &ResectionOptions::default()).unwrap();
-    let recovered = photos
-        .iter()
-        .zip(&res)
-        .map(|(p, r)| Photo {
-            camera: r.camera,
-            ..p.clone()
-        })
-        .collect();
+    let recovered = synthetic::with_cameras(&photos, &res);
     Set {
         mesh,
         photos,
@@ -69,10 +59,7 @@ fn cameras_texture_and_chromophores_are_recovered() {
         let d = (r.camera.project(p).unwrap() - t.camera.project(p).unwrap()).length();
         assert!(d < 4.0, "{}: a vertex lands {d} px off", t.name);
     }
-    let albedo = |p: Vec3| {
-        let (m, h) = chromophores_at(p, 1);
-        lut.lookup(m as f64, h as f64).map(|v| v as f32)
-    };
+    let albedo = synthetic::truth_albedo(&lut, 1);
     let run = |gain: bool, multiband: bool| {
         let opts = BakeOptions {
             size: 384,
