@@ -80,6 +80,12 @@ impl Regions {
         }
     }
 
+    /// True at texture coordinates inside an eye-socket chart (the lids' inner surfaces and the
+    /// conjunctiva behind them).
+    pub fn in_socket(&self, uv: Vec2) -> bool {
+        Self::in_rects(&self.socket_charts, uv) > 0.0
+    }
+
     /// The landmarks the regions follow.
     pub fn landmarks(&self) -> &Landmarks {
         &self.lm

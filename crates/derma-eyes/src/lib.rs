@@ -1,0 +1,41 @@
+//! The eye region, after the EyeMove thesis ("Eye Region Animation and Screen-Space Distance
+//! Fields", ch. 3–4; `../shared/seeds`):
+//!
+//! - [`gaze`]: the generalised gaze vector (Fick angles, lid openings, action units).
+//! - [`region`], [`lids`], [`tracked`]: the head's eye region, lid curves and the tracked-data
+//!   format; [`rigdata`] makes training data from the head's face units.
+//! - [`pca`], [`regression`], [`model`]: the eyelid-shape and skin-motion models (eqs. 3.2–3.11);
+//!   [`transfer`] moves them to other vertices (eqs. 3.4–3.5).
+//! - [`globe`], [`skull`], [`sliding`], [`evaluate`]: the eyeball with its corneal bulge, the
+//!   skull maps and globe sliding (Algorithm 1) that turn a model frame into 3D.
+//! - [`blink`], [`saccade`], [`idle`], [`saliency`]: the drivers — stochastic blinks, main-sequence
+//!   saccades, idle gaze and salient gaze targets.
+//! - [`sdf`]: screen-space distance fields and the lacrimal lake (ch. 4).
+//!
+//! Units are millimetres and degrees; the head looks down +Z with +Y up.
+
+#![warn(missing_docs)]
+
+pub mod blink;
+pub mod error;
+pub mod evaluate;
+pub mod gaze;
+pub mod globe;
+pub mod idle;
+pub mod lids;
+pub mod model;
+pub mod pca;
+pub mod region;
+pub mod regression;
+pub mod rigdata;
+pub mod saccade;
+pub mod saliency;
+pub mod sdf;
+pub mod skull;
+pub mod sliding;
+pub mod tracked;
+pub mod transfer;
+
+pub use error::{EyesError, Result};
+pub use gaze::{Fick, Gaze};
+pub use model::{Components, EyeModel};

@@ -1,0 +1,301 @@
+//! The eye region of a head mesh (thesis §3.2): the skin vertices the model moves, welded across
+//! UV seams, split into tracked vertices (visible skin) and untracked ones (the lids' inner
+//! surfaces, §3.6), and the four lid margins as vertex chains from the inner to the outer canthus.
+
+use derma_core::mesh::TriMesh;
+use derma_head::Head;
+use glam::{Vec2, Vec3};
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, HashMap};
+
+/// Face units whose support defines the region: they move the lids and the skin around them.
+pub const REGION_UNITS: [&str; 14] = [
+    "eyeLookUpLeft",
+    "eyeLookDownLeft",
+    "eyeLookInLeft",
+    "eyeLookOutLeft",
+    "eyeBlinkLeft",
+    "eyeSquintLeft",
+    "eyeWideLeft",
+    "eyeLookUpRight",
+    "eyeLookDownRight",
+    "eyeLookInRight",
+    "eyeLookOutRight",
+    "eyeBlinkRight",
+    "eyeSquintRight",
+    "eyeWideRight",
+];
+
+/// A vertex moves with the region when some region unit moves it by more than this (mm): a
+/// third of the ~0.3 mm texel of a 2048² texture, below anything a render shows.
+const SUPPORT_MM: f32 = 0.1;
+
+/// Spacing (mm, in the modelling camera) of the tracked vertices: one per 2.5 mm cell gives
+/// about a thousand over both eye regions, the thesis' "about a thousand vertices" (§3.5); the
+/// rest of the region follows them by extrapolation (eq. 3.5).
+pub const TRACK_SPACING: f32 = 2.5;
+
+/// A tracked vertex faces the camera at least this much (n · z): a video tracker sees it.
+const VISIBLE_COS: f32 = 0.25;
+
+/// The region of one head.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct EyeRegion {
+    /// Rest positions (mm) of the model vertices: tracked first, then untracked.
+    pub rest: Vec<Vec3>,
+    /// Rest normals of the model vertices.
+    pub rest_normals: Vec<Vec3>,
+    /// Number of tracked model vertices (the first `tracked` of `rest`).
+    pub tracked: usize,
+    /// Which eye (0 left, 1 right) each model vertex belongs to.
+    pub eye: Vec<u8>,
+    /// Lid margins: per eye, upper then lower, model-vertex indices from the inner to the outer
+    /// canthus (both chains share their end vertices).
+    pub margins: [[Vec<u32>; 2]; 2],
+    /// For every skin vertex of the mesh, its model vertex, or `u32::MAX` outside the region.
+    pub skin_to_model: Vec<u32>,
+}
+
+fn key(p: Vec3) -> [u32; 3] {
+    p.to_array().map(f32::to_bits)
+}
+
+impl EyeRegion {
+    /// The region of `head`: vertices the region units move, welded; margins from the seam
+    /// between the skin and the eye-socket charts.
+    pub fn of_head(head: &Head) -> crate::Result<EyeRegion> {
+        let skin = &head.skin;
+        let units = head.face_units();
+        let mut moved = vec![false; skin.positions.len()];
+        for name in REGION_UNITS {
+            let t = units.iter().find(|t| t.name == name).ok_or_else(|| {
+                crate::EyesError::Invalid(format!("the head has no face unit '{name}'"))
+            })?;
+            for &(i, d) in &t.skin {
+                if d.length() > SUPPORT_MM {
+                    moved[i as usize] = true;
+                }
+            }
+        }
+        let socket = |i: usize| head.regions.in_socket(skin.uvs[i]);
+        let eyes = [head.eyes[0].centre, head.eyes[1].centre];
+        Self::build(skin, &moved, &socket, eyes, &head.landmarks)
+    }
+
+    fn build(
+        skin: &TriMesh,
+        moved: &[bool],
+        socket: &dyn Fn(usize) -> bool,
+        eyes: [Vec3; 2],
+        lm: &derma_head::Landmarks,
+    ) -> crate::Result<EyeRegion> {
+        // Weld skin vertices by position; a welded vertex is in the region when any copy moves
+        // and is tracked when any copy lies on the skin chart.
+        let mut weld: HashMap<[u32; 3], usize> = HashMap::new();
+        let mut welded: Vec<(Vec3, Vec3, bool, bool, bool)> = Vec::new(); // pos, n, moved, skin, socket
+        let mut of_vertex = Vec::with_capacity(skin.positions.len());
+        for i in 0..skin.positions.len() {
+            let id = *weld.entry(key(skin.positions[i])).or_insert_with(|| {
+                welded.push((skin.positions[i], skin.normals[i], false, false, false));
+                welded.len() - 1
+            });
+            let w = &mut welded[id];
+            // Within the orbit's reach: 32 mm either side of the globe centre, from 30 mm below
+            // it to the brow 32 mm above (the units' far tails on cheek and forehead stay put).
+            let near = eyes.iter().any(|c| {
+                let d = skin.positions[i] - *c;
+                d.x.abs() < 32.0 && d.y > -30.0 && d.y < 32.0
+            });
+            w.2 |= moved[i] && near;
+            if socket(i) {
+                w.4 = true;
+            } else {
+                w.3 = true;
+                w.1 = skin.normals[i];
+            }
+            of_vertex.push(id);
+        }
+        let side = |p: Vec3| usize::from(p.x < 0.0);
+        // Tracked: one visible skin-chart vertex per grid cell of the modelling camera (the one
+        // nearest the cell centre); every other moved vertex is untracked.
+        let mut cells: BTreeMap<(i32, i32), (f32, usize)> = BTreeMap::new();
+        for (id, w) in welded.iter().enumerate() {
+            if w.2 && w.3 && w.1.z > VISIBLE_COS {
+                let c = w.0.truncate() / TRACK_SPACING;
+                let cell = (c.x.floor() as i32, c.y.floor() as i32);
+                let d = (c - c.floor() - Vec2::splat(0.5)).length_squared();
+                let e = cells.entry(cell).or_insert((f32::MAX, id));
+                if d < e.0 || (d == e.0 && id < e.1) {
+                    *e = (d, id);
+                }
+            }
+        }
+        let chosen: std::collections::BTreeSet<usize> = cells.values().map(|v| v.1).collect();
+        // Model vertices: tracked first, then untracked.
+        let mut model_of: BTreeMap<usize, u32> = BTreeMap::new();
+        let mut rest = Vec::new();
+        let mut rest_normals = Vec::new();
+        let mut eye = Vec::new();
+        let mut tracked = 0;
+        for pass in [true, false] {
+            for (id, w) in welded.iter().enumerate() {
+                if w.2 && chosen.contains(&id) == pass {
+                    model_of.insert(id, rest.len() as u32);
+                    rest.push(w.0);
+                    rest_normals.push(w.1);
+                    eye.push(side(w.0) as u8);
+                }
+            }
+            if pass {
+                tracked = rest.len();
+            }
+        }
+        // Margins: welded vertices with copies on both charts, linked by skin-chart edges.
+        let mut adj: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+        for t in &skin.triangles {
+            if t.iter().any(|&i| socket(i as usize)) {
+                continue;
+            }
+            for k in 0..3 {
+                let (a, b) = (of_vertex[t[k] as usize], of_vertex[t[(k + 1) % 3] as usize]);
+                let seam = |id: usize| welded[id].3 && welded[id].4;
+                if seam(a) && seam(b) {
+                    adj.entry(a).or_default().push(b);
+                    adj.entry(b).or_default().push(a);
+                }
+            }
+        }
+        let mut margins: [[Vec<u32>; 2]; 2] = Default::default();
+        for (e, name) in ["left", "right"].iter().enumerate() {
+            let ring = loop_around(&adj, &welded, |p| side(p) == e, eyes[e]).ok_or_else(|| {
+                crate::EyesError::Invalid(format!(
+                    "no closed lid margin found around the {name} eye (seam between the skin and the socket charts)"
+                ))
+            })?;
+            let nearest = |p: Vec3| {
+                (0..ring.len())
+                    .min_by(|&a, &b| {
+                        (welded[ring[a]].0 - p)
+                            .length_squared()
+                            .total_cmp(&(welded[ring[b]].0 - p).length_squared())
+                    })
+                    .expect("non-empty ring")
+            };
+            let inner = nearest(lm.get(&format!("canthus_inner_{name}")));
+            let outer = nearest(lm.get(&format!("canthus_outer_{name}")));
+            let n = ring.len();
+            let walk = |step: usize| {
+                let mut c = vec![ring[inner]];
+                let mut k = inner;
+                while k != outer {
+                    k = (k + step) % n;
+                    c.push(ring[k]);
+                }
+                c
+            };
+            let (a, b) = (walk(1), walk(n - 1));
+            let mean_y =
+                |c: &[usize]| c.iter().map(|&i| welded[i].0.y).sum::<f32>() / c.len() as f32;
+            let (upper, lower) = if mean_y(&a) > mean_y(&b) {
+                (a, b)
+            } else {
+                (b, a)
+            };
+            let to_model = |c: Vec<usize>| -> crate::Result<Vec<u32>> {
+                c.iter()
+                    .map(|id| {
+                        model_of.get(id).copied().ok_or_else(|| {
+                            crate::EyesError::Invalid(format!(
+                                "a lid-margin vertex of the {name} eye is not moved by the eye units"
+                            ))
+                        })
+                    })
+                    .collect()
+            };
+            margins[e] = [to_model(upper)?, to_model(lower)?];
+        }
+        let skin_to_model = of_vertex
+            .iter()
+            .map(|id| model_of.get(id).copied().unwrap_or(u32::MAX))
+            .collect();
+        Ok(EyeRegion {
+            rest,
+            rest_normals,
+            tracked,
+            eye,
+            margins,
+            skin_to_model,
+        })
+    }
+
+    /// Number of model vertices.
+    pub fn len(&self) -> usize {
+        self.rest.len()
+    }
+
+    /// True when the region has no vertices.
+    pub fn is_empty(&self) -> bool {
+        self.rest.is_empty()
+    }
+
+    /// Positions of the model vertices of a posed skin (same topology as the head's skin).
+    pub fn gather(&self, skin_positions: &[Vec3]) -> Vec<Vec3> {
+        let mut out = self.rest.clone();
+        for (i, &m) in self.skin_to_model.iter().enumerate() {
+            if m != u32::MAX {
+                out[m as usize] = skin_positions[i];
+            }
+        }
+        out
+    }
+
+    /// Writes model-vertex positions back onto the skin's vertices (every UV copy).
+    pub fn scatter(&self, model: &[Vec3], skin_positions: &mut [Vec3]) {
+        for (i, &m) in self.skin_to_model.iter().enumerate() {
+            if m != u32::MAX {
+                skin_positions[i] = model[m as usize];
+            }
+        }
+    }
+
+    /// As [`EyeRegion::scatter`] for normals.
+    pub fn scatter_normals(&self, model: &[Vec3], skin_normals: &mut [Vec3]) {
+        self.scatter(model, skin_normals)
+    }
+}
+
+/// The closed loop of seam vertices on one side, the one nearest the eye centre.
+fn loop_around(
+    adj: &BTreeMap<usize, Vec<usize>>,
+    welded: &[(Vec3, Vec3, bool, bool, bool)],
+    on_side: impl Fn(Vec3) -> bool,
+    centre: Vec3,
+) -> Option<Vec<usize>> {
+    let start = adj
+        .keys()
+        .copied()
+        .filter(|&v| on_side(welded[v].0))
+        .min_by(|&a, &b| {
+            let d = |v: usize| {
+                let p = welded[v].0 - centre;
+                Vec2::new(p.x, p.y).length()
+            };
+            d(a).total_cmp(&d(b))
+        })?;
+    let mut ring = vec![start];
+    let mut prev = usize::MAX;
+    let mut cur = start;
+    loop {
+        let next = adj[&cur].iter().copied().find(|&n| n != prev && n != cur)?;
+        if next == start {
+            break;
+        }
+        if ring.len() > adj.len() {
+            return None;
+        }
+        ring.push(next);
+        prev = cur;
+        cur = next;
+    }
+    (ring.len() >= 8).then_some(ring)
+}

@@ -1,0 +1,102 @@
+//! Screen-space distance fields (thesis ch. 4): for every pixel of the globes, the distance λ to
+//! the nearest skin, from a material mask and a depth buffer — the thesis' three samplers
+//! ([`samplers`]), two exact baselines it did not compare against ([`exact`]: Felzenszwalb &
+//! Huttenlocher's linear-time transform; [`jfa`]: jump flooding), and the lacrimal lake they
+//! drive ([`lake`]). [`scene`] renders the mask and depth of the built-in head's eye region.
+//!
+//! Distances are measured in the plane Ψ through the pixel parallel to the image plane (eq. 4.6):
+//! a screen offset of d pixels at view depth z is d z / f millimetres, the same for every
+//! method, so the exact transform is the reference for all of them.
+
+pub mod exact;
+pub mod jfa;
+pub mod lake;
+pub mod samplers;
+pub mod scene;
+
+/// Material ids of the mask (the thesis' M(u), one 8-bit channel).
+pub mod material {
+    /// Nothing drawn.
+    pub const NONE: u8 = 0;
+    /// Skin.
+    pub const SKIN: u8 = 1;
+    /// An eye globe.
+    pub const EYE: u8 = 2;
+}
+
+/// The G-buffer the fields are computed from.
+#[derive(Clone, Debug)]
+pub struct GBuffer {
+    /// Width (px).
+    pub width: usize,
+    /// Height (px).
+    pub height: usize,
+    /// Material per pixel.
+    pub mask: Vec<u8>,
+    /// View depth z (mm, positive in front of the camera) per pixel; 0 where nothing is drawn.
+    pub depth: Vec<f32>,
+    /// Focal length (px).
+    pub focal: f32,
+}
+
+impl GBuffer {
+    /// Pixels per millimetre in Ψ at pixel `i` (f / z).
+    #[inline]
+    pub fn px_per_mm(&self, i: usize) -> f32 {
+        self.focal / self.depth[i].max(1e-3)
+    }
+
+    /// True where the mask is skin.
+    #[inline]
+    pub fn skin(&self, x: i32, y: i32) -> bool {
+        x >= 0
+            && y >= 0
+            && (x as usize) < self.width
+            && (y as usize) < self.height
+            && self.mask[y as usize * self.width + x as usize] == material::SKIN
+    }
+}
+
+/// A distance field over the globe pixels: λ (mm; `f32::INFINITY` beyond the search range or
+/// off the globes) and the texture accesses spent.
+#[derive(Clone, Debug)]
+pub struct Field {
+    /// λ per pixel.
+    pub distance: Vec<f32>,
+    /// Mask and depth fetches over all pixels computed.
+    pub accesses: u64,
+    /// Pixels computed.
+    pub pixels: u64,
+}
+
+/// A per-pixel pseudo-random number in [0, 1) (a 32-bit integer hash of the pixel and a salt,
+/// Jarzynski & Olano 2020's PCG-style hash), identical on CPU and GPU.
+#[inline]
+pub fn hash01(x: u32, y: u32, salt: u32) -> f32 {
+    let mut v = x
+        .wrapping_mul(1_664_525)
+        .wrapping_add(y.wrapping_mul(22_695_477))
+        .wrapping_add(salt.wrapping_mul(2_654_435_761));
+    v = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+    let w = ((v >> ((v >> 28).wrapping_add(4))) ^ v).wrapping_mul(277_803_737);
+    ((w >> 22) ^ w) as f32 * (1.0 / 4_294_967_296.0)
+}
+
+/// Error of `f` against the exact field `truth` over pixels where the truth is within `range`
+/// (mm): mean |λ − λ*| as a percentage of the range (the thesis' "visual error" normalisation).
+pub fn error_percent(f: &[f32], truth: &[f32], range: f32) -> f64 {
+    let mut sum = 0.0f64;
+    let mut n = 0u64;
+    for (a, b) in f.iter().zip(truth) {
+        if b.is_finite() && *b < range {
+            let a = if a.is_finite() { a.min(range) } else { range };
+            sum += (a - b).abs() as f64;
+            n += 1;
+        }
+    }
+    if n == 0 {
+        0.0
+    } else {
+        100.0 * sum / n as f64 / range as f64
+    }
+}

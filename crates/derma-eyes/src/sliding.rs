@@ -1,0 +1,121 @@
+//! Globe sliding (thesis §3.8–3.9, Algorithm 1): skin that the motion model puts inside a globe
+//! is pushed out radially to the globe's surface plus a skin thickness t, in the globe's current
+//! orientation, so lids ride over the corneal bulge; extrapolated vertices at the lid margins and
+//! canthi keep their rest offset δ₀ from the globe (eq. 3.14); normals follow (eqs. 3.17–3.19).
+
+use crate::globe::RadialMap;
+use glam::{Quat, Vec3};
+
+/// Default cap (mm) on the skin thickness over the globe: a vertex never comes closer to the
+/// globe than min(its rest gap, this). Upper-lid skin with orbicularis and tarsus is about 1 mm
+/// thick near the margin (authored; the thesis leaves t to the user).
+pub const THICKNESS: f32 = 3.0;
+
+/// Extrapolated vertices within this distance (mm) of a globe at rest get the δ₀ treatment: the
+/// lid margins and canthi, not the cheek.
+const DELTA0_REACH: f32 = 4.0;
+
+/// How one vertex slides.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Mode {
+    /// Slides on the skull map; pushed out only when inside the globe (δ̂ > 1).
+    Skull {
+        /// Skin thickness t over the globe.
+        t: f32,
+    },
+    /// An extrapolated vertex kept at its rest radial offset δ₀ from the globe.
+    Offset {
+        /// δ₀ (mm), measured from D + t.
+        delta0: f32,
+        /// Skin thickness t.
+        t: f32,
+        /// Globe sliding normal τ̂₀ at rest (globe frame).
+        tau0: Vec3,
+    },
+}
+
+/// The globes and each vertex's mode.
+#[derive(Clone, Debug)]
+pub struct Slider {
+    /// Globe centres (head space).
+    pub centres: [Vec3; 2],
+    /// D(α) per globe (globe frame).
+    pub maps: [RadialMap; 2],
+    /// Eye of each vertex.
+    pub eye: Vec<u8>,
+    /// Mode of each vertex.
+    pub modes: Vec<Mode>,
+}
+
+impl Slider {
+    /// Modes from rest positions: extrapolated vertices (index ≥ `tracked`) near a globe keep
+    /// δ₀ = |r₀| − D(α₀) − t; every vertex's t is min(rest gap, `thickness`).
+    pub fn new(
+        centres: [Vec3; 2],
+        maps: [RadialMap; 2],
+        rest: &[Vec3],
+        eye: &[u8],
+        tracked: usize,
+        thickness: f32,
+    ) -> Slider {
+        let modes = rest
+            .iter()
+            .enumerate()
+            .map(|(i, &p)| {
+                let e = eye[i] as usize;
+                let r = p - centres[e];
+                let len = r.length().max(1e-6);
+                let d = r / len;
+                let gap = len - maps[e].sample(d);
+                let t = gap.clamp(0.0, thickness);
+                if i >= tracked && gap < DELTA0_REACH {
+                    Mode::Offset {
+                        delta0: gap - t,
+                        t,
+                        tau0: d,
+                    }
+                } else {
+                    Mode::Skull { t }
+                }
+            })
+            .collect();
+        Slider {
+            centres,
+            maps,
+            eye: eye.to_vec(),
+            modes,
+        }
+    }
+
+    /// Algorithm 1 on every vertex, globes rotated by `rot` (from primary position).
+    pub fn apply(&self, rot: [Quat; 2], pos: &mut [Vec3], nrm: &mut [Vec3], rest_normals: &[Vec3]) {
+        let inv = rot.map(|q| q.inverse());
+        for i in 0..pos.len() {
+            let e = self.eye[i] as usize;
+            let c = self.centres[e];
+            // Position in the globe's frame.
+            let r = inv[e] * (pos[i] - c);
+            let len = r.length().max(1e-6);
+            let dir = r / len;
+            match self.modes[i] {
+                Mode::Skull { t } => {
+                    let delta = self.maps[e].sample(dir) + t;
+                    if delta > len {
+                        pos[i] = c + rot[e] * (dir * delta);
+                        // Eq. 3.17–3.18: the globe sliding normal (sphere approximation).
+                        nrm[i] = (pos[i] - c).normalize();
+                    }
+                }
+                Mode::Offset { delta0, t, tau0 } => {
+                    let delta = self.maps[e].sample(dir) + t + delta0;
+                    pos[i] = c + rot[e] * (dir * delta);
+                    // Eq. 3.19: rotate the rest normal by the rotation taking τ̂₀ to τ̂ (both in
+                    // head space).
+                    let tau = (pos[i] - c).normalize();
+                    let q = Quat::from_rotation_arc(tau0, tau);
+                    nrm[i] = q * rest_normals[i];
+                }
+            }
+        }
+    }
+}

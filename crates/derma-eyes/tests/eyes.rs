@@ -1,0 +1,315 @@
+//! The eye-region model, drivers and distance fields against the thesis, the literature and
+//! exact references.
+
+use derma_eyes::blink::{self, Activity};
+use derma_eyes::rigdata::Rig;
+use derma_eyes::sdf::{self, material, samplers::Sampler, GBuffer};
+use derma_eyes::*;
+use std::sync::OnceLock;
+
+fn rig() -> &'static Rig {
+    static R: OnceLock<Rig> = OnceLock::new();
+    R.get_or_init(|| Rig::new(derma_head::Head::builtin()).unwrap())
+}
+
+fn model() -> &'static (tracked::Tracked, EyeModel) {
+    static M: OnceLock<(tracked::Tracked, EyeModel)> = OnceLock::new();
+    M.get_or_init(|| {
+        let t = rig().samples(300, 1);
+        let m = EyeModel::fit(&t, Components::default()).unwrap();
+        (t, m)
+    })
+}
+
+#[test]
+fn the_region_has_about_a_thousand_tracked_vertices_and_four_lid_margins() {
+    let r = &rig().region;
+    assert!((500..1500).contains(&r.tracked), "{}", r.tracked);
+    for e in 0..2 {
+        for l in 0..2 {
+            assert!(r.margins[e][l].len() > 20);
+        }
+        // Upper and lower lids share their canthi.
+        assert_eq!(r.margins[e][0][0], r.margins[e][1][0]);
+        assert_eq!(r.margins[e][0].last(), r.margins[e][1].last());
+    }
+}
+
+#[test]
+fn the_trained_model_reproduces_held_out_frames() {
+    let (_, m) = model();
+    // Fresh poses (another seed) the model never saw.
+    let held = rig().samples(60, 99);
+    let mut sum = 0.0f64;
+    let mut n = 0usize;
+    for f in &held.frames {
+        let g = m.gaze_of(&held, f);
+        let (_, u) = m.predict(&g);
+        for (a, b) in u.iter().zip(&f.vertices) {
+            sum += (*a - *b).length_squared() as f64;
+            n += 1;
+        }
+    }
+    let rms = (sum / n as f64).sqrt();
+    // Stated bound: 0.25 mm RMS over the tracked vertices (the rig's look units clamp, which a
+    // linear model cannot follow exactly).
+    assert!(rms < 0.25, "held-out RMS {rms} mm");
+}
+
+#[test]
+fn one_more_component_never_increases_training_error() {
+    let (t, _) = model();
+    let mut last = (f64::MAX, f64::MAX);
+    for k in 1..=8 {
+        let e = model::training_error(t, k).unwrap();
+        assert!(
+            e.0 <= last.0 * (1.0 + 1e-6) && e.1 <= last.1 * (1.0 + 1e-6),
+            "k {k}: {e:?} after {last:?}"
+        );
+        last = e;
+    }
+    let cv = model::cross_validate(t, Components { lids: 8, skin: 6 }, 5).unwrap();
+    // Fig. 3.7's shape: the held-out error falls steeply over the first components.
+    assert!(
+        cv.skin[3] < 0.1 * cv.skin[0] && cv.lids[4] < 0.5 * cv.lids[0],
+        "{cv:?}"
+    );
+}
+
+#[test]
+fn the_optimised_form_equals_the_two_stage_model() {
+    let (t, m) = model();
+    let opt = m.optimised(&[]);
+    let mut u = vec![glam::Vec2::ZERO; opt.len()];
+    for f in t.frames.iter().step_by(37) {
+        let g = m.gaze_of(t, f);
+        let (_, want) = m.predict(&g);
+        opt.evaluate(&opt.coefficients(&g), &mut u);
+        for (a, b) in u.iter().zip(&want) {
+            assert!((*a - *b).length() < 1e-3, "{a} {b}");
+        }
+    }
+}
+
+#[test]
+fn the_baseline_aperture_lands_in_read_et_al_ranges() {
+    let (_, m) = model();
+    // Read et al. 2006: 9.7 ± 1.2 mm in primary gaze, 6.4 ± 1.1 mm at 40° downgaze.
+    for e in 0..2 {
+        let primary = m.baseline_opening_mm(e, 0.0, 0.0);
+        let down = m.baseline_opening_mm(e, 0.0, -40.0);
+        assert!((primary - 9.7).abs() <= 1.2, "primary {primary}");
+        assert!((down - 6.4).abs() <= 1.1, "40° down {down}");
+        // Closing factor 0 closes the eye.
+        let closed = m.denormalise_lids(e, m.baseline_aperture(e, 0.0, 0.0, 0.0));
+        assert!((closed[0] - closed[1]) < 0.5);
+    }
+}
+
+#[test]
+fn skin_never_penetrates_the_globe_after_sliding() {
+    let (_, m) = model();
+    let head = derma_head::Head::builtin();
+    let ev = evaluate::Evaluator::new(m, &rig().region, head, sliding::THICKNESS).unwrap();
+    let mut f = evaluate::Frame::default();
+    // The neutral frame is the rest mesh.
+    ev.frame(&ev.neutral, &mut f);
+    let worst = f
+        .positions
+        .iter()
+        .zip(&rig().region.rest)
+        .map(|(a, b)| (*a - *b).length())
+        .fold(0.0f32, f32::max);
+    assert!(worst < 1e-3, "{worst}");
+    for (h, v, c) in [
+        (0.0, -35.0, 1.0),
+        (25.0, 10.0, 1.0),
+        (-20.0, -10.0, 0.0),
+        (10.0, 20.0, 0.5),
+    ] {
+        let mut g = ev.neutral.clone();
+        g.eyes = [Fick { h, v, t: 0.0 }; 2];
+        g.lids = [0, 1].map(|e| m.baseline_aperture(e, h, v, c));
+        ev.frame(&g, &mut f);
+        let rot = g.eyes.map(|a| a.rotation());
+        for (i, p) in f.positions.iter().enumerate() {
+            let e = ev.slider.eye[i] as usize;
+            let r = rot[e].inverse() * (*p - ev.slider.centres[e]);
+            let d = ev.slider.maps[e].sample(r.normalize());
+            let outside = match ev.slider.modes[i] {
+                sliding::Mode::Skull { .. } => true,
+                sliding::Mode::Offset { delta0, t, .. } => delta0 + t >= 0.0,
+            };
+            if outside {
+                assert!(
+                    r.length() >= d - 1e-3,
+                    "vertex {i} at {} inside the globe ({d}) at ({h}, {v}, {c})",
+                    r.length()
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn blink_intervals_and_amplitudes_follow_their_distributions() {
+    let b = blink::schedule(3600.0 * 4.0, Activity::Watching, 7);
+    assert!(b.len() > 1000, "{}", b.len());
+    let (mu, sd) = (blink::FREQUENCY_HZ.0 as f64, blink::FREQUENCY_HZ.1 as f64);
+    let (lo, hi) = (
+        blink::FREQ_RANGE.0 as f64 * mu,
+        blink::FREQ_RANGE.1 as f64 * mu,
+    );
+    // Frequencies 1 / interval (the interval starts where the previous blink ended).
+    let mut freq: Vec<f64> = b
+        .windows(2)
+        .map(|w| 1.0 / (w[1].start - w[0].start - w[0].down * (1.0 + blink::UP_OVER_DOWN)) as f64)
+        .collect();
+    let n = freq.len() as f64;
+    let ks = blink::ks_statistic(&mut freq, |x| blink::truncated_cdf(x, mu, sd, lo, hi));
+    // 1 % critical value of the one-sample KS test: 1.63 / √n.
+    assert!(ks < 1.63 / n.sqrt(), "frequency KS {ks}");
+    let mut amp: Vec<f64> = b.iter().map(|x| x.amplitude as f64).collect();
+    let (am, asd) = (blink::AMPLITUDE_DEG.0 as f64, blink::AMPLITUDE_DEG.1 as f64);
+    let ks = blink::ks_statistic(&mut amp, |x| blink::truncated_cdf(x, am, asd, -1e9, 1e9));
+    assert!(ks < 1.63 / (amp.len() as f64).sqrt(), "amplitude KS {ks}");
+    // Closing 40–47 % faster than opening; a mean blink's down phase is 66 ms.
+    for x in &b {
+        let ratio = x.up / x.down;
+        assert!((1.40..=1.47).contains(&ratio));
+    }
+    let mean_down = b.iter().map(|x| x.down).sum::<f32>() / b.len() as f32;
+    assert!((mean_down - 0.066).abs() < 0.002, "{mean_down}");
+    // Rates per activity.
+    for (a, per_min) in [
+        (Activity::Rest, 17.0),
+        (Activity::Conversation, 26.0),
+        (Activity::Reading, 4.5),
+    ] {
+        let n = blink::schedule(3600.0, a, 3).len() as f32 / 60.0;
+        assert!((n - per_min).abs() < 0.35 * per_min, "{a:?}: {n}/min");
+    }
+}
+
+#[test]
+fn idle_saccade_magnitudes_are_exponential() {
+    let f = idle::schedule(3.0 * 3600.0, 5);
+    let mut mags: Vec<f64> = f
+        .windows(2)
+        .filter(|w| !w[1].mutual || !w[0].mutual)
+        .map(|w| w[0].gaze.amplitude_to(w[1].gaze) as f64)
+        .filter(|&a| a > 1.0)
+        .collect();
+    assert!(mags.len() > 500);
+    let mean = mags.iter().sum::<f64>() / mags.len() as f64;
+    // Shifts between away fixations add two exponential draws, so the mean lies between one
+    // and two scales; most are small, few exceed 20°.
+    assert!(mean > 4.0 && mean < 14.0, "{mean}");
+    mags.sort_by(f64::total_cmp);
+    assert!(mags[mags.len() / 2] < mean);
+}
+
+/// A G-buffer of a flat plane (constant depth) with skin where `skin` says and eye elsewhere.
+fn flat(w: usize, h: usize, skin: impl Fn(usize, usize) -> bool) -> GBuffer {
+    GBuffer {
+        width: w,
+        height: h,
+        mask: (0..w * h)
+            .map(|i| {
+                if skin(i % w, i / w) {
+                    material::SKIN
+                } else {
+                    material::EYE
+                }
+            })
+            .collect(),
+        depth: vec![100.0; w * h],
+        focal: 1000.0,
+    }
+}
+
+#[test]
+fn distance_fields_equal_the_exact_transform_on_simple_shapes() {
+    // An eye opening: skin outside a disc of radius 50 px and left of x = 10; the exact transform
+    // against the analytic distance.
+    let (w, h) = (160, 120);
+    let inside =
+        |x: usize, y: usize| ((x as f32 - 80.0).powi(2) + (y as f32 - 60.0).powi(2)).sqrt() < 50.0;
+    let g = flat(w, h, |x, y| !inside(x, y) || x < 40);
+    let exact = sdf::exact::field(&g);
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            if g.mask[i] == material::EYE {
+                // Analytic distance to the nearest skin pixel centre is within a pixel of this.
+                let disc = (50.0 - ((x as f32 - 80.0).powi(2) + (y as f32 - 60.0).powi(2)).sqrt())
+                    .max(0.0);
+                let plane = x as f32 - 39.0;
+                let d_px = exact.distance[i] * g.px_per_mm(i);
+                assert!(
+                    (d_px - disc.min(plane)).abs() <= 1.0,
+                    "({x}, {y}): {d_px} vs {}",
+                    disc.min(plane)
+                );
+            }
+        }
+    }
+    // JFA+1 equals the exact transform here.
+    let j = sdf::jfa::field(&g);
+    assert!(sdf::error_percent(&j.distance, &exact.distance, 3.0) < 1e-3);
+    // The samplers within their stated resolution over pixels within range Λ = 3 mm (30 px): the
+    // samplers find the first skin texel along a ray, the exact transform the nearest texel
+    // centre, so half a pixel (1.7 % of Λ) plus the directions' angular error separates them.
+    let range = 3.0;
+    for (s, tol) in [
+        (
+            Sampler::Backtracking {
+                n: 8,
+                steps: 8,
+                refine: true,
+            },
+            2.5,
+        ),
+        (
+            Sampler::Backtracking {
+                n: 8,
+                steps: 8,
+                refine: false,
+            },
+            5.0,
+        ),
+        (Sampler::Equiangular { n: 64 }, 12.0),
+    ] {
+        let f = sdf::samplers::field(&g, s, range);
+        let e = sdf::error_percent(&f.distance, &exact.distance, range);
+        assert!(e < tol, "{}: {e}%", s.name());
+        // Never closer than the truth by more than a pixel (samples find real skin).
+        for (a, b) in f.distance.iter().zip(&exact.distance) {
+            if a.is_finite() {
+                assert!(*a >= b - 0.1, "{} {a} < {b}", s.name());
+            }
+        }
+    }
+}
+
+#[test]
+fn the_saliency_map_finds_the_odd_one_out() {
+    use derma_core::Map;
+    // Grey noise-free field with one red square: the first target is on it.
+    let (w, h) = (256, 192);
+    let mk = |f: &dyn Fn(usize, usize) -> f32| {
+        Map::from_vec(w, h, (0..w * h).map(|i| f(i % w, i / w)).collect()).unwrap()
+    };
+    let red = |x: usize, y: usize| (170..190).contains(&x) && (50..70).contains(&y);
+    let rgb = [
+        mk(&|x, y| if red(x, y) { 0.9 } else { 0.4 }),
+        mk(&|x, y| if red(x, y) { 0.1 } else { 0.4 }),
+        mk(&|_, _| 0.4),
+    ];
+    let s = saliency::saliency(&rgb);
+    let t = saliency::targets(&s, 3, 0.1);
+    assert!(
+        (t[0].x - 180.0 / 256.0).abs() < 0.06 && (t[0].y - 60.0 / 192.0).abs() < 0.08,
+        "{t:?}"
+    );
+}
