@@ -13,6 +13,7 @@ pub mod jfa;
 pub mod lake;
 pub mod samplers;
 pub mod scene;
+pub mod table;
 
 /// Material ids of the mask (the thesis' M(u), one 8-bit channel).
 pub mod material {
@@ -58,15 +59,28 @@ impl GBuffer {
 }
 
 /// A distance field over the globe pixels: λ (mm; `f32::INFINITY` beyond the search range or
-/// off the globes) and the texture accesses spent.
+/// off the globes) and the texture accesses spent per pixel.
 #[derive(Clone, Debug)]
 pub struct Field {
     /// λ per pixel.
     pub distance: Vec<f32>,
-    /// Mask and depth fetches over all pixels computed.
-    pub accesses: u64,
-    /// Pixels computed.
-    pub pixels: u64,
+    /// Mask, depth and intermediate-texture fetches per pixel.
+    pub accesses: Vec<u32>,
+}
+
+impl Field {
+    /// Mean accesses per texel over the pixels where `relevant` holds (the thesis counts the
+    /// "area of relevancy": globe texels within the lake's range of the skin).
+    pub fn accesses_per_texel(&self, relevant: &[bool]) -> f64 {
+        let (mut s, mut n) = (0u64, 0u64);
+        for (a, r) in self.accesses.iter().zip(relevant) {
+            if *r {
+                s += *a as u64;
+                n += 1;
+            }
+        }
+        s as f64 / n.max(1) as f64
+    }
 }
 
 /// A per-pixel pseudo-random number in [0, 1) (a 32-bit integer hash of the pixel and a salt,

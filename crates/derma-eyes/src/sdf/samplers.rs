@@ -24,15 +24,15 @@ pub enum Sampler {
         steps: u32,
     },
     /// §4.4.3: `n` directions; a direction whose far end (distance Λ) is skin is bisected for up
-    /// to `steps` samples. `refine`: derma's pruning, pixel-resolution stop and two levels of
-    /// angular refinement around the best direction.
+    /// to `steps` samples. `refine` > 0: derma's pruning, pixel-resolution stop and that many
+    /// levels of angular refinement around the best direction (0: the thesis' search).
     Backtracking {
         /// Directions.
         n: u32,
         /// Bisection steps per direction at most.
         steps: u32,
-        /// derma's refinements.
-        refine: bool,
+        /// Levels of angular refinement (0: none, and no pruning or early stop).
+        refine: u32,
     },
 }
 
@@ -43,10 +43,11 @@ impl Sampler {
             Sampler::Equiangular { n } => format!("equiangular {n}"),
             Sampler::Exponential { steps } => format!("exponential {steps}x{steps}"),
             Sampler::Backtracking { n, steps, refine } => {
-                format!(
-                    "backtracking {n}x{steps}{}",
-                    if refine { " refined" } else { "" }
-                )
+                if refine > 0 {
+                    format!("backtracking {n}x{steps}, {refine} refinements")
+                } else {
+                    format!("backtracking {n}x{steps}")
+                }
             }
         }
     }
@@ -74,6 +75,17 @@ impl Px<'_> {
     }
 }
 
+impl Px<'_> {
+    /// Distance (mm in Ψ) from the pixel's centre to the centre of the texel at distance `d`
+    /// along `dir`: the skin point a search ends on is that texel, and the distance between
+    /// texel centres is what the exact transform measures (no access: the texel is known).
+    fn centre_distance(&self, dir: (f32, f32), d: f32) -> f32 {
+        let sx = (self.x + dir.0 * d * self.ppm).floor() + 0.5;
+        let sy = (self.y + dir.1 * d * self.ppm).floor() + 0.5;
+        (sx - self.x).hypot(sy - self.y) / self.ppm
+    }
+}
+
 fn unit(a: f32) -> (f32, f32) {
     (a.cos(), a.sin())
 }
@@ -86,12 +98,12 @@ fn bisect(
     mut lo: f32,
     mut hi: f32,
     steps: u32,
-    refine: bool,
+    refine: u32,
     best: f32,
 ) -> f32 {
     let half_px = 0.5 / p.ppm;
     for _ in 0..steps {
-        if refine && (hi - lo < half_px || lo >= best) {
+        if refine > 0 && (hi - lo < half_px || lo >= best) {
             break;
         }
         let mid = 0.5 * (lo + hi);
@@ -104,25 +116,33 @@ fn bisect(
     hi
 }
 
-fn backtracking(p: &mut Px, range: f32, n: u32, steps: u32, refine: bool, rot: f32) -> f32 {
+fn backtracking(p: &mut Px, range: f32, n: u32, steps: u32, refine: u32, rot: f32) -> f32 {
     let mut best = f32::INFINITY;
     let mut best_angle = 0.0;
+    // With refinement, the far end reaches Λ / cos(π / n): a texel within Λ of a straight margin
+    // then always has a direction within half the spacing of the perpendicular that hits it.
+    let reach = if refine > 0 {
+        range / (std::f32::consts::PI / n as f32).cos()
+    } else {
+        range
+    };
     for i in 0..n {
         let a = TAU * (i as f32 + rot) / n as f32;
         let dir = unit(a);
-        if !p.skin_at(dir, range) {
+        if !p.skin_at(dir, reach) {
             continue;
         }
-        let d = bisect(p, dir, 0.0, range, steps, refine, best);
+        let d = bisect(p, dir, 0.0, reach, steps, refine, best);
+        let d = p.centre_distance(dir, d);
         if d < best {
             best = d;
             best_angle = a;
         }
     }
-    if refine && best.is_finite() {
-        // Two levels of angular refinement: ±¼ and ±⅛ of the direction spacing.
+    if refine > 0 && best.is_finite() {
+        // Angular refinement: ±¼, ±⅛, … of the direction spacing around the best direction.
         let mut spacing = TAU / n as f32;
-        for _ in 0..2 {
+        for _ in 0..refine {
             spacing *= 0.5;
             let centre = best_angle;
             for s in [-0.5f32, 0.5] {
@@ -132,7 +152,16 @@ fn backtracking(p: &mut Px, range: f32, n: u32, steps: u32, refine: bool, rot: f
                 if !p.skin_at(dir, best) {
                     continue;
                 }
-                let d = bisect(p, dir, 0.0, best, steps, refine, best);
+                // Below best · cos(spacing) a locally straight lid margin has no skin on this
+                // direction (the best direction is within the spacing of the perpendicular):
+                // bisect from there, after checking that it is indeed free.
+                let floor = best * spacing.cos();
+                let d = if p.skin_at(dir, floor) {
+                    bisect(p, dir, 0.0, floor, steps, refine, best)
+                } else {
+                    bisect(p, dir, floor, best, steps, refine, best)
+                };
+                let d = p.centre_distance(dir, d);
                 if d < best {
                     best = d;
                     best_angle = a;
@@ -150,18 +179,18 @@ fn equiangular(p: &mut Px, range: f32, n: u32, rot: f32, px: (u32, u32)) -> f32 
         // Uniform distance in (0, Λ].
         let d = range * (1.0 - hash01(px.0, px.1, 0x100 + i));
         if p.skin_at(dir, d) {
-            best = best.min(d);
+            best = best.min(p.centre_distance(dir, d));
         }
     }
     best
 }
 
 /// Exponential line search along `dir` (§4.4.2) on a metric: `probe(d)` fetches and returns the
-/// metric at distance d. Steps grow by µ = 2 from h₀ (so `steps` growing steps reach Λ) until
+/// metric at distance d. Steps grow by µ = 2 from h₀ (half the steps reach Λ) until
 /// the metric stops improving, then reverse with shrinking steps.
 fn exp_search(range: f32, steps: u32, mut probe: impl FnMut(f32) -> f32) -> f32 {
     let mu = 2.0f32;
-    let h0 = range * (mu - 1.0) / (mu.powi(steps as i32) - 1.0);
+    let h0 = range * (mu - 1.0) / (mu.powi(steps.div_ceil(2) as i32) - 1.0);
     let mut best = f32::INFINITY;
     let mut pos = 0.0f32;
     let mut step = h0;
@@ -201,7 +230,8 @@ fn exp_search(range: f32, steps: u32, mut probe: impl FnMut(f32) -> f32) -> f32 
 /// that turn back whenever the sample's material changes; the nearest skin sample seen.
 fn exp_boundary(range: f32, steps: u32, mut skin: impl FnMut(f32) -> bool) -> f32 {
     let mu = 2.0f32;
-    let h0 = range * (mu - 1.0) / (mu.powi(steps as i32) - 1.0);
+    // The growing steps reach Λ in half the budget, leaving the other half to refine.
+    let h0 = range * (mu - 1.0) / (mu.powi(steps.div_ceil(2) as i32) - 1.0);
     let (mut pos, mut step, mut found, mut dir) = (0.0f32, h0, false, 1.0f32);
     let mut best = f32::INFINITY;
     for _ in 0..steps {
@@ -238,7 +268,7 @@ pub fn field(g: &GBuffer, s: Sampler, range: f32) -> Field {
     match s {
         Sampler::Exponential { steps } => exponential(g, steps, range),
         _ => {
-            let (distance, acc): (Vec<f32>, Vec<u64>) = (0..w * g.height)
+            let (distance, accesses): (Vec<f32>, Vec<u32>) = (0..w * g.height)
                 .into_par_iter()
                 .map(|i| {
                     if g.mask[i] != material::EYE {
@@ -260,14 +290,10 @@ pub fn field(g: &GBuffer, s: Sampler, range: f32) -> Field {
                         }
                         Sampler::Exponential { .. } => unreachable!(),
                     };
-                    (d, p.accesses as u64)
+                    (d, p.accesses)
                 })
                 .unzip();
-            Field {
-                pixels: g.mask.iter().filter(|&&m| m == material::EYE).count() as u64,
-                accesses: acc.iter().sum(),
-                distance,
-            }
+            Field { distance, accesses }
         }
     }
 }
@@ -279,18 +305,21 @@ fn exponential(g: &GBuffer, steps: u32, range: f32) -> Field {
         (sx >= 0 && sy >= 0 && (sx as usize) < w && (sy as usize) < g.height)
             .then(|| sy as usize * w + sx as usize)
     };
-    // Pass 1: along the rotated axis, both ways; metric = distance where the mask is skin.
-    let pass1: Vec<(f32, u64)> = (0..w * g.height)
+    // Pass 1: along the pixel's rotated axis, both ways. derma stores the offset (px) to the
+    // skin point found, not only its distance λ̃: with per-pixel rotations the axes of
+    // neighbouring pixels differ, and eq. 4.13's right angle would not hold.
+    let pass1: Vec<(f32, f32, u64)> = (0..w * g.height)
         .into_par_iter()
         .map(|i| {
             if g.mask[i] != material::EYE {
-                return (f32::INFINITY, 0);
+                return (f32::INFINITY, f32::INFINITY, 0);
             }
             let (x, y) = ((i % w) as u32, (i / w) as u32);
             let a = TAU * hash01(x, y, ROTATION_SALT);
             let ppm = g.px_per_mm(i);
             let mut acc = 1u64;
-            let mut best = f32::INFINITY;
+            let mut best = (f32::INFINITY, f32::INFINITY);
+            let mut best_d = f32::INFINITY;
             for sgn in [1.0f32, -1.0] {
                 let dir = (sgn * a.cos(), sgn * a.sin());
                 let d = exp_boundary(range, steps, |d| {
@@ -301,13 +330,23 @@ fn exponential(g: &GBuffer, steps: u32, range: f32) -> Field {
                     )
                     .is_some_and(|j| g.mask[j] == material::SKIN)
                 });
-                best = best.min(d);
+                if d.is_finite() {
+                    // Offset to the centre of the skin texel found.
+                    let cx = (x as f32 + 0.5 + dir.0 * d * ppm).floor() + 0.5 - (x as f32 + 0.5);
+                    let cy = (y as f32 + 0.5 + dir.1 * d * ppm).floor() + 0.5 - (y as f32 + 0.5);
+                    let dc = cx.hypot(cy) / ppm;
+                    if dc < best_d {
+                        best_d = dc;
+                        best = (cx, cy);
+                    }
+                }
             }
-            (best, acc)
+            (best.0, best.1, acc)
         })
         .collect();
-    // Pass 2: perpendicular, on λᵢ = sqrt(|sᵢ − x|² + λ̃(sᵢ)²) (eq. 4.13).
-    let (distance, acc2): (Vec<f32>, Vec<u64>) = (0..w * g.height)
+    // Pass 2: perpendicular, minimising the distance to the skin points pass 1 found at the
+    // samples (eq. 4.13 with the stored offsets).
+    let (distance, accesses): (Vec<f32>, Vec<u32>) = (0..w * g.height)
         .into_par_iter()
         .map(|i| {
             if g.mask[i] != material::EYE {
@@ -317,30 +356,31 @@ fn exponential(g: &GBuffer, steps: u32, range: f32) -> Field {
             let a = TAU * hash01(x, y, ROTATION_SALT) + std::f32::consts::FRAC_PI_2;
             let ppm = g.px_per_mm(i);
             let mut acc = 0u64;
-            let mut best = pass1[i].0;
+            let own = pass1[i];
+            let mut best = (own.0 * own.0 + own.1 * own.1).sqrt() / ppm;
             for sgn in [1.0f32, -1.0] {
                 let dir = (sgn * a.cos(), sgn * a.sin());
                 let d = exp_search(range, steps, |t| {
-                    acc += 2; // mask and λ̃
-                    match idx(
-                        x as f32 + 0.5 + dir.0 * t * ppm,
-                        y as f32 + 0.5 + dir.1 * t * ppm,
-                    ) {
-                        Some(j) if g.mask[j] == material::SKIN => t,
+                    acc += 2; // mask and the stored offset
+                    let (ox, oy) = (dir.0 * t * ppm, dir.1 * t * ppm);
+                    let j = idx(x as f32 + 0.5 + ox, y as f32 + 0.5 + oy);
+                    // Offsets between texel centres.
+                    let (cx, cy) = (
+                        (x as f32 + 0.5 + ox).floor() - x as f32,
+                        (y as f32 + 0.5 + oy).floor() - y as f32,
+                    );
+                    match j {
+                        Some(j) if g.mask[j] == material::SKIN => cx.hypot(cy) / ppm,
                         Some(j) if g.mask[j] == material::EYE && pass1[j].0.is_finite() => {
-                            (t * t + pass1[j].0 * pass1[j].0).sqrt()
+                            (cx + pass1[j].0).hypot(cy + pass1[j].1) / ppm
                         }
                         _ => f32::INFINITY,
                     }
                 });
                 best = best.min(d);
             }
-            (best, acc + pass1[i].1)
+            (best, (acc + pass1[i].2) as u32)
         })
         .unzip();
-    Field {
-        pixels: g.mask.iter().filter(|&&m| m == material::EYE).count() as u64,
-        accesses: acc2.iter().sum(),
-        distance,
-    }
+    Field { distance, accesses }
 }
