@@ -11,6 +11,10 @@ use crate::skull::SkullMap;
 use crate::sliding::Slider;
 use glam::{Quat, Vec2, Vec3};
 
+/// Travel (mm, in the modelling camera) over which a vertex's rest offset from the skull map
+/// fades (authored: about the depth of the upper-lid crease).
+pub const UNFOLD_MM: f32 = 1.0;
+
 /// Texels per side of each globe's radial map (0.2 mm arc per texel on a 12 mm globe).
 pub const RADIAL_MAP_SIZE: usize = 128;
 
@@ -27,6 +31,8 @@ pub struct Evaluator {
     /// Per vertex: rest position minus T(ũ⁺ at the neutral input), so the neutral frame is the
     /// rest mesh exactly (vertices hidden in folds keep their depth).
     offset: Vec<Vec3>,
+    /// Per vertex: ũ⁺ at the neutral input.
+    u0: Vec<Vec2>,
     /// Per vertex: Υ(ũ⁺ neutral), normalised.
     skull_n0: Vec<Vec3>,
     /// Rest normals.
@@ -76,12 +82,34 @@ impl Evaluator {
                 }
             }
         }
-        let rows = crate::transfer::extrapolation(
-            &sources,
-            &source_eye,
-            &region.rest[region.tracked..],
-            &region.eye[region.tracked..],
-        );
+        // Untracked skin follows tracked vertices and lid points; the lids' inner surfaces and
+        // the conjunctiva (socket charts) follow the lid curves alone — their nearest tracked
+        // skin lies across the lid, on the surface that does not move with them.
+        let nt = region.tracked;
+        let lid_only: Vec<u8> = source_eye
+            .iter()
+            .enumerate()
+            .map(|(j, &e)| if j >= nt { e } else { u8::MAX })
+            .collect();
+        let (skin_i, inner_i): (Vec<usize>, Vec<usize>) =
+            (nt..region.len()).partition(|&i| !region.inner[i]);
+        let pick = |idx: &[usize]| -> (Vec<Vec3>, Vec<u8>) {
+            (
+                idx.iter().map(|&i| region.rest[i]).collect(),
+                idx.iter().map(|&i| region.eye[i]).collect(),
+            )
+        };
+        let (sp, se) = pick(&skin_i);
+        let (ip, ie) = pick(&inner_i);
+        let skin_rows = crate::transfer::extrapolation(&sources, &source_eye, &sp, &se);
+        let inner_rows = crate::transfer::extrapolation(&sources, &lid_only, &ip, &ie);
+        let mut rows = vec![Vec::new(); region.len() - nt];
+        for (i, r) in skin_i.iter().zip(skin_rows) {
+            rows[i - nt] = r;
+        }
+        for (i, r) in inner_i.iter().zip(inner_rows) {
+            rows[i - nt] = r;
+        }
         let optimised = model.optimised(&rows);
         let (lo, hi) = region.rest.iter().fold(
             (Vec2::splat(f32::MAX), Vec2::splat(f32::MIN)),
@@ -92,14 +120,23 @@ impl Evaluator {
         // The face's front surface: skin-chart triangles in front of the globe centres (the
         // camera would otherwise see the inside of the back of the head through the openings).
         let front = head.eyes[0].centre.z.min(head.eyes[1].centre.z) - 8.0;
-        let skull = SkullMap::new(
-            skin,
-            |t| {
-                let tri = skin.triangles[t];
-                !tri.iter()
-                    .any(|&i| head.regions.in_socket(skin.uvs[i as usize]))
-                    && tri.iter().all(|&i| skin.positions[i as usize].z > front)
-            },
+        let keep = |t: usize| {
+            let tri = skin.triangles[t];
+            !tri.iter()
+                .any(|&i| head.regions.in_socket(skin.uvs[i as usize]))
+                && tri.iter().all(|&i| skin.positions[i as usize].z > front)
+        };
+        // The head's own closed lids close the openings (its blink pose).
+        let mut closed = head.posed_skin(&[("eyeBlinkLeft", 1.0), ("eyeBlinkRight", 1.0)]);
+        closed.compute_normals();
+        let keep_closed = |t: usize| {
+            let tri = closed.triangles[t];
+            !tri.iter()
+                .any(|&i| head.regions.in_socket(closed.uvs[i as usize]))
+                && tri.iter().all(|&i| closed.positions[i as usize].z > front)
+        };
+        let skull = SkullMap::layered(
+            &[(skin, &keep), (&closed, &keep_closed)],
             lo - margin,
             hi + margin,
         )?;
@@ -111,7 +148,7 @@ impl Evaluator {
             maps,
             &region.rest,
             &region.eye,
-            region.tracked,
+            &region.inner,
             thickness,
         );
         let neutral = Gaze {
@@ -135,6 +172,7 @@ impl Evaluator {
             slider,
             globes,
             offset,
+            u0: u,
             skull_n0,
             rest_normals: region.rest_normals.clone(),
             neutral,
@@ -156,7 +194,11 @@ impl Evaluator {
         self.optimised.evaluate(e, &mut f.u);
         for i in 0..n {
             let (p, nn) = self.skull.sample(f.u[i]);
-            f.positions[i] = p + self.offset[i];
+            // Skin hidden in a fold at rest (the upper lid under its crease) unfolds onto the
+            // visible surface as it slides away: its rest offset fades over UNFOLD_MM of travel.
+            let travel = (f.u[i] - self.u0[i]).length();
+            let keep = (1.0 - travel / UNFOLD_MM).max(0.0);
+            f.positions[i] = p + self.offset[i] * keep;
             let nn = nn.normalize_or(Vec3::Z);
             f.normals[i] = Quat::from_rotation_arc(self.skull_n0[i], nn) * self.rest_normals[i];
         }

@@ -9,17 +9,21 @@
 //! - [`globe`], [`skull`], [`sliding`], [`evaluate`]: the eyeball with its corneal bulge, the
 //!   skull maps and globe sliding (Algorithm 1) that turn a model frame into 3D.
 //! - [`blink`], [`saccade`], [`idle`], [`saliency`]: the drivers — stochastic blinks, main-sequence
-//!   saccades, idle gaze and salient gaze targets.
+//!   saccades, idle gaze and salient gaze targets; [`animate`] turns them into frames and
+//!   [`synthetic`] into noisy tracked sequences.
 //! - [`sdf`]: screen-space distance fields and the lacrimal lake (ch. 4).
 //!
 //! Units are millimetres and degrees; the head looks down +Z with +Y up.
 
 #![warn(missing_docs)]
 
+pub mod animate;
 pub mod blink;
 pub mod error;
 pub mod evaluate;
+pub mod files;
 pub mod gaze;
+pub mod glb;
 pub mod globe;
 pub mod idle;
 pub mod lids;
@@ -27,12 +31,14 @@ pub mod model;
 pub mod pca;
 pub mod region;
 pub mod regression;
+pub mod render;
 pub mod rigdata;
 pub mod saccade;
 pub mod saliency;
 pub mod sdf;
 pub mod skull;
 pub mod sliding;
+pub mod synthetic;
 pub mod tracked;
 pub mod transfer;
 

@@ -82,20 +82,34 @@ impl Pca {
                 })
                 .unzip()
         };
-        // A deterministic sign: the largest-magnitude entry of each component is positive.
-        let components = vectors
-            .into_iter()
-            .map(|mut v| {
-                let big = v
-                    .iter()
-                    .copied()
-                    .fold(0.0f64, |a, x| if x.abs() > a.abs() { x } else { a });
-                if big < 0.0 {
-                    v.iter_mut().for_each(|x| *x = -*x);
-                }
-                v
-            })
-            .collect();
+        // Components without variance (fewer distinct frames than asked for) are dropped; the
+        // rest are re-orthogonalised (Gram–Schmidt) against rounding, and given a deterministic
+        // sign: the largest-magnitude entry of each component is positive.
+        let mut components: Vec<Vec<f64>> = Vec::new();
+        let mut variances = Vec::new();
+        for (lambda, mut v) in values.into_iter().zip(vectors) {
+            if lambda <= 1e-12 * total_variance.max(1e-300) {
+                continue;
+            }
+            for c in &components {
+                let d = dot(&v, c);
+                v.iter_mut().zip(c).for_each(|(x, y)| *x -= d * y);
+            }
+            if dot(&v, &v) < 1e-12 {
+                continue;
+            }
+            normalise(&mut v);
+            let big = v
+                .iter()
+                .copied()
+                .fold(0.0f64, |a, x| if x.abs() > a.abs() { x } else { a });
+            if big < 0.0 {
+                v.iter_mut().for_each(|x| *x = -*x);
+            }
+            components.push(v);
+            variances.push(lambda);
+        }
+        let values = variances;
         Ok(Pca {
             mean,
             components,

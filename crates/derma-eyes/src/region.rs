@@ -30,12 +30,13 @@ pub const REGION_UNITS: [&str; 14] = [
 /// third of the ~0.3 mm texel of a 2048² texture, below anything a render shows.
 const SUPPORT_MM: f32 = 0.1;
 
-/// Spacing (mm, in the modelling camera) of the tracked vertices: one per 2.5 mm cell gives
-/// about a thousand over both eye regions, the thesis' "about a thousand vertices" (§3.5); the
-/// rest of the region follows them by extrapolation (eq. 3.5).
+/// Spacing (mm, in the modelling camera) of the tracked vertices of a capture-like region
+/// ([`EyeRegion::of_head_sampled`]): one per 2.5 mm cell gives about a thousand over both eye
+/// regions, the thesis' "about a thousand vertices" (§3.5); the rest of the region follows them
+/// by extrapolation (eq. 3.5).
 pub const TRACK_SPACING: f32 = 2.5;
 
-/// A tracked vertex faces the camera at least this much (n · z): a video tracker sees it.
+/// A sampled tracked vertex faces the camera at least this much (n · z): a video tracker sees it.
 const VISIBLE_COS: f32 = 0.25;
 
 /// The region of one head.
@@ -49,6 +50,9 @@ pub struct EyeRegion {
     pub tracked: usize,
     /// Which eye (0 left, 1 right) each model vertex belongs to.
     pub eye: Vec<u8>,
+    /// True for vertices only on the socket charts: the lids' inner surfaces and the
+    /// conjunctiva, which follow the lid margins.
+    pub inner: Vec<bool>,
     /// Lid margins: per eye, upper then lower, model-vertex indices from the inner to the outer
     /// canthus (both chains share their end vertices).
     pub margins: [[Vec<u32>; 2]; 2],
@@ -62,8 +66,15 @@ fn key(p: Vec3) -> [u32; 3] {
 
 impl EyeRegion {
     /// The region of `head`: vertices the region units move, welded; margins from the seam
-    /// between the skin and the eye-socket charts.
+    /// between the skin and the eye-socket charts. Every skin-chart vertex is tracked (a rig
+    /// gives them all); the lids' inner surfaces are extrapolated.
     pub fn of_head(head: &Head) -> crate::Result<EyeRegion> {
+        Self::of_head_sampled(head, None)
+    }
+
+    /// As [`EyeRegion::of_head`] with the tracked vertices of a video capture: one visible
+    /// vertex per `spacing` mm cell (e.g. [`TRACK_SPACING`]), the rest extrapolated.
+    pub fn of_head_sampled(head: &Head, spacing: Option<f32>) -> crate::Result<EyeRegion> {
         let skin = &head.skin;
         let units = head.face_units();
         let mut moved = vec![false; skin.positions.len()];
@@ -79,7 +90,7 @@ impl EyeRegion {
         }
         let socket = |i: usize| head.regions.in_socket(skin.uvs[i]);
         let eyes = [head.eyes[0].centre, head.eyes[1].centre];
-        Self::build(skin, &moved, &socket, eyes, &head.landmarks)
+        Self::build(skin, &moved, &socket, eyes, &head.landmarks, spacing)
     }
 
     fn build(
@@ -88,6 +99,7 @@ impl EyeRegion {
         socket: &dyn Fn(usize) -> bool,
         eyes: [Vec3; 2],
         lm: &derma_head::Landmarks,
+        spacing: Option<f32>,
     ) -> crate::Result<EyeRegion> {
         // Weld skin vertices by position; a welded vertex is in the region when any copy moves
         // and is tracked when any copy lies on the skin chart.
@@ -120,8 +132,14 @@ impl EyeRegion {
         // nearest the cell centre); every other moved vertex is untracked.
         let mut cells: BTreeMap<(i32, i32), (f32, usize)> = BTreeMap::new();
         for (id, w) in welded.iter().enumerate() {
+            let Some(spacing) = spacing else {
+                if w.2 && w.3 {
+                    cells.insert((id as i32, 0), (0.0, id));
+                }
+                continue;
+            };
             if w.2 && w.3 && w.1.z > VISIBLE_COS {
-                let c = w.0.truncate() / TRACK_SPACING;
+                let c = w.0.truncate() / spacing;
                 let cell = (c.x.floor() as i32, c.y.floor() as i32);
                 let d = (c - c.floor() - Vec2::splat(0.5)).length_squared();
                 let e = cells.entry(cell).or_insert((f32::MAX, id));
@@ -136,6 +154,7 @@ impl EyeRegion {
         let mut rest = Vec::new();
         let mut rest_normals = Vec::new();
         let mut eye = Vec::new();
+        let mut inner = Vec::new();
         let mut tracked = 0;
         for pass in [true, false] {
             for (id, w) in welded.iter().enumerate() {
@@ -144,6 +163,7 @@ impl EyeRegion {
                     rest.push(w.0);
                     rest_normals.push(w.1);
                     eye.push(side(w.0) as u8);
+                    inner.push(!w.3);
                 }
             }
             if pass {
@@ -223,6 +243,7 @@ impl EyeRegion {
             rest_normals,
             tracked,
             eye,
+            inner,
             margins,
             skin_to_model,
         })

@@ -33,42 +33,58 @@ impl SkullMap {
         lo: Vec2,
         hi: Vec2,
     ) -> crate::Result<SkullMap> {
+        Self::layered(&[(mesh, &keep)], lo, hi)
+    }
+
+    /// As [`SkullMap::new`] over several layers: each later layer covers only the texels the
+    /// earlier ones left empty (the rest pose first, then the closed lids).
+    pub fn layered(
+        layers: &[(&TriMesh, &dyn Fn(usize) -> bool)],
+        lo: Vec2,
+        hi: Vec2,
+    ) -> crate::Result<SkullMap> {
         let width = ((hi.x - lo.x) / TEXEL_MM).ceil() as usize + 1;
         let height = ((hi.y - lo.y) / TEXEL_MM).ceil() as usize + 1;
         let mut depth = vec![f32::MIN; width * height];
         let mut texels = vec![[0.0f32; 6]; width * height];
-        for (ti, t) in mesh.triangles.iter().enumerate() {
-            if !keep(ti) {
-                continue;
-            }
-            let p = t.map(|i| mesh.positions[i as usize]);
-            let n = t.map(|i| mesh.normals[i as usize]);
-            let q = p.map(|v| (v.truncate() - lo) / TEXEL_MM);
-            let area = (q[1] - q[0]).perp_dot(q[2] - q[0]);
-            if area.abs() < 1e-12 {
-                continue;
-            }
-            let bmin = q[0].min(q[1]).min(q[2]).floor().max(Vec2::ZERO);
-            let bmax = q[0]
-                .max(q[1])
-                .max(q[2])
-                .ceil()
-                .min(Vec2::new(width as f32 - 1.0, height as f32 - 1.0));
-            for y in bmin.y as usize..=bmax.y.max(0.0) as usize {
-                for x in bmin.x as usize..=bmax.x.max(0.0) as usize {
-                    let s = Vec2::new(x as f32, y as f32);
-                    let w1 = (q[2] - q[1]).perp_dot(s - q[1]) / area;
-                    let w2 = (q[0] - q[2]).perp_dot(s - q[2]) / area;
-                    let w3 = 1.0 - w1 - w2;
-                    if w1 < -1e-5 || w2 < -1e-5 || w3 < -1e-5 {
-                        continue;
-                    }
-                    let pos = p[0] * w1 + p[1] * w2 + p[2] * w3;
-                    let i = y * width + x;
-                    if pos.z > depth[i] {
-                        depth[i] = pos.z;
-                        let nn = (n[0] * w1 + n[1] * w2 + n[2] * w3).normalize_or(Vec3::Z);
-                        texels[i] = [pos.x, pos.y, pos.z, nn.x, nn.y, nn.z];
+        for (mesh, keep) in layers {
+            let before: Vec<bool> = depth.iter().map(|d| *d > f32::MIN).collect();
+            for (ti, t) in mesh.triangles.iter().enumerate() {
+                if !keep(ti) {
+                    continue;
+                }
+                let p = t.map(|i| mesh.positions[i as usize]);
+                let n = t.map(|i| mesh.normals[i as usize]);
+                let q = p.map(|v| (v.truncate() - lo) / TEXEL_MM);
+                let area = (q[1] - q[0]).perp_dot(q[2] - q[0]);
+                if area.abs() < 1e-12 {
+                    continue;
+                }
+                let bmin = q[0].min(q[1]).min(q[2]).floor().max(Vec2::ZERO);
+                let bmax = q[0]
+                    .max(q[1])
+                    .max(q[2])
+                    .ceil()
+                    .min(Vec2::new(width as f32 - 1.0, height as f32 - 1.0));
+                for y in bmin.y as usize..=bmax.y.max(0.0) as usize {
+                    for x in bmin.x as usize..=bmax.x.max(0.0) as usize {
+                        let i = y * width + x;
+                        if before[i] {
+                            continue;
+                        }
+                        let s = Vec2::new(x as f32, y as f32);
+                        let w1 = (q[2] - q[1]).perp_dot(s - q[1]) / area;
+                        let w2 = (q[0] - q[2]).perp_dot(s - q[2]) / area;
+                        let w3 = 1.0 - w1 - w2;
+                        if w1 < -1e-5 || w2 < -1e-5 || w3 < -1e-5 {
+                            continue;
+                        }
+                        let pos = p[0] * w1 + p[1] * w2 + p[2] * w3;
+                        if pos.z > depth[i] {
+                            depth[i] = pos.z;
+                            let nn = (n[0] * w1 + n[1] * w2 + n[2] * w3).normalize_or(Vec3::Z);
+                            texels[i] = [pos.x, pos.y, pos.z, nn.x, nn.y, nn.z];
+                        }
                     }
                 }
             }

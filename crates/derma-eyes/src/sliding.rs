@@ -9,7 +9,7 @@ use glam::{Quat, Vec3};
 /// Default cap (mm) on the skin thickness over the globe: a vertex never comes closer to the
 /// globe than min(its rest gap, this). Upper-lid skin with orbicularis and tarsus is about 1 mm
 /// thick near the margin (authored; the thesis leaves t to the user).
-pub const THICKNESS: f32 = 3.0;
+pub const THICKNESS: f32 = 1.0;
 
 /// Extrapolated vertices within this distance (mm) of a globe at rest get the δ₀ treatment: the
 /// lid margins and canthi, not the cheek.
@@ -48,14 +48,15 @@ pub struct Slider {
 }
 
 impl Slider {
-    /// Modes from rest positions: extrapolated vertices (index ≥ `tracked`) near a globe keep
-    /// δ₀ = |r₀| − D(α₀) − t; every vertex's t is min(rest gap, `thickness`).
+    /// Modes from rest positions: `offset` vertices (the thesis' extrapolated lid margins and
+    /// canthi: here the lids' inner surfaces) near a globe keep δ₀ = |r₀| − D(α₀) − t; every
+    /// vertex's t is min(rest gap, `thickness`).
     pub fn new(
         centres: [Vec3; 2],
         maps: [RadialMap; 2],
         rest: &[Vec3],
         eye: &[u8],
-        tracked: usize,
+        offset: &[bool],
         thickness: f32,
     ) -> Slider {
         let modes = rest
@@ -68,7 +69,7 @@ impl Slider {
                 let d = r / len;
                 let gap = len - maps[e].sample(d);
                 let t = gap.clamp(0.0, thickness);
-                if i >= tracked && gap < DELTA0_REACH {
+                if offset[i] && gap < DELTA0_REACH {
                     Mode::Offset {
                         delta0: gap - t,
                         t,

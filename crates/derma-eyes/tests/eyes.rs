@@ -22,9 +22,21 @@ fn model() -> &'static (tracked::Tracked, EyeModel) {
 }
 
 #[test]
-fn the_region_has_about_a_thousand_tracked_vertices_and_four_lid_margins() {
+fn the_region_has_four_lid_margins_and_a_capture_like_sample_of_a_thousand_vertices() {
+    let sampled = region::EyeRegion::of_head_sampled(
+        derma_head::Head::builtin(),
+        Some(region::TRACK_SPACING),
+    )
+    .unwrap();
+    assert!(
+        (500..1500).contains(&sampled.tracked),
+        "{}",
+        sampled.tracked
+    );
     let r = &rig().region;
-    assert!((500..1500).contains(&r.tracked), "{}", r.tracked);
+    // The rig tracks every skin vertex it moves; only the lids' inner surfaces are extrapolated.
+    assert!((0..r.len()).all(|i| (i < r.tracked) != r.inner[i]));
+    assert_eq!(sampled.len(), r.len());
     for e in 0..2 {
         for l in 0..2 {
             assert!(r.margins[e][l].len() > 20);
@@ -234,7 +246,8 @@ fn distance_fields_equal_the_exact_transform_on_simple_shapes() {
     // image border that every search stays inside the image (screen space knows nothing beyond
     // it); the exact transform against the analytic distance.
     let (w, h) = (220, 180);
-    let inside = |x: usize, y: usize| ((x as f32 - 110.0).powi(2) + (y as f32 - 90.0).powi(2)).sqrt() < 50.0;
+    let inside =
+        |x: usize, y: usize| ((x as f32 - 110.0).powi(2) + (y as f32 - 90.0).powi(2)).sqrt() < 50.0;
     let g = flat(w, h, |x, y| !inside(x, y) || x < 70);
     let exact = sdf::exact::field(&g);
     for y in 0..h {

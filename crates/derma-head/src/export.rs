@@ -11,7 +11,7 @@ use serde_json::{json, Value};
 use std::path::Path;
 
 /// glTF metres per derma millimetre.
-const M_PER_MM: f32 = 1e-3;
+pub const M_PER_MM: f32 = 1e-3;
 
 /// Writes the skin alone as `path` (the mesh `derma skin --mesh` paints) and every other part as
 /// named objects in `parts_path` (`eye_left`, `eye_right`, `eyelashes_left`, …), OBJ in mm,
@@ -31,16 +31,44 @@ fn write_objects(path: &Path, meshes: &[(&str, &TriMesh)]) -> crate::Result<()> 
     Ok(derma_core::mesh::write_obj_objects(path, header, meshes)?)
 }
 
-/// A GLB under construction: the binary chunk and the JSON arrays.
+/// A GLB under construction: the binary chunk and the JSON arrays (shared with the crates that
+/// export animated heads).
 #[derive(Default)]
-struct Glb {
-    bin: Vec<u8>,
-    views: Vec<Value>,
-    accessors: Vec<Value>,
+pub struct Glb {
+    /// The binary chunk.
+    pub bin: Vec<u8>,
+    /// bufferViews.
+    pub views: Vec<Value>,
+    /// accessors.
+    pub accessors: Vec<Value>,
 }
 
 impl Glb {
-    fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
+    /// The GLB file of `doc` (whose buffers and views must be this builder's) and the binary.
+    pub fn finish(mut self, doc: &Value) -> Vec<u8> {
+        let mut js = serde_json::to_vec(doc).expect("JSON");
+        while !js.len().is_multiple_of(4) {
+            js.push(b' ');
+        }
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        let total = 12 + 8 + js.len() + 8 + self.bin.len();
+        let mut out = Vec::with_capacity(total);
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&(total as u32).to_le_bytes());
+        out.extend_from_slice(&(js.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&js);
+        out.extend_from_slice(&(self.bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&self.bin);
+        out
+    }
+
+    /// Appends `bytes` (4-byte aligned) as a buffer view; returns its index.
+    pub fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
         while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
@@ -53,12 +81,14 @@ impl Glb {
         self.views.len() - 1
     }
 
-    fn accessor(&mut self, a: Value) -> usize {
+    /// Adds an accessor; returns its index.
+    pub fn accessor(&mut self, a: Value) -> usize {
         self.accessors.push(a);
         self.accessors.len() - 1
     }
 
-    fn vec3s(&mut self, v: &[Vec3], with_bounds: bool) -> usize {
+    /// A VEC3 float accessor (vertex attribute), with min/max when asked.
+    pub fn vec3s(&mut self, v: &[Vec3], with_bounds: bool) -> usize {
         let bytes: Vec<u8> = v
             .iter()
             .flat_map(|p| p.to_array())
@@ -75,8 +105,8 @@ impl Glb {
         self.accessor(a)
     }
 
-    /// A sparse morph-target accessor over `count` vertices (zeros except `offs`).
-    fn sparse(&mut self, count: usize, offs: &[(u32, Vec3)]) -> usize {
+    /// A sparse morph-target accessor over `count` vertices (zeros except `offs`, mm).
+    pub fn sparse(&mut self, count: usize, offs: &[(u32, Vec3)]) -> usize {
         // glTF requires at least one sparse entry; an empty target stores a zero at vertex 0.
         let zero = [(0u32, Vec3::ZERO)];
         let offs = if offs.is_empty() { &zero[..] } else { offs };
@@ -104,7 +134,8 @@ impl Glb {
         }))
     }
 
-    fn mesh(&mut self, name: &str, m: &TriMesh, targets: &[(&str, &[(u32, Vec3)])]) -> Value {
+    /// A mesh (mm, written in metres) with named sparse morph targets (mm offsets).
+    pub fn mesh(&mut self, name: &str, m: &TriMesh, targets: &[(&str, &[(u32, Vec3)])]) -> Value {
         let pos: Vec<Vec3> = m.positions.iter().map(|p| *p * M_PER_MM).collect();
         let p = self.vec3s(&pos, true);
         let n = self.vec3s(&m.normals, false);
@@ -199,24 +230,7 @@ pub fn write_glb(head: &Head, path: &Path) -> crate::Result<()> {
         "bufferViews": g.views,
         "accessors": g.accessors,
     });
-    let mut js = serde_json::to_vec(&doc).expect("JSON");
-    while !js.len().is_multiple_of(4) {
-        js.push(b' ');
-    }
-    while !g.bin.len().is_multiple_of(4) {
-        g.bin.push(0);
-    }
-    let total = 12 + 8 + js.len() + 8 + g.bin.len();
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(js.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&js);
-    out.extend_from_slice(&(g.bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&g.bin);
+    let out = g.finish(&doc);
     derma_core::atomic::write_bytes(path, &out)?;
     Ok(())
 }

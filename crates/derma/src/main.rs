@@ -1,6 +1,7 @@
 //! `derma`: the command-line tool. Thin: parses flags, calls the libraries, shows their
 //! progress and notes, and prints results; the libraries do the work and write the files.
 
+mod eyes;
 mod matching;
 mod optics;
 mod output;
@@ -48,6 +49,10 @@ enum Command {
     /// Faces from photographs: calibrate, unwrap, bake, iris, teeth, chromophore maps.
     #[command(subcommand)]
     Photo(photo::PhotoCommand),
+    /// The eye region: train the gaze-driven lid and skin model, animate it (GLB, curves,
+    /// renders), synthetic tracked data, screen-space distance fields and lacrimal lakes.
+    #[command(subcommand)]
+    Eyes(eyes::EyesCommand),
 }
 
 /// `--device`, the same on every command that can use a GPU.
@@ -75,7 +80,7 @@ fn main() {
         0 => "warn",
         1 => "info",
         // Debug output of derma's own crates only (wgpu and naga are very chatty).
-        _ => "info,derma=debug,derma_core=debug,derma_skin=debug,derma_optics=debug,derma_shading=debug,derma_rig=debug,derma_synth=debug,derma_photo=debug",
+        _ => "info,derma=debug,derma_core=debug,derma_skin=debug,derma_optics=debug,derma_shading=debug,derma_rig=debug,derma_synth=debug,derma_photo=debug,derma_eyes=debug",
     };
     tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::new(level))
@@ -89,6 +94,7 @@ fn main() {
         Command::Rig(cmd) => rig::run(cmd, &bars),
         Command::Synth(args) => synth::run(args, &bars),
         Command::Photo(cmd) => photo::run(cmd, &bars),
+        Command::Eyes(cmd) => eyes::run(cmd),
     };
     bars.finish();
     if let Err(e) = result {

@@ -1,0 +1,390 @@
+//! The `derma eyes …` commands' work on files: training a model (from tracked data or the rig),
+//! writing synthetic tracked sequences, animating the head (curves, GLB, rendered frames) and
+//! the distance-field table with its images. The CLI only parses and prints.
+
+use crate::animate::{self, Drive, Sample};
+use crate::evaluate::{Evaluator, Frame};
+use crate::glb;
+use crate::model::{self, Components, Curve, EyeModel};
+use crate::render::{self, Stage};
+use crate::rigdata::Rig;
+use crate::sdf::{self, material};
+use crate::tracked::Tracked;
+use crate::{EyesError, Result};
+use derma_core::Map;
+use derma_head::Head;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// Where training data comes from.
+#[derive(Clone, Debug)]
+pub enum Data {
+    /// A tracked-data file (JSON or CSV).
+    File(PathBuf),
+    /// `n` sampled poses of the built-in head's rig.
+    Rig {
+        /// Poses.
+        samples: usize,
+        /// Seed.
+        seed: u64,
+    },
+}
+
+/// What `train` wrote and measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct TrainReport {
+    /// Frames trained on.
+    pub frames: usize,
+    /// Tracked vertices.
+    pub vertices: usize,
+    /// Components used.
+    pub components: Components,
+    /// Held-out error against the number of components (fig. 3.7).
+    pub curve: Curve,
+    /// Palpebral opening (mm) the baseline model gives in primary gaze and at 40° downgaze, per
+    /// eye (Read et al. 2006: 9.7 ± 1.2 and 6.4 ± 1.1).
+    pub aperture_mm: [[f32; 2]; 2],
+    /// Files written.
+    pub files: Vec<PathBuf>,
+}
+
+fn out_dir(dir: &Path) -> Result<()> {
+    derma_core::atomic::ensure_writable_dir(dir)?;
+    Ok(())
+}
+
+/// Trains a model and writes `model.json`, `components.csv` (fig. 3.7), `report.json` and, for
+/// rig data, `tracked.json` into `dir`.
+pub fn train(data: &Data, c: Components, dir: &Path) -> Result<TrainReport> {
+    out_dir(dir)?;
+    let mut files = Vec::new();
+    let t = match data {
+        Data::File(p) => Tracked::read(p)?,
+        Data::Rig { samples, seed } => {
+            let rig = Rig::new(Head::builtin())?;
+            let t = rig.samples(*samples, *seed);
+            let p = dir.join("tracked.json");
+            t.write(&p)?;
+            files.push(p);
+            t
+        }
+    };
+    let m = EyeModel::fit(&t, c)?;
+    let curve = model::cross_validate(&t, Components { lids: 13, skin: 8 }, 5)?;
+    let p = dir.join("model.json");
+    m.write(&p)?;
+    files.push(p);
+    let mut csv = String::from("components,lid_error,skin_error\n");
+    for (i, k) in curve.components.iter().enumerate() {
+        let f = |v: &Vec<f64>| v.get(i).map_or(String::new(), |x| format!("{x:.6e}"));
+        csv.push_str(&format!("{k},{},{}\n", f(&curve.lids), f(&curve.skin)));
+    }
+    let p = dir.join("components.csv");
+    derma_core::atomic::write_bytes(&p, csv.as_bytes())?;
+    files.push(p);
+    let aperture_mm = [0, 1].map(|e| {
+        [
+            m.baseline_opening_mm(e, 0.0, 0.0),
+            m.baseline_opening_mm(e, 0.0, -40.0),
+        ]
+    });
+    let report = TrainReport {
+        frames: t.frames.len(),
+        vertices: t.vertex_count(),
+        components: c,
+        curve,
+        aperture_mm,
+        files: files.clone(),
+    };
+    let p = dir.join("report.json");
+    derma_core::atomic::write_bytes(&p, &serde_json::to_vec_pretty(&report).expect("JSON"))?;
+    Ok(TrainReport {
+        files: {
+            let mut f = files;
+            f.push(p);
+            f
+        },
+        ..report
+    })
+}
+
+/// Writes a synthetic tracked sequence of the rig (JSON or CSV by extension).
+pub fn synthetic(out: &Path, seconds: f32, fps: f32, seed: u64) -> Result<usize> {
+    if !(seconds > 0.0 && fps > 0.0) {
+        return Err(EyesError::Invalid(format!(
+            "--seconds {seconds} and --fps {fps} must be positive"
+        )));
+    }
+    let head = Head::builtin();
+    let rig = Rig::new(head)?;
+    let t = crate::synthetic::sequence(
+        &rig,
+        [head.eyes[0].centre, head.eyes[1].centre],
+        seconds,
+        fps,
+        seed,
+    );
+    t.write(out)?;
+    Ok(t.frames.len())
+}
+
+/// Where gaze targets come from.
+#[derive(Clone, Debug)]
+pub enum Targets {
+    /// Idle-gaze statistics.
+    Idle,
+    /// A gaze-tracker CSV (time, h, v).
+    Tracker(PathBuf),
+    /// Salient points of an image the character looks at (horizontal field of view in °).
+    Image(PathBuf, f32),
+}
+
+/// Options of `animate`.
+#[derive(Clone, Debug)]
+pub struct AnimateOptions {
+    /// A trained model; `None` trains one on the rig.
+    pub model: Option<PathBuf>,
+    /// The drivers (fixations and blinks are filled from `targets`).
+    pub drive: Drive,
+    /// Gaze targets.
+    pub targets: Targets,
+    /// Rendered frame width (px); 0 for no renders.
+    pub render: usize,
+    /// Skin thickness cap over the globes (mm).
+    pub thickness: f32,
+}
+
+/// What `animate` wrote and measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct AnimateReport {
+    /// Frames.
+    pub frames: usize,
+    /// Blinks in the sequence.
+    pub blinks: usize,
+    /// Model vertices animated.
+    pub vertices: usize,
+    /// The GLB's morph-target fit.
+    pub glb: glb::Report,
+    /// Mean time (µs) of one model frame (all region vertices, one core).
+    pub frame_us: f64,
+    /// Files written.
+    pub files: Vec<PathBuf>,
+}
+
+/// The model to animate: a file, or one trained on 300 rig poses.
+pub fn load_or_train(p: &Option<PathBuf>, rig: &Rig) -> Result<EyeModel> {
+    match p {
+        Some(p) => EyeModel::read(p),
+        None => EyeModel::fit(&rig.samples(300, 1), Components::default()),
+    }
+}
+
+/// Animates the head: `curves.json`/`curves.csv`, `head.glb`, and with renders `sequence.png`
+/// (animated PNG), `strip.png` and `frames/NNNN.png`.
+pub fn animate(o: &AnimateOptions, dir: &Path) -> Result<AnimateReport> {
+    out_dir(dir)?;
+    let head = Head::builtin();
+    let rig = Rig::new(head)?;
+    let m = load_or_train(&o.model, &rig)?;
+    let ev = Evaluator::new(&m, &rig.region, head, o.thickness)?;
+    let mut drive = o.drive.clone();
+    match &o.targets {
+        Targets::Idle => {}
+        Targets::Tracker(p) => drive.fixations = Some(animate::read_tracker(p)?),
+        Targets::Image(p, fov) => {
+            let img = derma_core::image_io::read_rgb(p)?;
+            let rgb: [Map; 3] = img.channels.try_into().map_err(|_| {
+                EyesError::Invalid(format!("{}: expected an RGB image", p.display()))
+            })?;
+            drive.fixations = Some(animate::salient_fixations(
+                &rgb,
+                8,
+                *fov,
+                drive.seconds,
+                drive.seed,
+            ));
+        }
+    }
+    let centres = [head.eyes[0].centre, head.eyes[1].centre];
+    let samples = animate::timeline(&m, centres, head.eyes[0].radius + o.thickness, &drive);
+    let blinks = drive
+        .blinks
+        .clone()
+        .unwrap_or_else(|| crate::blink::schedule(drive.seconds, drive.activity, drive.seed))
+        .len();
+    let mut files = Vec::new();
+    files.extend(write_curves(&samples, dir)?);
+    // Evaluate every frame.
+    let mut f = Frame::default();
+    let t0 = std::time::Instant::now();
+    let mut positions = Vec::with_capacity(samples.len());
+    let mut rotations = Vec::with_capacity(samples.len());
+    let mut frames = Vec::new();
+    for s in &samples {
+        ev.frame(&s.gaze, &mut f);
+        positions.push(f.positions.clone());
+        rotations.push(s.gaze.eyes.map(|a| a.rotation()));
+    }
+    let frame_us = t0.elapsed().as_secs_f64() * 1e6 / samples.len().max(1) as f64;
+    let baked = glb::Baked {
+        times: samples.iter().map(|s| s.t).collect(),
+        positions,
+        rotations,
+    };
+    let p = dir.join("head.glb");
+    let glb = glb::write(head, &rig.region, &baked, &p)?;
+    files.push(p);
+    if o.render > 0 {
+        let stage = Stage::new(head, &rig.region);
+        let fdir = dir.join("frames");
+        std::fs::create_dir_all(&fdir)
+            .map_err(|e| EyesError::Invalid(format!("cannot create {}: {e}", fdir.display())))?;
+        let mut size = (0, 0);
+        for (i, s) in samples.iter().enumerate() {
+            ev.frame(&s.gaze, &mut f);
+            let img = stage.render(&f, s.gaze.eyes.map(|a| a.rotation()), o.render);
+            size = (img[0].width(), img[0].height());
+            let p = fdir.join(format!("{i:04}.png"));
+            derma_core::image_io::write_png8_srgb(&p, &[&img[0], &img[1], &img[2]])?;
+            frames.push(render::srgb8(&img));
+        }
+        let p = dir.join("sequence.png");
+        render::write_apng(&p, &frames, size.0, size.1, drive.fps.round() as u16)?;
+        files.push(p);
+        files.push(fdir);
+    }
+    Ok(AnimateReport {
+        frames: samples.len(),
+        blinks,
+        vertices: ev.optimised.len(),
+        glb,
+        frame_us,
+        files,
+    })
+}
+
+fn write_curves(samples: &[Sample], dir: &Path) -> Result<Vec<PathBuf>> {
+    let p = dir.join("curves.json");
+    derma_core::atomic::write_bytes(&p, &serde_json::to_vec(samples).expect("JSON"))?;
+    let mut csv = String::from("time,left_h,left_v,right_h,right_v,left_upper,left_lower,right_upper,right_lower,blink_closure\n");
+    for s in samples {
+        let g = &s.gaze;
+        csv.push_str(&format!(
+            "{:.4},{:.3},{:.3},{:.3},{:.3},{:.4},{:.4},{:.4},{:.4},{:.4}\n",
+            s.t,
+            g.eyes[0].h,
+            g.eyes[0].v,
+            g.eyes[1].h,
+            g.eyes[1].v,
+            g.lids[0][0],
+            g.lids[0][1],
+            g.lids[1][0],
+            g.lids[1][1],
+            s.closure
+        ));
+    }
+    let q = dir.join("curves.csv");
+    derma_core::atomic::write_bytes(&q, csv.as_bytes())?;
+    Ok(vec![p, q])
+}
+
+/// Writes the distance-field table (`table.md`, `table.json`) and images (`mask.png`, fields
+/// `exact.png`, `equiangular.png`, `backtracking.png`, `eye.png` / `lake.png` and the left eye's
+/// `lake-closeup.png`: without the lake, with it, the field) at
+/// `width` × `height` into `dir`; `runs` timed runs per method.
+pub fn distance_fields(
+    width: usize,
+    height: usize,
+    runs: usize,
+    dir: &Path,
+) -> Result<Vec<sdf::table::Row>> {
+    out_dir(dir)?;
+    if !(64..=8192).contains(&width) || !(64..=8192).contains(&height) {
+        return Err(EyesError::Invalid(format!(
+            "size {width}×{height}: expected 64 to 8192 pixels a side"
+        )));
+    }
+    let head = Head::builtin();
+    let scene = sdf::scene::head_close_up(head, width, height);
+    let range = sdf::table::RANGE_MM;
+    let rows = sdf::table::measure(&scene.g, range, runs);
+    derma_core::atomic::write_bytes(
+        &dir.join("table.md"),
+        sdf::table::markdown(&rows, width, height).as_bytes(),
+    )?;
+    derma_core::atomic::write_bytes(
+        &dir.join("table.json"),
+        &serde_json::to_vec_pretty(&rows).expect("JSON"),
+    )?;
+    let (w, h) = (width, height);
+    let mask =
+        Map::from_vec(w, h, scene.g.mask.iter().map(|&m| m as f32 / 2.0).collect()).expect("size");
+    derma_core::image_io::write_png8(&dir.join("mask.png"), &[&mask])?;
+    let show = |f: &sdf::Field| -> Map {
+        // λ / Λ in grey on the globes (white at the skin, black at Λ and beyond), skin mid-grey.
+        Map::from_vec(
+            w,
+            h,
+            (0..w * h)
+                .map(|i| match scene.g.mask[i] {
+                    material::EYE => (1.0 - f.distance[i] / range).clamp(0.0, 1.0),
+                    material::SKIN => 0.35,
+                    _ => 0.0,
+                })
+                .collect(),
+        )
+        .expect("size")
+    };
+    let exact = sdf::exact::field(&scene.g);
+    derma_core::image_io::write_png8(&dir.join("exact.png"), &[&show(&exact)])?;
+    let eq = sdf::samplers::field(
+        &scene.g,
+        sdf::samplers::Sampler::Equiangular { n: 64 },
+        range,
+    );
+    derma_core::image_io::write_png8(&dir.join("equiangular.png"), &[&show(&eq)])?;
+    let bt = sdf::samplers::field(&scene.g, sdf::table::DEFAULT, range);
+    derma_core::image_io::write_png8(&dir.join("backtracking.png"), &[&show(&bt)])?;
+    let light = glam::Vec3::new(-0.4, 0.5, 0.75);
+    let plain = sdf::lake::shade(&scene, None, light, 1.6);
+    let (d, n) = sdf::lake::lake(&scene, &bt, range);
+    let wet = sdf::lake::shade(&scene, Some((&d, &n)), light, 1.6);
+    let to_maps = |img: &[glam::Vec3]| {
+        [0, 1, 2].map(|c| Map::from_vec(w, h, img.iter().map(|v| v[c]).collect()).expect("size"))
+    };
+    for (name, img) in [("eye.png", &plain), ("lake.png", &wet)] {
+        let ch = to_maps(img);
+        derma_core::image_io::write_png8_srgb(&dir.join(name), &[&ch[0], &ch[1], &ch[2]])?;
+    }
+    // A close-up of the left eye: without the lake, with it, and the field (λ / Λ).
+    let cam = sdf::scene::Camera::close_up(head, width, height);
+    let (c, _) = cam.project(head.eyes[0].centre);
+    let (cw, ch) = (w * 9 / 40, h * 9 / 40);
+    let (x0, y0) = (
+        (c.x as usize).saturating_sub(cw / 2).min(w - cw),
+        (c.y as usize).saturating_sub(ch / 2).min(h - ch),
+    );
+    let field = show(&bt);
+    let panels: [[Map; 3]; 3] = [
+        to_maps(&plain),
+        to_maps(&wet),
+        [field.clone(), field.clone(), field],
+    ];
+    let crop = [0, 1, 2].map(|k| {
+        let mut out = Vec::with_capacity(3 * cw * ch);
+        for y in 0..ch {
+            for p in &panels {
+                for x in 0..cw {
+                    let v = p[k].get(x0 + x, y0 + y);
+                    out.push(v);
+                }
+            }
+        }
+        Map::from_vec(3 * cw, ch, out).expect("size")
+    });
+    derma_core::image_io::write_png8_srgb(
+        &dir.join("lake-closeup.png"),
+        &[&crop[0], &crop[1], &crop[2]],
+    )?;
+    Ok(rows)
+}

@@ -1,0 +1,347 @@
+//! The animated head for engines and DCC tools: a glTF 2.0 binary with the built-in head, the
+//! eye-region motion as morph targets (the mean displacement plus principal components of the
+//! baked frames, as the thesis reduces skin motion to a few components) whose weights are
+//! animated, eyelashes riding on their lid margins, and the globes (sclera, transparent cornea,
+//! textured iris) as nodes whose rotation is animated.
+
+use crate::globe::Globe;
+use crate::pca::Pca;
+use derma_head::export::{Glb, M_PER_MM};
+use derma_head::Head;
+use glam::{Quat, Vec2, Vec3};
+use serde_json::{json, Value};
+use std::path::Path;
+
+/// Motion components kept as morph targets (besides the mean).
+pub const COMPONENTS: usize = 12;
+
+/// A baked animation: region-vertex positions per frame and globe rotations.
+pub struct Baked {
+    /// Frame times (s).
+    pub times: Vec<f32>,
+    /// Model-vertex positions per frame (mm).
+    pub positions: Vec<Vec<Vec3>>,
+    /// Globe rotations per frame.
+    pub rotations: Vec<[Quat; 2]>,
+}
+
+/// What the export measured.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Report {
+    /// Morph targets written (mean + components).
+    pub targets: usize,
+    /// RMS (mm) of the morph-target reconstruction over all frames and region vertices.
+    pub rms_mm: f32,
+    /// Largest reconstruction error (mm).
+    pub max_mm: f32,
+    /// File size (bytes).
+    pub bytes: usize,
+}
+
+fn eye_texture_png(size: usize) -> Vec<u8> {
+    let mut img = Vec::with_capacity(size * size * 3);
+    for y in 0..size {
+        for x in 0..size {
+            // glTF's texture origin is the top-left: v = 1 − row.
+            let uv = Vec2::new(
+                (x as f32 + 0.5) / size as f32,
+                1.0 - (y as f32 + 0.5) / size as f32,
+            );
+            let c = derma_head::eye::default_albedo(uv);
+            img.extend(c.to_array().map(|v| {
+                (derma_core::color::srgb_encode(v.clamp(0.0, 1.0)) * 255.0).round() as u8
+            }));
+        }
+    }
+    let mut out = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut out, size as u32, size as u32);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut w = enc.write_header().expect("PNG header");
+        w.write_image_data(&img).expect("PNG data");
+    }
+    out
+}
+
+/// Writes `path`: the head with `baked` motion on the eye region (`region` maps skin vertices to
+/// model vertices).
+pub fn write(
+    head: &Head,
+    region: &crate::region::EyeRegion,
+    baked: &Baked,
+    path: &Path,
+) -> crate::Result<Report> {
+    let nf = baked.positions.len();
+    let nm = region.len();
+    // Displacements per frame, flattened, and their principal components.
+    let rows: Vec<Vec<f64>> = baked
+        .positions
+        .iter()
+        .map(|p| {
+            p.iter()
+                .zip(&region.rest)
+                .flat_map(|(a, b)| (*a - *b).to_array())
+                .map(f64::from)
+                .collect()
+        })
+        .collect();
+    let k = COMPONENTS.min(nf.saturating_sub(1)).max(1);
+    let pca = if nf >= 2 {
+        Pca::fit(&rows, k)?
+    } else {
+        Pca {
+            mean: rows[0].clone(),
+            components: Vec::new(),
+            variances: Vec::new(),
+            total_variance: 0.0,
+        }
+    };
+    let weights: Vec<Vec<f64>> = rows.iter().map(|r| pca.project(r, pca.len())).collect();
+    let (mut se, mut worst) = (0.0f64, 0.0f64);
+    for (r, w) in rows.iter().zip(&weights) {
+        let back = pca.reconstruct(w);
+        for c in r.chunks_exact(3).zip(back.chunks_exact(3)) {
+            let e =
+                ((c.0[0] - c.1[0]).powi(2) + (c.0[1] - c.1[1]).powi(2) + (c.0[2] - c.1[2]).powi(2))
+                    .sqrt();
+            se += e * e;
+            worst = worst.max(e);
+        }
+    }
+    let rms = (se / (nf * nm) as f64).sqrt() as f32;
+    // Per model vertex, a target vector → per skin vertex offsets (every UV copy).
+    let to_skin = |v: &[f64]| -> Vec<(u32, Vec3)> {
+        region
+            .skin_to_model
+            .iter()
+            .enumerate()
+            .filter_map(|(i, &m)| {
+                if m == u32::MAX {
+                    return None;
+                }
+                let m = m as usize;
+                let d = Vec3::new(v[3 * m] as f32, v[3 * m + 1] as f32, v[3 * m + 2] as f32);
+                (d.length_squared() > 1e-12).then_some((i as u32, d))
+            })
+            .collect()
+    };
+    let mut target_vecs: Vec<Vec<f64>> = vec![pca.mean.clone()];
+    target_vecs.extend(pca.components.iter().cloned());
+    let names: Vec<String> = std::iter::once("eyeRegionMean".to_string())
+        .chain((1..target_vecs.len()).map(|c| format!("eyeRegionPC{c}")))
+        .collect();
+    let skin_offs: Vec<Vec<(u32, Vec3)>> = target_vecs.iter().map(|v| to_skin(v)).collect();
+    // Lashes follow their nearest lid-margin vertex.
+    let margin: Vec<u32> = region.margins.iter().flatten().flatten().copied().collect();
+    let lash_offs = |mesh: &derma_core::mesh::TriMesh| -> Vec<Vec<(u32, Vec3)>> {
+        let near: Vec<usize> = mesh
+            .positions
+            .iter()
+            .map(|p| {
+                margin
+                    .iter()
+                    .map(|&m| m as usize)
+                    .min_by(|&a, &b| {
+                        (region.rest[a] - *p)
+                            .length_squared()
+                            .total_cmp(&(region.rest[b] - *p).length_squared())
+                    })
+                    .expect("margins")
+            })
+            .collect();
+        target_vecs
+            .iter()
+            .map(|v| {
+                near.iter()
+                    .enumerate()
+                    .map(|(i, &m)| {
+                        (
+                            i as u32,
+                            Vec3::new(v[3 * m] as f32, v[3 * m + 1] as f32, v[3 * m + 2] as f32),
+                        )
+                    })
+                    .collect()
+            })
+            .collect()
+    };
+    let mut g = Glb::default();
+    let mut meshes: Vec<Value> = Vec::new();
+    let mut nodes: Vec<Value> = Vec::new();
+    let mut morph_nodes: Vec<usize> = Vec::new();
+    let as_targets = |offs: &[Vec<(u32, Vec3)>]| -> Vec<(String, Vec<(u32, Vec3)>)> {
+        names.iter().cloned().zip(offs.iter().cloned()).collect()
+    };
+    let materials = json!([
+        {"name": "skin", "pbrMetallicRoughness": {"baseColorFactor": [0.56, 0.36, 0.28, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.55}},
+        {"name": "eye", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0, "roughnessFactor": 0.3}},
+        {"name": "cornea", "alphaMode": "BLEND", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 0.06], "metallicFactor": 0.0, "roughnessFactor": 0.02}},
+        {"name": "lashes", "pbrMetallicRoughness": {"baseColorFactor": [0.02, 0.015, 0.012, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.6}},
+        {"name": "mouth", "pbrMetallicRoughness": {"baseColorFactor": [0.62, 0.56, 0.45, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.35}}
+    ]);
+    let mut add = |g: &mut Glb,
+                   nodes: &mut Vec<Value>,
+                   name: &str,
+                   m: &derma_core::mesh::TriMesh,
+                   targets: &[(String, Vec<(u32, Vec3)>)],
+                   material: usize|
+     -> usize {
+        let t: Vec<(&str, &[(u32, Vec3)])> = targets
+            .iter()
+            .map(|(n, o)| (n.as_str(), o.as_slice()))
+            .collect();
+        let mut mesh = g.mesh(name, m, &t);
+        mesh["primitives"][0]["material"] = json!(material);
+        meshes.push(mesh);
+        nodes.push(json!({"name": name, "mesh": meshes.len() - 1}));
+        nodes.len() - 1
+    };
+    let skin_node = add(
+        &mut g,
+        &mut nodes,
+        "skin",
+        &head.skin,
+        &as_targets(&skin_offs),
+        0,
+    );
+    morph_nodes.push(skin_node);
+    for p in &head.parts {
+        if p.name.starts_with("eye_") {
+            continue;
+        }
+        if p.name.starts_with("eyelashes") {
+            let n = add(
+                &mut g,
+                &mut nodes,
+                &p.name,
+                &p.mesh,
+                &as_targets(&lash_offs(&p.mesh)),
+                3,
+            );
+            morph_nodes.push(n);
+        } else {
+            add(&mut g, &mut nodes, &p.name, &p.mesh, &[], 4);
+        }
+    }
+    let mut eye_nodes = Vec::new();
+    for (e, side) in ["left", "right"].iter().enumerate() {
+        let globe = Globe::of(&head.eyes[e]);
+        let c = head.eyes[e].centre * M_PER_MM;
+        let sclera = add(
+            &mut g,
+            &mut nodes,
+            &format!("sclera_{side}"),
+            &globe.shell(false),
+            &[],
+            1,
+        );
+        let iris = add(
+            &mut g,
+            &mut nodes,
+            &format!("iris_{side}"),
+            &globe.iris(),
+            &[],
+            1,
+        );
+        let cornea = add(
+            &mut g,
+            &mut nodes,
+            &format!("cornea_{side}"),
+            &globe.shell(true).cornea_cap(&globe),
+            &[],
+            2,
+        );
+        nodes.push(json!({"name": format!("eye_{side}"), "translation": c.to_array(), "children": [sclera, iris, cornea]}));
+        eye_nodes.push(nodes.len() - 1);
+    }
+    // Animation: weights of the morph nodes, rotations of the eye nodes.
+    let tb: Vec<u8> = baked.times.iter().flat_map(|t| t.to_le_bytes()).collect();
+    let tv = g.view(&tb, None);
+    let t_min = baked.times.first().copied().unwrap_or(0.0);
+    let t_max = baked.times.last().copied().unwrap_or(0.0);
+    let time_acc = g.accessor(json!({"bufferView": tv, "componentType": 5126, "count": nf, "type": "SCALAR", "min": [t_min], "max": [t_max]}));
+    let wb: Vec<u8> = weights
+        .iter()
+        .flat_map(|w| std::iter::once(1.0f32).chain(w.iter().map(|&x| x as f32)))
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    let wv = g.view(&wb, None);
+    let w_acc = g.accessor(json!({"bufferView": wv, "componentType": 5126, "count": nf * names.len(), "type": "SCALAR"}));
+    let mut samplers = vec![json!({"input": time_acc, "output": w_acc, "interpolation": "LINEAR"})];
+    let mut channels: Vec<Value> = morph_nodes
+        .iter()
+        .map(|&n| json!({"sampler": 0, "target": {"node": n, "path": "weights"}}))
+        .collect();
+    for (e, &n) in eye_nodes.iter().enumerate() {
+        let qb: Vec<u8> = baked
+            .rotations
+            .iter()
+            .flat_map(|r| r[e].to_array())
+            .flat_map(f32::to_le_bytes)
+            .collect();
+        let qv = g.view(&qb, None);
+        let q_acc = g.accessor(
+            json!({"bufferView": qv, "componentType": 5126, "count": nf, "type": "VEC4"}),
+        );
+        samplers.push(json!({"input": time_acc, "output": q_acc, "interpolation": "LINEAR"}));
+        channels.push(
+            json!({"sampler": samplers.len() - 1, "target": {"node": n, "path": "rotation"}}),
+        );
+    }
+    let png = eye_texture_png(512);
+    let iv = g.view(&png, None);
+    let roots: Vec<usize> = (0..nodes.len())
+        .filter(|i| {
+            !nodes.iter().any(|n| {
+                n["children"]
+                    .as_array()
+                    .is_some_and(|c| c.iter().any(|x| x.as_u64() == Some(*i as u64)))
+            })
+        })
+        .collect();
+    let doc = json!({
+        "asset": {"version": "2.0", "generator": "derma eyes",
+            "copyright": "MakeHuman base mesh and Face Units by the MakeHuman community and Mika Suominen, CC0 1.0"},
+        "scene": 0,
+        "scenes": [{"name": "derma eye region", "nodes": roots}],
+        "nodes": nodes,
+        "meshes": meshes,
+        "materials": materials,
+        "images": [{"bufferView": iv, "mimeType": "image/png", "name": "eye"}],
+        "samplers": [{"magFilter": 9729, "minFilter": 9987, "wrapS": 33071, "wrapT": 33071}],
+        "textures": [{"source": 0, "sampler": 0}],
+        "animations": [{"name": "eyes", "samplers": samplers, "channels": channels}],
+        "buffers": [{"byteLength": 0}],
+        "bufferViews": [],
+        "accessors": [],
+    });
+    let mut doc = doc;
+    doc["bufferViews"] = json!(g.views);
+    doc["accessors"] = json!(g.accessors);
+    while !g.bin.len().is_multiple_of(4) {
+        g.bin.push(0);
+    }
+    doc["buffers"] = json!([{"byteLength": g.bin.len()}]);
+    let out = g.finish(&doc);
+    derma_core::atomic::write_bytes(path, &out)?;
+    Ok(Report {
+        targets: names.len(),
+        rms_mm: rms,
+        max_mm: worst as f32,
+        bytes: out.len(),
+    })
+}
+
+/// The cornea cap of a shell mesh (triangles in front of the limbus).
+trait CorneaCap {
+    fn cornea_cap(self, g: &Globe) -> derma_core::mesh::TriMesh;
+}
+
+impl CorneaCap for derma_core::mesh::TriMesh {
+    fn cornea_cap(mut self, g: &Globe) -> derma_core::mesh::TriMesh {
+        let zl = g.radius * g.limbus_angle().cos() - 1e-4;
+        self.triangles
+            .retain(|t| t.iter().all(|&i| self.positions[i as usize].z >= zl));
+        self
+    }
+}

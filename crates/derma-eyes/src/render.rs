@@ -1,0 +1,228 @@
+//! Looking at the result: the eye region rendered with derma-core's software preview (skin,
+//! lashes riding on the lid margins, globes with the open cornea over the iris disc) frame by
+//! frame, written as PNG frames, an animated PNG and a contact strip.
+
+use crate::evaluate;
+use crate::globe::Globe;
+use crate::region::EyeRegion;
+use derma_core::mesh::TriMesh;
+use derma_core::preview::{self, FlatMaterial, Prop};
+use derma_core::Map;
+use derma_head::Head;
+use glam::{Quat, Vec2, Vec3};
+use std::path::Path;
+
+/// Linear skin colour of the preview (a light-intermediate complexion, authored).
+const SKIN_RGB: [f32; 3] = [0.56, 0.36, 0.28];
+
+/// The eye band of the head, cropped for framing, with what each frame moves.
+pub struct Stage<'a> {
+    head: &'a Head,
+    region: &'a EyeRegion,
+    crop: TriMesh,
+    /// Skin vertex of each crop vertex.
+    source: Vec<u32>,
+    tangents: Vec<[f32; 4]>,
+    /// Per lash part: its mesh and the nearest margin model vertex of each lash vertex.
+    lashes: Vec<(TriMesh, Vec<u32>)>,
+    globes: [(TriMesh, TriMesh); 2],
+}
+
+impl<'a> Stage<'a> {
+    /// The stage of `head`'s eye band (60 mm either side, 28 mm below to 34 mm above the eyes).
+    pub fn new(head: &'a Head, region: &'a EyeRegion) -> Stage<'a> {
+        let cy = head.eyes[0].centre.y;
+        let zmin = head.eyes[0].centre.z - 20.0;
+        let keep = |p: Vec3| p.x.abs() < 60.0 && p.y > cy - 28.0 && p.y < cy + 34.0 && p.z > zmin;
+        let skin = &head.skin;
+        let mut index = vec![u32::MAX; skin.positions.len()];
+        let mut crop = TriMesh::default();
+        let mut source = Vec::new();
+        for t in &skin.triangles {
+            if !t.iter().all(|&i| keep(skin.positions[i as usize])) {
+                continue;
+            }
+            let tri = t.map(|i| {
+                if index[i as usize] == u32::MAX {
+                    index[i as usize] = crop.positions.len() as u32;
+                    crop.positions.push(skin.positions[i as usize]);
+                    crop.normals.push(skin.normals[i as usize]);
+                    crop.uvs.push(skin.uvs[i as usize]);
+                    source.push(i);
+                }
+                index[i as usize]
+            });
+            crop.triangles.push(tri);
+        }
+        let tangents = derma_core::mesh::mikktspace_tangents(&crop);
+        let margin: Vec<u32> = region.margins.iter().flatten().flatten().copied().collect();
+        let lashes = head
+            .parts
+            .iter()
+            .filter(|p| p.name.starts_with("eyelashes"))
+            .map(|p| {
+                let near = p
+                    .mesh
+                    .positions
+                    .iter()
+                    .map(|q| {
+                        *margin
+                            .iter()
+                            .min_by(|&&a, &&b| {
+                                (region.rest[a as usize] - *q)
+                                    .length_squared()
+                                    .total_cmp(&(region.rest[b as usize] - *q).length_squared())
+                            })
+                            .expect("margins")
+                    })
+                    .collect();
+                (p.mesh.clone(), near)
+            })
+            .collect();
+        let globes = [0, 1].map(|e| {
+            let g = Globe::of(&head.eyes[e]);
+            (g.shell(false), g.iris())
+        });
+        Stage {
+            head,
+            region,
+            crop,
+            source,
+            tangents,
+            lashes,
+            globes,
+        }
+    }
+
+    /// Renders one frame at `size` px across (linear RGB, cropped to the band's aspect).
+    pub fn render(&self, f: &evaluate::Frame, rot: [Quat; 2], size: usize) -> [Map; 3] {
+        let mut mesh = self.crop.clone();
+        for (k, &s) in self.source.iter().enumerate() {
+            let m = self.region.skin_to_model[s as usize];
+            if m != u32::MAX {
+                mesh.positions[k] = f.positions[m as usize];
+                mesh.normals[k] = f.normals[m as usize];
+            }
+        }
+        let lashes: Vec<TriMesh> = self
+            .lashes
+            .iter()
+            .map(|(m, near)| {
+                let mut m = m.clone();
+                for (p, &n) in m.positions.iter_mut().zip(near) {
+                    *p += f.positions[n as usize] - self.region.rest[n as usize];
+                }
+                m
+            })
+            .collect();
+        let globes: Vec<TriMesh> = (0..2)
+            .flat_map(|e| {
+                let c = self.head.eyes[e].centre;
+                [&self.globes[e].0, &self.globes[e].1].map(|m| {
+                    let mut m = m.clone();
+                    for p in m.positions.iter_mut() {
+                        *p = c + rot[e] * *p;
+                    }
+                    for n in m.normals.iter_mut() {
+                        *n = rot[e] * *n;
+                    }
+                    m
+                })
+            })
+            .collect();
+        static EYE: fn(Vec2) -> Vec3 = derma_head::eye::default_albedo;
+        static LASHES: fn(Vec2) -> Vec3 = |_| Vec3::new(0.02, 0.015, 0.012);
+        static LASH_COVERAGE: fn(Vec2) -> f32 = derma_head::eye::lash_coverage;
+        // Sclera under the tear film: glossy. The iris disc sits behind the (open) cornea, whose
+        // highlight a flat disc cannot show: matte, or a flat disc mirrors the key light whole.
+        let mut props: Vec<Prop> = globes
+            .iter()
+            .enumerate()
+            .map(|(k, m)| {
+                let iris = k % 2 == 1;
+                Prop {
+                    mesh: m,
+                    albedo: &EYE,
+                    roughness: if iris { 0.7 } else { 0.08 },
+                    f0: if iris { 0.02 } else { 0.025 },
+                    coverage: None,
+                }
+            })
+            .collect();
+        for m in &lashes {
+            props.push(Prop {
+                mesh: m,
+                albedo: &LASHES,
+                roughness: 0.6,
+                f0: 0.04,
+                coverage: Some(&LASH_COVERAGE),
+            });
+        }
+        let material = FlatMaterial::new(0.5, 0.35);
+        let colour = preview::uniform_color(SKIN_RGB);
+        let img = preview::render_lit(
+            &mesh,
+            &self.tangents,
+            &material.textures(&colour),
+            &props,
+            0.0,
+            size,
+            &preview::STUDIO,
+        );
+        // The band is 120 × 62 mm, framed at 92 % of the width: keep its inner part (the crop's
+        // ragged triangle edges stay outside).
+        let span = 0.92 * size as f32 / 120.0; // px per mm
+        let (w_mm, h_mm) = (104.0, 50.0);
+        let (cw, ch) = ((w_mm * span) as usize, (h_mm * span) as usize);
+        let (x0, y0) = ((size - cw) / 2, (size - ch) / 2 + (2.0 * span) as usize);
+        img.map(|m| {
+            let mut out = Vec::with_capacity(cw * ch);
+            for y in y0..y0 + ch {
+                for x in x0..x0 + cw {
+                    out.push(m.get(x, y.min(size - 1)));
+                }
+            }
+            Map::from_vec(cw, ch, out).expect("size")
+        })
+    }
+}
+
+/// 8-bit sRGB bytes of a linear RGB image.
+pub fn srgb8(img: &[Map; 3]) -> Vec<u8> {
+    let n = img[0].width() * img[0].height();
+    (0..n)
+        .flat_map(|i| {
+            img.iter().map(move |m| {
+                (derma_core::color::srgb_encode(m.data()[i].clamp(0.0, 1.0)) * 255.0).round() as u8
+            })
+        })
+        .collect()
+}
+
+/// Writes an animated PNG of `frames` (sRGB bytes, all `w` × `h`) at `fps`, atomically.
+pub fn write_apng(
+    path: &Path,
+    frames: &[Vec<u8>],
+    w: usize,
+    h: usize,
+    fps: u16,
+) -> crate::Result<()> {
+    let mut out = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut out, w as u32, h as u32);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let err = |e: png::EncodingError| {
+            crate::EyesError::Invalid(format!("encoding {}: {e}", path.display()))
+        };
+        enc.set_animated(frames.len() as u32, 0).map_err(err)?;
+        enc.set_frame_delay(1, fps).map_err(err)?;
+        let mut wr = enc.write_header().map_err(err)?;
+        for f in frames {
+            wr.write_image_data(f).map_err(err)?;
+        }
+        wr.finish().map_err(err)?;
+    }
+    derma_core::atomic::write_bytes(path, &out)?;
+    Ok(())
+}
