@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Exports the built-in head (`derma skin --export-template`) and checks head.glb with Khronos'
+# Exports the built-in head (`derma skin --export-template`) and an animated eye region (`derma
+# eyes animate`), and checks both GLBs with Khronos'
 # glTF-Validator from npm (installed here into a temporary directory, with Node.js from apt when
 # the machine lacks it). Run by scripts/test.sh.
 set -euo pipefail
@@ -12,4 +13,5 @@ trap 'rm -rf "$work"' EXIT
 npm install --silent --prefix "$work/v" gltf-validator@2.0.0-dev.3.10 >/dev/null
 cargo build --release -q -p derma
 target/release/derma skin --export-template "$work/head" --quiet
-node scripts/validate_gltf.js "$work/v" "$work/head/head.glb"
+target/release/derma eyes animate --seconds 1 --fps 10 --render 0 --out "$work/eyes" --quiet >/dev/null
+node scripts/validate_gltf.js "$work/v" "$work/head/head.glb" "$work/eyes/head.glb"

@@ -9,7 +9,7 @@ use crate::model::{EyeModel, Optimised, MAX_COEF};
 use crate::region::EyeRegion;
 use crate::skull::SkullMap;
 use crate::sliding::Slider;
-use glam::{Quat, Vec2, Vec3};
+use glam::{Vec2, Vec3};
 
 /// Travel (mm, in the modelling camera) over which a vertex's rest offset from the skull map
 /// fades (authored: about the depth of the upper-lid crease).
@@ -199,8 +199,10 @@ impl Evaluator {
             let travel = (f.u[i] - self.u0[i]).length();
             let keep = (1.0 - travel / UNFOLD_MM).max(0.0);
             f.positions[i] = p + self.offset[i] * keep;
-            let nn = nn.normalize_or(Vec3::Z);
-            f.normals[i] = Quat::from_rotation_arc(self.skull_n0[i], nn) * self.rest_normals[i];
+            // The rest normal turned as the skull normal turns (to first order: adding the change
+            // of the skull normal, cheaper than a rotation per vertex and exact at rest).
+            f.normals[i] = (self.rest_normals[i] + nn.normalize_or(Vec3::Z) - self.skull_n0[i])
+                .normalize_or(Vec3::Z);
         }
         let rot = g.eyes.map(|a| a.rotation());
         self.slider

@@ -156,8 +156,24 @@ impl EyeRegion {
         let mut eye = Vec::new();
         let mut inner = Vec::new();
         let mut tracked = 0;
+        // Model vertices in Morton order of their camera position: a frame samples the skull
+        // map vertex after vertex, and neighbours in memory then read neighbouring texels.
+        let morton = |p: Vec3| {
+            let q = |v: f32| ((v + 128.0).clamp(0.0, 255.99) * 4.0) as u32; // 0.25 mm cells
+            let spread = |mut v: u32| {
+                v &= 0x3FF;
+                v = (v | (v << 16)) & 0x0300_00FF;
+                v = (v | (v << 8)) & 0x0300_F00F;
+                v = (v | (v << 4)) & 0x030C_30C3;
+                (v | (v << 2)) & 0x0924_9249
+            };
+            spread(q(p.x)) | (spread(q(p.y)) << 1)
+        };
+        let mut order: Vec<usize> = (0..welded.len()).collect();
+        order.sort_by_key(|&id| (morton(welded[id].0), id));
         for pass in [true, false] {
-            for (id, w) in welded.iter().enumerate() {
+            for &id in &order {
+                let w = &welded[id];
                 if w.2 && chosen.contains(&id) == pass {
                     model_of.insert(id, rest.len() as u32);
                     rest.push(w.0);

@@ -8,8 +8,8 @@ use derma_core::mesh::TriMesh;
 use derma_core::numerics::SparseCholesky;
 use glam::{Vec2, Vec3};
 
-/// Texel size (mm): 0.25 mm, a sixth of the head's 1.5 mm edges.
-pub const TEXEL_MM: f32 = 0.25;
+/// Texel size (mm): 0.5 mm, a third of the head's 1.5 mm edges (the map stays in cache).
+pub const TEXEL_MM: f32 = 0.5;
 
 /// T and Υ over a rectangle of the modelling camera.
 #[derive(Clone, Debug)]

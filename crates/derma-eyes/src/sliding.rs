@@ -45,7 +45,13 @@ pub struct Slider {
     pub eye: Vec<u8>,
     /// Mode of each vertex.
     pub modes: Vec<Mode>,
+    /// Vertices that can reach a globe (rest gap under [`REACH_MM`]); the others are skipped.
+    pub near: Vec<u32>,
 }
+
+/// A vertex further than this (mm) from its globe at rest never meets it: the region's skin
+/// slides by a few millimetres at most (a blink moves the upper lid ~10 mm, but along the globe).
+pub const REACH_MM: f32 = 8.0;
 
 impl Slider {
     /// Modes from rest positions: `offset` vertices (the thesis' extrapolated lid margins and
@@ -80,18 +86,30 @@ impl Slider {
                 }
             })
             .collect();
+        let near = rest
+            .iter()
+            .enumerate()
+            .filter(|(i, p)| {
+                let e = eye[*i] as usize;
+                (**p - centres[e]).length()
+                    < maps[e].sample((**p - centres[e]).normalize_or(Vec3::Z)) + REACH_MM
+            })
+            .map(|(i, _)| i as u32)
+            .collect();
         Slider {
             centres,
             maps,
             eye: eye.to_vec(),
             modes,
+            near,
         }
     }
 
     /// Algorithm 1 on every vertex, globes rotated by `rot` (from primary position).
     pub fn apply(&self, rot: [Quat; 2], pos: &mut [Vec3], nrm: &mut [Vec3], rest_normals: &[Vec3]) {
         let inv = rot.map(|q| q.inverse());
-        for i in 0..pos.len() {
+        for &i in &self.near {
+            let i = i as usize;
             let e = self.eye[i] as usize;
             let c = self.centres[e];
             // Position in the globe's frame.

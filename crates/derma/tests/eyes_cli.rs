@@ -1,0 +1,144 @@
+//! End-to-end tests of `derma eyes …`: synthetic tracked data → a trained model → an animated
+//! GLB that glTF readers open, the distance-field table, and errors for bad input.
+
+mod common;
+use common::{run, s};
+
+fn tmp(tag: &str) -> std::path::PathBuf {
+    common::tmp("eyes-cli", tag)
+}
+
+#[test]
+fn synthetic_data_trains_a_model_that_animates_the_head() {
+    let d = tmp("pipeline");
+    let data = d.join("tracked.csv");
+    let (ok, out, err) = run(&[
+        "eyes",
+        "synthetic",
+        "--seconds",
+        "3",
+        "--fps",
+        "10",
+        "--out",
+        s(&data),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("32 frames"), "{out}");
+    let model = d.join("model");
+    let (ok, out, err) = run(&["eyes", "train", "--data", s(&data), "--out", s(&model)]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("held-out error") && out.contains("Read et al."),
+        "{out}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(model.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["frames"], 32);
+    let anim = d.join("anim");
+    let (ok, out, err) = run(&[
+        "eyes",
+        "animate",
+        "--model",
+        s(&model.join("model.json")),
+        "--seconds",
+        "1",
+        "--fps",
+        "10",
+        "--render",
+        "160",
+        "--out",
+        s(&anim),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("10 frames"), "{out}");
+    // The GLB opens in a glTF reader with its animation, morph targets and eye nodes.
+    let (doc, _, _) = gltf::import(anim.join("head.glb")).unwrap();
+    let anims: Vec<_> = doc.animations().collect();
+    assert_eq!(anims.len(), 1);
+    assert!(anims[0].channels().count() >= 3);
+    let names: Vec<String> = doc
+        .nodes()
+        .filter_map(|n| n.name().map(str::to_string))
+        .collect();
+    for n in ["skin", "eye_left", "eye_right", "cornea_left", "iris_right"] {
+        assert!(names.iter().any(|x| x == n), "{n} missing from {names:?}");
+    }
+    assert_eq!(std::fs::read_dir(anim.join("frames")).unwrap().count(), 10);
+    let curves = std::fs::read_to_string(anim.join("curves.csv")).unwrap();
+    assert_eq!(curves.lines().count(), 11);
+}
+
+#[test]
+fn the_distance_field_table_lists_every_method() {
+    let d = tmp("sdf");
+    let (ok, out, err) = run(&[
+        "eyes",
+        "sdf",
+        "--width",
+        "480",
+        "--height",
+        "270",
+        "--runs",
+        "1",
+        "--out",
+        s(&d),
+    ]);
+    assert!(ok, "{err}");
+    for m in [
+        "exact EDT",
+        "jump flooding",
+        "equiangular 64",
+        "exponential 8x8",
+        "backtracking 8x8",
+    ] {
+        assert!(out.contains(m), "{m} missing: {out}");
+    }
+    for f in [
+        "table.md",
+        "table.json",
+        "mask.png",
+        "exact.png",
+        "lake.png",
+        "lake-closeup.png",
+    ] {
+        assert!(d.join(f).exists(), "{f}");
+    }
+}
+
+#[test]
+fn bad_input_is_named() {
+    let d = tmp("bad");
+    std::fs::create_dir_all(&d).unwrap();
+    let csv = d.join("short.csv");
+    std::fs::write(&csv, "fps,gaze_left_h,gaze_left_v,gaze_left_t,gaze_right_h,gaze_right_v,gaze_right_t\n30,0,0,0,0,0,0\n").unwrap();
+    let (ok, _, err) = run(&["eyes", "train", "--data", s(&csv), "--out", s(&d.join("m"))]);
+    assert!(
+        !ok && err.contains("short.csv") && err.contains("lid points"),
+        "{err}"
+    );
+    let tracker = d.join("gaze.csv");
+    std::fs::write(&tracker, "time,h,v\n0,0,0\n0.5,abc,1\n").unwrap();
+    let (ok, _, err) = run(&[
+        "eyes",
+        "animate",
+        "--tracker",
+        s(&tracker),
+        "--render",
+        "0",
+        "--out",
+        s(&d.join("a")),
+    ]);
+    assert!(
+        !ok && err.contains("gaze.csv") && err.contains("row 3"),
+        "{err}"
+    );
+    let (ok, _, err) = run(&[
+        "eyes",
+        "animate",
+        "--activity",
+        "sleeping",
+        "--out",
+        s(&d.join("b")),
+    ]);
+    assert!(!ok && err.contains("sleeping"), "{err}");
+}
