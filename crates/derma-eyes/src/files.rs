@@ -291,11 +291,13 @@ fn write_curves(samples: &[Sample], dir: &Path) -> Result<Vec<PathBuf>> {
 /// Writes the distance-field table (`table.md`, `table.json`) and images (`mask.png`, fields
 /// `exact.png`, `equiangular.png`, `backtracking.png`, `eye.png` / `lake.png` and the left eye's
 /// `lake-closeup.png`: without the lake, with it, the field) at
-/// `width` × `height` into `dir`; `runs` timed runs per method.
+/// `width` × `height` into `dir`; `runs` timed runs per method, plus the GPU rows when `device`
+/// resolves to a GPU.
 pub fn distance_fields(
     width: usize,
     height: usize,
     runs: usize,
+    device: derma_core::Device,
     dir: &Path,
 ) -> Result<Vec<sdf::table::Row>> {
     out_dir(dir)?;
@@ -307,7 +309,10 @@ pub fn distance_fields(
     let head = Head::builtin();
     let scene = sdf::scene::head_close_up(head, width, height);
     let range = sdf::table::RANGE_MM;
-    let rows = sdf::table::measure(&scene.g, range, runs);
+    let mut rows = sdf::table::measure(&scene.g, range, runs);
+    if device.resolve()? == derma_core::Device::Gpu {
+        rows.extend(sdf::table::measure_gpu(&scene.g, range, runs.max(10))?);
+    }
     derma_core::atomic::write_bytes(
         &dir.join("table.md"),
         sdf::table::markdown(&rows, width, height).as_bytes(),

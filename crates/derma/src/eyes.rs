@@ -104,6 +104,8 @@ pub struct SdfArgs {
     /// Timed runs per method (the table reports the median).
     #[arg(long, default_value_t = 5)]
     runs: usize,
+    #[command(flatten)]
+    device: crate::DeviceArg,
     /// Output directory.
     #[arg(long, short)]
     out: PathBuf,
@@ -194,7 +196,7 @@ pub fn run(cmd: EyesCommand) -> Result<()> {
             }
         }
         EyesCommand::Sdf(a) => {
-            let rows = files::distance_fields(a.width, a.height, a.runs, &a.out)?;
+            let rows = files::distance_fields(a.width, a.height, a.runs, a.device.device, &a.out)?;
             line(derma_eyes::sdf::table::markdown(&rows, a.width, a.height))?;
             line(format!("wrote {}", a.out.display()))?;
         }

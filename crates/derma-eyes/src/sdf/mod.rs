@@ -9,6 +9,7 @@
 //! method, so the exact transform is the reference for all of them.
 
 pub mod exact;
+pub mod gpu;
 pub mod jfa;
 pub mod lake;
 pub mod samplers;

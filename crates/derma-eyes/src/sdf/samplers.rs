@@ -82,7 +82,8 @@ impl Px<'_> {
     fn centre_distance(&self, dir: (f32, f32), d: f32) -> f32 {
         let sx = (self.x + dir.0 * d * self.ppm).floor() + 0.5;
         let sy = (self.y + dir.1 * d * self.ppm).floor() + 0.5;
-        (sx - self.x).hypot(sy - self.y) / self.ppm
+        let (dx, dy) = (sx - self.x, sy - self.y);
+        (dx * dx + dy * dy).sqrt() / self.ppm
     }
 }
 

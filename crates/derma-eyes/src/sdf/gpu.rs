@@ -1,0 +1,341 @@
+//! The distance fields on the GPU (WGSL, `sdf.wgsl`): jump flooding with its log₂ N passes
+//! dispatched back to back without host round trips, and the refined backtracking search — the
+//! CPU code in [`super::jfa`] and [`super::samplers`] is the reference; seeds are identical, and
+//! distances agree to float rounding (the GPU's sin, cos and sqrt differ by ULPs).
+
+use super::samplers::Sampler;
+use super::{material, Field, GBuffer};
+use crate::{EyesError, Result};
+use derma_core::gpu::{Gpu, GpuCell};
+use wgpu::util::DeviceExt;
+
+const SHADER: &str = include_str!("sdf.wgsl");
+const WORKGROUP: usize = 64;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    width: u32,
+    height: u32,
+    focal: f32,
+    range: f32,
+    step: u32,
+    n: u32,
+    steps: u32,
+    refine: u32,
+}
+
+struct Pipelines {
+    layout: wgpu::BindGroupLayout,
+    init: wgpu::ComputePipeline,
+    step: wgpu::ComputePipeline,
+    distance: wgpu::ComputePipeline,
+    backtrack: wgpu::ComputePipeline,
+}
+
+static PIPELINES: GpuCell<Pipelines> = GpuCell::new();
+
+fn pipelines() -> Result<(&'static Gpu, &'static Pipelines)> {
+    Ok(PIPELINES.get_or_init(|ctx| {
+        let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let ro = wgpu::BufferBindingType::Storage { read_only: true };
+        let rw = wgpu::BufferBindingType::Storage { read_only: false };
+        let layout = ctx
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("sdf"),
+                entries: &[
+                    entry(0, wgpu::BufferBindingType::Uniform),
+                    entry(1, ro),
+                    entry(2, ro),
+                    entry(3, ro),
+                    entry(4, rw),
+                    entry(5, rw),
+                    entry(6, rw),
+                ],
+            });
+        let pl = ctx
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("sdf"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            });
+        let make =
+            |e: &str| ctx.compute_pipeline_with(&format!("sdf.wgsl ({e})"), SHADER, e, Some(&pl));
+        Ok(Pipelines {
+            init: make("jfa_init")?,
+            step: make("jfa_step")?,
+            distance: make("jfa_distance")?,
+            backtrack: make("backtrack")?,
+            layout,
+        })
+    })?)
+}
+
+/// A G-buffer resident on the GPU.
+pub struct GpuFields {
+    w: usize,
+    h: usize,
+    focal: f32,
+    params: wgpu::Buffer,
+    seeds: [wgpu::Buffer; 2],
+    dist: wgpu::Buffer,
+    acc: wgpu::Buffer,
+    /// Bind groups reading seeds 0 → writing 1, and 1 → 0.
+    binds: [wgpu::BindGroup; 2],
+}
+
+fn groups(n: usize) -> (u32, u32) {
+    let g = n.div_ceil(WORKGROUP) as u32;
+    let gx = g.min(65_535);
+    (gx, g.div_ceil(gx))
+}
+
+impl GpuFields {
+    /// Uploads the mask and depth.
+    pub fn new(g: &GBuffer) -> Result<GpuFields> {
+        let (ctx, pl) = pipelines()?;
+        let d = &ctx.device;
+        let n = g.width * g.height;
+        let mask: Vec<u32> = g.mask.iter().map(|&m| m as u32).collect();
+        let init = |label, bytes: &[u8], usage| {
+            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytes,
+                usage,
+            })
+        };
+        let st = wgpu::BufferUsages::STORAGE;
+        let mask_buf = init("mask", bytemuck::cast_slice(&mask), st);
+        let depth_buf = init("depth", bytemuck::cast_slice(&g.depth), st);
+        let rw = |label| {
+            d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: (n * 4) as u64,
+                usage: st | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        };
+        let seeds = [rw("seeds a"), rw("seeds b")];
+        let dist = rw("distance");
+        let acc = rw("accesses");
+        let params = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("sdf params"),
+            size: std::mem::size_of::<Params>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind = |a: usize, b: usize| {
+            ctx.bind_buffers(
+                "sdf",
+                &pl.layout,
+                &[
+                    &params, &mask_buf, &depth_buf, &seeds[a], &seeds[b], &dist, &acc,
+                ],
+            )
+        };
+        let binds = [bind(0, 1), bind(1, 0)];
+        Ok(GpuFields {
+            w: g.width,
+            h: g.height,
+            focal: g.focal,
+            params,
+            seeds,
+            dist,
+            acc,
+            binds,
+        })
+    }
+
+    fn params(&self, step: u32, range: f32, s: Option<Sampler>) -> Params {
+        let (n, steps, refine) = match s {
+            Some(Sampler::Backtracking { n, steps, refine }) => (n, steps, refine),
+            _ => (0, 0, 0),
+        };
+        Params {
+            width: self.w as u32,
+            height: self.h as u32,
+            focal: self.focal,
+            range,
+            step,
+            n,
+            steps,
+            refine,
+        }
+    }
+
+    fn read(&self, ctx: &Gpu, with_acc: bool) -> Result<Field> {
+        let n = self.w * self.h;
+        let distance: Vec<f32> = ctx
+            .read_back::<f32>(&self.dist, n)?
+            .into_iter()
+            .map(|v| if v >= 1e30 { f32::INFINITY } else { v })
+            .collect();
+        let accesses = if with_acc {
+            ctx.read_back::<u32>(&self.acc, n)?
+        } else {
+            vec![0; n]
+        };
+        Ok(Field { distance, accesses })
+    }
+
+    /// Jump flooding: init, log₂ N + 1 steps and the distances in one submission.
+    pub fn jfa(&self) -> Result<(Field, Vec<u32>)> {
+        let (ctx, _) = pipelines()?;
+        let cur = self.submit_jfa(1)?;
+        let n = self.w * self.h;
+        let seeds = ctx.read_back::<u32>(&self.seeds[cur], n)?;
+        let passes = self.jfa_steps().len() as u32;
+        let mut f = self.read(ctx, false)?;
+        f.accesses = vec![9 * passes + 2; n];
+        Ok((f, seeds))
+    }
+
+    fn jfa_steps(&self) -> Vec<u32> {
+        let mut steps = Vec::new();
+        let mut k = self.w.max(self.h).next_power_of_two() / 2;
+        while k >= 1 {
+            steps.push(k as u32);
+            k /= 2;
+        }
+        steps.push(1);
+        steps
+    }
+
+    /// Mean milliseconds of one whole jump flooding on the device (all passes, no transfers):
+    /// `repeats` floods submitted back to back, then one wait.
+    pub fn time_jfa(&self, repeats: usize) -> Result<f64> {
+        let (ctx, _) = pipelines()?;
+        self.submit_jfa(1)?;
+        ctx.wait("warming up jump flooding")?;
+        let t = std::time::Instant::now();
+        self.submit_jfa(repeats.max(1))?;
+        ctx.wait("timing jump flooding")?;
+        Ok(t.elapsed().as_secs_f64() * 1e3 / repeats.max(1) as f64)
+    }
+
+    /// Mean milliseconds of one backtracking field on the device (no transfers).
+    pub fn time_sampled(&self, s: Sampler, range: f32, repeats: usize) -> Result<f64> {
+        let (ctx, pl) = pipelines()?;
+        ctx.queue.write_buffer(
+            &self.params,
+            0,
+            bytemuck::bytes_of(&self.params(0, range, Some(s))),
+        );
+        let (gx, gy) = groups(self.w * self.h);
+        let go = |k: usize| {
+            let mut enc = ctx.device.create_command_encoder(&Default::default());
+            for _ in 0..k {
+                let mut pass = enc.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&pl.backtrack);
+                pass.set_bind_group(0, &self.binds[0], &[]);
+                pass.dispatch_workgroups(gx, gy, 1);
+            }
+            ctx.queue.submit([enc.finish()]);
+        };
+        go(1);
+        ctx.wait("warming up the sampler")?;
+        let t = std::time::Instant::now();
+        go(repeats.max(1));
+        ctx.wait("timing the sampler")?;
+        Ok(t.elapsed().as_secs_f64() * 1e3 / repeats.max(1) as f64)
+    }
+
+    /// Submits `repeats` whole floods; returns the seed buffer holding the result.
+    fn submit_jfa(&self, repeats: usize) -> Result<usize> {
+        let (ctx, pl) = pipelines()?;
+        let n = self.w * self.h;
+        let (gx, gy) = groups(n);
+        let steps = self.jfa_steps();
+        // Each pass needs its own step in the uniform: a small buffer per pass copied in
+        // before it (queue-ordered, so no host round trip between passes).
+        let pass_params: Vec<wgpu::Buffer> = std::iter::once(0)
+            .chain(steps.iter().copied())
+            .chain(std::iter::once(0))
+            .map(|k| {
+                ctx.device
+                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("sdf pass params"),
+                        contents: bytemuck::bytes_of(&self.params(k, 0.0, None)),
+                        usage: wgpu::BufferUsages::COPY_SRC,
+                    })
+            })
+            .collect();
+        let size = std::mem::size_of::<Params>() as u64;
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        let mut cur = 0usize;
+        for _ in 0..repeats {
+            // Bind group c reads seeds[c] and writes seeds[1 − c]; init writes seeds[1].
+            let run = |enc: &mut wgpu::CommandEncoder,
+                       pipe: &wgpu::ComputePipeline,
+                       c: usize,
+                       p: &wgpu::Buffer| {
+                enc.copy_buffer_to_buffer(p, 0, &self.params, 0, size);
+                let mut pass = enc.begin_compute_pass(&Default::default());
+                pass.set_pipeline(pipe);
+                pass.set_bind_group(0, &self.binds[c], &[]);
+                pass.dispatch_workgroups(gx, gy, 1);
+            };
+            run(&mut enc, &pl.init, 0, &pass_params[0]);
+            cur = 1;
+            for k in 0..steps.len() {
+                run(&mut enc, &pl.step, cur, &pass_params[k + 1]);
+                cur = 1 - cur;
+            }
+            run(&mut enc, &pl.distance, cur, &pass_params[steps.len() + 1]);
+        }
+        ctx.queue.submit([enc.finish()]);
+        Ok(cur)
+    }
+
+    /// A sampler's field (backtracking only: the thesis' winner and derma's default).
+    pub fn sampled(&self, s: Sampler, range: f32) -> Result<Field> {
+        if !matches!(s, Sampler::Backtracking { .. }) {
+            return Err(EyesError::Invalid(format!(
+                "the GPU runs the backtracking sampler; {} runs on the CPU",
+                s.name()
+            )));
+        }
+        let (ctx, pl) = pipelines()?;
+        ctx.queue.write_buffer(
+            &self.params,
+            0,
+            bytemuck::bytes_of(&self.params(0, range, Some(s))),
+        );
+        let (gx, gy) = groups(self.w * self.h);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&pl.backtrack);
+            pass.set_bind_group(0, &self.binds[0], &[]);
+            pass.dispatch_workgroups(gx, gy, 1);
+        }
+        ctx.queue.submit([enc.finish()]);
+        self.read(ctx, true)
+    }
+}
+
+/// Globe pixels only (the CPU fields' convention), for comparisons.
+pub fn on_globes(g: &GBuffer, f: &Field) -> Vec<f32> {
+    f.distance
+        .iter()
+        .zip(&g.mask)
+        .map(|(d, m)| {
+            if *m == material::EYE {
+                *d
+            } else {
+                f32::INFINITY
+            }
+        })
+        .collect()
+}
