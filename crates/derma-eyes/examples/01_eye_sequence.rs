@@ -53,7 +53,7 @@ fn main() -> Result<()> {
         head.eyes[0].radius + sliding::THICKNESS,
         &drive,
     );
-    let stage = Stage::new(head, &rig.region);
+    let stage = Stage::new(head, &rig.region, None);
     let mut f = Frame::default();
     let mut frames = Vec::new();
     let mut imgs = Vec::new();

@@ -152,6 +152,29 @@ pub struct AnimateOptions {
     pub render: usize,
     /// Skin thickness cap over the globes (mm).
     pub thickness: f32,
+    /// An eyeball texture on the head's eye UVs (`derma photo iris`: eye.exr linear, or eye.png
+    /// sRGB); the default eye otherwise.
+    pub iris: Option<PathBuf>,
+}
+
+/// Loads an eyeball texture as linear RGB maps (EXR as stored, other formats sRGB-decoded).
+pub fn load_eye_texture(path: &Path) -> Result<[Map; 3]> {
+    let img = derma_core::image_io::read_rgb(path)?;
+    let exr = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    let mut rgb: [Map; 3] = img
+        .channels
+        .try_into()
+        .map_err(|_| EyesError::Invalid(format!("{}: expected an RGB image", path.display())))?;
+    if !exr {
+        for m in rgb.iter_mut() {
+            m.data_mut()
+                .iter_mut()
+                .for_each(|v| *v = derma_core::color::srgb_decode(*v));
+        }
+    }
+    Ok(rgb)
 }
 
 /// What `animate` wrote and measured.
@@ -231,11 +254,12 @@ pub fn animate(o: &AnimateOptions, dir: &Path) -> Result<AnimateReport> {
         positions,
         rotations,
     };
+    let eye_texture = o.iris.as_deref().map(load_eye_texture).transpose()?;
     let p = dir.join("head.glb");
-    let glb = glb::write(head, &rig.region, &baked, &p)?;
+    let glb = glb::write(head, &rig.region, &baked, eye_texture.as_ref(), &p)?;
     files.push(p);
     if o.render > 0 {
-        let stage = Stage::new(head, &rig.region);
+        let stage = Stage::new(head, &rig.region, eye_texture.clone());
         let fdir = dir.join("frames");
         std::fs::create_dir_all(&fdir)
             .map_err(|e| EyesError::Invalid(format!("cannot create {}: {e}", fdir.display())))?;

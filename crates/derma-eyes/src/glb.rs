@@ -38,7 +38,7 @@ pub struct Report {
     pub bytes: usize,
 }
 
-fn eye_texture_png(size: usize) -> Vec<u8> {
+fn eye_texture_png(size: usize, texture: Option<&[derma_core::Map; 3]>) -> Vec<u8> {
     let mut img = Vec::with_capacity(size * size * 3);
     for y in 0..size {
         for x in 0..size {
@@ -47,7 +47,10 @@ fn eye_texture_png(size: usize) -> Vec<u8> {
                 (x as f32 + 0.5) / size as f32,
                 1.0 - (y as f32 + 0.5) / size as f32,
             );
-            let c = derma_head::eye::default_albedo(uv);
+            let c = match texture {
+                Some(t) => Vec3::from(t.each_ref().map(|m| m.sample_uv(uv.x, uv.y, false))),
+                None => derma_head::eye::default_albedo(uv),
+            };
             img.extend(c.to_array().map(|v| {
                 (derma_core::color::srgb_encode(v.clamp(0.0, 1.0)) * 255.0).round() as u8
             }));
@@ -65,11 +68,13 @@ fn eye_texture_png(size: usize) -> Vec<u8> {
 }
 
 /// Writes `path`: the head with `baked` motion on the eye region (`region` maps skin vertices to
-/// model vertices).
+/// model vertices), the globes textured with `eye` (linear RGB on the head's eye UVs) or the
+/// default eye.
 pub fn write(
     head: &Head,
     region: &crate::region::EyeRegion,
     baked: &Baked,
+    eye: Option<&[derma_core::Map; 3]>,
     path: &Path,
 ) -> crate::Result<Report> {
     let nf = baked.positions.len();
@@ -288,7 +293,7 @@ pub fn write(
             json!({"sampler": samplers.len() - 1, "target": {"node": n, "path": "rotation"}}),
         );
     }
-    let png = eye_texture_png(512);
+    let png = eye_texture_png(512, eye);
     let iv = g.view(&png, None);
     let roots: Vec<usize> = (0..nodes.len())
         .filter(|i| {

@@ -26,11 +26,14 @@ pub struct Stage<'a> {
     /// Per lash part: its mesh and the nearest margin model vertex of each lash vertex.
     lashes: Vec<(TriMesh, Vec<u32>)>,
     globes: [(TriMesh, TriMesh); 2],
+    /// Eyeball texture (linear RGB on the head's eye UVs); the default eye when `None`.
+    eye: Option<[Map; 3]>,
 }
 
 impl<'a> Stage<'a> {
-    /// The stage of `head`'s eye band (60 mm either side, 28 mm below to 34 mm above the eyes).
-    pub fn new(head: &'a Head, region: &'a EyeRegion) -> Stage<'a> {
+    /// The stage of `head`'s eye band (60 mm either side, 28 mm below to 34 mm above the eyes),
+    /// the globes textured with `eye` (linear RGB on the head's eye UVs) or the default eye.
+    pub fn new(head: &'a Head, region: &'a EyeRegion, eye: Option<[Map; 3]>) -> Stage<'a> {
         let cy = head.eyes[0].centre.y;
         let zmin = head.eyes[0].centre.z - 20.0;
         let keep = |p: Vec3| p.x.abs() < 60.0 && p.y > cy - 28.0 && p.y < cy + 34.0 && p.z > zmin;
@@ -91,6 +94,7 @@ impl<'a> Stage<'a> {
             tangents,
             lashes,
             globes,
+            eye,
         }
     }
 
@@ -130,7 +134,16 @@ impl<'a> Stage<'a> {
                 })
             })
             .collect();
-        static EYE: fn(Vec2) -> Vec3 = derma_head::eye::default_albedo;
+        static DEFAULT_EYE: fn(Vec2) -> Vec3 = derma_head::eye::default_albedo;
+        let textured = |uv: Vec2| -> Vec3 {
+            let t = self.eye.as_ref().expect("textured only with a texture");
+            Vec3::from(t.each_ref().map(|m| m.sample_uv(uv.x, uv.y, false)))
+        };
+        let eye_albedo: &(dyn Fn(Vec2) -> Vec3 + Sync) = if self.eye.is_some() {
+            &textured
+        } else {
+            &DEFAULT_EYE
+        };
         static LASHES: fn(Vec2) -> Vec3 = |_| Vec3::new(0.02, 0.015, 0.012);
         static LASH_COVERAGE: fn(Vec2) -> f32 = derma_head::eye::lash_coverage;
         // Sclera under the tear film: glossy. The iris disc sits behind the (open) cornea, whose
@@ -142,7 +155,7 @@ impl<'a> Stage<'a> {
                 let iris = k % 2 == 1;
                 Prop {
                     mesh: m,
-                    albedo: &EYE,
+                    albedo: eye_albedo,
                     roughness: if iris { 0.7 } else { 0.08 },
                     f0: if iris { 0.02 } else { 0.025 },
                     coverage: None,

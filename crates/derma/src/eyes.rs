@@ -85,6 +85,9 @@ pub struct AnimateArgs {
     /// Render each frame at this width (px); 0: no renders.
     #[arg(long, default_value_t = 480)]
     render: usize,
+    /// Eyeball texture for the globes (`derma photo iris`'s eye.exr or eye.png).
+    #[arg(long)]
+    iris: Option<PathBuf>,
     /// Skin thickness over the globes (mm, a cap on each vertex's rest gap).
     #[arg(long, default_value_t = derma_eyes::sliding::THICKNESS)]
     thickness: f32,
@@ -178,6 +181,7 @@ pub fn run(cmd: EyesCommand) -> Result<()> {
                 targets,
                 render: a.render,
                 thickness: a.thickness,
+                iris: a.iris,
             };
             let r = files::animate(&o, &a.out)?;
             line(format!(
