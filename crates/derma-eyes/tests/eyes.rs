@@ -337,29 +337,36 @@ fn gpu_fields_equal_the_cpu_reference() {
     for (a, b) in jg.distance.iter().zip(&jc.distance) {
         assert!(a == b || (a - b).abs() <= 1e-5 * b.abs(), "{a} {b}");
     }
-    // Backtracking: the same search; the GPU's sin/cos/sqrt differ by ULPs, which can move a
-    // sample across a texel edge on a rare pixel.
+    // The three samplers: the same searches; the GPU's sin/cos/sqrt differ by ULPs, which can
+    // move a sample across a texel edge on a rare pixel.
     let range = sdf::table::RANGE_MM;
-    let c = sdf::samplers::field(g, sdf::table::DEFAULT, range);
-    let d = gpu.sampled(sdf::table::DEFAULT, range).unwrap();
-    let (mut same, mut n) = (0usize, 0usize);
-    for i in 0..c.distance.len() {
-        if g.mask[i] == material::EYE {
-            n += 1;
-            let (a, b) = (c.distance[i], d.distance[i]);
-            if a == b || (a - b).abs() < 1e-4 {
-                same += 1;
+    let exact = sdf::exact::field(g);
+    for s in [
+        sdf::table::DEFAULT,
+        Sampler::Equiangular { n: 64 },
+        Sampler::Exponential { steps: 8 },
+    ] {
+        let c = sdf::samplers::field(g, s, range);
+        let d = gpu.sampled(s, range).unwrap();
+        let (mut same, mut n) = (0usize, 0usize);
+        for i in 0..c.distance.len() {
+            if g.mask[i] == material::EYE {
+                n += 1;
+                let (a, b) = (c.distance[i], d.distance[i]);
+                if a == b || (a - b).abs() < 1e-4 {
+                    same += 1;
+                }
             }
         }
+        assert!(
+            same as f64 >= 0.999 * n as f64,
+            "{}: {same} of {n} globe pixels agree",
+            s.name()
+        );
+        let (ec, eg) = (
+            sdf::error_percent(&c.distance, &exact.distance, range),
+            sdf::error_percent(&d.distance, &exact.distance, range),
+        );
+        assert!((ec - eg).abs() < 0.02, "{}: CPU {ec}% GPU {eg}%", s.name());
     }
-    assert!(
-        same as f64 >= 0.999 * n as f64,
-        "{same} of {n} globe pixels agree"
-    );
-    let exact = sdf::exact::field(g);
-    let (ec, eg) = (
-        sdf::error_percent(&c.distance, &exact.distance, range),
-        sdf::error_percent(&d.distance, &exact.distance, range),
-    );
-    assert!((ec - eg).abs() < 0.02, "CPU {ec}% GPU {eg}%");
 }

@@ -5,7 +5,7 @@
 
 use super::samplers::Sampler;
 use super::{material, Field, GBuffer};
-use crate::{EyesError, Result};
+use crate::Result;
 use derma_core::gpu::{Gpu, GpuCell};
 use wgpu::util::DeviceExt;
 
@@ -31,6 +31,9 @@ struct Pipelines {
     step: wgpu::ComputePipeline,
     distance: wgpu::ComputePipeline,
     backtrack: wgpu::ComputePipeline,
+    equiangular: wgpu::ComputePipeline,
+    exp_pass1: wgpu::ComputePipeline,
+    exp_pass2: wgpu::ComputePipeline,
 }
 
 static PIPELINES: GpuCell<Pipelines> = GpuCell::new();
@@ -61,6 +64,7 @@ fn pipelines() -> Result<(&'static Gpu, &'static Pipelines)> {
                     entry(4, rw),
                     entry(5, rw),
                     entry(6, rw),
+                    entry(7, rw),
                 ],
             });
         let pl = ctx
@@ -77,6 +81,9 @@ fn pipelines() -> Result<(&'static Gpu, &'static Pipelines)> {
             step: make("jfa_step")?,
             distance: make("jfa_distance")?,
             backtrack: make("backtrack")?,
+            equiangular: make("equiangular")?,
+            exp_pass1: make("exp_pass1")?,
+            exp_pass2: make("exp_pass2")?,
             layout,
         })
     })?)
@@ -129,6 +136,12 @@ impl GpuFields {
         let seeds = [rw("seeds a"), rw("seeds b")];
         let dist = rw("distance");
         let acc = rw("accesses");
+        let offs = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("offsets"),
+            size: (n * 8) as u64,
+            usage: st,
+            mapped_at_creation: false,
+        });
         let params = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("sdf params"),
             size: std::mem::size_of::<Params>() as u64,
@@ -140,7 +153,7 @@ impl GpuFields {
                 "sdf",
                 &pl.layout,
                 &[
-                    &params, &mask_buf, &depth_buf, &seeds[a], &seeds[b], &dist, &acc,
+                    &params, &mask_buf, &depth_buf, &seeds[a], &seeds[b], &dist, &acc, &offs,
                 ],
             )
         };
@@ -160,7 +173,9 @@ impl GpuFields {
     fn params(&self, step: u32, range: f32, s: Option<Sampler>) -> Params {
         let (n, steps, refine) = match s {
             Some(Sampler::Backtracking { n, steps, refine }) => (n, steps, refine),
-            _ => (0, 0, 0),
+            Some(Sampler::Equiangular { n }) => (n, 0, 0),
+            Some(Sampler::Exponential { steps }) => (0, steps, 0),
+            None => (0, 0, 0),
         };
         Params {
             width: self.w as u32,
@@ -224,33 +239,6 @@ impl GpuFields {
         Ok(t.elapsed().as_secs_f64() * 1e3 / repeats.max(1) as f64)
     }
 
-    /// Mean milliseconds of one backtracking field on the device (no transfers).
-    pub fn time_sampled(&self, s: Sampler, range: f32, repeats: usize) -> Result<f64> {
-        let (ctx, pl) = pipelines()?;
-        ctx.queue.write_buffer(
-            &self.params,
-            0,
-            bytemuck::bytes_of(&self.params(0, range, Some(s))),
-        );
-        let (gx, gy) = groups(self.w * self.h);
-        let go = |k: usize| {
-            let mut enc = ctx.device.create_command_encoder(&Default::default());
-            for _ in 0..k {
-                let mut pass = enc.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&pl.backtrack);
-                pass.set_bind_group(0, &self.binds[0], &[]);
-                pass.dispatch_workgroups(gx, gy, 1);
-            }
-            ctx.queue.submit([enc.finish()]);
-        };
-        go(1);
-        ctx.wait("warming up the sampler")?;
-        let t = std::time::Instant::now();
-        go(repeats.max(1));
-        ctx.wait("timing the sampler")?;
-        Ok(t.elapsed().as_secs_f64() * 1e3 / repeats.max(1) as f64)
-    }
-
     /// Submits `repeats` whole floods; returns the seed buffer holding the result.
     fn submit_jfa(&self, repeats: usize) -> Result<usize> {
         let (ctx, pl) = pipelines()?;
@@ -298,15 +286,16 @@ impl GpuFields {
         Ok(cur)
     }
 
-    /// A sampler's field (backtracking only: the thesis' winner and derma's default).
-    pub fn sampled(&self, s: Sampler, range: f32) -> Result<Field> {
-        if !matches!(s, Sampler::Backtracking { .. }) {
-            return Err(EyesError::Invalid(format!(
-                "the GPU runs the backtracking sampler; {} runs on the CPU",
-                s.name()
-            )));
+    /// The passes of a sampler, in order.
+    fn passes(pl: &Pipelines, s: Sampler) -> Vec<&wgpu::ComputePipeline> {
+        match s {
+            Sampler::Equiangular { .. } => vec![&pl.equiangular],
+            Sampler::Exponential { .. } => vec![&pl.exp_pass1, &pl.exp_pass2],
+            Sampler::Backtracking { .. } => vec![&pl.backtrack],
         }
-        let (ctx, pl) = pipelines()?;
+    }
+
+    fn submit_sampler(&self, ctx: &Gpu, pl: &Pipelines, s: Sampler, range: f32, repeats: usize) {
         ctx.queue.write_buffer(
             &self.params,
             0,
@@ -314,14 +303,33 @@ impl GpuFields {
         );
         let (gx, gy) = groups(self.w * self.h);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = enc.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&pl.backtrack);
-            pass.set_bind_group(0, &self.binds[0], &[]);
-            pass.dispatch_workgroups(gx, gy, 1);
+        for _ in 0..repeats {
+            for pipe in Self::passes(pl, s) {
+                let mut pass = enc.begin_compute_pass(&Default::default());
+                pass.set_pipeline(pipe);
+                pass.set_bind_group(0, &self.binds[0], &[]);
+                pass.dispatch_workgroups(gx, gy, 1);
+            }
         }
         ctx.queue.submit([enc.finish()]);
+    }
+
+    /// A sampler's field, computed on the device.
+    pub fn sampled(&self, s: Sampler, range: f32) -> Result<Field> {
+        let (ctx, pl) = pipelines()?;
+        self.submit_sampler(ctx, pl, s, range, 1);
         self.read(ctx, true)
+    }
+
+    /// Mean milliseconds of one sampler field on the device (no transfers).
+    pub fn time_sampled(&self, s: Sampler, range: f32, repeats: usize) -> Result<f64> {
+        let (ctx, pl) = pipelines()?;
+        self.submit_sampler(ctx, pl, s, range, 1);
+        ctx.wait("warming up the sampler")?;
+        let t = std::time::Instant::now();
+        self.submit_sampler(ctx, pl, s, range, repeats.max(1));
+        ctx.wait("timing the sampler")?;
+        Ok(t.elapsed().as_secs_f64() * 1e3 / repeats.max(1) as f64)
     }
 }
 

@@ -335,7 +335,7 @@ fn exponential(g: &GBuffer, steps: u32, range: f32) -> Field {
                     // Offset to the centre of the skin texel found.
                     let cx = (x as f32 + 0.5 + dir.0 * d * ppm).floor() + 0.5 - (x as f32 + 0.5);
                     let cy = (y as f32 + 0.5 + dir.1 * d * ppm).floor() + 0.5 - (y as f32 + 0.5);
-                    let dc = cx.hypot(cy) / ppm;
+                    let dc = (cx * cx + cy * cy).sqrt() / ppm;
                     if dc < best_d {
                         best_d = dc;
                         best = (cx, cy);
@@ -371,9 +371,10 @@ fn exponential(g: &GBuffer, steps: u32, range: f32) -> Field {
                         (y as f32 + 0.5 + oy).floor() - y as f32,
                     );
                     match j {
-                        Some(j) if g.mask[j] == material::SKIN => cx.hypot(cy) / ppm,
+                        Some(j) if g.mask[j] == material::SKIN => (cx * cx + cy * cy).sqrt() / ppm,
                         Some(j) if g.mask[j] == material::EYE && pass1[j].0.is_finite() => {
-                            (cx + pass1[j].0).hypot(cy + pass1[j].1) / ppm
+                            let (ex, ey) = (cx + pass1[j].0, cy + pass1[j].1);
+                            (ex * ex + ey * ey).sqrt() / ppm
                         }
                         _ => f32::INFINITY,
                     }

@@ -1,5 +1,5 @@
 // Screen-space distance fields on the GPU (derma-eyes sdf/gpu.rs): jump flooding (Rong & Tan
-// 2006) and the refined backtracking search (thesis §4.4.3) — the same algorithms, hash and
+// 2006) and the thesis' three samplers (§4.4.1–4.4.3) — the same algorithms, hash and
 // sample positions as the CPU reference in exact.rs/jfa.rs and samplers.rs.
 
 struct Params {
@@ -20,6 +20,7 @@ struct Params {
 @group(0) @binding(4) var<storage, read_write> seeds_out: array<u32>;
 @group(0) @binding(5) var<storage, read_write> dist: array<f32>;
 @group(0) @binding(6) var<storage, read_write> acc: array<u32>;
+@group(0) @binding(7) var<storage, read_write> offs: array<vec2<f32>>;
 
 const NONE: u32 = 0xffffffffu;
 const SKIN: u32 = 1u;
@@ -217,4 +218,209 @@ fn backtrack(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     dist[i] = best;
     acc[i] = accesses;
+}
+
+// 2^k exactly (the CPU's powi), where pow() may round.
+fn powi2(k: u32) -> f32 {
+    var v = 1.0;
+    for (var j = 0u; j < k; j++) {
+        v *= 2.0;
+    }
+    return v;
+}
+
+fn begin(i: u32) {
+    let x = i % p.width;
+    let y = i / p.width;
+    px = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
+    ppm = p.focal / max(depth[i], 1e-3);
+}
+
+// §4.4.1: n equiangular directions, one sample each at a random distance in (0, Λ].
+@compute @workgroup_size(64)
+fn equiangular(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = index(gid);
+    if (i >= p.width * p.height) {
+        return;
+    }
+    if (mask[i] != EYE) {
+        dist[i] = INF;
+        acc[i] = 0u;
+        return;
+    }
+    let x = i % p.width;
+    let y = i / p.width;
+    let rot = hash01(x, y, ROTATION_SALT);
+    begin(i);
+    accesses = 1u;
+    var best = INF;
+    for (var k = 0u; k < p.n; k++) {
+        let dir = unit(TAU * (f32(k) + rot) / f32(p.n));
+        let d = p.range * (1.0 - hash01(x, y, 0x100u + k));
+        if (skin_at(dir, d)) {
+            best = min(best, centre_distance(dir, d));
+        }
+    }
+    dist[i] = best;
+    acc[i] = accesses;
+}
+
+fn skin_at_px(o: vec2<f32>) -> bool {
+    return is_skin(i32(floor(px.x + o.x)), i32(floor(px.y + o.y)));
+}
+
+// §4.4.2 pass 1: growing then shrinking steps along the pixel's rotated axis, both ways; the
+// offset (texels) to the centre of the nearest skin texel found.
+@compute @workgroup_size(64)
+fn exp_pass1(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = index(gid);
+    if (i >= p.width * p.height) {
+        return;
+    }
+    if (mask[i] != EYE) {
+        offs[i] = vec2<f32>(INF, INF);
+        acc[i] = 0u;
+        return;
+    }
+    let x = i % p.width;
+    let y = i / p.width;
+    let a = TAU * hash01(x, y, ROTATION_SALT);
+    begin(i);
+    var count = 1u;
+    var best = vec2<f32>(INF, INF);
+    var best_d = INF;
+    let mu = 2.0;
+    let h0 = p.range * (mu - 1.0) / (powi2((p.steps + 1u) / 2u) - 1.0);
+    for (var side = 0u; side < 2u; side++) {
+        let sgn = select(-1.0, 1.0, side == 0u);
+        let dir = vec2<f32>(sgn * cos(a), sgn * sin(a));
+        var pos = 0.0;
+        var step = h0;
+        var found = false;
+        var dr = 1.0;
+        var d = INF;
+        for (var k = 0u; k < p.steps; k++) {
+            if (!found) {
+                pos += step;
+                if (pos > p.range * 1.0001) {
+                    break;
+                }
+                count += 1u;
+                if (skin_at_px(vec2<f32>(dir.x * pos * ppm, dir.y * pos * ppm))) {
+                    found = true;
+                    d = pos;
+                    dr = -1.0;
+                } else {
+                    step *= mu;
+                    continue;
+                }
+            } else {
+                pos += dr * step;
+                count += 1u;
+                if (skin_at_px(vec2<f32>(dir.x * pos * ppm, dir.y * pos * ppm))) {
+                    d = min(d, pos);
+                    dr = -1.0;
+                } else {
+                    dr = 1.0;
+                }
+            }
+            step /= mu;
+        }
+        if (d < INF) {
+            let cx = floor(px.x + dir.x * d * ppm) + 0.5 - px.x;
+            let cy = floor(px.y + dir.y * d * ppm) + 0.5 - px.y;
+            let dc = sqrt(cx * cx + cy * cy) / ppm;
+            if (dc < best_d) {
+                best_d = dc;
+                best = vec2<f32>(cx, cy);
+            }
+        }
+    }
+    offs[i] = best;
+    acc[i] = count;
+}
+
+fn exp_probe(dir: vec2<f32>, t: f32, x: u32, y: u32) -> f32 {
+    let ox = dir.x * t * ppm;
+    let oy = dir.y * t * ppm;
+    let sx = i32(floor(px.x + ox));
+    let sy = i32(floor(px.y + oy));
+    let cx = floor(px.x + ox) - f32(x);
+    let cy = floor(px.y + oy) - f32(y);
+    if (sx < 0 || sy < 0 || sx >= i32(p.width) || sy >= i32(p.height)) {
+        return INF;
+    }
+    let j = u32(sy) * p.width + u32(sx);
+    if (mask[j] == SKIN) {
+        return sqrt(cx * cx + cy * cy) / ppm;
+    }
+    let o = offs[j];
+    if (mask[j] == EYE && o.x < 1e30) {
+        let ex = cx + o.x;
+        let ey = cy + o.y;
+        return sqrt(ex * ex + ey * ey) / ppm;
+    }
+    return INF;
+}
+
+// §4.4.2 pass 2: perpendicular, minimising the distance to the skin points pass 1 found at the
+// samples (eq. 4.13 with the stored offsets).
+@compute @workgroup_size(64)
+fn exp_pass2(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = index(gid);
+    if (i >= p.width * p.height) {
+        return;
+    }
+    if (mask[i] != EYE) {
+        dist[i] = INF;
+        return;
+    }
+    let x = i % p.width;
+    let y = i / p.width;
+    let a = TAU * hash01(x, y, ROTATION_SALT) + PI / 2.0;
+    begin(i);
+    let own = offs[i];
+    var best = INF;
+    if (own.x < 1e30) {
+        best = sqrt(own.x * own.x + own.y * own.y) / ppm;
+    }
+    var count = 0u;
+    let mu = 2.0;
+    let h0 = p.range * (mu - 1.0) / (powi2((p.steps + 1u) / 2u) - 1.0);
+    for (var side = 0u; side < 2u; side++) {
+        let sgn = select(-1.0, 1.0, side == 0u);
+        let dir = vec2<f32>(sgn * cos(a), sgn * sin(a));
+        var pos = 0.0;
+        var step = h0;
+        var growing = true;
+        var dr = 1.0;
+        var last = INF;
+        for (var k = 0u; k < p.steps; k++) {
+            pos = clamp(pos + dr * step, 0.0, p.range);
+            count += 2u;
+            let m = exp_probe(dir, pos, x, y);
+            best = min(best, m);
+            if (growing) {
+                if (m < 1e30 && m > last) {
+                    growing = false;
+                    dr = -dr;
+                    step /= mu;
+                } else if (m < 1e30 && m == 0.0) {
+                    growing = false;
+                    dr = -1.0;
+                    step /= mu;
+                } else {
+                    step *= mu;
+                }
+            } else {
+                step /= mu;
+                if (m > last || m == 0.0) {
+                    dr = -dr;
+                }
+            }
+            last = m;
+        }
+    }
+    dist[i] = best;
+    acc[i] = acc[i] + count;
 }

@@ -118,7 +118,7 @@ pub fn markdown(rows: &[Row], w: usize, h: usize) -> String {
     s
 }
 
-/// The GPU rows: jump flooding and the default sampler on the device, each the mean of `runs`
+/// The GPU rows: jump flooding and every sampler on the device, each the mean of `runs`
 /// back-to-back dispatches after a warm-up (device time without transfers), with their errors.
 pub fn measure_gpu(g: &GBuffer, range: f32, runs: usize) -> crate::Result<Vec<Row>> {
     let gpu = super::gpu::GpuFields::new(g)?;
@@ -131,19 +131,20 @@ pub fn measure_gpu(g: &GBuffer, range: f32, runs: usize) -> crate::Result<Vec<Ro
         .collect();
     let name = derma_core::gpu::context()?.name.clone();
     let (j, _) = gpu.jfa()?;
-    let f = gpu.sampled(DEFAULT, range)?;
-    Ok(vec![
-        Row {
-            method: format!("jump flooding (JFA+1), GPU: {name}"),
-            ms: gpu.time_jfa(runs)?,
-            accesses: j.accesses_per_texel(&relevant),
-            error_percent: error_percent(&j.distance, &truth.distance, range),
-        },
-        Row {
-            method: format!("{}, GPU: {name}", DEFAULT.name()),
-            ms: gpu.time_sampled(DEFAULT, range, runs)?,
+    let mut rows = vec![Row {
+        method: format!("jump flooding (JFA+1), GPU: {name}"),
+        ms: gpu.time_jfa(runs)?,
+        accesses: j.accesses_per_texel(&relevant),
+        error_percent: error_percent(&j.distance, &truth.distance, range),
+    }];
+    for s in SAMPLERS {
+        let f = gpu.sampled(s, range)?;
+        rows.push(Row {
+            method: format!("{}, GPU: {name}", s.name()),
+            ms: gpu.time_sampled(s, range, runs)?,
             accesses: f.accesses_per_texel(&relevant),
             error_percent: error_percent(&f.distance, &truth.distance, range),
-        },
-    ])
+        });
+    }
+    Ok(rows)
 }
