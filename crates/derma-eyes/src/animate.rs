@@ -59,6 +59,53 @@ pub struct Sample {
     pub cyclopean: Fick,
 }
 
+/// Fixations joined by saccades on the main sequence: the cyclopean gaze at any time.
+pub struct Scanpath {
+    fixations: Vec<Fixation>,
+    /// Gaze each saccade starts from.
+    from: Vec<Fick>,
+    profiles: Vec<Profile>,
+}
+
+impl Scanpath {
+    /// The path through `fixations` (sorted by start; the first starts from primary position).
+    pub fn new(fixations: Vec<Fixation>) -> Scanpath {
+        let mut from = vec![Fick::PRIMARY; fixations.len()];
+        for k in 1..fixations.len() {
+            from[k] = fixations[k - 1].gaze;
+        }
+        let profiles = fixations
+            .iter()
+            .zip(&from)
+            .map(|(f, p)| Profile::new(p.amplitude_to(f.gaze)))
+            .collect();
+        Scanpath {
+            fixations,
+            from,
+            profiles,
+        }
+    }
+
+    /// The cyclopean gaze at time `t` (s): the saccade into the current fixation along its
+    /// velocity profile, then the fixation.
+    pub fn at(&self, t: f32) -> Fick {
+        if self.fixations.is_empty() {
+            return Fick::PRIMARY;
+        }
+        let k = self
+            .fixations
+            .partition_point(|f| f.start <= t)
+            .saturating_sub(1);
+        let s = self.profiles[k].progress(t - self.fixations[k].start);
+        let (a, b) = (self.from[k], self.fixations[k].gaze);
+        Fick {
+            h: a.h + (b.h - a.h) * s,
+            v: a.v + (b.v - a.v) * s,
+            t: 0.0,
+        }
+    }
+}
+
 /// Upper-lid rotation (°) from the model's open baseline to closed, about the globe centre at
 /// `radius`: a blink of this amplitude closes the eye fully.
 pub fn full_blink_amplitude(m: &EyeModel, centre_y: f32, radius: f32) -> f32 {
@@ -81,28 +128,12 @@ pub fn timeline(model: &EyeModel, centres: [Vec3; 2], radius: f32, d: &Drive) ->
         .unwrap_or_else(|| blink::schedule(d.seconds, d.activity, d.seed));
     let full = full_blink_amplitude(model, centres[0].y, radius);
     let mid = 0.5 * (centres[0] + centres[1]);
-    // Saccade into each fixation from the gaze at its start.
-    let mut from = vec![Fick::PRIMARY; fix.len()];
-    for k in 1..fix.len() {
-        from[k] = fix[k - 1].gaze;
-    }
-    let profiles: Vec<Profile> = fix
-        .iter()
-        .zip(&from)
-        .map(|(f, p)| Profile::new(p.amplitude_to(f.gaze)))
-        .collect();
+    let path = Scanpath::new(fix);
     let n = (d.seconds * d.fps).round().max(1.0) as usize;
     (0..n)
         .map(|i| {
             let t = i as f32 / d.fps;
-            let k = fix.partition_point(|f| f.start <= t).saturating_sub(1);
-            let s = profiles[k].progress(t - fix[k].start);
-            let (a, b) = (from[k], fix[k].gaze);
-            let cyc = Fick {
-                h: a.h + (b.h - a.h) * s,
-                v: a.v + (b.v - a.v) * s,
-                t: 0.0,
-            };
+            let cyc = path.at(t);
             let target = mid + d.distance * cyc.direction();
             let eyes = verge(centres, target);
             let closure = blinks

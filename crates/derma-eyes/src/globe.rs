@@ -5,7 +5,7 @@
 
 use derma_core::bvh::Bvh;
 use derma_core::mesh::TriMesh;
-use derma_head::eye::{uv_of, Eye, IRIS_UV_RADIUS};
+use derma_head::eye::{polar_mesh, Eye, IRIS_UV_RADIUS};
 use glam::{Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
 
@@ -72,59 +72,26 @@ impl Globe {
         const RINGS: usize = 64;
         const SEGMENTS: usize = 64;
         let lim = self.limbus_angle();
-        let mut m = TriMesh::default();
-        let row = SEGMENTS as u32 + 1;
         // Rings: the corneal cap gets a third of them, so the bulge is resolved.
+        let cap = RINGS / 3;
         let theta_of = |r: usize| {
-            let cap = RINGS / 3;
             if r <= cap {
                 lim * r as f32 / cap as f32
             } else {
                 lim + (PI - lim) * (r - cap) as f32 / (RINGS - cap) as f32
             }
         };
-        for r in 0..=RINGS {
-            let theta = theta_of(r);
-            for s in 0..=SEGMENTS {
-                let phi = TAU * s as f32 / SEGMENTS as f32;
-                let d = Vec3::new(
-                    theta.sin() * phi.cos(),
-                    theta.sin() * phi.sin(),
-                    theta.cos(),
-                );
-                let rad = self.radial(d);
-                m.positions.push(d * rad);
-                let c = Vec3::new(0.0, 0.0, self.cornea_offset);
-                let n = if rad > self.radius + 1e-5 {
-                    (d * rad - c).normalize()
-                } else {
-                    d
-                };
-                m.normals.push(n);
-                m.uvs.push(uv_of(theta, phi));
-            }
-        }
-        let cap = RINGS / 3;
-        for r in 0..RINGS as u32 {
-            if !with_cornea && (r as usize) < cap {
-                continue;
-            }
-            for s in 0..SEGMENTS as u32 {
-                let (a, b, c, d) = (
-                    r * row + s,
-                    r * row + s + 1,
-                    (r + 1) * row + s,
-                    (r + 1) * row + s + 1,
-                );
-                if r > 0 {
-                    m.triangles.push([a, c, b]);
-                }
-                if r + 1 < RINGS as u32 {
-                    m.triangles.push([b, c, d]);
-                }
-            }
-        }
-        m
+        let thetas: Vec<f32> = (0..=RINGS).map(theta_of).collect();
+        let c = Vec3::new(0.0, 0.0, self.cornea_offset);
+        polar_mesh(&thetas, SEGMENTS, if with_cornea { 0 } else { cap }, |d| {
+            let rad = self.radial(d);
+            let n = if rad > self.radius + 1e-5 {
+                (d * rad - c).normalize()
+            } else {
+                d
+            };
+            (d * rad, n)
+        })
     }
 
     /// The iris disc in the iris plane, from the pupil to the limbus, facing +Z, with UVs

@@ -109,6 +109,16 @@ fn raw_inputs(t: &Tracked, f: &Frame, plane: [f32; 2]) -> Vec<f64> {
     g
 }
 
+/// One training row per frame: (g, lid control points, tracked vertices), flattened.
+type Row = (Vec<f64>, Vec<f64>, Vec<f64>);
+
+fn rows_of(t: &Tracked, plane: [f32; 2]) -> Vec<Row> {
+    t.frames
+        .iter()
+        .map(|f| (raw_inputs(t, f, plane), flat(&f.lids), flat(&f.vertices)))
+        .collect()
+}
+
 fn flat(p: &[Vec2]) -> Vec<f64> {
     p.iter().flat_map(|v| [v.x as f64, v.y as f64]).collect()
 }
@@ -126,7 +136,7 @@ struct Fitted {
 }
 
 /// Fits both stages on `rows` (g, lids, skin) with `c` components each.
-fn fit_stages(rows: &[(Vec<f64>, Vec<f64>, Vec<f64>)], c: Components) -> Result<Fitted> {
+fn fit_stages(rows: &[Row], c: Components) -> Result<Fitted> {
     let lids: Vec<Vec<f64>> = rows.iter().map(|r| r.1.clone()).collect();
     let skin: Vec<Vec<f64>> = rows.iter().map(|r| r.2.clone()).collect();
     let lid_pca = Pca::fit(&lids, c.lids)?;
@@ -165,11 +175,7 @@ impl EyeModel {
             )));
         }
         let plane = planes(t);
-        let rows: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> = t
-            .frames
-            .iter()
-            .map(|f| (raw_inputs(t, f, plane), flat(&f.lids), flat(&f.vertices)))
-            .collect();
+        let rows = rows_of(t, plane);
         // Eq. 3.6: ι = |g₄ − g₅| + |g₉ − g₁₀|; the most open frame has the largest ι, the most
         // closed the smallest (the thesis' text swaps the two words; its meaning is this). The
         // sign is kept: rigs and real lids overlap when squeezed shut, and a frame whose lids
@@ -248,12 +254,7 @@ impl EyeModel {
 
     /// A of eq. 3.11 for eye `e`: normalised openings of the baseline frames from (h, v), with
     /// one pass that drops frames more than 3 robust σ off (partial blinks in real captures).
-    fn fit_baseline(
-        &self,
-        t: &Tracked,
-        rows: &[(Vec<f64>, Vec<f64>, Vec<f64>)],
-        e: usize,
-    ) -> Result<Linear> {
+    fn fit_baseline(&self, t: &Tracked, rows: &[Row], e: usize) -> Result<Linear> {
         let mut xs = Vec::new();
         let mut ys = Vec::new();
         for (f, r) in t.frames.iter().zip(rows) {
@@ -556,12 +557,7 @@ fn fold_of(i: usize, folds: usize) -> usize {
 /// Cross-validated error against the number of components (fig. 3.7): `folds`-fold, up to
 /// `max` components for each model.
 pub fn cross_validate(t: &Tracked, max: Components, folds: usize) -> Result<Curve> {
-    let plane = planes(t);
-    let rows: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> = t
-        .frames
-        .iter()
-        .map(|f| (raw_inputs(t, f, plane), flat(&f.lids), flat(&f.vertices)))
-        .collect();
+    let rows = rows_of(t, planes(t));
     let kmax = max.lids.max(max.skin).min(MAX_SKIN.max(max.lids));
     let mut lid_num = vec![0.0; kmax];
     let mut lid_den = 0.0;
@@ -626,12 +622,7 @@ pub fn cross_validate(t: &Tracked, max: Components, folds: usize) -> Result<Curv
 
 /// Training-set error of both models with k components each (the same ratios as [`Curve`]).
 pub fn training_error(t: &Tracked, k: usize) -> Result<(f64, f64)> {
-    let plane = planes(t);
-    let rows: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> = t
-        .frames
-        .iter()
-        .map(|f| (raw_inputs(t, f, plane), flat(&f.lids), flat(&f.vertices)))
-        .collect();
+    let rows = rows_of(t, planes(t));
     let f = fit_stages(
         &rows,
         Components {

@@ -117,30 +117,19 @@ pub fn saliency(rgb: &[Map; 3]) -> Map {
     let yy = chan(&|k| ((r[k] + g[k]) / 2.0 - (r[k] - g[k]).abs() / 2.0 - b[k]).max(0.0));
     let levels = 9;
     let ip = pyramid(&Map::from_vec(w, h, i).expect("size"), levels);
-    let rg: Vec<Map> = pyramid(&rr, levels)
-        .iter()
-        .zip(pyramid(&gg, levels))
-        .map(|(a, b)| {
-            Map::from_vec(
-                a.width(),
-                a.height(),
-                a.data().iter().zip(b.data()).map(|(x, y)| x - y).collect(),
-            )
-            .expect("size")
-        })
-        .collect();
-    let by: Vec<Map> = pyramid(&bb, levels)
-        .iter()
-        .zip(pyramid(&yy, levels))
-        .map(|(a, b)| {
-            Map::from_vec(
-                a.width(),
-                a.height(),
-                a.data().iter().zip(b.data()).map(|(x, y)| x - y).collect(),
-            )
-            .expect("size")
-        })
-        .collect();
+    // Opponent channels per level: R − G and B − Y.
+    let opponent = |a: &Map, b: &Map| -> Vec<Map> {
+        pyramid(a, levels)
+            .iter()
+            .zip(pyramid(b, levels))
+            .map(|(a, b)| {
+                let d = a.data().iter().zip(b.data()).map(|(x, y)| x - y).collect();
+                Map::from_vec(a.width(), a.height(), d).expect("size")
+            })
+            .collect()
+    };
+    let rg = opponent(&rr, &gg);
+    let by = opponent(&bb, &yy);
     // Orientation: oriented first-derivative energy at 0°, 45°, 90°, 135° per level (a
     // steerable stand-in for the paper's Gabor filters).
     let orient: Vec<Vec<Map>> = (0..4)

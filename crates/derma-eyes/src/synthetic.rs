@@ -8,7 +8,6 @@ use crate::gaze::verge;
 use crate::idle;
 use crate::lids::CONTROL_POINTS;
 use crate::rigdata::{Pose, Rig, UNITS};
-use crate::saccade::Profile;
 use crate::tracked::{Tracked, FORMAT};
 use derma_core::rng::Philox;
 use glam::{Vec2, Vec3};
@@ -33,29 +32,14 @@ pub fn sequence(rig: &Rig, centres: [Vec3; 2], seconds: f32, fps: f32, seed: u64
     let blinks = blink::schedule(seconds, Activity::Conversation, seed);
     let mid = 0.5 * (centres[0] + centres[1]);
     let n = (seconds * fps).round().max(10.0) as usize;
-    let mut from = vec![crate::Fick::PRIMARY; fix.len()];
-    for k in 1..fix.len() {
-        from[k] = fix[k - 1].gaze;
-    }
-    let profiles: Vec<Profile> = fix
-        .iter()
-        .zip(&from)
-        .map(|(f, p)| Profile::new(p.amplitude_to(f.gaze)))
-        .collect();
+    let path = crate::animate::Scanpath::new(fix);
     // A blink of ≥ 45° closes fully (the table 3.1 mean, 34.6°, closes ~¾).
     let full = 45.0;
     let mut frames: Vec<crate::tracked::Frame> = (0..n)
         .into_par_iter()
         .map(|i| {
             let t = i as f32 / fps;
-            let k = fix.partition_point(|f| f.start <= t).saturating_sub(1);
-            let s = profiles[k].progress(t - fix[k].start);
-            let (a, b) = (from[k], fix[k].gaze);
-            let cyc = crate::Fick {
-                h: a.h + (b.h - a.h) * s,
-                v: a.v + (b.v - a.v) * s,
-                t: 0.0,
-            };
+            let cyc = path.at(t);
             let gaze = verge(centres, mid + 600.0 * cyc.direction());
             let closure = blinks
                 .iter()

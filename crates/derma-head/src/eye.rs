@@ -27,41 +27,55 @@ pub fn uv_of(theta: f32, phi: f32) -> Vec2 {
 impl Eye {
     /// The globe as a triangle mesh with normals and its own UVs.
     pub fn mesh(&self) -> TriMesh {
-        let mut m = TriMesh::default();
-        for r in 0..=RINGS {
-            let theta = PI * r as f32 / RINGS as f32;
-            for s in 0..=SEGMENTS {
-                let phi = TAU * s as f32 / SEGMENTS as f32;
-                let n = Vec3::new(
-                    theta.sin() * phi.cos(),
-                    theta.sin() * phi.sin(),
-                    theta.cos(),
-                );
-                m.positions.push(self.centre + self.radius * n);
-                m.normals.push(n);
-                m.uvs.push(uv_of(theta, phi));
-            }
-        }
-        let row = SEGMENTS as u32 + 1;
-        for r in 0..RINGS as u32 {
-            for s in 0..SEGMENTS as u32 {
-                let (a, b, c, d) = (
-                    r * row + s,
-                    r * row + s + 1,
-                    (r + 1) * row + s,
-                    (r + 1) * row + s + 1,
-                );
-                // Counter-clockwise seen from outside.
-                if r > 0 {
-                    m.triangles.push([a, c, b]);
-                }
-                if r + 1 < RINGS as u32 {
-                    m.triangles.push([b, c, d]);
-                }
-            }
-        }
-        m
+        let thetas: Vec<f32> = (0..=RINGS).map(|r| PI * r as f32 / RINGS as f32).collect();
+        polar_mesh(&thetas, SEGMENTS, 0, |d| (self.centre + self.radius * d, d))
     }
+}
+
+/// A closed globe-like mesh with the eye UVs ([`uv_of`]): rings at polar angles `thetas` from
+/// the optical axis (+Z; the first 0, the last π), `segments` around; `surface` gives the
+/// position and normal for each unit direction. Rings before `first` get no triangles (an open
+/// cap). Triangles are counter-clockwise seen from outside.
+pub fn polar_mesh(
+    thetas: &[f32],
+    segments: usize,
+    first: usize,
+    surface: impl Fn(Vec3) -> (Vec3, Vec3),
+) -> TriMesh {
+    let mut m = TriMesh::default();
+    for &theta in thetas {
+        for s in 0..=segments {
+            let phi = TAU * s as f32 / segments as f32;
+            let d = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            );
+            let (p, n) = surface(d);
+            m.positions.push(p);
+            m.normals.push(n);
+            m.uvs.push(uv_of(theta, phi));
+        }
+    }
+    let rings = thetas.len() as u32 - 1;
+    let row = segments as u32 + 1;
+    for r in first as u32..rings {
+        for s in 0..segments as u32 {
+            let (a, b, c, d) = (
+                r * row + s,
+                r * row + s + 1,
+                (r + 1) * row + s,
+                (r + 1) * row + s + 1,
+            );
+            if r > 0 {
+                m.triangles.push([a, c, b]);
+            }
+            if r + 1 < rings {
+                m.triangles.push([b, c, d]);
+            }
+        }
+    }
+    m
 }
 
 /// Iris radius in UV: the visible iris is ~11.7 mm across (horizontal visible iris diameter,

@@ -70,15 +70,20 @@ fn timed<T>(runs: usize, f: impl Fn() -> T) -> (T, f64) {
     (out.expect("one run"), median(times))
 }
 
-/// Measures every method on `g` with range `range`, each `runs` times.
-pub fn measure(g: &GBuffer, range: f32, runs: usize) -> Vec<Row> {
-    let (truth, ms) = timed(runs, || exact::field(g));
-    let relevant: Vec<bool> = truth
+/// The area of relevancy: globe texels within `range` of skin by the exact field.
+fn relevant(g: &GBuffer, truth: &super::Field, range: f32) -> Vec<bool> {
+    truth
         .distance
         .iter()
         .zip(&g.mask)
         .map(|(d, m)| *m == material::EYE && *d < range)
-        .collect();
+        .collect()
+}
+
+/// Measures every method on `g` with range `range`, each `runs` times.
+pub fn measure(g: &GBuffer, range: f32, runs: usize) -> Vec<Row> {
+    let (truth, ms) = timed(runs, || exact::field(g));
+    let relevant = relevant(g, &truth, range);
     let mut rows = vec![Row {
         method: "exact EDT (Felzenszwalb–Huttenlocher)".into(),
         ms,
@@ -123,12 +128,7 @@ pub fn markdown(rows: &[Row], w: usize, h: usize) -> String {
 pub fn measure_gpu(g: &GBuffer, range: f32, runs: usize) -> crate::Result<Vec<Row>> {
     let gpu = super::gpu::GpuFields::new(g)?;
     let truth = exact::field(g);
-    let relevant: Vec<bool> = truth
-        .distance
-        .iter()
-        .zip(&g.mask)
-        .map(|(d, m)| *m == material::EYE && *d < range)
-        .collect();
+    let relevant = relevant(g, &truth, range);
     let name = derma_core::gpu::context()?.name.clone();
     let (j, _) = gpu.jfa()?;
     let mut rows = vec![Row {
