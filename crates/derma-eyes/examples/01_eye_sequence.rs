@@ -1,7 +1,8 @@
 //! A short scripted sequence on the built-in head — gaze shifts on the saccade main sequence and
 //! a full blink — rendered with the preview: a contact strip and an animated PNG.
 //!
-//! cargo run --release -p derma-eyes --example 01_eye_sequence [OUT_DIR]
+//! cargo run --release -p derma-eyes --example 01_eye_sequence [OUT_DIR]   (default: a temporary
+//! directory; `docs/images` remakes the README's figures)
 
 use derma_core::Map;
 use derma_eyes::animate::{self, Drive};
@@ -13,11 +14,10 @@ use derma_eyes::rigdata::Rig;
 use derma_eyes::*;
 
 fn main() -> Result<()> {
-    let dir = std::path::PathBuf::from(
-        std::env::args()
-            .nth(1)
-            .unwrap_or_else(|| "eyes-sequence".into()),
-    );
+    let dir = std::env::args()
+        .nth(1)
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| std::env::temp_dir().join("derma-eyes-sequence"));
     std::fs::create_dir_all(&dir).map_err(|e| EyesError::Invalid(e.to_string()))?;
     let head = derma_head::Head::builtin();
     let rig = Rig::new(head)?;
