@@ -33,8 +33,8 @@ pub struct Evaluator {
     offset: Vec<Vec3>,
     /// Per vertex: ũ⁺ at the neutral input.
     u0: Vec<Vec2>,
-    /// Per vertex: Υ(ũ⁺ neutral), normalised.
-    skull_n0: Vec<Vec3>,
+    /// Per vertex: the rest normal minus Υ(ũ⁺ neutral).
+    normal_offset: Vec<Vec3>,
     /// Rest normals.
     rest_normals: Vec<Vec3>,
     /// The neutral input.
@@ -160,11 +160,11 @@ impl Evaluator {
         let mut u = vec![Vec2::ZERO; optimised.len()];
         optimised.evaluate(&e, &mut u);
         let mut offset = Vec::with_capacity(u.len());
-        let mut skull_n0 = Vec::with_capacity(u.len());
+        let mut normal_offset = Vec::with_capacity(u.len());
         for (i, ui) in u.iter().enumerate() {
             let (p, n) = skull.sample(*ui);
             offset.push(region.rest[i] - p);
-            skull_n0.push(n.normalize_or(Vec3::Z));
+            normal_offset.push(region.rest_normals[i] - n);
         }
         Ok(Evaluator {
             optimised,
@@ -173,7 +173,7 @@ impl Evaluator {
             globes,
             offset,
             u0: u,
-            skull_n0,
+            normal_offset,
             rest_normals: region.rest_normals.clone(),
             neutral,
         })
@@ -196,13 +196,20 @@ impl Evaluator {
             let (p, nn) = self.skull.sample(f.u[i]);
             // Skin hidden in a fold at rest (the upper lid under its crease) unfolds onto the
             // visible surface as it slides away: its rest offset fades over UNFOLD_MM of travel.
-            let travel = (f.u[i] - self.u0[i]).length();
-            let keep = (1.0 - travel / UNFOLD_MM).max(0.0);
+            // (1 − (travel / UNFOLD_MM)²)⁺: no square root per vertex.
+            let travel2 = (f.u[i] - self.u0[i]).length_squared();
+            let keep = (1.0 - travel2 * (1.0 / (UNFOLD_MM * UNFOLD_MM))).max(0.0);
             f.positions[i] = p + self.offset[i] * keep;
-            // The rest normal turned as the skull normal turns (to first order: adding the change
-            // of the skull normal, cheaper than a rotation per vertex and exact at rest).
-            f.normals[i] = (self.rest_normals[i] + nn.normalize_or(Vec3::Z) - self.skull_n0[i])
-                .normalize_or(Vec3::Z);
+            // The rest normal turned as the skull normal turns (to first order: the skull normal
+            // plus the rest normal's difference from it, cheaper than a rotation per vertex and
+            // exact at rest); the difference fades with the offset, so unfolded skin takes the
+            // surface's normal. The map's normals are unit at its texels.
+            let n = if keep > 0.0 {
+                nn + self.normal_offset[i] * keep
+            } else {
+                nn
+            };
+            f.normals[i] = n * n.length_recip();
         }
         let rot = g.eyes.map(|a| a.rotation());
         self.slider

@@ -91,6 +91,11 @@ impl SkullMap {
         }
         let covered: Vec<bool> = depth.iter().map(|d| *d > f32::MIN).collect();
         harmonic_fill(&mut texels, &covered, width, height)?;
+        // Unit normals at every texel (the fill interpolates them linearly).
+        for t in texels.iter_mut() {
+            let n = Vec3::new(t[3], t[4], t[5]).normalize_or(Vec3::Z);
+            t[3..6].copy_from_slice(&n.to_array());
+        }
         Ok(SkullMap {
             origin: lo,
             width,
@@ -102,7 +107,7 @@ impl SkullMap {
     /// Bilinear T(ũ) and Υ(ũ) (the normal unnormalised).
     #[inline]
     pub fn sample(&self, u: Vec2) -> (Vec3, Vec3) {
-        let f = (u - self.origin) / TEXEL_MM;
+        let f = (u - self.origin) * (1.0 / TEXEL_MM);
         let fx = f.x.clamp(0.0, (self.width - 1) as f32 - 1e-3);
         let fy = f.y.clamp(0.0, (self.height - 1) as f32 - 1e-3);
         let (x0, y0) = (fx as usize, fy as usize);

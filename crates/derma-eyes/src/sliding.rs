@@ -47,6 +47,8 @@ pub struct Slider {
     pub modes: Vec<Mode>,
     /// Vertices that can reach a globe (rest gap under [`REACH_MM`]); the others are skipped.
     pub near: Vec<u32>,
+    /// Largest radial distance of each globe's surface (mm).
+    pub reach: [f32; 2],
 }
 
 /// A vertex further than this (mm) from its globe at rest never meets it: the region's skin
@@ -96,12 +98,14 @@ impl Slider {
             })
             .map(|(i, _)| i as u32)
             .collect();
+        let reach = [0, 1].map(|e| maps[e].radius.iter().copied().fold(0.0f32, f32::max));
         Slider {
             centres,
             maps,
             eye: eye.to_vec(),
             modes,
             near,
+            reach,
         }
     }
 
@@ -118,6 +122,10 @@ impl Slider {
             let dir = r / len;
             match self.modes[i] {
                 Mode::Skull { t } => {
+                    // Beyond the globe's furthest point plus t nothing can push the vertex.
+                    if len >= self.reach[e] + t {
+                        continue;
+                    }
                     let delta = self.maps[e].sample(dir) + t;
                     if delta > len {
                         pos[i] = c + rot[e] * (dir * delta);
@@ -128,11 +136,11 @@ impl Slider {
                 Mode::Offset { delta0, t, tau0 } => {
                     let delta = self.maps[e].sample(dir) + t + delta0;
                     pos[i] = c + rot[e] * (dir * delta);
-                    // Eq. 3.19: rotate the rest normal by the rotation taking τ̂₀ to τ̂ (both in
-                    // head space).
-                    let tau = (pos[i] - c).normalize();
-                    let q = Quat::from_rotation_arc(tau0, tau);
-                    nrm[i] = q * rest_normals[i];
+                    // Eq. 3.19: turn the rest normal as the sliding normal turns from τ̂₀ to τ̂
+                    // (to first order, as the skull normals: exact at rest, no rotation to build).
+                    let tau = rot[e] * dir;
+                    let n = rest_normals[i] + tau - tau0;
+                    nrm[i] = n * n.length_recip();
                 }
             }
         }
