@@ -106,6 +106,70 @@ fn the_distance_field_table_lists_every_method() {
 }
 
 #[test]
+fn an_iris_texture_reaches_the_glb() {
+    let d = tmp("iris");
+    // Any RGB image on the eye UVs will do: the distance-field command's lake render.
+    let (ok, _, err) = run(&[
+        "eyes",
+        "sdf",
+        "--width",
+        "256",
+        "--height",
+        "144",
+        "--runs",
+        "1",
+        "--out",
+        s(&d.join("sdf")),
+    ]);
+    assert!(ok, "{err}");
+    let image_of = |dir: &std::path::Path| {
+        let (_, _, images) = gltf::import(dir.join("head.glb")).unwrap();
+        images[0].pixels.clone()
+    };
+    let mut images = Vec::new();
+    for (tag, iris) in [
+        ("plain", None),
+        ("photo", Some(d.join("sdf").join("lake.png"))),
+    ] {
+        let out = d.join(tag);
+        let mut args = vec![
+            "eyes",
+            "animate",
+            "--seconds",
+            "0.2",
+            "--fps",
+            "10",
+            "--render",
+            "0",
+            "--out",
+            s(&out),
+        ];
+        if let Some(p) = &iris {
+            args.extend(["--iris", s(p)]);
+        }
+        let (ok, _, err) = run(&args);
+        assert!(ok, "{err}");
+        images.push(image_of(&out));
+    }
+    assert_eq!(images[0].len(), images[1].len());
+    assert_ne!(
+        images[0], images[1],
+        "the --iris texture should replace the default eye"
+    );
+    let (ok, _, err) = run(&[
+        "eyes",
+        "animate",
+        "--iris",
+        s(&d.join("missing.png")),
+        "--render",
+        "0",
+        "--out",
+        s(&d.join("x")),
+    ]);
+    assert!(!ok && err.contains("missing.png"), "{err}");
+}
+
+#[test]
 fn bad_input_is_named() {
     let d = tmp("bad");
     std::fs::create_dir_all(&d).unwrap();
