@@ -88,24 +88,19 @@ pub fn train(data: &Data, c: Components, dir: &Path) -> Result<TrainReport> {
             m.baseline_opening_mm(e, 0.0, -40.0),
         ]
     });
+    // report.json lists itself among the files written.
+    let p = dir.join("report.json");
+    files.push(p.clone());
     let report = TrainReport {
         frames: t.frames.len(),
         vertices: t.vertex_count(),
         components: c,
         curve,
         aperture_mm,
-        files: files.clone(),
+        files,
     };
-    let p = dir.join("report.json");
     derma_core::atomic::write_bytes(&p, &serde_json::to_vec_pretty(&report).expect("JSON"))?;
-    Ok(TrainReport {
-        files: {
-            let mut f = files;
-            f.push(p);
-            f
-        },
-        ..report
-    })
+    Ok(report)
 }
 
 /// Writes a synthetic tracked sequence of the rig (JSON or CSV by extension).

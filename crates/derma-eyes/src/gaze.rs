@@ -6,7 +6,7 @@
 //! last torsion (about the line of sight). derma's head looks down +Z with +Y up and +X the head's
 //! left, so h > 0 turns the eye towards +X and v > 0 turns it up.
 
-use glam::{Mat3, Quat, Vec3};
+use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
 /// Inputs per eye in g: three Fick angles and two lid displacements.
@@ -56,11 +56,6 @@ impl Fick {
             v: d.y.clamp(-1.0, 1.0).asin().to_degrees(),
             t: 0.0,
         }
-    }
-
-    /// The rotation as a matrix.
-    pub fn matrix(self) -> Mat3 {
-        Mat3::from_quat(self.rotation())
     }
 
     /// Angular amplitude (°) of the shift from `self` to `other` (great-circle angle between

@@ -8,7 +8,8 @@ use derma_core::rng::Philox;
 
 /// Mean saccade magnitude (°) of the exponential P(A) ∝ e^(−A/6.9) (Lee et al. 2002, eq. 1 fit).
 pub const MAGNITUDE_SCALE: f32 = 6.9;
-/// Largest idle saccade (°): larger shifts come with head movement, which this model leaves out.
+/// Largest idle saccade (°; authored): larger shifts come with head movement, which this model
+/// leaves out.
 pub const MAX_MAGNITUDE: f32 = 27.0;
 
 /// Relative frequency of saccade directions in eight 45° sectors, counter-clockwise from "right"

@@ -36,7 +36,8 @@ const SUPPORT_MM: f32 = 0.1;
 /// by extrapolation (eq. 3.5).
 pub const TRACK_SPACING: f32 = 2.5;
 
-/// A sampled tracked vertex faces the camera at least this much (n · z): a video tracker sees it.
+/// A sampled tracked vertex faces the camera at least this much (n · z), so a video tracker
+/// sees it (authored).
 const VISIBLE_COS: f32 = 0.25;
 
 /// The region of one head.
@@ -273,31 +274,6 @@ impl EyeRegion {
     /// True when the region has no vertices.
     pub fn is_empty(&self) -> bool {
         self.rest.is_empty()
-    }
-
-    /// Positions of the model vertices of a posed skin (same topology as the head's skin).
-    pub fn gather(&self, skin_positions: &[Vec3]) -> Vec<Vec3> {
-        let mut out = self.rest.clone();
-        for (i, &m) in self.skin_to_model.iter().enumerate() {
-            if m != u32::MAX {
-                out[m as usize] = skin_positions[i];
-            }
-        }
-        out
-    }
-
-    /// Writes model-vertex positions back onto the skin's vertices (every UV copy).
-    pub fn scatter(&self, model: &[Vec3], skin_positions: &mut [Vec3]) {
-        for (i, &m) in self.skin_to_model.iter().enumerate() {
-            if m != u32::MAX {
-                skin_positions[i] = model[m as usize];
-            }
-        }
-    }
-
-    /// As [`EyeRegion::scatter`] for normals.
-    pub fn scatter_normals(&self, model: &[Vec3], skin_normals: &mut [Vec3]) {
-        self.scatter(model, skin_normals)
     }
 }
 

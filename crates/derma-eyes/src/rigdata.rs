@@ -72,7 +72,7 @@ impl Rig {
     /// Face-unit weights of a pose.
     pub fn weights(&self, p: &Pose) -> Vec<(&'static str, f32)> {
         let mut w = Vec::new();
-        for (e, side) in ["Left", "Right"].iter().enumerate() {
+        for e in 0..2 {
             let g = p.gaze[e];
             let h = (g.h / FULL_LOOK).clamp(-1.0, 1.0);
             let v_down = (-g.v / FULL_LOOK).clamp(0.0, 1.0);
@@ -83,20 +83,17 @@ impl Rig {
             } else {
                 ((-h).max(0.0), h.max(0.0))
             };
-            let name = |base: &str| -> &'static str {
-                crate::region::REGION_UNITS
-                    .iter()
-                    .find(|n| **n == format!("{base}{side}"))
-                    .copied()
-                    .expect("unit name")
-            };
-            w.push((name("eyeLookOut"), out));
-            w.push((name("eyeLookIn"), inn));
-            w.push((name("eyeLookDown"), v_down));
-            w.push((name("eyeLookUp"), v_up));
-            w.push((name("eyeBlink"), p.blink[e]));
-            w.push((name("eyeWide"), p.wide[e]));
-            w.push((name("eyeSquint"), p.squint[e]));
+            // REGION_UNITS per side: LookUp, LookDown, LookIn, LookOut, Blink, Squint, Wide.
+            let u = &crate::region::REGION_UNITS[7 * e..7 * e + 7];
+            w.extend([
+                (u[3], out),
+                (u[2], inn),
+                (u[1], v_down),
+                (u[0], v_up),
+                (u[4], p.blink[e]),
+                (u[6], p.wide[e]),
+                (u[5], p.squint[e]),
+            ]);
         }
         w
     }

@@ -11,8 +11,8 @@ use glam::{Quat, Vec3};
 /// thick near the margin (authored; the thesis leaves t to the user).
 pub const THICKNESS: f32 = 1.0;
 
-/// Extrapolated vertices within this distance (mm) of a globe at rest get the δ₀ treatment: the
-/// lid margins and canthi, not the cheek.
+/// Inner-surface vertices within this distance (mm) of a globe at rest get the δ₀ treatment: the
+/// lid margins and canthi, not the deep socket (authored).
 const DELTA0_REACH: f32 = 4.0;
 
 /// How one vertex slides.

@@ -4,7 +4,7 @@
 //! distances agree to float rounding (the GPU's sin, cos and sqrt differ by ULPs).
 
 use super::samplers::Sampler;
-use super::{material, Field, GBuffer};
+use super::{Field, GBuffer};
 use crate::Result;
 use derma_core::gpu::{Gpu, GpuCell};
 use wgpu::util::DeviceExt;
@@ -331,19 +331,4 @@ impl GpuFields {
         ctx.wait("timing the sampler")?;
         Ok(t.elapsed().as_secs_f64() * 1e3 / repeats.max(1) as f64)
     }
-}
-
-/// Globe pixels only (the CPU fields' convention), for comparisons.
-pub fn on_globes(g: &GBuffer, f: &Field) -> Vec<f32> {
-    f.distance
-        .iter()
-        .zip(&g.mask)
-        .map(|(d, m)| {
-            if *m == material::EYE {
-                *d
-            } else {
-                f32::INFINITY
-            }
-        })
-        .collect()
 }

@@ -4,7 +4,7 @@
 
 use super::{material, GBuffer};
 use derma_core::mesh::TriMesh;
-use glam::{Mat3, Vec2, Vec3};
+use glam::{Vec2, Vec3};
 
 /// A pinhole camera looking down −Z (view space), at `position` in head space.
 #[derive(Clone, Copy, Debug)]
@@ -135,8 +135,6 @@ pub fn render(cam: &Camera, layers: &[Layer]) -> Scene {
             *d = 0.0;
         }
     }
-    // Head space to view space is a translation here (the camera looks down −Z).
-    let _ = Mat3::IDENTITY;
     Scene {
         g: GBuffer {
             width: w,

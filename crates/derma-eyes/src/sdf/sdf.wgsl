@@ -163,11 +163,8 @@ fn backtrack(@builtin(global_invocation_id) gid: vec3<u32>) {
         acc[i] = 0u;
         return;
     }
-    let x = i % p.width;
-    let y = i / p.width;
-    let rot = hash01(x, y, ROTATION_SALT);
-    px = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
-    ppm = p.focal / max(depth[i], 1e-3);
+    let rot = hash01(i % p.width, i / p.width, ROTATION_SALT);
+    begin(i);
     accesses = 1u;
     let range = p.range;
     var best = INF;
