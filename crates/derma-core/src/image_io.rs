@@ -159,6 +159,36 @@ fn encode_png(path: &Path, w: usize, h: usize, bytes: &[u8], ty: ExtendedColorTy
     })
 }
 
+/// 8-bit PNG bytes in memory (for containers such as GLB) of 1, 3 or 4 maps of already-encoded
+/// values in [0, 1]; `what` names the image in errors.
+pub fn png8_bytes(what: &str, maps: &[&Map]) -> Result<Vec<u8>> {
+    let path = Path::new(what);
+    let (w, h, ty) = check_maps(
+        path,
+        maps,
+        [
+            ExtendedColorType::L8,
+            ExtendedColorType::Rgb8,
+            ExtendedColorType::Rgba8,
+        ],
+    )?;
+    let n = maps.len();
+    let mut bytes = vec![0u8; w * h * n];
+    for (k, m) in maps.iter().enumerate() {
+        for (i, &v) in m.data().iter().enumerate() {
+            bytes[i * n + k] = q8(v);
+        }
+    }
+    let mut out = Vec::new();
+    PngEncoder::new_with_quality(&mut out, CompressionType::Fast, FilterType::Adaptive)
+        .write_image(&bytes, w as u32, h as u32, ty)
+        .map_err(|e| CoreError::Encode {
+            path: path.to_path_buf(),
+            detail: e.to_string(),
+        })?;
+    Ok(out)
+}
+
 #[inline]
 fn q8(v: f32) -> u8 {
     (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
@@ -381,6 +411,29 @@ pub fn read_exr_channels(path: &Path) -> Result<Vec<(String, Map)>> {
             Ok((c.name.to_string(), Map::from_vec(w, h, v)?))
         })
         .collect()
+}
+
+/// Writes an animated PNG of `frames` (RGB 8-bit sRGB bytes, all `w` × `h`) at `fps`,
+/// atomically (turntables, eye sequences: every browser plays it).
+pub fn write_apng(path: &Path, frames: &[Vec<u8>], w: usize, h: usize, fps: u16) -> Result<()> {
+    let mut out = Vec::new();
+    {
+        let err = |e: png::EncodingError| CoreError::Encode {
+            path: path.to_path_buf(),
+            detail: e.to_string(),
+        };
+        let mut enc = png::Encoder::new(&mut out, w as u32, h as u32);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_animated(frames.len() as u32, 0).map_err(err)?;
+        enc.set_frame_delay(1, fps).map_err(err)?;
+        let mut wr = enc.write_header().map_err(err)?;
+        for f in frames {
+            wr.write_image_data(f).map_err(err)?;
+        }
+        wr.finish().map_err(err)?;
+    }
+    crate::atomic::write_bytes(path, &out)
 }
 
 #[cfg(test)]

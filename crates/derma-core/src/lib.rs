@@ -28,6 +28,7 @@ pub mod color;
 pub mod dtab;
 pub mod error;
 pub mod gpu;
+pub mod gpu_texture;
 pub mod image_io;
 pub mod map;
 pub mod memory;

@@ -449,9 +449,89 @@ pub fn mikktspace_tangents(mesh: &TriMesh) -> Vec<[f32; 4]> {
     g.out
 }
 
+/// A mesh whose vertices each carry one tangent, for formats with per-vertex tangents (glTF's
+/// TANGENT) and GPU vertex buffers: vertices whose corners got different MikkTSpace tangents
+/// (UV seams, mirrored islands) are split. Returns the mesh, its tangents and, per new vertex,
+/// the vertex of `mesh` it came from (to carry morph targets over).
+pub fn split_by_tangent(mesh: &TriMesh, corner: &[[f32; 4]]) -> (TriMesh, Vec<[f32; 4]>, Vec<u32>) {
+    assert_eq!(
+        corner.len(),
+        3 * mesh.triangles.len(),
+        "one tangent per corner"
+    );
+    // Corners within 1e-3 (≈ 0.06°) share a vertex; the sign must match exactly.
+    let same =
+        |a: &[f32; 4], b: &[f32; 4]| a[3] == b[3] && (0..3).all(|k| (a[k] - b[k]).abs() < 1e-3);
+    let n = mesh.positions.len();
+    // Per original vertex: the (tangent, new index) variants seen so far.
+    let mut variants: Vec<Vec<([f32; 4], u32)>> = vec![Vec::new(); n];
+    let mut out = TriMesh::default();
+    let mut tangents = Vec::new();
+    let mut origin = Vec::new();
+    for (f, tri) in mesh.triangles.iter().enumerate() {
+        let mut new_tri = [0u32; 3];
+        for (k, &v) in tri.iter().enumerate() {
+            let t = corner[3 * f + k];
+            let slot = &mut variants[v as usize];
+            let idx = match slot.iter().find(|(u, _)| same(u, &t)) {
+                Some(&(_, i)) => i,
+                None => {
+                    let i = out.positions.len() as u32;
+                    out.positions.push(mesh.positions[v as usize]);
+                    if let Some(nm) = mesh.normals.get(v as usize) {
+                        out.normals.push(*nm);
+                    }
+                    if let Some(uv) = mesh.uvs.get(v as usize) {
+                        out.uvs.push(*uv);
+                    }
+                    tangents.push(t);
+                    origin.push(v);
+                    slot.push((t, i));
+                    i
+                }
+            };
+            new_tri[k] = idx;
+        }
+        out.triangles.push(new_tri);
+    }
+    (out, tangents, origin)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn split_by_tangent_keeps_shared_corners_and_splits_mirrored_ones() {
+        // Two triangles sharing an edge; the second's UVs are mirrored, so its tangent flips.
+        let m = TriMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, 0.0)],
+            normals: vec![Vec3::Z; 4],
+            uvs: vec![Vec2::ZERO, Vec2::X, Vec2::Y, Vec2::new(0.0, 1.0)],
+            triangles: vec![[0, 1, 2], [1, 3, 2]],
+        };
+        let t = mikktspace_tangents(&m);
+        let (s, tan, origin) = split_by_tangent(&m, &t);
+        assert_eq!(s.triangles.len(), 2);
+        assert_eq!(tan.len(), s.positions.len());
+        // Every corner's tangent is kept exactly at its (new) vertex.
+        for (f, tri) in s.triangles.iter().enumerate() {
+            for k in 0..3 {
+                assert_eq!(tan[tri[k] as usize], t[3 * f + k]);
+                assert_eq!(
+                    s.positions[tri[k] as usize],
+                    m.positions[origin[tri[k] as usize] as usize]
+                );
+            }
+        }
+        // The shared edge's vertices differ in tangent between the triangles → split.
+        assert!(s.positions.len() > 4, "{}", s.positions.len());
+        // A mesh with consistent UVs is not split at all.
+        let mut c = m.clone();
+        c.uvs[3] = Vec2::ONE;
+        let (s2, _, _) = split_by_tangent(&c, &mikktspace_tangents(&c));
+        assert_eq!(s2.positions.len(), 4);
+    }
 
     #[test]
     fn head_units_follow_the_head_size_range() {

@@ -64,7 +64,7 @@ fn main() -> Result<()> {
         imgs.push(img);
     }
     let (w, h) = (imgs[0][0].width(), imgs[0][0].height());
-    render::write_apng(&dir.join("eyes-sequence-anim.png"), &frames, w, h, 12)?;
+    derma_core::image_io::write_apng(&dir.join("eyes-sequence-anim.png"), &frames, w, h, 12)?;
     // The strip: primary, left, down, mid-blink, closed, up-right.
     let pick = [0usize, 7, 12, 16, 17, 26];
     let strip = [0, 1, 2].map(|c| {

@@ -268,7 +268,7 @@ pub fn animate(o: &AnimateOptions, dir: &Path) -> Result<AnimateReport> {
             frames.push(render::srgb8(&img));
         }
         let p = dir.join("sequence.png");
-        render::write_apng(&p, &frames, size.0, size.1, drive.fps.round() as u16)?;
+        derma_core::image_io::write_apng(&p, &frames, size.0, size.1, drive.fps.round() as u16)?;
         files.push(p);
         files.push(fdir);
     }

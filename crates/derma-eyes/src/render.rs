@@ -10,7 +10,6 @@ use derma_core::preview::{self, FlatMaterial, Prop};
 use derma_core::Map;
 use derma_head::Head;
 use glam::{Quat, Vec2, Vec3};
-use std::path::Path;
 
 /// Linear skin colour of the preview (a light-intermediate complexion, authored).
 const SKIN_RGB: [f32; 3] = [0.56, 0.36, 0.28];
@@ -210,32 +209,4 @@ pub fn srgb8(img: &[Map; 3]) -> Vec<u8> {
             })
         })
         .collect()
-}
-
-/// Writes an animated PNG of `frames` (sRGB bytes, all `w` × `h`) at `fps`, atomically.
-pub fn write_apng(
-    path: &Path,
-    frames: &[Vec<u8>],
-    w: usize,
-    h: usize,
-    fps: u16,
-) -> crate::Result<()> {
-    let mut out = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut out, w as u32, h as u32);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let err = |e: png::EncodingError| {
-            crate::EyesError::Invalid(format!("encoding {}: {e}", path.display()))
-        };
-        enc.set_animated(frames.len() as u32, 0).map_err(err)?;
-        enc.set_frame_delay(1, fps).map_err(err)?;
-        let mut wr = enc.write_header().map_err(err)?;
-        for f in frames {
-            wr.write_image_data(f).map_err(err)?;
-        }
-        wr.finish().map_err(err)?;
-    }
-    derma_core::atomic::write_bytes(path, &out)?;
-    Ok(())
 }

@@ -721,13 +721,30 @@ impl TextureSet {
     /// Writes every file of [`outputs::OUTPUTS`] into `dir` — the maps, features.json,
     /// preview.png, then manifest.json and report.json — each atomically.
     pub fn write(&self, dir: &Path, progress: &dyn Progress) -> Result<Written> {
+        self.write_with(dir, progress, None)
+    }
+
+    /// [`TextureSet::write`] with the preview's shaded views already rendered (sRGB-encoded,
+    /// [`crate::preview::PANEL`]² each, e.g. by derma-render on a GPU); `None` draws them with
+    /// the software renderer.
+    pub fn write_with(
+        &self,
+        dir: &Path,
+        progress: &dyn Progress,
+        shaded: Option<Vec<[derma_core::Map; 3]>>,
+    ) -> Result<Written> {
         match &self.pool {
-            Some(p) => p.install(|| self.write_files(dir, progress)),
-            None => self.write_files(dir, progress),
+            Some(p) => p.install(|| self.write_files(dir, progress, shaded)),
+            None => self.write_files(dir, progress, shaded),
         }
     }
 
-    fn write_files(&self, dir: &Path, progress: &dyn Progress) -> Result<Written> {
+    fn write_files(
+        &self,
+        dir: &Path,
+        progress: &dyn Progress,
+        shaded: Option<Vec<[derma_core::Map; 3]>>,
+    ) -> Result<Written> {
         derma_core::atomic::ensure_writable_dir(dir)?;
         let job = Job::new(progress);
         job.stage("write", 1, Unit::Steps);
@@ -748,6 +765,7 @@ impl TextureSet {
             &self.surface,
             self.preview_mesh.as_ref(),
             &props,
+            shaded,
         );
         derma_core::image_io::write_png8(
             &dir.join(outputs::PREVIEW),

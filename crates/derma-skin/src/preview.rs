@@ -24,44 +24,52 @@ impl RenderMaps {
     }
 }
 
+/// Side of a preview panel (pixels): shaded views are this size, thumbnails half.
+pub const PANEL: usize = 512;
+
 /// Shaded views of `render` on its mesh (or a sphere and a tile for patches) plus the contact
-/// sheet (base colour, normal, height, roughness, melanin, blood): preview.png.
+/// sheet (base colour, normal, height, roughness, melanin, blood): preview.png. `shaded`: views
+/// already rendered (by the GPU renderer, sRGB-encoded, [`PANEL`]²); `None` draws them with the
+/// software renderer.
 pub fn contact_sheet(
     render_maps: &RenderMaps,
     bio: &BioMaps,
     surface: &Surface,
     mesh: Option<&(TriMesh, Vec<[f32; 4]>)>,
     props: &[Prop],
+    shaded: Option<Vec<[Map; 3]>>,
 ) -> [Map; 3] {
-    const PANEL: usize = 512;
     let r = render_maps;
-    let renders = match mesh {
-        Some((m, t)) => {
-            let tex = r.textures(false, glam::Vec2::ONE);
-            // Front and three-quarter (45°) views.
-            vec![
-                render_with(m, t, &tex, props, 0.0, PANEL),
-                render_with(m, t, &tex, props, std::f32::consts::FRAC_PI_4, PANEL),
-            ]
-        }
-        None => {
-            let (sx, sy) = match &surface.geometry {
-                crate::surface::Geometry::Patch { size_mm, .. } => (size_mm[0], size_mm[1]),
-                _ => (1.0, 1.0),
-            };
-            // A sphere of radius 1.2 patch widths, the patch repeated at its physical size.
-            let radius = 1.2 * sx;
-            let (sm, st) = sphere(radius, 96);
-            let scale = glam::Vec2::new(
-                2.0 * std::f32::consts::PI * radius / sx,
-                std::f32::consts::PI * radius / sy,
-            );
-            let (tm, tt) = tile(sx);
-            vec![
-                render(&sm, &st, &r.textures(true, scale), 0.0, PANEL),
-                render(&tm, &tt, &r.textures(true, glam::Vec2::ONE), 0.0, PANEL),
-            ]
-        }
+    let renders = match (shaded, mesh) {
+        (Some(v), _) => v,
+        (None, mesh) => match mesh {
+            Some((m, t)) => {
+                let tex = r.textures(false, glam::Vec2::ONE);
+                // Front and three-quarter (45°) views.
+                vec![
+                    render_with(m, t, &tex, props, 0.0, PANEL),
+                    render_with(m, t, &tex, props, std::f32::consts::FRAC_PI_4, PANEL),
+                ]
+            }
+            None => {
+                let (sx, sy) = match &surface.geometry {
+                    crate::surface::Geometry::Patch { size_mm, .. } => (size_mm[0], size_mm[1]),
+                    _ => (1.0, 1.0),
+                };
+                // A sphere of radius 1.2 patch widths, the patch repeated at its physical size.
+                let radius = 1.2 * sx;
+                let (sm, st) = sphere(radius, 96);
+                let scale = glam::Vec2::new(
+                    2.0 * std::f32::consts::PI * radius / sx,
+                    std::f32::consts::PI * radius / sy,
+                );
+                let (tm, tt) = tile(sx);
+                vec![
+                    render(&sm, &st, &r.textures(true, scale), 0.0, PANEL),
+                    render(&tm, &tt, &r.textures(true, glam::Vec2::ONE), 0.0, PANEL),
+                ]
+            }
+        },
     };
     // Thumbnails are downsampled first (area-averaged), then encoded or normalised.
     let t = PANEL / 2;

@@ -7,6 +7,7 @@ mod optics;
 mod output;
 mod photo;
 mod progress;
+mod render;
 mod rig;
 mod rig_args;
 mod skin;
@@ -53,6 +54,14 @@ enum Command {
     /// renders), synthetic tracked data, screen-space distance fields and lacrimal lakes.
     #[command(subcommand)]
     Eyes(eyes::EyesCommand),
+    /// Render a texture set on the head or your mesh: subsurface scattering, specular, shadows,
+    /// eyes; two lighting setups, turntables, contact sheets (wgpu; any GPU or lavapipe).
+    Render(render::RenderArgs),
+    /// Files for engines and the web: a GLB with the PBR material, or the web viewer's files.
+    #[command(subcommand)]
+    Export(render::ExportCommand),
+    /// Serve the web viewer on localhost for a directory from `derma export web`.
+    View(render::ViewArgs),
 }
 
 /// `--device`, the same on every command that can use a GPU.
@@ -80,7 +89,7 @@ fn main() {
         0 => "warn",
         1 => "info",
         // Debug output of derma's own crates only (wgpu and naga are very chatty).
-        _ => "info,derma=debug,derma_core=debug,derma_skin=debug,derma_optics=debug,derma_shading=debug,derma_rig=debug,derma_synth=debug,derma_photo=debug,derma_eyes=debug",
+        _ => "info,derma=debug,derma_core=debug,derma_skin=debug,derma_optics=debug,derma_shading=debug,derma_rig=debug,derma_synth=debug,derma_photo=debug,derma_eyes=debug,derma_render=debug",
     };
     tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::new(level))
@@ -95,6 +104,9 @@ fn main() {
         Command::Synth(args) => synth::run(args, &bars),
         Command::Photo(cmd) => photo::run(cmd, &bars),
         Command::Eyes(cmd) => eyes::run(cmd),
+        Command::Render(args) => render::render(args, &bars),
+        Command::Export(cmd) => render::export(cmd, &bars),
+        Command::View(args) => render::view(args, &bars),
     };
     bars.finish();
     if let Err(e) = result {

@@ -8,6 +8,7 @@
 //! runs here without its thread pool (so results never depend on the thread count) and is
 //! re-exported as [`faer`] for callers that need its full API.
 
+pub mod bessel;
 pub mod dense;
 pub mod levenberg_marquardt;
 pub mod nnls;

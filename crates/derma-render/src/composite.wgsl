@@ -1,0 +1,41 @@
+// The composite: scattered diffuse × post-scatter albedo + the rest, ACES tone mapping, sRGB.
+
+@group(0) @binding(0) var<uniform> comp_frame: Frame;
+@group(0) @binding(1) var scattered: texture_2d<f32>;
+@group(0) @binding(2) var direct_light: texture_2d<f32>;
+@group(0) @binding(3) var post_scatter: texture_2d<f32>;
+
+// Narkowicz 2015, "ACES filmic tone mapping curve": a fit of the ACES RRT + ODT.
+fn aces(x: vec3<f32>) -> vec3<f32> {
+    return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), vec3<f32>(0.0), vec3<f32>(1.0));
+}
+
+fn srgb(x: vec3<f32>) -> vec3<f32> {
+    let lo = x * 12.92;
+    let hi = 1.055 * pow(x, vec3<f32>(1.0 / 2.4)) - 0.055;
+    return select(hi, lo, x <= vec3<f32>(0.0031308));
+}
+
+struct CompOut {
+    @location(0) display: vec4<f32>,  // tone-mapped sRGB
+    @location(1) linear: vec4<f32>,   // scene-referred linear radiance (EXR)
+}
+
+@fragment
+fn fs_composite(@builtin(position) pos: vec4<f32>) -> CompOut {
+    let p = vec2<i32>(pos.xy);
+    let dl = textureLoad(direct_light, p, 0);
+    var o: CompOut;
+    if (dl.a <= 0.0) {
+        // Background: a soft vertical gradient.
+        let t = pos.y * comp_frame.viewport.w;
+        let bg = comp_frame.ground.w * mix(vec3<f32>(0.06, 0.065, 0.075), vec3<f32>(0.02, 0.02, 0.025), t);
+        o.display = vec4<f32>(bg, 1.0);
+        o.linear = vec4<f32>(0.0);
+        return o;
+    }
+    let rgb = textureLoad(scattered, p, 0).rgb * textureLoad(post_scatter, p, 0).rgb + dl.rgb;
+    o.linear = vec4<f32>(rgb, 1.0);
+    o.display = vec4<f32>(srgb(aces(rgb * comp_frame.sky.w)), 1.0);
+    return o;
+}

@@ -1,0 +1,38 @@
+//! The errors of the render crate: texture sets, meshes and rigs that cannot be used, each
+//! naming the file or value and what was expected, and GPU failures.
+
+use std::path::PathBuf;
+
+/// An error of `derma-render`.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// Input from the core (files, images, meshes).
+    #[error(transparent)]
+    Core(#[from] derma_core::CoreError),
+    /// A texture set, mesh or option that cannot be used.
+    #[error("{path}: {detail}")]
+    Input {
+        /// The file or directory.
+        path: PathBuf,
+        /// What is wrong and what was expected.
+        detail: String,
+    },
+    /// Any other invalid value.
+    #[error("{0}")]
+    Invalid(String),
+    /// The GPU could not be used.
+    #[error(transparent)]
+    Gpu(#[from] derma_core::gpu::GpuError),
+    /// A rig that cannot be loaded or evaluated.
+    #[error(transparent)]
+    Rig(#[from] derma_rig::RigError),
+    /// Skin generation failed.
+    #[error(transparent)]
+    Skin(#[from] derma_skin::SkinError),
+    /// The viewer's server failed.
+    #[error("serving the viewer: {0}")]
+    Serve(#[from] std::io::Error),
+}
+
+/// Results of this crate.
+pub type Result<T, E = RenderError> = std::result::Result<T, E>;

@@ -1,0 +1,214 @@
+//! `derma render`'s orchestration: load a texture set (and a mesh, a rig frame, an iris), build
+//! the scene once, and write the views, turntables and contact sheets, each file atomically.
+
+use crate::camera::View;
+use crate::error::{RenderError, Result};
+use crate::lighting::Setup;
+use crate::material::SkinMaps;
+use crate::renderer::Renderer;
+use crate::scene::{Material, Scene};
+use derma_core::progress::{Job, Progress, Unit};
+use derma_core::Map;
+use derma_rig::{GlobalScale, Normalization, WeightSpec};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// A rig frame whose colour replaces the texture set's base colour.
+pub struct RigFrame {
+    /// The rig directory (`derma rig build`).
+    pub dir: PathBuf,
+    /// Target weights.
+    pub weights: WeightSpec,
+    /// Global hemoglobin scale.
+    pub global: GlobalScale,
+}
+
+/// What `derma render` draws and writes.
+pub struct RenderJob {
+    /// The texture set directory.
+    pub textures: PathBuf,
+    /// A user mesh; `None`: the built-in head with its eyes, lashes, teeth and tongue.
+    pub mesh: Option<PathBuf>,
+    /// Lighting setups (one image each).
+    pub setups: Vec<Setup>,
+    /// Image size (pixels).
+    pub size: (u32, u32),
+    /// The camera.
+    pub view: View,
+    /// Also a turntable of this many frames per setup (APNG).
+    pub turntable: Option<usize>,
+    /// Also the contact sheet (views under every setup beside the maps).
+    pub sheet: bool,
+    /// Also linear radiance as EXR.
+    pub exr: bool,
+    /// Colour from a rig frame.
+    pub rig: Option<RigFrame>,
+    /// Face-unit weights posing the built-in head (e.g. mouthSmileLeft=1).
+    pub face_units: Vec<(String, f32)>,
+    /// An eye texture on the head's eye UVs (`derma photo iris`).
+    pub iris: Option<PathBuf>,
+    /// Gaze yaw and pitch (degrees).
+    pub gaze: (f32, f32),
+    /// Output directory.
+    pub out: PathBuf,
+}
+
+/// What was written and measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct RenderReport {
+    /// The GPU adapter.
+    pub adapter: String,
+    /// Every file written.
+    pub files: Vec<PathBuf>,
+    /// Frames rendered.
+    pub frames: usize,
+    /// Mean wall time per frame including read-back (s).
+    pub seconds_per_frame: f64,
+}
+
+fn rig_color(f: &RigFrame) -> Result<[Map; 3]> {
+    let (rig, lut, _) = derma_rig::rig_dir::load(&f.dir)?;
+    let (w, g) =
+        derma_rig::weights::frame_weights(&rig, &f.weights, Normalization::default(), f.global)?;
+    let melanin = rig.melanin.clone().ok_or_else(|| RenderError::Input {
+        path: f.dir.clone(),
+        detail: "the rig has no melanin map to colour with; build it with --melanin".into(),
+    })?;
+    let (_, rgb) = derma_rig::evaluate_frame(
+        &rig,
+        &lut,
+        &w,
+        g,
+        Some(&melanin),
+        derma_core::gpu::Device::Cpu,
+    )?;
+    Ok(rgb.expect("colour with melanin"))
+}
+
+fn write_rgb8(path: &Path, m: &[Map; 3]) -> Result<()> {
+    Ok(derma_core::image_io::write_png8(
+        path,
+        &[&m[0], &m[1], &m[2]],
+    )?)
+}
+
+/// Runs the job.
+pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
+    let t0 = Instant::now();
+    derma_core::atomic::ensure_writable_dir(&job.out)?;
+    if job.setups.is_empty() {
+        return Err(RenderError::Invalid("no lighting setup given".into()));
+    }
+    let mut skin = SkinMaps::from_dir(&job.textures)?;
+    if let Some(f) = &job.rig {
+        let c = rig_color(f)?;
+        if (c[0].width(), c[0].height()) != skin.size() {
+            return Err(RenderError::Input {
+                path: f.dir.clone(),
+                detail: format!(
+                    "its maps are {}×{}; the texture set is {}×{} (build the rig from this set's hemoglobin.exr)",
+                    c[0].width(),
+                    c[0].height(),
+                    skin.size().0,
+                    skin.size().1
+                ),
+            });
+        }
+        skin.base_color = c;
+    }
+    let job_p = Job::new(progress);
+    job_p.stage("scene", 1, Unit::Steps);
+    let scene = match &job.mesh {
+        Some(p) => Scene::mesh(&crate::glb::load_mesh_mm(p)?, skin.clone()),
+        None => {
+            let units: Vec<(&str, f32)> = job
+                .face_units
+                .iter()
+                .map(|(n, w)| (n.as_str(), *w))
+                .collect();
+            let head = derma_head::Head::builtin();
+            for (n, _) in &units {
+                if !head.face_units().iter().any(|u| u.name == *n) {
+                    return Err(RenderError::Invalid(format!(
+                        "face unit '{n}' is not one of the head's 52 (e.g. mouthSmileLeft, jawOpen, eyeBlinkLeft)"
+                    )));
+                }
+            }
+            let eye = job
+                .iris
+                .as_deref()
+                .map(derma_eyes::files::load_eye_texture)
+                .transpose()
+                .map_err(|e| RenderError::Invalid(e.to_string()))?;
+            Scene::head(head, skin.clone(), &units, eye, job.gaze)
+        }
+    };
+    debug_assert!(matches!(scene.parts[0].material, Material::Skin(_)));
+    let r = Renderer::new(&scene)?;
+    let mut files = Vec::new();
+    let mut frames = 0usize;
+    let (w, h) = job.size;
+    let total = job.setups.len() * (1 + job.turntable.unwrap_or(0))
+        + if job.sheet { 3 * job.setups.len() } else { 0 };
+    job_p.stage("render", total as u64, Unit::Steps);
+    let tr = Instant::now();
+    for s in &job.setups {
+        let img = r.render(&job.view, &s.lighting(), w, h)?;
+        frames += 1;
+        job_p.advance(1);
+        let p = job.out.join(format!("{}.png", s.name()));
+        write_rgb8(&p, &img.display_maps())?;
+        files.push(p);
+        if job.exr {
+            let p = job.out.join(format!("{}.exr", s.name()));
+            let m = img.linear_maps();
+            derma_core::image_io::write_exr(
+                &p,
+                &[("R", &m[0]), ("G", &m[1]), ("B", &m[2])],
+                derma_core::image_io::ExrPrecision::F16,
+            )?;
+            files.push(p);
+        }
+        if let Some(n) = job.turntable {
+            let fr = crate::sheet::turntable(&r, *s, n, w, h)?;
+            frames += n;
+            job_p.advance(n as u64);
+            let p = job.out.join(format!("{}-turntable.png", s.name()));
+            derma_core::image_io::write_apng(&p, &fr, w as usize, h as usize, 12)?;
+            files.push(p);
+        }
+    }
+    if job.sheet {
+        let panel = w.min(h);
+        let m = crate::sheet::contact_sheet(&r, &skin, &job.setups, panel)?;
+        frames += 3 * job.setups.len();
+        job_p.advance(3 * job.setups.len() as u64);
+        let p = job.out.join("sheet.png");
+        write_rgb8(&p, &m)?;
+        files.push(p);
+    }
+    let per = tr.elapsed().as_secs_f64() / frames.max(1) as f64;
+    let report = RenderReport {
+        adapter: r.adapter.clone(),
+        files: files.clone(),
+        frames,
+        seconds_per_frame: per,
+    };
+    let json = serde_json::to_vec_pretty(&serde_json::json!({
+        "adapter": report.adapter,
+        "frames": frames,
+        "seconds_per_frame": per,
+        "total_seconds": t0.elapsed().as_secs_f64(),
+        "size": [w, h],
+        "lighting": job.setups.iter().map(|s| s.name()).collect::<Vec<_>>(),
+        "view": {"yaw_deg": job.view.yaw_deg, "pitch_deg": job.view.pitch_deg, "zoom": job.view.zoom},
+        "textures": job.textures,
+        "mesh": job.mesh,
+        "files": files,
+    }))
+    .expect("JSON");
+    derma_core::atomic::write_bytes(&job.out.join("render.json"), &json)?;
+    job_p.finish();
+    Ok(report)
+}

@@ -1,0 +1,297 @@
+// The shadow pass from the key light and the forward pass, which splits skin's diffuse light
+// (to be scattered by blur.wgsl) from everything else.
+
+struct Draw {
+    albedo: vec4<f32>,    // rgb flat albedo (linear) for non-textured parts, w = textured (1/0)
+    params: vec4<f32>,    // x perceptual roughness, y F0, z kind, w specular scale (F0 per unit)
+    eye: vec4<f32>,       // eye centre (mm), w = globe radius
+    eye_axis: vec4<f32>,  // optical axis (unit), w = scatter (1: skin's subsurface maps apply)
+}
+
+const KIND_SKIN: f32 = 0.0;
+const KIND_EYE: f32 = 1.0;
+const KIND_FLAT: f32 = 2.0;
+const KIND_CARD: f32 = 3.0;
+const PI: f32 = 3.14159265;
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(0) @binding(1) var shadow_map: texture_depth_2d;
+@group(0) @binding(2) var shadow_sampler: sampler_comparison;
+@group(0) @binding(3) var tex_sampler: sampler;
+
+@group(1) @binding(0) var<uniform> draw: Draw;
+@group(1) @binding(1) var base_color: texture_2d<f32>;
+@group(1) @binding(2) var normal_map: texture_2d<f32>;
+@group(1) @binding(3) var rough_spec: texture_2d<f32>;
+@group(1) @binding(4) var sss_color: texture_2d<f32>;
+@group(1) @binding(5) var sss_radius: texture_2d<f32>;
+
+struct VertexIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) tangent: vec4<f32>,
+}
+
+struct VertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) tangent: vec4<f32>,
+}
+
+@vertex
+fn vs_shadow(v: VertexIn) -> @builtin(position) vec4<f32> {
+    return frame.light_view_proj * vec4<f32>(v.position, 1.0);
+}
+
+@vertex
+fn vs_main(v: VertexIn) -> VertexOut {
+    var o: VertexOut;
+    o.clip = frame.view_proj * vec4<f32>(v.position, 1.0);
+    o.world = v.position;
+    o.normal = v.normal;
+    o.uv = v.uv;
+    o.tangent = v.tangent;
+    return o;
+}
+
+// Texture coordinates: derma's UVs have v up (OpenGL); textures are stored top row first.
+fn tex_uv(uv: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>(uv.x, 1.0 - uv.y);
+}
+
+// Percentage-closer filtering of the key light's shadow map, 5×5 taps.
+fn shadow(world: vec3<f32>, n: vec3<f32>) -> f32 {
+    // Normal offset (in mm) against acne on surfaces grazing the light.
+    let p = frame.light_view_proj * vec4<f32>(world + n * 0.6, 1.0);
+    let ndc = p.xyz / p.w;
+    let uv = vec2<f32>(0.5 * ndc.x + 0.5, 0.5 - 0.5 * ndc.y);
+    if (uv.x <= 0.0 || uv.x >= 1.0 || uv.y <= 0.0 || uv.y >= 1.0) {
+        return 1.0;
+    }
+    let texel = frame.forward.w;
+    var lit = 0.0;
+    for (var j = -2; j <= 2; j++) {
+        for (var i = -2; i <= 2; i++) {
+            lit += textureSampleCompareLevel(shadow_map, shadow_sampler,
+                uv + vec2<f32>(f32(i), f32(j)) * texel, ndc.z - 0.0015);
+        }
+    }
+    return lit / 25.0;
+}
+
+// GGX / Trowbridge–Reitz distribution (Walter et al. 2007) with α = roughness².
+fn ggx_d(nh: f32, a: f32) -> f32 {
+    let a2 = a * a;
+    let d = nh * nh * (a2 - 1.0) + 1.0;
+    return a2 / (PI * d * d);
+}
+
+// Height-correlated Smith visibility G₂ / (4 n·l n·v) (Heitz 2014, eq. 99).
+fn smith_vis(nl: f32, nv: f32, a: f32) -> f32 {
+    let a2 = a * a;
+    let gv = nl * sqrt(nv * nv * (1.0 - a2) + a2);
+    let gl = nv * sqrt(nl * nl * (1.0 - a2) + a2);
+    return 0.5 / max(gv + gl, 1e-5);
+}
+
+fn schlick(f0: f32, vh: f32) -> f32 {
+    return f0 + (1.0 - f0) * pow(1.0 - vh, 5.0);
+}
+
+// Hemisphere environment: sky above, ground below, blended over ±0.3 of the up component.
+fn environment(d: vec3<f32>) -> vec3<f32> {
+    return mix(frame.ground.rgb, frame.sky.rgb, smoothstep(-0.3, 0.3, d.y));
+}
+
+// Karis 2014 ("Physically based shading on mobile"): analytic fit of the split-sum
+// environment BRDF, returning the F0 scale and bias.
+fn env_brdf(rough: f32, nv: f32) -> vec2<f32> {
+    let c0 = vec4<f32>(-1.0, -0.0275, -0.572, 0.022);
+    let c1 = vec4<f32>(1.0, 0.0425, 1.04, -0.04);
+    let r = rough * c0 + c1;
+    let a004 = min(r.x * r.x, exp2(-9.28 * nv)) * r.x + r.y;
+    return vec2<f32>(-1.04, 1.04) * a004 + r.zw;
+}
+
+struct Lit {
+    diffuse: vec3<f32>,   // irradiance-weighted diffuse term (× albedo/π·π = × albedo)
+    specular: vec3<f32>,
+}
+
+// Lights `n` (shading normal) seen from `v` with the given roughness and F0: diffuse irradiance
+// (radiance units, to be multiplied by the albedo) and specular radiance.
+fn light_surface(world: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, v: vec3<f32>, rough: f32, f0: f32) -> Lit {
+    var out: Lit;
+    let a = max(rough * rough, 0.002);
+    let nv = max(dot(n, v), 1e-4);
+    let sh = shadow(world, ng);
+    for (var i = 0; i < 3; i++) {
+        let l = frame.lights[i].dir.xyz;
+        let e = frame.lights[i].radiance.rgb * select(1.0, sh, i == 0);
+        let nl = max(dot(n, l), 0.0) * step(0.0, dot(ng, l));
+        if (nl <= 0.0) {
+            continue;
+        }
+        let h = normalize(l + v);
+        let spec = ggx_d(max(dot(n, h), 0.0), a) * smith_vis(nl, nv, a) * schlick(f0, max(dot(v, h), 0.0));
+        out.diffuse += e * nl * (1.0 - schlick(f0, nl)) / PI;
+        out.specular += e * nl * spec;
+    }
+    // Ambient: the hemisphere's irradiance on n (cosine-weighted; the blend is its analytic
+    // approximation) and its reflection through the split-sum fit.
+    out.diffuse += environment(n) * (1.0 - f0);
+    let r = reflect(-v, n);
+    let ab = env_brdf(rough, nv);
+    out.specular += mix(environment(r), 0.5 * (frame.sky.rgb + frame.ground.rgb), rough) * (f0 * ab.x + ab.y);
+    return out;
+}
+
+struct GOut {
+    @location(0) diffuse: vec4<f32>,  // skin: diffuse light × √albedo, to be scattered
+    @location(1) direct: vec4<f32>,   // everything not scattered; a = coverage
+    @location(2) sss: vec4<f32>,      // x view depth (mm), yzw Burley shape d per channel (mm)
+    @location(3) post: vec4<f32>,     // skin: √albedo, applied after scattering
+}
+
+fn shading_normal(in: VertexOut, ng: vec3<f32>, textured: bool) -> vec3<f32> {
+    if (!textured) {
+        return ng;
+    }
+    let t0 = in.tangent.xyz - ng * dot(ng, in.tangent.xyz);
+    if (dot(t0, t0) < 1e-12) {
+        return ng;
+    }
+    let t = normalize(t0);
+    let b = cross(ng, t) * in.tangent.w;
+    let m = textureSample(normal_map, tex_sampler, tex_uv(in.uv)).xyz * 2.0 - 1.0;
+    return normalize(t * m.x + b * m.y + ng * m.z);
+}
+
+// Burley's s(A) (Christensen & Burley 2015 eq. 6): ℓ = d s(A).
+fn burley_s(a: vec3<f32>) -> vec3<f32> {
+    let e = a - vec3<f32>(0.8);
+    return vec3<f32>(1.9) - a + 3.5 * e * e;
+}
+
+fn view_depth(world: vec3<f32>) -> f32 {
+    return dot(world - frame.camera.xyz, frame.forward.xyz);
+}
+
+@fragment
+fn fs_skin(in: VertexOut, @builtin(front_facing) front: bool) -> GOut {
+    var o: GOut;
+    let v = normalize(frame.camera.xyz - in.world);
+    var ng = normalize(in.normal);
+    if (!front) {
+        ng = -ng;
+    }
+    let textured = draw.albedo.w > 0.5;
+    var albedo = draw.albedo.rgb;
+    var rough = draw.params.x;
+    var f0 = draw.params.y;
+    var coverage = 1.0;
+    if (textured) {
+        let c = textureSample(base_color, tex_sampler, tex_uv(in.uv));
+        albedo = c.rgb;
+        coverage = c.a;
+        let rs = textureSample(rough_spec, tex_sampler, tex_uv(in.uv));
+        rough = rs.r;
+        f0 = rs.g * draw.params.w;
+    }
+    if (draw.params.z == KIND_CARD && coverage < 0.5) {
+        discard;
+    }
+    let n = shading_normal(in, ng, textured && draw.params.z == KIND_SKIN);
+    let lit = light_surface(in.world, n, ng, v, rough, f0);
+    o.sss = vec4<f32>(view_depth(in.world), 0.0, 0.0, 0.0);
+    if (draw.eye_axis.w > 0.5) {
+        // Skin with subsurface maps: the diffuse light is scattered by the blur passes.
+        let sa = textureSample(sss_color, tex_sampler, tex_uv(in.uv)).rgb;
+        let mfp = textureSample(sss_radius, tex_sampler, tex_uv(in.uv)).rgb;
+        let d = max(mfp / burley_s(clamp(sa, vec3<f32>(0.0), vec3<f32>(1.0))), vec3<f32>(1e-4));
+        let s = sqrt(max(albedo, vec3<f32>(0.0)));
+        o.diffuse = vec4<f32>(lit.diffuse * s, 1.0);
+        o.post = vec4<f32>(s, 1.0);
+        o.sss = vec4<f32>(o.sss.x, d);
+        o.direct = vec4<f32>(lit.specular, 1.0);
+    } else {
+        o.direct = vec4<f32>(lit.diffuse * albedo + lit.specular, 1.0);
+    }
+    return o;
+}
+
+// Ray–sphere: distance along unit `d` from `o` to the first hit of the sphere (c, r), or −1.
+fn hit_sphere(o: vec3<f32>, d: vec3<f32>, c: vec3<f32>, r: f32) -> f32 {
+    let oc = o - c;
+    let b = dot(oc, d);
+    let disc = b * b - (dot(oc, oc) - r * r);
+    if (disc < 0.0) {
+        return -1.0;
+    }
+    return -b - sqrt(disc);
+}
+
+// Eye geometry (derma-eyes' globe, after Le Grand's schematic eye): the cornea is a 7.8 mm
+// sphere whose apex stands 1.1 mm proud of the globe; the iris plane lies 3.6 mm behind the apex.
+const CORNEA_RADIUS: f32 = 7.8;
+const CORNEA_PROUD: f32 = 1.1;
+const IRIS_DEPTH: f32 = 3.6;
+const LIMBUS_RADIUS: f32 = 5.85;
+// Refractive index of the cornea and aqueous humour (Le Grand: 1.376 / 1.336); one interface.
+const CORNEA_N: f32 = 1.376;
+
+@fragment
+fn fs_eye(in: VertexOut, @builtin(front_facing) front: bool) -> GOut {
+    var o: GOut;
+    let v = normalize(frame.camera.xyz - in.world);
+    let ng = normalize(in.normal);
+    let c = draw.eye.xyz;
+    let rg = draw.eye.w;
+    let axis = draw.eye_axis.xyz;
+    let xe = normalize(cross(vec3<f32>(0.0, 1.0, 0.0), axis));
+    let ye = cross(axis, xe);
+    let cc = c + axis * (rg + CORNEA_PROUD - CORNEA_RADIUS);
+    let h_limbus = sqrt(max(rg * rg - LIMBUS_RADIUS * LIMBUS_RADIUS, 0.0));
+    let dir = -v;
+    let t = hit_sphere(frame.camera.xyz, dir, cc, CORNEA_RADIUS);
+    var albedo: vec3<f32>;
+    var spec_n = ng;
+    var lit_n = ng;
+    var lit_p = in.world;
+    var transmit = 1.0;
+    let q = frame.camera.xyz + dir * t;
+    if (t > 0.0 && dot(q - c, axis) > h_limbus) {
+        // Through the cornea: refract at its front surface and look the iris up where the ray
+        // meets the iris plane (its UV on the globe's azimuthal map, derma-head's eye::uv_of).
+        let nq = normalize(q - cc);
+        let r = refract(dir, nq, 1.0 / CORNEA_N);
+        let plane = rg + CORNEA_PROUD - IRIS_DEPTH;
+        let denom = dot(r, axis);
+        var s = q;
+        if (denom < -1e-4) {
+            s = q + r * ((plane - dot(q - c, axis)) / denom);
+        }
+        let local = vec2<f32>(dot(s - c, xe), dot(s - c, ye));
+        let rho = length(local);
+        let theta = asin(min(rho / rg, 1.0));
+        let phi = atan2(local.y, local.x);
+        let uv = vec2<f32>(0.5) + 0.5 * (theta / PI) * vec2<f32>(cos(phi), sin(phi));
+        albedo = textureSample(base_color, tex_sampler, uv).rgb;
+        spec_n = nq;
+        lit_n = axis;
+        lit_p = s;
+        transmit = 1.0 - schlick(draw.params.y, max(dot(nq, v), 0.0));
+    } else {
+        albedo = textureSample(base_color, tex_sampler, tex_uv(in.uv)).rgb;
+    }
+    // Diffuse from the iris or sclera; specular from the tear film over the cornea or sclera.
+    let d = light_surface(lit_p, lit_n, ng, v, 1.0, 0.0);
+    let s = light_surface(in.world, spec_n, ng, v, draw.params.x, draw.params.y);
+    o.direct = vec4<f32>(d.diffuse * albedo * transmit + s.specular, 1.0);
+    o.sss = vec4<f32>(view_depth(in.world), 0.0, 0.0, 0.0);
+    return o;
+}
+

@@ -1,0 +1,431 @@
+//! The texture set for engines: a glTF 2.0 binary with the head (or a user mesh) and its parts
+//! as named meshes, MikkTSpace tangents, the face units as morph targets, and the skin as a
+//! metallic-roughness material with KHR_materials_specular (F0 from the specular map),
+//! KHR_materials_diffuse_transmission and KHR_materials_volume (attenuation from the mean free
+//! paths of `sss_radius`); plus the maps as loose files under engine naming conventions.
+
+use crate::error::{RenderError, Result};
+use crate::material::{default_eye_texture, lash_coverage_map, SkinMaps};
+use derma_core::image_io::png8_bytes;
+use derma_core::mesh::{mikktspace_tangents, split_by_tangent, TriMesh};
+use derma_core::Map;
+use derma_head::export::Glb;
+use glam::Vec3;
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+
+/// Tangent-space normal convention of loose normal maps (the GLB's own is always glTF's,
+/// OpenGL +Y, as the glTF 2.0 specification requires).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum NormalConvention {
+    /// +Y up (green up): glTF, Blender, Unity, three.js.
+    #[default]
+    OpenGl,
+    /// −Y (green down): Unreal, Direct3D tools.
+    DirectX,
+}
+
+/// How loose maps are named.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MapNames {
+    /// derma's own names (base_color.png, normal.png, …).
+    #[default]
+    Derma,
+    /// Substance Painter's export preset names (head_BaseColor.png, head_Normal.png, …).
+    Substance,
+    /// Unreal / MetaHuman-style texture asset names (T_Head_BC.png, T_Head_N.png, …).
+    Unreal,
+}
+
+impl MapNames {
+    /// The file name of map `key` (base_color, normal, roughness, specular, height,
+    /// sss_color, sss_radius, orm).
+    pub fn file(self, key: &str) -> String {
+        match self {
+            MapNames::Derma => format!("{key}.png"),
+            MapNames::Substance => {
+                let s = match key {
+                    "base_color" => "BaseColor",
+                    "normal" => "Normal",
+                    "roughness" => "Roughness",
+                    "specular" => "Specular",
+                    "height" => "Height",
+                    "sss_color" => "SubsurfaceColor",
+                    "sss_radius" => "SubsurfaceRadius",
+                    _ => "OcclusionRoughnessMetallic",
+                };
+                format!("head_{s}.png")
+            }
+            MapNames::Unreal => {
+                let s = match key {
+                    "base_color" => "BC",
+                    "normal" => "N",
+                    "roughness" => "R",
+                    "specular" => "S",
+                    "height" => "H",
+                    "sss_color" => "SSS",
+                    "sss_radius" => "SSSR",
+                    _ => "ORM",
+                };
+                format!("T_Head_{s}.png")
+            }
+        }
+    }
+}
+
+/// What to export.
+pub struct GlbOptions {
+    /// The texture set (`derma skin --out DIR`).
+    pub textures: PathBuf,
+    /// A user mesh (mm, or any unit that [`derma_core::mesh::LengthUnit::for_head`] recognises);
+    /// `None`: the built-in head with eyes, lashes, teeth and tongue.
+    pub mesh: Option<PathBuf>,
+    /// The GLB to write.
+    pub out: PathBuf,
+    /// Loose maps to write beside (directory), with their naming and normal convention.
+    pub maps: Option<(PathBuf, MapNames, NormalConvention)>,
+}
+
+/// What was written.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct GlbReport {
+    /// The GLB.
+    pub path: PathBuf,
+    /// Its size (bytes).
+    pub bytes: usize,
+    /// Meshes by name.
+    pub meshes: Vec<String>,
+    /// Morph targets on the skin.
+    pub morph_targets: usize,
+    /// Extensions used.
+    pub extensions: Vec<String>,
+    /// Loose maps written.
+    pub maps: Vec<PathBuf>,
+}
+
+fn srgb_encoded(m: &[Map; 3]) -> [Map; 3] {
+    m.clone().map(|mut c| {
+        c.data_mut()
+            .iter_mut()
+            .for_each(|v| *v = derma_core::color::srgb_encode(*v));
+        c
+    })
+}
+
+/// The subsurface summary the volume and transmission extensions carry: mean linear sss
+/// colour and mean mean-free path per channel (mm) over the texture.
+fn subsurface_means(s: &SkinMaps) -> Option<([f32; 3], [f32; 3])> {
+    let (c, r) = s.subsurface.as_ref()?;
+    let mean = |m: &Map| m.data().iter().sum::<f32>() / m.data().len() as f32;
+    Some((
+        [mean(&c[0]), mean(&c[1]), mean(&c[2])],
+        [mean(&r[0]), mean(&r[1]), mean(&r[2])],
+    ))
+}
+
+/// KHR_materials_volume's attenuation from mean free paths ℓ_c (mm): Beer–Lambert with
+/// extinction 1/ℓ_c, the colour left after the longest path (glTF: attenuationColor is the
+/// transmittance at attenuationDistance, in metres).
+pub fn attenuation(mfp_mm: [f32; 3]) -> ([f32; 3], f32) {
+    let d = mfp_mm.iter().cloned().fold(0.0f32, f32::max).max(1e-3);
+    (
+        mfp_mm.map(|l| (-d / l.max(1e-4)).exp()),
+        d * derma_head::export::M_PER_MM,
+    )
+}
+
+fn tangent_accessor(g: &mut Glb, t: &[[f32; 4]]) -> usize {
+    let bytes: Vec<u8> = t.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    let view = g.view(&bytes, Some(34962));
+    g.accessor(json!({"bufferView": view, "componentType": 5126, "count": t.len(), "type": "VEC4"}))
+}
+
+/// Loads a user mesh for export in mm (the unit guessed from its size as `derma skin` does).
+pub fn load_mesh_mm(path: &Path) -> Result<TriMesh> {
+    let mut m = TriMesh::load(path)?;
+    let unit =
+        derma_core::mesh::LengthUnit::for_head(m.extent()).ok_or_else(|| RenderError::Input {
+            path: path.to_path_buf(),
+            detail: format!(
+                "extent {:.3} units fits no unit for a head (m, cm or mm); scale it to millimetres",
+                m.extent()
+            ),
+        })?;
+    m.to_millimetres(unit);
+    Ok(m)
+}
+
+/// Writes the GLB (and the loose maps when asked).
+pub fn export(o: &GlbOptions) -> Result<GlbReport> {
+    let skin = SkinMaps::from_dir(&o.textures)?;
+    let head = derma_head::Head::builtin();
+    let read = |f: &str| -> Result<Vec<u8>> {
+        let p = o.textures.join(f);
+        std::fs::read(&p).map_err(|e| RenderError::Input {
+            path: p,
+            detail: format!("cannot read ({e})"),
+        })
+    };
+    let mut g = Glb::default();
+    let mut images: Vec<Value> = Vec::new();
+    let mut image = |g: &mut Glb, name: &str, png: &[u8]| {
+        let v = g.view(png, None);
+        images.push(json!({"bufferView": v, "mimeType": "image/png", "name": name}));
+        images.len() - 1
+    };
+    // Textures: base colour and normal as written by `derma skin`; roughness (G), metal (B = 0)
+    // and the specular level (A, KHR_materials_specular reads alpha) packed in one.
+    let (w, h) = skin.size();
+    let ones = Map::filled(w, h, 1.0);
+    let zeros = Map::filled(w, h, 0.0);
+    let orm = png8_bytes(
+        "orm_specular",
+        &[&ones, &skin.roughness, &zeros, &skin.specular],
+    )?;
+    let t_base = image(
+        &mut g,
+        "base_color",
+        &read(derma_skin::outputs::BASE_COLOR)?,
+    );
+    let t_norm = image(&mut g, "normal", &read(derma_skin::outputs::NORMAL)?);
+    let t_orm = image(&mut g, "orm_specular", &orm);
+    let mut ext_used = vec!["KHR_materials_specular".to_string()];
+    // F0 = 0.04 (ior 1.5) × specularColorFactor × specular: 2 × s gives F0 = 0.08 s, the
+    // specular map's meaning (F0 / 0.08).
+    let mut exts = json!({
+        "KHR_materials_specular": {
+            "specularFactor": 1.0,
+            "specularTexture": {"index": t_orm},
+            "specularColorFactor": [2.0, 2.0, 2.0]
+        }
+    });
+    if let Some((color, mfp)) = subsurface_means(&skin) {
+        let (att, dist) = attenuation(mfp);
+        // Diffuse transmission: light scattered inside that leaves through the back of thin
+        // parts (ears, nostrils); a quarter of the subsurface light, tinted by Burley's albedo.
+        exts["KHR_materials_diffuse_transmission"] = json!({
+            "diffuseTransmissionFactor": 0.25,
+            "diffuseTransmissionColorFactor": color
+        });
+        exts["KHR_materials_volume"] = json!({
+            "thicknessFactor": 0.01,
+            "attenuationDistance": dist,
+            "attenuationColor": att
+        });
+        ext_used.push("KHR_materials_diffuse_transmission".into());
+        ext_used.push("KHR_materials_volume".into());
+    }
+    let mut materials = vec![json!({
+        "name": "skin",
+        "pbrMetallicRoughness": {
+            "baseColorTexture": {"index": t_base},
+            "metallicFactor": 0.0,
+            "roughnessFactor": 1.0,
+            "metallicRoughnessTexture": {"index": t_orm}
+        },
+        "normalTexture": {"index": t_norm},
+        "extensions": exts
+    })];
+    let mut meshes = Vec::new();
+    let mut names = Vec::new();
+    let skin_mesh = match &o.mesh {
+        Some(p) => load_mesh_mm(p)?,
+        None => head.skin.clone(),
+    };
+    let corner = mikktspace_tangents(&skin_mesh);
+    let (split, tangents, origin) = split_by_tangent(&skin_mesh, &corner);
+    // Morph targets follow the split vertices (built-in head only).
+    let units = if o.mesh.is_none() {
+        head.face_units()
+    } else {
+        &[]
+    };
+    let mut copies: Vec<Vec<u32>> = vec![Vec::new(); skin_mesh.positions.len()];
+    for (i, &v) in origin.iter().enumerate() {
+        copies[v as usize].push(i as u32);
+    }
+    let remapped: Vec<(String, Vec<(u32, Vec3)>)> = units
+        .iter()
+        .map(|u| {
+            let mut offs: Vec<(u32, Vec3)> = u
+                .skin
+                .iter()
+                .flat_map(|(v, d)| copies[*v as usize].iter().map(move |&i| (i, *d)))
+                .collect();
+            offs.sort_by_key(|o| o.0);
+            (u.name.clone(), offs)
+        })
+        .collect();
+    let targets: Vec<(&str, &[(u32, Vec3)])> = remapped
+        .iter()
+        .map(|(n, o)| (n.as_str(), o.as_slice()))
+        .collect();
+    let mut m = g.mesh("skin", &split, &targets);
+    let ta = tangent_accessor(&mut g, &tangents);
+    m["primitives"][0]["attributes"]["TANGENT"] = json!(ta);
+    m["primitives"][0]["material"] = json!(0);
+    meshes.push(m);
+    names.push("skin".to_string());
+    if o.mesh.is_none() {
+        let eye = srgb_encoded(&default_eye_texture(512));
+        let t_eye = image(
+            &mut g,
+            "eye",
+            &png8_bytes("eye", &[&eye[0], &eye[1], &eye[2]])?,
+        );
+        let lash = lash_coverage_map(256);
+        let black = Map::filled(256, 256, 0.02f32.powf(1.0 / 2.2));
+        let t_lash = image(
+            &mut g,
+            "eyelashes",
+            &png8_bytes("eyelashes", &[&black, &black, &black, &lash])?,
+        );
+        let props = head.preview_props();
+        let empty: Vec<(u32, Vec3)> = Vec::new();
+        for (k, (part, prop)) in head.parts.iter().zip(&props).enumerate() {
+            let mat = if part.name.starts_with("eye_") {
+                json!({"name": part.name, "pbrMetallicRoughness": {"baseColorTexture": {"index": t_eye},
+                    "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
+            } else if prop.coverage.is_some() {
+                json!({"name": part.name, "alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": true,
+                    "pbrMetallicRoughness": {"baseColorTexture": {"index": t_lash},
+                    "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
+            } else {
+                let a = (prop.albedo)(glam::Vec2::splat(0.5));
+                json!({"name": part.name, "pbrMetallicRoughness": {"baseColorFactor": [a.x, a.y, a.z, 1.0],
+                    "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
+            };
+            materials.push(mat);
+            let moved = units.iter().any(|u| u.parts.iter().any(|(p, _)| *p == k));
+            let t: Vec<(&str, &[(u32, Vec3)])> = if moved {
+                units
+                    .iter()
+                    .map(|u| {
+                        let offs = u
+                            .parts
+                            .iter()
+                            .find(|(p, _)| *p == k)
+                            .map(|(_, o)| o)
+                            .unwrap_or(&empty);
+                        (u.name.as_str(), offs.as_slice())
+                    })
+                    .collect()
+            } else {
+                Vec::new()
+            };
+            let mut pm = g.mesh(&part.name, &part.mesh, &t);
+            pm["primitives"][0]["material"] = json!(materials.len() - 1);
+            meshes.push(pm);
+            names.push(part.name.clone());
+        }
+    }
+    let nodes: Vec<Value> = meshes
+        .iter()
+        .enumerate()
+        .map(|(i, m)| json!({"name": m["name"], "mesh": i}))
+        .collect();
+    let n_images = images.len();
+    let mut doc = json!({
+        "asset": {"version": "2.0", "generator": "derma export glb",
+            "copyright": "MakeHuman base mesh and Face Units by the MakeHuman community and Mika Suominen, CC0 1.0; textures: derma"},
+        "extensionsUsed": ext_used,
+        "scene": 0,
+        "scenes": [{"name": "derma", "nodes": (0..nodes.len()).collect::<Vec<_>>()}],
+        "nodes": nodes,
+        "meshes": meshes,
+        "materials": materials,
+        "images": images,
+        "samplers": [{"magFilter": 9729, "minFilter": 9987, "wrapS": 33071, "wrapT": 33071}],
+        "textures": (0..n_images).map(|i| json!({"source": i, "sampler": 0})).collect::<Vec<_>>(),
+    });
+    doc["buffers"] = json!([{"byteLength": 0}]);
+    doc["bufferViews"] = json!(g.views);
+    doc["accessors"] = json!(g.accessors);
+    while !g.bin.len().is_multiple_of(4) {
+        g.bin.push(0);
+    }
+    doc["buffers"] = json!([{"byteLength": g.bin.len()}]);
+    let bytes = g.finish(&doc);
+    derma_core::atomic::write_bytes(&o.out, &bytes)?;
+    let mut maps = Vec::new();
+    if let Some((dir, naming, conv)) = &o.maps {
+        maps = write_maps(&o.textures, &skin, dir, *naming, *conv)?;
+    }
+    Ok(GlbReport {
+        path: o.out.clone(),
+        bytes: bytes.len(),
+        meshes: names,
+        morph_targets: units.len(),
+        extensions: ext_used,
+        maps,
+    })
+}
+
+/// Writes the loose maps under `naming` (normal in `conv`; the packed ORM as engines import it).
+pub fn write_maps(
+    src: &Path,
+    skin: &SkinMaps,
+    dir: &Path,
+    naming: MapNames,
+    conv: NormalConvention,
+) -> Result<Vec<PathBuf>> {
+    derma_core::atomic::ensure_writable_dir(dir)?;
+    let mut out = Vec::new();
+    let copy = |key: &str, file: &str, out: &mut Vec<PathBuf>| -> Result<()> {
+        let from = src.join(file);
+        if from.is_file() {
+            let bytes = std::fs::read(&from).map_err(|e| RenderError::Input {
+                path: from.clone(),
+                detail: e.to_string(),
+            })?;
+            let to = dir.join(naming.file(key));
+            derma_core::atomic::write_bytes(&to, &bytes)?;
+            out.push(to);
+        }
+        Ok(())
+    };
+    copy("base_color", derma_skin::outputs::BASE_COLOR, &mut out)?;
+    copy("roughness", derma_skin::outputs::ROUGHNESS, &mut out)?;
+    copy("specular", derma_skin::outputs::SPECULAR, &mut out)?;
+    copy("height", derma_skin::outputs::HEIGHT_PNG, &mut out)?;
+    copy("sss_color", derma_skin::outputs::SSS_COLOR, &mut out)?;
+    copy("sss_radius", derma_skin::outputs::SSS_RADIUS, &mut out)?;
+    let to = dir.join(naming.file("normal"));
+    match conv {
+        NormalConvention::OpenGl => copy("normal", derma_skin::outputs::NORMAL, &mut out)?,
+        NormalConvention::DirectX => {
+            let mut g = skin.normal[1].clone();
+            g.data_mut().iter_mut().for_each(|v| *v = 1.0 - *v);
+            derma_core::image_io::write_png16(&to, &[&skin.normal[0], &g, &skin.normal[2]])?;
+            out.push(to);
+        }
+    }
+    let (w, h) = skin.size();
+    let ones = Map::filled(w, h, 1.0);
+    let zeros = Map::filled(w, h, 0.0);
+    let orm = dir.join(naming.file("orm"));
+    derma_core::image_io::write_png8(&orm, &[&ones, &skin.roughness, &zeros])?;
+    out.push(orm);
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn attenuation_is_beer_lambert_over_the_longest_mean_free_path() {
+        let (c, d) = attenuation([4.0, 2.0, 1.0]);
+        assert!((d - 0.004).abs() < 1e-9);
+        assert!((c[0] - (-1.0f32).exp()).abs() < 1e-6);
+        assert!((c[1] - (-2.0f32).exp()).abs() < 1e-6);
+        assert!((c[2] - (-4.0f32).exp()).abs() < 1e-6);
+    }
+
+    #[test]
+    fn map_names_follow_each_convention() {
+        assert_eq!(MapNames::Derma.file("base_color"), "base_color.png");
+        assert_eq!(MapNames::Substance.file("normal"), "head_Normal.png");
+        assert_eq!(MapNames::Unreal.file("orm"), "T_Head_ORM.png");
+    }
+}

@@ -1,0 +1,28 @@
+//! derma-render: seeing derma's skin as users will. A wgpu renderer (headless; Mesa's
+//! lavapipe in CI, any Vulkan/Metal/DX12 GPU otherwise) that draws a head or a user mesh with
+//! a derma texture set — diffuse light scattered by the separable screen-space subsurface
+//! blur of Jimenez et al. 2015 with Burley's normalized diffusion per channel (driven by
+//! `sss_color`/`sss_radius`, the match table's fitted profile), GGX specular with Smith
+//! visibility from the roughness and specular maps, a shadowed three-light setup with a
+//! hemisphere environment, and eyes with a refracting cornea — plus turntables and contact
+//! sheets.
+
+pub mod camera;
+pub mod error;
+pub mod files;
+pub mod glb;
+pub mod lighting;
+pub mod material;
+pub mod renderer;
+pub mod scene;
+pub mod serve;
+pub mod sheet;
+pub mod sss;
+pub mod web;
+
+pub use camera::View;
+pub use error::{RenderError, Result};
+pub use lighting::{Lighting, Setup};
+pub use material::SkinMaps;
+pub use renderer::{Rendered, Renderer};
+pub use scene::Scene;

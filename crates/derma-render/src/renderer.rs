@@ -1,0 +1,892 @@
+//! The GPU renderer (orchestration of the passes in the WGSL files): the key light's shadow
+//! map, the forward pass into split diffuse / direct / depth-and-profile targets, the
+//! separable subsurface blur (Jimenez et al. 2015) along x then y, and the tone-mapped
+//! composite, read back as an sRGB image and linear radiance.
+
+use crate::camera::{light_view_proj, Camera, View};
+use crate::error::Result;
+use crate::lighting::Lighting;
+use crate::scene::{Material, Part, Scene, Vertex};
+use crate::sss;
+use derma_core::gpu::{context, Gpu};
+use derma_core::gpu_texture::{rgba_of, TexelFormat};
+use derma_core::Map;
+use wgpu::util::DeviceExt;
+
+const COMMON: &str = include_str!("common.wgsl");
+const FORWARD: &str = include_str!("forward.wgsl");
+const BLUR: &str = include_str!("blur.wgsl");
+const COMPOSITE: &str = include_str!("composite.wgsl");
+
+/// Shadow map size (texels per side).
+pub const SHADOW_SIZE: u32 = 2048;
+const HDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct FrameU {
+    view_proj: [[f32; 4]; 4],
+    light_view_proj: [[f32; 4]; 4],
+    camera: [f32; 4],
+    forward: [f32; 4],
+    viewport: [f32; 4],
+    sky: [f32; 4],
+    ground: [f32; 4],
+    lights: [[f32; 4]; 6],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct DrawU {
+    albedo: [f32; 4],
+    params: [f32; 4],
+    eye: [f32; 4],
+    eye_axis: [f32; 4],
+}
+
+/// One rendered frame.
+pub struct Rendered {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// Tone-mapped sRGB, RGBA 8-bit, top row first.
+    pub display: Vec<u8>,
+    /// Scene-referred linear RGB radiance (0 on the background).
+    pub linear: Vec<[f32; 3]>,
+}
+
+impl Rendered {
+    /// The display image as three maps with values in [0, 1] (sRGB-encoded).
+    pub fn display_maps(&self) -> [Map; 3] {
+        let ch = |k: usize| {
+            let v = (0..self.width * self.height)
+                .map(|i| self.display[4 * i + k] as f32 / 255.0)
+                .collect();
+            Map::from_vec(self.width, self.height, v).expect("size")
+        };
+        [ch(0), ch(1), ch(2)]
+    }
+
+    /// The linear radiance as three maps.
+    pub fn linear_maps(&self) -> [Map; 3] {
+        let ch = |k: usize| {
+            Map::from_vec(
+                self.width,
+                self.height,
+                self.linear.iter().map(|p| p[k]).collect(),
+            )
+            .expect("size")
+        };
+        [ch(0), ch(1), ch(2)]
+    }
+}
+
+struct GpuPart {
+    vertices: wgpu::Buffer,
+    count: u32,
+    bind: wgpu::BindGroup,
+    eye: bool,
+    casts_shadow: bool,
+}
+
+/// A scene on the GPU, ready to render views of it.
+pub struct Renderer {
+    gpu: &'static Gpu,
+    parts: Vec<GpuPart>,
+    draw_layout: wgpu::BindGroupLayout,
+    frame_buf: wgpu::Buffer,
+    shadow_tex: wgpu::Texture,
+    shadow_bind: wgpu::BindGroup,
+    main_bind: wgpu::BindGroup,
+    shadow_pipe: wgpu::RenderPipeline,
+    skin_pipe: wgpu::RenderPipeline,
+    eye_pipe: wgpu::RenderPipeline,
+    blur_pipe: wgpu::RenderPipeline,
+    blur_layout: wgpu::BindGroupLayout,
+    comp_pipe: wgpu::RenderPipeline,
+    comp_layout: wgpu::BindGroupLayout,
+    cdf: wgpu::Buffer,
+    blur_bufs: [wgpu::Buffer; 2],
+    tex_sampler: wgpu::Sampler,
+    lin_sampler: wgpu::Sampler,
+    centre: glam::Vec3,
+    radius: f32,
+    /// The adapter's name, for reports.
+    pub adapter: String,
+}
+
+fn uniform_entry(binding: u32, vis: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: vis,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn texture_entry(binding: u32, sample: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: sample,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+fn sampler_entry(binding: u32, ty: wgpu::SamplerBindingType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Sampler(ty),
+        count: None,
+    }
+}
+
+const FLOAT: wgpu::TextureSampleType = wgpu::TextureSampleType::Float { filterable: true };
+const VS_FS: wgpu::ShaderStages = wgpu::ShaderStages::VERTEX_FRAGMENT;
+
+fn view(t: &wgpu::Texture) -> wgpu::TextureView {
+    t.create_view(&Default::default())
+}
+
+fn layout(gpu: &Gpu, label: &str, entries: &[wgpu::BindGroupLayoutEntry]) -> wgpu::BindGroupLayout {
+    gpu.device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(label),
+            entries,
+        })
+}
+
+fn bind(
+    gpu: &Gpu,
+    label: &str,
+    l: &wgpu::BindGroupLayout,
+    res: &[wgpu::BindingResource],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = res
+        .iter()
+        .enumerate()
+        .map(|(i, r)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: r.clone(),
+        })
+        .collect();
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout: l,
+        entries: &entries,
+    })
+}
+
+struct PipeSpec<'a> {
+    label: &'a str,
+    module: &'a wgpu::ShaderModule,
+    vs: &'a str,
+    fs: Option<&'a str>,
+    layouts: &'a [&'a wgpu::BindGroupLayout],
+    targets: &'a [wgpu::TextureFormat],
+    vertex: bool,
+    depth: bool,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn spec<'a>(
+    label: &'a str,
+    module: &'a wgpu::ShaderModule,
+    vs: &'a str,
+    fs: Option<&'a str>,
+    layouts: &'a [&'a wgpu::BindGroupLayout],
+    targets: &'a [wgpu::TextureFormat],
+    vertex: bool,
+    depth: bool,
+) -> PipeSpec<'a> {
+    PipeSpec {
+        label,
+        module,
+        vs,
+        fs,
+        layouts,
+        targets,
+        vertex,
+        depth,
+    }
+}
+
+fn pipeline(gpu: &Gpu, s: &PipeSpec) -> Result<wgpu::RenderPipeline> {
+    let pl = gpu
+        .device
+        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(s.label),
+            bind_group_layouts: &s.layouts.iter().map(|l| Some(*l)).collect::<Vec<_>>(),
+            immediate_size: 0,
+        });
+    let attrs =
+        wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4];
+    let buffers = [Some(wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<Vertex>() as u64,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &attrs,
+    })];
+    let targets: Vec<Option<wgpu::ColorTargetState>> =
+        s.targets.iter().map(|f| Some((*f).into())).collect();
+    Ok(gpu.validated(s.label, || {
+        gpu.device
+            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(s.label),
+                layout: Some(&pl),
+                vertex: wgpu::VertexState {
+                    module: s.module,
+                    entry_point: Some(s.vs),
+                    compilation_options: Default::default(),
+                    buffers: if s.vertex { &buffers } else { &[] },
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: s.depth.then(|| wgpu::DepthStencilState {
+                    format: DEPTH,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: s.fs.map(|fs| wgpu::FragmentState {
+                    module: s.module,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets: &targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+    })?)
+}
+
+impl Renderer {
+    /// Uploads `scene` to the process's GPU and builds the pipelines.
+    pub fn new(scene: &Scene) -> Result<Renderer> {
+        let gpu = context()?;
+        let d = &gpu.device;
+        let frag = wgpu::ShaderStages::FRAGMENT;
+        let frame_layout = layout(
+            gpu,
+            "frame",
+            &[
+                uniform_entry(0, VS_FS),
+                texture_entry(1, wgpu::TextureSampleType::Depth),
+                sampler_entry(2, wgpu::SamplerBindingType::Comparison),
+                sampler_entry(3, wgpu::SamplerBindingType::Filtering),
+            ],
+        );
+        let shadow_layout = layout(gpu, "shadow frame", &[uniform_entry(0, VS_FS)]);
+        let draw_layout = layout(
+            gpu,
+            "draw",
+            &[
+                uniform_entry(0, frag),
+                texture_entry(1, FLOAT),
+                texture_entry(2, FLOAT),
+                texture_entry(3, FLOAT),
+                texture_entry(4, FLOAT),
+                texture_entry(5, FLOAT),
+            ],
+        );
+        let blur_layout = layout(
+            gpu,
+            "blur",
+            &[
+                uniform_entry(0, frag),
+                uniform_entry(1, frag),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: frag,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                texture_entry(3, FLOAT),
+                texture_entry(4, FLOAT),
+                sampler_entry(5, wgpu::SamplerBindingType::Filtering),
+            ],
+        );
+        let comp_layout = layout(
+            gpu,
+            "composite",
+            &[
+                uniform_entry(0, frag),
+                texture_entry(1, FLOAT),
+                texture_entry(2, FLOAT),
+                texture_entry(3, FLOAT),
+            ],
+        );
+        let fwd = gpu.shader_module("forward.wgsl", &format!("{COMMON}\n{FORWARD}"))?;
+        let blur_m = gpu.shader_module("blur.wgsl", &format!("{COMMON}\n{BLUR}"))?;
+        let comp_m = gpu.shader_module("composite.wgsl", &format!("{COMMON}\n{COMPOSITE}"))?;
+        let gtargets = [HDR, HDR, HDR, wgpu::TextureFormat::Rgba8Unorm];
+        let shadow_pipe = pipeline(
+            gpu,
+            &spec(
+                "shadow",
+                &fwd,
+                "vs_shadow",
+                None,
+                &[&shadow_layout],
+                &[],
+                true,
+                true,
+            ),
+        )?;
+        let skin_pipe = pipeline(
+            gpu,
+            &spec(
+                "forward skin",
+                &fwd,
+                "vs_main",
+                Some("fs_skin"),
+                &[&frame_layout, &draw_layout],
+                &gtargets,
+                true,
+                true,
+            ),
+        )?;
+        let eye_pipe = pipeline(
+            gpu,
+            &spec(
+                "forward eye",
+                &fwd,
+                "vs_main",
+                Some("fs_eye"),
+                &[&frame_layout, &draw_layout],
+                &gtargets,
+                true,
+                true,
+            ),
+        )?;
+        let blur_pipe = pipeline(
+            gpu,
+            &spec(
+                "blur",
+                &blur_m,
+                "vs_full",
+                Some("fs_blur"),
+                &[&blur_layout],
+                &[HDR],
+                false,
+                false,
+            ),
+        )?;
+        let comp_pipe = pipeline(
+            gpu,
+            &spec(
+                "composite",
+                &comp_m,
+                "vs_full",
+                Some("fs_composite"),
+                &[&comp_layout],
+                &[wgpu::TextureFormat::Rgba8Unorm, HDR],
+                false,
+                false,
+            ),
+        )?;
+        let frame_buf = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame"),
+            size: std::mem::size_of::<FrameU>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let shadow_tex = d.create_texture(&wgpu::TextureDescriptor {
+            label: Some("shadow map"),
+            size: wgpu::Extent3d {
+                width: SHADOW_SIZE,
+                height: SHADOW_SIZE,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let cmp_sampler = d.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("shadow"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            compare: Some(wgpu::CompareFunction::LessEqual),
+            ..Default::default()
+        });
+        let tex_sampler = gpu.sampler("textures", false);
+        let lin_sampler = d.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("screen"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let shadow_bind = bind(
+            gpu,
+            "shadow frame",
+            &shadow_layout,
+            &[frame_buf.as_entire_binding()],
+        );
+        let main_bind = bind(
+            gpu,
+            "frame",
+            &frame_layout,
+            &[
+                frame_buf.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&view(&shadow_tex)),
+                wgpu::BindingResource::Sampler(&cmp_sampler),
+                wgpu::BindingResource::Sampler(&tex_sampler),
+            ],
+        );
+        let cdf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("burley marginal cdf"),
+            contents: bytemuck::cast_slice(&sss::cdf_table()),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let blur_u = |dx: f32, dy: f32| {
+            let u = [dx, dy, sss::TAPS as f32, sss::U_RANGE, 0.0, 0.0, 0.0, 0.0];
+            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("blur"),
+                contents: bytemuck::cast_slice(&u[..4]),
+                usage: wgpu::BufferUsages::UNIFORM,
+            })
+        };
+        let blur_bufs = [blur_u(1.0, 0.0), blur_u(0.0, 1.0)];
+        let mut r = Renderer {
+            gpu,
+            parts: Vec::new(),
+            draw_layout,
+            frame_buf,
+            shadow_tex,
+            shadow_bind,
+            main_bind,
+            shadow_pipe,
+            skin_pipe,
+            eye_pipe,
+            blur_pipe,
+            blur_layout,
+            comp_pipe,
+            comp_layout,
+            cdf,
+            blur_bufs,
+            tex_sampler,
+            lin_sampler,
+            centre: scene.centre,
+            radius: scene.radius,
+            adapter: gpu.name.clone(),
+        };
+        for p in &scene.parts {
+            let gp = r.upload(p)?;
+            r.parts.push(gp);
+        }
+        Ok(r)
+    }
+
+    fn tex(&self, label: &str, maps: &[&Map], format: TexelFormat) -> wgpu::Texture {
+        let (px, w, h) = rgba_of(maps);
+        self.gpu.texture(label, &px, w, h, format)
+    }
+
+    fn one(&self, v: [f32; 4], format: TexelFormat) -> wgpu::Texture {
+        self.gpu.texture("uniform", &[v], 1, 1, format)
+    }
+
+    fn upload(&self, p: &Part) -> Result<GpuPart> {
+        let spec_scale = derma_core::preview::SPECULAR_SCALE;
+        let (u, textures, eye, casts) = match &p.material {
+            Material::Skin(s) => {
+                let base = self.tex(
+                    "base colour",
+                    &[&s.base_color[0], &s.base_color[1], &s.base_color[2]],
+                    TexelFormat::Srgb8,
+                );
+                let normal = self.tex(
+                    "normal",
+                    &[&s.normal[0], &s.normal[1], &s.normal[2]],
+                    TexelFormat::Float16,
+                );
+                let rs = self.tex(
+                    "roughness, specular",
+                    &[&s.roughness, &s.specular],
+                    TexelFormat::Linear8,
+                );
+                let (sc, sr) = match &s.subsurface {
+                    Some((c, r)) => (
+                        self.tex("sss colour", &[&c[0], &c[1], &c[2]], TexelFormat::Srgb8),
+                        self.tex("sss radius", &[&r[0], &r[1], &r[2]], TexelFormat::Float16),
+                    ),
+                    None => (
+                        self.one([0.0; 4], TexelFormat::Srgb8),
+                        self.one([0.0; 4], TexelFormat::Float16),
+                    ),
+                };
+                let scatter = if s.subsurface.is_some() { 1.0 } else { 0.0 };
+                (
+                    DrawU {
+                        albedo: [1.0, 1.0, 1.0, 1.0],
+                        params: [0.5, 0.04, 0.0, spec_scale],
+                        eye: [0.0; 4],
+                        eye_axis: [0.0, 0.0, 1.0, scatter],
+                    },
+                    [base, normal, rs, sc, sr],
+                    false,
+                    true,
+                )
+            }
+            Material::Eye {
+                albedo,
+                centre,
+                radius,
+                axis,
+                roughness,
+                f0,
+            } => (
+                DrawU {
+                    albedo: [1.0, 1.0, 1.0, 1.0],
+                    params: [*roughness, *f0, 1.0, spec_scale],
+                    eye: [centre.x, centre.y, centre.z, *radius],
+                    eye_axis: [axis.x, axis.y, axis.z, 0.0],
+                },
+                [
+                    self.tex(
+                        "eye",
+                        &[&albedo[0], &albedo[1], &albedo[2]],
+                        TexelFormat::Srgb8,
+                    ),
+                    self.one([0.5, 0.5, 1.0, 1.0], TexelFormat::Float16),
+                    self.one(
+                        [*roughness, f0 / spec_scale, 0.0, 1.0],
+                        TexelFormat::Linear8,
+                    ),
+                    self.one([0.0; 4], TexelFormat::Srgb8),
+                    self.one([0.0; 4], TexelFormat::Float16),
+                ],
+                true,
+                true,
+            ),
+            Material::Flat {
+                albedo,
+                roughness,
+                f0,
+            } => (
+                DrawU {
+                    albedo: [albedo.x, albedo.y, albedo.z, 0.0],
+                    params: [*roughness, *f0, 2.0, spec_scale],
+                    eye: [0.0; 4],
+                    eye_axis: [0.0; 4],
+                },
+                [
+                    self.one([1.0; 4], TexelFormat::Srgb8),
+                    self.one([0.5, 0.5, 1.0, 1.0], TexelFormat::Float16),
+                    self.one(
+                        [*roughness, f0 / spec_scale, 0.0, 1.0],
+                        TexelFormat::Linear8,
+                    ),
+                    self.one([0.0; 4], TexelFormat::Srgb8),
+                    self.one([0.0; 4], TexelFormat::Float16),
+                ],
+                false,
+                true,
+            ),
+            Material::Card {
+                albedo,
+                coverage,
+                roughness,
+                f0,
+            } => {
+                let (w, h) = (coverage.width(), coverage.height());
+                let px: Vec<[f32; 4]> = coverage
+                    .data()
+                    .iter()
+                    .map(|&c| [albedo.x, albedo.y, albedo.z, c])
+                    .collect();
+                (
+                    DrawU {
+                        albedo: [albedo.x, albedo.y, albedo.z, 1.0],
+                        params: [*roughness, *f0, 3.0, spec_scale],
+                        eye: [0.0; 4],
+                        eye_axis: [0.0; 4],
+                    },
+                    [
+                        self.gpu.texture("card", &px, w, h, TexelFormat::Srgb8),
+                        self.one([0.5, 0.5, 1.0, 1.0], TexelFormat::Float16),
+                        self.one(
+                            [*roughness, f0 / spec_scale, 0.0, 1.0],
+                            TexelFormat::Linear8,
+                        ),
+                        self.one([0.0; 4], TexelFormat::Srgb8),
+                        self.one([0.0; 4], TexelFormat::Float16),
+                    ],
+                    false,
+                    false,
+                )
+            }
+        };
+        let d = &self.gpu.device;
+        let ubuf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("draw"),
+            contents: bytemuck::bytes_of(&u),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let views: Vec<wgpu::TextureView> = textures.iter().map(view).collect();
+        let mut res = vec![ubuf.as_entire_binding()];
+        res.extend(views.iter().map(wgpu::BindingResource::TextureView));
+        let bind = bind(self.gpu, &p.name, &self.draw_layout, &res);
+        let vertices = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(&p.name),
+            contents: bytemuck::cast_slice(&p.vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        Ok(GpuPart {
+            vertices,
+            count: p.vertices.len() as u32,
+            bind,
+            eye,
+            casts_shadow: casts,
+        })
+    }
+
+    /// Replaces part `index`'s material (e.g. the skin's base colour for an animated rig frame).
+    pub fn replace(&mut self, index: usize, part: &Part) -> Result<()> {
+        let gp = self.upload(part)?;
+        self.parts[index] = gp;
+        Ok(())
+    }
+
+    /// Renders `view` under `lighting` at `w`×`h` pixels.
+    pub fn render(
+        &self,
+        view_spec: &View,
+        lighting: &Lighting,
+        w: u32,
+        h: u32,
+    ) -> Result<Rendered> {
+        let gpu = self.gpu;
+        let d = &gpu.device;
+        let cam = Camera::frame(self.centre, self.radius, view_spec, w, h);
+        let key = cam.to_world(lighting.lights[0].dir);
+        let lvp = light_view_proj(self.centre, self.radius, key);
+        let mut lights = [[0.0f32; 4]; 6];
+        for (i, l) in lighting.lights.iter().enumerate() {
+            let dw = cam.to_world(l.dir);
+            lights[2 * i] = [dw.x, dw.y, dw.z, 0.0];
+            lights[2 * i + 1] = [l.irradiance.x, l.irradiance.y, l.irradiance.z, 0.0];
+        }
+        let fu = FrameU {
+            view_proj: cam.view_proj.to_cols_array_2d(),
+            light_view_proj: lvp.to_cols_array_2d(),
+            camera: [cam.eye.x, cam.eye.y, cam.eye.z, cam.focal_px],
+            forward: [
+                cam.forward.x,
+                cam.forward.y,
+                cam.forward.z,
+                1.0 / SHADOW_SIZE as f32,
+            ],
+            viewport: [w as f32, h as f32, 1.0 / w as f32, 1.0 / h as f32],
+            sky: [
+                lighting.sky.x,
+                lighting.sky.y,
+                lighting.sky.z,
+                lighting.exposure,
+            ],
+            ground: [lighting.ground.x, lighting.ground.y, lighting.ground.z, 1.0],
+            lights,
+        };
+        gpu.queue
+            .write_buffer(&self.frame_buf, 0, bytemuck::bytes_of(&fu));
+        let target = |label, format| gpu.render_target(label, w, h, format);
+        let diffuse = target("diffuse", HDR);
+        let direct = target("direct", HDR);
+        let sssp = target("sss params", HDR);
+        let post = target("post scatter", wgpu::TextureFormat::Rgba8Unorm);
+        let ping = target("blur x", HDR);
+        let pong = target("blur y", HDR);
+        let display = target("display", wgpu::TextureFormat::Rgba8Unorm);
+        let linear = target("linear", HDR);
+        let depth = d.create_texture(&wgpu::TextureDescriptor {
+            label: Some("depth"),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        let mut enc = d.create_command_encoder(&Default::default());
+        {
+            let sv = view(&self.shadow_tex);
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("shadow"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &sv,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.shadow_pipe);
+            pass.set_bind_group(0, &self.shadow_bind, &[]);
+            for p in self.parts.iter().filter(|p| p.casts_shadow) {
+                pass.set_vertex_buffer(0, p.vertices.slice(..));
+                pass.draw(0..p.count, 0..1);
+            }
+        }
+        {
+            let views = [view(&diffuse), view(&direct), view(&sssp), view(&post)];
+            let att: Vec<Option<wgpu::RenderPassColorAttachment>> = views
+                .iter()
+                .map(|v| {
+                    Some(wgpu::RenderPassColorAttachment {
+                        view: v,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })
+                })
+                .collect();
+            let dv = view(&depth);
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("forward"),
+                color_attachments: &att,
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &dv,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &self.main_bind, &[]);
+            for p in &self.parts {
+                pass.set_pipeline(if p.eye {
+                    &self.eye_pipe
+                } else {
+                    &self.skin_pipe
+                });
+                pass.set_bind_group(1, &p.bind, &[]);
+                pass.set_vertex_buffer(0, p.vertices.slice(..));
+                pass.draw(0..p.count, 0..1);
+            }
+        }
+        let full_pass = |enc: &mut wgpu::CommandEncoder,
+                         label: &str,
+                         pipe: &wgpu::RenderPipeline,
+                         group: &wgpu::BindGroup,
+                         outs: &[&wgpu::Texture]| {
+            let views: Vec<wgpu::TextureView> = outs.iter().map(|t| view(t)).collect();
+            let att: Vec<Option<wgpu::RenderPassColorAttachment>> = views
+                .iter()
+                .map(|v| {
+                    Some(wgpu::RenderPassColorAttachment {
+                        view: v,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })
+                })
+                .collect();
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(label),
+                color_attachments: &att,
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(pipe);
+            pass.set_bind_group(0, group, &[]);
+            pass.draw(0..3, 0..1);
+        };
+        let sv = view(&sssp);
+        let blur_group = |src: &wgpu::Texture, k: usize| {
+            bind(
+                gpu,
+                "blur",
+                &self.blur_layout,
+                &[
+                    self.frame_buf.as_entire_binding(),
+                    self.blur_bufs[k].as_entire_binding(),
+                    self.cdf.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(&view(src)),
+                    wgpu::BindingResource::TextureView(&sv),
+                    wgpu::BindingResource::Sampler(&self.lin_sampler),
+                ],
+            )
+        };
+        let bx = blur_group(&diffuse, 0);
+        full_pass(&mut enc, "blur x", &self.blur_pipe, &bx, &[&ping]);
+        let by = blur_group(&ping, 1);
+        full_pass(&mut enc, "blur y", &self.blur_pipe, &by, &[&pong]);
+        let cg = bind(
+            gpu,
+            "composite",
+            &self.comp_layout,
+            &[
+                self.frame_buf.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&view(&pong)),
+                wgpu::BindingResource::TextureView(&view(&direct)),
+                wgpu::BindingResource::TextureView(&view(&post)),
+            ],
+        );
+        full_pass(
+            &mut enc,
+            "composite",
+            &self.comp_pipe,
+            &cg,
+            &[&display, &linear],
+        );
+        gpu.queue.submit([enc.finish()]);
+        let disp = gpu.read_texture(&display)?;
+        let lin = gpu.read_texture(&linear)?;
+        let linear: Vec<[f32; 3]> = lin
+            .chunks_exact(8)
+            .map(|c| {
+                let h = |i: usize| {
+                    half::f16::from_bits(u16::from_le_bytes([c[2 * i], c[2 * i + 1]])).to_f32()
+                };
+                [h(0), h(1), h(2)]
+            })
+            .collect();
+        let _ = &self.tex_sampler;
+        Ok(Rendered {
+            width: w as usize,
+            height: h as usize,
+            display: disp,
+            linear,
+        })
+    }
+}

@@ -1,0 +1,199 @@
+//! What is drawn: the skin (a mesh with a derma texture set) and, for the built-in head, its
+//! parts with their own materials — eyes with a refracting cornea, lash cards, teeth, tongue —
+//! as GPU-ready vertex lists (one vertex per triangle corner, MikkTSpace tangents).
+
+use crate::material::{default_eye_texture, lash_coverage_map, SkinMaps};
+use derma_core::mesh::{mikktspace_tangents, TriMesh};
+use derma_core::Map;
+use glam::{Quat, Vec3};
+
+/// One vertex as the shaders read it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Vertex {
+    /// Position (mm).
+    pub position: [f32; 3],
+    /// Unit normal.
+    pub normal: [f32; 3],
+    /// Texture coordinate (v up).
+    pub uv: [f32; 2],
+    /// MikkTSpace tangent and bitangent sign.
+    pub tangent: [f32; 4],
+}
+
+/// How a part is shaded.
+#[derive(Clone)]
+pub enum Material {
+    /// The skin texture set.
+    Skin(Box<SkinMaps>),
+    /// An eye globe: its albedo on the globe's UVs, the globe (centre, radius, mm) and its
+    /// optical axis; the cornea's tear film has the given roughness and F0.
+    Eye {
+        /// Linear RGB on the eye UVs.
+        albedo: Box<[Map; 3]>,
+        /// Centre (mm).
+        centre: Vec3,
+        /// Globe radius (mm).
+        radius: f32,
+        /// Unit optical axis (gaze).
+        axis: Vec3,
+        /// Tear film roughness.
+        roughness: f32,
+        /// Tear film F0.
+        f0: f32,
+    },
+    /// A uniform material.
+    Flat {
+        /// Linear albedo.
+        albedo: Vec3,
+        /// Perceptual roughness.
+        roughness: f32,
+        /// F0.
+        f0: f32,
+    },
+    /// An alpha-tested card (eyelashes): uniform albedo, coverage from a map.
+    Card {
+        /// Linear albedo.
+        albedo: Vec3,
+        /// Coverage on the card's UVs.
+        coverage: Box<Map>,
+        /// Perceptual roughness.
+        roughness: f32,
+        /// F0.
+        f0: f32,
+    },
+}
+
+/// A named mesh and its material.
+pub struct Part {
+    /// Name (as in the head: skin, eye_left, teeth_upper, …).
+    pub name: String,
+    /// Vertices, three per triangle.
+    pub vertices: Vec<Vertex>,
+    /// Its material.
+    pub material: Material,
+}
+
+/// Everything a frame draws; the camera frames the first part (the skin).
+pub struct Scene {
+    /// The skin first, then the props.
+    pub parts: Vec<Part>,
+    /// Centre of the skin's bounding sphere (mm).
+    pub centre: Vec3,
+    /// Its radius (mm).
+    pub radius: f32,
+}
+
+/// Corner vertices of `m` with per-corner `tangents` (or +X when `None`).
+pub fn corner_vertices(m: &TriMesh, tangents: Option<&[[f32; 4]]>) -> Vec<Vertex> {
+    let mut out = Vec::with_capacity(m.triangles.len() * 3);
+    for (f, tri) in m.triangles.iter().enumerate() {
+        for (k, &v) in tri.iter().enumerate() {
+            let v = v as usize;
+            out.push(Vertex {
+                position: m.positions[v].to_array(),
+                normal: m.normals.get(v).copied().unwrap_or(Vec3::Z).to_array(),
+                uv: m.uvs.get(v).map(|t| t.to_array()).unwrap_or([0.0, 0.0]),
+                tangent: tangents
+                    .map(|t| t[3 * f + k])
+                    .unwrap_or([1.0, 0.0, 0.0, 1.0]),
+            });
+        }
+    }
+    out
+}
+
+/// Rotation of an eye from the neutral gaze (+Z) by yaw (about +Y, positive to the subject's
+/// left) and pitch (up), degrees.
+pub fn gaze_rotation(yaw_deg: f32, pitch_deg: f32) -> Quat {
+    Quat::from_rotation_y(yaw_deg.to_radians()) * Quat::from_rotation_x(-pitch_deg.to_radians())
+}
+
+impl Scene {
+    /// A user mesh (mm, with UVs and normals) with a texture set.
+    pub fn mesh(mesh: &TriMesh, skin: SkinMaps) -> Scene {
+        let t = mikktspace_tangents(mesh);
+        let (lo, hi) = mesh.bounds();
+        let centre = 0.5 * (lo + hi);
+        let radius = mesh
+            .positions
+            .iter()
+            .map(|p| p.distance(centre))
+            .fold(0.0f32, f32::max);
+        Scene {
+            parts: vec![Part {
+                name: "skin".into(),
+                vertices: corner_vertices(mesh, Some(&t)),
+                material: Material::Skin(Box::new(skin)),
+            }],
+            centre,
+            radius,
+        }
+    }
+
+    /// The built-in head posed by face-unit `weights` (the skin only; the parts stay), with a
+    /// texture set, the eyes' albedo (`None`: the built-in eye) and the gaze (yaw, pitch in
+    /// degrees).
+    pub fn head(
+        head: &derma_head::Head,
+        skin: SkinMaps,
+        weights: &[(&str, f32)],
+        eye_albedo: Option<[Map; 3]>,
+        gaze: (f32, f32),
+    ) -> Scene {
+        let posed = if weights.is_empty() {
+            head.skin.clone()
+        } else {
+            head.posed_skin(weights)
+        };
+        let mut scene = Scene::mesh(&posed, skin);
+        let eye_tex = eye_albedo.unwrap_or_else(|| default_eye_texture(512));
+        let rot = gaze_rotation(gaze.0, gaze.1);
+        for (part, prop) in head.parts.iter().zip(head.preview_props()) {
+            let centre_uv = glam::Vec2::splat(0.5);
+            let material = if let Some(side) = part.name.strip_prefix("eye_") {
+                let eye = if side == "left" {
+                    &head.eyes[0]
+                } else {
+                    &head.eyes[1]
+                };
+                Material::Eye {
+                    albedo: Box::new(eye_tex.clone()),
+                    centre: eye.centre,
+                    radius: eye.radius,
+                    axis: rot * Vec3::Z,
+                    roughness: prop.roughness,
+                    f0: prop.f0,
+                }
+            } else if prop.coverage.is_some() {
+                Material::Card {
+                    albedo: (prop.albedo)(centre_uv),
+                    coverage: Box::new(lash_coverage_map(256)),
+                    roughness: prop.roughness,
+                    f0: prop.f0,
+                }
+            } else {
+                Material::Flat {
+                    albedo: (prop.albedo)(centre_uv),
+                    roughness: prop.roughness,
+                    f0: prop.f0,
+                }
+            };
+            let mut mesh = part.mesh.clone();
+            if let Material::Eye { centre, .. } = &material {
+                for p in &mut mesh.positions {
+                    *p = *centre + rot * (*p - *centre);
+                }
+                for n in &mut mesh.normals {
+                    *n = rot * *n;
+                }
+            }
+            scene.parts.push(Part {
+                name: part.name.clone(),
+                vertices: corner_vertices(&mesh, None),
+                material,
+            });
+        }
+        scene
+    }
+}

@@ -1,0 +1,148 @@
+//! The web viewer's files (`derma export web`): the GLB, and the rig in a form a browser can
+//! read — three.js' EXRLoader only takes channels named R, G, B, A or Y, so the rig's maps go
+//! out as 16-bit PNGs (values mapped to their range, stated in `manifest.json`) with the
+//! skin-colour LUT, for the viewer to evaluate Jimenez et al. 2010 eqs. 6–7 in a shader.
+
+use crate::error::{RenderError, Result};
+use derma_core::image_io::write_png16;
+use derma_core::Map;
+use serde_json::json;
+use std::path::Path;
+
+/// The manifest's `format`.
+pub const FORMAT: &str = "derma-web";
+/// Its `version`.
+pub const VERSION: u32 = 1;
+
+/// What was written.
+#[derive(Clone, Debug)]
+pub struct WebReport {
+    /// Rig targets exported (0 without a rig).
+    pub targets: usize,
+}
+
+/// (min, max) of several maps, widened so the range is never empty.
+fn range(maps: &[&Map]) -> (f32, f32) {
+    let (lo, hi) = maps
+        .iter()
+        .flat_map(|m| m.data().iter().copied())
+        .fold((f32::MAX, f32::MIN), |(a, b), v| (a.min(v), b.max(v)));
+    if hi > lo {
+        (lo, hi)
+    } else {
+        (lo, lo + 1.0)
+    }
+}
+
+fn normalise(m: &Map, (lo, hi): (f32, f32)) -> Map {
+    let v = m.data().iter().map(|x| (x - lo) / (hi - lo)).collect();
+    Map::from_vec(m.width(), m.height(), v).expect("size")
+}
+
+/// Tiles laid side by side.
+fn atlas(tiles: &[Map]) -> Map {
+    let (w, h) = (tiles[0].width(), tiles[0].height());
+    let mut out = Map::filled(w * tiles.len(), h, 0.0);
+    for (i, t) in tiles.iter().enumerate() {
+        for y in 0..h {
+            for x in 0..w {
+                out.set(i * w + x, y, t.get(x, y));
+            }
+        }
+    }
+    out
+}
+
+/// A point inside each region of the built-in head (its mask's first maximum), as UV with v
+/// up: the viewer labels them and the browser test probes them.
+fn region_points(n: usize) -> serde_json::Value {
+    let mut out = serde_json::Map::new();
+    for (name, m) in derma_head::Head::builtin().region_masks(n) {
+        let (i, _) =
+            m.data().iter().enumerate().fold(
+                (0, f32::MIN),
+                |(bi, bv), (i, &v)| if v > bv { (i, v) } else { (bi, bv) },
+            );
+        let (x, y) = (i % n, i / n);
+        out.insert(
+            name.to_string(),
+            json!([
+                (x as f32 + 0.5) / n as f32,
+                1.0 - (y as f32 + 0.5) / n as f32
+            ]),
+        );
+    }
+    serde_json::Value::Object(out)
+}
+
+/// Writes `out/head.glb` (the built-in head with the set) and, with a rig, `out/rig/*.png` and
+/// `out/manifest.json`.
+pub fn export(textures: &Path, rig_dir: Option<&Path>, out: &Path) -> Result<WebReport> {
+    derma_core::atomic::ensure_writable_dir(out)?;
+    crate::glb::export(&crate::glb::GlbOptions {
+        textures: textures.to_path_buf(),
+        mesh: None,
+        out: out.join("head.glb"),
+        maps: None,
+    })?;
+    let mut manifest = json!({
+        "format": FORMAT,
+        "version": VERSION,
+        "glb": "head.glb",
+        "skin_mesh": "skin",
+        "regions": region_points(256),
+        "rig": null,
+    });
+    let mut targets = 0;
+    if let Some(dir) = rig_dir {
+        let (rig, lut, rj) = derma_rig::rig_dir::load(dir)?;
+        let melanin = rig.melanin.as_ref().ok_or_else(|| RenderError::Input {
+            path: dir.to_path_buf(),
+            detail: "the rig has no melanin map; build it with --melanin".into(),
+        })?;
+        let rd = out.join("rig");
+        derma_core::atomic::ensure_writable_dir(&rd)?;
+        let h0r = range(&[&rig.h0]);
+        write_png16(&rd.join("h0.png"), &[&normalise(&rig.h0, h0r)])?;
+        let mr = range(&[melanin]);
+        write_png16(&rd.join("melanin.png"), &[&normalise(melanin, mr)])?;
+        // Basis atlas: tile 0 the neutral (bias μ₀, scale 1), then each target (bias, scale).
+        let ones = Map::filled(rig.neutral_mean.width(), rig.neutral_mean.height(), 1.0);
+        let biases: Vec<&Map> = std::iter::once(&rig.neutral_mean)
+            .chain(rig.targets.iter().map(|t| &t.bias))
+            .collect();
+        let scales: Vec<&Map> = std::iter::once(&ones)
+            .chain(rig.targets.iter().map(|t| &t.scale))
+            .collect();
+        let (br, sr) = (range(&biases), range(&scales));
+        let b_atlas = atlas(&biases.iter().map(|m| normalise(m, br)).collect::<Vec<_>>());
+        let s_atlas = atlas(&scales.iter().map(|m| normalise(m, sr)).collect::<Vec<_>>());
+        let zero = Map::filled(b_atlas.width(), b_atlas.height(), 0.0);
+        write_png16(&rd.join("basis.png"), &[&b_atlas, &s_atlas, &zero])?;
+        // The LUT: linear RGB, 16-bit, rows along the blood axis from the top (rig.json's layout).
+        let [r, g, b] = lut.channels();
+        let lr = range(&[&r, &g, &b]);
+        write_png16(
+            &rd.join("lut.png"),
+            &[&normalise(&r, lr), &normalise(&g, lr), &normalise(&b, lr)],
+        )?;
+        targets = rig.targets.len();
+        manifest["rig"] = json!({
+            "model": rj.model,
+            "map_size": rj.map_size,
+            "basis_size": rj.basis_size,
+            "h0": {"file": "rig/h0.png", "range": [h0r.0, h0r.1]},
+            "melanin": {"file": "rig/melanin.png", "range": [mr.0, mr.1]},
+            "basis": {"file": "rig/basis.png", "tiles": targets + 1,
+                "bias_range": [br.0, br.1], "scale_range": [sr.0, sr.1],
+                "layout": "tile 0 the neutral, tile i target i-1, side by side; R bias, G scale"},
+            "lut": {"file": "rig/lut.png", "range": [lr.0, lr.1], "size": rj.lut.size,
+                "melanin_max": rj.lut.melanin_max, "blood_max": rj.lut.blood_max, "layout": rj.lut.layout},
+            "targets": rig.targets.iter().map(|t| json!({"name": t.name, "global_scale": t.global_scale})).collect::<Vec<_>>(),
+            "encoding": "16-bit PNG, value = range[0] + (range[1] - range[0]) × sample; rows top first (v = 1 at the top)",
+        });
+    }
+    let text = serde_json::to_vec_pretty(&manifest).expect("JSON");
+    derma_core::atomic::write_bytes(&out.join("manifest.json"), &text)?;
+    Ok(WebReport { targets })
+}

@@ -1,0 +1,272 @@
+//! `derma render`, `derma export` and `derma view`: flags → derma-render, and what was written.
+
+use crate::progress::Bars;
+use anyhow::{bail, Result};
+use clap::{Args, Subcommand, ValueEnum};
+use derma_render::files::{RenderJob, RigFrame};
+use derma_render::glb::{GlbOptions, MapNames, NormalConvention};
+use derma_render::{Setup, View};
+use derma_rig::{GlobalScale, WeightSpec};
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// A texture set from `derma skin --out DIR`.
+    textures: PathBuf,
+    /// Your mesh (OBJ, glTF, GLB) with the set's UVs; default: the built-in head with its
+    /// eyes, lashes, teeth and tongue.
+    #[arg(long)]
+    mesh: Option<PathBuf>,
+    /// Lighting setups, comma-separated: studio (three-point), window (one soft side light).
+    #[arg(long, default_value = "studio,window", value_delimiter = ',', value_parser = parse_setup)]
+    lighting: Vec<Setup>,
+    /// Image size WxH (or one number for a square).
+    #[arg(long, default_value = "1024", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Camera yaw in degrees (0 = front, 90 = the subject's left profile).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    yaw: f32,
+    /// Camera pitch in degrees above the horizon.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pitch: f32,
+    /// Camera distance as a multiple of the framing distance (below 1 is closer).
+    #[arg(long, default_value_t = 1.0)]
+    zoom: f32,
+    /// Also a turntable of N frames per setup (animated PNG).
+    #[arg(long, value_name = "N")]
+    turntable: Option<usize>,
+    /// Also sheet.png: front, three-quarter and profile under every setup beside the raw maps.
+    #[arg(long)]
+    sheet: bool,
+    /// Also the linear radiance as EXR (before tone mapping).
+    #[arg(long)]
+    exr: bool,
+    /// Colour from a rig (`derma rig build`) at --weights instead of base_color.png.
+    #[arg(long)]
+    rig: Option<PathBuf>,
+    /// Rig target weights NAME=W,… (with --rig).
+    #[arg(long, default_value = "", requires = "rig")]
+    weights: WeightSpec,
+    /// Global hemoglobin scale with --rig: auto or a factor.
+    #[arg(long, default_value = "auto", requires = "rig")]
+    global_scale: GlobalScale,
+    /// Face units posing the built-in head, NAME=W,… (e.g. mouthSmileLeft=1,mouthSmileRight=1).
+    #[arg(long, default_value = "", conflicts_with = "mesh")]
+    pose: WeightSpec,
+    /// An eye texture on the head's eye UVs (`derma photo iris`).
+    #[arg(long, conflicts_with = "mesh")]
+    iris: Option<PathBuf>,
+    /// Gaze yaw,pitch in degrees (positive yaw: to the subject's left).
+    #[arg(long, default_value = "0,0", value_parser = parse_pair, allow_negative_numbers = true)]
+    gaze: (f32, f32),
+    /// Output directory.
+    #[arg(long, default_value = "render")]
+    out: PathBuf,
+}
+
+fn parse_setup(s: &str) -> Result<Setup, String> {
+    s.parse()
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("size '{s}': expected WxH or N, e.g. 1920x1080 or 1024");
+    let (a, b) = s.split_once('x').unwrap_or((s, s));
+    let w: u32 = a.trim().parse().map_err(|_| bad())?;
+    let h: u32 = b.trim().parse().map_err(|_| bad())?;
+    if !(16..=8192).contains(&w) || !(16..=8192).contains(&h) {
+        return Err(format!("size '{s}': each side must be 16 to 8192 pixels"));
+    }
+    Ok((w, h))
+}
+
+fn parse_pair(s: &str) -> Result<(f32, f32), String> {
+    let bad = || format!("'{s}': expected YAW,PITCH in degrees, e.g. 10,-5");
+    let (a, b) = s.split_once(',').ok_or_else(bad)?;
+    Ok((
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    ))
+}
+
+pub fn render(a: RenderArgs, bars: &Bars) -> Result<()> {
+    let job = RenderJob {
+        textures: a.textures,
+        mesh: a.mesh,
+        setups: a.lighting,
+        size: a.size,
+        view: View {
+            yaw_deg: a.yaw,
+            pitch_deg: a.pitch,
+            zoom: a.zoom,
+        },
+        turntable: a.turntable,
+        sheet: a.sheet,
+        exr: a.exr,
+        rig: a.rig.map(|dir| RigFrame {
+            dir,
+            weights: a.weights,
+            global: a.global_scale,
+        }),
+        face_units: a.pose.entries,
+        iris: a.iris,
+        gaze: a.gaze,
+        out: a.out,
+    };
+    let r = derma_render::files::run(&job, bars)?;
+    bars.finish();
+    bars.say(format!(
+        "{} frames on {} ({:.0} ms each with read-back) → {}",
+        r.frames,
+        r.adapter,
+        1e3 * r.seconds_per_frame,
+        job.out.display()
+    ));
+    Ok(())
+}
+
+#[derive(Subcommand)]
+pub enum ExportCommand {
+    /// A glTF 2.0 binary for engines: the head (or your mesh) with the texture set as a PBR
+    /// material (KHR_materials_specular, _volume, _diffuse_transmission), tangents, face units.
+    Glb(GlbArgs),
+    /// The web viewer's files: the GLB, and the rig as 16-bit PNG textures with a JSON manifest.
+    Web(WebArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum NormalArg {
+    /// +Y up (glTF, Blender, Unity, three.js).
+    Opengl,
+    /// −Y (Unreal).
+    Directx,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum NamesArg {
+    /// base_color.png, normal.png, …
+    Derma,
+    /// head_BaseColor.png, head_Normal.png, … (Substance Painter).
+    Substance,
+    /// T_Head_BC.png, T_Head_N.png, … (Unreal / MetaHuman style).
+    Unreal,
+}
+
+#[derive(Args)]
+pub struct GlbArgs {
+    /// A texture set from `derma skin --out DIR`.
+    textures: PathBuf,
+    /// Your mesh with the set's UVs; default: the built-in head and its parts.
+    #[arg(long)]
+    mesh: Option<PathBuf>,
+    /// The GLB to write.
+    #[arg(long, default_value = "head.glb")]
+    out: PathBuf,
+    /// Also write the maps as loose files into DIR (named by --names, normal by --normal).
+    #[arg(long, value_name = "DIR")]
+    maps: Option<PathBuf>,
+    /// Naming of the loose maps.
+    #[arg(long, value_enum, default_value = "derma")]
+    names: NamesArg,
+    /// Normal-map convention of the loose maps (the GLB's is glTF's, OpenGL, by its spec).
+    #[arg(long, value_enum, default_value = "opengl")]
+    normal: NormalArg,
+}
+
+pub fn glb_options(textures: PathBuf, mesh: Option<PathBuf>, out: PathBuf) -> GlbOptions {
+    GlbOptions {
+        textures,
+        mesh,
+        out,
+        maps: None,
+    }
+}
+
+#[derive(Args)]
+pub struct WebArgs {
+    /// A texture set from `derma skin --out DIR`.
+    textures: PathBuf,
+    /// A rig built from the set (`derma rig build`), for the expression sliders.
+    #[arg(long)]
+    rig: Option<PathBuf>,
+    /// Output directory (what `derma view` serves).
+    #[arg(long, default_value = "web")]
+    out: PathBuf,
+}
+
+pub fn export(cmd: ExportCommand, bars: &Bars) -> Result<()> {
+    match cmd {
+        ExportCommand::Glb(a) => {
+            let mut o = glb_options(a.textures, a.mesh, a.out);
+            o.maps = a.maps.map(|d| {
+                (
+                    d,
+                    match a.names {
+                        NamesArg::Derma => MapNames::Derma,
+                        NamesArg::Substance => MapNames::Substance,
+                        NamesArg::Unreal => MapNames::Unreal,
+                    },
+                    match a.normal {
+                        NormalArg::Opengl => NormalConvention::OpenGl,
+                        NormalArg::Directx => NormalConvention::DirectX,
+                    },
+                )
+            });
+            let r = derma_render::glb::export(&o)?;
+            bars.say(format!(
+                "{} ({:.1} MB): meshes {}; {} morph targets; {}{}",
+                r.path.display(),
+                r.bytes as f64 / 1e6,
+                r.meshes.join(", "),
+                r.morph_targets,
+                r.extensions.join(", "),
+                if r.maps.is_empty() {
+                    String::new()
+                } else {
+                    format!("; {} loose maps", r.maps.len())
+                }
+            ));
+            Ok(())
+        }
+        ExportCommand::Web(a) => {
+            let r = derma_render::web::export(&a.textures, a.rig.as_deref(), &a.out)?;
+            bars.say(format!(
+                "{}: head.glb, {} rig targets → `derma view {}`",
+                a.out.display(),
+                r.targets,
+                a.out.display()
+            ));
+            Ok(())
+        }
+    }
+}
+
+#[derive(Args)]
+pub struct ViewArgs {
+    /// A directory from `derma export web`.
+    dir: PathBuf,
+    /// Port on localhost (0: any free one).
+    #[arg(long, default_value_t = 8017)]
+    port: u16,
+    /// The built viewer (`npm --prefix viewer run build`); default: viewer/dist of this source tree.
+    #[arg(long)]
+    viewer: Option<PathBuf>,
+}
+
+pub fn view(a: ViewArgs, bars: &Bars) -> Result<()> {
+    let viewer = a
+        .viewer
+        .unwrap_or_else(derma_render::serve::default_viewer_dir);
+    if !viewer.join("index.html").is_file() {
+        bail!(
+            "no built viewer at {}: run `npm --prefix viewer ci && npm --prefix viewer run build` (or give --viewer DIR)",
+            viewer.display()
+        );
+    }
+    let server = derma_render::serve::Server::bind(&viewer, &a.dir, a.port)?;
+    bars.say(format!(
+        "derma viewer on http://{}/ (Ctrl-C to stop)",
+        server.addr()
+    ));
+    server.run()?;
+    Ok(())
+}
