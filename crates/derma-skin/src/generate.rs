@@ -724,7 +724,7 @@ impl TextureSet {
         self.write_with(dir, progress, None)
     }
 
-    /// [`TextureSet::write`] with the preview's shaded views already rendered (sRGB-encoded,
+    /// [`TextureSet::write`] with the preview's shaded views already rendered (linear after tone mapping,
     /// [`crate::preview::PANEL`]² each, e.g. by derma-render on a GPU); `None` draws them with
     /// the software renderer.
     pub fn write_with(

@@ -29,7 +29,7 @@ pub const PANEL: usize = 512;
 
 /// Shaded views of `render` on its mesh (or a sphere and a tile for patches) plus the contact
 /// sheet (base colour, normal, height, roughness, melanin, blood): preview.png. `shaded`: views
-/// already rendered (by the GPU renderer, sRGB-encoded, [`PANEL`]²); `None` draws them with the
+/// already rendered (by the GPU renderer, linear radiance after tone mapping, [`PANEL`]²); `None` draws them with the
 /// software renderer.
 pub fn contact_sheet(
     render_maps: &RenderMaps,

@@ -68,7 +68,13 @@ pub struct SkinArgs {
     /// Age in years (wrinkles). Overrides person.age_years.
     #[arg(long)]
     age: Option<f32>,
-    /// Where `[detail]`'s exemplar synthesis runs (the same files on every device).
+    /// Also head.glb in --out: the head (or --mesh) with the texture set as glTF PBR, for
+    /// Blender, Unreal, Unity and three.js (see `derma export glb` for loose maps and naming).
+    #[arg(long, conflicts_with = "patch")]
+    glb: bool,
+    /// Where `[detail]`'s exemplar synthesis and the preview's renderer run (the texture files
+    /// are the same on every device; the preview is drawn by derma-render on a GPU and by the
+    /// software renderer otherwise).
     #[command(flatten)]
     device: crate::DeviceArg,
 }
@@ -189,7 +195,38 @@ pub fn run(args: SkinArgs, bars: &Bars) -> Result<()> {
     }
     generator.check_output(&args.out)?;
     let set = generator.run()?;
-    set.write(&args.out, bars)?;
+    let shaded = match derma_render::sheet::skin_views(&set, args.device.device) {
+        Ok(Some((views, adapter))) => {
+            bars.say(format!("preview rendered by derma-render on {adapter}"));
+            Some(views)
+        }
+        Ok(None) => {
+            bars.say("preview drawn by the software renderer (no hardware GPU; --device gpu uses any Vulkan/Metal/DX12 adapter)");
+            None
+        }
+        Err(e) => {
+            bars.say(format!(
+                "preview drawn by the software renderer: the GPU renderer failed ({e})"
+            ));
+            None
+        }
+    };
+    set.write_with(&args.out, bars, shaded)?;
+    if args.glb {
+        let report = derma_render::glb::export(&derma_render::glb::GlbOptions {
+            textures: args.out.clone(),
+            mesh: args.mesh.clone(),
+            out: args.out.join("head.glb"),
+            maps: None,
+        })?;
+        bars.say(format!(
+            "wrote {} ({:.1} MB; meshes {}; {} morph targets)",
+            report.path.display(),
+            report.bytes as f64 / 1e6,
+            report.meshes.join(", "),
+            report.morph_targets
+        ));
+    }
     bars.finish();
     bars.say(format!(
         "wrote {} ({}², {} features: {}) in {:.1} s",
