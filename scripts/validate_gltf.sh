@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Exports the built-in head (`derma skin --export-template`) and an animated eye region (`derma
-# eyes animate`), and checks both GLBs with Khronos'
+# Exports the built-in head (`derma skin --export-template`), an animated eye region (`derma
+# eyes animate`), a texture set on the head (`derma skin --glb`), the same set with Unreal
+# names and DirectX normals (`derma export glb`), and a set on a user mesh (MediaPipe's canonical
+# face from ../shared/data), and checks every GLB with Khronos'
 # glTF-Validator from npm (installed here into a temporary directory, with Node.js from apt when
 # the machine lacks it). Run by scripts/test.sh.
 set -euo pipefail
@@ -14,4 +16,10 @@ npm install --silent --prefix "$work/v" gltf-validator@2.0.0-dev.3.10 >/dev/null
 cargo build --release -q -p derma
 target/release/derma skin --export-template "$work/head" --quiet
 target/release/derma eyes animate --seconds 1 --fps 10 --render 0 --out "$work/eyes" --quiet >/dev/null
-node scripts/validate_gltf.js "$work/v" "$work/head/head.glb" "$work/eyes/head.glb"
+target/release/derma skin --size 256 --glb --out "$work/skin" --quiet
+target/release/derma export glb "$work/skin" --out "$work/unreal.glb" --maps "$work/unreal" \
+  --names unreal --normal directx --quiet
+target/release/derma skin --size 256 --glb --out "$work/user" --quiet \
+  --mesh ../shared/data/canonical_face_model.obj --landmarks mediapipe
+node scripts/validate_gltf.js "$work/v" "$work/head/head.glb" "$work/eyes/head.glb" \
+  "$work/skin/head.glb" "$work/unreal.glb" "$work/user/head.glb#static"
