@@ -3,7 +3,8 @@
 # need; checks formatting and lints; checks the committed adding-doubling references against
 # iadpython and the histogram-matching reference against scikit-image; runs the workspace tests
 # with the GPU tests required (on Mesa's lavapipe); validates the exported head's GLB with
-# Khronos' glTF-Validator; and runs every numbered example.
+# Khronos' glTF-Validator; runs every numbered example; and drives the web viewer in headless
+# Chromium (scripts/viewer_test.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if ! ls /usr/share/vulkan/icd.d/lvp_icd*.json >/dev/null 2>&1; then
@@ -24,7 +25,7 @@ bash scripts/validate_gltf.sh
 # Every numbered example runs (the Monte Carlo ones with fewer photons than their defaults),
 # built once with the workspace's features (a per-crate `cargo run -p` would rebuild its
 # dependencies with another feature set).
-cargo build --release -q --workspace --examples
+cargo build --release -q --workspace --bins --examples
 tmp=$(mktemp -d)
 for f in crates/*/examples/[0-9][0-9]_*.rs; do
   ex=$(basename "$f" .rs)
@@ -37,3 +38,5 @@ for f in crates/*/examples/[0-9][0-9]_*.rs; do
   "target/release/examples/$ex" "${args[@]}" > "$tmp/$ex.log" 2>&1 || { cat "$tmp/$ex.log"; exit 1; }
 done
 rm -rf "$tmp"
+# The web viewer in Debian's chromium: the GLB loads, the smile slider flushes the cheeks.
+bash scripts/viewer_test.sh

@@ -507,7 +507,8 @@ mod tests {
         let m = TriMesh {
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, 0.0)],
             normals: vec![Vec3::Z; 4],
-            uvs: vec![Vec2::ZERO, Vec2::X, Vec2::Y, Vec2::new(0.0, 1.0)],
+            // Vertex 3 at (1, 1) maps to UV (0, 0): the second UV triangle winds the other way.
+            uvs: vec![Vec2::ZERO, Vec2::X, Vec2::Y, Vec2::ZERO],
             triangles: vec![[0, 1, 2], [1, 3, 2]],
         };
         let t = mikktspace_tangents(&m);

@@ -53,26 +53,50 @@ fn atlas(tiles: &[Map]) -> Map {
     out
 }
 
-/// A point inside each region of the built-in head (its mask's first maximum), as UV with v
-/// up: the viewer labels them and the browser test probes them.
+/// A point deep inside each region of the built-in head, as UV with v up: the centre of the
+/// cell of a coarse grid (the mask area-averaged to 32²) that the region fills most, the first
+/// such cell on ties. The viewer labels them and the browser test probes them.
 fn region_points(n: usize) -> serde_json::Value {
+    const CELLS: usize = 32;
     let mut out = serde_json::Map::new();
     for (name, m) in derma_head::Head::builtin().region_masks(n) {
-        let (i, _) =
-            m.data().iter().enumerate().fold(
+        let coarse = m.resized(CELLS, CELLS);
+        let (i, _) = coarse
+            .data()
+            .iter()
+            .enumerate()
+            .fold(
                 (0, f32::MIN),
                 |(bi, bv), (i, &v)| if v > bv { (i, v) } else { (bi, bv) },
             );
-        let (x, y) = (i % n, i / n);
+        let (x, y) = (i % CELLS, i / CELLS);
         out.insert(
             name.to_string(),
             json!([
-                (x as f32 + 0.5) / n as f32,
-                1.0 - (y as f32 + 0.5) / n as f32
+                (x as f32 + 0.5) / CELLS as f32,
+                1.0 - (y as f32 + 0.5) / CELLS as f32
             ]),
         );
     }
     serde_json::Value::Object(out)
+}
+
+/// Checks that `dir` holds a web export (its `manifest.json` with this format), naming what is
+/// wrong otherwise — a texture set's own manifest.json is not one.
+pub fn check_export(dir: &Path) -> Result<()> {
+    let path = dir.join("manifest.json");
+    let bad = |detail: String| RenderError::Input {
+        path: path.clone(),
+        detail: format!("{detail}; expected a directory from `derma export web`"),
+    };
+    let bytes = std::fs::read(&path).map_err(|e| bad(format!("cannot read it ({e})")))?;
+    let v: serde_json::Value =
+        serde_json::from_slice(&bytes).map_err(|e| bad(format!("not JSON ({e})")))?;
+    match v.get("format").and_then(|f| f.as_str()) {
+        Some(FORMAT) => Ok(()),
+        Some(other) => Err(bad(format!("format '{other}', not '{FORMAT}'"))),
+        None => Err(bad("no \"format\" field".into())),
+    }
 }
 
 /// Writes `out/head.glb` (the built-in head with the set) and, with a rig, `out/rig/*.png` and
@@ -145,4 +169,38 @@ pub fn export(textures: &Path, rig_dir: Option<&Path>, out: &Path) -> Result<Web
     let text = serde_json::to_vec_pretty(&manifest).expect("JSON");
     derma_core::atomic::write_bytes(&out.join("manifest.json"), &text)?;
     Ok(WebReport { targets })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_a_web_export_passes_the_check() {
+        let d = derma_test_support::scratch_dir("web-check");
+        let m = d.join("manifest.json");
+        let err = check_export(&d).unwrap_err().to_string();
+        assert!(
+            err.contains("manifest.json") && err.contains("cannot read"),
+            "{err}"
+        );
+        // A texture set's manifest (another format) is named as such.
+        std::fs::write(&m, r#"{"format": "derma-texture-set"}"#).unwrap();
+        let err = check_export(&d).unwrap_err().to_string();
+        assert!(
+            err.contains("'derma-texture-set'") && err.contains("export web"),
+            "{err}"
+        );
+        std::fs::write(&m, "{").unwrap();
+        assert!(check_export(&d)
+            .unwrap_err()
+            .to_string()
+            .contains("not JSON"));
+        std::fs::write(
+            &m,
+            format!(r#"{{"format": "{FORMAT}", "version": {VERSION}}}"#),
+        )
+        .unwrap();
+        check_export(&d).unwrap();
+    }
 }

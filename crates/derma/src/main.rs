@@ -106,7 +106,7 @@ fn main() {
         Command::Eyes(cmd) => eyes::run(cmd),
         Command::Render(args) => render::render(args, &bars),
         Command::Export(cmd) => render::export(cmd, &bars),
-        Command::View(args) => render::view(args, &bars),
+        Command::View(args) => render::view(args),
     };
     bars.finish();
     if let Err(e) = result {

@@ -252,10 +252,11 @@ pub struct ViewArgs {
     viewer: Option<PathBuf>,
 }
 
-pub fn view(a: ViewArgs, bars: &Bars) -> Result<()> {
+pub fn view(a: ViewArgs) -> Result<()> {
     let viewer = a
         .viewer
         .unwrap_or_else(derma_render::serve::default_viewer_dir);
+    derma_render::web::check_export(&a.dir)?;
     if !viewer.join("index.html").is_file() {
         bail!(
             "no built viewer at {}: run `npm --prefix viewer ci && npm --prefix viewer run build` (or give --viewer DIR)",
@@ -263,10 +264,11 @@ pub fn view(a: ViewArgs, bars: &Bars) -> Result<()> {
         );
     }
     let server = derma_render::serve::Server::bind(&viewer, &a.dir, a.port)?;
-    bars.say(format!(
-        "derma viewer on http://{}/ (Ctrl-C to stop)",
+    // On stdout (and flushed) so scripts that start the viewer can read the address.
+    crate::output::text(&format!(
+        "derma viewer on http://{}/ (Ctrl-C to stop)\n",
         server.addr()
-    ));
+    ))?;
     server.run()?;
     Ok(())
 }

@@ -1,0 +1,309 @@
+//! End-to-end tests of `derma render`, `derma export glb|web` and `derma view`: the files each
+//! writes, what engines read from the GLB, the web export's 16-bit round trip, and the errors
+//! users meet.
+
+mod common;
+
+use common::{run, s};
+use std::path::{Path, PathBuf};
+
+fn tmp(tag: &str) -> PathBuf {
+    common::tmp("rendercli", tag)
+}
+
+fn skin(d: &Path) -> PathBuf {
+    let out = d.join("skin");
+    let (ok, _, err) = run(&["skin", "--size", "256", "--out", s(&out)]);
+    assert!(ok, "{err}");
+    out
+}
+
+fn rgb(p: &Path) -> derma_core::image_io::LoadedImage {
+    derma_core::image_io::read_rgb(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+#[test]
+fn render_writes_each_lighting_a_sheet_and_linear_exr() {
+    if derma_test_support::skip_without_gpu() {
+        return;
+    }
+    let d = tmp("render");
+    let set = skin(&d);
+    let out = d.join("r");
+    let (ok, _, err) = run(&[
+        "render",
+        s(&set),
+        "--size",
+        "320x240",
+        "--sheet",
+        "--exr",
+        "--yaw",
+        "20",
+        "--out",
+        s(&out),
+    ]);
+    assert!(ok, "{err}");
+    for f in ["studio.png", "window.png"] {
+        let img = rgb(&out.join(f));
+        let c = &img.channels[0];
+        assert_eq!((c.width(), c.height()), (320, 240), "{f}");
+    }
+    assert!(out.join("sheet.png").is_file());
+    let exr = derma_core::image_io::read_exr_channels(&out.join("studio.exr")).unwrap();
+    let mut names: Vec<&str> = exr.iter().map(|c| c.0.as_str()).collect();
+    names.sort();
+    assert_eq!(names, ["B", "G", "R"]);
+    // Linear radiance: non-negative, zero on the background, positive on the head.
+    let r = &exr.iter().find(|c| c.0 == "R").unwrap().1;
+    assert!(r.data().iter().all(|&v| v >= 0.0));
+    assert_eq!(r.get(0, 0), 0.0);
+    assert!(r.get(160, 120) > 0.0);
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("render.json")).unwrap()).unwrap();
+    assert_eq!(report["size"], serde_json::json!([320, 240]));
+    assert_eq!(report["view"]["yaw_deg"], 20.0);
+    // The studio and window setups light the head differently.
+    assert!(
+        std::fs::read(out.join("studio.png")).unwrap()
+            != std::fs::read(out.join("window.png")).unwrap()
+    );
+}
+
+#[test]
+fn render_names_what_is_wrong() {
+    let d = tmp("render-errors");
+    std::fs::create_dir_all(d.join("empty")).unwrap();
+    let (ok, _, err) = run(&["render", s(&d.join("empty")), "--out", s(&d.join("r"))]);
+    assert!(!ok);
+    assert!(
+        err.contains("base_color.png") && err.contains("derma skin"),
+        "{err}"
+    );
+    let (ok, _, err) = run(&["render", s(&d.join("empty")), "--lighting", "disco"]);
+    assert!(!ok);
+    assert!(err.contains("disco"), "{err}");
+}
+
+#[test]
+fn glb_carries_the_set_as_pbr_with_tangents_units_and_engine_maps() {
+    let d = tmp("glb");
+    let set = skin(&d);
+    let glb = d.join("head.glb");
+    let maps = d.join("unreal");
+    let (ok, _, err) = run(&[
+        "export",
+        "glb",
+        s(&set),
+        "--out",
+        s(&glb),
+        "--maps",
+        s(&maps),
+        "--names",
+        "unreal",
+        "--normal",
+        "directx",
+    ]);
+    assert!(ok, "{err}");
+    let (doc, buffers, images) = gltf::import(&glb).unwrap();
+    let used: Vec<&str> = doc.extensions_used().collect();
+    for e in [
+        "KHR_materials_specular",
+        "KHR_materials_volume",
+        "KHR_materials_diffuse_transmission",
+    ] {
+        assert!(used.contains(&e), "{e} in {used:?}");
+    }
+    let names: Vec<&str> = doc.meshes().filter_map(|m| m.name()).collect();
+    for n in ["skin", "eye_left", "eye_right"] {
+        assert!(names.contains(&n), "mesh {n} in {names:?}");
+    }
+    assert!(names.iter().any(|n| n.contains("teeth")), "{names:?}");
+    let skin_mesh = doc.meshes().find(|m| m.name() == Some("skin")).unwrap();
+    let prim = skin_mesh.primitives().next().unwrap();
+    let reader = prim.reader(|b| Some(&buffers[b.index()]));
+    // MikkTSpace tangents: unit xyz, handedness ±1, one per vertex.
+    let tangents: Vec<[f32; 4]> = reader.read_tangents().unwrap().collect();
+    let count = reader.read_positions().unwrap().count();
+    assert_eq!(tangents.len(), count);
+    assert!(tangents.iter().all(|t| {
+        let l = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
+        (l - 1.0).abs() < 1e-3 && t[3].abs() == 1.0
+    }));
+    // Face units as morph targets, named.
+    let extras = skin_mesh.extras().as_ref().map(|r| r.get().to_string());
+    let extras = extras.unwrap_or_default();
+    assert!(
+        extras.contains("mouthSmileLeft") && extras.contains("eyeBlinkLeft"),
+        "{extras}"
+    );
+    assert_eq!(
+        reader.read_morph_targets().count(),
+        serde_json::from_str::<serde_json::Value>(&extras).unwrap()["targetNames"]
+            .as_array()
+            .unwrap()
+            .len()
+    );
+    // The material: base colour and normal from the set; metallic 0, roughness in G.
+    let mat = prim.material();
+    let pbr = mat.pbr_metallic_roughness();
+    assert_eq!(pbr.metallic_factor(), 0.0);
+    assert!(pbr.base_color_texture().is_some() && mat.normal_texture().is_some());
+    let orm = pbr
+        .metallic_roughness_texture()
+        .unwrap()
+        .texture()
+        .source()
+        .index();
+    let orm = &images[orm];
+    let rough = rgb(&set.join("roughness.png"));
+    let mean_set =
+        rough.channels[0].data().iter().sum::<f32>() / rough.channels[0].data().len() as f32;
+    let stride = orm.pixels.len() / (orm.width * orm.height) as usize;
+    let g_mean = orm
+        .pixels
+        .chunks(stride)
+        .map(|p| p[1] as f32 / 255.0)
+        .sum::<f32>()
+        / (orm.width * orm.height) as f32;
+    assert!(
+        (g_mean - mean_set).abs() < 2.0 / 255.0,
+        "ORM green {g_mean} vs roughness.png {mean_set}"
+    );
+    // Unreal's loose normal map is DirectX: green flipped against the set's OpenGL one.
+    let n_gl = rgb(&set.join("normal.png"));
+    let n_dx = rgb(&maps.join("T_Head_N.png"));
+    let (a, b) = (&n_gl.channels[1], &n_dx.channels[1]);
+    let worst = a
+        .data()
+        .iter()
+        .zip(b.data())
+        .map(|(x, y)| (x + y - 1.0).abs())
+        .fold(0.0f32, f32::max);
+    assert!(worst <= 1.0 / 65535.0 + 1e-6, "green not flipped: {worst}");
+    assert_eq!(n_gl.channels[0].data(), n_dx.channels[0].data());
+    assert!(maps.join("T_Head_BC.png").is_file() && maps.join("T_Head_ORM.png").is_file());
+}
+
+#[test]
+fn web_export_round_trips_the_rig_within_one_16_bit_step_and_view_serves_it() {
+    let d = tmp("web");
+    let set = skin(&d);
+    let rig = d.join("rig");
+    let (ok, _, err) = run(&[
+        "rig",
+        "build",
+        "--neutral",
+        s(&set.join("hemoglobin.exr")),
+        "--melanin",
+        s(&set.join("melanin.exr")),
+        "--builtin",
+        "all",
+        "--radius",
+        "8",
+        "--out",
+        s(&rig),
+    ]);
+    assert!(ok, "{err}");
+    let web = d.join("web");
+    let (ok, _, err) = run(&["export", "web", s(&set), "--rig", s(&rig), "--out", s(&web)]);
+    assert!(ok, "{err}");
+    let m: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(web.join("manifest.json")).unwrap()).unwrap();
+    assert_eq!(m["format"], "derma-web");
+    assert!(web.join(m["glb"].as_str().unwrap()).is_file());
+    let targets = m["rig"]["targets"].as_array().unwrap();
+    assert!(
+        targets.iter().any(|t| t["name"] == "happiness"),
+        "{targets:?}"
+    );
+    assert_eq!(m["rig"]["basis"]["tiles"], targets.len() + 1);
+    // Every region's probe point lies in [0, 1]².
+    for (name, p) in m["regions"].as_object().unwrap() {
+        let (u, v) = (p[0].as_f64().unwrap(), p[1].as_f64().unwrap());
+        assert!(
+            (0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v),
+            "{name}"
+        );
+    }
+    // h0 decodes to the rig's own map within one 16-bit step of its range.
+    let h0 = &m["rig"]["h0"];
+    let (lo, hi) = (
+        h0["range"][0].as_f64().unwrap() as f32,
+        h0["range"][1].as_f64().unwrap() as f32,
+    );
+    let png = rgb(&web.join(h0["file"].as_str().unwrap()));
+    let (rig_model, _, _) = derma_rig::rig_dir::load(&rig).unwrap();
+    let worst = png.channels[0]
+        .data()
+        .iter()
+        .zip(rig_model.h0.data())
+        .map(|(q, v)| (lo + (hi - lo) * q - v).abs())
+        .fold(0.0f32, f32::max);
+    assert!(
+        worst <= 0.5 * (hi - lo) / 65535.0 * 1.01,
+        "h0 off by {worst} (range {lo}..{hi})"
+    );
+
+    // `derma view` refuses a directory that is not a web export, naming what it wanted.
+    let (ok, _, err) = run(&["view", s(&set)]);
+    assert!(!ok);
+    assert!(
+        err.contains("manifest.json") && err.contains("export web"),
+        "{err}"
+    );
+
+    // …and serves one: the viewer at /, the export under /data/, nothing outside either.
+    let viewer = d.join("viewer");
+    std::fs::create_dir_all(&viewer).unwrap();
+    std::fs::write(viewer.join("index.html"), "<!doctype html><title>v</title>").unwrap();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_derma"))
+        .args(["view", s(&web), "--viewer", s(&viewer), "--port", "0"])
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    std::io::BufRead::read_line(
+        &mut std::io::BufReader::new(child.stdout.take().unwrap()),
+        &mut line,
+    )
+    .unwrap();
+    let addr = line
+        .split("http://")
+        .nth(1)
+        .and_then(|r| r.split('/').next())
+        .unwrap_or_else(|| panic!("no address in {line:?}"))
+        .to_string();
+    let get = |path: &str| -> (String, Vec<u8>) {
+        use std::io::{Read, Write};
+        let mut c = std::net::TcpStream::connect(&addr).unwrap();
+        write!(c, "GET {path} HTTP/1.1\r\nHost: x\r\n\r\n").unwrap();
+        let mut buf = Vec::new();
+        c.read_to_end(&mut buf).unwrap();
+        let split = buf.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
+        (
+            String::from_utf8_lossy(&buf[..split]).into_owned(),
+            buf[split + 4..].to_vec(),
+        )
+    };
+    let (head, body) = get("/");
+    assert!(
+        head.starts_with("HTTP/1.1 200") && head.contains("text/html"),
+        "{head}"
+    );
+    assert_eq!(body, b"<!doctype html><title>v</title>");
+    let (head, body) = get("/data/manifest.json");
+    assert!(head.contains("application/json"), "{head}");
+    assert_eq!(body, std::fs::read(web.join("manifest.json")).unwrap());
+    let (head, body) = get("/data/head.glb");
+    assert!(head.contains("model/gltf-binary"), "{head}");
+    assert_eq!(&body[..4], b"glTF");
+    for bad in [
+        "/data/../skin/manifest.json",
+        "/../Cargo.toml",
+        "/data/missing.png",
+    ] {
+        assert!(get(bad).0.starts_with("HTTP/1.1 404"), "{bad}");
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+}

@@ -1,0 +1,145 @@
+// Headless browser test of the web viewer (run by scripts/viewer_test.sh): Debian's chromium
+// through playwright-core (installed by the script, never a dependency of derma) opens
+// `derma view`, loads the exported GLB with three.js' GLTFLoader, checks the shader-evaluated
+// rig against derma's CPU evaluation (`derma rig eval`), moves the "happiness" (smile) slider
+// and checks that the cheeks flush while the forehead stays, then saves a screenshot.
+// Usage: node viewer_test.mjs PLAYWRIGHT_DIR URL NEUTRAL.png HAPPY.png SCREENSHOT.png
+import fs from 'node:fs';
+import path from 'node:path';
+import { createRequire } from 'node:module';
+
+const [pwDir, url, neutralRef, happyRef, shot] = process.argv.slice(2);
+const require = createRequire(path.join(pwDir, 'package.json'));
+const { chromium } = require('playwright-core');
+
+let failures = 0;
+const fail = (msg) => {
+  console.error(`viewer test: ${msg}`);
+  failures += 1;
+};
+
+// CIELAB (D65) of 8-bit sRGB (IEC 61966-2-1; CIE 15:2004).
+function lab([r, g, b]) {
+  const lin = (c) => ((c /= 255) <= 0.04045 ? c / 12.92 : ((c + 0.055) / 1.055) ** 2.4);
+  const [R, G, B] = [r, g, b].map(lin);
+  const X = (0.4124 * R + 0.3576 * G + 0.1805 * B) / 0.95047;
+  const Y = 0.2126 * R + 0.7152 * G + 0.0722 * B;
+  const Z = (0.0193 * R + 0.1192 * G + 0.9505 * B) / 1.08883;
+  const f = (t) => (t > 216 / 24389 ? Math.cbrt(t) : (24389 / 27 * t + 16) / 116);
+  return [116 * f(Y) - 16, 500 * (f(X) - f(Y)), 200 * (f(Y) - f(Z))];
+}
+const deltaE = (a, b) => Math.hypot(...lab(a).map((x, i) => x - lab(b)[i]));
+const hue = (c) => (Math.atan2(lab(c)[2], lab(c)[1]) * 180) / Math.PI;
+
+// Largest per-channel difference between the viewer's albedo and a reference PNG, in the page.
+async function compare(page, refFile) {
+  const ref = fs.readFileSync(refFile).toString('base64');
+  return page.evaluate(async (b64) => {
+    const decode = async (src) => {
+      const img = await createImageBitmap(await (await fetch(src)).blob(), { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
+      const c = new OffscreenCanvas(img.width, img.height);
+      const ctx = c.getContext('2d');
+      ctx.drawImage(img, 0, 0);
+      return ctx.getImageData(0, 0, img.width, img.height).data;
+    };
+    const a = await decode(window.derma.albedo());
+    const b = await decode(`data:image/png;base64,${b64}`);
+    if (a.length !== b.length) return { error: `sizes differ: ${a.length / 4} vs ${b.length / 4} texels` };
+    let max = 0, sum = 0, n = 0;
+    for (let i = 0; i < a.length; i += 4) {
+      for (let k = 0; k < 3; k++) {
+        const d = Math.abs(a[i + k] - b[i + k]);
+        max = Math.max(max, d);
+        sum += d;
+        n += 1;
+      }
+    }
+    return { max, mean: sum / n };
+  }, ref);
+}
+
+const browser = await chromium.launch({
+  executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium',
+  args: ['--enable-unsafe-swiftshader', '--use-angle=swiftshader', '--ignore-gpu-blocklist', '--no-sandbox'],
+});
+try {
+  const page = await browser.newPage({ viewport: { width: 1280, height: 800 } });
+  const consoleErrors = [];
+  page.on('console', (m) => m.type() === 'error' && consoleErrors.push(m.text()));
+  page.on('pageerror', (e) => consoleErrors.push(String(e)));
+  await page.goto(url);
+  await page.waitForFunction(() => window.derma && (window.derma.ready || window.derma.errors.length), null, {
+    timeout: 180_000,
+  });
+  const state = await page.evaluate(() => ({
+    ready: window.derma.ready,
+    errors: window.derma.errors,
+    targets: window.derma.targets,
+    regions: window.derma.regions,
+  }));
+  if (!state.ready) throw new Error(`viewer did not load: ${state.errors.join('; ')}`);
+  console.log(`GLB and rig loaded: ${state.targets.length} rig targets (${state.targets.join(', ')})`);
+  if (!state.targets.includes('happiness')) throw new Error('no happiness target in the rig');
+
+  // 1. The shader evaluates the rig as derma-rig does on the CPU (8-bit sRGB; 16-bit inputs).
+  const n = await compare(page, neutralRef);
+  console.log(`neutral albedo vs derma rig eval: max ${n.max}, mean ${n.mean?.toFixed(4)} levels`);
+  if (n.error || !(n.max <= 2 && n.mean < 0.05)) fail(`neutral albedo differs from the CPU's: ${JSON.stringify(n)}`);
+
+  // 2. The smile, moved as a user would. The built-in happiness target raises perfusion over
+  // the cheekbones (Jimenez et al. 2010 §3.1, obs. 2): search the cheek region for its peak.
+  const [cu, cv] = state.regions.cheeks;
+  const grid = [];
+  for (let i = -6; i <= 6; i++) for (let j = -6; j <= 6; j++) grid.push([cu + 0.008 * i, cv + 0.008 * j]);
+  const hb = (pts) => page.evaluate((p) => p.map(([u, v]) => window.derma.hemoglobinAt(u, v)), pts);
+  const color = (p) => page.evaluate(([u, v]) => window.derma.colorAt(u, v), p);
+  const h0 = await hb(grid);
+  const f0 = (await hb([state.regions.forehead]))[0];
+  const foreheadBefore = await color(state.regions.forehead);
+  await page.locator('#w-happiness').fill('1');
+  const h1 = await hb(grid);
+  const f1 = (await hb([state.regions.forehead]))[0];
+  let best = 0;
+  grid.forEach((_, i) => {
+    if (h1[i] ** 3 / h0[i] ** 3 > h1[best] ** 3 / h0[best] ** 3) best = i;
+  });
+  const gain = (h1[best] / h0[best]) ** 3;
+  console.log(`cheek: hemoglobin ×${gain.toFixed(3)} at uv (${grid[best].map((x) => x.toFixed(3))}); forehead ×${((f1 / f0) ** 3).toFixed(4)}`);
+  if (!(gain > 1.2)) fail(`the smile did not raise cheek hemoglobin (×${gain.toFixed(3)})`);
+  if (!(Math.abs((f1 / f0) ** 3 - 1) < 0.01)) fail(`the smile changed forehead hemoglobin (×${((f1 / f0) ** 3).toFixed(4)})`);
+  // Its colour: more blood darkens the cheek and turns its hue toward red (CIELAB h_ab falls).
+  await page.locator('#w-happiness').fill('0');
+  const cheekN = await color(grid[best]);
+  await page.locator('#w-happiness').fill('1');
+  const cheekH = await color(grid[best]);
+  const foreheadAfter = await color(state.regions.forehead);
+  const dE = deltaE(cheekN, cheekH);
+  const dh = hue(cheekH) - hue(cheekN);
+  const dEf = deltaE(foreheadBefore, foreheadAfter);
+  console.log(`cheek colour ${cheekN.map((x) => x.toFixed(1))} → ${cheekH.map((x) => x.toFixed(1))}: ΔE*ab ${dE.toFixed(2)}, hue ${dh.toFixed(2)}°; forehead ΔE*ab ${dEf.toFixed(2)}`);
+  if (!(dE >= 1 && dh < 0)) fail(`the cheek did not flush (ΔE*ab ${dE.toFixed(2)}, hue change ${dh.toFixed(2)}°)`);
+  if (!(dEf < 0.5)) fail(`the forehead's colour changed with the smile (ΔE*ab ${dEf.toFixed(2)})`);
+  const h = await compare(page, happyRef);
+  console.log(`smile albedo vs derma rig eval: max ${h.max}, mean ${h.mean?.toFixed(4)} levels`);
+  if (h.error || !(h.max <= 2 && h.mean < 0.05)) fail(`smile albedo differs from the CPU's: ${JSON.stringify(h)}`);
+  const units = await page.evaluate(() => window.derma.units());
+  if (!((units.mouthSmileLeft ?? 0) > 0.9)) fail(`the smile did not pose the face (mouthSmileLeft ${units.mouthSmileLeft})`);
+
+  // 3. Gaze and blink drive the face units.
+  await page.locator('#gaze-yaw').fill('20');
+  const look = await page.evaluate(() => window.derma.units());
+  if (!(look.eyeLookOutLeft > 0.5 && look.eyeLookInRight > 0.5)) fail(`gaze did not move the lids: ${JSON.stringify(look)}`);
+  await page.locator('#aperture').fill('-1');
+  const shut = await page.evaluate(() => window.derma.units());
+  if (!(shut.eyeBlinkLeft === 1 && shut.eyeBlinkRight === 1)) fail(`aperture −1 did not close the lids`);
+  await page.locator('#aperture').fill('0');
+  await page.locator('#gaze-yaw').fill('8');
+  await page.waitForFunction((f) => window.derma.frames > f + 1, await page.evaluate(() => window.derma.frames), { timeout: 60_000 });
+  const errors = consoleErrors.concat(await page.evaluate(() => window.derma.errors));
+  if (errors.length) fail(`errors in the page: ${errors.join('\n')}`);
+  await page.screenshot({ path: shot });
+  console.log(`screenshot → ${shot}`);
+} finally {
+  await browser.close();
+}
+process.exit(failures ? 1 : 0);

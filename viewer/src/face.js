@@ -1,0 +1,138 @@
+// The head's motion in the viewer: ARKit face units (the GLB's morph targets) posing each rig
+// expression, gaze (eye rotation with the lids following through eyeLook* units) and blinks.
+import * as THREE from 'three';
+
+/**
+ * Face units that pose each of the rig's built-in expressions (weights at full expression).
+ * Authored from the Action Units of EMFACS prototypes (Ekman & Friesen, Facial Action Coding
+ * System, 1978; Friesen & Ekman 1983): happiness AU6+12, sadness AU1+4+15, anger AU4+5+7+23,
+ * fear AU1+2+4+5+20+26, surprise AU1+2+5B+26, disgust AU9+15+16; each AU mapped to the ARKit
+ * unit that moves the same region.
+ */
+export const EXPRESSION_UNITS = {
+  happiness: { mouthSmileLeft: 1, mouthSmileRight: 1, cheekSquintLeft: 0.7, cheekSquintRight: 0.7 },
+  sadness: { browInnerUp: 0.8, browDownLeft: 0.3, browDownRight: 0.3, mouthFrownLeft: 0.8, mouthFrownRight: 0.8 },
+  anger: {
+    browDownLeft: 1, browDownRight: 1, eyeWideLeft: 0.3, eyeWideRight: 0.3,
+    eyeSquintLeft: 0.5, eyeSquintRight: 0.5, mouthPressLeft: 0.8, mouthPressRight: 0.8,
+  },
+  fear: {
+    browInnerUp: 1, browOuterUpLeft: 0.6, browOuterUpRight: 0.6, eyeWideLeft: 0.8, eyeWideRight: 0.8,
+    mouthStretchLeft: 0.7, mouthStretchRight: 0.7, jawOpen: 0.2,
+  },
+  surprise: {
+    browInnerUp: 1, browOuterUpLeft: 1, browOuterUpRight: 1, eyeWideLeft: 0.6, eyeWideRight: 0.6, jawOpen: 0.5,
+  },
+  disgust: { noseSneerLeft: 1, noseSneerRight: 1, mouthUpperUpLeft: 0.6, mouthUpperUpRight: 0.6, mouthFrownLeft: 0.4, mouthFrownRight: 0.4 },
+};
+
+/**
+ * Eye rotation (degrees) at which an eyeLook* unit reaches weight 1: ±35° horizontally, 25° up,
+ * 30° down — authored to the oculomotor range used in everyday gaze (most saccades stay within
+ * ±15°, Bahill et al. 1975), so the lids track comfortably over the sliders' range.
+ */
+const LOOK_RANGE = { horizontal: 35, up: 25, down: 30 };
+
+/** Blink timing (ms): lid closing, closed, reopening; the down-phase is faster than the
+ * up-phase (Evinger et al. 1991: ~100 ms down, ~2–3 × that to reopen). */
+export const BLINK_MS = { close: 100, hold: 40, open: 220 };
+
+/** Lid closure (0–1) `t` ms into a blink, eased in each phase. */
+export function blinkCurve(t) {
+  const { close, hold, open } = BLINK_MS;
+  const ease = (x) => x * x * (3 - 2 * x);
+  if (t < 0) return 0;
+  if (t < close) return ease(t / close);
+  if (t < close + hold) return 1;
+  if (t < close + hold + open) return 1 - ease((t - close - hold) / open);
+  return 0;
+}
+
+/** The head's animated parts: meshes with face units, and the eyes on pivots at their centres. */
+export class Face {
+  constructor(root) {
+    this.morphed = [];
+    this.eyes = [];
+    root.traverse((o) => {
+      if (o.isMesh && o.morphTargetDictionary) this.morphed.push(o);
+    });
+    for (const name of ['eye_left', 'eye_right']) {
+      const eye = root.getObjectByName(name);
+      if (!eye) continue;
+      const mesh = eye.isMesh ? eye : eye.getObjectByProperty('isMesh', true);
+      mesh.geometry.computeBoundingBox();
+      const b = mesh.geometry.boundingBox;
+      // The globe's centre: mid-box across, one radius behind the back of the globe's front
+      // (the cornea bulges forward along +Z, so the box centre would sit in front of it).
+      const r = (b.max.x - b.min.x) / 2;
+      const c = new THREE.Vector3((b.min.x + b.max.x) / 2, (b.min.y + b.max.y) / 2, b.min.z + r);
+      const pivot = new THREE.Group();
+      pivot.name = `${name}_pivot`;
+      pivot.position.copy(c).applyMatrix4(eye.matrix);
+      eye.parent.add(pivot);
+      pivot.add(eye);
+      eye.position.sub(c);
+      this.eyes.push(pivot);
+    }
+    this.units = {};
+    this.expression = {};
+    this.gaze = [0, 0];
+    this.aperture = 0;
+    this.blink = 0;
+    this.poseExpressions = true;
+  }
+
+  /** Names of the face units the GLB carries. */
+  unitNames() {
+    return this.morphed.length ? Object.keys(this.morphed[0].morphTargetDictionary) : [];
+  }
+
+  /** Rig expression weights by name (posing the face when `poseExpressions`). */
+  setExpression(weights) {
+    this.expression = weights;
+  }
+
+  /** Face-unit weights from expressions, gaze, aperture and blink, then applied. */
+  apply() {
+    const u = {};
+    const add = (n, w) => (u[n] = Math.min((u[n] ?? 0) + w, 1));
+    if (this.poseExpressions) {
+      for (const [e, w] of Object.entries(this.expression)) {
+        for (const [n, k] of Object.entries(EXPRESSION_UNITS[e] ?? {})) add(n, w * k);
+      }
+    }
+    // Gaze: positive yaw to the subject's left (+X), positive pitch up.
+    const [yaw, pitch] = this.gaze;
+    const h = Math.min(Math.abs(yaw) / LOOK_RANGE.horizontal, 1);
+    if (yaw > 0) {
+      add('eyeLookOutLeft', h);
+      add('eyeLookInRight', h);
+    } else if (yaw < 0) {
+      add('eyeLookInLeft', h);
+      add('eyeLookOutRight', h);
+    }
+    if (pitch > 0) {
+      const v = Math.min(pitch / LOOK_RANGE.up, 1);
+      add('eyeLookUpLeft', v);
+      add('eyeLookUpRight', v);
+    } else if (pitch < 0) {
+      const v = Math.min(-pitch / LOOK_RANGE.down, 1);
+      add('eyeLookDownLeft', v);
+      add('eyeLookDownRight', v);
+    }
+    // Aperture: above zero the lids open wide, below they close; a blink closes them fully.
+    const close = Math.max(-this.aperture, 0);
+    const wide = Math.max(this.aperture, 0);
+    for (const s of ['Left', 'Right']) {
+      add(`eyeWide${s}`, wide * (1 - this.blink));
+      u[`eyeBlink${s}`] = Math.max(close, this.blink);
+    }
+    this.units = u;
+    for (const m of this.morphed) {
+      const d = m.morphTargetDictionary;
+      m.morphTargetInfluences.fill(0);
+      for (const [n, w] of Object.entries(u)) if (d[n] !== undefined) m.morphTargetInfluences[d[n]] = w;
+    }
+    for (const p of this.eyes) p.rotation.set((-pitch * Math.PI) / 180, (yaw * Math.PI) / 180, 0, 'YXZ');
+  }
+}

@@ -1,0 +1,311 @@
+// derma's web viewer: the head of `derma export web` lit by an image-based environment and a
+// key light, its albedo re-evaluated from the skin appearance rig (Jimenez et al. 2010 §6) as
+// expression sliders move, with gaze, aperture and blinks on the head's face units.
+import * as THREE from 'three';
+import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { RoomEnvironment } from 'three/addons/environments/RoomEnvironment.js';
+import { Rig, MODES } from './rig.js';
+import { Face, blinkCurve, BLINK_MS } from './face.js';
+
+// Where the export lives: ?data=URL, else the `data/` that `derma view` serves beside the viewer.
+const base = (new URLSearchParams(location.search).get('data') ?? 'data').replace(/\/?$/, '/');
+
+// What a script (the browser test, a user's console) can ask the viewer.
+const api = {
+  ready: false,
+  errors: [],
+  targets: [],
+  units: () => {
+    face?.apply();
+    return face?.units ?? {};
+  },
+  // sRGB bytes of the rig's evaluated albedo around (u, v) (v up, as manifest.json's regions).
+  colorAt: (u, v) => {
+    if (!rig) return null;
+    refresh();
+    return rig.colorAt(renderer, u, v);
+  },
+  // The whole evaluated albedo as a PNG data URL (rows from the top, as the texture files).
+  albedo: () => {
+    if (!rig) return null;
+    refresh();
+    return rig.toDataURL(renderer);
+  },
+  // ∛(H / H_max) of the evaluated rig around (u, v): the hemoglobin display mode's value.
+  hemoglobinAt: (u, v) => {
+    if (!rig) return null;
+    const mode = rig.mode;
+    rig.mode = MODES.hemoglobin;
+    dirty = true;
+    refresh();
+    const c = rig.colorAt(renderer, u, v, 0);
+    rig.mode = mode;
+    dirty = true;
+    refresh();
+    // The render target stores sRGB bytes: decode to the linear value the shader wrote.
+    const x = c[0] / 255;
+    return x <= 0.04045 ? x / 12.92 : ((x + 0.055) / 1.055) ** 2.4;
+  },
+  regions: {},
+  setWeight: (name, w) => setWeight(name, w),
+};
+window.derma = api;
+
+const status = document.getElementById('status');
+function fail(e) {
+  console.error(e);
+  api.errors.push(String(e.message ?? e));
+  status.textContent = `error: ${e.message ?? e}`;
+  status.classList.add('error');
+}
+
+const canvas = document.getElementById('view');
+const renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
+renderer.toneMapping = THREE.ACESFilmicToneMapping;
+renderer.toneMappingExposure = 1.0;
+renderer.outputColorSpace = THREE.SRGBColorSpace;
+
+const scene = new THREE.Scene();
+scene.background = new THREE.Color(0x0d0e12);
+const pmrem = new THREE.PMREMGenerator(renderer);
+scene.environment = pmrem.fromScene(new RoomEnvironment(), 0.04).texture;
+scene.environmentIntensity = 0.55;
+// Key light high on the subject's right, a cool fill on the left (three-point portrait setup).
+const key = new THREE.DirectionalLight(0xfff1e0, 2.2);
+key.position.set(-0.6, 0.8, 1.0);
+scene.add(key);
+const fill = new THREE.DirectionalLight(0xdde8ff, 0.45);
+fill.position.set(1.0, 0.2, 0.6);
+scene.add(fill);
+
+const camera = new THREE.PerspectiveCamera(28, 1, 0.01, 10);
+const controls = new OrbitControls(camera, canvas);
+controls.enableDamping = true;
+
+let rig = null;
+let face = null;
+let skin = null;
+const original = {};
+let dirty = true;
+let blinkStart = -1;
+let nextAutoBlink = 0;
+
+function resize() {
+  const w = canvas.clientWidth;
+  const h = canvas.clientHeight;
+  renderer.setSize(w, h, false);
+  camera.aspect = w / h;
+  camera.updateProjectionMatrix();
+}
+window.addEventListener('resize', resize);
+
+function setWeight(name, w) {
+  if (!rig || !(name in rig.weights)) throw new Error(`no rig target '${name}'`);
+  rig.weights[name] = w;
+  face.setExpression({ ...rig.weights });
+  const el = document.getElementById(`w-${name}`);
+  if (el) el.value = String(w);
+  dirty = true;
+}
+
+// ---- controls ----
+const panel = document.getElementById('panel');
+function slider(parent, id, label, min, max, step, value, onInput) {
+  const row = document.createElement('label');
+  row.className = 'row';
+  const span = document.createElement('span');
+  span.textContent = label;
+  const input = document.createElement('input');
+  Object.assign(input, { type: 'range', id, min, max, step, value });
+  const out = document.createElement('output');
+  out.textContent = Number(value).toFixed(2);
+  input.addEventListener('input', () => {
+    out.textContent = Number(input.value).toFixed(2);
+    onInput(Number(input.value));
+  });
+  row.append(span, input, out);
+  parent.append(row);
+  return input;
+}
+function checkbox(parent, id, label, checked, onChange) {
+  const row = document.createElement('label');
+  row.className = 'row check';
+  const input = document.createElement('input');
+  Object.assign(input, { type: 'checkbox', id, checked });
+  input.addEventListener('change', () => onChange(input.checked));
+  row.append(input, document.createTextNode(label));
+  parent.append(row);
+  return input;
+}
+function section(title) {
+  const s = document.createElement('fieldset');
+  const l = document.createElement('legend');
+  l.textContent = title;
+  s.append(l);
+  panel.append(s);
+  return s;
+}
+
+function buildControls() {
+  if (rig) {
+    const s = section('Expression (skin appearance rig)');
+    for (const name of rig.targets) {
+      slider(s, `w-${name}`, name, 0, 1, 0.01, 0, (v) => setWeight(name, v));
+    }
+    const g = slider(s, 'global-scale', 'global blood ×', 0.5, 1.5, 0.01, 1, (v) => {
+      rig.globalScale = auto.checked ? 'auto' : v;
+      dirty = true;
+    });
+    const auto = checkbox(s, 'global-auto', 'global scale from the expressions (auto)', true, (on) => {
+      rig.globalScale = on ? 'auto' : Number(g.value);
+      dirty = true;
+    });
+    checkbox(s, 'pose', 'pose the face with the expression', true, (on) => {
+      face.poseExpressions = on;
+    });
+  } else {
+    const s = section('Expression');
+    s.append('No rig in this export (derma export web --rig DIR); showing base_color.png.');
+  }
+  const e = section('Eyes');
+  slider(e, 'gaze-yaw', 'gaze yaw °', -35, 35, 0.5, 0, (v) => (face.gaze[0] = v));
+  slider(e, 'gaze-pitch', 'gaze pitch °', -30, 25, 0.5, 0, (v) => (face.gaze[1] = v));
+  slider(e, 'aperture', 'aperture', -1, 1, 0.01, 0, (v) => (face.aperture = v));
+  const b = document.createElement('button');
+  b.id = 'blink';
+  b.textContent = 'blink';
+  b.addEventListener('click', () => (blinkStart = performance.now()));
+  e.append(b);
+  checkbox(e, 'auto-blink', 'blink on its own (every 2–6 s)', false, (on) => {
+    nextAutoBlink = on ? performance.now() + 1000 : 0;
+  });
+
+  const m = section('Maps');
+  const select = document.createElement('select');
+  select.id = 'display';
+  for (const [v, t] of [
+    ['shaded', 'shaded'],
+    ['albedo', 'albedo (unlit)'],
+    ['hemoglobin', 'hemoglobin ∛(H / H_max)'],
+    ['melanin', 'melanin ∛(C_m / C_m,max)'],
+    ['normal', 'normal map'],
+  ]) {
+    if (!rig && (v === 'hemoglobin' || v === 'melanin')) continue;
+    const o = document.createElement('option');
+    o.value = v;
+    o.textContent = t;
+    select.append(o);
+  }
+  select.addEventListener('change', () => setDisplay(select.value));
+  m.append(select);
+  if (rig) checkbox(m, 'map-rig', 'albedo from the rig (off: base_color.png)', true, (on) => setMap('map', on ? rig.target.texture : original.map));
+  checkbox(m, 'map-normal', 'normal map', true, (on) => setMap('normalMap', on ? original.normalMap : null));
+  checkbox(m, 'map-rough', 'roughness and specular maps', true, (on) => {
+    setMap('roughnessMap', on ? original.roughnessMap : null);
+    setMap('specularIntensityMap', on ? original.specularIntensityMap : null);
+    if (!on) skin.material.roughness = 0.45;
+    else skin.material.roughness = original.roughness;
+  });
+  checkbox(m, 'parts', 'eyes, lashes, teeth', true, (on) => {
+    for (const n of ['eye_left_pivot', 'eye_right_pivot', 'eyelashes_left', 'eyelashes_right', 'teeth_upper', 'teeth_lower', 'tongue']) {
+      const o = skin.parent.getObjectByName(n);
+      if (o) o.visible = on;
+    }
+  });
+}
+
+function refresh() {
+  if (rig && dirty) {
+    rig.evaluate(renderer);
+    dirty = false;
+  }
+}
+
+function setMap(slot, tex) {
+  skin.material[slot] = tex;
+  skin.material.needsUpdate = true;
+}
+
+const flat = new THREE.MeshBasicMaterial();
+function setDisplay(mode) {
+  if (mode === 'shaded') {
+    skin.material = original.material;
+  } else {
+    flat.map = mode === 'normal' ? original.normalMap : rig ? rig.target.texture : original.map;
+    flat.needsUpdate = true;
+    skin.material = flat;
+  }
+  if (rig) {
+    rig.mode = mode === 'hemoglobin' ? MODES.hemoglobin : mode === 'melanin' ? MODES.melanin : MODES.color;
+    dirty = true;
+  }
+}
+
+// ---- loading ----
+async function load() {
+  const res = await fetch(base + 'manifest.json');
+  if (!res.ok) throw new Error(`${base}manifest.json: HTTP ${res.status} (expected a \`derma export web\` directory)`);
+  const manifest = await res.json();
+  if (manifest.format !== 'derma-web') throw new Error(`${base}manifest.json: format '${manifest.format}', expected 'derma-web'`);
+  api.regions = manifest.regions ?? {};
+  const gltf = await new GLTFLoader().loadAsync(base + manifest.glb);
+  scene.add(gltf.scene);
+  skin = gltf.scene.getObjectByName(manifest.skin_mesh);
+  if (!skin) throw new Error(`${manifest.glb}: no mesh named '${manifest.skin_mesh}'`);
+  if (!skin.isMesh) skin = skin.getObjectByProperty('isMesh', true);
+  const mat = skin.material;
+  Object.assign(original, {
+    material: mat,
+    map: mat.map,
+    normalMap: mat.normalMap,
+    roughnessMap: mat.roughnessMap,
+    specularIntensityMap: mat.specularIntensityMap ?? null,
+    roughness: mat.roughness,
+  });
+  face = new Face(gltf.scene);
+  if (manifest.rig) {
+    status.textContent = 'loading the rig…';
+    rig = await Rig.load(base, manifest);
+    api.targets = rig.targets;
+    rig.evaluate(renderer);
+    mat.map = rig.target.texture;
+    mat.needsUpdate = true;
+  }
+  // Frame the face: the skin's bounds, seen from the front a little above eye level.
+  const box = new THREE.Box3().setFromObject(skin);
+  const c = box.getCenter(new THREE.Vector3());
+  const size = box.getSize(new THREE.Vector3());
+  const dist = (1.25 * size.y) / (2 * Math.tan((camera.fov * Math.PI) / 360));
+  camera.position.set(c.x, c.y + 0.05 * size.y, c.z + dist);
+  camera.near = dist / 20;
+  camera.far = dist * 20;
+  camera.updateProjectionMatrix();
+  controls.target.copy(c);
+  controls.update();
+  buildControls();
+  status.textContent = `${manifest.glb}: ${rig ? rig.targets.length + ' rig targets' : 'no rig'}, ${face.unitNames().length} face units`;
+  api.ready = true;
+}
+
+function frame(now) {
+  requestAnimationFrame(frame);
+  if (!face) return;
+  if (nextAutoBlink && now >= nextAutoBlink) {
+    blinkStart = now;
+    nextAutoBlink = now + 2000 + 4000 * Math.random();
+  }
+  const t = blinkStart >= 0 ? now - blinkStart : -1;
+  face.blink = blinkCurve(t);
+  if (t > BLINK_MS.close + BLINK_MS.hold + BLINK_MS.open) blinkStart = -1;
+  face.apply();
+  refresh();
+  controls.update();
+  renderer.render(scene, camera);
+  api.frames = (api.frames ?? 0) + 1;
+}
+
+resize();
+requestAnimationFrame(frame);
+load().catch(fail);
