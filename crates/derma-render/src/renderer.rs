@@ -91,6 +91,23 @@ struct GpuPart {
     casts_shadow: bool,
 }
 
+/// The targets of one frame size (see [`Renderer::targets`]).
+struct Targets {
+    size: (u32, u32),
+    diffuse: wgpu::Texture,
+    direct: wgpu::Texture,
+    sssp: wgpu::Texture,
+    post: wgpu::Texture,
+    ping: wgpu::Texture,
+    pong: wgpu::Texture,
+    display: wgpu::Texture,
+    linear: wgpu::Texture,
+    depth: wgpu::Texture,
+    blur_x: wgpu::BindGroup,
+    blur_y: wgpu::BindGroup,
+    composite: wgpu::BindGroup,
+}
+
 /// A scene on the GPU, ready to render views of it.
 pub struct Renderer {
     gpu: &'static Gpu,
@@ -109,7 +126,6 @@ pub struct Renderer {
     comp_layout: wgpu::BindGroupLayout,
     cdf: wgpu::Buffer,
     blur_bufs: [wgpu::Buffer; 2],
-    tex_sampler: wgpu::Sampler,
     lin_sampler: wgpu::Sampler,
     centre: glam::Vec3,
     radius: f32,
@@ -482,7 +498,6 @@ impl Renderer {
             comp_layout,
             cdf,
             blur_bufs,
-            tex_sampler,
             lin_sampler,
             centre: scene.centre,
             radius: scene.radius,
@@ -675,7 +690,126 @@ impl Renderer {
         h: u32,
     ) -> Result<Rendered> {
         let gpu = self.gpu;
+        let t = self.targets(w, h);
+        self.submit_frame(&t, view_spec, lighting);
+        let disp = gpu.read_texture(&t.display)?;
+        let lin = gpu.read_texture(&t.linear)?;
+        let linear: Vec<[f32; 3]> = lin
+            .chunks_exact(8)
+            .map(|c| {
+                let h = |i: usize| {
+                    half::f16::from_bits(u16::from_le_bytes([c[2 * i], c[2 * i + 1]])).to_f32()
+                };
+                [h(0), h(1), h(2)]
+            })
+            .collect();
+        Ok(Rendered {
+            width: w as usize,
+            height: h as usize,
+            display: disp,
+            linear,
+        })
+    }
+
+    /// Seconds per frame of `frames` frames of `view` at `w`×`h`, rendered into the same
+    /// targets one after another as an interactive application would (no read-back), after
+    /// one warm-up frame; the wall time from the first submission until the device is idle.
+    pub fn time_frames(
+        &self,
+        view_spec: &View,
+        lighting: &Lighting,
+        w: u32,
+        h: u32,
+        frames: usize,
+    ) -> Result<f64> {
+        let t = self.targets(w, h);
+        self.submit_frame(&t, view_spec, lighting);
+        self.gpu.wait("rendering a warm-up frame")?;
+        let t0 = std::time::Instant::now();
+        for _ in 0..frames {
+            self.submit_frame(&t, view_spec, lighting);
+        }
+        self.gpu.wait("rendering timed frames")?;
+        Ok(t0.elapsed().as_secs_f64() / frames.max(1) as f64)
+    }
+
+    /// The render targets of one frame size, and the bind groups that read them.
+    fn targets(&self, w: u32, h: u32) -> Targets {
+        let gpu = self.gpu;
+        let target = |label, format| gpu.render_target(label, w, h, format);
+        let diffuse = target("diffuse", HDR);
+        let direct = target("direct", HDR);
+        let sssp = target("sss params", HDR);
+        let post = target("post scatter", wgpu::TextureFormat::Rgba8Unorm);
+        let ping = target("blur x", HDR);
+        let pong = target("blur y", HDR);
+        let display = target("display", wgpu::TextureFormat::Rgba8Unorm);
+        let linear = target("linear", HDR);
+        let depth = gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("depth"),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        let sv = view(&sssp);
+        let blur_group = |src: &wgpu::Texture, k: usize| {
+            bind(
+                gpu,
+                "blur",
+                &self.blur_layout,
+                &[
+                    self.frame_buf.as_entire_binding(),
+                    self.blur_bufs[k].as_entire_binding(),
+                    self.cdf.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(&view(src)),
+                    wgpu::BindingResource::TextureView(&sv),
+                    wgpu::BindingResource::Sampler(&self.lin_sampler),
+                ],
+            )
+        };
+        let blur_x = blur_group(&diffuse, 0);
+        let blur_y = blur_group(&ping, 1);
+        let composite = bind(
+            gpu,
+            "composite",
+            &self.comp_layout,
+            &[
+                self.frame_buf.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&view(&pong)),
+                wgpu::BindingResource::TextureView(&view(&direct)),
+                wgpu::BindingResource::TextureView(&view(&post)),
+            ],
+        );
+        Targets {
+            size: (w, h),
+            diffuse,
+            direct,
+            sssp,
+            post,
+            ping,
+            pong,
+            display,
+            linear,
+            depth,
+            blur_x,
+            blur_y,
+            composite,
+        }
+    }
+
+    /// Encodes and submits one frame into `t`: shadow, forward, blur x, blur y, composite.
+    fn submit_frame(&self, t: &Targets, view_spec: &View, lighting: &Lighting) {
+        let gpu = self.gpu;
         let d = &gpu.device;
+        let (w, h) = t.size;
         let cam = Camera::frame(self.centre, self.radius, view_spec, w, h);
         let key = cam.to_world(lighting.lights[0].dir);
         let lvp = light_view_proj(self.centre, self.radius, key);
@@ -707,29 +841,6 @@ impl Renderer {
         };
         gpu.queue
             .write_buffer(&self.frame_buf, 0, bytemuck::bytes_of(&fu));
-        let target = |label, format| gpu.render_target(label, w, h, format);
-        let diffuse = target("diffuse", HDR);
-        let direct = target("direct", HDR);
-        let sssp = target("sss params", HDR);
-        let post = target("post scatter", wgpu::TextureFormat::Rgba8Unorm);
-        let ping = target("blur x", HDR);
-        let pong = target("blur y", HDR);
-        let display = target("display", wgpu::TextureFormat::Rgba8Unorm);
-        let linear = target("linear", HDR);
-        let depth = d.create_texture(&wgpu::TextureDescriptor {
-            label: Some("depth"),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: DEPTH,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            view_formats: &[],
-        });
         let mut enc = d.create_command_encoder(&Default::default());
         {
             let sv = view(&self.shadow_tex);
@@ -756,7 +867,12 @@ impl Renderer {
             }
         }
         {
-            let views = [view(&diffuse), view(&direct), view(&sssp), view(&post)];
+            let views = [
+                view(&t.diffuse),
+                view(&t.direct),
+                view(&t.sssp),
+                view(&t.post),
+            ];
             let att: Vec<Option<wgpu::RenderPassColorAttachment>> = views
                 .iter()
                 .map(|v| {
@@ -771,7 +887,7 @@ impl Renderer {
                     })
                 })
                 .collect();
-            let dv = view(&depth);
+            let dv = view(&t.depth);
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("forward"),
                 color_attachments: &att,
@@ -831,62 +947,15 @@ impl Renderer {
             pass.set_bind_group(0, group, &[]);
             pass.draw(0..3, 0..1);
         };
-        let sv = view(&sssp);
-        let blur_group = |src: &wgpu::Texture, k: usize| {
-            bind(
-                gpu,
-                "blur",
-                &self.blur_layout,
-                &[
-                    self.frame_buf.as_entire_binding(),
-                    self.blur_bufs[k].as_entire_binding(),
-                    self.cdf.as_entire_binding(),
-                    wgpu::BindingResource::TextureView(&view(src)),
-                    wgpu::BindingResource::TextureView(&sv),
-                    wgpu::BindingResource::Sampler(&self.lin_sampler),
-                ],
-            )
-        };
-        let bx = blur_group(&diffuse, 0);
-        full_pass(&mut enc, "blur x", &self.blur_pipe, &bx, &[&ping]);
-        let by = blur_group(&ping, 1);
-        full_pass(&mut enc, "blur y", &self.blur_pipe, &by, &[&pong]);
-        let cg = bind(
-            gpu,
-            "composite",
-            &self.comp_layout,
-            &[
-                self.frame_buf.as_entire_binding(),
-                wgpu::BindingResource::TextureView(&view(&pong)),
-                wgpu::BindingResource::TextureView(&view(&direct)),
-                wgpu::BindingResource::TextureView(&view(&post)),
-            ],
-        );
+        full_pass(&mut enc, "blur x", &self.blur_pipe, &t.blur_x, &[&t.ping]);
+        full_pass(&mut enc, "blur y", &self.blur_pipe, &t.blur_y, &[&t.pong]);
         full_pass(
             &mut enc,
             "composite",
             &self.comp_pipe,
-            &cg,
-            &[&display, &linear],
+            &t.composite,
+            &[&t.display, &t.linear],
         );
         gpu.queue.submit([enc.finish()]);
-        let disp = gpu.read_texture(&display)?;
-        let lin = gpu.read_texture(&linear)?;
-        let linear: Vec<[f32; 3]> = lin
-            .chunks_exact(8)
-            .map(|c| {
-                let h = |i: usize| {
-                    half::f16::from_bits(u16::from_le_bytes([c[2 * i], c[2 * i + 1]])).to_f32()
-                };
-                [h(0), h(1), h(2)]
-            })
-            .collect();
-        let _ = &self.tex_sampler;
-        Ok(Rendered {
-            width: w as usize,
-            height: h as usize,
-            display: disp,
-            linear,
-        })
     }
 }

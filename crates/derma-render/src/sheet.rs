@@ -86,16 +86,15 @@ pub fn map_thumbnails(s: &SkinMaps, size: usize) -> Vec<[Map; 3]> {
 }
 
 /// A contact sheet: for each setup a row of views (front, three-quarter, profile) at `panel`²,
-/// the first row followed by the raw maps as thumbnails (3 × 2 at half the panel).
+/// and beside all rows the raw maps as a grid as tall as the rows (see [`map_grid`]).
 pub fn contact_sheet(
     r: &Renderer,
     skin: &SkinMaps,
     setups: &[Setup],
     panel: u32,
 ) -> Result<[Map; 3]> {
-    let thumbs = map_thumbnails(skin, panel as usize / 2);
     let mut rows = Vec::new();
-    for (i, s) in setups.iter().enumerate() {
+    for s in setups {
         let mut views = Vec::new();
         for yaw in [0.0, 35.0, 90.0] {
             let v = View {
@@ -106,10 +105,44 @@ pub fn contact_sheet(
                 r.render(&v, &s.lighting(), panel, panel)?.display_maps(),
             ));
         }
-        let sheet: &[[Map; 3]] = if i == 0 { &thumbs } else { &[] };
-        rows.push(compose(&views, sheet, panel as usize));
+        rows.push(compose(&views, &[], panel as usize));
     }
-    Ok(stack(&rows))
+    let views = stack(&rows);
+    let (grid_rows, tile) = map_grid(setups.len(), panel as usize);
+    let thumbs = map_thumbnails(skin, tile);
+    let cols = thumbs.len().div_ceil(grid_rows);
+    let (vw, h) = (views[0].width(), views[0].height());
+    let mut out = [
+        Map::filled(vw + cols * tile, h, 0.0),
+        Map::filled(vw + cols * tile, h, 0.0),
+        Map::filled(vw + cols * tile, h, 0.0),
+    ];
+    blit(&mut out, &views, 0, 0);
+    for (i, t) in thumbs.iter().enumerate() {
+        blit(&mut out, t, vw + (i % cols) * tile, (i / cols) * tile);
+    }
+    Ok(out)
+}
+
+/// The map grid beside `setups` rows of `panel`-pixel views: (rows of tiles, tile side). One
+/// setup: two rows of half-panel tiles; more: three rows filling the height.
+pub fn map_grid(setups: usize, panel: usize) -> (usize, usize) {
+    if setups <= 1 {
+        (2, panel / 2)
+    } else {
+        (3, setups * panel / 3)
+    }
+}
+
+/// `img` copied into `out` with its top-left corner at (x0, y0).
+fn blit(out: &mut [Map; 3], img: &[Map; 3], x0: usize, y0: usize) {
+    for k in 0..3 {
+        for y in 0..img[k].height() {
+            for x in 0..img[k].width() {
+                out[k].set(x0 + x, y0 + y, img[k].get(x, y));
+            }
+        }
+    }
 }
 
 /// Rows stacked top to bottom, left-aligned on a black background.
@@ -123,16 +156,31 @@ fn stack(rows: &[[Map; 3]]) -> [Map; 3] {
     ];
     let mut y0 = 0;
     for r in rows {
-        for k in 0..3 {
-            for y in 0..r[k].height() {
-                for x in 0..r[k].width() {
-                    out[k].set(x, y0 + y, r[k].get(x, y));
-                }
-            }
-        }
+        blit(&mut out, r, 0, y0);
         y0 += r[0].height();
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_map_grid_fills_the_height_of_the_rows() {
+        // Six maps (with subsurface): 3 × 2 beside one row, 2 × 3 beside two or three.
+        for setups in 1..=3 {
+            let (rows, tile) = map_grid(setups, 1024);
+            let h = setups * 1024;
+            assert!(
+                rows * tile <= h && rows * tile + rows > h,
+                "{setups}: {rows} × {tile}"
+            );
+            assert!(6usize.div_ceil(rows) <= 3);
+        }
+        assert_eq!(map_grid(1, 1024), (2, 512));
+        assert_eq!(map_grid(2, 1024), (3, 682));
+    }
 }
 
 /// `frames` views in a full turn (yaw 0 → 360°) under `setup`, as 8-bit sRGB RGB frames.
