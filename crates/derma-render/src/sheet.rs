@@ -162,27 +162,6 @@ fn stack(rows: &[[Map; 3]]) -> [Map; 3] {
     out
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_map_grid_fills_the_height_of_the_rows() {
-        // Six maps (with subsurface): 3 × 2 beside one row, 2 × 3 beside two or three.
-        for setups in 1..=3 {
-            let (rows, tile) = map_grid(setups, 1024);
-            let h = setups * 1024;
-            assert!(
-                rows * tile <= h && rows * tile + rows > h,
-                "{setups}: {rows} × {tile}"
-            );
-            assert!(6usize.div_ceil(rows) <= 3);
-        }
-        assert_eq!(map_grid(1, 1024), (2, 512));
-        assert_eq!(map_grid(2, 1024), (3, 682));
-    }
-}
-
 /// `frames` views in a full turn (yaw 0 → 360°) under `setup`, as 8-bit sRGB RGB frames.
 pub fn turntable(
     r: &Renderer,
@@ -205,4 +184,25 @@ pub fn turntable(
                 .collect())
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_map_grid_fills_the_height_of_the_rows() {
+        // Six maps (with subsurface): 3 × 2 beside one row, 2 × 3 beside two or three.
+        for setups in 1..=3 {
+            let (rows, tile) = map_grid(setups, 1024);
+            let h = setups * 1024;
+            assert!(
+                rows * tile <= h && rows * tile + rows > h,
+                "{setups}: {rows} × {tile}"
+            );
+            assert!(6usize.div_ceil(rows) <= 3);
+        }
+        assert_eq!(map_grid(1, 1024), (2, 512));
+        assert_eq!(map_grid(2, 1024), (3, 682));
+    }
 }
