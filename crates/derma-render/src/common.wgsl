@@ -13,6 +13,8 @@ struct Frame {
     viewport: vec4<f32>,  // width, height, 1/width, 1/height
     sky: vec4<f32>,       // rgb sky radiance, w = exposure
     ground: vec4<f32>,    // rgb ground radiance, w = background brightness
+    right: vec4<f32>,     // camera's right axis (world)
+    up: vec4<f32>,        // camera's up axis (world)
     lights: array<Light, 3>,
 }
 

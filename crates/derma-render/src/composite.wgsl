@@ -1,9 +1,11 @@
-// The composite: scattered diffuse × post-scatter albedo + the rest, ACES tone mapping, sRGB.
+// The composite: scattered diffuse × post-scatter albedo + the rest (through the lacrimal lake
+// where there is one), ACES tone mapping, sRGB.
 
 @group(0) @binding(0) var<uniform> comp_frame: Frame;
 @group(0) @binding(1) var scattered: texture_2d<f32>;
 @group(0) @binding(2) var direct_light: texture_2d<f32>;
 @group(0) @binding(3) var post_scatter: texture_2d<f32>;
+@group(0) @binding(4) var lake_light: texture_2d<f32>;  // rgb lake highlight, a its absorption
 
 // Narkowicz 2015, "ACES filmic tone mapping curve": a fit of the ACES RRT + ODT.
 fn aces(x: vec3<f32>) -> vec3<f32> {
@@ -34,7 +36,8 @@ fn fs_composite(@builtin(position) pos: vec4<f32>) -> CompOut {
         o.linear = vec4<f32>(0.0);
         return o;
     }
-    let rgb = textureLoad(scattered, p, 0).rgb * textureLoad(post_scatter, p, 0).rgb + dl.rgb;
+    let lk = textureLoad(lake_light, p, 0);
+    let rgb = textureLoad(scattered, p, 0).rgb * textureLoad(post_scatter, p, 0).rgb + dl.rgb * lk.a + lk.rgb;
     o.linear = vec4<f32>(rgb, 1.0);
     o.display = vec4<f32>(srgb(aces(rgb * comp_frame.sky.w)), 1.0);
     return o;

@@ -50,6 +50,8 @@ pub struct RenderJob {
     pub iris: Option<PathBuf>,
     /// Gaze yaw and pitch (degrees).
     pub gaze: (f32, f32),
+    /// Draw the lacrimal lake along the lid margins.
+    pub lake: bool,
     /// Output directory.
     pub out: PathBuf,
 }
@@ -146,6 +148,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     };
     debug_assert!(matches!(scene.parts[0].material, Material::Skin(_)));
     let r = Renderer::new(&scene)?;
+    r.set_lake(job.lake);
     let mut files = Vec::new();
     let mut frames = 0usize;
     let (w, h) = job.size;

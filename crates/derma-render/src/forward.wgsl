@@ -12,12 +12,7 @@ const KIND_SKIN: f32 = 0.0;
 const KIND_EYE: f32 = 1.0;
 const KIND_FLAT: f32 = 2.0;
 const KIND_CARD: f32 = 3.0;
-const PI: f32 = 3.14159265;
 
-@group(0) @binding(0) var<uniform> frame: Frame;
-@group(0) @binding(1) var shadow_map: texture_depth_2d;
-@group(0) @binding(2) var shadow_sampler: sampler_comparison;
-@group(0) @binding(3) var tex_sampler: sampler;
 
 @group(1) @binding(0) var<uniform> draw: Draw;
 @group(1) @binding(1) var base_color: texture_2d<f32>;
@@ -62,98 +57,20 @@ fn tex_uv(uv: vec2<f32>) -> vec2<f32> {
     return vec2<f32>(uv.x, 1.0 - uv.y);
 }
 
-// Percentage-closer filtering of the key light's shadow map, 5×5 taps.
-fn shadow(world: vec3<f32>, n: vec3<f32>) -> f32 {
-    // Normal offset (in mm) against acne on surfaces grazing the light.
-    let p = frame.light_view_proj * vec4<f32>(world + n * 0.6, 1.0);
-    let ndc = p.xyz / p.w;
-    let uv = vec2<f32>(0.5 * ndc.x + 0.5, 0.5 - 0.5 * ndc.y);
-    if (uv.x <= 0.0 || uv.x >= 1.0 || uv.y <= 0.0 || uv.y >= 1.0) {
-        return 1.0;
-    }
-    let texel = frame.forward.w;
-    var lit = 0.0;
-    for (var j = -2; j <= 2; j++) {
-        for (var i = -2; i <= 2; i++) {
-            lit += textureSampleCompareLevel(shadow_map, shadow_sampler,
-                uv + vec2<f32>(f32(i), f32(j)) * texel, ndc.z - 0.0015);
-        }
-    }
-    return lit / 25.0;
-}
+// post.a marks the material for the lacrimal lake (lake.wgsl): the skin mesh, the globes,
+// anything else (lashes, teeth, tongue; the background stays 0).
+const MATERIAL_SKIN: f32 = 1.0;
+const MATERIAL_EYE: f32 = 0.5;
 
-// GGX / Trowbridge–Reitz distribution (Walter et al. 2007) with α = roughness².
-fn ggx_d(nh: f32, a: f32) -> f32 {
-    let a2 = a * a;
-    let d = nh * nh * (a2 - 1.0) + 1.0;
-    return a2 / (PI * d * d);
-}
-
-// Height-correlated Smith visibility G₂ / (4 n·l n·v) (Heitz 2014, eq. 99).
-fn smith_vis(nl: f32, nv: f32, a: f32) -> f32 {
-    let a2 = a * a;
-    let gv = nl * sqrt(nv * nv * (1.0 - a2) + a2);
-    let gl = nv * sqrt(nl * nl * (1.0 - a2) + a2);
-    return 0.5 / max(gv + gl, 1e-5);
-}
-
-fn schlick(f0: f32, vh: f32) -> f32 {
-    return f0 + (1.0 - f0) * pow(1.0 - vh, 5.0);
-}
-
-// Hemisphere environment: sky above, ground below, blended over ±0.3 of the up component.
-fn environment(d: vec3<f32>) -> vec3<f32> {
-    return mix(frame.ground.rgb, frame.sky.rgb, smoothstep(-0.3, 0.3, d.y));
-}
-
-// Karis 2014 ("Physically based shading on mobile"): analytic fit of the split-sum
-// environment BRDF, returning the F0 scale and bias.
-fn env_brdf(rough: f32, nv: f32) -> vec2<f32> {
-    let c0 = vec4<f32>(-1.0, -0.0275, -0.572, 0.022);
-    let c1 = vec4<f32>(1.0, 0.0425, 1.04, -0.04);
-    let r = rough * c0 + c1;
-    let a004 = min(r.x * r.x, exp2(-9.28 * nv)) * r.x + r.y;
-    return vec2<f32>(-1.04, 1.04) * a004 + r.zw;
-}
-
-struct Lit {
-    diffuse: vec3<f32>,   // irradiance-weighted diffuse term (× albedo/π·π = × albedo)
-    specular: vec3<f32>,
-}
-
-// Lights `n` (shading normal) seen from `v` with the given roughness and F0: diffuse irradiance
-// (radiance units, to be multiplied by the albedo) and specular radiance.
-fn light_surface(world: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, v: vec3<f32>, rough: f32, f0: f32) -> Lit {
-    var out: Lit;
-    let a = max(rough * rough, 0.002);
-    let nv = max(dot(n, v), 1e-4);
-    let sh = shadow(world, ng);
-    for (var i = 0; i < 3; i++) {
-        let l = frame.lights[i].dir.xyz;
-        let e = frame.lights[i].radiance.rgb * select(1.0, sh, i == 0);
-        let nl = max(dot(n, l), 0.0) * step(0.0, dot(ng, l));
-        if (nl <= 0.0) {
-            continue;
-        }
-        let h = normalize(l + v);
-        let spec = ggx_d(max(dot(n, h), 0.0), a) * smith_vis(nl, nv, a) * schlick(f0, max(dot(v, h), 0.0));
-        out.diffuse += e * nl * (1.0 - schlick(f0, nl)) / PI;
-        out.specular += e * nl * spec;
-    }
-    // Ambient: the hemisphere's irradiance on n (cosine-weighted; the blend is its analytic
-    // approximation) and its reflection through the split-sum fit.
-    out.diffuse += environment(n) * (1.0 - f0);
-    let r = reflect(-v, n);
-    let ab = env_brdf(rough, nv);
-    out.specular += mix(environment(r), 0.5 * (frame.sky.rgb + frame.ground.rgb), rough) * (f0 * ab.x + ab.y);
-    return out;
+fn skin_marker() -> f32 {
+    return select(0.0, MATERIAL_SKIN, draw.params.z == KIND_SKIN);
 }
 
 struct GOut {
     @location(0) diffuse: vec4<f32>,  // skin: diffuse light × √albedo, to be scattered
     @location(1) direct: vec4<f32>,   // everything not scattered; a = coverage
     @location(2) sss: vec4<f32>,      // x view depth (mm), yzw Burley shape d per channel (mm)
-    @location(3) post: vec4<f32>,     // skin: √albedo, applied after scattering
+    @location(3) post: vec4<f32>,     // skin: √albedo, applied after scattering; eyes: normal; a material
 }
 
 fn shading_normal(in: VertexOut, ng: vec3<f32>, textured: bool) -> vec3<f32> {
@@ -214,11 +131,12 @@ fn fs_skin(in: VertexOut, @builtin(front_facing) front: bool) -> GOut {
         let d = max(mfp / burley_s(clamp(sa, vec3<f32>(0.0), vec3<f32>(1.0))), vec3<f32>(1e-4));
         let s = sqrt(max(albedo, vec3<f32>(0.0)));
         o.diffuse = vec4<f32>(lit.diffuse * s, 1.0);
-        o.post = vec4<f32>(s, 1.0);
+        o.post = vec4<f32>(s, skin_marker());
         o.sss = vec4<f32>(o.sss.x, d);
         o.direct = vec4<f32>(lit.specular, 1.0);
     } else {
         o.direct = vec4<f32>(lit.diffuse * albedo + lit.specular, 1.0);
+        o.post = vec4<f32>(0.0, 0.0, 0.0, skin_marker());
     }
     return o;
 }
@@ -292,6 +210,8 @@ fn fs_eye(in: VertexOut, @builtin(front_facing) front: bool) -> GOut {
     let s = light_surface(in.world, spec_n, ng, v, draw.params.x, draw.params.y);
     o.direct = vec4<f32>(d.diffuse * albedo * transmit + s.specular, 1.0);
     o.sss = vec4<f32>(view_depth(in.world), 0.0, 0.0, 0.0);
+    // The globe for the lacrimal lake (lake.wgsl): its marker and geometric normal.
+    o.post = vec4<f32>(ng * 0.5 + 0.5, MATERIAL_EYE);
     return o;
 }
 

@@ -17,6 +17,11 @@ const COMMON: &str = include_str!("common.wgsl");
 const FORWARD: &str = include_str!("forward.wgsl");
 const BLUR: &str = include_str!("blur.wgsl");
 const COMPOSITE: &str = include_str!("composite.wgsl");
+const LIGHTING: &str = include_str!("lighting.wgsl");
+const LAKE: &str = include_str!("lake.wgsl");
+/// Most pixels the lake's distance search reaches on each side: Λ = 1 mm spans fewer at every
+/// framing `derma render` makes of a head (≈ 4 px at 1024², ≈ 20 px in a 0.3-zoom close-up).
+pub const LAKE_MAX_PX: u32 = 48;
 
 /// Shadow map size (texels per side).
 pub const SHADOW_SIZE: u32 = 2048;
@@ -33,7 +38,37 @@ struct FrameU {
     viewport: [f32; 4],
     sky: [f32; 4],
     ground: [f32; 4],
+    right: [f32; 4],
+    up: [f32; 4],
     lights: [[f32; 4]; 6],
+}
+
+/// The lacrimal lake's constants (lake.wgsl), from derma-eyes' model of it.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct LakeU {
+    shape: [f32; 4],
+    search: [f32; 4],
+}
+
+impl LakeU {
+    fn new(enabled: bool) -> LakeU {
+        use derma_eyes::sdf::lake;
+        LakeU {
+            shape: [
+                lake::MENISCUS_MM,
+                derma_eyes::sdf::table::RANGE_MM,
+                lake::ATTENUATION,
+                lake::F0,
+            ],
+            search: [
+                lake::ROUGHNESS,
+                LAKE_MAX_PX as f32,
+                if enabled { 1.0 } else { 0.0 },
+                0.0,
+            ],
+        }
+    }
 }
 
 #[repr(C)]
@@ -55,6 +90,24 @@ pub struct Rendered {
     pub display: Vec<u8>,
     /// Scene-referred linear RGB radiance (0 on the background).
     pub linear: Vec<[f32; 3]>,
+    /// What each pixel shows: [`MATERIAL_SKIN`], [`MATERIAL_EYE`] or [`MATERIAL_OTHER`].
+    pub material: Vec<u8>,
+}
+
+/// [`Rendered::material`] of the skin mesh.
+pub const MATERIAL_SKIN: u8 = 1;
+/// [`Rendered::material`] of an eye globe.
+pub const MATERIAL_EYE: u8 = 2;
+/// [`Rendered::material`] of anything else: lashes, teeth, tongue, the background.
+pub const MATERIAL_OTHER: u8 = 0;
+
+/// The material of a post-scatter target's alpha byte (forward.wgsl: skin 1, eye ½).
+fn material_of(alpha: u8) -> u8 {
+    match alpha {
+        192..=255 => MATERIAL_SKIN,
+        100..=150 => MATERIAL_EYE,
+        _ => MATERIAL_OTHER,
+    }
 }
 
 impl Rendered {
@@ -103,9 +156,13 @@ struct Targets {
     display: wgpu::Texture,
     linear: wgpu::Texture,
     depth: wgpu::Texture,
+    lake_d: wgpu::Texture,
+    lake_l: wgpu::Texture,
     blur_x: wgpu::BindGroup,
     blur_y: wgpu::BindGroup,
     composite: wgpu::BindGroup,
+    lake_depth: wgpu::BindGroup,
+    lake_shade: wgpu::BindGroup,
 }
 
 /// A scene on the GPU, ready to render views of it.
@@ -124,6 +181,11 @@ pub struct Renderer {
     blur_layout: wgpu::BindGroupLayout,
     comp_pipe: wgpu::RenderPipeline,
     comp_layout: wgpu::BindGroupLayout,
+    lake_depth_pipe: wgpu::RenderPipeline,
+    lake_shade_pipe: wgpu::RenderPipeline,
+    lake_depth_layout: wgpu::BindGroupLayout,
+    lake_shade_layout: wgpu::BindGroupLayout,
+    lake_buf: wgpu::Buffer,
     cdf: wgpu::Buffer,
     blur_bufs: [wgpu::Buffer; 2],
     lin_sampler: wgpu::Sampler,
@@ -345,9 +407,19 @@ impl Renderer {
                 texture_entry(1, FLOAT),
                 texture_entry(2, FLOAT),
                 texture_entry(3, FLOAT),
+                texture_entry(4, FLOAT),
             ],
         );
-        let fwd = gpu.shader_module("forward.wgsl", &format!("{COMMON}\n{FORWARD}"))?;
+        let lake_entries = [
+            uniform_entry(0, frag),
+            texture_entry(1, FLOAT),
+            texture_entry(2, FLOAT),
+            texture_entry(3, FLOAT),
+        ];
+        let lake_depth_layout = layout(gpu, "lake depth", &lake_entries[..3]);
+        let lake_shade_layout = layout(gpu, "lake shade", &lake_entries);
+        let fwd = gpu.shader_module("forward.wgsl", &format!("{COMMON}\n{LIGHTING}\n{FORWARD}"))?;
+        let lake_m = gpu.shader_module("lake.wgsl", &format!("{COMMON}\n{LIGHTING}\n{LAKE}"))?;
         let blur_m = gpu.shader_module("blur.wgsl", &format!("{COMMON}\n{BLUR}"))?;
         let comp_m = gpu.shader_module("composite.wgsl", &format!("{COMMON}\n{COMPOSITE}"))?;
         let gtargets = [HDR, HDR, HDR, wgpu::TextureFormat::Rgba8Unorm];
@@ -416,6 +488,28 @@ impl Renderer {
                 false,
             ),
         )?;
+        let lake_pipe = |label, fs, l: &wgpu::BindGroupLayout| {
+            pipeline(
+                gpu,
+                &spec(
+                    label,
+                    &lake_m,
+                    "vs_full",
+                    Some(fs),
+                    &[&frame_layout, l],
+                    &[HDR],
+                    false,
+                    false,
+                ),
+            )
+        };
+        let lake_depth_pipe = lake_pipe("lake depth", "fs_lake_depth", &lake_depth_layout)?;
+        let lake_shade_pipe = lake_pipe("lake shade", "fs_lake_shade", &lake_shade_layout)?;
+        let lake_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("lake"),
+            contents: bytemuck::bytes_of(&LakeU::new(true)),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
         let frame_buf = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame"),
             size: std::mem::size_of::<FrameU>() as u64,
@@ -496,6 +590,11 @@ impl Renderer {
             blur_layout,
             comp_pipe,
             comp_layout,
+            lake_depth_pipe,
+            lake_shade_pipe,
+            lake_depth_layout,
+            lake_shade_layout,
+            lake_buf,
             cdf,
             blur_bufs,
             lin_sampler,
@@ -681,6 +780,13 @@ impl Renderer {
         Ok(())
     }
 
+    /// Draws the lacrimal lake along the lid margins (on by default; off shows the bare globes).
+    pub fn set_lake(&self, on: bool) {
+        self.gpu
+            .queue
+            .write_buffer(&self.lake_buf, 0, bytemuck::bytes_of(&LakeU::new(on)));
+    }
+
     /// Renders `view` under `lighting` at `w`×`h` pixels.
     pub fn render(
         &self,
@@ -694,6 +800,11 @@ impl Renderer {
         self.submit_frame(&t, view_spec, lighting);
         let disp = gpu.read_texture(&t.display)?;
         let lin = gpu.read_texture(&t.linear)?;
+        let material = gpu
+            .read_texture(&t.post)?
+            .chunks_exact(4)
+            .map(|p| material_of(p[3]))
+            .collect();
         let linear: Vec<[f32; 3]> = lin
             .chunks_exact(8)
             .map(|c| {
@@ -708,6 +819,7 @@ impl Renderer {
             height: h as usize,
             display: disp,
             linear,
+            material,
         })
     }
 
@@ -745,6 +857,8 @@ impl Renderer {
         let pong = target("blur y", HDR);
         let display = target("display", wgpu::TextureFormat::Rgba8Unorm);
         let linear = target("linear", HDR);
+        let lake_d = target("lake depth", HDR);
+        let lake_l = target("lake light", HDR);
         let depth = gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("depth"),
             size: wgpu::Extent3d {
@@ -786,8 +900,18 @@ impl Renderer {
                 wgpu::BindingResource::TextureView(&view(&pong)),
                 wgpu::BindingResource::TextureView(&view(&direct)),
                 wgpu::BindingResource::TextureView(&view(&post)),
+                wgpu::BindingResource::TextureView(&view(&lake_l)),
             ],
         );
+        let (pv, lv) = (view(&post), view(&lake_d));
+        let lake_in = [
+            self.lake_buf.as_entire_binding(),
+            wgpu::BindingResource::TextureView(&pv),
+            wgpu::BindingResource::TextureView(&sv),
+            wgpu::BindingResource::TextureView(&lv),
+        ];
+        let lake_depth = bind(gpu, "lake depth", &self.lake_depth_layout, &lake_in[..3]);
+        let lake_shade = bind(gpu, "lake shade", &self.lake_shade_layout, &lake_in);
         Targets {
             size: (w, h),
             diffuse,
@@ -799,9 +923,13 @@ impl Renderer {
             display,
             linear,
             depth,
+            lake_d,
+            lake_l,
             blur_x,
             blur_y,
             composite,
+            lake_depth,
+            lake_shade,
         }
     }
 
@@ -837,6 +965,8 @@ impl Renderer {
                 lighting.exposure,
             ],
             ground: [lighting.ground.x, lighting.ground.y, lighting.ground.z, 1.0],
+            right: cam.basis[0].extend(0.0).to_array(),
+            up: cam.basis[1].extend(0.0).to_array(),
             lights,
         };
         gpu.queue
@@ -918,7 +1048,7 @@ impl Renderer {
         let full_pass = |enc: &mut wgpu::CommandEncoder,
                          label: &str,
                          pipe: &wgpu::RenderPipeline,
-                         group: &wgpu::BindGroup,
+                         groups: &[&wgpu::BindGroup],
                          outs: &[&wgpu::Texture]| {
             let views: Vec<wgpu::TextureView> = outs.iter().map(|t| view(t)).collect();
             let att: Vec<Option<wgpu::RenderPassColorAttachment>> = views
@@ -944,16 +1074,44 @@ impl Renderer {
                 multiview_mask: None,
             });
             pass.set_pipeline(pipe);
-            pass.set_bind_group(0, group, &[]);
+            for (i, g) in groups.iter().enumerate() {
+                pass.set_bind_group(i as u32, *g, &[]);
+            }
             pass.draw(0..3, 0..1);
         };
-        full_pass(&mut enc, "blur x", &self.blur_pipe, &t.blur_x, &[&t.ping]);
-        full_pass(&mut enc, "blur y", &self.blur_pipe, &t.blur_y, &[&t.pong]);
+        full_pass(
+            &mut enc,
+            "blur x",
+            &self.blur_pipe,
+            &[&t.blur_x],
+            &[&t.ping],
+        );
+        full_pass(
+            &mut enc,
+            "blur y",
+            &self.blur_pipe,
+            &[&t.blur_y],
+            &[&t.pong],
+        );
+        full_pass(
+            &mut enc,
+            "lake depth",
+            &self.lake_depth_pipe,
+            &[&self.main_bind, &t.lake_depth],
+            &[&t.lake_d],
+        );
+        full_pass(
+            &mut enc,
+            "lake shade",
+            &self.lake_shade_pipe,
+            &[&self.main_bind, &t.lake_shade],
+            &[&t.lake_l],
+        );
         full_pass(
             &mut enc,
             "composite",
             &self.comp_pipe,
-            &t.composite,
+            &[&t.composite],
             &[&t.display, &t.linear],
         );
         gpu.queue.submit([enc.finish()]);

@@ -59,6 +59,9 @@ pub struct RenderArgs {
     /// Gaze yaw,pitch in degrees (positive yaw: to the subject's left).
     #[arg(long, default_value = "0,0", value_parser = parse_pair, allow_negative_numbers = true)]
     gaze: (f32, f32),
+    /// Leave out the lacrimal lake (the tear meniscus along the lid margins).
+    #[arg(long)]
+    no_lake: bool,
     /// Output directory.
     #[arg(long, default_value = "render")]
     out: PathBuf,
@@ -110,6 +113,7 @@ pub fn render(a: RenderArgs, bars: &Bars) -> Result<()> {
         face_units: a.pose.entries,
         iris: a.iris,
         gaze: a.gaze,
+        lake: !a.no_lake,
         out: a.out,
     };
     let r = derma_render::files::run(&job, bars)?;
