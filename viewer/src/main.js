@@ -277,7 +277,7 @@ async function load() {
   const box = new THREE.Box3().setFromObject(skin);
   const c = box.getCenter(new THREE.Vector3());
   const size = box.getSize(new THREE.Vector3());
-  const dist = (1.25 * size.y) / (2 * Math.tan((camera.fov * Math.PI) / 360));
+  const dist = (0.9 * size.y) / (2 * Math.tan((camera.fov * Math.PI) / 360));
   camera.position.set(c.x, c.y + 0.05 * size.y, c.z + dist);
   camera.near = dist / 20;
   camera.far = dist * 20;
