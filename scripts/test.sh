@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The project's test command (README.md; CI runs it on a fresh machine): installs what the tests
 # need; checks formatting and lints; checks the committed adding-doubling references against
-# iadpython and the histogram-matching reference against scikit-image; runs the workspace tests
-# with the GPU tests required (on Mesa's lavapipe); validates the exported head's GLB with
+# iadpython and the histogram-matching reference against scikit-image; checks deploy/; runs the
+# workspace tests with the GPU tests required (on Mesa's lavapipe); validates the exported GLBs with
 # Khronos' glTF-Validator; runs every numbered example; and drives the web viewer in headless
 # Chromium (scripts/viewer_test.sh).
 set -euo pipefail
@@ -18,6 +18,8 @@ cargo fmt --all -- --check
 cargo clippy --workspace --all-targets -- -D warnings
 python3 scripts/iad_reference.py --check
 python3 scripts/histmatch_reference.py --check
+# The cluster deployment files parse and validate (Slurm scripts, Kubernetes manifests).
+bash deploy/check.sh
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 DERMA_REQUIRE_GPU=1 cargo test --workspace --release
 # The exported head opens without errors or warnings in Khronos' glTF-Validator.

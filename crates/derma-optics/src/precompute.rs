@@ -249,6 +249,63 @@ impl Shard {
         Ok(Self { k, n })
     }
 
+    /// The shard a cluster scheduler gave this process, from its environment (`var` looks a
+    /// name up, e.g. `|k| std::env::var(k).ok()`), with where it came from:
+    /// - a Slurm job array: `SLURM_ARRAY_TASK_ID` within `SLURM_ARRAY_TASK_MIN` …
+    ///   `SLURM_ARRAY_TASK_MAX` (step 1), n = `SLURM_ARRAY_TASK_COUNT`;
+    /// - a Kubernetes Indexed Job: `JOB_COMPLETION_INDEX` (0-based), n = `DERMA_SHARD_COUNT`
+    ///   (the Job's `completions`, which Kubernetes does not put in the environment);
+    /// - neither: the whole grid, 1/1.
+    pub fn from_env(var: impl Fn(&str) -> Option<String>) -> Result<(Self, &'static str)> {
+        let num = |name: &str| -> Result<Option<usize>> {
+            match var(name) {
+                None => Ok(None),
+                Some(v) => v.trim().parse().map(Some).map_err(|_| {
+                    OpticsError::Invalid(format!("{name}='{v}': expected a whole number"))
+                }),
+            }
+        };
+        let need = |name: &str, why: &str| -> Result<usize> {
+            num(name)?.ok_or_else(|| OpticsError::Invalid(format!("{name} is not set; {why}")))
+        };
+        if let Some(id) = num("SLURM_ARRAY_TASK_ID")? {
+            let why = "Slurm sets it for job arrays (sbatch --array=MIN-MAX)";
+            let (min, max) = (
+                need("SLURM_ARRAY_TASK_MIN", why)?,
+                need("SLURM_ARRAY_TASK_MAX", why)?,
+            );
+            let count = need("SLURM_ARRAY_TASK_COUNT", why)?;
+            let step = num("SLURM_ARRAY_TASK_STEP")?.unwrap_or(1);
+            if step != 1 || max < min || max - min + 1 != count || !(min..=max).contains(&id) {
+                return Err(OpticsError::Invalid(format!(
+                    "Slurm array task {id} of {min}-{max} (count {count}, step {step}): shards need \
+                     a contiguous array, e.g. --array=0-{}; or pass --shard k/n",
+                    count.max(1) - 1
+                )));
+            }
+            return Ok((
+                Self {
+                    k: id - min + 1,
+                    n: count,
+                },
+                "SLURM_ARRAY_TASK_ID",
+            ));
+        }
+        if let Some(index) = num("JOB_COMPLETION_INDEX")? {
+            let n = need(
+                "DERMA_SHARD_COUNT",
+                "set it to the Indexed Job's completions (Kubernetes does not pass them)",
+            )?;
+            if index >= n {
+                return Err(OpticsError::Invalid(format!(
+                    "JOB_COMPLETION_INDEX {index} is not below DERMA_SHARD_COUNT {n}"
+                )));
+            }
+            return Ok((Self { k: index + 1, n }, "JOB_COMPLETION_INDEX"));
+        }
+        Ok((Self { k: 1, n: 1 }, "no scheduler: the whole grid"))
+    }
+
     /// Whether node `i` belongs to this shard (i mod n = k − 1).
     pub fn owns(&self, i: usize) -> bool {
         i % self.n == self.k - 1

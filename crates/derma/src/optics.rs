@@ -94,9 +94,11 @@ pub struct PrecomputeArgs {
     grid: String,
     #[arg(long, required_unless_present = "print_grid")]
     out: Option<PathBuf>,
-    /// This process's share of the grid, k/n (1-based).
-    #[arg(long, default_value = "1/1")]
-    shard: String,
+    /// This process's share of the grid, k/n (1-based). Default: from the scheduler's
+    /// environment (a Slurm job array's SLURM_ARRAY_TASK_ID, a Kubernetes Indexed Job's
+    /// JOB_COMPLETION_INDEX with DERMA_SHARD_COUNT), else the whole grid.
+    #[arg(long)]
+    shard: Option<String>,
     #[command(flatten)]
     device: DeviceArg,
     /// Print the built-in grid and exit.
@@ -229,7 +231,11 @@ fn precompute(a: PrecomputeArgs, bars: &Bars) -> Result<()> {
         bail!("--out DIR is required (or --print-grid)");
     };
     let grid = Grid::load(&a.grid)?;
-    let shard = Shard::parse(&a.shard)?;
+    let (shard, source) = match &a.shard {
+        Some(s) => (Shard::parse(s)?, "--shard"),
+        None => Shard::from_env(|k| std::env::var(k).ok())?,
+    };
+    bars.say(format!("shard {}/{} ({source})", shard.k, shard.n));
     let t0 = Instant::now();
     let done = precompute::run_shard(&out, &grid, shard, a.device.device, bars)?;
     bars.finish();
