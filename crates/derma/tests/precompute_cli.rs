@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::s;
+use common::{run, s};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command};
 use std::time::{Duration, Instant};
@@ -121,18 +121,14 @@ fn four_concurrent_shards_one_killed_and_resumed_merge_to_the_single_process_tab
         assert_eq!(entries(&shared, k), 4, "shard {k}");
     }
     // Merging now names what is missing.
-    let out = Command::new(env!("CARGO_BIN_EXE_derma"))
-        .args([
-            "optics",
-            "merge",
-            s(&shared),
-            "--out",
-            s(&d.join("partial.dtab")),
-        ])
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("missing"));
+    let (ok, _, err) = run(&[
+        "optics",
+        "merge",
+        s(&shared),
+        "--out",
+        s(&d.join("partial.dtab")),
+    ]);
+    assert!(!ok && err.contains("missing"), "{err}");
     // The same Indexed Job pod again: it resumes, computing only what is left.
     assert!(precompute(&grid, &shared, &k8s, None)
         .wait()
