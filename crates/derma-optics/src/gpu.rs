@@ -108,6 +108,7 @@ pub fn run_gpu(run: &Run, progress: &dyn Progress) -> Result<Tally> {
     let (surface, sigma) = match prepared[0].surface {
         Surface::Smooth => (0, 0.0),
         Surface::TrowbridgeReitz { sigma } => (1, sigma as f32),
+        Surface::Smith { alpha } => (2, alpha as f32),
     };
     let (bottom, bottom_value) = match prepared[0].bottom {
         Bottom::Medium { n } => (0, n as f32),

@@ -76,10 +76,18 @@ pub enum Bottom {
 pub enum Surface {
     /// A flat interface.
     Smooth,
-    /// Micro-facets with Trowbridge–Reitz normals (thesis §4.5.1).
+    /// Micro-facets with normals drawn by the thesis' Trowbridge–Reitz formula (§4.5.1), as
+    /// BioSpec does: no shadowing or masking, normals not weighted by their visible area.
     TrowbridgeReitz {
         /// Their aspect ratio σ.
         sigma: f64,
+    },
+    /// A Smith microsurface with Trowbridge–Reitz (GGX) normals of roughness α: visible
+    /// normals, shadowing and masking, and the light masking catches scattered again
+    /// ([`crate::microsurface`]).
+    Smith {
+        /// GGX α (the spheroids' aspect ratio).
+        alpha: f64,
     },
 }
 
@@ -164,10 +172,10 @@ impl Stack {
                 format!("bottom albedo {albedo} must lie in [0, 1]"),
             )?,
         }
-        if let Surface::TrowbridgeReitz { sigma } = self.surface {
+        if let Surface::TrowbridgeReitz { sigma: a } | Surface::Smith { alpha: a } = self.surface {
             check(
-                sigma.is_finite() && sigma > 0.0 && sigma <= 1.0,
-                format!("surface aspect ratio σ = {sigma} must lie in (0, 1]"),
+                a.is_finite() && a > 0.0 && a <= 1.0,
+                format!("surface aspect ratio σ = {a} must lie in (0, 1]"),
             )?;
         }
         Ok(())

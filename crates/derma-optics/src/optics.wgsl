@@ -120,7 +120,80 @@ fn tr_cos_zenith(rho: f32, sigma: f32) -> f32 {
     return sqrt(clamp(cos2, 0.0, 1.0));
 }
 
+// ---- The Smith microsurface (microsurface.rs): GGX Λ, visible normals (Heitz 2018), the
+// dielectric random walk over uniform heights (Heitz et al. 2016). Same draws as the CPU.
+const WALK_EVENTS: u32 = 256u;
+const MIN_DRAW: f32 = 5.9604645e-8;  // 2^-24: a zero draw taken as the smallest non-zero one
+
+fn smith_lambda(c: f32, a: f32) -> f32 {
+    if (c >= 1.0) { return 0.0; }
+    if (c <= 0.0) { return 3.0e38; }
+    let tan2 = (1.0 - c * c) / (c * c);
+    return 0.5 * (-1.0 + sqrt(1.0 + a * a * tan2));
+}
+
+fn visible_normal(wi: vec3<f32>, a: f32, u1: f32, u2: f32) -> vec3<f32> {
+    let vh = normalize(vec3<f32>(a * wi.x, a * wi.y, wi.z));
+    let len2 = vh.x * vh.x + vh.y * vh.y;
+    var t1 = vec3<f32>(1.0, 0.0, 0.0);
+    if (len2 > 0.0) { t1 = vec3<f32>(-vh.y, vh.x, 0.0) / sqrt(len2); }
+    let t2 = cross(vh, t1);
+    let r = sqrt(u1);
+    let phi = TAU * u2;
+    let p1 = r * cos(phi);
+    let s = 0.5 * (1.0 + vh.z);
+    let p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * r * sin(phi);
+    let p3 = sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2));
+    let nh = p1 * t1 + p2 * t2 + p3 * vh;
+    return normalize(vec3<f32>(a * nh.x, a * nh.y, max(nh.z, 1e-9)));
+}
+
+// `d` local to the starting side (d.z < 0); returns the exit direction in that frame.
+fn smith_walk(d: vec3<f32>, n1: f32, n2: f32, a: f32) -> vec3<f32> {
+    var dir = d;
+    var flip = false;
+    var c1 = 1.0;
+    var na = n1;
+    var nb = n2;
+    for (var e = 0u; e < WALK_EVENTS; e++) {
+        var z = dir.z;
+        if (flip) { z = -dir.z; }
+        let u = rand01();
+        if (z > 0.0) {
+            let lam = smith_lambda(z, a);
+            if (1.0 - u <= pow(c1, lam)) { return dir; }
+            c1 = c1 / exp(log(1.0 - u) / lam);
+        } else {
+            let lam = smith_lambda(-z, a);
+            c1 = c1 * exp(log(max(u, MIN_DRAW)) / (1.0 + lam));
+        }
+        let u1 = rand01();
+        let u2 = rand01();
+        var m = visible_normal(vec3<f32>(-dir.x, -dir.y, -z), a, u1, u2);
+        if (flip) { m.z = -m.z; }
+        let wi = -dir;
+        let ci = max(dot(wi, m), 0.0);
+        if (rand01() < fresnel(ci, na, nb)) {
+            dir = normalize(-wi + 2.0 * ci * m);
+        } else {
+            let eta = na / nb;
+            let sin2_t = eta * eta * (1.0 - ci * ci);
+            let ct = sqrt(max(0.0, 1.0 - sin2_t));
+            dir = normalize(eta * dir + (eta * ci - ct) * m);
+            flip = !flip;
+            c1 = 1.0 - c1;
+            let t = na; na = nb; nb = t;
+        }
+    }
+    if (flip) { return vec3<f32>(0.0, 0.0, -1.0); }
+    return vec3<f32>(0.0, 0.0, 1.0);
+}
+
 fn top_surface(u: vec3<f32>, n1: f32, n2: f32, side: f32) -> vec3<f32> {
+    if (P.surface == 2u) {
+        let e = smith_walk(vec3<f32>(u.x, u.y, u.z * side), n1, n2, P.sigma);
+        return vec3<f32>(e.x, e.y, e.z * side);
+    }
     var m = vec3<f32>(0.0, 0.0, side);
     if (P.surface == 1u) {
         var found = false;

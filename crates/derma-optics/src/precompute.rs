@@ -10,6 +10,7 @@
 use crate::bio::BioTexel;
 use crate::error::{OpticsError, Result};
 use crate::simulate::{simulate_skin, SkinResult, SkinSimConfig};
+use crate::specimen::SurfaceModel;
 use crate::tally::{BrdfBins, ProfileBins};
 use derma_core::dtab::{Dtab, DtabAxis, DtabHeader, DtabValue};
 use derma_core::gpu::Device;
@@ -55,6 +56,9 @@ pub struct Grid {
     #[serde(default = "default_dmax")]
     /// Outer radius of the radial profile, mm.
     pub profile_d_max_mm: f64,
+    /// The skin surface's model: `smith` (default) or `thesis`.
+    #[serde(default)]
+    pub surface: SurfaceModel,
     /// The axes.
     pub axes: GridAxes,
 }
@@ -223,6 +227,7 @@ impl Grid {
                 bins: self.profile_bins,
                 d_max_mm: self.profile_d_max_mm,
             },
+            surface: self.surface,
         }
     }
 }

@@ -8,7 +8,7 @@ use crate::bio::BioTexel;
 use crate::error::Result;
 use crate::layer::{ABSORBER_NAMES, N_ABSORBERS};
 use crate::run::Run;
-use crate::specimen::{skin_stacks, SKIN_LAYER_NAMES};
+use crate::specimen::{skin_stacks, SurfaceModel, SKIN_LAYER_NAMES};
 use crate::tally::{BrdfBins, ProfileBins, Tally, R_DIFFUSE, R_SPECULAR, TRANSMITTED};
 use crate::transport::Incidence;
 use derma_core::color::{
@@ -29,6 +29,13 @@ pub struct SkinSimConfig {
     pub brdf: BrdfBins,
     /// Bins of the radial exit profile.
     pub profile: ProfileBins,
+    /// The skin surface's model (absent in older files: the thesis' sampling they were made with).
+    #[serde(default = "thesis_surface")]
+    pub surface: SurfaceModel,
+}
+
+fn thesis_surface() -> SurfaceModel {
+    SurfaceModel::Thesis
 }
 
 impl Default for SkinSimConfig {
@@ -48,6 +55,7 @@ impl Default for SkinSimConfig {
                 bins: 64,
                 d_max_mm: 8.0,
             },
+            surface: SurfaceModel::Smith,
         }
     }
 }
@@ -121,7 +129,13 @@ pub struct SkinResult {
 pub fn skin_run(bio: &BioTexel, cfg: &SkinSimConfig) -> Run {
     let nl = N_WAVELENGTHS as f64;
     Run {
-        stacks: skin_stacks(bio),
+        stacks: skin_stacks(bio)
+            .into_iter()
+            .map(|mut s| {
+                s.surface = cfg.surface.surface();
+                s
+            })
+            .collect(),
         photons: cfg.photons,
         seed: cfg.seed,
         incidence: Incidence::ArcsinZenith,

@@ -6,6 +6,7 @@ use crate::chromophore;
 use crate::layer::{Bottom, Layer, Stack, Surface, N_ABSORBERS};
 use crate::microfacet::BIOSPEC_FOLD_ASPECT;
 use derma_core::color::{wavelength_nm, N_WAVELENGTHS};
+use serde::{Deserialize, Serialize};
 
 /// Refractive indices of stratum corneum, epidermis, papillary and reticular dermis: 1.55,
 /// 1.4, 1.36, 1.38 (BioSpec defaults, Krishnaswamy & Baranoski 2004, as used by RISE).
@@ -139,9 +140,54 @@ pub fn skin_stack_with_epidermal_blood(
         n_above: 1.0,
         // The white, diffusely reflecting hypodermis (thesis §2.1).
         bottom: Bottom::Lambertian { albedo: 1.0 },
-        surface: Surface::TrowbridgeReitz {
-            sigma: BIOSPEC_FOLD_ASPECT,
-        },
+        surface: SurfaceModel::default().surface(),
+    }
+}
+
+/// How the skin's surface folds (BioSpec's Trowbridge–Reitz micro-facets, aspect 0.75) meet
+/// light: as a Smith microsurface (the default) or as the thesis samples them (§4.5.1).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SurfaceModel {
+    /// GGX normals of α = 0.75 sampled by visible area, Smith shadowing and masking, the
+    /// masked light scattered again (Heitz 2018; Heitz et al. 2016): energy conserving.
+    #[default]
+    Smith,
+    /// The thesis' and BioSpec's sampling: no shadowing or masking, normals not weighted by
+    /// visible area; light leaving the skin piles up at grazing angles. For comparison.
+    Thesis,
+}
+
+impl SurfaceModel {
+    /// The surface of the skin stack.
+    pub fn surface(self) -> Surface {
+        match self {
+            SurfaceModel::Smith => Surface::Smith {
+                alpha: BIOSPEC_FOLD_ASPECT,
+            },
+            SurfaceModel::Thesis => Surface::TrowbridgeReitz {
+                sigma: BIOSPEC_FOLD_ASPECT,
+            },
+        }
+    }
+
+    /// Its name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            SurfaceModel::Smith => "smith",
+            SurfaceModel::Thesis => "thesis",
+        }
+    }
+}
+
+impl std::str::FromStr for SurfaceModel {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "smith" => Ok(SurfaceModel::Smith),
+            "thesis" => Ok(SurfaceModel::Thesis),
+            _ => Err(format!("surface '{s}': expected smith or thesis")),
+        }
     }
 }
 

@@ -15,6 +15,7 @@
 use crate::fresnel::fresnel_unpolarised;
 use crate::layer::{Bottom, Stack, Surface, N_ABSORBERS};
 use crate::microfacet::tr_cos_zenith;
+use crate::microsurface;
 use crate::photon_rng::PhotonRng;
 use crate::tally::{BrdfBins, ProfileBins, Tally, ABSORBED, R_DIFFUSE, R_SPECULAR, TRANSMITTED};
 use std::f64::consts::TAU;
@@ -187,6 +188,12 @@ fn top_surface(p: &Prepared, u: V3, n1: f64, n2: f64, side: f64, rng: &mut Photo
     let m = match p.surface {
         Surface::Smooth => [0.0, 0.0, side],
         Surface::TrowbridgeReitz { sigma } => micro_normal(u, sigma, side, rng),
+        Surface::Smith { alpha } => {
+            // In the frame of the side the ray comes from, z along the macro normal there.
+            let d = [u[0], u[1], u[2] * side];
+            let e = microsurface::walk(d, n1, n2, alpha, fresnel_unpolarised, || rng.uniform());
+            return [e.dir[0], e.dir[1], e.dir[2] * side];
+        }
     };
     interface(u, m, n1, n2, rng.uniform())
 }
@@ -266,7 +273,7 @@ pub fn trace(
             let sin_t = eta * sin_i;
             u = [-sin_t, 0.0, (1.0 - sin_t * sin_t).sqrt()];
         }
-        Surface::TrowbridgeReitz { .. } => {
+        Surface::TrowbridgeReitz { .. } | Surface::Smith { .. } => {
             let v = normalise(top_surface(p, u, p.n_above, p.n[0], -1.0, &mut rng));
             if v[2] <= 0.0 {
                 out[R_SPECULAR] = 1.0;

@@ -77,6 +77,10 @@ pub struct SimulateArgs {
     /// Epidermis thickness (µm).
     #[arg(long, default_value_t = BioTexel::FAIR.epidermis_um)]
     epidermis_um: f32,
+    /// The skin surface: smith (visible normals, masking, multiple scattering) or thesis
+    /// (BioSpec's unmasked sampling, for comparison).
+    #[arg(long, default_value = "smith")]
+    surface: derma_optics::specimen::SurfaceModel,
     #[command(flatten)]
     run: RunArgs,
     /// Directory for result.json (and the plots).
@@ -177,6 +181,7 @@ fn simulate(a: SimulateArgs, bars: &Bars) -> Result<()> {
     let cfg = SkinSimConfig {
         photons: a.run.photons,
         seed: a.run.seed,
+        surface: a.surface,
         ..SkinSimConfig::default()
     };
     let r = simulate_skin(&bio, &cfg, a.run.device.device, bars)?;
