@@ -33,12 +33,12 @@ impl Weighting {
     }
 }
 
-/// Fits leave out bins beyond 80° zenith (as Ngan, Matusik & Durand 2005, "Experimental
-/// analysis of BRDF models", do with measured data): the Monte Carlo's surface has no
-/// shadowing or masking (BioSpec's perturbed normals, thesis §4.4), so its grazing bins grow as
-/// 1/cosθ where every render model with a masking term goes to zero, and those bins would
-/// otherwise dominate the squared difference. The cut-off is a parameter.
-pub const DEFAULT_MAX_ZENITH_DEG: f64 = 80.0;
+/// Fits use every bin, grazing ones included: the Monte Carlo skin's surface is a Smith
+/// microsurface (derma-optics' `microsurface.rs`), whose BRDF conserves energy at every angle.
+/// The cut-off stays a parameter — 80° (as Ngan, Matusik & Durand 2005 do with measured data)
+/// was needed while the surface was the thesis' unmasked one, whose grazing bins grow as 1/cosθ
+/// where every render model with a masking term goes to zero.
+pub const DEFAULT_MAX_ZENITH_DEG: f64 = 90.0;
 
 /// Gauss–Legendre 2-point nodes on [0, 1].
 const GL2: [f64; 2] = [0.211_324_865_405_187_1, 0.788_675_134_594_812_9];
@@ -65,7 +65,7 @@ impl FitGeometry {
         Self::with_cutoff(bins, weighting, DEFAULT_MAX_ZENITH_DEG)
     }
 
-    /// The geometry of `bins`, leaving out bins beyond `max_zenith_deg` (their Monte Carlo estimates are noisiest and the skin surface has no masking yet).
+    /// The geometry of `bins`, leaving out bins whose centre lies beyond `max_zenith_deg` (90°: none).
     pub fn with_cutoff(bins: BrdfBins, weighting: Weighting, max_zenith_deg: f64) -> Self {
         let (ni, no, np) = (bins.theta_in, bins.theta_out, bins.phi);
         let mut dirs = Vec::with_capacity(bins.len() * POINTS_PER_BIN);
@@ -383,12 +383,16 @@ mod tests {
         let g = FitGeometry::new(bins(), Weighting::Cosine);
         assert!((g.weight.iter().sum::<f64>() - 1.0).abs() < 1e-12);
         assert!(g.weight[0] > g.weight[g.len() - 1]);
-        let u = FitGeometry::new(bins(), Weighting::Uniform);
-        // Bin (θi 75°, θo 75°, last φ) is kept and weighs like bin 0; θo = 85° is cut off.
+        // By default every bin counts, the grazing ones too, each alike under uniform weights.
+        let all = FitGeometry::new(bins(), Weighting::Uniform);
+        assert!(all
+            .weight
+            .iter()
+            .all(|&w| (w - all.weight[0]).abs() < 1e-15));
+        // An 80° cut-off keeps bin (θi 75°, θo 75°, last φ) at bin 0's weight and drops θo 85°.
+        let u = FitGeometry::with_cutoff(bins(), Weighting::Uniform, 80.0);
         assert!((u.weight[0] - u.weight[bins().index(7, 7, 11)]).abs() < 1e-15);
         assert_eq!(u.weight[bins().index(7, 8, 11)], 0.0);
-        let all = FitGeometry::with_cutoff(bins(), Weighting::Uniform, 90.0);
-        assert!(all.weight.iter().all(|&w| w > 0.0));
     }
 
     #[test]
