@@ -10,6 +10,7 @@
 
 pub mod bessel;
 pub mod dense;
+pub mod fastmath;
 pub mod levenberg_marquardt;
 pub mod nnls;
 pub mod sparse;
