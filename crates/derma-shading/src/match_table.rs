@@ -409,30 +409,28 @@ impl MatchTable {
 
     /// Interpolated value `name` at table coordinates `p`.
     pub fn value_at(&self, p: &[f64], name: &str) -> Option<Vec<f64>> {
-        let (o, l) = self.dtab.header.offset(name)?;
-        let s = self.dtab.header.stride();
-        let mut out = vec![0.0; l];
-        self.cube.corners(p, &mut |node, w| {
-            for (j, v) in out.iter_mut().enumerate() {
-                *v += w * self.dtab.data[node * s + o + j] as f64;
-            }
-        });
-        Some(out)
+        self.weighted_sum(p, name, |v| v)
     }
 
     /// Value `name` at `p` interpolated geometrically (multilinear in the logarithm), as the
     /// table appearance interpolates colours; `None` if the table has no such value. Values
     /// must be positive.
     pub fn value_at_geometric(&self, p: &[f64], name: &str) -> Option<Vec<f64>> {
+        let out = self.weighted_sum(p, name, f64::ln)?;
+        Some(out.into_iter().map(f64::exp).collect())
+    }
+
+    /// Σ over the corners around `p` of weight × `f(value)`, per component of `name`.
+    fn weighted_sum(&self, p: &[f64], name: &str, f: impl Fn(f64) -> f64) -> Option<Vec<f64>> {
         let (o, l) = self.dtab.header.offset(name)?;
         let s = self.dtab.header.stride();
         let mut out = vec![0.0; l];
         self.cube.corners(p, &mut |node, w| {
             for (j, v) in out.iter_mut().enumerate() {
-                *v += w * (self.dtab.data[node * s + o + j] as f64).ln();
+                *v += w * f(self.dtab.data[node * s + o + j] as f64);
             }
         });
-        Some(out.into_iter().map(f64::exp).collect())
+        Some(out)
     }
 
     /// Node stride of each table axis (first axis slowest).

@@ -334,6 +334,9 @@ mod tests {
         let mut w = none;
         w[regions::index("cheeks").unwrap()] = 0.5;
         let c = gains(&w);
-        assert!((c[0] - (1.0 + 0.5 * (5.5 - 1.0))).abs() < 1e-6);
+        let cheeks = GAINS.iter().find(|g| g.region == "cheeks").unwrap();
+        assert!(cheeks.blood > 1.5, "cheeks carry more blood");
+        assert!((c[0] - (1.0 + 0.5 * (cheeks.blood - 1.0))).abs() < 1e-6);
+        assert!((c[2] - 0.5 * cheeks.oxygenation).abs() < 1e-6);
     }
 }
