@@ -344,13 +344,10 @@ pub fn write_exr(path: &Path, channels: &[(&str, &Map)], precision: ExrPrecision
     );
     let image = Image::from_layer(layer);
     atomic::write_with(path, |tmp| {
-        image
-            .write()
-            .to_file(tmp)
-            .map_err(|e| CoreError::Encode {
-                path: path.to_path_buf(),
-                detail: e.to_string(),
-            })
+        image.write().to_file(tmp).map_err(|e| CoreError::Encode {
+            path: path.to_path_buf(),
+            detail: e.to_string(),
+        })
     })
 }
 
