@@ -300,11 +300,12 @@ pub enum ExrPrecision {
     F16,
 }
 
-/// Writes named single-channel maps into one OpenEXR file (RLE-compressed scan lines, one
-/// channel per map). Blocks are compressed in parallel; line order "increasing" makes the
-/// compressor write them in order, so the bytes are identical on every run and at any thread
-/// count (with "unspecified" order they land in completion order). Parallel blocks cut
-/// `derma skin --size 4096`'s write stage from 5.4 to 4.5 s on 2 cores (BENCHMARKS.md).
+/// Writes named single-channel maps into one OpenEXR file (scan lines, one channel per map;
+/// half floats RLE-compressed, f32 uncompressed). Blocks are compressed in parallel; line
+/// order "increasing" makes the compressor write them in order, so the bytes are identical on
+/// every run and at any thread count (with "unspecified" order they land in completion order).
+/// Parallel blocks cut `derma skin --size 4096`'s write stage from 5.4 to 4.5 s on 2 cores,
+/// f32 uncompressed to 3.5 s (BENCHMARKS.md).
 pub fn write_exr(path: &Path, channels: &[(&str, &Map)], precision: ExrPrecision) -> Result<()> {
     use exr::prelude::*;
     use rayon::prelude::*;
@@ -336,7 +337,13 @@ pub fn write_exr(path: &Path, channels: &[(&str, &Map)], precision: ExrPrecision
         (w, h),
         LayerAttributes::default(),
         Encoding {
-            compression: Compression::RLE,
+            // Noisy f32 samples do not compress under RLE (the files came out at their raw
+            // size, BENCHMARKS.md), so they are stored as they are; half floats keep RLE
+            // (bio.exr: 105 MB of 400 MB raw at 4096²).
+            compression: match precision {
+                ExrPrecision::F32 => Compression::Uncompressed,
+                ExrPrecision::F16 => Compression::RLE,
+            },
             blocks: Blocks::ScanLines,
             line_order: LineOrder::Increasing,
         },
