@@ -404,7 +404,7 @@ mod tests {
         let (lo, hi) = (nodes[3], nodes[4]);
         let at = |x: f64, p: &mut Vec<f64>| {
             p[mel] = x;
-            let v = ta.lookup(&texel(&mt.coords(&texel(p))));
+            let v = ta.lookup(&texel(p));
             [v[0] as f64, v[1] as f64, v[2] as f64]
         };
         let (a, b) = (at(lo, &mut p), at(hi, &mut p));

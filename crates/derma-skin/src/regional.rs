@@ -249,33 +249,34 @@ pub fn apply_person(
     }
     let b = &cfg.baseline;
     let mid = |r: crate::config::Range| r.min + 0.5 * b.phi * (r.max - r.min);
-    // The cheeks and the forehead, each with its own blood gain and oxygenation shift (or
-    // none without regional gains); the ITA of their mean colour is what is calibrated.
-    let regions: Vec<(f32, f32)> = ["cheeks", "forehead"]
+    // The cheeks and the forehead, each under its own regional gains (`gains`, or none
+    // without regional gains); the ITA of their mean colour is what is calibrated.
+    let sample: Vec<[f32; 4]> = ["cheeks", "forehead"]
         .iter()
         .map(|name| {
-            GAINS
-                .iter()
-                .find(|g| g.region == *name)
-                .filter(|_| regional_gains)
-                .map_or((1.0, 0.0), |g| (g.blood, g.oxygenation))
+            if !regional_gains {
+                return NEUTRAL;
+            }
+            let mut w = [0.0; regions::REGIONS.len()];
+            w[regions::index(name).expect("a region of derma-head")] = 1.0;
+            gains(&w)
         })
         .collect();
-    let texel = |melanin: f32, (blood_gain, oxy_shift): (f32, f32)| derma_shading::BioTexel {
-        melanin,
+    let texel = |melanin: f32, g: [f32; 4]| derma_shading::BioTexel {
+        melanin: melanin * g[1],
         pheomelanin: mid(b.pheomelanin),
-        blood: (mid(b.blood) * blood_gain).min(1.0),
-        oxygenation: (mid(b.oxygenation) + oxy_shift).clamp(0.0, 1.0),
+        blood: (mid(b.blood) * g[0]).min(1.0),
+        oxygenation: (mid(b.oxygenation) + g[2]).clamp(0.0, 1.0),
         stratum_corneum_um: mid(b.stratum_corneum_um),
-        epidermis_um: mid(b.epidermis_um),
+        epidermis_um: mid(b.epidermis_um) * g[3],
     };
     let ita_of = |m: f32| {
         let mut lab = [0.0; 3];
-        for &r in &regions {
+        for &r in &sample {
             let rgb = appearance.albedo(&texel(m, r)).map(f64::from);
             let l = derma_core::color::xyz_to_lab(derma_core::color::linear_srgb_to_xyz(rgb));
             for k in 0..3 {
-                lab[k] += l[k] / regions.len() as f64;
+                lab[k] += l[k] / sample.len() as f64;
             }
         }
         ita_deg(lab)
