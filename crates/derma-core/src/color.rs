@@ -118,6 +118,13 @@ pub fn srgb_decode(x: f32) -> f32 {
     }
 }
 
+/// Linear value of an 8-bit sRGB code ([`srgb_decode`] of code / 255, tabulated).
+#[inline]
+pub fn srgb8_decode(code: u8) -> f32 {
+    static TABLE: std::sync::OnceLock<[f32; 256]> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| std::array::from_fn(|i| srgb_decode(i as f32 / 255.0)))[code as usize]
+}
+
 /// CIELAB (D65 white) of an XYZ colour; used to compare colours perceptually in tests and reports.
 pub fn xyz_to_lab(xyz: [f64; 3]) -> [f64; 3] {
     // D65 white point, CIE 15:2004 (2° observer): Xn = 0.95047, Yn = 1, Zn = 1.08883.

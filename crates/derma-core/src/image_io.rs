@@ -143,36 +143,23 @@ fn read_exr_rgb(path: &Path) -> Result<LoadedImage> {
     })
 }
 
-fn encode_png(path: &Path, w: usize, h: usize, bytes: &[u8], ty: ExtendedColorType) -> Result<()> {
-    atomic::write_with(path, |tmp| {
-        let file = std::fs::File::create(tmp).map_err(|source| CoreError::Write {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let writer = std::io::BufWriter::with_capacity(1 << 20, file);
-        PngEncoder::new_with_quality(writer, CompressionType::Fast, FilterType::Adaptive)
-            .write_image(bytes, w as u32, h as u32, ty)
-            .map_err(|e| CoreError::Encode {
-                path: path.to_path_buf(),
-                detail: e.to_string(),
-            })
-    })
-}
-
 /// 8-bit PNG bytes in memory (for containers such as GLB) of 1, 3 or 4 maps of already-encoded
 /// values in [0, 1]; `what` names the image in errors.
 pub fn png8_bytes(what: &str, maps: &[&Map]) -> Result<Vec<u8>> {
     let path = Path::new(what);
-    let (w, h, ty) = check_maps(
-        path,
-        maps,
-        [
-            ExtendedColorType::L8,
-            ExtendedColorType::Rgb8,
-            ExtendedColorType::Rgba8,
-        ],
-    )?;
+    let (w, h) = check_maps(path, maps)?;
     let n = maps.len();
+    let ty = match n {
+        1 => ExtendedColorType::L8,
+        3 => ExtendedColorType::Rgb8,
+        4 => ExtendedColorType::Rgba8,
+        n => {
+            return Err(CoreError::Encode {
+                path: path.to_path_buf(),
+                detail: format!("{n} channels (expected 1, 3 or 4)"),
+            })
+        }
+    };
     let mut bytes = vec![0u8; w * h * n];
     for (k, m) in maps.iter().enumerate() {
         for (i, &v) in m.data().iter().enumerate() {
@@ -189,13 +176,116 @@ pub fn png8_bytes(what: &str, maps: &[&Map]) -> Result<Vec<u8>> {
     Ok(out)
 }
 
+/// A value in [0, 1] as an 8-bit code (rounded to nearest; out-of-range values clamped).
 #[inline]
-fn q8(v: f32) -> u8 {
+pub fn quantize8(v: f32) -> u8 {
     (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
 }
+
+/// A value in [0, 1] as a 16-bit code (rounded to nearest; out-of-range values clamped).
 #[inline]
-fn q16(v: f32) -> u16 {
+pub fn quantize16(v: f32) -> u16 {
     (v.clamp(0.0, 1.0) * 65535.0 + 0.5) as u16
+}
+
+use quantize16 as q16;
+use quantize8 as q8;
+
+/// The 8-bit sRGB code of a *linear* value, through a 65 536-entry table of the transfer
+/// function (exact to the 8-bit rounding except within 1/65 535 of a code boundary).
+#[inline]
+pub fn srgb8(v: f32) -> u8 {
+    static TABLE: std::sync::OnceLock<Vec<u8>> = std::sync::OnceLock::new();
+    let t = TABLE.get_or_init(|| {
+        (0..65536u32)
+            .map(|i| q8(crate::color::srgb_encode(i as f32 / 65535.0)))
+            .collect()
+    });
+    t[(v.clamp(0.0, 1.0) * 65535.0 + 0.5) as usize]
+}
+
+/// Bits per sample of a PNG.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PngDepth {
+    /// 8 bits.
+    Eight,
+    /// 16 bits (big-endian in the rows, as PNG stores them).
+    Sixteen,
+}
+
+/// Rows of a PNG filled at once (in parallel) before they are compressed.
+const PNG_STRIP_ROWS: usize = 64;
+
+/// Writes a `width` × `height` PNG of `channels` samples per texel (1 grey, 3 RGB, 4 RGBA)
+/// atomically, its rows made by `fill(y, row)` (row 0 at the top; `row` holds the row's bytes
+/// as PNG stores them) in strips filled in parallel and compressed in order (fdeflate, adaptive
+/// filters): no whole-image buffer is made, and the bytes do not depend on the thread count.
+pub fn write_png_rows<F>(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: usize,
+    depth: PngDepth,
+    fill: F,
+) -> Result<()>
+where
+    F: Fn(usize, &mut [u8]) + Sync,
+{
+    use rayon::prelude::*;
+    let bad = |detail: String| CoreError::Encode {
+        path: path.to_path_buf(),
+        detail,
+    };
+    let color = match channels {
+        1 => png::ColorType::Grayscale,
+        3 => png::ColorType::Rgb,
+        4 => png::ColorType::Rgba,
+        n => return Err(bad(format!("{n} channels (expected 1, 3 or 4)"))),
+    };
+    if width == 0 || height == 0 || width > u32::MAX as usize || height > u32::MAX as usize {
+        return Err(bad(format!(
+            "{width}×{height} texels: expected a positive size"
+        )));
+    }
+    let bytes = match depth {
+        PngDepth::Eight => 1,
+        PngDepth::Sixteen => 2,
+    };
+    let row = width * channels * bytes;
+    atomic::write_with(path, |tmp| {
+        let err = |e: png::EncodingError| bad(e.to_string());
+        let file = std::fs::File::create(tmp).map_err(|source| CoreError::Write {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let writer = std::io::BufWriter::with_capacity(1 << 20, file);
+        let mut enc = png::Encoder::new(writer, width as u32, height as u32);
+        enc.set_color(color);
+        enc.set_depth(match depth {
+            PngDepth::Eight => png::BitDepth::Eight,
+            PngDepth::Sixteen => png::BitDepth::Sixteen,
+        });
+        enc.set_compression(png::Compression::Fast);
+        enc.set_filter(png::Filter::Adaptive);
+        let mut wr = enc.write_header().map_err(err)?;
+        let mut stream = wr.stream_writer_with_size(1 << 20).map_err(err)?;
+        let mut strip = vec![0u8; row * PNG_STRIP_ROWS.min(height)];
+        for y0 in (0..height).step_by(PNG_STRIP_ROWS) {
+            let n = PNG_STRIP_ROWS.min(height - y0);
+            strip[..n * row]
+                .par_chunks_mut(row)
+                .enumerate()
+                .for_each(|(k, r)| fill(y0 + k, r));
+            std::io::Write::write_all(&mut stream, &strip[..n * row]).map_err(|source| {
+                CoreError::Write {
+                    path: path.to_path_buf(),
+                    source,
+                }
+            })?;
+        }
+        stream.finish().map_err(err)?;
+        wr.finish().map_err(err)
+    })
 }
 
 /// Writes 1 (grey), 3 (RGB) or 4 (RGBA) maps of already-encoded values in [0, 1] as an 8-bit PNG.
@@ -203,92 +293,54 @@ pub fn write_png8(path: &Path, maps: &[&Map]) -> Result<()> {
     write_png8_with(path, maps, q8)
 }
 
-/// Writes 1 or 3 maps of *linear* values as an 8-bit sRGB PNG (alpha is not encoded). The
-/// transfer function is applied through a 65 536-entry table, exact to the 8-bit rounding except
-/// within 1/65 535 of a code boundary.
+/// Writes 1 or 3 maps of *linear* values as an 8-bit sRGB PNG (alpha is not encoded), through
+/// [`srgb8`].
 pub fn write_png8_srgb(path: &Path, maps: &[&Map]) -> Result<()> {
-    let table: Vec<u8> = (0..65536u32)
-        .map(|i| q8(crate::color::srgb_encode(i as f32 / 65535.0)))
-        .collect();
-    write_png8_with(path, maps, |v| {
-        table[(v.clamp(0.0, 1.0) * 65535.0 + 0.5) as usize]
-    })
+    write_png8_with(path, maps, srgb8)
 }
 
-/// Interleaves `maps` into 8-bit samples with `quantise` (rows in parallel) and encodes them.
+/// Interleaves `maps` into 8-bit samples with `quantise`, row by row, and encodes them.
 fn write_png8_with(path: &Path, maps: &[&Map], quantise: impl Fn(f32) -> u8 + Sync) -> Result<()> {
-    use rayon::prelude::*;
-    let (w, h, ty) = check_maps(
-        path,
-        maps,
-        [
-            ExtendedColorType::L8,
-            ExtendedColorType::Rgb8,
-            ExtendedColorType::Rgba8,
-        ],
-    )?;
+    let (w, h) = check_maps(path, maps)?;
     let n = maps.len();
-    let mut bytes = vec![0u8; w * h * n];
-    bytes
-        .par_chunks_mut(w * n)
-        .enumerate()
-        .for_each(|(y, row)| {
-            for (k, m) in maps.iter().enumerate() {
-                for (x, &v) in m.data()[y * w..(y + 1) * w].iter().enumerate() {
-                    row[x * n + k] = quantise(v);
-                }
+    write_png_rows(path, w, h, n, PngDepth::Eight, |y, row| {
+        for (k, m) in maps.iter().enumerate() {
+            for (x, &v) in m.data()[y * w..(y + 1) * w].iter().enumerate() {
+                row[x * n + k] = quantise(v);
             }
-        });
-    encode_png(path, w, h, &bytes, ty)
+        }
+    })
 }
 
 /// Writes 1, 3 or 4 maps of values in [0, 1] as a 16-bit PNG.
 pub fn write_png16(path: &Path, maps: &[&Map]) -> Result<()> {
-    let (w, h, ty) = check_maps(
-        path,
-        maps,
-        [
-            ExtendedColorType::L16,
-            ExtendedColorType::Rgb16,
-            ExtendedColorType::Rgba16,
-        ],
-    )?;
+    let (w, h) = check_maps(path, maps)?;
     let n = maps.len();
-    let mut bytes = vec![0u8; w * h * n * 2];
-    for (k, m) in maps.iter().enumerate() {
-        for (i, &v) in m.data().iter().enumerate() {
-            let b = q16(v).to_ne_bytes();
-            bytes[2 * (i * n + k)] = b[0];
-            bytes[2 * (i * n + k) + 1] = b[1];
+    write_png_rows(path, w, h, n, PngDepth::Sixteen, |y, row| {
+        for (k, m) in maps.iter().enumerate() {
+            for (x, &v) in m.data()[y * w..(y + 1) * w].iter().enumerate() {
+                let i = 2 * (x * n + k);
+                row[i..i + 2].copy_from_slice(&q16(v).to_be_bytes());
+            }
         }
-    }
-    encode_png(path, w, h, &bytes, ty)
+    })
 }
 
-fn check_maps(
-    path: &Path,
-    maps: &[&Map],
-    types: [ExtendedColorType; 3],
-) -> Result<(usize, usize, ExtendedColorType)> {
-    let ty = match maps.len() {
-        1 => types[0],
-        3 => types[1],
-        4 => types[2],
-        n => {
-            return Err(CoreError::Encode {
-                path: path.to_path_buf(),
-                detail: format!("{n} channels (expected 1, 3 or 4)"),
-            })
-        }
+fn check_maps(path: &Path, maps: &[&Map]) -> Result<(usize, usize)> {
+    let Some(first) = maps.first() else {
+        return Err(CoreError::Encode {
+            path: path.to_path_buf(),
+            detail: "no channels (expected 1, 3 or 4)".into(),
+        });
     };
-    let (w, h) = (maps[0].width(), maps[0].height());
+    let (w, h) = (first.width(), first.height());
     if maps.iter().any(|m| m.width() != w || m.height() != h) {
         return Err(CoreError::Encode {
             path: path.to_path_buf(),
             detail: "channels differ in size".into(),
         });
     }
-    Ok((w, h, ty))
+    Ok((w, h))
 }
 
 /// Sample precision of an EXR layer.
@@ -301,14 +353,10 @@ pub enum ExrPrecision {
 }
 
 /// Writes named single-channel maps into one OpenEXR file (scan lines, one channel per map;
-/// half floats RLE-compressed, f32 uncompressed). Blocks are compressed in parallel; line
-/// order "increasing" makes the compressor write them in order, so the bytes are identical on
-/// every run and at any thread count (with "unspecified" order they land in completion order).
-/// Parallel blocks cut `derma skin --size 4096`'s write stage from 5.4 to 4.5 s on 2 cores,
-/// f32 uncompressed to 3.5 s (BENCHMARKS.md).
+/// half floats RLE-compressed, f32 uncompressed: noisy f32 samples do not compress under RLE,
+/// BENCHMARKS.md) through [`crate::exr_writer`], which compresses blocks in parallel and writes
+/// them in order: the bytes are identical at any thread count.
 pub fn write_exr(path: &Path, channels: &[(&str, &Map)], precision: ExrPrecision) -> Result<()> {
-    use exr::prelude::*;
-    use rayon::prelude::*;
     let (w, h) = match channels.first() {
         Some((_, m)) => (m.width(), m.height()),
         None => {
@@ -318,43 +366,25 @@ pub fn write_exr(path: &Path, channels: &[(&str, &Map)], precision: ExrPrecision
             })
         }
     };
-    let list: Vec<AnyChannel<FlatSamples>> = channels
+    if channels
         .iter()
-        .map(|(name, m)| {
-            let samples = match precision {
-                ExrPrecision::F32 => FlatSamples::F32(m.data().to_vec()),
-                ExrPrecision::F16 => FlatSamples::F16(
-                    m.data()
-                        .par_iter()
-                        .map(|&v| half::f16::from_f32(v))
-                        .collect(),
-                ),
-            };
-            AnyChannel::new(*name, samples)
-        })
-        .collect();
-    let layer = Layer::new(
-        (w, h),
-        LayerAttributes::default(),
-        Encoding {
-            // Noisy f32 samples do not compress under RLE (the files came out at their raw
-            // size, BENCHMARKS.md), so they are stored as they are; half floats keep RLE
-            // (bio.exr: 105 MB of 400 MB raw at 4096²).
-            compression: match precision {
-                ExrPrecision::F32 => Compression::Uncompressed,
-                ExrPrecision::F16 => Compression::RLE,
-            },
-            blocks: Blocks::ScanLines,
-            line_order: LineOrder::Increasing,
-        },
-        AnyChannels::sort(list.into()),
-    );
-    let image = Image::from_layer(layer);
-    atomic::write_with(path, |tmp| {
-        image.write().to_file(tmp).map_err(|e| CoreError::Encode {
+        .any(|(_, m)| m.width() != w || m.height() != h)
+    {
+        return Err(CoreError::Encode {
             path: path.to_path_buf(),
-            detail: e.to_string(),
-        })
+            detail: "channels differ in size".into(),
+        });
+    }
+    let list: Vec<crate::exr_writer::ExrChannel> = channels
+        .iter()
+        .map(|(name, _)| crate::exr_writer::ExrChannel { name, precision })
+        .collect();
+    let compression = match precision {
+        ExrPrecision::F32 => crate::exr_writer::ExrCompression::None,
+        ExrPrecision::F16 => crate::exr_writer::ExrCompression::Rle,
+    };
+    crate::exr_writer::write_exr_rows(path, w, h, &list, compression, |y, c, row| {
+        row.copy_from_slice(&channels[c].1.data()[y * w..(y + 1) * w]);
     })
 }
 
@@ -467,6 +497,44 @@ mod tests {
         let ch = read_exr_channels(&e).unwrap();
         assert_eq!(ch.len(), 2);
         assert_eq!(ch[0].1, m);
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn png_rows_cross_strips_and_read_back_exactly() {
+        // 150 rows: two full strips and a partial one; 16-bit RGB and 8-bit grey, decoded by the
+        // image crate.
+        let d = tmpdir("rows");
+        let (w, h) = (70, 150);
+        let v = |x: usize, y: usize, k: usize| ((x * 977 + y * 131 + k * 7919) % 65536) as u16;
+        let p = d.join("rgb16.png");
+        write_png_rows(&p, w, h, 3, PngDepth::Sixteen, |y, row| {
+            for x in 0..w {
+                for k in 0..3 {
+                    let i = 2 * (3 * x + k);
+                    row[i..i + 2].copy_from_slice(&v(x, y, k).to_be_bytes());
+                }
+            }
+        })
+        .unwrap();
+        let img = image::open(&p).unwrap().into_rgb16();
+        for (x, y, px) in img.enumerate_pixels() {
+            let (x, y) = (x as usize, y as usize);
+            assert_eq!(px.0, [v(x, y, 0), v(x, y, 1), v(x, y, 2)], "({x}, {y})");
+        }
+        let p = d.join("grey8.png");
+        write_png_rows(&p, w, h, 1, PngDepth::Eight, |y, row| {
+            row.iter_mut()
+                .enumerate()
+                .for_each(|(x, b)| *b = v(x, y, 0) as u8);
+        })
+        .unwrap();
+        let img = image::open(&p).unwrap().into_luma8();
+        assert!(img
+            .enumerate_pixels()
+            .all(|(x, y, px)| px.0[0] == v(x as usize, y as usize, 0) as u8));
+        let e = write_png_rows(&p, w, h, 2, PngDepth::Eight, |_, _| {}).unwrap_err();
+        assert!(e.to_string().contains("2 channels"), "{e}");
         std::fs::remove_dir_all(&d).unwrap();
     }
 

@@ -4,7 +4,8 @@
 //! - [`rng::Philox`]: a counter-based random generator keyed by (seed, stream, index), so that a
 //!   random draw never depends on thread order (and can be reproduced on a GPU).
 //! - [`color`]: spectra on the 380–780 nm grid, the CIE 1931 observer, XYZ ↔ linear sRGB.
-//! - [`image_io`]: PNG (8/16-bit) and OpenEXR reading and atomic writing.
+//! - [`image_io`]: PNG (8/16-bit) and OpenEXR reading and atomic writing; [`exr_writer`]: EXR
+//!   files streamed from their rows, blocks compressed in parallel.
 //! - [`mesh`]: OBJ and glTF/GLB loading, unit detection, and [`raster`]: UV-space rasterisation
 //!   of a mesh into per-texel surface points.
 //! - [`progress`]: the one way a long job reports (stages, units, steps, notes, timings).
@@ -27,6 +28,7 @@ mod cie_table;
 pub mod color;
 pub mod dtab;
 pub mod error;
+pub mod exr_writer;
 pub mod gpu;
 pub mod gpu_texture;
 pub mod image_io;

@@ -164,14 +164,24 @@ impl Map {
 
     /// Mean, minimum and maximum over the texels where `mask` (if given) is true.
     pub fn stats(&self, mask: Option<&[bool]>) -> MapStats {
+        MapStats::of(
+            self.data
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| mask.is_none_or(|m| m[*i]))
+                .map(|(_, &v)| v),
+        )
+    }
+}
+
+impl MapStats {
+    /// Mean (summed in f64, in order), minimum and maximum of `values`.
+    pub fn of(values: impl IntoIterator<Item = f32>) -> MapStats {
         let mut sum = 0.0f64;
         let mut n = 0usize;
         let mut lo = f32::INFINITY;
         let mut hi = f32::NEG_INFINITY;
-        for (i, &v) in self.data.iter().enumerate() {
-            if mask.is_some_and(|m| !m[i]) {
-                continue;
-            }
+        for v in values {
             sum += v as f64;
             n += 1;
             lo = lo.min(v);

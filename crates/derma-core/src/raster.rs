@@ -204,7 +204,7 @@ pub fn dilation_sources(covered: &[bool], width: usize, height: usize) -> Option
 }
 
 /// Copies each texel's value from its dilation source.
-pub fn apply_dilation(values: &mut [f32], sources: &[u32]) {
+pub fn apply_dilation<T: Copy>(values: &mut [T], sources: &[u32]) {
     for i in 0..values.len() {
         let s = sources[i] as usize;
         if s != i {

@@ -114,20 +114,16 @@ impl SkinMaps {
 
     /// The maps of a texture set in memory (`derma skin`'s preview).
     pub fn from_render_maps(r: &RenderMaps, wrap: bool) -> SkinMaps {
-        let enc = |m: &Map| {
-            let mut m = m.clone();
+        let enc = |mut m: Map| {
             m.data_mut().iter_mut().for_each(|v| *v = 0.5 * *v + 0.5);
             m
         };
         SkinMaps {
-            base_color: r.base_color.clone(),
-            normal: [enc(&r.normal[0]), enc(&r.normal[1]), enc(&r.normal[2])],
-            roughness: r.roughness.clone(),
-            specular: r.specular.clone(),
-            subsurface: r
-                .subsurface
-                .as_ref()
-                .map(|s| (s.color.clone(), s.radius_mm.clone())),
+            base_color: r.decode_base_color(),
+            normal: r.decode_normal().map(enc),
+            roughness: r.decode_roughness(),
+            specular: r.decode_specular(),
+            subsurface: r.decode_subsurface(),
             wrap,
         }
     }

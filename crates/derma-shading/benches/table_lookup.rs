@@ -1,6 +1,7 @@
 //! Bio → render lookup for a 4096² texture set (16.8 M texels) on all cores: the built-in match
 //! table (simplex and multilinear; base colour + subsurface colour + scatter distance) against the analytic
-//! model's simplex LUT (base colour only). Goal (issue 4): table lookup < 0.5 s on 2 cores.
+//! model's simplex LUT (base colour only), texel by texel and in batches of eight (SIMD lanes).
+//! Goal (issues 4 and 15): table lookup < 0.5 s on 2 cores.
 //!
 //! cargo bench -p derma-shading --bench table_lookup
 
@@ -54,6 +55,14 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+    // The texture-set path: rows looked up eight texels at a time (SIMD lanes).
+    g.bench_function("match_table_simplex_batch", |b| {
+        b.iter(|| {
+            out.par_chunks_mut(SIDE)
+                .zip(tex.par_chunks(SIDE))
+                .for_each(|(o, t)| table.lookup_batch(t, o))
+        })
+    });
     g.bench_function("memory_baseline", |b| {
         b.iter(|| {
             out.par_chunks_mut(SIDE)

@@ -30,4 +30,11 @@ pub trait Appearance: Send + Sync {
     fn shade(&self, bio: &BioTexel) -> ([f32; 3], Option<Subsurface>) {
         (self.albedo(bio), self.subsurface(bio))
     }
+    /// [`Self::shade`] of many texels (`out[i]` for `bio[i]`); implementations may work across
+    /// texels at once, with the same values.
+    fn shade_batch(&self, bio: &[BioTexel], out: &mut [([f32; 3], Option<Subsurface>)]) {
+        for (o, b) in out.iter_mut().zip(bio) {
+            *o = self.shade(b);
+        }
+    }
 }

@@ -219,8 +219,14 @@ impl TableAppearance {
             // coordinates are ∛ of the values on cube-root axes).
             let x = f[self.field[k]];
             // (∛ of 0 comes out tiny and positive: below the first node, clamped to it.)
-            let x = if self.cube_root[k] { cbrt_f32(x) } else { x };
-            let x = x.clamp(nodes[0], nodes[n - 1]);
+            // Negative and NaN inputs fall to the first node: `max` and `min` take the number
+            // (as the SIMD lanes of `lookup_batch` do).
+            let x = if self.cube_root[k] {
+                cbrt_f32(x.max(0.0))
+            } else {
+                x
+            };
+            let x = x.max(nodes[0]).min(nodes[n - 1]);
             let above = nodes[1..].iter().map(|&v| (v <= x) as usize).sum::<usize>();
             let i = above.min(n - 2);
             t[k] = ((x - nodes[i]) * self.inv_step[k][i]).clamp(0.0, 1.0);
@@ -288,6 +294,143 @@ impl TableAppearance {
     }
 }
 
+/// Texels interpolated together by [`TableAppearance::lookup_batch`]: eight f32 lanes fill an
+/// AVX2 register.
+pub const LANES: usize = 8;
+
+impl TableAppearance {
+    /// [`Self::lookup`] of many texels (simplex interpolation), eight at a time: the cell search,
+    /// the fractions' ranking, the weights, ∛ and e^x run across texels in SIMD lanes
+    /// ([`derma_core::numerics::lanes`], where the CPU has AVX2; texel by texel otherwise). The
+    /// lanes perform [`Self::lookup`]'s IEEE operations in the same order, so the values are
+    /// identical on every path.
+    pub fn lookup_batch(&self, bio: &[BioTexel], out: &mut [[f32; N]]) {
+        assert_eq!(bio.len(), out.len(), "one output per texel");
+        #[cfg(target_arch = "x86_64")]
+        if self.interpolation == Interpolation::Simplex && self.d > 0 {
+            if let Some(t) = derma_core::numerics::lanes::Avx2::detect() {
+                // SAFETY: the token proves the CPU has AVX2 and FMA.
+                unsafe { self.lookup_batch_avx2(t, bio, out) };
+                return;
+            }
+        }
+        for (o, b) in out.iter_mut().zip(bio) {
+            *o = self.lookup(b);
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn lookup_batch_avx2(
+        &self,
+        tok: derma_core::numerics::lanes::Avx2,
+        bio: &[BioTexel],
+        out: &mut [[f32; N]],
+    ) {
+        for (b, o) in bio.chunks(LANES).zip(out.chunks_mut(LANES)) {
+            if b.len() == LANES {
+                self.simplex_avx2(tok, b.try_into().expect("a full block"), o);
+            } else {
+                // The last, partial block: padded with its first texel.
+                let block: [BioTexel; LANES] = std::array::from_fn(|l| b[l.min(b.len() - 1)]);
+                let mut res = [[0.0f32; N]; LANES];
+                self.simplex_avx2(tok, &block, &mut res);
+                o.copy_from_slice(&res[..b.len()]);
+            }
+        }
+    }
+
+    /// Kuhn-simplex interpolation and e^x of the colours for one block of eight texels: the
+    /// operations of [`Self::interpolate`] and [`Self::lookup_with`], lane by lane.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn simplex_avx2(
+        &self,
+        tok: derma_core::numerics::lanes::Avx2,
+        bio: &[BioTexel; LANES],
+        out: &mut [[f32; N]],
+    ) {
+        use derma_core::numerics::lanes::{F32x8, I32x8};
+        let d = self.d;
+        let splat = |v: f32| F32x8::splat(tok, v);
+        let mut base = I32x8::splat(tok, 0);
+        let mut t = [splat(0.0); MAX_AXES];
+        for k in 0..d {
+            let (nodes, inv_step, n) = (&self.nodes[k], &self.inv_step[k], self.n_nodes[k]);
+            let f = self.field[k];
+            let x = F32x8::from_array(tok, std::array::from_fn(|l| bio[l].to_array()[f]));
+            let x = if self.cube_root[k] {
+                x.max(splat(0.0)).cbrt()
+            } else {
+                x
+            };
+            let x = x.max(splat(nodes[0])).min(splat(nodes[n - 1]));
+            // The cell: the inner nodes at or below x, counted (a set mask is −1).
+            let (mut lo, mut inv, mut i) =
+                (splat(nodes[0]), splat(inv_step[0]), I32x8::splat(tok, 0));
+            for j in 1..n - 1 {
+                let ge = x.ge(splat(nodes[j]));
+                lo = ge.select(splat(nodes[j]), lo);
+                inv = ge.select(splat(inv_step[j]), inv);
+                i = i.sub(ge.to_bits());
+            }
+            t[k] = x.sub(lo).mul(inv).clamp(0.0, 1.0);
+            base = base.add(i.mul(I32x8::splat(tok, self.stride[k] as i32)));
+        }
+        // Ranks of the fractions, largest first, ties to the lower axis: axis j outranks k
+        // when t_j > t_k, or t_j = t_k and j < k.
+        let mut rank = [[0i32; LANES]; MAX_AXES];
+        for k in 0..d {
+            let mut r = I32x8::splat(tok, 0);
+            for j in 0..d {
+                let above = match j.cmp(&k) {
+                    std::cmp::Ordering::Less => t[j].ge(t[k]),
+                    std::cmp::Ordering::Greater => t[j].gt(t[k]),
+                    std::cmp::Ordering::Equal => continue,
+                };
+                r = r.sub(above.to_bits());
+            }
+            rank[k] = r.to_array();
+        }
+        let ts: [[f32; LANES]; MAX_AXES] = std::array::from_fn(|k| t[k].to_array());
+        let base = base.to_array();
+        for l in 0..LANES {
+            let mut order = [0usize; MAX_AXES];
+            for k in 0..d {
+                order[rank[k][l] as usize] = k;
+            }
+            let mut idx = base[l] as usize;
+            let row = |idx: usize| {
+                let v = &self.values[idx];
+                (F32x8::load(tok, &v[..8]), F32x8::load(tok, &v[4..]))
+            };
+            let (v0, v1) = row(idx);
+            let w0 = splat(1.0 - ts[order[0]][l]);
+            let (mut a, mut b) = (v0.mul(w0), v1.mul(w0));
+            for j in 0..d {
+                idx += self.stride[order[j]];
+                let w = ts[order[j]][l] - if j + 1 < d { ts[order[j + 1]][l] } else { 0.0 };
+                let (va, vb) = row(idx);
+                let w = splat(w);
+                a = a.add(w.mul(va));
+                b = b.add(w.mul(vb));
+            }
+            // The second half starts at value 4.
+            let (a, b) = (a.to_array(), b.to_array());
+            out[l] = std::array::from_fn(|j| if j < 8 { a[j] } else { b[j - 4] });
+        }
+        // The colours back from logarithms, each value across the block's lanes.
+        for c in 0..LOG_VALUES {
+            let e = F32x8::from_array(tok, std::array::from_fn(|l| out[l][c]))
+                .exp()
+                .to_array();
+            for l in 0..LANES {
+                out[l][c] = e[l];
+            }
+        }
+    }
+}
+
 #[inline(always)]
 fn as_lanes(v: &[f32; N]) -> [[f32; 4]; 3] {
     [
@@ -319,15 +462,30 @@ impl Appearance for TableAppearance {
         self.shade(bio).1
     }
     fn shade(&self, bio: &BioTexel) -> ([f32; 3], Option<Subsurface>) {
-        let v = self.lookup(bio);
-        (
-            [v[0], v[1], v[2]],
-            Some(Subsurface {
-                color: [v[3], v[4], v[5]],
-                radius_mm: [v[6], v[7], v[8]],
-            }),
-        )
+        shade_of(&self.lookup(bio))
     }
+    fn shade_batch(&self, bio: &[BioTexel], out: &mut [([f32; 3], Option<Subsurface>)]) {
+        let mut v = [[0.0f32; N]; 64];
+        for (b, o) in bio.chunks(64).zip(out.chunks_mut(64)) {
+            let v = &mut v[..b.len()];
+            self.lookup_batch(b, v);
+            for (o, v) in o.iter_mut().zip(v.iter()) {
+                *o = shade_of(v);
+            }
+        }
+    }
+}
+
+/// A looked-up node row as base colour and subsurface parameters.
+#[inline]
+fn shade_of(v: &[f32; N]) -> ([f32; 3], Option<Subsurface>) {
+    (
+        [v[0], v[1], v[2]],
+        Some(Subsurface {
+            color: [v[3], v[4], v[5]],
+            radius_mm: [v[6], v[7], v[8]],
+        }),
+    )
 }
 
 #[cfg(test)]
@@ -388,6 +546,37 @@ mod tests {
                 // Inside cells simplex and multilinear differ by little on this table.
                 assert!((sx[c] - ml[c]).abs() < 0.02, "{p:?}: {sx:?} vs {ml:?}");
             }
+        }
+    }
+
+    #[test]
+    fn batches_equal_single_lookups_bit_for_bit() {
+        // Texels across and beyond the table's ranges (clamped), 203 of them: full blocks and a
+        // partial one (on a CPU without AVX2 both sides are the scalar path).
+        let ta = TableAppearance::builtin();
+        let rng = derma_core::rng::Philox::new(3, 0);
+        let bio = (0..203u64)
+            .map(|i| {
+                let (u, v) = (rng.uniform4(i, 0), rng.uniform4(i, 1));
+                BioTexel {
+                    melanin: 0.45 * u[0] * u[0] - 0.01,
+                    pheomelanin: 1.2 * u[1] - 0.1,
+                    blood: 0.12 * u[2],
+                    oxygenation: u[3],
+                    stratum_corneum_um: 5.0 + 20.0 * v[0],
+                    epidermis_um: 30.0 + 100.0 * v[1],
+                }
+            })
+            .collect::<Vec<_>>();
+        // NaN inputs fall to the first node on both paths.
+        let mut bio = bio;
+        bio[5].blood = f32::NAN;
+        bio[6].pheomelanin = f32::NAN;
+        let mut fast = vec![[0.0f32; N]; bio.len()];
+        ta.lookup_batch(&bio, &mut fast);
+        for (k, b) in bio.iter().enumerate() {
+            let one = ta.lookup(b).map(f32::to_bits);
+            assert_eq!(fast[k].map(f32::to_bits), one, "texel {k}: {b:?}");
         }
     }
 

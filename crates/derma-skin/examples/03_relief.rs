@@ -132,7 +132,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     std::fs::create_dir_all(&out)?;
     let on = patch(size as u32, true)?;
     let texel = PATCH_MM as f64 / size as f64;
-    let spec = radial_spectrum(on.render.height_mm.data(), size, PATCH_MM as f64);
+    let spec = radial_spectrum(
+        on.bio.channel(|s| s.height_mm).data(),
+        size,
+        PATCH_MM as f64,
+    );
     let plateau = on.config.relief.cell_mm[0] as f64;
     let (lo, hi) = (1.0 / plateau, 1.0 / (4.0 * texel));
     let s = slope(&spec, lo, hi);
@@ -173,7 +177,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let views: Vec<[derma_core::Map; 3]> = [&off, &on]
         .iter()
         .map(|set| {
-            let tex = set.render.textures(true, glam::Vec2::ONE);
+            let maps = set.render.decoded(size);
+            let tex = maps.textures(true, glam::Vec2::ONE);
             render_lit(&m, &t, &tex, &[], 0.0, 512, &grazing)
         })
         .collect();

@@ -4,7 +4,7 @@
 
 use crate::regional::ita_deg;
 use crate::TextureSet;
-use derma_core::color::{linear_srgb_to_xyz, xyz_to_lab};
+use derma_core::color::{linear_srgb_to_xyz, srgb8_decode, xyz_to_lab};
 
 /// Mean colour of one region.
 #[derive(Clone, Debug, PartialEq)]
@@ -21,12 +21,10 @@ pub struct RegionColor {
 
 /// Lab of every texel of the base colour.
 fn lab_map(set: &TextureSet) -> Vec<[f64; 3]> {
-    let [r, g, b] = &set.render.base_color;
-    (0..r.data().len())
-        .map(|i| {
-            let rgb = [r.data()[i], g.data()[i], b.data()[i]].map(f64::from);
-            xyz_to_lab(linear_srgb_to_xyz(rgb))
-        })
+    set.render
+        .base_color
+        .iter()
+        .map(|c| xyz_to_lab(linear_srgb_to_xyz(c.map(|v| srgb8_decode(v) as f64))))
         .collect()
 }
 
@@ -120,10 +118,13 @@ pub struct TiltStats {
 /// Tilt of the tangent-space normal map from +Z over the texels of `region` (mask > 0.7).
 pub fn normal_tilt(set: &TextureSet, region: &str) -> crate::Result<TiltStats> {
     let mask = in_region(set, region)?;
-    let z = set.render.normal[2].data();
+    let z = &set.render.normal;
     let mut t: Vec<f64> = (0..z.len())
         .filter(|&i| mask[i])
-        .map(|i| (z[i].clamp(-1.0, 1.0) as f64).acos().to_degrees())
+        .map(|i| {
+            let nz = z[i][2] as f64 / 65535.0 * 2.0 - 1.0;
+            nz.clamp(-1.0, 1.0).acos().to_degrees()
+        })
         .collect();
     t.sort_by(f64::total_cmp);
     let n = t.len().max(1) as f64;

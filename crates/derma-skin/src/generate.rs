@@ -792,7 +792,7 @@ impl TextureSet {
             appearance: self.appearance,
             surface: &self.surface,
             bio: &self.bio,
-            base_color: &self.render.base_color,
+            render: &self.render,
             counts: self.features.counts(),
             height_range,
             log: &log,

@@ -8,56 +8,69 @@ use derma_core::Map;
 use glam::Vec3;
 use rayon::prelude::*;
 
-/// Tangent-space normals (x, y, z in [−1, 1]) of the displacement `height` (mm) over `surface`.
+/// Tangent-space normals (x, y, z in [−1, 1]) of the displacement `height` (mm) over `surface`;
+/// texels off the surface get +Z.
 pub fn normals_from_height(surface: &Surface, height: &Map) -> [Map; 3] {
     let (w, h) = (surface.width, surface.height);
-    let wrap = surface.period().is_some();
     let hd = height.data();
     let mut out = vec![[0.0f32, 0.0, 1.0]; w * h];
     out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         for (x, o) in row.iter_mut().enumerate() {
-            let i = y * w + x;
-            if !surface.covered(i) {
-                continue;
+            if surface.covered(y * w + x) {
+                *o = tangent_normal(surface, |j| hd[j], x, y);
             }
-            let at = |xx: i64, yy: i64| -> Option<f32> {
-                let (xx, yy) = if wrap {
-                    (xx.rem_euclid(w as i64), yy.rem_euclid(h as i64))
-                } else if xx < 0 || yy < 0 || xx >= w as i64 || yy >= h as i64 {
-                    return None;
-                } else {
-                    (xx, yy)
-                };
-                let j = yy as usize * w + xx as usize;
-                surface.covered(j).then(|| hd[j])
-            };
-            let c = hd[i];
-            let (xi, yi) = (x as i64, y as i64);
-            // Central differences where both neighbours are on the surface, else one-sided.
-            let diff = |a: Option<f32>, b: Option<f32>| match (a, b) {
-                (Some(a), Some(b)) => 0.5 * (b - a),
-                (None, Some(b)) => b - c,
-                (Some(a), None) => c - a,
-                (None, None) => 0.0,
-            };
-            let dh_dx = diff(at(xi - 1, yi), at(xi + 1, yi)); // per texel, +x = +u
-            let dh_dy = diff(at(xi, yi - 1), at(xi, yi + 1)); // per texel, +y = −v
-            let hu = dh_dx * w as f32;
-            let hv = -dh_dy * h as f32;
-            let f = surface.frame(i);
-            let (a, b, cc) = (f.dpdu.dot(f.dpdu), f.dpdu.dot(f.dpdv), f.dpdv.dot(f.dpdv));
-            let det = a * cc - b * b;
-            let g = if det.abs() > 1e-20 {
-                f.dpdu * ((cc * hu - b * hv) / det) + f.dpdv * ((a * hv - b * hu) / det)
-            } else {
-                Vec3::ZERO
-            };
-            let n = (f.n - g).normalize_or(f.n);
-            *o = [n.dot(f.t), n.dot(f.b), n.dot(f.n)];
         }
     });
     let ch = |k: usize| Map::from_vec(w, h, out.iter().map(|v| v[k]).collect()).expect("size");
     [ch(0), ch(1), ch(2)]
+}
+
+/// The tangent-space normal of covered texel (`x`, `y`) from the heights (mm) of its
+/// neighbours on the surface, `height(j)` giving texel `j`'s.
+#[inline]
+pub fn tangent_normal(
+    surface: &Surface,
+    height: impl Fn(usize) -> f32,
+    x: usize,
+    y: usize,
+) -> [f32; 3] {
+    let (w, h) = (surface.width, surface.height);
+    let wrap = surface.period().is_some();
+    let i = y * w + x;
+    let at = |xx: i64, yy: i64| -> Option<f32> {
+        let (xx, yy) = if wrap {
+            (xx.rem_euclid(w as i64), yy.rem_euclid(h as i64))
+        } else if xx < 0 || yy < 0 || xx >= w as i64 || yy >= h as i64 {
+            return None;
+        } else {
+            (xx, yy)
+        };
+        let j = yy as usize * w + xx as usize;
+        surface.covered(j).then(|| height(j))
+    };
+    let c = height(i);
+    let (xi, yi) = (x as i64, y as i64);
+    // Central differences where both neighbours are on the surface, else one-sided.
+    let diff = |a: Option<f32>, b: Option<f32>| match (a, b) {
+        (Some(a), Some(b)) => 0.5 * (b - a),
+        (None, Some(b)) => b - c,
+        (Some(a), None) => c - a,
+        (None, None) => 0.0,
+    };
+    let dh_dx = diff(at(xi - 1, yi), at(xi + 1, yi)); // per texel, +x = +u
+    let dh_dy = diff(at(xi, yi - 1), at(xi, yi + 1)); // per texel, +y = −v
+    let hu = dh_dx * w as f32;
+    let hv = -dh_dy * h as f32;
+    let f = surface.frame(i);
+    let (a, b, cc) = (f.dpdu.dot(f.dpdu), f.dpdu.dot(f.dpdv), f.dpdv.dot(f.dpdv));
+    let det = a * cc - b * b;
+    let g = if det.abs() > 1e-20 {
+        f.dpdu * ((cc * hu - b * hv) / det) + f.dpdv * ((a * hv - b * hu) / det)
+    } else {
+        Vec3::ZERO
+    };
+    let n = (f.n - g).normalize_or(f.n);
+    [n.dot(f.t), n.dot(f.b), n.dot(f.n)]
 }
 
 #[cfg(test)]

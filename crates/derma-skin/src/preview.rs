@@ -4,12 +4,12 @@
 
 use crate::paint::BioMaps;
 use crate::surface::Surface;
-use crate::texture_set::RenderMaps;
+use crate::texture_set::{DecodedMaps, RenderMaps};
 use derma_core::mesh::TriMesh;
 use derma_core::preview::{compose, normalised, render, render_with, sphere, tile, Prop, Textures};
 use derma_core::Map;
 
-impl RenderMaps {
+impl DecodedMaps {
     /// The maps as the software renderer's textures.
     pub fn textures(&self, wrap: bool, uv_scale: glam::Vec2) -> Textures<'_> {
         Textures {
@@ -27,7 +27,11 @@ impl RenderMaps {
 /// Side of a preview panel (pixels): shaded views are this size, thumbnails half.
 pub const PANEL: usize = 512;
 
-/// Shaded views of `render` on its mesh (or a sphere and a tile for patches) plus the contact
+/// Largest side of the maps the software preview samples: larger sets are box-filtered down to
+/// it (a 512-pixel panel resolves no more), which bounds the preview's memory at 8192².
+pub const PREVIEW_MAPS: usize = 2048;
+
+/// Shaded views of `render_maps` on its mesh (or a sphere and a tile for patches) plus the contact
 /// sheet (base colour, normal, height, roughness, melanin, blood): preview.png. `shaded`: views
 /// already rendered (by the GPU renderer, linear radiance after tone mapping, [`PANEL`]²); `None` draws them with the
 /// software renderer.
@@ -39,7 +43,7 @@ pub fn contact_sheet(
     props: &[Prop],
     shaded: Option<Vec<[Map; 3]>>,
 ) -> [Map; 3] {
-    let r = render_maps;
+    let r = &render_maps.decoded(PREVIEW_MAPS);
     let renders = match (shaded, mesh) {
         (Some(v), _) => v,
         (None, mesh) => match mesh {
@@ -87,6 +91,9 @@ pub fn contact_sheet(
         m
     };
     let rough = small(&r.roughness);
+    // Bio thumbnails straight from the samples, reduced to about twice the thumbnail first.
+    let k = (bio.width.max(bio.height) / (2 * t)).max(1);
+    let bio_small = |f: fn(&crate::features::BioSample) -> f32| small(&bio.channel_reduced(k, f));
     let sheet = vec![
         [
             enc(&r.base_color[0]),
@@ -94,10 +101,10 @@ pub fn contact_sheet(
             enc(&r.base_color[2]),
         ],
         [half(&r.normal[0]), half(&r.normal[1]), half(&r.normal[2])],
-        normalised(&small(&r.height_mm)),
+        normalised(&bio_small(|s| s.height_mm)),
         [rough.clone(), rough.clone(), rough],
-        normalised(&small(&bio.channel(|s| s.tissue.melanin))),
-        normalised(&small(&bio.channel(|s| s.tissue.blood))),
+        normalised(&bio_small(|s| s.tissue.melanin)),
+        normalised(&bio_small(|s| s.tissue.blood)),
     ];
     compose(&renders, &sheet, PANEL)
 }

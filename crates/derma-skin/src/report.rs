@@ -7,11 +7,11 @@ use crate::feature_set::FeatureCounts;
 use crate::outputs;
 use crate::paint::BioMaps;
 use crate::surface::Surface;
-use crate::texture_set::HeightRange;
+use crate::texture_set::{HeightRange, RenderMaps};
+use derma_core::map::MapStats;
 use derma_core::mesh::MeshScale;
 use derma_core::progress::Log;
 use derma_core::report::{pretty_json, sha256_file};
-use derma_core::Map;
 use derma_optics::bio::names;
 use serde_json::json;
 use std::path::PathBuf;
@@ -45,8 +45,8 @@ pub struct Run<'a> {
     pub surface: &'a Surface,
     /// The painted bio maps.
     pub bio: &'a BioMaps,
-    /// The base colour maps, linear.
-    pub base_color: &'a [Map; 3],
+    /// The render maps (the base colour's statistics).
+    pub render: &'a RenderMaps,
     /// Features per kind.
     pub counts: FeatureCounts,
     /// Range of height.png.
@@ -74,14 +74,27 @@ pub fn manifest(size: u32, files: &[&str]) -> Vec<u8> {
 
 /// report.json of a run.
 pub fn report(set: &Run) -> Vec<u8> {
-    let mask: Option<Vec<bool>> = set.surface.mesh_surface().map(|m| {
-        (0..set.surface.len())
-            .map(|i| m.raster.covered(i))
-            .collect()
-    });
-    let stat =
-        |f: fn(&crate::features::BioSample) -> f32| set.bio.channel(f).stats(mask.as_deref());
-    let bc = set.base_color;
+    let covered = |i: usize| set.surface.covered(i);
+    let stat = |f: fn(&crate::features::BioSample) -> f32| {
+        MapStats::of(
+            set.bio
+                .texels
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| covered(*i))
+                .map(|(_, s)| f(s)),
+        )
+    };
+    let bc = |k: usize| {
+        MapStats::of(
+            set.render
+                .base_color
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| covered(*i))
+                .map(|(_, c)| derma_core::color::srgb8_decode(c[k])),
+        )
+    };
     let file = |p: &Option<std::path::PathBuf>| {
         p.as_ref()
             .map(|p| json!({"path": p.display().to_string(), "sha256": sha256_file(p)}))
@@ -120,7 +133,7 @@ pub fn report(set: &Run) -> Vec<u8> {
             names::OXYGENATION: stat(|s| s.tissue.oxygenation),
             names::EPIDERMIS_UM: stat(|s| s.tissue.epidermis_um),
             "height_mm": stat(|s| s.height_mm),
-            "base_color_linear": [bc[0].stats(mask.as_deref()), bc[1].stats(mask.as_deref()), bc[2].stats(mask.as_deref())],
+            "base_color_linear": [bc(0), bc(1), bc(2)],
         },
         "notes": set.log.notes,
         "timings_s": set.log.timings,

@@ -4,107 +4,182 @@
 
 use crate::config::MaterialConfig;
 use crate::outputs;
-use crate::paint::{BioMaps, BIO_CHANNELS};
+use crate::paint::{BioChannel, BioMaps, BIO_CHANNELS};
 use crate::surface::Surface;
-use derma_core::image_io::{self, ExrPrecision};
+use derma_core::color::srgb8_decode;
+use derma_core::exr_writer::{write_exr_rows, ExrChannel, ExrCompression};
+use derma_core::image_io::{quantize16, quantize8, srgb8, write_png_rows, ExrPrecision, PngDepth};
 use derma_core::Map;
 use derma_optics::bio::names;
-use derma_shading::Appearance;
+use derma_shading::{Appearance, BioTexel};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::path::Path;
-use std::slice::ChunksMut;
 
 /// Normal-incidence reflectance of hair keratin, n ≈ 1.55 (Stamm, Garcia & Fuchs 1977, "The optical
 /// properties of human hair"): ((1.55 − 1)/(1.55 + 1))² = 0.0465.
 pub const HAIR_F0: f32 = 0.0465;
 pub use derma_core::preview::SPECULAR_SCALE;
 
-/// The render maps, linear values.
+/// The render maps as their files store them: what is in memory is what the files hold
+/// (8-bit sRGB colours, 16-bit normals and scatter distances, 8-bit roughness and specular),
+/// 20 bytes per texel where f32 planes took 60 (issue 15: 4096² in ≤ 1.6 GB). The height is the
+/// bio samples' own ([`BioMaps`]); `decode_*` give linear f32 maps.
 pub struct RenderMaps {
-    /// Diffuse albedo, linear sRGB.
-    pub base_color: [Map; 3],
-    /// glTF perceptual roughness.
-    pub roughness: Map,
-    /// F0 / 0.08.
-    pub specular: Map,
-    /// Tangent-space normal in [−1, 1].
-    pub normal: [Map; 3],
-    /// Displacement from the mean skin surface, mm.
-    pub height_mm: Map,
+    /// Width in texels.
+    pub width: usize,
+    /// Height in texels.
+    pub height: usize,
+    /// base_color.png: diffuse albedo, 8-bit sRGB.
+    pub base_color: Vec<[u8; 3]>,
+    /// roughness.png: glTF perceptual roughness, 8-bit.
+    pub roughness: Vec<u8>,
+    /// specular.png: F0 / 0.08, 8-bit.
+    pub specular: Vec<u8>,
+    /// normal.png: tangent-space normal as n·½ + ½, 16-bit.
+    pub normal: Vec<[u16; 3]>,
     /// Subsurface maps, when the appearance provides them (the match table does).
     pub subsurface: Option<SubsurfaceMaps>,
 }
 
-/// Per-texel subsurface parameters (linear sRGB channels).
+/// Per-texel subsurface parameters (linear sRGB channels), as their files store them.
 pub struct SubsurfaceMaps {
-    /// Burley's surface albedo A (subsurface colour), linear.
-    pub color: [Map; 3],
-    /// Scatter distance (mean free path ℓ) in mm.
-    pub radius_mm: [Map; 3],
+    /// sss_color.png: Burley's surface albedo A (subsurface colour), 8-bit sRGB.
+    pub color: Vec<[u8; 3]>,
+    /// sss_radius.png: scatter distance (mean free path ℓ) / [`SSS_RADIUS_RANGE_MM`], 16-bit.
+    pub radius: Vec<[u16; 3]>,
 }
 
 /// sss_radius.png stores ℓ / SSS_RADIUS_RANGE_MM (16-bit): 0–8 mm, the radial profile's range.
 pub const SSS_RADIUS_RANGE_MM: f32 = 8.0;
 
-/// One row of three colour channels.
-type RgbRow<'a> = [&'a mut [f32]; 3];
-/// Three planar colour channels.
-type RgbPlanes = [Vec<f32>; 3];
-
-/// One row of every output channel of [`convert`], by name.
-struct RowOut<'a> {
-    base_color: [&'a mut [f32]; 3],
-    roughness: &'a mut [f32],
-    specular: &'a mut [f32],
-    /// Subsurface colour and scatter distance, with a subsurface-aware appearance.
-    subsurface: Option<(RgbRow<'a>, RgbRow<'a>)>,
+/// Decoded (linear, f32) render maps, possibly at a reduced size: what renderers sample.
+pub struct DecodedMaps {
+    /// Diffuse albedo, linear sRGB.
+    pub base_color: [Map; 3],
+    /// Tangent-space normal in [−1, 1].
+    pub normal: [Map; 3],
+    /// glTF perceptual roughness.
+    pub roughness: Map,
+    /// F0 / 0.08.
+    pub specular: Map,
 }
 
-/// Planar output channels of [`convert`].
-struct Channels {
-    base_color: [Vec<f32>; 3],
-    roughness: Vec<f32>,
-    specular: Vec<f32>,
-    subsurface: Option<(RgbPlanes, RgbPlanes)>,
-}
-
-impl Channels {
-    fn new(n: usize, subsurface: bool) -> Self {
-        let three = || std::array::from_fn(|_| vec![0.0f32; n]);
+impl RenderMaps {
+    /// Maps of `width` × `height` texels, zero until [`convert`] fills them.
+    fn zeroed(width: usize, height: usize, subsurface: bool) -> Self {
+        let n = width * height;
         Self {
-            base_color: three(),
-            roughness: vec![0.0; n],
-            specular: vec![0.0; n],
-            subsurface: subsurface.then(|| (three(), three())),
+            width,
+            height,
+            base_color: vec![[0; 3]; n],
+            roughness: vec![0; n],
+            specular: vec![0; n],
+            normal: vec![[0; 3]; n],
+            subsurface: subsurface.then(|| SubsurfaceMaps {
+                color: vec![[0; 3]; n],
+                radius: vec![[0; 3]; n],
+            }),
         }
     }
 
-    /// The channels cut into rows of `w` texels, each row holding its slice of every channel.
-    fn rows(&mut self, w: usize) -> Vec<RowOut<'_>> {
-        fn split3(c: &mut [Vec<f32>; 3], w: usize) -> [ChunksMut<'_, f32>; 3] {
-            c.each_mut().map(|v| v.chunks_mut(w))
+    /// Planar f32 maps of `C` channels, each texel from `f` (texel index → values), in
+    /// parallel rows.
+    fn planes<const C: usize>(&self, f: impl Fn(usize) -> [f32; C] + Sync) -> [Map; C] {
+        self.planes_reduced(1, f)
+    }
+
+    /// [`Self::planes`] reduced by the whole factor `k`: each output texel the mean of a k × k
+    /// block.
+    fn planes_reduced<const C: usize>(
+        &self,
+        k: usize,
+        f: impl Fn(usize) -> [f32; C] + Sync,
+    ) -> [Map; C] {
+        let (w, h) = (self.width / k, self.height / k);
+        let mut out: [Vec<f32>; C] = std::array::from_fn(|_| vec![0.0; w * h]);
+        let mut rows: Vec<[&mut [f32]; C]> = Vec::with_capacity(h);
+        let mut its = out.each_mut().map(|v| v.chunks_mut(w));
+        for _ in 0..h {
+            rows.push(its.each_mut().map(|i| i.next().expect("rows")));
         }
-        fn next3<'a>(it: &mut [ChunksMut<'a, f32>; 3]) -> [&'a mut [f32]; 3] {
-            it.each_mut().map(|i| i.next().expect("rows"))
+        let norm = 1.0 / (k * k) as f32;
+        rows.into_par_iter().enumerate().for_each(|(y, r)| {
+            for x in 0..w {
+                let mut acc = [0.0f32; C];
+                for yy in y * k..(y + 1) * k {
+                    for xx in x * k..(x + 1) * k {
+                        let v = f(yy * self.width + xx);
+                        for c in 0..C {
+                            acc[c] += v[c];
+                        }
+                    }
+                }
+                for c in 0..C {
+                    r[c][x] = if k == 1 { acc[c] } else { acc[c] * norm };
+                }
+            }
+        });
+        out.map(|v| Map::from_vec(w, h, v).expect("size"))
+    }
+
+    /// Base colour, linear sRGB.
+    pub fn decode_base_color(&self) -> [Map; 3] {
+        self.planes(|i| self.base_color[i].map(srgb8_decode))
+    }
+
+    /// Tangent-space normal in [−1, 1] (as decoded from normal.png).
+    pub fn decode_normal(&self) -> [Map; 3] {
+        self.planes(|i| self.normal[i].map(|c| c as f32 / 65535.0 * 2.0 - 1.0))
+    }
+
+    /// Perceptual roughness.
+    pub fn decode_roughness(&self) -> Map {
+        let [m] = self.planes(|i| [self.roughness[i] as f32 / 255.0]);
+        m
+    }
+
+    /// Specular level (F0 / 0.08).
+    pub fn decode_specular(&self) -> Map {
+        let [m] = self.planes(|i| [self.specular[i] as f32 / 255.0]);
+        m
+    }
+
+    /// Subsurface colour (linear) and scatter distance (mm), when the set has them.
+    pub fn decode_subsurface(&self) -> Option<([Map; 3], [Map; 3])> {
+        self.subsurface.as_ref().map(|s| {
+            (
+                self.planes(|i| s.color[i].map(srgb8_decode)),
+                self.planes(|i| s.radius[i].map(|c| c as f32 / 65535.0 * SSS_RADIUS_RANGE_MM)),
+            )
+        })
+    }
+
+    /// The maps decoded for a renderer, box-filtered by a whole factor to at most `max_size`
+    /// texels a side (linear values averaged; normals averaged and left for the renderer to
+    /// normalise): previews need no more than their panels resolve.
+    pub fn decoded(&self, max_size: usize) -> DecodedMaps {
+        let k = self.width.max(self.height).div_ceil(max_size.max(1)).max(1);
+        let unit = |c: u16| c as f32 / 65535.0 * 2.0 - 1.0;
+        let [r, g, b, nx, ny, nz, ro, sp] = self.planes_reduced(k, |i| {
+            let (c, n) = (self.base_color[i], self.normal[i]);
+            [
+                srgb8_decode(c[0]),
+                srgb8_decode(c[1]),
+                srgb8_decode(c[2]),
+                unit(n[0]),
+                unit(n[1]),
+                unit(n[2]),
+                self.roughness[i] as f32 / 255.0,
+                self.specular[i] as f32 / 255.0,
+            ]
+        });
+        DecodedMaps {
+            base_color: [r, g, b],
+            normal: [nx, ny, nz],
+            roughness: ro,
+            specular: sp,
         }
-        let mut base = split3(&mut self.base_color, w);
-        let rough = self.roughness.chunks_mut(w);
-        let mut spec = self.specular.chunks_mut(w);
-        let mut sss = self
-            .subsurface
-            .as_mut()
-            .map(|(c, r)| (split3(c, w), split3(r, w)));
-        let mut rows = Vec::new();
-        for roughness in rough {
-            rows.push(RowOut {
-                base_color: next3(&mut base),
-                roughness,
-                specular: spec.next().expect("rows"),
-                subsurface: sss.as_mut().map(|(c, r)| (next3(c), next3(r))),
-            });
-        }
-        rows
     }
 }
 
@@ -112,46 +187,67 @@ impl Channels {
 /// cavity (furrows of the micro-relief, pores, wrinkles).
 pub const CAVITY_DEPTH_MM: f32 = 0.02;
 
-/// Cavity of every texel: how far it lies below the mean of its 3×3 neighbourhood, over
-/// [`CAVITY_DEPTH_MM`], in [0, 1].
+/// Cavity of texel (`x`, `y`) of a `w` × `h` height map (`height(j)`, mm): how far it lies
+/// below the mean of its 3×3 neighbourhood, over [`CAVITY_DEPTH_MM`], in [0, 1].
+#[inline]
+pub fn cavity_at(height: impl Fn(usize) -> f32, w: usize, h: usize, x: usize, y: usize) -> f32 {
+    let (y0, y1) = (y.saturating_sub(1), (y + 1).min(h - 1));
+    let (x0, x1) = (x.saturating_sub(1), (x + 1).min(w - 1));
+    let mut sum = 0.0f32;
+    for yy in y0..=y1 {
+        for xx in x0..=x1 {
+            sum += height(yy * w + xx);
+        }
+    }
+    let n = (y1 - y0 + 1) * (x1 - x0 + 1);
+    ((sum / n as f32 - height(y * w + x)) / CAVITY_DEPTH_MM).clamp(0.0, 1.0)
+}
+
+/// Cavity of every texel of `height_mm` ([`cavity_at`]).
 pub fn cavity(height_mm: &Map) -> Vec<f32> {
     let (w, h) = (height_mm.width(), height_mm.height());
     let d = height_mm.data();
     (0..w * h)
         .into_par_iter()
-        .map(|i| {
-            let (x, y) = (i % w, i / w);
-            let mut sum = 0.0f32;
-            for yy in y.saturating_sub(1)..=(y + 1).min(h - 1) {
-                for xx in x.saturating_sub(1)..=(x + 1).min(w - 1) {
-                    sum += d[yy * w + xx];
-                }
-            }
-            let n = ((y + 1).min(h - 1) - y.saturating_sub(1) + 1)
-                * ((x + 1).min(w - 1) - x.saturating_sub(1) + 1);
-            ((sum / n as f32 - d[i]) / CAVITY_DEPTH_MM).clamp(0.0, 1.0)
-        })
+        .map(|i| cavity_at(|j| d[j], w, h, i % w, i / w))
         .collect()
 }
 
-/// Roughness and specular occlusion in cavities: inside a furrow the walls hide part of the
-/// specular lobe (specular occlusion, as Jimenez et al. 2016, "Practical realtime strategies for
-/// accurate indirect occlusion", apply it to cavities), so specular falls by up to 60 %, and the
-/// furrow's floor scatters more (roughness + 0.15 at most; authored).
+/// Roughness and specular occlusion in a cavity `c`: inside a furrow the walls hide part of
+/// the specular lobe (specular occlusion, as Jimenez et al. 2016, "Practical realtime
+/// strategies for accurate indirect occlusion", apply it to cavities), so specular falls by up
+/// to 60 %, and the furrow's floor scatters more (roughness + 0.15 at most; authored).
+#[inline]
+pub fn occlude(roughness: f32, specular: f32, c: f32) -> (f32, f32) {
+    ((roughness + 0.15 * c).min(1.0), specular * (1.0 - 0.6 * c))
+}
+
+/// [`occlude`] over whole maps, each texel by its cavity in `height_mm`.
 pub fn occlude_cavities(height_mm: &Map, roughness: &mut [f32], specular: &mut [f32]) {
     let c = cavity(height_mm);
     roughness
         .par_iter_mut()
         .zip(specular.par_iter_mut())
         .zip(c.par_iter())
-        .for_each(|((r, s), &c)| {
-            *r = (*r + 0.15 * c).min(1.0);
-            *s *= 1.0 - 0.6 * c;
-        });
+        .for_each(|((r, s), &c)| (*r, *s) = occlude(*r, *s, c));
 }
 
-/// Converts painted bio maps (already dilated on meshes, see [`BioMaps::dilate`]) to render maps;
-/// `dilation` fills the normal map's texels outside the UV charts.
+/// Rows of the render maps converted per parallel task.
+const CONVERT_ROWS: usize = 8;
+
+/// One task's rows of every render map.
+struct Strip<'a> {
+    first_row: usize,
+    base_color: &'a mut [[u8; 3]],
+    roughness: &'a mut [u8],
+    specular: &'a mut [u8],
+    normal: &'a mut [[u16; 3]],
+    subsurface: Option<(&'a mut [[u8; 3]], &'a mut [[u16; 3]])>,
+}
+
+/// Converts painted bio maps (already dilated on meshes, see [`BioMaps::dilate`]) to render maps
+/// in one pass per texel, straight to the files' encodings; `dilation` fills the normal map's
+/// texels outside the UV charts.
 pub fn convert(
     bio: &BioMaps,
     surface: &Surface,
@@ -161,62 +257,78 @@ pub fn convert(
 ) -> RenderMaps {
     let (w, h) = (bio.width, bio.height);
     let has_sss = appearance.subsurface(&bio.texels[0].tissue).is_some();
-    let mut channels = Channels::new(w * h, has_sss);
-    // Rows are handed out in parallel, each with its slice of every channel.
-    channels
-        .rows(w)
-        .into_par_iter()
-        .enumerate()
-        .for_each(|(y, mut row)| {
-            for x in 0..w {
-                let t = &bio.texels[y * w + x];
-                let (a, sub) = appearance.shade(&t.tissue);
-                let ea = t.extra[3].clamp(0.0, 1.0);
-                for k in 0..3 {
-                    row.base_color[k][x] = a[k] + (t.extra[k] - a[k]) * ea;
-                }
-                let base_r = material.roughness_skin
-                    + (material.roughness_lips - material.roughness_skin) * t.lips;
-                row.roughness[x] = base_r + (material.roughness_hair - base_r) * ea;
-                row.specular[x] =
-                    (material.specular_f0 + (HAIR_F0 - material.specular_f0) * ea) / SPECULAR_SCALE;
-                if let (Some(sub), Some((color, radius))) = (sub, row.subsurface.as_mut()) {
-                    for k in 0..3 {
-                        color[k][x] = sub.color[k];
-                        radius[k][x] = sub.radius_mm[k];
-                    }
-                }
+    let mut maps = RenderMaps::zeroed(w, h, has_sss);
+    let height = |j: usize| bio.texels[j].height_mm;
+    let n = w * CONVERT_ROWS;
+    let mut strips = Vec::with_capacity(h.div_ceil(CONVERT_ROWS));
+    {
+        let mut sss = maps
+            .subsurface
+            .as_mut()
+            .map(|s| (s.color.chunks_mut(n), s.radius.chunks_mut(n)));
+        for (k, (((b, r), s), nm)) in maps
+            .base_color
+            .chunks_mut(n)
+            .zip(maps.roughness.chunks_mut(n))
+            .zip(maps.specular.chunks_mut(n))
+            .zip(maps.normal.chunks_mut(n))
+            .enumerate()
+        {
+            strips.push(Strip {
+                first_row: k * CONVERT_ROWS,
+                base_color: b,
+                roughness: r,
+                specular: s,
+                normal: nm,
+                subsurface: sss
+                    .as_mut()
+                    .map(|(c, r)| (c.next().expect("rows"), r.next().expect("rows"))),
+            });
+        }
+    }
+    strips.into_par_iter().for_each(|mut st| {
+        let first = st.first_row * w;
+        let len = st.roughness.len();
+        // The appearance over the whole strip at once (the match table interpolates eight
+        // texels per SIMD register).
+        let tissue: Vec<BioTexel> = bio.texels[first..first + len]
+            .iter()
+            .map(|t| t.tissue)
+            .collect();
+        let mut shade = vec![([0.0f32; 3], None); len];
+        appearance.shade_batch(&tissue, &mut shade);
+        for k in 0..len {
+            let i = first + k;
+            let (x, y) = (i % w, i / w);
+            let t = &bio.texels[i];
+            let (a, sub) = shade[k];
+            let ea = t.extra[3].clamp(0.0, 1.0);
+            st.base_color[k] = std::array::from_fn(|c| srgb8(a[c] + (t.extra[c] - a[c]) * ea));
+            let base_r = material.roughness_skin
+                + (material.roughness_lips - material.roughness_skin) * t.lips;
+            let r = base_r + (material.roughness_hair - base_r) * ea;
+            let s = (material.specular_f0 + (HAIR_F0 - material.specular_f0) * ea) / SPECULAR_SCALE;
+            let (r, s) = occlude(r, s, cavity_at(height, w, h, x, y));
+            st.roughness[k] = quantize8(r);
+            st.specular[k] = quantize8(s);
+            // Normals use only texels on the surface (one-sided differences at chart borders);
+            // texels off it are dilated below.
+            let nrm = if surface.covered(i) {
+                crate::normal_map::tangent_normal(surface, height, x, y)
+            } else {
+                [0.0, 0.0, 1.0]
+            };
+            st.normal[k] = nrm.map(|v| quantize16(0.5 * v + 0.5));
+            if let (Some(sub), Some((color, radius))) = (sub, st.subsurface.as_mut()) {
+                color[k] = sub.color.map(srgb8);
+                radius[k] = sub.radius_mm.map(|v| quantize16(v / SSS_RADIUS_RANGE_MM));
             }
-        });
-    let map = |v: Vec<f32>| Map::from_vec(w, h, v).expect("size");
-    let Channels {
-        base_color,
-        roughness,
-        specular,
-        subsurface,
-    } = channels;
-    let height_mm = bio.channel(|s| s.height_mm);
-    let (mut roughness, mut specular) = (roughness, specular);
-    occlude_cavities(&height_mm, &mut roughness, &mut specular);
-    // Normals use only texels on the surface (one-sided differences at chart borders), then are
-    // dilated themselves; every other map derives from already dilated bio samples.
-    let mut normal = crate::normal_map::normals_from_height(surface, &height_mm);
+        }
+    });
     if let Some(src) = dilation {
-        normal
-            .par_iter_mut()
-            .for_each(|m| derma_core::raster::apply_dilation(m.data_mut(), src));
+        derma_core::raster::apply_dilation(&mut maps.normal, src);
     }
-    RenderMaps {
-        base_color: base_color.map(map),
-        roughness: map(roughness),
-        specular: map(specular),
-        normal,
-        height_mm,
-        subsurface: subsurface.map(|(c, r)| SubsurfaceMaps {
-            color: c.map(map),
-            radius_mm: r.map(map),
-        }),
-    }
+    maps
 }
 
 /// Range of the height map, for decoding height.png.
@@ -228,159 +340,219 @@ pub struct HeightRange {
     pub max_mm: f32,
 }
 
-/// Writes the maps of the texture set into `dir` (each atomically; files in parallel): every
+/// The range of the painted heights (every texel, the gutter's dilated ones included).
+pub fn height_range(bio: &BioMaps) -> HeightRange {
+    let (lo, hi) = bio
+        .texels
+        .par_iter()
+        .fold(
+            || (f32::INFINITY, f32::NEG_INFINITY),
+            |(lo, hi), t| (lo.min(t.height_mm), hi.max(t.height_mm)),
+        )
+        .reduce(
+            || (f32::INFINITY, f32::NEG_INFINITY),
+            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+        );
+    HeightRange {
+        min_mm: lo,
+        max_mm: hi,
+    }
+}
+
+/// Writes the maps of the texture set into `dir` (each atomically; files in parallel, each
+/// streamed from the bio samples or the render maps by rows, with no whole-image copy): every
 /// file of [`crate::outputs::OUTPUTS`] but features.json, preview.png, manifest.json and
-/// report.json, the subsurface maps only when `maps` has them. Returns the files written and the
-/// height range of height.png.
+/// report.json, the subsurface maps only when `maps` has them. Returns the files written and
+/// the height range of height.png.
 pub fn write_maps(
     dir: &Path,
     bio: &BioMaps,
     maps: &RenderMaps,
 ) -> crate::Result<(Vec<&'static str>, HeightRange)> {
-    let hs = maps.height_mm.stats(None);
-    let range = HeightRange {
-        min_mm: hs.min,
-        max_mm: hs.max,
-    };
-    let span = (hs.max - hs.min).max(1e-9);
-    let bio_channel = |f: fn(&crate::features::BioSample) -> f32| bio.channel(f);
+    let range = height_range(bio);
+    let span = (range.max_mm - range.min_mm).max(1e-9);
+    let (w, h) = (bio.width, bio.height);
     let path = |name: &str| dir.join(name);
+    let row = |y: usize| &bio.texels[y * w..(y + 1) * w];
+    let exr = |file: &'static str,
+               chans: &[BioChannel],
+               precision: ExrPrecision,
+               compression: ExrCompression|
+     -> crate::Result<()> {
+        let list: Vec<ExrChannel> = chans
+            .iter()
+            .map(|(name, _)| ExrChannel { name, precision })
+            .collect();
+        Ok(write_exr_rows(
+            &path(file),
+            w,
+            h,
+            &list,
+            compression,
+            |y, c, out| {
+                let f = chans[c].1;
+                for (o, s) in out.iter_mut().zip(row(y)) {
+                    *o = f(s);
+                }
+            },
+        )?)
+    };
+    let rgb8 = |file: &'static str, px: &[[u8; 3]]| -> crate::Result<()> {
+        Ok(write_png_rows(
+            &path(file),
+            w,
+            h,
+            3,
+            PngDepth::Eight,
+            |y, out| {
+                out.copy_from_slice(px[y * w..(y + 1) * w].as_flattened());
+            },
+        )?)
+    };
+    let rgb16 = |file: &'static str, px: &[[u16; 3]]| -> crate::Result<()> {
+        Ok(write_png_rows(
+            &path(file),
+            w,
+            h,
+            3,
+            PngDepth::Sixteen,
+            |y, out| {
+                for (o, v) in out
+                    .chunks_exact_mut(2)
+                    .zip(px[y * w..(y + 1) * w].as_flattened())
+                {
+                    o.copy_from_slice(&v.to_be_bytes());
+                }
+            },
+        )?)
+    };
+    let grey8 = |file: &'static str, px: &[u8]| -> crate::Result<()> {
+        Ok(write_png_rows(
+            &path(file),
+            w,
+            h,
+            1,
+            PngDepth::Eight,
+            |y, out| {
+                out.copy_from_slice(&px[y * w..(y + 1) * w]);
+            },
+        )?)
+    };
+    let f32_none = (ExrPrecision::F32, ExrCompression::None);
     type Job<'a> = Box<dyn FnOnce() -> crate::Result<()> + Send + 'a>;
+    // Largest first, so the last jobs to start are short.
     let mut list: Vec<(&'static str, Job)> = vec![
         (
-            outputs::BASE_COLOR,
+            outputs::BIO,
             Box::new(|| {
-                let c = &maps.base_color;
-                Ok(image_io::write_png8_srgb(
-                    &path(outputs::BASE_COLOR),
-                    &[&c[0], &c[1], &c[2]],
-                )?)
-            }),
-        ),
-        (
-            outputs::NORMAL,
-            Box::new(|| {
-                let enc = maps.normal.clone().map(|mut m| {
-                    m.data_mut().iter_mut().for_each(|v| *v = 0.5 * *v + 0.5);
-                    m
-                });
-                Ok(image_io::write_png16(
-                    &path(outputs::NORMAL),
-                    &[&enc[0], &enc[1], &enc[2]],
-                )?)
-            }),
-        ),
-        (
-            outputs::HEIGHT_EXR,
-            Box::new(|| {
-                Ok(image_io::write_exr(
-                    &path(outputs::HEIGHT_EXR),
-                    &[("height_mm", &maps.height_mm)],
-                    ExrPrecision::F32,
-                )?)
-            }),
-        ),
-        (
-            outputs::HEIGHT_PNG,
-            Box::new(move || {
-                let mut m = maps.height_mm.clone();
-                m.data_mut()
-                    .iter_mut()
-                    .for_each(|v| *v = (*v - hs.min) / span);
-                Ok(image_io::write_png16(&path(outputs::HEIGHT_PNG), &[&m])?)
-            }),
-        ),
-        (
-            outputs::ROUGHNESS,
-            Box::new(|| {
-                Ok(image_io::write_png8(
-                    &path(outputs::ROUGHNESS),
-                    &[&maps.roughness],
-                )?)
-            }),
-        ),
-        (
-            outputs::SPECULAR,
-            Box::new(|| {
-                Ok(image_io::write_png8(
-                    &path(outputs::SPECULAR),
-                    &[&maps.specular],
-                )?)
+                exr(
+                    outputs::BIO,
+                    &BIO_CHANNELS,
+                    ExrPrecision::F16,
+                    BIO_COMPRESSION,
+                )
             }),
         ),
         (
             outputs::MELANIN,
             Box::new(|| {
-                let m = bio_channel(|s| s.tissue.melanin);
-                let p = bio_channel(|s| s.tissue.pheomelanin);
-                Ok(image_io::write_exr(
-                    &path(outputs::MELANIN),
-                    &[(names::MELANIN, &m), (names::PHEOMELANIN, &p)],
-                    ExrPrecision::F32,
-                )?)
+                let c: [BioChannel; 2] = [
+                    (names::MELANIN, |s| s.tissue.melanin),
+                    (names::PHEOMELANIN, |s| s.tissue.pheomelanin),
+                ];
+                exr(outputs::MELANIN, &c, f32_none.0, f32_none.1)
             }),
         ),
         (
             outputs::HEMOGLOBIN,
             Box::new(|| {
-                let b = bio_channel(|s| s.tissue.blood);
-                let o = bio_channel(|s| s.tissue.oxygenation);
-                Ok(image_io::write_exr(
-                    &path(outputs::HEMOGLOBIN),
-                    &[(names::HEMOGLOBIN, &b), (names::OXYGENATION, &o)],
-                    ExrPrecision::F32,
+                let c: [BioChannel; 2] = [
+                    (names::HEMOGLOBIN, |s| s.tissue.blood),
+                    (names::OXYGENATION, |s| s.tissue.oxygenation),
+                ];
+                exr(outputs::HEMOGLOBIN, &c, f32_none.0, f32_none.1)
+            }),
+        ),
+        (
+            outputs::NORMAL,
+            Box::new(|| rgb16(outputs::NORMAL, &maps.normal)),
+        ),
+        (
+            outputs::HEIGHT_EXR,
+            Box::new(|| {
+                let c: [BioChannel; 1] = [("height_mm", |s| s.height_mm)];
+                exr(outputs::HEIGHT_EXR, &c, f32_none.0, f32_none.1)
+            }),
+        ),
+        (
+            outputs::HEIGHT_PNG,
+            Box::new(move || {
+                Ok(write_png_rows(
+                    &path(outputs::HEIGHT_PNG),
+                    w,
+                    h,
+                    1,
+                    PngDepth::Sixteen,
+                    |y, out| {
+                        for (o, s) in out.chunks_exact_mut(2).zip(row(y)) {
+                            let v = quantize16((s.height_mm - range.min_mm) / span);
+                            o.copy_from_slice(&v.to_be_bytes());
+                        }
+                    },
                 )?)
             }),
         ),
         (
-            outputs::BIO,
-            Box::new(|| {
-                let chans: Vec<(&str, Map)> = BIO_CHANNELS
-                    .iter()
-                    .map(|(n, f)| (*n, bio_channel(*f)))
-                    .collect();
-                let refs: Vec<(&str, &Map)> = chans.iter().map(|(n, m)| (*n, m)).collect();
-                Ok(image_io::write_exr(
-                    &path(outputs::BIO),
-                    &refs,
-                    ExrPrecision::F16,
-                )?)
-            }),
+            outputs::BASE_COLOR,
+            Box::new(|| rgb8(outputs::BASE_COLOR, &maps.base_color)),
+        ),
+        (
+            outputs::ROUGHNESS,
+            Box::new(|| grey8(outputs::ROUGHNESS, &maps.roughness)),
+        ),
+        (
+            outputs::SPECULAR,
+            Box::new(|| grey8(outputs::SPECULAR, &maps.specular)),
         ),
     ];
     if let Some(sub) = &maps.subsurface {
+        list.insert(
+            4,
+            (
+                outputs::SSS_RADIUS,
+                Box::new(|| rgb16(outputs::SSS_RADIUS, &sub.radius)),
+            ),
+        );
         list.push((
             outputs::SSS_COLOR,
-            Box::new(|| {
-                let c = &sub.color;
-                Ok(image_io::write_png8_srgb(
-                    &path(outputs::SSS_COLOR),
-                    &[&c[0], &c[1], &c[2]],
-                )?)
-            }),
-        ));
-        list.push((
-            outputs::SSS_RADIUS,
-            Box::new(|| {
-                let r = sub.radius_mm.clone().map(|mut m| {
-                    m.data_mut()
-                        .iter_mut()
-                        .for_each(|v| *v = (*v / SSS_RADIUS_RANGE_MM).clamp(0.0, 1.0));
-                    m
-                });
-                Ok(image_io::write_png16(
-                    &path(outputs::SSS_RADIUS),
-                    &[&r[0], &r[1], &r[2]],
-                )?)
-            }),
+            Box::new(|| rgb8(outputs::SSS_COLOR, &sub.color)),
         ));
     }
-    let files = list.iter().map(|(f, _)| *f).collect();
     list.into_par_iter()
         .map(|(_, j)| j())
         .collect::<crate::Result<Vec<()>>>()?;
+    // Files in manifest order.
+    let files = outputs::OUTPUTS
+        .iter()
+        .map(|o| o.file)
+        .filter(|f| {
+            ![
+                outputs::FEATURES,
+                outputs::PREVIEW,
+                outputs::MANIFEST,
+                outputs::REPORT,
+            ]
+            .contains(f)
+                && (maps.subsurface.is_some()
+                    || ![outputs::SSS_COLOR, outputs::SSS_RADIUS].contains(f))
+        })
+        .collect();
     Ok((files, range))
 }
+
+/// bio.exr's compression: RLE (see BENCHMARKS.md, "EXR compression", for the alternatives'
+/// sizes and times).
+pub const BIO_COMPRESSION: ExrCompression = ExrCompression::Rle;
 
 #[cfg(test)]
 mod tests {

@@ -35,10 +35,8 @@ fn same_seed_is_bit_identical_with_one_or_two_threads() {
         a.bio.texels == b.bio.texels,
         "bio maps differ between 1 and 2 threads"
     );
-    for k in 0..3 {
-        assert!(a.render.base_color[k].data() == b.render.base_color[k].data());
-        assert!(a.render.normal[k].data() == b.render.normal[k].data());
-    }
+    assert!(a.render.base_color == b.render.base_color);
+    assert!(a.render.normal == b.render.normal);
     assert_eq!(
         serde_json::to_string(&a.features.to_json()).unwrap(),
         serde_json::to_string(&b.features.to_json()).unwrap()
@@ -155,7 +153,7 @@ fn tileable_patch_wraps_seamlessly() {
         "edge {edge} vs interior {}",
         inner / 2.0
     );
-    let hm = &g.render.height_mm;
+    let hm = &g.bio.channel(|s| s.height_mm);
     let (mut e2, mut i2) = (0.0f64, 0.0f64);
     for x in 0..w {
         e2 += (hm.get(x, 0) - hm.get(x, h - 1)).abs() as f64;
@@ -230,7 +228,7 @@ fn moles_are_darker_than_their_surroundings() {
         moles.len()
     );
     // Base colour stays in the range of real skin (linear albedo, CIE-derived).
-    let bc = &g.render.base_color;
+    let bc = &g.render.decode_base_color();
     let means = [0, 1, 2].map(|k| bc[k].stats(None).mean);
     assert!(means[0] > means[1] && means[1] > means[2], "{means:?}");
     assert!((0.2..0.7).contains(&means[0]), "{means:?}");

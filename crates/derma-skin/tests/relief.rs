@@ -34,7 +34,8 @@ fn features_stand_out_of_the_relief() {
     // follicles, wrinkles) keep tilts well above the relief's own with it.
     let (on, off) = (run(2048, true), run(2048, false));
     let tilt = |set: &derma_skin::TextureSet, i: usize| {
-        (set.render.normal[2].data()[i].clamp(-1.0, 1.0) as f64)
+        (set.render.normal[i][2] as f64 / 65535.0 * 2.0 - 1.0)
+            .clamp(-1.0, 1.0)
             .acos()
             .to_degrees()
     };

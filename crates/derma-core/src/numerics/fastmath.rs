@@ -10,22 +10,43 @@
 
 /// ln 2 split for Cody–Waite reduction: `LN2_HI` has 16 significant bits, so n·LN2_HI is
 /// exact in f32 for |n| < 2⁸; `LN2_HI + LN2_LO` = ln 2 to f32 precision twice over.
-const LN2_HI: f32 = 0.693_145_75;
-const LN2_LO: f32 = 1.428_606_8e-6;
+pub(crate) const LN2_HI: f32 = 0.693_145_75;
+pub(crate) const LN2_LO: f32 = 1.428_606_8e-6;
+
+/// Taylor coefficients of e^r, 1/k! for k = 0…6 (evaluated by Horner's rule).
+pub(crate) const EXP_POLY: [f32; 7] = [
+    1.0,
+    1.0,
+    0.5,
+    1.0 / 6.0,
+    1.0 / 24.0,
+    1.0 / 120.0,
+    1.0 / 720.0,
+];
+
+/// 1.5 · 2²³: adding and subtracting it rounds an f32 of magnitude below 2²² to an integer,
+/// ties to even, in the current (round-to-nearest) mode.
+pub(crate) const ROUND_MAGIC: f32 = 12_582_912.0;
+
+/// `x` rounded to the nearest integer, ties to even, for |x| < 2²² (the magic-number trick:
+/// two additions, so it vectorises on every x86-64 and lanes give the same bits,
+/// [`super::lanes`]; `f32::round` is a library call without SSE4.1).
+#[inline(always)]
+pub fn round_ties_even(x: f32) -> f32 {
+    (x + ROUND_MAGIC) - ROUND_MAGIC
+}
 
 /// e^x for x in [−87, 88] (outside, clamped: ≈ 1.6·10⁻³⁸ and ≈ 1.65·10³⁸), relative error
 /// below 3·10⁻⁷.
 #[inline(always)]
 pub fn exp_f32(x: f32) -> f32 {
     let x = x.clamp(-87.0, 88.0);
-    let n = (x * std::f32::consts::LOG2_E).round();
+    let n = round_ties_even(x * std::f32::consts::LOG2_E);
     let r = (x - n * LN2_HI) - n * LN2_LO;
-    // Horner form of Σ rᵏ/k!, k ≤ 6.
-    let p = 1.0
-        + r * (1.0
-            + r * (0.5
-                + r * (1.0 / 6.0 + r * (1.0 / 24.0 + r * (1.0 / 120.0 + r * (1.0 / 720.0))))));
-    // 2ⁿ: n in [−126, 127] after the clamp, a normal float's exponent field.
+    let mut p = EXP_POLY[EXP_POLY.len() - 1];
+    for &c in EXP_POLY[..EXP_POLY.len() - 1].iter().rev() {
+        p = c + r * p;
+    }
     let scale = f32::from_bits(((n as i32 + 127) as u32) << 23);
     p * scale
 }

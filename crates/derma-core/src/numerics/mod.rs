@@ -11,6 +11,7 @@
 pub mod bessel;
 pub mod dense;
 pub mod fastmath;
+pub mod lanes;
 pub mod levenberg_marquardt;
 pub mod nnls;
 pub mod sparse;

@@ -1,0 +1,487 @@
+//! OpenEXR scan-line files written straight from their rows (OpenEXR 2 file layout, Kainz,
+//! Bogart & Stanczyk, "Technical Introduction to OpenEXR" and "OpenEXR File Layout"): the caller
+//! fills one channel of one line at a time, blocks are compressed in parallel and written in
+//! order, and no whole-image copy of the samples is ever made.
+//!
+//! Why derma writes EXR itself: a texture set's EXRs hold up to 12 channels of 16.8 M texels;
+//! going through a general image library needed every channel as a whole planar copy (and its
+//! half-float copy) before the first byte was written, 800 MB at 4096² for `bio.exr` alone
+//! (BENCHMARKS.md, issue 15). Reading stays with the `exr` crate, which the tests use as the
+//! independent decoder of every file written here.
+
+use crate::atomic;
+use crate::error::{CoreError, Result};
+use crate::image_io::ExrPrecision;
+use rayon::prelude::*;
+use std::io::{Seek, SeekFrom, Write};
+use std::path::Path;
+
+/// How the blocks of an EXR file are compressed (all lossless).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExrCompression {
+    /// Samples as they are (one line per block).
+    None,
+    /// Byte-wise run-length coding after the byte split and delta predictor (one line per
+    /// block).
+    Rle,
+    /// zlib (deflate level 1) after the same predictor, 16 lines per block.
+    Zip,
+}
+
+impl ExrCompression {
+    /// The header's compression code (OpenEXR file layout, "compression" attribute).
+    fn code(self) -> u8 {
+        match self {
+            ExrCompression::None => 0,
+            ExrCompression::Rle => 1,
+            ExrCompression::Zip => 3,
+        }
+    }
+
+    /// Scan lines per block for the method.
+    pub fn lines_per_block(self) -> usize {
+        match self {
+            ExrCompression::None | ExrCompression::Rle => 1,
+            ExrCompression::Zip => 16,
+        }
+    }
+}
+
+/// One channel of the file: its name and sample precision.
+#[derive(Clone, Copy, Debug)]
+pub struct ExrChannel<'a> {
+    /// Channel name (stored sorted, as the format requires).
+    pub name: &'a str,
+    /// Sample type.
+    pub precision: ExrPrecision,
+}
+
+/// Blocks compressed per batch before they are written (bounds the memory in flight).
+const BLOCKS_PER_BATCH: usize = 256;
+
+/// Writes a `width` × `height` scan-line EXR atomically. `fill(y, c, row)` writes line `y`
+/// (0 = top) of channel `c` (an index into `channels` as given) into `row` (`width` samples).
+/// It is called from several threads; the file's bytes do not depend on how many.
+pub fn write_exr_rows<F>(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: &[ExrChannel<'_>],
+    compression: ExrCompression,
+    fill: F,
+) -> Result<()>
+where
+    F: Fn(usize, usize, &mut [f32]) + Sync,
+{
+    let bad = |detail: String| CoreError::Encode {
+        path: path.to_path_buf(),
+        detail,
+    };
+    if width == 0 || height == 0 || width > i32::MAX as usize || height > i32::MAX as usize {
+        return Err(bad(format!(
+            "{width}×{height} texels: expected a positive size"
+        )));
+    }
+    if channels.is_empty() {
+        return Err(bad("no channels".into()));
+    }
+    // The format stores channels sorted by name, in the header and in every line.
+    let mut order: Vec<usize> = (0..channels.len()).collect();
+    order.sort_by(|&a, &b| channels[a].name.as_bytes().cmp(channels[b].name.as_bytes()));
+    for w in order.windows(2) {
+        if channels[w[0]].name == channels[w[1]].name {
+            return Err(bad(format!(
+                "channel '{}' is given twice",
+                channels[w[0]].name
+            )));
+        }
+    }
+    if let Some(c) = channels
+        .iter()
+        .find(|c| c.name.is_empty() || c.name.len() > 255 || c.name.contains('\0'))
+    {
+        return Err(bad(format!(
+            "channel name '{}': expected 1 to 255 bytes without NUL",
+            c.name
+        )));
+    }
+    let sorted: Vec<ExrChannel> = order.iter().map(|&k| channels[k]).collect();
+    let header = header_bytes(width, height, &sorted, compression);
+    let lpb = compression.lines_per_block();
+    let blocks = height.div_ceil(lpb);
+    let line_bytes: usize = sorted
+        .iter()
+        .map(|c| width * sample_bytes(c.precision))
+        .sum();
+
+    atomic::write_with(path, |tmp| {
+        let io = |source: std::io::Error| CoreError::Write {
+            path: path.to_path_buf(),
+            source,
+        };
+        let file = std::fs::File::create(tmp).map_err(io)?;
+        let mut out = std::io::BufWriter::with_capacity(1 << 20, file);
+        out.write_all(&header).map_err(io)?;
+        let table_at = header.len() as u64;
+        // The offset table, filled in once every block's position is known.
+        out.write_all(&vec![0u8; 8 * blocks]).map_err(io)?;
+        let mut offsets = Vec::with_capacity(blocks);
+        let mut at = table_at + 8 * blocks as u64;
+        for first in (0..blocks).step_by(BLOCKS_PER_BATCH) {
+            let last = (first + BLOCKS_PER_BATCH).min(blocks);
+            let chunks: Vec<Vec<u8>> = (first..last)
+                .into_par_iter()
+                .map_init(
+                    || (vec![0.0f32; width], Vec::with_capacity(line_bytes * lpb)),
+                    |(row, raw), b| {
+                        let (y0, y1) = (b * lpb, ((b + 1) * lpb).min(height));
+                        raw.clear();
+                        for y in y0..y1 {
+                            for &k in &order {
+                                row.iter_mut().for_each(|v| *v = 0.0);
+                                fill(y, k, row);
+                                push_samples(raw, row, channels[k].precision);
+                            }
+                        }
+                        chunk(y0 as i32, raw, compression)
+                    },
+                )
+                .collect();
+            for c in &chunks {
+                offsets.push(at);
+                out.write_all(c).map_err(io)?;
+                at += c.len() as u64;
+            }
+        }
+        out.seek(SeekFrom::Start(table_at)).map_err(io)?;
+        let table: Vec<u8> = offsets.iter().flat_map(|o| o.to_le_bytes()).collect();
+        out.write_all(&table).map_err(io)?;
+        out.flush().map_err(io)?;
+        Ok(())
+    })
+}
+
+fn sample_bytes(p: ExrPrecision) -> usize {
+    match p {
+        ExrPrecision::F32 => 4,
+        ExrPrecision::F16 => 2,
+    }
+}
+
+/// Appends `row` to `raw` as little-endian samples of `precision`.
+fn push_samples(raw: &mut Vec<u8>, row: &[f32], precision: ExrPrecision) {
+    match precision {
+        ExrPrecision::F32 => {
+            for v in row {
+                raw.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        ExrPrecision::F16 => {
+            for v in row {
+                raw.extend_from_slice(&half::f16::from_f32(*v).to_le_bytes());
+            }
+        }
+    }
+}
+
+/// One chunk: first line, data size, data (stored raw when compression does not shrink it, as
+/// the format allows: a reader takes a block of the uncompressed size as uncompressed).
+fn chunk(y: i32, raw: &[u8], compression: ExrCompression) -> Vec<u8> {
+    let packed = match compression {
+        ExrCompression::None => None,
+        ExrCompression::Rle => Some(rle(&predict(raw))),
+        ExrCompression::Zip => Some(miniz_oxide::deflate::compress_to_vec_zlib(&predict(raw), 1)),
+    };
+    let data = match &packed {
+        Some(p) if p.len() < raw.len() => p.as_slice(),
+        _ => raw,
+    };
+    let mut c = Vec::with_capacity(8 + data.len());
+    c.extend_from_slice(&y.to_le_bytes());
+    c.extend_from_slice(&(data.len() as i32).to_le_bytes());
+    c.extend_from_slice(data);
+    c
+}
+
+/// The RLE and ZIP methods' preprocessing: the bytes at even positions, then those at odd
+/// positions (the low and high bytes of half floats fall apart), then each byte replaced by its
+/// difference to the previous one plus 128 (mod 256).
+fn predict(raw: &[u8]) -> Vec<u8> {
+    let mut t = vec![0u8; raw.len()];
+    let (even, odd) = t.split_at_mut(raw.len().div_ceil(2));
+    for (k, pair) in raw.chunks(2).enumerate() {
+        even[k] = pair[0];
+        if let Some(&b) = pair.get(1) {
+            odd[k] = b;
+        }
+    }
+    let mut prev = t.first().copied().unwrap_or(0);
+    for v in t.iter_mut().skip(1) {
+        let cur = *v;
+        *v = cur.wrapping_sub(prev).wrapping_add(128);
+        prev = cur;
+    }
+    t
+}
+
+/// OpenEXR's run-length code: a signed count byte, then either count + 1 copies of one byte
+/// (count ≥ 0, runs of 3 to 128) or −count literal bytes (count < 0, up to 127).
+fn rle(data: &[u8]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(data.len() / 2);
+    let n = data.len();
+    let run_at = |i: usize| {
+        let mut j = i + 1;
+        while j < n && data[j] == data[i] && j - i < 128 {
+            j += 1;
+        }
+        j - i
+    };
+    let mut i = 0;
+    while i < n {
+        let r = run_at(i);
+        if r >= 3 {
+            out.push((r - 1) as u8);
+            out.push(data[i]);
+            i += r;
+        } else {
+            // Literals until the next run of three (or 127 bytes).
+            let start = i;
+            while i < n && i - start < 127 {
+                if i + 2 < n && data[i] == data[i + 1] && data[i] == data[i + 2] {
+                    break;
+                }
+                i += 1;
+            }
+            out.push((-((i - start) as i32)) as i8 as u8);
+            out.extend_from_slice(&data[start..i]);
+        }
+    }
+    out
+}
+
+/// The header: magic number, version 2 (single-part scan lines), the required attributes, and
+/// the terminating NUL.
+fn header_bytes(
+    width: usize,
+    height: usize,
+    channels: &[ExrChannel<'_>],
+    compression: ExrCompression,
+) -> Vec<u8> {
+    let mut h = Vec::new();
+    h.extend_from_slice(&20000630i32.to_le_bytes());
+    // Version 2; bit 10 (0x400) marks names longer than 31 bytes.
+    let long_names = channels.iter().any(|c| c.name.len() > 31);
+    h.extend_from_slice(&(2u32 | if long_names { 0x400 } else { 0 }).to_le_bytes());
+    let mut attr = |name: &str, ty: &str, value: &[u8]| {
+        h.extend_from_slice(name.as_bytes());
+        h.push(0);
+        h.extend_from_slice(ty.as_bytes());
+        h.push(0);
+        h.extend_from_slice(&(value.len() as i32).to_le_bytes());
+        h.extend_from_slice(value);
+    };
+    let mut chlist = Vec::new();
+    for c in channels {
+        chlist.extend_from_slice(c.name.as_bytes());
+        chlist.push(0);
+        let pixel_type: i32 = match c.precision {
+            ExrPrecision::F16 => 1,
+            ExrPrecision::F32 => 2,
+        };
+        chlist.extend_from_slice(&pixel_type.to_le_bytes());
+        chlist.extend_from_slice(&[0, 0, 0, 0]); // pLinear, reserved
+        chlist.extend_from_slice(&1i32.to_le_bytes()); // x sampling
+        chlist.extend_from_slice(&1i32.to_le_bytes()); // y sampling
+    }
+    chlist.push(0);
+    attr("channels", "chlist", &chlist);
+    attr("compression", "compression", &[compression.code()]);
+    let window: Vec<u8> = [0i32, 0, width as i32 - 1, height as i32 - 1]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    attr("dataWindow", "box2i", &window);
+    attr("displayWindow", "box2i", &window);
+    attr("lineOrder", "lineOrder", &[0]); // increasing y
+    attr("pixelAspectRatio", "float", &1.0f32.to_le_bytes());
+    let centre: Vec<u8> = [0.0f32, 0.0].iter().flat_map(|v| v.to_le_bytes()).collect();
+    attr("screenWindowCenter", "v2f", &centre);
+    attr("screenWindowWidth", "float", &1.0f32.to_le_bytes());
+    h.push(0);
+    h
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tmp(tag: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("derma-exr-{tag}-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d.join("t.exr")
+    }
+
+    /// Decodes with the `exr` crate (an independent implementation of the format).
+    fn read(path: &Path) -> Vec<(String, usize, usize, Vec<f32>)> {
+        use exr::prelude::*;
+        let img = read_all_flat_layers_from_file(path).unwrap();
+        let l = &img.layer_data[0];
+        l.channel_data
+            .list
+            .iter()
+            .map(|c| {
+                (
+                    c.name.to_string(),
+                    l.size.width(),
+                    l.size.height(),
+                    c.sample_data.values_as_f32().collect(),
+                )
+            })
+            .collect()
+    }
+
+    /// A field with runs (flat areas, which RLE and ZIP shrink) and noise (which they cannot).
+    fn value(c: usize, x: usize, y: usize) -> f32 {
+        let flat = x < 20 || (x / 7 + y / 5) % 3 == 0;
+        if flat {
+            c as f32 * 0.25
+        } else {
+            let h = (x as u64 * 0x9e37_79b9 ^ y as u64 * 0x85eb_ca6b ^ c as u64 * 0xc2b2_ae35)
+                .wrapping_mul(0x2545_f491_4f6c_dd1d);
+            (h >> 40) as f32 / (1u64 << 24) as f32 - 0.3
+        }
+    }
+
+    #[test]
+    fn every_compression_reads_back_exactly_in_an_independent_decoder() {
+        // Odd sizes (not a multiple of ZIP's 16 lines), mixed precisions, names out of order.
+        let (w, h) = (37, 41);
+        let chans = [
+            ExrChannel {
+                name: "melanin",
+                precision: ExrPrecision::F32,
+            },
+            ExrChannel {
+                name: "blood",
+                precision: ExrPrecision::F16,
+            },
+            ExrChannel {
+                name: "Z.long_channel_name_of_more_than_31_bytes",
+                precision: ExrPrecision::F16,
+            },
+        ];
+        for comp in [
+            ExrCompression::None,
+            ExrCompression::Rle,
+            ExrCompression::Zip,
+        ] {
+            let p = tmp(&format!("{comp:?}"));
+            write_exr_rows(&p, w, h, &chans, comp, |y, c, row| {
+                for (x, v) in row.iter_mut().enumerate() {
+                    *v = value(c, x, y);
+                }
+            })
+            .unwrap();
+            let got = read(&p);
+            assert_eq!(got.len(), 3);
+            // Half the texels are flat: the compressed files are smaller than the samples.
+            let samples = (w * h * (4 + 2 + 2)) as u64;
+            let size = std::fs::metadata(&p).unwrap().len();
+            assert_eq!(
+                comp == ExrCompression::None,
+                size > samples,
+                "{comp:?}: {size} bytes"
+            );
+            for (k, ch) in chans.iter().enumerate() {
+                let (_, gw, gh, data) = got.iter().find(|g| g.0 == ch.name).unwrap();
+                assert_eq!((*gw, *gh), (w, h));
+                for y in 0..h {
+                    for x in 0..w {
+                        let want = match ch.precision {
+                            ExrPrecision::F32 => value(k, x, y),
+                            ExrPrecision::F16 => half::f16::from_f32(value(k, x, y)).to_f32(),
+                        };
+                        assert_eq!(
+                            data[y * w + x].to_bits(),
+                            want.to_bits(),
+                            "{comp:?} {} ({x}, {y})",
+                            ch.name
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn rle_codes_runs_and_literals_within_their_limits() {
+        // A decoder of the format's RLE, written from its description.
+        fn unrle(mut d: &[u8]) -> Vec<u8> {
+            let mut out = Vec::new();
+            while let [c, rest @ ..] = d {
+                let c = *c as i8;
+                if c < 0 {
+                    let n = (-(c as i32)) as usize;
+                    out.extend_from_slice(&rest[..n]);
+                    d = &rest[n..];
+                } else {
+                    out.extend(std::iter::repeat_n(rest[0], c as usize + 1));
+                    d = &rest[1..];
+                }
+            }
+            out
+        }
+        let mut data = vec![7u8; 300];
+        data.extend((0..400).map(|i| (i * 37 % 251) as u8));
+        data.extend([1, 1, 2, 2, 2, 3]);
+        let packed = rle(&data);
+        assert_eq!(unrle(&packed), data);
+        // 300 equal bytes: runs of 128, 128 and 44 (6 bytes), far below the input.
+        assert_eq!(&packed[..6], &[127, 7, 127, 7, 43, 7]);
+    }
+
+    #[test]
+    fn bytes_do_not_depend_on_threads() {
+        let chans = [ExrChannel {
+            name: "h",
+            precision: ExrPrecision::F16,
+        }];
+        let write = |threads: usize, tag: &str| {
+            let p = tmp(tag);
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    write_exr_rows(&p, 300, 700, &chans, ExrCompression::Zip, |y, c, row| {
+                        for (x, v) in row.iter_mut().enumerate() {
+                            *v = value(c, x, y);
+                        }
+                    })
+                })
+                .unwrap();
+            std::fs::read(&p).unwrap()
+        };
+        assert_eq!(write(1, "t1"), write(3, "t3"));
+    }
+
+    #[test]
+    fn bad_input_is_named() {
+        let p = tmp("bad");
+        let c = [
+            ExrChannel {
+                name: "a",
+                precision: ExrPrecision::F16,
+            },
+            ExrChannel {
+                name: "a",
+                precision: ExrPrecision::F16,
+            },
+        ];
+        let e = write_exr_rows(&p, 4, 4, &c, ExrCompression::Rle, |_, _, _| {}).unwrap_err();
+        assert!(e.to_string().contains("'a' is given twice"), "{e}");
+        let e = write_exr_rows(&p, 0, 4, &c[..1], ExrCompression::Rle, |_, _, _| {}).unwrap_err();
+        assert!(e.to_string().contains("0×4"), "{e}");
+        assert!(!p.exists());
+    }
+}
