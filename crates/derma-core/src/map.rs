@@ -81,43 +81,32 @@ impl Map {
     }
 
     /// Bilinear sample at continuous texel coordinates (texel centres at integers).
+    #[inline]
     pub fn sample_texel(&self, fx: f32, fy: f32, wrap: bool) -> f32 {
-        // ⌊·⌋ by truncation and correction: avoids a libm call per sample on baseline x86-64.
-        let x0 = {
-            let t = fx as i64 as f32;
-            if fx < t {
-                t - 1.0
-            } else {
-                t
-            }
-        };
-        let y0 = {
-            let t = fy as i64 as f32;
-            if fy < t {
-                t - 1.0
-            } else {
-                t
-            }
-        };
-        let tx = fx - x0;
-        let ty = fy - y0;
-        let (w, h) = (self.width as i64, self.height as i64);
-        let idx = |x: i64, y: i64| -> usize {
-            let (x, y) = if wrap {
-                (x.rem_euclid(w), y.rem_euclid(h))
-            } else {
-                (x.clamp(0, w - 1), y.clamp(0, h - 1))
-            };
-            (y * w + x) as usize
-        };
-        let (x0, y0) = (x0 as i64, y0 as i64);
-        let a = self.data[idx(x0, y0)];
-        let b = self.data[idx(x0 + 1, y0)];
-        let c = self.data[idx(x0, y0 + 1)];
-        let d = self.data[idx(x0 + 1, y0 + 1)];
-        let top = a + (b - a) * tx;
-        let bot = c + (d - c) * tx;
-        top + (bot - top) * ty
+        self.at_taps(&Taps::texel(self.width, self.height, fx, fy, wrap))
+    }
+
+    /// The bilinear sample of `taps` (made for this map's size: maps of one size share them).
+    #[inline]
+    fn at_taps(&self, t: &Taps) -> f32 {
+        let a = self.data[t.idx[0]];
+        let b = self.data[t.idx[1]];
+        let c = self.data[t.idx[2]];
+        let d = self.data[t.idx[3]];
+        let top = a + (b - a) * t.tx;
+        let bot = c + (d - c) * t.tx;
+        top + (bot - top) * t.ty
+    }
+
+    /// [`Map::sample_uv`] at the coordinates of `taps`, reusing their texels and weights when
+    /// the map has the size they were made for (the same value either way).
+    #[inline]
+    pub fn sample(&self, taps: &Taps) -> f32 {
+        if (self.width, self.height) == (taps.width, taps.height) {
+            self.at_taps(taps)
+        } else {
+            self.sample_uv(taps.u, taps.v, taps.wrap)
+        }
     }
 
     /// Resamples to a new size by bilinear filtering (area-averaging first when shrinking by more
@@ -192,6 +181,70 @@ impl MapStats {
             min: lo,
             max: hi,
             count: n,
+        }
+    }
+}
+
+/// The four texels and the weights of one bilinear sample on maps of one size: several maps
+/// sampled at the same point (the fields a texel reads) share the index arithmetic.
+#[derive(Clone, Copy, Debug)]
+pub struct Taps {
+    idx: [usize; 4],
+    tx: f32,
+    ty: f32,
+    width: usize,
+    height: usize,
+    u: f32,
+    v: f32,
+    wrap: bool,
+}
+
+impl Taps {
+    /// The taps of texture coordinates (`u`, `v`) (v up) on `width` × `height` maps.
+    #[inline]
+    pub fn uv(width: usize, height: usize, u: f32, v: f32, wrap: bool) -> Taps {
+        let fx = u * width as f32 - 0.5;
+        let fy = (1.0 - v) * height as f32 - 0.5;
+        Taps {
+            u,
+            v,
+            ..Taps::texel(width, height, fx, fy, wrap)
+        }
+    }
+
+    /// The taps of continuous texel coordinates (texel centres at integers).
+    #[inline]
+    fn texel(width: usize, height: usize, fx: f32, fy: f32, wrap: bool) -> Taps {
+        // ⌊·⌋ by truncation and correction: avoids a libm call per sample on baseline x86-64.
+        let floor = |f: f32| {
+            let t = f as i64 as f32;
+            if f < t {
+                t - 1.0
+            } else {
+                t
+            }
+        };
+        let (x0, y0) = (floor(fx), floor(fy));
+        let (w, h) = (width as i64, height as i64);
+        let idx = |x: i64, y: i64| -> usize {
+            let (x, y) = if wrap {
+                (x.rem_euclid(w), y.rem_euclid(h))
+            } else {
+                (x.clamp(0, w - 1), y.clamp(0, h - 1))
+            };
+            (y * w + x) as usize
+        };
+        let (xi, yi) = (x0 as i64, y0 as i64);
+        Taps {
+            idx: [idx(xi, yi), idx(xi + 1, yi), idx(xi, yi + 1), idx(xi + 1, yi + 1)],
+            tx: fx - x0,
+            ty: fy - y0,
+            width,
+            height,
+            // Texel coordinates back to (u, v), for maps of other sizes.
+            u: (fx + 0.5) / width as f32,
+            v: 1.0 - (fy + 0.5) / height as f32,
+            wrap,
         }
     }
 }

@@ -30,6 +30,34 @@ pub fn index(name: &str) -> Option<usize> {
     REGIONS.iter().position(|r| *r == name)
 }
 
+/// [`index`] at compile time (a name that is no region fails the build): per-texel code reads
+/// weights by constant index, `w[region!("cheeks")]`.
+pub const fn index_const(name: &str) -> usize {
+    let mut k = 0;
+    while k < REGIONS.len() {
+        let (a, b) = (REGIONS[k].as_bytes(), name.as_bytes());
+        if a.len() == b.len() {
+            let mut i = 0;
+            while i < a.len() && a[i] == b[i] {
+                i += 1;
+            }
+            if i == a.len() {
+                return k;
+            }
+        }
+        k += 1;
+    }
+    panic!("no such region")
+}
+
+/// The index of a region name in [`REGIONS`], checked at compile time.
+#[macro_export]
+macro_rules! region {
+    ($name:literal) => {
+        const { $crate::regions::index_const($name) }
+    };
+}
+
 #[inline]
 fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
     let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
@@ -57,11 +85,61 @@ pub type Rect = [f32; 4];
 #[derive(Clone, Debug)]
 pub struct Regions {
     lm: Landmarks,
+    /// The landmarks `weights` reads, looked up once (it runs per texel).
+    at: Points,
     /// Depth of the head's vertical axis (mean of the ears' z).
     axis_z: f32,
     /// Non-skin charts: mouth cavity, then eye sockets.
     mouth_charts: Vec<Rect>,
     socket_charts: Vec<Rect>,
+}
+
+/// One side's landmarks (left: +x, right: −x).
+#[derive(Clone, Copy, Debug)]
+pub struct Side {
+    /// Eye centre.
+    pub eye: Vec3,
+    /// Inner canthus.
+    pub canthus_inner: Vec3,
+    /// Outer canthus.
+    pub canthus_outer: Vec3,
+    /// Ear.
+    pub ear: Vec3,
+    /// Mouth corner.
+    pub mouth_corner: Vec3,
+}
+
+/// The landmarks the region weights read, by field instead of by name.
+#[derive(Clone, Copy, Debug)]
+struct Points {
+    left: Side,
+    right: Side,
+    nose_tip: Vec3,
+    subnasale: Vec3,
+    chin: Vec3,
+    menton: Vec3,
+    hairline: Vec3,
+}
+
+impl Points {
+    fn of(lm: &Landmarks) -> Points {
+        let side = |s: &str| Side {
+            eye: lm.get(&format!("eye_centre_{s}")),
+            canthus_inner: lm.get(&format!("canthus_inner_{s}")),
+            canthus_outer: lm.get(&format!("canthus_outer_{s}")),
+            ear: lm.get(&format!("ear_{s}")),
+            mouth_corner: lm.get(&format!("mouth_corner_{s}")),
+        };
+        Points {
+            left: side("left"),
+            right: side("right"),
+            nose_tip: lm.get("nose_tip"),
+            subnasale: lm.get("subnasale"),
+            chin: lm.get("chin"),
+            menton: lm.get("menton"),
+            hairline: lm.get("hairline"),
+        }
+    }
 }
 
 /// Region weights at one point, in [`REGIONS`] order.
@@ -73,6 +151,7 @@ impl Regions {
     pub fn new(lm: Landmarks, mouth_charts: Vec<Rect>, socket_charts: Vec<Rect>) -> Self {
         let axis_z = 0.5 * (lm.get("ear_left").z + lm.get("ear_right").z);
         Self {
+            at: Points::of(&lm),
             lm,
             axis_z,
             mouth_charts,
@@ -91,6 +170,20 @@ impl Regions {
         &self.lm
     }
 
+    /// The subnasale landmark.
+    pub fn subnasale(&self) -> Vec3 {
+        self.at.subnasale
+    }
+
+    /// The landmarks of the side of the face at x (left for x ≥ 0), looked up once.
+    pub fn side(&self, x: f32) -> &Side {
+        if x >= 0.0 {
+            &self.at.left
+        } else {
+            &self.at.right
+        }
+    }
+
     /// Frontness: the cosine of the point's azimuth about the head's vertical axis (1 straight
     /// ahead, 0 at the sides, −1 at the back).
     pub fn azimuth_cos(&self, p: Vec3) -> f32 {
@@ -101,8 +194,8 @@ impl Regions {
     /// Height of the scalp hairline at azimuth cosine `c`: the trichion in front, receding at the
     /// temples, above the ears, down to the nape (authored on the landmarks).
     pub fn hairline_y(&self, c: f32) -> f32 {
-        let t = self.lm.get("hairline").y;
-        let ear = 0.5 * (self.lm.get("ear_left").y + self.lm.get("ear_right").y);
+        let t = self.at.hairline.y;
+        let ear = 0.5 * (self.at.left.ear.y + self.at.right.ear.y);
         pwl(
             &[
                 (-1.0, ear - 50.0),
@@ -129,23 +222,24 @@ impl Regions {
 
     /// Weights of every region at surface point `p` with texture coordinate `uv`.
     pub fn weights(&self, p: Vec3, uv: Vec2) -> Weights {
-        let lm = &self.lm;
+        let at = &self.at;
         let mouth_interior = Self::in_rects(&self.mouth_charts, uv);
         let eye_sockets = Self::in_rects(&self.socket_charts, uv);
         let skin = 1.0 - mouth_interior.max(eye_sockets);
         let c = self.azimuth_cos(p);
         let front = smoothstep(0.1, 0.35, c);
         let (x, y) = (p.x, p.y);
-        let side = if x >= 0.0 { "left" } else { "right" };
+        let (side, this) = if x >= 0.0 {
+            ("left", &at.left)
+        } else {
+            ("right", &at.right)
+        };
         let s = Landmarks::side_sign(side);
         let ax = x * s; // distance towards this side
-        let eye = lm.get(&format!("eye_centre_{side}"));
-        let ci = lm.get(&format!("canthus_inner_{side}"));
-        let co = lm.get(&format!("canthus_outer_{side}"));
-        let ear_p = lm.get(&format!("ear_{side}"));
-        let mc = lm.get(&format!("mouth_corner_{side}"));
-        let (nose_tip, subnasale) = (lm.get("nose_tip"), lm.get("subnasale"));
-        let (chin, menton) = (lm.get("chin"), lm.get("menton"));
+        let (eye, ci, co) = (this.eye, this.canthus_inner, this.canthus_outer);
+        let (ear_p, mc) = (this.ear, this.mouth_corner);
+        let (nose_tip, subnasale) = (at.nose_tip, at.subnasale);
+        let (chin, menton) = (at.chin, at.menton);
 
         // Ears: the auricle, ~63 × 35 mm (Farkas 1994), standing out from the side of the head.
         let ey = (y - ear_p.y) / 33.0;
@@ -217,7 +311,7 @@ impl Regions {
 
         // Lips (vermilion): from corner to corner, the upper vermilion 8 mm tall with a cupid's
         // bow, the lower 10 mm (vermilion heights ls–sto ≈ 8, sto–li ≈ 10 mm; Farkas 1994).
-        let mouth_y = 0.5 * (lm.get("mouth_corner_left").y + lm.get("mouth_corner_right").y);
+        let mouth_y = 0.5 * (at.left.mouth_corner.y + at.right.mouth_corner.y);
         let half = mc.x.abs();
         let lip_h = if y > mouth_y {
             8.0 - 1.5 * (-(x / 4.0).powi(2)).exp() + 1.0 * (-((x.abs() - 6.0) / 4.0).powi(2)).exp()
@@ -244,7 +338,7 @@ impl Regions {
             .clamp(0.0, 1.0);
 
         // Neck: below the jaw line, which runs from under the menton to 38 mm below the ears.
-        let ear_y = 0.5 * (lm.get("ear_left").y + lm.get("ear_right").y);
+        let ear_y = 0.5 * (at.left.ear.y + at.right.ear.y);
         let jaw_y = pwl(
             &[
                 (-1.0, ear_y - 50.0),

@@ -12,7 +12,7 @@ use crate::regional::{self, Person};
 use derma_core::mesh::TriMesh;
 use derma_core::raster::{apply_dilation, dilation_sources, UvRaster};
 use derma_core::Map;
-use derma_head::{regions, Head, Regions, REGIONS};
+use derma_head::{region, regions, Head, Regions, REGIONS};
 use glam::{Vec2, Vec3};
 
 /// Resolution of the generated fields.
@@ -97,21 +97,20 @@ fn feature_values(
     p: Vec3,
     person: &Person,
 ) -> ([f32; 10], Vec3, f32) {
-    let g = |name: &str| w[regions::index(name).expect("region")];
-    let lm = r.landmarks();
-    let skin = 1.0 - g("mouth_interior").max(g("eye_sockets"));
-    let scalp = g("scalp");
+    let g = |i: usize| w[i];
+    let skin = 1.0 - g(region!("mouth_interior")).max(g(region!("eye_sockets")));
+    let scalp = g(region!("scalp"));
     let beard = if person.sex == regional::Sex::Male {
-        BEARD_TO_SCALP * g("beard")
+        BEARD_TO_SCALP * g(region!("beard"))
     } else {
         0.0
     };
-    let eyebrows = g("eyebrows");
-    let eyes = (g("eyelids") + g("eye_sockets")).min(1.0);
-    let lips = g("lips");
-    let face = g("face");
+    let eyebrows = g(region!("eyebrows"));
+    let eyes = (g(region!("eyelids")) + g(region!("eye_sockets"))).min(1.0);
+    let lips = g(region!("lips"));
+    let face = g(region!("face"));
     // Freckles: where the sun falls — cheeks, nose, forehead (thesis §5.3.5).
-    let freckles = (g("cheeks") + 0.9 * g("nose") + 0.35 * g("forehead") + 0.3 * g("upper_lip")
+    let freckles = (g(region!("cheeks")) + 0.9 * g(region!("nose")) + 0.35 * g(region!("forehead")) + 0.3 * g(region!("upper_lip"))
         - lips
         - eyebrows)
         .clamp(0.0, 1.0);
@@ -120,23 +119,21 @@ fn feature_values(
     // Pores: facial follicle density is highest on the nose, then cheeks and chin, lower on the
     // forehead and the rest of the face (Pagnoni et al. 1994, Br J Dermatol 131:862, cyanoacrylate
     // biopsies by region); relative weights authored in that order.
-    let pores = (g("nose")
-        + 0.75 * g("cheeks")
-        + 0.6 * g("chin")
-        + 0.55 * g("forehead")
-        + 0.35 * (face - g("nose") - g("cheeks") - g("chin") - g("forehead")).max(0.0)
+    let pores = (g(region!("nose"))
+        + 0.75 * g(region!("cheeks"))
+        + 0.6 * g(region!("chin"))
+        + 0.55 * g(region!("forehead"))
+        + 0.35 * (face - g(region!("nose")) - g(region!("cheeks")) - g(region!("chin")) - g(region!("forehead"))).max(0.0)
         - eyes
         - lips
         - eyebrows)
         .clamp(0.0, 1.0);
     // Wrinkle families and their directions.
-    let eye_l = lm.get("eye_centre_left");
-    let side = if p.x >= 0.0 { "left" } else { "right" };
+    let eye_l = r.side(1.0).eye;
     let s = if p.x >= 0.0 { 1.0 } else { -1.0 };
-    let eye = lm.get(&format!("eye_centre_{side}"));
-    let co = lm.get(&format!("canthus_outer_{side}"));
-    let mc = lm.get(&format!("mouth_corner_{side}"));
-    let sn = lm.get("subnasale");
+    let this = r.side(p.x);
+    let (eye, co, mc) = (this.eye, this.canthus_outer, this.mouth_corner);
+    let sn = r.subnasale();
     let q = Vec2::new(p.x, p.y);
     let mut best = (0.0f32, Vec3::ZERO, 0.0f32);
     let mut consider = |weight: f32, dir: Vec3, len: f32| {
@@ -146,7 +143,7 @@ fn feature_values(
     };
     // Forehead lines: horizontal, across the middle of the forehead.
     consider(
-        g("forehead") * smoothstep(eye_l.y + 28.0, eye_l.y + 36.0, p.y),
+        g(region!("forehead")) * smoothstep(eye_l.y + 28.0, eye_l.y + 36.0, p.y),
         Vec3::X,
         0.9,
     );
@@ -282,16 +279,16 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
                 Vec3::X
             };
             let tv = to_uv(tension, 1.0);
-            let g = |name: &str| w[regions::index(name).expect("region")];
-            let skin = 1.0 - g("mouth_interior").max(g("eye_sockets"));
+            let g = |i: usize| w[i];
+            let skin = 1.0 - g(region!("mouth_interior")).max(g(region!("eye_sockets")));
             // Relief depth by region (authored): coarser on the nose, finest on the eyelids,
             // none on the lip vermilion (its own vertical folds are not modelled).
             let relief = (skin
-                * (1.0 - g("lips"))
-                * (1.0 + 0.3 * g("nose")
-                    - 0.5 * g("eyelids")
-                    - 0.2 * g("scalp")
-                    - 0.2 * g("ears")))
+                * (1.0 - g(region!("lips")))
+                * (1.0 + 0.3 * g(region!("nose"))
+                    - 0.5 * g(region!("eyelids"))
+                    - 0.2 * g(region!("scalp"))
+                    - 0.2 * g(region!("ears"))))
             .clamp(0.0, 1.5);
             let t = mesh.triangles[raster.triangle[i] as usize];
             let [b1, b2] = raster.bary[i];

@@ -53,15 +53,22 @@ impl FieldSet {
 /// The vector at (u, v) of a vector field's three maps (direction R, G with 0.5 = 0; length B).
 #[inline]
 pub fn decode_vector(f: &[Map; 3], u: f32, v: f32, wrap: bool) -> UvVector {
-    let x = 2.0 * f[0].sample_uv(u, v, wrap) - 1.0;
-    let y = 2.0 * f[1].sample_uv(u, v, wrap) - 1.0;
+    let (w, h) = (f[0].width(), f[0].height());
+    decode_vector_at(f, &derma_core::map::Taps::uv(w, h, u, v, wrap))
+}
+
+/// [`decode_vector`] at the point of `taps`.
+#[inline]
+pub fn decode_vector_at(f: &[Map; 3], taps: &derma_core::map::Taps) -> UvVector {
+    let x = 2.0 * f[0].sample(taps) - 1.0;
+    let y = 2.0 * f[1].sample(taps) - 1.0;
     let d = glam::Vec2::new(x, y);
     UvVector {
         dir: d.normalize_or_zero(),
         length: if d.length() < 1e-3 {
             0.0
         } else {
-            f[2].sample_uv(u, v, wrap).clamp(0.0, 1.0)
+            f[2].sample(taps).clamp(0.0, 1.0)
         },
     }
 }

@@ -12,6 +12,7 @@ use crate::index::GridCursor;
 use crate::noise::{BandNoise, NOISE_STREAM, RELIEF_STREAM};
 use crate::surface::Surface;
 use derma_core::progress::{Progress, Unit};
+use derma_core::map::Taps;
 use derma_core::Map;
 use derma_optics::bio::names;
 use derma_shading::BioTexel;
@@ -189,6 +190,12 @@ pub fn paint_with(
         amp(b.height_mm),
     ];
     let wrap = surface.period().is_some();
+    // The size most fields share (the built-in head's are all FIELD_RESOLUTION²).
+    let field_size = regional
+        .as_ref()
+        .and_then(|r| r.first().copied())
+        .or(lips_map)
+        .map_or((1, 1), |m| (m.width(), m.height()));
     let w = surface.width;
     let mut texels = vec![BioSample::default(); surface.len()];
     texels
@@ -220,30 +227,30 @@ pub fn paint_with(
                     extra: [0.0; 4],
                     lips: 0.0,
                 };
+                // Every field this texel reads, sampled through one set of bilinear taps
+                // (the fields share a size; others are sampled on their own).
+                let uv = surface.uv(i);
+                let taps = Taps::uv(field_size.0, field_size.1, uv.x, uv.y, wrap);
                 if let Some(r) = &regional {
-                    let uv = surface.uv(i);
-                    let at = |k: usize| r[k].sample_uv(uv.x, uv.y, wrap);
+                    let at = |k: usize| r[k].sample(&taps);
                     s.tissue.blood *= at(0);
                     s.tissue.melanin *= at(1);
                     s.tissue.oxygenation = (s.tissue.oxygenation + at(2)).clamp(0.0, 1.0);
                     s.tissue.epidermis_um *= at(3);
                 }
-                if measured.melanin.is_some() || measured.blood.is_some() {
-                    let uv = surface.uv(i);
-                    if let Some(m) = &measured.melanin {
-                        s.tissue.melanin = m.sample_uv(uv.x, uv.y, wrap);
-                    }
-                    if let Some(m) = &measured.blood {
-                        s.tissue.blood = m.sample_uv(uv.x, uv.y, wrap);
-                    }
+                if let Some(m) = &measured.melanin {
+                    s.tissue.melanin = m.sample(&taps);
                 }
-                if let Some((prm, depth, tension)) = &relief {
-                    let uv = surface.uv(i);
-                    let scale = depth.sample_uv(uv.x, uv.y, wrap).max(0.0);
+                if let Some(m) = &measured.blood {
+                    s.tissue.blood = m.sample(&taps);
+                }
+                // The surface frame where the relief needs it (its normal is `normal(i)`).
+                let frame = relief.as_ref().map(|_| surface.frame(i));
+                if let (Some((prm, depth, tension)), Some(f)) = (&relief, &frame) {
+                    let scale = depth.sample(&taps).max(0.0);
                     if scale > 0.0 {
-                        let f = surface.frame(i);
                         let t = tension
-                            .map(|maps| crate::field::decode_vector(maps, uv.x, uv.y, wrap))
+                            .map(|maps| crate::field::decode_vector_at(maps, &taps))
                             .map_or(glam::Vec3::ZERO, |v| {
                                 let d = f.dpdu * v.dir.x + f.dpdv * v.dir.y;
                                 (d - f.n * f.n.dot(d)).normalize_or_zero()
@@ -254,12 +261,11 @@ pub fn paint_with(
                     }
                 }
                 if let Some(m) = lips_map {
-                    let uv = surface.uv(i);
-                    apply_lips(&lip, m.sample_uv(uv.x, uv.y, wrap).clamp(0.0, 1.0), s);
+                    apply_lips(&lip, m.sample(&taps).clamp(0.0, 1.0), s);
                 }
                 let q = PaintPoint {
                     p,
-                    n: surface.normal(i),
+                    n: frame.map_or_else(|| surface.normal(i), |f| f.n),
                 };
                 for (kind, cursor) in kinds.iter().zip(cursors.iter_mut()) {
                     let ids = cursor.query(q.p);

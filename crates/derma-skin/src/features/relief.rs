@@ -117,12 +117,17 @@ const NEIGHBOURS: [[i32; 3]; 27] = {
 };
 
 /// The 27 sites around one cell of one octave, kept while consecutive texels stay in that cell
-/// (texels are much smaller than cells, so most texels reuse them).
+/// (texels are much smaller than cells, so most texels reuse them); also as coordinate columns
+/// padded to 28 with a far site, four to an SSE register.
 #[derive(Clone, Copy, Debug)]
 struct CellSites {
     base: [i32; 3],
     sites: [Vec3A; 27],
+    columns: [[f32; 28]; 3],
 }
+
+/// A coordinate no site has: the padding column's distance is never the smallest two.
+const FAR: f32 = 1e18;
 
 /// Per-thread cache of the sites around the last cell of each octave (results do not depend on
 /// it: a cache miss recomputes the same sites).
@@ -146,29 +151,55 @@ fn nearest_two(
         Some(c) if c.base == b => c,
         _ => {
             let mut sites = [Vec3A::ZERO; 27];
-            for (s, off) in sites.iter_mut().zip(NEIGHBOURS) {
+            let mut columns = [[FAR; 28]; 3];
+            for (k, (s, off)) in sites.iter_mut().zip(NEIGHBOURS).enumerate() {
                 *s = Vec3A::from(site_wrapped(
                     [b[0] + off[0], b[1] + off[1], b[2] + off[2]],
                     o as u32,
                     seed,
                     wrap,
                 ));
+                (columns[0][k], columns[1][k], columns[2][k]) = (s.x, s.y, s.z);
             }
-            cache.octaves[o].insert(CellSites { base: b, sites })
+            cache.octaves[o].insert(CellSites {
+                base: b,
+                sites,
+                columns,
+            })
         }
     };
-    let qa = Vec3A::from(q);
-    let (mut s1, mut d1, mut s2, mut d2) = (Vec3A::ZERO, f32::MAX, Vec3A::ZERO, f32::MAX);
-    for &s in &cell.sites {
-        let d = (s - qa).length_squared();
-        if d < d1 {
-            (s2, d2) = (s1, d1);
-            (s1, d1) = (s, d);
-        } else if d < d2 {
-            (s2, d2) = (s, d);
-        }
+    let (i1, d1, i2, d2) = two_smallest(&squared_distances(q, &cell.columns));
+    (Vec3::from(cell.sites[i1]), d1, Vec3::from(cell.sites[i2]), d2)
+}
+
+/// Squared distances from `q` to the sites in `columns`, as `(s − q).length_squared()`
+/// computes them: (dx² + dy²) + dz².
+#[inline]
+fn squared_distances(q: Vec3, columns: &[[f32; 28]; 3]) -> [f32; 28] {
+    let mut d = [0.0f32; 28];
+    for k in 0..28 {
+        let (dx, dy, dz) = (columns[0][k] - q.x, columns[1][k] - q.y, columns[2][k] - q.z);
+        d[k] = (dx * dx + dy * dy) + dz * dz;
     }
-    (Vec3::from(s1), d1, Vec3::from(s2), d2)
+    d
+}
+
+/// The smallest and second smallest of `d` with their indices, ties to the lower index (what a
+/// scan keeping the two best by strict comparison finds).
+#[inline]
+fn two_smallest(d: &[f32; 28]) -> (usize, f32, usize, f32) {
+    let first = |d: &[f32; 28], skip: usize| {
+        let m = d
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| *k != skip)
+            .fold(f32::MAX, |m, (_, &v)| m.min(v));
+        let k = (0..28).find(|&k| k != skip && d[k] == m).unwrap_or(0);
+        (k, m)
+    };
+    let (i1, d1) = first(d, usize::MAX);
+    let (i2, d2) = first(d, i1);
+    (i1, d1, i2, d2)
 }
 
 /// Weight of an octave of cell size `cell` at texel size `texel` (both mm): 0 below two texels,
