@@ -244,29 +244,25 @@ pub fn paint_with(
                 if let Some(m) = &measured.blood {
                     s.tissue.blood = m.sample(&taps);
                 }
-                // The surface frame where the relief needs it (its normal is `normal(i)`).
-                let frame = relief.as_ref().map(|_| surface.frame(i));
-                if let (Some((prm, depth, tension)), Some(f)) = (&relief, &frame) {
+                let (n, [dpdu, dpdv]) = surface.normal_jacobian(i);
+                if let Some((prm, depth, tension)) = &relief {
                     let scale = depth.sample(&taps).max(0.0);
                     if scale > 0.0 {
                         let t = tension
                             .map(|maps| crate::field::decode_vector_at(maps, &taps))
                             .map_or(glam::Vec3::ZERO, |v| {
-                                let d = f.dpdu * v.dir.x + f.dpdv * v.dir.y;
-                                (d - f.n * f.n.dot(d)).normalize_or_zero()
+                                let d = dpdu * v.dir.x + dpdv * v.dir.y;
+                                (d - n * n.dot(d)).normalize_or_zero()
                             });
-                        let texel = f.texel_area(surface.width, surface.height).sqrt();
+                        let texel = crate::surface::texel_area(dpdu, dpdv, surface.width, surface.height).sqrt();
                         s.height_mm +=
-                            relief::height_cached(prm, p, f.n, t, scale, texel, &mut relief_cache);
+                            relief::height_cached(prm, p, n, t, scale, texel, &mut relief_cache);
                     }
                 }
                 if let Some(m) = lips_map {
                     apply_lips(&lip, m.sample(&taps).clamp(0.0, 1.0), s);
                 }
-                let q = PaintPoint {
-                    p,
-                    n: frame.map_or_else(|| surface.normal(i), |f| f.n),
-                };
+                let q = PaintPoint { p, n };
                 for (kind, cursor) in kinds.iter().zip(cursors.iter_mut()) {
                     let ids = cursor.query(q.p);
                     if !ids.is_empty() {

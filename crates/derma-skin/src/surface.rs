@@ -23,8 +23,14 @@ pub struct Frame {
 impl Frame {
     /// Surface area covered by one texel of a `w`×`h` texture, mm².
     pub fn texel_area(&self, w: usize, h: usize) -> f32 {
-        self.dpdu.cross(self.dpdv).length() / (w * h) as f32
+        texel_area(self.dpdu, self.dpdv, w, h)
     }
+}
+
+/// Surface area covered by one texel of a `w`×`h` texture with UV Jacobian (∂P/∂u, ∂P/∂v), mm².
+#[inline]
+pub fn texel_area(dpdu: Vec3, dpdv: Vec3, w: usize, h: usize) -> f32 {
+    dpdu.cross(dpdv).length() / (w * h) as f32
 }
 
 /// What a surface is made of.
@@ -176,6 +182,22 @@ impl Surface {
                 let nn = |k: usize| m.mesh.normals[idx[k] as usize];
                 (nn(0) * (1.0 - w1 - w2) + nn(1) * w1 + nn(2) * w2).normalize_or(Vec3::Z)
             }
+        }
+    }
+
+    /// Unit normal and ∂P/∂u, ∂P/∂v (mm per unit of texture coordinate) of a covered texel: the
+    /// parts of [`Surface::frame`] that need no tangent.
+    #[inline]
+    pub fn normal_jacobian(&self, i: usize) -> (Vec3, [Vec3; 2]) {
+        match &self.geometry {
+            Geometry::Patch { size_mm, .. } => (
+                Vec3::Z,
+                [
+                    Vec3::new(size_mm[0], 0.0, 0.0),
+                    Vec3::new(0.0, size_mm[1], 0.0),
+                ],
+            ),
+            Geometry::Mesh(m) => (self.normal(i), m.jacobians[m.raster.triangle[i] as usize]),
         }
     }
 

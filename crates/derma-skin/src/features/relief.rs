@@ -13,7 +13,7 @@
 //! are never narrower than ¾ texel (their cross-section kept), so the relief is band-limited at
 //! the output resolution: no aliasing at 1024², more detail as the size grows.
 
-use glam::{Vec3, Vec3A};
+use glam::Vec3;
 
 /// Parameters of the relief (config `[relief]`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -95,8 +95,22 @@ fn site(c: [i32; 3], o: u32, seed: u32) -> Vec3 {
     Vec3::new(c[0] as f32 + u(0), c[1] as f32 + u(10), c[2] as f32 + u(20))
 }
 
-/// The 27 neighbour offsets, nearest classes first (own cell, faces, edges, corners), so the
-/// search below can skip most of the far ones.
+/// The 3 × 3 × 3 block of sites around one cell of one octave, kept while consecutive texels
+/// stay in that cell (texels are much smaller than cells, so most texels reuse them); when the
+/// texel moves to a neighbouring cell, the sites the two blocks share are kept and only the
+/// others computed. Sites are stored as coordinate columns (in [`NEIGHBOURS`] order, padded
+/// to 28 with a far site) for the distance loop.
+#[derive(Clone, Copy, Debug)]
+struct CellSites {
+    base: [i32; 3],
+    columns: [[f32; 28]; 3],
+}
+
+/// A coordinate no site has: the padding slot's distance is never among the smallest two.
+const FAR: f32 = 1e18;
+
+/// The 27 neighbour offsets, nearest classes first (own cell, faces, edges, corners): the
+/// order of a block's slots, which decides between sites at exactly equal distances.
 const NEIGHBOURS: [[i32; 3]; 27] = {
     let mut out = [[0i32; 3]; 27];
     let mut k = 0;
@@ -116,18 +130,23 @@ const NEIGHBOURS: [[i32; 3]; 27] = {
     out
 };
 
-/// The 27 sites around one cell of one octave, kept while consecutive texels stay in that cell
-/// (texels are much smaller than cells, so most texels reuse them); also as coordinate columns
-/// padded to 28 with a far site, four to an SSE register.
-#[derive(Clone, Copy, Debug)]
-struct CellSites {
-    base: [i32; 3],
-    sites: [Vec3A; 27],
-    columns: [[f32; 28]; 3],
-}
+/// Slot of each offset (indexed (dz+1)·9 + (dy+1)·3 + dx+1): its place in [`NEIGHBOURS`].
+const SLOTS: [usize; 27] = {
+    let mut out = [0usize; 27];
+    let mut k = 0;
+    while k < 27 {
+        let d = NEIGHBOURS[k];
+        out[((d[2] + 1) * 9 + (d[1] + 1) * 3 + d[0] + 1) as usize] = k;
+        k += 1;
+    }
+    out
+};
 
-/// A coordinate no site has: the padding column's distance is never the smallest two.
-const FAR: f32 = 1e18;
+/// Slot of neighbour offset `d` (each −1, 0 or 1) in a [`CellSites`] block.
+#[inline]
+fn slot(d: [i32; 3]) -> usize {
+    SLOTS[((d[2] + 1) * 9 + (d[1] + 1) * 3 + d[0] + 1) as usize]
+}
 
 /// Per-thread cache of the sites around the last cell of each octave (results do not depend on
 /// it: a cache miss recomputes the same sites).
@@ -136,7 +155,8 @@ pub struct ReliefCache {
     octaves: [Option<CellSites>; 3],
 }
 
-/// The two nearest sites of `q` (in cell units) and their squared distances.
+/// The two nearest sites of `q` (in cell units) and their squared distances (of sites at
+/// exactly equal distances, the first in [`NEIGHBOURS`] order).
 #[inline]
 fn nearest_two(
     q: Vec3,
@@ -147,29 +167,35 @@ fn nearest_two(
 ) -> (Vec3, f32, Vec3, f32) {
     let base = q.floor();
     let b = [base.x as i32, base.y as i32, base.z as i32];
-    let cell = match &cache.octaves[o] {
+    let cell = match &mut cache.octaves[o] {
         Some(c) if c.base == b => c,
-        _ => {
-            let mut sites = [Vec3A::ZERO; 27];
+        entry => {
+            let old = *entry;
             let mut columns = [[FAR; 28]; 3];
-            for (k, (s, off)) in sites.iter_mut().zip(NEIGHBOURS).enumerate() {
-                *s = Vec3A::from(site_wrapped(
-                    [b[0] + off[0], b[1] + off[1], b[2] + off[2]],
-                    o as u32,
-                    seed,
-                    wrap,
-                ));
-                (columns[0][k], columns[1][k], columns[2][k]) = (s.x, s.y, s.z);
+            for dz in -1..=1 {
+                for dy in -1..=1 {
+                    for dx in -1..=1 {
+                        let c = [b[0] + dx, b[1] + dy, b[2] + dz];
+                        let k = slot([dx, dy, dz]);
+                        // Shared with the previous block: copied, not recomputed.
+                        let kept = old.and_then(|o| {
+                            let d = [c[0] - o.base[0], c[1] - o.base[1], c[2] - o.base[2]];
+                            d.iter().all(|v| v.abs() <= 1).then(|| {
+                                let j = slot(d);
+                                [o.columns[0][j], o.columns[1][j], o.columns[2][j]]
+                            })
+                        });
+                        let s = kept.unwrap_or_else(|| site_wrapped(c, o as u32, seed, wrap).to_array());
+                        (columns[0][k], columns[1][k], columns[2][k]) = (s[0], s[1], s[2]);
+                    }
+                }
             }
-            cache.octaves[o].insert(CellSites {
-                base: b,
-                sites,
-                columns,
-            })
+            entry.insert(CellSites { base: b, columns })
         }
     };
     let (i1, d1, i2, d2) = two_smallest(&squared_distances(q, &cell.columns));
-    (Vec3::from(cell.sites[i1]), d1, Vec3::from(cell.sites[i2]), d2)
+    let site = |k: usize| Vec3::new(cell.columns[0][k], cell.columns[1][k], cell.columns[2][k]);
+    (site(i1), d1, site(i2), d2)
 }
 
 /// Squared distances from `q` to the sites in `columns`, as `(s − q).length_squared()`
@@ -184,21 +210,28 @@ fn squared_distances(q: Vec3, columns: &[[f32; 28]; 3]) -> [f32; 28] {
     d
 }
 
-/// The smallest and second smallest of `d` with their indices, ties to the lower index (what a
-/// scan keeping the two best by strict comparison finds).
+/// The smallest of `d` (four lanes of minima, then across them).
+#[inline]
+fn smallest(d: &[f32; 28]) -> f32 {
+    let mut m = [f32::MAX; 4];
+    for c in d.chunks_exact(4) {
+        for l in 0..4 {
+            m[l] = if c[l] < m[l] { c[l] } else { m[l] };
+        }
+    }
+    let (a, b) = (m[0].min(m[1]), m[2].min(m[3]));
+    a.min(b)
+}
+
+/// The smallest and second smallest of `d` with their indices (ties to the lower index).
 #[inline]
 fn two_smallest(d: &[f32; 28]) -> (usize, f32, usize, f32) {
-    let first = |d: &[f32; 28], skip: usize| {
-        let m = d
-            .iter()
-            .enumerate()
-            .filter(|(k, _)| *k != skip)
-            .fold(f32::MAX, |m, (_, &v)| m.min(v));
-        let k = (0..28).find(|&k| k != skip && d[k] == m).unwrap_or(0);
-        (k, m)
-    };
-    let (i1, d1) = first(d, usize::MAX);
-    let (i2, d2) = first(d, i1);
+    let d1 = smallest(d);
+    let i1 = d.iter().position(|&v| v == d1).unwrap_or(0);
+    let mut rest = *d;
+    rest[i1] = f32::MAX;
+    let d2 = smallest(&rest);
+    let i2 = rest.iter().position(|&v| v == d2).unwrap_or(0);
     (i1, d1, i2, d2)
 }
 
