@@ -59,9 +59,10 @@ pub struct ExrChannel<'a> {
 /// Blocks compressed per batch before they are written (bounds the memory in flight).
 const BLOCKS_PER_BATCH: usize = 256;
 
-/// Writes a `width` × `height` scan-line EXR atomically. `fill(y, c, row)` writes line `y`
-/// (0 = top) of channel `c` (an index into `channels` as given) into `row` (`width` samples).
-/// It is called from several threads; the file's bytes do not depend on how many.
+/// Writes a `width` × `height` scan-line EXR atomically. `fill(y, rows)` writes line `y`
+/// (0 = top) of every channel, `rows[c]` (`width` samples) for `channels[c]` as given, in one
+/// pass over the caller's data. It is called from several threads; the file's bytes do not
+/// depend on how many.
 pub fn write_exr_rows<F>(
     path: &Path,
     width: usize,
@@ -71,7 +72,7 @@ pub fn write_exr_rows<F>(
     fill: F,
 ) -> Result<()>
 where
-    F: Fn(usize, usize, &mut [f32]) + Sync,
+    F: Fn(usize, &mut [&mut [f32]]) + Sync,
 {
     let bad = |detail: String| CoreError::Encode {
         path: path.to_path_buf(),
@@ -132,15 +133,23 @@ where
             let chunks: Vec<Vec<u8>> = (first..last)
                 .into_par_iter()
                 .map_init(
-                    || (vec![0.0f32; width], Vec::with_capacity(line_bytes * lpb)),
-                    |(row, raw), b| {
+                    || {
+                        let raw = Vec::with_capacity(line_bytes * lpb);
+                        let rows = vec![vec![0.0f32; width]; channels.len()];
+                        (rows, raw, Vec::with_capacity(width))
+                    },
+                    |(rows, raw, halves), b| {
                         let (y0, y1) = (b * lpb, ((b + 1) * lpb).min(height));
                         raw.clear();
                         for y in y0..y1 {
+                            for r in rows.iter_mut() {
+                                r.iter_mut().for_each(|v| *v = 0.0);
+                            }
+                            let mut refs: Vec<&mut [f32]> =
+                                rows.iter_mut().map(|r| r.as_mut_slice()).collect();
+                            fill(y, &mut refs);
                             for &k in &order {
-                                row.iter_mut().for_each(|v| *v = 0.0);
-                                fill(y, k, row);
-                                push_samples(raw, row, channels[k].precision);
+                                push_samples(raw, &rows[k], halves, channels[k].precision);
                             }
                         }
                         chunk(y0 as i32, raw, compression)
@@ -168,17 +177,30 @@ fn sample_bytes(p: ExrPrecision) -> usize {
     }
 }
 
-/// Appends `row` to `raw` as little-endian samples of `precision`.
-fn push_samples(raw: &mut Vec<u8>, row: &[f32], precision: ExrPrecision) {
+/// Appends `row` to `raw` as little-endian samples of `precision` (half floats rounded to
+/// nearest even, by the CPU's conversion instructions where it has them).
+fn push_samples(
+    raw: &mut Vec<u8>,
+    row: &[f32],
+    halves: &mut Vec<half::f16>,
+    precision: ExrPrecision,
+) {
+    use half::slice::HalfFloatSliceExt;
     match precision {
         ExrPrecision::F32 => {
-            for v in row {
-                raw.extend_from_slice(&v.to_le_bytes());
+            let at = raw.len();
+            raw.resize(at + 4 * row.len(), 0);
+            for (o, v) in raw[at..].chunks_exact_mut(4).zip(row) {
+                o.copy_from_slice(&v.to_le_bytes());
             }
         }
         ExrPrecision::F16 => {
-            for v in row {
-                raw.extend_from_slice(&half::f16::from_f32(*v).to_le_bytes());
+            halves.resize(row.len(), half::f16::ZERO);
+            halves.convert_from_f32_slice(row);
+            let at = raw.len();
+            raw.resize(at + 2 * row.len(), 0);
+            for (o, v) in raw[at..].chunks_exact_mut(2).zip(halves.iter()) {
+                o.copy_from_slice(&v.to_le_bytes());
             }
         }
     }
@@ -207,56 +229,103 @@ fn chunk(y: i32, raw: &[u8], compression: ExrCompression) -> Vec<u8> {
 /// positions (the low and high bytes of half floats fall apart), then each byte replaced by its
 /// difference to the previous one plus 128 (mod 256).
 fn predict(raw: &[u8]) -> Vec<u8> {
-    let mut t = vec![0u8; raw.len()];
-    let (even, odd) = t.split_at_mut(raw.len().div_ceil(2));
-    for (k, pair) in raw.chunks(2).enumerate() {
-        even[k] = pair[0];
-        if let Some(&b) = pair.get(1) {
-            odd[k] = b;
-        }
+    let mut split = vec![0u8; raw.len()];
+    let (even, odd) = split.split_at_mut(raw.len().div_ceil(2));
+    let pairs = raw.chunks_exact(2);
+    if let [last] = pairs.remainder() {
+        even[even.len() - 1] = *last;
     }
-    let mut prev = t.first().copied().unwrap_or(0);
-    for v in t.iter_mut().skip(1) {
-        let cur = *v;
-        *v = cur.wrapping_sub(prev).wrapping_add(128);
-        prev = cur;
+    for ((e, o), p) in even.iter_mut().zip(odd.iter_mut()).zip(pairs) {
+        (*e, *o) = (p[0], p[1]);
     }
-    t
+    // Differences to the previous byte of the split stream (independent: it vectorises).
+    let mut out = vec![0u8; raw.len()];
+    let Some(&first) = split.first() else {
+        return out;
+    };
+    out[0] = first;
+    for (o, w) in out[1..].iter_mut().zip(split.windows(2)) {
+        *o = w[1].wrapping_sub(w[0]).wrapping_add(128);
+    }
+    out
 }
 
 /// OpenEXR's run-length code: a signed count byte, then either count + 1 copies of one byte
-/// (count ≥ 0, runs of 3 to 128) or −count literal bytes (count < 0, up to 127).
+/// (count ≥ 0, runs of 3 to 128) or −count literal bytes (count < 0, up to 127). Greedy: a run
+/// wherever three equal bytes start, literals in between.
 fn rle(data: &[u8]) -> Vec<u8> {
     let mut out = Vec::with_capacity(data.len() / 2);
     let n = data.len();
-    let run_at = |i: usize| {
-        let mut j = i + 1;
-        while j < n && data[j] == data[i] && j - i < 128 {
-            j += 1;
-        }
-        j - i
-    };
     let mut i = 0;
     while i < n {
-        let r = run_at(i);
+        let r = run_length(data, i, 128);
         if r >= 3 {
             out.push((r - 1) as u8);
             out.push(data[i]);
             i += r;
         } else {
             // Literals until the next run of three (or 127 bytes).
-            let start = i;
-            while i < n && i - start < 127 {
-                if i + 2 < n && data[i] == data[i + 1] && data[i] == data[i + 2] {
-                    break;
-                }
-                i += 1;
-            }
-            out.push((-((i - start) as i32)) as i8 as u8);
-            out.extend_from_slice(&data[start..i]);
+            let end = next_run3(data, i, (i + 127).min(n));
+            out.push((-((end - i) as i32)) as i8 as u8);
+            out.extend_from_slice(&data[i..end]);
+            i = end;
         }
     }
     out
+}
+
+/// Bytes equal to `data[i]` from `i` on, at most `max`.
+#[inline]
+fn run_length(data: &[u8], i: usize, max: usize) -> usize {
+    let end = (i + max).min(data.len());
+    let b = data[i];
+    let mut j = i + 1;
+    let word = u64::from_ne_bytes([b; 8]);
+    while j + 8 <= end {
+        let w = u64::from_ne_bytes(data[j..j + 8].try_into().expect("8 bytes"));
+        let diff = w ^ word;
+        if diff != 0 {
+            // The first differing byte in memory order.
+            let k = if cfg!(target_endian = "little") {
+                diff.trailing_zeros()
+            } else {
+                diff.leading_zeros()
+            } / 8;
+            return j + k as usize - i;
+        }
+        j += 8;
+    }
+    while j < end && data[j] == b {
+        j += 1;
+    }
+    j - i
+}
+
+/// The first position in [`from`, `limit`) where three equal bytes start (`limit` if none): eight
+/// positions per step, a zero byte of (w ⊕ w≫8) | (w ⊕ w≫16) marking one (the classic
+/// "has a zero byte" test, whose lowest flag is exact).
+#[inline]
+fn next_run3(data: &[u8], from: usize, limit: usize) -> usize {
+    const LO: u64 = 0x0101_0101_0101_0101;
+    const HI: u64 = 0x8080_8080_8080_8080;
+    let n = data.len();
+    let mut i = from;
+    while i < limit && i + 10 <= n {
+        let at = |k: usize| u64::from_le_bytes(data[k..k + 8].try_into().expect("8 bytes"));
+        let z = (at(i) ^ at(i + 1)) | (at(i) ^ at(i + 2));
+        let flags = z.wrapping_sub(LO) & !z & HI;
+        if flags != 0 {
+            return (i + (flags.trailing_zeros() / 8) as usize).min(limit);
+        }
+        i += 8;
+    }
+    while i < limit {
+        if i + 2 < n && data[i] == data[i + 1] && data[i] == data[i + 2] {
+            return i;
+        }
+        i += 1;
+    }
+    limit
 }
 
 /// The header: magic number, version 2 (single-part scan lines), the required attributes, and
@@ -376,9 +445,11 @@ mod tests {
             ExrCompression::Zip,
         ] {
             let p = tmp(&format!("{comp:?}"));
-            write_exr_rows(&p, w, h, &chans, comp, |y, c, row| {
-                for (x, v) in row.iter_mut().enumerate() {
-                    *v = value(c, x, y);
+            write_exr_rows(&p, w, h, &chans, comp, |y, rows| {
+                for (c, row) in rows.iter_mut().enumerate() {
+                    for (x, v) in row.iter_mut().enumerate() {
+                        *v = value(c, x, y);
+                    }
                 }
             })
             .unwrap();
@@ -410,6 +481,74 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    /// The greedy RLE written plainly, byte by byte: the reference for the word-wise one.
+    fn rle_reference(data: &[u8]) -> Vec<u8> {
+        let mut out = Vec::new();
+        let n = data.len();
+        let mut i = 0;
+        while i < n {
+            let mut j = i + 1;
+            while j < n && data[j] == data[i] && j - i < 128 {
+                j += 1;
+            }
+            if j - i >= 3 {
+                out.push((j - i - 1) as u8);
+                out.push(data[i]);
+                i = j;
+            } else {
+                let start = i;
+                while i < n && i - start < 127 {
+                    if i + 2 < n && data[i] == data[i + 1] && data[i] == data[i + 2] {
+                        break;
+                    }
+                    i += 1;
+                }
+                out.push((-((i - start) as i32)) as i8 as u8);
+                out.extend_from_slice(&data[start..i]);
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn the_predictor_splits_bytes_and_takes_differences() {
+        // Odd length: the even half has one byte more.
+        let raw = [10u8, 200, 13, 0, 7];
+        // Split: 10 13 7 | 200 0; differences + 128 from the second byte on.
+        let want = [
+            10u8,
+            13u8.wrapping_sub(10).wrapping_add(128),
+            7u8.wrapping_sub(13).wrapping_add(128),
+            200u8.wrapping_sub(7).wrapping_add(128),
+            0u8.wrapping_sub(200).wrapping_add(128),
+        ];
+        assert_eq!(predict(&raw), want);
+        assert!(predict(&[]).is_empty());
+    }
+
+    #[test]
+    fn word_wise_rle_equals_the_plain_one() {
+        // Random data with runs of every length near the limits, few symbols (many short runs).
+        let rng = crate::rng::Philox::new(4, 0);
+        for case in 0..400u64 {
+            let mut data = Vec::new();
+            let mut k = 0u64;
+            while data.len() < 50 + (case as usize * 37) % 900 {
+                let r = rng.u32x4(case << 20 | k);
+                k += 1;
+                let len = match r[0] % 6 {
+                    0 => 1,
+                    1 => 2,
+                    2 => 3,
+                    3 => 120 + (r[1] % 20) as usize,
+                    _ => (r[1] % 9) as usize,
+                };
+                data.extend(std::iter::repeat_n((r[2] % 3) as u8, len));
+            }
+            assert_eq!(rle(&data), rle_reference(&data), "case {case}");
         }
     }
 
@@ -453,9 +592,9 @@ mod tests {
                 .build()
                 .unwrap()
                 .install(|| {
-                    write_exr_rows(&p, 300, 700, &chans, ExrCompression::Zip, |y, c, row| {
-                        for (x, v) in row.iter_mut().enumerate() {
-                            *v = value(c, x, y);
+                    write_exr_rows(&p, 300, 700, &chans, ExrCompression::Zip, |y, rows| {
+                        for (x, v) in rows[0].iter_mut().enumerate() {
+                            *v = value(0, x, y);
                         }
                     })
                 })
@@ -478,9 +617,9 @@ mod tests {
                 precision: ExrPrecision::F16,
             },
         ];
-        let e = write_exr_rows(&p, 4, 4, &c, ExrCompression::Rle, |_, _, _| {}).unwrap_err();
+        let e = write_exr_rows(&p, 4, 4, &c, ExrCompression::Rle, |_, _| {}).unwrap_err();
         assert!(e.to_string().contains("'a' is given twice"), "{e}");
-        let e = write_exr_rows(&p, 0, 4, &c[..1], ExrCompression::Rle, |_, _, _| {}).unwrap_err();
+        let e = write_exr_rows(&p, 0, 4, &c[..1], ExrCompression::Rle, |_, _| {}).unwrap_err();
         assert!(e.to_string().contains("0×4"), "{e}");
         assert!(!p.exists());
     }

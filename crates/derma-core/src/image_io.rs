@@ -383,8 +383,10 @@ pub fn write_exr(path: &Path, channels: &[(&str, &Map)], precision: ExrPrecision
         ExrPrecision::F32 => crate::exr_writer::ExrCompression::None,
         ExrPrecision::F16 => crate::exr_writer::ExrCompression::Rle,
     };
-    crate::exr_writer::write_exr_rows(path, w, h, &list, compression, |y, c, row| {
-        row.copy_from_slice(&channels[c].1.data()[y * w..(y + 1) * w]);
+    crate::exr_writer::write_exr_rows(path, w, h, &list, compression, |y, rows| {
+        for (row, (_, m)) in rows.iter_mut().zip(channels) {
+            row.copy_from_slice(&m.data()[y * w..(y + 1) * w]);
+        }
     })
 }
 

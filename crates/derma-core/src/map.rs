@@ -236,7 +236,12 @@ impl Taps {
         };
         let (xi, yi) = (x0 as i64, y0 as i64);
         Taps {
-            idx: [idx(xi, yi), idx(xi + 1, yi), idx(xi, yi + 1), idx(xi + 1, yi + 1)],
+            idx: [
+                idx(xi, yi),
+                idx(xi + 1, yi),
+                idx(xi, yi + 1),
+                idx(xi + 1, yi + 1),
+            ],
             tx: fx - x0,
             ty: fy - y0,
             width,

@@ -110,7 +110,10 @@ fn feature_values(
     let lips = g(region!("lips"));
     let face = g(region!("face"));
     // Freckles: where the sun falls — cheeks, nose, forehead (thesis §5.3.5).
-    let freckles = (g(region!("cheeks")) + 0.9 * g(region!("nose")) + 0.35 * g(region!("forehead")) + 0.3 * g(region!("upper_lip"))
+    let freckles = (g(region!("cheeks"))
+        + 0.9 * g(region!("nose"))
+        + 0.35 * g(region!("forehead"))
+        + 0.3 * g(region!("upper_lip"))
         - lips
         - eyebrows)
         .clamp(0.0, 1.0);
@@ -123,7 +126,13 @@ fn feature_values(
         + 0.75 * g(region!("cheeks"))
         + 0.6 * g(region!("chin"))
         + 0.55 * g(region!("forehead"))
-        + 0.35 * (face - g(region!("nose")) - g(region!("cheeks")) - g(region!("chin")) - g(region!("forehead"))).max(0.0)
+        + 0.35
+            * (face
+                - g(region!("nose"))
+                - g(region!("cheeks"))
+                - g(region!("chin"))
+                - g(region!("forehead")))
+            .max(0.0)
         - eyes
         - lips
         - eyebrows)

@@ -11,8 +11,8 @@ use crate::features::{BioSample, PaintPoint};
 use crate::index::GridCursor;
 use crate::noise::{BandNoise, NOISE_STREAM, RELIEF_STREAM};
 use crate::surface::Surface;
-use derma_core::progress::{Progress, Unit};
 use derma_core::map::Taps;
+use derma_core::progress::{Progress, Unit};
 use derma_core::Map;
 use derma_optics::bio::names;
 use derma_shading::BioTexel;
@@ -47,6 +47,28 @@ pub const BIO_CHANNELS: [BioChannel; 12] = [
     ("extra.A", |s| s.extra[3]),
     ("lips", |s| s.lips),
 ];
+
+impl BioSample {
+    /// The sample's values in [`BIO_CHANNELS`] order.
+    #[inline]
+    pub fn channels(&self) -> [f32; 12] {
+        let t = &self.tissue;
+        [
+            t.melanin,
+            t.pheomelanin,
+            t.blood,
+            t.oxygenation,
+            t.stratum_corneum_um,
+            t.epidermis_um,
+            self.height_mm,
+            self.extra[0],
+            self.extra[1],
+            self.extra[2],
+            self.extra[3],
+            self.lips,
+        ]
+    }
+}
 
 impl BioMaps {
     /// Fills texels outside the UV charts from their dilation sources (whole samples at once,
@@ -254,7 +276,9 @@ pub fn paint_with(
                                 let d = dpdu * v.dir.x + dpdv * v.dir.y;
                                 (d - n * n.dot(d)).normalize_or_zero()
                             });
-                        let texel = crate::surface::texel_area(dpdu, dpdv, surface.width, surface.height).sqrt();
+                        let texel =
+                            crate::surface::texel_area(dpdu, dpdv, surface.width, surface.height)
+                                .sqrt();
                         s.height_mm +=
                             relief::height_cached(prm, p, n, t, scale, texel, &mut relief_cache);
                     }
@@ -280,4 +304,28 @@ pub fn paint_with(
         height: surface.height,
         texels,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn channels_follow_the_bio_channel_table() {
+        let s = BioSample {
+            tissue: BioTexel {
+                melanin: 0.1,
+                pheomelanin: 0.2,
+                blood: 0.3,
+                oxygenation: 0.4,
+                stratum_corneum_um: 15.0,
+                epidermis_um: 60.0,
+            },
+            height_mm: -0.02,
+            extra: [0.5, 0.6, 0.7, 0.8],
+            lips: 0.9,
+        };
+        let by_table: Vec<f32> = BIO_CHANNELS.iter().map(|(_, f)| f(&s)).collect();
+        assert_eq!(s.channels().to_vec(), by_table);
+    }
 }

@@ -3,8 +3,9 @@
 //! height and normal maps; dilation into the UV gutter; and the map files of [`crate::outputs`].
 
 use crate::config::MaterialConfig;
+use crate::features::BioSample;
 use crate::outputs;
-use crate::paint::{BioChannel, BioMaps, BIO_CHANNELS};
+use crate::paint::{BioMaps, BIO_CHANNELS};
 use crate::surface::Surface;
 use derma_core::color::srgb8_decode;
 use derma_core::exr_writer::{write_exr_rows, ExrChannel, ExrCompression};
@@ -374,29 +375,33 @@ pub fn write_maps(
     let (w, h) = (bio.width, bio.height);
     let path = |name: &str| dir.join(name);
     let row = |y: usize| &bio.texels[y * w..(y + 1) * w];
-    let exr = |file: &'static str,
-               chans: &[BioChannel],
-               precision: ExrPrecision,
-               compression: ExrCompression|
-     -> crate::Result<()> {
-        let list: Vec<ExrChannel> = chans
-            .iter()
-            .map(|(name, _)| ExrChannel { name, precision })
-            .collect();
+    // Each EXR in one pass over the samples of a line, all its channels at once.
+    fn exr<const C: usize>(
+        path: &Path,
+        bio: &BioMaps,
+        names: [&str; C],
+        precision: ExrPrecision,
+        compression: ExrCompression,
+        values: impl Fn(&BioSample) -> [f32; C] + Sync,
+    ) -> crate::Result<()> {
+        let w = bio.width;
+        let list = names.map(|name| ExrChannel { name, precision });
         Ok(write_exr_rows(
-            &path(file),
+            path,
             w,
-            h,
+            bio.height,
             &list,
             compression,
-            |y, c, out| {
-                let f = chans[c].1;
-                for (o, s) in out.iter_mut().zip(row(y)) {
-                    *o = f(s);
+            |y, rows| {
+                for (x, s) in bio.texels[y * w..(y + 1) * w].iter().enumerate() {
+                    let v = values(s);
+                    for c in 0..C {
+                        rows[c][x] = v[c];
+                    }
                 }
             },
         )?)
-    };
+    }
     let rgb8 = |file: &'static str, px: &[[u8; 3]]| -> crate::Result<()> {
         Ok(write_png_rows(
             &path(file),
@@ -438,39 +443,41 @@ pub fn write_maps(
             },
         )?)
     };
-    let f32_none = (ExrPrecision::F32, ExrCompression::None);
+    let (f32, none) = (ExrPrecision::F32, ExrCompression::None);
     type Job<'a> = Box<dyn FnOnce() -> crate::Result<()> + Send + 'a>;
     // Largest first, so the last jobs to start are short.
     let mut list: Vec<(&'static str, Job)> = vec![
         (
             outputs::BIO,
             Box::new(|| {
+                let names = BIO_CHANNELS.map(|(n, _)| n);
+                let (f16, comp) = (ExrPrecision::F16, BIO_COMPRESSION);
                 exr(
-                    outputs::BIO,
-                    &BIO_CHANNELS,
-                    ExrPrecision::F16,
-                    BIO_COMPRESSION,
+                    &path(outputs::BIO),
+                    bio,
+                    names,
+                    f16,
+                    comp,
+                    BioSample::channels,
                 )
             }),
         ),
         (
             outputs::MELANIN,
             Box::new(|| {
-                let c: [BioChannel; 2] = [
-                    (names::MELANIN, |s| s.tissue.melanin),
-                    (names::PHEOMELANIN, |s| s.tissue.pheomelanin),
-                ];
-                exr(outputs::MELANIN, &c, f32_none.0, f32_none.1)
+                let names = [names::MELANIN, names::PHEOMELANIN];
+                exr(&path(outputs::MELANIN), bio, names, f32, none, |s| {
+                    [s.tissue.melanin, s.tissue.pheomelanin]
+                })
             }),
         ),
         (
             outputs::HEMOGLOBIN,
             Box::new(|| {
-                let c: [BioChannel; 2] = [
-                    (names::HEMOGLOBIN, |s| s.tissue.blood),
-                    (names::OXYGENATION, |s| s.tissue.oxygenation),
-                ];
-                exr(outputs::HEMOGLOBIN, &c, f32_none.0, f32_none.1)
+                let names = [names::HEMOGLOBIN, names::OXYGENATION];
+                exr(&path(outputs::HEMOGLOBIN), bio, names, f32, none, |s| {
+                    [s.tissue.blood, s.tissue.oxygenation]
+                })
             }),
         ),
         (
@@ -480,8 +487,14 @@ pub fn write_maps(
         (
             outputs::HEIGHT_EXR,
             Box::new(|| {
-                let c: [BioChannel; 1] = [("height_mm", |s| s.height_mm)];
-                exr(outputs::HEIGHT_EXR, &c, f32_none.0, f32_none.1)
+                exr(
+                    &path(outputs::HEIGHT_EXR),
+                    bio,
+                    ["height_mm"],
+                    f32,
+                    none,
+                    |s| [s.height_mm],
+                )
             }),
         ),
         (

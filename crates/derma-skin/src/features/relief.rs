@@ -185,7 +185,8 @@ fn nearest_two(
                                 [o.columns[0][j], o.columns[1][j], o.columns[2][j]]
                             })
                         });
-                        let s = kept.unwrap_or_else(|| site_wrapped(c, o as u32, seed, wrap).to_array());
+                        let s = kept
+                            .unwrap_or_else(|| site_wrapped(c, o as u32, seed, wrap).to_array());
                         (columns[0][k], columns[1][k], columns[2][k]) = (s[0], s[1], s[2]);
                     }
                 }
@@ -204,7 +205,11 @@ fn nearest_two(
 fn squared_distances(q: Vec3, columns: &[[f32; 28]; 3]) -> [f32; 28] {
     let mut d = [0.0f32; 28];
     for k in 0..28 {
-        let (dx, dy, dz) = (columns[0][k] - q.x, columns[1][k] - q.y, columns[2][k] - q.z);
+        let (dx, dy, dz) = (
+            columns[0][k] - q.x,
+            columns[1][k] - q.y,
+            columns[2][k] - q.z,
+        );
         d[k] = (dx * dx + dy * dy) + dz * dz;
     }
     d
