@@ -114,7 +114,12 @@ impl Grid {
     }
 }
 
-/// Remembers the last cell looked up, so texels in the same cell skip the hash look-up.
+/// Cells a [`GridCursor`] remembers besides the current one (direct-mapped by key): a row of
+/// texels crosses the same cells as the row before it.
+const RECENT: usize = 256;
+
+/// Remembers the last cell looked up, so texels in the same cell skip the hash look-up, and
+/// the cells met recently, so the next rows mostly skip it too.
 pub struct GridCursor<'a> {
     grid: &'a Grid,
     last_key: u64,
@@ -122,6 +127,8 @@ pub struct GridCursor<'a> {
     /// Bounds of the last cell: while the point stays inside, nothing is recomputed.
     lo: Vec3,
     hi: Vec3,
+    /// Recent cells: key and item range (key u64::MAX: empty).
+    recent: Vec<(u64, u32, u32)>,
 }
 
 impl<'a> GridCursor<'a> {
@@ -133,6 +140,7 @@ impl<'a> GridCursor<'a> {
             last: &[],
             lo: Vec3::INFINITY,
             hi: Vec3::NEG_INFINITY,
+            recent: vec![(u64::MAX, 0, 0); RECENT],
         }
     }
 
@@ -149,10 +157,16 @@ impl<'a> GridCursor<'a> {
         let k = key(c[0], c[1], c[2]);
         if k != self.last_key {
             self.last_key = k;
-            self.last = match self.grid.cells.get(&k) {
-                Some(&(s, n)) => &self.grid.items[s as usize..(s + n) as usize],
-                None => &[],
+            let slot = (k.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 56) as usize % RECENT;
+            let (s, n) = match self.recent[slot] {
+                (key, s, n) if key == k => (s, n),
+                _ => {
+                    let (s, n) = self.grid.cells.get(&k).copied().unwrap_or((0, 0));
+                    self.recent[slot] = (k, s, n);
+                    (s, n)
+                }
             };
+            self.last = &self.grid.items[s as usize..(s + n) as usize];
         }
         self.last
     }
