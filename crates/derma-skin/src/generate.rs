@@ -269,7 +269,7 @@ impl<'a> SkinGenerator<'a> {
         let job = Job::new(self.progress);
 
         // Surface.
-        job.stage("surface", 1, Unit::Steps);
+        job.stage("surface and fields", 1, Unit::Steps);
         if kind == SurfaceKind::Mesh && mesh_path.is_none() {
             return Err(SkinError::Key {
                 key: "surface.kind".into(),
@@ -299,28 +299,7 @@ impl<'a> SkinGenerator<'a> {
             });
         }
         let sr = cfg.scatter_resolution as usize;
-        let (surface, scatter_surface, preview_mesh) = match &mesh {
-            Some(m) => {
-                let tangents = crate::surface::mikktspace_tangents(m);
-                let s = Surface::mesh(m, &tangents, size, size);
-                let ss = Surface::mesh(m, &tangents, sr, sr);
-                check_raster(&s, mesh_path.as_deref(), &job)?;
-                (s, ss, Some((m.clone(), tangents)))
-            }
-            None => {
-                let [w, h] = cfg.surface.patch_size_mm;
-                (
-                    Surface::patch(size, size, [w, h], cfg.surface.tileable),
-                    Surface::patch(sr, sr, [w, h], cfg.surface.tileable),
-                    None,
-                )
-            }
-        };
-        let dilation = surface.dilation();
-
-        // Fields: the built-in head's defaults, or uniform ones; then a fields directory; then
-        // config entries.
-        job.stage("fields", 1, Unit::Steps);
+        // The fields' notes first (they depend only on the inputs), in a fixed order.
         if let Some(m) = melanin {
             job.note(Note::info(format!(
                 "person: ITA {:.0}° → mean baseline melanin {m:.4} (cheeks and forehead, '{}' appearance); age {:.0} → wrinkle density ×{:.2}",
@@ -341,19 +320,59 @@ impl<'a> SkinGenerator<'a> {
                 )));
             }
         }
-        let mut fields = if kind == SurfaceKind::Template {
-            crate::builtin_head::default_fields(mesh.as_ref().expect("template mesh"), &cfg.person)
-        } else if let Some(regions) = &user_regions {
-            job.note(Note::info(
-                "default fields and regional biology placed on the mesh by its landmarks",
-            ));
-            crate::builtin_head::fields_on(mesh.as_ref().expect("a mesh"), regions, &cfg.person)
-        } else {
-            if self.fields.is_none() && cfg.fields.is_empty() {
+        if kind != SurfaceKind::Template {
+            if user_regions.is_some() {
+                job.note(Note::info(
+                    "default fields and regional biology placed on the mesh by its landmarks",
+                ));
+            } else if self.fields.is_none() && cfg.fields.is_empty() {
                 job.note(Note::info("no --fields given: uniform fields are used (moles, freckles, cysts and pores everywhere; no lips, hair or wrinkles); paint fields to place them"));
             }
-            uniform_fields()
+        }
+        // The surface (tangent frames, UV rasters, gutter dilation) and the default fields do
+        // not depend on each other: built side by side, so the single-threaded parts (MikkTSpace,
+        // the dilation search) overlap the parallel ones.
+        let build_surface = || match &mesh {
+            Some(m) => {
+                let tangents = crate::surface::mikktspace_tangents(m);
+                let (s, ss) = rayon::join(
+                    || {
+                        let s = Surface::mesh(m, &tangents, size, size);
+                        let d = s.dilation();
+                        (s, d)
+                    },
+                    || Surface::mesh(m, &tangents, sr, sr),
+                );
+                (s, ss, Some((m.clone(), tangents)))
+            }
+            None => {
+                let [w, h] = cfg.surface.patch_size_mm;
+                (
+                    (Surface::patch(size, size, [w, h], cfg.surface.tileable), None),
+                    Surface::patch(sr, sr, [w, h], cfg.surface.tileable),
+                    None,
+                )
+            }
         };
+        // Fields: the built-in head's defaults, or uniform ones; then a fields directory; then
+        // config entries.
+        let build_fields = || {
+            if kind == SurfaceKind::Template {
+                crate::builtin_head::default_fields(
+                    mesh.as_ref().expect("template mesh"),
+                    &cfg.person,
+                )
+            } else if let Some(regions) = &user_regions {
+                crate::builtin_head::fields_on(mesh.as_ref().expect("a mesh"), regions, &cfg.person)
+            } else {
+                uniform_fields()
+            }
+        };
+        let (((surface, dilation), scatter_surface, preview_mesh), mut fields) =
+            rayon::join(build_surface, build_fields);
+        if mesh.is_some() {
+            check_raster(&surface, mesh_path.as_deref(), &job)?;
+        }
         if let Some(dir) = &self.fields {
             fields.load_dir(dir, &job)?;
         }

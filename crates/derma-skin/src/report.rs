@@ -72,29 +72,66 @@ pub fn manifest(size: u32, files: &[&str]) -> Vec<u8> {
     pretty_json(&manifest).expect("the manifest serializes")
 }
 
+/// Texels per block of [`covered_stats`]: the blocks' sums are added in order, so the
+/// statistics do not depend on the thread count.
+const STATS_BLOCK: usize = 1 << 16;
+
+/// [`MapStats`] of `C` values per covered texel of `surface`, in one parallel pass.
+fn covered_stats<const C: usize>(
+    surface: &Surface,
+    values: impl Fn(usize) -> [f32; C] + Sync,
+) -> [MapStats; C] {
+    use rayon::prelude::*;
+    type Acc = (f64, usize, f32, f32);
+    let empty: Acc = (0.0, 0, f32::INFINITY, f32::NEG_INFINITY);
+    let blocks: Vec<[Acc; C]> = (0..surface.len().div_ceil(STATS_BLOCK))
+        .into_par_iter()
+        .map(|b| {
+            let mut acc = [empty; C];
+            for i in b * STATS_BLOCK..((b + 1) * STATS_BLOCK).min(surface.len()) {
+                if !surface.covered(i) {
+                    continue;
+                }
+                for (a, v) in acc.iter_mut().zip(values(i)) {
+                    *a = (a.0 + v as f64, a.1 + 1, a.2.min(v), a.3.max(v));
+                }
+            }
+            acc
+        })
+        .collect();
+    std::array::from_fn(|c| {
+        let (sum, n, lo, hi) = blocks.iter().fold(empty, |t, b| {
+            let a = b[c];
+            (t.0 + a.0, t.1 + a.1, t.2.min(a.2), t.3.max(a.3))
+        });
+        MapStats {
+            mean: if n > 0 { sum / n as f64 } else { 0.0 },
+            min: lo,
+            max: hi,
+            count: n,
+        }
+    })
+}
+
 /// report.json of a run.
 pub fn report(set: &Run) -> Vec<u8> {
-    let covered = |i: usize| set.surface.covered(i);
-    let stat = |f: fn(&crate::features::BioSample) -> f32| {
-        MapStats::of(
-            set.bio
-                .texels
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| covered(*i))
-                .map(|(_, s)| f(s)),
-        )
-    };
-    let bc = |k: usize| {
-        MapStats::of(
-            set.render
-                .base_color
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| covered(*i))
-                .map(|(_, c)| derma_core::color::srgb8_decode(c[k])),
-        )
-    };
+    // Every statistic in one parallel pass over the covered texels.
+    let srgb = derma_core::color::srgb8_decode;
+    let [mel, pheo, blood, oxy, epi, height, r, g, b] = covered_stats(set.surface, |i| {
+        let (s, c) = (&set.bio.texels[i], set.render.base_color[i]);
+        let t = &s.tissue;
+        [
+            t.melanin,
+            t.pheomelanin,
+            t.blood,
+            t.oxygenation,
+            t.epidermis_um,
+            s.height_mm,
+            srgb(c[0]),
+            srgb(c[1]),
+            srgb(c[2]),
+        ]
+    });
     let file = |p: &Option<std::path::PathBuf>| {
         p.as_ref()
             .map(|p| json!({"path": p.display().to_string(), "sha256": sha256_file(p)}))
@@ -127,13 +164,13 @@ pub fn report(set: &Run) -> Vec<u8> {
         "counts": set.counts,
         "height_range": set.height_range,
         "statistics": {
-            names::MELANIN: stat(|s| s.tissue.melanin),
-            names::PHEOMELANIN: stat(|s| s.tissue.pheomelanin),
-            names::BLOOD: stat(|s| s.tissue.blood),
-            names::OXYGENATION: stat(|s| s.tissue.oxygenation),
-            names::EPIDERMIS_UM: stat(|s| s.tissue.epidermis_um),
-            "height_mm": stat(|s| s.height_mm),
-            "base_color_linear": [bc(0), bc(1), bc(2)],
+            names::MELANIN: mel,
+            names::PHEOMELANIN: pheo,
+            names::BLOOD: blood,
+            names::OXYGENATION: oxy,
+            names::EPIDERMIS_UM: epi,
+            "height_mm": height,
+            "base_color_linear": [r, g, b],
         },
         "notes": set.log.notes,
         "timings_s": set.log.timings,
