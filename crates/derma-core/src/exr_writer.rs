@@ -57,7 +57,7 @@ pub struct ExrChannel<'a> {
 }
 
 /// Blocks compressed per batch before they are written (bounds the memory in flight).
-const BLOCKS_PER_BATCH: usize = 256;
+const BLOCKS_PER_BATCH: usize = 64;
 
 /// Writes a `width` × `height` scan-line EXR atomically. `fill(y, rows)` writes line `y`
 /// (0 = top) of every channel, `rows[c]` (`width` samples) for `channels[c]` as given, in one

@@ -89,13 +89,7 @@ impl Map {
     /// The bilinear sample of `taps` (made for this map's size: maps of one size share them).
     #[inline]
     fn at_taps(&self, t: &Taps) -> f32 {
-        let a = self.data[t.idx[0]];
-        let b = self.data[t.idx[1]];
-        let c = self.data[t.idx[2]];
-        let d = self.data[t.idx[3]];
-        let top = a + (b - a) * t.tx;
-        let bot = c + (d - c) * t.tx;
-        top + (bot - top) * t.ty
+        t.blend(t.idx.map(|i| self.data[i]))
     }
 
     /// [`Map::sample_uv`] at the coordinates of `taps`, reusing their texels and weights when
@@ -200,6 +194,22 @@ pub struct Taps {
 }
 
 impl Taps {
+    /// The four texels (top left, top right, bottom left, bottom right) on row-major maps of
+    /// the size the taps were made for.
+    #[inline]
+    pub fn texels(&self) -> [usize; 4] {
+        self.idx
+    }
+
+    /// The bilinear blend of the four texels' values (in [`Taps::texels`] order): what any
+    /// store of texels (encoded, interleaved) gives for the sample.
+    #[inline]
+    pub fn blend(&self, v: [f32; 4]) -> f32 {
+        let top = v[0] + (v[1] - v[0]) * self.tx;
+        let bot = v[2] + (v[3] - v[2]) * self.tx;
+        top + (bot - top) * self.ty
+    }
+
     /// The taps of texture coordinates (`u`, `v`) (v up) on `width` × `height` maps.
     #[inline]
     pub fn uv(width: usize, height: usize, u: f32, v: f32, wrap: bool) -> Taps {

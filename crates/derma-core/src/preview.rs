@@ -69,6 +69,56 @@ pub struct Textures<'a> {
     pub uv_scale: Vec2,
 }
 
+/// What the renderer reads of a surface's material at a texture coordinate.
+#[derive(Clone, Copy, Debug)]
+pub struct MaterialSample {
+    /// Diffuse albedo, linear RGB.
+    pub albedo: Vec3,
+    /// Tangent-space normal (normalised by the renderer).
+    pub normal: Vec3,
+    /// Perceptual roughness.
+    pub roughness: f32,
+    /// Normal-incidence reflectance F0.
+    pub f0: f32,
+}
+
+/// A surface material the renderer samples: planar maps ([`Textures`]) or any other store of
+/// texels (a texture set's encoded maps, sampled without decoded copies).
+pub trait Material: Sync {
+    /// The material at texture coordinate `uv` (already scaled by [`Material::uv_scale`]).
+    fn sample(&self, uv: Vec2) -> MaterialSample;
+    /// UV scale applied before sampling (tiling a patch over the preview sphere).
+    fn uv_scale(&self) -> Vec2 {
+        Vec2::ONE
+    }
+}
+
+impl Material for Textures<'_> {
+    fn sample(&self, uv: Vec2) -> MaterialSample {
+        let taps = crate::map::Taps::uv(
+            self.base_color[0].width(),
+            self.base_color[0].height(),
+            uv.x,
+            uv.y,
+            self.wrap,
+        );
+        let s = |m: &Map| m.sample(&taps);
+        MaterialSample {
+            albedo: Vec3::new(
+                s(&self.base_color[0]),
+                s(&self.base_color[1]),
+                s(&self.base_color[2]),
+            ),
+            normal: Vec3::new(s(&self.normal[0]), s(&self.normal[1]), s(&self.normal[2])),
+            roughness: s(self.roughness),
+            f0: s(self.specular) * self.specular_scale,
+        }
+    }
+    fn uv_scale(&self) -> Vec2 {
+        self.uv_scale
+    }
+}
+
 /// A part drawn beside the textured surface with its own simple material (eyes, teeth, lashes):
 /// albedo as a function of its UV, one roughness and one F0.
 pub struct Prop<'a> {
@@ -97,7 +147,7 @@ fn dither(x: usize, y: usize) -> f32 {
 pub fn render(
     mesh: &TriMesh,
     tangents: &[[f32; 4]],
-    tex: &Textures,
+    tex: &dyn Material,
     view_yaw: f32,
     size: usize,
 ) -> [Map; 3] {
@@ -109,7 +159,7 @@ pub fn render(
 pub fn render_with(
     mesh: &TriMesh,
     tangents: &[[f32; 4]],
-    tex: &Textures,
+    tex: &dyn Material,
     props: &[Prop],
     view_yaw: f32,
     size: usize,
@@ -134,7 +184,7 @@ pub const STUDIO: [Light; 2] = [
 pub fn render_lit(
     mesh: &TriMesh,
     tangents: &[[f32; 4]],
-    tex: &Textures,
+    tex: &dyn Material,
     props: &[Prop],
     view_yaw: f32,
     size: usize,
@@ -225,7 +275,7 @@ pub fn render_lit(
             let uv = (mesh.uvs[t[0] as usize] * w0
                 + mesh.uvs[t[1] as usize] * w1
                 + mesh.uvs[t[2] as usize] * w2)
-                * tex.uv_scale;
+                * tex.uv_scale();
             let n = (rot
                 * (mesh.normals[t[0] as usize] * w0
                     + mesh.normals[t[1] as usize] * w1
@@ -235,17 +285,11 @@ pub fn render_lit(
             let tan = rot * (tc(0) * w0 + tc(1) * w1 + tc(2) * w2);
             let tan = (tan - n * n.dot(tan)).normalize_or(n.any_orthonormal_vector());
             let bit = n.cross(tan) * tangents[3 * ti as usize][3];
-            let s = |m: &Map| m.sample_uv(uv.x, uv.y, tex.wrap);
-            let albedo = Vec3::new(
-                s(&tex.base_color[0]),
-                s(&tex.base_color[1]),
-                s(&tex.base_color[2]),
-            );
-            let nt = Vec3::new(s(&tex.normal[0]), s(&tex.normal[1]), s(&tex.normal[2]));
+            let m = tex.sample(uv);
+            let nt = m.normal;
             let nn = (tan * nt.x + bit * nt.y + n * nt.z).normalize_or(n);
-            let alpha = s(tex.roughness).powi(2).max(0.02);
-            let f0 = s(tex.specular) * tex.specular_scale;
-            shade(nn, albedo, alpha, f0, lights, ambient, view)
+            let alpha = m.roughness.powi(2).max(0.02);
+            shade(nn, m.albedo, alpha, m.f0, lights, ambient, view)
         })
         .collect();
     [0, 1, 2]

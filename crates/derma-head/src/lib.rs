@@ -382,7 +382,7 @@ pub fn masks_on(mesh: &TriMesh, regions: &Regions, n: usize) -> Vec<(&'static st
                     ((i % n) as f32 + 0.5) / n as f32,
                     1.0 - ((i / n) as f32 + 0.5) / n as f32,
                 );
-                regions.weights(raster.position[i], uv)
+                regions.weights(raster.position(mesh, i), uv)
             } else {
                 [0.0; REGIONS.len()]
             }

@@ -450,7 +450,7 @@ pub fn evaluate(
     let t: Vec<[f32; 3]> = (0..size * size)
         .map(|i| {
             if raster.covered(i) {
-                truth(raster.position[i])
+                truth(raster.position(mesh, i))
             } else {
                 [0.0; 3]
             }

@@ -264,7 +264,7 @@ pub fn teeth_texture(
             if !raster.covered(i) {
                 continue;
             }
-            let p = raster.position[i];
+            let p = raster.position(mesh, i);
             let depth = ((hi.z - p.z) / (hi.z - lo.z).max(1e-6)).clamp(0.0, 1.0);
             let generic = target.map(|v| v * (1.0 - 0.45 * depth));
             let xf = p.x.abs();

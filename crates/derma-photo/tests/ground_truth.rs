@@ -106,7 +106,7 @@ fn cameras_texture_and_chromophores_are_recovered() {
     let (mut tm, mut th) = (0.0f64, 0.0f64);
     for i in 0..384 * 384 {
         if mask[i] {
-            let (m, h) = chromophores_at(raster.position[i], 1);
+            let (m, h) = chromophores_at(raster.position(&s.mesh, i), 1);
             em += (c.melanin.data()[i] - m).abs() as f64;
             eh += (c.hemoglobin.data()[i] - h).abs() as f64;
             tm += m as f64;

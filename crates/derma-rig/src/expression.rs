@@ -259,9 +259,10 @@ impl Expression {
 /// Surface points of the built-in head on a `w × h` UV grid (texel centres), `None` outside
 /// its charts.
 pub fn head_points(w: usize, h: usize) -> Vec<Option<Vec3>> {
-    let raster = derma_core::raster::UvRaster::new(&Head::builtin().skin, w, h);
+    let skin = &Head::builtin().skin;
+    let raster = derma_core::raster::UvRaster::new(skin, w, h);
     (0..w * h)
-        .map(|i| raster.covered(i).then(|| raster.position[i]))
+        .map(|i| raster.covered(i).then(|| raster.position(skin, i)))
         .collect()
 }
 

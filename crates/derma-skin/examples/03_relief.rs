@@ -177,8 +177,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let views: Vec<[derma_core::Map; 3]> = [&off, &on]
         .iter()
         .map(|set| {
-            let maps = set.render.decoded(size);
-            let tex = maps.textures(true, glam::Vec2::ONE);
+            let tex = set.render.material(true, glam::Vec2::ONE);
             render_lit(&m, &t, &tex, &[], 0.0, 512, &grazing)
         })
         .collect();

@@ -249,7 +249,7 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
                     regions: [0.0; REGIONS.len()],
                 };
             }
-            let p = raster.position[i];
+            let p = raster.position(mesh, i);
             let w = regions.weights(p, uv_of(i));
             let (f, dir3, len) = feature_values(regions, &w, p, person);
             // The 3D wrinkle direction in UV coordinates: least squares on the texel's Jacobian
@@ -257,7 +257,7 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
             let (x, y) = (i % n, i / n);
             let at = |xx: usize, yy: usize| {
                 let j = yy * n + xx;
-                covered[j].then(|| raster.position[j])
+                covered[j].then(|| raster.position(mesh, j))
             };
             let du = match (at((x + 1).min(n - 1), y), at(x.saturating_sub(1), y)) {
                 (Some(a), Some(b)) => (a - b) * (n as f32 / 2.0),

@@ -348,7 +348,10 @@ impl<'a> SkinGenerator<'a> {
             None => {
                 let [w, h] = cfg.surface.patch_size_mm;
                 (
-                    (Surface::patch(size, size, [w, h], cfg.surface.tileable), None),
+                    (
+                        Surface::patch(size, size, [w, h], cfg.surface.tileable),
+                        None,
+                    ),
                     Surface::patch(sr, sr, [w, h], cfg.surface.tileable),
                     None,
                 )
@@ -413,7 +416,6 @@ impl<'a> SkinGenerator<'a> {
             features,
             bio,
             render,
-            dilation,
             mesh_scale,
             preview_mesh,
             appearance: appearance.name(),
@@ -699,8 +701,6 @@ pub struct TextureSet {
     pub bio: BioMaps,
     /// The render maps.
     pub render: RenderMaps,
-    /// Gutter dilation sources on meshes (texel → covered texel).
-    pub dilation: Option<Vec<u32>>,
     /// The unit a user mesh was read in.
     pub mesh_scale: Option<MeshScale>,
     /// Mesh and tangents for the preview (template, user mesh, or none for patches).

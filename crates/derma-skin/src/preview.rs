@@ -4,32 +4,13 @@
 
 use crate::paint::BioMaps;
 use crate::surface::Surface;
-use crate::texture_set::{DecodedMaps, RenderMaps};
+use crate::texture_set::RenderMaps;
 use derma_core::mesh::TriMesh;
-use derma_core::preview::{compose, normalised, render, render_with, sphere, tile, Prop, Textures};
+use derma_core::preview::{compose, normalised, render, render_with, sphere, tile, Prop};
 use derma_core::Map;
-
-impl DecodedMaps {
-    /// The maps as the software renderer's textures.
-    pub fn textures(&self, wrap: bool, uv_scale: glam::Vec2) -> Textures<'_> {
-        Textures {
-            base_color: &self.base_color,
-            normal: &self.normal,
-            roughness: &self.roughness,
-            specular: &self.specular,
-            specular_scale: derma_core::preview::SPECULAR_SCALE,
-            wrap,
-            uv_scale,
-        }
-    }
-}
 
 /// Side of a preview panel (pixels): shaded views are this size, thumbnails half.
 pub const PANEL: usize = 512;
-
-/// Largest side of the maps the software preview samples: larger sets are box-filtered down to
-/// it (a 512-pixel panel resolves no more), which bounds the preview's memory at 8192².
-pub const PREVIEW_MAPS: usize = 2048;
 
 /// Shaded views of `render_maps` on its mesh (or a sphere and a tile for patches) plus the contact
 /// sheet (base colour, normal, height, roughness, melanin, blood): preview.png. `shaded`: views
@@ -43,12 +24,12 @@ pub fn contact_sheet(
     props: &[Prop],
     shaded: Option<Vec<[Map; 3]>>,
 ) -> [Map; 3] {
-    let r = &render_maps.decoded(PREVIEW_MAPS);
+    let r = render_maps;
     let renders = match (shaded, mesh) {
         (Some(v), _) => v,
         (None, mesh) => match mesh {
             Some((m, t)) => {
-                let tex = r.textures(false, glam::Vec2::ONE);
+                let tex = r.material(false, glam::Vec2::ONE);
                 // Front and three-quarter (45°) views.
                 vec![
                     render_with(m, t, &tex, props, 0.0, PANEL),
@@ -69,8 +50,8 @@ pub fn contact_sheet(
                 );
                 let (tm, tt) = tile(sx);
                 vec![
-                    render(&sm, &st, &r.textures(true, scale), 0.0, PANEL),
-                    render(&tm, &tt, &r.textures(true, glam::Vec2::ONE), 0.0, PANEL),
+                    render(&sm, &st, &r.material(true, scale), 0.0, PANEL),
+                    render(&tm, &tt, &r.material(true, glam::Vec2::ONE), 0.0, PANEL),
                 ]
             }
         },
@@ -90,17 +71,14 @@ pub fn contact_sheet(
         m.data_mut().iter_mut().for_each(|v| *v = 0.5 * *v + 0.5);
         m
     };
-    let rough = small(&r.roughness);
-    // Bio thumbnails straight from the samples, reduced to about twice the thumbnail first.
+    // Thumbnails from maps reduced to about twice their size first (no full-size copies).
     let k = (bio.width.max(bio.height) / (2 * t)).max(1);
+    let (base, normal, rough) = r.reduced(k);
+    let rough = small(&rough);
     let bio_small = |f: fn(&crate::features::BioSample) -> f32| small(&bio.channel_reduced(k, f));
     let sheet = vec![
-        [
-            enc(&r.base_color[0]),
-            enc(&r.base_color[1]),
-            enc(&r.base_color[2]),
-        ],
-        [half(&r.normal[0]), half(&r.normal[1]), half(&r.normal[2])],
+        base.each_ref().map(enc),
+        normal.each_ref().map(half),
         normalised(&bio_small(|s| s.height_mm)),
         [rough.clone(), rough.clone(), rough],
         normalised(&bio_small(|s| s.tissue.melanin)),

@@ -167,7 +167,7 @@ impl Surface {
                 let uv = self.uv(i);
                 Vec3::new(uv.x * size_mm[0], uv.y * size_mm[1], 0.0)
             }
-            Geometry::Mesh(m) => m.raster.position[i],
+            Geometry::Mesh(m) => m.raster.position(&m.mesh, i),
         }
     }
 

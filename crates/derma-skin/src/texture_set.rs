@@ -10,6 +10,8 @@ use crate::surface::Surface;
 use derma_core::color::srgb8_decode;
 use derma_core::exr_writer::{write_exr_rows, ExrChannel, ExrCompression};
 use derma_core::image_io::{quantize16, quantize8, srgb8, write_png_rows, ExrPrecision, PngDepth};
+use derma_core::map::Taps;
+use derma_core::preview::{Material, MaterialSample};
 use derma_core::Map;
 use derma_optics::bio::names;
 use derma_shading::{Appearance, BioTexel};
@@ -53,18 +55,6 @@ pub struct SubsurfaceMaps {
 
 /// sss_radius.png stores ℓ / SSS_RADIUS_RANGE_MM (16-bit): 0–8 mm, the radial profile's range.
 pub const SSS_RADIUS_RANGE_MM: f32 = 8.0;
-
-/// Decoded (linear, f32) render maps, possibly at a reduced size: what renderers sample.
-pub struct DecodedMaps {
-    /// Diffuse albedo, linear sRGB.
-    pub base_color: [Map; 3],
-    /// Tangent-space normal in [−1, 1].
-    pub normal: [Map; 3],
-    /// glTF perceptual roughness.
-    pub roughness: Map,
-    /// F0 / 0.08.
-    pub specular: Map,
-}
 
 impl RenderMaps {
     /// Maps of `width` × `height` texels, zero until [`convert`] fills them.
@@ -131,7 +121,7 @@ impl RenderMaps {
 
     /// Tangent-space normal in [−1, 1] (as decoded from normal.png).
     pub fn decode_normal(&self) -> [Map; 3] {
-        self.planes(|i| self.normal[i].map(|c| c as f32 / 65535.0 * 2.0 - 1.0))
+        self.planes(|i| self.normal[i].map(unit16))
     }
 
     /// Perceptual roughness.
@@ -156,31 +146,66 @@ impl RenderMaps {
         })
     }
 
-    /// The maps decoded for a renderer, box-filtered by a whole factor to at most `max_size`
-    /// texels a side (linear values averaged; normals averaged and left for the renderer to
-    /// normalise): previews need no more than their panels resolve.
-    pub fn decoded(&self, max_size: usize) -> DecodedMaps {
-        let k = self.width.max(self.height).div_ceil(max_size.max(1)).max(1);
-        let unit = |c: u16| c as f32 / 65535.0 * 2.0 - 1.0;
-        let [r, g, b, nx, ny, nz, ro, sp] = self.planes_reduced(k, |i| {
+    /// Base colour (linear), normal and roughness box-filtered by the whole factor `k` (each
+    /// texel the mean of a k × k block): thumbnails without full-size copies.
+    pub fn reduced(&self, k: usize) -> ([Map; 3], [Map; 3], Map) {
+        let [r, g, b, nx, ny, nz, ro] = self.planes_reduced(k.max(1), |i| {
             let (c, n) = (self.base_color[i], self.normal[i]);
             [
                 srgb8_decode(c[0]),
                 srgb8_decode(c[1]),
                 srgb8_decode(c[2]),
-                unit(n[0]),
-                unit(n[1]),
-                unit(n[2]),
+                unit16(n[0]),
+                unit16(n[1]),
+                unit16(n[2]),
                 self.roughness[i] as f32 / 255.0,
-                self.specular[i] as f32 / 255.0,
             ]
         });
-        DecodedMaps {
-            base_color: [r, g, b],
-            normal: [nx, ny, nz],
-            roughness: ro,
-            specular: sp,
+        ([r, g, b], [nx, ny, nz], ro)
+    }
+
+    /// The maps as the software renderer's material, sampled from their encodings (bilinear,
+    /// the same values as sampling [`Self::decode_base_color`] and the others, without the
+    /// decoded copies); `wrap` repeats them, `uv_scale` tiles them.
+    pub fn material(&self, wrap: bool, uv_scale: glam::Vec2) -> EncodedMaterial<'_> {
+        EncodedMaterial {
+            maps: self,
+            wrap,
+            uv_scale,
         }
+    }
+}
+
+/// [`RenderMaps`] as a [`Material`] of the software renderer.
+pub struct EncodedMaterial<'a> {
+    maps: &'a RenderMaps,
+    wrap: bool,
+    uv_scale: glam::Vec2,
+}
+
+/// A 16-bit code of n·½ + ½ back to n ∈ [−1, 1].
+#[inline]
+fn unit16(c: u16) -> f32 {
+    c as f32 / 65535.0 * 2.0 - 1.0
+}
+
+impl Material for EncodedMaterial<'_> {
+    fn sample(&self, uv: glam::Vec2) -> MaterialSample {
+        let r = self.maps;
+        let taps = Taps::uv(r.width, r.height, uv.x, uv.y, self.wrap);
+        let t = taps.texels();
+        let colour = |c: usize| taps.blend(t.map(|i| srgb8_decode(r.base_color[i][c])));
+        let normal = |c: usize| taps.blend(t.map(|i| unit16(r.normal[i][c])));
+        let byte = |m: &[u8]| taps.blend(t.map(|i| m[i] as f32 / 255.0));
+        MaterialSample {
+            albedo: glam::Vec3::new(colour(0), colour(1), colour(2)),
+            normal: glam::Vec3::new(normal(0), normal(1), normal(2)),
+            roughness: byte(&r.roughness),
+            f0: byte(&r.specular) * SPECULAR_SCALE,
+        }
+    }
+    fn uv_scale(&self) -> glam::Vec2 {
+        self.uv_scale
     }
 }
 
