@@ -53,14 +53,19 @@ impl std::fmt::Debug for AppearanceChoice {
 }
 
 /// Bytes of memory per output texel at the pipeline's peak: measured peak resident memory of
-/// `derma skin` on the built-in head was 0.92 GB at 2048² and 3.18 GB at 4096², i.e. 184 bytes
-/// per added texel (bio samples 48, render maps 36, surface raster 24, file encoding buffers);
-/// rounded up for a margin.
-pub const BYTES_PER_TEXEL: f64 = 200.0;
+/// `derma skin` on the built-in head was 1.59 GB at 4096² and 5.51 GB at 8192² (issue 15), i.e.
+/// 78 bytes per added texel (bio samples 48, the files' encodings of the render maps 20, UV
+/// raster 12, dilation sources 4, less what is freed before the render maps exist); rounded
+/// up for a margin.
+pub const BYTES_PER_TEXEL: f64 = 90.0;
+
+/// Memory the job takes whatever the size (the built-in head, its fields at 1024², the
+/// features and their index): 0.27 GB measured by the same two runs, rounded up.
+pub const FIXED_BYTES: f64 = 0.4e9;
 
 /// Fails early when a `size`² texture set would not fit in memory.
 pub fn check_memory(size: usize) -> Result<()> {
-    derma_core::memory::check_fits(BYTES_PER_TEXEL * (size * size) as f64).map_err(
+    derma_core::memory::check_fits(FIXED_BYTES + BYTES_PER_TEXEL * (size * size) as f64).map_err(
         |(need_gib, have_gib)| SkinError::TooLarge {
             width: size,
             height: size,

@@ -173,10 +173,33 @@ const SHIFTS: [[u8; 27]; 27] = {
 };
 
 /// Per-thread cache of the sites around the last cell of each octave (results do not depend on
-/// it: a cache miss recomputes the same sites).
+/// it: a cache miss recomputes the same sites). Two blocks per octave: a new block is written
+/// into the spare one while the sites it shares are read from the current one.
 #[derive(Clone, Debug, Default)]
 pub struct ReliefCache {
-    octaves: [Option<CellSites>; 3],
+    octaves: [Blocks; 3],
+}
+
+/// The current and the spare block of one octave.
+#[derive(Clone, Debug)]
+struct Blocks {
+    blocks: [CellSites; 2],
+    current: usize,
+    valid: bool,
+}
+
+impl Default for Blocks {
+    fn default() -> Self {
+        let empty = CellSites {
+            base: [0; 3],
+            columns: [[FAR; 28]; 3],
+        };
+        Blocks {
+            blocks: [empty; 2],
+            current: 0,
+            valid: false,
+        }
+    }
 }
 
 /// The two nearest sites of `q` (in cell units) and their squared distances (of sites at
@@ -191,36 +214,38 @@ fn nearest_two(
 ) -> (Vec3, f32, Vec3, f32) {
     let base = q.floor();
     let b = [base.x as i32, base.y as i32, base.z as i32];
-    let cell = match &mut cache.octaves[o] {
-        Some(c) if c.base == b => c,
-        entry => {
-            // Sites shared with the previous block (a move to a neighbouring cell) are copied.
-            let shift = entry.as_ref().and_then(|o| {
-                let e = [b[0] - o.base[0], b[1] - o.base[1], b[2] - o.base[2]];
-                e.iter()
-                    .all(|v| v.abs() <= 1)
-                    .then(|| (&SHIFTS[slot(e)], o.columns))
-            });
-            let mut columns = [[FAR; 28]; 3];
-            for (k, d) in NEIGHBOURS.iter().enumerate() {
-                let s = match shift {
-                    Some((src, old)) if src[k] != NONE => {
-                        let j = src[k] as usize;
-                        [old[0][j], old[1][j], old[2][j]]
-                    }
-                    _ => site_wrapped(
-                        [b[0] + d[0], b[1] + d[1], b[2] + d[2]],
-                        o as u32,
-                        seed,
-                        wrap,
-                    )
-                    .to_array(),
-                };
-                (columns[0][k], columns[1][k], columns[2][k]) = (s[0], s[1], s[2]);
-            }
-            entry.insert(CellSites { base: b, columns })
+    let oct = &mut cache.octaves[o];
+    if !(oct.valid && oct.blocks[oct.current].base == b) {
+        let [first, second] = &mut oct.blocks;
+        let (old, new) = if oct.current == 0 {
+            (&*first, second)
+        } else {
+            (&*second, first)
+        };
+        // Sites shared with the previous block (a move to a neighbouring cell) are copied.
+        let e = [b[0] - old.base[0], b[1] - old.base[1], b[2] - old.base[2]];
+        let shift = (oct.valid && e.iter().all(|v| v.abs() <= 1)).then(|| &SHIFTS[slot(e)]);
+        for (k, d) in NEIGHBOURS.iter().enumerate() {
+            let s = match shift {
+                Some(src) if src[k] != NONE => {
+                    let j = src[k] as usize;
+                    [old.columns[0][j], old.columns[1][j], old.columns[2][j]]
+                }
+                _ => site_wrapped(
+                    [b[0] + d[0], b[1] + d[1], b[2] + d[2]],
+                    o as u32,
+                    seed,
+                    wrap,
+                )
+                .to_array(),
+            };
+            (new.columns[0][k], new.columns[1][k], new.columns[2][k]) = (s[0], s[1], s[2]);
         }
-    };
+        new.base = b;
+        oct.current ^= 1;
+        oct.valid = true;
+    }
+    let cell = &oct.blocks[oct.current];
     let (i1, d1, i2, d2) = two_smallest(&squared_distances(q, &cell.columns));
     let site = |k: usize| Vec3::new(cell.columns[0][k], cell.columns[1][k], cell.columns[2][k]);
     (site(i1), d1, site(i2), d2)
@@ -260,10 +285,16 @@ fn smallest(d: &[f32; 28]) -> f32 {
 fn two_smallest(d: &[f32; 28]) -> (usize, f32, usize, f32) {
     let d1 = smallest(d);
     let i1 = d.iter().position(|&v| v == d1).unwrap_or(0);
-    let mut rest = *d;
-    rest[i1] = f32::MAX;
-    let d2 = smallest(&rest);
-    let i2 = rest.iter().position(|&v| v == d2).unwrap_or(0);
+    // The second: the smallest of the others (an equal distance elsewhere included).
+    let mut m = [f32::MAX; 4];
+    for (c, chunk) in d.chunks_exact(4).enumerate() {
+        for l in 0..4 {
+            let v = if 4 * c + l == i1 { f32::MAX } else { chunk[l] };
+            m[l] = if v < m[l] { v } else { m[l] };
+        }
+    }
+    let d2 = m[0].min(m[1]).min(m[2].min(m[3]));
+    let i2 = (0..28).find(|&k| k != i1 && d[k] == d2).unwrap_or(0);
     (i1, d1, i2, d2)
 }
 
