@@ -350,7 +350,7 @@ impl TableAppearance {
         bio: &[BioTexel; LANES],
         out: &mut [[f32; N]],
     ) {
-        use derma_core::numerics::lanes::{F32x8, I32x8};
+        use derma_core::numerics::lanes::{Avx2F32 as F32x8, Avx2I32 as I32x8, IntLanes, Lanes};
         let d = self.d;
         let splat = |v: f32| F32x8::splat(tok, v);
         let mut base = I32x8::splat(tok, 0);
@@ -402,7 +402,11 @@ impl TableAppearance {
             let mut idx = base[l] as usize;
             let row = |idx: usize| {
                 let v = &self.values[idx];
-                (F32x8::load(tok, &v[..8]), F32x8::load(tok, &v[4..]))
+                let (a, b): ([f32; 8], [f32; 8]) = (
+                    v[..8].try_into().expect("8 values"),
+                    v[4..].try_into().expect("8 values"),
+                );
+                (F32x8::from_array(tok, a), F32x8::from_array(tok, b))
             };
             let (v0, v1) = row(idx);
             let w0 = splat(1.0 - ts[order[0]][l]);
