@@ -5,11 +5,14 @@
 //! one), so results never depend on thread count or scheduling, and a WGSL port of the same
 //! ten rounds reproduces the CPU stream bit for bit.
 
-/// Philox multipliers and Weyl key increments (Salmon et al. 2011, §5; the Random123 constants).
-const PHILOX_M0: u32 = 0xD251_1F53;
-const PHILOX_M1: u32 = 0xCD9E_8D57;
-const PHILOX_W0: u32 = 0x9E37_79B9;
-const PHILOX_W1: u32 = 0xBB67_AE85;
+/// Philox multiplier of counter word 0 (Salmon et al. 2011, §5; the Random123 constants).
+pub const PHILOX_M0: u32 = 0xD251_1F53;
+/// Philox multiplier of counter word 2.
+pub const PHILOX_M1: u32 = 0xCD9E_8D57;
+/// Weyl increment of key word 0.
+pub const PHILOX_W0: u32 = 0x9E37_79B9;
+/// Weyl increment of key word 1.
+pub const PHILOX_W1: u32 = 0xBB67_AE85;
 
 #[inline]
 fn mulhilo(a: u32, b: u32) -> (u32, u32) {
@@ -25,6 +28,35 @@ pub fn philox4x32_10(mut ctr: [u32; 4], key: [u32; 2]) -> [u32; 4] {
         let (lo0, hi0) = mulhilo(PHILOX_M0, ctr[0]);
         let (lo1, hi1) = mulhilo(PHILOX_M1, ctr[2]);
         ctr = [hi1 ^ ctr[1] ^ k0, lo1, hi0 ^ ctr[3] ^ k1, lo0];
+        k0 = k0.wrapping_add(PHILOX_W0);
+        k1 = k1.wrapping_add(PHILOX_W1);
+    }
+    ctr
+}
+
+/// [`philox4x32_10`] in eight lanes at once (each lane its own counter, one key): the same
+/// words as the scalar function, lane by lane.
+#[inline(always)]
+pub fn philox4x32_10_lanes<I: crate::numerics::lanes::IntLanes>(
+    mut ctr: [I; 4],
+    key: [u32; 2],
+) -> [I; 4] {
+    let t = ctr[0].to_f32_bits();
+    let tok = crate::numerics::lanes::Lanes::token(t);
+    let (m0, m1) = (
+        I::splat(tok, PHILOX_M0 as i32),
+        I::splat(tok, PHILOX_M1 as i32),
+    );
+    let (mut k0, mut k1) = (key[0], key[1]);
+    for _ in 0..10 {
+        let (lo0, hi0) = m0.mul_wide_unsigned(ctr[0]);
+        let (lo1, hi1) = m1.mul_wide_unsigned(ctr[2]);
+        ctr = [
+            hi1.xor(ctr[1]).xor(I::splat(tok, k0 as i32)),
+            lo1,
+            hi0.xor(ctr[3]).xor(I::splat(tok, k1 as i32)),
+            lo0,
+        ];
         k0 = k0.wrapping_add(PHILOX_W0);
         k1 = k1.wrapping_add(PHILOX_W1);
     }
@@ -90,6 +122,31 @@ mod tests {
     use super::*;
 
     /// Known-answer vectors of Philox4x32-10 published with Random123 (kat_vectors).
+    #[test]
+    fn lanes_draw_the_scalar_words() {
+        use crate::numerics::lanes::{IntLanes, PortableI32};
+        let ctr: [[u32; 4]; 8] = std::array::from_fn(|l| [l as u32 * 977, 3, 0x4f50, l as u32]);
+        let key = [0xdead_beef, 42];
+        let lanes = |k: usize| PortableI32(std::array::from_fn(|l| ctr[l][k] as i32));
+        let out = philox4x32_10_lanes([lanes(0), lanes(1), lanes(2), lanes(3)], key);
+        for l in 0..8 {
+            let want = philox4x32_10(ctr[l], key);
+            for k in 0..4 {
+                assert_eq!(out[k].to_array()[l] as u32, want[k]);
+            }
+        }
+        #[cfg(target_arch = "x86_64")]
+        if let Some(t) = crate::numerics::lanes::Avx2::detect() {
+            use crate::numerics::lanes::Avx2I32;
+            let lanes =
+                |k: usize| Avx2I32::from_array(t, std::array::from_fn(|l| ctr[l][k] as i32));
+            let a = philox4x32_10_lanes([lanes(0), lanes(1), lanes(2), lanes(3)], key);
+            for k in 0..4 {
+                assert_eq!(a[k].to_array(), out[k].to_array());
+            }
+        }
+    }
+
     #[test]
     fn philox_known_answers() {
         assert_eq!(

@@ -34,6 +34,7 @@ pub mod slab;
 pub mod specimen;
 pub mod tally;
 pub mod transport;
+pub mod transport_lanes;
 
 pub use bio::BioTexel;
 pub use derma_core::gpu::Device;

@@ -134,11 +134,15 @@ pub fn trace_range(run: &Run, prepared: &[Prepared], range: std::ops::Range<u64>
 }
 
 /// Runs on the CPU with rayon; `progress` advances by the photons of each finished batch.
+/// Slab runs ([`crate::transport_lanes::eligible`]) walk photons in SIMD lanes, the rest one
+/// photon at a time ([`crate::transport::trace`]).
 pub fn run_cpu(run: &Run, progress: &dyn Progress) -> Result<Tally> {
     run.validate()?;
     let prepared: Vec<Prepared> = run.stacks.iter().map(Prepared::new).collect();
     let bs = run.batch_size();
     let batches = run.photons.div_ceil(bs);
+    // Slabs under a pencil beam walk eight photons per SIMD register (transport_lanes).
+    let lanes = crate::transport_lanes::eligible(run);
     let mut total = run.empty_tally();
     // Merge in groups so memory stays bounded for runs with many batches.
     let group = 64u64;
@@ -150,7 +154,11 @@ pub fn run_cpu(run: &Run, progress: &dyn Progress) -> Result<Tally> {
             .map(|b| {
                 let r = b * bs..((b + 1) * bs).min(run.photons);
                 let n = r.end - r.start;
-                let t = trace_range(run, &prepared, r);
+                let t = if lanes {
+                    crate::transport_lanes::trace_range_lanes(run, &prepared[0], r)
+                } else {
+                    trace_range(run, &prepared, r)
+                };
                 progress.advance(n);
                 t
             })
