@@ -411,12 +411,13 @@ mod tests {
 
     /// A field with runs (flat areas, which RLE and ZIP shrink) and noise (which they cannot).
     fn value(c: usize, x: usize, y: usize) -> f32 {
-        let flat = x < 20 || (x / 7 + y / 5) % 3 == 0;
+        let flat = x < 20 || (x / 7 + y / 5).is_multiple_of(3);
         if flat {
             c as f32 * 0.25
         } else {
-            let h = (x as u64 * 0x9e37_79b9 ^ y as u64 * 0x85eb_ca6b ^ c as u64 * 0xc2b2_ae35)
-                .wrapping_mul(0x2545_f491_4f6c_dd1d);
+            let h =
+                ((x as u64 * 0x9e37_79b9) ^ (y as u64 * 0x85eb_ca6b) ^ (c as u64 * 0xc2b2_ae35))
+                    .wrapping_mul(0x2545_f491_4f6c_dd1d);
             (h >> 40) as f32 / (1u64 << 24) as f32 - 0.3
         }
     }

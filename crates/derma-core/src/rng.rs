@@ -38,29 +38,10 @@ pub fn philox4x32_10(mut ctr: [u32; 4], key: [u32; 2]) -> [u32; 4] {
 /// words as the scalar function, lane by lane.
 #[inline(always)]
 pub fn philox4x32_10_lanes<I: crate::numerics::lanes::IntLanes>(
-    mut ctr: [I; 4],
+    ctr: [I; 4],
     key: [u32; 2],
 ) -> [I; 4] {
-    let t = ctr[0].to_f32_bits();
-    let tok = crate::numerics::lanes::Lanes::token(t);
-    let (m0, m1) = (
-        I::splat(tok, PHILOX_M0 as i32),
-        I::splat(tok, PHILOX_M1 as i32),
-    );
-    let (mut k0, mut k1) = (key[0], key[1]);
-    for _ in 0..10 {
-        let (lo0, hi0) = m0.mul_wide_unsigned(ctr[0]);
-        let (lo1, hi1) = m1.mul_wide_unsigned(ctr[2]);
-        ctr = [
-            hi1.xor(ctr[1]).xor(I::splat(tok, k0 as i32)),
-            lo1,
-            hi0.xor(ctr[3]).xor(I::splat(tok, k1 as i32)),
-            lo0,
-        ];
-        k0 = k0.wrapping_add(PHILOX_W0);
-        k1 = k1.wrapping_add(PHILOX_W1);
-    }
-    ctr
+    I::philox4x32_10(ctr, key)
 }
 
 /// A keyed random stream: `Philox::new(seed, stream).u32x4(index)`.

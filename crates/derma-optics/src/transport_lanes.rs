@@ -211,11 +211,12 @@ impl<L: Lanes> Streams<L> {
     }
 
     /// The next uniform draw in [0, 1) (24 bits, as [`crate::photon_rng::PhotonRng::uniform`])
-    /// of the lanes in `mask`; other lanes' streams do not advance.
+    /// of the lanes in `mask`; other lanes' streams do not advance. `last` bounds the lanes'
+    /// place in their words: the k-th draw of a step after [`Self::refill`] is at most k + 2.
     #[inline(always)]
-    fn uniform(&mut self, t: L::Token, mask: L) -> L {
+    fn uniform(&mut self, t: L::Token, mask: L, last: usize) -> L {
         let mut w = self.words[0].to_f32_bits();
-        for k in 1..8 {
+        for k in 1..=last.min(7) {
             w = self
                 .pos
                 .eq(L::I::splat(t, k as i32))
@@ -254,7 +255,7 @@ struct Tables {
 
 impl Tables {
     fn new(s: &Slab) -> Self {
-        let f = |g: &dyn Fn(usize) -> f32| std::array::from_fn(|k| g(k));
+        let f = |g: &dyn Fn(usize) -> f32| std::array::from_fn(g);
         Tables {
             layers: s.layers,
             mut_: s.mut_,
@@ -358,10 +359,10 @@ fn walk<L: Lanes>(t: L::Token, run: &Run, slab: &Slab, range: std::ops::Range<u6
 
         // Step length where the last one was used up.
         let fresh = alive.and(s_left.le(zero));
-        let xi = rng.uniform(t, fresh);
+        let xi = rng.uniform(t, fresh, 3);
         s_left = fresh.select(zero.sub(one.sub(xi).ln()), s_left);
 
-        // Distance to the boundary ahead (infinite when moving parallel to it).
+        // Does the step reach the boundary ahead (never when moving parallel to it)?
         let mu_t = pick::<L>(layer, &tb.mut_, nl);
         let down = uz.gt(zero);
         let up = uz.lt(zero);
@@ -369,8 +370,14 @@ fn walk<L: Lanes>(t: L::Token, run: &Run, slab: &Slab, range: std::ops::Range<u6
             pick::<L>(layer, &tb.z_top, nl),
             pick::<L>(layer, &tb.z_bot, nl),
         );
-        let dist = up.or(down).select(z_b.sub(z).div(uz), splat(f32::INFINITY));
-        let hit = alive.and(mu_t.mul(dist).le(s_left));
+        // μt·(z_b − z)/u_z ≤ s compared without the division (both sides times |u_z|; the
+        // gap is signed: a depth rounded past the boundary counts as reached); the distance
+        // itself is needed only where a lane reaches the boundary.
+        let abs_uz = zero.sub(uz).max(uz);
+        let gap = up.select(z.sub(z_b), z_b.sub(z));
+        let hit = alive
+            .and(up.or(down))
+            .and(mu_t.mul(gap).le(s_left.mul(abs_uz)));
         // (`a.and_not(b)` is b and not a.)
         let inside = hit.and_not(alive);
         let (hm, im) = (hit.mask_bits(), inside.mask_bits());
@@ -394,8 +401,10 @@ fn walk<L: Lanes>(t: L::Token, run: &Run, slab: &Slab, range: std::ops::Range<u6
             // Internal boundaries between equal indices are crossed without a Fresnel draw.
             let crosses_free = outer.and_not(hit).and(n1.eq(n2));
             let tested = crosses_free.and_not(hit);
-            let xi_f = rng.uniform(t, tested);
-            let cos_i = zero.sub(uz).max(uz);
+            let xi_f = rng.uniform(t, tested, 4);
+            // The hop to the boundary, along the incident direction.
+            let dist = z_b.sub(z).div(uz);
+            let cos_i = abs_uz;
             let (f, cos_t) = fresnel(cos_i, n1, n2, eta);
             let reflect = tested.and(xi_f.lt(f));
             let refract = reflect.and_not(tested);
@@ -426,13 +435,13 @@ fn walk<L: Lanes>(t: L::Token, run: &Run, slab: &Slab, range: std::ops::Range<u6
         let mut w_absorbed = w;
         if im != 0 {
             let d = s_left.mul(pick::<L>(layer, &tb.inv_mut, nl));
-            z = inside.select(z.add(uz.mul(d)), z);
+            z = inside.select(uz.mul_add(d, z), z);
             s_left = inside.select(zero, s_left);
             let a = pick::<L>(layer, &tb.albedo_c, nl);
             let w_abs = w.sub(w.mul(a));
             let g = pick::<L>(layer, &tb.g, nl);
-            let xi_g = rng.uniform(t, inside);
-            let xi_p = rng.uniform(t, inside);
+            let xi_g = rng.uniform(t, inside, 4);
+            let xi_p = rng.uniform(t, inside, 5);
             // Henyey–Greenstein (MCML eq. 3.28); isotropic for |g| < 10⁻⁶.
             let tt =
                 pick::<L>(layer, &tb.hg_a, nl).div(one.sub(g).add(splat(2.0).mul(g).mul(xi_g)));
@@ -450,9 +459,10 @@ fn walk<L: Lanes>(t: L::Token, run: &Run, slab: &Slab, range: std::ops::Range<u6
             let sign_z = uz.lt(zero).select(zero.sub(one), one);
             let temp = one.sub(uz.mul(uz)).sqrt();
             let q = st.div(temp);
-            let sx = q.mul(ux.mul(uz).mul(cp).sub(uy.mul(sp))).add(ux.mul(ct));
-            let sy = q.mul(uy.mul(uz).mul(cp).add(ux.mul(sp))).add(uy.mul(ct));
-            let sz = zero.sub(st).mul(cp).mul(temp).add(uz.mul(ct));
+            let uzcp = uz.mul(cp);
+            let sx = q.mul_add(ux.mul_add(uzcp, zero.sub(uy.mul(sp))), ux.mul(ct));
+            let sy = q.mul_add(uy.mul_add(uzcp, ux.mul(sp)), uy.mul(ct));
+            let sz = uz.mul_add(ct, zero.sub(st.mul(cp).mul(temp)));
             ux = inside.select(vertical.select(st.mul(cp), sx), ux);
             uy = inside.select(vertical.select(st.mul(sp), sy), uy);
             uz = inside.select(vertical.select(ct.mul(sign_z), sz), uz);
@@ -461,7 +471,7 @@ fn walk<L: Lanes>(t: L::Token, run: &Run, slab: &Slab, range: std::ops::Range<u6
             w = inside.select(w_abs, w);
             w_absorbed = w;
             if low.mask_bits() != 0 {
-                let xi_r = rng.uniform(t, low);
+                let xi_r = rng.uniform(t, low, 6);
                 survives = low.and(xi_r.lt(splat(ROULETTE_CHANCE as f32)));
                 killed = survives.and_not(low);
                 w = survives.select(w.div(splat(ROULETTE_CHANCE as f32)), w);

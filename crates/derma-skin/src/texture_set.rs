@@ -261,6 +261,9 @@ pub fn occlude_cavities(height_mm: &Map, roughness: &mut [f32], specular: &mut [
 /// Rows of the render maps converted per parallel task.
 const CONVERT_ROWS: usize = 8;
 
+/// One task's rows of the subsurface colour and radius maps.
+type SubsurfaceRows<'a> = (&'a mut [[u8; 3]], &'a mut [[u16; 3]]);
+
 /// One task's rows of every render map.
 struct Strip<'a> {
     first_row: usize,
@@ -268,7 +271,7 @@ struct Strip<'a> {
     roughness: &'a mut [u8],
     specular: &'a mut [u8],
     normal: &'a mut [[u16; 3]],
-    subsurface: Option<(&'a mut [[u8; 3]], &'a mut [[u16; 3]])>,
+    subsurface: Option<SubsurfaceRows<'a>>,
 }
 
 /// Converts painted bio maps (already dilated on meshes, see [`BioMaps::dilate`]) to render maps

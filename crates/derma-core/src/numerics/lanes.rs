@@ -4,8 +4,8 @@
 //! CPU has AVX2 and FMA, and the lane types are made from it, so the code that uses them is
 //! safe) and [`PortableF32`], eight plain f32s for every other CPU.
 //!
-//! Every operation is one IEEE operation per lane, the same on both (no fused multiply–add, the
-//! same rounding, comparisons false with NaN, `min`/`max` returning the second operand when
+//! Every operation is one IEEE operation per lane, the same on both (fused multiply–add only
+//! where asked for, and then fused on both; the same rounding, comparisons false with NaN, `min`/`max` returning the second operand when
 //! either is NaN as the x86 instructions do), and the elementary functions below are written
 //! once over the interface, so both give the same bits — and [`Lanes::exp`] and [`Lanes::cbrt`]
 //! the bits of [`super::fastmath`]'s scalar functions. Results do not depend on the CPU.
@@ -70,6 +70,9 @@ pub trait Lanes: Copy + Send + Sync + std::fmt::Debug {
     fn to_i32(self) -> Self::I;
     /// Lanes where a mask is set, as bits 0–7.
     fn mask_bits(self) -> u32;
+    /// `self · a + b` with one rounding (fused multiply–add; `f32::mul_add` on the portable
+    /// lanes, so both give the same bits).
+    fn mul_add(self, a: Self, b: Self) -> Self;
 
     /// `v` in every lane (the token taken from `self`).
     #[inline(always)]
@@ -148,11 +151,13 @@ pub trait Lanes: Copy + Send + Sync + std::fmt::Debug {
         let z = s.mul(s);
         let mut p = self.splat_as(1.0 / 9.0);
         for c in [1.0 / 7.0, 1.0 / 5.0, 1.0 / 3.0, 1.0] {
-            p = self.splat_as(c).add(z.mul(p));
+            p = z.mul_add(p, self.splat_as(c));
         }
         let ln_m = self.splat_as(2.0).mul(s).mul(p);
-        e.mul(self.splat_as(LN2_HI))
-            .add(ln_m.add(e.mul(self.splat_as(LN2_LO))))
+        e.mul_add(
+            self.splat_as(LN2_HI),
+            e.mul_add(self.splat_as(LN2_LO), ln_m),
+        )
     }
 
     /// (sin 2πt, cos 2πt) for t ∈ [0, 1) with 24 fractional bits (the photons' uniform draws;
@@ -167,12 +172,12 @@ pub trait Lanes: Copy + Send + Sync + std::fmt::Debug {
         // sin a = a (1 − a²/3! + a⁴/5! − a⁶/7! + a⁸/9!), cos a = 1 − a²/2! + … + a¹⁰/10!.
         let mut s = self.splat_as(1.0 / 362_880.0);
         for c in [-1.0 / 5040.0, 1.0 / 120.0, -1.0 / 6.0, 1.0] {
-            s = self.splat_as(c).add(a2.mul(s));
+            s = a2.mul_add(s, self.splat_as(c));
         }
         let s = a.mul(s);
         let mut c = self.splat_as(-1.0 / 3_628_800.0);
         for k in [1.0 / 40_320.0, -1.0 / 720.0, 1.0 / 24.0, -0.5, 1.0] {
-            c = self.splat_as(k).add(a2.mul(c));
+            c = a2.mul_add(c, self.splat_as(k));
         }
         // Quarter turns: (s, c) → (c, −s) → (−s, −c) → (−c, s).
         let k = q.to_i32();
@@ -228,6 +233,32 @@ pub trait IntLanes: Copy + Send + Sync + std::fmt::Debug {
     /// The low and high 32 bits of the lanes' unsigned 64-bit products with `o` (Philox's
     /// multiply).
     fn mul_wide_unsigned(self, o: Self) -> (Self, Self);
+
+    /// Philox4x32-10 ([`crate::rng::philox4x32_10`]) of each lane's counter under one key.
+    #[inline(always)]
+    fn philox4x32_10(ctr: [Self; 4], key: [u32; 2]) -> [Self; 4] {
+        use crate::rng::{PHILOX_M0, PHILOX_M1, PHILOX_W0, PHILOX_W1};
+        let tok = ctr[0].to_f32_bits().token();
+        let (m0, m1) = (
+            Self::splat(tok, PHILOX_M0 as i32),
+            Self::splat(tok, PHILOX_M1 as i32),
+        );
+        let (mut k0, mut k1) = (key[0], key[1]);
+        let mut c = ctr;
+        for _ in 0..10 {
+            let (lo0, hi0) = m0.mul_wide_unsigned(c[0]);
+            let (lo1, hi1) = m1.mul_wide_unsigned(c[2]);
+            c = [
+                hi1.xor(c[1]).xor(Self::splat(tok, k0 as i32)),
+                lo1,
+                hi0.xor(c[3]).xor(Self::splat(tok, k1 as i32)),
+                lo0,
+            ];
+            k0 = k0.wrapping_add(PHILOX_W0);
+            k1 = k1.wrapping_add(PHILOX_W1);
+        }
+        c
+    }
 
     /// Each lane read as u32 divided by 3, exactly: ⌊x · ⌈2³³/3⌉ / 2³³⌋ = ⌊x/3⌋ for every
     /// 32-bit x (Granlund & Montgomery 1994, "Division by invariant integers using
@@ -359,7 +390,7 @@ impl Lanes for PortableF32 {
     fn to_i32(self) -> PortableI32 {
         // As CVTTPS2DQ: out of range and NaN give i32::MIN.
         PortableI32(self.0.map(|v| {
-            if v.is_nan() || v >= 2_147_483_648.0 || v < -2_147_483_648.0 {
+            if !(-2_147_483_648.0..2_147_483_648.0).contains(&v) {
                 i32::MIN
             } else {
                 v as i32
@@ -369,6 +400,10 @@ impl Lanes for PortableF32 {
     #[inline(always)]
     fn mask_bits(self) -> u32 {
         (0..8).fold(0, |m, l| m | ((self.0[l].to_bits() >> 31) << l))
+    }
+    #[inline(always)]
+    fn mul_add(self, a: Self, b: Self) -> Self {
+        Self(std::array::from_fn(|l| self.0[l].mul_add(a.0[l], b.0[l])))
     }
 }
 
@@ -552,6 +587,10 @@ mod x86 {
         fn mask_bits(self) -> u32 {
             unsafe { _mm256_movemask_ps(self.0) as u32 }
         }
+        #[inline(always)]
+        fn mul_add(self, a: Self, b: Self) -> Self {
+            Avx2F32(unsafe { _mm256_fmadd_ps(self.0, a.0, b.0) })
+        }
     }
 
     impl IntLanes for Avx2I32 {
@@ -615,6 +654,52 @@ mod x86 {
         fn eq(self, o: Self) -> Avx2F32 {
             Avx2F32(unsafe { _mm256_castsi256_ps(_mm256_cmpeq_epi32(self.0, o.0)) })
         }
+        /// Philox with the lanes spread over the 64-bit slots of two registers (even and odd
+        /// lanes): each multiply then yields both halves of four products in place, and only
+        /// the low 32 bits of a slot are ever read, so no lanes are reassembled between rounds.
+        #[inline(always)]
+        fn philox4x32_10(ctr: [Self; 4], key: [u32; 2]) -> [Self; 4] {
+            use crate::rng::{PHILOX_M0, PHILOX_M1, PHILOX_W0, PHILOX_W1};
+            unsafe {
+                let m0 = _mm256_set1_epi64x(PHILOX_M0 as i64);
+                let m1 = _mm256_set1_epi64x(PHILOX_M1 as i64);
+                let spread = |v: __m256i| (v, _mm256_srli_epi64::<32>(v));
+                let mut even = [_mm256_setzero_si256(); 4];
+                let mut odd = even;
+                for k in 0..4 {
+                    (even[k], odd[k]) = spread(ctr[k].0);
+                }
+                let (mut k0, mut k1) = (key[0], key[1]);
+                for _ in 0..10 {
+                    let (kk0, kk1) = (_mm256_set1_epi32(k0 as i32), _mm256_set1_epi32(k1 as i32));
+                    for c in [&mut even, &mut odd] {
+                        let p0 = _mm256_mul_epu32(m0, c[0]);
+                        let p1 = _mm256_mul_epu32(m1, c[2]);
+                        *c = [
+                            _mm256_xor_si256(
+                                _mm256_xor_si256(_mm256_srli_epi64::<32>(p1), c[1]),
+                                kk0,
+                            ),
+                            p1,
+                            _mm256_xor_si256(
+                                _mm256_xor_si256(_mm256_srli_epi64::<32>(p0), c[3]),
+                                kk1,
+                            ),
+                            p0,
+                        ];
+                    }
+                    k0 = k0.wrapping_add(PHILOX_W0);
+                    k1 = k1.wrapping_add(PHILOX_W1);
+                }
+                std::array::from_fn(|k| {
+                    Avx2I32(_mm256_blend_epi32::<0b1010_1010>(
+                        even[k],
+                        _mm256_slli_epi64::<32>(odd[k]),
+                    ))
+                })
+            }
+        }
+
         #[inline(always)]
         fn mul_wide_unsigned(self, o: Self) -> (Self, Self) {
             unsafe {
