@@ -3,7 +3,8 @@
 # CLI (installed here from crates.io, never vendored) on the same skin exemplars, same machine,
 # same run, at 512², 1024² and 2048² from 128² and 256² exemplars. Times are whole-process wall
 # clock (load, synthesise, write); the quality metrics of both outputs come from one program
-# (derma-synth's 02_quality example: patch SWD, verbatim-copy ratio, seam energy).
+# (derma-synth's 02_quality example: patch SWD at full, half and quarter resolution, contrast and
+# grain ratios, verbatim-copy ratio, seam energy).
 #   bash bench/synth.sh [SIZES...]      (default: 512 1024 2048)
 # Needs ../shared/data (the skin crops) and python3 with Pillow (for cropping and the figure).
 set -euo pipefail
@@ -37,7 +38,7 @@ PY
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
 csv="$out/results.csv"
-echo "exemplar,size,tool,seconds,patch_swd,verbatim_copy_ratio,seam_energy" >"$csv"
+echo "exemplar,size,tool,seconds,patch_swd,swd_half,swd_quarter,contrast,grain,verbatim_copy_ratio,seam_energy" >"$csv"
 wall() { # seconds of wall clock of a command
   local t0 t1
   t0=$(date +%s.%N)
@@ -51,8 +52,9 @@ for ex in disp128 disp256 albedo256x128; do
     p_s=$(wall "$peer" --no-progress --seed 1 --out-size "$s" --out "$out/${ex}_${s}_peer.png" generate "$out/$ex.png")
     for tool in derma peer; do
       secs=$d_s; [ $tool = peer ] && secs=$p_s
-      read -r _ swd _ verb _ seam < <("$quality" "$out/$ex.png" "$out/${ex}_${s}_${tool}.png" 16)
-      echo "$ex,$s,$tool,$secs,$swd,$verb,$seam" >>"$csv"
+      read -r _ swd _ swd2 _ swd4 _ contrast _ grain _ verb _ seam \
+        < <("$quality" "$out/$ex.png" "$out/${ex}_${s}_${tool}.png" 16)
+      echo "$ex,$s,$tool,$secs,$swd,$swd2,$swd4,$contrast,$grain,$verb,$seam" >>"$csv"
     done
     python3 -c "print(f'$ex {$s}²: derma {$d_s} s, peer {$p_s} s, ratio {$p_s/$d_s:.1f}×')" 2>/dev/null \
       || echo "$ex ${s}²: derma $d_s s, peer $p_s s"

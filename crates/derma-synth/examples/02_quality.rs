@@ -1,14 +1,15 @@
 //! Quality metrics of a synthesised image against its exemplar (as used by `bench/synth.sh`).
 //!
 //! `cargo run --release -p derma-synth --example 02_quality -- EXEMPLAR.png OUTPUT.png [STEP]`
-//! prints: patch SWD, verbatim-copy ratio (32² blocks), seam energy at the given patch step.
+//! prints: patch SWD at full, half and quarter resolution, contrast and grain ratios,
+//! verbatim-copy ratio (32² blocks), seam energy at the given patch step.
 //! Without arguments it scores two images of its own against a noise exemplar, to show what the
 //! metrics see: the exemplar tiled 4 × 4 (a pure copy: verbatim ratio 1, patch statistics as the
 //! exemplar's) and white noise (nothing copied, but far in patch statistics).
 
 use derma_core::image_io::read_rgb;
 use derma_core::rng::Philox;
-use derma_synth::quality::{patch_swd, seam_energy, verbatim_copy_ratio, SwdOptions};
+use derma_synth::quality::Metrics;
 use derma_synth::Texture;
 use std::path::Path;
 
@@ -24,11 +25,16 @@ fn load(path: &str, color: Option<bool>) -> Result<(Texture, bool), Box<dyn std:
 }
 
 fn score(out: &Texture, ex: &Texture, step: usize) -> Result<String, Box<dyn std::error::Error>> {
+    let m = Metrics::measure(out, ex, 2 * step)?;
     Ok(format!(
-        "swd {:.5} verbatim {:.4} seam {:.4}",
-        patch_swd(out, ex, &SwdOptions::default())?,
-        verbatim_copy_ratio(out, ex, 32)?,
-        seam_energy(out, step)?
+        "swd {:.5} swd_half {:.5} swd_quarter {:.5} contrast {:.3} grain {:.3} verbatim {:.4} seam {:.4}",
+        m.patch_swd,
+        m.patch_swd_half,
+        m.patch_swd_quarter,
+        m.contrast_ratio,
+        m.grain_ratio,
+        m.verbatim_copy_ratio,
+        m.seam_energy
     ))
 }
 

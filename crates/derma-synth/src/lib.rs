@@ -2,7 +2,8 @@
 //! texture synthesis for digital human model" (`../shared/seeds/gpu-skin-texture-synthesis-shen.txt`).
 //!
 //! [`synthesize`] grows a texture of any size from one or more exemplars: white noise, a patch
-//! pass ([`patch_pass`]), then self-adaptive optimisation passes ([`optimize`]). Every
+//! pass ([`patch_pass`]), self-adaptive optimisation passes ([`optimize`]), then a texel-level
+//! coherent [`correction`]. Every
 //! best-match search is the exact integer search of [`search`], run by a [`Matcher`]: the CPU
 //! one ([`CpuMatcher`], rayon) or the GPU one (`gpu::GpuMatcher`, WGSL), which give identical
 //! answers, so a seed gives the same texture on either. [`quality`] holds the metrics that
@@ -11,6 +12,7 @@
 #![warn(missing_docs)]
 
 pub mod canvas;
+pub mod correction;
 pub mod error;
 pub mod exemplar;
 pub mod files;

@@ -14,9 +14,13 @@
 //!
 //! Patches run in anti-diagonal wavefronts, t = i + 2j (column i, row j): a patch overlaps
 //! earlier ones only at (i−1, j), (i−1, j−1), (i, j−1) and (i+1, j−1), all of smaller t, so one
-//! wavefront's searches are independent and the result equals the scanline order. Where the
-//! output wraps (tileable) or the last patch is pulled in to the edge, the order is simply
-//! wavefront by wavefront, and within one, scanline.
+//! wavefront's searches are independent. They share the occurrence counts of the wavefronts
+//! before, though, and patches in alike surroundings along a wavefront would pick the same
+//! windows (bands along the wavefronts); so a patch whose match overlaps one accepted earlier
+//! in its wavefront by more than half a patch each way is searched again with those windows
+//! barred, which is what a scanline order with the penalty updated per patch would discourage.
+//! Where the output wraps (tileable) or the last patch is pulled in to the edge, the order is
+//! simply wavefront by wavefront, and within one, scanline.
 
 use crate::canvas::{origins, Canvas, NO_SOURCE};
 use crate::error::Result;
@@ -102,17 +106,45 @@ pub(crate) fn patch_pass(
                 }
             })
             .collect();
-        let penalty = occ.penalties();
-        let search = Search {
-            w: n,
-            tol,
-            penalty: penalty.as_deref(),
-        };
-        let matches = ctx.matcher.best_matches(set, &search, &queries)?;
-        for ((&(px, py, _), q), m) in patches.iter().zip(&queries).zip(&matches) {
-            occ.remove(canvas, px, py, n);
-            canvas.paste(set, q.exemplar as usize, m.index, px, py, n);
-            occ.add(canvas, px, py, n);
+        // Searches of one wavefront are independent, but they share the occurrence counts of
+        // the wavefronts before: left alone, patches in similar surroundings along a
+        // wavefront pick the same windows and the output shows bands along the wavefronts.
+        // So, in scanline order, a patch whose match overlaps (by more than half a patch each
+        // way) a window accepted earlier in its wavefront is searched again, with the accepted
+        // windows' neighbourhoods penalised and the counts updated; repeated until none clashes
+        // (each round accepts its first patch whatever it overlaps). Deterministic, as the searches are.
+        let mut pending: Vec<usize> = (0..patches.len()).collect();
+        let mut accepted: Vec<(u32, usize, usize)> = Vec::new();
+        while !pending.is_empty() {
+            let penalty = occ.penalties_excluding(&accepted, d);
+            let search = Search {
+                w: n,
+                tol,
+                penalty: penalty.as_deref(),
+            };
+            let batch: Vec<Query> = pending.iter().map(|&k| queries[k].clone()).collect();
+            let matches = ctx.matcher.best_matches(set, &search, &batch)?;
+            let mut redo = Vec::new();
+            for (i, (&k, m)) in pending.iter().zip(&matches).enumerate() {
+                let ex = queries[k].exemplar;
+                let cw = set.exemplars[ex as usize].width() + 1 - n;
+                let (mx, my) = (m.index as usize % cw, m.index as usize / cw);
+                // (The first of a round is accepted whatever it overlaps: the loop ends.)
+                let clash = i > 0
+                    && accepted
+                        .iter()
+                        .any(|&(e, ax, ay)| e == ex && ax.abs_diff(mx) < d && ay.abs_diff(my) < d);
+                if clash {
+                    redo.push(k);
+                    continue;
+                }
+                accepted.push((ex, mx, my));
+                let (px, py, _) = patches[k];
+                occ.remove(canvas, px, py, n);
+                canvas.paste(set, ex as usize, m.index, px, py, n);
+                occ.add(canvas, px, py, n);
+            }
+            pending = redo;
         }
         progress.advance(patches.len() as u64);
     }
@@ -174,6 +206,38 @@ impl Occurrence {
                 self.total[ex] += 1;
             }
         }
+    }
+
+    /// [`Self::penalties`], with every candidate within `d` texels (each way) of an
+    /// `(exemplar, x, y)` window of `taken` charged the cap; `None` when there is nothing to
+    /// charge.
+    fn penalties_excluding(
+        &self,
+        taken: &[(u32, usize, usize)],
+        d: usize,
+    ) -> Option<Vec<Vec<u32>>> {
+        let mut p = self.penalties();
+        if taken.is_empty() {
+            return p;
+        }
+        let n = self.n;
+        let cap = MAX_PENALTY_TOTAL / (n * n) as u32;
+        let p = p.get_or_insert_with(|| {
+            self.sizes
+                .iter()
+                .map(|&(w, h)| vec![0; (w + 1 - n) * (h + 1 - n)])
+                .collect()
+        });
+        for &(ex, ax, ay) in taken {
+            let (w, h) = self.sizes[ex as usize];
+            let (cw, ch) = (w + 1 - n, h + 1 - n);
+            for y in ay.saturating_sub(d - 1)..(ay + d).min(ch) {
+                for x in ax.saturating_sub(d - 1)..(ax + d).min(cw) {
+                    p[ex as usize][y * cw + x] = cap;
+                }
+            }
+        }
+        Some(std::mem::take(p))
     }
 
     /// Per exemplar, per candidate: the penalty per known texel; `None` when λ = 0.

@@ -11,6 +11,11 @@
 //! - **Seam energy**: the mean squared difference across the synthesis grid's lines divided by
 //!   the mean squared difference across all other texel boundaries, minus one: 0 when the grid
 //!   is invisible, positive when patches show.
+//! - **Multi-scale**: the patch SWD again on 2 × 2 and 4 × 4 box-averaged copies of both
+//!   textures (7 × 7 patches then span 14 and 28 texels: structure a 7 × 7 patch cannot see,
+//!   such as bands and repeated features), the contrast ratio (standard deviation of the output
+//!   over the exemplar's) and the grain ratio (the same for what a 3 × 3 box blur removes: the
+//!   finest detail, which averaging overlapping windows loses first).
 
 use crate::error::{invalid, Result};
 use crate::texture::Texture;
@@ -18,11 +23,19 @@ use derma_core::rng::Philox;
 use rayon::prelude::*;
 use std::collections::HashMap;
 
-/// The three quality figures of a synthesis against its exemplar (`derma synth --metrics`).
+/// The quality figures of a synthesis against its exemplar (`derma synth --metrics`).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Metrics {
     /// [`patch_swd`] with default settings (lower is closer to the exemplar).
     pub patch_swd: f64,
+    /// [`patch_swd`] of both textures at half resolution ([`downsample`] by 2).
+    pub patch_swd_half: f64,
+    /// [`patch_swd`] of both textures at quarter resolution ([`downsample`] by 4).
+    pub patch_swd_quarter: f64,
+    /// [`contrast_ratio`]: 1 when the output varies as much as the exemplar.
+    pub contrast_ratio: f64,
+    /// [`grain_ratio`]: 1 when the output keeps the exemplar's finest detail.
+    pub grain_ratio: f64,
     /// [`verbatim_copy_ratio`] for 32 × 32 blocks.
     pub verbatim_copy_ratio: f64,
     /// [`seam_energy`] along the patch pass's grid (step N/2).
@@ -31,13 +44,127 @@ pub struct Metrics {
 
 impl Metrics {
     /// Measures `output` against `exemplar`, synthesised with patches of side `patch`.
+    /// The coarser SWDs are NaN where the exemplar is too small for 7 × 7 patches at that scale.
     pub fn measure(output: &Texture, exemplar: &Texture, patch: usize) -> Result<Self> {
+        let o = SwdOptions::default();
+        let coarse = |f: usize| -> Result<f64> {
+            let (a, b) = (downsample(output, f), downsample(exemplar, f));
+            if a.width < o.patch || a.height < o.patch || b.width < o.patch || b.height < o.patch {
+                return Ok(f64::NAN);
+            }
+            patch_swd(&a, &b, &o)
+        };
         Ok(Self {
-            patch_swd: patch_swd(output, exemplar, &SwdOptions::default())?,
+            patch_swd: patch_swd(output, exemplar, &o)?,
+            patch_swd_half: coarse(2)?,
+            patch_swd_quarter: coarse(4)?,
+            contrast_ratio: contrast_ratio(output, exemplar)?,
+            grain_ratio: grain_ratio(output, exemplar)?,
             verbatim_copy_ratio: verbatim_copy_ratio(output, exemplar, 32)?,
             seam_energy: seam_energy(output, patch / 2)?,
         })
     }
+}
+
+/// `t` averaged over `f × f` blocks (a box filter and decimation; a partial last row or column
+/// of blocks is dropped).
+pub fn downsample(t: &Texture, f: usize) -> Texture {
+    let f = f.max(1);
+    let (w, h, c) = (t.width / f, t.height / f, t.channels);
+    let norm = 1.0 / (f * f) as f32;
+    let mut data = vec![0f32; w * h * c];
+    for y in 0..h {
+        for x in 0..w {
+            for dy in 0..f {
+                for dx in 0..f {
+                    let v = t.texel(x * f + dx, y * f + dy);
+                    for k in 0..c {
+                        data[(y * w + x) * c + k] += v[k] * norm;
+                    }
+                }
+            }
+        }
+    }
+    Texture {
+        width: w,
+        height: h,
+        channels: c,
+        data,
+    }
+}
+
+/// Standard deviation of each channel of `t`.
+fn channel_std(t: &Texture) -> Vec<f64> {
+    let c = t.channels;
+    let n = (t.width * t.height) as f64;
+    (0..c)
+        .map(|k| {
+            let vals = t.data.iter().skip(k).step_by(c).map(|&v| v as f64);
+            let mean = vals.clone().sum::<f64>() / n;
+            (vals.map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt()
+        })
+        .collect()
+}
+
+/// Mean over channels of the ratio of standard deviations, `a`'s over `b`'s (channels where
+/// `b` is constant are skipped; 1 when none is left).
+fn std_ratio(a: &Texture, b: &Texture) -> Result<f64> {
+    if a.channels != b.channels {
+        return Err(invalid(
+            "textures",
+            format!("{} and {} channels", a.channels, b.channels),
+        ));
+    }
+    let ratios: Vec<f64> = channel_std(a)
+        .iter()
+        .zip(channel_std(b))
+        .filter(|(_, sb)| *sb > 0.0)
+        .map(|(sa, sb)| sa / sb)
+        .collect();
+    Ok(if ratios.is_empty() {
+        1.0
+    } else {
+        ratios.iter().sum::<f64>() / ratios.len() as f64
+    })
+}
+
+/// Contrast ratio: the output's standard deviation over the exemplar's (mean over channels):
+/// below 1 when synthesis washes the texture out.
+pub fn contrast_ratio(output: &Texture, exemplar: &Texture) -> Result<f64> {
+    std_ratio(output, exemplar)
+}
+
+/// `t` minus its 3 × 3 box blur (edges clamped): the finest octave of detail.
+fn fine_detail(t: &Texture) -> Texture {
+    let (w, h, c) = (t.width, t.height, t.channels);
+    let mut data = vec![0f32; w * h * c];
+    for y in 0..h {
+        for x in 0..w {
+            for k in 0..c {
+                let mut s = 0.0;
+                for dy in -1i64..=1 {
+                    for dx in -1i64..=1 {
+                        let xx = (x as i64 + dx).clamp(0, w as i64 - 1) as usize;
+                        let yy = (y as i64 + dy).clamp(0, h as i64 - 1) as usize;
+                        s += t.texel(xx, yy)[k];
+                    }
+                }
+                data[(y * w + x) * c + k] = t.texel(x, y)[k] - s / 9.0;
+            }
+        }
+    }
+    Texture {
+        width: w,
+        height: h,
+        channels: c,
+        data,
+    }
+}
+
+/// Grain ratio: the [`contrast_ratio`] of the finest detail (each texture minus its 3 × 3 box
+/// blur): below 1 when synthesis blurs the grain.
+pub fn grain_ratio(output: &Texture, exemplar: &Texture) -> Result<f64> {
+    std_ratio(&fine_detail(output), &fine_detail(exemplar))
 }
 
 /// Settings of [`patch_swd`].
@@ -405,6 +532,56 @@ mod tests {
             }
         }
         out
+    }
+
+    #[test]
+    fn contrast_and_grain_ratios_see_blur_and_gain() {
+        let t = noise(64, 64, 5);
+        assert!((contrast_ratio(&t, &t).unwrap() - 1.0).abs() < 1e-12);
+        // Doubling the deviation about the mean doubles both ratios.
+        let mean = t.data.iter().sum::<f32>() / t.data.len() as f32;
+        let loud = Texture {
+            data: t.data.iter().map(|v| mean + 2.0 * (v - mean)).collect(),
+            ..t.clone()
+        };
+        assert!((contrast_ratio(&loud, &t).unwrap() - 2.0).abs() < 1e-5);
+        assert!((grain_ratio(&loud, &t).unwrap() - 2.0).abs() < 1e-5);
+        // A blur keeps the mean but loses the grain much more than the contrast.
+        let rng = Philox::new(9, 7);
+        let t = Texture::new(
+            64,
+            64,
+            1,
+            (0..64 * 64).map(|i| rng.uniform4(i, 0)[0]).collect(),
+        )
+        .unwrap();
+        let blurred = downsample(&t, 2);
+        let up = Texture {
+            width: 64,
+            height: 64,
+            channels: 1,
+            data: (0..64 * 64)
+                .map(|i| blurred.data[(i / 64 / 2) * 32 + (i % 64) / 2])
+                .collect(),
+        };
+        let (c, g) = (
+            contrast_ratio(&up, &t).unwrap(),
+            grain_ratio(&up, &t).unwrap(),
+        );
+        assert!(g < 0.7 && g < c, "contrast {c}, grain {g}");
+    }
+
+    #[test]
+    fn downsample_averages_blocks() {
+        let t = Texture {
+            width: 4,
+            height: 2,
+            channels: 1,
+            data: vec![0.0, 2.0, 4.0, 8.0, 2.0, 4.0, 0.0, 4.0],
+        };
+        let d = downsample(&t, 2);
+        assert_eq!((d.width, d.height), (2, 1));
+        assert_eq!(d.data, vec![2.0, 4.0]);
     }
 
     #[test]

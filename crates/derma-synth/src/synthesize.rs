@@ -2,6 +2,7 @@
 //! passes with shrinking neighbourhoods; options, guidance and progress reporting.
 
 use crate::canvas::Canvas;
+use crate::correction::correct;
 use crate::error::{invalid, Result};
 use crate::exemplar::ExemplarSet;
 use crate::guide::Guide;
@@ -41,6 +42,9 @@ pub struct SynthOptions {
     pub seed: u64,
     /// Tileable output: the texture wraps at its edges.
     pub tile: bool,
+    /// Texel-level coherent correction passes after the optimisation (0 = off, as the paper);
+    /// see [`crate::correction`].
+    pub correction: usize,
 }
 
 impl Default for SynthOptions {
@@ -55,6 +59,7 @@ impl Default for SynthOptions {
             occurrence: 1.0,
             seed: 1,
             tile: false,
+            correction: 2,
         }
     }
 }
@@ -197,6 +202,7 @@ pub fn synthesize(
     for w in opts.pass_windows() {
         optimise_pass(&mut canvas, &ctx, w, opts.r)?;
     }
+    correct(&mut canvas, set, guide, opts.correction, &job);
     let timings = job.finish().timings;
     let (ow, oh) = (opts.width, opts.height);
     let mut data = Vec::with_capacity(ow * oh * c);

@@ -49,6 +49,10 @@ pub struct SynthArgs {
     /// Weight of the occurrence penalty that keeps the whole exemplar in use (0 = off).
     #[arg(long, default_value_t = 1.0)]
     occurrence: f64,
+    /// Texel-level coherent correction passes after the optimisation, which restore the
+    /// exemplar's finest grain (0 = off, as the paper).
+    #[arg(long, default_value_t = 2)]
+    correction: usize,
     /// Guide map (grey): level v draws from exemplar round(v·(count − 1)).
     #[arg(long)]
     guide: Option<PathBuf>,
@@ -119,6 +123,7 @@ pub fn run(args: SynthArgs, bars: &Bars) -> Result<()> {
             passes: args.passes,
             tolerance: args.tolerance,
             occurrence: args.occurrence,
+            correction: args.correction,
             seed: args.seed,
             tile: args.tile,
             ..Default::default()
@@ -168,6 +173,10 @@ pub fn run(args: SynthArgs, bars: &Bars) -> Result<()> {
             "seconds": secs,
             "stages": stages,
             "patch_swd": m.patch_swd,
+            "patch_swd_half": m.patch_swd_half,
+            "patch_swd_quarter": m.patch_swd_quarter,
+            "contrast_ratio": m.contrast_ratio,
+            "grain_ratio": m.grain_ratio,
             "verbatim_copy_ratio": m.verbatim_copy_ratio,
             "seam_energy": m.seam_energy,
         });
