@@ -361,10 +361,33 @@ pub(crate) fn known_block_sums(
 impl Matcher for CpuMatcher {
     fn best_matches(&self, set: &ExemplarSet, s: &Search, queries: &[Query]) -> Result<Vec<Match>> {
         let prep = Prepared::new(set, s.w);
+        let threads = rayon::current_num_threads();
+        if queries.len() >= threads {
+            return Ok(queries
+                .par_iter()
+                .with_min_len(1)
+                .map(|q| best_match_pruned(set, &prep, s, q))
+                .collect());
+        }
+        // Fewer queries than threads (the patch pass's last searches of a wavefront): each
+        // query's rows are split among the threads. Every part keeps all candidates within its
+        // own limit, which is at least the whole search's, so the merged candidates hold every
+        // one within the final limit and the answer is the same.
         Ok(queries
-            .par_iter()
-            .with_min_len(1)
-            .map(|q| best_match_pruned(set, &prep, s, q))
+            .iter()
+            .map(|q| {
+                let (_, ch) = set.exemplars[q.exemplar as usize].candidates(s.w);
+                let parts = (threads * 4).min(ch);
+                let found: Vec<(Vec<(u32, u32)>, u32)> = (0..parts)
+                    .into_par_iter()
+                    .map(|p| scan_pruned(set, &prep, s, q, p * ch / parts..(p + 1) * ch / parts))
+                    .collect();
+                let best = found.iter().map(|f| f.1).min().unwrap_or(u32::MAX);
+                let mut kept: Vec<(u32, u32)> = found.into_iter().flat_map(|f| f.0).collect();
+                kept.sort_unstable_by_key(|k| k.1);
+                kept.dedup();
+                choose(q.salt, kept, s.tol.limit(best))
+            })
             .collect())
     }
     fn name(&self) -> String {
@@ -372,40 +395,63 @@ impl Matcher for CpuMatcher {
     }
 }
 
-/// Exact search with the block-sum bounds (see the module comment), compiled for AVX2 + FMA
-/// where the processor has them (the bound loops vectorise 8 wide; the answer is the same,
-/// as every decision that matters is made on exact integers).
+/// Exact search with the block-sum bounds over every candidate, on one thread.
 fn best_match_pruned(set: &ExemplarSet, prep: &Prepared, s: &Search, q: &Query) -> Match {
-    #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-        // SAFETY: the features the function is compiled for were just detected.
-        return unsafe { best_match_pruned_avx2(set, prep, s, q) };
-    }
-    best_match_pruned_body(set, prep, s, q)
+    let (_, ch) = set.exemplars[q.exemplar as usize].candidates(s.w);
+    let (kept, best) = scan_pruned(set, prep, s, q, 0..ch);
+    choose(q.salt, kept, s.tol.limit(best))
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn best_match_pruned_avx2(
+/// Exact search with the block-sum bounds (see the module comment) over the candidate rows
+/// `rows`, starting from the query's guesses: every candidate whose cost is within the
+/// tolerance of the least cost found (the guesses included), and that least cost. Compiled for
+/// AVX2 + FMA where the processor has them (the bound loops vectorise 8 wide; the answer is
+/// the same, as every decision that matters is made on exact integers).
+fn scan_pruned(
     set: &ExemplarSet,
     prep: &Prepared,
     s: &Search,
     q: &Query,
-) -> Match {
-    best_match_pruned_body(set, prep, s, q)
+    rows: std::ops::Range<usize>,
+) -> (Vec<(u32, u32)>, u32) {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+        // SAFETY: the features the function is compiled for were just detected.
+        return unsafe { scan_pruned_avx2(set, prep, s, q, rows) };
+    }
+    best_match_pruned_body(set, prep, s, q, rows)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn scan_pruned_avx2(
+    set: &ExemplarSet,
+    prep: &Prepared,
+    s: &Search,
+    q: &Query,
+    rows: std::ops::Range<usize>,
+) -> (Vec<(u32, u32)>, u32) {
+    best_match_pruned_body(set, prep, s, q, rows)
 }
 
 #[inline(always)]
-fn best_match_pruned_body(set: &ExemplarSet, prep: &Prepared, s: &Search, q: &Query) -> Match {
+fn best_match_pruned_body(
+    set: &ExemplarSet,
+    prep: &Prepared,
+    s: &Search,
+    q: &Query,
+    rows: std::ops::Range<usize>,
+) -> (Vec<(u32, u32)>, u32) {
     let (w, tol) = (s.w, s.tol);
     let ex = q.exemplar as usize;
     let known = known_texels(q, w);
     let e = &set.exemplars[ex];
     let c = e.channels();
-    let (cw, ch) = e.candidates(w);
+    let (cw, _) = e.candidates(w);
     let half = prep.half;
     if half == 0 {
-        return best_match_brute(set, s, q);
+        let m = best_match_brute(set, s, q);
+        return (vec![(m.cost, m.index)], m.cost);
     }
     let sums = &prep.sums[ex];
     let plane_w = e.width() + 1 - half;
@@ -437,7 +483,7 @@ fn best_match_pruned_body(set: &ExemplarSet, prep: &Prepared, s: &Search, q: &Qu
     let mut fine_limit = bound_limit(limit, fine);
     let penalties = s.penalty.map(|p| &p[ex]);
     let mut acc = vec![0f32; cw];
-    for y in 0..ch {
+    for y in rows {
         acc.iter_mut().for_each(|a| *a = 0.0);
         for (ox, oy, sum) in &quads {
             for (k, &target) in sum.iter().enumerate() {
@@ -511,7 +557,7 @@ fn best_match_pruned_body(set: &ExemplarSet, prep: &Prepared, s: &Search, q: &Qu
             }
         }
     }
-    choose(q.salt, kept, limit)
+    (kept, best)
 }
 
 #[cfg(test)]
@@ -594,10 +640,19 @@ mod tests {
             ] {
                 for penalty in [None, Some(&pen[..])] {
                     let s = Search { w, tol, penalty };
-                    assert_eq!(
-                        best_match_pruned(&set, &prep, &s, &q),
-                        best_match_brute(&set, &s, &q)
-                    );
+                    let want = best_match_brute(&set, &s, &q);
+                    assert_eq!(best_match_pruned(&set, &prep, &s, &q), want);
+                    // One query on a pool of three threads: its rows are split among them.
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(3)
+                        .build()
+                        .unwrap();
+                    let split = pool.install(|| {
+                        CpuMatcher
+                            .best_matches(&set, &s, std::slice::from_ref(&q))
+                            .unwrap()
+                    });
+                    assert_eq!(split, vec![want]);
                 }
             }
         }

@@ -59,7 +59,7 @@ impl Default for SynthOptions {
             occurrence: 1.0,
             seed: 1,
             tile: false,
-            correction: 2,
+            correction: 1,
         }
     }
 }

@@ -51,7 +51,7 @@ pub struct SynthArgs {
     occurrence: f64,
     /// Texel-level coherent correction passes after the optimisation, which restore the
     /// exemplar's finest grain (0 = off, as the paper).
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 1)]
     correction: usize,
     /// Guide map (grey): level v draws from exemplar round(v·(count − 1)).
     #[arg(long)]
