@@ -3,7 +3,7 @@
 # Usage: bench/optics.sh [cpu|gpu|both]   (prints one line per case: photons/s and results)
 # Anchors (SKIN-OPTICS-REFERENCES): MCML 1.2.2, gcc -O3, one core of a 2-core EPYC: 3.7e6/s on
 # the van de Hulst slab, 3.6e5/s on the 1-layer slab, 1.4e5/s on the 2-layer slab, 2.6e4/s on its
-# 7-layer skin model (anchors from another machine; `bench/mcml.sh` builds MCML 1.2.2 from its
+# 7-layer skin model (recorded anchors; `bench/mcml.sh` builds MCML 1.2.2 from its
 # public source and times it beside derma on this one).
 set -euo pipefail
 cd "$(dirname "$0")/.."
