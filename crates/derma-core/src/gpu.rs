@@ -100,6 +100,21 @@ pub enum GpuError {
         /// wgpu's reason.
         detail: String,
     },
+    /// A buffer is larger than the adapter binds (or allocates) at once.
+    #[error(
+        "{what} needs {bytes} bytes on the GPU; {adapter} binds at most {limit} bytes per \
+         storage buffer — use a smaller size or --device cpu"
+    )]
+    TooLarge {
+        /// The buffer, in words ("the rig's colour output at 4096×4096").
+        what: String,
+        /// Its size.
+        bytes: u64,
+        /// The adapter's limit.
+        limit: u64,
+        /// The adapter's name and backend.
+        adapter: String,
+    },
 }
 
 /// The device, its queue and a human-readable name.
@@ -189,6 +204,23 @@ impl<T> Default for GpuCell<T> {
 }
 
 impl Gpu {
+    /// Checks that a storage buffer of `bytes` fits what this device binds and allocates (wgpu
+    /// would otherwise stop the process with a validation panic): lavapipe binds 128 MiB, a
+    /// data-centre GPU several GiB.
+    pub fn check_storage(&self, what: impl Into<String>, bytes: u64) -> Result<(), GpuError> {
+        let l = self.device.limits();
+        let limit = l.max_storage_buffer_binding_size.min(l.max_buffer_size);
+        if bytes > limit {
+            return Err(GpuError::TooLarge {
+                what: what.into(),
+                bytes,
+                limit,
+                adapter: self.name.clone(),
+            });
+        }
+        Ok(())
+    }
+
     /// Compiles `source` (WGSL) into a compute pipeline with entry point `entry`; shader
     /// validation errors come back as [`GpuError::Compile`] instead of a panic.
     pub fn compute_pipeline(

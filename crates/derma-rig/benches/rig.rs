@@ -1,8 +1,12 @@
 //! Rig benchmarks (BENCHMARKS.md, "Dynamic facial colour"): building the basis for 4096² maps
 //! with 8 targets at several radii, one 2048² colour frame with 8 targets (real-time path and
-//! exact path), and full-resolution local statistics against the exact O(r) disk.
+//! exact path), full-resolution local statistics against the exact O(r) disk, and the GPU frame
+//! (`rig.wgsl`) at 2048² and 4096² with 8 targets — frames submitted back to back with new
+//! weights, nothing read back, as an engine runs it (skipped where no GPU adapter opens; on
+//! Mesa's lavapipe it times the CPU's emulation).
 //!
 //!     cargo bench -p derma-rig --bench rig
+//!     cargo bench -p derma-rig --bench rig -- gpu_frame      (the GPU frame alone)
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use derma_core::Map;
@@ -107,5 +111,42 @@ fn stats(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, build, frame, stats);
+fn gpu_frame(c: &mut Criterion) {
+    let lut = SkinColorLut::builtin();
+    let weights = vec![0.2, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1];
+    let mut g = c.benchmark_group("rig_gpu_frame_8_targets");
+    g.sample_size(20);
+    for w in [2048usize, 4096] {
+        let neutral = blood(w, 0);
+        let targets: Vec<Map> = (1..=8).map(|s| blood(w, s)).collect();
+        let melanin = Map::from_vec(
+            w,
+            w,
+            (0..w * w)
+                .map(|i| 0.01 + 0.05 * (i % w) as f32 / w as f32)
+                .collect(),
+        )
+        .unwrap();
+        let rig = rig_of(&neutral, &targets, 32.0, Some(melanin.clone()));
+        drop(targets);
+        let gpu = match derma_rig::gpu_eval::GpuRig::new(&rig, &melanin, &lut) {
+            Ok(gpu) => gpu,
+            Err(e) => {
+                eprintln!("rig_gpu_frame skipped: {e}");
+                return;
+            }
+        };
+        g.bench_function(BenchmarkId::from_parameter(w), |b| {
+            b.iter_custom(|iters| {
+                let s = gpu
+                    .seconds_per_frame(&weights, 1.1, iters as usize)
+                    .unwrap();
+                Duration::from_secs_f64(s * iters as f64)
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, build, frame, stats, gpu_frame);
 criterion_main!(benches);

@@ -67,6 +67,15 @@ impl GpuRig {
             basis.extend_from_slice(t.scale.data());
         }
         let lut_data: Vec<f32> = lut.rgb.iter().flatten().copied().collect();
+        // The largest buffers: the colour output (16 bytes a texel) and the basis.
+        ctx.check_storage(
+            format!("the rig's colour output at {w}×{h}"),
+            (w * h * 16) as u64,
+        )?;
+        ctx.check_storage(
+            format!("the rig's basis ({layers} layers of {bw}×{bh})"),
+            (basis.len() * 4) as u64,
+        )?;
         let d = &ctx.device;
         let init = |label, bytes: &[u8], usage| {
             d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -141,6 +150,37 @@ impl GpuRig {
     /// Evaluates weights `w` (w_0 first) under global scale `g`: the hemoglobin map and the
     /// linear-sRGB colour maps.
     pub fn render(&self, w: &[f32], g: f32) -> Result<(Map, [Map; 3])> {
+        let ctx = self.submit(w, g)?;
+        let (fw, fh) = self.size;
+        let hb: Vec<f32> = ctx.read_back(&self.hemoglobin_buf, fw * fh)?;
+        let cb: Vec<[f32; 4]> = ctx.read_back(&self.color_buf, fw * fh)?;
+        let rgb = [0, 1, 2]
+            .map(|c| Map::from_vec(fw, fh, cb.iter().map(|p| p[c]).collect()).expect("size"));
+        Ok((Map::from_vec(fw, fh, hb)?, rgb))
+    }
+
+    /// Seconds per frame as an engine runs the rig: `frames` frames of new weights (uploads
+    /// and dispatches) submitted back to back and waited for once, nothing read back; after
+    /// one warm-up frame. On a software adapter (lavapipe) this times the CPU's emulation.
+    pub fn seconds_per_frame(&self, w: &[f32], g: f32, frames: usize) -> Result<f64> {
+        let ctx = self.submit(w, g)?;
+        ctx.wait("the warm-up frame")?;
+        let frames = frames.max(1);
+        let start = std::time::Instant::now();
+        for k in 0..frames {
+            // Weights that change each frame, as an animation's do.
+            let wk: Vec<f32> = w
+                .iter()
+                .map(|&v| v * (1.0 + 0.01 * (k % 7) as f32))
+                .collect();
+            self.submit(&wk, g)?;
+        }
+        ctx.wait("the timed frames")?;
+        Ok(start.elapsed().as_secs_f64() / frames as f64)
+    }
+
+    /// Uploads the frame's weights and scale and dispatches the shader (no waiting).
+    fn submit(&self, w: &[f32], g: f32) -> Result<&'static derma_core::gpu::Gpu> {
         if w.len() != self.layers {
             return Err(invalid(
                 "weights",
@@ -172,10 +212,6 @@ impl GpuRig {
             pass.dispatch_workgroups(gx, gy, 1);
         }
         ctx.queue.submit([enc.finish()]);
-        let hb: Vec<f32> = ctx.read_back(&self.hemoglobin_buf, fw * fh)?;
-        let cb: Vec<[f32; 4]> = ctx.read_back(&self.color_buf, fw * fh)?;
-        let rgb = [0, 1, 2]
-            .map(|c| Map::from_vec(fw, fh, cb.iter().map(|p| p[c]).collect()).expect("size"));
-        Ok((Map::from_vec(fw, fh, hb)?, rgb))
+        Ok(ctx)
     }
 }

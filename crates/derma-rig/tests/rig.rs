@@ -456,4 +456,11 @@ fn gpu_shader_agrees_with_the_cpu_path() {
             assert!(dc < 2e-4, "colour channel {k} differs by {dc}");
         }
     }
+    // Timed frames (other weights, nothing read back) leave the rig as it was: the next
+    // render is the same as before them, to the bit.
+    let before = gpu.render(&[0.2, 0.5, 0.3], 1.17).unwrap();
+    let s = gpu.seconds_per_frame(&[0.9, 0.1, 0.4], 0.8, 3).unwrap();
+    assert!(s.is_finite() && s > 0.0, "seconds per frame {s}");
+    assert_eq!(gpu.render(&[0.2, 0.5, 0.3], 1.17).unwrap(), before);
+    assert!(gpu.seconds_per_frame(&[1.0, 0.0], 1.0, 1).is_err());
 }
