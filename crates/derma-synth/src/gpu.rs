@@ -208,11 +208,19 @@ impl GpuMatcher {
     /// Opens the GPU; the error says why none could be opened.
     pub fn new() -> Result<Self> {
         let (ctx, _) = pipelines()?;
+        // The survivors (8 bytes each) must fit one storage binding of this adapter: lavapipe
+        // binds 128 MiB, below MAX_SURVIVORS' 256 MiB (wgpu stopped the process on a 256²
+        // exemplar there). Fewer survivors only send more batches down the uncompacted path,
+        // which gives the same answer.
+        let l = ctx.device.limits();
+        let bindable = (l.max_storage_buffer_binding_size.min(l.max_buffer_size) / 8).max(1);
+        // A power of two: the buffer grows to the next one of what it holds.
+        let bindable = 1usize << bindable.ilog2();
         Ok(Self {
             resident: Mutex::new(HashMap::new()),
             scratch: Mutex::new(None),
             name: ctx.name.clone(),
-            max_survivors: MAX_SURVIVORS,
+            max_survivors: MAX_SURVIVORS.min(bindable),
         })
     }
 
@@ -459,5 +467,25 @@ impl Matcher for GpuMatcher {
 
     fn name(&self) -> String {
         format!("GPU ({})", self.name)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_survivor_buffer_fits_one_binding_of_the_adapter() {
+        // wgpu stops the process on a binding beyond the adapter's limit (lavapipe: 128 MiB,
+        // which MAX_SURVIVORS' 256 MiB once exceeded on a 256² exemplar).
+        if derma_test_support::skip_without_gpu() {
+            return;
+        }
+        let m = GpuMatcher::new().unwrap();
+        let l = derma_core::gpu::context().unwrap().device.limits();
+        let limit = l.max_storage_buffer_binding_size.min(l.max_buffer_size);
+        // The buffer grows to the next power of two of the bytes it holds.
+        let bytes = ((m.max_survivors * 8) as u64).next_power_of_two();
+        assert!(bytes <= limit, "{bytes} bytes of survivors, limit {limit}");
     }
 }
