@@ -7,7 +7,8 @@
 #   DERMA=path/to/derma RIG_BENCH=path/to/rig-bench EXEMPLARS=dir bash bench/gpu.sh
 # DERMA: the release binary (default target/release/derma). RIG_BENCH: the criterion binary of
 # `cargo bench -p derma-rig --bench rig --no-run` (target/release/deps/rig-*; skipped if unset).
-# EXEMPLARS: a folder with disp256.png (bench/synth.sh writes it to bench/out/synth).
+# EXEMPLARS: a folder with disp256.png (disp128.png for QUICK; bench/synth.sh writes both to
+# bench/out/synth).
 # PMCX_WHEELS: a folder of wheels (pmcx and numpy) to install from where there is no network.
 # QUICK=1: tiny sizes, to check the script on any adapter (lavapipe included).
 set -euo pipefail
@@ -20,9 +21,10 @@ trap 'rm -rf "$tmp"' EXIT
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
 command -v nvidia-smi >/dev/null && nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
 if [ "$quick" = 1 ]; then
-  photons=(100000); skin=41000; sizes=(256); frames_filter="gpu_frame_8_targets/2048"; mcx_n=100000
+  photons=(100000); skin=41000; sizes=(128); exname=disp128
+  frames_filter="gpu_frame_8_targets/2048"; mcx_n=100000
 else
-  photons=(100000000 1000000000); skin=41000000; sizes=(1024 2048 4096)
+  photons=(100000000 1000000000); skin=41000000; sizes=(1024 2048 4096); exname=disp256
   frames_filter="gpu_frame"; mcx_n=100000000
 fi
 field() { python3 -c "import json, sys; print(json.load(sys.stdin)$1)"; }
@@ -44,10 +46,10 @@ PY
 
 # 3. Exemplar synthesis from the 256² crop; the CPU's file compared at the smallest size.
 for s in "${sizes[@]}"; do
-  m=$("$derma" synth -q --exemplar "$ex/disp256.png" --size "$s" --device gpu --out "$tmp/g.png" --metrics)
-  echo "derma synth gpu ${s}² from 256²: $m"
+  m=$("$derma" synth -q --exemplar "$ex/$exname.png" --size "$s" --device gpu --out "$tmp/g.png" --metrics)
+  echo "derma synth gpu ${s}² from $exname: $m"
   if [ "$s" = "${sizes[0]}" ]; then
-    "$derma" synth -q --exemplar "$ex/disp256.png" --size "$s" --device cpu --out "$tmp/c.png"
+    "$derma" synth -q --exemplar "$ex/$exname.png" --size "$s" --device cpu --out "$tmp/c.png"
     cmp -s "$tmp/g.png" "$tmp/c.png" && echo "synth ${s}²: GPU and CPU files identical" \
       || echo "synth ${s}²: FILES DIFFER"
   fi
