@@ -49,6 +49,22 @@ fn rig_of(neutral: &Map, targets: &[Map], r: f64, melanin: Option<Map>) -> Rig {
     Rig::build(neutral, None, melanin, &specs, &BasisOptions::new(r)).unwrap()
 }
 
+/// The frame benchmarks' rig: `w`², 8 targets, r = 32, with a melanin ramp.
+fn frame_rig(w: usize) -> (Rig, Map) {
+    let neutral = blood(w, 0);
+    let targets: Vec<Map> = (1..=8).map(|s| blood(w, s)).collect();
+    let melanin = Map::from_vec(
+        w,
+        w,
+        (0..w * w)
+            .map(|i| 0.01 + 0.05 * (i % w) as f32 / w as f32)
+            .collect(),
+    )
+    .unwrap();
+    let rig = rig_of(&neutral, &targets, 32.0, Some(melanin.clone()));
+    (rig, melanin)
+}
+
 fn build(c: &mut Criterion) {
     let w = 4096;
     let neutral = blood(w, 0);
@@ -65,18 +81,7 @@ fn build(c: &mut Criterion) {
 
 fn frame(c: &mut Criterion) {
     let w = 2048;
-    let neutral = blood(w, 0);
-    let targets: Vec<Map> = (1..=8).map(|s| blood(w, s)).collect();
-    let melanin = Map::from_vec(
-        w,
-        w,
-        (0..w * w)
-            .map(|i| 0.01 + 0.05 * (i % w) as f32 / w as f32)
-            .collect(),
-    )
-    .unwrap();
-    let rig = rig_of(&neutral, &targets, 32.0, Some(melanin.clone()));
-    drop(targets);
+    let (rig, melanin) = frame_rig(w);
     let lut = SkinColorLut::builtin();
     let weights = vec![0.2, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1];
     let mut plan = FramePlan::new(&rig, &melanin, &lut).unwrap();
@@ -117,18 +122,7 @@ fn gpu_frame(c: &mut Criterion) {
     let mut g = c.benchmark_group("rig_gpu_frame_8_targets");
     g.sample_size(20);
     for w in [2048usize, 4096] {
-        let neutral = blood(w, 0);
-        let targets: Vec<Map> = (1..=8).map(|s| blood(w, s)).collect();
-        let melanin = Map::from_vec(
-            w,
-            w,
-            (0..w * w)
-                .map(|i| 0.01 + 0.05 * (i % w) as f32 / w as f32)
-                .collect(),
-        )
-        .unwrap();
-        let rig = rig_of(&neutral, &targets, 32.0, Some(melanin.clone()));
-        drop(targets);
+        let (rig, melanin) = frame_rig(w);
         let gpu = match derma_rig::gpu_eval::GpuRig::new(&rig, &melanin, &lut) {
             Ok(gpu) => gpu,
             Err(e) => {
