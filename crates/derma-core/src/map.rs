@@ -179,6 +179,48 @@ impl MapStats {
     }
 }
 
+/// `C` maps of (`width` / k) × (`height` / k) texels, each texel the mean of a k × k block of
+/// `f(texel index)` over a row-major `width` × `height` grid (a partial last block row or column
+/// is dropped), rows in parallel: thumbnails and decoded planes of any store of texels without
+/// a full-size copy. k = 1 gives the values themselves.
+pub fn box_reduced<const C: usize>(
+    width: usize,
+    height: usize,
+    k: usize,
+    f: impl Fn(usize) -> [f32; C] + Sync,
+) -> [Map; C] {
+    use rayon::prelude::*;
+    let k = k.max(1);
+    let (w, h) = (width / k, height / k);
+    let mut out: [Vec<f32>; C] = std::array::from_fn(|_| vec![0.0; w * h]);
+    if w * h == 0 {
+        return out.map(|v| Map::from_vec(w, h, v).expect("size"));
+    }
+    let mut rows: Vec<[&mut [f32]; C]> = Vec::with_capacity(h);
+    let mut its = out.each_mut().map(|v| v.chunks_mut(w));
+    for _ in 0..h {
+        rows.push(its.each_mut().map(|i| i.next().expect("rows")));
+    }
+    let norm = 1.0 / (k * k) as f32;
+    rows.into_par_iter().enumerate().for_each(|(y, r)| {
+        for x in 0..w {
+            let mut acc = [0.0f32; C];
+            for yy in y * k..(y + 1) * k {
+                for xx in x * k..(x + 1) * k {
+                    let v = f(yy * width + xx);
+                    for c in 0..C {
+                        acc[c] += v[c];
+                    }
+                }
+            }
+            for c in 0..C {
+                r[c][x] = acc[c] * norm;
+            }
+        }
+    });
+    out.map(|v| Map::from_vec(w, h, v).expect("size"))
+}
+
 /// The four texels and the weights of one bilinear sample on maps of one size: several maps
 /// sampled at the same point (the fields a texel reads) share the index arithmetic.
 #[derive(Clone, Copy, Debug)]
@@ -280,6 +322,21 @@ pub struct MapStats {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn box_reduced_takes_block_means_and_drops_partial_blocks() {
+        // A 5 × 4 grid of texel indices, two channels (i and −i), reduced by 2: 2 × 2 blocks.
+        let [a, b] = box_reduced(5, 4, 2, |i| [i as f32, -(i as f32)]);
+        assert_eq!((a.width(), a.height()), (2, 2));
+        // Block (0, 0) holds texels 0, 1, 5, 6; block (1, 1) holds 12, 13, 17, 18.
+        assert_eq!(a.data(), &[3.0, 5.0, 13.0, 15.0]);
+        assert_eq!(b.data(), &[-3.0, -5.0, -13.0, -15.0]);
+        let [same] = box_reduced(3, 2, 1, |i| [i as f32 * 0.5]);
+        assert_eq!(same.data(), &[0.0, 0.5, 1.0, 1.5, 2.0, 2.5]);
+        // A factor beyond a side leaves no whole block: an empty map, not a panic.
+        let [none] = box_reduced(3, 8, 4, |i| [i as f32]);
+        assert_eq!((none.width(), none.height()), (0, 2));
+    }
 
     #[test]
     fn bilinear_reproduces_texel_centres_and_midpoints() {

@@ -102,7 +102,7 @@ pub fn unit_f32(w: u32) -> f32 {
 mod tests {
     use super::*;
 
-    /// Known-answer vectors of Philox4x32-10 published with Random123 (kat_vectors).
+    /// The lanes' Philox gives each lane the scalar function's words (portable and AVX2).
     #[test]
     fn lanes_draw_the_scalar_words() {
         use crate::numerics::lanes::{IntLanes, PortableI32};
@@ -128,6 +128,7 @@ mod tests {
         }
     }
 
+    /// Known-answer vectors of Philox4x32-10 published with Random123 (kat_vectors).
     #[test]
     fn philox_known_answers() {
         assert_eq!(

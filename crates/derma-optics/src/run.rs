@@ -141,7 +141,6 @@ pub fn run_cpu(run: &Run, progress: &dyn Progress) -> Result<Tally> {
     let prepared: Vec<Prepared> = run.stacks.iter().map(Prepared::new).collect();
     let bs = run.batch_size();
     let batches = run.photons.div_ceil(bs);
-    // Slabs under a pencil beam walk eight photons per SIMD register (transport_lanes).
     let lanes = crate::transport_lanes::eligible(run);
     let mut total = run.empty_tally();
     // Merge in groups so memory stays bounded for runs with many batches.

@@ -40,55 +40,73 @@ pub fn eligible(run: &Run) -> bool {
         && run.stacks[0].layers.len() <= MAX_LAYERS
 }
 
-/// The slab's constants in f32, per layer (padded).
+/// The slab's constants in f32, per layer (padded to [`MAX_LAYERS`]), in the forms the walk
+/// uses.
 struct Slab {
     layers: usize,
-    /// Boundary depths, mm (layers + 1).
-    z: [f32; MAX_LAYERS + 1],
+    /// Weight entering the first layer (1 − specular reflectance), f32.
+    w0: f32,
+    share: Vec<[f64; N_ABSORBERS]>,
     mut_: [f32; MAX_LAYERS],
     inv_mut: [f32; MAX_LAYERS],
     albedo_c: [f32; MAX_LAYERS],
     g: [f32; MAX_LAYERS],
-    /// Index of each layer and of the media beyond: `n[k + 1]` is layer k's, `n[0]` above,
-    /// `n[layers + 1]` below.
-    n: [f32; MAX_LAYERS + 2],
-    /// Weight entering the first layer (1 − specular reflectance), f32.
-    w0: f32,
-    share: Vec<[f64; N_ABSORBERS]>,
+    /// (1 − g²) and 1/(2g) of Henyey–Greenstein's inversion.
+    hg_a: [f32; MAX_LAYERS],
+    hg_b: [f32; MAX_LAYERS],
+    /// Depths of the layer's top and bottom boundaries, mm.
+    z_top: [f32; MAX_LAYERS],
+    z_bot: [f32; MAX_LAYERS],
+    /// Indices of the layer and of the media above and below it, and η = n/n' for both ways.
+    n_here: [f32; MAX_LAYERS],
+    n_up: [f32; MAX_LAYERS],
+    n_down: [f32; MAX_LAYERS],
+    eta_up: [f32; MAX_LAYERS],
+    eta_down: [f32; MAX_LAYERS],
 }
 
 impl Slab {
     fn new(p: &Prepared) -> Self {
         let nl = p.mut_.len();
-        let mut s = Slab {
-            layers: nl,
-            z: [0.0; MAX_LAYERS + 1],
-            mut_: [0.0; MAX_LAYERS],
-            inv_mut: [0.0; MAX_LAYERS],
-            albedo_c: [0.0; MAX_LAYERS],
-            g: [0.0; MAX_LAYERS],
-            n: [1.0; MAX_LAYERS + 2],
-            w0: 0.0,
-            share: p.share.clone(),
-        };
+        // Boundary depths (layers + 1) and indices: `n[k + 1]` is layer k's, `n[0]` the medium
+        // above, `n[layers + 1]` the one below.
+        let mut z = [0.0f32; MAX_LAYERS + 1];
+        let mut n = [1.0f32; MAX_LAYERS + 2];
         for k in 0..=nl {
-            s.z[k] = p.z[k] as f32;
+            z[k] = p.z[k] as f32;
         }
         for k in 0..nl {
-            s.mut_[k] = p.mut_[k] as f32;
-            s.inv_mut[k] = p.inv_mut[k] as f32;
-            s.albedo_c[k] = p.mua_over_mut[k] as f32;
-            s.g[k] = p.g[k] as f32;
-            s.n[k + 1] = p.n[k] as f32;
+            n[k + 1] = p.n[k] as f32;
         }
-        s.n[0] = p.n_above as f32;
-        s.n[nl + 1] = match p.bottom {
+        n[0] = p.n_above as f32;
+        n[nl + 1] = match p.bottom {
             Bottom::Medium { n } => n as f32,
             Bottom::Lambertian { .. } => unreachable!("eligible() admits clear bottoms only"),
         };
-        // Normal incidence on a smooth top: the specular part is split off.
-        s.w0 = (1.0 - fresnel_unpolarised(1.0, p.n_above, p.n[0])) as f32;
-        s
+        let per_layer = |f: &dyn Fn(usize) -> f32| -> [f32; MAX_LAYERS] {
+            std::array::from_fn(|k| if k < nl { f(k) } else { 0.0 })
+        };
+        let g = per_layer(&|k| p.g[k] as f32);
+        let below = |k: usize| n[(k + 2).min(MAX_LAYERS + 1)];
+        Slab {
+            layers: nl,
+            // Normal incidence on a smooth top: the specular part is split off.
+            w0: (1.0 - fresnel_unpolarised(1.0, p.n_above, p.n[0])) as f32,
+            share: p.share.clone(),
+            mut_: per_layer(&|k| p.mut_[k] as f32),
+            inv_mut: per_layer(&|k| p.inv_mut[k] as f32),
+            albedo_c: per_layer(&|k| p.mua_over_mut[k] as f32),
+            g,
+            hg_a: std::array::from_fn(|k| 1.0 - g[k] * g[k]),
+            hg_b: std::array::from_fn(|k| if g[k] != 0.0 { 1.0 / (2.0 * g[k]) } else { 0.0 }),
+            z_top: std::array::from_fn(|k| z[k]),
+            z_bot: std::array::from_fn(|k| z[k + 1]),
+            n_here: std::array::from_fn(|k| n[k + 1]),
+            n_up: std::array::from_fn(|k| n[k]),
+            n_down: std::array::from_fn(below),
+            eta_up: std::array::from_fn(|k| n[k + 1] / n[k]),
+            eta_down: std::array::from_fn(|k| n[k + 1] / below(k)),
+        }
     }
 }
 
@@ -233,60 +251,11 @@ impl<L: Lanes> Streams<L> {
     }
 }
 
-/// The slab's per-layer tables, f32, in the forms the walk uses.
-struct Tables {
-    layers: usize,
-    mut_: [f32; MAX_LAYERS],
-    inv_mut: [f32; MAX_LAYERS],
-    albedo_c: [f32; MAX_LAYERS],
-    g: [f32; MAX_LAYERS],
-    /// (1 − g²) and 1/(2g) of Henyey–Greenstein's inversion.
-    hg_a: [f32; MAX_LAYERS],
-    hg_b: [f32; MAX_LAYERS],
-    z_top: [f32; MAX_LAYERS],
-    z_bot: [f32; MAX_LAYERS],
-    /// Indices of the layer and of the media above and below it, and η = n/n' for both ways.
-    n_here: [f32; MAX_LAYERS],
-    n_up: [f32; MAX_LAYERS],
-    n_down: [f32; MAX_LAYERS],
-    eta_up: [f32; MAX_LAYERS],
-    eta_down: [f32; MAX_LAYERS],
-}
-
-impl Tables {
-    fn new(s: &Slab) -> Self {
-        let f = |g: &dyn Fn(usize) -> f32| std::array::from_fn(g);
-        Tables {
-            layers: s.layers,
-            mut_: s.mut_,
-            inv_mut: s.inv_mut,
-            albedo_c: s.albedo_c,
-            g: s.g,
-            hg_a: f(&|k| 1.0 - s.g[k] * s.g[k]),
-            hg_b: f(&|k| {
-                if s.g[k] != 0.0 {
-                    1.0 / (2.0 * s.g[k])
-                } else {
-                    0.0
-                }
-            }),
-            z_top: f(&|k| s.z[k]),
-            z_bot: f(&|k| s.z[k + 1]),
-            n_here: f(&|k| s.n[k + 1]),
-            n_up: f(&|k| s.n[k]),
-            n_down: f(&|k| s.n[(k + 2).min(MAX_LAYERS + 1)]),
-            eta_up: f(&|k| s.n[k + 1] / s.n[k]),
-            eta_down: f(&|k| s.n[k + 1] / s.n[(k + 2).min(MAX_LAYERS + 1)]),
-        }
-    }
-}
-
 /// The walk, generic over the lanes.
 #[inline(always)]
 fn walk<L: Lanes>(t: L::Token, run: &Run, slab: &Slab, range: std::ops::Range<u64>) -> Tally {
     let mut tally = run.empty_tally();
-    let tb = Tables::new(slab);
-    let nl = tb.layers;
+    let nl = slab.layers;
     let splat = |v: f32| L::splat(t, v);
     let isplat = |v: i32| L::I::splat(t, v);
     let (zero, one) = (splat(0.0), splat(1.0));
@@ -363,12 +332,12 @@ fn walk<L: Lanes>(t: L::Token, run: &Run, slab: &Slab, range: std::ops::Range<u6
         s_left = fresh.select(zero.sub(one.sub(xi).ln()), s_left);
 
         // Does the step reach the boundary ahead (never when moving parallel to it)?
-        let mu_t = pick::<L>(layer, &tb.mut_, nl);
+        let mu_t = pick::<L>(layer, &slab.mut_, nl);
         let down = uz.gt(zero);
         let up = uz.lt(zero);
         let z_b = up.select(
-            pick::<L>(layer, &tb.z_top, nl),
-            pick::<L>(layer, &tb.z_bot, nl),
+            pick::<L>(layer, &slab.z_top, nl),
+            pick::<L>(layer, &slab.z_bot, nl),
         );
         // μt·(z_b − z)/u_z ≤ s compared without the division (both sides times |u_z|; the
         // gap is signed: a depth rounded past the boundary counts as reached); the distance
@@ -388,14 +357,14 @@ fn walk<L: Lanes>(t: L::Token, run: &Run, slab: &Slab, range: std::ops::Range<u6
         if hm != 0 {
             let is_top = up.and(layer.eq(isplat(0)));
             let is_bottom = down.and(layer.eq(isplat(nl as i32 - 1)));
-            let n1 = pick::<L>(layer, &tb.n_here, nl);
+            let n1 = pick::<L>(layer, &slab.n_here, nl);
             let n2 = up.select(
-                pick::<L>(layer, &tb.n_up, nl),
-                pick::<L>(layer, &tb.n_down, nl),
+                pick::<L>(layer, &slab.n_up, nl),
+                pick::<L>(layer, &slab.n_down, nl),
             );
             let eta = up.select(
-                pick::<L>(layer, &tb.eta_up, nl),
-                pick::<L>(layer, &tb.eta_down, nl),
+                pick::<L>(layer, &slab.eta_up, nl),
+                pick::<L>(layer, &slab.eta_down, nl),
             );
             let outer = is_top.or(is_bottom);
             // Internal boundaries between equal indices are crossed without a Fresnel draw.
@@ -434,21 +403,21 @@ fn walk<L: Lanes>(t: L::Token, run: &Run, slab: &Slab, range: std::ops::Range<u6
         let w_before = w;
         let mut w_absorbed = w;
         if im != 0 {
-            let d = s_left.mul(pick::<L>(layer, &tb.inv_mut, nl));
+            let d = s_left.mul(pick::<L>(layer, &slab.inv_mut, nl));
             z = inside.select(uz.mul_add(d, z), z);
             s_left = inside.select(zero, s_left);
-            let a = pick::<L>(layer, &tb.albedo_c, nl);
+            let a = pick::<L>(layer, &slab.albedo_c, nl);
             let w_abs = w.sub(w.mul(a));
-            let g = pick::<L>(layer, &tb.g, nl);
+            let g = pick::<L>(layer, &slab.g, nl);
             let xi_g = rng.uniform(t, inside, 4);
             let xi_p = rng.uniform(t, inside, 5);
             // Henyey–Greenstein (MCML eq. 3.28); isotropic for |g| < 10⁻⁶.
             let tt =
-                pick::<L>(layer, &tb.hg_a, nl).div(one.sub(g).add(splat(2.0).mul(g).mul(xi_g)));
+                pick::<L>(layer, &slab.hg_a, nl).div(one.sub(g).add(splat(2.0).mul(g).mul(xi_g)));
             let ct_hg = one
                 .add(g.mul(g))
                 .sub(tt.mul(tt))
-                .mul(pick::<L>(layer, &tb.hg_b, nl))
+                .mul(pick::<L>(layer, &slab.hg_b, nl))
                 .clamp(-1.0, 1.0);
             let iso = zero.sub(g).max(g).lt(splat(1e-6));
             let ct = iso.select(splat(2.0).mul(xi_g).sub(one), ct_hg);

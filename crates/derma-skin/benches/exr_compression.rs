@@ -6,8 +6,7 @@
 //! cargo bench -p derma-skin --bench exr_compression
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use derma_core::exr_writer::{write_exr_rows, ExrChannel, ExrCompression};
-use derma_core::image_io::ExrPrecision;
+use derma_core::exr_writer::ExrCompression;
 use derma_skin::paint::BIO_CHANNELS;
 use derma_skin::{SkinConfig, SkinGenerator};
 
@@ -26,22 +25,8 @@ fn bench(c: &mut Criterion) {
     let (w, h) = (bio.width, bio.height);
     let dir = std::env::temp_dir().join(format!("derma-exr-bench-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let chans: Vec<ExrChannel> = BIO_CHANNELS
-        .iter()
-        .map(|(name, _)| ExrChannel {
-            name,
-            precision: ExrPrecision::F16,
-        })
-        .collect();
     let write = |comp: ExrCompression, path: &std::path::Path| {
-        write_exr_rows(path, w, h, &chans, comp, |y, rows| {
-            for (x, s) in bio.texels[y * w..(y + 1) * w].iter().enumerate() {
-                for (row, v) in rows.iter_mut().zip(s.channels()) {
-                    row[x] = v;
-                }
-            }
-        })
-        .unwrap()
+        derma_skin::texture_set::write_bio_exr(path, bio, comp).unwrap()
     };
     // PIZ through the exr crate: planar half-float channels made once.
     let planar: Vec<(&str, Vec<half::f16>)> = BIO_CHANNELS

@@ -85,23 +85,9 @@ impl BioMaps {
     /// One channel box-filtered by the whole factor `k` (each texel the mean of a k × k block),
     /// without making the full-size map.
     pub fn channel_reduced(&self, k: usize, f: fn(&BioSample) -> f32) -> Map {
-        let k = k.max(1);
-        let (w, h) = (self.width / k, self.height / k);
-        let norm = 1.0 / (k * k) as f32;
-        let data = (0..w * h)
-            .into_par_iter()
-            .map(|i| {
-                let (x, y) = (i % w, i / w);
-                let mut acc = 0.0f32;
-                for yy in y * k..(y + 1) * k {
-                    for t in &self.texels[yy * self.width + x * k..yy * self.width + (x + 1) * k] {
-                        acc += f(t);
-                    }
-                }
-                acc * norm
-            })
-            .collect();
-        Map::from_vec(w, h, data).expect("size matches")
+        let [m] =
+            derma_core::map::box_reduced(self.width, self.height, k, |i| [f(&self.texels[i])]);
+        m
     }
 
     /// One channel as a planar map.

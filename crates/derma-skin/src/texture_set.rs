@@ -10,7 +10,7 @@ use crate::surface::Surface;
 use derma_core::color::srgb8_decode;
 use derma_core::exr_writer::{write_exr_rows, ExrChannel, ExrCompression};
 use derma_core::image_io::{quantize16, quantize8, srgb8, write_png_rows, ExrPrecision, PngDepth};
-use derma_core::map::Taps;
+use derma_core::map::{box_reduced, Taps};
 use derma_core::preview::{Material, MaterialSample};
 use derma_core::Map;
 use derma_optics::bio::names;
@@ -74,44 +74,9 @@ impl RenderMaps {
         }
     }
 
-    /// Planar f32 maps of `C` channels, each texel from `f` (texel index → values), in
-    /// parallel rows.
+    /// Planar f32 maps of `C` channels, each texel from `f` (texel index → values).
     fn planes<const C: usize>(&self, f: impl Fn(usize) -> [f32; C] + Sync) -> [Map; C] {
-        self.planes_reduced(1, f)
-    }
-
-    /// [`Self::planes`] reduced by the whole factor `k`: each output texel the mean of a k × k
-    /// block.
-    fn planes_reduced<const C: usize>(
-        &self,
-        k: usize,
-        f: impl Fn(usize) -> [f32; C] + Sync,
-    ) -> [Map; C] {
-        let (w, h) = (self.width / k, self.height / k);
-        let mut out: [Vec<f32>; C] = std::array::from_fn(|_| vec![0.0; w * h]);
-        let mut rows: Vec<[&mut [f32]; C]> = Vec::with_capacity(h);
-        let mut its = out.each_mut().map(|v| v.chunks_mut(w));
-        for _ in 0..h {
-            rows.push(its.each_mut().map(|i| i.next().expect("rows")));
-        }
-        let norm = 1.0 / (k * k) as f32;
-        rows.into_par_iter().enumerate().for_each(|(y, r)| {
-            for x in 0..w {
-                let mut acc = [0.0f32; C];
-                for yy in y * k..(y + 1) * k {
-                    for xx in x * k..(x + 1) * k {
-                        let v = f(yy * self.width + xx);
-                        for c in 0..C {
-                            acc[c] += v[c];
-                        }
-                    }
-                }
-                for c in 0..C {
-                    r[c][x] = if k == 1 { acc[c] } else { acc[c] * norm };
-                }
-            }
-        });
-        out.map(|v| Map::from_vec(w, h, v).expect("size"))
+        box_reduced(self.width, self.height, 1, f)
     }
 
     /// Base colour, linear sRGB.
@@ -149,7 +114,7 @@ impl RenderMaps {
     /// Base colour (linear), normal and roughness box-filtered by the whole factor `k` (each
     /// texel the mean of a k × k block): thumbnails without full-size copies.
     pub fn reduced(&self, k: usize) -> ([Map; 3], [Map; 3], Map) {
-        let [r, g, b, nx, ny, nz, ro] = self.planes_reduced(k.max(1), |i| {
+        let [r, g, b, nx, ny, nz, ro] = box_reduced(self.width, self.height, k, |i| {
             let (c, n) = (self.base_color[i], self.normal[i]);
             [
                 srgb8_decode(c[0]),
@@ -388,6 +353,48 @@ pub fn height_range(bio: &BioMaps) -> HeightRange {
     }
 }
 
+/// Writes an EXR of `C` channels of the bio samples, each line in one pass over its samples.
+fn exr<const C: usize>(
+    path: &Path,
+    bio: &BioMaps,
+    names: [&str; C],
+    precision: ExrPrecision,
+    compression: ExrCompression,
+    values: impl Fn(&BioSample) -> [f32; C] + Sync,
+) -> crate::Result<()> {
+    let w = bio.width;
+    let list = names.map(|name| ExrChannel { name, precision });
+    Ok(write_exr_rows(
+        path,
+        w,
+        bio.height,
+        &list,
+        compression,
+        |y, rows| {
+            for (x, s) in bio.texels[y * w..(y + 1) * w].iter().enumerate() {
+                let v = values(s);
+                for c in 0..C {
+                    rows[c][x] = v[c];
+                }
+            }
+        },
+    )?)
+}
+
+/// bio.exr: every bio channel ([`BIO_CHANNELS`]) as half floats, with `compression` (the main
+/// job uses [`BIO_COMPRESSION`]; the `exr_compression` bench compares the others).
+pub fn write_bio_exr(path: &Path, bio: &BioMaps, compression: ExrCompression) -> crate::Result<()> {
+    let names = BIO_CHANNELS.map(|(n, _)| n);
+    exr(
+        path,
+        bio,
+        names,
+        ExrPrecision::F16,
+        compression,
+        BioSample::channels,
+    )
+}
+
 /// Writes the maps of the texture set into `dir` (each atomically; files in parallel, each
 /// streamed from the bio samples or the render maps by rows, with no whole-image copy): every
 /// file of [`crate::outputs::OUTPUTS`] but features.json, preview.png, manifest.json and
@@ -403,33 +410,6 @@ pub fn write_maps(
     let (w, h) = (bio.width, bio.height);
     let path = |name: &str| dir.join(name);
     let row = |y: usize| &bio.texels[y * w..(y + 1) * w];
-    // Each EXR in one pass over the samples of a line, all its channels at once.
-    fn exr<const C: usize>(
-        path: &Path,
-        bio: &BioMaps,
-        names: [&str; C],
-        precision: ExrPrecision,
-        compression: ExrCompression,
-        values: impl Fn(&BioSample) -> [f32; C] + Sync,
-    ) -> crate::Result<()> {
-        let w = bio.width;
-        let list = names.map(|name| ExrChannel { name, precision });
-        Ok(write_exr_rows(
-            path,
-            w,
-            bio.height,
-            &list,
-            compression,
-            |y, rows| {
-                for (x, s) in bio.texels[y * w..(y + 1) * w].iter().enumerate() {
-                    let v = values(s);
-                    for c in 0..C {
-                        rows[c][x] = v[c];
-                    }
-                }
-            },
-        )?)
-    }
     let rgb8 = |file: &'static str, px: &[[u8; 3]]| -> crate::Result<()> {
         Ok(write_png_rows(
             &path(file),
@@ -477,18 +457,7 @@ pub fn write_maps(
     let mut list: Vec<(&'static str, Job)> = vec![
         (
             outputs::BIO,
-            Box::new(|| {
-                let names = BIO_CHANNELS.map(|(n, _)| n);
-                let (f16, comp) = (ExrPrecision::F16, BIO_COMPRESSION);
-                exr(
-                    &path(outputs::BIO),
-                    bio,
-                    names,
-                    f16,
-                    comp,
-                    BioSample::channels,
-                )
-            }),
+            Box::new(|| write_bio_exr(&path(outputs::BIO), bio, BIO_COMPRESSION)),
         ),
         (
             outputs::MELANIN,

@@ -111,21 +111,27 @@ impl Canvas {
         py: usize,
         w: usize,
     ) {
-        let e = &set.exemplars[ex];
-        let c = self.channels;
-        let cw = e.width() + 1 - w;
+        let ew = set.exemplars[ex].width();
+        let cw = ew + 1 - w;
         let (mx, my) = (index as usize % cw, index as usize / cw);
         for dy in 0..w {
             for dx in 0..w {
                 let t = self.at(px, py, dx, dy);
-                let s = (my + dy) * e.width() + mx + dx;
-                self.values[t * c..(t + 1) * c]
-                    .copy_from_slice(&e.texture.data[s * c..(s + 1) * c]);
-                self.codes[t * c..(t + 1) * c].copy_from_slice(&e.codes[s * c..(s + 1) * c]);
-                self.src[t] = s as u32;
-                self.src_exemplar[t] = ex as u8;
+                self.copy_texel(set, t, ex, (my + dy) * ew + mx + dx);
             }
         }
+    }
+
+    /// Makes texel `t` a copy of texel `s` (y · width + x) of exemplar `ex`: its values, codes
+    /// and source.
+    #[inline]
+    pub fn copy_texel(&mut self, set: &ExemplarSet, t: usize, ex: usize, s: usize) {
+        let e = &set.exemplars[ex];
+        let c = self.channels;
+        self.values[t * c..(t + 1) * c].copy_from_slice(&e.texture.data[s * c..(s + 1) * c]);
+        self.codes[t * c..(t + 1) * c].copy_from_slice(&e.codes[s * c..(s + 1) * c]);
+        self.src[t] = s as u32;
+        self.src_exemplar[t] = ex as u8;
     }
 }
 

@@ -45,16 +45,8 @@ pub(crate) fn correct(
             Unit::Steps,
         );
         for &(ox, oy) in &PARITIES {
-            let choices = decide(canvas, set, guide, ox, oy);
-            let c = canvas.channels;
-            for (t, ex, s) in choices {
-                let e = &set.exemplars[ex as usize];
-                let s = s as usize;
-                canvas.values[t * c..(t + 1) * c]
-                    .copy_from_slice(&e.texture.data[s * c..(s + 1) * c]);
-                canvas.codes[t * c..(t + 1) * c].copy_from_slice(&e.codes[s * c..(s + 1) * c]);
-                canvas.src[t] = s as u32;
-                canvas.src_exemplar[t] = ex;
+            for (t, ex, s) in decide(canvas, set, guide, ox, oy) {
+                canvas.copy_texel(set, t, ex as usize, s as usize);
             }
             progress.advance(1);
         }

@@ -93,7 +93,7 @@ pub(crate) fn patch_pass(
         if patches.is_empty() {
             continue;
         }
-        let mut queries: Vec<Query> = patches
+        let queries: Vec<Query> = patches
             .iter()
             .map(|&(px, py, k)| {
                 let ex = guide.map_or(0, |g| g.at(canvas, px + d, py + d));
@@ -113,8 +113,7 @@ pub(crate) fn patch_pass(
         // way) a window accepted earlier in its wavefront is searched again, with the accepted
         // windows' neighbourhoods penalised and the counts updated; repeated until none clashes
         // (each round accepts its first patch whatever it overlaps). Deterministic, as the
-        // searches are. A patch searched again also starts from the windows just outside the
-        // barred square around its first answer (guesses change the speed, not the answer).
+        // searches are.
         let mut pending: Vec<usize> = (0..patches.len()).collect();
         let mut accepted: Vec<(u32, usize, usize)> = Vec::new();
         while !pending.is_empty() {
@@ -137,16 +136,6 @@ pub(crate) fn patch_pass(
                         .iter()
                         .any(|&(e, ax, ay)| e == ex && ax.abs_diff(mx) < d && ay.abs_diff(my) < d);
                 if clash {
-                    let ch = set.exemplars[ex as usize].height() + 1 - n;
-                    let g = &mut queries[k].guesses;
-                    for (x, y) in [
-                        ((mx + d).min(cw - 1), my),
-                        (mx.saturating_sub(d), my),
-                        (mx, (my + d).min(ch - 1)),
-                        (mx, my.saturating_sub(d)),
-                    ] {
-                        g.push((y * cw + x) as u32);
-                    }
                     redo.push(k);
                     continue;
                 }

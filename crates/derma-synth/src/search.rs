@@ -415,11 +415,11 @@ fn scan_pruned(
     rows: std::ops::Range<usize>,
 ) -> (Vec<(u32, u32)>, u32) {
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-        // SAFETY: the features the function is compiled for were just detected.
+    if derma_core::numerics::lanes::Avx2::detect().is_some() {
+        // SAFETY: the token proves the CPU has the features the function is compiled for.
         return unsafe { scan_pruned_avx2(set, prep, s, q, rows) };
     }
-    best_match_pruned_body(set, prep, s, q, rows)
+    scan_pruned_body(set, prep, s, q, rows)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -431,11 +431,11 @@ unsafe fn scan_pruned_avx2(
     q: &Query,
     rows: std::ops::Range<usize>,
 ) -> (Vec<(u32, u32)>, u32) {
-    best_match_pruned_body(set, prep, s, q, rows)
+    scan_pruned_body(set, prep, s, q, rows)
 }
 
 #[inline(always)]
-fn best_match_pruned_body(
+fn scan_pruned_body(
     set: &ExemplarSet,
     prep: &Prepared,
     s: &Search,

@@ -5,10 +5,11 @@
 //! safe) and [`PortableF32`], eight plain f32s for every other CPU.
 //!
 //! Every operation is one IEEE operation per lane, the same on both (fused multiply–add only
-//! where asked for, and then fused on both; the same rounding, comparisons false with NaN, `min`/`max` returning the second operand when
-//! either is NaN as the x86 instructions do), and the elementary functions below are written
-//! once over the interface, so both give the same bits — and [`Lanes::exp`] and [`Lanes::cbrt`]
-//! the bits of [`super::fastmath`]'s scalar functions. Results do not depend on the CPU.
+//! where asked for, and then fused on both; the same rounding, comparisons false with NaN,
+//! `min`/`max` returning the second operand when either is NaN as the x86 instructions do), and
+//! the elementary functions below are written once over the interface, so both give the same
+//! bits — and [`Lanes::exp`] and [`Lanes::cbrt`] the bits of [`super::fastmath`]'s scalar
+//! functions. Results do not depend on the CPU.
 //!
 //! Methods: e^x and ∛x as in [`super::fastmath`]; ln x from the exponent and
 //! 2·atanh((m − 1)/(m + 1)) for the mantissa m ∈ [√½, √2) (series to s⁹, truncation below
@@ -16,7 +17,7 @@
 //! turn (exact for t of 24 bits) and Taylor polynomials on [−π/4, π/4] (degree 9 and 10,
 //! truncation below 4·10⁻⁹).
 
-use super::fastmath::{EXP_POLY, LN2_HI, LN2_LO, ROUND_MAGIC};
+use super::fastmath::{CBRT_BIAS, EXP_POLY, LN2_HI, LN2_LO, ROUND_MAGIC};
 
 /// Eight f32 lanes. A comparison gives a mask: all bits set in the lanes where it holds.
 pub trait Lanes: Copy + Send + Sync + std::fmt::Debug {
@@ -122,7 +123,7 @@ pub trait Lanes: Copy + Send + Sync + std::fmt::Debug {
         let bits = self.to_bits();
         let mut y = bits
             .div3_unsigned()
-            .add(Self::I::splat(self.token(), 0x2a51_67a8))
+            .add(Self::I::splat(self.token(), CBRT_BIAS as i32))
             .to_f32_bits();
         let three = self.splat_as(3.0);
         for _ in 0..3 {

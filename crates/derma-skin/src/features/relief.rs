@@ -286,14 +286,9 @@ fn two_smallest(d: &[f32; 28]) -> (usize, f32, usize, f32) {
     let d1 = smallest(d);
     let i1 = d.iter().position(|&v| v == d1).unwrap_or(0);
     // The second: the smallest of the others (an equal distance elsewhere included).
-    let mut m = [f32::MAX; 4];
-    for (c, chunk) in d.chunks_exact(4).enumerate() {
-        for l in 0..4 {
-            let v = if 4 * c + l == i1 { f32::MAX } else { chunk[l] };
-            m[l] = if v < m[l] { v } else { m[l] };
-        }
-    }
-    let d2 = m[0].min(m[1]).min(m[2].min(m[3]));
+    let mut others = *d;
+    others[i1] = f32::MAX;
+    let d2 = smallest(&others);
     let i2 = (0..28).find(|&k| k != i1 && d[k] == d2).unwrap_or(0);
     (i1, d1, i2, d2)
 }
