@@ -267,6 +267,46 @@ impl Gpu {
         Ok(pipeline)
     }
 
+    /// One bind group layout for several entry points of a shader, and its pipeline layout:
+    /// binding 0 a uniform buffer, then `read_only` read-only storage buffers, then
+    /// `read_write` read-write ones (each entry point may use only some of them).
+    pub fn storage_layout(
+        &self,
+        label: &str,
+        read_only: u32,
+        read_write: u32,
+    ) -> (wgpu::BindGroupLayout, wgpu::PipelineLayout) {
+        let entry = |binding: u32, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty,
+            count: None,
+        };
+        let buffer = |ty| wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        };
+        let storage = |read_only| buffer(wgpu::BufferBindingType::Storage { read_only });
+        let mut entries = vec![entry(0, buffer(wgpu::BufferBindingType::Uniform))];
+        entries.extend((1..=read_only).map(|b| entry(b, storage(true))));
+        entries.extend((read_only + 1..=read_only + read_write).map(|b| entry(b, storage(false))));
+        let layout = self
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(label),
+                entries: &entries,
+            });
+        let pipeline_layout = self
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            });
+        (layout, pipeline_layout)
+    }
+
     /// A bind group of whole buffers at bindings 0, 1, 2, … in the order given.
     pub fn bind_buffers(
         &self,

@@ -28,15 +28,35 @@ struct Params {
     pad: [u32; 3],
 }
 
-/// The rig pipeline, compiled once per process.
-static PIPELINE: GpuCell<wgpu::ComputePipeline> = GpuCell::new();
+struct Pipelines {
+    layout: wgpu::BindGroupLayout,
+    /// Eq. 6's weighted sum at the basis resolution.
+    combine: wgpu::ComputePipeline,
+    /// Upsampling, H and the colour, per texel.
+    main: wgpu::ComputePipeline,
+}
 
-fn pipeline() -> Result<(
-    &'static derma_core::gpu::Gpu,
-    &'static wgpu::ComputePipeline,
-)> {
-    Ok(PIPELINE
-        .get_or_init(|ctx| ctx.compute_pipeline("the rig shader (rig.wgsl)", SHADER, "main"))?)
+/// The rig pipelines, compiled once per process.
+static PIPELINES: GpuCell<Pipelines> = GpuCell::new();
+
+fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
+    Ok(PIPELINES.get_or_init(|ctx| {
+        // Binding 0 the parameters, 1–5 read-only inputs, 6–8 the outputs and the scratch.
+        let (layout, pipeline_layout) = ctx.storage_layout("rig", 5, 3);
+        let make = |entry: &str| {
+            ctx.compute_pipeline_with(
+                &format!("the rig shader (rig.wgsl, {entry})"),
+                SHADER,
+                entry,
+                Some(&pipeline_layout),
+            )
+        };
+        Ok(Pipelines {
+            combine: make("combine")?,
+            main: make("main")?,
+            layout,
+        })
+    })?)
 }
 
 /// A rig resident on the GPU.
@@ -49,12 +69,14 @@ pub struct GpuRig {
     hemoglobin_buf: wgpu::Buffer,
     color_buf: wgpu::Buffer,
     bind: wgpu::BindGroup,
+    /// Texels of the basis maps (threads of the `combine` dispatch).
+    basis_texels: usize,
 }
 
 impl GpuRig {
     /// Uploads `rig`, `melanin` (full resolution) and `lut`.
     pub fn new(rig: &Rig, melanin: &Map, lut: &SkinColorLut) -> Result<Self> {
-        let (ctx, pipe) = pipeline()?;
+        let (ctx, pipes) = pipelines()?;
         let (w, h) = rig.size();
         rig.check_melanin(melanin)?;
         let (bw, bh) = rig.basis_size();
@@ -104,6 +126,7 @@ impl GpuRig {
         };
         let hemoglobin_buf = out("hemoglobin", (w * h * 4) as u64);
         let color_buf = out("colour", (w * h * 16) as u64);
+        let combined_buf = out("combined basis", (bw * bh * 8) as u64);
         let params = Params {
             width: w as u32,
             height: h as u32,
@@ -123,7 +146,7 @@ impl GpuRig {
         );
         let bind = ctx.bind_buffers(
             "rig",
-            &pipe.get_bind_group_layout(0),
+            &pipes.layout,
             &[
                 &params_buf,
                 &weights_buf,
@@ -133,6 +156,7 @@ impl GpuRig {
                 &lut_buf,
                 &hemoglobin_buf,
                 &color_buf,
+                &combined_buf,
             ],
         );
         Ok(Self {
@@ -144,6 +168,7 @@ impl GpuRig {
             hemoglobin_buf,
             color_buf,
             bind,
+            basis_texels: bw * bh,
         })
     }
 
@@ -191,7 +216,7 @@ impl GpuRig {
                 ),
             ));
         }
-        let (ctx, pipe) = pipeline()?;
+        let (ctx, pipes) = pipelines()?;
         let params = Params {
             global_scale: g,
             ..self.params
@@ -201,14 +226,22 @@ impl GpuRig {
         ctx.queue
             .write_buffer(&self.weights_buf, 0, bytemuck::cast_slice(w));
         let (fw, fh) = self.size;
-        let groups = (fw * fh).div_ceil(WORKGROUP as usize) as u32;
-        let gx = groups.min(65_535);
-        let gy = groups.div_ceil(gx);
+        // Two-dimensional grids: a dimension holds at most 65 535 workgroups.
+        let grid = |threads: usize| {
+            let groups = threads.div_ceil(WORKGROUP as usize) as u32;
+            let gx = groups.min(65_535);
+            (gx, groups.div_ceil(gx))
+        };
+        let (cx, cy) = grid(self.basis_texels);
+        let (gx, gy) = grid(fw * fh);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
-            pass.set_pipeline(pipe);
             pass.set_bind_group(0, &self.bind, &[]);
+            // wgpu orders the two dispatches: `main` reads what `combine` wrote.
+            pass.set_pipeline(&pipes.combine);
+            pass.dispatch_workgroups(cx, cy, 1);
+            pass.set_pipeline(&pipes.main);
             pass.dispatch_workgroups(gx, gy, 1);
         }
         ctx.queue.submit([enc.finish()]);

@@ -1,8 +1,13 @@
-// derma skin appearance rig, evaluated on the GPU (Jimenez et al. 2010, eq. 6 and 7): one
-// thread per texel writes the frame's hemoglobin map (dermal blood volume fraction) and its
-// linear-sRGB colour. The same arithmetic, in the same order, as derma-rig's CPU path
-// (`evaluate::hemoglobin`, `evaluate::color`). An engine can run it once per frame per
-// character and sample `color` as the diffuse albedo (post-scattering texturing, §6).
+// derma skin appearance rig, evaluated on the GPU (Jimenez et al. 2010, eq. 6 and 7): the
+// frame's hemoglobin map (dermal blood volume fraction) and its linear-sRGB colour. The same
+// arithmetic, in the same order, as derma-rig's CPU path (`evaluate::hemoglobin`,
+// `evaluate::color`). An engine runs it once per frame per character and samples `color` as the
+// diffuse albedo (post-scattering texturing, §6).
+//
+// Two dispatches a frame, in this order (one bind group serves both):
+//   `combine`  one thread per basis texel: g · Σ_i w_i · (bias_i, scale_i) into `combined`
+//              (eq. 6's weighted sum, done once at the basis resolution as the CPU does);
+//   `main`     one thread per texel: the combined maps upsampled, H, and the colour of eq. 7.
 //
 // Inputs (f32, rows from the top, as in the rig directory's EXRs; see rig.json):
 //   h0       W × H        H_0 = H_n − μ_n                              (h0.exr)
@@ -11,6 +16,7 @@
 //                                                        (neutral.exr, targets/NAME.exr)
 //   lut      n × n × 3    linear RGB at [v][u], u = ∛(C_m/melanin_max), v = ∛(H/blood_max)
 //   weights  w_0 … w_k (sum to one; w_0 is the neutral pose)
+// Scratch: combined  BH × BW × (bias, scale).
 // Basis maps are upsampled bilinearly with clamp to edge and texel centres at half-integers.
 
 struct Params {
@@ -36,6 +42,7 @@ struct Params {
 @group(0) @binding(5) var<storage, read> lut: array<f32>;
 @group(0) @binding(6) var<storage, read_write> hemoglobin_out: array<f32>;
 @group(0) @binding(7) var<storage, read_write> color_out: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> combined: array<vec2<f32>>;
 
 struct Tap {
     i0: u32,
@@ -50,23 +57,14 @@ fn tap(x: u32, src: u32, dst: u32) -> Tap {
     return Tap(i0, min(i0 + 1u, src - 1u), f - f32(i0));
 }
 
-// g · Σ_i w_i · plane p of layer i at basis texel (x, y): the weighted sum of eq. 6.
-fn combined(p: u32, x: u32, y: u32) -> f32 {
-    let plane = params.basis_width * params.basis_height;
-    let at = y * params.basis_width + x;
-    var s = 0.0;
-    for (var i = 0u; i < params.layers; i++) {
-        s += weights[i] * basis[(2u * i + p) * plane + at];
-    }
-    return params.global_scale * s;
-}
-
-// Bilinear upsampling of the combined plane p: horizontal lerps first, then vertical.
-fn upsampled(p: u32, cx: Tap, cy: Tap) -> f32 {
-    let a0 = combined(p, cx.i0, cy.i0);
-    let a1 = combined(p, cx.i1, cy.i0);
-    let b0 = combined(p, cx.i0, cy.i1);
-    let b1 = combined(p, cx.i1, cy.i1);
+// Bilinear upsampling of the combined (bias, scale): horizontal lerps first, then vertical.
+fn upsampled(cx: Tap, cy: Tap) -> vec2<f32> {
+    let r0 = cy.i0 * params.basis_width;
+    let r1 = cy.i1 * params.basis_width;
+    let a0 = combined[r0 + cx.i0];
+    let a1 = combined[r0 + cx.i1];
+    let b0 = combined[r1 + cx.i0];
+    let b1 = combined[r1 + cx.i1];
     let top = a0 + (a1 - a0) * cx.t;
     let bottom = b0 + (b1 - b0) * cx.t;
     return top + (bottom - top) * cy.t;
@@ -91,20 +89,37 @@ fn skin_color(c_m: f32, c_hd: f32) -> vec3<f32> {
     return mix(top, bottom, fy);
 }
 
+// Thread index of a two-dimensional dispatch (a dimension holds at most 65 535 workgroups).
+fn flat_index(id: vec3<u32>, groups: vec3<u32>) -> u32 {
+    return id.y * groups.x * 64u + id.x;
+}
+
+// Eq. 6's weighted sum at one basis texel, for both planes: g · Σ_i w_i · plane p of layer i.
+@compute @workgroup_size(64)
+fn combine(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let plane = params.basis_width * params.basis_height;
+    let at = flat_index(id, groups);
+    if (at >= plane) {
+        return;
+    }
+    var s = vec2<f32>(0.0, 0.0);
+    for (var i = 0u; i < params.layers; i++) {
+        let w = weights[i];
+        s += w * vec2<f32>(basis[2u * i * plane + at], basis[(2u * i + 1u) * plane + at]);
+    }
+    combined[at] = params.global_scale * s;
+}
+
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    // Two-dimensional dispatch (a dimension holds at most 65 535 workgroups).
-    let k = id.y * groups.x * 64u + id.x;
+    let k = flat_index(id, groups);
     if (k >= params.width * params.height) {
         return;
     }
     let x = k % params.width;
     let y = k / params.width;
-    let cx = tap(x, params.basis_width, params.width);
-    let cy = tap(y, params.basis_height, params.height);
-    let bias = upsampled(0u, cx, cy);
-    let scale = upsampled(1u, cx, cy);
-    let h = clamp(bias + h0[k] * scale, 0.0, 1.0);
+    let c = upsampled(tap(x, params.basis_width, params.width), tap(y, params.basis_height, params.height));
+    let h = clamp(c.x + h0[k] * c.y, 0.0, 1.0);
     hemoglobin_out[k] = h;
     color_out[k] = vec4<f32>(skin_color(melanin[k], h), 1.0);
 }

@@ -60,40 +60,7 @@ fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
     Ok(PIPELINES.get_or_init(|ctx| {
         // One layout for all entry points: binding 0 uniform, 1–5 read-only storage,
         // 6–9 read-write storage.
-        let entry = |binding: u32, ty| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty,
-            count: None,
-        };
-        let storage = |read_only| wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        };
-        let mut entries = vec![entry(
-            0,
-            wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-        )];
-        entries.extend((1..=5).map(|b| entry(b, storage(true))));
-        entries.extend((6..=9).map(|b| entry(b, storage(false))));
-        let layout = ctx
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("search"),
-                entries: &entries,
-            });
-        let pipeline_layout = ctx
-            .device
-            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("search"),
-                bind_group_layouts: &[Some(&layout)],
-                immediate_size: 0,
-            });
+        let (layout, pipeline_layout) = ctx.storage_layout("search", 5, 4);
         let make = |entry: &str| {
             ctx.compute_pipeline_with(
                 &format!("search.wgsl ({entry})"),
