@@ -147,7 +147,8 @@ fn open() -> Result<Gpu, GpuError> {
     let name = format!("{} ({:?})", info.name, info.backend);
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some("derma"),
-        required_features: wgpu::Features::empty(),
+        // 64-bit integers where the adapter has them (the optics kernel's Philox products).
+        required_features: adapter.features() & wgpu::Features::SHADER_INT64,
         required_limits: adapter.limits(),
         ..Default::default()
     }))

@@ -3,7 +3,7 @@
 //! that GPU results are bit-identical from run to run.
 
 use crate::error::Result;
-use crate::layer::{Bottom, Surface, N_ABSORBERS};
+use crate::layer::{Bottom, Surface};
 use crate::run::Run;
 use crate::tally::Tally;
 use crate::transport::{Incidence, Prepared};
@@ -16,18 +16,79 @@ const WORKGROUP: u32 = 64;
 /// Fixed-point scale of the tallies (2^24 units per photon weight).
 const FIXED: f64 = 16_777_216.0;
 
-/// The transport pipeline, compiled once per process.
-static PIPELINE: GpuCell<wgpu::ComputePipeline> = GpuCell::new();
+/// How the kernel is laid out on the device. None of it changes the results (integer tallies
+/// of per-photon values; each photon has its own random stream): tests compare layouts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Kernel {
+    /// The form of Philox's products.
+    pub products: Products,
+    /// Workgroups (of 64 threads) per dispatch for large runs.
+    pub groups: u64,
+    /// Photons per thread and dispatch for large runs.
+    pub photons_per_thread: u64,
+}
 
-fn pipeline() -> std::result::Result<
+impl Kernel {
+    /// The layout for this device: native products where it has 64-bit integers; 2^18 threads
+    /// a dispatch, enough to fill a data-centre GPU (an H200 holds 132 × 2048 resident
+    /// threads), 32 photons each.
+    pub fn for_device() -> std::result::Result<Self, GpuError> {
+        let ctx = derma_core::gpu::context()?;
+        let products = if ctx.device.features().contains(wgpu::Features::SHADER_INT64) {
+            Products::Native64
+        } else {
+            Products::Halves
+        };
+        Ok(Self {
+            products,
+            groups: 4096,
+            photons_per_thread: 32,
+        })
+    }
+}
+
+/// How the kernel forms Philox's 32×32 → 64-bit products; both give the same bits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Products {
+    /// From 16-bit halves (any device).
+    Halves,
+    /// One 64-bit multiplication (devices with `SHADER_INT64`).
+    Native64,
+}
+
+/// The native-product form of `mulhilo`, swapped in for the halves where the device allows.
+const MULHILO_NATIVE: &str = "fn mulhilo(a: u32, b: u32) -> vec2<u32> {
+    let p = u64(a) * u64(b);
+    return vec2<u32>(u32(p & 0xfffffffflu), u32(p >> 32u));
+}
+";
+
+/// The transport pipelines, compiled once per process (halves, native products).
+static PIPELINES: [GpuCell<wgpu::ComputePipeline>; 2] = [GpuCell::new(), GpuCell::new()];
+
+/// The kernel's source with the products of `products`.
+fn shader(products: Products) -> String {
+    match products {
+        Products::Halves => SHADER.to_string(),
+        Products::Native64 => {
+            let a = SHADER.find("// mulhilo begin").expect("marker");
+            let b = SHADER.find("// mulhilo end").expect("marker");
+            format!("{}{MULHILO_NATIVE}{}", &SHADER[..a], &SHADER[b..])
+        }
+    }
+}
+
+fn pipeline(
+    products: Products,
+) -> std::result::Result<
     (
         &'static derma_core::gpu::Gpu,
         &'static wgpu::ComputePipeline,
     ),
     GpuError,
 > {
-    PIPELINE.get_or_init(|ctx| {
-        ctx.compute_pipeline("the transport shader (optics.wgsl)", SHADER, "main")
+    PIPELINES[products as usize].get_or_init(|ctx| {
+        ctx.compute_pipeline("the transport shader (optics.wgsl)", &shader(products), "main")
     })
 }
 
@@ -39,7 +100,7 @@ struct Params {
     offset_lo: u32,
     offset_hi: u32,
     count: u32,
-    threads: u32,
+    lanes: u32,
     n_lambda: u32,
     n_layers: u32,
     incidence: u32,
@@ -62,12 +123,17 @@ fn fixed_to_f64(lo: u32, hi: u32) -> f64 {
 
 /// Runs `run` on the GPU; `progress` advances by the photons of each dispatch.
 pub fn run_gpu(run: &Run, progress: &dyn Progress) -> Result<Tally> {
+    run_gpu_with(run, progress, &Kernel::for_device()?)
+}
+
+/// [`run_gpu`] with the given kernel layout (the results are the same).
+pub fn run_gpu_with(run: &Run, progress: &dyn Progress, kernel: &Kernel) -> Result<Tally> {
     run.validate()?;
-    let (ctx, pipeline) = pipeline()?;
+    let (ctx, pipeline) = pipeline(kernel.products)?;
     let prepared: Vec<Prepared> = run.stacks.iter().map(Prepared::new).collect();
     let nl = prepared.len() as u32;
     let n_layers = prepared[0].mut_.len() as u32;
-    let mut layer_data = Vec::with_capacity((nl * n_layers * 12) as usize);
+    let mut layer_data = Vec::with_capacity((nl * n_layers * 7) as usize);
     for p in &prepared {
         for l in 0..n_layers as usize {
             layer_data.extend_from_slice(&[
@@ -79,7 +145,6 @@ pub fn run_gpu(run: &Run, progress: &dyn Progress) -> Result<Tally> {
                 p.g[l] as f32,
                 p.n[l] as f32,
             ]);
-            layer_data.extend(p.share[l].iter().map(|&v| v as f32));
         }
     }
     let channels = run.channels() as u32;
@@ -97,13 +162,35 @@ pub fn run_gpu(run: &Run, progress: &dyn Progress) -> Result<Tally> {
         .map_or((0, 0, 0), |b| (b.theta_in, b.theta_out, b.phi));
     let brdf_len = (bti * bto * bphi) as u32 * channels;
     let (pbins, pdmax) = run.profile.map_or((0, 1.0), |p| (p.bins, p.d_max_mm));
-    let slots = 8 * nl + 8 * N_ABSORBERS as u32 + 1 + brdf_len + pbins as u32 * nl;
+    let slots = 8 * nl + nl * n_layers + 1 + brdf_len + pbins as u32 * nl;
     let n_counts = nl + bti as u32;
 
-    // Threads: a multiple of the wavelength count and of the workgroup; photons per dispatch
-    // a multiple of the thread count, so every dispatch starts at a multiple of nλ.
-    let threads = (65_536 / (nl * WORKGROUP)).max(1) * nl * WORKGROUP;
-    let per_dispatch = threads as u64 * 16;
+    // Workgroups: `columns` per wavelength. Large runs fill the device with the kernel's
+    // workgroups and photons per thread and dispatch; small ones use fewer
+    // (at least 4 photons a thread). Every dispatch but the last holds a multiple of nλ
+    // photons, so each starts at a multiple of nλ. None of this changes the results.
+    let max_groups = ctx.device.limits().max_compute_workgroups_per_dimension;
+    if nl > max_groups {
+        return Err(crate::error::OpticsError::Invalid(format!(
+            "{nl} wavelength samples; the GPU path runs at most {max_groups} at once"
+        )));
+    }
+    let full_columns = (kernel.groups / nl as u64).clamp(1, (max_groups / nl) as u64);
+    let per_dispatch =
+        full_columns * WORKGROUP as u64 * nl as u64 * kernel.photons_per_thread.max(1);
+    if per_dispatch > u32::MAX as u64 {
+        return Err(crate::error::OpticsError::Invalid(format!(
+            "{per_dispatch} photons per dispatch; at most {} (fewer groups or photons per thread)",
+            u32::MAX
+        )));
+    }
+    let columns = if run.photons >= per_dispatch {
+        full_columns
+    } else {
+        run.photons
+            .div_ceil(nl as u64 * WORKGROUP as u64 * 4)
+            .clamp(1, full_columns)
+    } as u32;
 
     let (surface, sigma) = match prepared[0].surface {
         Surface::Smooth => (0, 0.0),
@@ -158,7 +245,21 @@ pub fn run_gpu(run: &Run, progress: &dyn Progress) -> Result<Tally> {
         &[&params_buf, &layers_buf, &chan_buf, &acc_buf, &counts_buf],
     );
 
+    // Dispatches are queued back to back: the host waits for dispatch i − 1 (and reports its
+    // photons) only after submitting dispatch i, so the device never idles between them.
     let mut offset = 0u64;
+    let mut in_flight: Option<(wgpu::SubmissionIndex, u64)> = None;
+    let wait_for = |index: wgpu::SubmissionIndex| {
+        d.poll(wgpu::PollType::Wait {
+            submission_index: Some(index),
+            timeout: None,
+        })
+        .map(|_| ())
+        .map_err(|e| GpuError::Device {
+            during: "tracing photons",
+            detail: e.to_string(),
+        })
+    };
     while offset < run.photons {
         let count = (run.photons - offset).min(per_dispatch) as u32;
         let params = Params {
@@ -167,7 +268,7 @@ pub fn run_gpu(run: &Run, progress: &dyn Progress) -> Result<Tally> {
             offset_lo: offset as u32,
             offset_hi: (offset >> 32) as u32,
             count,
-            threads,
+            lanes: columns * WORKGROUP,
             n_lambda: nl,
             n_layers,
             incidence: matches!(run.incidence, Incidence::ArcsinZenith) as u32,
@@ -183,6 +284,7 @@ pub fn run_gpu(run: &Run, progress: &dyn Progress) -> Result<Tally> {
             profile_bins: pbins as u32,
             profile_dmax: pdmax as f32,
         };
+        // Ordered after the previous dispatch by the queue, as wgpu guarantees.
         ctx.queue
             .write_buffer(&params_buf, 0, bytemuck::bytes_of(&params));
         let mut enc = d.create_command_encoder(&Default::default());
@@ -190,12 +292,18 @@ pub fn run_gpu(run: &Run, progress: &dyn Progress) -> Result<Tally> {
             let mut pass = enc.begin_compute_pass(&Default::default());
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(threads / WORKGROUP, 1, 1);
+            pass.dispatch_workgroups(columns * nl, 1, 1);
         }
-        ctx.queue.submit([enc.finish()]);
-        ctx.wait("tracing photons")?;
+        let index = ctx.queue.submit([enc.finish()]);
+        if let Some((previous, photons)) = in_flight.replace((index, count as u64)) {
+            wait_for(previous)?;
+            progress.advance(photons);
+        }
         offset += count as u64;
-        progress.advance(count as u64);
+    }
+    if let Some((last, photons)) = in_flight {
+        wait_for(last)?;
+        progress.advance(photons);
     }
 
     let acc: Vec<u32> = ctx.read_back(&acc_buf, 2 * slots as usize)?;
@@ -213,14 +321,20 @@ pub fn run_gpu(run: &Run, progress: &dyn Progress) -> Result<Tally> {
             t.sum_sq[k] += val(l * 8 + 4 + k as u32);
         }
     }
+    // Absorbed weight per wavelength and layer, split among the absorbers by the layer's
+    // shares at that wavelength (what the CPU walk adds step by step).
     let abs0 = 8 * nl;
-    for (li, a) in t.absorbed.iter_mut().enumerate() {
-        for (c, v) in a.iter_mut().enumerate() {
-            *v = val(abs0 + (li * N_ABSORBERS + c) as u32);
+    for (l, p) in prepared.iter().enumerate() {
+        for (li, a) in t.absorbed.iter_mut().enumerate() {
+            let total = val(abs0 + l as u32 * n_layers + li as u32);
+            for (v, share) in a.iter_mut().zip(&p.share[li]) {
+                *v += total * share;
+            }
         }
     }
-    t.roulette = val(abs0 + 40);
-    let brdf0 = abs0 + 41;
+    let roulette0 = abs0 + nl * n_layers;
+    t.roulette = val(roulette0);
+    let brdf0 = roulette0 + 1;
     for (i, v) in t.brdf.iter_mut().enumerate() {
         *v = val(brdf0 + i as u32);
     }

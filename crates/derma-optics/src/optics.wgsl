@@ -1,27 +1,32 @@
 // Photon transport in a layered specimen on the GPU: the WGSL port of transport.rs (thesis
 // §4.4–4.5; weights + Russian roulette as MCML, Wang, Jacques & Zheng 1995), same Philox stream.
 //
-// Thread `tid` runs photons k = offset + tid + j·threads; `offset` and `threads` are multiples
-// of the number of wavelengths, so all photons of a thread share one wavelength and per-thread sums are
-// per wavelength. Tallies are 64-bit fixed point (2^-24 units) in pairs of u32 atomics:
-// integer adds commute, so results do not depend on scheduling.
+// Work: every workgroup serves one wavelength λ = workgroup % nλ, so its photons share their
+// layer data. Within a dispatch (photons offset … offset + count, offset a multiple of nλ) the
+// photons of λ are k = offset + λ + nλ·m, m = 0, 1, …; lane r of the λ's `lanes` lanes runs
+// m = r, r + lanes, … Any such split traces every photon once with its own Philox stream.
+// Tallies: each photon's values are rounded to 64-bit fixed point (2^-24 units) and added with
+// integer atomics, first into the workgroup's tallies and then, once per workgroup, into the
+// global ones (pairs of u32). Integer adds commute, so results depend neither on scheduling nor
+// on the number of threads: the host sizes dispatches to the device.
 
 struct Params {
     seed_lo: u32, seed_hi: u32, offset_lo: u32, offset_hi: u32,
-    count: u32, threads: u32, n_lambda: u32, n_layers: u32,
+    count: u32, lanes: u32, n_lambda: u32, n_layers: u32,
     incidence: u32, surface: u32, sigma: f32, bottom: u32,
     bottom_value: f32, n_above: f32, brdf_ti: u32, brdf_to: u32,
     brdf_phi: u32, channels: u32, profile_bins: u32, profile_dmax: f32,
 }
 
 @group(0) @binding(0) var<uniform> P: Params;
-// Per (wavelength, layer): z_top, z_bot, mut, mua/mut, 1/mut, g, n, share[5] (12 floats).
+// Per (wavelength, layer): z_top, z_bot, mut, mua/mut, 1/mut, g, n (7 floats).
 @group(0) @binding(1) var<storage, read> layers: array<f32>;
 // Per wavelength: BRDF channel weights.
 @group(0) @binding(2) var<storage, read> chan: array<f32>;
 // Fixed-point tallies (lo, hi pairs):
-// [0, 8·nλ): per wavelength sum and sum of squares of (Rs, Rd, T, A)
-// then 8·5 absorbed (layer, absorber), then roulette, then BRDF bins·channels, then profile.
+// [0, 8·nλ): per wavelength sum and sum of squares of (Rs, Rd, T, A);
+// then per wavelength and layer the absorbed weight (the host splits it among absorbers by the
+// layer's shares); then roulette, then BRDF bins·channels, then profile.
 @group(0) @binding(3) var<storage, read_write> acc: array<atomic<u32>>;
 // Photon counts: per wavelength, then per θi bin.
 @group(0) @binding(4) var<storage, read_write> counts: array<atomic<u32>>;
@@ -30,8 +35,18 @@ const TAU: f32 = 6.283185307179586;
 const ROULETTE_WEIGHT: f32 = 1e-4;
 const ROULETTE_CHANCE: f32 = 0.1;
 const FACING_TRIES: u32 = 8u;
+const WORKGROUP: u32 = 64u;
+const MAX_LAYERS: u32 = 8u;
+// Workgroup tallies: sums 0–3, squares 4–7, absorbed per layer 8…, roulette last.
+const WG_SLOTS: u32 = 9u + MAX_LAYERS;
+var<workgroup> wg_acc: array<atomic<u32>, 34>;  // 2 · WG_SLOTS
+var<workgroup> wg_launched: atomic<u32>;
+// A photon's absorbed weight per layer, one column per thread (no per-thread array in memory).
+var<workgroup> wg_absorbed: array<f32, 512>;  // MAX_LAYERS · WORKGROUP
 
-// ---- Philox4x32-10 (Salmon et al. 2011), 32×32 → 64-bit products from 16-bit halves.
+// ---- Philox4x32-10 (Salmon et al. 2011). The 32×32 → 64-bit product from 16-bit halves; where
+// the device has 64-bit integers the host swaps in the native product (same bits).
+// mulhilo begin
 fn mulhilo(a: u32, b: u32) -> vec2<u32> {
     let a0 = a & 0xffffu; let a1 = a >> 16u;
     let b0 = b & 0xffffu; let b1 = b >> 16u;
@@ -41,6 +56,7 @@ fn mulhilo(a: u32, b: u32) -> vec2<u32> {
     let hi = p11 + (p01 >> 16u) + (p10 >> 16u) + (mid >> 16u);
     return vec2<u32>(lo, hi);
 }
+// mulhilo end
 
 fn philox(c_in: vec4<u32>, k_in: vec2<u32>) -> vec4<u32> {
     var c = c_in; var k = k_in;
@@ -72,22 +88,42 @@ fn rand01() -> f32 {
     return f32(next_u32() >> 8u) * (1.0 / 16777216.0);
 }
 
-// ---- Fixed-point accumulation: v · 2^24 as a 64-bit two's complement integer.
-fn add_fixed(slot: u32, v: f32) {
-    if (v == 0.0) { return; }
-    let s = v * 16777216.0;
+// ---- Fixed-point accumulation: round(v · 2^24) as a 64-bit two's complement integer (lo, hi).
+fn to_fixed(v: f32) -> vec2<u32> {
+    let s = round(v * 16777216.0);
     let hi = floor(s / 4294967296.0);
     let lo = u32(clamp(s - hi * 4294967296.0, 0.0, 4294967295.0));
-    let old = atomicAdd(&acc[2u * slot], lo);
+    return vec2<u32>(lo, bitcast<u32>(i32(hi)));
+}
+
+// Adds the pair f to global slot `slot`.
+fn add_pair(slot: u32, f: vec2<u32>) {
+    if (f.x == 0u && f.y == 0u) { return; }
+    let old = atomicAdd(&acc[2u * slot], f.x);
     var carry = 0u;
-    if (old > 0xffffffffu - lo) { carry = 1u; }
-    let h = bitcast<u32>(i32(hi)) + carry;
+    if (old > 0xffffffffu - f.x) { carry = 1u; }
+    let h = f.y + carry;
     if (h != 0u) { atomicAdd(&acc[2u * slot + 1u], h); }
+}
+
+fn add_fixed(slot: u32, v: f32) {
+    if (v != 0.0) { add_pair(slot, to_fixed(v)); }
+}
+
+// Adds v to the workgroup's slot `slot`.
+fn add_wg(slot: u32, v: f32) {
+    if (v == 0.0) { return; }
+    let f = to_fixed(v);
+    let old = atomicAdd(&wg_acc[2u * slot], f.x);
+    var carry = 0u;
+    if (old > 0xffffffffu - f.x) { carry = 1u; }
+    let h = f.y + carry;
+    if (h != 0u) { atomicAdd(&wg_acc[2u * slot + 1u], h); }
 }
 
 // ---- Layer data.
 fn L(lambda: u32, layer: u32, f: u32) -> f32 {
-    return layers[(lambda * P.n_layers + layer) * 12u + f];
+    return layers[(lambda * P.n_layers + layer) * 7u + f];
 }
 
 fn fresnel(cos_i_in: f32, n1: f32, n2: f32) -> f32 {
@@ -228,7 +264,7 @@ fn spin(u: vec3<f32>, ct: f32, phi: f32) -> vec3<f32> {
 }
 
 fn slot_absorbed() -> u32 { return 8u * P.n_lambda; }
-fn slot_roulette() -> u32 { return slot_absorbed() + 40u; }
+fn slot_roulette() -> u32 { return slot_absorbed() + P.n_lambda * P.n_layers; }
 fn slot_brdf() -> u32 { return slot_roulette() + 1u; }
 fn slot_profile() -> u32 { return slot_brdf() + P.brdf_ti * P.brdf_to * P.brdf_phi * P.channels; }
 
@@ -253,28 +289,27 @@ fn record_exit(lambda: u32, ti: u32, pos: vec3<f32>, u: vec3<f32>, w: f32, diffu
 }
 
 @compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let tid = gid.x;
-    if (tid >= P.threads) { return; }
+fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     key = vec2<u32>(P.seed_lo, P.seed_hi);
-    var sums = array<f32, 4>(0.0, 0.0, 0.0, 0.0);
-    var sqs = array<f32, 4>(0.0, 0.0, 0.0, 0.0);
-    var absorbed = array<f32, 40>();
-    var roulette = 0.0;
-    var lambda = 0u;
-    var launched = 0u;
+    let lambda = wid.x % P.n_lambda;
+    let lane = (wid.x / P.n_lambda) * WORKGROUP + li;
     let nl = P.n_layers;
-    for (var j = tid; j < P.count; j += P.threads) {
+    // Photons of this wavelength in the dispatch: k = λ + nλ·m < count.
+    var of_lambda = 0u;
+    if (lambda < P.count) { of_lambda = (P.count - lambda - 1u) / P.n_lambda + 1u; }
+    var launched = 0u;
+    for (var m = lane; m < of_lambda; m += P.lanes) {
         // 64-bit photon index offset + j.
+        let j = lambda + P.n_lambda * m;
         let lo = P.offset_lo + j;
         var hi = P.offset_hi;
         if (lo < j) { hi = hi + 1u; }
-        // offset and threads are multiples of n_lambda, so k mod n_lambda = tid mod n_lambda.
-        lambda = tid % P.n_lambda;
         rng.ctr = vec4<u32>(lo, hi, 0x4f50u, 0u);
         rng.pos = 4u;
         launched = launched + 1u;
         var out = array<f32, 4>(0.0, 0.0, 0.0, 0.0);
+        for (var l = 0u; l < nl; l++) { wg_absorbed[l * WORKGROUP + li] = 0.0; }
+        var roulette = 0.0;
 
         var sin_i = 0.0;
         var cos_i = 1.0;
@@ -364,9 +399,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
                 pos = pos + u * d;
                 let dw = w * L(lambda, layer, 3u);
                 if (dw > 0.0) {
-                    for (var c = 0u; c < 5u; c++) {
-                        absorbed[layer * 5u + c] = absorbed[layer * 5u + c] + dw * L(lambda, layer, 7u + c);
-                    }
+                    wg_absorbed[layer * WORKGROUP + li] = wg_absorbed[layer * WORKGROUP + li] + dw;
                     out[3] = out[3] + dw;
                     w = w - dw;
                 }
@@ -384,18 +417,28 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
         }
         for (var k = 0u; k < 4u; k++) {
-            sums[k] = sums[k] + out[k];
-            sqs[k] = sqs[k] + out[k] * out[k];
+            add_wg(k, out[k]);
+            add_wg(4u + k, out[k] * out[k]);
         }
+        for (var l = 0u; l < nl; l++) {
+            add_wg(8u + l, wg_absorbed[l * WORKGROUP + li]);
+        }
+        add_wg(8u + MAX_LAYERS, roulette);
     }
-    if (launched == 0u) { return; }
-    atomicAdd(&counts[lambda], launched);
-    for (var k = 0u; k < 4u; k++) {
-        add_fixed(lambda * 8u + k, sums[k]);
-        add_fixed(lambda * 8u + 4u + k, sqs[k]);
+    atomicAdd(&wg_launched, launched);
+    // Once per workgroup: its tallies into the global ones.
+    workgroupBarrier();
+    if (li < WG_SLOTS) {
+        let f = vec2<u32>(atomicLoad(&wg_acc[2u * li]), atomicLoad(&wg_acc[2u * li + 1u]));
+        if (li < 8u) {
+            add_pair(lambda * 8u + li, f);
+        } else if (li < 8u + nl) {
+            add_pair(slot_absorbed() + lambda * nl + li - 8u, f);
+        } else if (li == 8u + MAX_LAYERS) {
+            add_pair(slot_roulette(), f);
+        }
+    } else if (li == WG_SLOTS) {
+        let n = atomicLoad(&wg_launched);
+        if (n > 0u) { atomicAdd(&counts[lambda], n); }
     }
-    for (var i = 0u; i < nl * 5u; i++) {
-        add_fixed(slot_absorbed() + i, absorbed[i]);
-    }
-    add_fixed(slot_roulette(), roulette);
 }

@@ -26,7 +26,7 @@ use derma_core::rng::philox4x32_10_lanes;
 /// Photons walked together.
 pub const LANES: usize = 8;
 /// Most layers the lane walk takes (their parameters are chosen per lane by selects).
-pub const MAX_LAYERS: usize = 8;
+pub use crate::MAX_LAYERS;
 
 /// Whether `run` is one the lanes walk: one stack, smooth top, a clear medium below, a normal
 /// pencil beam, totals only (no BRDF or profile), at most [`MAX_LAYERS`] layers.

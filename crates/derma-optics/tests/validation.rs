@@ -331,6 +331,69 @@ fn cpu_and_gpu_agree() {
 }
 
 #[test]
+fn gpu_results_do_not_depend_on_the_kernel_layout() {
+    if derma_test_support::skip_without_gpu() {
+        return;
+    }
+    use derma_optics::gpu::{run_gpu_with, Kernel, Products};
+    let device = Kernel::for_device().unwrap();
+    // Many workgroups with one photon a thread against few with many, and Philox's products
+    // from 16-bit halves against the device's own (native 64-bit where it has them): the
+    // tallies are sums of per-photon integers, so they must agree to the bit.
+    let layouts = [
+        Kernel {
+            products: Products::Halves,
+            groups: 3,
+            photons_per_thread: 1,
+        },
+        Kernel {
+            groups: 4096,
+            photons_per_thread: 32,
+            ..device
+        },
+    ];
+    // Three wavelengths over two layers with a floor, oblique incidence, BRDF and profile bins
+    // (every kind of tally), and the skin specimen (micro-facet surface, six layers).
+    let stack = |mua: f64| Stack {
+        layers: vec![
+            Layer::plain(0.1, mua, 20.0, 0.8, 1.4),
+            Layer::plain(0.4, 0.5 * mua, 8.0, 0.7, 1.37),
+        ],
+        n_above: 1.0,
+        bottom: Bottom::Lambertian { albedo: 0.5 },
+        surface: Surface::Smooth,
+    };
+    let slab = Run {
+        stacks: vec![stack(0.3), stack(1.0), stack(3.0)],
+        photons: 6_001,
+        seed: 5,
+        incidence: Incidence::ArcsinZenith,
+        brdf: Some(BrdfBins {
+            theta_in: 3,
+            theta_out: 4,
+            phi: 2,
+        }),
+        profile: Some(derma_optics::tally::ProfileBins {
+            bins: 8,
+            d_max_mm: 2.0,
+        }),
+        channel_weights: Vec::new(),
+    };
+    let cfg = SkinSimConfig {
+        photons: 3_000,
+        ..SkinSimConfig::default()
+    };
+    let skin = skin_run(&BioTexel::FAIR, &cfg);
+    for run in [&slab, &skin] {
+        let a = run_gpu_with(run, &Silent, &layouts[0]).unwrap();
+        let b = run_gpu_with(run, &Silent, &layouts[1]).unwrap();
+        assert_eq!(a, b, "{:?} against {:?}", layouts[0], layouts[1]);
+        assert_eq!(a.photons, run.photons);
+        assert_eq!(a.per_lambda_count.iter().sum::<u64>(), run.photons);
+    }
+}
+
+#[test]
 fn skin_spectra_have_the_known_shape() {
     // Fair, medium and dark epidermis over a well-perfused dermis. Features (not bytes): the
     // hemoglobin Soret dip near 420 nm and Q-band dips near 542 and 577 nm with the 560 nm hump
