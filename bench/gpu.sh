@@ -4,9 +4,12 @@
 # photons/s, exemplar synthesis at 1024²–4096² from the 256² crop (with the CPU's file compared
 # at 1024²), and the rig's GPU frame at 2048² and 4096² with 8 targets. Sized for well under 10
 # minutes on one data-centre GPU. Run where the GPU is:
-#   DERMA=path/to/derma RIG_BENCH=path/to/rig-bench EXEMPLARS=dir bash bench/gpu.sh
+#   DERMA=path/to/derma RIG_BENCH=path/to/rig-bench LAYOUT_BENCH=path/to/gpu_layout-bench \
+#   EXEMPLARS=dir bash bench/gpu.sh
 # DERMA: the release binary (default target/release/derma). RIG_BENCH: the criterion binary of
 # `cargo bench -p derma-rig --bench rig --no-run` (target/release/deps/rig-*; skipped if unset).
+# LAYOUT_BENCH: that of `cargo bench -p derma-optics --bench gpu_layout --no-run`
+# (target/release/deps/gpu_layout-*): photons/s per kernel layout, to tune Kernel::for_device.
 # EXEMPLARS: a folder with disp256.png (disp128.png for QUICK; bench/synth.sh writes both to
 # bench/out/synth).
 # PMCX_WHEELS: a folder of wheels (pmcx and numpy) to install from where there is no network.
@@ -60,6 +63,15 @@ if [ -n "${RIG_BENCH:-}" ]; then
   "$RIG_BENCH" --bench "$frames_filter" --sample-size 20 2>&1 | grep -E "rig_gpu_frame|time:|skipped"
 else
   echo "rig GPU frame: skipped (set RIG_BENCH)"
+fi
+
+# 4b. The optics kernel's layouts (workgroups, photons per thread, Philox products).
+if [ -n "${LAYOUT_BENCH:-}" ]; then
+  if [ "$quick" = 1 ]; then export PHOTONS=100000; fi
+  "$LAYOUT_BENCH" --bench --sample-size 10 --warm-up-time 1 --measurement-time 3 2>&1 \
+    | grep -E "^gpu_photons|thrpt:|skipped" | grep -v "%\]"
+else
+  echo "optics kernel layouts: skipped (set LAYOUT_BENCH)"
 fi
 
 # 5. MCX on the same slab: 0.05 mm voxels, 20 × 20 mm, 1 mm deep, refractive mismatch, a pencil
