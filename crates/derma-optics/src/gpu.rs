@@ -29,9 +29,11 @@ pub struct Kernel {
 }
 
 impl Kernel {
-    /// The layout for this device: native products where it has 64-bit integers; 2^18 threads
-    /// a dispatch, enough to fill a data-centre GPU (an H200 holds 132 × 2048 resident
-    /// threads), 32 photons each.
+    /// The layout for this device: native products where it has 64-bit integers; on a
+    /// hardware GPU 2^18 threads a dispatch, enough to fill a data-centre GPU (an H200 holds
+    /// 132 × 2048 resident threads), 32 photons each; on a software adapter (lavapipe, which
+    /// runs a workgroup per CPU thread) 2^12 threads of 8 photons, so that a dispatch takes
+    /// about a second there and progress moves.
     pub fn for_device() -> std::result::Result<Self, GpuError> {
         let ctx = derma_core::gpu::context()?;
         let products = if ctx.device.features().contains(wgpu::Features::SHADER_INT64) {
@@ -39,10 +41,11 @@ impl Kernel {
         } else {
             Products::Halves
         };
+        let (groups, photons_per_thread) = if ctx.hardware { (4096, 32) } else { (64, 8) };
         Ok(Self {
             products,
-            groups: 4096,
-            photons_per_thread: 32,
+            groups,
+            photons_per_thread,
         })
     }
 }
