@@ -91,7 +91,11 @@ fn pipeline(
     GpuError,
 > {
     PIPELINES[products as usize].get_or_init(|ctx| {
-        ctx.compute_pipeline("the transport shader (optics.wgsl)", &shader(products), "main")
+        ctx.compute_pipeline(
+            "the transport shader (optics.wgsl)",
+            &shader(products),
+            "main",
+        )
     })
 }
 
