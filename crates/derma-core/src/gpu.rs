@@ -268,10 +268,11 @@ impl Gpu {
         Ok(pipeline)
     }
 
-    /// One bind group layout for several entry points of a shader, and its pipeline layout:
+    /// One bind group layout for several entry points of a shader, and its pipeline layout
+    /// ([`Gpu::entry_points`]):
     /// binding 0 a uniform buffer, then `read_only` read-only storage buffers, then
     /// `read_write` read-write ones (each entry point may use only some of them).
-    pub fn storage_layout(
+    fn storage_layout(
         &self,
         label: &str,
         read_only: u32,
@@ -306,6 +307,35 @@ impl Gpu {
                 immediate_size: 0,
             });
         (layout, pipeline_layout)
+    }
+
+    /// Compiles the entry points `entries` of one shader against one [`Gpu::storage_layout`]
+    /// (binding 0 uniform, `read_only` then `read_write` storage buffers): the layout they
+    /// share, so one bind group serves them all, and the pipelines in the order given.
+    pub fn entry_points<const N: usize>(
+        &self,
+        label: &str,
+        source: &str,
+        read_only: u32,
+        read_write: u32,
+        entries: [&str; N],
+    ) -> Result<(wgpu::BindGroupLayout, [wgpu::ComputePipeline; N]), GpuError> {
+        let (layout, pipeline_layout) = self.storage_layout(label, read_only, read_write);
+        let pipelines = entries
+            .iter()
+            .map(|e| {
+                self.compute_pipeline_with(
+                    &format!("{label} ({e})"),
+                    source,
+                    e,
+                    Some(&pipeline_layout),
+                )
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let pipelines: [wgpu::ComputePipeline; N] = pipelines
+            .try_into()
+            .unwrap_or_else(|_| unreachable!("one pipeline per entry point"));
+        Ok((layout, pipelines))
     }
 
     /// A bind group of whole buffers at bindings 0, 1, 2, … in the order given.

@@ -42,19 +42,12 @@ static PIPELINES: GpuCell<Pipelines> = GpuCell::new();
 fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
     Ok(PIPELINES.get_or_init(|ctx| {
         // Binding 0 the parameters, 1–5 read-only inputs, 6–8 the outputs and the scratch.
-        let (layout, pipeline_layout) = ctx.storage_layout("rig", 5, 3);
-        let make = |entry: &str| {
-            ctx.compute_pipeline_with(
-                &format!("the rig shader (rig.wgsl, {entry})"),
-                SHADER,
-                entry,
-                Some(&pipeline_layout),
-            )
-        };
+        let (layout, [combine, main]) =
+            ctx.entry_points("rig.wgsl", SHADER, 5, 3, ["combine", "main"])?;
         Ok(Pipelines {
-            combine: make("combine")?,
-            main: make("main")?,
             layout,
+            combine,
+            main,
         })
     })?)
 }

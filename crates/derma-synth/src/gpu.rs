@@ -60,23 +60,21 @@ fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
     Ok(PIPELINES.get_or_init(|ctx| {
         // One layout for all entry points: binding 0 uniform, 1–5 read-only storage,
         // 6–9 read-write storage.
-        let (layout, pipeline_layout) = ctx.storage_layout("search", 5, 4);
-        let make = |entry: &str| {
-            ctx.compute_pipeline_with(
-                &format!("search.wgsl ({entry})"),
-                SHADER,
-                entry,
-                Some(&pipeline_layout),
-            )
-        };
+        let (layout, [min_cost, settle, pick, screen, cost, choose]) = ctx.entry_points(
+            "search.wgsl",
+            SHADER,
+            5,
+            4,
+            ["min_cost", "settle", "pick", "screen", "cost", "choose"],
+        )?;
         Ok(Pipelines {
-            min_cost: make("min_cost")?,
-            settle: make("settle")?,
-            pick: make("pick")?,
-            screen: make("screen")?,
-            cost: make("cost")?,
-            choose: make("choose")?,
             layout,
+            min_cost,
+            settle,
+            pick,
+            screen,
+            cost,
+            choose,
         })
     })?)
 }

@@ -40,51 +40,32 @@ static PIPELINES: GpuCell<Pipelines> = GpuCell::new();
 
 fn pipelines() -> Result<(&'static Gpu, &'static Pipelines)> {
     Ok(PIPELINES.get_or_init(|ctx| {
-        let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let ro = wgpu::BufferBindingType::Storage { read_only: true };
-        let rw = wgpu::BufferBindingType::Storage { read_only: false };
-        let layout = ctx
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("sdf"),
-                entries: &[
-                    entry(0, wgpu::BufferBindingType::Uniform),
-                    entry(1, ro),
-                    entry(2, ro),
-                    entry(3, ro),
-                    entry(4, rw),
-                    entry(5, rw),
-                    entry(6, rw),
-                    entry(7, rw),
+        // Binding 0 the parameters, 1–3 read-only inputs, 4–7 the fields and seeds.
+        let (layout, [init, step, distance, backtrack, equiangular, exp_pass1, exp_pass2]) = ctx
+            .entry_points(
+                "sdf.wgsl",
+                SHADER,
+                3,
+                4,
+                [
+                    "jfa_init",
+                    "jfa_step",
+                    "jfa_distance",
+                    "backtrack",
+                    "equiangular",
+                    "exp_pass1",
+                    "exp_pass2",
                 ],
-            });
-        let pl = ctx
-            .device
-            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("sdf"),
-                bind_group_layouts: &[Some(&layout)],
-                immediate_size: 0,
-            });
-        let make =
-            |e: &str| ctx.compute_pipeline_with(&format!("sdf.wgsl ({e})"), SHADER, e, Some(&pl));
+            )?;
         Ok(Pipelines {
-            init: make("jfa_init")?,
-            step: make("jfa_step")?,
-            distance: make("jfa_distance")?,
-            backtrack: make("backtrack")?,
-            equiangular: make("equiangular")?,
-            exp_pass1: make("exp_pass1")?,
-            exp_pass2: make("exp_pass2")?,
             layout,
+            init,
+            step,
+            distance,
+            backtrack,
+            equiangular,
+            exp_pass1,
+            exp_pass2,
         })
     })?)
 }
