@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # GPU figures in one run (issue 16; BENCHMARKS.md): derma's photon transport on the 1-layer slab
-# at 10⁸ and 10⁹ photons and MCX (pmcx, from its wheel) on the same slab, the skin specimen's
+# at 10⁸ and 10⁹ photons (R and T against adding–doubling, the f32 kernel's error budget) and MCX
+# (pmcx, from its wheel) on the same slab, the skin specimen's
 # photons/s, exemplar synthesis at 1024²–4096² from the 256² crop (with the CPU's file compared
 # at 1024²), and the rig's GPU frame at 2048² and 4096² with 8 targets. Sized for well under 10
 # minutes on one data-centre GPU. Run where the GPU is:
@@ -37,6 +38,16 @@ for n in "${photons[@]}"; do
   "$derma" -q optics slab --layer 1,1,100,0.9,1.4 --photons "$n" --device gpu --json >"$tmp/slab.json"
   echo "derma slab gpu, $n photons: $(field "['photons_per_s']" <"$tmp/slab.json") photons/s," \
     "absorbed $(field "['absorbed']" <"$tmp/slab.json"), $(field "['seconds']" <"$tmp/slab.json") s"
+  # The f32 kernel against adding–doubling (iadpython, crates/derma-optics/tests/data).
+  python3 - "$tmp/slab.json" crates/derma-optics/tests/data/iad_cases.json <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+ad = next(c for c in json.load(open(sys.argv[2]))["cases"] if c["name"] == "1 layer albedo 0.99 g 0.9 n 1.4 in air")
+se = r["stderr"]
+for what, mc, ref, s in [("R", r["r_specular"] + r["r_diffuse"], ad["r_total"], se["r_diffuse"]),
+                         ("T", r["t_total"], ad["t_total"], se["t_total"])]:
+    print(f"  {what} {mc:.6f} vs adding-doubling {ref:.6f}: diff {mc - ref:+.2e} = {(mc - ref) / s:+.1f} standard errors")
+PY
 done
 
 # 2. The skin specimen (4 layers, 41 wavelengths, BRDF, profile, per-chromophore tallies).
