@@ -1,6 +1,7 @@
 //! The GPU backend: `optics.wgsl` on wgpu (Vulkan, Metal, DX12; Mesa lavapipe in CI). Same
-//! algorithm and random stream as the CPU path, in f32, with tallies in 64-bit fixed point so
-//! that GPU results are bit-identical from run to run.
+//! algorithm and random stream as the CPU path, in f32, with each photon's values tallied in
+//! 64-bit fixed point, so that GPU results are bit-identical from run to run and under any
+//! [`Kernel`] layout.
 
 use crate::error::Result;
 use crate::layer::{Bottom, Surface};
@@ -33,7 +34,7 @@ impl Kernel {
     /// hardware GPU 2^18 threads a dispatch, enough to fill a data-centre GPU (an H200 holds
     /// 132 × 2048 resident threads), 32 photons each; on a software adapter (lavapipe, which
     /// runs a workgroup per CPU thread) 2^12 threads of 8 photons, so that a dispatch takes
-    /// about a second there and progress moves.
+    /// under a second there and progress moves.
     pub fn for_device() -> std::result::Result<Self, GpuError> {
         let ctx = derma_core::gpu::context()?;
         let products = if ctx.device.features().contains(wgpu::Features::SHADER_INT64) {
