@@ -164,6 +164,15 @@ fn open() -> Result<Gpu, GpuError> {
     })
 }
 
+/// Workgroups for `threads` threads of `workgroup` each, as a two-dimensional grid (a dimension
+/// holds at most 65 535 workgroups): rows of 65 535 when one row is not enough, so a shader
+/// finds its thread as `gid.x + gid.y · 65 535 · workgroup`.
+pub fn grid(threads: usize, workgroup: usize) -> (u32, u32) {
+    let groups = threads.div_ceil(workgroup).max(1) as u32;
+    let gx = groups.min(65_535);
+    (gx, groups.div_ceil(gx))
+}
+
 /// The process's GPU, opened on first call; the error says why none could be opened.
 pub fn context() -> Result<&'static Gpu, GpuError> {
     GPU.get_or_init(open).as_ref().map_err(Clone::clone)
@@ -402,8 +411,29 @@ impl Gpu {
 
     /// Waits until the device has finished the work submitted so far.
     pub fn wait(&self, during: &'static str) -> Result<(), GpuError> {
+        self.wait_until(None, during)
+    }
+
+    /// Waits until the device has finished submission `index` (and what came before it),
+    /// leaving later submissions running: how a host keeps the next dispatch queued.
+    pub fn wait_for(
+        &self,
+        index: wgpu::SubmissionIndex,
+        during: &'static str,
+    ) -> Result<(), GpuError> {
+        self.wait_until(Some(index), during)
+    }
+
+    fn wait_until(
+        &self,
+        submission_index: Option<wgpu::SubmissionIndex>,
+        during: &'static str,
+    ) -> Result<(), GpuError> {
         self.device
-            .poll(wgpu::PollType::wait_indefinitely())
+            .poll(wgpu::PollType::Wait {
+                submission_index,
+                timeout: None,
+            })
             .map(|_| ())
             .map_err(|e| GpuError::Device {
                 during,

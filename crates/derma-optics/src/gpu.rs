@@ -14,6 +14,8 @@ use wgpu::util::DeviceExt;
 
 const SHADER: &str = include_str!("optics.wgsl");
 const WORKGROUP: u32 = 64;
+/// Floats per (wavelength, layer) in the kernel's layer table (`optics.wgsl`, `L`).
+const LAYER_FLOATS: usize = 7;
 /// Fixed-point scale of the tallies (2^24 units per photon weight).
 const FIXED: f64 = 16_777_216.0;
 
@@ -141,7 +143,7 @@ pub fn run_gpu_with(run: &Run, progress: &dyn Progress, kernel: &Kernel) -> Resu
     let prepared: Vec<Prepared> = run.stacks.iter().map(Prepared::new).collect();
     let nl = prepared.len() as u32;
     let n_layers = prepared[0].mut_.len() as u32;
-    let mut layer_data = Vec::with_capacity((nl * n_layers * 7) as usize);
+    let mut layer_data = Vec::with_capacity(nl as usize * n_layers as usize * LAYER_FLOATS);
     for p in &prepared {
         for l in 0..n_layers as usize {
             layer_data.extend_from_slice(&[
@@ -257,17 +259,6 @@ pub fn run_gpu_with(run: &Run, progress: &dyn Progress, kernel: &Kernel) -> Resu
     // photons) only after submitting dispatch i, so the device never idles between them.
     let mut offset = 0u64;
     let mut in_flight: Option<(wgpu::SubmissionIndex, u64)> = None;
-    let wait_for = |index: wgpu::SubmissionIndex| {
-        d.poll(wgpu::PollType::Wait {
-            submission_index: Some(index),
-            timeout: None,
-        })
-        .map(|_| ())
-        .map_err(|e| GpuError::Device {
-            during: "tracing photons",
-            detail: e.to_string(),
-        })
-    };
     while offset < run.photons {
         let count = (run.photons - offset).min(per_dispatch) as u32;
         let params = Params {
@@ -304,13 +295,13 @@ pub fn run_gpu_with(run: &Run, progress: &dyn Progress, kernel: &Kernel) -> Resu
         }
         let index = ctx.queue.submit([enc.finish()]);
         if let Some((previous, photons)) = in_flight.replace((index, count as u64)) {
-            wait_for(previous)?;
+            ctx.wait_for(previous, "tracing photons")?;
             progress.advance(photons);
         }
         offset += count as u64;
     }
     if let Some((last, photons)) = in_flight {
-        wait_for(last)?;
+        ctx.wait_for(last, "tracing photons")?;
         progress.advance(photons);
     }
 

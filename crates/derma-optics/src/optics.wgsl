@@ -36,13 +36,13 @@ const ROULETTE_WEIGHT: f32 = 1e-4;
 const ROULETTE_CHANCE: f32 = 0.1;
 const FACING_TRIES: u32 = 8u;
 const WORKGROUP: u32 = 64u;
-const MAX_LAYERS: u32 = 8u;
+const MAX_LAYERS: u32 = 8u;  // derma_optics::MAX_LAYERS (Stack::validate refuses more)
 // Workgroup tallies: sums 0–3, squares 4–7, absorbed per layer 8…, roulette last.
 const WG_SLOTS: u32 = 9u + MAX_LAYERS;
-var<workgroup> wg_acc: array<atomic<u32>, 34>;  // 2 · WG_SLOTS
+var<workgroup> wg_acc: array<atomic<u32>, 2u * WG_SLOTS>;
 var<workgroup> wg_launched: atomic<u32>;
 // A photon's absorbed weight per layer, one column per thread (no per-thread array in memory).
-var<workgroup> wg_absorbed: array<f32, 512>;  // MAX_LAYERS · WORKGROUP
+var<workgroup> wg_absorbed: array<f32, MAX_LAYERS * WORKGROUP>;
 
 // ---- Philox4x32-10 (Salmon et al. 2011). The 32×32 → 64-bit product from 16-bit halves; where
 // the device has 64-bit integers the host swaps in the native product (same bits).
@@ -96,13 +96,15 @@ fn to_fixed(v: f32) -> vec2<u32> {
     return vec2<u32>(lo, bitcast<u32>(i32(hi)));
 }
 
+// The high word to add once the low word f.x has been added to `old`: f.y plus the carry.
+fn high_word(old: u32, f: vec2<u32>) -> u32 {
+    return f.y + select(0u, 1u, old > 0xffffffffu - f.x);
+}
+
 // Adds the pair f to global slot `slot`.
 fn add_pair(slot: u32, f: vec2<u32>) {
     if (f.x == 0u && f.y == 0u) { return; }
-    let old = atomicAdd(&acc[2u * slot], f.x);
-    var carry = 0u;
-    if (old > 0xffffffffu - f.x) { carry = 1u; }
-    let h = f.y + carry;
+    let h = high_word(atomicAdd(&acc[2u * slot], f.x), f);
     if (h != 0u) { atomicAdd(&acc[2u * slot + 1u], h); }
 }
 
@@ -114,16 +116,13 @@ fn add_fixed(slot: u32, v: f32) {
 fn add_wg(slot: u32, v: f32) {
     if (v == 0.0) { return; }
     let f = to_fixed(v);
-    let old = atomicAdd(&wg_acc[2u * slot], f.x);
-    var carry = 0u;
-    if (old > 0xffffffffu - f.x) { carry = 1u; }
-    let h = f.y + carry;
+    let h = high_word(atomicAdd(&wg_acc[2u * slot], f.x), f);
     if (h != 0u) { atomicAdd(&wg_acc[2u * slot + 1u], h); }
 }
 
 // ---- Layer data.
 fn L(lambda: u32, layer: u32, f: u32) -> f32 {
-    return layers[(lambda * P.n_layers + layer) * 7u + f];
+    return layers[(lambda * P.n_layers + layer) * 7u + f];  // 7: LAYER_FLOATS in gpu.rs
 }
 
 fn fresnel(cos_i_in: f32, n1: f32, n2: f32) -> f32 {

@@ -11,7 +11,7 @@ use wgpu::util::DeviceExt;
 
 /// The shader, also written into every rig directory as `rig.wgsl` for engines.
 pub const SHADER: &str = include_str!("rig.wgsl");
-const WORKGROUP: u32 = 64;
+const WORKGROUP: usize = 64;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -219,14 +219,8 @@ impl GpuRig {
         ctx.queue
             .write_buffer(&self.weights_buf, 0, bytemuck::cast_slice(w));
         let (fw, fh) = self.size;
-        // Two-dimensional grids: a dimension holds at most 65 535 workgroups.
-        let grid = |threads: usize| {
-            let groups = threads.div_ceil(WORKGROUP as usize) as u32;
-            let gx = groups.min(65_535);
-            (gx, groups.div_ceil(gx))
-        };
-        let (cx, cy) = grid(self.basis_texels);
-        let (gx, gy) = grid(fw * fh);
+        let (cx, cy) = derma_core::gpu::grid(self.basis_texels, WORKGROUP);
+        let (gx, gy) = derma_core::gpu::grid(fw * fh, WORKGROUP);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&Default::default());

@@ -46,6 +46,20 @@ impl Canvas {
         y * self.width + x
     }
 
+    /// Output texel (x + dx, y + dy), wrapping on a torus; `None` off a plane.
+    #[inline]
+    pub fn neighbour(&self, x: usize, y: usize, dx: isize, dy: isize) -> Option<usize> {
+        let (w, h) = (self.width as isize, self.height as isize);
+        let (mut nx, mut ny) = (x as isize + dx, y as isize + dy);
+        if self.tile {
+            nx = nx.rem_euclid(w);
+            ny = ny.rem_euclid(h);
+        } else if nx < 0 || ny < 0 || nx >= w || ny >= h {
+            return None;
+        }
+        Some(ny as usize * self.width + nx as usize)
+    }
+
     /// The codes of the `w × w` window at (px, py).
     pub fn window_codes(&self, px: usize, py: usize, w: usize) -> Vec<u8> {
         let c = self.channels;

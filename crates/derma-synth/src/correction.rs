@@ -73,20 +73,6 @@ fn decide(
         .collect()
 }
 
-/// Output texel (x + dx, y + dy), wrapping on a torus; `None` off a plane.
-#[inline]
-fn neighbour(canvas: &Canvas, x: usize, y: usize, dx: isize, dy: isize) -> Option<usize> {
-    let (w, h) = (canvas.width as isize, canvas.height as isize);
-    let (mut nx, mut ny) = (x as isize + dx, y as isize + dy);
-    if canvas.tile {
-        nx = nx.rem_euclid(w);
-        ny = ny.rem_euclid(h);
-    } else if nx < 0 || ny < 0 || nx >= w || ny >= h {
-        return None;
-    }
-    Some(ny as usize * canvas.width + nx as usize)
-}
-
 /// The best coherent candidate for texel (x, y), or `None` when it has no proposal.
 fn best_candidate(
     canvas: &Canvas,
@@ -102,7 +88,7 @@ fn best_candidate(
     let mut n = 0;
     for dy in -1isize..=1 {
         for dx in -1isize..=1 {
-            let Some(q) = neighbour(canvas, x, y, dx, dy) else {
+            let Some(q) = canvas.neighbour(x, y, dx, dy) else {
                 continue;
             };
             if canvas.src[q] == NO_SOURCE {
@@ -133,7 +119,7 @@ fn best_candidate(
         let mut d = 0u64;
         for dy in -r..=r {
             for dx in -r..=r {
-                let Some(q) = neighbour(canvas, x, y, dx, dy) else {
+                let Some(q) = canvas.neighbour(x, y, dx, dy) else {
                     continue;
                 };
                 let es = ((sy + dy) * ew + sx + dx) as usize;

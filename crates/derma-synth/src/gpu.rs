@@ -343,11 +343,7 @@ impl GpuMatcher {
         let groups_x = (cw * ch).div_ceil(WORKGROUP) as u32;
         let nq = queries.len() as u32;
         let settle_groups = queries.len().div_ceil(WORKGROUP) as u32;
-        let survivor_groups = capacity.div_ceil(WORKGROUP);
-        let survivor_dims = (
-            survivor_groups.min(65_535) as u32,
-            survivor_groups.div_ceil(65_535) as u32,
-        );
+        let survivor_dims = derma_core::gpu::grid(capacity, WORKGROUP);
         let result_words = queries.len() * 2 + 1;
         // Runs the steps and reads the result words back through the kept staging buffer.
         let run_steps = |steps: &[(&wgpu::ComputePipeline, (u32, u32))]| -> Result<Vec<u32>> {

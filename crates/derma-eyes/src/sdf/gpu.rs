@@ -83,12 +83,6 @@ pub struct GpuFields {
     binds: [wgpu::BindGroup; 2],
 }
 
-fn groups(n: usize) -> (u32, u32) {
-    let g = n.div_ceil(WORKGROUP) as u32;
-    let gx = g.min(65_535);
-    (gx, g.div_ceil(gx))
-}
-
 impl GpuFields {
     /// Uploads the mask and depth.
     pub fn new(g: &GBuffer) -> Result<GpuFields> {
@@ -224,7 +218,7 @@ impl GpuFields {
     fn submit_jfa(&self, repeats: usize) -> Result<usize> {
         let (ctx, pl) = pipelines()?;
         let n = self.w * self.h;
-        let (gx, gy) = groups(n);
+        let (gx, gy) = derma_core::gpu::grid(n, WORKGROUP);
         let steps = self.jfa_steps();
         // Each pass needs its own step in the uniform: a small buffer per pass copied in
         // before it (queue-ordered, so no host round trip between passes).
@@ -282,7 +276,7 @@ impl GpuFields {
             0,
             bytemuck::bytes_of(&self.params(0, range, Some(s))),
         );
-        let (gx, gy) = groups(self.w * self.h);
+        let (gx, gy) = derma_core::gpu::grid(self.w * self.h, WORKGROUP);
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         for _ in 0..repeats {
             for pipe in Self::passes(pl, s) {
