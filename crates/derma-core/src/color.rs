@@ -96,7 +96,7 @@ macro_rules! luminance_in {
 luminance_in!(f32);
 luminance_in!(f64);
 
-/// sRGB opto-electronic transfer function (IEC 61966-2-1), linear [0,1] → encoded [0,1].
+/// sRGB opto-electronic transfer function (IEC 61966-2-1), linear \[0,1\] → encoded \[0,1\].
 #[inline]
 pub fn srgb_encode(x: f32) -> f32 {
     let x = x.clamp(0.0, 1.0);

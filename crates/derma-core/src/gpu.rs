@@ -241,9 +241,11 @@ impl Gpu {
     ) -> Result<wgpu::ComputePipeline, GpuError> {
         self.compute_pipeline_with(label, source, entry, None)
     }
+
     /// As [`Gpu::compute_pipeline`], with an explicit layout (so several entry points of one
-    /// shader can share one bind group even when each uses only some of its bindings).
-    pub fn compute_pipeline_with(
+    /// shader can share one bind group even when each uses only some of its bindings; see
+    /// [`Gpu::entry_points`]).
+    fn compute_pipeline_with(
         &self,
         label: &str,
         source: &str,
@@ -318,7 +320,7 @@ impl Gpu {
         (layout, pipeline_layout)
     }
 
-    /// Compiles the entry points `entries` of one shader against one [`Gpu::storage_layout`]
+    /// Compiles the entry points `entries` of one shader against one shared layout
     /// (binding 0 uniform, `read_only` then `read_write` storage buffers): the layout they
     /// share, so one bind group serves them all, and the pipelines in the order given.
     pub fn entry_points<const N: usize>(

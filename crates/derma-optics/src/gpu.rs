@@ -34,7 +34,8 @@ pub struct Kernel {
 impl Kernel {
     /// The layout for this device: native products where it has 64-bit integers; on a
     /// hardware GPU 2^18 threads a dispatch, enough to fill a data-centre GPU (an H200 holds
-    /// 132 × 2048 resident threads), 32 photons each; on a software adapter (lavapipe, which
+    /// 132 SMs × 2048 resident threads: NVIDIA H100 Tensor Core GPU Architecture whitepaper,
+    /// 2022), 32 photons each; on a software adapter (lavapipe, which
     /// runs a workgroup per CPU thread) 2^12 threads of 8 photons, so that a dispatch takes
     /// under a second there and progress moves.
     pub fn for_device() -> std::result::Result<Self, GpuError> {
