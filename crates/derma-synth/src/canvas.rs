@@ -2,6 +2,7 @@
 //! texel was copied from (its source), on a plane or, for tileable output, a torus.
 
 use crate::exemplar::ExemplarSet;
+use crate::search::Plane;
 
 /// No source yet: the texel still holds the white noise of §3.1.
 pub const NO_SOURCE: u32 = u32::MAX;
@@ -60,22 +61,15 @@ impl Canvas {
         Some(ny as usize * self.width + nx as usize)
     }
 
-    /// The codes of the `w × w` window at (px, py).
-    pub fn window_codes(&self, px: usize, py: usize, w: usize) -> Vec<u8> {
-        let c = self.channels;
-        let mut out = Vec::with_capacity(w * w * c);
-        for dy in 0..w {
-            if !self.tile || (px + w <= self.width && py + dy < self.height) {
-                let t = self.at(px, py, 0, dy);
-                out.extend_from_slice(&self.codes[t * c..(t + w) * c]);
-            } else {
-                for dx in 0..w {
-                    let t = self.at(px, py, dx, dy);
-                    out.extend_from_slice(&self.codes[t * c..(t + 1) * c]);
-                }
-            }
+    /// The codes as a [`Plane`] that search windows are read from.
+    pub fn plane(&self) -> Plane<'_> {
+        Plane {
+            width: self.width,
+            height: self.height,
+            channels: self.channels,
+            wrap: self.tile,
+            codes: &self.codes,
         }
-        out
     }
 
     /// Starting guesses for the search of the window at (px, py) in exemplar `ex`: the

@@ -1,13 +1,19 @@
 //! The GPU backend of the best-match search (Shen et al. §3.4): `search.wgsl` on wgpu — one
 //! thread per exemplar position and query, reduced with atomics — returning exactly what the
 //! CPU search returns (the definition is in [`crate::search`]).
+//!
+//! Two sources of query windows: uploaded with each batch ([`Matcher::best_matches`], the patch
+//! pass's masked windows), or read from a copy of the canvas uploaded once per optimisation
+//! pass ([`Matcher::window_matches`]), where the GPU also computes the quadrant sums and the
+//! guesses' costs that the host computes for an uploaded window.
 
 use crate::error::{invalid, Result, SynthError};
 use crate::exemplar::ExemplarSet;
 use crate::search::{
-    index_of_key, initial_cost, known_block_sums, known_texels, ssd_at, Match, Matcher, Query,
-    Search,
+    gathered_window_matches, initial_cost, known_block_sums, known_texels, Match, Matcher, Plane,
+    Query, Search, WindowQuery, MAX_GUESSES,
 };
+use derma_core::progress::Progress;
 use derma_core::gpu::GpuCell;
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -37,6 +43,37 @@ struct Params {
     info_stride: u32,
     n_queries: u32,
     capacity: u32,
+    src_width: u32,
+    src_height: u32,
+    max_guesses: u32,
+    pad: u32,
+}
+
+/// Words of a query's `info` before its quadrant sums (search.wgsl's INFO_SUMS).
+const INFO_HEAD: usize = 6;
+/// No guess / no answer (search.wgsl's NONE).
+const NONE: u32 = u32::MAX;
+
+/// Where a batch's query windows come from.
+enum Windows<'a> {
+    /// Uploaded with the batch, stacked one under the other.
+    Uploaded(&'a [&'a Query]),
+    /// Read from the plane kept on the GPU (`width × height` texels).
+    Resident {
+        plane: &'a wgpu::Buffer,
+        width: usize,
+        height: usize,
+        queries: &'a [&'a WindowQuery],
+    },
+}
+
+impl Windows<'_> {
+    fn len(&self) -> usize {
+        match self {
+            Windows::Uploaded(q) => q.len(),
+            Windows::Resident { queries, .. } => queries.len(),
+        }
+    }
 }
 
 fn gpu_error(detail: String) -> SynthError {
@@ -45,6 +82,8 @@ fn gpu_error(detail: String) -> SynthError {
 
 struct Pipelines {
     layout: wgpu::BindGroupLayout,
+    prepare: wgpu::ComputePipeline,
+    finish: wgpu::ComputePipeline,
     min_cost: wgpu::ComputePipeline,
     settle: wgpu::ComputePipeline,
     pick: wgpu::ComputePipeline,
@@ -59,16 +98,21 @@ static PIPELINES: GpuCell<Pipelines> = GpuCell::new();
 fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
     Ok(PIPELINES.get_or_init(|ctx| {
         // One layout for all entry points: binding 0 uniform, 1–5 read-only storage,
-        // 6–9 read-write storage.
-        let (layout, [min_cost, settle, pick, screen, cost, choose]) = ctx.entry_points(
-            "search.wgsl",
-            SHADER,
-            5,
-            4,
-            ["min_cost", "settle", "pick", "screen", "cost", "choose"],
-        )?;
+        // 6–10 read-write storage.
+        let (layout, [prepare, finish, min_cost, settle, pick, screen, cost, choose]) = ctx
+            .entry_points(
+                "search.wgsl",
+                SHADER,
+                5,
+                5,
+                [
+                    "prepare", "finish", "min_cost", "settle", "pick", "screen", "cost", "choose",
+                ],
+            )?;
         Ok(Pipelines {
             layout,
+            prepare,
+            finish,
             min_cost,
             settle,
             pick,
@@ -120,6 +164,7 @@ impl Growing {
 struct Scratch {
     params: wgpu::Buffer,
     qcodes: Growing,
+    guesses: Growing,
     info: Growing,
     penalty: Growing,
     result: Growing,
@@ -141,6 +186,7 @@ impl Scratch {
                 mapped_at_creation: false,
             }),
             qcodes: Growing::new(d, "query codes", input),
+            guesses: Growing::new(d, "query guesses", input),
             info: Growing::new(d, "query info", input),
             penalty: Growing::new(d, "penalty", input),
             result: Growing::new(d, "result", input | U::COPY_SRC),
@@ -234,13 +280,7 @@ impl GpuMatcher {
 
     /// One batch of queries of one exemplar: the compacted search, or the uncompacted one when
     /// more candidates survive the bound than there is room for.
-    fn run(
-        &self,
-        set: &ExemplarSet,
-        s: &Search,
-        ex: usize,
-        queries: &[&Query],
-    ) -> Result<Vec<Match>> {
+    fn run(&self, set: &ExemplarSet, s: &Search, ex: usize, windows: Windows) -> Result<Vec<Match>> {
         let (ctx, pipes) = pipelines()?;
         let t0 = std::time::Instant::now();
         let w = s.w;
@@ -249,45 +289,74 @@ impl GpuMatcher {
         let (cw, ch) = e.candidates(w);
         let res = self.resident(set, ex, w)?;
         let half = w / 2;
-        let info_stride = 4 + 4 * c;
-        // Per query, in parallel: codes (256 where unknown), then info and the first result.
-        let prepared: Vec<(Vec<u32>, Vec<u32>, u32)> = queries
-            .par_iter()
-            .map(|q| {
-                let known = |t: usize| q.mask.as_ref().is_none_or(|m| m[t] != 0);
-                let codes: Vec<u32> = q
-                    .codes
-                    .iter()
+        let info_stride = INFO_HEAD + 4 * c;
+        let n = windows.len();
+        // The queries' info and first results; for uploaded windows also their codes (256
+        // where unknown), stacked, and the info's sums and guesses' cost, computed here.
+        let mut qcodes: Vec<u32> = Vec::new();
+        let mut guesses: Vec<u32> = vec![NONE];
+        let mut info: Vec<u32> = Vec::with_capacity(n * info_stride);
+        let mut result: Vec<u32> = Vec::with_capacity(n * 2 + 1);
+        let (src_width, src_height) = match &windows {
+            Windows::Uploaded(queries) => {
+                let prepared: Vec<(Vec<u32>, Vec<u32>, u32)> = queries
+                    .par_iter()
                     .enumerate()
-                    .map(|(i, &v)| if known(i / c) { v as u32 } else { 256 })
+                    .map(|(i, q)| {
+                        let known = |t: usize| q.mask.as_ref().is_none_or(|m| m[t] != 0);
+                        let codes: Vec<u32> = q
+                            .codes
+                            .iter()
+                            .enumerate()
+                            .map(|(i, &v)| if known(i / c) { v as u32 } else { 256 })
+                            .collect();
+                        // The fully known quadrants (bit q of the mask) and their sums, as on
+                        // the CPU.
+                        let mut quad_mask = 0u32;
+                        let mut quad_sums = vec![0f32; 4 * c];
+                        for (ox, oy, sum) in known_block_sums(q, w, c, half) {
+                            let quad = usize::from(ox > 0) + 2 * usize::from(oy > 0);
+                            quad_mask |= 1 << quad;
+                            quad_sums[quad * c..(quad + 1) * c].copy_from_slice(&sum);
+                        }
+                        let first = initial_cost(set, s, q);
+                        let origin_y = (i * w) as u32;
+                        let mut info =
+                            vec![known_texels(q, w), q.salt, quad_mask, first, 0, origin_y];
+                        info.extend(quad_sums.iter().map(|v| v.to_bits()));
+                        (codes, info, first)
+                    })
                     .collect();
-                // The fully known quadrants (bit q of the mask) and their sums, as on the CPU.
-                let mut quad_mask = 0u32;
-                let mut quad_sums = vec![0f32; 4 * c];
-                for (ox, oy, sum) in known_block_sums(q, w, c, half) {
-                    let quad = usize::from(ox > 0) + 2 * usize::from(oy > 0);
-                    quad_mask |= 1 << quad;
-                    quad_sums[quad * c..(quad + 1) * c].copy_from_slice(&sum);
+                qcodes.reserve(n * w * w * c);
+                for (codes, inf, first) in prepared {
+                    qcodes.extend_from_slice(&codes);
+                    info.extend_from_slice(&inf);
+                    result.extend_from_slice(&[first, NONE]);
                 }
-                let first = initial_cost(set, s, q);
-                let mut info = vec![known_texels(q, w), q.salt, quad_mask, first];
-                info.extend(quad_sums.iter().map(|v| v.to_bits()));
-                (codes, info, first)
-            })
-            .collect();
-        let mut qcodes: Vec<u32> = Vec::with_capacity(queries.len() * w * w * c);
-        let mut info: Vec<u32> = Vec::with_capacity(queries.len() * info_stride);
-        let mut result: Vec<u32> = Vec::with_capacity(queries.len() * 2);
-        for (codes, inf, first) in prepared {
-            qcodes.extend_from_slice(&codes);
-            info.extend_from_slice(&inf);
-            result.extend_from_slice(&[first, u32::MAX]);
-        }
+                (w, n * w)
+            }
+            Windows::Resident {
+                width,
+                height,
+                queries,
+                ..
+            } => {
+                // `prepare` fills in the rest of the info and the first results.
+                guesses = vec![NONE; n * MAX_GUESSES];
+                for (i, q) in queries.iter().enumerate() {
+                    info.extend_from_slice(&[0, q.salt, 0, 0, q.x, q.y]);
+                    info.resize(info.len() + 4 * c, 0);
+                    guesses[i * MAX_GUESSES..][..q.guesses.len()].copy_from_slice(&q.guesses);
+                }
+                result.resize(n * 2, 0);
+                (*width, *height)
+            }
+        };
         // The survivor counter follows the per-query results.
         result.push(0);
         let candidates = cw * ch;
-        let capacity = (queries.len() * candidates / 4)
-            .clamp(self.max_survivors.min(1 << 16), self.max_survivors);
+        let capacity =
+            (n * candidates / 4).clamp(self.max_survivors.min(1 << 16), self.max_survivors);
         let penalty: &[u32] = s.penalty.map_or(&[0], |p| &p[ex]);
         let params = Params {
             ex_width: e.width() as u32,
@@ -300,8 +369,12 @@ impl GpuMatcher {
             tol: s.tol.0,
             has_penalty: u32::from(s.penalty.is_some()),
             info_stride: info_stride as u32,
-            n_queries: queries.len() as u32,
+            n_queries: n as u32,
             capacity: capacity as u32,
+            src_width: src_width as u32,
+            src_height: src_height as u32,
+            max_guesses: MAX_GUESSES as u32,
+            pad: 0,
         };
         let d = &ctx.device;
         // Buffers live as long as the matcher and grow when a batch needs more; one batch runs
@@ -311,28 +384,35 @@ impl GpuMatcher {
             .lock()
             .map_err(|_| gpu_error("a previous search panicked".into()))?;
         let sc = guard.get_or_insert_with(|| Scratch::new(d));
-        let bytes = |v: &[u32]| std::mem::size_of_val(v) as u64;
+        let bytes = |v: &[u32]| std::mem::size_of_val(v).max(4) as u64;
         sc.qcodes.fit(d, bytes(&qcodes));
+        sc.guesses.fit(d, bytes(&guesses));
         sc.info.fit(d, bytes(&info));
         sc.penalty.fit(d, bytes(penalty));
         sc.result.fit(d, bytes(&result));
-        sc.limits.fit(d, (queries.len() * 4) as u64);
+        sc.limits.fit(d, (n * 4) as u64);
         sc.survivors.fit(d, (capacity * 8) as u64);
         sc.costs.fit(d, (capacity * 4) as u64);
         sc.staging.fit(d, bytes(&result));
         let q = &ctx.queue;
         q.write_buffer(&sc.params, 0, bytemuck::bytes_of(&params));
         q.write_buffer(&sc.qcodes.buf, 0, bytemuck::cast_slice(&qcodes));
+        q.write_buffer(&sc.guesses.buf, 0, bytemuck::cast_slice(&guesses));
         q.write_buffer(&sc.info.buf, 0, bytemuck::cast_slice(&info));
         q.write_buffer(&sc.penalty.buf, 0, bytemuck::cast_slice(penalty));
         q.write_buffer(&sc.result.buf, 0, bytemuck::cast_slice(&result));
+        let (source, prepare) = match &windows {
+            Windows::Uploaded(_) => (&sc.qcodes.buf, None),
+            Windows::Resident { plane, .. } => (*plane, Some(&pipes.prepare)),
+        };
         let buffers = [
             &sc.params,
             &res.codes,
             &res.sums,
-            &sc.qcodes.buf,
-            &sc.info.buf,
+            source,
             &sc.penalty.buf,
+            &sc.guesses.buf,
+            &sc.info.buf,
             &sc.result.buf,
             &sc.limits.buf,
             &sc.survivors.buf,
@@ -341,14 +421,20 @@ impl GpuMatcher {
         let group = ctx.bind_buffers("search", &pipes.layout, &buffers);
         let t1 = std::time::Instant::now();
         let groups_x = (cw * ch).div_ceil(WORKGROUP) as u32;
-        let nq = queries.len() as u32;
-        let settle_groups = queries.len().div_ceil(WORKGROUP) as u32;
+        let nq = n as u32;
+        let per_query = derma_core::gpu::grid(n, WORKGROUP);
         let survivor_dims = derma_core::gpu::grid(capacity, WORKGROUP);
-        let result_words = queries.len() * 2 + 1;
-        // Runs the steps and reads the result words back through the kept staging buffer.
+        let result_words = n * 2 + 1;
+        // Runs the steps (after `prepare` for resident windows, then `finish`) and reads the
+        // result words back through the kept staging buffer.
         let run_steps = |steps: &[(&wgpu::ComputePipeline, (u32, u32))]| -> Result<Vec<u32>> {
             let mut enc = d.create_command_encoder(&Default::default());
-            for (pipe, dims) in steps {
+            let all = prepare
+                .map(|p| (p, per_query))
+                .into_iter()
+                .chain(steps.iter().copied())
+                .chain([(&pipes.finish, per_query)]);
+            for (pipe, dims) in all {
                 let mut pass = enc.begin_compute_pass(&Default::default());
                 pass.set_pipeline(pipe);
                 pass.set_bind_group(0, &group, &[]);
@@ -360,44 +446,37 @@ impl GpuMatcher {
         let mut out = run_steps(&[
             (&pipes.screen, (groups_x, nq)),
             (&pipes.cost, survivor_dims),
-            (&pipes.settle, (settle_groups, 1)),
+            (&pipes.settle, per_query),
             (&pipes.choose, survivor_dims),
         ])?;
-        if out[queries.len() * 2] as usize > capacity {
+        if out[n * 2] as usize > capacity {
             // More passed the bound than there was room for: the uncompacted search.
             tracing::debug!(
                 "GPU search: {} candidates passed the bound, room for {capacity}; searching uncompacted",
-                out[queries.len() * 2]
+                out[n * 2]
             );
             q.write_buffer(&sc.result.buf, 0, bytemuck::cast_slice(&result));
             out = run_steps(&[
                 (&pipes.min_cost, (groups_x, nq)),
-                (&pipes.settle, (settle_groups, 1)),
+                (&pipes.settle, per_query),
                 (&pipes.pick, (groups_x, nq)),
             ])?;
         }
         let t2 = std::time::Instant::now();
-        let out = queries
-            .iter()
-            .enumerate()
-            .map(|(i, q)| {
-                let key = out[2 * i + 1];
-                let index = index_of_key(q.salt, key);
-                if index as usize >= cw * ch {
+        let out = out[..n * 2]
+            .chunks_exact(2)
+            .map(|r| {
+                let (cost, index) = (r[0], r[1]);
+                if index as usize >= candidates {
                     return Err(gpu_error(format!(
-                        "the search returned key {key}, position {index} of {}",
-                        cw * ch
+                        "the search returned position {index} of {candidates}"
                     )));
                 }
-                let (x, y) = (index as usize % cw, index as usize / cw);
-                let cost =
-                    ssd_at(e, w, q, x, y) + s.penalty_of(ex, index as usize, known_texels(q, w));
                 Ok(Match { cost, index })
             })
             .collect();
         tracing::debug!(
-            "GPU search: {} queries of side {w}: prepare {:.2} ms, GPU {:.2} ms, finish {:.2} ms",
-            queries.len(),
+            "GPU search: {n} queries of side {w}: prepare {:.2} ms, GPU {:.2} ms, finish {:.2} ms",
             (t1 - t0).as_secs_f64() * 1e3,
             (t2 - t1).as_secs_f64() * 1e3,
             t2.elapsed().as_secs_f64() * 1e3
@@ -406,11 +485,15 @@ impl GpuMatcher {
     }
 }
 
+/// Most queries of one batch: a dimension of the screening grid (one row of workgroups per
+/// query).
+const MAX_BATCH_QUERIES: usize = 65_535;
+
 impl Matcher for GpuMatcher {
     fn best_matches(&self, set: &ExemplarSet, s: &Search, queries: &[Query]) -> Result<Vec<Match>> {
         let c = set.channels();
         let per_query = s.w * s.w * c * 4;
-        let chunk = (MAX_QUERY_BYTES / per_query).clamp(1, 65_535);
+        let chunk = (MAX_QUERY_BYTES / per_query).clamp(1, MAX_BATCH_QUERIES);
         let mut out = vec![Match { cost: 0, index: 0 }; queries.len()];
         for ex in 0..set.exemplars.len() {
             let mine: Vec<usize> = (0..queries.len())
@@ -418,9 +501,69 @@ impl Matcher for GpuMatcher {
                 .collect();
             for part in mine.chunks(chunk) {
                 let qs: Vec<&Query> = part.iter().map(|&i| &queries[i]).collect();
-                for (&i, m) in part.iter().zip(self.run(set, s, ex, &qs)?) {
+                for (&i, m) in part
+                    .iter()
+                    .zip(self.run(set, s, ex, Windows::Uploaded(&qs))?)
+                {
                     out[i] = m;
                 }
+            }
+        }
+        Ok(out)
+    }
+
+    fn window_matches(
+        &self,
+        set: &ExemplarSet,
+        s: &Search,
+        plane: &Plane,
+        queries: &[WindowQuery],
+        progress: &dyn Progress,
+    ) -> Result<Vec<Match>> {
+        if let Some(q) = queries.iter().find(|q| q.guesses.len() > MAX_GUESSES) {
+            return Err(invalid(
+                "window query",
+                format!(
+                    "{} guesses at ({}, {}) (at most {MAX_GUESSES})",
+                    q.guesses.len(),
+                    q.x,
+                    q.y
+                ),
+            ));
+        }
+        let (ctx, _) = pipelines()?;
+        let bytes = (plane.codes.len() * 4) as u64;
+        if let Err(e) = ctx.check_storage("the canvas", bytes) {
+            // A plane this adapter cannot bind whole: its windows travel with the batches.
+            tracing::debug!("GPU search: {e}; uploading the windows instead");
+            return gathered_window_matches(self, set, s, plane, queries, progress);
+        }
+        let codes: Vec<u32> = plane.codes.par_iter().map(|&v| v as u32).collect();
+        let buf = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("canvas codes"),
+                contents: bytemuck::cast_slice(&codes),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+        drop(codes);
+        let mut out = vec![Match { cost: 0, index: 0 }; queries.len()];
+        for ex in 0..set.exemplars.len() {
+            let mine: Vec<usize> = (0..queries.len())
+                .filter(|&i| queries[i].exemplar as usize == ex)
+                .collect();
+            for part in mine.chunks(MAX_BATCH_QUERIES) {
+                let qs: Vec<&WindowQuery> = part.iter().map(|&i| &queries[i]).collect();
+                let windows = Windows::Resident {
+                    plane: &buf,
+                    width: plane.width,
+                    height: plane.height,
+                    queries: &qs,
+                };
+                for (&i, m) in part.iter().zip(self.run(set, s, ex, windows)?) {
+                    out[i] = m;
+                }
+                progress.advance(part.len() as u64);
             }
         }
         Ok(out)

@@ -31,7 +31,9 @@ pub use error::{Result, SynthError};
 pub use exemplar::{Exemplar, ExemplarSet, Quantizer};
 pub use gpu::GpuMatcher;
 pub use guide::Guide;
-pub use search::{CpuMatcher, Match, Matcher, Query, Search, Tolerance};
+pub use search::{
+    CpuMatcher, Match, Matcher, Plane, Query, Search, Tolerance, WindowQuery, MAX_GUESSES,
+};
 pub use synthesize::{synthesize, SynthOptions, Synthesis};
 pub use synthesizer::{matcher_for, Synthesizer};
 pub use texture::Texture;

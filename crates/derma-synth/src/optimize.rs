@@ -17,7 +17,7 @@
 use crate::canvas::{origins, Canvas, NO_SOURCE};
 use crate::error::Result;
 use crate::pass_context::PassContext;
-use crate::search::{Match, Query, Search, Tolerance};
+use crate::search::{Search, Tolerance, WindowQuery};
 use derma_core::progress::Unit;
 use derma_core::rng::Philox;
 use rayon::prelude::*;
@@ -25,8 +25,6 @@ use rayon::prelude::*;
 /// Kwatra et al. 2005, §3 (robust norm exponent), as adopted by Shen et al. §3.3.
 pub const KWATRA_R: f32 = 0.8;
 
-/// Queries per batch handed to the matcher (bounds memory; one progress step each).
-const BATCH: usize = 16_384;
 /// Philox stream of the salts of the tie-breaking choice (one sub-stream per window side).
 const PICK_STREAM: u32 = 0x5e_0003;
 
@@ -64,33 +62,31 @@ pub(crate) fn optimise_pass(
         (w - 1, w - 1),
     ];
 
-    // M-step.
-    let mut exemplar_of = Vec::with_capacity(windows.len());
-    let mut matches: Vec<Match> = Vec::with_capacity(windows.len());
-    for (b, chunk) in windows.chunks(BATCH).enumerate() {
-        let queries: Vec<Query> = chunk
-            .par_iter()
-            .enumerate()
-            .map(|(i, &(px, py))| {
-                let ex = guide.map_or(0, |g| g.at(canvas, px + w / 2, py + w / 2));
-                Query {
-                    exemplar: ex as u32,
-                    codes: canvas.window_codes(px, py, w),
-                    mask: None,
-                    guesses: canvas.coherent_guess(set, ex, px, py, w, &probes),
-                    salt: rng.u32x4_sub((b * BATCH + i) as u64, w as u32)[0],
-                }
-            })
-            .collect();
-        exemplar_of.extend(queries.iter().map(|q| q.exemplar as usize));
-        let search = Search {
-            w,
-            tol: Tolerance(0),
-            penalty: None,
-        };
-        matches.extend(ctx.matcher.best_matches(set, &search, &queries)?);
-        progress.advance(chunk.len() as u64);
-    }
+    // M-step: every window's best match, searched where the matcher keeps the canvas.
+    let queries: Vec<WindowQuery> = windows
+        .par_iter()
+        .enumerate()
+        .map(|(k, &(px, py))| {
+            let ex = guide.map_or(0, |g| g.at(canvas, px + w / 2, py + w / 2));
+            WindowQuery {
+                exemplar: ex as u32,
+                x: px as u32,
+                y: py as u32,
+                guesses: canvas.coherent_guess(set, ex, px, py, w, &probes),
+                salt: rng.u32x4_sub(k as u64, w as u32)[0],
+            }
+        })
+        .collect();
+    let exemplar_of: Vec<usize> = queries.iter().map(|q| q.exemplar as usize).collect();
+    let search = Search {
+        w,
+        tol: Tolerance(0),
+        penalty: None,
+    };
+    let matches = ctx
+        .matcher
+        .window_matches(set, &search, &canvas.plane(), &queries, progress)?;
+    drop(queries);
 
     // Where each match lies: (exemplar, x, y) of its window.
     let placed: Vec<(usize, usize, usize)> = matches

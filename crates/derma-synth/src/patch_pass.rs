@@ -99,7 +99,7 @@ pub(crate) fn patch_pass(
                 let ex = guide.map_or(0, |g| g.at(canvas, px + d, py + d));
                 Query {
                     exemplar: ex as u32,
-                    codes: canvas.window_codes(px, py, n),
+                    codes: canvas.plane().window(px, py, n),
                     mask: known_mask(canvas, px, py, n),
                     guesses: canvas.coherent_guess(set, ex, px, py, n, &probes),
                     salt: rng.u32x4(k as u64)[0],

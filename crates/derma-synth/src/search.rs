@@ -24,6 +24,7 @@
 
 use crate::error::Result;
 use crate::exemplar::{Exemplar, ExemplarSet};
+use derma_core::progress::Progress;
 use rayon::prelude::*;
 
 /// One search: a window of codes, the exemplar to search and starting guesses.
@@ -160,12 +161,118 @@ pub fn known_texels(q: &Query, w: usize) -> u32 {
     })
 }
 
+/// A plane of codes that windows are read from (the canvas during the optimisation passes):
+/// `width × height` texels, channels interleaved, wrapping at its edges when `wrap`.
+#[derive(Clone, Copy, Debug)]
+pub struct Plane<'a> {
+    /// Texels per row.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// Codes per texel.
+    pub channels: usize,
+    /// A torus (tileable output): windows continue across the edges.
+    pub wrap: bool,
+    /// `width × height × channels` codes, rows from the top.
+    pub codes: &'a [u8],
+}
+
+impl Plane<'_> {
+    /// The codes of the `w × w` window at (x, y), rows from the top, channels interleaved.
+    pub fn window(&self, x: usize, y: usize, w: usize) -> Vec<u8> {
+        let c = self.channels;
+        let mut out = Vec::with_capacity(w * w * c);
+        for dy in 0..w {
+            let row = if self.wrap { (y + dy) % self.height } else { y + dy };
+            if x + w <= self.width {
+                let t = row * self.width + x;
+                out.extend_from_slice(&self.codes[t * c..(t + w) * c]);
+            } else {
+                for dx in 0..w {
+                    let t = row * self.width + (x + dx) % self.width;
+                    out.extend_from_slice(&self.codes[t * c..(t + 1) * c]);
+                }
+            }
+        }
+        out
+    }
+}
+
+/// A search for the whole `w × w` window at (x, y) of a [`Plane`]: the optimisation passes'
+/// M-step, whose windows are all known. The GPU reads them from a copy of the plane it keeps
+/// (`gpu::GpuMatcher`), so no window travels on its own.
+#[derive(Clone, Debug)]
+pub struct WindowQuery {
+    /// Index of the exemplar in the set.
+    pub exemplar: u32,
+    /// Column of the window's top-left texel.
+    pub x: u32,
+    /// Row of the window's top-left texel.
+    pub y: u32,
+    /// As [`Query::guesses`]: at least one, at most [`MAX_GUESSES`].
+    pub guesses: Vec<u32>,
+    /// As [`Query::salt`].
+    pub salt: u32,
+}
+
+/// Most starting guesses of a [`WindowQuery`] (the optimisation pass probes five texels).
+pub const MAX_GUESSES: usize = 8;
+
+impl WindowQuery {
+    /// The same search as a [`Query`] carrying its window's codes.
+    pub fn query(&self, plane: &Plane, w: usize) -> Query {
+        Query {
+            exemplar: self.exemplar,
+            codes: plane.window(self.x as usize, self.y as usize, w),
+            mask: None,
+            guesses: self.guesses.clone(),
+            salt: self.salt,
+        }
+    }
+}
+
+/// Window queries per batch of the default [`Matcher::window_matches`] (bounds the memory of
+/// the gathered windows; one progress step each).
+const WINDOW_BATCH: usize = 16_384;
+
 /// Runs searches; implemented on the CPU ([`CpuMatcher`]) and on the GPU (`gpu::GpuMatcher`).
 pub trait Matcher: Sync {
     /// The answer of each query (all of window side `w`), in order.
     fn best_matches(&self, set: &ExemplarSet, s: &Search, queries: &[Query]) -> Result<Vec<Match>>;
+    /// The answer of each window query of `plane`, in order, advancing `progress` by the
+    /// queries done; the same answers as [`Self::best_matches`] of [`WindowQuery::query`].
+    /// By default it gathers the windows in batches and runs those.
+    fn window_matches(
+        &self,
+        set: &ExemplarSet,
+        s: &Search,
+        plane: &Plane,
+        queries: &[WindowQuery],
+        progress: &dyn Progress,
+    ) -> Result<Vec<Match>> {
+        gathered_window_matches(self, set, s, plane, queries, progress)
+    }
     /// What runs the searches, for reports ("CPU", "GPU (…)").
     fn name(&self) -> String;
+}
+
+/// [`Matcher::window_matches`] by gathering the windows on the host, in batches of
+/// [`WINDOW_BATCH`], and searching those with [`Matcher::best_matches`].
+pub(crate) fn gathered_window_matches<M: Matcher + ?Sized>(
+    matcher: &M,
+    set: &ExemplarSet,
+    s: &Search,
+    plane: &Plane,
+    queries: &[WindowQuery],
+    progress: &dyn Progress,
+) -> Result<Vec<Match>> {
+    let mut out = Vec::with_capacity(queries.len());
+    for chunk in queries.chunks(WINDOW_BATCH) {
+        let batch: Vec<Query> = chunk.par_iter().map(|q| q.query(plane, s.w)).collect();
+        out.extend(matcher.best_matches(set, s, &batch)?);
+        progress.advance(chunk.len() as u64);
+    }
+    Ok(out)
 }
 
 /// Distance between the query and the exemplar window at (x, y).

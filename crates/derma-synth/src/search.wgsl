@@ -3,9 +3,16 @@
 //   cost(p) = Σ over known texels and channels (code_e − code_q)²  +  penalty[p] · known
 //   d* = min cost;  T = d* + ⌊d*·ε₁₆/2¹⁶⌋;  answer = argmin over cost ≤ T of pick_key(salt, p)
 // Pass `min_cost` reduces d* with atomicMin (pruning with the guesses' cost, an upper bound
-// of d* the CPU computed), `settle` copies d*'s limit T out of the atomics, and `pick` reduces
-// the least key. Positions whose quadrant block-sum bound already exceeds the limit are skipped
-// (a safe lower bound, so the answer is unchanged). Integers decide: CPU and GPU agree exactly.
+// of d*), `settle` copies d*'s limit T out of the atomics, and `pick` reduces the least key.
+// Positions whose quadrant block-sum bound already exceeds the limit are skipped (a safe lower
+// bound, so the answer is unchanged). Integers decide: CPU and GPU agree exactly.
+//
+// A query's window is read from `source`, a plane of codes: either the windows the host
+// uploaded, stacked one under the other (the patch pass's, with unknown texels), or the
+// canvas itself, kept on the GPU for an optimisation pass, with each query's window at its
+// origin (wrapping on a torus). For the canvas, `prepare` computes on the GPU what the host
+// computes for uploaded windows (quadrant sums, the guesses' cost), and `finish` turns each
+// answer's key back into a position and its cost, for either source.
 
 struct Params {
     ex_width: u32,     // exemplar width
@@ -20,6 +27,10 @@ struct Params {
     info_stride: u32,  // u32 words per query in `info`
     n_queries: u32,
     capacity: u32,     // room in `survivors`
+    src_width: u32,    // the source plane's width and height (windows wrap at them)
+    src_height: u32,
+    max_guesses: u32,  // words per query in `guesses`
+    pad: u32,
 }
 
 @group(0) @binding(0) var<uniform> p: Params;
@@ -27,21 +38,27 @@ struct Params {
 @group(0) @binding(1) var<storage, read> ex: array<u32>;
 // Per channel, sums of codes over (w/2)² blocks at every position.
 @group(0) @binding(2) var<storage, read> sums: array<f32>;
-// Per query w·w·C codes; 256 marks a texel that is not known.
-@group(0) @binding(3) var<storage, read> qcodes: array<u32>;
-// Per query: known texels, salt, quadrant mask (bit q: quadrant q fully known), the guesses'
-// cost, then 4·C quadrant sums (f32 bits).
-@group(0) @binding(4) var<storage, read> info: array<u32>;
+// The plane the query windows are read from, one code per word, channels interleaved;
+// 256 marks a texel that is not known.
+@group(0) @binding(3) var<storage, read> source: array<u32>;
 // Per candidate: occurrence penalty per known texel (when has_penalty).
-@group(0) @binding(5) var<storage, read> penalty: array<u32>;
-// Per query: [d* (starts at the guesses' cost), least key].
-@group(0) @binding(6) var<storage, read_write> result: array<atomic<u32>>;
+@group(0) @binding(4) var<storage, read> penalty: array<u32>;
+// Per query (canvas windows): `max_guesses` starting positions, NONE after the last.
+@group(0) @binding(5) var<storage, read> guesses: array<u32>;
+// Per query: known texels, salt, quadrant mask (bit q: quadrant q fully known), the guesses'
+// cost, the window's origin x and y in `source`, then 4·C quadrant sums (f32 bits).
+@group(0) @binding(6) var<storage, read_write> info: array<u32>;
+// Per query: [d* (starts at the guesses' cost), least key]; after `finish`, [cost, position].
+@group(0) @binding(7) var<storage, read_write> result: array<atomic<u32>>;
 // Per query: the limit T of the choice (written by `settle`).
-@group(0) @binding(7) var<storage, read_write> limits: array<u32>;
+@group(0) @binding(8) var<storage, read_write> limits: array<u32>;
 // Compacted search: (query, position) of the candidates that pass the bound, and their costs.
 // `result[2·n_queries]` counts them; `p.capacity` is the room.
-@group(0) @binding(8) var<storage, read_write> survivors: array<vec2<u32>>;
-@group(0) @binding(9) var<storage, read_write> costs: array<u32>;
+@group(0) @binding(9) var<storage, read_write> survivors: array<vec2<u32>>;
+@group(0) @binding(10) var<storage, read_write> costs: array<u32>;
+
+const INFO_ORIGIN: u32 = 4u;
+const INFO_SUMS: u32 = 6u;
 
 fn pick_key(salt: u32, index: u32) -> u32 {
     var x = index + salt;
@@ -77,7 +94,7 @@ fn bound_exceeds(q: u32, x: u32, y: u32, limit: u32) -> bool {
         let oy = (quad >> 1u) * half;
         let at = (y + oy) * p.plane_w + x + ox;
         for (var k = 0u; k < p.channels; k++) {
-            let d = sums[k * p.plane_len + at] - bitcast<f32>(info[base + 4u + quad * p.channels + k]);
+            let d = sums[k * p.plane_len + at] - bitcast<f32>(info[base + INFO_SUMS + quad * p.channels + k]);
             bound += d * d;
         }
     }
@@ -86,19 +103,33 @@ fn bound_exceeds(q: u32, x: u32, y: u32, limit: u32) -> bool {
     return bound > f32(limit) * area * (1.0 + 1.0 / 256.0) + 1.0;
 }
 
+// Index in `source` of the first code of window texel (dx, dy) at origin (ox, oy), wrapping
+// at the plane's edges (a stacked upload never reaches them).
+fn source_at(ox: u32, oy: u32, dx: u32, dy: u32) -> u32 {
+    var x = ox + dx;
+    if (x >= p.src_width) { x -= p.src_width; }
+    var y = oy + dy;
+    if (y >= p.src_height) { y -= p.src_height; }
+    return (y * p.src_width + x) * p.channels;
+}
+
 // The exact distance, or any value above `limit` once the partial sum passes it.
 fn distance(q: u32, x: u32, y: u32, limit: u32) -> u32 {
-    let row_len = p.w * p.channels;
-    let qbase = q * p.w * row_len;
+    let base = q * p.info_stride;
+    let ox = info[base + INFO_ORIGIN];
+    let oy = info[base + INFO_ORIGIN + 1u];
     var total = 0u;
     for (var r = 0u; r < p.w; r++) {
         let e0 = ((y + r) * p.ex_width + x) * p.channels;
-        let q0 = qbase + r * row_len;
-        for (var i = 0u; i < row_len; i++) {
-            let qv = qcodes[q0 + i];
-            if (qv < 256u) {
-                let d = i32(ex[e0 + i]) - i32(qv);
-                total += u32(d * d);
+        for (var dx = 0u; dx < p.w; dx++) {
+            let s0 = source_at(ox, oy, dx, r);
+            let e1 = e0 + dx * p.channels;
+            for (var k = 0u; k < p.channels; k++) {
+                let qv = source[s0 + k];
+                if (qv < 256u) {
+                    let d = i32(ex[e1 + k]) - i32(qv);
+                    total += u32(d * d);
+                }
             }
         }
         if (total > limit) { return total; }
@@ -198,13 +229,14 @@ fn screen(
     }
 }
 
-fn survivor_slot(gid: vec3<u32>) -> u32 {
+// The thread's index in a two-dimensional grid of workgroups (derma_core::gpu::grid).
+fn thread_of(gid: vec3<u32>) -> u32 {
     return gid.x + gid.y * 65535u * 64u;
 }
 
 @compute @workgroup_size(64)
 fn cost(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let slot = survivor_slot(gid);
+    let slot = thread_of(gid);
     let count = min(atomicLoad(&result[2u * p.n_queries]), p.capacity);
     if (slot >= count) { return; }
     let s = survivors[slot];
@@ -217,11 +249,96 @@ fn cost(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 @compute @workgroup_size(64)
 fn choose(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let slot = survivor_slot(gid);
+    let slot = thread_of(gid);
     let count = min(atomicLoad(&result[2u * p.n_queries]), p.capacity);
     if (slot >= count) { return; }
     let s = survivors[slot];
     if (costs[slot] <= limits[s.x]) {
         atomicMin(&result[2u * s.x + 1u], pick_key(info[s.x * p.info_stride + 1u], s.y));
     }
+}
+
+// The index whose key is `key` (search.rs, index_of_key): the steps of pick_key undone.
+fn unshift(key: u32, s: u32) -> u32 {
+    var x = key;
+    var y = key;
+    for (var k = s; k < 32u; k += s) {
+        x = x >> s;
+        y = y ^ x;
+    }
+    return y;
+}
+
+// Multiplicative inverse of an odd number modulo 2³² (Newton's iteration).
+fn inverse_mod_2_32(a: u32) -> u32 {
+    var x = a;
+    for (var i = 0u; i < 5u; i++) {
+        x = x * (2u - a * x);
+    }
+    return x;
+}
+
+fn index_of_key(salt: u32, key: u32) -> u32 {
+    var x = unshift(key, 16u);
+    x = x * inverse_mod_2_32(0x846ca68bu);
+    x = unshift(x, 15u);
+    x = x * inverse_mod_2_32(0x7feb352du);
+    x = unshift(x, 16u);
+    return x - salt;
+}
+
+// Canvas windows: the quadrant sums (every texel is known) and the least cost among the
+// guesses, clamped to the candidate range, as search.rs computes them for an uploaded query.
+@compute @workgroup_size(64)
+fn prepare(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let q = thread_of(gid);
+    if (q >= p.n_queries) { return; }
+    let base = q * p.info_stride;
+    let ox = info[base + INFO_ORIGIN];
+    let oy = info[base + INFO_ORIGIN + 1u];
+    let half = p.w / 2u;
+    info[base] = p.w * p.w;
+    info[base + 2u] = 15u;
+    for (var quad = 0u; quad < 4u; quad++) {
+        let qx = (quad & 1u) * half;
+        let qy = (quad >> 1u) * half;
+        for (var k = 0u; k < p.channels; k++) {
+            // An integer sum (at most 255·(w/2)², exact in f32, as on the CPU).
+            var sum = 0u;
+            for (var dy = 0u; dy < half; dy++) {
+                for (var dx = 0u; dx < half; dx++) {
+                    sum += source[source_at(ox, oy, qx + dx, qy + dy) + k];
+                }
+            }
+            info[base + INFO_SUMS + quad * p.channels + k] = bitcast<u32>(f32(sum));
+        }
+    }
+    let last = p.cand_w * p.cand_h - 1u;
+    var first = NONE;
+    for (var j = 0u; j < p.max_guesses; j++) {
+        let g0 = guesses[q * p.max_guesses + j];
+        if (g0 == NONE) { break; }
+        let g = min(g0, last);
+        let c = distance(q, g % p.cand_w, g / p.cand_w, NONE) + candidate_penalty(q, g);
+        first = min(first, c);
+    }
+    info[base + 3u] = first;
+    atomicStore(&result[2u * q], first);
+    atomicStore(&result[2u * q + 1u], NONE);
+}
+
+// Each answer's key back to its position, and the position's cost: [cost, position]; a
+// position outside the candidates (which the search cannot give) is returned as it is, for
+// the host to report.
+@compute @workgroup_size(64)
+fn finish(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let q = thread_of(gid);
+    if (q >= p.n_queries) { return; }
+    let index = index_of_key(info[q * p.info_stride + 1u], atomicLoad(&result[2u * q + 1u]));
+    var c = NONE;
+    if (index < p.cand_w * p.cand_h) {
+        c = distance(q, index % p.cand_w, index / p.cand_w, NONE) + candidate_penalty(q, index);
+    }
+    atomicStore(&result[2u * q], c);
+    atomicStore(&result[2u * q + 1u], index);
 }
