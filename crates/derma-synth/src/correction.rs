@@ -11,11 +11,14 @@
 //! 5 × 5 exemplar neighbourhood is nearest (integer L2 over the codes) to p's neighbourhood in
 //! the output, and copies that exemplar texel's values. The texels are updated in four
 //! subpasses by the parity of (x, y), each reading only the state before it, so the result
-//! does not depend on thread count (and the same code runs whatever device did the searches).
+//! does not depend on thread count. Where the searches ran on the GPU, so does the correction
+//! ([`crate::gpu_correction`], the same decisions).
 
 use crate::canvas::{Canvas, NO_SOURCE};
+use crate::error::Result;
 use crate::exemplar::ExemplarSet;
 use crate::guide::Guide;
+use derma_core::gpu::Device;
 use derma_core::progress::{Job, Progress, Unit};
 use rayon::prelude::*;
 
@@ -25,19 +28,27 @@ pub const RADIUS: usize = 2;
 /// Subpasses per correction pass: the four parity classes of (x, y) (Lefebvre & Hoppe 2005
 /// §3.4 use 2 × 2 or 3 × 3 classes; 2 × 2 keeps every texel's nearest neighbours fixed while it
 /// is decided).
-const PARITIES: [(usize, usize); 4] = [(0, 0), (1, 1), (1, 0), (0, 1)];
+pub(crate) const PARITIES: [(usize, usize); 4] = [(0, 0), (1, 1), (1, 0), (0, 1)];
 
 /// One decision: texel, exemplar, exemplar texel.
 type Choice = (usize, u8, u32);
 
-/// Runs `passes` correction passes over the canvas (each a stage of `progress`).
+/// Runs `passes` correction passes over the canvas (each a stage of `progress`), on `device`
+/// (the GPU's falls back to the CPU's for a canvas larger than the adapter binds).
 pub(crate) fn correct(
     canvas: &mut Canvas,
     set: &ExemplarSet,
     guide: Option<&Guide>,
     passes: usize,
     progress: &Job,
-) {
+    device: Device,
+) -> Result<()> {
+    if passes > 0
+        && device == Device::Gpu
+        && crate::gpu_correction::correct(canvas, set, guide, passes, progress)?
+    {
+        return Ok(());
+    }
     for pass in 0..passes {
         progress.stage(
             &format!("correction {}", pass + 1),
@@ -51,6 +62,7 @@ pub(crate) fn correct(
             progress.advance(1);
         }
     }
+    Ok(())
 }
 
 /// The choices of the texels with parity (ox, oy), from the current canvas (read only).

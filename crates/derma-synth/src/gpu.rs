@@ -572,6 +572,10 @@ impl Matcher for GpuMatcher {
     fn name(&self) -> String {
         format!("GPU ({})", self.name)
     }
+
+    fn device(&self) -> derma_core::gpu::Device {
+        derma_core::gpu::Device::Gpu
+    }
 }
 
 #[cfg(test)]

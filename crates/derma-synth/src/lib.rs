@@ -17,6 +17,7 @@ pub mod error;
 pub mod exemplar;
 pub mod files;
 pub mod gpu;
+mod gpu_correction;
 pub mod guide;
 pub mod optimize;
 mod pass_context;

@@ -24,6 +24,7 @@
 
 use crate::error::Result;
 use crate::exemplar::{Exemplar, ExemplarSet};
+use derma_core::gpu::Device;
 use derma_core::progress::Progress;
 use rayon::prelude::*;
 
@@ -254,6 +255,10 @@ pub trait Matcher: Sync {
     }
     /// What runs the searches, for reports ("CPU", "GPU (…)").
     fn name(&self) -> String;
+    /// Where the searches run; the passes that do not search (the correction) run there too.
+    fn device(&self) -> Device {
+        Device::Cpu
+    }
 }
 
 /// [`Matcher::window_matches`] by gathering the windows on the host, in batches of

@@ -202,7 +202,14 @@ pub fn synthesize(
     for w in opts.pass_windows() {
         optimise_pass(&mut canvas, &ctx, w, opts.r)?;
     }
-    correct(&mut canvas, set, guide, opts.correction, &job);
+    correct(
+        &mut canvas,
+        set,
+        guide,
+        opts.correction,
+        &job,
+        matcher.device(),
+    )?;
     let timings = job.finish().timings;
     let (ow, oh) = (opts.width, opts.height);
     let mut data = Vec::with_capacity(ow * oh * c);

@@ -4,8 +4,8 @@
 use derma_core::progress::Silent;
 use derma_core::rng::Philox;
 use derma_synth::{
-    synthesize, CpuMatcher, ExemplarSet, GpuMatcher, Matcher, Query, Search, SynthOptions, Texture,
-    Tolerance,
+    synthesize, CpuMatcher, ExemplarSet, GpuMatcher, Guide, Matcher, Plane, Query, Search,
+    SynthOptions, Texture, Tolerance, WindowQuery,
 };
 use derma_test_support::skip_without_gpu;
 
@@ -104,5 +104,93 @@ fn a_seed_gives_the_same_texture_on_cpu_and_gpu() {
         let b = synthesize(&set, &opts, None, &gpu, &none).unwrap();
         assert_eq!(a.texture, b.texture, "tile {tile}");
         assert_eq!(a.source, b.source);
+        assert_eq!(a.source_exemplar, b.source_exemplar);
+    }
+}
+
+#[test]
+fn windows_of_the_canvas_kept_on_the_gpu_get_the_cpu_answers() {
+    // The optimisation passes' searches read their windows from a plane the GPU keeps: windows
+    // at any origin, across the wrap of a torus, in two exemplars, with up to 8 guesses.
+    if skip_without_gpu() {
+        return;
+    }
+    let gpu = GpuMatcher::new().unwrap();
+    let set = ExemplarSet::new(vec![exemplar(40, 36, 3, 1), exemplar(34, 40, 3, 2)], 8).unwrap();
+    let (pw, ph) = (37, 29);
+    let rng = Philox::new(4, 2);
+    let codes: Vec<u8> = (0..pw * ph * 3)
+        .map(|i| (rng.u32x4(i as u64)[0] % 256) as u8)
+        .collect();
+    for wrap in [false, true] {
+        let plane = Plane {
+            width: pw,
+            height: ph,
+            channels: 3,
+            wrap,
+            codes: &codes,
+        };
+        for w in [4, 8] {
+            let (xs, ys) = if wrap { (pw, ph) } else { (pw + 1 - w, ph + 1 - w) };
+            let queries: Vec<WindowQuery> = (0..60u64)
+                .map(|i| {
+                    let r = rng.u32x4_sub(i, 7 + w as u32);
+                    WindowQuery {
+                        exemplar: (i % 2) as u32,
+                        x: r[0] % xs as u32,
+                        y: r[1] % ys as u32,
+                        guesses: (0..1 + i as u32 % 8).map(|g| r[2] % 900 + g * 31).collect(),
+                        salt: r[3],
+                    }
+                })
+                .collect();
+            for tol in [Tolerance(0), Tolerance::from_fraction(0.1)] {
+                let s = Search {
+                    w,
+                    tol,
+                    penalty: None,
+                };
+                let a = CpuMatcher
+                    .window_matches(&set, &s, &plane, &queries, &Silent)
+                    .unwrap();
+                let b = gpu
+                    .window_matches(&set, &s, &plane, &queries, &Silent)
+                    .unwrap();
+                assert_eq!(a, b, "wrap {wrap}, side {w}, tolerance {tol:?}");
+                // The same answers as the windows gathered and uploaded.
+                let gathered: Vec<Query> = queries.iter().map(|q| q.query(&plane, w)).collect();
+                assert_eq!(a, gpu.best_matches(&set, &s, &gathered).unwrap());
+            }
+        }
+    }
+}
+
+#[test]
+fn a_guided_tileable_synthesis_is_the_same_on_cpu_and_gpu() {
+    // Two exemplars chosen by a guide, wrapping: the correction's proposals keep to the guide's
+    // exemplar and cross the wrap, on the GPU as on the CPU.
+    if skip_without_gpu() {
+        return;
+    }
+    let gpu = GpuMatcher::new().unwrap();
+    let set = ExemplarSet::new(vec![exemplar(40, 40, 1, 3), exemplar(36, 44, 1, 4)], 16).unwrap();
+    let levels: Vec<f32> = (0..16 * 16).map(|t| ((t % 16) / 8) as f32).collect();
+    let guide = Guide::from_levels(16, 16, &levels, 2);
+    for correction in [1, 2] {
+        let opts = SynthOptions {
+            width: 64,
+            height: 48,
+            patch: 16,
+            seed: 3,
+            tile: true,
+            correction,
+            ..Default::default()
+        };
+        let a = synthesize(&set, &opts, Some(&guide), &CpuMatcher, &Silent).unwrap();
+        let b = synthesize(&set, &opts, Some(&guide), &gpu, &Silent).unwrap();
+        assert_eq!(a.texture, b.texture, "{correction} correction passes");
+        assert_eq!(a.source, b.source);
+        assert_eq!(a.source_exemplar, b.source_exemplar);
+        assert!(a.source_exemplar.contains(&0) && a.source_exemplar.contains(&1));
     }
 }
