@@ -118,17 +118,31 @@ fn distance(q: u32, x: u32, y: u32, limit: u32) -> u32 {
     let base = q * p.info_stride;
     let ox = info[base + INFO_ORIGIN];
     let oy = info[base + INFO_ORIGIN + 1u];
+    let row_len = p.w * p.channels;
+    // Rows that do not cross the plane's right edge are contiguous in `source`.
+    let straight = ox + p.w <= p.src_width;
     var total = 0u;
     for (var r = 0u; r < p.w; r++) {
         let e0 = ((y + r) * p.ex_width + x) * p.channels;
-        for (var dx = 0u; dx < p.w; dx++) {
-            let s0 = source_at(ox, oy, dx, r);
-            let e1 = e0 + dx * p.channels;
-            for (var k = 0u; k < p.channels; k++) {
-                let qv = source[s0 + k];
+        if (straight) {
+            let s0 = source_at(ox, oy, 0u, r);
+            for (var i = 0u; i < row_len; i++) {
+                let qv = source[s0 + i];
                 if (qv < 256u) {
-                    let d = i32(ex[e1 + k]) - i32(qv);
+                    let d = i32(ex[e0 + i]) - i32(qv);
                     total += u32(d * d);
+                }
+            }
+        } else {
+            for (var dx = 0u; dx < p.w; dx++) {
+                let s0 = source_at(ox, oy, dx, r);
+                let e1 = e0 + dx * p.channels;
+                for (var k = 0u; k < p.channels; k++) {
+                    let qv = source[s0 + k];
+                    if (qv < 256u) {
+                        let d = i32(ex[e1 + k]) - i32(qv);
+                        total += u32(d * d);
+                    }
                 }
             }
         }
