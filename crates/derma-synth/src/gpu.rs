@@ -13,8 +13,8 @@ use crate::search::{
     gathered_window_matches, initial_cost, known_block_sums, known_texels, Match, Matcher, Plane,
     Query, Search, WindowQuery, MAX_GUESSES,
 };
-use derma_core::progress::Progress;
 use derma_core::gpu::GpuCell;
+use derma_core::progress::Progress;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -164,7 +164,7 @@ impl Growing {
 struct Scratch {
     params: wgpu::Buffer,
     qcodes: Growing,
-    guesses: Growing,
+    windows: Growing,
     info: Growing,
     penalty: Growing,
     result: Growing,
@@ -186,7 +186,7 @@ impl Scratch {
                 mapped_at_creation: false,
             }),
             qcodes: Growing::new(d, "query codes", input),
-            guesses: Growing::new(d, "query guesses", input),
+            windows: Growing::new(d, "query windows", input),
             info: Growing::new(d, "query info", input),
             penalty: Growing::new(d, "penalty", input),
             result: Growing::new(d, "result", input | U::COPY_SRC),
@@ -280,7 +280,7 @@ impl GpuMatcher {
 
     /// One batch of queries of one exemplar: the compacted search, or the uncompacted one when
     /// more candidates survive the bound than there is room for.
-    fn run(&self, set: &ExemplarSet, s: &Search, ex: usize, windows: Windows) -> Result<Vec<Match>> {
+    fn run(&self, set: &ExemplarSet, s: &Search, ex: usize, batch: Windows) -> Result<Vec<Match>> {
         let (ctx, pipes) = pipelines()?;
         let t0 = std::time::Instant::now();
         let w = s.w;
@@ -290,14 +290,14 @@ impl GpuMatcher {
         let res = self.resident(set, ex, w)?;
         let half = w / 2;
         let info_stride = INFO_HEAD + 4 * c;
-        let n = windows.len();
+        let n = batch.len();
         // The queries' info and first results; for uploaded windows also their codes (256
         // where unknown), stacked, and the info's sums and guesses' cost, computed here.
         let mut qcodes: Vec<u32> = Vec::new();
-        let mut guesses: Vec<u32> = vec![NONE];
+        let mut windows: Vec<u32> = Vec::new();
         let mut info: Vec<u32> = Vec::with_capacity(n * info_stride);
         let mut result: Vec<u32> = Vec::with_capacity(n * 2 + 1);
-        let (src_width, src_height) = match &windows {
+        let (src_width, src_height) = match &batch {
             Windows::Uploaded(queries) => {
                 let prepared: Vec<(Vec<u32>, Vec<u32>, u32)> = queries
                     .par_iter()
@@ -341,18 +341,20 @@ impl GpuMatcher {
                 queries,
                 ..
             } => {
-                // `prepare` fills in the rest of the info and the first results.
-                guesses = vec![NONE; n * MAX_GUESSES];
-                for (i, q) in queries.iter().enumerate() {
-                    info.extend_from_slice(&[0, q.salt, 0, 0, q.x, q.y]);
-                    info.resize(info.len() + 4 * c, 0);
-                    guesses[i * MAX_GUESSES..][..q.guesses.len()].copy_from_slice(&q.guesses);
+                // `prepare` writes the info and the first results from the windows' origins,
+                // salts and guesses.
+                let stride = 3 + MAX_GUESSES;
+                windows = vec![NONE; n * stride];
+                for (q, row) in queries.iter().zip(windows.chunks_exact_mut(stride)) {
+                    row[..3].copy_from_slice(&[q.x, q.y, q.salt]);
+                    row[3..3 + q.guesses.len()].copy_from_slice(&q.guesses);
                 }
-                result.resize(n * 2, 0);
                 (*width, *height)
             }
         };
-        // The survivor counter follows the per-query results.
+        // The survivor counter follows the per-query results (which `prepare` writes for
+        // resident windows, as it writes their info).
+        let counter_at = (n * 2 * 4) as u64;
         result.push(0);
         let candidates = cw * ch;
         let capacity =
@@ -386,32 +388,43 @@ impl GpuMatcher {
         let sc = guard.get_or_insert_with(|| Scratch::new(d));
         let bytes = |v: &[u32]| std::mem::size_of_val(v).max(4) as u64;
         sc.qcodes.fit(d, bytes(&qcodes));
-        sc.guesses.fit(d, bytes(&guesses));
-        sc.info.fit(d, bytes(&info));
+        sc.windows.fit(d, bytes(&windows));
+        sc.info.fit(d, (n * info_stride * 4) as u64);
         sc.penalty.fit(d, bytes(penalty));
-        sc.result.fit(d, bytes(&result));
+        sc.result.fit(d, counter_at + 4);
         sc.limits.fit(d, (n * 4) as u64);
         sc.survivors.fit(d, (capacity * 8) as u64);
         sc.costs.fit(d, (capacity * 4) as u64);
-        sc.staging.fit(d, bytes(&result));
+        sc.staging.fit(d, counter_at + 4);
         let q = &ctx.queue;
         q.write_buffer(&sc.params, 0, bytemuck::bytes_of(&params));
-        q.write_buffer(&sc.qcodes.buf, 0, bytemuck::cast_slice(&qcodes));
-        q.write_buffer(&sc.guesses.buf, 0, bytemuck::cast_slice(&guesses));
-        q.write_buffer(&sc.info.buf, 0, bytemuck::cast_slice(&info));
+        // Only what this source needs goes up (`prepare` writes a resident batch's info).
+        for (buf, words) in [
+            (&sc.qcodes, &qcodes),
+            (&sc.windows, &windows),
+            (&sc.info, &info),
+        ] {
+            if !words.is_empty() {
+                q.write_buffer(&buf.buf, 0, bytemuck::cast_slice(words));
+            }
+        }
         q.write_buffer(&sc.penalty.buf, 0, bytemuck::cast_slice(penalty));
-        q.write_buffer(&sc.result.buf, 0, bytemuck::cast_slice(&result));
-        let (source, prepare) = match &windows {
+        let (source, prepare) = match &batch {
             Windows::Uploaded(_) => (&sc.qcodes.buf, None),
             Windows::Resident { plane, .. } => (*plane, Some(&pipes.prepare)),
         };
+        let reset_results = || {
+            let at = if prepare.is_some() { counter_at } else { 0 };
+            q.write_buffer(&sc.result.buf, at, bytemuck::cast_slice(&result));
+        };
+        reset_results();
         let buffers = [
             &sc.params,
             &res.codes,
             &res.sums,
             source,
             &sc.penalty.buf,
-            &sc.guesses.buf,
+            &sc.windows.buf,
             &sc.info.buf,
             &sc.result.buf,
             &sc.limits.buf,
@@ -455,7 +468,7 @@ impl GpuMatcher {
                 "GPU search: {} candidates passed the bound, room for {capacity}; searching uncompacted",
                 out[n * 2]
             );
-            q.write_buffer(&sc.result.buf, 0, bytemuck::cast_slice(&result));
+            reset_results();
             out = run_steps(&[
                 (&pipes.min_cost, (groups_x, nq)),
                 (&pipes.settle, per_query),

@@ -77,7 +77,12 @@ pub(crate) fn correct(
     let mut ex_info: Vec<u32> = Vec::with_capacity(set.exemplars.len() * 4);
     let mut ex_codes: Vec<u32> = Vec::new();
     for e in &set.exemplars {
-        ex_info.extend_from_slice(&[e.width() as u32, e.height() as u32, ex_codes.len() as u32, 0]);
+        ex_info.extend_from_slice(&[
+            e.width() as u32,
+            e.height() as u32,
+            ex_codes.len() as u32,
+            0,
+        ]);
         ex_codes.extend(e.codes.iter().map(|&v| v as u32));
     }
     if ctx
@@ -110,7 +115,11 @@ pub(crate) fn correct(
         mapped_at_creation: false,
     });
     let ex_info = init("exemplar info", bytemuck::cast_slice(&ex_info), U::STORAGE);
-    let ex_codes = init("exemplar codes", bytemuck::cast_slice(&ex_codes), U::STORAGE);
+    let ex_codes = init(
+        "exemplar codes",
+        bytemuck::cast_slice(&ex_codes),
+        U::STORAGE,
+    );
     let want = init("wanted exemplars", bytemuck::cast_slice(&want), U::STORAGE);
     let codes = init("canvas codes", bytemuck::cast_slice(&codes), U::STORAGE);
     let src = init(

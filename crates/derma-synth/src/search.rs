@@ -184,7 +184,11 @@ impl Plane<'_> {
         let c = self.channels;
         let mut out = Vec::with_capacity(w * w * c);
         for dy in 0..w {
-            let row = if self.wrap { (y + dy) % self.height } else { y + dy };
+            let row = if self.wrap {
+                (y + dy) % self.height
+            } else {
+                y + dy
+            };
             if x + w <= self.width {
                 let t = row * self.width + x;
                 out.extend_from_slice(&self.codes[t * c..(t + w) * c]);
@@ -217,7 +221,7 @@ pub struct WindowQuery {
 }
 
 /// Most starting guesses of a [`WindowQuery`] (the optimisation pass probes five texels).
-pub const MAX_GUESSES: usize = 8;
+pub const MAX_GUESSES: usize = 5;
 
 impl WindowQuery {
     /// The same search as a [`Query`] carrying its window's codes.

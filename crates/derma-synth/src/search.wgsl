@@ -10,7 +10,7 @@
 // A query's window is read from `source`, a plane of codes: either the windows the host
 // uploaded, stacked one under the other (the patch pass's, with unknown texels), or the
 // canvas itself, kept on the GPU for an optimisation pass, with each query's window at its
-// origin (wrapping on a torus). For the canvas, `prepare` computes on the GPU what the host
+// origin (wrapping on a torus). For the canvas, `prepare` computes on the GPU the info the host
 // computes for uploaded windows (quadrant sums, the guesses' cost), and `finish` turns each
 // answer's key back into a position and its cost, for either source.
 
@@ -29,7 +29,7 @@ struct Params {
     capacity: u32,     // room in `survivors`
     src_width: u32,    // the source plane's width and height (windows wrap at them)
     src_height: u32,
-    max_guesses: u32,  // words per query in `guesses`
+    max_guesses: u32,  // guesses per query in `windows`
     pad: u32,
 }
 
@@ -43,8 +43,9 @@ struct Params {
 @group(0) @binding(3) var<storage, read> source: array<u32>;
 // Per candidate: occurrence penalty per known texel (when has_penalty).
 @group(0) @binding(4) var<storage, read> penalty: array<u32>;
-// Per query (canvas windows): `max_guesses` starting positions, NONE after the last.
-@group(0) @binding(5) var<storage, read> guesses: array<u32>;
+// Per query (canvas windows): origin x, y, salt, then `max_guesses` starting positions, NONE
+// after the last.
+@group(0) @binding(5) var<storage, read> windows: array<u32>;
 // Per query: known texels, salt, quadrant mask (bit q: quadrant q fully known), the guesses'
 // cost, the window's origin x and y in `source`, then 4·C quadrant sums (f32 bits).
 @group(0) @binding(6) var<storage, read_write> info: array<u32>;
@@ -308,11 +309,15 @@ fn prepare(@builtin(global_invocation_id) gid: vec3<u32>) {
     let q = thread_of(gid);
     if (q >= p.n_queries) { return; }
     let base = q * p.info_stride;
-    let ox = info[base + INFO_ORIGIN];
-    let oy = info[base + INFO_ORIGIN + 1u];
-    let half = p.w / 2u;
+    let stride = 3u + p.max_guesses;
+    let ox = windows[q * stride];
+    let oy = windows[q * stride + 1u];
     info[base] = p.w * p.w;
+    info[base + 1u] = windows[q * stride + 2u];
     info[base + 2u] = 15u;
+    info[base + INFO_ORIGIN] = ox;
+    info[base + INFO_ORIGIN + 1u] = oy;
+    let half = p.w / 2u;
     for (var quad = 0u; quad < 4u; quad++) {
         let qx = (quad & 1u) * half;
         let qy = (quad >> 1u) * half;
@@ -330,7 +335,7 @@ fn prepare(@builtin(global_invocation_id) gid: vec3<u32>) {
     let last = p.cand_w * p.cand_h - 1u;
     var first = NONE;
     for (var j = 0u; j < p.max_guesses; j++) {
-        let g0 = guesses[q * p.max_guesses + j];
+        let g0 = windows[q * stride + 3u + j];
         if (g0 == NONE) { break; }
         let g = min(g0, last);
         let c = distance(q, g % p.cand_w, g / p.cand_w, NONE) + candidate_penalty(q, g);
