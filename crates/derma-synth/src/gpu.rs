@@ -7,8 +7,10 @@
 //! pass ([`Matcher::window_matches`]), where the GPU also computes the quadrant sums and the
 //! guesses' costs that the host computes for an uploaded window.
 
+use crate::canvas::NO_SOURCE;
 use crate::error::{invalid, Result, SynthError};
 use crate::exemplar::ExemplarSet;
+use crate::patch_pass::PatchPlan;
 use crate::search::{
     gathered_window_matches, initial_cost, known_block_sums, known_texels, Match, Matcher, Plane,
     Query, Search, WindowQuery, MAX_GUESSES,
@@ -22,6 +24,9 @@ use wgpu::util::DeviceExt;
 
 /// The shader.
 pub const SHADER: &str = include_str!("search.wgsl");
+/// The search with the patch pass's kernels (64-bit integers: devices with `SHADER_INT64`).
+pub const PATCH_SHADER: &str =
+    concat!(include_str!("search.wgsl"), include_str!("patch_pass.wgsl"));
 const WORKGROUP: usize = 64;
 /// Largest query upload per dispatch, in bytes.
 const MAX_QUERY_BYTES: usize = 64 << 20;
@@ -46,11 +51,18 @@ struct Params {
     src_width: u32,
     src_height: u32,
     max_guesses: u32,
-    pad: u32,
+    guarded: u32,
+    canvas_w: u32,
+    canvas_h: u32,
+    k16_lo: u32,
+    k16_hi: u32,
+    cap: u32,
+    overlap: u32,
+    pad: [u32; 2],
 }
 
 /// Words of a query's `info` before its quadrant sums (search.wgsl's INFO_SUMS).
-const INFO_HEAD: usize = 6;
+const INFO_HEAD: usize = 7;
 /// No guess / no answer (search.wgsl's NONE).
 const NONE: u32 = u32::MAX;
 
@@ -97,14 +109,14 @@ static PIPELINES: GpuCell<Pipelines> = GpuCell::new();
 
 fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
     Ok(PIPELINES.get_or_init(|ctx| {
-        // One layout for all entry points: binding 0 uniform, 1–5 read-only storage,
-        // 6–10 read-write storage.
+        // One layout for all entry points: binding 0 uniform, 1–2 read-only storage,
+        // 3–10 read-write storage.
         let (layout, [prepare, finish, min_cost, settle, pick, screen, cost, choose]) = ctx
             .entry_points(
                 "search.wgsl",
                 SHADER,
-                5,
-                5,
+                2,
+                8,
                 [
                     "prepare", "finish", "min_cost", "settle", "pick", "screen", "cost", "choose",
                 ],
@@ -120,6 +132,51 @@ fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
             cost,
             choose,
         })
+    })?)
+}
+
+/// The patch pass's pipelines: its kernels and the search's, on one layout (binding 0 uniform,
+/// 1–2 read-only storage, 3–15 read-write storage).
+struct PatchPipelines {
+    layout: wgpu::BindGroupLayout,
+    /// `gather`, then per round: `penalty_rows`, `penalty_table`, `prepare_round`, `screen`,
+    /// `cost`, `min_cost`, `settle`, `choose`, `pick`, `finish`, `accept`, `paste`.
+    steps: [wgpu::ComputePipeline; 13],
+}
+
+static PATCH_PIPELINES: GpuCell<Option<PatchPipelines>> = GpuCell::new();
+
+/// The patch pass's pipelines; `None` on a device without 64-bit integers.
+fn patch_pipelines() -> Result<(
+    &'static derma_core::gpu::Gpu,
+    &'static Option<PatchPipelines>,
+)> {
+    Ok(PATCH_PIPELINES.get_or_init(|ctx| {
+        if !ctx.device.features().contains(wgpu::Features::SHADER_INT64) {
+            return Ok(None);
+        }
+        let (layout, steps) = ctx.entry_points(
+            "patch_pass.wgsl",
+            PATCH_SHADER,
+            2,
+            13,
+            [
+                "gather",
+                "penalty_rows",
+                "penalty_table",
+                "prepare_round",
+                "screen",
+                "cost",
+                "min_cost",
+                "settle",
+                "choose",
+                "pick",
+                "finish",
+                "accept",
+                "paste",
+            ],
+        )?;
+        Ok(Some(PatchPipelines { layout, steps }))
     })?)
 }
 
@@ -321,8 +378,9 @@ impl GpuMatcher {
                         }
                         let first = initial_cost(set, s, q);
                         let origin_y = (i * w) as u32;
+                        // Known, salt, quadrants, first cost, origin, flags (searched).
                         let mut info =
-                            vec![known_texels(q, w), q.salt, quad_mask, first, 0, origin_y];
+                            vec![known_texels(q, w), q.salt, quad_mask, first, 0, origin_y, 0];
                         info.extend(quad_sums.iter().map(|v| v.to_bits()));
                         (codes, info, first)
                     })
@@ -376,7 +434,14 @@ impl GpuMatcher {
             src_width: src_width as u32,
             src_height: src_height as u32,
             max_guesses: MAX_GUESSES as u32,
-            pad: 0,
+            guarded: 0,
+            canvas_w: 0,
+            canvas_h: 0,
+            k16_lo: 0,
+            k16_hi: 0,
+            cap: 0,
+            overlap: 0,
+            pad: [0; 2],
         };
         let d = &ctx.device;
         // Buffers live as long as the matcher and grow when a batch needs more; one batch runs
@@ -498,6 +563,219 @@ impl GpuMatcher {
     }
 }
 
+/// Rounds of a wavefront recorded per submission (most wavefronts settle within them; the rest
+/// get more).
+const ROUNDS_PER_SUBMISSION: usize = 4;
+
+impl GpuMatcher {
+    /// The patch pass on the GPU (patch_pass.wgsl), one submission per wavefront; `None` where
+    /// the device lacks 64-bit integers or the canvas exceeds one storage binding.
+    fn patch_pass_resident(
+        &self,
+        set: &ExemplarSet,
+        plan: &PatchPlan,
+        progress: &dyn Progress,
+    ) -> Result<Option<Vec<u32>>> {
+        let (ctx, pipes) = patch_pipelines()?;
+        let Some(pipes) = pipes else {
+            return Ok(None);
+        };
+        let n = plan.n;
+        let e = &set.exemplars[0];
+        let c = e.channels();
+        let (cw, ch) = e.candidates(n);
+        let candidates = cw * ch;
+        let plane = &plan.plane;
+        let texels = plane.width * plane.height;
+        let nq_max = plan.wavefronts.iter().map(Vec::len).max().unwrap_or(0);
+        if nq_max == 0 {
+            return Ok(Some(plan.sources.to_vec()));
+        }
+        let fits = |bytes: usize| ctx.check_storage("the patch pass", bytes as u64).is_ok();
+        if !fits(texels * c * 4) || !fits(nq_max * n * n * c * 4) {
+            return Ok(None);
+        }
+        let res = self.resident(set, 0, n)?;
+        let info_stride = INFO_HEAD + 4 * c;
+        let stride = 3 + MAX_GUESSES;
+        let capacity =
+            (nq_max * candidates / 4).clamp(self.max_survivors.min(1 << 16), self.max_survivors);
+        let d = &ctx.device;
+        use wgpu::BufferUsages as U;
+        let buffer = |label: &str, bytes: usize, usage: wgpu::BufferUsages| {
+            d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes.max(4) as u64,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let init = |label: &str, words: &[u32], usage: wgpu::BufferUsages| {
+            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytemuck::cast_slice(words),
+                usage,
+            })
+        };
+        let codes: Vec<u32> = plane.codes.iter().map(|&v| v as u32).collect();
+        // The counts and total of the sources already on the canvas (none at the start).
+        let mut counts = vec![0u32; e.width() * e.height()];
+        let mut total = 0u32;
+        for &s in plan.sources.iter().filter(|&&s| s != NO_SOURCE) {
+            counts[s as usize] += 1;
+            total += 1;
+        }
+        let rw = U::STORAGE | U::COPY_DST;
+        let params = buffer(
+            "patch params",
+            std::mem::size_of::<Params>(),
+            U::UNIFORM | U::COPY_DST,
+        );
+        let source = buffer("patch windows' codes", nq_max * n * n * c * 4, rw);
+        let penalty = buffer("penalties", candidates * 4, rw);
+        let windows = buffer("patches", nq_max * stride * 4, rw);
+        let info = buffer("patch info", nq_max * info_stride * 4, rw);
+        let result = buffer("patch results", (nq_max * 2 + 1) * 4, rw);
+        let limits = buffer("patch limits", nq_max * 4, rw);
+        let survivors = buffer("patch survivors", capacity * 8, rw);
+        let costs = buffer("patch costs", capacity * 4, rw);
+        let canvas = init("canvas codes", &codes, rw);
+        let canvas_src = init("canvas sources", plan.sources, rw | U::COPY_SRC);
+        let counts = init("occurrence counts", &counts, rw);
+        let state_words = 3 + 3 * nq_max;
+        let mut state0 = vec![0u32; state_words];
+        state0[0] = total;
+        let state = init("patch state", &state0, rw | U::COPY_SRC);
+        let row_sums = buffer("row sums", cw * e.height() * 4, rw);
+        let staging = buffer("patch state read back", 8, U::MAP_READ | U::COPY_DST);
+        let group = ctx.bind_buffers(
+            "patch pass",
+            &pipes.layout,
+            &[
+                &params,
+                &res.codes,
+                &res.sums,
+                &source,
+                &penalty,
+                &windows,
+                &info,
+                &result,
+                &limits,
+                &survivors,
+                &costs,
+                &canvas,
+                &canvas_src,
+                &counts,
+                &state,
+                &row_sums,
+            ],
+        );
+        let q = &ctx.queue;
+        let [gather, rows, table, prepare_round, screen, cost, min_cost, settle, choose, pick, finish, accept, paste] =
+            &pipes.steps;
+        let k16 = plan.weight16;
+        for (front, &overlap) in plan.wavefronts.iter().zip(&plan.overlaps) {
+            let nq = front.len();
+            if nq == 0 {
+                continue;
+            }
+            let params_now = Params {
+                ex_width: e.width() as u32,
+                channels: c as u32,
+                w: n as u32,
+                cand_w: cw as u32,
+                cand_h: ch as u32,
+                plane_w: res.plane_w as u32,
+                plane_len: res.plane_len as u32,
+                tol: plan.tol.0,
+                has_penalty: 1,
+                info_stride: info_stride as u32,
+                n_queries: nq as u32,
+                capacity: capacity as u32,
+                src_width: n as u32,
+                src_height: (nq * n) as u32,
+                max_guesses: MAX_GUESSES as u32,
+                guarded: 1,
+                canvas_w: plane.width as u32,
+                canvas_h: plane.height as u32,
+                k16_lo: k16 as u32,
+                k16_hi: (k16 >> 32) as u32,
+                cap: plan.cap,
+                overlap: u32::from(overlap),
+                pad: [0; 2],
+            };
+            q.write_buffer(&params, 0, bytemuck::bytes_of(&params_now));
+            let mut rows_of = vec![NONE; nq * stride];
+            for (row, p) in rows_of.chunks_exact_mut(stride).zip(front) {
+                row[..3].copy_from_slice(p);
+            }
+            q.write_buffer(&windows, 0, bytemuck::cast_slice(&rows_of));
+            // Pending: all; none accepted; every status PENDING (the total stays).
+            let mut head = vec![0u32; 2 + nq];
+            head[0] = nq as u32;
+            q.write_buffer(&state, 4, bytemuck::cast_slice(&head));
+            let per_query = derma_core::gpu::grid(nq, WORKGROUP);
+            let screen_dims = ((candidates.div_ceil(WORKGROUP)) as u32, nq as u32);
+            let survivor_dims = derma_core::gpu::grid(capacity, WORKGROUP);
+            let round: [(&wgpu::ComputePipeline, (u32, u32)); 12] = [
+                (rows, derma_core::gpu::grid(cw * e.height(), WORKGROUP)),
+                (table, derma_core::gpu::grid(candidates, WORKGROUP)),
+                (prepare_round, per_query),
+                (screen, screen_dims),
+                (cost, survivor_dims),
+                (min_cost, screen_dims),
+                (settle, per_query),
+                (choose, survivor_dims),
+                (pick, screen_dims),
+                (finish, per_query),
+                (accept, (1, 1)),
+                (paste, derma_core::gpu::grid(nq * n * n, WORKGROUP)),
+            ];
+            let mut first = true;
+            loop {
+                let mut enc = d.create_command_encoder(&Default::default());
+                {
+                    let mut pass = enc.begin_compute_pass(&Default::default());
+                    pass.set_bind_group(0, &group, &[]);
+                    if first {
+                        pass.set_pipeline(gather);
+                        pass.dispatch_workgroups(per_query.0, per_query.1, 1);
+                    }
+                    for _ in 0..ROUNDS_PER_SUBMISSION {
+                        for (pipe, dims) in &round {
+                            pass.set_pipeline(pipe);
+                            pass.dispatch_workgroups(dims.0, dims.1, 1);
+                        }
+                    }
+                }
+                q.submit([enc.finish()]);
+                first = false;
+                // The pending count (state word 1).
+                let pending: Vec<u32> = read_words(ctx, &state, &staging, 2)?;
+                if pending[1] == 0 {
+                    break;
+                }
+            }
+            progress.advance(nq as u64);
+        }
+        let sources: Vec<u32> = ctx
+            .read_back(&canvas_src, texels)
+            .map_err(|e| gpu_error(e.to_string()))?;
+        Ok(Some(sources))
+    }
+}
+
+/// The first `len` words of `buf` through `staging`.
+fn read_words(
+    ctx: &derma_core::gpu::Gpu,
+    buf: &wgpu::Buffer,
+    staging: &wgpu::Buffer,
+    len: usize,
+) -> Result<Vec<u32>> {
+    ctx.read_back_with(buf, staging, len)
+        .map_err(|e| gpu_error(e.to_string()))
+}
+
 /// Most queries of one batch: a dimension of the screening grid (one row of workgroups per
 /// query).
 const MAX_BATCH_QUERIES: usize = 65_535;
@@ -584,6 +862,15 @@ impl Matcher for GpuMatcher {
 
     fn name(&self) -> String {
         format!("GPU ({})", self.name)
+    }
+
+    fn patch_pass(
+        &self,
+        set: &ExemplarSet,
+        plan: &PatchPlan,
+        progress: &dyn Progress,
+    ) -> Result<Option<Vec<u32>>> {
+        self.patch_pass_resident(set, plan, progress)
     }
 
     fn device(&self) -> derma_core::gpu::Device {

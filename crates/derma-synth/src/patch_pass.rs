@@ -26,7 +26,7 @@ use crate::canvas::{origins, Canvas, NO_SOURCE};
 use crate::error::Result;
 use crate::exemplar::ExemplarSet;
 use crate::pass_context::PassContext;
-use crate::search::{Query, Search, Tolerance, MAX_PENALTY_TOTAL};
+use crate::search::{Plane, Query, Search, Tolerance, MAX_PENALTY_TOTAL};
 use derma_core::progress::Unit;
 use derma_core::rng::Philox;
 
@@ -63,6 +63,61 @@ fn known_mask(canvas: &Canvas, px: usize, py: usize, n: usize) -> Option<Vec<u8>
     (known != 0 && known != n * n).then_some(m)
 }
 
+/// A patch pass for a matcher that runs it where it keeps the canvas ([`Matcher::patch_pass`]):
+/// one exemplar, the canvas before it, and every wavefront's patches.
+///
+/// [`Matcher::patch_pass`]: crate::search::Matcher::patch_pass
+pub struct PatchPlan<'a> {
+    /// Patch side N.
+    pub n: usize,
+    /// Near-best tolerance of the choice.
+    pub tol: Tolerance,
+    /// λ · C · v̄ in 16.16 fixed point (the occurrence penalty's weight; 0 = off).
+    pub weight16: u64,
+    /// The penalty's cap per known texel.
+    pub cap: u32,
+    /// Per wavefront, its patches in scanline order: (x, y, salt).
+    pub wavefronts: Vec<Vec<[u32; 3]>>,
+    /// Per wavefront, whether two of its patches overlap (then the later pastes last).
+    pub overlaps: Vec<bool>,
+    /// The canvas's codes before the pass.
+    pub plane: Plane<'a>,
+    /// The canvas's sources before the pass (exemplar texel or [`NO_SOURCE`]).
+    pub sources: &'a [u32],
+}
+
+/// The patches of each wavefront t = i + 2j in scanline order: (x, y, index j·nx + i).
+fn wavefronts(xs: &[usize], ys: &[usize]) -> Vec<Vec<(usize, usize, usize)>> {
+    let (nx, ny) = (xs.len(), ys.len());
+    (0..nx + 2 * ny - 2)
+        .map(|t| {
+            (0..ny)
+                .filter_map(|j| {
+                    t.checked_sub(2 * j)
+                        .filter(|&i| i < nx)
+                        .map(|i| (xs[i], ys[j], j * nx + i))
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Whether windows of side n at two origins share a texel of a `width × height` canvas
+/// (wrapping on a torus).
+fn windows_overlap(
+    a: (usize, usize),
+    b: (usize, usize),
+    n: usize,
+    width: usize,
+    height: usize,
+) -> bool {
+    let near = |p: usize, q: usize, len: usize| {
+        let d = (p + len - q) % len;
+        d < n || len - d < n
+    };
+    near(a.0, b.0, width) && near(a.1, b.1, height)
+}
+
 /// Runs the patch pass with patches of side `n`.
 pub(crate) fn patch_pass(
     canvas: &mut Canvas,
@@ -82,14 +137,45 @@ pub(crate) fn patch_pass(
     // above-left, left half from the previous patch, top half from the row above).
     let probes = [(0, 0), (0, d), (d, 0), (n - 1, 0)];
     let mut occ = Occurrence::new(set, n, occurrence);
-    for t in 0..nx + 2 * ny - 2 {
-        let patches: Vec<(usize, usize, usize)> = (0..ny)
-            .filter_map(|j| {
-                t.checked_sub(2 * j)
-                    .filter(|&i| i < nx)
-                    .map(|i| (xs[i], ys[j], j * nx + i))
-            })
-            .collect();
+    let fronts = wavefronts(&xs, &ys);
+    // One exemplar: the matcher may run the whole pass where it keeps the canvas.
+    if set.exemplars.len() == 1 {
+        let plan = PatchPlan {
+            n,
+            tol,
+            weight16: if occurrence > 0.0 { occ.weight16() } else { 0 },
+            cap: MAX_PENALTY_TOTAL / (n * n) as u32,
+            wavefronts: fronts
+                .iter()
+                .map(|f| {
+                    f.iter()
+                        .map(|&(x, y, k)| [x as u32, y as u32, rng.u32x4(k as u64)[0]])
+                        .collect()
+                })
+                .collect(),
+            overlaps: fronts
+                .iter()
+                .map(|f| {
+                    f.iter().enumerate().any(|(i, a)| {
+                        f[i + 1..].iter().any(|b| {
+                            windows_overlap((a.0, a.1), (b.0, b.1), n, canvas.width, canvas.height)
+                        })
+                    })
+                })
+                .collect(),
+            plane: canvas.plane(),
+            sources: &canvas.src,
+        };
+        if let Some(sources) = ctx.matcher.patch_pass(set, &plan, progress)? {
+            for (t, s) in sources.into_iter().enumerate() {
+                if s != NO_SOURCE {
+                    canvas.copy_texel(set, t, 0, s as usize);
+                }
+            }
+            return Ok(());
+        }
+    }
+    for patches in fronts {
         if patches.is_empty() {
             continue;
         }
@@ -150,6 +236,20 @@ pub(crate) fn patch_pass(
         progress.advance(patches.len() as u64);
     }
     Ok(())
+}
+
+/// The penalty per known texel of a window from which `o` output texels are drawn, in an
+/// exemplar of `texels` texels of which `total` output texels are drawn, for windows of side `n`:
+/// λ·C·v̄ · max(0, O/(N² ō) − 1) of the module comment in integers, so the GPU gives the same
+/// bits: the ratio O/(N² ō) = o · texels / (n² · total) floored in 16.16 fixed point, times the
+/// weight `k16` (λ·C·v̄ in 16.16), floored, at most `cap`. Exact in u64 for o ≤ total < 2³⁸.
+pub(crate) fn penalty(o: u64, texels: u64, n: usize, total: u64, k16: u64, cap: u32) -> u32 {
+    let (a, d) = (o * texels, (n * n) as u64 * total);
+    // ⌊a · 2¹⁶ / d⌋ without forming a · 2¹⁶.
+    let ratio = ((a / d) << 16) + (((a % d) << 16) / d);
+    let excess = ratio.saturating_sub(1 << 16);
+    let pen = excess.saturating_mul(k16) >> 32;
+    pen.min(cap as u64) as u32
 }
 
 /// How often each exemplar texel is the source of an output texel, and the penalties that
@@ -241,6 +341,13 @@ impl Occurrence {
         Some(std::mem::take(p))
     }
 
+    /// λ · C · v̄ in 16.16 fixed point, at most 2³² (the factor of [`penalty`]).
+    fn weight16(&self) -> u64 {
+        (self.lambda * self.scale * 65536.0)
+            .round()
+            .min(4_294_967_296.0) as u64
+    }
+
     /// Per exemplar, per candidate: the penalty per known texel; `None` when λ = 0.
     fn penalties(&self) -> Option<Vec<Vec<u32>>> {
         if self.lambda <= 0.0 {
@@ -258,7 +365,6 @@ impl Occurrence {
                     if total == 0 {
                         return vec![0; cw * ch];
                     }
-                    let mean = total as f64 / (w * h) as f64;
                     // Summed-area table of the counts.
                     let mut sat = vec![0u64; (w + 1) * (h + 1)];
                     for y in 0..h {
@@ -268,21 +374,45 @@ impl Occurrence {
                             sat[(y + 1) * (w + 1) + x + 1] = sat[y * (w + 1) + x + 1] + row;
                         }
                     }
-                    let expected = (n * n) as f64 * mean;
+                    let k16 = self.weight16();
                     let mut out = vec![0u32; cw * ch];
                     for y in 0..ch {
                         for x in 0..cw {
                             let o = sat[(y + n) * (w + 1) + x + n] + sat[y * (w + 1) + x]
                                 - sat[y * (w + 1) + x + n]
                                 - sat[(y + n) * (w + 1) + x];
-                            let excess = (o as f64 / expected - 1.0).max(0.0);
-                            out[y * cw + x] =
-                                (self.lambda * self.scale * excess).floor().min(cap as f64) as u32;
+                            out[y * cw + x] = penalty(o, (w * h) as u64, n, total, k16, cap);
                         }
                     }
                     out
                 })
                 .collect(),
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_integer_penalty_follows_the_formula() {
+        // λ·C·v̄ · max(0, o/E − 1) with E = n²·total/texels, to within the fixed point's
+        // rounding (one unit), zero up to the mean use and capped.
+        let (texels, n) = (128 * 128u64, 32usize);
+        for (scale, total) in [(3100.0f64, 40_000u64), (55.5, 9_000_000), (0.7, 1024)] {
+            let k16 = (scale * 65536.0).round() as u64;
+            let e = (n * n) as f64 * total as f64 / texels as f64;
+            for o in [0u64, 1, e as u64, (e * 1.5) as u64, (e * 7.0) as u64, total] {
+                let want = (scale * (o as f64 / e - 1.0).max(0.0)).floor();
+                let got = penalty(o, texels, n, total, k16, u32::MAX) as f64;
+                assert!(
+                    (got - want.min(u32::MAX as f64)).abs() <= 1.0 + want * 1e-4,
+                    "o {o}, total {total}: {got} vs {want}"
+                );
+            }
+        }
+        assert_eq!(penalty(10_000, texels, n, 1024, 1 << 40, 77), 77);
+        assert_eq!(penalty(0, texels, n, 1024, 1 << 20, 77), 0);
     }
 }

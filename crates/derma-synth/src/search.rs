@@ -259,6 +259,18 @@ pub trait Matcher: Sync {
     }
     /// What runs the searches, for reports ("CPU", "GPU (…)").
     fn name(&self) -> String;
+    /// Runs the patch pass of `plan` where the matcher keeps the canvas, advancing `progress`
+    /// by the patches done, and returns the canvas's sources after it; `Ok(None)` when this
+    /// matcher does not (the default), and the caller runs it round by round with
+    /// [`Self::best_matches`]. Both give the same sources.
+    fn patch_pass(
+        &self,
+        _set: &ExemplarSet,
+        _plan: &crate::patch_pass::PatchPlan,
+        _progress: &dyn Progress,
+    ) -> Result<Option<Vec<u32>>> {
+        Ok(None)
+    }
     /// Where the searches run; the passes that do not search (the correction) run there too.
     fn device(&self) -> Device {
         Device::Cpu

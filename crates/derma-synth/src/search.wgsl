@@ -30,7 +30,16 @@ struct Params {
     src_width: u32,    // the source plane's width and height (windows wrap at them)
     src_height: u32,
     max_guesses: u32,  // guesses per query in `windows`
-    pad: u32,
+    guarded: u32,      // 1: the compacted and uncompacted steps are all dispatched, and each
+                       // runs only when the survivors fit (compacted) or overflow (uncompacted)
+    canvas_w: u32,     // patch_pass.wgsl: the canvas kept on the GPU
+    canvas_h: u32,
+    k16_lo: u32,       // patch_pass.wgsl: the occurrence weight λ·C·v̄ in 16.16 (u64 halves)
+    k16_hi: u32,
+    cap: u32,          // patch_pass.wgsl: the penalty's cap per known texel
+    overlap: u32,      // patch_pass.wgsl: 1 when patches of this wavefront overlap
+    pad1: u32,
+    pad2: u32,
 }
 
 @group(0) @binding(0) var<uniform> p: Params;
@@ -40,14 +49,15 @@ struct Params {
 @group(0) @binding(2) var<storage, read> sums: array<f32>;
 // The plane the query windows are read from, one code per word, channels interleaved;
 // 256 marks a texel that is not known.
-@group(0) @binding(3) var<storage, read> source: array<u32>;
+@group(0) @binding(3) var<storage, read_write> source: array<u32>;
 // Per candidate: occurrence penalty per known texel (when has_penalty).
-@group(0) @binding(4) var<storage, read> penalty: array<u32>;
+@group(0) @binding(4) var<storage, read_write> penalty: array<u32>;
 // Per query (canvas windows): origin x, y, salt, then `max_guesses` starting positions, NONE
 // after the last.
-@group(0) @binding(5) var<storage, read> windows: array<u32>;
+@group(0) @binding(5) var<storage, read_write> windows: array<u32>;
 // Per query: known texels, salt, quadrant mask (bit q: quadrant q fully known), the guesses'
-// cost, the window's origin x and y in `source`, then 4·C quadrant sums (f32 bits).
+// cost, the window's origin x and y in `source`, flags (1: not searched this time), then 4·C
+// quadrant sums (f32 bits).
 @group(0) @binding(6) var<storage, read_write> info: array<u32>;
 // Per query: [d* (starts at the guesses' cost), least key]; after `finish`, [cost, position].
 @group(0) @binding(7) var<storage, read_write> result: array<atomic<u32>>;
@@ -59,7 +69,18 @@ struct Params {
 @group(0) @binding(10) var<storage, read_write> costs: array<u32>;
 
 const INFO_ORIGIN: u32 = 4u;
-const INFO_SUMS: u32 = 6u;
+const INFO_FLAGS: u32 = 6u;
+const INFO_SUMS: u32 = 7u;
+
+// Whether query q is searched in this dispatch (patch_pass.wgsl leaves settled ones out).
+fn searched(q: u32) -> bool {
+    return info[q * p.info_stride + INFO_FLAGS] == 0u;
+}
+
+// Whether more candidates passed the screen than `survivors` has room for.
+fn overflowed() -> bool {
+    return atomicLoad(&result[2u * p.n_queries]) > p.capacity;
+}
 
 fn pick_key(salt: u32, index: u32) -> u32 {
     var x = index + salt;
@@ -175,7 +196,8 @@ fn cost_within(q: u32, index: u32, limit: u32) -> u32 {
 fn min_cost(@builtin(global_invocation_id) gid: vec3<u32>) {
     let q = gid.y;
     let index = gid.x;
-    if (q >= p.n_queries || index >= p.cand_w * p.cand_h) { return; }
+    if (q >= p.n_queries || index >= p.cand_w * p.cand_h || !searched(q)) { return; }
+    if (p.guarded == 1u && !overflowed()) { return; }
     let c = cost_within(q, index, info[q * p.info_stride + 3u]);
     if (c != NONE) {
         atomicMin(&result[2u * q], c);
@@ -193,7 +215,8 @@ fn settle(@builtin(global_invocation_id) gid: vec3<u32>) {
 fn pick(@builtin(global_invocation_id) gid: vec3<u32>) {
     let q = gid.y;
     let index = gid.x;
-    if (q >= p.n_queries || index >= p.cand_w * p.cand_h) { return; }
+    if (q >= p.n_queries || index >= p.cand_w * p.cand_h || !searched(q)) { return; }
+    if (p.guarded == 1u && !overflowed()) { return; }
     if (cost_within(q, index, limits[q]) != NONE) {
         atomicMin(&result[2u * q + 1u], pick_key(info[q * p.info_stride + 1u], index));
     }
@@ -222,7 +245,7 @@ fn screen(
     let index = gid.x;
     var passes = false;
     var local = 0u;
-    if (q < p.n_queries && index < p.cand_w * p.cand_h) {
+    if (q < p.n_queries && index < p.cand_w * p.cand_h && searched(q)) {
         let upper = tolerance_limit(info[q * p.info_stride + 3u]);
         let pen = candidate_penalty(q, index);
         if (pen <= upper && !bound_exceeds(q, index % p.cand_w, index / p.cand_w, upper - pen)) {
@@ -252,6 +275,7 @@ fn thread_of(gid: vec3<u32>) -> u32 {
 @compute @workgroup_size(64)
 fn cost(@builtin(global_invocation_id) gid: vec3<u32>) {
     let slot = thread_of(gid);
+    if (p.guarded == 1u && overflowed()) { return; }
     let count = min(atomicLoad(&result[2u * p.n_queries]), p.capacity);
     if (slot >= count) { return; }
     let s = survivors[slot];
@@ -265,6 +289,7 @@ fn cost(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(64)
 fn choose(@builtin(global_invocation_id) gid: vec3<u32>) {
     let slot = thread_of(gid);
+    if (p.guarded == 1u && overflowed()) { return; }
     let count = min(atomicLoad(&result[2u * p.n_queries]), p.capacity);
     if (slot >= count) { return; }
     let s = survivors[slot];
@@ -317,6 +342,7 @@ fn prepare(@builtin(global_invocation_id) gid: vec3<u32>) {
     info[base + 2u] = 15u;
     info[base + INFO_ORIGIN] = ox;
     info[base + INFO_ORIGIN + 1u] = oy;
+    info[base + INFO_FLAGS] = 0u;
     let half = p.w / 2u;
     for (var quad = 0u; quad < 4u; quad++) {
         let qx = (quad & 1u) * half;
@@ -352,7 +378,7 @@ fn prepare(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(64)
 fn finish(@builtin(global_invocation_id) gid: vec3<u32>) {
     let q = thread_of(gid);
-    if (q >= p.n_queries) { return; }
+    if (q >= p.n_queries || !searched(q)) { return; }
     let index = index_of_key(info[q * p.info_stride + 1u], atomicLoad(&result[2u * q + 1u]));
     var c = NONE;
     if (index < p.cand_w * p.cand_h) {

@@ -1,0 +1,293 @@
+// The patch pass of derma-synth kept on the GPU (patch_pass.rs: Shen et al. §3.2 in wavefronts,
+// with the occurrence penalty after Kaspar et al. 2015 §4.2 and the clash rounds), appended to
+// search.wgsl, whose search it runs. One wavefront per submission: `gather` reads its patches'
+// windows, masks and coherent guesses from the canvas kept here; then each round builds the
+// penalties from the occurrence counts (`penalty_rows`, `penalty_table`), searches the patches
+// still pending (`prepare_round`, then search.wgsl's steps), accepts in scanline order those
+// that do not clash with a window accepted earlier in the wavefront (`accept`, one thread) and
+// pastes them, updating the counts (`paste`). The same integers as the CPU decide every step.
+
+// The canvas: codes (one per word, channels interleaved) and sources (exemplar texel, NONE
+// where none); one exemplar.
+@group(0) @binding(11) var<storage, read_write> canvas: array<u32>;
+@group(0) @binding(12) var<storage, read_write> canvas_src: array<u32>;
+// Per exemplar texel: output texels drawn from it.
+@group(0) @binding(13) var<storage, read_write> counts: array<atomic<u32>>;
+// [total drawn, pending patches, windows accepted in the wavefront, per patch its status
+// (PENDING, PASTE, DONE), then the accepted windows' (x, y)].
+@group(0) @binding(14) var<storage, read_write> state: array<atomic<u32>>;
+// Per exemplar row and candidate column: counts summed over a row of n texels.
+@group(0) @binding(15) var<storage, read_write> row_sums: array<u32>;
+
+const PENDING: u32 = 0u;
+const PASTE: u32 = 1u;
+const DONE: u32 = 2u;
+const STATE_TOTAL: u32 = 0u;
+const STATE_PENDING: u32 = 1u;
+const STATE_ACCEPTED: u32 = 2u;
+const STATE_STATUS: u32 = 3u;
+
+fn accepted_at(i: u32) -> u32 {
+    return STATE_STATUS + p.n_queries + 2u * i;
+}
+
+fn window_stride() -> u32 {
+    return 3u + p.max_guesses;
+}
+
+// Canvas texel (x + dx, y + dy), wrapping on a torus (a plane's patches never reach its edge).
+fn canvas_at(x: u32, y: u32, dx: u32, dy: u32) -> u32 {
+    return ((y + dy) % p.canvas_h) * p.canvas_w + (x + dx) % p.canvas_w;
+}
+
+// Patch q's window: its codes stacked in `source` (256 where not yet synthesised, unless none
+// or all are: patch_pass.rs, known_mask), its info and its coherent guesses (Canvas::
+// coherent_guess with the probes (0, 0), (0, d), (d, 0), (n − 1, 0)).
+@compute @workgroup_size(64)
+fn gather(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let q = thread_of(gid);
+    if (q >= p.n_queries) { return; }
+    let n = p.w;
+    let c = p.channels;
+    let ws = q * window_stride();
+    let px = windows[ws];
+    let py = windows[ws + 1u];
+    var known = 0u;
+    for (var t = 0u; t < n * n; t++) {
+        if (canvas_src[canvas_at(px, py, t % n, t / n)] != NONE) { known++; }
+    }
+    let masked = known != 0u && known != n * n;
+    var mask_known = 0u;
+    for (var t = 0u; t < n * n; t++) {
+        let ct = canvas_at(px, py, t % n, t / n);
+        let is_known = !masked || canvas_src[ct] != NONE;
+        for (var k = 0u; k < c; k++) {
+            var v = 256u;
+            if (is_known) { v = canvas[ct * c + k]; }
+            source[(q * n * n + t) * c + k] = v;
+        }
+        if (is_known) { mask_known++; }
+    }
+    let base = q * p.info_stride;
+    info[base] = mask_known;
+    info[base + 1u] = windows[ws + 2u];
+    info[base + INFO_ORIGIN] = 0u;
+    info[base + INFO_ORIGIN + 1u] = q * n;
+    info[base + INFO_FLAGS] = 0u;
+    // The fully known quadrants and their sums (integers, exact in f32).
+    let half = n / 2u;
+    var quad_mask = 0u;
+    for (var quad = 0u; quad < 4u; quad++) {
+        let qx = (quad & 1u) * half;
+        let qy = (quad >> 1u) * half;
+        var full = true;
+        for (var k = 0u; k < c; k++) {
+            var sum = 0u;
+            for (var dy = 0u; dy < half; dy++) {
+                for (var dx = 0u; dx < half; dx++) {
+                    let v = source[(q * n * n + (qy + dy) * n + qx + dx) * c + k];
+                    if (v == 256u) { full = false; } else { sum += v; }
+                }
+            }
+            info[base + INFO_SUMS + quad * c + k] = bitcast<u32>(f32(sum));
+        }
+        if (full) { quad_mask |= 1u << quad; }
+    }
+    for (var quad = 0u; quad < 4u; quad++) {
+        if ((quad_mask & (1u << quad)) == 0u) {
+            for (var k = 0u; k < c; k++) { info[base + INFO_SUMS + quad * c + k] = 0u; }
+        }
+    }
+    info[base + 2u] = quad_mask;
+    // Coherent guesses, without repeats; [0] when no probe has a source.
+    let d = n / 2u;
+    var probes = array<vec2<u32>, 4>(vec2<u32>(0u, 0u), vec2<u32>(0u, d), vec2<u32>(d, 0u), vec2<u32>(n - 1u, 0u));
+    var count = 0u;
+    for (var j = 0u; j < 4u; j++) {
+        let pr = probes[j];
+        let s = canvas_src[canvas_at(px, py, pr.x, pr.y)];
+        if (s == NONE) { continue; }
+        let sx = s % p.ex_width;
+        let sy = s / p.ex_width;
+        let gx = min(select(0u, sx - pr.x, sx >= pr.x), p.cand_w - 1u);
+        let gy = min(select(0u, sy - pr.y, sy >= pr.y), p.cand_h - 1u);
+        let g = gy * p.cand_w + gx;
+        var seen = false;
+        for (var i = 0u; i < count; i++) {
+            if (windows[ws + 3u + i] == g) { seen = true; }
+        }
+        if (!seen) {
+            windows[ws + 3u + count] = g;
+            count++;
+        }
+    }
+    if (count == 0u) {
+        windows[ws + 3u] = 0u;
+        count = 1u;
+    }
+    for (var i = count; i < p.max_guesses; i++) { windows[ws + 3u + i] = NONE; }
+}
+
+fn nothing_pending() -> bool {
+    return atomicLoad(&state[STATE_PENDING]) == 0u;
+}
+
+// Counts summed over n texels along each exemplar row, at every candidate column.
+@compute @workgroup_size(64)
+fn penalty_rows(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = thread_of(gid);
+    let ex_h = p.cand_h + p.w - 1u;
+    if (i >= p.cand_w * ex_h || nothing_pending()) { return; }
+    let x = i % p.cand_w;
+    let y = i / p.cand_w;
+    var sum = 0u;
+    for (var dx = 0u; dx < p.w; dx++) {
+        sum += atomicLoad(&counts[y * p.ex_width + x + dx]);
+    }
+    row_sums[i] = sum;
+}
+
+// The penalty per known texel of each candidate (patch_pass.rs, `penalty`): the window's count
+// o against the mean use, in 64-bit integers; the cap near windows accepted in the wavefront.
+@compute @workgroup_size(64)
+fn penalty_table(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = thread_of(gid);
+    if (i >= p.cand_w * p.cand_h || nothing_pending()) { return; }
+    let x = i % p.cand_w;
+    let y = i / p.cand_w;
+    let total = atomicLoad(&state[STATE_TOTAL]);
+    var pen = 0u;
+    if (total > 0u) {
+        var o = 0u;
+        for (var dy = 0u; dy < p.w; dy++) { o += row_sums[(y + dy) * p.cand_w + x]; }
+        let texels = u64(p.ex_width) * u64(p.cand_h + p.w - 1u);
+        let a = u64(o) * texels;
+        let dd = u64(p.w * p.w) * u64(total);
+        let ratio = ((a / dd) << 16u) + (((a % dd) << 16u) / dd);
+        let one = 65536lu;
+        let k16 = (u64(p.k16_hi) << 32u) | u64(p.k16_lo);
+        if (ratio > one && k16 > 0lu) {
+            let excess = ratio - one;
+            // Saturating product: beyond 2⁶⁴ the penalty is past any cap.
+            if (excess > 0xfffffffffffffffflu / k16) {
+                pen = p.cap;
+            } else {
+                pen = u32(min((excess * k16) >> 32u, u64(p.cap)));
+            }
+        }
+    }
+    let d = p.w / 2u;
+    let accepted = atomicLoad(&state[STATE_ACCEPTED]);
+    for (var a = 0u; a < accepted; a++) {
+        let ax = atomicLoad(&state[accepted_at(a)]);
+        let ay = atomicLoad(&state[accepted_at(a) + 1u]);
+        if (max(ax, x) - min(ax, x) < d && max(ay, y) - min(ay, y) < d) { pen = p.cap; }
+    }
+    penalty[i] = pen;
+}
+
+// A round's start: patches pasted in the last round are done; the pending ones start from the
+// least cost among their guesses under this round's penalties.
+@compute @workgroup_size(64)
+fn prepare_round(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let q = thread_of(gid);
+    if (q == 0u) { atomicStore(&result[2u * p.n_queries], 0u); }
+    if (q >= p.n_queries) { return; }
+    let status = atomicLoad(&state[STATE_STATUS + q]);
+    if (status == PASTE) { atomicStore(&state[STATE_STATUS + q], DONE); }
+    let base = q * p.info_stride;
+    if (status != PENDING) {
+        info[base + INFO_FLAGS] = 1u;
+        return;
+    }
+    info[base + INFO_FLAGS] = 0u;
+    let ws = q * window_stride();
+    let last = p.cand_w * p.cand_h - 1u;
+    var first = NONE;
+    for (var j = 0u; j < p.max_guesses; j++) {
+        let g0 = windows[ws + 3u + j];
+        if (g0 == NONE) { break; }
+        let g = min(g0, last);
+        first = min(first, distance(q, g % p.cand_w, g / p.cand_w, NONE) + candidate_penalty(q, g));
+    }
+    info[base + 3u] = first;
+    atomicStore(&result[2u * q], first);
+    atomicStore(&result[2u * q + 1u], NONE);
+}
+
+// In scanline order, a pending patch is accepted unless its match lies within half a patch
+// (each way) of a window accepted earlier in the wavefront; the round's first always is.
+@compute @workgroup_size(1)
+fn accept() {
+    if (nothing_pending()) { return; }
+    let d = p.w / 2u;
+    var first = true;
+    var accepted = atomicLoad(&state[STATE_ACCEPTED]);
+    var pending = 0u;
+    for (var q = 0u; q < p.n_queries; q++) {
+        if (atomicLoad(&state[STATE_STATUS + q]) != PENDING) { continue; }
+        let index = atomicLoad(&result[2u * q + 1u]);
+        let mx = index % p.cand_w;
+        let my = index / p.cand_w;
+        var clash = false;
+        if (!first) {
+            for (var a = 0u; a < accepted; a++) {
+                let ax = atomicLoad(&state[accepted_at(a)]);
+                let ay = atomicLoad(&state[accepted_at(a) + 1u]);
+                if (max(ax, mx) - min(ax, mx) < d && max(ay, my) - min(ay, my) < d) { clash = true; }
+            }
+        }
+        first = false;
+        if (clash) {
+            pending++;
+            continue;
+        }
+        atomicStore(&state[accepted_at(accepted)], mx);
+        atomicStore(&state[accepted_at(accepted) + 1u], my);
+        accepted++;
+        atomicStore(&state[STATE_STATUS + q], PASTE);
+    }
+    atomicStore(&state[STATE_ACCEPTED], accepted);
+    atomicStore(&state[STATE_PENDING], pending);
+}
+
+// Copies the accepted patches' matches over their windows (one thread per texel), moving each
+// texel's count from its old source to its new one.
+@compute @workgroup_size(64)
+fn paste(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = thread_of(gid);
+    let n = p.w;
+    let q = i / (n * n);
+    if (q >= p.n_queries) { return; }
+    if (atomicLoad(&state[STATE_STATUS + q]) != PASTE) { return; }
+    let t = i % (n * n);
+    let ws = q * window_stride();
+    let ct = canvas_at(windows[ws], windows[ws + 1u], t % n, t / n);
+    // Where patches overlap (a plane's last patch pulled in to its edge, a small torus), the
+    // later one in scanline order pastes last on the CPU: so only it writes the texel, and
+    // the counts move from the source before the round to its source, as on the CPU.
+    if (p.overlap == 1u) {
+        let cx = ct % p.canvas_w;
+        let cy = ct / p.canvas_w;
+        for (var q2 = q + 1u; q2 < p.n_queries; q2++) {
+            if (atomicLoad(&state[STATE_STATUS + q2]) != PASTE) { continue; }
+            let w2 = q2 * window_stride();
+            let dx = (cx + p.canvas_w - windows[w2]) % p.canvas_w;
+            let dy = (cy + p.canvas_h - windows[w2 + 1u]) % p.canvas_h;
+            if (dx < n && dy < n) { return; }
+        }
+    }
+    let index = atomicLoad(&result[2u * q + 1u]);
+    let s = (index / p.cand_w + t / n) * p.ex_width + index % p.cand_w + t % n;
+    let old = canvas_src[ct];
+    if (old == NONE) {
+        atomicAdd(&state[STATE_TOTAL], 1u);
+    } else {
+        atomicSub(&counts[old], 1u);
+    }
+    atomicAdd(&counts[s], 1u);
+    canvas_src[ct] = s;
+    for (var k = 0u; k < p.channels; k++) {
+        canvas[ct * p.channels + k] = ex[s * p.channels + k];
+    }
+}
