@@ -674,6 +674,8 @@ impl GpuMatcher {
         let [gather, rows, table, prepare_round, screen, cost, min_cost, settle, choose, pick, finish, accept, paste] =
             &pipes.steps;
         let k16 = plan.weight16;
+        let t0 = std::time::Instant::now();
+        let mut submissions = 0usize;
         for (front, &overlap) in plan.wavefronts.iter().zip(&plan.overlaps) {
             let nq = front.len();
             if nq == 0 {
@@ -749,6 +751,7 @@ impl GpuMatcher {
                     }
                 }
                 q.submit([enc.finish()]);
+                submissions += 1;
                 first = false;
                 // The pending count (state word 1).
                 let pending: Vec<u32> = read_words(ctx, &state, &staging, 2)?;
@@ -761,6 +764,12 @@ impl GpuMatcher {
         let sources: Vec<u32> = ctx
             .read_back(&canvas_src, texels)
             .map_err(|e| gpu_error(e.to_string()))?;
+        tracing::debug!(
+            "GPU patch pass: {} wavefronts in {submissions} submissions of up to \
+             {ROUNDS_PER_SUBMISSION} rounds, {:.1} ms",
+            plan.wavefronts.len(),
+            t0.elapsed().as_secs_f64() * 1e3
+        );
         Ok(Some(sources))
     }
 }
