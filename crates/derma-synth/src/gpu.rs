@@ -57,7 +57,7 @@ struct Params {
     k16_lo: u32,
     k16_hi: u32,
     cap: u32,
-    overlap: u32,
+    fronts: u32,
     pad: [u32; 2],
 }
 
@@ -136,12 +136,12 @@ fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
 }
 
 /// The patch pass's pipelines: its kernels and the search's, on one layout (binding 0 uniform,
-/// 1–2 read-only storage, 3–15 read-write storage).
+/// 1–2 read-only storage, 3–16 read-write storage).
 struct PatchPipelines {
     layout: wgpu::BindGroupLayout,
-    /// `gather`, then per round: `penalty_rows`, `penalty_table`, `prepare_round`, `screen`,
+    /// `advance`, `gather`, then per round: `penalty_rows`, `penalty_table`, `prepare_round`, `screen`,
     /// `cost`, `min_cost`, `settle`, `choose`, `pick`, `finish`, `accept`, `paste`.
-    steps: [wgpu::ComputePipeline; 13],
+    steps: [wgpu::ComputePipeline; 14],
 }
 
 static PATCH_PIPELINES: GpuCell<Option<PatchPipelines>> = GpuCell::new();
@@ -159,8 +159,9 @@ fn patch_pipelines() -> Result<(
             "patch_pass.wgsl",
             PATCH_SHADER,
             2,
-            13,
+            14,
             [
+                "advance",
                 "gather",
                 "penalty_rows",
                 "penalty_table",
@@ -270,6 +271,8 @@ pub struct GpuMatcher {
     scratch: Mutex<Option<Scratch>>,
     name: String,
     max_survivors: usize,
+    patch_rounds: usize,
+    patch_wavefronts: usize,
 }
 
 impl GpuMatcher {
@@ -289,6 +292,19 @@ impl GpuMatcher {
             scratch: Mutex::new(None),
             name: ctx.name.clone(),
             max_survivors: MAX_SURVIVORS.min(bindable),
+            patch_rounds: PATCH_ROUNDS,
+            patch_wavefronts: PATCH_WAVEFRONTS,
+        })
+    }
+
+    /// As [`GpuMatcher::new`] with the patch pass recording `rounds` rounds per wavefront and
+    /// `wavefronts` wavefronts per submission (tests use few, so that wavefronts stop
+    /// submissions and get more rounds); the sources are the same for any.
+    pub fn with_patch_schedule(rounds: usize, wavefronts: usize) -> Result<Self> {
+        Ok(Self {
+            patch_rounds: rounds.max(1),
+            patch_wavefronts: wavefronts.max(1),
+            ..Self::new()?
         })
     }
 
@@ -440,7 +456,7 @@ impl GpuMatcher {
             k16_lo: 0,
             k16_hi: 0,
             cap: 0,
-            overlap: 0,
+            fronts: 0,
             pad: [0; 2],
         };
         let d = &ctx.device;
@@ -563,9 +579,17 @@ impl GpuMatcher {
     }
 }
 
-/// Rounds of a wavefront recorded per submission (most wavefronts settle within them; the rest
-/// get more).
-const ROUNDS_PER_SUBMISSION: usize = 4;
+/// Rounds recorded per wavefront (most settle within them; the rest get more in a submission
+/// of their own).
+const PATCH_ROUNDS: usize = 4;
+/// Wavefronts recorded per submission of the patch pass (the first that does not settle in its
+/// rounds stops the rest, which the next submission records again).
+const PATCH_WAVEFRONTS: usize = 16;
+/// Words of the patch pass's state before the per-patch statuses (patch_pass.wgsl).
+const STATE_STATUS: usize = 7;
+const STATE_PENDING: usize = 1;
+const STATE_WAVEFRONT: usize = 3;
+const STATE_STALLED: usize = 4;
 
 impl GpuMatcher {
     /// The patch pass on the GPU (patch_pass.wgsl), one submission per wavefront; `None` where
@@ -642,12 +666,34 @@ impl GpuMatcher {
         let canvas = init("canvas codes", &codes, rw);
         let canvas_src = init("canvas sources", plan.sources, rw | U::COPY_SRC);
         let counts = init("occurrence counts", &counts, rw);
-        let state_words = 3 + 3 * nq_max;
-        let mut state0 = vec![0u32; state_words];
+        // The wavefronts with patches: (first patch, patches, overlap), then the patches.
+        let fronts: Vec<(&Vec<[u32; 3]>, bool)> = plan
+            .wavefronts
+            .iter()
+            .zip(plan.overlaps.iter().copied())
+            .filter(|(f, _)| !f.is_empty())
+            .collect();
+        let mut plan_words: Vec<u32> = Vec::new();
+        let mut first_patch = 0u32;
+        for (f, overlap) in &fronts {
+            plan_words.extend_from_slice(&[first_patch, f.len() as u32, u32::from(*overlap)]);
+            first_patch += f.len() as u32;
+        }
+        for (f, _) in &fronts {
+            plan_words.extend(f.iter().flatten());
+        }
+        let plan_buf = init("patch plan", &plan_words, rw);
+        let mut state0 = vec![0u32; STATE_STATUS + 3 * nq_max];
         state0[0] = total;
+        // No wavefront yet: `advance` starts wavefront 0 (the index wraps to it).
+        state0[STATE_WAVEFRONT] = u32::MAX;
         let state = init("patch state", &state0, rw | U::COPY_SRC);
         let row_sums = buffer("row sums", cw * e.height() * 4, rw);
-        let staging = buffer("patch state read back", 8, U::MAP_READ | U::COPY_DST);
+        let staging = buffer(
+            "patch state read back",
+            STATE_STATUS * 4,
+            U::MAP_READ | U::COPY_DST,
+        );
         let group = ctx.bind_buffers(
             "patch pass",
             &pipes.layout,
@@ -668,106 +714,126 @@ impl GpuMatcher {
                 &counts,
                 &state,
                 &row_sums,
+                &plan_buf,
             ],
         );
         let q = &ctx.queue;
-        let [gather, rows, table, prepare_round, screen, cost, min_cost, settle, choose, pick, finish, accept, paste] =
-            &pipes.steps;
         let k16 = plan.weight16;
-        let t0 = std::time::Instant::now();
-        let mut submissions = 0usize;
-        for (front, &overlap) in plan.wavefronts.iter().zip(&plan.overlaps) {
-            let nq = front.len();
-            if nq == 0 {
-                continue;
-            }
-            let params_now = Params {
-                ex_width: e.width() as u32,
-                channels: c as u32,
-                w: n as u32,
-                cand_w: cw as u32,
-                cand_h: ch as u32,
-                plane_w: res.plane_w as u32,
-                plane_len: res.plane_len as u32,
-                tol: plan.tol.0,
-                has_penalty: 1,
-                info_stride: info_stride as u32,
-                n_queries: nq as u32,
-                capacity: capacity as u32,
-                src_width: n as u32,
-                src_height: (nq * n) as u32,
-                max_guesses: MAX_GUESSES as u32,
-                guarded: 1,
-                canvas_w: plane.width as u32,
-                canvas_h: plane.height as u32,
-                k16_lo: k16 as u32,
-                k16_hi: (k16 >> 32) as u32,
-                cap: plan.cap,
-                overlap: u32::from(overlap),
-                pad: [0; 2],
-            };
-            q.write_buffer(&params, 0, bytemuck::bytes_of(&params_now));
-            let mut rows_of = vec![NONE; nq * stride];
-            for (row, p) in rows_of.chunks_exact_mut(stride).zip(front) {
-                row[..3].copy_from_slice(p);
-            }
-            q.write_buffer(&windows, 0, bytemuck::cast_slice(&rows_of));
-            // Pending: all; none accepted; every status PENDING (the total stays).
-            let mut head = vec![0u32; 2 + nq];
-            head[0] = nq as u32;
-            q.write_buffer(&state, 4, bytemuck::cast_slice(&head));
-            let per_query = derma_core::gpu::grid(nq, WORKGROUP);
-            let screen_dims = ((candidates.div_ceil(WORKGROUP)) as u32, nq as u32);
-            let survivor_dims = derma_core::gpu::grid(capacity, WORKGROUP);
-            let round: [(&wgpu::ComputePipeline, (u32, u32)); 12] = [
-                (rows, derma_core::gpu::grid(cw * e.height(), WORKGROUP)),
-                (table, derma_core::gpu::grid(candidates, WORKGROUP)),
-                (prepare_round, per_query),
-                (screen, screen_dims),
-                (cost, survivor_dims),
-                (min_cost, screen_dims),
-                (settle, per_query),
-                (choose, survivor_dims),
-                (pick, screen_dims),
-                (finish, per_query),
-                (accept, (1, 1)),
-                (paste, derma_core::gpu::grid(nq * n * n, WORKGROUP)),
-            ];
-            let mut first = true;
-            loop {
-                let mut enc = d.create_command_encoder(&Default::default());
-                {
-                    let mut pass = enc.begin_compute_pass(&Default::default());
-                    pass.set_bind_group(0, &group, &[]);
-                    if first {
-                        pass.set_pipeline(gather);
-                        pass.dispatch_workgroups(per_query.0, per_query.1, 1);
+        let params_all = Params {
+            ex_width: e.width() as u32,
+            channels: c as u32,
+            w: n as u32,
+            cand_w: cw as u32,
+            cand_h: ch as u32,
+            plane_w: res.plane_w as u32,
+            plane_len: res.plane_len as u32,
+            tol: plan.tol.0,
+            has_penalty: 1,
+            info_stride: info_stride as u32,
+            n_queries: nq_max as u32,
+            capacity: capacity as u32,
+            src_width: n as u32,
+            src_height: (nq_max * n) as u32,
+            max_guesses: MAX_GUESSES as u32,
+            guarded: 1,
+            canvas_w: plane.width as u32,
+            canvas_h: plane.height as u32,
+            k16_lo: k16 as u32,
+            k16_hi: (k16 >> 32) as u32,
+            cap: plan.cap,
+            fronts: fronts.len() as u32,
+            pad: [0; 2],
+        };
+        q.write_buffer(&params, 0, bytemuck::bytes_of(&params_all));
+        let [advance, gather, rows, table, prepare_round, screen, cost, min_cost, settle, choose, pick, finish, accept, paste] =
+            &pipes.steps;
+        let per_query = derma_core::gpu::grid(nq_max, WORKGROUP);
+        let screen_dims = ((candidates.div_ceil(WORKGROUP)) as u32, nq_max as u32);
+        let survivor_dims = derma_core::gpu::grid(capacity, WORKGROUP);
+        let round: [(&wgpu::ComputePipeline, (u32, u32)); 12] = [
+            (rows, derma_core::gpu::grid(cw * e.height(), WORKGROUP)),
+            (table, derma_core::gpu::grid(candidates, WORKGROUP)),
+            (prepare_round, per_query),
+            (screen, screen_dims),
+            (cost, survivor_dims),
+            (min_cost, screen_dims),
+            (settle, per_query),
+            (choose, survivor_dims),
+            (pick, screen_dims),
+            (finish, per_query),
+            (accept, (1, 1)),
+            (paste, derma_core::gpu::grid(nq_max * n * n, WORKGROUP)),
+        ];
+        // Records `wavefronts` starts (each `advance`, `gather` and `rounds` rounds; none: only
+        // the rounds, continuing the current one), submits and reads the state's head back.
+        let submit = |wavefronts: usize, rounds: usize| -> Result<Vec<u32>> {
+            let mut enc = d.create_command_encoder(&Default::default());
+            {
+                let mut pass = enc.begin_compute_pass(&Default::default());
+                pass.set_bind_group(0, &group, &[]);
+                let mut dispatch = |pipe: &wgpu::ComputePipeline, dims: (u32, u32)| {
+                    pass.set_pipeline(pipe);
+                    pass.dispatch_workgroups(dims.0, dims.1, 1);
+                };
+                for _ in 0..wavefronts.max(1) {
+                    if wavefronts > 0 {
+                        dispatch(advance, (1, 1));
+                        dispatch(gather, per_query);
                     }
-                    for _ in 0..ROUNDS_PER_SUBMISSION {
-                        for (pipe, dims) in &round {
-                            pass.set_pipeline(pipe);
-                            pass.dispatch_workgroups(dims.0, dims.1, 1);
+                    for _ in 0..rounds {
+                        for &(pipe, dims) in &round {
+                            dispatch(pipe, dims);
                         }
                     }
                 }
-                q.submit([enc.finish()]);
-                submissions += 1;
-                first = false;
-                // The pending count (state word 1).
-                let pending: Vec<u32> = read_words(ctx, &state, &staging, 2)?;
-                if pending[1] == 0 {
-                    break;
+            }
+            q.submit([enc.finish()]);
+            read_words(ctx, &state, &staging, STATE_STATUS)
+        };
+        let t0 = std::time::Instant::now();
+        let mut submissions = 0usize;
+        let mut next = 0usize;
+        while next < fronts.len() {
+            let batch = self.patch_wavefronts.min(fronts.len() - next);
+            let mut head = submit(batch, self.patch_rounds)?;
+            submissions += 1;
+            // The last wavefront started has not settled (it stopped the rest, or it was the
+            // batch's last): more rounds for it alone.
+            if head[STATE_PENDING] != 0 {
+                q.write_buffer(
+                    &state,
+                    (STATE_STALLED * 4) as u64,
+                    bytemuck::bytes_of(&0u32),
+                );
+                // Each round accepts at least one patch, so this ends within nq_max rounds.
+                for _ in 0..=nq_max {
+                    if head[STATE_PENDING] == 0 {
+                        break;
+                    }
+                    head = submit(0, self.patch_rounds)?;
+                    submissions += 1;
+                }
+                if head[STATE_PENDING] != 0 {
+                    return Err(gpu_error(format!(
+                        "wavefront {} of the patch pass did not settle",
+                        head[STATE_WAVEFRONT]
+                    )));
                 }
             }
-            progress.advance(nq as u64);
+            let started = head[STATE_WAVEFRONT] as usize;
+            let done: usize = fronts[next..=started].iter().map(|f| f.0.len()).sum();
+            progress.advance(done as u64);
+            next = started + 1;
         }
         let sources: Vec<u32> = ctx
             .read_back(&canvas_src, texels)
             .map_err(|e| gpu_error(e.to_string()))?;
         tracing::debug!(
-            "GPU patch pass: {} wavefronts in {submissions} submissions of up to \
-             {ROUNDS_PER_SUBMISSION} rounds, {:.1} ms",
-            plan.wavefronts.len(),
+            "GPU patch pass: {} wavefronts in {submissions} submissions ({} wavefronts of {} \
+             rounds each), {:.1} ms",
+            fronts.len(),
+            self.patch_wavefronts,
+            self.patch_rounds,
             t0.elapsed().as_secs_f64() * 1e3
         );
         Ok(Some(sources))

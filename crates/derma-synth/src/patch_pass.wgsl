@@ -1,7 +1,9 @@
 // The patch pass of derma-synth kept on the GPU (patch_pass.rs: Shen et al. §3.2 in wavefronts,
 // with the occurrence penalty after Kaspar et al. 2015 §4.2 and the clash rounds), appended to
-// search.wgsl, whose search it runs. One wavefront per submission: `gather` reads its patches'
-// windows, masks and coherent guesses from the canvas kept here; then each round builds the
+// search.wgsl, whose search it runs. Several wavefronts per submission: `advance` starts the
+// next one when the last has settled (else it stops the submission's remaining work, and the
+// host adds rounds), `gather` reads its patches' windows, masks and coherent guesses from the
+// canvas kept here; then each round builds the
 // penalties from the occurrence counts (`penalty_rows`, `penalty_table`), searches the patches
 // still pending (`prepare_round`, then search.wgsl's steps), accepts in scanline order those
 // that do not clash with a window accepted earlier in the wavefront (`accept`, one thread) and
@@ -13,11 +15,15 @@
 @group(0) @binding(12) var<storage, read_write> canvas_src: array<u32>;
 // Per exemplar texel: output texels drawn from it.
 @group(0) @binding(13) var<storage, read_write> counts: array<atomic<u32>>;
-// [total drawn, pending patches, windows accepted in the wavefront, per patch its status
-// (PENDING, PASTE, DONE), then the accepted windows' (x, y)].
+// [total drawn, pending patches, windows accepted in the wavefront, the wavefront, stalled
+// (1: a wavefront did not settle in its rounds, so nothing more runs), its patches, whether they
+// overlap, then per patch its status (PENDING, PASTE, DONE), then the accepted windows' (x, y)].
 @group(0) @binding(14) var<storage, read_write> state: array<atomic<u32>>;
 // Per exemplar row and candidate column: counts summed over a row of n texels.
 @group(0) @binding(15) var<storage, read_write> row_sums: array<u32>;
+// Per wavefront (first patch, patches, overlap), then per patch (x, y, salt); `p.fronts`
+// wavefronts.
+@group(0) @binding(16) var<storage, read_write> plan: array<u32>;
 
 const PENDING: u32 = 0u;
 const PASTE: u32 = 1u;
@@ -25,7 +31,37 @@ const DONE: u32 = 2u;
 const STATE_TOTAL: u32 = 0u;
 const STATE_PENDING: u32 = 1u;
 const STATE_ACCEPTED: u32 = 2u;
-const STATE_STATUS: u32 = 3u;
+const STATE_WAVEFRONT: u32 = 3u;
+const STATE_STALLED: u32 = 4u;
+const STATE_COUNT: u32 = 5u;
+const STATE_OVERLAP: u32 = 6u;
+const STATE_STATUS: u32 = 7u;
+
+fn stalled() -> bool {
+    return atomicLoad(&state[STATE_STALLED]) != 0u;
+}
+
+// The next wavefront, if the last one settled: its patches go into `windows` (with `gather`),
+// all pending. Otherwise nothing more runs in this submission.
+@compute @workgroup_size(1)
+fn advance() {
+    if (stalled()) { return; }
+    if (atomicLoad(&state[STATE_PENDING]) != 0u) {
+        atomicStore(&state[STATE_STALLED], 1u);
+        return;
+    }
+    let w = atomicLoad(&state[STATE_WAVEFRONT]) + 1u;
+    if (w >= p.fronts) { return; }
+    let count = plan[3u * w + 1u];
+    atomicStore(&state[STATE_WAVEFRONT], w);
+    atomicStore(&state[STATE_COUNT], count);
+    atomicStore(&state[STATE_OVERLAP], plan[3u * w + 2u]);
+    atomicStore(&state[STATE_PENDING], count);
+    atomicStore(&state[STATE_ACCEPTED], 0u);
+    for (var q = 0u; q < p.n_queries; q++) {
+        atomicStore(&state[STATE_STATUS + q], select(DONE, PENDING, q < count));
+    }
+}
 
 fn accepted_at(i: u32) -> u32 {
     return STATE_STATUS + p.n_queries + 2u * i;
@@ -46,10 +82,15 @@ fn canvas_at(x: u32, y: u32, dx: u32, dy: u32) -> u32 {
 @compute @workgroup_size(64)
 fn gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     let q = thread_of(gid);
-    if (q >= p.n_queries) { return; }
+    if (stalled() || q >= atomicLoad(&state[STATE_COUNT])) { return; }
     let n = p.w;
     let c = p.channels;
     let ws = q * window_stride();
+    let w = atomicLoad(&state[STATE_WAVEFRONT]);
+    let at = 3u * p.fronts + 3u * (plan[3u * w] + q);
+    windows[ws] = plan[at];
+    windows[ws + 1u] = plan[at + 1u];
+    windows[ws + 2u] = plan[at + 2u];
     let px = windows[ws];
     let py = windows[ws + 1u];
     var known = 0u;
@@ -129,7 +170,7 @@ fn gather(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 
 fn nothing_pending() -> bool {
-    return atomicLoad(&state[STATE_PENDING]) == 0u;
+    return stalled() || atomicLoad(&state[STATE_PENDING]) == 0u;
 }
 
 // Counts summed over n texels along each exemplar row, at every candidate column.
@@ -196,7 +237,7 @@ fn prepare_round(@builtin(global_invocation_id) gid: vec3<u32>) {
     let status = atomicLoad(&state[STATE_STATUS + q]);
     if (status == PASTE) { atomicStore(&state[STATE_STATUS + q], DONE); }
     let base = q * p.info_stride;
-    if (status != PENDING) {
+    if (status != PENDING || stalled()) {
         info[base + INFO_FLAGS] = 1u;
         return;
     }
@@ -258,7 +299,7 @@ fn paste(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = thread_of(gid);
     let n = p.w;
     let q = i / (n * n);
-    if (q >= p.n_queries) { return; }
+    if (q >= p.n_queries || stalled()) { return; }
     if (atomicLoad(&state[STATE_STATUS + q]) != PASTE) { return; }
     let t = i % (n * n);
     let ws = q * window_stride();
@@ -266,7 +307,7 @@ fn paste(@builtin(global_invocation_id) gid: vec3<u32>) {
     // Where patches overlap (a plane's last patch pulled in to its edge, a small torus), the
     // later one in scanline order pastes last on the CPU: so only it writes the texel, and
     // the counts move from the source before the round to its source, as on the CPU.
-    if (p.overlap == 1u) {
+    if (atomicLoad(&state[STATE_OVERLAP]) == 1u) {
         let cx = ct % p.canvas_w;
         let cy = ct / p.canvas_w;
         for (var q2 = q + 1u; q2 < p.n_queries; q2++) {

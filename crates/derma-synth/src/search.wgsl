@@ -37,7 +37,7 @@ struct Params {
     k16_lo: u32,       // patch_pass.wgsl: the occurrence weight λ·C·v̄ in 16.16 (u64 halves)
     k16_hi: u32,
     cap: u32,          // patch_pass.wgsl: the penalty's cap per known texel
-    overlap: u32,      // patch_pass.wgsl: 1 when patches of this wavefront overlap
+    fronts: u32,       // patch_pass.wgsl: wavefronts in `plan`
     pad1: u32,
     pad2: u32,
 }

@@ -93,6 +93,7 @@ fn a_seed_gives_the_same_texture_on_cpu_and_gpu() {
     // to the edge (a plane) or wrap them over the first (a torus), so patches of a wavefront
     // overlap; λ = 0 charges only the windows accepted earlier in a wavefront.
     let gpu = GpuMatcher::new().unwrap();
+    let tight = GpuMatcher::with_patch_schedule(1, 3).unwrap();
     let set = ExemplarSet::new(vec![exemplar(48, 48, 2, 5)], 16).unwrap();
     for (tile, width, height, occurrence) in [
         (false, 80, 64, 1.0),
@@ -118,6 +119,13 @@ fn a_seed_gives_the_same_texture_on_cpu_and_gpu() {
         );
         assert_eq!(a.source, b.source);
         assert_eq!(a.source_exemplar, b.source_exemplar);
+        // One round per wavefront, three wavefronts a submission: most wavefronts stop their
+        // submission and get more rounds; the texture is the same.
+        let c = synthesize(&set, &opts, None, &tight, &none).unwrap();
+        assert_eq!(
+            a.texture, c.texture,
+            "one round a wavefront, {width}×{height}"
+        );
     }
 }
 
