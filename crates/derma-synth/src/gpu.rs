@@ -139,6 +139,10 @@ fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
 /// 1–2 read-only storage, 3–16 read-write storage).
 struct PatchPipelines {
     layout: wgpu::BindGroupLayout,
+    /// `schedule` (patch_schedule.wgsl) on its own layout: binding 0 uniform, 1 the state, 2
+    /// the indirect arguments (which a dispatch may not also bind as storage).
+    schedule_layout: wgpu::BindGroupLayout,
+    schedule: wgpu::ComputePipeline,
     /// `advance`, `gather`, then per round: `penalty_rows`, `penalty_table`, `prepare_round`, `screen`,
     /// `cost`, `min_cost`, `settle`, `choose`, `pick`, `finish`, `accept`, `paste`.
     steps: [wgpu::ComputePipeline; 14],
@@ -177,7 +181,19 @@ fn patch_pipelines() -> Result<(
                 "paste",
             ],
         )?;
-        Ok(Some(PatchPipelines { layout, steps }))
+        let (schedule_layout, [schedule]) = ctx.entry_points(
+            "patch_schedule.wgsl",
+            include_str!("patch_schedule.wgsl"),
+            0,
+            2,
+            ["schedule"],
+        )?;
+        Ok(Some(PatchPipelines {
+            layout,
+            schedule_layout,
+            schedule,
+            steps,
+        }))
     })?)
 }
 
@@ -585,6 +601,8 @@ const PATCH_ROUNDS: usize = 4;
 /// Wavefronts recorded per submission of the patch pass (the first that does not settle in its
 /// rounds stops the rest, which the next submission records again).
 const PATCH_WAVEFRONTS: usize = 16;
+/// Indirect-dispatch words of one round (three per dispatch; patch_schedule.wgsl's ROUND_ARGS).
+const ROUND_ARGS: usize = 36;
 /// Words of the patch pass's state before the per-patch statuses (patch_pass.wgsl).
 const STATE_STATUS: usize = 7;
 const STATE_PENDING: usize = 1;
@@ -683,6 +701,9 @@ impl GpuMatcher {
             plan_words.extend(f.iter().flatten());
         }
         let plan_buf = init("patch plan", &plan_words, rw);
+        // The round's full workgroup counts (filled below), then the live ones `schedule`
+        // writes before each round.
+        let args = buffer("round arguments", ROUND_ARGS * 2 * 4, rw | U::INDIRECT);
         let mut state0 = vec![0u32; STATE_STATUS + 3 * nq_max];
         state0[0] = total;
         // No wavefront yet: `advance` starts wavefront 0 (the index wraps to it).
@@ -750,7 +771,7 @@ impl GpuMatcher {
         let per_query = derma_core::gpu::grid(nq_max, WORKGROUP);
         let screen_dims = ((candidates.div_ceil(WORKGROUP)) as u32, nq_max as u32);
         let survivor_dims = derma_core::gpu::grid(capacity, WORKGROUP);
-        let round: [(&wgpu::ComputePipeline, (u32, u32)); 12] = [
+        let round: [(&wgpu::ComputePipeline, (u32, u32)); ROUND_ARGS / 3] = [
             (rows, derma_core::gpu::grid(cw * e.height(), WORKGROUP)),
             (table, derma_core::gpu::grid(candidates, WORKGROUP)),
             (prepare_round, per_query),
@@ -764,25 +785,39 @@ impl GpuMatcher {
             (accept, (1, 1)),
             (paste, derma_core::gpu::grid(nq_max * n * n, WORKGROUP)),
         ];
+        let full: Vec<u32> = round.iter().flat_map(|(_, d)| [d.0, d.1, 1]).collect();
+        q.write_buffer(&args, 0, bytemuck::cast_slice(&full));
+        let schedule_group = ctx.bind_buffers(
+            "patch schedule",
+            &pipes.schedule_layout,
+            &[&params, &state, &args],
+        );
         // Records `wavefronts` starts (each `advance`, `gather` and `rounds` rounds; none: only
         // the rounds, continuing the current one), submits and reads the state's head back.
         let submit = |wavefronts: usize, rounds: usize| -> Result<Vec<u32>> {
             let mut enc = d.create_command_encoder(&Default::default());
             {
                 let mut pass = enc.begin_compute_pass(&Default::default());
-                pass.set_bind_group(0, &group, &[]);
-                let mut dispatch = |pipe: &wgpu::ComputePipeline, dims: (u32, u32)| {
-                    pass.set_pipeline(pipe);
-                    pass.dispatch_workgroups(dims.0, dims.1, 1);
-                };
                 for _ in 0..wavefronts.max(1) {
+                    pass.set_bind_group(0, &group, &[]);
                     if wavefronts > 0 {
-                        dispatch(advance, (1, 1));
-                        dispatch(gather, per_query);
+                        for (pipe, dims) in [(advance, (1, 1)), (gather, per_query)] {
+                            pass.set_pipeline(pipe);
+                            pass.dispatch_workgroups(dims.0, dims.1, 1);
+                        }
                     }
                     for _ in 0..rounds {
-                        for &(pipe, dims) in &round {
-                            dispatch(pipe, dims);
+                        // Nothing is dispatched for a settled wavefront or after a stop.
+                        pass.set_pipeline(&pipes.schedule);
+                        pass.set_bind_group(0, &schedule_group, &[]);
+                        pass.dispatch_workgroups(1, 1, 1);
+                        pass.set_bind_group(0, &group, &[]);
+                        for (k, &(pipe, _)) in round.iter().enumerate() {
+                            pass.set_pipeline(pipe);
+                            pass.dispatch_workgroups_indirect(
+                                &args,
+                                ((ROUND_ARGS + 3 * k) * 4) as u64,
+                            );
                         }
                     }
                 }
