@@ -289,6 +289,8 @@ pub struct GpuMatcher {
     max_survivors: usize,
     patch_rounds: usize,
     patch_wavefronts: usize,
+    /// Whether the rounds recorded per wavefront grow to the most any wavefront has taken.
+    patch_adaptive: bool,
 }
 
 impl GpuMatcher {
@@ -310,16 +312,19 @@ impl GpuMatcher {
             max_survivors: MAX_SURVIVORS.min(bindable),
             patch_rounds: PATCH_ROUNDS,
             patch_wavefronts: PATCH_WAVEFRONTS,
+            patch_adaptive: true,
         })
     }
 
-    /// As [`GpuMatcher::new`] with the patch pass recording `rounds` rounds per wavefront and
-    /// `wavefronts` wavefronts per submission (tests use few, so that wavefronts stop
-    /// submissions and get more rounds); the sources are the same for any.
+    /// As [`GpuMatcher::new`] with the patch pass recording `rounds` rounds per wavefront
+    /// (fixed: by default they grow to the most any wavefront has taken) and `wavefronts`
+    /// wavefronts per submission. Tests use few, so that wavefronts stop submissions and get
+    /// more rounds; the sources are the same for any.
     pub fn with_patch_schedule(rounds: usize, wavefronts: usize) -> Result<Self> {
         Ok(Self {
             patch_rounds: rounds.max(1),
             patch_wavefronts: wavefronts.max(1),
+            patch_adaptive: false,
             ..Self::new()?
         })
     }
@@ -595,8 +600,8 @@ impl GpuMatcher {
     }
 }
 
-/// Rounds recorded per wavefront (most settle within them; the rest get more in a submission
-/// of their own).
+/// Rounds first recorded per wavefront (they grow to the most any wavefront has taken; one that
+/// needs more gets them in a submission of its own).
 const PATCH_ROUNDS: usize = 4;
 /// Wavefronts recorded per submission of the patch pass (the first that does not settle in its
 /// rounds stops the rest, which the next submission records again).
@@ -604,7 +609,10 @@ const PATCH_WAVEFRONTS: usize = 16;
 /// Indirect-dispatch words of one round (three per dispatch; patch_schedule.wgsl's ROUND_ARGS).
 const ROUND_ARGS: usize = 36;
 /// Words of the patch pass's state before the per-patch statuses (patch_pass.wgsl).
-const STATE_STATUS: usize = 7;
+const STATE_STATUS: usize = 9;
+const STATE_MAX_ROUNDS: usize = 8;
+/// Most rounds recorded per wavefront when the schedule adapts to the rounds wavefronts took.
+const MAX_PATCH_ROUNDS: usize = 32;
 const STATE_PENDING: usize = 1;
 const STATE_WAVEFRONT: usize = 3;
 const STATE_STALLED: usize = 4;
@@ -828,9 +836,10 @@ impl GpuMatcher {
         let t0 = std::time::Instant::now();
         let mut submissions = 0usize;
         let mut next = 0usize;
+        let mut rounds = self.patch_rounds;
         while next < fronts.len() {
             let batch = self.patch_wavefronts.min(fronts.len() - next);
-            let mut head = submit(batch, self.patch_rounds)?;
+            let mut head = submit(batch, rounds)?;
             submissions += 1;
             // The last wavefront started has not settled (it stopped the rest, or it was the
             // batch's last): more rounds for it alone.
@@ -845,7 +854,7 @@ impl GpuMatcher {
                     if head[STATE_PENDING] == 0 {
                         break;
                     }
-                    head = submit(0, self.patch_rounds)?;
+                    head = submit(0, rounds)?;
                     submissions += 1;
                 }
                 if head[STATE_PENDING] != 0 {
@@ -854,6 +863,9 @@ impl GpuMatcher {
                         head[STATE_WAVEFRONT]
                     )));
                 }
+            }
+            if self.patch_adaptive {
+                rounds = rounds.max((head[STATE_MAX_ROUNDS] as usize).min(MAX_PATCH_ROUNDS));
             }
             let started = head[STATE_WAVEFRONT] as usize;
             let done: usize = fronts[next..=started].iter().map(|f| f.0.len()).sum();
@@ -864,11 +876,10 @@ impl GpuMatcher {
             .read_back(&canvas_src, texels)
             .map_err(|e| gpu_error(e.to_string()))?;
         tracing::debug!(
-            "GPU patch pass: {} wavefronts in {submissions} submissions ({} wavefronts of {} \
-             rounds each), {:.1} ms",
+            "GPU patch pass: {} wavefronts in {submissions} submissions ({} wavefronts of up to \
+             {rounds} rounds each), {:.1} ms",
             fronts.len(),
             self.patch_wavefronts,
-            self.patch_rounds,
             t0.elapsed().as_secs_f64() * 1e3
         );
         Ok(Some(sources))

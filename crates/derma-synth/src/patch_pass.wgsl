@@ -17,7 +17,8 @@
 @group(0) @binding(13) var<storage, read_write> counts: array<atomic<u32>>;
 // [total drawn, pending patches, windows accepted in the wavefront, the wavefront, stalled
 // (1: a wavefront did not settle in its rounds, so nothing more runs), its patches, whether they
-// overlap, then per patch its status (PENDING, PASTE, DONE), then the accepted windows' (x, y)].
+// overlap, its rounds so far, the most rounds any wavefront took, then per patch its status
+// (PENDING, PASTE, DONE), then the accepted windows' (x, y)].
 @group(0) @binding(14) var<storage, read_write> state: array<atomic<u32>>;
 // Per exemplar row and candidate column: counts summed over a row of n texels.
 @group(0) @binding(15) var<storage, read_write> row_sums: array<u32>;
@@ -35,7 +36,9 @@ const STATE_WAVEFRONT: u32 = 3u;
 const STATE_STALLED: u32 = 4u;
 const STATE_COUNT: u32 = 5u;
 const STATE_OVERLAP: u32 = 6u;
-const STATE_STATUS: u32 = 7u;
+const STATE_ROUNDS: u32 = 7u;
+const STATE_MAX_ROUNDS: u32 = 8u;
+const STATE_STATUS: u32 = 9u;
 
 fn stalled() -> bool {
     return atomicLoad(&state[STATE_STALLED]) != 0u;
@@ -58,6 +61,7 @@ fn advance() {
     atomicStore(&state[STATE_OVERLAP], plan[3u * w + 2u]);
     atomicStore(&state[STATE_PENDING], count);
     atomicStore(&state[STATE_ACCEPTED], 0u);
+    atomicStore(&state[STATE_ROUNDS], 0u);
     for (var q = 0u; q < p.n_queries; q++) {
         atomicStore(&state[STATE_STATUS + q], select(DONE, PENDING, q < count));
     }
@@ -261,6 +265,10 @@ fn prepare_round(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(1)
 fn accept() {
     if (nothing_pending()) { return; }
+    // The rounds this wavefront has taken, and the most any has (the host records that many).
+    let rounds = atomicLoad(&state[STATE_ROUNDS]) + 1u;
+    atomicStore(&state[STATE_ROUNDS], rounds);
+    atomicMax(&state[STATE_MAX_ROUNDS], rounds);
     let d = p.w / 2u;
     var first = true;
     var accepted = atomicLoad(&state[STATE_ACCEPTED]);
