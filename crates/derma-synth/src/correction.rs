@@ -12,7 +12,7 @@
 //! the output, and copies that exemplar texel's values. The texels are updated in four
 //! subpasses by the parity of (x, y), each reading only the state before it, so the result
 //! does not depend on thread count. Where the searches ran on the GPU, so does the correction
-//! ([`crate::gpu_correction`], the same decisions).
+//! (`gpu_correction.rs`, the same decisions).
 
 use crate::canvas::{Canvas, NO_SOURCE};
 use crate::error::Result;

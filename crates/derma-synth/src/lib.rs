@@ -1,7 +1,7 @@
 //! derma-synth: exemplar-based synthesis of skin detail, after Shen et al., "GPU-based skin
 //! texture synthesis for digital human model" (`../shared/seeds/gpu-skin-texture-synthesis-shen.txt`).
 //!
-//! [`synthesize`] grows a texture of any size from one or more exemplars: white noise, a patch
+//! [`synthesize()`] grows a texture of any size from one or more exemplars: white noise, a patch
 //! pass ([`patch_pass`]), self-adaptive optimisation passes ([`optimize`]), then a texel-level
 //! coherent [`correction`]. Every
 //! best-match search is the exact integer search of [`search`], run by a [`Matcher`]: the CPU
@@ -18,6 +18,7 @@ pub mod exemplar;
 pub mod files;
 pub mod gpu;
 mod gpu_correction;
+mod gpu_patch_pass;
 pub mod guide;
 pub mod optimize;
 mod pass_context;

@@ -11,7 +11,7 @@
 //! `y · (exemplar width − w + 1) + x`. The key is a bijection of the index for a given salt,
 //! so the answer is unique; integers make every sum independent of summation order.
 //! With ε = 0 this is the best match of eq. 1, ties broken at random; with ε > 0 it is image
-//! quilting's choice among the near-best (Efros & Freeman 2001 §2.1, the paper's ref. [8]),
+//! quilting's choice among the near-best (Efros & Freeman 2001 §2.1, the paper's ref. \[8\]),
 //! which keeps a deterministic best match from copying the same chain of patches over and over.
 //!
 //! The CPU search prunes without changing that answer (successive elimination, Li & Salari

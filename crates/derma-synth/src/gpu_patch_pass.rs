@@ -1,0 +1,376 @@
+//! The patch pass of [`crate::patch_pass`] (Shen et al. §3.2 in wavefronts, with the occurrence
+//! penalty and the clash rounds) run on the GPU by the [`GpuMatcher`]: `patch_pass.wgsl`.
+//!
+//! The canvas's codes and sources, the occurrence counts and every wavefront's patches stay on
+//! the GPU. Several wavefronts are recorded per submission, each with its rounds dispatched
+//! indirectly (`patch_schedule.wgsl`), and only the state's head comes back between
+//! submissions. The same integers as the CPU decide every step, so the sources are the CPU's.
+
+use crate::canvas::NO_SOURCE;
+use crate::error::Result;
+use crate::exemplar::ExemplarSet;
+use crate::gpu::{gpu_error, GpuMatcher, Params, INFO_HEAD, PATCH_SHADER, WORKGROUP};
+use crate::patch_pass::PatchPlan;
+use crate::search::MAX_GUESSES;
+use derma_core::gpu::GpuCell;
+use derma_core::progress::Progress;
+use wgpu::util::DeviceExt;
+
+/// The patch pass's pipelines: its kernels and the search's, on one layout (binding 0 uniform,
+/// 1–2 read-only storage, 3–16 read-write storage).
+struct PatchPipelines {
+    layout: wgpu::BindGroupLayout,
+    /// `schedule` (patch_schedule.wgsl) on its own layout: binding 0 uniform, 1 the state, 2
+    /// the indirect arguments (which a dispatch may not also bind as storage).
+    schedule_layout: wgpu::BindGroupLayout,
+    schedule: wgpu::ComputePipeline,
+    /// `advance`, `gather`, then per round: `penalty_rows`, `penalty_table`, `prepare_round`, `screen`,
+    /// `cost`, `min_cost`, `settle`, `choose`, `pick`, `finish`, `accept`, `paste`.
+    steps: [wgpu::ComputePipeline; 14],
+}
+
+static PATCH_PIPELINES: GpuCell<Option<PatchPipelines>> = GpuCell::new();
+
+/// The patch pass's pipelines; `None` on a device without 64-bit integers.
+fn patch_pipelines() -> Result<(
+    &'static derma_core::gpu::Gpu,
+    &'static Option<PatchPipelines>,
+)> {
+    Ok(PATCH_PIPELINES.get_or_init(|ctx| {
+        if !ctx.device.features().contains(wgpu::Features::SHADER_INT64) {
+            return Ok(None);
+        }
+        let (layout, steps) = ctx.entry_points(
+            "patch_pass.wgsl",
+            PATCH_SHADER,
+            2,
+            14,
+            [
+                "advance",
+                "gather",
+                "penalty_rows",
+                "penalty_table",
+                "prepare_round",
+                "screen",
+                "cost",
+                "min_cost",
+                "settle",
+                "choose",
+                "pick",
+                "finish",
+                "accept",
+                "paste",
+            ],
+        )?;
+        let (schedule_layout, [schedule]) = ctx.entry_points(
+            "patch_schedule.wgsl",
+            include_str!("patch_schedule.wgsl"),
+            0,
+            2,
+            ["schedule"],
+        )?;
+        Ok(Some(PatchPipelines {
+            layout,
+            schedule_layout,
+            schedule,
+            steps,
+        }))
+    })?)
+}
+
+/// Rounds first recorded per wavefront (they grow to the most any wavefront has taken; one that
+/// needs more gets them in a submission of its own).
+pub(crate) const PATCH_ROUNDS: usize = 4;
+/// Wavefronts recorded per submission of the patch pass (the first that does not settle in its
+/// rounds stops the rest, which the next submission records again).
+pub(crate) const PATCH_WAVEFRONTS: usize = 16;
+/// Indirect-dispatch words of one round (three per dispatch; patch_schedule.wgsl's ROUND_ARGS).
+const ROUND_ARGS: usize = 36;
+/// Words of the patch pass's state before the per-patch statuses (patch_pass.wgsl).
+const STATE_STATUS: usize = 9;
+const STATE_MAX_ROUNDS: usize = 8;
+/// Most rounds recorded per wavefront when the schedule adapts to the rounds wavefronts took.
+const MAX_PATCH_ROUNDS: usize = 32;
+const STATE_PENDING: usize = 1;
+const STATE_WAVEFRONT: usize = 3;
+const STATE_STALLED: usize = 4;
+
+impl GpuMatcher {
+    /// The patch pass on the GPU (patch_pass.wgsl), one submission per wavefront; `None` where
+    /// the device lacks 64-bit integers or the canvas exceeds one storage binding.
+    pub(crate) fn patch_pass_resident(
+        &self,
+        set: &ExemplarSet,
+        plan: &PatchPlan,
+        progress: &dyn Progress,
+    ) -> Result<Option<Vec<u32>>> {
+        let (ctx, pipes) = patch_pipelines()?;
+        let Some(pipes) = pipes else {
+            return Ok(None);
+        };
+        let n = plan.n;
+        let e = &set.exemplars[0];
+        let c = e.channels();
+        let (cw, ch) = e.candidates(n);
+        let candidates = cw * ch;
+        let plane = &plan.plane;
+        let texels = plane.width * plane.height;
+        let nq_max = plan.wavefronts.iter().map(Vec::len).max().unwrap_or(0);
+        if nq_max == 0 {
+            return Ok(Some(plan.sources.to_vec()));
+        }
+        let fits = |bytes: usize| ctx.check_storage("the patch pass", bytes as u64).is_ok();
+        if !fits(texels * c * 4) || !fits(nq_max * n * n * c * 4) {
+            return Ok(None);
+        }
+        let res = self.resident(set, 0, n)?;
+        let info_stride = INFO_HEAD + 4 * c;
+        let stride = 3 + MAX_GUESSES;
+        let capacity =
+            (nq_max * candidates / 4).clamp(self.max_survivors.min(1 << 16), self.max_survivors);
+        let d = &ctx.device;
+        use wgpu::BufferUsages as U;
+        let buffer = |label: &str, bytes: usize, usage: wgpu::BufferUsages| {
+            d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes.max(4) as u64,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let init = |label: &str, words: &[u32], usage: wgpu::BufferUsages| {
+            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytemuck::cast_slice(words),
+                usage,
+            })
+        };
+        let codes: Vec<u32> = plane.codes.iter().map(|&v| v as u32).collect();
+        // The counts and total of the sources already on the canvas (none at the start).
+        let mut counts = vec![0u32; e.width() * e.height()];
+        let mut total = 0u32;
+        for &s in plan.sources.iter().filter(|&&s| s != NO_SOURCE) {
+            counts[s as usize] += 1;
+            total += 1;
+        }
+        let rw = U::STORAGE | U::COPY_DST;
+        let params = buffer(
+            "patch params",
+            std::mem::size_of::<Params>(),
+            U::UNIFORM | U::COPY_DST,
+        );
+        let source = buffer("patch windows' codes", nq_max * n * n * c * 4, rw);
+        let penalty = buffer("penalties", candidates * 4, rw);
+        let windows = buffer("patches", nq_max * stride * 4, rw);
+        let info = buffer("patch info", nq_max * info_stride * 4, rw);
+        let result = buffer("patch results", (nq_max * 2 + 1) * 4, rw);
+        let limits = buffer("patch limits", nq_max * 4, rw);
+        let survivors = buffer("patch survivors", capacity * 8, rw);
+        let costs = buffer("patch costs", capacity * 4, rw);
+        let canvas = init("canvas codes", &codes, rw);
+        let canvas_src = init("canvas sources", plan.sources, rw | U::COPY_SRC);
+        let counts = init("occurrence counts", &counts, rw);
+        // The wavefronts with patches: (first patch, patches, overlap), then the patches.
+        let fronts: Vec<(&Vec<[u32; 3]>, bool)> = plan
+            .wavefronts
+            .iter()
+            .zip(plan.overlaps.iter().copied())
+            .filter(|(f, _)| !f.is_empty())
+            .collect();
+        let mut plan_words: Vec<u32> = Vec::new();
+        let mut first_patch = 0u32;
+        for (f, overlap) in &fronts {
+            plan_words.extend_from_slice(&[first_patch, f.len() as u32, u32::from(*overlap)]);
+            first_patch += f.len() as u32;
+        }
+        for (f, _) in &fronts {
+            plan_words.extend(f.iter().flatten());
+        }
+        let plan_buf = init("patch plan", &plan_words, rw);
+        // The round's full workgroup counts (filled below), then the live ones `schedule`
+        // writes before each round.
+        let args = buffer("round arguments", ROUND_ARGS * 2 * 4, rw | U::INDIRECT);
+        let mut state0 = vec![0u32; STATE_STATUS + 3 * nq_max];
+        state0[0] = total;
+        // No wavefront yet: `advance` starts wavefront 0 (the index wraps to it).
+        state0[STATE_WAVEFRONT] = u32::MAX;
+        let state = init("patch state", &state0, rw | U::COPY_SRC);
+        let row_sums = buffer("row sums", cw * e.height() * 4, rw);
+        let staging = buffer(
+            "patch state read back",
+            STATE_STATUS * 4,
+            U::MAP_READ | U::COPY_DST,
+        );
+        let group = ctx.bind_buffers(
+            "patch pass",
+            &pipes.layout,
+            &[
+                &params,
+                &res.codes,
+                &res.sums,
+                &source,
+                &penalty,
+                &windows,
+                &info,
+                &result,
+                &limits,
+                &survivors,
+                &costs,
+                &canvas,
+                &canvas_src,
+                &counts,
+                &state,
+                &row_sums,
+                &plan_buf,
+            ],
+        );
+        let q = &ctx.queue;
+        let k16 = plan.weight16;
+        let params_all = Params {
+            ex_width: e.width() as u32,
+            channels: c as u32,
+            w: n as u32,
+            cand_w: cw as u32,
+            cand_h: ch as u32,
+            plane_w: res.plane_w as u32,
+            plane_len: res.plane_len as u32,
+            tol: plan.tol.0,
+            has_penalty: 1,
+            info_stride: info_stride as u32,
+            n_queries: nq_max as u32,
+            capacity: capacity as u32,
+            src_width: n as u32,
+            src_height: (nq_max * n) as u32,
+            max_guesses: MAX_GUESSES as u32,
+            guarded: 1,
+            canvas_w: plane.width as u32,
+            canvas_h: plane.height as u32,
+            k16_lo: k16 as u32,
+            k16_hi: (k16 >> 32) as u32,
+            cap: plan.cap,
+            fronts: fronts.len() as u32,
+            pad: [0; 2],
+        };
+        q.write_buffer(&params, 0, bytemuck::bytes_of(&params_all));
+        let [advance, gather, rows, table, prepare_round, screen, cost, min_cost, settle, choose, pick, finish, accept, paste] =
+            &pipes.steps;
+        let per_query = derma_core::gpu::grid(nq_max, WORKGROUP);
+        let screen_dims = ((candidates.div_ceil(WORKGROUP)) as u32, nq_max as u32);
+        let survivor_dims = derma_core::gpu::grid(capacity, WORKGROUP);
+        let round: [(&wgpu::ComputePipeline, (u32, u32)); ROUND_ARGS / 3] = [
+            (rows, derma_core::gpu::grid(cw * e.height(), WORKGROUP)),
+            (table, derma_core::gpu::grid(candidates, WORKGROUP)),
+            (prepare_round, per_query),
+            (screen, screen_dims),
+            (cost, survivor_dims),
+            (min_cost, screen_dims),
+            (settle, per_query),
+            (choose, survivor_dims),
+            (pick, screen_dims),
+            (finish, per_query),
+            (accept, (1, 1)),
+            (paste, derma_core::gpu::grid(nq_max * n * n, WORKGROUP)),
+        ];
+        let full: Vec<u32> = round.iter().flat_map(|(_, d)| [d.0, d.1, 1]).collect();
+        q.write_buffer(&args, 0, bytemuck::cast_slice(&full));
+        let schedule_group = ctx.bind_buffers(
+            "patch schedule",
+            &pipes.schedule_layout,
+            &[&params, &state, &args],
+        );
+        // Records `wavefronts` starts (each `advance`, `gather` and `rounds` rounds; none: only
+        // the rounds, continuing the current one), submits and reads the state's head back.
+        let submit = |wavefronts: usize, rounds: usize| -> Result<Vec<u32>> {
+            let mut enc = d.create_command_encoder(&Default::default());
+            {
+                let mut pass = enc.begin_compute_pass(&Default::default());
+                for _ in 0..wavefronts.max(1) {
+                    pass.set_bind_group(0, &group, &[]);
+                    if wavefronts > 0 {
+                        for (pipe, dims) in [(advance, (1, 1)), (gather, per_query)] {
+                            pass.set_pipeline(pipe);
+                            pass.dispatch_workgroups(dims.0, dims.1, 1);
+                        }
+                    }
+                    for _ in 0..rounds {
+                        // Nothing is dispatched for a settled wavefront or after a stop.
+                        pass.set_pipeline(&pipes.schedule);
+                        pass.set_bind_group(0, &schedule_group, &[]);
+                        pass.dispatch_workgroups(1, 1, 1);
+                        pass.set_bind_group(0, &group, &[]);
+                        for (k, &(pipe, _)) in round.iter().enumerate() {
+                            pass.set_pipeline(pipe);
+                            pass.dispatch_workgroups_indirect(
+                                &args,
+                                ((ROUND_ARGS + 3 * k) * 4) as u64,
+                            );
+                        }
+                    }
+                }
+            }
+            q.submit([enc.finish()]);
+            read_words(ctx, &state, &staging, STATE_STATUS)
+        };
+        let t0 = std::time::Instant::now();
+        let mut submissions = 0usize;
+        let mut next = 0usize;
+        let mut rounds = self.patch_rounds;
+        while next < fronts.len() {
+            let batch = self.patch_wavefronts.min(fronts.len() - next);
+            let mut head = submit(batch, rounds)?;
+            submissions += 1;
+            // The last wavefront started has not settled (it stopped the rest, or it was the
+            // batch's last): more rounds for it alone.
+            if head[STATE_PENDING] != 0 {
+                q.write_buffer(
+                    &state,
+                    (STATE_STALLED * 4) as u64,
+                    bytemuck::bytes_of(&0u32),
+                );
+                // Each round accepts at least one patch, so this ends within nq_max rounds.
+                for _ in 0..=nq_max {
+                    if head[STATE_PENDING] == 0 {
+                        break;
+                    }
+                    head = submit(0, rounds)?;
+                    submissions += 1;
+                }
+                if head[STATE_PENDING] != 0 {
+                    return Err(gpu_error(format!(
+                        "wavefront {} of the patch pass did not settle",
+                        head[STATE_WAVEFRONT]
+                    )));
+                }
+            }
+            if self.patch_adaptive {
+                rounds = rounds.max((head[STATE_MAX_ROUNDS] as usize).min(MAX_PATCH_ROUNDS));
+            }
+            let started = head[STATE_WAVEFRONT] as usize;
+            let done: usize = fronts[next..=started].iter().map(|f| f.0.len()).sum();
+            progress.advance(done as u64);
+            next = started + 1;
+        }
+        let sources: Vec<u32> = ctx
+            .read_back(&canvas_src, texels)
+            .map_err(|e| gpu_error(e.to_string()))?;
+        tracing::debug!(
+            "GPU patch pass: {} wavefronts in {submissions} submissions ({} wavefronts of up to \
+             {rounds} rounds each), {:.1} ms",
+            fronts.len(),
+            self.patch_wavefronts,
+            t0.elapsed().as_secs_f64() * 1e3
+        );
+        Ok(Some(sources))
+    }
+}
+
+/// The first `len` words of `buf` through `staging`.
+fn read_words(
+    ctx: &derma_core::gpu::Gpu,
+    buf: &wgpu::Buffer,
+    staging: &wgpu::Buffer,
+    len: usize,
+) -> Result<Vec<u32>> {
+    ctx.read_back_with(buf, staging, len)
+        .map_err(|e| gpu_error(e.to_string()))
+}
