@@ -17,6 +17,7 @@
 use crate::canvas::{Canvas, NO_SOURCE};
 use crate::error::Result;
 use crate::exemplar::ExemplarSet;
+use crate::gpu_correction::GpuCorrection;
 use crate::guide::Guide;
 use derma_core::gpu::Device;
 use derma_core::progress::{Job, Progress, Unit};
@@ -28,7 +29,7 @@ pub const RADIUS: usize = 2;
 /// Subpasses per correction pass: the four parity classes of (x, y) (Lefebvre & Hoppe 2005
 /// §3.4 use 2 × 2 or 3 × 3 classes; 2 × 2 keeps every texel's nearest neighbours fixed while it
 /// is decided).
-pub(crate) const PARITIES: [(usize, usize); 4] = [(0, 0), (1, 1), (1, 0), (0, 1)];
+const PARITIES: [(usize, usize); 4] = [(0, 0), (1, 1), (1, 0), (0, 1)];
 
 /// One decision: texel, exemplar, exemplar texel.
 type Choice = (usize, u8, u32);
@@ -43,12 +44,11 @@ pub(crate) fn correct(
     progress: &Job,
     device: Device,
 ) -> Result<()> {
-    if passes > 0
-        && device == Device::Gpu
-        && crate::gpu_correction::correct(canvas, set, guide, passes, progress)?
-    {
-        return Ok(());
-    }
+    let gpu = if passes > 0 && device == Device::Gpu {
+        GpuCorrection::new(canvas, set, guide)?
+    } else {
+        None
+    };
     for pass in 0..passes {
         progress.stage(
             &format!("correction {}", pass + 1),
@@ -56,11 +56,19 @@ pub(crate) fn correct(
             Unit::Steps,
         );
         for &(ox, oy) in &PARITIES {
-            for (t, ex, s) in decide(canvas, set, guide, ox, oy) {
-                canvas.copy_texel(set, t, ex as usize, s as usize);
+            match &gpu {
+                Some(g) => g.subpass(ox, oy)?,
+                None => {
+                    for (t, ex, s) in decide(canvas, set, guide, ox, oy) {
+                        canvas.copy_texel(set, t, ex as usize, s as usize);
+                    }
+                }
             }
             progress.advance(1);
         }
+    }
+    if let Some(g) = gpu {
+        g.finish(canvas, set)?;
     }
     Ok(())
 }

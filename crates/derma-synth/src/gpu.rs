@@ -9,13 +9,14 @@
 //! ([`Matcher::patch_pass`]) is in `gpu_patch_pass.rs`.
 
 use crate::error::{invalid, Result, SynthError};
-use crate::exemplar::ExemplarSet;
+use crate::exemplar::{Exemplar, ExemplarSet};
 use crate::gpu_patch_pass::{PATCH_ROUNDS, PATCH_WAVEFRONTS};
 use crate::patch_pass::PatchPlan;
 use crate::search::{
     gathered_window_matches, initial_cost, known_block_sums, known_texels, Match, Matcher, Plane,
-    Query, Search, WindowQuery, MAX_GUESSES,
+    Query, Search, Tolerance, WindowQuery, MAX_GUESSES,
 };
+use bytemuck::Zeroable;
 use derma_core::gpu::GpuCell;
 use derma_core::progress::Progress;
 use rayon::prelude::*;
@@ -63,8 +64,50 @@ pub(crate) struct Params {
     pub(crate) pad: [u32; 2],
 }
 
+impl Params {
+    /// The search's parameters for `n_queries` windows of side `w` in exemplar `e` (its block
+    /// sums in `res`), read from a source plane of `source` (width, height), with room for
+    /// `capacity` survivors; the patch pass's fields zero.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn search(
+        e: &Exemplar,
+        res: &Resident,
+        w: usize,
+        tol: Tolerance,
+        has_penalty: bool,
+        n_queries: usize,
+        capacity: usize,
+        source: (usize, usize),
+    ) -> Self {
+        let (cw, ch) = e.candidates(w);
+        Self {
+            ex_width: e.width() as u32,
+            channels: e.channels() as u32,
+            w: w as u32,
+            cand_w: cw as u32,
+            cand_h: ch as u32,
+            plane_w: res.plane_w as u32,
+            plane_len: res.plane_len as u32,
+            tol: tol.0,
+            has_penalty: u32::from(has_penalty),
+            info_stride: info_stride(e.channels()) as u32,
+            n_queries: n_queries as u32,
+            capacity: capacity as u32,
+            src_width: source.0 as u32,
+            src_height: source.1 as u32,
+            max_guesses: MAX_GUESSES as u32,
+            ..Self::zeroed()
+        }
+    }
+}
+
 /// Words of a query's `info` before its quadrant sums (search.wgsl's INFO_SUMS).
-pub(crate) const INFO_HEAD: usize = 7;
+const INFO_HEAD: usize = 7;
+
+/// Words of a query's `info` for `channels` channels: the head, then 4 quadrant sums each.
+pub(crate) fn info_stride(channels: usize) -> usize {
+    INFO_HEAD + 4 * channels
+}
 /// No guess / no answer (search.wgsl's NONE).
 pub(crate) const NONE: u32 = u32::MAX;
 
@@ -226,7 +269,7 @@ pub struct GpuMatcher {
     resident: Mutex<HashMap<(usize, usize, usize), Arc<Resident>>>,
     scratch: Mutex<Option<Scratch>>,
     name: String,
-    pub(crate) max_survivors: usize,
+    max_survivors: usize,
     pub(crate) patch_rounds: usize,
     pub(crate) patch_wavefronts: usize,
     /// Whether the rounds recorded per wavefront grow to the most any wavefront has taken.
@@ -267,6 +310,12 @@ impl GpuMatcher {
             patch_adaptive: false,
             ..Self::new()?
         })
+    }
+
+    /// Room for survivors of the bound for `queries` queries of `candidates` positions each: a
+    /// quarter of them, within what one binding of the adapter holds.
+    pub(crate) fn survivor_room(&self, queries: usize, candidates: usize) -> usize {
+        (queries * candidates / 4).clamp(self.max_survivors.min(1 << 16), self.max_survivors)
     }
 
     /// As [`GpuMatcher::new`] with room for at most `n` bound survivors per dispatch (tests
@@ -323,7 +372,7 @@ impl GpuMatcher {
         let (cw, ch) = e.candidates(w);
         let res = self.resident(set, ex, w)?;
         let half = w / 2;
-        let info_stride = INFO_HEAD + 4 * c;
+        let info_stride = info_stride(c);
         let n = batch.len();
         // The queries' info and first results; for uploaded windows also their codes (256
         // where unknown), stacked, and the info's sums and guesses' cost, computed here.
@@ -392,34 +441,18 @@ impl GpuMatcher {
         let counter_at = (n * 2 * 4) as u64;
         result.push(0);
         let candidates = cw * ch;
-        let capacity =
-            (n * candidates / 4).clamp(self.max_survivors.min(1 << 16), self.max_survivors);
+        let capacity = self.survivor_room(n, candidates);
         let penalty: &[u32] = s.penalty.map_or(&[0], |p| &p[ex]);
-        let params = Params {
-            ex_width: e.width() as u32,
-            channels: c as u32,
-            w: w as u32,
-            cand_w: cw as u32,
-            cand_h: ch as u32,
-            plane_w: res.plane_w as u32,
-            plane_len: res.plane_len as u32,
-            tol: s.tol.0,
-            has_penalty: u32::from(s.penalty.is_some()),
-            info_stride: info_stride as u32,
-            n_queries: n as u32,
-            capacity: capacity as u32,
-            src_width: src_width as u32,
-            src_height: src_height as u32,
-            max_guesses: MAX_GUESSES as u32,
-            guarded: 0,
-            canvas_w: 0,
-            canvas_h: 0,
-            k16_lo: 0,
-            k16_hi: 0,
-            cap: 0,
-            fronts: 0,
-            pad: [0; 2],
-        };
+        let params = Params::search(
+            e,
+            &res,
+            w,
+            s.tol,
+            s.penalty.is_some(),
+            n,
+            capacity,
+            (src_width, src_height),
+        );
         let d = &ctx.device;
         // Buffers live as long as the matcher and grow when a batch needs more; one batch runs
         // at a time, holding them.
@@ -540,31 +573,45 @@ impl GpuMatcher {
     }
 }
 
+/// Runs `run` on the queries of each exemplar (`exemplar` of a query), in chunks of at most
+/// `chunk`, and returns the answers in the queries' order.
+fn by_exemplar<'q, Q>(
+    set: &ExemplarSet,
+    queries: &'q [Q],
+    exemplar: impl Fn(&Q) -> u32,
+    chunk: usize,
+    mut run: impl FnMut(usize, &[&'q Q]) -> Result<Vec<Match>>,
+) -> Result<Vec<Match>> {
+    let mut out = vec![Match { cost: 0, index: 0 }; queries.len()];
+    for ex in 0..set.exemplars.len() {
+        let mine: Vec<usize> = (0..queries.len())
+            .filter(|&i| exemplar(&queries[i]) as usize == ex)
+            .collect();
+        for part in mine.chunks(chunk) {
+            let qs: Vec<&Q> = part.iter().map(|&i| &queries[i]).collect();
+            for (&i, m) in part.iter().zip(run(ex, &qs)?) {
+                out[i] = m;
+            }
+        }
+    }
+    Ok(out)
+}
+
 /// Most queries of one batch: a dimension of the screening grid (one row of workgroups per
 /// query).
 const MAX_BATCH_QUERIES: usize = 65_535;
 
 impl Matcher for GpuMatcher {
     fn best_matches(&self, set: &ExemplarSet, s: &Search, queries: &[Query]) -> Result<Vec<Match>> {
-        let c = set.channels();
-        let per_query = s.w * s.w * c * 4;
+        let per_query = s.w * s.w * set.channels() * 4;
         let chunk = (MAX_QUERY_BYTES / per_query).clamp(1, MAX_BATCH_QUERIES);
-        let mut out = vec![Match { cost: 0, index: 0 }; queries.len()];
-        for ex in 0..set.exemplars.len() {
-            let mine: Vec<usize> = (0..queries.len())
-                .filter(|&i| queries[i].exemplar as usize == ex)
-                .collect();
-            for part in mine.chunks(chunk) {
-                let qs: Vec<&Query> = part.iter().map(|&i| &queries[i]).collect();
-                for (&i, m) in part
-                    .iter()
-                    .zip(self.run(set, s, ex, Windows::Uploaded(&qs))?)
-                {
-                    out[i] = m;
-                }
-            }
-        }
-        Ok(out)
+        by_exemplar(
+            set,
+            queries,
+            |q| q.exemplar,
+            chunk,
+            |ex, qs| self.run(set, s, ex, Windows::Uploaded(qs)),
+        )
     }
 
     fn window_matches(
@@ -602,26 +649,23 @@ impl Matcher for GpuMatcher {
                 usage: wgpu::BufferUsages::STORAGE,
             });
         drop(codes);
-        let mut out = vec![Match { cost: 0, index: 0 }; queries.len()];
-        for ex in 0..set.exemplars.len() {
-            let mine: Vec<usize> = (0..queries.len())
-                .filter(|&i| queries[i].exemplar as usize == ex)
-                .collect();
-            for part in mine.chunks(MAX_BATCH_QUERIES) {
-                let qs: Vec<&WindowQuery> = part.iter().map(|&i| &queries[i]).collect();
+        by_exemplar(
+            set,
+            queries,
+            |q| q.exemplar,
+            MAX_BATCH_QUERIES,
+            |ex, qs| {
                 let windows = Windows::Resident {
                     plane: &buf,
                     width: plane.width,
                     height: plane.height,
-                    queries: &qs,
+                    queries: qs,
                 };
-                for (&i, m) in part.iter().zip(self.run(set, s, ex, windows)?) {
-                    out[i] = m;
-                }
-                progress.advance(part.len() as u64);
-            }
-        }
-        Ok(out)
+                let answers = self.run(set, s, ex, windows)?;
+                progress.advance(qs.len() as u64);
+                Ok(answers)
+            },
+        )
     }
 
     fn name(&self) -> String {

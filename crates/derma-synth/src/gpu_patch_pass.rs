@@ -9,7 +9,7 @@
 use crate::canvas::NO_SOURCE;
 use crate::error::Result;
 use crate::exemplar::ExemplarSet;
-use crate::gpu::{gpu_error, GpuMatcher, Params, INFO_HEAD, PATCH_SHADER, WORKGROUP};
+use crate::gpu::{gpu_error, info_stride, GpuMatcher, Params, PATCH_SHADER, WORKGROUP};
 use crate::patch_pass::PatchPlan;
 use crate::search::MAX_GUESSES;
 use derma_core::gpu::GpuCell;
@@ -124,10 +124,9 @@ impl GpuMatcher {
             return Ok(None);
         }
         let res = self.resident(set, 0, n)?;
-        let info_stride = INFO_HEAD + 4 * c;
+        let info_stride = info_stride(c);
         let stride = 3 + MAX_GUESSES;
-        let capacity =
-            (nq_max * candidates / 4).clamp(self.max_survivors.min(1 << 16), self.max_survivors);
+        let capacity = self.survivor_room(nq_max, candidates);
         let d = &ctx.device;
         use wgpu::BufferUsages as U;
         let buffer = |label: &str, bytes: usize, usage: wgpu::BufferUsages| {
@@ -227,21 +226,6 @@ impl GpuMatcher {
         let q = &ctx.queue;
         let k16 = plan.weight16;
         let params_all = Params {
-            ex_width: e.width() as u32,
-            channels: c as u32,
-            w: n as u32,
-            cand_w: cw as u32,
-            cand_h: ch as u32,
-            plane_w: res.plane_w as u32,
-            plane_len: res.plane_len as u32,
-            tol: plan.tol.0,
-            has_penalty: 1,
-            info_stride: info_stride as u32,
-            n_queries: nq_max as u32,
-            capacity: capacity as u32,
-            src_width: n as u32,
-            src_height: (nq_max * n) as u32,
-            max_guesses: MAX_GUESSES as u32,
             guarded: 1,
             canvas_w: plane.width as u32,
             canvas_h: plane.height as u32,
@@ -249,7 +233,16 @@ impl GpuMatcher {
             k16_hi: (k16 >> 32) as u32,
             cap: plan.cap,
             fronts: fronts.len() as u32,
-            pad: [0; 2],
+            ..Params::search(
+                e,
+                &res,
+                n,
+                plan.tol,
+                true,
+                nq_max,
+                capacity,
+                (n, nq_max * n),
+            )
         };
         q.write_buffer(&params, 0, bytemuck::bytes_of(&params_all));
         let [advance, gather, rows, table, prepare_round, screen, cost, min_cost, settle, choose, pick, finish, accept, paste] =
@@ -309,7 +302,7 @@ impl GpuMatcher {
                 }
             }
             q.submit([enc.finish()]);
-            read_words(ctx, &state, &staging, STATE_STATUS)
+            Ok(ctx.read_back_with(&state, &staging, STATE_STATUS)?)
         };
         let t0 = std::time::Instant::now();
         let mut submissions = 0usize;
@@ -350,9 +343,7 @@ impl GpuMatcher {
             progress.advance(done as u64);
             next = started + 1;
         }
-        let sources: Vec<u32> = ctx
-            .read_back(&canvas_src, texels)
-            .map_err(|e| gpu_error(e.to_string()))?;
+        let sources: Vec<u32> = ctx.read_back(&canvas_src, texels)?;
         tracing::debug!(
             "GPU patch pass: {} wavefronts in {submissions} submissions ({} wavefronts of up to \
              {rounds} rounds each), {:.1} ms",
@@ -362,15 +353,4 @@ impl GpuMatcher {
         );
         Ok(Some(sources))
     }
-}
-
-/// The first `len` words of `buf` through `staging`.
-fn read_words(
-    ctx: &derma_core::gpu::Gpu,
-    buf: &wgpu::Buffer,
-    staging: &wgpu::Buffer,
-    len: usize,
-) -> Result<Vec<u32>> {
-    ctx.read_back_with(buf, staging, len)
-        .map_err(|e| gpu_error(e.to_string()))
 }

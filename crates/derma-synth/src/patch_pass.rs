@@ -27,6 +27,7 @@ use crate::error::Result;
 use crate::exemplar::ExemplarSet;
 use crate::pass_context::PassContext;
 use crate::search::{Plane, Query, Search, Tolerance, MAX_PENALTY_TOTAL};
+use derma_core::gpu::Device;
 use derma_core::progress::Unit;
 use derma_core::rng::Philox;
 
@@ -138,8 +139,8 @@ pub(crate) fn patch_pass(
     let probes = [(0, 0), (0, d), (d, 0), (n - 1, 0)];
     let mut occ = Occurrence::new(set, n, occurrence);
     let fronts = wavefronts(&xs, &ys);
-    // One exemplar: the matcher may run the whole pass where it keeps the canvas.
-    if set.exemplars.len() == 1 {
+    // One exemplar on the GPU: the matcher may run the whole pass where it keeps the canvas.
+    if set.exemplars.len() == 1 && ctx.matcher.device() == Device::Gpu {
         let plan = PatchPlan {
             n,
             tol,

@@ -71,10 +71,6 @@ fn accepted_at(i: u32) -> u32 {
     return STATE_STATUS + p.n_queries + 2u * i;
 }
 
-fn window_stride() -> u32 {
-    return 3u + p.max_guesses;
-}
-
 // Canvas texel (x + dx, y + dy), wrapping on a torus (a plane's patches never reach its edge).
 fn canvas_at(x: u32, y: u32, dx: u32, dy: u32) -> u32 {
     return ((y + dy) % p.canvas_h) * p.canvas_w + (x + dx) % p.canvas_w;
@@ -92,11 +88,11 @@ fn gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     let ws = q * window_stride();
     let w = atomicLoad(&state[STATE_WAVEFRONT]);
     let at = 3u * p.fronts + 3u * (plan[3u * w] + q);
-    windows[ws] = plan[at];
-    windows[ws + 1u] = plan[at + 1u];
+    let px = plan[at];
+    let py = plan[at + 1u];
+    windows[ws] = px;
+    windows[ws + 1u] = py;
     windows[ws + 2u] = plan[at + 2u];
-    let px = windows[ws];
-    let py = windows[ws + 1u];
     var known = 0u;
     for (var t = 0u; t < n * n; t++) {
         if (canvas_src[canvas_at(px, py, t % n, t / n)] != NONE) { known++; }
@@ -119,31 +115,7 @@ fn gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     info[base + INFO_ORIGIN] = 0u;
     info[base + INFO_ORIGIN + 1u] = q * n;
     info[base + INFO_FLAGS] = 0u;
-    // The fully known quadrants and their sums (integers, exact in f32).
-    let half = n / 2u;
-    var quad_mask = 0u;
-    for (var quad = 0u; quad < 4u; quad++) {
-        let qx = (quad & 1u) * half;
-        let qy = (quad >> 1u) * half;
-        var full = true;
-        for (var k = 0u; k < c; k++) {
-            var sum = 0u;
-            for (var dy = 0u; dy < half; dy++) {
-                for (var dx = 0u; dx < half; dx++) {
-                    let v = source[(q * n * n + (qy + dy) * n + qx + dx) * c + k];
-                    if (v == 256u) { full = false; } else { sum += v; }
-                }
-            }
-            info[base + INFO_SUMS + quad * c + k] = bitcast<u32>(f32(sum));
-        }
-        if (full) { quad_mask |= 1u << quad; }
-    }
-    for (var quad = 0u; quad < 4u; quad++) {
-        if ((quad_mask & (1u << quad)) == 0u) {
-            for (var k = 0u; k < c; k++) { info[base + INFO_SUMS + quad * c + k] = 0u; }
-        }
-    }
-    info[base + 2u] = quad_mask;
+    quadrant_sums(q);
     // Coherent guesses, without repeats; [0] when no probe has a source.
     let d = n / 2u;
     var probes = array<vec2<u32>, 4>(vec2<u32>(0u, 0u), vec2<u32>(0u, d), vec2<u32>(d, 0u), vec2<u32>(n - 1u, 0u));
@@ -246,15 +218,7 @@ fn prepare_round(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     info[base + INFO_FLAGS] = 0u;
-    let ws = q * window_stride();
-    let last = p.cand_w * p.cand_h - 1u;
-    var first = NONE;
-    for (var j = 0u; j < p.max_guesses; j++) {
-        let g0 = windows[ws + 3u + j];
-        if (g0 == NONE) { break; }
-        let g = min(g0, last);
-        first = min(first, distance(q, g % p.cand_w, g / p.cand_w, NONE) + candidate_penalty(q, g));
-    }
+    let first = guesses_cost(q);
     info[base + 3u] = first;
     atomicStore(&result[2u * q], first);
     atomicStore(&result[2u * q + 1u], NONE);

@@ -327,6 +327,59 @@ fn index_of_key(salt: u32, key: u32) -> u32 {
     return x - salt;
 }
 
+// Query q's quadrant sums and the mask of its fully known quadrants (bit q), read from
+// `source` at its origin; a quadrant with an unknown texel (256) is left out with sums 0, as
+// search.rs's known_block_sums does.
+fn quadrant_sums(q: u32) {
+    let base = q * p.info_stride;
+    let ox = info[base + INFO_ORIGIN];
+    let oy = info[base + INFO_ORIGIN + 1u];
+    let half = p.w / 2u;
+    var mask = 0u;
+    for (var quad = 0u; quad < 4u; quad++) {
+        let qx = (quad & 1u) * half;
+        let qy = (quad >> 1u) * half;
+        var full = true;
+        for (var k = 0u; k < p.channels; k++) {
+            // An integer sum (at most 255·(w/2)², exact in f32, as on the CPU).
+            var sum = 0u;
+            for (var dy = 0u; dy < half; dy++) {
+                for (var dx = 0u; dx < half; dx++) {
+                    let v = source[source_at(ox, oy, qx + dx, qy + dy) + k];
+                    if (v == 256u) { full = false; } else { sum += v; }
+                }
+            }
+            info[base + INFO_SUMS + quad * p.channels + k] = bitcast<u32>(f32(sum));
+        }
+        if (full) {
+            mask |= 1u << quad;
+        } else {
+            for (var k = 0u; k < p.channels; k++) { info[base + INFO_SUMS + quad * p.channels + k] = 0u; }
+        }
+    }
+    info[base + 2u] = mask;
+}
+
+// Words per query in `windows`: origin x, y, salt, then the guesses.
+fn window_stride() -> u32 {
+    return 3u + p.max_guesses;
+}
+
+// The least cost among query q's guesses in `windows` (NONE after the last), clamped to the
+// candidate range: an upper bound of d* (search.rs, initial_cost).
+fn guesses_cost(q: u32) -> u32 {
+    let at = q * window_stride() + 3u;
+    let last = p.cand_w * p.cand_h - 1u;
+    var first = NONE;
+    for (var j = 0u; j < p.max_guesses; j++) {
+        let g0 = windows[at + j];
+        if (g0 == NONE) { break; }
+        let g = min(g0, last);
+        first = min(first, distance(q, g % p.cand_w, g / p.cand_w, NONE) + candidate_penalty(q, g));
+    }
+    return first;
+}
+
 // Canvas windows: the quadrant sums (every texel is known) and the least cost among the
 // guesses, clamped to the candidate range, as search.rs computes them for an uploaded query.
 @compute @workgroup_size(64)
@@ -334,39 +387,16 @@ fn prepare(@builtin(global_invocation_id) gid: vec3<u32>) {
     let q = thread_of(gid);
     if (q >= p.n_queries) { return; }
     let base = q * p.info_stride;
-    let stride = 3u + p.max_guesses;
-    let ox = windows[q * stride];
-    let oy = windows[q * stride + 1u];
+    let ws = q * window_stride();
+    let ox = windows[ws];
+    let oy = windows[ws + 1u];
     info[base] = p.w * p.w;
-    info[base + 1u] = windows[q * stride + 2u];
-    info[base + 2u] = 15u;
+    info[base + 1u] = windows[ws + 2u];
     info[base + INFO_ORIGIN] = ox;
     info[base + INFO_ORIGIN + 1u] = oy;
     info[base + INFO_FLAGS] = 0u;
-    let half = p.w / 2u;
-    for (var quad = 0u; quad < 4u; quad++) {
-        let qx = (quad & 1u) * half;
-        let qy = (quad >> 1u) * half;
-        for (var k = 0u; k < p.channels; k++) {
-            // An integer sum (at most 255·(w/2)², exact in f32, as on the CPU).
-            var sum = 0u;
-            for (var dy = 0u; dy < half; dy++) {
-                for (var dx = 0u; dx < half; dx++) {
-                    sum += source[source_at(ox, oy, qx + dx, qy + dy) + k];
-                }
-            }
-            info[base + INFO_SUMS + quad * p.channels + k] = bitcast<u32>(f32(sum));
-        }
-    }
-    let last = p.cand_w * p.cand_h - 1u;
-    var first = NONE;
-    for (var j = 0u; j < p.max_guesses; j++) {
-        let g0 = windows[q * stride + 3u + j];
-        if (g0 == NONE) { break; }
-        let g = min(g0, last);
-        let c = distance(q, g % p.cand_w, g / p.cand_w, NONE) + candidate_penalty(q, g);
-        first = min(first, c);
-    }
+    quadrant_sums(q);
+    let first = guesses_cost(q);
     info[base + 3u] = first;
     atomicStore(&result[2u * q], first);
     atomicStore(&result[2u * q + 1u], NONE);
