@@ -103,20 +103,18 @@ fn wavefronts(xs: &[usize], ys: &[usize]) -> Vec<Vec<(usize, usize, usize)>> {
         .collect()
 }
 
-/// Whether windows of side n at two origins share a texel of a `width × height` canvas
+/// Whether two of the patches (x, y, ·) of side n share a texel of a `width × height` canvas
 /// (wrapping on a torus).
-fn windows_overlap(
-    a: (usize, usize),
-    b: (usize, usize),
-    n: usize,
-    width: usize,
-    height: usize,
-) -> bool {
+fn overlapping(patches: &[(usize, usize, usize)], n: usize, width: usize, height: usize) -> bool {
     let near = |p: usize, q: usize, len: usize| {
         let d = (p + len - q) % len;
         d < n || len - d < n
     };
-    near(a.0, b.0, width) && near(a.1, b.1, height)
+    patches.iter().enumerate().any(|(i, a)| {
+        patches[i + 1..]
+            .iter()
+            .any(|b| near(a.0, b.0, width) && near(a.1, b.1, height))
+    })
 }
 
 /// Runs the patch pass with patches of side `n`.
@@ -144,7 +142,7 @@ pub(crate) fn patch_pass(
         let plan = PatchPlan {
             n,
             tol,
-            weight16: if occurrence > 0.0 { occ.weight16() } else { 0 },
+            weight16: occ.weight16(),
             cap: MAX_PENALTY_TOTAL / (n * n) as u32,
             wavefronts: fronts
                 .iter()
@@ -156,13 +154,7 @@ pub(crate) fn patch_pass(
                 .collect(),
             overlaps: fronts
                 .iter()
-                .map(|f| {
-                    f.iter().enumerate().any(|(i, a)| {
-                        f[i + 1..].iter().any(|b| {
-                            windows_overlap((a.0, a.1), (b.0, b.1), n, canvas.width, canvas.height)
-                        })
-                    })
-                })
+                .map(|f| overlapping(f, n, canvas.width, canvas.height))
                 .collect(),
             plane: canvas.plane(),
             sources: &canvas.src,
@@ -243,7 +235,8 @@ pub(crate) fn patch_pass(
 /// exemplar of `texels` texels of which `total` output texels are drawn, for windows of side `n`:
 /// λ·C·v̄ · max(0, O/(N² ō) − 1) of the module comment in integers, so the GPU gives the same
 /// bits: the ratio O/(N² ō) = o · texels / (n² · total) floored in 16.16 fixed point, times the
-/// weight `k16` (λ·C·v̄ in 16.16), floored, at most `cap`. Exact in u64 for o ≤ total < 2³⁸.
+/// weight `k16` (λ·C·v̄ in 16.16), floored, at most `cap`. Exact in u64 while o · texels < 2⁶⁴
+/// and n² · total < 2⁴⁸ (o ≤ total: canvases up to 2³⁴ texels, exemplars up to 2²⁴).
 pub(crate) fn penalty(o: u64, texels: u64, n: usize, total: u64, k16: u64, cap: u32) -> u32 {
     let (a, d) = (o * texels, (n * n) as u64 * total);
     // ⌊a · 2¹⁶ / d⌋ without forming a · 2¹⁶.
@@ -342,7 +335,7 @@ impl Occurrence {
         Some(std::mem::take(p))
     }
 
-    /// λ · C · v̄ in 16.16 fixed point, at most 2³² (the factor of [`penalty`]).
+    /// λ · C · v̄ in 16.16 fixed point, at most 2³² (the factor of [`penalty`]; 0 when λ = 0).
     fn weight16(&self) -> u64 {
         (self.lambda * self.scale * 65536.0)
             .round()
