@@ -147,8 +147,10 @@ fn open() -> Result<Gpu, GpuError> {
     let name = format!("{} ({:?})", info.name, info.backend);
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some("derma"),
-        // 64-bit integers where the adapter has them (the optics kernel's Philox products).
-        required_features: adapter.features() & wgpu::Features::SHADER_INT64,
+        // 64-bit integers and floats where the adapter has them (the optics kernel's Philox
+        // products, the synthesis's exact E-step).
+        required_features: adapter.features()
+            & (wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_F64),
         required_limits: adapter.limits(),
         ..Default::default()
     }))

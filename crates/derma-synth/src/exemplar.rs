@@ -48,6 +48,34 @@ impl Quantizer {
         self.lo[k] + q / 255.0 * (self.hi[k] - self.lo[k])
     }
 
+    /// The code boundaries of channel `k` as [`order_key`]s: entry `j` (1 ≤ j ≤ 255) is the key
+    /// of the least value whose code is at least `j` (`u32::MAX` where no value reaches it), so
+    /// a value's code is the number of boundaries at or below its key. How the GPU reproduces
+    /// [`Quantizer::quantize`] bit for bit with integer comparisons alone (its division is not
+    /// correctly rounded). Entry 0 is unused.
+    pub fn boundaries(&self, k: usize) -> [u32; 256] {
+        // `quantize` is monotone in v (each step of it is), so each boundary is found by
+        // bisection over the keys of the finite values.
+        let (lo_key, hi_key) = (order_key(f32::MIN), order_key(f32::MAX));
+        let mut out = [u32::MAX; 256];
+        for (j, b) in out.iter_mut().enumerate().skip(1) {
+            if self.quantize(k, f32::MAX) < j as u8 {
+                continue;
+            }
+            let (mut a, mut z) = (lo_key, hi_key);
+            while a < z {
+                let mid = a + (z - a) / 2;
+                if self.quantize(k, from_order_key(mid)) >= j as u8 {
+                    z = mid;
+                } else {
+                    a = mid + 1;
+                }
+            }
+            *b = a;
+        }
+        out
+    }
+
     /// Codes of interleaved texels `data` into `out`.
     pub fn quantize_all(&self, data: &[f32], out: &mut [u8]) {
         let c = self.lo.len();
@@ -55,6 +83,26 @@ impl Quantizer {
             *o = self.quantize(i % c, v);
         }
     }
+}
+
+/// A key of `v` whose unsigned order is the order of the values (−0 just below +0): the bits
+/// with the sign flipped for positive values and all bits flipped for negative ones.
+pub fn order_key(v: f32) -> u32 {
+    let b = v.to_bits();
+    if b >> 31 == 1 {
+        !b
+    } else {
+        b | 1 << 31
+    }
+}
+
+/// The value of an [`order_key`].
+pub fn from_order_key(key: u32) -> f32 {
+    f32::from_bits(if key >> 31 == 1 {
+        key & !(1 << 31)
+    } else {
+        !key
+    })
 }
 
 /// One exemplar: its values (copied into the output) and their 8-bit codes (searched).
@@ -250,6 +298,64 @@ mod tests {
                 assert_eq!(plane[y * pw + x], direct as f32);
             }
         }
+    }
+
+    #[test]
+    fn order_keys_sort_like_the_values() {
+        let vals = [
+            f32::MIN,
+            -1.0,
+            -1e-38,
+            -1e-45,
+            -0.0,
+            0.0,
+            1e-45,
+            1e-38,
+            0.5,
+            1.0,
+            f32::MAX,
+        ];
+        for pair in vals.windows(2) {
+            assert!(order_key(pair[0]) < order_key(pair[1]), "{pair:?}");
+        }
+        for v in vals {
+            assert_eq!(from_order_key(order_key(v)).to_bits(), v.to_bits());
+        }
+    }
+
+    #[test]
+    fn boundaries_give_the_codes_of_quantize() {
+        // Counting the boundaries at or below a value's key is how the GPU's E-step codes its
+        // averages; it must agree with `quantize` everywhere, at the boundaries above all.
+        let q = Quantizer {
+            lo: vec![-0.37, 0.0, 2.0],
+            hi: vec![1.91, 1.0, 2.0],
+        };
+        let rng = derma_core::rng::Philox::new(7, 1);
+        for k in 0..3 {
+            let b = q.boundaries(k);
+            let code = |v: f32| b[1..].iter().filter(|&&t| t <= order_key(v)).count();
+            let mut probes: Vec<f32> = (0..20_000u64)
+                .map(|i| {
+                    let u = rng.u32x4(i);
+                    q.lo[0] - 1.0 + (u[0] as f32 / u32::MAX as f32) * 4.0
+                })
+                .collect();
+            for &t in b.iter().skip(1).filter(|&&t| t != u32::MAX) {
+                let v = from_order_key(t);
+                probes.extend([v, from_order_key(t - 1), from_order_key(t + 1)]);
+            }
+            probes.extend([f32::MIN, f32::MAX, -0.0, 0.0, 255.0, -255.0]);
+            for v in probes {
+                assert_eq!(
+                    code(v),
+                    q.quantize(k, v) as usize,
+                    "channel {k}, value {v:e}"
+                );
+            }
+        }
+        // A channel of one value: every code 0, no boundary reached.
+        assert!(q.boundaries(2)[1..].iter().all(|&t| t == u32::MAX));
     }
 
     #[test]

@@ -18,6 +18,7 @@ pub mod exemplar;
 pub mod files;
 pub mod gpu;
 mod gpu_correction;
+pub mod gpu_e_step;
 mod gpu_patch_pass;
 pub mod guide;
 pub mod optimize;

@@ -16,8 +16,11 @@
 
 use crate::canvas::{origins, Canvas, NO_SOURCE};
 use crate::error::Result;
+use crate::exemplar::ExemplarSet;
+use crate::gpu_e_step;
 use crate::pass_context::PassContext;
 use crate::search::{Search, Tolerance, WindowQuery};
+use derma_core::gpu::Device;
 use derma_core::progress::Unit;
 use derma_core::rng::Philox;
 use rayon::prelude::*;
@@ -130,22 +133,49 @@ pub(crate) fn optimise_pass(
         })
         .collect();
 
-    // Which windows cover each column and row, with the offset into the window.
-    let cover = |len: usize, origins: &[usize]| -> Vec<Vec<(u32, u32)>> {
-        let mut v = vec![Vec::new(); len];
-        for (k, &o) in origins.iter().enumerate() {
-            for d in 0..w {
-                let p = if canvas.tile { (o + d) % len } else { o + d };
-                v[p].push((k as u32, d as u32));
-            }
-        }
-        v
+    let blend = Blend {
+        w,
+        xs,
+        ys,
+        placed,
+        weights,
     };
-    let cover_x = cover(canvas.width, &xs);
-    let cover_y = cover(canvas.height, &ys);
+    if ctx.matcher.device() != Device::Gpu || !gpu_e_step::e_step(canvas, set, &blend)? {
+        e_step(canvas, set, &blend);
+    }
+    Ok(())
+}
 
-    // E-step, texel by texel in a fixed order of windows: the same sums on any thread count.
-    let nwx = xs.len();
+/// What the E-step blends: the windows (origins along each axis, row-major), where each
+/// window's best match lies (exemplar, x, y) and its weight.
+pub(crate) struct Blend {
+    pub w: usize,
+    pub xs: Vec<usize>,
+    pub ys: Vec<usize>,
+    pub placed: Vec<(usize, usize, usize)>,
+    pub weights: Vec<f32>,
+}
+
+/// Which windows of side `w` at `origins` cover each of the `len` positions of an axis, with
+/// the offset into the window, in the order of the windows.
+pub(crate) fn cover(len: usize, origins: &[usize], w: usize, tile: bool) -> Vec<Vec<(u32, u32)>> {
+    let mut v = vec![Vec::new(); len];
+    for (k, &o) in origins.iter().enumerate() {
+        for d in 0..w {
+            let p = if tile { (o + d) % len } else { o + d };
+            v[p].push((k as u32, d as u32));
+        }
+    }
+    v
+}
+
+/// The E-step on the CPU, texel by texel in a fixed order of windows (the same sums on any
+/// thread count; `e_step.wgsl` reproduces them bit for bit).
+fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) {
+    let c = canvas.channels;
+    let cover_x = cover(canvas.width, &b.xs, b.w, canvas.tile);
+    let cover_y = cover(canvas.height, &b.ys, b.w, canvas.tile);
+    let nwx = b.xs.len();
     let width = canvas.width;
     // One output row: its values and, per texel, (source exemplar, source texel).
     type Sources = Vec<(u8, u32)>;
@@ -163,10 +193,10 @@ pub(crate) fn optimise_pass(
                 for &(jy, oy) in &cover_y[y] {
                     for &(ix, ox) in &cover_x[x] {
                         let k = jy as usize * nwx + ix as usize;
-                        let (ex, mx, my) = placed[k];
+                        let (ex, mx, my) = b.placed[k];
                         let e = &set.exemplars[ex];
                         let s = (my + oy as usize) * e.width() + mx + ox as usize;
-                        let wk = weights[k];
+                        let wk = b.weights[k];
                         for (a, &v) in acc.iter_mut().zip(&e.texture.data[s * c..(s + 1) * c]) {
                             *a += wk as f64 * v as f64;
                         }
@@ -203,5 +233,4 @@ pub(crate) fn optimise_pass(
                 code[k] = q.quantize(k, v[k]);
             }
         });
-    Ok(())
 }

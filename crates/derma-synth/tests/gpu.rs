@@ -82,6 +82,11 @@ fn gpu_search_equals_cpu_search() {
     }
 }
 
+/// A texture's values as bits: "identical" includes the sign of zero.
+fn bits(t: &Texture) -> Vec<u32> {
+    t.data.iter().map(|v| v.to_bits()).collect()
+}
+
 #[test]
 fn a_seed_gives_the_same_texture_on_cpu_and_gpu() {
     // Skip only without an adapter; a shader that does not compile must fail.
@@ -95,11 +100,13 @@ fn a_seed_gives_the_same_texture_on_cpu_and_gpu() {
     let gpu = GpuMatcher::new().unwrap();
     let tight = GpuMatcher::with_patch_schedule(1, 3).unwrap();
     let set = ExemplarSet::new(vec![exemplar(48, 48, 2, 5)], 16).unwrap();
-    for (tile, width, height, occurrence) in [
-        (false, 80, 64, 1.0),
-        (true, 80, 64, 1.0),
-        (false, 70, 58, 1.0),
-        (true, 70, 58, 0.0),
+    // Without the correction, the E-step's averages are the output (the correction makes
+    // most texels exemplar copies again).
+    for (tile, width, height, occurrence, correction) in [
+        (false, 80, 64, 1.0, 1),
+        (true, 80, 64, 1.0, 0),
+        (false, 70, 58, 1.0, 0),
+        (true, 70, 58, 0.0, 1),
     ] {
         let opts = SynthOptions {
             width,
@@ -108,13 +115,15 @@ fn a_seed_gives_the_same_texture_on_cpu_and_gpu() {
             seed: 42,
             tile,
             occurrence,
+            correction,
             ..Default::default()
         };
         let none = Silent;
         let a = synthesize(&set, &opts, None, &CpuMatcher, &none).unwrap();
         let b = synthesize(&set, &opts, None, &gpu, &none).unwrap();
         assert_eq!(
-            a.texture, b.texture,
+            bits(&a.texture),
+            bits(&b.texture),
             "tile {tile}, {width}×{height}, λ {occurrence}"
         );
         assert_eq!(a.source, b.source);
@@ -218,4 +227,114 @@ fn a_guided_tileable_synthesis_is_the_same_on_cpu_and_gpu() {
         assert_eq!(a.source_exemplar, b.source_exemplar);
         assert!(a.source_exemplar.contains(&0) && a.source_exemplar.contains(&1));
     }
+}
+
+/// The f64 pairs whose f32 quotients the GPU E-step's long division must get right: random
+/// weighted sums over random weight sums, exact ties of the f32 rounding, quotients that the
+/// f64 rounding turns into ties (double rounding), subnormal and overflowing f32 results.
+fn quotient_pairs() -> Vec<(f64, f64)> {
+    let rng = Philox::new(11, 3);
+    let mut pairs = Vec::new();
+    for i in 0..20_000u64 {
+        let u = rng.uniform4(i, 0);
+        let r = rng.u32x4(i);
+        let b = (0..1 + r[0] % 16)
+            .map(|k| rng.uniform4(i, k + 1)[0] as f64 * 1000.0 + 1e-3)
+            .sum::<f64>();
+        let a = (u[1] as f64 - 0.3) * b * 2f64.powi(r[1] as i32 % 9 - 4);
+        pairs.push((a, b));
+        // Small integers: exact quotients, many at a tie of either rounding.
+        pairs.push((((r[2] % 2001) as f64 - 1000.0), (1 + r[3] % 97) as f64));
+        // An odd 25-bit integer times a power of two: exactly halfway between two f32s.
+        let m = ((r[2] | 1 << 24) & ((1 << 25) - 1)) | 1;
+        pairs.push((m as f64 * 2f64.powi(r[3] as i32 % 60 - 30), 1.0));
+        // Just off that tie, in f64: f64 rounding keeps it off, or lands on it.
+        let t = m as f64;
+        pairs.push((t * (1.0 + 2f64.powi(-52)), 1.0));
+        pairs.push((t, 1.0 + 2f64.powi(-52)));
+        pairs.push((t * 3.0 + 1.0, 3.0));
+        // Within an f64 ulp above an f32 tie T: (b·T + k·ulp) / b = T + (k/b) ulp, whose f64
+        // rounding (k/b just above a half: the sticky bit decides) makes it T or T + 1 ulp,
+        // and so the f32 rounding down (to even) or up.
+        let tie = m as f64 * 2f64.powi(-24);
+        for b in [3.0, 5.0, 7.0, 9.0, 11.0, 13.0] {
+            for k in 1..b as i32 {
+                pairs.push((b * tie + k as f64 * 2f64.powi(-52), b));
+            }
+        }
+    }
+    for e in [-160, -150, -149, -140, -127, -126, -125, 127, 128] {
+        for m in [
+            1.0,
+            1.5,
+            1.999_999_9,
+            0.75,
+            1.0 + 2f64.powi(-24),
+            1.0 - 2f64.powi(-25),
+        ] {
+            pairs.push((m * 2f64.powi(e), 1.0));
+            pairs.push((-m * 2f64.powi(e) * 3.0, 3.0));
+        }
+    }
+    pairs.push((0.0, 5.0));
+    pairs.push((-0.0, 5.0));
+    pairs.push((f32::MAX as f64, 1.0));
+    pairs.push((f32::MAX as f64 * (1.0 + 2f64.powi(-25)), 1.0));
+    pairs
+}
+
+#[test]
+fn the_gpu_divides_and_rounds_like_rust() {
+    // The E-step's quotient (acc / Σω) as f32 — f64 division then rounding to f32, both to
+    // nearest even — formed by integer long division in e_step.wgsl, since Vulkan's f64
+    // division may be 2.5 ulp off.
+    if skip_without_gpu() {
+        return;
+    }
+    // Codes too (the quantiser's boundaries compared as integer keys), at every boundary and
+    // a key either side of it.
+    let q = derma_synth::Quantizer {
+        lo: vec![-0.37],
+        hi: vec![1.91],
+    };
+    let mut pairs = quotient_pairs();
+    for &t in &q.boundaries(0)[1..] {
+        for key in [t - 1, t, t + 1] {
+            pairs.push((derma_synth::exemplar::from_order_key(key) as f64, 1.0));
+        }
+    }
+    let Some(got) = derma_synth::gpu_e_step::gpu_quotients(&pairs, &q).unwrap() else {
+        let f = derma_core::gpu::context().unwrap().device.features();
+        assert!(
+            !f.contains(wgpu_features()),
+            "the device has 64-bit floats and integers but the E-step did not run"
+        );
+        eprintln!("no 64-bit floats on this adapter: the E-step blends on the CPU");
+        return;
+    };
+    let mut wrong = 0;
+    for (&(a, b), &(g, code)) in pairs.iter().zip(&got) {
+        let want = (a / b) as f32;
+        if want.to_bits() != g.to_bits() || code != q.quantize(0, want) {
+            if wrong < 10 {
+                eprintln!(
+                    "{a:e} / {b:e}: want {want:e} ({:#x}, code {}), got {g:e} ({:#x}, code {code})",
+                    want.to_bits(),
+                    q.quantize(0, want),
+                    g.to_bits()
+                );
+            }
+            wrong += 1;
+        }
+    }
+    assert_eq!(
+        wrong,
+        0,
+        "{wrong} of {} quotients or codes differ",
+        pairs.len()
+    );
+}
+
+fn wgpu_features() -> wgpu::Features {
+    wgpu::Features::SHADER_F64 | wgpu::Features::SHADER_INT64
 }

@@ -1,0 +1,286 @@
+//! The E-step of an optimisation pass (Shen et al. §3.3, after Kwatra et al. 2005 §3) on the GPU,
+//! `e_step.wgsl`: every texel's weighted mean, source and codes, bit for bit as the CPU's.
+//!
+//! The host uploads the windows' matches and weights (one word triple per window), the cover
+//! lists and the exemplars' values; one dispatch blends all texels; values, sources and codes
+//! come back to the canvas, which the next pass's guesses and the correction read. Needs
+//! 64-bit floats and integers (`SHADER_F64`, `SHADER_INT64`); without them, or for a canvas
+//! larger than the adapter binds, the caller blends on the CPU.
+
+use crate::canvas::Canvas;
+use crate::error::Result;
+use crate::exemplar::{ExemplarSet, Quantizer};
+use crate::optimize::{cover, Blend};
+use derma_core::gpu::{grid, Gpu, GpuCell};
+use rayon::prelude::*;
+use wgpu::util::DeviceExt;
+
+/// The shader.
+pub const SHADER: &str = include_str!("e_step.wgsl");
+const WORKGROUP: usize = 64;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    width: u32,
+    height: u32,
+    channels: u32,
+    cols: u32,
+    count: u32,
+    values_at: u32,
+    pad: [u32; 2],
+}
+
+struct Pipelines {
+    layout: wgpu::BindGroupLayout,
+    blend: wgpu::ComputePipeline,
+    quotients: wgpu::ComputePipeline,
+}
+
+static PIPELINES: GpuCell<Option<Pipelines>> = GpuCell::new();
+
+/// The pipelines; `None` on a device without 64-bit floats and integers.
+fn pipelines() -> Result<Option<(&'static Gpu, &'static Pipelines)>> {
+    let (ctx, pipes) = PIPELINES.get_or_init(|ctx| {
+        let needs = wgpu::Features::SHADER_F64 | wgpu::Features::SHADER_INT64;
+        if !ctx.device.features().contains(needs) {
+            return Ok(None);
+        }
+        // Binding 0 uniform, 1–4 read-only storage, 5–8 read-write storage.
+        let (layout, [blend, quotients]) =
+            ctx.entry_points("e_step.wgsl", SHADER, 4, 4, ["blend", "quotients"])?;
+        Ok(Some(Pipelines {
+            layout,
+            blend,
+            quotients,
+        }))
+    })?;
+    Ok(pipes.as_ref().map(|p| (ctx, p)))
+}
+
+/// A buffer holding `bytes`.
+fn upload(d: &wgpu::Device, label: &str, bytes: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytes,
+        usage,
+    })
+}
+
+/// Runs `pipe` over `count` threads with `buffers` bound at 0, 1, 2, … and waits for it.
+fn run(
+    ctx: &Gpu,
+    pipes: &Pipelines,
+    pipe: &wgpu::ComputePipeline,
+    buffers: &[wgpu::Buffer],
+    count: usize,
+    during: &'static str,
+) -> Result<()> {
+    let refs: Vec<&wgpu::Buffer> = buffers.iter().collect();
+    let group = ctx.bind_buffers("e-step", &pipes.layout, &refs);
+    let dims = grid(count, WORKGROUP);
+    let mut enc = ctx.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = enc.begin_compute_pass(&Default::default());
+        pass.set_pipeline(pipe);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(dims.0, dims.1, 1);
+    }
+    let index = ctx.queue.submit([enc.finish()]);
+    ctx.wait_for(index, during)?;
+    Ok(())
+}
+
+/// The cover lists of both axes in `e_step.wgsl`'s layout: column offsets, row offsets, then
+/// the (window, offset) pairs.
+fn cover_words(b: &Blend, canvas: &Canvas) -> Vec<u32> {
+    let cx = cover(canvas.width, &b.xs, b.w, canvas.tile);
+    let cy = cover(canvas.height, &b.ys, b.w, canvas.tile);
+    let heads = cx.len() + cy.len() + 2;
+    let mut words = Vec::with_capacity(heads + 2 * (cx.len() + cy.len()) * 2);
+    words.resize(heads, 0);
+    let mut at = 0;
+    for lists in [&cx, &cy] {
+        for list in lists.iter() {
+            words[at] = words.len() as u32;
+            at += 1;
+            words.extend(list.iter().flat_map(|&(k, d)| [k, d]));
+        }
+        words[at] = words.len() as u32;
+        at += 1;
+    }
+    words
+}
+
+/// Blends the canvas on the GPU; false where this device cannot (the caller then blends on the
+/// CPU).
+pub(crate) fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) -> Result<bool> {
+    let Some((ctx, pipes)) = pipelines()? else {
+        return Ok(false);
+    };
+    let (w, h, c) = (canvas.width, canvas.height, canvas.channels);
+    let texels = w * h;
+    let mut exemplars: Vec<u32> = Vec::new();
+    let values_at = 2 * set.exemplars.len();
+    let mut at = values_at;
+    for e in &set.exemplars {
+        exemplars.extend([e.width() as u32, at as u32]);
+        at += e.texture.data.len();
+    }
+    for e in &set.exemplars {
+        exemplars.extend(e.texture.data.iter().map(|v| v.to_bits()));
+    }
+    let windows: Vec<[u32; 4]> = b
+        .placed
+        .iter()
+        .zip(&b.weights)
+        .map(|(&(ex, mx, my), &wk)| {
+            let ew = set.exemplars[ex].width();
+            [ex as u32, (my * ew + mx) as u32, wk.to_bits(), 0]
+        })
+        .collect();
+    let cover = cover_words(b, canvas);
+    let fits = |what: &str, bytes: usize| ctx.check_storage(what, bytes as u64).is_ok();
+    if !fits("the blended values", texels * c * 4)
+        || !fits("the exemplar values", exemplars.len() * 4)
+        || !fits("the windows", windows.len() * 16)
+        || !fits("the cover lists", cover.len() * 4)
+        || exemplars.len() > u32::MAX as usize
+    {
+        return Ok(false);
+    }
+    let bounds: Vec<u32> = (0..c).flat_map(|k| set.quantizer.boundaries(k)).collect();
+    let d = &ctx.device;
+    use wgpu::BufferUsages as U;
+    let init = |label, bytes: &[u8], usage| upload(d, label, bytes, usage);
+    let params = Params {
+        width: w as u32,
+        height: h as u32,
+        channels: c as u32,
+        cols: b.xs.len() as u32,
+        count: texels as u32,
+        values_at: values_at as u32,
+        pad: [0; 2],
+    };
+    let out = |label, words: usize| {
+        d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: (words * 4) as u64,
+            usage: U::STORAGE | U::COPY_SRC,
+            mapped_at_creation: false,
+        })
+    };
+    let buffers = [
+        init("e-step params", bytemuck::bytes_of(&params), U::UNIFORM),
+        init("e-step windows", bytemuck::cast_slice(&windows), U::STORAGE),
+        init("e-step cover", bytemuck::cast_slice(&cover), U::STORAGE),
+        init(
+            "e-step exemplars",
+            bytemuck::cast_slice(&exemplars),
+            U::STORAGE,
+        ),
+        init(
+            "e-step boundaries",
+            bytemuck::cast_slice(&bounds),
+            U::STORAGE,
+        ),
+        out("e-step values", texels * c),
+        out("e-step sources", texels),
+        out("e-step source exemplars", texels),
+        out("e-step codes", texels * c),
+    ];
+    drop((exemplars, windows, cover));
+    run(ctx, pipes, &pipes.blend, &buffers, texels, "blending")?;
+    let values: Vec<u32> = ctx.read_back(&buffers[5], texels * c)?;
+    let sources: Vec<u32> = ctx.read_back(&buffers[6], texels)?;
+    let source_exemplars: Vec<u32> = ctx.read_back(&buffers[7], texels)?;
+    let codes: Vec<u32> = ctx.read_back(&buffers[8], texels * c)?;
+    canvas
+        .values
+        .par_iter_mut()
+        .zip(&values)
+        .for_each(|(v, &bits)| *v = f32::from_bits(bits));
+    canvas
+        .codes
+        .par_iter_mut()
+        .zip(&codes)
+        .for_each(|(q, &code)| *q = code as u8);
+    canvas.src.copy_from_slice(&sources);
+    canvas
+        .src_exemplar
+        .par_iter_mut()
+        .zip(&source_exemplars)
+        .for_each(|(e, &ex)| *e = ex as u8);
+    Ok(true)
+}
+
+/// `e_step.wgsl`'s quotient of each pair (a, b) as f32, as Rust's `(a / b) as f32` gives it, for
+/// finite a and b > 0 (normal or zero), and the quotient's code in channel 0 of `quantizer`;
+/// `None` on a device without 64-bit floats and integers. A check of the shader's arithmetic
+/// for tests.
+#[doc(hidden)]
+pub fn gpu_quotients(
+    pairs: &[(f64, f64)],
+    quantizer: &Quantizer,
+) -> Result<Option<Vec<(f32, u8)>>> {
+    let Some((ctx, pipes)) = pipelines()? else {
+        return Ok(None);
+    };
+    if pairs.is_empty() {
+        return Ok(Some(Vec::new()));
+    }
+    let n = pairs.len();
+    let words: Vec<[u32; 4]> = pairs
+        .iter()
+        .map(|&(a, b)| {
+            let (a, b) = (a.to_bits(), b.to_bits());
+            [a as u32, (a >> 32) as u32, b as u32, (b >> 32) as u32]
+        })
+        .collect();
+    let params = Params {
+        width: 1,
+        height: 1,
+        channels: 1,
+        cols: 1,
+        count: n as u32,
+        values_at: 0,
+        pad: [0; 2],
+    };
+    let d = &ctx.device;
+    use wgpu::BufferUsages as U;
+    let init = |label, bytes: &[u8], usage| upload(d, label, bytes, usage);
+    let zero = [0u32; 4];
+    let out = vec![0u32; n];
+    let buffers = [
+        init("quotient params", bytemuck::bytes_of(&params), U::UNIFORM),
+        init("quotient pairs", bytemuck::cast_slice(&words), U::STORAGE),
+        init("unused", bytemuck::cast_slice(&zero), U::STORAGE),
+        init("unused", bytemuck::cast_slice(&zero), U::STORAGE),
+        init(
+            "boundaries",
+            bytemuck::cast_slice(&quantizer.boundaries(0)),
+            U::STORAGE,
+        ),
+        init(
+            "quotients",
+            bytemuck::cast_slice(&out),
+            U::STORAGE | U::COPY_SRC,
+        ),
+        init("unused", bytemuck::cast_slice(&zero), U::STORAGE),
+        init("unused", bytemuck::cast_slice(&zero), U::STORAGE),
+        init(
+            "codes",
+            bytemuck::cast_slice(&out),
+            U::STORAGE | U::COPY_SRC,
+        ),
+    ];
+    run(ctx, pipes, &pipes.quotients, &buffers, n, "dividing")?;
+    let bits: Vec<u32> = ctx.read_back(&buffers[5], n)?;
+    let codes: Vec<u32> = ctx.read_back(&buffers[8], n)?;
+    Ok(Some(
+        bits.into_iter()
+            .zip(codes)
+            .map(|(b, q)| (f32::from_bits(b), q as u8))
+            .collect(),
+    ))
+}
