@@ -60,8 +60,13 @@ PY
 
 # 3. Exemplar synthesis from the 256² crop; the CPU's file compared at the smallest size.
 for s in "${sizes[@]}"; do
-  m=$("$derma" synth -q --exemplar "$ex/$exname.png" --size "$s" --device gpu --out "$tmp/g.png" --metrics)
+  m=$("$derma" synth -q -vv --exemplar "$ex/$exname.png" --size "$s" --device gpu --out "$tmp/g.png" \
+    --metrics 2>"$tmp/synth.log")
   echo "derma synth gpu ${s}² from $exname: $m"
+  # Where the time goes: each stage, and per optimisation pass the host's queries and weights,
+  # the search and the E-step (its uploads, blend and read-back).
+  grep -E "INFO.*(patch pass|optimisation|correction)|queries|E-step on the GPU" "$tmp/synth.log" \
+    | sed -E 's/\x1b\[[0-9;]*m//g; s/^.*(INFO|DEBUG) [a-z_:]*: /  /' || true
   if [ "$s" = "${sizes[0]}" ]; then
     "$derma" synth -q --exemplar "$ex/$exname.png" --size "$s" --device cpu --out "$tmp/c.png"
     cmp -s "$tmp/g.png" "$tmp/c.png" && echo "synth ${s}²: GPU and CPU files identical" \

@@ -118,6 +118,7 @@ pub(crate) fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) -> Resul
     let Some((ctx, pipes)) = pipelines()? else {
         return Ok(false);
     };
+    let prepared = std::time::Instant::now();
     let (w, h, c) = (canvas.width, canvas.height, canvas.channels);
     let texels = w * h;
     let mut exemplars: Vec<u32> = Vec::new();
@@ -190,11 +191,19 @@ pub(crate) fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) -> Resul
         out("e-step codes", texels * c),
     ];
     drop((exemplars, windows, cover));
+    let started = std::time::Instant::now();
     run(ctx, pipes, &pipes.blend, &buffers, texels, "blending")?;
+    let blended = started.elapsed();
     let values: Vec<u32> = ctx.read_back(&buffers[5], texels * c)?;
     let sources: Vec<u32> = ctx.read_back(&buffers[6], texels)?;
     let source_exemplars: Vec<u32> = ctx.read_back(&buffers[7], texels)?;
     let codes: Vec<u32> = ctx.read_back(&buffers[8], texels * c)?;
+    tracing::debug!(
+        "E-step on the GPU, {w}×{h}: uploads {:.1} ms, blend {:.1} ms, read-back {:.1} ms",
+        (started - prepared).as_secs_f64() * 1e3,
+        blended.as_secs_f64() * 1e3,
+        (started.elapsed() - blended).as_secs_f64() * 1e3
+    );
     canvas
         .values
         .par_iter_mut()

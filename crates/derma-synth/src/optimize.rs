@@ -24,6 +24,7 @@ use derma_core::gpu::Device;
 use derma_core::progress::Unit;
 use derma_core::rng::Philox;
 use rayon::prelude::*;
+use std::time::Instant;
 
 /// Kwatra et al. 2005, §3 (robust norm exponent), as adopted by Shen et al. §3.3.
 pub const KWATRA_R: f32 = 0.8;
@@ -66,6 +67,7 @@ pub(crate) fn optimise_pass(
     ];
 
     // M-step: every window's best match, searched where the matcher keeps the canvas.
+    let t0 = Instant::now();
     let queries: Vec<WindowQuery> = windows
         .par_iter()
         .enumerate()
@@ -86,10 +88,12 @@ pub(crate) fn optimise_pass(
         tol: Tolerance(0),
         penalty: None,
     };
+    let t1 = Instant::now();
     let matches = ctx
         .matcher
         .window_matches(set, &search, &canvas.plane(), &queries, progress)?;
     drop(queries);
+    let t2 = Instant::now();
 
     // Where each match lies: (exemplar, x, y) of its window.
     let placed: Vec<(usize, usize, usize)> = matches
@@ -140,9 +144,18 @@ pub(crate) fn optimise_pass(
         placed,
         weights,
     };
+    let t3 = Instant::now();
     if ctx.matcher.device() != Device::Gpu || !gpu_e_step::e_step(canvas, set, &blend)? {
         e_step(canvas, set, &blend);
     }
+    let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
+    tracing::debug!(
+        "optimisation {w}×{w}: queries {:.1} ms, search {:.1} ms, weights {:.1} ms, E-step {:.1} ms",
+        ms(t0, t1),
+        ms(t1, t2),
+        ms(t2, t3),
+        ms(t3, Instant::now())
+    );
     Ok(())
 }
 
