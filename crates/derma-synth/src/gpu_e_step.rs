@@ -4,8 +4,9 @@
 //! The host uploads the windows' matches and weights (one word triple per window), the cover
 //! lists and the exemplars' values; one dispatch blends all texels; values, sources and codes
 //! come back to the canvas, which the next pass's guesses and the correction read. Needs
-//! 64-bit floats and integers (`SHADER_F64`, `SHADER_INT64`); without them, or for a canvas
-//! larger than the adapter binds, the caller blends on the CPU.
+//! 64-bit floats and integers (`SHADER_F64`, `SHADER_INT64`); without them, for a canvas
+//! larger than the adapter binds, or for exemplars with subnormal values, the caller blends on
+//! the CPU.
 
 use crate::canvas::Canvas;
 use crate::error::Result;
@@ -118,6 +119,16 @@ pub(crate) fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) -> Resul
     let Some((ctx, pipes)) = pipelines()? else {
         return Ok(false);
     };
+    // A GPU may flush subnormal f32s to zero where it widens them to f64 (Vulkan leaves the
+    // default denormal mode to the implementation); exemplars holding any blend on the CPU.
+    if set
+        .exemplars
+        .iter()
+        .any(|e| e.texture.data.iter().any(|v| v.is_subnormal()))
+    {
+        tracing::debug!("E-step on the CPU: the exemplars hold subnormal values");
+        return Ok(false);
+    }
     let prepared = std::time::Instant::now();
     let (w, h, c) = (canvas.width, canvas.height, canvas.channels);
     let texels = w * h;
