@@ -1,7 +1,9 @@
 //! The texture being synthesised: values, their 8-bit codes for the search, and where each
 //! texel was copied from (its source), on a plane or, for tileable output, a torus.
 
+use crate::error::Result;
 use crate::exemplar::ExemplarSet;
+use crate::gpu_e_step::Blended;
 use crate::search::Plane;
 
 /// No source yet: the texel still holds the white noise of §3.1.
@@ -18,6 +20,9 @@ pub(crate) struct Canvas {
     pub src_exemplar: Vec<u8>,
     /// Texel index (y · width + x) of the source in its exemplar, or [`NO_SOURCE`].
     pub src: Vec<u32>,
+    /// The values and codes of the last E-step where it ran on the GPU, kept there for the next
+    /// pass's search: newer than `values` and `codes` until [`Canvas::sync`].
+    pub blended: Option<Blended>,
 }
 
 impl Canvas {
@@ -32,6 +37,15 @@ impl Canvas {
             codes: vec![0; n * channels],
             src_exemplar: vec![0; n],
             src: vec![NO_SOURCE; n],
+            blended: None,
+        }
+    }
+
+    /// Brings values and codes kept on the GPU (by its E-step) back into `values` and `codes`.
+    pub fn sync(&mut self) -> Result<()> {
+        match self.blended.take() {
+            Some(b) => b.read_into(&mut self.values, &mut self.codes),
+            None => Ok(()),
         }
     }
 
@@ -69,6 +83,7 @@ impl Canvas {
             channels: self.channels,
             wrap: self.tile,
             codes: &self.codes,
+            gpu_codes: self.blended.as_ref().map(Blended::codes),
         }
     }
 
@@ -134,6 +149,7 @@ impl Canvas {
     /// and source.
     #[inline]
     pub fn copy_texel(&mut self, set: &ExemplarSet, t: usize, ex: usize, s: usize) {
+        debug_assert!(self.blended.is_none(), "copy into a canvas not synced");
         let e = &set.exemplars[ex];
         let c = self.channels;
         self.values[t * c..(t + 1) * c].copy_from_slice(&e.texture.data[s * c..(s + 1) * c]);

@@ -634,21 +634,29 @@ impl Matcher for GpuMatcher {
             ));
         }
         let (ctx, _) = pipelines()?;
-        let bytes = (plane.codes.len() * 4) as u64;
-        if let Err(e) = ctx.check_storage("the canvas", bytes) {
-            // A plane this adapter cannot bind whole: its windows travel with the batches.
-            tracing::debug!("GPU search: {e}; uploading the windows instead");
-            return gathered_window_matches(self, set, s, plane, queries, progress);
-        }
-        let codes: Vec<u32> = plane.codes.par_iter().map(|&v| v as u32).collect();
-        let buf = ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("canvas codes"),
-                contents: bytemuck::cast_slice(&codes),
-                usage: wgpu::BufferUsages::STORAGE,
-            });
-        drop(codes);
+        // The canvas's codes: kept here by the GPU's E-step, or uploaded once for this pass.
+        let uploaded;
+        let buf = match plane.gpu_codes {
+            Some(buf) => buf,
+            None => {
+                let bytes = (plane.codes.len() * 4) as u64;
+                if let Err(e) = ctx.check_storage("the canvas", bytes) {
+                    // A plane this adapter cannot bind whole: its windows travel with the
+                    // batches.
+                    tracing::debug!("GPU search: {e}; uploading the windows instead");
+                    return gathered_window_matches(self, set, s, plane, queries, progress);
+                }
+                let codes: Vec<u32> = plane.codes.par_iter().map(|&v| v as u32).collect();
+                uploaded = ctx
+                    .device
+                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("canvas codes"),
+                        contents: bytemuck::cast_slice(&codes),
+                        usage: wgpu::BufferUsages::STORAGE,
+                    });
+                &uploaded
+            }
+        };
         by_exemplar(
             set,
             queries,
@@ -656,7 +664,7 @@ impl Matcher for GpuMatcher {
             MAX_BATCH_QUERIES,
             |ex, qs| {
                 let windows = Windows::Resident {
-                    plane: &buf,
+                    plane: buf,
                     width: plane.width,
                     height: plane.height,
                     queries: qs,

@@ -2,8 +2,10 @@
 //! `e_step.wgsl`: every texel's weighted mean, source and codes, bit for bit as the CPU's.
 //!
 //! The host uploads the windows' matches and weights (one word triple per window), the cover
-//! lists and the exemplars' values; one dispatch blends all texels; values, sources and codes
-//! come back to the canvas, which the next pass's guesses and the correction read. Needs
+//! lists and the exemplars' values; one dispatch blends all texels. The sources come back at
+//! once (the next pass's coherent guesses read them); values and codes stay on the GPU, where
+//! the next pass's search reads the codes, until the canvas is synced after the last pass
+//! ([`Blended`], `Canvas::sync`). Needs
 //! 64-bit floats and integers (`SHADER_F64`, `SHADER_INT64`); without them, for a canvas
 //! larger than the adapter binds, or for exemplars with subnormal values, the caller blends on
 //! the CPU.
@@ -196,42 +198,70 @@ pub(crate) fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) -> Resul
             bytemuck::cast_slice(&bounds),
             U::STORAGE,
         ),
-        out("e-step values", texels * c),
+        out("canvas values", texels * c),
         out("e-step sources", texels),
         out("e-step source exemplars", texels),
-        out("e-step codes", texels * c),
+        out("canvas codes", texels * c),
     ];
     drop((exemplars, windows, cover));
     let started = std::time::Instant::now();
     run(ctx, pipes, &pipes.blend, &buffers, texels, "blending")?;
     let blended = started.elapsed();
-    let values: Vec<u32> = ctx.read_back(&buffers[5], texels * c)?;
-    let sources: Vec<u32> = ctx.read_back(&buffers[6], texels)?;
-    let source_exemplars: Vec<u32> = ctx.read_back(&buffers[7], texels)?;
-    let codes: Vec<u32> = ctx.read_back(&buffers[8], texels * c)?;
+    let [_, _, _, _, _, values, sources, source_exemplars, codes] = buffers;
+    let sources: Vec<u32> = ctx.read_back(&sources, texels)?;
+    let source_exemplars: Vec<u32> = ctx.read_back(&source_exemplars, texels)?;
     tracing::debug!(
         "E-step on the GPU, {w}×{h}: uploads {:.1} ms, blend {:.1} ms, read-back {:.1} ms",
         (started - prepared).as_secs_f64() * 1e3,
         blended.as_secs_f64() * 1e3,
         (started.elapsed() - blended).as_secs_f64() * 1e3
     );
-    canvas
-        .values
-        .par_iter_mut()
-        .zip(&values)
-        .for_each(|(v, &bits)| *v = f32::from_bits(bits));
-    canvas
-        .codes
-        .par_iter_mut()
-        .zip(&codes)
-        .for_each(|(q, &code)| *q = code as u8);
     canvas.src.copy_from_slice(&sources);
     canvas
         .src_exemplar
         .par_iter_mut()
         .zip(&source_exemplars)
         .for_each(|(e, &ex)| *e = ex as u8);
+    canvas.blended = Some(Blended {
+        ctx,
+        values,
+        codes,
+        len: texels * c,
+    });
     Ok(true)
+}
+
+/// A canvas's values and codes as the GPU's E-step left them (one per 32-bit word: f32 bits,
+/// codes), kept there for the next pass's search; the sources go back to the host at once (its
+/// next queries' coherent guesses read them).
+pub(crate) struct Blended {
+    ctx: &'static Gpu,
+    values: wgpu::Buffer,
+    codes: wgpu::Buffer,
+    len: usize,
+}
+
+impl Blended {
+    /// The codes, as a search's plane.
+    pub(crate) fn codes(&self) -> &wgpu::Buffer {
+        &self.codes
+    }
+
+    /// Copies the values and codes into the host's canvas.
+    pub(crate) fn read_into(self, values: &mut [f32], codes: &mut [u8]) -> Result<()> {
+        let bits: Vec<u32> = self.ctx.read_back(&self.values, self.len)?;
+        values
+            .par_iter_mut()
+            .zip(&bits)
+            .for_each(|(v, &b)| *v = f32::from_bits(b));
+        drop(bits);
+        let words: Vec<u32> = self.ctx.read_back(&self.codes, self.len)?;
+        codes
+            .par_iter_mut()
+            .zip(&words)
+            .for_each(|(q, &w)| *q = w as u8);
+        Ok(())
+    }
 }
 
 /// `e_step.wgsl`'s quotient of each pair (a, b) as f32, as Rust's `(a / b) as f32` gives it, for

@@ -146,6 +146,8 @@ pub(crate) fn optimise_pass(
     };
     let t3 = Instant::now();
     if ctx.matcher.device() != Device::Gpu || !gpu_e_step::e_step(canvas, set, &blend)? {
+        // Every value and code is blended anew, so any kept on the GPU are dropped.
+        canvas.blended = None;
         e_step(canvas, set, &blend);
     }
     let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;

@@ -22,7 +22,7 @@
 //! found so far cannot be chosen. It starts from coherent guesses (positions continuing the
 //! neighbouring texels' sources), which make the first limit tight.
 
-use crate::error::Result;
+use crate::error::{invalid, Result};
 use crate::exemplar::{Exemplar, ExemplarSet};
 use derma_core::gpu::Device;
 use derma_core::progress::Progress;
@@ -176,6 +176,10 @@ pub struct Plane<'a> {
     pub wrap: bool,
     /// `width × height × channels` codes, rows from the top.
     pub codes: &'a [u8],
+    /// The same plane's codes kept on the GPU (one per 32-bit word) by the GPU's E-step. Where
+    /// given, they are the current codes and `codes` may be older: only a GPU matcher, which
+    /// reads these, takes such a plane.
+    pub gpu_codes: Option<&'a wgpu::Buffer>,
 }
 
 impl Plane<'_> {
@@ -287,6 +291,12 @@ pub(crate) fn gathered_window_matches<M: Matcher + ?Sized>(
     queries: &[WindowQuery],
     progress: &dyn Progress,
 ) -> Result<Vec<Match>> {
+    if plane.gpu_codes.is_some() {
+        return Err(invalid(
+            "window query",
+            "the plane's current codes are on the GPU; the host's copy is older",
+        ));
+    }
     let mut out = Vec::with_capacity(queries.len());
     for chunk in queries.chunks(WINDOW_BATCH) {
         let batch: Vec<Query> = chunk.par_iter().map(|q| q.query(plane, s.w)).collect();

@@ -202,6 +202,7 @@ pub fn synthesize(
     for w in opts.pass_windows() {
         optimise_pass(&mut canvas, &ctx, w, opts.r)?;
     }
+    canvas.sync()?;
     correct(
         &mut canvas,
         set,
