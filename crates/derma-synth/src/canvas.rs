@@ -20,8 +20,9 @@ pub(crate) struct Canvas {
     pub src_exemplar: Vec<u8>,
     /// Texel index (y · width + x) of the source in its exemplar, or [`NO_SOURCE`].
     pub src: Vec<u32>,
-    /// The values and codes of the last E-step where it ran on the GPU, kept there for the next
-    /// pass's search: newer than `values` and `codes` until [`Canvas::sync`].
+    /// The values, codes and sources of the last E-step where it ran on the GPU, kept there for
+    /// the next pass's search: newer than `values`, `codes`, `src` and `src_exemplar` until
+    /// [`Canvas::sync`].
     pub blended: Option<Blended>,
 }
 
@@ -41,10 +42,15 @@ impl Canvas {
         }
     }
 
-    /// Brings values and codes kept on the GPU (by its E-step) back into `values` and `codes`.
+    /// Brings values, codes and sources kept on the GPU (by its E-step) back to the host.
     pub fn sync(&mut self) -> Result<()> {
         match self.blended.take() {
-            Some(b) => b.read_into(&mut self.values, &mut self.codes),
+            Some(b) => b.read_into(
+                &mut self.values,
+                &mut self.codes,
+                &mut self.src,
+                &mut self.src_exemplar,
+            ),
             None => Ok(()),
         }
     }
@@ -83,7 +89,7 @@ impl Canvas {
             channels: self.channels,
             wrap: self.tile,
             codes: &self.codes,
-            gpu_codes: self.blended.as_ref().map(Blended::codes),
+            gpu: self.blended.as_ref().map(Blended::plane),
         }
     }
 
@@ -99,6 +105,7 @@ impl Canvas {
         w: usize,
         probes: &[(usize, usize)],
     ) -> Vec<u32> {
+        debug_assert!(self.blended.is_none(), "guesses from a canvas not synced");
         let e = &set.exemplars[ex];
         let (cw, ch) = e.candidates(w);
         let mut out = Vec::with_capacity(probes.len());

@@ -30,6 +30,8 @@ pub const SHADER: &str = include_str!("search.wgsl");
 /// run by `gpu_patch_pass.rs`).
 pub const PATCH_SHADER: &str =
     concat!(include_str!("search.wgsl"), include_str!("patch_pass.wgsl"));
+/// The coherent guesses of windows read from a canvas whose sources are on the GPU.
+const GUESSES_SHADER: &str = include_str!("guesses.wgsl");
 pub(crate) const WORKGROUP: usize = 64;
 /// Largest query upload per dispatch, in bytes.
 const MAX_QUERY_BYTES: usize = 64 << 20;
@@ -101,6 +103,23 @@ impl Params {
     }
 }
 
+/// guesses.wgsl's parameters.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GuessParams {
+    w: u32,
+    n_queries: u32,
+    stride: u32,
+    exemplar: u32,
+    ex_width: u32,
+    cand_w: u32,
+    cand_h: u32,
+    canvas_w: u32,
+    canvas_h: u32,
+    wrap: u32,
+    pad: [u32; 2],
+}
+
 /// Words of a query's `info` before its quadrant sums (search.wgsl's INFO_SUMS).
 const INFO_HEAD: usize = 7;
 
@@ -115,11 +134,14 @@ pub(crate) const NONE: u32 = u32::MAX;
 enum Windows<'a> {
     /// Uploaded with the batch, stacked one under the other.
     Uploaded(&'a [&'a Query]),
-    /// Read from the plane kept on the GPU (`width × height` texels).
+    /// Read from the plane kept on the GPU (`width × height` texels); the guesses made there
+    /// from `sources` (sources, their exemplars) where given.
     Resident {
         plane: &'a wgpu::Buffer,
         width: usize,
         height: usize,
+        wrap: bool,
+        sources: Option<(&'a wgpu::Buffer, &'a wgpu::Buffer)>,
         queries: &'a [&'a WindowQuery],
     },
 }
@@ -139,6 +161,8 @@ pub(crate) fn gpu_error(detail: String) -> SynthError {
 
 struct Pipelines {
     layout: wgpu::BindGroupLayout,
+    guesses_layout: wgpu::BindGroupLayout,
+    guesses: wgpu::ComputePipeline,
     prepare: wgpu::ComputePipeline,
     finish: wgpu::ComputePipeline,
     min_cost: wgpu::ComputePipeline,
@@ -166,8 +190,14 @@ fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
                     "prepare", "finish", "min_cost", "settle", "pick", "screen", "cost", "choose",
                 ],
             )?;
+        // The coherent guesses of resident windows: binding 0 uniform, 1–2 read-only, 3
+        // read-write.
+        let (guesses_layout, [guesses]) =
+            ctx.entry_points("guesses.wgsl", GUESSES_SHADER, 2, 1, ["guesses"])?;
         Ok(Pipelines {
             layout,
+            guesses_layout,
+            guesses,
             prepare,
             finish,
             min_cost,
@@ -425,6 +455,7 @@ impl GpuMatcher {
                 queries,
                 ..
             } => {
+                // Guesses left empty are made on the GPU (`guesses`, below), over these NONEs.
                 // `prepare` writes the info and the first results from the windows' origins,
                 // salts and guesses.
                 let stride = 3 + MAX_GUESSES;
@@ -488,6 +519,36 @@ impl GpuMatcher {
             Windows::Uploaded(_) => (&sc.qcodes.buf, None),
             Windows::Resident { plane, .. } => (*plane, Some(&pipes.prepare)),
         };
+        if let Windows::Resident {
+            width,
+            height,
+            wrap,
+            sources: Some((sources, source_exemplars)),
+            ..
+        } = &batch
+        {
+            // The coherent guesses from the sources kept here, before `prepare` reads them.
+            let gp = GuessParams {
+                w: w as u32,
+                n_queries: n as u32,
+                stride: (3 + MAX_GUESSES) as u32,
+                exemplar: ex as u32,
+                ex_width: e.width() as u32,
+                cand_w: cw as u32,
+                cand_h: ch as u32,
+                canvas_w: *width as u32,
+                canvas_h: *height as u32,
+                wrap: u32::from(*wrap),
+                pad: [0; 2],
+            };
+            make_guesses(
+                ctx,
+                pipes,
+                &gp,
+                (sources, source_exemplars),
+                &sc.windows.buf,
+            );
+        }
         let reset_results = || {
             let at = if prepare.is_some() { counter_at } else { 0 };
             q.write_buffer(&sc.result.buf, at, bytemuck::cast_slice(&result));
@@ -573,6 +634,37 @@ impl GpuMatcher {
     }
 }
 
+/// Submits `guesses.wgsl` over the window rows in `windows` (x, y, salt, then the guesses it
+/// writes), reading the canvas's sources and their exemplars.
+fn make_guesses(
+    ctx: &derma_core::gpu::Gpu,
+    pipes: &Pipelines,
+    gp: &GuessParams,
+    (sources, source_exemplars): (&wgpu::Buffer, &wgpu::Buffer),
+    windows: &wgpu::Buffer,
+) {
+    let d = &ctx.device;
+    let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("guess params"),
+        contents: bytemuck::bytes_of(gp),
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
+    let group = ctx.bind_buffers(
+        "guesses",
+        &pipes.guesses_layout,
+        &[&params, sources, source_exemplars, windows],
+    );
+    let mut enc = d.create_command_encoder(&Default::default());
+    {
+        let mut pass = enc.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipes.guesses);
+        pass.set_bind_group(0, &group, &[]);
+        let dims = derma_core::gpu::grid(gp.n_queries as usize, WORKGROUP);
+        pass.dispatch_workgroups(dims.0, dims.1, 1);
+    }
+    ctx.queue.submit([enc.finish()]);
+}
+
 /// Runs `run` on the queries of each exemplar (`exemplar` of a query), in chunks of at most
 /// `chunk`, and returns the answers in the queries' order.
 fn by_exemplar<'q, Q>(
@@ -622,6 +714,19 @@ impl Matcher for GpuMatcher {
         queries: &[WindowQuery],
         progress: &dyn Progress,
     ) -> Result<Vec<Match>> {
+        // No guesses at all: made here from the plane's sources on the GPU.
+        let unguessed = queries.iter().filter(|q| q.guesses.is_empty()).count();
+        let guess_here = unguessed > 0;
+        if guess_here && (unguessed < queries.len() || plane.gpu.is_none()) {
+            return Err(invalid(
+                "window query",
+                format!(
+                    "{unguessed} of {} windows without guesses (expected guesses for every \
+                     window, or for none where the plane's sources are on the GPU)",
+                    queries.len()
+                ),
+            ));
+        }
         if let Some(q) = queries.iter().find(|q| q.guesses.len() > MAX_GUESSES) {
             return Err(invalid(
                 "window query",
@@ -636,8 +741,8 @@ impl Matcher for GpuMatcher {
         let (ctx, _) = pipelines()?;
         // The canvas's codes: kept here by the GPU's E-step, or uploaded once for this pass.
         let uploaded;
-        let buf = match plane.gpu_codes {
-            Some(buf) => buf,
+        let buf = match plane.gpu {
+            Some(g) => g.codes,
             None => {
                 let bytes = (plane.codes.len() * 4) as u64;
                 if let Err(e) = ctx.check_storage("the canvas", bytes) {
@@ -667,6 +772,11 @@ impl Matcher for GpuMatcher {
                     plane: buf,
                     width: plane.width,
                     height: plane.height,
+                    wrap: plane.wrap,
+                    sources: plane
+                        .gpu
+                        .filter(|_| guess_here)
+                        .map(|g| (g.sources, g.source_exemplars)),
                     queries: qs,
                 };
                 let answers = self.run(set, s, ex, windows)?;
@@ -697,6 +807,100 @@ impl Matcher for GpuMatcher {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn guesses_made_from_sources_on_the_gpu_are_the_hosts() {
+        // guesses.wgsl against Canvas::coherent_guess: texels without a source, sources in
+        // another exemplar, continuations clamped at the candidates' edges, repeats, windows
+        // wrapping on a torus.
+        if derma_test_support::skip_without_gpu() {
+            return;
+        }
+        use crate::canvas::{Canvas, NO_SOURCE};
+        use crate::texture::Texture;
+        let (ctx, pipes) = pipelines().unwrap();
+        let rng = derma_core::rng::Philox::new(3, 9);
+        let textures: Vec<Texture> = [(40, 30), (24, 24)]
+            .iter()
+            .map(|&(w, h)| Texture::new(w, h, 1, vec![0.5; w * h]).unwrap())
+            .collect();
+        let set = ExemplarSet::new(textures, 8).unwrap();
+        for (tile, w) in [(false, 8), (true, 8), (true, 4), (false, 2)] {
+            let mut canvas = Canvas::new(45, 37, 1, tile);
+            for t in 0..45 * 37 {
+                let r = rng.u32x4_sub(t as u64, w as u32);
+                let ex = (r[0] % 2) as usize;
+                canvas.src_exemplar[t] = ex as u8;
+                let len = set.exemplars[ex].width() * set.exemplars[ex].height();
+                // Neighbours often continue each other, so guesses repeat.
+                canvas.src[t] = match r[1] % 4 {
+                    0 => NO_SOURCE,
+                    1 => (t % len) as u32,
+                    _ => r[2] % len as u32,
+                };
+            }
+            let probes = [
+                (w / 2, w / 2),
+                (0, 0),
+                (w - 1, 0),
+                (0, w - 1),
+                (w - 1, w - 1),
+            ];
+            let step = (w / 2).max(1);
+            let xs = crate::canvas::origins(45, w, step, w / 4, tile);
+            let ys = crate::canvas::origins(37, w, step, w / 4, tile);
+            let origins: Vec<(usize, usize)> = ys
+                .iter()
+                .flat_map(|&y| xs.iter().map(move |&x| (x, y)))
+                .collect();
+            let stride = 3 + MAX_GUESSES;
+            let mut rows = vec![NONE; origins.len() * stride];
+            for (row, &(x, y)) in rows.chunks_exact_mut(stride).zip(&origins) {
+                row[..3].copy_from_slice(&[x as u32, y as u32, 7]);
+            }
+            let init = |label, words: &[u32], usage| {
+                ctx.device
+                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some(label),
+                        contents: bytemuck::cast_slice(words),
+                        usage,
+                    })
+            };
+            use wgpu::BufferUsages as U;
+            let src = init("sources", &canvas.src, U::STORAGE);
+            let src_ex: Vec<u32> = canvas.src_exemplar.iter().map(|&e| e as u32).collect();
+            let src_ex = init("source exemplars", &src_ex, U::STORAGE);
+            for ex in 0..2 {
+                let windows = init("windows", &rows, U::STORAGE | U::COPY_SRC);
+                let e = &set.exemplars[ex];
+                let (cw, ch) = e.candidates(w);
+                let gp = GuessParams {
+                    w: w as u32,
+                    n_queries: origins.len() as u32,
+                    stride: stride as u32,
+                    exemplar: ex as u32,
+                    ex_width: e.width() as u32,
+                    cand_w: cw as u32,
+                    cand_h: ch as u32,
+                    canvas_w: 45,
+                    canvas_h: 37,
+                    wrap: u32::from(tile),
+                    pad: [0; 2],
+                };
+                make_guesses(ctx, pipes, &gp, (&src, &src_ex), &windows);
+                let got: Vec<u32> = ctx.read_back(&windows, rows.len()).unwrap();
+                for (row, &(x, y)) in got.chunks_exact(stride).zip(&origins) {
+                    let mut want = canvas.coherent_guess(&set, ex, x, y, w, &probes);
+                    want.resize(MAX_GUESSES, NONE);
+                    assert_eq!(
+                        &row[3..],
+                        &want[..],
+                        "window ({x}, {y}), exemplar {ex}, side {w}, tile {tile}"
+                    );
+                }
+            }
+        }
+    }
 
     #[test]
     fn the_survivor_buffer_fits_one_binding_of_the_adapter() {

@@ -2,10 +2,9 @@
 //! `e_step.wgsl`: every texel's weighted mean, source and codes, bit for bit as the CPU's.
 //!
 //! The host uploads the windows' matches and weights (one word triple per window), the cover
-//! lists and the exemplars' values; one dispatch blends all texels. The sources come back at
-//! once (the next pass's coherent guesses read them); values and codes stay on the GPU, where
-//! the next pass's search reads the codes, until the canvas is synced after the last pass
-//! ([`Blended`], `Canvas::sync`). Needs
+//! lists and the exemplars' values; one dispatch blends all texels. Values, codes and sources
+//! stay on the GPU, where the next pass makes its coherent guesses (`guesses.wgsl`) and
+//! searches, until the canvas is synced after the last pass ([`Blended`], `Canvas::sync`). Needs
 //! 64-bit floats and integers (`SHADER_F64`, `SHADER_INT64`); without them, for a canvas
 //! larger than the adapter binds, or for exemplars with subnormal values, the caller blends on
 //! the CPU.
@@ -14,6 +13,7 @@ use crate::canvas::Canvas;
 use crate::error::Result;
 use crate::exemplar::{ExemplarSet, Quantizer};
 use crate::optimize::{cover, Blend};
+use crate::search::GpuPlane;
 use derma_core::gpu::{grid, Gpu, GpuCell};
 use rayon::prelude::*;
 use wgpu::util::DeviceExt;
@@ -208,58 +208,72 @@ pub(crate) fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) -> Resul
     run(ctx, pipes, &pipes.blend, &buffers, texels, "blending")?;
     let blended = started.elapsed();
     let [_, _, _, _, _, values, sources, source_exemplars, codes] = buffers;
-    let sources: Vec<u32> = ctx.read_back(&sources, texels)?;
-    let source_exemplars: Vec<u32> = ctx.read_back(&source_exemplars, texels)?;
     tracing::debug!(
-        "E-step on the GPU, {w}×{h}: uploads {:.1} ms, blend {:.1} ms, read-back {:.1} ms",
+        "E-step on the GPU, {w}×{h}: uploads {:.1} ms, blend {:.1} ms",
         (started - prepared).as_secs_f64() * 1e3,
         blended.as_secs_f64() * 1e3,
-        (started.elapsed() - blended).as_secs_f64() * 1e3
     );
-    canvas.src.copy_from_slice(&sources);
-    canvas
-        .src_exemplar
-        .par_iter_mut()
-        .zip(&source_exemplars)
-        .for_each(|(e, &ex)| *e = ex as u8);
     canvas.blended = Some(Blended {
         ctx,
         values,
         codes,
-        len: texels * c,
+        sources,
+        source_exemplars,
+        texels,
+        channels: c,
     });
     Ok(true)
 }
 
-/// A canvas's values and codes as the GPU's E-step left them (one per 32-bit word: f32 bits,
-/// codes), kept there for the next pass's search; the sources go back to the host at once (its
-/// next queries' coherent guesses read them).
+/// A canvas as the GPU's E-step left it (one 32-bit word per value, code, source and source
+/// exemplar), kept there for the next pass's guesses and search.
 pub(crate) struct Blended {
     ctx: &'static Gpu,
     values: wgpu::Buffer,
     codes: wgpu::Buffer,
-    len: usize,
+    sources: wgpu::Buffer,
+    source_exemplars: wgpu::Buffer,
+    texels: usize,
+    channels: usize,
 }
 
 impl Blended {
-    /// The codes, as a search's plane.
-    pub(crate) fn codes(&self) -> &wgpu::Buffer {
-        &self.codes
+    /// The canvas as a search's plane.
+    pub(crate) fn plane(&self) -> GpuPlane<'_> {
+        GpuPlane {
+            codes: &self.codes,
+            sources: &self.sources,
+            source_exemplars: &self.source_exemplars,
+        }
     }
 
-    /// Copies the values and codes into the host's canvas.
-    pub(crate) fn read_into(self, values: &mut [f32], codes: &mut [u8]) -> Result<()> {
-        let bits: Vec<u32> = self.ctx.read_back(&self.values, self.len)?;
+    /// Copies everything back into the host's canvas.
+    pub(crate) fn read_into(
+        self,
+        values: &mut [f32],
+        codes: &mut [u8],
+        src: &mut [u32],
+        src_exemplar: &mut [u8],
+    ) -> Result<()> {
+        let (n, c) = (self.texels, self.channels);
+        let bits: Vec<u32> = self.ctx.read_back(&self.values, n * c)?;
         values
             .par_iter_mut()
             .zip(&bits)
             .for_each(|(v, &b)| *v = f32::from_bits(b));
         drop(bits);
-        let words: Vec<u32> = self.ctx.read_back(&self.codes, self.len)?;
+        let words: Vec<u32> = self.ctx.read_back(&self.codes, n * c)?;
         codes
             .par_iter_mut()
             .zip(&words)
             .for_each(|(q, &w)| *q = w as u8);
+        drop(words);
+        src.copy_from_slice(&self.ctx.read_back::<u32>(&self.sources, n)?);
+        let words: Vec<u32> = self.ctx.read_back(&self.source_exemplars, n)?;
+        src_exemplar
+            .par_iter_mut()
+            .zip(&words)
+            .for_each(|(e, &w)| *e = w as u8);
         Ok(())
     }
 }

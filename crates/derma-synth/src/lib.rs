@@ -35,7 +35,7 @@ pub use exemplar::{Exemplar, ExemplarSet, Quantizer};
 pub use gpu::GpuMatcher;
 pub use guide::Guide;
 pub use search::{
-    CpuMatcher, Match, Matcher, Plane, Query, Search, Tolerance, WindowQuery, MAX_GUESSES,
+    CpuMatcher, GpuPlane, Match, Matcher, Plane, Query, Search, Tolerance, WindowQuery, MAX_GUESSES,
 };
 pub use synthesize::{synthesize, SynthOptions, Synthesis};
 pub use synthesizer::{matcher_for, Synthesizer};

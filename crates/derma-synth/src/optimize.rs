@@ -58,6 +58,8 @@ pub(crate) fn optimise_pass(
         Unit::Windows,
     );
     let c = canvas.channels;
+    // The texels whose sources' continuations are the windows' coherent guesses (guesses.wgsl
+    // has the same list).
     let probes = [
         (w / 2, w / 2),
         (0, 0),
@@ -77,7 +79,12 @@ pub(crate) fn optimise_pass(
                 exemplar: ex as u32,
                 x: px as u32,
                 y: py as u32,
-                guesses: canvas.coherent_guess(set, ex, px, py, w, &probes),
+                // Where the sources are on the GPU, its matcher makes the same guesses there.
+                guesses: if canvas.blended.is_some() {
+                    Vec::new()
+                } else {
+                    canvas.coherent_guess(set, ex, px, py, w, &probes)
+                },
                 salt: rng.u32x4_sub(k as u64, w as u32)[0],
             }
         })

@@ -176,10 +176,21 @@ pub struct Plane<'a> {
     pub wrap: bool,
     /// `width × height × channels` codes, rows from the top.
     pub codes: &'a [u8],
-    /// The same plane's codes kept on the GPU (one per 32-bit word) by the GPU's E-step. Where
-    /// given, they are the current codes and `codes` may be older: only a GPU matcher, which
-    /// reads these, takes such a plane.
-    pub gpu_codes: Option<&'a wgpu::Buffer>,
+    /// The same plane kept on the GPU by the GPU's E-step. Where given, it is current and
+    /// `codes` may be older: only a GPU matcher, which reads it, takes such a plane.
+    pub gpu: Option<GpuPlane<'a>>,
+}
+
+/// A [`Plane`] kept on the GPU: its codes (one per 32-bit word) and, per texel, its source and
+/// the source's exemplar, from which a GPU matcher makes the windows' coherent guesses.
+#[derive(Clone, Copy, Debug)]
+pub struct GpuPlane<'a> {
+    /// The codes.
+    pub codes: &'a wgpu::Buffer,
+    /// Source texel per texel (y · exemplar width + x, or `u32::MAX`).
+    pub sources: &'a wgpu::Buffer,
+    /// Exemplar of the source per texel.
+    pub source_exemplars: &'a wgpu::Buffer,
 }
 
 impl Plane<'_> {
@@ -218,7 +229,9 @@ pub struct WindowQuery {
     pub x: u32,
     /// Row of the window's top-left texel.
     pub y: u32,
-    /// As [`Query::guesses`]: at least one, at most [`MAX_GUESSES`].
+    /// As [`Query::guesses`]: at least one, at most [`MAX_GUESSES`]; or none where the plane is
+    /// kept on the GPU ([`Plane::gpu`]), whose matcher then makes the coherent guesses from the
+    /// plane's sources there.
     pub guesses: Vec<u32>,
     /// As [`Query::salt`].
     pub salt: u32,
@@ -291,7 +304,7 @@ pub(crate) fn gathered_window_matches<M: Matcher + ?Sized>(
     queries: &[WindowQuery],
     progress: &dyn Progress,
 ) -> Result<Vec<Match>> {
-    if plane.gpu_codes.is_some() {
+    if plane.gpu.is_some() {
         return Err(invalid(
             "window query",
             "the plane's current codes are on the GPU; the host's copy is older",
