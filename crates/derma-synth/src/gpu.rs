@@ -28,10 +28,16 @@ use wgpu::util::DeviceExt;
 pub const SHADER: &str = include_str!("search.wgsl");
 /// The search with the patch pass's kernels (64-bit integers: devices with `SHADER_INT64`;
 /// run by `gpu_patch_pass.rs`).
-pub const PATCH_SHADER: &str =
-    concat!(include_str!("search.wgsl"), include_str!("patch_pass.wgsl"));
+pub const PATCH_SHADER: &str = concat!(
+    include_str!("search.wgsl"),
+    include_str!("patch_pass.wgsl"),
+    include_str!("guess_list.wgsl")
+);
 /// The coherent guesses of windows read from a canvas whose sources are on the GPU.
-const GUESSES_SHADER: &str = include_str!("guesses.wgsl");
+const GUESSES_SHADER: &str = concat!(
+    include_str!("guesses.wgsl"),
+    include_str!("guess_list.wgsl")
+);
 pub(crate) const WORKGROUP: usize = 64;
 /// Largest query upload per dispatch, in bytes.
 const MAX_QUERY_BYTES: usize = 64 << 20;
@@ -839,13 +845,7 @@ mod tests {
                     _ => r[2] % len as u32,
                 };
             }
-            let probes = [
-                (w / 2, w / 2),
-                (0, 0),
-                (w - 1, 0),
-                (0, w - 1),
-                (w - 1, w - 1),
-            ];
+            let probes = crate::optimize::probes(w);
             let step = (w / 2).max(1);
             let xs = crate::canvas::origins(45, w, step, w / 4, tile);
             let ys = crate::canvas::origins(37, w, step, w / 4, tile);

@@ -1,6 +1,7 @@
 // Coherent starting guesses of an optimisation pass's windows (Ashikhmin 2001's continuation of
 // a texel's source, as canvas.rs's `coherent_guess`) from the canvas's sources kept on the GPU
-// by the E-step: the same guesses, in the same order, as the host makes from its copy.
+// by the E-step: the same guesses, in the same order, as the host makes from its copy. The
+// list itself is guess_list.wgsl's (appended).
 
 struct Params {
     // Window side and windows of the batch.
@@ -30,7 +31,7 @@ const NONE: u32 = 0xffffffffu;
 const WORKGROUP: u32 = 64u;
 const PROBES: u32 = 5u;
 
-// Offset of probe j in a window of side w: the centre, then the corners (optimize.rs's probes).
+// Offset of probe j in a window of side w: the centre, then the corners (optimize.rs, `probes`).
 fn probe(j: u32) -> vec2<u32> {
     let e = p.w - 1u;
     switch j {
@@ -61,26 +62,7 @@ fn guesses(@builtin(global_invocation_id) gid: vec3<u32>) {
         let t = y * p.canvas_w + x;
         let s = sources[t];
         if (s == NONE || source_exemplars[t] != p.exemplar) { continue; }
-        let sx = s % p.ex_width;
-        let sy = s / p.ex_width;
-        // saturating_sub, then clamped to the candidates.
-        let gx = min(select(0u, sx - d.x, sx >= d.x), p.cand_w - 1u);
-        let gy = min(select(0u, sy - d.y, sy >= d.y), p.cand_h - 1u);
-        let g = gy * p.cand_w + gx;
-        var seen = false;
-        for (var k = 0u; k < n; k++) {
-            if (windows[row + 3u + k] == g) { seen = true; }
-        }
-        if (!seen) {
-            windows[row + 3u + n] = g;
-            n += 1u;
-        }
+        n = add_guess(row + 3u, n, continuation(s, d, p.ex_width, p.cand_w, p.cand_h));
     }
-    if (n == 0u) {
-        windows[row + 3u] = 0u;
-        n = 1u;
-    }
-    for (var k = n; k < p.stride - 3u; k++) {
-        windows[row + 3u + k] = NONE;
-    }
+    close_guesses(row + 3u, n, p.stride - 3u);
 }

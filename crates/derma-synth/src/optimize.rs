@@ -58,15 +58,7 @@ pub(crate) fn optimise_pass(
         Unit::Windows,
     );
     let c = canvas.channels;
-    // The texels whose sources' continuations are the windows' coherent guesses (guesses.wgsl
-    // has the same list).
-    let probes = [
-        (w / 2, w / 2),
-        (0, 0),
-        (w - 1, 0),
-        (0, w - 1),
-        (w - 1, w - 1),
-    ];
+    let probes = probes(w);
 
     // M-step: every window's best match, searched where the matcher keeps the canvas.
     let t0 = Instant::now();
@@ -166,6 +158,18 @@ pub(crate) fn optimise_pass(
         ms(t3, Instant::now())
     );
     Ok(())
+}
+
+/// The texels of a window of side `w` whose sources' continuations are its coherent guesses:
+/// the centre, then the corners (guesses.wgsl has the same list).
+pub(crate) fn probes(w: usize) -> [(usize, usize); 5] {
+    [
+        (w / 2, w / 2),
+        (0, 0),
+        (w - 1, 0),
+        (0, w - 1),
+        (w - 1, w - 1),
+    ]
 }
 
 /// What the E-step blends: the windows (origins along each axis, row-major), where each

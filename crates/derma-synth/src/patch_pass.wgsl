@@ -124,25 +124,9 @@ fn gather(@builtin(global_invocation_id) gid: vec3<u32>) {
         let pr = probes[j];
         let s = canvas_src[canvas_at(px, py, pr.x, pr.y)];
         if (s == NONE) { continue; }
-        let sx = s % p.ex_width;
-        let sy = s / p.ex_width;
-        let gx = min(select(0u, sx - pr.x, sx >= pr.x), p.cand_w - 1u);
-        let gy = min(select(0u, sy - pr.y, sy >= pr.y), p.cand_h - 1u);
-        let g = gy * p.cand_w + gx;
-        var seen = false;
-        for (var i = 0u; i < count; i++) {
-            if (windows[ws + 3u + i] == g) { seen = true; }
-        }
-        if (!seen) {
-            windows[ws + 3u + count] = g;
-            count++;
-        }
+        count = add_guess(ws + 3u, count, continuation(s, pr, p.ex_width, p.cand_w, p.cand_h));
     }
-    if (count == 0u) {
-        windows[ws + 3u] = 0u;
-        count = 1u;
-    }
-    for (var i = count; i < p.max_guesses; i++) { windows[ws + 3u + i] = NONE; }
+    close_guesses(ws + 3u, count, p.max_guesses);
 }
 
 fn nothing_pending() -> bool {
