@@ -4,7 +4,7 @@
 //! The host uploads the windows' matches and weights (one word triple per window), the cover
 //! lists and the exemplars' values; one dispatch blends all texels. Values, codes and sources
 //! stay on the GPU, where the next pass makes its coherent guesses (`guesses.wgsl`) and
-//! searches, until the canvas is synced after the last pass ([`Blended`], `Canvas::sync`). Needs
+//! searches, until the canvas is synced after the last pass (`Blended`, `Canvas::sync`). Needs
 //! 64-bit floats and integers (`SHADER_F64`, `SHADER_INT64`); without them, for a canvas
 //! larger than the adapter binds, or for exemplars with subnormal values, the caller blends on
 //! the CPU.
