@@ -64,7 +64,7 @@ for s in "${sizes[@]}"; do
     --metrics 2>"$tmp/synth.log")
   echo "derma synth gpu ${s}² from $exname: $m"
   # Where the time goes: each stage, and per optimisation pass the host's queries and weights,
-  # the search and the E-step (its uploads, blend and read-back).
+  # the search and the E-step (its preparation and uploads, and the blend).
   grep -E "INFO.*(patch pass|optimisation|correction)|queries|E-step on the GPU" "$tmp/synth.log" \
     | sed -E 's/\x1b\[[0-9;]*m//g; s/^.*(INFO|DEBUG) [a-z_:]*: /  /' || true
   if [ "$s" = "${sizes[0]}" ]; then

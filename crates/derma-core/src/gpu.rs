@@ -6,6 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 use std::sync::OnceLock;
+use wgpu::util::DeviceExt;
 
 /// Where a job runs: the user's choice, the same on every command.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -349,6 +350,33 @@ impl Gpu {
             .try_into()
             .unwrap_or_else(|_| unreachable!("one pipeline per entry point"));
         Ok((layout, pipelines))
+    }
+
+    /// A buffer holding `bytes`.
+    pub fn upload(&self, label: &str, bytes: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        self.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytes,
+                usage,
+            })
+    }
+
+    /// Submits one compute pass per (pipeline, workgroups), in order, all bound to `group`, as
+    /// one submission; its index, for [`Gpu::wait_for`].
+    pub fn submit_passes(
+        &self,
+        group: &wgpu::BindGroup,
+        passes: &[(&wgpu::ComputePipeline, (u32, u32))],
+    ) -> wgpu::SubmissionIndex {
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        for &(pipe, (x, y)) in passes {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(pipe);
+            pass.set_bind_group(0, group, &[]);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        self.queue.submit([enc.finish()])
     }
 
     /// A bind group of whole buffers at bindings 0, 1, 2, … in the order given.

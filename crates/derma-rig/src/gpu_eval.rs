@@ -7,7 +7,6 @@ use crate::error::{invalid, Result};
 use derma_core::gpu::GpuCell;
 use derma_core::Map;
 use derma_shading::skin_color_lut::SkinColorLut;
-use wgpu::util::DeviceExt;
 
 /// The shader, also written into every rig directory as `rig.wgsl` for engines.
 pub const SHADER: &str = include_str!("rig.wgsl");
@@ -92,13 +91,7 @@ impl GpuRig {
             (basis.len() * 4) as u64,
         )?;
         let d = &ctx.device;
-        let init = |label, bytes: &[u8], usage| {
-            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
-                usage,
-            })
-        };
+        let init = |label, bytes: &[u8], usage| ctx.upload(label, bytes, usage);
         let read = wgpu::BufferUsages::STORAGE;
         let h0_buf = init("h0", bytemuck::cast_slice(rig.h0.data()), read);
         let mel_buf = init("melanin", bytemuck::cast_slice(melanin.data()), read);

@@ -22,7 +22,6 @@ use derma_core::progress::Progress;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
-use wgpu::util::DeviceExt;
 
 /// The shader.
 pub const SHADER: &str = include_str!("search.wgsl");
@@ -124,6 +123,34 @@ struct GuessParams {
     canvas_h: u32,
     wrap: u32,
     pad: [u32; 2],
+}
+
+impl GuessParams {
+    /// For `n` windows of side `w` searched in exemplar `ex` (`e`), on a `width × height`
+    /// canvas.
+    fn new(
+        e: &Exemplar,
+        ex: usize,
+        w: usize,
+        n: usize,
+        (width, height): (usize, usize),
+        wrap: bool,
+    ) -> Self {
+        let (cw, ch) = e.candidates(w);
+        Self {
+            w: w as u32,
+            n_queries: n as u32,
+            stride: (3 + MAX_GUESSES) as u32,
+            exemplar: ex as u32,
+            ex_width: e.width() as u32,
+            cand_w: cw as u32,
+            cand_h: ch as u32,
+            canvas_w: width as u32,
+            canvas_h: height as u32,
+            wrap: u32::from(wrap),
+            pad: [0; 2],
+        }
+    }
 }
 
 /// Words of a query's `info` before its quadrant sums (search.wgsl's INFO_SUMS).
@@ -379,14 +406,7 @@ impl GpuMatcher {
         let plane_len = plane_w * (e.height() + 1 - half);
         let codes: Vec<u32> = e.codes.iter().map(|&v| v as u32).collect();
         let sums: Vec<f32> = e.block_sums(half).into_iter().flatten().collect();
-        let init = |label, bytes: &[u8]| {
-            ctx.device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents: bytes,
-                    usage: wgpu::BufferUsages::STORAGE,
-                })
-        };
+        let init = |label, bytes: &[u8]| ctx.upload(label, bytes, wgpu::BufferUsages::STORAGE);
         let r = Arc::new(Resident {
             codes: init("exemplar codes", bytemuck::cast_slice(&codes)),
             sums: init("exemplar block sums", bytemuck::cast_slice(&sums)),
@@ -534,19 +554,7 @@ impl GpuMatcher {
         } = &batch
         {
             // The coherent guesses from the sources kept here, before `prepare` reads them.
-            let gp = GuessParams {
-                w: w as u32,
-                n_queries: n as u32,
-                stride: (3 + MAX_GUESSES) as u32,
-                exemplar: ex as u32,
-                ex_width: e.width() as u32,
-                cand_w: cw as u32,
-                cand_h: ch as u32,
-                canvas_w: *width as u32,
-                canvas_h: *height as u32,
-                wrap: u32::from(*wrap),
-                pad: [0; 2],
-            };
+            let gp = GuessParams::new(e, ex, w, n, (*width, *height), *wrap);
             make_guesses(
                 ctx,
                 pipes,
@@ -583,19 +591,13 @@ impl GpuMatcher {
         // Runs the steps (after `prepare` for resident windows, then `finish`) and reads the
         // result words back through the kept staging buffer.
         let run_steps = |steps: &[(&wgpu::ComputePipeline, (u32, u32))]| -> Result<Vec<u32>> {
-            let mut enc = d.create_command_encoder(&Default::default());
-            let all = prepare
+            let all: Vec<_> = prepare
                 .map(|p| (p, per_query))
                 .into_iter()
                 .chain(steps.iter().copied())
-                .chain([(&pipes.finish, per_query)]);
-            for (pipe, dims) in all {
-                let mut pass = enc.begin_compute_pass(&Default::default());
-                pass.set_pipeline(pipe);
-                pass.set_bind_group(0, &group, &[]);
-                pass.dispatch_workgroups(dims.0, dims.1, 1);
-            }
-            q.submit([enc.finish()]);
+                .chain([(&pipes.finish, per_query)])
+                .collect();
+            ctx.submit_passes(&group, &all);
             Ok(ctx.read_back_with(&sc.result.buf, &sc.staging.buf, result_words)?)
         };
         let mut out = run_steps(&[
@@ -649,26 +651,18 @@ fn make_guesses(
     (sources, source_exemplars): (&wgpu::Buffer, &wgpu::Buffer),
     windows: &wgpu::Buffer,
 ) {
-    let d = &ctx.device;
-    let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("guess params"),
-        contents: bytemuck::bytes_of(gp),
-        usage: wgpu::BufferUsages::UNIFORM,
-    });
+    let params = ctx.upload(
+        "guess params",
+        bytemuck::bytes_of(gp),
+        wgpu::BufferUsages::UNIFORM,
+    );
     let group = ctx.bind_buffers(
         "guesses",
         &pipes.guesses_layout,
         &[&params, sources, source_exemplars, windows],
     );
-    let mut enc = d.create_command_encoder(&Default::default());
-    {
-        let mut pass = enc.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipes.guesses);
-        pass.set_bind_group(0, &group, &[]);
-        let dims = derma_core::gpu::grid(gp.n_queries as usize, WORKGROUP);
-        pass.dispatch_workgroups(dims.0, dims.1, 1);
-    }
-    ctx.queue.submit([enc.finish()]);
+    let dims = derma_core::gpu::grid(gp.n_queries as usize, WORKGROUP);
+    ctx.submit_passes(&group, &[(&pipes.guesses, dims)]);
 }
 
 /// Runs `run` on the queries of each exemplar (`exemplar` of a query), in chunks of at most
@@ -758,13 +752,11 @@ impl Matcher for GpuMatcher {
                     return gathered_window_matches(self, set, s, plane, queries, progress);
                 }
                 let codes: Vec<u32> = plane.codes.par_iter().map(|&v| v as u32).collect();
-                uploaded = ctx
-                    .device
-                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                        label: Some("canvas codes"),
-                        contents: bytemuck::cast_slice(&codes),
-                        usage: wgpu::BufferUsages::STORAGE,
-                    });
+                uploaded = ctx.upload(
+                    "canvas codes",
+                    bytemuck::cast_slice(&codes),
+                    wgpu::BufferUsages::STORAGE,
+                );
                 &uploaded
             }
         };
@@ -846,9 +838,7 @@ mod tests {
                 };
             }
             let probes = crate::optimize::probes(w);
-            let step = (w / 2).max(1);
-            let xs = crate::canvas::origins(45, w, step, w / 4, tile);
-            let ys = crate::canvas::origins(37, w, step, w / 4, tile);
+            let (xs, ys) = crate::optimize::window_origins(&canvas, w);
             let origins: Vec<(usize, usize)> = ys
                 .iter()
                 .flat_map(|&y| xs.iter().map(move |&x| (x, y)))
@@ -858,35 +848,15 @@ mod tests {
             for (row, &(x, y)) in rows.chunks_exact_mut(stride).zip(&origins) {
                 row[..3].copy_from_slice(&[x as u32, y as u32, 7]);
             }
-            let init = |label, words: &[u32], usage| {
-                ctx.device
-                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                        label: Some(label),
-                        contents: bytemuck::cast_slice(words),
-                        usage,
-                    })
-            };
+            let init =
+                |label, words: &[u32], usage| ctx.upload(label, bytemuck::cast_slice(words), usage);
             use wgpu::BufferUsages as U;
             let src = init("sources", &canvas.src, U::STORAGE);
             let src_ex: Vec<u32> = canvas.src_exemplar.iter().map(|&e| e as u32).collect();
             let src_ex = init("source exemplars", &src_ex, U::STORAGE);
             for ex in 0..2 {
                 let windows = init("windows", &rows, U::STORAGE | U::COPY_SRC);
-                let e = &set.exemplars[ex];
-                let (cw, ch) = e.candidates(w);
-                let gp = GuessParams {
-                    w: w as u32,
-                    n_queries: origins.len() as u32,
-                    stride: stride as u32,
-                    exemplar: ex as u32,
-                    ex_width: e.width() as u32,
-                    cand_w: cw as u32,
-                    cand_h: ch as u32,
-                    canvas_w: 45,
-                    canvas_h: 37,
-                    wrap: u32::from(tile),
-                    pad: [0; 2],
-                };
+                let gp = GuessParams::new(&set.exemplars[ex], ex, w, origins.len(), (45, 37), tile);
                 make_guesses(ctx, pipes, &gp, (&src, &src_ex), &windows);
                 let got: Vec<u32> = ctx.read_back(&windows, rows.len()).unwrap();
                 for (row, &(x, y)) in got.chunks_exact(stride).zip(&origins) {

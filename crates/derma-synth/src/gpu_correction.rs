@@ -10,7 +10,6 @@ use crate::error::Result;
 use crate::exemplar::ExemplarSet;
 use crate::guide::Guide;
 use derma_core::gpu::{grid, Gpu, GpuCell};
-use wgpu::util::DeviceExt;
 
 /// The shader.
 pub const SHADER: &str = include_str!("correction.wgsl");
@@ -106,13 +105,7 @@ impl GpuCorrection {
         let src_ex: Vec<u32> = canvas.src_exemplar.iter().map(|&e| e as u32).collect();
         let d = &ctx.device;
         use wgpu::BufferUsages as U;
-        let init = |label, bytes: &[u8], usage| {
-            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
-                usage,
-            })
-        };
+        let init = |label, bytes: &[u8], usage| ctx.upload(label, bytes, usage);
         let params = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("correction params"),
             size: std::mem::size_of::<Params>() as u64,
@@ -188,14 +181,7 @@ impl GpuCorrection {
         ctx.queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&p));
         let dims = grid(count, WORKGROUP);
-        let mut enc = ctx.device.create_command_encoder(&Default::default());
-        for pipe in [&pipes.decide, &pipes.apply] {
-            let mut pass = enc.begin_compute_pass(&Default::default());
-            pass.set_pipeline(pipe);
-            pass.set_bind_group(0, &self.group, &[]);
-            pass.dispatch_workgroups(dims.0, dims.1, 1);
-        }
-        let index = ctx.queue.submit([enc.finish()]);
+        let index = ctx.submit_passes(&self.group, &[(&pipes.decide, dims), (&pipes.apply, dims)]);
         ctx.wait_for(index, "correcting")?;
         Ok(())
     }

@@ -16,7 +16,6 @@ use crate::optimize::{cover, Blend};
 use crate::search::GpuPlane;
 use derma_core::gpu::{grid, Gpu, GpuCell};
 use rayon::prelude::*;
-use wgpu::util::DeviceExt;
 
 /// The shader.
 pub const SHADER: &str = include_str!("e_step.wgsl");
@@ -61,15 +60,6 @@ fn pipelines() -> Result<Option<(&'static Gpu, &'static Pipelines)>> {
     Ok(pipes.as_ref().map(|p| (ctx, p)))
 }
 
-/// A buffer holding `bytes`.
-fn upload(d: &wgpu::Device, label: &str, bytes: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
-    d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents: bytes,
-        usage,
-    })
-}
-
 /// Runs `pipe` over `count` threads with `buffers` bound at 0, 1, 2, … and waits for it.
 fn run(
     ctx: &Gpu,
@@ -81,15 +71,7 @@ fn run(
 ) -> Result<()> {
     let refs: Vec<&wgpu::Buffer> = buffers.iter().collect();
     let group = ctx.bind_buffers("e-step", &pipes.layout, &refs);
-    let dims = grid(count, WORKGROUP);
-    let mut enc = ctx.device.create_command_encoder(&Default::default());
-    {
-        let mut pass = enc.begin_compute_pass(&Default::default());
-        pass.set_pipeline(pipe);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(dims.0, dims.1, 1);
-    }
-    let index = ctx.queue.submit([enc.finish()]);
+    let index = ctx.submit_passes(&group, &[(pipe, grid(count, WORKGROUP))]);
     ctx.wait_for(index, during)?;
     Ok(())
 }
@@ -100,7 +82,8 @@ fn cover_words(b: &Blend, canvas: &Canvas) -> Vec<u32> {
     let cx = cover(canvas.width, &b.xs, b.w, canvas.tile);
     let cy = cover(canvas.height, &b.ys, b.w, canvas.tile);
     let heads = cx.len() + cy.len() + 2;
-    let mut words = Vec::with_capacity(heads + 2 * (cx.len() + cy.len()) * 2);
+    let pairs: usize = cx.iter().chain(&cy).map(Vec::len).sum();
+    let mut words = Vec::with_capacity(heads + 2 * pairs);
     words.resize(heads, 0);
     let mut at = 0;
     for lists in [&cx, &cy] {
@@ -164,9 +147,8 @@ pub(crate) fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) -> Resul
         return Ok(false);
     }
     let bounds: Vec<u32> = (0..c).flat_map(|k| set.quantizer.boundaries(k)).collect();
-    let d = &ctx.device;
     use wgpu::BufferUsages as U;
-    let init = |label, bytes: &[u8], usage| upload(d, label, bytes, usage);
+    let init = |label, bytes: &[u8], usage| ctx.upload(label, bytes, usage);
     let params = Params {
         width: w as u32,
         height: h as u32,
@@ -177,7 +159,7 @@ pub(crate) fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) -> Resul
         pad: [0; 2],
     };
     let out = |label, words: usize| {
-        d.create_buffer(&wgpu::BufferDescriptor {
+        ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
             size: (words * 4) as u64,
             usage: U::STORAGE | U::COPY_SRC,
@@ -209,7 +191,7 @@ pub(crate) fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) -> Resul
     let blended = started.elapsed();
     let [_, _, _, _, _, values, sources, source_exemplars, codes] = buffers;
     tracing::debug!(
-        "E-step on the GPU, {w}×{h}: uploads {:.1} ms, blend {:.1} ms",
+        "E-step on the GPU, {w}×{h}: preparation and uploads {:.1} ms, blend {:.1} ms",
         (started - prepared).as_secs_f64() * 1e3,
         blended.as_secs_f64() * 1e3,
     );
@@ -310,9 +292,8 @@ pub fn gpu_quotients(
         values_at: 0,
         pad: [0; 2],
     };
-    let d = &ctx.device;
     use wgpu::BufferUsages as U;
-    let init = |label, bytes: &[u8], usage| upload(d, label, bytes, usage);
+    let init = |label, bytes: &[u8], usage| ctx.upload(label, bytes, usage);
     let zero = [0u32; 4];
     let out = vec![0u32; n];
     let buffers = [

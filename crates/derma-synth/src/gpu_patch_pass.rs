@@ -14,7 +14,6 @@ use crate::patch_pass::PatchPlan;
 use crate::search::MAX_GUESSES;
 use derma_core::gpu::GpuCell;
 use derma_core::progress::Progress;
-use wgpu::util::DeviceExt;
 
 /// The patch pass's pipelines: its kernels and the search's, on one layout (binding 0 uniform,
 /// 1–2 read-only storage, 3–16 read-write storage).
@@ -138,11 +137,7 @@ impl GpuMatcher {
             })
         };
         let init = |label: &str, words: &[u32], usage: wgpu::BufferUsages| {
-            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytemuck::cast_slice(words),
-                usage,
-            })
+            ctx.upload(label, bytemuck::cast_slice(words), usage)
         };
         let codes: Vec<u32> = plane.codes.iter().map(|&v| v as u32).collect();
         // The counts and total of the sources already on the canvas (none at the start).

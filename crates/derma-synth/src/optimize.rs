@@ -41,13 +41,7 @@ pub(crate) fn optimise_pass(
 ) -> Result<()> {
     let (set, guide, progress) = (ctx.set, ctx.guide, ctx.progress);
     let rng = Philox::new(ctx.seed, PICK_STREAM);
-    let step = (w / 2).max(1);
-    // Offset by a quarter window, so no window edge lies on the patch grid (multiples of D)
-    // or on the previous pass's window edges: every seam falls inside the windows that
-    // straddle it, whose best matches are coherent across it.
-    let offset = w / 4;
-    let xs = origins(canvas.width, w, step, offset, canvas.tile);
-    let ys = origins(canvas.height, w, step, offset, canvas.tile);
+    let (xs, ys) = window_origins(canvas, w);
     let windows: Vec<(usize, usize)> = ys
         .iter()
         .flat_map(|&y| xs.iter().map(move |&x| (x, y)))
@@ -158,6 +152,19 @@ pub(crate) fn optimise_pass(
         ms(t3, Instant::now())
     );
     Ok(())
+}
+
+/// The windows' origins along x and along y for windows of side `w`, every w/2 texels.
+pub(crate) fn window_origins(canvas: &Canvas, w: usize) -> (Vec<usize>, Vec<usize>) {
+    let step = (w / 2).max(1);
+    // Offset by a quarter window, so no window edge lies on the patch grid (multiples of D)
+    // or on the previous pass's window edges: every seam falls inside the windows that
+    // straddle it, whose best matches are coherent across it.
+    let offset = w / 4;
+    (
+        origins(canvas.width, w, step, offset, canvas.tile),
+        origins(canvas.height, w, step, offset, canvas.tile),
+    )
 }
 
 /// The texels of a window of side `w` whose sources' continuations are its coherent guesses:

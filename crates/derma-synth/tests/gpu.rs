@@ -307,7 +307,7 @@ fn the_gpu_divides_and_rounds_like_rust() {
     let Some(got) = derma_synth::gpu_e_step::gpu_quotients(&pairs, &q).unwrap() else {
         let f = derma_core::gpu::context().unwrap().device.features();
         assert!(
-            !f.contains(wgpu_features()),
+            !f.contains(wgpu::Features::SHADER_F64 | wgpu::Features::SHADER_INT64),
             "the device has 64-bit floats and integers but the E-step did not run"
         );
         eprintln!("no 64-bit floats on this adapter: the E-step blends on the CPU");
@@ -334,8 +334,4 @@ fn the_gpu_divides_and_rounds_like_rust() {
         "{wrong} of {} quotients or codes differ",
         pairs.len()
     );
-}
-
-fn wgpu_features() -> wgpu::Features {
-    wgpu::Features::SHADER_F64 | wgpu::Features::SHADER_INT64
 }

@@ -90,13 +90,7 @@ impl GpuFields {
         let d = &ctx.device;
         let n = g.width * g.height;
         let mask: Vec<u32> = g.mask.iter().map(|&m| m as u32).collect();
-        let init = |label, bytes: &[u8], usage| {
-            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
-                usage,
-            })
-        };
+        let init = |label, bytes: &[u8], usage| ctx.upload(label, bytes, usage);
         let st = wgpu::BufferUsages::STORAGE;
         let mask_buf = init("mask", bytemuck::cast_slice(&mask), st);
         let depth_buf = init("depth", bytemuck::cast_slice(&g.depth), st);
