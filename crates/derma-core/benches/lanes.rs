@@ -4,8 +4,9 @@
 //! `cargo bench -p derma-core --bench lanes`
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use derma_core::numerics::lanes::philox4x32_10_lanes;
 use derma_core::numerics::lanes::{IntLanes, Lanes, PortableF32, PortableI32};
-use derma_core::rng::{philox4x32_10, philox4x32_10_lanes};
+use derma_core::rng::philox4x32_10;
 
 fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("lanes");

@@ -1,5 +1,6 @@
-// CIE 1931 2° standard observer colour-matching functions x̄, ȳ, z̄, 380–780 nm every 10 nm.
-// Source: CIE 15:2004 (CVRL "Older CIE Standards" tabulation), values at the 10 nm points of the 5 nm table.
+//! CIE 1931 2° standard observer colour-matching functions x̄, ȳ, z̄, 380–780 nm every 10 nm.
+//! Source: CIE 15:2004 (CVRL "Older CIE Standards" tabulation), values at the 10 nm points of the 5 nm table.
+
 pub(crate) const CIE1931_XYZ_10NM: [[f64; 3]; 41] = [
     [0.001368, 3.9e-05, 0.00645],
     [0.004243, 0.00012, 0.02005],

@@ -11,10 +11,18 @@
 
 use crate::atomic;
 use crate::error::{CoreError, Result};
-use crate::image_io::ExrPrecision;
 use rayon::prelude::*;
 use std::io::{Seek, SeekFrom, Write};
 use std::path::Path;
+
+/// Sample precision of an EXR layer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExrPrecision {
+    /// 32-bit float.
+    F32,
+    /// 16-bit half float.
+    F16,
+}
 
 /// How the blocks of an EXR file are compressed (all lossless).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -343,14 +343,7 @@ fn check_maps(path: &Path, maps: &[&Map]) -> Result<(usize, usize)> {
     Ok((w, h))
 }
 
-/// Sample precision of an EXR layer.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ExrPrecision {
-    /// 32-bit float.
-    F32,
-    /// 16-bit half float.
-    F16,
-}
+pub use crate::exr_writer::ExrPrecision;
 
 /// Writes named single-channel maps into one OpenEXR file (scan lines, one channel per map;
 /// half floats RLE-compressed, f32 uncompressed: noisy f32 samples do not compress under RLE,

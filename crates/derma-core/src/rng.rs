@@ -34,16 +34,6 @@ pub fn philox4x32_10(mut ctr: [u32; 4], key: [u32; 2]) -> [u32; 4] {
     ctr
 }
 
-/// [`philox4x32_10`] in eight lanes at once (each lane its own counter, one key): the same
-/// words as the scalar function, lane by lane.
-#[inline(always)]
-pub fn philox4x32_10_lanes<I: crate::numerics::lanes::IntLanes>(
-    ctr: [I; 4],
-    key: [u32; 2],
-) -> [I; 4] {
-    I::philox4x32_10(ctr, key)
-}
-
 /// A keyed random stream: `Philox::new(seed, stream).u32x4(index)`.
 #[derive(Clone, Copy, Debug)]
 pub struct Philox {
@@ -101,32 +91,6 @@ pub fn unit_f32(w: u32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The lanes' Philox gives each lane the scalar function's words (portable and AVX2).
-    #[test]
-    fn lanes_draw_the_scalar_words() {
-        use crate::numerics::lanes::{IntLanes, PortableI32};
-        let ctr: [[u32; 4]; 8] = std::array::from_fn(|l| [l as u32 * 977, 3, 0x4f50, l as u32]);
-        let key = [0xdead_beef, 42];
-        let lanes = |k: usize| PortableI32(std::array::from_fn(|l| ctr[l][k] as i32));
-        let out = philox4x32_10_lanes([lanes(0), lanes(1), lanes(2), lanes(3)], key);
-        for l in 0..8 {
-            let want = philox4x32_10(ctr[l], key);
-            for k in 0..4 {
-                assert_eq!(out[k].to_array()[l] as u32, want[k]);
-            }
-        }
-        #[cfg(target_arch = "x86_64")]
-        if let Some(t) = crate::numerics::lanes::Avx2::detect() {
-            use crate::numerics::lanes::Avx2I32;
-            let lanes =
-                |k: usize| Avx2I32::from_array(t, std::array::from_fn(|l| ctr[l][k] as i32));
-            let a = philox4x32_10_lanes([lanes(0), lanes(1), lanes(2), lanes(3)], key);
-            for k in 0..4 {
-                assert_eq!(a[k].to_array(), out[k].to_array());
-            }
-        }
-    }
 
     /// Known-answer vectors of Philox4x32-10 published with Random123 (kat_vectors).
     #[test]

@@ -5,7 +5,8 @@
 //! `cargo bench -p derma-optics --bench photons`
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use derma_optics::run::{trace_range, Run};
+use derma_optics::cpu::trace_range;
+use derma_optics::run::Run;
 use derma_optics::slab::{parse_layer, slab_stack};
 use derma_optics::transport::Prepared;
 use derma_optics::transport_lanes::trace_range_on;

@@ -1,7 +1,9 @@
-//! Chooses the backend for a run: the CPU path, or the GPU kernel, as the [`Device`] says.
+//! Chooses the backend for a run: the CPU path, or the GPU kernel, as the [`Device`] says; both
+//! trace the same photons with the same random streams, so they agree statistically.
 
+use crate::cpu::run_cpu;
 use crate::error::Result;
-use crate::run::{run_cpu, Run};
+use crate::run::Run;
 use crate::tally::Tally;
 use derma_core::gpu::Device;
 use derma_core::progress::Progress;

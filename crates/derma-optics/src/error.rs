@@ -1,4 +1,5 @@
-//! Typed errors of the optics crate.
+//! Typed errors of the optics crate, naming the file, key or value at fault and what was
+//! expected (a layer, a grid axis, a shard, a table).
 
 use std::path::PathBuf;
 

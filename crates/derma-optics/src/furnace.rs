@@ -4,9 +4,10 @@
 //! for each outgoing direction, by reciprocity, the light arriving there from all incidences
 //! sums to at most one (Heitz 2014 §3, the weak white furnace; Heitz et al. 2016 §7).
 
+use crate::cpu::run_cpu;
 use crate::error::Result;
 use crate::layer::{Bottom, Layer, Stack};
-use crate::run::{run_cpu, Run};
+use crate::run::Run;
 use crate::specimen::SurfaceModel;
 use crate::tally::BrdfBins;
 use crate::transport::Incidence;

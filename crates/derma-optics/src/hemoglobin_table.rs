@@ -1,6 +1,7 @@
-// Molar extinction coefficients (decadic, cm⁻¹ M⁻¹) of oxy- and deoxy-hemoglobin, 380–780 nm every 10 nm.
-// Source: S. Prahl, OMLC, "Tabulated molar extinction coefficient for hemoglobin in water", compiled from
-// W. B. Gratzer and N. Kollias (also the table used by BioSpec, Krishnaswamy & Baranoski 2004). Columns: [HbO2, Hb].
+//! Molar extinction coefficients (decadic, cm⁻¹ M⁻¹) of oxy- and deoxy-hemoglobin, 380–780 nm every 10 nm.
+//! Source: S. Prahl, OMLC, "Tabulated molar extinction coefficient for hemoglobin in water", compiled from
+//! W. B. Gratzer and N. Kollias (also the table used by BioSpec, Krishnaswamy & Baranoski 2004). Columns: [HbO2, Hb].
+
 pub const HEMOGLOBIN_EXTINCTION_10NM: [[f64; 2]; 41] = [
     [109564.0, 145232.0],
     [167748.0, 167780.0],

@@ -20,8 +20,8 @@ use crate::photon_rng::OPTICS_STREAM;
 use crate::run::Run;
 use crate::tally::{Tally, ABSORBED, R_DIFFUSE, R_SPECULAR, TRANSMITTED};
 use crate::transport::{Incidence, Prepared, MAX_STEPS, ROULETTE_CHANCE, ROULETTE_WEIGHT};
+use derma_core::numerics::lanes::philox4x32_10_lanes;
 use derma_core::numerics::lanes::{IntLanes, Lanes, PortableF32};
-use derma_core::rng::philox4x32_10_lanes;
 
 /// Photons walked together.
 pub const LANES: usize = 8;
@@ -575,7 +575,7 @@ mod tests {
         let r = run(&["0.5,2,150,0.8,1.4", "0.5,0.5,100,0.9,1.4"], 3000);
         let p = Prepared::new(&r.stacks[0]);
         let lanes = trace_range_on(&r, &p, 0..3000, true);
-        let scalar = crate::run::trace_range(&r, std::slice::from_ref(&p), 0..3000);
+        let scalar = crate::cpu::trace_range(&r, std::slice::from_ref(&p), 0..3000);
         for k in 0..4 {
             let d = (lanes.sum[k] - scalar.sum[k]).abs() / 3000.0;
             assert!(d < 2e-4, "total {k}: {} vs {}", lanes.sum[k], scalar.sum[k]);

@@ -3,8 +3,9 @@
 //! conservation, reciprocity, determinism, CPU/GPU agreement and the shape of skin spectra.
 
 use derma_core::progress::Silent;
+use derma_optics::cpu::run_cpu;
 use derma_optics::layer::{Bottom, Layer, Stack, Surface};
-use derma_optics::run::{run_cpu, Run};
+use derma_optics::run::Run;
 use derma_optics::simulate::{skin_result, skin_run, SkinSimConfig};
 use derma_optics::slab::{parse_layer, slab_stack, SlabResult};
 use derma_optics::tally::{BrdfBins, Tally};

@@ -1,4 +1,5 @@
-//! Errors of the shading crate.
+//! Typed errors of the shading crate, naming the table, fit or value at fault and what was
+//! expected.
 
 use std::path::PathBuf;
 

@@ -267,7 +267,7 @@ impl<'a> SkinGenerator<'a> {
         let has_landmarks = !self.config.surface.landmarks.trim().is_empty();
         let regional_gains = (on_head || has_landmarks) && self.config.regional.enabled;
         let (person_cfg, melanin) =
-            crate::regional::apply_person(&self.config, appearance, regional_gains)?;
+            crate::calibration::apply_person(&self.config, appearance, regional_gains)?;
         let cfg = &person_cfg;
         let size = cfg.size as usize;
         check_memory(size)?;

@@ -23,6 +23,7 @@
 #![warn(missing_docs)]
 
 pub mod builtin_head;
+pub mod calibration;
 pub mod color_stats;
 pub mod config;
 pub mod detail;

@@ -3,7 +3,7 @@
 
 use crate::error::Result;
 use crate::exemplar::ExemplarSet;
-use crate::gpu_e_step::Blended;
+use crate::resident::Blended;
 use crate::search::Plane;
 
 /// No source yet: the texel still holds the white noise of §3.1.

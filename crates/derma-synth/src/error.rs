@@ -1,4 +1,5 @@
-//! Typed errors of derma-synth, naming the texture or value at fault and what was expected.
+//! Typed errors of derma-synth, naming the texture, exemplar or value at fault and what was
+//! expected.
 
 /// Errors of derma-synth.
 #[derive(Debug, thiserror::Error)]

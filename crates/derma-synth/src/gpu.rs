@@ -10,15 +10,12 @@
 
 use crate::error::{invalid, Result, SynthError};
 use crate::exemplar::{Exemplar, ExemplarSet};
-use crate::gpu_patch_pass::{PATCH_ROUNDS, PATCH_WAVEFRONTS};
-use crate::patch_pass::PatchPlan;
 use crate::search::{
-    gathered_window_matches, initial_cost, known_block_sums, known_texels, Match, Matcher, Plane,
-    Query, Search, Tolerance, WindowQuery, MAX_GUESSES,
+    initial_cost, known_block_sums, known_texels, Match, Query, Search, Tolerance, WindowQuery,
+    MAX_GUESSES,
 };
 use bytemuck::Zeroable;
 use derma_core::gpu::GpuCell;
-use derma_core::progress::Progress;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -38,8 +35,15 @@ const GUESSES_SHADER: &str = concat!(
     include_str!("guess_list.wgsl")
 );
 pub(crate) const WORKGROUP: usize = 64;
+
+/// Rounds first recorded per wavefront (they grow to the most any wavefront has taken; one that
+/// needs more gets them in a submission of its own).
+pub(crate) const PATCH_ROUNDS: usize = 4;
+/// Wavefronts recorded per submission of the patch pass (the first that does not settle in its
+/// rounds stops the rest, which the next submission records again).
+pub(crate) const PATCH_WAVEFRONTS: usize = 16;
 /// Largest query upload per dispatch, in bytes.
-const MAX_QUERY_BYTES: usize = 64 << 20;
+pub(crate) const MAX_QUERY_BYTES: usize = 64 << 20;
 /// Room for candidates that pass the bound in one compacted search (12 bytes each).
 const MAX_SURVIVORS: usize = 32 << 20;
 
@@ -164,7 +168,7 @@ pub(crate) fn info_stride(channels: usize) -> usize {
 pub(crate) const NONE: u32 = u32::MAX;
 
 /// Where a batch's query windows come from.
-enum Windows<'a> {
+pub(crate) enum Windows<'a> {
     /// Uploaded with the batch, stacked one under the other.
     Uploaded(&'a [&'a Query]),
     /// Read from the plane kept on the GPU (`width × height` texels); the guesses made there
@@ -192,7 +196,7 @@ pub(crate) fn gpu_error(detail: String) -> SynthError {
     invalid("GPU search", detail)
 }
 
-struct Pipelines {
+pub(crate) struct Pipelines {
     layout: wgpu::BindGroupLayout,
     guesses_layout: wgpu::BindGroupLayout,
     guesses: wgpu::ComputePipeline,
@@ -209,7 +213,7 @@ struct Pipelines {
 /// The search pipelines, compiled once per process.
 static PIPELINES: GpuCell<Pipelines> = GpuCell::new();
 
-fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
+pub(crate) fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
     Ok(PIPELINES.get_or_init(|ctx| {
         // One layout for all entry points: binding 0 uniform, 1–2 read-only storage,
         // 3–10 read-write storage.
@@ -331,7 +335,7 @@ pub(crate) struct Resident {
 pub struct GpuMatcher {
     resident: Mutex<HashMap<(usize, usize, usize), Arc<Resident>>>,
     scratch: Mutex<Option<Scratch>>,
-    name: String,
+    pub(crate) name: String,
     max_survivors: usize,
     pub(crate) patch_rounds: usize,
     pub(crate) patch_wavefronts: usize,
@@ -419,7 +423,13 @@ impl GpuMatcher {
 
     /// One batch of queries of one exemplar: the compacted search, or the uncompacted one when
     /// more candidates survive the bound than there is room for.
-    fn run(&self, set: &ExemplarSet, s: &Search, ex: usize, batch: Windows) -> Result<Vec<Match>> {
+    pub(crate) fn run(
+        &self,
+        set: &ExemplarSet,
+        s: &Search,
+        ex: usize,
+        batch: Windows,
+    ) -> Result<Vec<Match>> {
         let (ctx, pipes) = pipelines()?;
         let t0 = std::time::Instant::now();
         let w = s.w;
@@ -667,7 +677,7 @@ fn make_guesses(
 
 /// Runs `run` on the queries of each exemplar (`exemplar` of a query), in chunks of at most
 /// `chunk`, and returns the answers in the queries' order.
-fn by_exemplar<'q, Q>(
+pub(crate) fn by_exemplar<'q, Q>(
     set: &ExemplarSet,
     queries: &'q [Q],
     exemplar: impl Fn(&Q) -> u32,
@@ -691,116 +701,7 @@ fn by_exemplar<'q, Q>(
 
 /// Most queries of one batch: a dimension of the screening grid (one row of workgroups per
 /// query).
-const MAX_BATCH_QUERIES: usize = 65_535;
-
-impl Matcher for GpuMatcher {
-    fn best_matches(&self, set: &ExemplarSet, s: &Search, queries: &[Query]) -> Result<Vec<Match>> {
-        let per_query = s.w * s.w * set.channels() * 4;
-        let chunk = (MAX_QUERY_BYTES / per_query).clamp(1, MAX_BATCH_QUERIES);
-        by_exemplar(
-            set,
-            queries,
-            |q| q.exemplar,
-            chunk,
-            |ex, qs| self.run(set, s, ex, Windows::Uploaded(qs)),
-        )
-    }
-
-    fn window_matches(
-        &self,
-        set: &ExemplarSet,
-        s: &Search,
-        plane: &Plane,
-        queries: &[WindowQuery],
-        progress: &dyn Progress,
-    ) -> Result<Vec<Match>> {
-        // No guesses at all: made here from the plane's sources on the GPU.
-        let unguessed = queries.iter().filter(|q| q.guesses.is_empty()).count();
-        let guess_here = unguessed > 0;
-        if guess_here && (unguessed < queries.len() || plane.gpu.is_none()) {
-            return Err(invalid(
-                "window query",
-                format!(
-                    "{unguessed} of {} windows without guesses (expected guesses for every \
-                     window, or for none where the plane's sources are on the GPU)",
-                    queries.len()
-                ),
-            ));
-        }
-        if let Some(q) = queries.iter().find(|q| q.guesses.len() > MAX_GUESSES) {
-            return Err(invalid(
-                "window query",
-                format!(
-                    "{} guesses at ({}, {}) (at most {MAX_GUESSES})",
-                    q.guesses.len(),
-                    q.x,
-                    q.y
-                ),
-            ));
-        }
-        let (ctx, _) = pipelines()?;
-        // The canvas's codes: kept here by the GPU's E-step, or uploaded once for this pass.
-        let uploaded;
-        let buf = match plane.gpu {
-            Some(g) => g.codes,
-            None => {
-                let bytes = (plane.codes.len() * 4) as u64;
-                if let Err(e) = ctx.check_storage("the canvas", bytes) {
-                    // A plane this adapter cannot bind whole: its windows travel with the
-                    // batches.
-                    tracing::debug!("GPU search: {e}; uploading the windows instead");
-                    return gathered_window_matches(self, set, s, plane, queries, progress);
-                }
-                let codes: Vec<u32> = plane.codes.par_iter().map(|&v| v as u32).collect();
-                uploaded = ctx.upload(
-                    "canvas codes",
-                    bytemuck::cast_slice(&codes),
-                    wgpu::BufferUsages::STORAGE,
-                );
-                &uploaded
-            }
-        };
-        by_exemplar(
-            set,
-            queries,
-            |q| q.exemplar,
-            MAX_BATCH_QUERIES,
-            |ex, qs| {
-                let windows = Windows::Resident {
-                    plane: buf,
-                    width: plane.width,
-                    height: plane.height,
-                    wrap: plane.wrap,
-                    sources: plane
-                        .gpu
-                        .filter(|_| guess_here)
-                        .map(|g| (g.sources, g.source_exemplars)),
-                    queries: qs,
-                };
-                let answers = self.run(set, s, ex, windows)?;
-                progress.advance(qs.len() as u64);
-                Ok(answers)
-            },
-        )
-    }
-
-    fn name(&self) -> String {
-        format!("GPU ({})", self.name)
-    }
-
-    fn patch_pass(
-        &self,
-        set: &ExemplarSet,
-        plan: &PatchPlan,
-        progress: &dyn Progress,
-    ) -> Result<Option<Vec<u32>>> {
-        self.patch_pass_resident(set, plan, progress)
-    }
-
-    fn device(&self) -> derma_core::gpu::Device {
-        derma_core::gpu::Device::Gpu
-    }
-}
+pub(crate) const MAX_BATCH_QUERIES: usize = 65_535;
 
 #[cfg(test)]
 mod tests {

@@ -10,12 +10,11 @@
 //! the CPU.
 
 use crate::canvas::Canvas;
+use crate::e_step::{cover, Blend};
 use crate::error::Result;
 use crate::exemplar::{ExemplarSet, Quantizer};
-use crate::optimize::{cover, Blend};
-use crate::search::GpuPlane;
+use crate::resident::Blended;
 use derma_core::gpu::{grid, Gpu, GpuCell};
-use rayon::prelude::*;
 
 /// The shader.
 pub const SHADER: &str = include_str!("e_step.wgsl");
@@ -205,59 +204,6 @@ pub(crate) fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) -> Resul
         channels: c,
     });
     Ok(true)
-}
-
-/// A canvas as the GPU's E-step left it (one 32-bit word per value, code, source and source
-/// exemplar), kept there for the next pass's guesses and search.
-pub(crate) struct Blended {
-    ctx: &'static Gpu,
-    values: wgpu::Buffer,
-    codes: wgpu::Buffer,
-    sources: wgpu::Buffer,
-    source_exemplars: wgpu::Buffer,
-    texels: usize,
-    channels: usize,
-}
-
-impl Blended {
-    /// The canvas as a search's plane.
-    pub(crate) fn plane(&self) -> GpuPlane<'_> {
-        GpuPlane {
-            codes: &self.codes,
-            sources: &self.sources,
-            source_exemplars: &self.source_exemplars,
-        }
-    }
-
-    /// Copies everything back into the host's canvas.
-    pub(crate) fn read_into(
-        self,
-        values: &mut [f32],
-        codes: &mut [u8],
-        src: &mut [u32],
-        src_exemplar: &mut [u8],
-    ) -> Result<()> {
-        let (n, c) = (self.texels, self.channels);
-        let bits: Vec<u32> = self.ctx.read_back(&self.values, n * c)?;
-        values
-            .par_iter_mut()
-            .zip(&bits)
-            .for_each(|(v, &b)| *v = f32::from_bits(b));
-        drop(bits);
-        let words: Vec<u32> = self.ctx.read_back(&self.codes, n * c)?;
-        codes
-            .par_iter_mut()
-            .zip(&words)
-            .for_each(|(q, &w)| *q = w as u8);
-        drop(words);
-        src.copy_from_slice(&self.ctx.read_back::<u32>(&self.sources, n)?);
-        let words: Vec<u32> = self.ctx.read_back(&self.source_exemplars, n)?;
-        src_exemplar
-            .par_iter_mut()
-            .zip(&words)
-            .for_each(|(e, &w)| *e = w as u8);
-        Ok(())
-    }
 }
 
 /// `e_step.wgsl`'s quotient of each pair (a, b) as f32, as Rust's `(a / b) as f32` gives it, for

@@ -10,7 +10,7 @@ use crate::canvas::NO_SOURCE;
 use crate::error::Result;
 use crate::exemplar::ExemplarSet;
 use crate::gpu::{gpu_error, info_stride, GpuMatcher, Params, PATCH_SHADER, WORKGROUP};
-use crate::patch_pass::PatchPlan;
+use crate::matcher::PatchPlan;
 use crate::search::MAX_GUESSES;
 use derma_core::gpu::GpuCell;
 use derma_core::progress::Progress;
@@ -77,12 +77,6 @@ fn patch_pipelines() -> Result<(
     })?)
 }
 
-/// Rounds first recorded per wavefront (they grow to the most any wavefront has taken; one that
-/// needs more gets them in a submission of its own).
-pub(crate) const PATCH_ROUNDS: usize = 4;
-/// Wavefronts recorded per submission of the patch pass (the first that does not settle in its
-/// rounds stops the rest, which the next submission records again).
-pub(crate) const PATCH_WAVEFRONTS: usize = 16;
 /// Indirect-dispatch words of one round (three per dispatch; patch_schedule.wgsl's ROUND_ARGS).
 const ROUND_ARGS: usize = 36;
 /// Words of the patch pass's state before the per-patch statuses (patch_pass.wgsl).

@@ -13,18 +13,22 @@
 
 pub mod canvas;
 pub mod correction;
+mod e_step;
 pub mod error;
 pub mod exemplar;
 pub mod files;
 pub mod gpu;
 mod gpu_correction;
 pub mod gpu_e_step;
+mod gpu_matcher;
 mod gpu_patch_pass;
 pub mod guide;
+pub mod matcher;
 pub mod optimize;
 mod pass_context;
 pub mod patch_pass;
 pub mod quality;
+mod resident;
 pub mod search;
 pub mod synthesize;
 pub mod synthesizer;
@@ -34,9 +38,9 @@ pub use error::{Result, SynthError};
 pub use exemplar::{Exemplar, ExemplarSet, Quantizer};
 pub use gpu::GpuMatcher;
 pub use guide::Guide;
-pub use search::{
-    CpuMatcher, GpuPlane, Match, Matcher, Plane, Query, Search, Tolerance, WindowQuery, MAX_GUESSES,
-};
+pub use matcher::{CpuMatcher, Matcher, PatchPlan};
+pub use resident::GpuPlane;
+pub use search::{Match, Plane, Query, Search, Tolerance, WindowQuery, MAX_GUESSES};
 pub use synthesize::{synthesize, SynthOptions, Synthesis};
 pub use synthesizer::{matcher_for, Synthesizer};
 pub use texture::Texture;

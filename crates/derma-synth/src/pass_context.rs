@@ -3,7 +3,7 @@
 
 use crate::exemplar::ExemplarSet;
 use crate::guide::Guide;
-use crate::search::Matcher;
+use crate::matcher::Matcher;
 use derma_core::progress::Progress;
 
 /// The shared inputs of the patch pass and the optimisation passes.

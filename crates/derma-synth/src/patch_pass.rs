@@ -25,8 +25,9 @@
 use crate::canvas::{origins, Canvas, NO_SOURCE};
 use crate::error::Result;
 use crate::exemplar::ExemplarSet;
+use crate::matcher::PatchPlan;
 use crate::pass_context::PassContext;
-use crate::search::{Plane, Query, Search, Tolerance, MAX_PENALTY_TOTAL};
+use crate::search::{Query, Search, Tolerance, MAX_PENALTY_TOTAL};
 use derma_core::gpu::Device;
 use derma_core::progress::Unit;
 use derma_core::rng::Philox;
@@ -62,29 +63,6 @@ fn known_mask(canvas: &Canvas, px: usize, py: usize, n: usize) -> Option<Vec<u8>
         .collect();
     let known = m.iter().filter(|&&k| k != 0).count();
     (known != 0 && known != n * n).then_some(m)
-}
-
-/// A patch pass for a matcher that runs it where it keeps the canvas ([`Matcher::patch_pass`]):
-/// one exemplar, the canvas before it, and every wavefront's patches.
-///
-/// [`Matcher::patch_pass`]: crate::search::Matcher::patch_pass
-pub struct PatchPlan<'a> {
-    /// Patch side N.
-    pub n: usize,
-    /// Near-best tolerance of the choice.
-    pub tol: Tolerance,
-    /// λ · C · v̄ in 16.16 fixed point (the occurrence penalty's weight; 0 = off).
-    pub weight16: u64,
-    /// The penalty's cap per known texel.
-    pub cap: u32,
-    /// Per wavefront, its patches in scanline order: (x, y, salt).
-    pub wavefronts: Vec<Vec<[u32; 3]>>,
-    /// Per wavefront, whether two of its patches overlap (then the later pastes last).
-    pub overlaps: Vec<bool>,
-    /// The canvas's codes before the pass.
-    pub plane: Plane<'a>,
-    /// The canvas's sources before the pass (exemplar texel or [`NO_SOURCE`]).
-    pub sources: &'a [u32],
 }
 
 /// The patches of each wavefront t = i + 2j in scanline order: (x, y, index j·nx + i).

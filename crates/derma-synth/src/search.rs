@@ -22,10 +22,7 @@
 //! found so far cannot be chosen. It starts from coherent guesses (positions continuing the
 //! neighbouring texels' sources), which make the first limit tight.
 
-use crate::error::{invalid, Result};
 use crate::exemplar::{Exemplar, ExemplarSet};
-use derma_core::gpu::Device;
-use derma_core::progress::Progress;
 use rayon::prelude::*;
 
 /// One search: a window of codes, the exemplar to search and starting guesses.
@@ -178,19 +175,7 @@ pub struct Plane<'a> {
     pub codes: &'a [u8],
     /// The same plane kept on the GPU by the GPU's E-step. Where given, it is current and
     /// `codes` may be older: only a GPU matcher, which reads it, takes such a plane.
-    pub gpu: Option<GpuPlane<'a>>,
-}
-
-/// A [`Plane`] kept on the GPU: its codes (one per 32-bit word) and, per texel, its source and
-/// the source's exemplar, from which a GPU matcher makes the windows' coherent guesses.
-#[derive(Clone, Copy, Debug)]
-pub struct GpuPlane<'a> {
-    /// The codes.
-    pub codes: &'a wgpu::Buffer,
-    /// Source texel per texel (y · exemplar width + x, or `u32::MAX`).
-    pub sources: &'a wgpu::Buffer,
-    /// Exemplar of the source per texel.
-    pub source_exemplars: &'a wgpu::Buffer,
+    pub gpu: Option<crate::resident::GpuPlane<'a>>,
 }
 
 impl Plane<'_> {
@@ -251,72 +236,6 @@ impl WindowQuery {
             salt: self.salt,
         }
     }
-}
-
-/// Window queries per batch of the default [`Matcher::window_matches`] (bounds the memory of
-/// the gathered windows; one progress step each).
-const WINDOW_BATCH: usize = 16_384;
-
-/// Runs searches; implemented on the CPU ([`CpuMatcher`]) and on the GPU (`gpu::GpuMatcher`).
-pub trait Matcher: Sync {
-    /// The answer of each query (all of window side `w`), in order.
-    fn best_matches(&self, set: &ExemplarSet, s: &Search, queries: &[Query]) -> Result<Vec<Match>>;
-    /// The answer of each window query of `plane`, in order, advancing `progress` by the
-    /// queries done; the same answers as [`Self::best_matches`] of [`WindowQuery::query`].
-    /// By default it gathers the windows in batches and runs those.
-    fn window_matches(
-        &self,
-        set: &ExemplarSet,
-        s: &Search,
-        plane: &Plane,
-        queries: &[WindowQuery],
-        progress: &dyn Progress,
-    ) -> Result<Vec<Match>> {
-        gathered_window_matches(self, set, s, plane, queries, progress)
-    }
-    /// What runs the searches, for reports ("CPU", "GPU (…)").
-    fn name(&self) -> String;
-    /// Runs the patch pass of `plan` where the matcher keeps the canvas, advancing `progress`
-    /// by the patches done, and returns the canvas's sources after it; `Ok(None)` when this
-    /// matcher does not (the default), and the caller runs it round by round with
-    /// [`Self::best_matches`]. Both give the same sources.
-    fn patch_pass(
-        &self,
-        _set: &ExemplarSet,
-        _plan: &crate::patch_pass::PatchPlan,
-        _progress: &dyn Progress,
-    ) -> Result<Option<Vec<u32>>> {
-        Ok(None)
-    }
-    /// Where the searches run; the passes that do not search (the correction) run there too.
-    fn device(&self) -> Device {
-        Device::Cpu
-    }
-}
-
-/// [`Matcher::window_matches`] by gathering the windows on the host, in batches of
-/// [`WINDOW_BATCH`], and searching those with [`Matcher::best_matches`].
-pub(crate) fn gathered_window_matches<M: Matcher + ?Sized>(
-    matcher: &M,
-    set: &ExemplarSet,
-    s: &Search,
-    plane: &Plane,
-    queries: &[WindowQuery],
-    progress: &dyn Progress,
-) -> Result<Vec<Match>> {
-    if plane.gpu.is_some() {
-        return Err(invalid(
-            "window query",
-            "the plane's current codes are on the GPU; the host's copy is older",
-        ));
-    }
-    let mut out = Vec::with_capacity(queries.len());
-    for chunk in queries.chunks(WINDOW_BATCH) {
-        let batch: Vec<Query> = chunk.par_iter().map(|q| q.query(plane, s.w)).collect();
-        out.extend(matcher.best_matches(set, s, &batch)?);
-        progress.advance(chunk.len() as u64);
-    }
-    Ok(out)
 }
 
 /// Distance between the query and the exemplar window at (x, y).
@@ -447,10 +366,6 @@ pub fn initial_cost(set: &ExemplarSet, s: &Search, q: &Query) -> u32 {
         .unwrap_or(u32::MAX)
 }
 
-/// The CPU backend: queries spread over all cores with rayon; each search prunes with the
-/// block-sum bounds. The exemplars' block sums are prepared once per batch of queries.
-pub struct CpuMatcher;
-
 /// Quadrant block sums of each exemplar for one window side.
 struct Prepared {
     half: usize,
@@ -509,41 +424,38 @@ pub(crate) fn known_block_sums(
     out
 }
 
-impl Matcher for CpuMatcher {
-    fn best_matches(&self, set: &ExemplarSet, s: &Search, queries: &[Query]) -> Result<Vec<Match>> {
-        let prep = Prepared::new(set, s.w);
-        let threads = rayon::current_num_threads();
-        if queries.len() >= threads {
-            return Ok(queries
-                .par_iter()
-                .with_min_len(1)
-                .map(|q| best_match_pruned(set, &prep, s, q))
-                .collect());
-        }
-        // Fewer queries than threads (the patch pass's last searches of a wavefront): each
-        // query's rows are split among the threads. Every part keeps all candidates within its
-        // own limit, which is at least the whole search's, so the merged candidates hold every
-        // one within the final limit and the answer is the same.
-        Ok(queries
-            .iter()
-            .map(|q| {
-                let (_, ch) = set.exemplars[q.exemplar as usize].candidates(s.w);
-                let parts = (threads * 4).min(ch);
-                let found: Vec<(Vec<(u32, u32)>, u32)> = (0..parts)
-                    .into_par_iter()
-                    .map(|p| scan_pruned(set, &prep, s, q, p * ch / parts..(p + 1) * ch / parts))
-                    .collect();
-                let best = found.iter().map(|f| f.1).min().unwrap_or(u32::MAX);
-                let mut kept: Vec<(u32, u32)> = found.into_iter().flat_map(|f| f.0).collect();
-                kept.sort_unstable_by_key(|k| k.1);
-                kept.dedup();
-                choose(q.salt, kept, s.tol.limit(best))
-            })
-            .collect())
+/// The CPU backend's answers to `queries`: spread over all cores with rayon; each search prunes
+/// with the block-sum bounds, the exemplars' block sums prepared once per call.
+pub(crate) fn best_matches_cpu(set: &ExemplarSet, s: &Search, queries: &[Query]) -> Vec<Match> {
+    let prep = Prepared::new(set, s.w);
+    let threads = rayon::current_num_threads();
+    if queries.len() >= threads {
+        return queries
+            .par_iter()
+            .with_min_len(1)
+            .map(|q| best_match_pruned(set, &prep, s, q))
+            .collect();
     }
-    fn name(&self) -> String {
-        format!("CPU ({} threads)", rayon::current_num_threads())
-    }
+    // Fewer queries than threads (the patch pass's last searches of a wavefront): each
+    // query's rows are split among the threads. Every part keeps all candidates within its
+    // own limit, which is at least the whole search's, so the merged candidates hold every
+    // one within the final limit and the answer is the same.
+    queries
+        .iter()
+        .map(|q| {
+            let (_, ch) = set.exemplars[q.exemplar as usize].candidates(s.w);
+            let parts = (threads * 4).min(ch);
+            let found: Vec<(Vec<(u32, u32)>, u32)> = (0..parts)
+                .into_par_iter()
+                .map(|p| scan_pruned(set, &prep, s, q, p * ch / parts..(p + 1) * ch / parts))
+                .collect();
+            let best = found.iter().map(|f| f.1).min().unwrap_or(u32::MAX);
+            let mut kept: Vec<(u32, u32)> = found.into_iter().flat_map(|f| f.0).collect();
+            kept.sort_unstable_by_key(|k| k.1);
+            kept.dedup();
+            choose(q.salt, kept, s.tol.limit(best))
+        })
+        .collect()
 }
 
 /// Exact search with the block-sum bounds over every candidate, on one thread.
@@ -714,6 +626,7 @@ fn scan_pruned_body(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::matcher::{CpuMatcher, Matcher};
     use crate::texture::Texture;
     use derma_core::rng::Philox;
 

@@ -6,10 +6,11 @@ use crate::correction::correct;
 use crate::error::{invalid, Result};
 use crate::exemplar::ExemplarSet;
 use crate::guide::Guide;
+use crate::matcher::Matcher;
 use crate::optimize::{optimise_pass, KWATRA_R};
 use crate::pass_context::PassContext;
 use crate::patch_pass::{initialise_noise, patch_pass};
-use crate::search::{window_fits, Matcher, Tolerance};
+use crate::search::{window_fits, Tolerance};
 use crate::texture::Texture;
 use derma_core::progress::{Job, Progress, Timing};
 

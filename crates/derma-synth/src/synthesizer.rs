@@ -16,7 +16,7 @@ use crate::error::Result;
 use crate::exemplar::ExemplarSet;
 use crate::gpu::GpuMatcher;
 use crate::guide::Guide;
-use crate::search::{CpuMatcher, Matcher};
+use crate::matcher::{CpuMatcher, Matcher};
 use crate::synthesize::{synthesize, SynthOptions, Synthesis};
 use crate::texture::Texture;
 use derma_core::gpu::Device;

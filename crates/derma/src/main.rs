@@ -1,11 +1,15 @@
 //! `derma`: the command-line tool. Thin: parses flags, calls the libraries, shows their
 //! progress and notes, and prints results; the libraries do the work and write the files.
+//! Each command's models and sources are in docs/ (skin.md, optics.md, matching.md, rig.md,
+//! synth.md, photo.md, eyes.md, render.md).
 
+mod args;
 mod eyes;
 mod matching;
 mod optics;
 mod output;
 mod photo;
+mod photo_args;
 mod progress;
 mod render;
 mod rig;

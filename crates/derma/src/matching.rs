@@ -1,4 +1,5 @@
-//! `derma match …`: fit render models to the Monte Carlo table, and the skin-colour LUT.
+//! `derma match …`: fit render models to the Monte Carlo table (docs/matching.md) and build the
+//! skin-colour LUT of Jimenez et al. 2010; flags → derma-shading, and what was written.
 
 use crate::output::line;
 use crate::progress::Bars;

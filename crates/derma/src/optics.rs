@@ -1,4 +1,5 @@
-//! `derma optics …`: the skin optics (Monte Carlo light transport) from the command line.
+//! `derma optics …`: the skin optics (Monte Carlo light transport in layered skin, docs/optics.md)
+//! from the command line: flags → derma-optics, and what was written.
 
 use crate::output::line;
 use crate::progress::Bars;

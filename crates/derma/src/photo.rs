@@ -3,9 +3,10 @@
 //! photos, iris and teeth textures from single photos, and melanin/hemoglobin maps of a texture.
 
 use crate::output::line;
+use crate::photo_args::*;
 use crate::progress::Bars;
-use anyhow::{bail, Result};
-use clap::{Args, Subcommand};
+use anyhow::Result;
+use clap::Subcommand;
 use derma_photo::bake::BakeOptions;
 use derma_photo::files::{self, CalibrateInputs, MeshSource, SyntheticOptions};
 use derma_photo::iris::IrisOptions;
@@ -38,151 +39,6 @@ fn mesh_source(m: &Option<PathBuf>) -> MeshSource {
         Some(p) => MeshSource::File(p.clone()),
         None => MeshSource::Builtin,
     }
-}
-
-#[derive(Args)]
-pub struct CalibrateArgs {
-    /// Correspondences: JSON or CSV (format in derma-photo's correspondences module and README).
-    #[arg(long)]
-    points: PathBuf,
-    /// The mesh the points lie on (OBJ/glTF/GLB, UVs not needed); default: the built-in face.
-    #[arg(long)]
-    mesh: Option<PathBuf>,
-    /// Named landmarks of --mesh (JSON {"name": [x, y, z]}), for points given by name.
-    #[arg(long)]
-    landmarks: Option<PathBuf>,
-    /// --mesh is in MediaPipe's 468-vertex topology (vertex index = landmark id).
-    #[arg(long)]
-    mediapipe_topology: bool,
-    /// Fix each photo's focal length from its EXIF (FocalLengthIn35mmFilm) when present.
-    #[arg(long)]
-    exif: bool,
-    /// Intrinsics per photo instead of one shared camera.
-    #[arg(long)]
-    per_photo: bool,
-    /// Also refine the principal point.
-    #[arg(long)]
-    refine_principal: bool,
-    /// Also refine radial distortion k1, k2.
-    #[arg(long)]
-    refine_distortion: bool,
-    /// Output cameras file.
-    #[arg(long)]
-    out: PathBuf,
-}
-
-#[derive(Args)]
-pub struct UnwrapArgs {
-    /// Disc-topology mesh (one boundary loop); default: the built-in face.
-    #[arg(long)]
-    mesh: Option<PathBuf>,
-    /// Direction of view onto the face, X,Y,Z (Tarini et al. §3.1's V), or "none" for a
-    /// view-independent layout.
-    #[arg(long, default_value = "0,0,-1")]
-    view: String,
-    /// k of the view weight 1/(⟨N,V⟩ + k), 1.01–2: smaller gives the face more texture.
-    #[arg(long, default_value_t = 1.2)]
-    k: f32,
-    /// Output OBJ with UVs.
-    #[arg(long)]
-    out: PathBuf,
-}
-
-#[derive(Args)]
-pub struct BakeArgs {
-    /// UV-mapped mesh (from `derma photo unwrap`, or any single-chart UV layout).
-    #[arg(long)]
-    mesh: PathBuf,
-    /// Cameras from `derma photo calibrate`.
-    #[arg(long)]
-    cameras: PathBuf,
-    /// Texture size (texels).
-    #[arg(long, default_value_t = 2048)]
-    size: usize,
-    /// No per-photo gain and white-balance compensation.
-    #[arg(long)]
-    no_gain: bool,
-    /// No multiresolution spline: the weighted mean only.
-    #[arg(long)]
-    no_multiband: bool,
-    /// Output directory.
-    #[arg(long)]
-    out: PathBuf,
-}
-
-#[derive(Args)]
-pub struct ChromophoreArgs {
-    /// Texture (PNG sRGB or linear EXR), e.g. a baked texture.png.
-    #[arg(long)]
-    texture: PathBuf,
-    /// Grey mask: texels > 0.5 are the ones the exposure fit and the report use (e.g. the
-    /// bake's mask.png: texels coloured from photos); every texel gets its maps.
-    #[arg(long)]
-    mask: Option<PathBuf>,
-    /// Exposure the texture is divided by, or "auto" to fit it.
-    #[arg(long, default_value = "auto")]
-    exposure: String,
-    /// Output directory.
-    #[arg(long)]
-    out: PathBuf,
-}
-
-#[derive(Args)]
-pub struct IrisArgs {
-    /// Photo of one open eye looking at the camera.
-    #[arg(long)]
-    photo: PathBuf,
-    /// A rough centre X,Y (pixels) inside the pupil or iris; default: the darkest spot.
-    #[arg(long)]
-    start: Option<String>,
-    /// Texture size (the globe's UV square).
-    #[arg(long, default_value_t = 1024)]
-    size: usize,
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
-    /// Output directory.
-    #[arg(long)]
-    out: PathBuf,
-}
-
-#[derive(Args)]
-pub struct TeethArgs {
-    /// Photo of the subject's teeth (a smile), cropped around the mouth.
-    #[arg(long)]
-    photo: PathBuf,
-    /// Texture size.
-    #[arg(long, default_value_t = 1024)]
-    size: usize,
-    /// Output directory.
-    #[arg(long)]
-    out: PathBuf,
-}
-
-#[derive(Args)]
-pub struct SyntheticArgs {
-    /// Photo width in pixels (height ¾ of it).
-    #[arg(long, default_value_t = 1200)]
-    width: u32,
-    /// Landmark click noise (pixels).
-    #[arg(long, default_value_t = 1.5)]
-    noise: f64,
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
-    /// Output directory.
-    #[arg(long)]
-    out: PathBuf,
-}
-
-fn parse_vec(s: &str, n: usize, what: &str) -> Result<Vec<f64>> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<std::result::Result<_, _>>()
-        .map_err(|_| anyhow::anyhow!("{what} '{s}': expected {n} comma-separated numbers"))?;
-    if v.len() != n || v.iter().any(|x| !x.is_finite()) {
-        bail!("{what} '{s}': expected {n} comma-separated finite numbers");
-    }
-    Ok(v)
 }
 
 pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
@@ -221,19 +77,12 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
                     out
                 ))?;
             }
-            bars.say(format!(
-                "cameras in {:.2} s → {}",
-                t0.elapsed().as_secs_f64(),
-                a.out.display()
-            ));
+            done(bars, "cameras", t0, &a.out);
         }
         PhotoCommand::Unwrap(a) => {
-            let view = if a.view.eq_ignore_ascii_case("none") {
-                None
-            } else {
-                let v = parse_vec(&a.view, 3, "--view")?;
-                Some(glam::Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32))
-            };
+            let view = crate::args::optional_numbers(&a.view, "none", 3)
+                .map_err(|e| anyhow::anyhow!("--view {e}"))?
+                .map(|v| glam::Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32));
             let opts = UnwrapOptions {
                 view,
                 k: a.k,
@@ -245,11 +94,7 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
                 "{tris} triangles: L2 stretch {:.4} (Tutte start {:.3}), L∞ {:.2}, weighted L2 {:.4}, {} flipped, {it} iterations",
                 s.l2, tutte.l2, s.linf, s.weighted_l2, s.flipped
             ))?;
-            bars.say(format!(
-                "unwrapped in {:.2} s → {}",
-                t0.elapsed().as_secs_f64(),
-                a.out.display()
-            ));
+            done(bars, "unwrapped", t0, &a.out);
         }
         PhotoCommand::Bake(a) => {
             let opts = BakeOptions {
@@ -284,11 +129,9 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
             ));
         }
         PhotoCommand::Chromophores(a) => {
-            let exposure = if a.exposure.eq_ignore_ascii_case("auto") {
-                None
-            } else {
-                Some(parse_vec(&a.exposure, 1, "--exposure")?[0])
-            };
+            let exposure = crate::args::optional_numbers(&a.exposure, "auto", 1)
+                .map_err(|e| anyhow::anyhow!("--exposure {e}"))?
+                .map(|v| v[0]);
             let r =
                 files::chromophore_files(&a.texture, a.mask.as_deref(), exposure, &a.out, bars)?;
             line(format!(
@@ -299,22 +142,11 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
                 100.0 * r.clamped_share,
                 r.texels
             ))?;
-            bars.say(format!(
-                "chromophores in {:.2} s → {}",
-                t0.elapsed().as_secs_f64(),
-                a.out.display()
-            ));
+            done(bars, "chromophores", t0, &a.out);
         }
         PhotoCommand::Iris(a) => {
-            let start = match &a.start {
-                Some(s) => {
-                    let v = parse_vec(s, 2, "--start")?;
-                    Some([v[0], v[1]])
-                }
-                None => None,
-            };
             let opts = IrisOptions {
-                start,
+                start: a.start,
                 size: a.size,
                 seed: a.seed,
                 ..Default::default()
@@ -330,11 +162,7 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
                 r.sector_deg,
                 r.synthesis
             ))?;
-            bars.say(format!(
-                "iris in {:.2} s → {}",
-                t0.elapsed().as_secs_f64(),
-                a.out.display()
-            ));
+            done(bars, "iris", t0, &a.out);
         }
         PhotoCommand::Teeth(a) => {
             let opts = TeethOptions {
@@ -351,11 +179,7 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
                 r.gum_threshold,
                 r.target
             ))?;
-            bars.say(format!(
-                "teeth in {:.2} s → {}",
-                t0.elapsed().as_secs_f64(),
-                a.out.display()
-            ));
+            done(bars, "teeth", t0, &a.out);
         }
         PhotoCommand::Synthetic(a) => {
             let opts = SyntheticOptions {
@@ -364,12 +188,17 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
                 seed: a.seed,
             };
             files::synthetic_set(&opts, &a.out, bars)?;
-            bars.say(format!(
-                "synthetic photo set in {:.2} s → {}",
-                t0.elapsed().as_secs_f64(),
-                a.out.display()
-            ));
+            done(bars, "synthetic photo set", t0, &a.out);
         }
     }
     Ok(())
+}
+
+/// The closing note of a subcommand: what it made, how long it took, where it went.
+fn done(bars: &Bars, what: &str, t0: Instant, out: &std::path::Path) {
+    bars.say(format!(
+        "{what} in {:.2} s → {}",
+        t0.elapsed().as_secs_f64(),
+        out.display()
+    ));
 }

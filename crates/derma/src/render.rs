@@ -1,4 +1,5 @@
-//! `derma render`, `derma export` and `derma view`: flags → derma-render, and what was written.
+//! `derma render`, `derma export` and `derma view` (docs/render.md): flags → derma-render, and
+//! what was written or served.
 
 use crate::progress::Bars;
 use anyhow::{bail, Result};
@@ -21,7 +22,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = "studio,window", value_delimiter = ',', value_parser = parse_setup)]
     lighting: Vec<Setup>,
     /// Image size WxH (or one number for a square).
-    #[arg(long, default_value = "1024", value_parser = parse_size)]
+    #[arg(long, default_value = "1024", value_parser = crate::args::frame_size)]
     size: (u32, u32),
     /// Camera yaw in degrees (0 = front, 90 = the subject's left profile).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
@@ -57,7 +58,7 @@ pub struct RenderArgs {
     #[arg(long, conflicts_with = "mesh")]
     iris: Option<PathBuf>,
     /// Gaze yaw,pitch in degrees (positive yaw: to the subject's left).
-    #[arg(long, default_value = "0,0", value_parser = parse_pair, allow_negative_numbers = true)]
+    #[arg(long, default_value = "0,0", value_parser = crate::args::pair, allow_negative_numbers = true)]
     gaze: (f32, f32),
     /// Leave out the lacrimal lake (the tear meniscus along the lid margins).
     #[arg(long)]
@@ -69,26 +70,6 @@ pub struct RenderArgs {
 
 fn parse_setup(s: &str) -> Result<Setup, String> {
     s.parse()
-}
-
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("size '{s}': expected WxH or N, e.g. 1920x1080 or 1024");
-    let (a, b) = s.split_once('x').unwrap_or((s, s));
-    let w: u32 = a.trim().parse().map_err(|_| bad())?;
-    let h: u32 = b.trim().parse().map_err(|_| bad())?;
-    if !(16..=8192).contains(&w) || !(16..=8192).contains(&h) {
-        return Err(format!("size '{s}': each side must be 16 to 8192 pixels"));
-    }
-    Ok((w, h))
-}
-
-fn parse_pair(s: &str) -> Result<(f32, f32), String> {
-    let bad = || format!("'{s}': expected YAW,PITCH in degrees, e.g. 10,-5");
-    let (a, b) = s.split_once(',').ok_or_else(bad)?;
-    Ok((
-        a.trim().parse().map_err(|_| bad())?,
-        b.trim().parse().map_err(|_| bad())?,
-    ))
 }
 
 pub fn render(a: RenderArgs, bars: &Bars) -> Result<()> {

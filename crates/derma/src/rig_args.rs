@@ -51,14 +51,14 @@ pub struct BuildArgs {
     #[command(flatten)]
     pub character: CharacterArgs,
     /// A measured or painted target hemoglobin map, aligned with the neutral: NAME=FILE (repeat).
-    #[arg(long = "target", value_name = "NAME=FILE", value_parser = target_arg)]
+    #[arg(long = "target", value_name = "NAME=FILE", value_parser = crate::args::named_file)]
     pub targets: Vec<(String, PathBuf)>,
     /// Built-in library entries to add (comma-separated names, or "all"); they assume derma's
     /// built-in head's UV layout (e.g. maps from `derma skin`). See `derma rig library`.
     #[arg(long, value_delimiter = ',')]
     pub builtin: Vec<String>,
     /// Suggested global hemoglobin scale of a target at full weight: NAME=S (repeat).
-    #[arg(long = "global", value_name = "NAME=S", value_parser = global_arg)]
+    #[arg(long = "global", value_name = "NAME=S", value_parser = crate::args::named_number)]
     pub globals: Vec<(String, f32)>,
     /// Disk radius r of the local statistics, in texels of the neutral map.
     #[arg(long)]
@@ -75,26 +75,6 @@ pub struct BuildArgs {
     /// Output rig directory.
     #[arg(long)]
     pub out: PathBuf,
-}
-
-/// Parses `form` (NAME=FILE, NAME=S).
-fn named<T: std::str::FromStr>(s: &str, form: &str) -> std::result::Result<(String, T), String> {
-    let (n, v) = s
-        .split_once('=')
-        .ok_or_else(|| format!("'{s}': expected {form}"))?;
-    let v = v
-        .trim()
-        .parse()
-        .map_err(|_| format!("'{s}': expected {form}"))?;
-    Ok((n.trim().to_string(), v))
-}
-
-fn target_arg(s: &str) -> std::result::Result<(String, PathBuf), String> {
-    named(s, "NAME=FILE")
-}
-
-fn global_arg(s: &str) -> std::result::Result<(String, f32), String> {
-    named(s, "NAME=S, a name and a number")
 }
 
 #[derive(Clone, Copy, ValueEnum)]

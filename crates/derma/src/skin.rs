@@ -1,4 +1,5 @@
-//! `derma skin`: the main job.
+//! `derma skin`: the main job, procedural biological skin (docs/skin.md): flags and config →
+//! derma-skin's generator, and the files it wrote.
 
 use crate::progress::Bars;
 use anyhow::{Context, Result};
@@ -37,7 +38,7 @@ pub struct SkinArgs {
     #[arg(long)]
     threads: Option<usize>,
     /// A flat patch of this size in mm (WxH or W) instead of the head.
-    #[arg(long, value_name = "WxH", value_parser = parse_patch)]
+    #[arg(long, value_name = "WxH", value_parser = crate::args::mm_size)]
     patch: Option<[f32; 2]>,
     /// With --patch: do not wrap (by default patches tile seamlessly).
     #[arg(long)]
@@ -117,21 +118,6 @@ fn apply_person(cfg: &mut SkinConfig, args: &SkinArgs) {
     if let Some(p) = args.preset {
         cfg.person = p.person(cfg.person.sex, cfg.person.age_years);
     }
-}
-
-fn parse_patch(s: &str) -> std::result::Result<[f32; 2], String> {
-    let num = |t: &str| {
-        t.trim()
-            .parse::<f32>()
-            .ok()
-            .filter(|v| v.is_finite() && *v > 0.0)
-    };
-    match s.split(['x', 'X']).collect::<Vec<_>>().as_slice() {
-        [w] => num(w).map(|w| [w, w]),
-        [w, h] => num(w).zip(num(h)).map(|(w, h)| [w, h]),
-        _ => None,
-    }
-    .ok_or_else(|| format!("'{s}': expected a size in mm such as 40 or 40x30"))
 }
 
 pub fn run(args: SkinArgs, bars: &Bars) -> Result<()> {

@@ -21,11 +21,11 @@ pub struct SynthArgs {
     /// Further channels registered with the exemplar, synthesised jointly: NAME=FILE[,NAME=FILE…]
     /// (e.g. height=h.png,normal=n.png). With several --exemplar, give it once per exemplar, in
     /// the same order, with the same names.
-    #[arg(long, value_parser = parse_channels)]
+    #[arg(long, value_parser = crate::args::named_files)]
     exemplar_channels: Vec<Vec<(String, PathBuf)>>,
     /// Output size: W or WxH texels.
-    #[arg(long, default_value = "512", value_parser = parse_size)]
-    size: (usize, usize),
+    #[arg(long, default_value = "512", value_parser = crate::args::size)]
+    size: (u32, u32),
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Tileable output (wraps at the edges).
@@ -62,43 +62,6 @@ pub struct SynthArgs {
     metrics: bool,
 }
 
-fn parse_size(s: &str) -> std::result::Result<(usize, usize), String> {
-    let parse = |v: &str| {
-        v.trim()
-            .parse::<usize>()
-            .ok()
-            .filter(|&n| n > 0)
-            .ok_or_else(|| format!("'{s}' is not a size: expected W or WxH, positive integers"))
-    };
-    match s.split_once(['x', 'X']) {
-        Some((w, h)) => Ok((parse(w)?, parse(h)?)),
-        None => parse(s).map(|n| (n, n)),
-    }
-}
-
-/// Parses NAME=FILE[,NAME=FILE…].
-fn parse_channels(spec: &str) -> std::result::Result<Vec<(String, PathBuf)>, String> {
-    spec.split(',')
-        .filter(|s| !s.trim().is_empty())
-        .map(|item| {
-            let (name, file) = item
-                .split_once('=')
-                .ok_or_else(|| format!("'{item}': expected NAME=FILE (e.g. height=h.png)"))?;
-            let name = name.trim();
-            if name.is_empty()
-                || !name
-                    .chars()
-                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
-            {
-                return Err(format!(
-                    "the name '{name}' must be letters, digits, '_' or '-'"
-                ));
-            }
-            Ok((name.to_string(), PathBuf::from(file.trim())))
-        })
-        .collect()
-}
-
 pub fn run(args: SynthArgs, bars: &Bars) -> Result<()> {
     let files = load_exemplars(&args.exemplar, &args.exemplar_channels)?;
     let outputs = output_paths(&args.out, &files.groups)?;
@@ -117,8 +80,8 @@ pub fn run(args: SynthArgs, bars: &Bars) -> Result<()> {
     let exemplar = args.metrics.then(|| first.clone());
     let mut synth = Synthesizer::new(first)
         .options(SynthOptions {
-            width: args.size.0,
-            height: args.size.1,
+            width: args.size.0 as usize,
+            height: args.size.1 as usize,
             patch: args.patch,
             passes: args.passes,
             tolerance: args.tolerance,

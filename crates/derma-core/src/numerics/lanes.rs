@@ -271,6 +271,13 @@ pub trait IntLanes: Copy + Send + Sync + std::fmt::Debug {
     }
 }
 
+/// [`crate::rng::philox4x32_10`] in eight lanes at once (each lane its own counter, one key): the same
+/// words as the scalar function, lane by lane.
+#[inline(always)]
+pub fn philox4x32_10_lanes<I: IntLanes>(ctr: [I; 4], key: [u32; 2]) -> [I; 4] {
+    I::philox4x32_10(ctr, key)
+}
+
 /// Eight plain f32s: the lanes on every CPU.
 #[derive(Clone, Copy, Debug)]
 pub struct PortableF32(pub [f32; 8]);
@@ -721,6 +728,31 @@ mod x86 {
 mod tests {
     use super::*;
     use crate::numerics::fastmath::{cbrt_f32, exp_f32};
+
+    /// The lanes' Philox gives each lane the scalar function's words (portable and AVX2).
+    #[test]
+    fn lanes_draw_the_scalar_words() {
+        use crate::rng::philox4x32_10;
+        let ctr: [[u32; 4]; 8] = std::array::from_fn(|l| [l as u32 * 977, 3, 0x4f50, l as u32]);
+        let key = [0xdead_beef, 42];
+        let lanes = |k: usize| PortableI32(std::array::from_fn(|l| ctr[l][k] as i32));
+        let out = philox4x32_10_lanes([lanes(0), lanes(1), lanes(2), lanes(3)], key);
+        for l in 0..8 {
+            let want = philox4x32_10(ctr[l], key);
+            for k in 0..4 {
+                assert_eq!(out[k].to_array()[l] as u32, want[k]);
+            }
+        }
+        #[cfg(target_arch = "x86_64")]
+        if let Some(t) = Avx2::detect() {
+            let lanes =
+                |k: usize| Avx2I32::from_array(t, std::array::from_fn(|l| ctr[l][k] as i32));
+            let a = philox4x32_10_lanes([lanes(0), lanes(1), lanes(2), lanes(3)], key);
+            for k in 0..4 {
+                assert_eq!(a[k].to_array(), out[k].to_array());
+            }
+        }
+    }
 
     /// Inputs across the functions' ranges, ties of the rounding included.
     fn inputs(k: u64) -> [f32; 8] {

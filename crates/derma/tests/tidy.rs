@@ -1,0 +1,778 @@
+//! The architecture's invariants as a test, after rust-analyzer's `tidy`: ARCHITECTURE.md states
+//! them, this file checks each over the source tree, so a change that breaks one fails here.
+//!
+//! - every CLI file is under 300 lines;
+//! - no library prints (`print!`, `println!`, `eprint!`, `eprintln!`, `dbg!` outside tests);
+//! - every crate opens with a crate doc and every module with a doc comment of two lines or more;
+//! - no import circles between the modules of any crate (and no crate imports a crate above it);
+//! - every declared dependency is used;
+//! - every library crate that reads files has property tests (`tests/robust_*.rs`, `proptest!`).
+//!
+//! The module graph: a node per source file (`lib.rs`, the crate's facade, excluded); an arrow
+//! from a file to every module a `crate::`, `super::` or `self::` path in its non-test code
+//! resolves to, following the facades' `pub use` re-exports to the module that defines the item.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .canonicalize()
+        .unwrap()
+}
+
+/// Every `.rs` file below `dir`, sorted.
+fn rust_files(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return out;
+    };
+    for e in entries.flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            out.extend(rust_files(&p));
+        } else if p.extension().is_some_and(|x| x == "rs") {
+            out.push(p);
+        }
+    }
+    out.sort();
+    out
+}
+
+fn crates() -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(workspace().join("crates"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.join("Cargo.toml").exists())
+        .collect();
+    v.sort();
+    v
+}
+
+fn name_of(krate: &Path) -> String {
+    krate.file_name().unwrap().to_string_lossy().into_owned()
+}
+
+/// `src` with comments, string and char literals blanked (newlines kept, so lines still count).
+fn strip_comments_and_strings(src: &str) -> String {
+    let b = src.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    let blank = |out: &mut Vec<u8>, c: u8| out.push(if c == b'\n' { b'\n' } else { b' ' });
+    while i < b.len() {
+        if b[i] == b'/' && b.get(i + 1) == Some(&b'/') {
+            while i < b.len() && b[i] != b'\n' {
+                out.push(b' ');
+                i += 1;
+            }
+        } else if b[i] == b'/' && b.get(i + 1) == Some(&b'*') {
+            let mut depth = 0;
+            while i < b.len() {
+                if b[i] == b'/' && b.get(i + 1) == Some(&b'*') {
+                    depth += 1;
+                    out.extend_from_slice(b"  ");
+                    i += 2;
+                } else if b[i] == b'*' && b.get(i + 1) == Some(&b'/') {
+                    depth -= 1;
+                    out.extend_from_slice(b"  ");
+                    i += 2;
+                    if depth == 0 {
+                        break;
+                    }
+                } else {
+                    blank(&mut out, b[i]);
+                    i += 1;
+                }
+            }
+        } else if b[i] == b'r'
+            && (b.get(i + 1) == Some(&b'"') || b.get(i + 1) == Some(&b'#'))
+            && (i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_'))
+        {
+            // Raw string r"…" or r#"…"#.
+            let mut j = i + 1;
+            let mut hashes = 0;
+            while b.get(j) == Some(&b'#') {
+                hashes += 1;
+                j += 1;
+            }
+            if b.get(j) != Some(&b'"') {
+                out.push(b[i]);
+                i += 1;
+                continue;
+            }
+            j += 1;
+            loop {
+                if j >= b.len() {
+                    break;
+                }
+                if b[j] == b'"' && (0..hashes).all(|k| b.get(j + 1 + k) == Some(&b'#')) {
+                    j += 1 + hashes;
+                    break;
+                }
+                j += 1;
+            }
+            for &c in &b[i..j.min(b.len())] {
+                blank(&mut out, c);
+            }
+            i = j;
+        } else if b[i] == b'"' {
+            out.push(b' ');
+            i += 1;
+            while i < b.len() && b[i] != b'"' {
+                if b[i] == b'\\' {
+                    out.push(b' ');
+                    i += 1;
+                }
+                if i < b.len() {
+                    blank(&mut out, b[i]);
+                    i += 1;
+                }
+            }
+            out.push(b' ');
+            i += 1;
+        } else if b[i] == b'\'' {
+            // A char literal ('x', '\n', '\u{..}') or a lifetime ('a): blank only the former.
+            let end = if b.get(i + 1) == Some(&b'\\') {
+                b[i + 2..]
+                    .iter()
+                    .position(|&c| c == b'\'')
+                    .map(|p| i + 2 + p)
+            } else if b.get(i + 2) == Some(&b'\'') {
+                Some(i + 2)
+            } else {
+                // Multi-byte UTF-8 char literal.
+                let s = &src[i + 1..];
+                s.chars().next().and_then(|c| {
+                    let l = c.len_utf8();
+                    (b.get(i + 1 + l) == Some(&b'\'')).then_some(i + 1 + l)
+                })
+            };
+            match end {
+                Some(e) => {
+                    out.extend(std::iter::repeat_n(b' ', e + 1 - i));
+                    i = e + 1;
+                }
+                None => {
+                    out.push(b[i]);
+                    i += 1;
+                }
+            }
+        } else {
+            out.push(b[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// The index just past the item that starts at `from` (a `{…}` block or up to a `;`).
+fn item_end(code: &[u8], from: usize) -> usize {
+    let mut depth = 0i32;
+    let mut i = from;
+    while i < code.len() {
+        match code[i] {
+            b'{' => depth += 1,
+            b'}' => {
+                depth -= 1;
+                if depth == 0 {
+                    return i + 1;
+                }
+            }
+            b';' if depth == 0 => return i + 1,
+            _ => {}
+        }
+        i += 1;
+    }
+    code.len()
+}
+
+/// Comment-free code without the items under `#[cfg(test)]` (test modules and helpers).
+fn non_test_code(src: &str) -> String {
+    let code = strip_comments_and_strings(src);
+    let mut out = code.clone().into_bytes();
+    let b = code.as_bytes();
+    let mut at = 0;
+    while let Some(p) = code[at..].find("#[cfg(test)]") {
+        let start = at + p;
+        let end = item_end(b, start + "#[cfg(test)]".len());
+        for c in &mut out[start..end] {
+            if *c != b'\n' {
+                *c = b' ';
+            }
+        }
+        at = end;
+    }
+    String::from_utf8(out).unwrap()
+}
+
+/// One crate's modules: path segments (`["numerics", "lanes"]`) → file.
+struct Crate {
+    modules: BTreeMap<Vec<String>, PathBuf>,
+    /// Facade re-exports: module → (name → the module path it names).
+    reexports: BTreeMap<Vec<String>, BTreeMap<String, Vec<String>>>,
+}
+
+fn module_path(src_dir: &Path, file: &Path) -> Vec<String> {
+    let rel = file.strip_prefix(src_dir).unwrap();
+    let mut segs: Vec<String> = rel
+        .iter()
+        .map(|s| s.to_string_lossy().trim_end_matches(".rs").to_string())
+        .collect();
+    if segs
+        .last()
+        .is_some_and(|s| s == "mod" || s == "lib" || s == "main")
+    {
+        segs.pop();
+    }
+    segs
+}
+
+/// Paths that start with `crate`, `super` or `self` in `code`, with `{a, b::c}` groups expanded.
+fn paths_in(code: &str) -> Vec<Vec<String>> {
+    let b = code.as_bytes();
+    let mut out = Vec::new();
+    for kw in ["crate", "super", "self"] {
+        let mut at = 0;
+        while let Some(p) = code[at..].find(kw) {
+            let s = at + p;
+            at = s + kw.len();
+            let before_ok = s == 0
+                || !(b[s - 1].is_ascii_alphanumeric() || b[s - 1] == b'_' || b[s - 1] == b':');
+            if !before_ok || !code[at..].trim_start().starts_with("::") {
+                continue;
+            }
+            let mut acc = Vec::new();
+            expand(code, s, &[], &mut acc);
+            out.extend(acc);
+        }
+    }
+    out
+}
+
+/// Expands the path starting at `i` (after `prefix`) into `out`.
+fn expand(code: &str, mut i: usize, prefix: &[String], out: &mut Vec<Vec<String>>) -> usize {
+    let b = code.as_bytes();
+    let mut segs = prefix.to_vec();
+    loop {
+        while i < b.len() && b[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        if i < b.len() && b[i] == b'{' {
+            i += 1;
+            loop {
+                while i < b.len() && (b[i].is_ascii_whitespace() || b[i] == b',') {
+                    i += 1;
+                }
+                if i >= b.len() || b[i] == b'}' {
+                    out.push(segs.clone());
+                    return i + 1;
+                }
+                i = expand(code, i, &segs, out);
+            }
+        }
+        let st = i;
+        while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
+            i += 1;
+        }
+        if i == st {
+            out.push(segs);
+            return i;
+        }
+        segs.push(code[st..i].to_string());
+        let mut j = i;
+        while j < b.len() && b[j].is_ascii_whitespace() {
+            j += 1;
+        }
+        if code[j..].starts_with("::") {
+            i = j + 2;
+        } else {
+            out.push(segs);
+            return i;
+        }
+    }
+}
+
+impl Crate {
+    fn load(krate: &Path) -> Crate {
+        let src = krate.join("src");
+        let mut modules = BTreeMap::new();
+        for f in rust_files(&src) {
+            if f.parent().unwrap().ends_with("bin") {
+                continue;
+            }
+            modules.insert(module_path(&src, &f), f);
+        }
+        let mut c = Crate {
+            modules,
+            reexports: BTreeMap::new(),
+        };
+        // Facade re-exports, from `pub use` lines of every module.
+        let files: Vec<(Vec<String>, PathBuf)> = c
+            .modules
+            .iter()
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect();
+        for (m, f) in files {
+            let code = non_test_code(&std::fs::read_to_string(&f).unwrap());
+            let mut map = BTreeMap::new();
+            for stmt in code.split(';') {
+                let t = stmt.trim();
+                let Some(rest) = t
+                    .strip_prefix("pub use ")
+                    .or_else(|| t.strip_prefix("pub(crate) use "))
+                else {
+                    continue;
+                };
+                let rest = rest.trim();
+                let mut acc = Vec::new();
+                expand(rest, 0, &[], &mut acc);
+                for p in acc {
+                    let Some(last) = p.last().cloned() else {
+                        continue;
+                    };
+                    let target = c.absolute(&m, &p);
+                    if let Some(t) = target {
+                        map.insert(last, t);
+                    }
+                }
+            }
+            c.reexports.insert(m, map);
+        }
+        c
+    }
+
+    /// The absolute segments of `path` written in module `from` (`crate::`, `super::`, `self::`
+    /// or a child module's name), or None for another crate's path.
+    fn absolute(&self, from: &[String], path: &[String]) -> Option<Vec<String>> {
+        let first = path.first()?;
+        let (mut base, rest): (Vec<String>, &[String]) = match first.as_str() {
+            "crate" => (Vec::new(), &path[1..]),
+            "self" => (from.to_vec(), &path[1..]),
+            "super" => {
+                let mut b = from.to_vec();
+                let mut k = 0;
+                while path.get(k).is_some_and(|s| s == "super") {
+                    b.pop();
+                    k += 1;
+                }
+                (b, &path[k..])
+            }
+            _ => {
+                let mut child = from.to_vec();
+                child.push(first.clone());
+                if self.modules.contains_key(&child) {
+                    (from.to_vec(), path)
+                } else {
+                    return None;
+                }
+            }
+        };
+        base.extend(rest.iter().cloned());
+        Some(base)
+    }
+
+    /// The module that defines what absolute `path` names.
+    fn resolve(&self, path: &[String], depth: usize) -> Vec<String> {
+        let mut m: Vec<String> = Vec::new();
+        for seg in path {
+            let mut child = m.clone();
+            child.push(seg.clone());
+            if self.modules.contains_key(&child) {
+                m = child;
+                continue;
+            }
+            if depth < 8 {
+                if let Some(t) = self.reexports.get(&m).and_then(|r| r.get(seg)) {
+                    if t != path {
+                        return self.resolve(t, depth + 1);
+                    }
+                }
+            }
+            break;
+        }
+        m
+    }
+
+    /// Arrows between modules (the crate root and test code left out).
+    fn graph(&self) -> BTreeMap<Vec<String>, BTreeSet<Vec<String>>> {
+        let mut g: BTreeMap<Vec<String>, BTreeSet<Vec<String>>> = BTreeMap::new();
+        for (m, f) in &self.modules {
+            if m.is_empty() {
+                continue;
+            }
+            let code = non_test_code(&std::fs::read_to_string(f).unwrap());
+            let set = g.entry(m.clone()).or_default();
+            for p in paths_in(&code) {
+                let Some(abs) = self.absolute(m, &p) else {
+                    continue;
+                };
+                let t = self.resolve(&abs, 0);
+                // Containment is not an import: a facade naming its own children.
+                if !t.is_empty() && &t != m && !t.starts_with(m) {
+                    set.insert(t);
+                }
+            }
+        }
+        g
+    }
+}
+
+/// Strongly connected components of more than one module (Tarjan).
+fn circles(g: &BTreeMap<Vec<String>, BTreeSet<Vec<String>>>) -> Vec<Vec<Vec<String>>> {
+    struct T<'a> {
+        g: &'a BTreeMap<Vec<String>, BTreeSet<Vec<String>>>,
+        index: BTreeMap<&'a Vec<String>, usize>,
+        low: BTreeMap<&'a Vec<String>, usize>,
+        stack: Vec<&'a Vec<String>>,
+        on: BTreeSet<&'a Vec<String>>,
+        next: usize,
+        out: Vec<Vec<Vec<String>>>,
+    }
+    fn visit<'a>(t: &mut T<'a>, v: &'a Vec<String>) {
+        t.index.insert(v, t.next);
+        t.low.insert(v, t.next);
+        t.next += 1;
+        t.stack.push(v);
+        t.on.insert(v);
+        if let Some(ws) = t.g.get(v) {
+            for w in ws {
+                let Some((w, _)) = t.g.get_key_value(w) else {
+                    continue;
+                };
+                if !t.index.contains_key(w) {
+                    visit(t, w);
+                    let l = t.low[w].min(t.low[v]);
+                    t.low.insert(v, l);
+                } else if t.on.contains(w) {
+                    let l = t.index[w].min(t.low[v]);
+                    t.low.insert(v, l);
+                }
+            }
+        }
+        if t.low[v] == t.index[v] {
+            let mut comp = Vec::new();
+            loop {
+                let w = t.stack.pop().unwrap();
+                t.on.remove(w);
+                comp.push(w.clone());
+                if w == v {
+                    break;
+                }
+            }
+            if comp.len() > 1 {
+                comp.sort();
+                t.out.push(comp);
+            }
+        }
+    }
+    let mut t = T {
+        g,
+        index: BTreeMap::new(),
+        low: BTreeMap::new(),
+        stack: Vec::new(),
+        on: BTreeSet::new(),
+        next: 0,
+        out: Vec::new(),
+    };
+    for v in g.keys() {
+        if !t.index.contains_key(v) {
+            visit(&mut t, v);
+        }
+    }
+    t.out
+}
+
+/// Every import circle in the workspace, as `crate: a → b → a` lines.
+fn all_circles() -> Vec<String> {
+    let mut out = Vec::new();
+    for k in crates() {
+        let c = Crate::load(&k);
+        for comp in circles(&c.graph()) {
+            let names: Vec<String> = comp.iter().map(|m| m.join("/")).collect();
+            out.push(format!("{}: {{{}}}", name_of(&k), names.join(", ")));
+        }
+    }
+    out
+}
+
+#[test]
+fn no_import_circles_inside_any_crate() {
+    let found = all_circles();
+    assert!(
+        found.is_empty(),
+        "import circles (modules that import each other):\n{}",
+        found.join("\n")
+    );
+}
+
+#[test]
+fn the_circle_finder_finds_circles() {
+    // The checker itself: a two-module circle through a facade's re-export, a `super::` path and
+    // a grouped `use`, and the same modules without the back arrow.
+    let dir = std::env::temp_dir().join(format!("derma-tidy-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("src/numerics")).unwrap();
+    std::fs::write(dir.join("Cargo.toml"), "[package]\nname = \"x\"\n").unwrap();
+    std::fs::write(
+        dir.join("src/lib.rs"),
+        "//! x\npub mod rng;\npub mod numerics;\npub use rng::Philox;\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("src/numerics/mod.rs"),
+        "//! n\npub mod lanes;\npub use lanes::Lanes;\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("src/numerics/lanes.rs"),
+        "//! l\nuse crate::{Philox, map::X};\npub struct Lanes;\n",
+    )
+    .unwrap();
+    std::fs::write(dir.join("src/rng.rs"), "//! r\npub struct Philox;\nfn f() { let _ = crate::numerics::Lanes; }\n#[cfg(test)]\nmod tests { use super::*; }\n").unwrap();
+    let c = Crate::load(&dir);
+    let found = circles(&c.graph());
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert_eq!(
+        found[0],
+        vec![
+            vec!["numerics".to_string(), "lanes".to_string()],
+            vec!["rng".to_string()]
+        ]
+    );
+    std::fs::write(dir.join("src/rng.rs"), "//! r\npub struct Philox;\n").unwrap();
+    assert!(circles(&Crate::load(&dir).graph()).is_empty());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Library crates: every crate but the CLI.
+fn libraries() -> Vec<PathBuf> {
+    crates()
+        .into_iter()
+        .filter(|k| name_of(k) != "derma")
+        .collect()
+}
+
+#[test]
+fn cli_files_are_under_300_lines() {
+    let mut long = Vec::new();
+    for f in rust_files(&workspace().join("crates/derma/src")) {
+        let n = std::fs::read_to_string(&f).unwrap().lines().count();
+        if n >= 300 {
+            long.push(format!("{} has {n} lines", f.display()));
+        }
+    }
+    assert!(
+        long.is_empty(),
+        "CLI files must stay under 300 lines (parse → call → print):\n{}",
+        long.join("\n")
+    );
+}
+
+/// The printing macros a library must not call outside its tests.
+fn prints(code: &str) -> Vec<usize> {
+    let mut at = Vec::new();
+    for (i, line) in code.lines().enumerate() {
+        for mac in ["println!", "print!", "eprintln!", "eprint!", "dbg!"] {
+            if let Some(p) = line.find(mac) {
+                let b = line.as_bytes();
+                if p == 0 || !(b[p - 1].is_ascii_alphanumeric() || b[p - 1] == b'_') {
+                    at.push(i + 1);
+                    break;
+                }
+            }
+        }
+    }
+    at
+}
+
+#[test]
+fn libraries_never_print() {
+    let mut found = Vec::new();
+    for k in libraries() {
+        if name_of(&k) == "derma-test-support" {
+            continue; // the tests' own helpers say why a test skipped
+        }
+        for f in rust_files(&k.join("src")) {
+            let code = non_test_code(&std::fs::read_to_string(&f).unwrap());
+            for line in prints(&code) {
+                found.push(format!("{}:{line}", f.display()));
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "libraries report through derma_core::progress, never print:\n{}",
+        found.join("\n")
+    );
+}
+
+/// The leading `//!` lines of a file.
+fn module_doc(src: &str) -> Vec<&str> {
+    src.lines().take_while(|l| l.starts_with("//!")).collect()
+}
+
+#[test]
+fn every_crate_and_module_says_what_it_models() {
+    let mut missing = Vec::new();
+    for k in crates() {
+        for f in rust_files(&k.join("src")) {
+            let src = std::fs::read_to_string(&f).unwrap();
+            let doc = module_doc(&src);
+            let text: String = doc
+                .iter()
+                .map(|l| l.trim_start_matches("//!").trim())
+                .collect::<Vec<_>>()
+                .join(" ");
+            if doc.len() < 2 || text.split_whitespace().count() < 12 {
+                missing.push(format!(
+                    "{}: a module opens with at least two lines of `//!` on what it models",
+                    f.display()
+                ));
+            }
+            let is_root = f.ends_with("src/lib.rs") || f.ends_with("src/main.rs");
+            if is_root && name_of(&k) != "derma-test-support" && !cites_a_source(&text) {
+                missing.push(format!(
+                    "{}: the crate doc names its sources (a paper with its year, a thesis, docs/…, the seeds or a PROVENANCE file)",
+                    f.display()
+                ));
+            }
+        }
+    }
+    assert!(missing.is_empty(), "{}", missing.join("\n"));
+}
+
+/// Whether `text` names a source: a year (a paper, a standard), a thesis, a page of docs/, the
+/// papers' folder or a data PROVENANCE file.
+fn cites_a_source(text: &str) -> bool {
+    ["docs/", "seeds", "thesis", "PROVENANCE"]
+        .iter()
+        .any(|s| text.contains(s))
+        || text
+            .split(|c: char| !c.is_ascii_digit())
+            .any(|w| w.len() == 4 && (w.starts_with("19") || w.starts_with("20")))
+}
+
+/// The dependency names of one table (`[dependencies]`, `[dev-dependencies]`) of a manifest.
+fn dependencies(manifest: &str, table: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut inside = false;
+    for line in manifest.lines() {
+        let t = line.trim();
+        if t.starts_with('[') {
+            inside = t == format!("[{table}]");
+            continue;
+        }
+        if inside && !t.is_empty() && !t.starts_with('#') {
+            if let Some(name) = t.split(['=', '.']).next() {
+                out.push(name.trim().to_string());
+            }
+        }
+    }
+    out
+}
+
+/// All the Rust text of `dirs` below `krate`.
+fn text_of(krate: &Path, dirs: &[&str]) -> String {
+    dirs.iter()
+        .flat_map(|d| rust_files(&krate.join(d)))
+        .map(|f| std::fs::read_to_string(f).unwrap())
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+#[test]
+fn every_declared_dependency_is_used() {
+    let mut unused = Vec::new();
+    for k in crates() {
+        let manifest = std::fs::read_to_string(k.join("Cargo.toml")).unwrap();
+        let src = text_of(&k, &["src"]);
+        let all = text_of(&k, &["src", "tests", "benches", "examples"]);
+        for (table, text) in [("dependencies", &src), ("dev-dependencies", &all)] {
+            for dep in dependencies(&manifest, table) {
+                let ident = dep.replace('-', "_");
+                let used = text.contains(&format!("{ident}::"))
+                    || text.contains(&format!("use {ident}"))
+                    || text.contains(&format!("extern crate {ident}"))
+                    || text.contains(&format!("{ident}!"))
+                    || text.contains(&format!("#[{ident}"))
+                    || text.contains(&format!("derive({ident}"));
+                if !used {
+                    unused.push(format!("{}: [{table}] {dep}", name_of(&k)));
+                }
+            }
+        }
+    }
+    assert!(
+        unused.is_empty(),
+        "declared but never used:\n{}",
+        unused.join("\n")
+    );
+}
+
+#[test]
+fn every_crate_that_reads_files_has_property_tests() {
+    let mut missing = Vec::new();
+    for k in libraries() {
+        let code: String = rust_files(&k.join("src"))
+            .iter()
+            .map(|f| non_test_code(&std::fs::read_to_string(f).unwrap()))
+            .collect();
+        let reads = [
+            "fs::read(",
+            "fs::read_to_string(",
+            "File::open(",
+            "image_io::read",
+            "read_json(",
+        ]
+        .iter()
+        .any(|p| code.contains(p));
+        if !reads {
+            continue;
+        }
+        let has = rust_files(&k.join("tests")).iter().any(|f| {
+            f.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("robust_")
+                && std::fs::read_to_string(f).unwrap().contains("proptest!")
+        });
+        if !has {
+            missing.push(name_of(&k));
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "crates that read files without property tests of their parsers (tests/robust_*.rs with proptest!): {}",
+        missing.join(", ")
+    );
+}
+
+#[test]
+fn every_dependency_is_declared_once_in_the_workspace() {
+    let mut local = Vec::new();
+    for k in crates() {
+        let manifest = std::fs::read_to_string(k.join("Cargo.toml")).unwrap();
+        for table in ["dependencies", "dev-dependencies", "build-dependencies"] {
+            let mut inside = false;
+            for line in manifest.lines() {
+                let t = line.trim();
+                if t.starts_with('[') {
+                    inside = t == format!("[{table}]");
+                } else if inside
+                    && !t.is_empty()
+                    && !t.starts_with('#')
+                    && !t.contains("workspace = true")
+                {
+                    local.push(format!("{}: {t}", name_of(&k)));
+                }
+            }
+        }
+    }
+    assert!(
+        local.is_empty(),
+        "declare versions once, in [workspace.dependencies]:\n{}",
+        local.join("\n")
+    );
+}
