@@ -3,7 +3,10 @@
 # (bench/compare_outputs.py): the full `derma skin --size 512` set (head, and an analytic patch),
 # `derma synth` (grey and joint colour + height, tileable), a rig (build, frame, preview,
 # animation), the optics (`slab --json`, `simulate --json --plot`), a skin-colour LUT and a
-# model fit with its plots. Used to show that a refactor changed no output.
+# model fit with its plots, the eyes (synthetic data, a trained model, an animation with frames,
+# the distance fields and lake), photos (a synthetic set, calibration, unwrap, bake,
+# chromophores, iris, teeth) and renders (`derma render` with the GPU renderer where one opens,
+# a GLB and a web export). Used to show that a refactor changed no output.
 #   bash bench/same_outputs.sh BEFORE_BINARY AFTER_BINARY [WORK_DIR]
 # Exit status 0 when every file is identical or equal in content (see compare_outputs.py).
 set -euo pipefail
@@ -47,6 +50,27 @@ run() { # run BINARY OUT_DIR
   "$d" optics simulate --melanin 0.05 --photons 50000 --device cpu --out "$o/simulate" --plot --quiet > /dev/null
   "$d" match lut --size 6 --photons 2000 --device cpu --out "$o/lut/lut.png" --out "$o/lut/lut.dtab" --quiet > /dev/null
   "$d" match fit --grid "$in/pre.dtab" --anneal-steps 300 --out "$o/fit/table.dtab" --plots "$o/fit/plots" --quiet | sed -E -e "s/ in [0-9.]+ s/ in (time) s/" -e "s|$o|OUT|g" > "$o/fit/stdout.txt"
+  # The eye region: synthetic tracked data, a model trained on it, an animation with frames, and
+  # the distance fields with the lake.
+  mkdir -p "$o/eyes"
+  "$d" eyes synthetic --seconds 3 --fps 10 --out "$o/eyes/tracked.csv" --quiet > /dev/null
+  "$d" eyes train --data "$o/eyes/tracked.csv" --out "$o/eyes/model" --quiet > /dev/null
+  "$d" eyes animate --model "$o/eyes/model/model.json" --seconds 1 --fps 10 --render 160 --out "$o/eyes/anim" --quiet > /dev/null
+  "$d" eyes sdf --width 256 --height 144 --runs 1 --out "$o/eyes/sdf" --quiet > /dev/null
+  # Photos: a synthetic set through calibration, unwrap, bake and chromophores; iris and teeth.
+  mkdir -p "$o/photo"
+  "$d" photo synthetic --width 800 --out "$o/photo/set" --quiet
+  "$d" photo calibrate --points "$o/photo/set/points.json" --out "$o/photo/cameras.json" --quiet > "$o/photo/calibrate.txt"
+  "$d" photo unwrap --mesh "$o/photo/set/face.obj" --out "$o/photo/face_uv.obj" --quiet > "$o/photo/unwrap.txt"
+  "$d" photo bake --mesh "$o/photo/face_uv.obj" --cameras "$o/photo/cameras.json" --size 256 --out "$o/photo/bake" --quiet > "$o/photo/bake.txt"
+  "$d" photo chromophores --texture "$o/photo/bake/texture.exr" --mask "$o/photo/bake/mask.png" --out "$o/photo/chromo" --quiet > "$o/photo/chromo.txt"
+  "$d" photo iris --photo "$o/eyes/sdf/lake.png" --size 128 --out "$o/photo/iris" --quiet > "$o/photo/iris.txt"
+  "$d" photo teeth --photo "$o/eyes/sdf/lake.png" --size 128 --out "$o/photo/teeth" --quiet > "$o/photo/teeth.txt" || true
+  # Renders of the skin set (GPU renderer where an adapter opens, e.g. lavapipe), GLB and web.
+  "$d" render "$in/skin" --size 160x120 --out "$o/render" --quiet
+  mkdir -p "$o/export"
+  "$d" export glb "$in/skin" --out "$o/export/head.glb" --quiet
+  "$d" export web "$in/skin" --rig "$o/rig" --out "$o/export/web" --quiet
 }
 rm -rf "$work/before" "$work/after"
 run "$before" "$work/before"

@@ -22,6 +22,7 @@ pub mod ashikhmin_shirley;
 pub mod brdf_fit;
 pub mod burley;
 pub mod error;
+pub mod fit_job;
 /// Chromophore spectra and Fresnel reflectance live in the optics crate; re-exported here.
 pub use derma_optics::{chromophore, fresnel};
 pub mod ggx;

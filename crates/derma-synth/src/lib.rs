@@ -23,6 +23,7 @@ pub mod gpu_e_step;
 mod gpu_matcher;
 mod gpu_patch_pass;
 pub mod guide;
+pub mod job;
 pub mod matcher;
 pub mod optimize;
 mod pass_context;

@@ -6,11 +6,10 @@ use crate::progress::Bars;
 use crate::DeviceArg;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
-use derma_core::dtab::Dtab;
 use derma_shading::annealing::Schedule;
 use derma_shading::brdf_fit::{FitOptions, Weighting};
-use derma_shading::match_report;
-use derma_shading::match_table::{self, MatchOptions, MatchTable};
+use derma_shading::fit_job::FitJob;
+use derma_shading::match_table::MatchOptions;
 use derma_shading::model_kind::ModelKind;
 use derma_shading::skin_color_lut::{LutOptions, SkinColorLut};
 use std::path::PathBuf;
@@ -107,49 +106,37 @@ fn parse_models(names: &[String]) -> Result<Vec<ModelKind>> {
 }
 
 fn fit(a: FitArgs, bars: &Bars) -> Result<()> {
-    if a.out == a.grid {
-        bail!("--out must differ from --grid (inputs are never overwritten)");
-    }
-    if !(a.max_zenith > 0.0 && a.max_zenith <= 90.0) {
-        bail!("--max-zenith {}: expected degrees in (0, 90]", a.max_zenith);
-    }
-    let opts = MatchOptions {
-        models: parse_models(&a.model)?,
-        weighting: match a.weighting {
-            WeightingArg::Cosine => Weighting::Cosine,
-            WeightingArg::Uniform => Weighting::Uniform,
-        },
-        fit: FitOptions {
-            schedule: Schedule {
-                steps: a.anneal_steps,
-                ..Schedule::default()
+    let job = FitJob {
+        grid: a.grid.clone(),
+        out: a.out.clone(),
+        options: MatchOptions {
+            models: parse_models(&a.model)?,
+            weighting: match a.weighting {
+                WeightingArg::Cosine => Weighting::Cosine,
+                WeightingArg::Uniform => Weighting::Uniform,
             },
-            seed: a.seed,
-            ..FitOptions::default()
+            fit: FitOptions {
+                schedule: Schedule {
+                    steps: a.anneal_steps,
+                    ..Schedule::default()
+                },
+                seed: a.seed,
+                ..FitOptions::default()
+            },
+            gaussians: a.gaussians.clamp(1, 6),
+            max_zenith_deg: a.max_zenith,
         },
-        gaussians: a.gaussians.clamp(1, 6),
-        max_zenith_deg: a.max_zenith,
+        plots: a.plots,
+        plot_nodes: a.plot_nodes,
     };
-    let pre = Dtab::read(&a.grid).with_context(|| format!("reading {}", a.grid.display()))?;
-    let t0 = Instant::now();
-    let (table, summary) = match_table::fit_table(&pre, &opts, bars)
-        .with_context(|| format!("fitting {}", a.grid.display()))?;
-    let secs = t0.elapsed().as_secs_f64();
+    let r = derma_shading::fit_job::run(&job, bars).with_context(|| format!("fitting {}", a.grid.display()))?;
     bars.finish();
-    table
-        .write(&a.out)
-        .with_context(|| format!("writing {}", a.out.display()))?;
-    let csv_path = a.out.with_extension("residuals.csv");
-    derma_core::atomic::write_bytes(
-        &csv_path,
-        match_report::residual_csv(&table, &opts).as_bytes(),
-    )
-    .with_context(|| format!("writing {}", csv_path.display()))?;
     line(format!(
-        "fitted {} entries × {} models in {secs:.1} s ({} weighting) → {}",
-        pre.header.nodes(),
-        opts.models.len(),
-        opts.weighting.name(),
+        "fitted {} entries × {} models in {:.1} s ({} weighting) → {}",
+        r.entries,
+        job.options.models.len(),
+        r.seconds,
+        job.options.weighting.name(),
         a.out.display()
     ))?;
     line("relative RMS residual over the grid:")?;
@@ -157,21 +144,14 @@ fn fit(a: FitArgs, bars: &Bars) -> Result<()> {
         "  {:<20} {:>8} {:>8} {:>8} {:>8}  worst node",
         "model", "mean", "median", "p90", "max"
     ))?;
-    for s in &summary {
+    for s in &r.summary {
         line(format!(
             "  {:<20} {:>8.4} {:>8.4} {:>8.4} {:>8.4}  {}",
             s.name, s.mean, s.median, s.p90, s.max, s.worst_node
         ))?;
     }
-    line(format!("per-entry residuals: {}", csv_path.display()))?;
-    if let Some(dir) = &a.plots {
-        let mt = MatchTable::new(table, &a.out)?;
-        let nodes = if a.plot_nodes.is_empty() {
-            match_report::default_plot_nodes(&pre)
-        } else {
-            a.plot_nodes.clone()
-        };
-        let n = match_report::write_plots(&pre, &mt, &opts, &nodes, dir)?;
+    line(format!("per-entry residuals: {}", r.residuals.display()))?;
+    if let Some((n, dir)) = &r.plots {
         line(format!("{n} plots in {}", dir.display()))?;
     }
     Ok(())

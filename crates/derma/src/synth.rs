@@ -4,13 +4,11 @@
 use crate::output::line;
 use crate::progress::Bars;
 use crate::DeviceArg;
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use clap::Args;
-use derma_synth::files::{load_exemplars, output_paths, write_outputs};
-use derma_synth::quality::Metrics;
-use derma_synth::{Guide, SynthOptions, Synthesizer};
+use derma_synth::job::SynthJob;
+use derma_synth::SynthOptions;
 use std::path::PathBuf;
-use std::time::Instant;
 
 #[derive(Args)]
 pub struct SynthArgs {
@@ -63,23 +61,12 @@ pub struct SynthArgs {
 }
 
 pub fn run(args: SynthArgs, bars: &Bars) -> Result<()> {
-    let files = load_exemplars(&args.exemplar, &args.exemplar_channels)?;
-    let outputs = output_paths(&args.out, &files.groups)?;
-    for o in &outputs {
-        if let Some(parent) = o.parent().filter(|p| !p.as_os_str().is_empty()) {
-            std::fs::create_dir_all(parent)
-                .with_context(|| format!("cannot create '{}'", parent.display()))?;
-        }
-    }
-    let mut inputs: Vec<&std::path::Path> = files.inputs.iter().map(PathBuf::as_path).collect();
-    inputs.extend(args.guide.as_deref());
-    derma_core::atomic::check_inputs_spared(&outputs, &inputs)?;
-    let mut textures = files.textures.into_iter();
-    let first = textures.next().context("no exemplar")?;
-    // The metrics compare with the first exemplar; keep a copy only when they are asked for.
-    let exemplar = args.metrics.then(|| first.clone());
-    let mut synth = Synthesizer::new(first)
-        .options(SynthOptions {
+    let job = SynthJob {
+        exemplars: args.exemplar.clone(),
+        channels: args.exemplar_channels,
+        guide: args.guide,
+        out: args.out,
+        options: SynthOptions {
             width: args.size.0 as usize,
             height: args.size.1 as usize,
             patch: args.patch,
@@ -90,60 +77,27 @@ pub fn run(args: SynthArgs, bars: &Bars) -> Result<()> {
             seed: args.seed,
             tile: args.tile,
             ..Default::default()
-        })
-        .device(args.device.device)
-        .progress(bars);
-    for t in textures {
-        synth = synth.exemplar(t);
-    }
-    if let Some(g) = &args.guide {
-        if args.exemplar.len() < 2 {
-            bail!("--guide chooses among exemplars: give at least two --exemplar");
-        }
-        synth = synth.guide(
-            Guide::read(g, args.exemplar.len())
-                .with_context(|| format!("reading the guide '{}'", g.display()))?,
-        );
-    }
-    let t = Instant::now();
-    let out = synth.run().context("synthesising")?;
-    let secs = t.elapsed().as_secs_f64();
+        },
+        device: args.device.device,
+        metrics: args.metrics,
+    };
+    let r = derma_synth::job::run(&job, bars).context("synthesising")?;
     bars.finish();
-    write_outputs(&outputs, &files.groups, &out.texture)?;
+    let files: Vec<String> = r.outputs.iter().map(|p| p.display().to_string()).collect();
     bars.say(format!(
-        "{}×{} texels from {} exemplar(s) in {secs:.2} s on {}: {}",
+        "{}×{} texels from {} exemplar(s) in {:.2} s on {}: {}",
         args.size.0,
         args.size.1,
         args.exemplar.len(),
-        out.matcher,
-        outputs
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect::<Vec<_>>()
-            .join(", ")
+        r.seconds,
+        r.matcher,
+        files.join(", ")
     ));
-    for timing in &out.timings {
+    for timing in &r.timings {
         tracing::info!("{}: {:.3} s", timing.stage, timing.seconds);
     }
-    if let Some(exemplar) = &exemplar {
-        let stages: serde_json::Map<String, serde_json::Value> = out
-            .timings
-            .iter()
-            .map(|t| (t.stage.clone(), serde_json::json!(t.seconds)))
-            .collect();
-        let m = Metrics::measure(&out.texture, exemplar, args.patch)?;
-        let metrics = serde_json::json!({
-            "seconds": secs,
-            "stages": stages,
-            "patch_swd": m.patch_swd,
-            "patch_swd_half": m.patch_swd_half,
-            "patch_swd_quarter": m.patch_swd_quarter,
-            "contrast_ratio": m.contrast_ratio,
-            "grain_ratio": m.grain_ratio,
-            "verbatim_copy_ratio": m.verbatim_copy_ratio,
-            "seam_energy": m.seam_energy,
-        });
-        line(metrics)?;
+    if let Some(m) = r.metrics_json() {
+        line(m)?;
     }
     Ok(())
 }
