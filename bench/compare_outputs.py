@@ -8,11 +8,12 @@ Each file is reported as one of:
                   '0.04' instead of '0.03999999910593033' is the same value) and the renames
                   of TEXT_RENAMES are applied;
   same data       OpenEXR channels with equal pixels, where a channel was renamed as listed in
-                  RENAMED (e.g. hemoglobin.exr's 'blood' → 'hemoglobin');
+                  RENAMED (e.g. hemoglobin.exr's 'blood' → 'hemoglobin'); GLBs with the same
+                  scene and buffers whose embedded images decode to equal pixels;
   DIFFERENT       anything else (exit status 1).
 Paths under either tree's root compare equal (reports name the files they wrote), and the
 files of TIMING_FILES hold a run's timings only.
-Needs numpy and OpenEXR (pip install numpy OpenEXR).
+Needs numpy, OpenEXR and Pillow (pip install numpy OpenEXR pillow).
 """
 import json
 import math
@@ -97,6 +98,50 @@ def same_exr(a, b):
     return None
 
 
+def glb_parts(p):
+    import struct
+    b = p.read_bytes()
+    n = struct.unpack_from("<I", b, 12)[0]
+    doc = json.loads(b[20:20 + n])
+    at = 20 + n
+    bin_len = struct.unpack_from("<I", b, at)[0] if at < len(b) else 0
+    return doc, b[at + 8:at + 8 + bin_len]
+
+
+def same_glb(a, b):
+    """Equal scenes: the same JSON but for buffer offsets and lengths, the same bytes in every
+    buffer view, except embedded images, which must decode to the same pixels (an encoder's
+    compression settings change only the bytes)."""
+    import io
+    import numpy as np
+    from PIL import Image
+    (da, ba), (db, bb) = glb_parts(a), glb_parts(b)
+    image_views = {im["bufferView"] for im in da.get("images", []) if "bufferView" in im}
+
+    def layout_free(d):
+        d = json.loads(json.dumps(d))
+        for v in d.get("bufferViews", []):
+            v.pop("byteOffset", None)
+            v.pop("byteLength", None)
+        for buf in d.get("buffers", []):
+            buf.pop("byteLength", None)
+        return d
+    why = same_json(layout_free(da), layout_free(db))
+    if why:
+        return why
+    for i, (va, vb) in enumerate(zip(da["bufferViews"], db["bufferViews"])):
+        xa = ba[va.get("byteOffset", 0):va.get("byteOffset", 0) + va["byteLength"]]
+        xb = bb[vb.get("byteOffset", 0):vb.get("byteOffset", 0) + vb["byteLength"]]
+        if i in image_views:
+            pa = np.asarray(Image.open(io.BytesIO(xa)))
+            pb = np.asarray(Image.open(io.BytesIO(xb)))
+            if pa.shape != pb.shape or not np.array_equal(pa, pb):
+                return f"image in buffer view {i}: pixels differ"
+        elif xa != xb:
+            return f"buffer view {i} differs"
+    return None
+
+
 def main():
     if len(sys.argv) != 3:
         sys.exit("usage: compare_outputs.py BEFORE_DIR AFTER_DIR")
@@ -125,6 +170,11 @@ def main():
             why = same_json(json.loads(a.read_text()), json.loads(b.read_text()))
             if why is None:
                 print(f"same content  {rel} (JSON: equal but for formatting and run-dependent keys)")
+                continue
+        elif rel.suffix == ".glb":
+            why = same_glb(a, b)
+            if why is None:
+                print(f"same data     {rel} (GLB: same scene and buffers; embedded images with equal pixels)")
                 continue
         elif rel.suffix == ".exr":
             why = same_exr(a, b)

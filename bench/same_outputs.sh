@@ -13,7 +13,7 @@ set -euo pipefail
 before=$(realpath "$1"); after=$(realpath "$2")
 work=${3:-$(mktemp -d)}
 here=$(cd "$(dirname "$0")" && pwd)
-python3 -m pip install --quiet numpy OpenEXR >/dev/null 2>&1 || true
+python3 -m pip install --quiet numpy OpenEXR pillow >/dev/null 2>&1 || true
 mkdir -p "$work/inputs"
 in=$work/inputs
 # Shared inputs, made once by the first binary: both binaries then read the same bytes.

@@ -30,7 +30,7 @@ pub enum CoreError {
         /// What the decoder found.
         detail: String,
     },
-    /// An image could not be encoded.
+    /// An image or a JSON file could not be encoded.
     #[error("cannot encode '{path}': {detail}")]
     Encode {
         /// The file being written.

@@ -40,6 +40,105 @@ impl Map {
         })
     }
 
+    /// A map of `f(i)` for every texel index i (row-major): sized by construction.
+    pub fn from_fn(width: usize, height: usize, f: impl FnMut(usize) -> f32) -> Self {
+        Self {
+            width,
+            height,
+            data: (0..width * height).map(f).collect(),
+        }
+    }
+
+    /// As [`Map::from_fn`], the texels computed in parallel (each on its own, so the same bits
+    /// at any thread count).
+    pub fn from_par_fn(
+        width: usize,
+        height: usize,
+        f: impl Fn(usize) -> f32 + Sync + Send,
+    ) -> Self {
+        use rayon::prelude::*;
+        Self {
+            width,
+            height,
+            data: (0..width * height).into_par_iter().map(f).collect(),
+        }
+    }
+
+    /// A map whose rows `fill(y, row)` writes, rows in parallel.
+    pub fn from_par_rows(
+        width: usize,
+        height: usize,
+        fill: impl Fn(usize, &mut [f32]) + Sync + Send,
+    ) -> Self {
+        use rayon::prelude::*;
+        let mut m = Self::filled(width, height, 0.0);
+        if width > 0 {
+            m.data
+                .par_chunks_mut(width)
+                .enumerate()
+                .for_each(|(y, row)| fill(y, row));
+        }
+        m
+    }
+
+    /// `C` maps of `width` × `height` from interleaved texels: plane c holds `texel(i)[c]`.
+    pub fn planes<const C: usize>(
+        width: usize,
+        height: usize,
+        texel: impl Fn(usize) -> [f32; C],
+    ) -> [Map; C] {
+        let mut out: [Vec<f32>; C] = std::array::from_fn(|_| Vec::with_capacity(width * height));
+        for i in 0..width * height {
+            let t = texel(i);
+            for c in 0..C {
+                out[c].push(t[c]);
+            }
+        }
+        out.map(|data| Self {
+            width,
+            height,
+            data,
+        })
+    }
+
+    /// Each texel through `f`.
+    pub fn map(&self, f: impl Fn(f32) -> f32) -> Map {
+        Self {
+            width: self.width,
+            height: self.height,
+            data: self.data.iter().map(|&v| f(v)).collect(),
+        }
+    }
+
+    /// Texel by texel `f(self, other)` of two maps of one size. A map of another size is a bug
+    /// of the caller, and panics.
+    pub fn zip_map(&self, other: &Map, f: impl Fn(f32, f32) -> f32) -> Map {
+        assert_eq!(
+            (self.width, self.height),
+            (other.width, other.height),
+            "zip_map of maps of different sizes"
+        );
+        Self {
+            width: self.width,
+            height: self.height,
+            data: self
+                .data
+                .iter()
+                .zip(&other.data)
+                .map(|(&a, &b)| f(a, b))
+                .collect(),
+        }
+    }
+
+    /// The `w` × `h` texels from (x0, y0), rows past the bottom edge repeating the last row and
+    /// columns past the right edge the last column.
+    pub fn crop(&self, x0: usize, y0: usize, w: usize, h: usize) -> Map {
+        let (mx, my) = (self.width.saturating_sub(1), self.height.saturating_sub(1));
+        Self::from_fn(w, h, |i| {
+            self.get((x0 + i % w.max(1)).min(mx), (y0 + i / w.max(1)).min(my))
+        })
+    }
+
     /// Width in texels.
     pub fn width(&self) -> usize {
         self.width
@@ -194,7 +293,7 @@ pub fn box_reduced<const C: usize>(
     let (w, h) = (width / k, height / k);
     let mut out: [Vec<f32>; C] = std::array::from_fn(|_| vec![0.0; w * h]);
     if w * h == 0 {
-        return out.map(|v| Map::from_vec(w, h, v).expect("size"));
+        return std::array::from_fn(|_| Map::filled(w, h, 0.0));
     }
     let mut rows: Vec<[&mut [f32]; C]> = Vec::with_capacity(h);
     let mut its = out.each_mut().map(|v| v.chunks_mut(w));
@@ -218,7 +317,11 @@ pub fn box_reduced<const C: usize>(
             }
         }
     });
-    out.map(|v| Map::from_vec(w, h, v).expect("size"))
+    out.map(|data| Map {
+        width: w,
+        height: h,
+        data,
+    })
 }
 
 /// The four texels and the weights of one bilinear sample on maps of one size: several maps

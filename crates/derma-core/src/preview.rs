@@ -292,8 +292,7 @@ pub fn render_lit(
             shade(nn, m.albedo, alpha, m.f0, lights, ambient, view)
         })
         .collect();
-    [0, 1, 2]
-        .map(|k| Map::from_vec(size, size, pixels.iter().map(|p| p[k]).collect()).expect("size"))
+    Map::planes(size, size, |i| pixels[i].to_array())
 }
 
 /// Lambert diffuse plus a GGX lobe (Smith–Schlick visibility) under `lights` and an ambient term.

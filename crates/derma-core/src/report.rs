@@ -33,11 +33,75 @@ pub fn tidy_floats(v: &mut serde_json::Value) {
     }
 }
 
-/// `value` as pretty-printed JSON with [`tidy_floats`] applied.
-pub fn pretty_json(value: &impl serde::Serialize) -> Result<Vec<u8>, serde_json::Error> {
+/// How a JSON file is written: indented or on one line, and whether floats are shown as the
+/// user wrote them ([`tidy_floats`], for files people read) or exactly (data read back by a
+/// program, where an f64 that happens to equal an f32 must keep its bits).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct JsonFormat {
+    /// Indented, one key per line.
+    pub pretty: bool,
+    /// Floats as written ([`as_written`]).
+    pub tidy: bool,
+}
+
+impl JsonFormat {
+    /// Reports and manifests: indented, floats as written.
+    pub const REPORT: JsonFormat = JsonFormat {
+        pretty: true,
+        tidy: true,
+    };
+    /// Data read back by a program (models, shards, curves): one line, exact.
+    pub const DATA: JsonFormat = JsonFormat {
+        pretty: false,
+        tidy: false,
+    };
+    /// Data people also read (a rig's description, the viewer's manifest): indented, exact.
+    pub const DATA_PRETTY: JsonFormat = JsonFormat {
+        pretty: true,
+        tidy: false,
+    };
+}
+
+/// `value` as JSON bytes in `format`.
+/// Exact formats keep a struct's field order; tidied ones pass through a `serde_json::Value`,
+/// whose objects list their keys in sorted order.
+pub fn json_bytes(
+    value: &impl serde::Serialize,
+    format: JsonFormat,
+) -> Result<Vec<u8>, serde_json::Error> {
+    if !format.tidy {
+        return if format.pretty {
+            serde_json::to_vec_pretty(value)
+        } else {
+            serde_json::to_vec(value)
+        };
+    }
     let mut v = serde_json::to_value(value)?;
     tidy_floats(&mut v);
-    serde_json::to_vec_pretty(&v)
+    if format.pretty {
+        serde_json::to_vec_pretty(&v)
+    } else {
+        serde_json::to_vec(&v)
+    }
+}
+
+/// `value` as pretty-printed JSON with [`tidy_floats`] applied ([`JsonFormat::REPORT`]).
+pub fn pretty_json(value: &impl serde::Serialize) -> Result<Vec<u8>, serde_json::Error> {
+    json_bytes(value, JsonFormat::REPORT)
+}
+
+/// Writes `value` to `path` as JSON in `format`, atomically (a temporary name, then a rename):
+/// the one way derma writes a JSON file. The error names the file.
+pub fn write_json(
+    path: &Path,
+    value: &impl serde::Serialize,
+    format: JsonFormat,
+) -> crate::Result<()> {
+    let bytes = json_bytes(value, format).map_err(|e| crate::CoreError::Encode {
+        path: path.to_path_buf(),
+        detail: format!("as JSON: {e}"),
+    })?;
+    crate::atomic::write_bytes(path, &bytes)
 }
 
 /// The SHA-256 of a file's bytes as lowercase hex, or `None` when it cannot be read.
@@ -54,6 +118,32 @@ pub fn hex(bytes: &[u8]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Data keeps an f64's bits where a report shows the number as written; both read back.
+    #[test]
+    fn json_formats_keep_data_exact_and_reports_tidy() {
+        let x = 0.04f32 as f64; // 0.03999999910593033, an f32 value held in an f64
+        let v = serde_json::json!({"x": x, "n": 3});
+        let data = json_bytes(&v, JsonFormat::DATA).unwrap();
+        assert_eq!(
+            String::from_utf8(data.clone()).unwrap(),
+            r#"{"n":3,"x":0.03999999910593033}"#
+        );
+        let back: serde_json::Value = serde_json::from_slice(&data).unwrap();
+        assert_eq!(back["x"].as_f64().unwrap().to_bits(), x.to_bits());
+        let report = String::from_utf8(json_bytes(&v, JsonFormat::REPORT).unwrap()).unwrap();
+        assert!(
+            report.contains("\"x\": 0.04") && report.contains('\n'),
+            "{report}"
+        );
+        let dir = std::env::temp_dir().join(format!("derma-json-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("r.json");
+        write_json(&p, &v, JsonFormat::DATA_PRETTY).unwrap();
+        let text = std::fs::read_to_string(&p).unwrap();
+        assert!(text.contains("0.03999999910593033") && text.contains('\n'));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn f32_values_print_as_written() {

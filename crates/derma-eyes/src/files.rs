@@ -99,7 +99,7 @@ pub fn train(data: &Data, c: Components, dir: &Path) -> Result<TrainReport> {
         aperture_mm,
         files,
     };
-    derma_core::atomic::write_bytes(&p, &serde_json::to_vec_pretty(&report).expect("JSON"))?;
+    derma_core::report::write_json(&p, &report, derma_core::report::JsonFormat::REPORT)?;
     Ok(report)
 }
 
@@ -284,7 +284,7 @@ pub fn animate(o: &AnimateOptions, dir: &Path) -> Result<AnimateReport> {
 
 fn write_curves(samples: &[Sample], dir: &Path) -> Result<Vec<PathBuf>> {
     let p = dir.join("curves.json");
-    derma_core::atomic::write_bytes(&p, &serde_json::to_vec(samples).expect("JSON"))?;
+    derma_core::report::write_json(&p, &samples, derma_core::report::JsonFormat::DATA)?;
     let mut csv = String::from("time,left_h,left_v,right_h,right_v,left_upper,left_lower,right_upper,right_lower,blink_closure\n");
     for s in samples {
         let g = &s.gaze;
@@ -336,28 +336,21 @@ pub fn distance_fields(
         &dir.join("table.md"),
         sdf::table::markdown(&rows, width, height).as_bytes(),
     )?;
-    derma_core::atomic::write_bytes(
+    derma_core::report::write_json(
         &dir.join("table.json"),
-        &serde_json::to_vec_pretty(&rows).expect("JSON"),
+        &rows,
+        derma_core::report::JsonFormat::REPORT,
     )?;
     let (w, h) = (width, height);
-    let mask =
-        Map::from_vec(w, h, scene.g.mask.iter().map(|&m| m as f32 / 2.0).collect()).expect("size");
+    let mask = Map::from_fn(w, h, |i| scene.g.mask[i] as f32 / 2.0);
     derma_core::image_io::write_png8(&dir.join("mask.png"), &[&mask])?;
     let show = |f: &sdf::Field| -> Map {
         // λ / Λ in grey on the globes (white at the skin, black at Λ and beyond), skin mid-grey.
-        Map::from_vec(
-            w,
-            h,
-            (0..w * h)
-                .map(|i| match scene.g.mask[i] {
-                    material::EYE => (1.0 - f.distance[i] / range).clamp(0.0, 1.0),
-                    material::SKIN => 0.35,
-                    _ => 0.0,
-                })
-                .collect(),
-        )
-        .expect("size")
+        Map::from_fn(w, h, |i| match scene.g.mask[i] {
+            material::EYE => (1.0 - f.distance[i] / range).clamp(0.0, 1.0),
+            material::SKIN => 0.35,
+            _ => 0.0,
+        })
     };
     let exact = sdf::exact::field(&scene.g);
     derma_core::image_io::write_png8(&dir.join("exact.png"), &[&show(&exact)])?;
@@ -373,9 +366,7 @@ pub fn distance_fields(
     let plain = sdf::lake::shade(&scene, None, light, 1.6);
     let (d, n) = sdf::lake::lake(&scene, &bt, range);
     let wet = sdf::lake::shade(&scene, Some((&d, &n)), light, 1.6);
-    let to_maps = |img: &[glam::Vec3]| {
-        [0, 1, 2].map(|c| Map::from_vec(w, h, img.iter().map(|v| v[c]).collect()).expect("size"))
-    };
+    let to_maps = |img: &[glam::Vec3]| Map::planes(w, h, |i| img[i].to_array());
     for (name, img) in [("eye.png", &plain), ("lake.png", &wet)] {
         let ch = to_maps(img);
         derma_core::image_io::write_png8_srgb(&dir.join(name), &[&ch[0], &ch[1], &ch[2]])?;
@@ -394,17 +385,12 @@ pub fn distance_fields(
         to_maps(&wet),
         [field.clone(), field.clone(), field],
     ];
+    // The three panels' crops side by side.
     let crop = [0, 1, 2].map(|k| {
-        let mut out = Vec::with_capacity(3 * cw * ch);
-        for y in 0..ch {
-            for p in &panels {
-                for x in 0..cw {
-                    let v = p[k].get(x0 + x, y0 + y);
-                    out.push(v);
-                }
-            }
-        }
-        Map::from_vec(3 * cw, ch, out).expect("size")
+        Map::from_fn(3 * cw, ch, |i| {
+            let (x, y) = (i % (3 * cw), i / (3 * cw));
+            panels[x / cw][k].get(x0 + x % cw, y0 + y)
+        })
     });
     derma_core::image_io::write_png8_srgb(
         &dir.join("lake-closeup.png"),

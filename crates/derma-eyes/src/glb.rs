@@ -38,33 +38,26 @@ pub struct Report {
     pub bytes: usize,
 }
 
-fn eye_texture_png(size: usize, texture: Option<&[derma_core::Map; 3]>) -> Vec<u8> {
-    let mut img = Vec::with_capacity(size * size * 3);
-    for y in 0..size {
-        for x in 0..size {
-            // glTF's texture origin is the top-left: v = 1 − row.
-            let uv = Vec2::new(
-                (x as f32 + 0.5) / size as f32,
-                1.0 - (y as f32 + 0.5) / size as f32,
-            );
-            let c = match texture {
-                Some(t) => Vec3::from(t.each_ref().map(|m| m.sample_uv(uv.x, uv.y, false))),
-                None => derma_head::eye::default_albedo(uv),
-            };
-            img.extend(c.to_array().map(|v| {
-                (derma_core::color::srgb_encode(v.clamp(0.0, 1.0)) * 255.0).round() as u8
-            }));
-        }
-    }
-    let mut out = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut out, size as u32, size as u32);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut w = enc.write_header().expect("PNG header");
-        w.write_image_data(&img).expect("PNG data");
-    }
-    out
+/// The eye globes' texture as PNG bytes: `texture` (linear RGB on the globe's UVs) or the
+/// default iris, sampled at texel centres and sRGB-encoded.
+fn eye_texture_png(size: usize, texture: Option<&[derma_core::Map; 3]>) -> crate::Result<Vec<u8>> {
+    let srgb = derma_core::Map::planes(size, size, |i| {
+        // glTF's texture origin is the top-left: v = 1 − row.
+        let uv = Vec2::new(
+            ((i % size) as f32 + 0.5) / size as f32,
+            1.0 - ((i / size) as f32 + 0.5) / size as f32,
+        );
+        let c = match texture {
+            Some(t) => Vec3::from(t.each_ref().map(|m| m.sample_uv(uv.x, uv.y, false))),
+            None => derma_head::eye::default_albedo(uv),
+        };
+        c.to_array()
+            .map(|v| derma_core::color::srgb_encode(v.clamp(0.0, 1.0)))
+    });
+    Ok(derma_core::image_io::png8_bytes(
+        "the eye texture",
+        &[&srgb[0], &srgb[1], &srgb[2]],
+    )?)
 }
 
 /// Writes `path`: the head with `baked` motion on the eye region (`region` maps skin vertices to
@@ -293,7 +286,7 @@ pub fn write(
             json!({"sampler": samplers.len() - 1, "target": {"node": n, "path": "rotation"}}),
         );
     }
-    let png = eye_texture_png(512, eye);
+    let png = eye_texture_png(512, eye)?;
     let iv = g.view(&png, None);
     let roots: Vec<usize> = (0..nodes.len())
         .filter(|i| {

@@ -490,7 +490,7 @@ impl EyeModel {
 
     /// Writes the model as JSON, atomically.
     pub fn write(&self, path: &std::path::Path) -> Result<()> {
-        derma_core::atomic::write_bytes(path, &serde_json::to_vec(self).expect("JSON"))?;
+        derma_core::report::write_json(path, self, derma_core::report::JsonFormat::DATA)?;
         Ok(())
     }
 }

@@ -187,15 +187,7 @@ impl<'a> Stage<'a> {
         let (w_mm, h_mm) = (104.0, 50.0);
         let (cw, ch) = ((w_mm * span) as usize, (h_mm * span) as usize);
         let (x0, y0) = ((size - cw) / 2, (size - ch) / 2 + (2.0 * span) as usize);
-        img.map(|m| {
-            let mut out = Vec::with_capacity(cw * ch);
-            for y in y0..y0 + ch {
-                for x in x0..x0 + cw {
-                    out.push(m.get(x, y.min(size - 1)));
-                }
-            }
-            Map::from_vec(cw, ch, out).expect("size")
-        })
+        img.map(|m| m.crop(x0, y0, cw, ch))
     }
 }
 

@@ -26,19 +26,15 @@ fn blur_down(m: &Map) -> Map {
                 .sum();
         }
     }
-    let mut out = vec![0.0f32; nw * nh];
-    for y in 0..nh {
-        for x in 0..nw {
-            out[y * nw + x] = (0..5)
-                .map(|i| {
-                    k[i] * tmp[(2 * y as isize + i as isize - 2).clamp(0, h as isize - 1) as usize
-                        * nw
-                        + x]
-                })
-                .sum();
-        }
-    }
-    Map::from_vec(nw, nh, out).expect("size")
+    Map::from_fn(nw, nh, |t| {
+        let (x, y) = (t % nw, t / nw);
+        (0..5)
+            .map(|i| {
+                k[i] * tmp
+                    [(2 * y as isize + i as isize - 2).clamp(0, h as isize - 1) as usize * nw + x]
+            })
+            .sum()
+    })
 }
 
 fn pyramid(m: &Map, levels: usize) -> Vec<Map> {
@@ -53,16 +49,7 @@ fn pyramid(m: &Map, levels: usize) -> Vec<Map> {
 /// |c ⊖ s| resampled to `w` × `h`.
 fn across(c: &Map, s: &Map, w: usize, h: usize) -> Map {
     let (c, s) = (c.resized(w, h), s.resized(w, h));
-    Map::from_vec(
-        w,
-        h,
-        c.data()
-            .iter()
-            .zip(s.data())
-            .map(|(a, b)| (a - b).abs())
-            .collect(),
-    )
-    .expect("size")
+    c.zip_map(&s, |a, b| (a - b).abs())
 }
 
 /// N(·): scale to [0, 1], then multiply by (1 − m̄)² where m̄ is the mean of the other local
@@ -90,7 +77,7 @@ pub fn normalise(m: &Map) -> Map {
     }
     let mbar = if n > 0 { sum / n as f32 } else { 0.0 };
     let f = (1.0 - mbar) * (1.0 - mbar);
-    Map::from_vec(w, h, v.iter().map(|x| x * f).collect()).expect("size")
+    Map::from_fn(w, h, |i| v[i] * f)
 }
 
 /// The saliency map of a linear RGB image, at pyramid scale 4 (1/16 of the input).
@@ -102,30 +89,20 @@ pub fn saliency(rgb: &[Map; 3]) -> Map {
     let imax = i.iter().copied().fold(0.0f32, f32::max);
     // Hue channels only where the intensity exceeds a tenth of its maximum (Itti et al. 1998).
     let chan = |f: &dyn Fn(usize) -> f32| -> Map {
-        Map::from_vec(
-            w,
-            h,
-            (0..n)
-                .map(|k| if i[k] > 0.1 * imax { f(k) / i[k] } else { 0.0 })
-                .collect(),
-        )
-        .expect("size")
+        Map::from_fn(w, h, |k| if i[k] > 0.1 * imax { f(k) / i[k] } else { 0.0 })
     };
     let rr = chan(&|k| (r[k] - (g[k] + b[k]) / 2.0).max(0.0));
     let gg = chan(&|k| (g[k] - (r[k] + b[k]) / 2.0).max(0.0));
     let bb = chan(&|k| (b[k] - (r[k] + g[k]) / 2.0).max(0.0));
     let yy = chan(&|k| ((r[k] + g[k]) / 2.0 - (r[k] - g[k]).abs() / 2.0 - b[k]).max(0.0));
     let levels = 9;
-    let ip = pyramid(&Map::from_vec(w, h, i).expect("size"), levels);
+    let ip = pyramid(&Map::from_fn(w, h, |k| i[k]), levels);
     // Opponent channels per level: R − G and B − Y.
     let opponent = |a: &Map, b: &Map| -> Vec<Map> {
         pyramid(a, levels)
             .iter()
             .zip(pyramid(b, levels))
-            .map(|(a, b)| {
-                let d = a.data().iter().zip(b.data()).map(|(x, y)| x - y).collect();
-                Map::from_vec(a.width(), a.height(), d).expect("size")
-            })
+            .map(|(a, b)| a.zip_map(&b, |x, y| x - y))
             .collect()
     };
     let rg = opponent(&rr, &gg);
@@ -145,62 +122,53 @@ pub fn saliency(rgb: &[Map; 3]) -> Map {
                             y.clamp(0, mh as isize - 1) as usize,
                         )
                     };
-                    let d: Vec<f32> = (0..mw * mh)
-                        .map(|k| {
-                            let (x, y) = ((k % mw) as isize, (k / mw) as isize);
-                            let gx = 0.5 * (at(x + 1, y) - at(x - 1, y));
-                            let gy = 0.5 * (at(x, y + 1) - at(x, y - 1));
-                            (c * gx + s * gy).abs()
-                        })
-                        .collect();
-                    Map::from_vec(mw, mh, d).expect("size")
+                    Map::from_fn(mw, mh, |k| {
+                        let (x, y) = ((k % mw) as isize, (k / mw) as isize);
+                        let gx = 0.5 * (at(x + 1, y) - at(x - 1, y));
+                        let gy = 0.5 * (at(x, y + 1) - at(x, y - 1));
+                        (c * gx + s * gy).abs()
+                    })
                 })
                 .collect()
         })
         .collect();
     let (sw, sh) = (ip[4].width(), ip[4].height());
     let feature = |p: &[Map]| -> Map {
-        let mut acc = vec![0.0f32; sw * sh];
+        let mut acc = Map::filled(sw, sh, 0.0);
         for c in 2..=4 {
             for d in [3, 4] {
                 let s = c + d;
                 if s < p.len() {
                     let m = normalise(&across(&p[c], &p[s], sw, sh));
-                    acc.iter_mut().zip(m.data()).for_each(|(a, v)| *a += v);
+                    acc.data_mut()
+                        .iter_mut()
+                        .zip(m.data())
+                        .for_each(|(a, v)| *a += v);
                 }
             }
         }
-        Map::from_vec(sw, sh, acc).expect("size")
+        acc
     };
     let ci = normalise(&feature(&ip));
     let cc = {
         let a = feature(&rg);
         let b = feature(&by);
-        normalise(
-            &Map::from_vec(
-                sw,
-                sh,
-                a.data().iter().zip(b.data()).map(|(x, y)| x + y).collect(),
-            )
-            .expect("size"),
-        )
+        normalise(&a.zip_map(&b, |x, y| x + y))
     };
     let co = {
-        let mut acc = vec![0.0f32; sw * sh];
+        let mut acc = Map::filled(sw, sh, 0.0);
         for o in &orient {
             let m = normalise(&feature(o));
-            acc.iter_mut().zip(m.data()).for_each(|(a, v)| *a += v);
+            acc.data_mut()
+                .iter_mut()
+                .zip(m.data())
+                .for_each(|(a, v)| *a += v);
         }
-        normalise(&Map::from_vec(sw, sh, acc).expect("size"))
+        normalise(&acc)
     };
-    Map::from_vec(
-        sw,
-        sh,
-        (0..sw * sh)
-            .map(|k| (ci.data()[k] + cc.data()[k] + co.data()[k]) / 3.0)
-            .collect(),
-    )
-    .expect("size")
+    Map::from_fn(sw, sh, |k| {
+        (ci.data()[k] + cc.data()[k] + co.data()[k]) / 3.0
+    })
 }
 
 /// The `n` most salient points (image fractions in [0, 1]², y down) by winner-take-all with

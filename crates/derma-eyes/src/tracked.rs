@@ -162,15 +162,14 @@ impl Tracked {
 
     /// Writes `.json` or `.csv` (by extension), atomically.
     pub fn write(&self, path: &Path) -> Result<()> {
-        let bytes = if path
+        if path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
         {
-            to_csv(self).into_bytes()
+            derma_core::atomic::write_bytes(path, to_csv(self).as_bytes())?;
         } else {
-            serde_json::to_vec(self).expect("JSON")
-        };
-        derma_core::atomic::write_bytes(path, &bytes)?;
+            derma_core::report::write_json(path, self, derma_core::report::JsonFormat::DATA)?;
+        }
         Ok(())
     }
 }

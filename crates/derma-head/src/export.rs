@@ -46,7 +46,8 @@ pub struct Glb {
 impl Glb {
     /// The GLB file of `doc` (whose buffers and views must be this builder's) and the binary.
     pub fn finish(mut self, doc: &Value) -> Vec<u8> {
-        let mut js = serde_json::to_vec(doc).expect("JSON");
+        // A `Value` always serialises: its Display is the compact JSON text.
+        let mut js = doc.to_string().into_bytes();
         while !js.len().is_multiple_of(4) {
             js.push(b' ');
         }

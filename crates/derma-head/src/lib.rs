@@ -394,7 +394,7 @@ pub fn masks_on(mesh: &TriMesh, regions: &Regions, n: usize) -> Vec<(&'static st
         .iter()
         .enumerate()
         .map(|(k, name)| {
-            let mut m = Map::from_vec(n, n, w.iter().map(|v| v[k]).collect()).expect("size");
+            let mut m = Map::from_fn(n, n, |i| w[i][k]);
             if let Some(src) = &src {
                 apply_dilation(m.data_mut(), src);
             }

@@ -10,7 +10,6 @@ use crate::tally::Tally;
 use crate::transport::{Incidence, Prepared};
 use derma_core::gpu::{GpuCell, GpuError};
 use derma_core::progress::Progress;
-use wgpu::util::DeviceExt;
 
 const SHADER: &str = include_str!("optics.wgsl");
 const WORKGROUP: u32 = 64;
@@ -213,13 +212,7 @@ pub fn run_gpu_with(run: &Run, progress: &dyn Progress, kernel: &Kernel) -> Resu
         Bottom::Lambertian { albedo } => (1, albedo as f32),
     };
     let d = &ctx.device;
-    let storage = |label, bytes: &[u8], usage| {
-        d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: bytes,
-            usage,
-        })
-    };
+    let storage = |label, bytes: &[u8], usage| ctx.upload(label, bytes, usage);
     let layers_buf = storage(
         "layers",
         bytemuck::cast_slice(&layer_data),

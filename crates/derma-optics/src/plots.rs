@@ -93,10 +93,8 @@ pub fn skin_plots(r: &SkinResult) -> [(&'static str, Plot); 3] {
 /// [`skin_plots`]; returns the files written.
 pub fn write_result(r: &SkinResult, dir: &Path, plots: bool) -> crate::Result<Vec<PathBuf>> {
     derma_core::atomic::ensure_writable_dir(dir)?;
-    let json =
-        serde_json::to_vec_pretty(r).map_err(|e| crate::OpticsError::Invalid(e.to_string()))?;
     let mut files = vec![dir.join("result.json")];
-    derma_core::atomic::write_bytes(&files[0], &json)?;
+    derma_core::report::write_json(&files[0], r, derma_core::report::JsonFormat::DATA_PRETTY)?;
     if plots {
         for (name, p) in skin_plots(r) {
             let path = dir.join(name);

@@ -362,8 +362,12 @@ pub fn compute_entry(
     progress: &dyn Progress,
 ) -> Result<SkinResult> {
     let r = simulate_skin(&grid.node(i), &grid.config(i), device, progress)?;
-    let json = serde_json::to_vec(&r).map_err(|e| OpticsError::Invalid(e.to_string()))?;
-    derma_core::atomic::write_bytes(&entry_path(dir, i), &json)?;
+    // Exact: a resumed run merges these numbers as they were computed.
+    derma_core::report::write_json(
+        &entry_path(dir, i),
+        &r,
+        derma_core::report::JsonFormat::DATA,
+    )?;
     Ok(r)
 }
 

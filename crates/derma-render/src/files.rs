@@ -198,7 +198,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
         frames,
         seconds_per_frame: per,
     };
-    let json = serde_json::to_vec_pretty(&serde_json::json!({
+    let json = serde_json::json!({
         "adapter": report.adapter,
         "frames": frames,
         "seconds_per_frame": per,
@@ -209,9 +209,12 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
         "textures": job.textures,
         "mesh": job.mesh,
         "files": files,
-    }))
-    .expect("JSON");
-    derma_core::atomic::write_bytes(&job.out.join("render.json"), &json)?;
+    });
+    derma_core::report::write_json(
+        &job.out.join("render.json"),
+        &json,
+        derma_core::report::JsonFormat::DATA_PRETTY,
+    )?;
     job_p.finish();
     Ok(report)
 }

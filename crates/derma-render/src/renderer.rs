@@ -11,7 +11,6 @@ use crate::sss;
 use derma_core::gpu::{context, Gpu};
 use derma_core::gpu_texture::{rgba_of, TexelFormat};
 use derma_core::Map;
-use wgpu::util::DeviceExt;
 
 const COMMON: &str = include_str!("common.wgsl");
 const FORWARD: &str = include_str!("forward.wgsl");
@@ -114,24 +113,16 @@ impl Rendered {
     /// The display image as three maps with values in [0, 1] (sRGB-encoded).
     pub fn display_maps(&self) -> [Map; 3] {
         let ch = |k: usize| {
-            let v = (0..self.width * self.height)
-                .map(|i| self.display[4 * i + k] as f32 / 255.0)
-                .collect();
-            Map::from_vec(self.width, self.height, v).expect("size")
+            Map::from_fn(self.width, self.height, |i| {
+                self.display[4 * i + k] as f32 / 255.0
+            })
         };
         [ch(0), ch(1), ch(2)]
     }
 
     /// The linear radiance as three maps.
     pub fn linear_maps(&self) -> [Map; 3] {
-        let ch = |k: usize| {
-            Map::from_vec(
-                self.width,
-                self.height,
-                self.linear.iter().map(|p| p[k]).collect(),
-            )
-            .expect("size")
-        };
+        let ch = |k: usize| Map::from_fn(self.width, self.height, |i| self.linear[i][k]);
         [ch(0), ch(1), ch(2)]
     }
 }
@@ -505,11 +496,11 @@ impl Renderer {
         };
         let lake_depth_pipe = lake_pipe("lake depth", "fs_lake_depth", &lake_depth_layout)?;
         let lake_shade_pipe = lake_pipe("lake shade", "fs_lake_shade", &lake_shade_layout)?;
-        let lake_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("lake"),
-            contents: bytemuck::bytes_of(&LakeU::new(true)),
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        });
+        let lake_buf = gpu.upload(
+            "lake",
+            bytemuck::bytes_of(&LakeU::new(true)),
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
         let frame_buf = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame"),
             size: std::mem::size_of::<FrameU>() as u64,
@@ -548,18 +539,18 @@ impl Renderer {
                 wgpu::BindingResource::Sampler(&tex_sampler),
             ],
         );
-        let cdf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("burley marginal cdf"),
-            contents: bytemuck::cast_slice(&sss::cdf_table()),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
+        let cdf = gpu.upload(
+            "burley marginal cdf",
+            bytemuck::cast_slice(&sss::cdf_table()),
+            wgpu::BufferUsages::STORAGE,
+        );
         let blur_u = |dx: f32, dy: f32| {
             let u = [dx, dy, sss::TAPS as f32, sss::U_RANGE, 0.0, 0.0, 0.0, 0.0];
-            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("blur"),
-                contents: bytemuck::cast_slice(&u[..4]),
-                usage: wgpu::BufferUsages::UNIFORM,
-            })
+            gpu.upload(
+                "blur",
+                bytemuck::cast_slice(&u[..4]),
+                wgpu::BufferUsages::UNIFORM,
+            )
         };
         let blur_bufs = [blur_u(1.0, 0.0), blur_u(0.0, 1.0)];
         let mut r = Renderer {
@@ -736,21 +727,18 @@ impl Renderer {
                 )
             }
         };
-        let d = &self.gpu.device;
-        let ubuf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("draw"),
-            contents: bytemuck::bytes_of(&u),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let ubuf = self
+            .gpu
+            .upload("draw", bytemuck::bytes_of(&u), wgpu::BufferUsages::UNIFORM);
         let views: Vec<wgpu::TextureView> = textures.iter().map(view).collect();
         let mut res = vec![ubuf.as_entire_binding()];
         res.extend(views.iter().map(wgpu::BindingResource::TextureView));
         let bind = bind(self.gpu, &p.name, &self.draw_layout, &res);
-        let vertices = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(&p.name),
-            contents: bytemuck::cast_slice(&p.vertices),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
+        let vertices = self.gpu.upload(
+            &p.name,
+            bytemuck::cast_slice(&p.vertices),
+            wgpu::BufferUsages::VERTEX,
+        );
         Ok(GpuPart {
             vertices,
             count: p.vertices.len() as u32,

@@ -35,8 +35,7 @@ fn range(maps: &[&Map]) -> (f32, f32) {
 }
 
 fn normalise(m: &Map, (lo, hi): (f32, f32)) -> Map {
-    let v = m.data().iter().map(|x| (x - lo) / (hi - lo)).collect();
-    Map::from_vec(m.width(), m.height(), v).expect("size")
+    m.map(|x| (x - lo) / (hi - lo))
 }
 
 /// Tiles laid side by side.
@@ -166,8 +165,11 @@ pub fn export(textures: &Path, rig_dir: Option<&Path>, out: &Path) -> Result<Web
             "encoding": "16-bit PNG, value = range[0] + (range[1] - range[0]) × sample; rows top first (v = 1 at the top)",
         });
     }
-    let text = serde_json::to_vec_pretty(&manifest).expect("JSON");
-    derma_core::atomic::write_bytes(&out.join("manifest.json"), &text)?;
+    derma_core::report::write_json(
+        &out.join("manifest.json"),
+        &manifest,
+        derma_core::report::JsonFormat::DATA_PRETTY,
+    )?;
     Ok(WebReport { targets })
 }
 

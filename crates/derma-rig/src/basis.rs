@@ -189,13 +189,7 @@ fn floor_of(sigma_n: &Map, fraction: f32) -> f32 {
 
 /// scale = σ_i / max(σ_n, ε), texel by texel.
 pub fn scale_map(sigma_i: &Map, sigma_n: &Map, eps: f32) -> Map {
-    let v = sigma_i
-        .data()
-        .iter()
-        .zip(sigma_n.data())
-        .map(|(&si, &sn)| si / sn.max(eps))
-        .collect();
-    Map::from_vec(sigma_n.width(), sigma_n.height(), v).expect("size")
+    sigma_i.zip_map(sigma_n, |si, sn| si / sn.max(eps))
 }
 
 /// H_0 = H_n − up(μ_n).
@@ -203,14 +197,12 @@ fn mean_free(neutral: &Map, mean_n: &Map) -> Map {
     let (w, h) = (neutral.width(), neutral.height());
     let up = Upsampler::new((mean_n.width(), mean_n.height()), (w, h));
     let wide = up.widen(mean_n.data());
-    let mut out = vec![0.0f32; w * h];
-    out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+    Map::from_par_rows(w, h, |y, row| {
         up.row_of_wide(&wide, y, row);
         for (o, &hn) in row.iter_mut().zip(&neutral.data()[y * w..(y + 1) * w]) {
             *o = hn - *o;
         }
-    });
-    Map::from_vec(w, h, out).expect("size")
+    })
 }
 
 impl Rig {
@@ -288,10 +280,7 @@ impl Rig {
                     TargetSource::Builtin(e) => {
                         let pts = points.as_ref().expect("computed when a builtin is present");
                         let (gm, gs) = expression::gain_maps(e, pts, gw, gh);
-                        let mul = |a: &Map, b: &Map| {
-                            let v = a.data().iter().zip(b.data()).map(|(x, y)| x * y).collect();
-                            Map::from_vec(gw, gh, v).expect("size")
-                        };
+                        let mul = |a: &Map, b: &Map| a.zip_map(b, |x, y| x * y);
                         (
                             mul(&neutral_stats.mean, &gm),
                             mul(&neutral_stats.sigma, &gs),
@@ -335,13 +324,7 @@ impl Rig {
     pub fn neutral(&self) -> Map {
         let (w, h) = self.size();
         let up = Upsampler::new(self.basis_size(), (w, h)).apply(&self.neutral_mean);
-        let v = up
-            .data()
-            .iter()
-            .zip(self.h0.data())
-            .map(|(a, b)| a + b)
-            .collect();
-        Map::from_vec(w, h, v).expect("size")
+        up.zip_map(&self.h0, |a, b| a + b)
     }
 
     /// Index of target `name`.
@@ -387,22 +370,14 @@ impl Rig {
                     TransferMode::Absolute => (t.bias.clone(), t.sigma.clone()),
                     TransferMode::Relative => {
                         let ratio = |num: f32, den: f32| if den > 1e-7 { num / den } else { 1.0 };
-                        let b = (0..gw * gh)
-                            .map(|i| {
-                                st.mean.data()[i]
-                                    * ratio(t.bias.data()[i], self.neutral_mean.data()[i])
-                            })
-                            .collect();
-                        let s = (0..gw * gh)
-                            .map(|i| {
-                                st.sigma.data()[i] * t.sigma.data()[i]
-                                    / self.neutral_sigma.data()[i].max(self.sigma_floor)
-                            })
-                            .collect();
-                        (
-                            Map::from_vec(gw, gh, b).expect("size"),
-                            Map::from_vec(gw, gh, s).expect("size"),
-                        )
+                        let b = Map::from_fn(gw, gh, |i| {
+                            st.mean.data()[i] * ratio(t.bias.data()[i], self.neutral_mean.data()[i])
+                        });
+                        let s = Map::from_fn(gw, gh, |i| {
+                            st.sigma.data()[i] * t.sigma.data()[i]
+                                / self.neutral_sigma.data()[i].max(self.sigma_floor)
+                        });
+                        (b, s)
                     }
                 };
                 Target {

@@ -123,7 +123,7 @@ pub fn color(h: &Map, melanin: &Map, lut: &SkinColorLut) -> Result<[Map; 3]> {
         .map(|(&hb, &m)| lut.lookup(m as f64, hb as f64).map(|c| c as f32))
         .collect();
     let (w, hh) = (h.width(), h.height());
-    Ok([0, 1, 2].map(|k| Map::from_vec(w, hh, rgb.iter().map(|p| p[k]).collect()).expect("size")))
+    Ok(Map::planes(w, hh, |i| rgb[i]))
 }
 
 /// Levels of the resampled LUT per axis (8-bit output precision).
@@ -354,17 +354,7 @@ unsafe fn frame_row_avx2(
 
 /// Unpacks an RGBA8 frame into three maps of encoded [0, 1] values (for writing a PNG).
 pub fn unpack_rgba8(frame: &[u32], w: usize, h: usize) -> [Map; 3] {
-    [0, 8, 16].map(|s| {
-        Map::from_vec(
-            w,
-            h,
-            frame
-                .iter()
-                .map(|p| ((p >> s) & 255) as f32 / 255.0)
-                .collect(),
-        )
-        .expect("size")
-    })
+    [0, 8, 16].map(|s| Map::from_fn(w, h, |i| ((frame[i] >> s) & 255) as f32 / 255.0))
 }
 
 #[cfg(test)]

@@ -273,10 +273,7 @@ pub fn gain_maps(e: &Expression, points: &[Option<Vec3>], w: usize, h: usize) ->
         .iter()
         .map(|p| p.map_or((1.0, 1.0), |p| e.gains_at(p)))
         .unzip();
-    (
-        Map::from_vec(w, h, gm).expect("size"),
-        Map::from_vec(w, h, gs).expect("size"),
-    )
+    (Map::from_fn(w, h, |i| gm[i]), Map::from_fn(w, h, |i| gs[i]))
 }
 
 #[cfg(test)]

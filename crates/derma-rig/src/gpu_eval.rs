@@ -165,8 +165,7 @@ impl GpuRig {
         let (fw, fh) = self.size;
         let hb: Vec<f32> = ctx.read_back(&self.hemoglobin_buf, fw * fh)?;
         let cb: Vec<[f32; 4]> = ctx.read_back(&self.color_buf, fw * fh)?;
-        let rgb = [0, 1, 2]
-            .map(|c| Map::from_vec(fw, fh, cb.iter().map(|p| p[c]).collect()).expect("size"));
+        let rgb = Map::planes(fw, fh, |i| [cb[i][0], cb[i][1], cb[i][2]]);
         Ok((Map::from_vec(fw, fh, hb)?, rgb))
     }
 

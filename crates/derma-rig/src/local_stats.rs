@@ -272,12 +272,7 @@ impl Centred {
     fn upsampled(&self, w: usize, h: usize) -> Centred {
         let up = Upsampler::new_extrapolating((self.width, self.height), (w, h));
         let go = |v: &[f64]| {
-            let m = Map::from_vec(
-                self.width,
-                self.height,
-                v.iter().map(|&x| x as f32).collect(),
-            )
-            .expect("size");
+            let m = Map::from_fn(self.width, self.height, |i| v[i] as f32);
             up.apply(&m).data().iter().map(|&x| x as f64).collect()
         };
         Centred {
@@ -291,16 +286,13 @@ impl Centred {
 
     /// Mean and standard deviation.
     fn finish(&self) -> Stats {
-        let mean = self.e1.iter().map(|&m| (self.offset + m) as f32).collect();
-        let sigma = self
-            .e1
-            .iter()
-            .zip(&self.e2)
-            .map(|(&m, &s)| (s - m * m).max(0.0).sqrt() as f32)
-            .collect();
+        let (w, h) = (self.width, self.height);
         Stats {
-            mean: Map::from_vec(self.width, self.height, mean).expect("size"),
-            sigma: Map::from_vec(self.width, self.height, sigma).expect("size"),
+            mean: Map::from_fn(w, h, |i| (self.offset + self.e1[i]) as f32),
+            sigma: Map::from_fn(w, h, |i| {
+                let (m, s) = (self.e1[i], self.e2[i]);
+                (s - m * m).max(0.0).sqrt() as f32
+            }),
         }
     }
 }

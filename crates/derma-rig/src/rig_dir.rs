@@ -146,14 +146,7 @@ pub fn save(rig: &Rig, lut: &SkinColorLut, dir: &Path) -> Result<RigJson> {
         &[("R", &r), ("G", &g), ("B", &b)],
         ExrPrecision::F32,
     )?;
-    let enc = |m: &Map| {
-        let v = m
-            .data()
-            .iter()
-            .map(|&x| derma_core::color::srgb_encode(x))
-            .collect();
-        Map::from_vec(m.width(), m.height(), v).expect("size")
-    };
+    let enc = |m: &Map| m.map(derma_core::color::srgb_encode);
     write_png16(
         &dir.join("skin_color_lut.png"),
         &[&enc(&r), &enc(&g), &enc(&b)],
@@ -182,8 +175,11 @@ pub fn save(rig: &Rig, lut: &SkinColorLut, dir: &Path) -> Result<RigJson> {
         lut: lut_json(lut),
         targets,
     };
-    let text = serde_json::to_string_pretty(&json).expect("serialisable");
-    derma_core::atomic::write_bytes(&dir.join("rig.json"), text.as_bytes())?;
+    derma_core::report::write_json(
+        &dir.join("rig.json"),
+        &json,
+        derma_core::report::JsonFormat::DATA_PRETTY,
+    )?;
     Ok(json)
 }
 

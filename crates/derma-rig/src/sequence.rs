@@ -256,8 +256,6 @@ fn start_or_resume(out: &Path, json: &AnimationJson, force: bool) -> Result<()> 
             }
         }
     }
-    let bytes =
-        serde_json::to_string_pretty(json).map_err(|e| invalid("animation.json", e.to_string()))?;
-    derma_core::atomic::write_bytes(&jp, bytes.as_bytes())?;
+    derma_core::report::write_json(&jp, json, derma_core::report::JsonFormat::DATA_PRETTY)?;
     Ok(())
 }

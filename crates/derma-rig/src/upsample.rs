@@ -130,11 +130,7 @@ impl Upsampler {
         debug_assert_eq!((map.width(), map.height()), self.src);
         let (w, h) = self.dst;
         let wide = self.widen(map.data());
-        let mut out = vec![0.0f32; w * h];
-        out.par_chunks_mut(w)
-            .enumerate()
-            .for_each(|(y, row)| self.row_of_wide(&wide, y, row));
-        Map::from_vec(w, h, out).expect("size")
+        Map::from_par_rows(w, h, |y, row| self.row_of_wide(&wide, y, row))
     }
 }
 

@@ -48,7 +48,9 @@ pub fn run(job: &FitJob, progress: &dyn Progress) -> Result<FitReport> {
     }
     let z = job.options.max_zenith_deg;
     if !(z > 0.0 && z <= 90.0) {
-        return Err(ShadingError::Invalid(format!("max zenith {z}°: expected degrees in (0, 90]")));
+        return Err(ShadingError::Invalid(format!(
+            "max zenith {z}°: expected degrees in (0, 90]"
+        )));
     }
     let pre = Dtab::read(&job.grid)?;
     let t0 = Instant::now();
@@ -56,7 +58,10 @@ pub fn run(job: &FitJob, progress: &dyn Progress) -> Result<FitReport> {
     let seconds = t0.elapsed().as_secs_f64();
     table.write(&job.out)?;
     let residuals = job.out.with_extension("residuals.csv");
-    derma_core::atomic::write_bytes(&residuals, match_report::residual_csv(&table, &job.options).as_bytes())?;
+    derma_core::atomic::write_bytes(
+        &residuals,
+        match_report::residual_csv(&table, &job.options).as_bytes(),
+    )?;
     let plots = match &job.plots {
         Some(dir) => {
             let mt = MatchTable::new(table, &job.out)?;
@@ -65,9 +70,18 @@ pub fn run(job: &FitJob, progress: &dyn Progress) -> Result<FitReport> {
             } else {
                 job.plot_nodes.clone()
             };
-            Some((match_report::write_plots(&pre, &mt, &job.options, &nodes, dir)?, dir.clone()))
+            Some((
+                match_report::write_plots(&pre, &mt, &job.options, &nodes, dir)?,
+                dir.clone(),
+            ))
         }
         None => None,
     };
-    Ok(FitReport { entries: pre.header.nodes(), seconds, summary, residuals, plots })
+    Ok(FitReport {
+        entries: pre.header.nodes(),
+        seconds,
+        summary,
+        residuals,
+        plots,
+    })
 }

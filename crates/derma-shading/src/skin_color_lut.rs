@@ -295,9 +295,7 @@ impl SkinColorLut {
     /// The table as images: three channels of `size × size`, linear.
     pub fn channels(&self) -> [derma_core::Map; 3] {
         let n = self.options.size;
-        [0, 1, 2].map(|c| {
-            derma_core::Map::from_vec(n, n, self.rgb.iter().map(|p| p[c]).collect()).expect("size")
-        })
+        derma_core::Map::planes(n, n, |i| self.rgb[i])
     }
 }
 

@@ -318,7 +318,7 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
         .collect();
     let src = dilation_sources(&covered, n, n);
     let mk = |f: &(dyn Fn(&Texel) -> f32 + Sync)| {
-        let mut m = Map::from_vec(n, n, values.par_iter().map(f).collect()).expect("size");
+        let mut m = Map::from_par_fn(n, n, |i| f(&values[i]));
         if let Some(src) = &src {
             apply_dilation(m.data_mut(), src);
         }

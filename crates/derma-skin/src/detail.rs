@@ -97,8 +97,7 @@ pub fn build(
         let hp = high_pass(h.data(), size, radius);
         let rms = (hp.iter().map(|v| (*v as f64).powi(2)).sum::<f64>() / hp.len() as f64).sqrt();
         let scale = if rms > 0.0 { (1.0 / rms) as f32 } else { 0.0 };
-        let d = hp.into_iter().map(|v| v * scale).collect();
-        Map::from_vec(size, size, d).expect("tile size")
+        Map::from_fn(size, size, |i| hp[i] * scale)
     });
     let contrast = albedo_channels.map(|_| {
         let lum: Vec<f32> = (0..size * size)
@@ -108,12 +107,14 @@ pub fn build(
             })
             .collect();
         let low = box_blur_wrapped(&lum, size, radius);
-        let contrast = lum
-            .iter()
-            .zip(&low)
-            .map(|(&l, &m)| if m > 1e-6 { (l - m) / m } else { 0.0 })
-            .collect();
-        Map::from_vec(size, size, contrast).expect("tile size")
+        Map::from_fn(size, size, |i| {
+            let (l, m) = (lum[i], low[i]);
+            if m > 1e-6 {
+                (l - m) / m
+            } else {
+                0.0
+            }
+        })
     });
     Ok(DetailTile {
         size,

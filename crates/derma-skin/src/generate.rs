@@ -774,8 +774,11 @@ impl TextureSet {
         job.stage("write", 1, Unit::Steps);
         let (mut files, height_range) =
             crate::texture_set::write_maps(dir, &self.bio, &self.render)?;
-        let features = serde_json::to_vec(&self.features.to_json()).expect("JSON values serialize");
-        derma_core::atomic::write_bytes(&dir.join(outputs::FEATURES), &features)?;
+        derma_core::report::write_json(
+            &dir.join(outputs::FEATURES),
+            &self.features.to_json(),
+            derma_core::report::JsonFormat::DATA,
+        )?;
         files.push(outputs::FEATURES);
         job.stage("preview", 1, Unit::Steps);
         let props = if self.inputs.surface == SurfaceKind::Template {
@@ -807,7 +810,11 @@ impl TextureSet {
         files.push(outputs::REPORT);
         // The manifest lists every file but itself.
         let manifest = crate::report::manifest(self.config.size, &files);
-        derma_core::atomic::write_bytes(&dir.join(outputs::MANIFEST), &manifest)?;
+        derma_core::report::write_json(
+            &dir.join(outputs::MANIFEST),
+            &manifest,
+            derma_core::report::JsonFormat::REPORT,
+        )?;
         let report = crate::report::report(&crate::report::Run {
             config: &self.config,
             inputs: &self.inputs,
@@ -821,7 +828,11 @@ impl TextureSet {
             height_range,
             log: &log,
         });
-        derma_core::atomic::write_bytes(&dir.join(outputs::REPORT), &report)?;
+        derma_core::report::write_json(
+            &dir.join(outputs::REPORT),
+            &report,
+            derma_core::report::JsonFormat::REPORT,
+        )?;
         files.insert(files.len() - 1, outputs::MANIFEST); // manifest order: before report.json
         Ok(Written {
             files,

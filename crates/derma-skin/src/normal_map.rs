@@ -21,7 +21,7 @@ pub fn normals_from_height(surface: &Surface, height: &Map) -> [Map; 3] {
             }
         }
     });
-    let ch = |k: usize| Map::from_vec(w, h, out.iter().map(|v| v[k]).collect()).expect("size");
+    let ch = |k: usize| Map::from_fn(w, h, |i| out[i][k]);
     [ch(0), ch(1), ch(2)]
 }
 

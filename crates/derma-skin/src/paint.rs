@@ -92,12 +92,7 @@ impl BioMaps {
 
     /// One channel as a planar map.
     pub fn channel(&self, f: fn(&BioSample) -> f32) -> Map {
-        Map::from_vec(
-            self.width,
-            self.height,
-            self.texels.par_iter().map(f).collect(),
-        )
-        .expect("size matches")
+        Map::from_par_fn(self.width, self.height, |i| f(&self.texels[i]))
     }
 }
 

@@ -11,7 +11,7 @@ use crate::texture_set::{HeightRange, RenderMaps};
 use derma_core::map::MapStats;
 use derma_core::mesh::MeshScale;
 use derma_core::progress::Log;
-use derma_core::report::{pretty_json, sha256_file};
+use derma_core::report::sha256_file;
 use derma_optics::bio::names;
 use serde_json::json;
 use std::path::PathBuf;
@@ -57,9 +57,9 @@ pub struct Run<'a> {
 
 /// manifest.json of a `size`² set listing `files` (the maps, features.json, preview.png and
 /// report.json).
-pub fn manifest(size: u32, files: &[&str]) -> Vec<u8> {
+pub fn manifest(size: u32, files: &[&str]) -> serde_json::Value {
     let maps: Vec<&outputs::OutputFile> = files.iter().filter_map(|f| outputs::output(f)).collect();
-    let manifest = json!({
+    json!({
         "generator": format!("derma {}", env!("CARGO_PKG_VERSION")),
         "size": [size, size],
         "conventions": {
@@ -68,8 +68,7 @@ pub fn manifest(size: u32, files: &[&str]) -> Vec<u8> {
             "lengths": "mm"
         },
         "maps": maps,
-    });
-    pretty_json(&manifest).expect("the manifest serializes")
+    })
 }
 
 /// Texels per block of [`covered_stats`]: the blocks' sums are added in order, so the
@@ -114,7 +113,7 @@ fn covered_stats<const C: usize>(
 }
 
 /// report.json of a run.
-pub fn report(set: &Run) -> Vec<u8> {
+pub fn report(set: &Run) -> serde_json::Value {
     // Every statistic in one parallel pass over the covered texels.
     let srgb = derma_core::color::srgb8_decode;
     let [mel, pheo, blood, oxy, epi, height, r, g, b] = covered_stats(set.surface, |i| {
@@ -146,7 +145,7 @@ pub fn report(set: &Run) -> Vec<u8> {
         SurfaceKind::Patch => "patch",
         SurfaceKind::Mesh => "mesh",
     };
-    let report = json!({
+    json!({
         "derma_version": env!("CARGO_PKG_VERSION"),
         "command": "skin",
         "seed": set.config.seed,
@@ -174,6 +173,5 @@ pub fn report(set: &Run) -> Vec<u8> {
         },
         "notes": set.log.notes,
         "timings_s": set.log.timings,
-    });
-    pretty_json(&report).expect("the report serializes")
+    })
 }

@@ -50,8 +50,11 @@ impl SynthReport {
     /// when they were asked for.
     pub fn metrics_json(&self) -> Option<serde_json::Value> {
         let m = self.metrics.as_ref()?;
-        let stages: serde_json::Map<String, serde_json::Value> =
-            self.timings.iter().map(|t| (t.stage.clone(), serde_json::json!(t.seconds))).collect();
+        let stages: serde_json::Map<String, serde_json::Value> = self
+            .timings
+            .iter()
+            .map(|t| (t.stage.clone(), serde_json::json!(t.seconds)))
+            .collect();
         Some(serde_json::json!({
             "seconds": self.seconds,
             "stages": stages,
@@ -71,7 +74,10 @@ fn create_parents(outputs: &[PathBuf]) -> Result<()> {
     for o in outputs {
         if let Some(parent) = o.parent().filter(|p| !p.as_os_str().is_empty()) {
             std::fs::create_dir_all(parent).map_err(|e| {
-                invalid(format!("output folder '{}'", parent.display()), format!("cannot create it ({e})"))
+                invalid(
+                    format!("output folder '{}'", parent.display()),
+                    format!("cannot create it ({e})"),
+                )
             })?;
         }
     }
@@ -88,16 +94,24 @@ pub fn run(job: &SynthJob, progress: &dyn Progress) -> Result<SynthReport> {
     inputs.extend(job.guide.as_deref());
     derma_core::atomic::check_inputs_spared(&outputs, &inputs)?;
     let mut textures = files.textures.into_iter();
-    let first = textures.next().ok_or_else(|| invalid("exemplars", "none given; give at least one"))?;
+    let first = textures
+        .next()
+        .ok_or_else(|| invalid("exemplars", "none given; give at least one"))?;
     // The metrics compare with the first exemplar; keep a copy only when they are asked for.
     let exemplar = job.metrics.then(|| first.clone());
-    let mut synth = Synthesizer::new(first).options(job.options.clone()).device(job.device).progress(progress);
+    let mut synth = Synthesizer::new(first)
+        .options(job.options.clone())
+        .device(job.device)
+        .progress(progress);
     for t in textures {
         synth = synth.exemplar(t);
     }
     if let Some(g) = &job.guide {
         if job.exemplars.len() < 2 {
-            return Err(invalid("guide", "a guide chooses among exemplars: give at least two"));
+            return Err(invalid(
+                "guide",
+                "a guide chooses among exemplars: give at least two",
+            ));
         }
         synth = synth.guide(Guide::read(g, job.exemplars.len())?);
     }
@@ -109,5 +123,11 @@ pub fn run(job: &SynthJob, progress: &dyn Progress) -> Result<SynthReport> {
         Some(e) => Some(Metrics::measure(&out.texture, e, job.options.patch)?),
         None => None,
     };
-    Ok(SynthReport { outputs, matcher: out.matcher, seconds, timings: out.timings, metrics })
+    Ok(SynthReport {
+        outputs,
+        matcher: out.matcher,
+        seconds,
+        timings: out.timings,
+        metrics,
+    })
 }

@@ -66,14 +66,9 @@ impl Texture {
 
     /// Channel `k` as a planar map.
     pub fn channel(&self, k: usize) -> Map {
-        let v = self
-            .data
-            .iter()
-            .skip(k)
-            .step_by(self.channels)
-            .copied()
-            .collect();
-        Map::from_vec(self.width, self.height, v).expect("size")
+        Map::from_fn(self.width, self.height, |i| {
+            self.data[i * self.channels + k]
+        })
     }
 
     /// The texel at (x, y).

@@ -129,7 +129,8 @@ fn fit(a: FitArgs, bars: &Bars) -> Result<()> {
         plots: a.plots,
         plot_nodes: a.plot_nodes,
     };
-    let r = derma_shading::fit_job::run(&job, bars).with_context(|| format!("fitting {}", a.grid.display()))?;
+    let r = derma_shading::fit_job::run(&job, bars)
+        .with_context(|| format!("fitting {}", a.grid.display()))?;
     bars.finish();
     line(format!(
         "fitted {} entries × {} models in {:.1} s ({} weighting) → {}",

@@ -7,7 +7,6 @@ use super::samplers::Sampler;
 use super::{Field, GBuffer};
 use crate::Result;
 use derma_core::gpu::{Gpu, GpuCell};
-use wgpu::util::DeviceExt;
 
 const SHADER: &str = include_str!("sdf.wgsl");
 const WORKGROUP: usize = 64;
@@ -220,12 +219,11 @@ impl GpuFields {
             .chain(steps.iter().copied())
             .chain(std::iter::once(0))
             .map(|k| {
-                ctx.device
-                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                        label: Some("sdf pass params"),
-                        contents: bytemuck::bytes_of(&self.params(k, 0.0, None)),
-                        usage: wgpu::BufferUsages::COPY_SRC,
-                    })
+                ctx.upload(
+                    "sdf pass params",
+                    bytemuck::bytes_of(&self.params(k, 0.0, None)),
+                    wgpu::BufferUsages::COPY_SRC,
+                )
             })
             .collect();
         let size = std::mem::size_of::<Params>() as u64;
