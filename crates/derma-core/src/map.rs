@@ -226,22 +226,8 @@ impl Map {
     }
 
     fn halved(&self) -> Map {
-        use rayon::prelude::*;
-        let (w, h) = (self.width / 2, self.height / 2);
-        let mut out = Map::filled(w, h, 0.0);
-        out.data
-            .par_chunks_mut(w.max(1))
-            .enumerate()
-            .for_each(|(y, row)| {
-                for (x, o) in row.iter_mut().enumerate() {
-                    let s = self.get(2 * x, 2 * y)
-                        + self.get(2 * x + 1, 2 * y)
-                        + self.get(2 * x, 2 * y + 1)
-                        + self.get(2 * x + 1, 2 * y + 1);
-                    *o = 0.25 * s;
-                }
-            });
-        out
+        let [m] = box_reduced(self.width, self.height, 2, |i| [self.data[i]]);
+        m
     }
 
     /// Mean, minimum and maximum over the texels where `mask` (if given) is true.

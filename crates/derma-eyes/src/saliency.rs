@@ -4,46 +4,22 @@
 //! operator N(·), conspicuity maps summed at scale 4, and a winner-take-all scan with inhibition
 //! of return that yields gaze targets (thesis §3.10: gaze driven by salient points of a video).
 
+use derma_core::image::Grey;
+use derma_core::pyramid::{gaussian_pyramid, BINOMIAL};
 use derma_core::Map;
 use glam::Vec2;
 
-fn blur_down(m: &Map) -> Map {
-    // [1 4 6 4 1]/16 separable, then every other sample.
-    let (w, h) = (m.width(), m.height());
-    let k = [1.0, 4.0, 6.0, 4.0, 1.0].map(|v| v / 16.0);
-    let at = |x: isize, y: isize| {
-        m.get(
-            x.clamp(0, w as isize - 1) as usize,
-            y.clamp(0, h as isize - 1) as usize,
-        )
-    };
-    let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
-    let mut tmp = vec![0.0f32; nw * h];
-    for y in 0..h {
-        for x in 0..nw {
-            tmp[y * nw + x] = (0..5)
-                .map(|i| k[i] * at(2 * x as isize + i as isize - 2, y as isize))
-                .sum();
-        }
-    }
-    Map::from_fn(nw, nh, |t| {
-        let (x, y) = (t % nw, t / nw);
-        (0..5)
-            .map(|i| {
-                k[i] * tmp
-                    [(2 * y as isize + i as isize - 2).clamp(0, h as isize - 1) as usize * nw + x]
-            })
-            .sum()
-    })
-}
-
+/// The dyadic Gaussian pyramid of Itti et al. 1998 (`levels` levels, level 0 is `m`): derma-core's
+/// REDUCE with the binomial kernel [1 4 6 4 1]/16.
 fn pyramid(m: &Map, levels: usize) -> Vec<Map> {
-    let mut p = vec![m.clone()];
-    for _ in 1..levels {
-        let next = blur_down(p.last().expect("level"));
-        p.push(next);
-    }
-    p
+    let grey = Grey::from_fn(m.width(), m.height(), |i| [m.data()[i]]);
+    gaussian_pyramid(grey, levels, &BINOMIAL)
+        .iter()
+        .map(|l| {
+            let [p] = l.to_planes();
+            p
+        })
+        .collect()
 }
 
 /// |c ⊖ s| resampled to `w` × `h`.

@@ -64,7 +64,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             s.psnr_db, s.seam_gradient_energy
         );
         if gain && multiband {
-            b.texture.write(&out.join("texture.png"))?;
+            b.texture.write_linear(&out.join("texture.png"))?;
             let mask: Vec<bool> = b
                 .source
                 .iter()

@@ -15,7 +15,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .unwrap_or_else(|| std::env::temp_dir().join("derma-iris"));
     std::fs::create_dir_all(&out)?;
     let photo = match args.get(2) {
-        Some(p) => RgbImage::read(std::path::Path::new(p))?,
+        Some(p) => RgbImage::read_linear(std::path::Path::new(p))?,
         None => synthetic_eye(320, 240, [161.3, 118.7], 64.0, 7),
     };
     let t = iris_texture(
@@ -30,8 +30,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "iris centre ({:.2}, {:.2}) radius {:.2} px, pupil {:.2} px, {:.0} % kept, sector {:.1}°, {}",
         r.centre[0], r.centre[1], r.radius, r.pupil_radius, 100.0 * r.kept_share, r.sector_deg, r.synthesis
     );
-    t.texture.write(&out.join("eye.png"))?;
-    t.polar.write(&out.join("iris_polar.png"))?;
+    t.texture.write_linear(&out.join("eye.png"))?;
+    t.polar.write_linear(&out.join("iris_polar.png"))?;
     println!("wrote {}", out.display());
     Ok(())
 }

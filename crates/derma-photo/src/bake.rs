@@ -3,13 +3,14 @@
 //! the paper's three triangle cases; the one-ring colour fill (80/60/40/20 %) so no region stays
 //! empty; gains solved globally first; then the multiresolution spline with shrunk masks.
 
-use crate::blend::{default_levels, multiband_with, Image, Plane};
+use crate::blend::{default_levels, multiband_with, Plane};
 use crate::camera::Prepared;
 use crate::error::{PhotoError, Result};
 use crate::gain::Overlaps;
 use crate::photo::{Photo, RgbImage};
 use crate::topology::Topology;
 use derma_core::bvh::Bvh;
+use derma_core::image::Image;
 use derma_core::mesh::TriMesh;
 use derma_core::progress::{Progress, Unit};
 use derma_core::raster::{dilation_sources, UvRaster, NO_TRIANGLE};
@@ -516,11 +517,11 @@ pub fn bake(
                     .for_each(|(y, (a, w))| add_row(k, y, a, w, None)),
             }
         };
-    let mut acc: Vec<[f32; 3]> = crate::blend::zeroed(n_tex);
+    let mut acc: Vec<[f32; 3]> = derma_core::image::zeroed(n_tex);
     let mut wsum: Vec<f32> = vec![0.0; n_tex];
     let mut source = vec![SOURCE_NONE; n_tex];
     let multiband = opts.multiband && photos.len() > 1;
-    let mut texture: Vec<[f32; 3]> = crate::blend::zeroed(n_tex);
+    let mut texture: Vec<[f32; 3]> = derma_core::image::zeroed(n_tex);
     if !multiband {
         for k in 0..photos.len() {
             add_photo(k, &mut acc, &mut wsum, None);

@@ -1,207 +1,16 @@
 //! Multiresolution splines (Burt & Adelson 1983, "A multiresolution spline with application to
 //! image mosaics"): each image's Laplacian pyramid weighted by its mask's Gaussian pyramid, so
 //! low frequencies blend over wide zones and fine detail switches sharply (Tarini et al. §3.2).
+//! The pyramid itself is derma-core's ([`derma_core::pyramid`], a = 0.4).
 
+use derma_core::image::Image;
+use derma_core::pyramid::{build_gaussian, expand_into, madd, zero_pyramid, BURT_ADELSON};
 use rayon::prelude::*;
 
-/// The generating kernel of Burt & Adelson (a = 0.4): [0.05, 0.25, 0.4, 0.25, 0.05].
-const KERNEL: [f32; 5] = [0.05, 0.25, 0.4, 0.25, 0.05];
+pub use derma_core::pyramid::default_levels;
 
-/// An image of `C`-channel pixels, row-major.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Image<const C: usize> {
-    /// Width.
-    pub width: usize,
-    /// Height.
-    pub height: usize,
-    /// Pixels, row-major.
-    pub data: Vec<[f32; C]>,
-}
-
-/// A single-channel image.
-pub type Plane = Image<1>;
-
-impl Plane {
-    /// A plane from its values.
-    pub fn new(width: usize, height: usize, data: Vec<f32>) -> Self {
-        assert_eq!(data.len(), width * height);
-        Self {
-            width,
-            height,
-            data: data.into_iter().map(|v| [v]).collect(),
-        }
-    }
-
-    /// The values.
-    pub fn values(&self) -> Vec<f32> {
-        self.data.iter().map(|v| v[0]).collect()
-    }
-}
-
-impl<const C: usize> Image<C> {
-    fn zeros(width: usize, height: usize) -> Self {
-        Self {
-            width,
-            height,
-            data: zeroed(width * height),
-        }
-    }
-}
-
-/// `n` zero pixels, written rather than calloc'ed: pages first touched by a read map the shared
-/// zero page, and the write after it costs a copy-on-write fault with a TLB shootdown on every
-/// core (measured: a third of the bake's time).
-pub(crate) fn zeroed<const C: usize>(n: usize) -> Vec<[f32; C]> {
-    let mut v = Vec::with_capacity(n);
-    v.resize(n, [0.0; C]);
-    v
-}
-
-#[inline]
-fn madd<const C: usize>(acc: &mut [f32; C], k: f32, v: &[f32; C]) {
-    for c in 0..C {
-        acc[c] += k * v[c];
-    }
-}
-
-/// REDUCE: blur with the 5-tap kernel and keep every second sample (borders clamped).
-pub fn reduce<const C: usize>(p: &Image<C>) -> Image<C> {
-    let mut out = Image::zeros(p.width.div_ceil(2), p.height.div_ceil(2));
-    reduce_into(p, &mut out, &mut Vec::new());
-    out
-}
-
-/// [`reduce`] into `out` (of the halved size), with `tmp` as scratch (grown as needed).
-fn reduce_into<const C: usize>(p: &Image<C>, out: &mut Image<C>, tmp: &mut Vec<[f32; C]>) {
-    let (w, h) = (p.width, p.height);
-    let (w2, h2) = (w.div_ceil(2), h.div_ceil(2));
-    assert_eq!((out.width, out.height), (w2, h2));
-    if tmp.len() < w * h2 {
-        *tmp = zeroed(w * h2);
-    }
-    // Vertical pass on every second row, then horizontal on every second column.
-    tmp[..w * h2]
-        .par_chunks_mut(w)
-        .enumerate()
-        .for_each(|(y2, row)| {
-            let y = 2 * y2 as isize;
-            row.fill([0.0; C]);
-            for (k, kv) in KERNEL.iter().enumerate() {
-                let yi = (y + k as isize - 2).clamp(0, h as isize - 1) as usize;
-                let src = &p.data[yi * w..(yi + 1) * w];
-                // Flat f32 rows: the compiler vectorises this across channels and pixels.
-                for (o, s) in row.as_flattened_mut().iter_mut().zip(src.as_flattened()) {
-                    *o += kv * s;
-                }
-            }
-        });
-    let tmp = &tmp[..w * h2];
-    out.data
-        .par_chunks_mut(w2)
-        .enumerate()
-        .for_each(|(y2, row)| {
-            let src = &tmp[y2 * w..(y2 + 1) * w];
-            let at = |x: isize| &src[x.clamp(0, w as isize - 1) as usize];
-            for (x2, o) in row.iter_mut().enumerate() {
-                let x = 2 * x2;
-                let mut acc = [0.0f32; C];
-                if x >= 2 && x + 2 < w {
-                    // Interior: no clamping.
-                    for (k, kv) in KERNEL.iter().enumerate() {
-                        madd(&mut acc, *kv, &src[x + k - 2]);
-                    }
-                } else {
-                    for (k, kv) in KERNEL.iter().enumerate() {
-                        madd(&mut acc, *kv, at(x as isize + k as isize - 2));
-                    }
-                }
-                *o = acc;
-            }
-        });
-}
-
-/// EXPAND `p` to `into`'s size by interpolating with the kernel (×4 gain on the inserted zeros,
-/// ×2 per axis) and add `sign` × the result to `into`.
-fn expand_into<const C: usize>(
-    p: &Image<C>,
-    into: &mut Image<C>,
-    sign: f32,
-    tmp: &mut Vec<[f32; C]>,
-) {
-    let (w, h) = (p.width, p.height);
-    let width = into.width;
-    if tmp.len() < width * h {
-        *tmp = zeroed(width * h);
-    }
-    // Horizontal: out[x] = 2 Σ_k K[k] in[(x − k + 2)/2] over integer positions: even x take
-    // K0, K2, K4 at x/2 + 1, x/2, x/2 − 1; odd x take K1, K3 at (x + 1)/2, (x − 1)/2.
-    tmp[..width * h]
-        .par_chunks_mut(width)
-        .enumerate()
-        .for_each(|(y, row)| {
-            let src = &p.data[y * w..(y + 1) * w];
-            let at = |i: isize| &src[i.clamp(0, w as isize - 1) as usize];
-            for (x, out) in row.iter_mut().enumerate() {
-                let mut acc = [0.0f32; C];
-                let half = (x / 2) as isize;
-                if x % 2 == 0 {
-                    madd(&mut acc, 2.0 * KERNEL[2], at(half));
-                    madd(&mut acc, 2.0 * KERNEL[0], at(half + 1));
-                    madd(&mut acc, 2.0 * KERNEL[4], at(half - 1));
-                } else {
-                    madd(&mut acc, 2.0 * KERNEL[1], at(half + 1));
-                    madd(&mut acc, 2.0 * KERNEL[3], at(half));
-                }
-                *out = acc;
-            }
-        });
-    let tmp = &tmp[..width * h];
-    into.data
-        .par_chunks_mut(width)
-        .enumerate()
-        .for_each(|(y, row)| {
-            for (k, kv) in KERNEL.iter().enumerate() {
-                let t = y as isize - k as isize + 2;
-                if t % 2 != 0 {
-                    continue;
-                }
-                let yi = (t / 2).clamp(0, h as isize - 1) as usize;
-                let src = &tmp[yi * width..(yi + 1) * width];
-                let k = sign * 2.0 * kv;
-                for (o, s) in row.as_flattened_mut().iter_mut().zip(src.as_flattened()) {
-                    *o += k * s;
-                }
-            }
-        });
-}
-
-/// EXPAND: upsample `p` to `width` × `height` by interpolating with the kernel.
-pub fn expand<const C: usize>(p: &Image<C>, width: usize, height: usize) -> Image<C> {
-    let mut out = Image::zeros(width, height);
-    expand_into(p, &mut out, 1.0, &mut Vec::new());
-    out
-}
-
-/// The Gaussian pyramid of `p` with `levels` levels (level 0 is `p`).
-pub fn gaussian_pyramid<const C: usize>(p: Image<C>, levels: usize) -> Vec<Image<C>> {
-    let mut out = vec![p];
-    for _ in 1..levels {
-        let next = reduce(out.last().expect("a level"));
-        out.push(next);
-    }
-    out
-}
-
-/// Pyramid levels for an image: down to about 8 texels on the short side.
-pub fn default_levels(width: usize, height: usize) -> usize {
-    let mut n = 1;
-    let mut s = width.min(height);
-    while s > 16 {
-        s = s.div_ceil(2);
-        n += 1;
-    }
-    n
-}
+/// A single-channel image (a mask).
+pub type Plane = derma_core::image::Grey;
 
 /// Adds the Laplacian pyramid of the image in `g[0]` (its Gaussian levels built in `g`, then
 /// turned into Laplacian levels in place) weighted by its mask pyramid `mp` into `acc`.
@@ -212,13 +21,13 @@ fn accumulate<const C: usize>(
     tmp: &mut Vec<[f32; C]>,
 ) {
     let levels = acc.len();
-    build_gaussian(g, tmp);
+    build_gaussian(g, &BURT_ADELSON, tmp);
     for l in 0..levels {
         // Laplacian level in place: G_l − EXPAND(G_{l+1}) (G_{l+1} still Gaussian); the top
         // level is G_top itself.
         let (lo, hi) = g.split_at_mut(l + 1);
         if let Some(next) = hi.first() {
-            expand_into(next, &mut lo[l], -1.0, tmp);
+            expand_into(next, &mut lo[l], -1.0, &BURT_ADELSON, tmp);
         }
         acc[l]
             .data
@@ -232,30 +41,10 @@ fn accumulate<const C: usize>(
 fn collapse<const C: usize>(mut acc: Vec<Image<C>>, tmp: &mut Vec<[f32; C]>) -> Image<C> {
     let mut out = acc.pop().expect("a level");
     while let Some(mut level) = acc.pop() {
-        expand_into(&out, &mut level, 1.0, tmp);
+        expand_into(&out, &mut level, 1.0, &BURT_ADELSON, tmp);
         out = level;
     }
     out
-}
-
-/// Zero images of a pyramid's level sizes.
-fn zero_pyramid<const C: usize>(width: usize, height: usize, levels: usize) -> Vec<Image<C>> {
-    let mut out = Vec::with_capacity(levels);
-    let (mut w, mut h) = (width, height);
-    for _ in 0..levels {
-        out.push(Image::zeros(w, h));
-        w = w.div_ceil(2);
-        h = h.div_ceil(2);
-    }
-    out
-}
-
-/// Fills levels 1… of `g` by REDUCE from level 0.
-fn build_gaussian<const C: usize>(g: &mut [Image<C>], tmp: &mut Vec<[f32; C]>) {
-    for l in 1..g.len() {
-        let (lo, hi) = g.split_at_mut(l);
-        reduce_into(&lo[l - 1], &mut hi[0], tmp);
-    }
 }
 
 /// Blends `images` by `masks` (same size, ≥ 0; normalised per pixel and level here, the last
@@ -306,7 +95,7 @@ pub fn multiband_with<const C: usize>(
     let (mut tmp, mut mtmp) = (Vec::new(), Vec::new());
     for k in 0..n {
         mask(k, &mut mp[0]);
-        build_gaussian(&mut mp, &mut mtmp);
+        build_gaussian(&mut mp, &BURT_ADELSON, &mut mtmp);
         image(k, &mut g[0]);
         accumulate(&mut g, &mp, &mut acc, &mut tmp);
     }
@@ -318,13 +107,17 @@ mod tests {
     use super::*;
 
     fn ramp(w: usize, h: usize, f: impl Fn(usize, usize) -> f32) -> Plane {
-        Plane::new(w, h, (0..w * h).map(|i| f(i % w, i / w)).collect())
+        Plane::from_fn(w, h, |i| [f(i % w, i / w)])
+    }
+
+    fn values(p: &Plane) -> Vec<f32> {
+        p.data.iter().map(|v| v[0]).collect()
     }
 
     #[test]
     fn one_image_with_a_full_mask_comes_back_exactly() {
         let img = ramp(37, 29, |x, y| ((x * 7 + y * 13) % 17) as f32 / 17.0);
-        let mask = Plane::new(37, 29, vec![1.0; 37 * 29]);
+        let mask = Plane::filled(37, 29, [1.0]);
         let out = multiband(&[&img], &[mask], default_levels(37, 29));
         let err = out
             .data
@@ -333,19 +126,6 @@ mod tests {
             .map(|(a, b)| (a[0] - b[0]).abs())
             .fold(0.0, f32::max);
         assert!(err < 1e-5, "{err}");
-    }
-
-    #[test]
-    fn the_kernel_keeps_a_constant() {
-        let c = Plane::new(20, 14, vec![0.3; 280]);
-        let r = reduce(&c);
-        assert!(r.values().iter().all(|v| (v - 0.3).abs() < 1e-6));
-        let e = expand(&r, 20, 14);
-        assert!(
-            e.data.iter().all(|v| (v[0] - 0.3).abs() < 1e-6),
-            "{:?}",
-            &e.data[..5]
-        );
     }
 
     #[test]
@@ -366,8 +146,8 @@ mod tests {
                 }
             })
             .collect();
-        let out = multiband(&[&a, &b], &[left, right], default_levels(w, h)).values();
-        let (a, b) = (a.values(), b.values());
+        let out = values(&multiband(&[&a, &b], &[left, right], default_levels(w, h)));
+        let (a, b) = (values(&a), values(&b));
         // The largest jump of the local mean across the seam: row means over 4-pixel columns.
         let col_mean = |d: &[f32], x: usize| {
             (0..h)

@@ -128,7 +128,7 @@ pub fn calibrate(
         mediapipe_topology: inp.mediapipe_topology,
     };
     let size = |p: &Path| -> Result<(u32, u32)> {
-        let img = RgbImage::read(p)?;
+        let img = RgbImage::read_linear(p)?;
         Ok((img.width as u32, img.height as u32))
     };
     let mut entries = correspondences::read(inp.correspondences, &surface, &size)?;
@@ -217,7 +217,7 @@ pub fn read_photos(list: &[(PathBuf, String, Camera)]) -> Result<Vec<Photo>> {
         .map(|(path, name, camera)| {
             let p = Photo {
                 name: name.clone(),
-                image: RgbImage::read(path)?,
+                image: RgbImage::read_linear(path)?,
                 camera: *camera,
             };
             p.check()?;
@@ -253,8 +253,8 @@ pub fn bake_files(
     let m = TriMesh::load(mesh)?;
     let b = bake(&m, &photos, opts, progress)?;
     progress.stage("write", 0, Unit::Steps);
-    b.texture.write(&outs[0])?;
-    b.texture.write(&outs[1])?;
+    b.texture.write_linear(&outs[0])?;
+    b.texture.write_linear(&outs[1])?;
     let n = photos.len().max(1);
     let src: Vec<f32> = b
         .source
@@ -297,11 +297,11 @@ pub fn iris_files(
         .collect();
     check_inputs_spared(&outs, &[photo])?;
     progress.stage("iris", 0, Unit::Steps);
-    let img = RgbImage::read(photo)?;
+    let img = RgbImage::read_linear(photo)?;
     let t = iris_texture(&img, opts)?;
-    t.texture.write(&outs[0])?;
-    t.texture.write(&outs[1])?;
-    t.polar.write(&outs[2])?;
+    t.texture.write_linear(&outs[0])?;
+    t.texture.write_linear(&outs[1])?;
+    t.polar.write_linear(&outs[2])?;
     json_out(&outs[3], &t.report)?;
     Ok(t.report)
 }
@@ -321,7 +321,7 @@ pub fn teeth_files(
         .collect();
     check_inputs_spared(&outs, &[photo])?;
     progress.stage("teeth", 0, Unit::Steps);
-    let img = RgbImage::read(photo)?;
+    let img = RgbImage::read_linear(photo)?;
     let head = Head::builtin();
     let part = |n: &str| {
         head.part(n)
@@ -343,7 +343,7 @@ pub fn teeth_files(
     };
     let alpha = Map::from_vec(s, s, t.alpha.clone())?;
     write_png8(&outs[0], &[&ch(0)?, &ch(1)?, &ch(2)?, &alpha])?;
-    t.equalised.write(&outs[1])?;
+    t.equalised.write_linear(&outs[1])?;
     json_out(&outs[2], &t.report)?;
     Ok(t.report)
 }
@@ -374,7 +374,7 @@ pub fn chromophore_files(
     inputs.extend(mask);
     check_inputs_spared(&outs, &inputs)?;
     progress.stage("invert the skin-colour LUT", 0, Unit::Steps);
-    let tex = RgbImage::read(texture)?;
+    let tex = RgbImage::read_linear(texture)?;
     let m: Option<Vec<bool>> = match mask {
         Some(p) => {
             let g = derma_core::image_io::read_grey(p)?;
@@ -454,7 +454,7 @@ pub fn synthetic_set(
     let mut photos_json = Vec::new();
     let mut truth = Vec::new();
     for (photo, pts) in photos.iter().zip(&points) {
-        photo.image.write(&out_dir.join(&photo.name))?;
+        photo.image.write_linear(&out_dir.join(&photo.name))?;
         photos_json.push(serde_json::json!({
             "image": photo.name,
             "width": size.0,

@@ -309,7 +309,7 @@ pub fn render(
         height: h,
         data,
     }
-    .quantised_8bit()
+    .quantised_srgb8()
 }
 
 /// Feature points a person would click: the head's named landmarks (without the eye centres,

@@ -70,10 +70,10 @@ proptest! {
         let d = scratch_dir("robust-photo-image");
         let good = d.join("good.png");
         let img = RgbImage { width: 9, height: 7, data: (0..63).map(|i| [i as f32 / 63.0, 0.5, 0.25]).collect() };
-        img.write(&good).unwrap();
+        img.write_linear(&good).unwrap();
         let p = d.join("bad.png");
         std::fs::write(&p, damaged(&std::fs::read(&good).unwrap(), cut, at, flip)).unwrap();
-        if let Ok(back) = RgbImage::read(&p) {
+        if let Ok(back) = RgbImage::read_linear(&p) {
             prop_assert_eq!(back.data.len(), back.width * back.height);
         }
     }

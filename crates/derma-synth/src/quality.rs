@@ -19,7 +19,9 @@
 
 use crate::error::{invalid, Result};
 use crate::texture::Texture;
+use derma_core::map::box_reduced;
 use derma_core::rng::Philox;
+use derma_core::Map;
 use rayon::prelude::*;
 use std::collections::HashMap;
 
@@ -67,29 +69,21 @@ impl Metrics {
 }
 
 /// `t` averaged over `f × f` blocks (a box filter and decimation; a partial last row or column
-/// of blocks is dropped).
+/// of blocks is dropped): derma-core's [`box_reduced`] channel by channel.
 pub fn downsample(t: &Texture, f: usize) -> Texture {
-    let f = f.max(1);
-    let (w, h, c) = (t.width / f, t.height / f, t.channels);
-    let norm = 1.0 / (f * f) as f32;
-    let mut data = vec![0f32; w * h * c];
-    for y in 0..h {
-        for x in 0..w {
-            for dy in 0..f {
-                for dx in 0..f {
-                    let v = t.texel(x * f + dx, y * f + dy);
-                    for k in 0..c {
-                        data[(y * w + x) * c + k] += v[k] * norm;
-                    }
-                }
-            }
-        }
-    }
+    let c = t.channels;
+    let maps: Vec<Map> = (0..c)
+        .map(|k| {
+            let [m] = box_reduced(t.width, t.height, f, |i| [t.data[i * c + k]]);
+            m
+        })
+        .collect();
+    let (w, h) = (maps[0].width(), maps[0].height());
     Texture {
         width: w,
         height: h,
         channels: c,
-        data,
+        data: (0..w * h * c).map(|j| maps[j % c].data()[j / c]).collect(),
     }
 }
 

@@ -121,7 +121,7 @@ fn iris_and_teeth_from_single_photos() {
     let d = tmp("parts");
     let eye = d.join("eye.png");
     derma_photo::iris::synthetic_eye(240, 180, [118.0, 92.0], 48.0, 1)
-        .write(&eye)
+        .write_linear(&eye)
         .unwrap();
     let (ok, out, err) = run(&[
         "photo",
@@ -139,7 +139,7 @@ fn iris_and_teeth_from_single_photos() {
     let smile = d.join("smile.png");
     derma_photo::teeth::synthetic_smile(320, 160)
         .0
-        .write(&smile)
+        .write_linear(&smile)
         .unwrap();
     let (ok, out, err) = run(&[
         "photo",
@@ -216,7 +216,7 @@ fn bad_input_gets_a_clear_error() {
     // A texture outside the skin gamut is clamped, with its residual reported.
     let blue = d.join("blue.png");
     derma_photo::photo::RgbImage::filled(8, 8, [0.02, 0.05, 0.7])
-        .write(&blue)
+        .write_linear(&blue)
         .unwrap();
     let (ok, out, err) = run(&[
         "photo",
