@@ -9,13 +9,13 @@ pub fn available_bytes() -> Option<f64> {
     Some(kb * 1024.0)
 }
 
-/// Checks that `need` bytes fit in 90 % of the available memory; `Err((need_gib, have_gib))`
-/// when they do not. Passes where the system does not tell.
-pub fn check_fits(need: f64) -> Result<(), (f64, f64)> {
+/// Whether `need` bytes fit in 90 % of the available memory: `Some((need_gib, have_gib))` when
+/// they do not, `None` when they do or the system does not tell.
+pub fn shortfall(need: f64) -> Option<(f64, f64)> {
     const GIB: f64 = 1073741824.0;
     match available_bytes() {
-        Some(have) if need > 0.9 * have => Err((need / GIB, have / GIB)),
-        _ => Ok(()),
+        Some(have) if need > 0.9 * have => Some((need / GIB, have / GIB)),
+        _ => None,
     }
 }
 
@@ -25,9 +25,9 @@ mod tests {
 
     #[test]
     fn small_jobs_fit_and_absurd_ones_do_not() {
-        assert!(check_fits(1e6).is_ok());
+        assert!(shortfall(1e6).is_none());
         if available_bytes().is_some() {
-            let (need, have) = check_fits(1e18).unwrap_err();
+            let (need, have) = shortfall(1e18).unwrap();
             assert!(need > have && have > 0.0);
         }
     }

@@ -65,7 +65,14 @@ impl JsonFormat {
 /// `value` as JSON bytes in `format`.
 /// Exact formats keep a struct's field order; tidied ones pass through a `serde_json::Value`,
 /// whose objects list their keys in sorted order.
-pub fn json_bytes(
+pub fn json_bytes(value: &impl serde::Serialize, format: JsonFormat) -> crate::Result<Vec<u8>> {
+    json_bytes_of(value, format).map_err(|e| crate::CoreError::Invalid {
+        what: "a JSON value".into(),
+        detail: e.to_string(),
+    })
+}
+
+fn json_bytes_of(
     value: &impl serde::Serialize,
     format: JsonFormat,
 ) -> Result<Vec<u8>, serde_json::Error> {
@@ -85,11 +92,6 @@ pub fn json_bytes(
     }
 }
 
-/// `value` as pretty-printed JSON with [`tidy_floats`] applied ([`JsonFormat::REPORT`]).
-pub fn pretty_json(value: &impl serde::Serialize) -> Result<Vec<u8>, serde_json::Error> {
-    json_bytes(value, JsonFormat::REPORT)
-}
-
 /// Writes `value` to `path` as JSON in `format`, atomically (a temporary name, then a rename):
 /// the one way derma writes a JSON file. The error names the file.
 pub fn write_json(
@@ -97,7 +99,7 @@ pub fn write_json(
     value: &impl serde::Serialize,
     format: JsonFormat,
 ) -> crate::Result<()> {
-    let bytes = json_bytes(value, format).map_err(|e| crate::CoreError::Encode {
+    let bytes = json_bytes_of(value, format).map_err(|e| crate::CoreError::Encode {
         path: path.to_path_buf(),
         detail: format!("as JSON: {e}"),
     })?;

@@ -11,6 +11,7 @@ use crate::rigdata::Rig;
 use crate::sdf::{self, material};
 use crate::tracked::Tracked;
 use crate::{EyesError, Result};
+use derma_core::progress::{Progress, Unit};
 use derma_core::Map;
 use derma_head::Head;
 use serde::Serialize;
@@ -55,8 +56,14 @@ fn out_dir(dir: &Path) -> Result<()> {
 
 /// Trains a model and writes `model.json`, `components.csv` (fig. 3.7), `report.json` and, for
 /// rig data, `tracked.json` into `dir`.
-pub fn train(data: &Data, c: Components, dir: &Path) -> Result<TrainReport> {
+pub fn train(
+    data: &Data,
+    c: Components,
+    dir: &Path,
+    progress: &dyn Progress,
+) -> Result<TrainReport> {
     out_dir(dir)?;
+    progress.stage("train the lid and skin model", 1, Unit::Steps);
     let mut files = Vec::new();
     let t = match data {
         Data::File(p) => Tracked::read(p)?,
@@ -100,16 +107,24 @@ pub fn train(data: &Data, c: Components, dir: &Path) -> Result<TrainReport> {
         files,
     };
     derma_core::report::write_json(&p, &report, derma_core::report::JsonFormat::REPORT)?;
+    progress.advance(1);
     Ok(report)
 }
 
 /// Writes a synthetic tracked sequence of the rig (JSON or CSV by extension).
-pub fn synthetic(out: &Path, seconds: f32, fps: f32, seed: u64) -> Result<usize> {
+pub fn synthetic(
+    out: &Path,
+    seconds: f32,
+    fps: f32,
+    seed: u64,
+    progress: &dyn Progress,
+) -> Result<usize> {
     if !(seconds > 0.0 && fps > 0.0) {
         return Err(EyesError::Invalid(format!(
             "--seconds {seconds} and --fps {fps} must be positive"
         )));
     }
+    progress.stage("synthesise tracked data", 1, Unit::Steps);
     let head = Head::builtin();
     let rig = Rig::new(head)?;
     let t = crate::synthetic::sequence(
@@ -120,6 +135,7 @@ pub fn synthetic(out: &Path, seconds: f32, fps: f32, seed: u64) -> Result<usize>
         seed,
     );
     t.write(out)?;
+    progress.advance(1);
     Ok(t.frames.len())
 }
 
@@ -199,8 +215,9 @@ pub fn load_or_train(p: &Option<PathBuf>, rig: &Rig) -> Result<EyeModel> {
 
 /// Animates the head: `curves.json`/`curves.csv`, `head.glb`, and with renders `sequence.png`
 /// (animated PNG), `strip.png` and `frames/NNNN.png`.
-pub fn animate(o: &AnimateOptions, dir: &Path) -> Result<AnimateReport> {
+pub fn animate(o: &AnimateOptions, dir: &Path, progress: &dyn Progress) -> Result<AnimateReport> {
     out_dir(dir)?;
+    progress.stage("load or train the model", 1, Unit::Steps);
     let head = Head::builtin();
     let rig = Rig::new(head)?;
     let m = load_or_train(&o.model, &rig)?;
@@ -233,6 +250,7 @@ pub fn animate(o: &AnimateOptions, dir: &Path) -> Result<AnimateReport> {
     let mut files = Vec::new();
     files.extend(write_curves(&samples, dir)?);
     // Evaluate every frame.
+    progress.stage("evaluate frames", samples.len() as u64, Unit::Frames);
     let mut f = Frame::default();
     let t0 = std::time::Instant::now();
     let mut positions = Vec::with_capacity(samples.len());
@@ -242,6 +260,7 @@ pub fn animate(o: &AnimateOptions, dir: &Path) -> Result<AnimateReport> {
         ev.frame(&s.gaze, &mut f);
         positions.push(f.positions.clone());
         rotations.push(s.gaze.eyes.map(|a| a.rotation()));
+        progress.advance(1);
     }
     let frame_us = t0.elapsed().as_secs_f64() * 1e6 / samples.len().max(1) as f64;
     let baked = glb::Baked {
@@ -249,11 +268,14 @@ pub fn animate(o: &AnimateOptions, dir: &Path) -> Result<AnimateReport> {
         positions,
         rotations,
     };
+    progress.stage("write the animated GLB", 1, Unit::Steps);
     let eye_texture = o.iris.as_deref().map(load_eye_texture).transpose()?;
     let p = dir.join("head.glb");
     let glb = glb::write(head, &rig.region, &baked, eye_texture.as_ref(), &p)?;
     files.push(p);
+    progress.advance(1);
     if o.render > 0 {
+        progress.stage("render frames", samples.len() as u64, Unit::Frames);
         let stage = Stage::new(head, &rig.region, eye_texture.clone());
         let fdir = dir.join("frames");
         std::fs::create_dir_all(&fdir)
@@ -266,6 +288,7 @@ pub fn animate(o: &AnimateOptions, dir: &Path) -> Result<AnimateReport> {
             let p = fdir.join(format!("{i:04}.png"));
             derma_core::image_io::write_png8_srgb(&p, &[&img[0], &img[1], &img[2]])?;
             frames.push(render::srgb8(&img));
+            progress.advance(1);
         }
         let p = dir.join("sequence.png");
         derma_core::image_io::write_apng(&p, &frames, size.0, size.1, drive.fps.round() as u16)?;
@@ -318,6 +341,7 @@ pub fn distance_fields(
     runs: usize,
     device: derma_core::Device,
     dir: &Path,
+    progress: &dyn Progress,
 ) -> Result<Vec<sdf::table::Row>> {
     out_dir(dir)?;
     if !(64..=8192).contains(&width) || !(64..=8192).contains(&height) {
@@ -325,6 +349,7 @@ pub fn distance_fields(
             "size {width}×{height}: expected 64 to 8192 pixels a side"
         )));
     }
+    progress.stage("distance fields and the lake", 1, Unit::Steps);
     let head = Head::builtin();
     let scene = sdf::scene::head_close_up(head, width, height);
     let range = sdf::table::RANGE_MM;
@@ -396,5 +421,6 @@ pub fn distance_fields(
         &dir.join("lake-closeup.png"),
         &[&crop[0], &crop[1], &crop[2]],
     )?;
+    progress.advance(1);
     Ok(rows)
 }

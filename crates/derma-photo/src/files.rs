@@ -13,11 +13,11 @@ use crate::resection::{resect, Resection, ResectionOptions};
 use crate::synthetic;
 use crate::teeth::{teeth_texture, TeethOptions, TeethReport};
 use crate::unwrap::{unwrap, Stretch, UnwrapOptions};
-use derma_core::atomic::{check_inputs_spared, ensure_writable_dir, write_bytes};
+use derma_core::atomic::{check_inputs_spared, ensure_writable_dir};
 use derma_core::image_io::{write_exr, write_png8, ExrPrecision};
 use derma_core::mesh::TriMesh;
 use derma_core::progress::{Progress, Unit};
-use derma_core::report::pretty_json;
+use derma_core::report::{write_json, JsonFormat};
 use derma_core::Map;
 use derma_head::Head;
 use derma_shading::skin_color_lut::SkinColorLut;
@@ -51,8 +51,7 @@ impl MeshSource {
 }
 
 fn json_out(path: &Path, value: &impl Serialize) -> Result<()> {
-    let bytes = pretty_json(value).map_err(|e| PhotoError::Invalid(format!("JSON: {e}")))?;
-    Ok(write_bytes(path, &bytes)?)
+    Ok(write_json(path, value, JsonFormat::REPORT)?)
 }
 
 /// `cameras.json`: each photo's camera and errors.

@@ -22,6 +22,7 @@ pub mod basis;
 pub mod error;
 pub mod evaluate;
 pub mod expression;
+pub mod frame_job;
 pub mod from_files;
 pub mod gpu_eval;
 pub mod local_stats;

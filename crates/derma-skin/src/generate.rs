@@ -65,14 +65,15 @@ pub const FIXED_BYTES: f64 = 0.4e9;
 
 /// Fails early when a `size`² texture set would not fit in memory.
 pub fn check_memory(size: usize) -> Result<()> {
-    derma_core::memory::check_fits(FIXED_BYTES + BYTES_PER_TEXEL * (size * size) as f64).map_err(
-        |(need_gib, have_gib)| SkinError::TooLarge {
+    match derma_core::memory::shortfall(FIXED_BYTES + BYTES_PER_TEXEL * (size * size) as f64) {
+        Some((need_gib, have_gib)) => Err(SkinError::TooLarge {
             width: size,
             height: size,
             need_gib,
             have_gib,
-        },
-    )
+        }),
+        None => Ok(()),
+    }
 }
 
 /// Builds a skin texture set. Defaults: the given config, the built-in head (or the config's

@@ -106,8 +106,8 @@ impl SynthOptions {
             return Err(invalid("output size", "zero width or height"));
         }
         let texels = self.width as f64 * self.height as f64;
-        if let Err((need, have)) =
-            derma_core::memory::check_fits(texels * bytes_per_texel(channels))
+        if let Some((need, have)) =
+            derma_core::memory::shortfall(texels * bytes_per_texel(channels))
         {
             return Err(invalid(
                 "output size",

@@ -3,6 +3,7 @@
 //! screen-space distance fields with the lacrimal lake.
 
 use crate::output::line;
+use crate::progress::Bars;
 use anyhow::Result;
 use clap::{Args, Subcommand};
 use derma_eyes::animate::Drive;
@@ -119,7 +120,7 @@ fn parse_activity(s: &str) -> Result<Activity, String> {
         .ok_or_else(|| format!("activity '{s}': expected rest, conversation, reading or watching"))
 }
 
-pub fn run(cmd: EyesCommand) -> Result<()> {
+pub fn run(cmd: EyesCommand, bars: &Bars) -> Result<()> {
     let start = Instant::now();
     match cmd {
         EyesCommand::Train(a) => {
@@ -134,7 +135,8 @@ pub fn run(cmd: EyesCommand) -> Result<()> {
                 lids: a.lid_components,
                 skin: a.skin_components,
             };
-            let r = files::train(&data, c, &a.out)?;
+            let r = files::train(&data, c, &a.out, bars)?;
+            bars.finish();
             line(format!(
                 "trained on {} frames, {} tracked vertices, {} lid and {} skin components",
                 r.frames, r.vertices, c.lids, c.skin
@@ -158,7 +160,8 @@ pub fn run(cmd: EyesCommand) -> Result<()> {
             }
         }
         EyesCommand::Synthetic(a) => {
-            let n = files::synthetic(&a.out, a.seconds, a.fps, a.seed)?;
+            let n = files::synthetic(&a.out, a.seconds, a.fps, a.seed, bars)?;
+            bars.finish();
             line(format!("wrote {} ({n} frames)", a.out.display()))?;
         }
         EyesCommand::Animate(a) => {
@@ -183,7 +186,8 @@ pub fn run(cmd: EyesCommand) -> Result<()> {
                 thickness: a.thickness,
                 iris: a.iris,
             };
-            let r = files::animate(&o, &a.out)?;
+            let r = files::animate(&o, &a.out, bars)?;
+            bars.finish();
             line(format!(
                 "{} frames, {} blinks, {} vertices; {:.0} µs per model frame; GLB: {} morph targets, fit RMS {:.3} mm (max {:.3}), {:.1} MB",
                 r.frames,
@@ -200,7 +204,9 @@ pub fn run(cmd: EyesCommand) -> Result<()> {
             }
         }
         EyesCommand::Sdf(a) => {
-            let rows = files::distance_fields(a.width, a.height, a.runs, a.device.device, &a.out)?;
+            let rows =
+                files::distance_fields(a.width, a.height, a.runs, a.device.device, &a.out, bars)?;
+            bars.finish();
             line(derma_eyes::sdf::table::markdown(&rows, a.width, a.height))?;
             line(format!("wrote {}", a.out.display()))?;
         }

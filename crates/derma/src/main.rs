@@ -107,7 +107,7 @@ fn main() {
         Command::Rig(cmd) => rig::run(cmd, &bars),
         Command::Synth(args) => synth::run(args, &bars),
         Command::Photo(cmd) => photo::run(cmd, &bars),
-        Command::Eyes(cmd) => eyes::run(cmd),
+        Command::Eyes(cmd) => eyes::run(cmd, &bars),
         Command::Render(args) => render::render(args, &bars),
         Command::Export(cmd) => render::export(cmd, &bars),
         Command::View(args) => render::view(args),

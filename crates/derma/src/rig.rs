@@ -7,12 +7,11 @@ use crate::progress::Bars;
 use crate::rig_args::{
     AnimateArgs, BuildArgs, EvalArgs, FormatArg, ModeArg, RigCommand, TransferArgs,
 };
-use anyhow::{bail, Result};
+use anyhow::Result;
+use derma_rig::frame_job::FrameJob;
 use derma_rig::from_files::{self, BuildFiles};
-use derma_rig::maps::{melanin_for, write_color, write_hemoglobin};
 use derma_rig::sequence::{render_sequence, FrameFormat, SequenceOptions};
-use derma_rig::weights::frame_weights;
-use derma_rig::{expression, rig_dir, BasisOptions, TransferMode};
+use derma_rig::{expression, BasisOptions, TransferMode};
 use std::time::Instant;
 
 pub fn run(cmd: RigCommand, bars: &Bars) -> Result<()> {
@@ -83,42 +82,27 @@ fn transfer(a: TransferArgs, bars: &Bars) -> Result<()> {
 }
 
 fn eval(a: EvalArgs, bars: &Bars) -> Result<()> {
-    if a.out.is_none() && a.hemoglobin.is_none() && a.preview.is_none() {
-        bail!("nothing to write: give --out (colour), --hemoglobin and/or --preview");
-    }
-    let (rig, lut, _) = rig_dir::load(&a.rig)?;
-    let (w, g) = frame_weights(
-        &rig,
-        &a.weights,
-        a.frame.normalization(),
-        a.frame.global_scale,
-    )?;
-    let wants_color = a.out.is_some() || a.preview.is_some();
-    let melanin = wants_color
-        .then(|| melanin_for(&rig, a.frame.melanin.as_deref(), &lut.options, bars))
-        .transpose()?;
-    let (h, rgb) =
-        derma_rig::evaluate::evaluate_frame(&rig, &lut, &w, g, melanin.as_ref(), a.device.device)?;
-    if let Some(p) = &a.hemoglobin {
-        write_hemoglobin(p, &h, &lut.options)?;
-    }
-    if let Some(rgb) = &rgb {
-        if let Some(p) = &a.out {
-            write_color(p, rgb)?;
-        }
-        if let Some(p) = &a.preview {
-            derma_rig::preview::write_preview(p, rgb, &h)?;
-        }
-    }
+    let job = FrameJob {
+        rig: a.rig,
+        weights: a.weights,
+        normalization: a.frame.normalization(),
+        global_scale: a.frame.global_scale,
+        melanin: a.frame.melanin,
+        device: a.device.device,
+        color: a.out,
+        hemoglobin: a.hemoglobin,
+        preview: a.preview,
+    };
+    let r = derma_rig::frame_job::run(&job, bars)?;
     line(format!(
-        "weights: neutral={:.4}{} global scale {g:.4}",
-        w[0],
-        rig.targets
+        "weights: neutral={:.4}{} global scale {:.4}",
+        r.neutral,
+        r.targets
             .iter()
-            .zip(&w[1..])
-            .filter(|(_, x)| **x > 0.0)
-            .map(|(t, x)| format!(", {}={x:.4}", t.name))
-            .collect::<String>()
+            .filter(|(_, x)| *x > 0.0)
+            .map(|(name, x)| format!(", {name}={x:.4}"))
+            .collect::<String>(),
+        r.global_scale
     ))
 }
 

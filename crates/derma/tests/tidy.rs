@@ -776,3 +776,67 @@ fn every_dependency_is_declared_once_in_the_workspace() {
         local.join("\n")
     );
 }
+
+#[test]
+fn core_returns_only_its_own_errors() {
+    // derma-core's public functions fail with CoreError, GpuError or NumericsError (through
+    // `crate::Result<T>` or `Result<T, E>` naming one), never another crate's error type.
+    let own = ["CoreError", "GpuError", "NumericsError"];
+    let mut foreign = Vec::new();
+    for f in rust_files(&workspace().join("crates/derma-core/src")) {
+        let code = non_test_code(&std::fs::read_to_string(&f).unwrap());
+        // Signatures span lines: join each `pub fn` up to its body.
+        for (i, _) in code.match_indices("pub fn ") {
+            let sig: String = code[i..]
+                .chars()
+                .take_while(|&c| c != '{' && c != ';')
+                .collect();
+            // The return type: after the last arrow before any `where` clause (a parameter may
+            // be a closure with an arrow of its own).
+            let head = sig
+                .split([' ', '\n'])
+                .take_while(|w| *w != "where")
+                .collect::<Vec<_>>()
+                .join(" ");
+            let Some((_, ret)) = head.rsplit_once("->") else {
+                continue;
+            };
+            let ret = ret.split_whitespace().collect::<String>();
+            if ret.contains("io::Result") || ret.contains("fmt::Result") {
+                foreign.push(format!(
+                    "{}: {}",
+                    f.display(),
+                    sig.lines().next().unwrap_or("")
+                ));
+            } else if let Some(p) = ret.find("Result<") {
+                let args = &ret[p + 7..];
+                let depth_zero_comma = {
+                    let mut d = 0i32;
+                    args.char_indices().find(|&(_, c)| {
+                        match c {
+                            '<' | '(' | '[' => d += 1,
+                            '>' | ')' | ']' => d -= 1,
+                            _ => {}
+                        }
+                        c == ',' && d == 0
+                    })
+                };
+                if let Some((k, _)) = depth_zero_comma {
+                    let err = args[k + 1..].trim_end_matches('>');
+                    if !own.iter().any(|o| err.ends_with(o)) {
+                        foreign.push(format!(
+                            "{}: {}",
+                            f.display(),
+                            sig.lines().next().unwrap_or("")
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        foreign.is_empty(),
+        "derma-core functions returning other errors:\n{}",
+        foreign.join("\n")
+    );
+}
