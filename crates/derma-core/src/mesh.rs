@@ -154,6 +154,91 @@ pub struct MeshScale {
     pub mm_per_unit: f32,
 }
 
+/// The unit a user's head mesh is read in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HeadUnit {
+    /// The unit that makes the mesh head-sized ([`LengthUnit::for_head`]), else a fit.
+    Auto,
+    /// Scaled so its largest extent is [`NOMINAL_HEAD_EXTENT_MM`].
+    Fit,
+    /// A given unit.
+    Length(LengthUnit),
+}
+
+impl HeadUnit {
+    /// `auto`, `fit`, `mm`, `cm` or `m`.
+    pub fn parse(s: &str) -> Option<HeadUnit> {
+        Some(match s {
+            "auto" => HeadUnit::Auto,
+            "fit" => HeadUnit::Fit,
+            "mm" => HeadUnit::Length(LengthUnit::Mm),
+            "cm" => HeadUnit::Length(LengthUnit::Cm),
+            "m" => HeadUnit::Length(LengthUnit::M),
+            _ => return None,
+        })
+    }
+}
+
+/// Loads a user's head or face mesh with UVs in millimetres: the one loader every command uses,
+/// with one set of rules. `unit` says how its coordinates are read; `Auto` takes the unit that
+/// makes it head-sized and otherwise fits it (with a warning); `progress` is told which.
+pub fn load_head_mesh(
+    path: &Path,
+    unit: HeadUnit,
+    progress: &dyn crate::progress::Progress,
+) -> Result<(TriMesh, MeshScale)> {
+    use crate::progress::Note;
+    let mut mesh = TriMesh::load(path)?;
+    let extent = mesh.extent();
+    if !(extent > 0.0 && extent.is_finite()) {
+        return Err(CoreError::Mesh {
+            path: path.to_path_buf(),
+            detail: format!("its largest extent is {extent}; expected a positive size"),
+        });
+    }
+    let fit = MeshScale {
+        unit: None,
+        mm_per_unit: NOMINAL_HEAD_EXTENT_MM / extent,
+    };
+    let of = |u: LengthUnit| MeshScale {
+        unit: Some(u),
+        mm_per_unit: u.to_mm(),
+    };
+    let (lo, hi) = HEAD_EXTENT_MM;
+    let scale = match unit {
+        HeadUnit::Auto => match LengthUnit::for_head(extent) {
+            Some(u) => {
+                progress.note(Note::info(format!(
+                    "mesh '{}': largest extent {extent:.3} units, read as {} ({:.0} mm; a head or face is {lo:.0}–{hi:.0} mm; give its unit to override)",
+                    path.display(),
+                    u.long_name(),
+                    extent * u.to_mm()
+                )));
+                of(u)
+            }
+            None => {
+                progress.note(Note::warning(format!(
+                    "mesh '{}': largest extent {extent:.3} units is no head in mm, cm or m ({lo:.0}–{hi:.0} mm); scaled ×{:.4} to a nominal {NOMINAL_HEAD_EXTENT_MM:.0} mm head (give its unit to override)",
+                    path.display(),
+                    fit.mm_per_unit
+                )));
+                fit
+            }
+        },
+        HeadUnit::Fit => {
+            progress.note(Note::info(format!(
+                "mesh '{}': scaled ×{:.4} so its largest extent is {NOMINAL_HEAD_EXTENT_MM:.0} mm",
+                path.display(),
+                fit.mm_per_unit
+            )));
+            fit
+        }
+        HeadUnit::Length(u) => of(u),
+    };
+    mesh.scale(scale.mm_per_unit);
+    Ok((mesh, scale))
+}
+
 impl TriMesh {
     /// Loads an OBJ, glTF or GLB file (by extension); it must have UVs.
     pub fn load(path: &Path) -> Result<TriMesh> {

@@ -183,6 +183,29 @@ fn bounds(it: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
     )
 }
 
+/// The face units' morph offsets of part `part` (teeth, tongue, …) for a GLB mesh: one target per
+/// unit, in the units' order (an empty one where a unit leaves the part still), or none at all
+/// when no unit moves the part (glTF then carries no targets for it).
+pub fn part_targets(units: &[MorphTarget], part: usize) -> Vec<(&str, &[(u32, Vec3)])> {
+    if !units
+        .iter()
+        .any(|u| u.parts.iter().any(|(p, _)| *p == part))
+    {
+        return Vec::new();
+    }
+    units
+        .iter()
+        .map(|u| {
+            let offs = u
+                .parts
+                .iter()
+                .find(|(p, _)| *p == part)
+                .map_or(&[][..], |(_, o)| o.as_slice());
+            (u.name.as_str(), offs)
+        })
+        .collect()
+}
+
 /// Writes `head.glb`: nodes `skin`, `eye_left`, …; the skin, teeth and tongue carry all 52 face
 /// units as morph targets (the same names and order on each mesh, so one weight array drives
 /// them together).
@@ -191,31 +214,13 @@ pub fn write_glb(head: &Head, path: &Path) -> crate::Result<()> {
     let mut g = Glb::default();
     let mut meshes = Vec::new();
     let mut nodes = Vec::new();
-    let empty: Vec<(u32, Vec3)> = Vec::new();
     let skin_targets: Vec<(&str, &[(u32, Vec3)])> = units
         .iter()
         .map(|u| (u.name.as_str(), u.skin.as_slice()))
         .collect();
     meshes.push(g.mesh("skin", &head.skin, &skin_targets));
     for (k, part) in head.parts.iter().enumerate() {
-        let moved = units.iter().any(|u| u.parts.iter().any(|(p, _)| *p == k));
-        let targets: Vec<(&str, &[(u32, Vec3)])> = if moved {
-            units
-                .iter()
-                .map(|u| {
-                    let offs = u
-                        .parts
-                        .iter()
-                        .find(|(p, _)| *p == k)
-                        .map(|(_, o)| o)
-                        .unwrap_or(&empty);
-                    (u.name.as_str(), offs.as_slice())
-                })
-                .collect()
-        } else {
-            Vec::new()
-        };
-        meshes.push(g.mesh(&part.name, &part.mesh, &targets));
+        meshes.push(g.mesh(&part.name, &part.mesh, &part_targets(units, k)));
     }
     for (i, m) in meshes.iter().enumerate() {
         nodes.push(json!({"name": m["name"], "mesh": i}));

@@ -122,7 +122,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     let job_p = Job::new(progress);
     job_p.stage("scene", 1, Unit::Steps);
     let scene = match &job.mesh {
-        Some(p) => Scene::mesh(&crate::glb::load_mesh_mm(p)?, skin.clone()),
+        Some(p) => Scene::mesh(&crate::glb::load_mesh_mm(p, progress)?, skin.clone()),
         None => {
             let units: Vec<(&str, f32)> = job
                 .face_units

@@ -140,19 +140,11 @@ fn tangent_accessor(g: &mut Glb, t: &[[f32; 4]]) -> usize {
     g.accessor(json!({"bufferView": view, "componentType": 5126, "count": t.len(), "type": "VEC4"}))
 }
 
-/// Loads a user mesh for export in mm (the unit guessed from its size as `derma skin` does).
-pub fn load_mesh_mm(path: &Path) -> Result<TriMesh> {
-    let mut m = TriMesh::load(path)?;
-    let unit =
-        derma_core::mesh::LengthUnit::for_head(m.extent()).ok_or_else(|| RenderError::Input {
-            path: path.to_path_buf(),
-            detail: format!(
-                "extent {:.3} units fits no unit for a head (m, cm or mm); scale it to millimetres",
-                m.extent()
-            ),
-        })?;
-    m.to_millimetres(unit);
-    Ok(m)
+/// Loads a user mesh in mm through derma-core's one head-mesh loader, with `derma skin`'s
+/// rules: the unit that makes it head-sized, else a fit to a nominal head.
+/// `progress` is told which unit was read or that the mesh was fitted.
+pub fn load_mesh_mm(path: &Path, progress: &dyn derma_core::progress::Progress) -> Result<TriMesh> {
+    Ok(derma_core::mesh::load_head_mesh(path, derma_core::mesh::HeadUnit::Auto, progress)?.0)
 }
 
 /// Writes the GLB (and the loose maps when asked).
@@ -229,7 +221,7 @@ pub fn export(o: &GlbOptions) -> Result<GlbReport> {
     let mut meshes = Vec::new();
     let mut names = Vec::new();
     let skin_mesh = match &o.mesh {
-        Some(p) => load_mesh_mm(p)?,
+        Some(p) => load_mesh_mm(p, &derma_core::progress::Silent)?,
         None => head.skin.clone(),
     };
     let corner = mikktspace_tangents(&skin_mesh);
@@ -281,7 +273,6 @@ pub fn export(o: &GlbOptions) -> Result<GlbReport> {
             &png8_bytes("eyelashes", &[&black, &black, &black, &lash])?,
         );
         let props = head.preview_props();
-        let empty: Vec<(u32, Vec3)> = Vec::new();
         for (k, (part, prop)) in head.parts.iter().zip(&props).enumerate() {
             let mat = if part.name.starts_with("eye_") {
                 json!({"name": part.name, "pbrMetallicRoughness": {"baseColorTexture": {"index": t_eye},
@@ -296,23 +287,7 @@ pub fn export(o: &GlbOptions) -> Result<GlbReport> {
                     "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
             };
             materials.push(mat);
-            let moved = units.iter().any(|u| u.parts.iter().any(|(p, _)| *p == k));
-            let t: Vec<(&str, &[(u32, Vec3)])> = if moved {
-                units
-                    .iter()
-                    .map(|u| {
-                        let offs = u
-                            .parts
-                            .iter()
-                            .find(|(p, _)| *p == k)
-                            .map(|(_, o)| o)
-                            .unwrap_or(&empty);
-                        (u.name.as_str(), offs.as_slice())
-                    })
-                    .collect()
-            } else {
-                Vec::new()
-            };
+            let t = derma_head::export::part_targets(units, k);
             let mut pm = g.mesh(&part.name, &part.mesh, &t);
             pm["primitives"][0]["material"] = json!(materials.len() - 1);
             meshes.push(pm);

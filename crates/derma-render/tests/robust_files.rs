@@ -1,6 +1,6 @@
 //! The renderer's readers never panic on bad files (docs/render.md's inputs): a texture set with
 //! a damaged map, and arbitrary or damaged bytes as a user's mesh, give an error (or maps of one
-//! size and a mesh in millimetres).
+//! size and a mesh in millimetres). A mesh `derma skin` accepts, `derma render` accepts too.
 
 use derma_core::image_io::write_png8;
 use derma_core::Map;
@@ -38,6 +38,32 @@ fn the_valid_set_reads() {
     SkinMaps::from_dir(texture_set()).unwrap();
 }
 
+/// One loader, one set of rules: a mesh in no head-sized unit (8.6 units tall) is fitted by the
+/// renderer as by `derma skin`, not refused.
+#[test]
+fn a_mesh_in_no_unit_is_fitted_as_derma_skin_fits_it() {
+    let d = scratch_dir("robust-render-fit");
+    let p = d.join("small.obj");
+    std::fs::write(
+        &p,
+        "v 0 0 0\nv 4 0 0\nv 0 8.6 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n",
+    )
+    .unwrap();
+    let m = load_mesh_mm(&p, &derma_core::progress::Silent).unwrap();
+    let (_, scale) = derma_core::mesh::load_head_mesh(
+        &p,
+        derma_core::mesh::HeadUnit::Auto,
+        &derma_core::progress::Silent,
+    )
+    .unwrap();
+    assert!(scale.unit.is_none(), "fitted, not read in a unit");
+    assert!(
+        (m.extent() - derma_core::mesh::NOMINAL_HEAD_EXTENT_MM).abs() < 1e-3,
+        "{}",
+        m.extent()
+    );
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(derma_test_support::proptest_cases(48)))]
 
@@ -70,7 +96,7 @@ proptest! {
             std::fs::write(&p, format!("v 0 0 0\nv 100 0 0\nv 0 150 0\n{text}\nf 1 2 3\n")).unwrap();
             p
         };
-        if let Ok(m) = load_mesh_mm(&p) {
+        if let Ok(m) = load_mesh_mm(&p, &derma_core::progress::Silent) {
             prop_assert!(m.positions.iter().all(|v| v.is_finite()));
         }
     }

@@ -22,7 +22,7 @@ use crate::surface::Surface;
 use crate::texture_set::{HeightRange, RenderMaps};
 use crate::{Result, SkinError};
 use derma_core::gpu::Device;
-use derma_core::mesh::{LengthUnit, MeshScale, TriMesh};
+use derma_core::mesh::{MeshScale, TriMesh};
 use derma_core::progress::{Job, Log, Note, Prefixed, Progress, Silent, Unit};
 use derma_core::Map;
 use derma_shading::Appearance;
@@ -591,67 +591,13 @@ impl SkinGenerator<'_> {
 /// Loads a mesh and converts it to millimetres: by its unit (`mm`, `cm`, `m`), by the unit that
 /// makes it head-sized (`auto`), or by scaling it to a nominal head (`fit`, and `auto` when no
 /// unit makes it head-sized); the choice is noted.
+/// The user's mesh through derma-core's one head-mesh loader, `surface.unit` checked here.
 fn load_mesh(path: &Path, unit: &str, progress: &dyn Progress) -> Result<(TriMesh, MeshScale)> {
-    use derma_core::mesh::{HEAD_EXTENT_MM, NOMINAL_HEAD_EXTENT_MM};
-    let mut mesh = TriMesh::load(path)?;
-    let extent = mesh.extent();
-    let fit = || MeshScale {
-        unit: None,
-        mm_per_unit: NOMINAL_HEAD_EXTENT_MM / extent,
-    };
-    let of = |u: LengthUnit| MeshScale {
-        unit: Some(u),
-        mm_per_unit: u.to_mm(),
-    };
-    let (lo, hi) = HEAD_EXTENT_MM;
-    let scale = match unit {
-        "auto" => match LengthUnit::for_head(extent) {
-            Some(u) => {
-                progress.note(Note::info(format!(
-                    "mesh '{}': largest extent {extent:.3} units, read as {} ({:.0} mm; a head or face is {lo:.0}–{hi:.0} mm; set surface.unit to override)",
-                    path.display(),
-                    u.long_name(),
-                    extent * u.to_mm()
-                )));
-                of(u)
-            }
-            None => {
-                let s = fit();
-                progress.note(Note::warning(format!(
-                    "mesh '{}': largest extent {extent:.3} units is no head in mm, cm or m ({lo:.0}–{hi:.0} mm); scaled ×{:.4} to a nominal {NOMINAL_HEAD_EXTENT_MM:.0} mm head (surface.unit = \"fit\"; set a unit to override)",
-                    path.display(),
-                    s.mm_per_unit
-                )));
-                s
-            }
-        },
-        "fit" => {
-            let s = fit();
-            progress.note(Note::info(format!(
-                "mesh '{}': scaled ×{:.4} so its largest extent is {NOMINAL_HEAD_EXTENT_MM:.0} mm",
-                path.display(),
-                s.mm_per_unit
-            )));
-            s
-        }
-        "mm" => of(LengthUnit::Mm),
-        "cm" => of(LengthUnit::Cm),
-        "m" => of(LengthUnit::M),
-        other => {
-            return Err(SkinError::Key {
-                key: "surface.unit".into(),
-                detail: format!("'{other}': expected auto, fit, mm, cm or m"),
-            })
-        }
-    };
-    if !(extent > 0.0 && extent.is_finite()) {
-        return Err(SkinError::Mesh {
-            path: path.display().to_string(),
-            detail: format!("its largest extent is {extent}; expected a positive size"),
-        });
-    }
-    mesh.scale(scale.mm_per_unit);
-    Ok((mesh, scale))
+    let unit = derma_core::mesh::HeadUnit::parse(unit).ok_or_else(|| SkinError::Key {
+        key: "surface.unit".into(),
+        detail: format!("'{unit}': expected auto, fit, mm, cm or m"),
+    })?;
+    Ok(derma_core::mesh::load_head_mesh(path, unit, progress)?)
 }
 
 /// Notes UV overlaps and charts outside [0, 1]; fails when no triangle covers a texel.

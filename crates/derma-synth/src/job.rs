@@ -110,7 +110,7 @@ pub fn run(job: &SynthJob, progress: &dyn Progress) -> Result<SynthReport> {
         if job.exemplars.len() < 2 {
             return Err(invalid(
                 "guide",
-                "a guide chooses among exemplars: give at least two",
+                "a guide chooses among exemplars: give at least two exemplars",
             ));
         }
         synth = synth.guide(Guide::read(g, job.exemplars.len())?);

@@ -168,6 +168,6 @@ fn errors_name_the_file_or_value() {
         "--out",
         s(&out),
     ]);
-    assert!(!ok && err.contains("at least two --exemplar"), "{err}");
+    assert!(!ok && err.contains("at least two exemplars"), "{err}");
     let _ = std::fs::remove_dir_all(&d);
 }

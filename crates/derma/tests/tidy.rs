@@ -654,23 +654,28 @@ fn cites_a_source(text: &str) -> bool {
             .any(|w| w.len() == 4 && (w.starts_with("19") || w.starts_with("20")))
 }
 
-/// The dependency names of one table (`[dependencies]`, `[dev-dependencies]`) of a manifest.
-fn dependencies(manifest: &str, table: &str) -> Vec<String> {
+/// The entries of one table (`[dependencies]`, `[dev-dependencies]`) of a manifest, trimmed.
+fn table_lines<'a>(manifest: &'a str, table: &str) -> Vec<&'a str> {
     let mut out = Vec::new();
     let mut inside = false;
     for line in manifest.lines() {
         let t = line.trim();
         if t.starts_with('[') {
             inside = t == format!("[{table}]");
-            continue;
-        }
-        if inside && !t.is_empty() && !t.starts_with('#') {
-            if let Some(name) = t.split(['=', '.']).next() {
-                out.push(name.trim().to_string());
-            }
+        } else if inside && !t.is_empty() && !t.starts_with('#') {
+            out.push(t);
         }
     }
     out
+}
+
+/// The dependency names of one table of a manifest.
+fn dependencies(manifest: &str, table: &str) -> Vec<String> {
+    table_lines(manifest, table)
+        .iter()
+        .filter_map(|t| t.split(['=', '.']).next())
+        .map(|name| name.trim().to_string())
+        .collect()
 }
 
 /// All the Rust text of `dirs` below `krate`.
@@ -755,16 +760,8 @@ fn every_dependency_is_declared_once_in_the_workspace() {
     for k in crates() {
         let manifest = std::fs::read_to_string(k.join("Cargo.toml")).unwrap();
         for table in ["dependencies", "dev-dependencies", "build-dependencies"] {
-            let mut inside = false;
-            for line in manifest.lines() {
-                let t = line.trim();
-                if t.starts_with('[') {
-                    inside = t == format!("[{table}]");
-                } else if inside
-                    && !t.is_empty()
-                    && !t.starts_with('#')
-                    && !t.contains("workspace = true")
-                {
+            for t in table_lines(&manifest, table) {
+                if !t.contains("workspace = true") {
                     local.push(format!("{}: {t}", name_of(&k)));
                 }
             }
