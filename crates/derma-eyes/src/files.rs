@@ -221,6 +221,7 @@ pub fn animate(o: &AnimateOptions, dir: &Path, progress: &dyn Progress) -> Resul
     let head = Head::builtin();
     let rig = Rig::new(head)?;
     let m = load_or_train(&o.model, &rig)?;
+    progress.advance(1);
     let ev = Evaluator::new(&m, &rig.region, head, o.thickness)?;
     let mut drive = o.drive.clone();
     match &o.targets {

@@ -77,9 +77,11 @@ impl MapNames {
 pub struct GlbOptions {
     /// The texture set (`derma skin --out DIR`).
     pub textures: PathBuf,
-    /// A user mesh (mm, or any unit that [`derma_core::mesh::LengthUnit::for_head`] recognises);
-    /// `None`: the built-in head with eyes, lashes, teeth and tongue.
+    /// A user mesh, read in `unit` (derma-core's one head-mesh loader); `None`: the built-in
+    /// head with eyes, lashes, teeth and tongue.
     pub mesh: Option<PathBuf>,
+    /// The user mesh's unit: as `derma skin` read it (its `surface.unit`), or `Auto`.
+    pub unit: derma_core::mesh::HeadUnit,
     /// The GLB to write.
     pub out: PathBuf,
     /// Loose maps to write beside (directory), with their naming and normal convention.
@@ -144,11 +146,20 @@ fn tangent_accessor(g: &mut Glb, t: &[[f32; 4]]) -> usize {
 /// rules: the unit that makes it head-sized, else a fit to a nominal head.
 /// `progress` is told which unit was read or that the mesh was fitted.
 pub fn load_mesh_mm(path: &Path, progress: &dyn derma_core::progress::Progress) -> Result<TriMesh> {
-    Ok(derma_core::mesh::load_head_mesh(path, derma_core::mesh::HeadUnit::Auto, progress)?.0)
+    load_mesh_in(path, derma_core::mesh::HeadUnit::Auto, progress)
 }
 
-/// Writes the GLB (and the loose maps when asked).
-pub fn export(o: &GlbOptions) -> Result<GlbReport> {
+/// As [`load_mesh_mm`], the mesh read in `unit`.
+pub fn load_mesh_in(
+    path: &Path,
+    unit: derma_core::mesh::HeadUnit,
+    progress: &dyn derma_core::progress::Progress,
+) -> Result<TriMesh> {
+    Ok(derma_core::mesh::load_head_mesh(path, unit, progress)?.0)
+}
+
+/// Writes the GLB (and the loose maps when asked); `progress` hears how a user mesh was read.
+pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> Result<GlbReport> {
     let skin = SkinMaps::from_dir(&o.textures)?;
     let head = derma_head::Head::builtin();
     let read = |f: &str| -> Result<Vec<u8>> {
@@ -221,7 +232,7 @@ pub fn export(o: &GlbOptions) -> Result<GlbReport> {
     let mut meshes = Vec::new();
     let mut names = Vec::new();
     let skin_mesh = match &o.mesh {
-        Some(p) => load_mesh_mm(p, &derma_core::progress::Silent)?,
+        Some(p) => load_mesh_in(p, o.unit, progress)?,
         None => head.skin.clone(),
     };
     let corner = mikktspace_tangents(&skin_mesh);

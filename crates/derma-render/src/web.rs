@@ -102,12 +102,16 @@ pub fn check_export(dir: &Path) -> Result<()> {
 /// `out/manifest.json`.
 pub fn export(textures: &Path, rig_dir: Option<&Path>, out: &Path) -> Result<WebReport> {
     derma_core::atomic::ensure_writable_dir(out)?;
-    crate::glb::export(&crate::glb::GlbOptions {
-        textures: textures.to_path_buf(),
-        mesh: None,
-        out: out.join("head.glb"),
-        maps: None,
-    })?;
+    crate::glb::export(
+        &crate::glb::GlbOptions {
+            textures: textures.to_path_buf(),
+            mesh: None,
+            unit: derma_core::mesh::HeadUnit::Auto,
+            out: out.join("head.glb"),
+            maps: None,
+        },
+        &derma_core::progress::Silent,
+    )?;
     let mut manifest = json!({
         "format": FORMAT,
         "version": VERSION,

@@ -40,12 +40,10 @@ pub struct FitReport {
 
 /// Runs `job`, advancing `progress` per fitted entry.
 pub fn run(job: &FitJob, progress: &dyn Progress) -> Result<FitReport> {
-    if job.out == job.grid {
-        return Err(ShadingError::Invalid(format!(
-            "the output '{}' is the input grid; inputs are never overwritten",
-            job.out.display()
-        )));
-    }
+    let residuals = job.out.with_extension("residuals.csv");
+    let mut outputs = vec![job.out.clone(), residuals.clone()];
+    outputs.extend(job.plots.clone());
+    derma_core::atomic::check_inputs_spared(&outputs, &[job.grid.as_path()])?;
     let z = job.options.max_zenith_deg;
     if !(z > 0.0 && z <= 90.0) {
         return Err(ShadingError::Invalid(format!(
@@ -57,7 +55,6 @@ pub fn run(job: &FitJob, progress: &dyn Progress) -> Result<FitReport> {
     let (table, summary) = match_table::fit_table(&pre, &job.options, progress)?;
     let seconds = t0.elapsed().as_secs_f64();
     table.write(&job.out)?;
-    let residuals = job.out.with_extension("residuals.csv");
     derma_core::atomic::write_bytes(
         &residuals,
         match_report::residual_csv(&table, &job.options).as_bytes(),

@@ -2,11 +2,12 @@
 //! thread per exemplar position and query, reduced with atomics — returning exactly what the
 //! CPU search returns (the definition is in [`crate::search`]).
 //!
-//! Two sources of query windows: uploaded with each batch ([`Matcher::best_matches`], the patch
+//! Two sources of query windows: uploaded with each batch (`Matcher::best_matches`, the patch
 //! pass's masked windows), or read from a copy of the canvas uploaded once per optimisation
-//! pass ([`Matcher::window_matches`]), where the GPU also computes the quadrant sums and the
-//! guesses' costs that the host computes for an uploaded window. A whole patch pass on the GPU
-//! ([`Matcher::patch_pass`]) is in `gpu_patch_pass.rs`.
+//! pass (`Matcher::window_matches`), where the GPU also computes the quadrant sums and the
+//! guesses' costs that the host computes for an uploaded window. The `Matcher` implementation
+//! is `gpu_matcher.rs`; a whole patch pass on the GPU (`Matcher::patch_pass`) is in
+//! `gpu_patch_pass.rs`.
 
 use crate::error::{invalid, Result, SynthError};
 use crate::exemplar::{Exemplar, ExemplarSet};

@@ -72,6 +72,14 @@ impl Metrics {
 /// of blocks is dropped): derma-core's [`box_reduced`] channel by channel.
 pub fn downsample(t: &Texture, f: usize) -> Texture {
     let c = t.channels;
+    if c == 0 {
+        return Texture {
+            width: t.width / f.max(1),
+            height: t.height / f.max(1),
+            channels: 0,
+            data: Vec::new(),
+        };
+    }
     let maps: Vec<Map> = (0..c)
         .map(|k| {
             let [m] = box_reduced(t.width, t.height, f, |i| [t.data[i * c + k]]);

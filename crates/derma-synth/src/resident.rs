@@ -5,7 +5,7 @@ use crate::error::Result;
 use derma_core::gpu::Gpu;
 use rayon::prelude::*;
 
-/// A [`Plane`] kept on the GPU: its codes (one per 32-bit word) and, per texel, its source and
+/// A [`crate::search::Plane`] kept on the GPU: its codes (one per 32-bit word) and, per texel, its source and
 /// the source's exemplar, from which a GPU matcher makes the windows' coherent guesses.
 #[derive(Clone, Copy, Debug)]
 pub struct GpuPlane<'a> {

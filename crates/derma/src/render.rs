@@ -161,6 +161,7 @@ pub fn glb_options(textures: PathBuf, mesh: Option<PathBuf>, out: PathBuf) -> Gl
     GlbOptions {
         textures,
         mesh,
+        unit: derma_core::mesh::HeadUnit::Auto,
         out,
         maps: None,
     }
@@ -196,7 +197,7 @@ pub fn export(cmd: ExportCommand, bars: &Bars) -> Result<()> {
                     },
                 )
             });
-            let r = derma_render::glb::export(&o)?;
+            let r = derma_render::glb::export(&o, bars)?;
             bars.say(format!(
                 "{} ({:.1} MB): meshes {}; {} morph targets; {}{}",
                 r.path.display(),

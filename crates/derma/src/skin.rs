@@ -199,12 +199,24 @@ pub fn run(args: SkinArgs, bars: &Bars) -> Result<()> {
     };
     set.write_with(&args.out, bars, shaded)?;
     if args.glb {
-        let report = derma_render::glb::export(&derma_render::glb::GlbOptions {
-            textures: args.out.clone(),
-            mesh: args.mesh.clone(),
-            out: args.out.join("head.glb"),
-            maps: None,
-        })?;
+        // The mesh in the unit the set was painted in.
+        let unit = match set.mesh_scale {
+            Some(derma_core::mesh::MeshScale { unit: Some(u), .. }) => {
+                derma_core::mesh::HeadUnit::Length(u)
+            }
+            Some(_) => derma_core::mesh::HeadUnit::Fit,
+            None => derma_core::mesh::HeadUnit::Auto,
+        };
+        let report = derma_render::glb::export(
+            &derma_render::glb::GlbOptions {
+                textures: args.out.clone(),
+                mesh: args.mesh.clone(),
+                unit,
+                out: args.out.join("head.glb"),
+                maps: None,
+            },
+            bars,
+        )?;
         bars.say(format!(
             "wrote {} ({:.1} MB; meshes {}; {} morph targets)",
             report.path.display(),

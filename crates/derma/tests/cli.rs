@@ -622,7 +622,7 @@ fn match_fit_table_plots_and_skin_with_it() {
         "{err}"
     );
     let (ok, err) = run(&["match", "fit", "--grid", &s(&pre_t), "--out", &s(&pre_t)]);
-    assert!(!ok && err.contains("is the input grid"), "{err}");
+    assert!(!ok && err.contains("is the input"), "{err}");
     let (ok, err) = run(&[
         "skin",
         "--size",

@@ -167,20 +167,23 @@ fn strip_comments_and_strings(src: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
-/// The index just past the item that starts at `from` (a `{…}` block or up to a `;`).
+/// The index just past the item that starts at `from` (a `{…}` block or up to a `;` outside any
+/// bracket: `fn f() -> [f32; 3] {…}` ends at its brace).
 fn item_end(code: &[u8], from: usize) -> usize {
-    let mut depth = 0i32;
+    let (mut braces, mut other) = (0i32, 0i32);
     let mut i = from;
     while i < code.len() {
         match code[i] {
-            b'{' => depth += 1,
+            b'{' => braces += 1,
             b'}' => {
-                depth -= 1;
-                if depth == 0 {
+                braces -= 1;
+                if braces == 0 && other == 0 {
                     return i + 1;
                 }
             }
-            b';' if depth == 0 => return i + 1,
+            b'(' | b'[' => other += 1,
+            b')' | b']' => other -= 1,
+            b';' if braces == 0 && other == 0 => return i + 1,
             _ => {}
         }
         i += 1;
@@ -687,22 +690,40 @@ fn text_of(krate: &Path, dirs: &[&str]) -> String {
         .join("\n")
 }
 
+/// Whether `pat` occurs in `text` not preceded by an identifier character (`exr::` is not in
+/// `use exr_writer`, nor `png::` in `apng::`).
+fn has_word(text: &str, pat: &str) -> bool {
+    text.match_indices(pat).any(|(i, _)| {
+        i == 0 || {
+            let c = text.as_bytes()[i - 1];
+            !(c.is_ascii_alphanumeric() || c == b'_')
+        }
+    })
+}
+
 #[test]
 fn every_declared_dependency_is_used() {
     let mut unused = Vec::new();
     for k in crates() {
         let manifest = std::fs::read_to_string(k.join("Cargo.toml")).unwrap();
-        let src = text_of(&k, &["src"]);
-        let all = text_of(&k, &["src", "tests", "benches", "examples"]);
+        // Code only (a comment naming a crate is no use of it), test modules out of `src`.
+        let src: String = rust_files(&k.join("src"))
+            .iter()
+            .map(|f| non_test_code(&std::fs::read_to_string(f).unwrap()))
+            .collect();
+        let all =
+            strip_comments_and_strings(&text_of(&k, &["src", "tests", "benches", "examples"]));
         for (table, text) in [("dependencies", &src), ("dev-dependencies", &all)] {
             for dep in dependencies(&manifest, table) {
                 let ident = dep.replace('-', "_");
-                let used = text.contains(&format!("{ident}::"))
-                    || text.contains(&format!("use {ident}"))
-                    || text.contains(&format!("extern crate {ident}"))
-                    || text.contains(&format!("{ident}!"))
-                    || text.contains(&format!("#[{ident}"))
-                    || text.contains(&format!("derive({ident}"));
+                let used = [
+                    format!("{ident}::"),
+                    format!("use {ident};"),
+                    format!("crate {ident}"),
+                    format!("{ident}!"),
+                ]
+                .iter()
+                .any(|p| has_word(text, p));
                 if !used {
                     unused.push(format!("{}: [{table}] {dep}", name_of(&k)));
                 }
@@ -799,7 +820,11 @@ fn core_returns_only_its_own_errors() {
                 continue;
             };
             let ret = ret.split_whitespace().collect::<String>();
-            if ret.contains("io::Result") || ret.contains("fmt::Result") {
+            // A one-argument Result must be the crate's own (`Result<T>` or `crate::Result<T>`).
+            let foreign_alias = ret
+                .match_indices("::Result<")
+                .any(|(i, _)| !ret[..i].ends_with("crate"));
+            if foreign_alias || ret.contains("io::Result") || ret.contains("fmt::Result") {
                 foreign.push(format!(
                     "{}: {}",
                     f.display(),
@@ -820,7 +845,8 @@ fn core_returns_only_its_own_errors() {
                 };
                 if let Some((k, _)) = depth_zero_comma {
                     let err = args[k + 1..].trim_end_matches('>');
-                    if !own.iter().any(|o| err.ends_with(o)) {
+                    let name = err.rsplit("::").next().unwrap_or(err);
+                    if !own.contains(&name) {
                         foreign.push(format!(
                             "{}: {}",
                             f.display(),
@@ -836,4 +862,50 @@ fn core_returns_only_its_own_errors() {
         "derma-core functions returning other errors:\n{}",
         foreign.join("\n")
     );
+}
+
+#[test]
+fn crates_sit_on_their_floors() {
+    // ARCHITECTURE.md's table `| floor | crate | … |`: every crate depends only on lower floors.
+    let arch = std::fs::read_to_string(workspace().join("ARCHITECTURE.md")).unwrap();
+    let mut floor = BTreeMap::new();
+    for line in arch.lines() {
+        let cells: Vec<&str> = line.split('|').map(str::trim).collect();
+        if cells.len() > 3 {
+            if let (Ok(n), Some(name)) = (
+                cells[1].parse::<u32>(),
+                cells[2].strip_prefix('`').and_then(|c| c.strip_suffix('`')),
+            ) {
+                floor.insert(name.to_string(), n);
+            }
+        }
+    }
+    let mut wrong = Vec::new();
+    for k in crates() {
+        let name = name_of(&k);
+        if name == "derma-test-support" {
+            continue;
+        }
+        let Some(&mine) = floor.get(&name) else {
+            wrong.push(format!(
+                "{name} is missing from ARCHITECTURE.md's crate table"
+            ));
+            continue;
+        };
+        let manifest = std::fs::read_to_string(k.join("Cargo.toml")).unwrap();
+        for dep in dependencies(&manifest, "dependencies")
+            .iter()
+            .filter(|d| d.starts_with("derma"))
+        {
+            match floor.get(dep) {
+                Some(&f) if f < mine => {}
+                Some(&f) => wrong.push(format!(
+                    "{name} (floor {mine}) depends on {dep} (floor {f})"
+                )),
+                None => wrong.push(format!("{name} depends on {dep}, which is in no floor")),
+            }
+        }
+    }
+    assert!(floor.len() >= 11, "the crate table was not read: {floor:?}");
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
 }
