@@ -52,6 +52,8 @@ pub fn run(job: &FrameJob, progress: &dyn Progress) -> Result<FrameReport> {
             "nothing to write: give a colour map, a hemoglobin map and/or a preview",
         ));
     }
+    let (rig, lut, _) = rig_dir::load(&job.rig)?;
+    // The rig read, and before anything is written: no output may touch an input.
     let outputs: Vec<PathBuf> = [&job.color, &job.hemoglobin, &job.preview]
         .into_iter()
         .flatten()
@@ -60,7 +62,6 @@ pub fn run(job: &FrameJob, progress: &dyn Progress) -> Result<FrameReport> {
     let mut inputs: Vec<&std::path::Path> = vec![job.rig.as_path()];
     inputs.extend(job.melanin.as_deref());
     derma_core::atomic::check_inputs_spared(&outputs, &inputs)?;
-    let (rig, lut, _) = rig_dir::load(&job.rig)?;
     let (w, g) = frame_weights(&rig, &job.weights, job.normalization, job.global_scale)?;
     let wants_color = job.color.is_some() || job.preview.is_some();
     let melanin = wants_color

@@ -1,5 +1,6 @@
-//! The flag values every command shares, parsed once: sizes (`1024`, `1920x1080`), sizes in mm
-//! (`40x30`), lists of numbers (`10,-5`), and `NAME=VALUE` items; each error names the value.
+//! The flag values every command shares, parsed once: `--device`, sizes (`1024`, `1920x1080`),
+//! sizes in mm (`40x30`), lists of numbers (`10,-5`), and `NAME=VALUE` items; each error names
+//! the value.
 
 use std::path::PathBuf;
 use std::str::FromStr;
@@ -135,6 +136,19 @@ pub fn named_files(s: &str) -> Result<Vec<(String, PathBuf)>, String> {
         .filter(|t| !t.trim().is_empty())
         .map(|t| named_file(t).map_err(|e| format!("in '{s}': {e}")))
         .collect()
+}
+
+/// `--device`, the same on every command that can use a GPU.
+#[derive(clap::Args, Clone, Copy)]
+pub struct DeviceArg {
+    /// Where to run: auto (a hardware GPU when there is one, else the CPU), cpu, or gpu (any
+    /// adapter, software ones such as Mesa's lavapipe included).
+    #[arg(long, default_value = "auto", value_parser = parse_device)]
+    pub device: derma_core::gpu::Device,
+}
+
+fn parse_device(s: &str) -> Result<derma_core::gpu::Device, String> {
+    s.parse()
 }
 
 #[cfg(test)]

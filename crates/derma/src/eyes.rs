@@ -109,7 +109,7 @@ pub struct SdfArgs {
     #[arg(long, default_value_t = 5)]
     runs: usize,
     #[command(flatten)]
-    device: crate::DeviceArg,
+    device: crate::args::DeviceArg,
     /// Output directory.
     #[arg(long, short)]
     out: PathBuf,

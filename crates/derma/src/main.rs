@@ -68,19 +68,6 @@ enum Command {
     View(render::ViewArgs),
 }
 
-/// `--device`, the same on every command that can use a GPU.
-#[derive(clap::Args, Clone, Copy)]
-pub struct DeviceArg {
-    /// Where to run: auto (a hardware GPU when there is one, else the CPU), cpu, or gpu (any
-    /// adapter, software ones such as Mesa's lavapipe included).
-    #[arg(long, default_value = "auto", value_parser = parse_device)]
-    pub device: derma_core::gpu::Device,
-}
-
-fn parse_device(s: &str) -> Result<derma_core::gpu::Device, String> {
-    s.parse()
-}
-
 fn main() {
     // Mesa's Vulkan drivers print "XDG_RUNTIME_DIR is invalid or not set" (looking like an error
     // of derma's) when wgpu opens them without one, as on headless servers; give them the

@@ -1,9 +1,9 @@
 //! `derma match …`: fit render models to the Monte Carlo table (docs/matching.md) and build the
 //! skin-colour LUT of Jimenez et al. 2010; flags → derma-shading, and what was written.
 
+use crate::args::DeviceArg;
 use crate::output::line;
 use crate::progress::Bars;
-use crate::DeviceArg;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
 use derma_shading::annealing::Schedule;

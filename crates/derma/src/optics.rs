@@ -1,9 +1,9 @@
 //! `derma optics …`: the skin optics (Monte Carlo light transport in layered skin, docs/optics.md)
 //! from the command line: flags → derma-optics, and what was written.
 
+use crate::args::DeviceArg;
 use crate::output::line;
 use crate::progress::Bars;
-use crate::DeviceArg;
 use anyhow::{bail, Result};
 use clap::{Args, Subcommand};
 use derma_core::progress::Silent;

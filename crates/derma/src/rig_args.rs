@@ -1,7 +1,7 @@
 //! The flags of `derma rig …`, defined once with their help text (the commands are in
 //! `rig.rs`).
 
-use crate::DeviceArg;
+use crate::args::DeviceArg;
 use clap::{Args, Subcommand, ValueEnum};
 use derma_rig::from_files::CharacterFiles;
 use derma_rig::{GlobalScale, Normalization, WeightSpec};

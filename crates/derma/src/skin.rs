@@ -77,7 +77,7 @@ pub struct SkinArgs {
     /// are the same on every device; the preview is drawn by derma-render on a GPU and by the
     /// software renderer otherwise).
     #[command(flatten)]
-    device: crate::DeviceArg,
+    device: crate::args::DeviceArg,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]

@@ -1,9 +1,9 @@
 //! `derma synth`: grow a skin-detail texture of any size from a small exemplar (derma-synth,
 //! after Shen et al.), on the CPU or the GPU, optionally tileable and guided by a mask.
 
+use crate::args::DeviceArg;
 use crate::output::line;
 use crate::progress::Bars;
-use crate::DeviceArg;
 use anyhow::{Context, Result};
 use clap::Args;
 use derma_synth::job::SynthJob;

@@ -8,9 +8,10 @@
 //! - every declared dependency is used;
 //! - every library crate that reads files has property tests (`tests/robust_*.rs`, `proptest!`).
 //!
-//! The module graph: a node per source file (`lib.rs`, the crate's facade, excluded); an arrow
-//! from a file to every module a `crate::`, `super::` or `self::` path in its non-test code
-//! resolves to, following the facades' `pub use` re-exports to the module that defines the item.
+//! The module graph: a node per source file, the crate root included; an arrow from a file to
+//! every module a path in its non-test code resolves to (`crate::`, `super::`, `self::` or a
+//! child's name), following `pub use` re-exports to the module that defines the item. A file's
+//! facade (`mod` declarations, `pub use`) is containment, not an import.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -398,28 +399,87 @@ impl Crate {
         m
     }
 
-    /// Arrows between modules (the crate root and test code left out).
+    /// Arrows between modules (test code left out). A module's facade — its `mod` declarations
+    /// and `pub use` re-exports — is containment, not an import; every other path in its code
+    /// is an arrow, to a sibling, a parent or a child alike (the crate root is a module too).
     fn graph(&self) -> BTreeMap<Vec<String>, BTreeSet<Vec<String>>> {
         let mut g: BTreeMap<Vec<String>, BTreeSet<Vec<String>>> = BTreeMap::new();
         for (m, f) in &self.modules {
-            if m.is_empty() {
-                continue;
-            }
-            let code = non_test_code(&std::fs::read_to_string(f).unwrap());
+            let code = without_facade(&non_test_code(&std::fs::read_to_string(f).unwrap()));
+            let children: Vec<String> = self
+                .modules
+                .keys()
+                .filter(|k| k.len() == m.len() + 1 && k.starts_with(m))
+                .map(|k| k[m.len()].clone())
+                .collect();
             let set = g.entry(m.clone()).or_default();
-            for p in paths_in(&code) {
+            for p in paths_in(&code)
+                .into_iter()
+                .chain(child_paths(&code, &children))
+            {
                 let Some(abs) = self.absolute(m, &p) else {
                     continue;
                 };
                 let t = self.resolve(&abs, 0);
-                // Containment is not an import: a facade naming its own children.
-                if !t.is_empty() && &t != m && !t.starts_with(m) {
+                if &t != m {
                     set.insert(t);
                 }
             }
         }
         g
     }
+}
+
+/// `code` with its facade blanked: `mod x;`, `pub mod x;` and `pub use …;` / `pub(crate) use …;`
+/// statements.
+fn without_facade(code: &str) -> String {
+    let mut out = String::with_capacity(code.len());
+    let mut skipping = false;
+    for line in code.lines() {
+        let t = line.trim_start();
+        if !skipping
+            && [
+                "pub use ",
+                "pub(crate) use ",
+                "mod ",
+                "pub mod ",
+                "pub(crate) mod ",
+            ]
+            .iter()
+            .any(|p| t.starts_with(p))
+            && !t.contains('{')
+            || !skipping && (t.starts_with("pub use ") || t.starts_with("pub(crate) use "))
+        {
+            skipping = !t.contains(';');
+            out.push('\n');
+            continue;
+        }
+        if skipping {
+            skipping = !t.contains(';');
+            out.push('\n');
+            continue;
+        }
+        out.push_str(line);
+        out.push('\n');
+    }
+    out
+}
+
+/// Paths in `code` that start with one of `children` (a module's own child modules, named
+/// without `self::`), with groups expanded.
+fn child_paths(code: &str, children: &[String]) -> Vec<Vec<String>> {
+    let b = code.as_bytes();
+    let mut out = Vec::new();
+    for c in children {
+        let pat = format!("{c}::");
+        for (i, _) in code.match_indices(&pat) {
+            if i > 0 && (b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_' || b[i - 1] == b':') {
+                continue;
+            }
+            expand(code, i, &[], &mut out);
+        }
+    }
+    out
 }
 
 /// Strongly connected components of more than one module (Tarjan).
@@ -546,6 +606,22 @@ fn the_circle_finder_finds_circles() {
     );
     std::fs::write(dir.join("src/rng.rs"), "//! r\npub struct Philox;\n").unwrap();
     assert!(circles(&Crate::load(&dir).graph()).is_empty());
+    // A root that defines an item a child uses, and calls into that child from its own code.
+    std::fs::write(
+        dir.join("src/lib.rs"),
+        "//! x\npub mod rng;\npub mod numerics;\npub struct Seed;\nfn f() { rng::draw(); }\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("src/rng.rs"),
+        "//! r\npub fn draw() { let _ = crate::Seed; }\n",
+    )
+    .unwrap();
+    let found = circles(&Crate::load(&dir).graph());
+    assert_eq!(
+        found,
+        vec![vec![Vec::<String>::new(), vec!["rng".to_string()]]]
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
