@@ -563,11 +563,7 @@ fn all_circles() -> Vec<String> {
 #[test]
 fn no_import_circles_inside_any_crate() {
     let found = all_circles();
-    assert!(
-        found.is_empty(),
-        "import circles (modules that import each other):\n{}",
-        found.join("\n")
-    );
+    assert_none(&found, "import circles (modules that import each other):");
 }
 
 #[test]
@@ -625,6 +621,11 @@ fn the_circle_finder_finds_circles() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Fails with `what` and every finding, one a line, unless there are none.
+fn assert_none(found: &[String], what: &str) {
+    assert!(found.is_empty(), "{what}\n{}", found.join("\n"));
+}
+
 /// Library crates: every crate but the CLI.
 fn libraries() -> Vec<PathBuf> {
     crates()
@@ -642,10 +643,9 @@ fn cli_files_are_under_300_lines() {
             long.push(format!("{} has {n} lines", f.display()));
         }
     }
-    assert!(
-        long.is_empty(),
-        "CLI files must stay under 300 lines (parse → call → print):\n{}",
-        long.join("\n")
+    assert_none(
+        &long,
+        "CLI files must stay under 300 lines (parse → call → print):",
     );
 }
 
@@ -680,10 +680,9 @@ fn libraries_never_print() {
             }
         }
     }
-    assert!(
-        found.is_empty(),
-        "libraries report through derma_core::progress, never print:\n{}",
-        found.join("\n")
+    assert_none(
+        &found,
+        "libraries report through derma_core::progress, never print:",
     );
 }
 
@@ -719,7 +718,7 @@ fn every_crate_and_module_says_what_it_models() {
             }
         }
     }
-    assert!(missing.is_empty(), "{}", missing.join("\n"));
+    assert_none(&missing, "modules and crates without the docs they need:");
 }
 
 /// Whether `text` names a source: a year (a paper, a standard), a thesis, a page of docs/, the
@@ -806,11 +805,7 @@ fn every_declared_dependency_is_used() {
             }
         }
     }
-    assert!(
-        unused.is_empty(),
-        "declared but never used:\n{}",
-        unused.join("\n")
-    );
+    assert_none(&unused, "declared but never used:");
 }
 
 #[test]
@@ -864,10 +859,9 @@ fn every_dependency_is_declared_once_in_the_workspace() {
             }
         }
     }
-    assert!(
-        local.is_empty(),
-        "declare versions once, in [workspace.dependencies]:\n{}",
-        local.join("\n")
+    assert_none(
+        &local,
+        "declare versions once, in [workspace.dependencies]:",
     );
 }
 
@@ -933,11 +927,7 @@ fn core_returns_only_its_own_errors() {
             }
         }
     }
-    assert!(
-        foreign.is_empty(),
-        "derma-core functions returning other errors:\n{}",
-        foreign.join("\n")
-    );
+    assert_none(&foreign, "derma-core functions returning other errors:");
 }
 
 #[test]
@@ -983,5 +973,5 @@ fn crates_sit_on_their_floors() {
         }
     }
     assert!(floor.len() >= 11, "the crate table was not read: {floor:?}");
-    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+    assert_none(&wrong, "crates off their floors:");
 }
