@@ -1,4 +1,4 @@
-//! The errors of the render crate: texture sets, meshes and rigs that cannot be used, each
+//! The errors of the render crate: texture sets, meshes and scenes that cannot be used, each
 //! naming the file or value and what was expected, and GPU failures.
 
 use std::path::PathBuf;
@@ -23,15 +23,9 @@ pub enum RenderError {
     /// The GPU could not be used.
     #[error(transparent)]
     Gpu(#[from] derma_core::gpu::GpuError),
-    /// A rig that cannot be loaded or evaluated.
-    #[error(transparent)]
-    Rig(#[from] derma_rig::RigError),
     /// Skin generation failed.
     #[error(transparent)]
     Skin(#[from] derma_skin::SkinError),
-    /// The viewer's server failed.
-    #[error("serving the viewer: {0}")]
-    Serve(#[from] std::io::Error),
 }
 
 /// Results of this crate.

@@ -5,20 +5,16 @@
 //! `sss_color`/`sss_radius`, the match table's fitted profile), GGX specular with Smith
 //! visibility from the roughness and specular maps, a shadowed three-light setup with a
 //! hemisphere environment, and eyes with a refracting cornea — plus turntables and contact
-//! sheets.
+//! sheets. Exporting (GLB, web, the viewer's server) and rendering from files are derma-export's.
 
 pub mod camera;
 pub mod error;
-pub mod files;
-pub mod glb;
 pub mod lighting;
 pub mod material;
 pub mod renderer;
 pub mod scene;
-pub mod serve;
 pub mod sheet;
 pub mod sss;
-pub mod web;
 
 pub use camera::View;
 pub use error::{RenderError, Result};

@@ -4,8 +4,8 @@
 use crate::progress::Bars;
 use anyhow::{bail, Result};
 use clap::{Args, Subcommand, ValueEnum};
-use derma_render::files::{RenderJob, RigFrame};
-use derma_render::glb::{GlbOptions, MapNames, NormalConvention};
+use derma_export::files::{RenderJob, RigFrame};
+use derma_export::glb::{GlbOptions, MapNames, NormalConvention};
 use derma_render::{Setup, View};
 use derma_rig::{GlobalScale, WeightSpec};
 use std::path::PathBuf;
@@ -97,7 +97,7 @@ pub fn render(a: RenderArgs, bars: &Bars) -> Result<()> {
         lake: !a.no_lake,
         out: a.out,
     };
-    let r = derma_render::files::run(&job, bars)?;
+    let r = derma_export::files::run(&job, bars)?;
     bars.finish();
     bars.say(format!(
         "{} frames on {} ({:.0} ms each with read-back) → {}",
@@ -197,7 +197,7 @@ pub fn export(cmd: ExportCommand, bars: &Bars) -> Result<()> {
                     },
                 )
             });
-            let r = derma_render::glb::export(&o, bars)?;
+            let r = derma_export::glb::export(&o, bars)?;
             bars.say(format!(
                 "{} ({:.1} MB): meshes {}; {} morph targets; {}{}",
                 r.path.display(),
@@ -214,7 +214,7 @@ pub fn export(cmd: ExportCommand, bars: &Bars) -> Result<()> {
             Ok(())
         }
         ExportCommand::Web(a) => {
-            let r = derma_render::web::export(&a.textures, a.rig.as_deref(), &a.out)?;
+            let r = derma_export::web::export(&a.textures, a.rig.as_deref(), &a.out)?;
             bars.say(format!(
                 "{}: head.glb, {} rig targets → `derma view {}`",
                 a.out.display(),
@@ -241,15 +241,15 @@ pub struct ViewArgs {
 pub fn view(a: ViewArgs) -> Result<()> {
     let viewer = a
         .viewer
-        .unwrap_or_else(derma_render::serve::default_viewer_dir);
-    derma_render::web::check_export(&a.dir)?;
+        .unwrap_or_else(derma_export::serve::default_viewer_dir);
+    derma_export::web::check_export(&a.dir)?;
     if !viewer.join("index.html").is_file() {
         bail!(
             "no built viewer at {}: run `npm --prefix viewer ci && npm --prefix viewer run build` (or give --viewer DIR)",
             viewer.display()
         );
     }
-    let server = derma_render::serve::Server::bind(&viewer, &a.dir, a.port)?;
+    let server = derma_export::serve::Server::bind(&viewer, &a.dir, a.port)?;
     // On stdout (and flushed) so scripts that start the viewer can read the address.
     crate::output::text(&format!(
         "derma viewer on http://{}/ (Ctrl-C to stop)\n",

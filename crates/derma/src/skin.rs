@@ -207,8 +207,8 @@ pub fn run(args: SkinArgs, bars: &Bars) -> Result<()> {
             Some(_) => derma_core::mesh::HeadUnit::Fit,
             None => derma_core::mesh::HeadUnit::Auto,
         };
-        let report = derma_render::glb::export(
-            &derma_render::glb::GlbOptions {
+        let report = derma_export::glb::export(
+            &derma_export::glb::GlbOptions {
                 textures: args.out.clone(),
                 mesh: args.mesh.clone(),
                 unit,

@@ -3,7 +3,7 @@
 //! out as 16-bit PNGs (values mapped to their range, stated in `manifest.json`) with the
 //! skin-colour LUT, for the viewer to evaluate Jimenez et al. 2010 eqs. 6–7 in a shader.
 
-use crate::error::{RenderError, Result};
+use crate::error::{ExportError, Result};
 use derma_core::image_io::write_png16;
 use derma_core::Map;
 use serde_json::json;
@@ -84,7 +84,7 @@ fn region_points(n: usize) -> serde_json::Value {
 /// wrong otherwise — a texture set's own manifest.json is not one.
 pub fn check_export(dir: &Path) -> Result<()> {
     let path = dir.join("manifest.json");
-    let bad = |detail: String| RenderError::Input {
+    let bad = |detail: String| ExportError::Input {
         path: path.clone(),
         detail: format!("{detail}; expected a directory from `derma export web`"),
     };
@@ -123,7 +123,7 @@ pub fn export(textures: &Path, rig_dir: Option<&Path>, out: &Path) -> Result<Web
     let mut targets = 0;
     if let Some(dir) = rig_dir {
         let (rig, lut, rj) = derma_rig::rig_dir::load(dir)?;
-        let melanin = rig.melanin.as_ref().ok_or_else(|| RenderError::Input {
+        let melanin = rig.melanin.as_ref().ok_or_else(|| ExportError::Input {
             path: dir.to_path_buf(),
             detail: "the rig has no melanin map; build it with --melanin".into(),
         })?;

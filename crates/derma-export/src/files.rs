@@ -1,14 +1,14 @@
 //! `derma render`'s orchestration: load a texture set (and a mesh, a rig frame, an iris), build
 //! the scene once, and write the views, turntables and contact sheets, each file atomically.
 
-use crate::camera::View;
-use crate::error::{RenderError, Result};
-use crate::lighting::Setup;
-use crate::material::SkinMaps;
-use crate::renderer::Renderer;
-use crate::scene::{Material, Scene};
+use crate::error::{ExportError, Result};
 use derma_core::progress::{Job, Progress, Unit};
 use derma_core::Map;
+use derma_render::camera::View;
+use derma_render::lighting::Setup;
+use derma_render::material::SkinMaps;
+use derma_render::renderer::Renderer;
+use derma_render::scene::{Material, Scene};
 use derma_rig::{GlobalScale, Normalization, WeightSpec};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -73,7 +73,7 @@ fn rig_color(f: &RigFrame) -> Result<[Map; 3]> {
     let (rig, lut, _) = derma_rig::rig_dir::load(&f.dir)?;
     let (w, g) =
         derma_rig::weights::frame_weights(&rig, &f.weights, Normalization::default(), f.global)?;
-    let melanin = rig.melanin.clone().ok_or_else(|| RenderError::Input {
+    let melanin = rig.melanin.clone().ok_or_else(|| ExportError::Input {
         path: f.dir.clone(),
         detail: "the rig has no melanin map to colour with; build it with --melanin".into(),
     })?;
@@ -100,13 +100,13 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     let t0 = Instant::now();
     derma_core::atomic::ensure_writable_dir(&job.out)?;
     if job.setups.is_empty() {
-        return Err(RenderError::Invalid("no lighting setup given".into()));
+        return Err(ExportError::Invalid("no lighting setup given".into()));
     }
     let mut skin = SkinMaps::from_dir(&job.textures)?;
     if let Some(f) = &job.rig {
         let c = rig_color(f)?;
         if (c[0].width(), c[0].height()) != skin.size() {
-            return Err(RenderError::Input {
+            return Err(ExportError::Input {
                 path: f.dir.clone(),
                 detail: format!(
                     "its maps are {}×{}; the texture set is {}×{} (build the rig from this set's hemoglobin.exr)",
@@ -132,7 +132,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
             let head = derma_head::Head::builtin();
             for (n, _) in &units {
                 if !head.face_units().iter().any(|u| u.name == *n) {
-                    return Err(RenderError::Invalid(format!(
+                    return Err(ExportError::Invalid(format!(
                         "face unit '{n}' is not one of the head's 52 (e.g. mouthSmileLeft, jawOpen, eyeBlinkLeft)"
                     )));
                 }
@@ -142,7 +142,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
                 .as_deref()
                 .map(derma_eyes::files::load_eye_texture)
                 .transpose()
-                .map_err(|e| RenderError::Invalid(e.to_string()))?;
+                .map_err(|e| ExportError::Invalid(e.to_string()))?;
             Scene::head(head, skin.clone(), &units, eye, job.gaze)
         }
     };
@@ -174,7 +174,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
             files.push(p);
         }
         if let Some(n) = job.turntable {
-            let fr = crate::sheet::turntable(&r, *s, n, w, h)?;
+            let fr = derma_render::sheet::turntable(&r, *s, n, w, h)?;
             frames += n;
             job_p.advance(n as u64);
             let p = job.out.join(format!("{}-turntable.png", s.name()));
@@ -184,7 +184,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     }
     if job.sheet {
         let panel = w.min(h);
-        let m = crate::sheet::contact_sheet(&r, &skin, &job.setups, panel)?;
+        let m = derma_render::sheet::contact_sheet(&r, &skin, &job.setups, panel)?;
         frames += 3 * job.setups.len();
         job_p.advance(3 * job.setups.len() as u64);
         let p = job.out.join("sheet.png");

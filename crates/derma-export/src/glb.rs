@@ -4,12 +4,12 @@
 //! KHR_materials_diffuse_transmission and KHR_materials_volume (attenuation from the mean free
 //! paths of `sss_radius`); plus the maps as loose files under engine naming conventions.
 
-use crate::error::{RenderError, Result};
-use crate::material::{default_eye_texture, lash_coverage_map, SkinMaps};
+use crate::error::{ExportError, Result};
 use derma_core::image_io::png8_bytes;
 use derma_core::mesh::{mikktspace_tangents, split_by_tangent, TriMesh};
 use derma_core::Map;
 use derma_head::export::Glb;
+use derma_render::material::{default_eye_texture, lash_coverage_map, SkinMaps};
 use glam::Vec3;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -164,7 +164,7 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
     let head = derma_head::Head::builtin();
     let read = |f: &str| -> Result<Vec<u8>> {
         let p = o.textures.join(f);
-        std::fs::read(&p).map_err(|e| RenderError::Input {
+        std::fs::read(&p).map_err(|e| ExportError::Input {
             path: p,
             detail: format!("cannot read ({e})"),
         })
@@ -360,7 +360,7 @@ pub fn write_maps(
     let copy = |key: &str, file: &str, out: &mut Vec<PathBuf>| -> Result<()> {
         let from = src.join(file);
         if from.is_file() {
-            let bytes = std::fs::read(&from).map_err(|e| RenderError::Input {
+            let bytes = std::fs::read(&from).map_err(|e| ExportError::Input {
                 path: from.clone(),
                 detail: e.to_string(),
             })?;
