@@ -63,16 +63,7 @@ impl JsonFormat {
 }
 
 /// `value` as JSON bytes in `format`.
-/// Exact formats keep a struct's field order; tidied ones pass through a `serde_json::Value`,
-/// whose objects list their keys in sorted order.
-pub fn json_bytes(value: &impl serde::Serialize, format: JsonFormat) -> crate::Result<Vec<u8>> {
-    json_bytes_of(value, format).map_err(|e| crate::CoreError::Invalid {
-        what: "a JSON value".into(),
-        detail: e.to_string(),
-    })
-}
-
-fn json_bytes_of(
+fn json_bytes(
     value: &impl serde::Serialize,
     format: JsonFormat,
 ) -> Result<Vec<u8>, serde_json::Error> {
@@ -99,7 +90,7 @@ pub fn write_json(
     value: &impl serde::Serialize,
     format: JsonFormat,
 ) -> crate::Result<()> {
-    let bytes = json_bytes_of(value, format).map_err(|e| crate::CoreError::Encode {
+    let bytes = json_bytes(value, format).map_err(|e| crate::CoreError::Encode {
         path: path.to_path_buf(),
         detail: format!("as JSON: {e}"),
     })?;

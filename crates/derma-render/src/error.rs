@@ -23,9 +23,6 @@ pub enum RenderError {
     /// The GPU could not be used.
     #[error(transparent)]
     Gpu(#[from] derma_core::gpu::GpuError),
-    /// Skin generation failed.
-    #[error(transparent)]
-    Skin(#[from] derma_skin::SkinError),
 }
 
 /// Results of this crate.

@@ -573,23 +573,21 @@ fn the_circle_finder_finds_circles() {
     let dir = std::env::temp_dir().join(format!("derma-tidy-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(dir.join("src/numerics")).unwrap();
-    std::fs::write(dir.join("Cargo.toml"), "[package]\nname = \"x\"\n").unwrap();
-    std::fs::write(
-        dir.join("src/lib.rs"),
+    let put = |path: &str, text: &str| std::fs::write(dir.join(path), text).unwrap();
+    put("Cargo.toml", "[package]\nname = \"x\"\n");
+    put(
+        "src/lib.rs",
         "//! x\npub mod rng;\npub mod numerics;\npub use rng::Philox;\n",
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("src/numerics/mod.rs"),
+    );
+    put(
+        "src/numerics/mod.rs",
         "//! n\npub mod lanes;\npub use lanes::Lanes;\n",
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("src/numerics/lanes.rs"),
+    );
+    put(
+        "src/numerics/lanes.rs",
         "//! l\nuse crate::{Philox, map::X};\npub struct Lanes;\n",
-    )
-    .unwrap();
-    std::fs::write(dir.join("src/rng.rs"), "//! r\npub struct Philox;\nfn f() { let _ = crate::numerics::Lanes; }\n#[cfg(test)]\nmod tests { use super::*; }\n").unwrap();
+    );
+    put("src/rng.rs", "//! r\npub struct Philox;\nfn f() { let _ = crate::numerics::Lanes; }\n#[cfg(test)]\nmod tests { use super::*; }\n");
     let c = Crate::load(&dir);
     let found = circles(&c.graph());
     assert_eq!(found.len(), 1, "{found:?}");
@@ -600,19 +598,17 @@ fn the_circle_finder_finds_circles() {
             vec!["rng".to_string()]
         ]
     );
-    std::fs::write(dir.join("src/rng.rs"), "//! r\npub struct Philox;\n").unwrap();
+    put("src/rng.rs", "//! r\npub struct Philox;\n");
     assert!(circles(&Crate::load(&dir).graph()).is_empty());
     // A root that defines an item a child uses, and calls into that child from its own code.
-    std::fs::write(
-        dir.join("src/lib.rs"),
+    put(
+        "src/lib.rs",
         "//! x\npub mod rng;\npub mod numerics;\npub struct Seed;\nfn f() { rng::draw(); }\n",
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("src/rng.rs"),
+    );
+    put(
+        "src/rng.rs",
         "//! r\npub fn draw() { let _ = crate::Seed; }\n",
-    )
-    .unwrap();
+    );
     let found = circles(&Crate::load(&dir).graph());
     assert_eq!(
         found,
