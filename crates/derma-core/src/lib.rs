@@ -38,7 +38,6 @@ pub mod memory;
 pub mod mesh;
 pub mod numerics;
 pub mod plot;
-pub mod preview;
 pub mod progress;
 pub mod pyramid;
 pub mod raster;

@@ -7,7 +7,6 @@ use derma_core::Map;
 use derma_render::camera::View;
 use derma_render::lighting::Setup;
 use derma_render::material::SkinMaps;
-use derma_render::renderer::Renderer;
 use derma_render::scene::{Material, Scene};
 use derma_rig::{GlobalScale, Normalization, WeightSpec};
 use serde::Serialize;
@@ -52,6 +51,9 @@ pub struct RenderJob {
     pub gaze: (f32, f32),
     /// Draw the lacrimal lake along the lid margins.
     pub lake: bool,
+    /// Where to draw: a GPU (the full renderer) or the CPU (no subsurface scattering, shadows,
+    /// lake or refraction; [`derma_render::CpuRenderer`]).
+    pub device: derma_core::gpu::Device,
     /// Output directory.
     pub out: PathBuf,
 }
@@ -59,7 +61,7 @@ pub struct RenderJob {
 /// What was written and measured.
 #[derive(Clone, Debug, Serialize)]
 pub struct RenderReport {
-    /// The GPU adapter.
+    /// What drew: the GPU adapter, or the CPU renderer.
     pub adapter: String,
     /// Every file written.
     pub files: Vec<PathBuf>,
@@ -147,7 +149,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
         }
     };
     debug_assert!(matches!(scene.parts[0].material, Material::Skin(_)));
-    let r = Renderer::new(&scene)?;
+    let r = derma_render::renderer(&scene, job.device)?;
     r.set_lake(job.lake);
     let mut files = Vec::new();
     let mut frames = 0usize;
@@ -157,7 +159,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     job_p.stage("render", total as u64, Unit::Steps);
     let tr = Instant::now();
     for s in &job.setups {
-        let img = r.render(&job.view, &s.lighting(), w, h)?;
+        let img = r.draw(&job.view, &s.lighting(), w, h)?;
         frames += 1;
         job_p.advance(1);
         let p = job.out.join(format!("{}.png", s.name()));
@@ -174,7 +176,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
             files.push(p);
         }
         if let Some(n) = job.turntable {
-            let fr = derma_render::sheet::turntable(&r, *s, n, w, h)?;
+            let fr = derma_render::sheet::turntable(&*r, *s, n, w, h)?;
             frames += n;
             job_p.advance(n as u64);
             let p = job.out.join(format!("{}-turntable.png", s.name()));
@@ -184,7 +186,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     }
     if job.sheet {
         let panel = w.min(h);
-        let m = derma_render::sheet::contact_sheet(&r, &skin, &job.setups, panel)?;
+        let m = derma_render::sheet::contact_sheet(&*r, &skin, &job.setups, panel)?;
         frames += 3 * job.setups.len();
         job_p.advance(3 * job.setups.len() as u64);
         let p = job.out.join("sheet.png");
@@ -193,7 +195,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     }
     let per = tr.elapsed().as_secs_f64() / frames.max(1) as f64;
     let report = RenderReport {
-        adapter: r.adapter.clone(),
+        adapter: r.name(),
         files: files.clone(),
         frames,
         seconds_per_frame: per,

@@ -283,8 +283,8 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
             "eyelashes",
             &png8_bytes("eyelashes", &[&black, &black, &black, &lash])?,
         );
-        let props = head.preview_props();
-        for (k, (part, prop)) in head.parts.iter().zip(&props).enumerate() {
+        for (k, part) in head.parts.iter().enumerate() {
+            let prop = derma_head::Look::of(&part.name);
             let mat = if part.name.starts_with("eye_") {
                 json!({"name": part.name, "pbrMetallicRoughness": {"baseColorTexture": {"index": t_eye},
                     "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})

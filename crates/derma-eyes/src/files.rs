@@ -389,9 +389,11 @@ pub fn distance_fields(
     let bt = sdf::samplers::field(&scene.g, sdf::table::DEFAULT, range);
     derma_core::image_io::write_png8(&dir.join("backtracking.png"), &[&show(&bt)])?;
     let light = glam::Vec3::new(-0.4, 0.5, 0.75);
-    let plain = sdf::lake::shade(&scene, None, light, 1.6);
-    let (d, n) = sdf::lake::lake(&scene, &bt, range);
-    let wet = sdf::lake::shade(&scene, Some((&d, &n)), light, 1.6);
+    let px_per_mm = |i: usize| scene.g.px_per_mm(i);
+    let surfaces = scene.surfaces(&px_per_mm);
+    let plain = derma_render::lake::shade(&surfaces, None, light, 1.6);
+    let (d, n) = derma_render::lake::lake(&surfaces, &bt.distance, range);
+    let wet = derma_render::lake::shade(&surfaces, Some((&d, &n)), light, 1.6);
     let to_maps = |img: &[glam::Vec3]| Map::planes(w, h, |i| img[i].to_array());
     for (name, img) in [("eye.png", &plain), ("lake.png", &wet)] {
         let ch = to_maps(img);

@@ -1,4 +1,4 @@
-//! Looking at the result: the eye region rendered with derma-core's software preview (skin,
+//! Looking at the result: the eye region rendered by derma-render's CPU renderer (skin,
 //! lashes riding on the lid margins, globes with the open cornea over the iris disc) frame by
 //! frame, written as PNG frames, an animated PNG and a contact strip.
 
@@ -6,9 +6,9 @@ use crate::evaluate;
 use crate::globe::Globe;
 use crate::region::EyeRegion;
 use derma_core::mesh::TriMesh;
-use derma_core::preview::{self, FlatMaterial, Prop};
 use derma_core::Map;
 use derma_head::Head;
+use derma_render::cpu::{self as preview, FlatMaterial, Prop};
 use glam::{Quat, Vec2, Vec3};
 
 /// Linear skin colour of the preview (a light-intermediate complexion, authored).

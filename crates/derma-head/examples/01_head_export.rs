@@ -52,24 +52,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("jawOpen", 0.3),
     ]);
     posed.write_obj(&out.join("smile.obj"))?;
-    // A look at it: neutral and posed, side by side, in derma-core's software preview.
-    let base = derma_core::preview::uniform_color([0.45, 0.33, 0.28]);
-    let material = derma_core::preview::FlatMaterial::new(0.5, 0.35);
-    let tex = material.textures(&base);
-    let props = head.preview_props();
-    let views: Vec<[derma_core::Map; 3]> = [&head.skin, &posed]
-        .iter()
-        .map(|m| {
-            let t = derma_core::mesh::mikktspace_tangents(m);
-            derma_core::preview::render_with(m, &t, &tex, &props, 0.35, 512)
-        })
-        .collect();
-    let sheet = derma_core::preview::compose(&views, &[], 512);
-    derma_core::image_io::write_png8(&out.join("smile.png"), &[&sheet[0], &sheet[1], &sheet[2]])?;
     export::write_obj(head, &out.join("head.obj"), &out.join("head_parts.obj"))?;
     export::write_glb(head, &out.join("head.glb"))?;
     println!(
-        "wrote {}/head.obj, head_parts.obj, head.glb, smile.obj, smile.png",
+        "wrote {}/head.obj, head_parts.obj, head.glb, smile.obj",
         out.display()
     );
     Ok(())

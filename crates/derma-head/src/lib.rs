@@ -19,11 +19,13 @@ pub mod asset;
 pub mod export;
 pub mod eye;
 pub mod landmarks;
+pub mod look;
 pub mod regions;
 pub mod subdivision;
 
 pub use eye::Eye;
 pub use landmarks::Landmarks;
+pub use look::Look;
 pub use regions::{Regions, REGIONS};
 
 use derma_core::mesh::TriMesh;
@@ -260,43 +262,6 @@ impl Head {
             targets: a.targets,
             units: OnceLock::new(),
         }
-    }
-
-    /// The parts as props for derma-core's software preview, with simple materials: the eyes
-    /// with [`eye::default_albedo`] under a glossy tear film, ivory teeth, a pink tongue and
-    /// near-black lashes thinning to their tips ([`eye::lash_coverage`]).
-    pub fn preview_props(&self) -> Vec<derma_core::preview::Prop<'_>> {
-        // Linear albedos: enamel ivory, tongue mucosa pink, lashes near black (authored).
-        static TEETH: fn(Vec2) -> Vec3 = |_| Vec3::new(0.62, 0.56, 0.45);
-        static TONGUE: fn(Vec2) -> Vec3 = |_| Vec3::new(0.42, 0.12, 0.11);
-        static LASHES: fn(Vec2) -> Vec3 = |_| Vec3::new(0.02, 0.015, 0.012);
-        static EYE: fn(Vec2) -> Vec3 = eye::default_albedo;
-        self.parts
-            .iter()
-            .map(|p| {
-                type Albedo = &'static (dyn Fn(Vec2) -> Vec3 + Sync);
-                let (albedo, roughness, f0): (Albedo, f32, f32) = if p.name.starts_with("eye_") {
-                    // The cornea's tear film: glossy; F0 of n ≈ 1.376 (cornea) ≈ 0.025.
-                    (&EYE, 0.08, 0.025)
-                } else if p.name.starts_with("teeth") {
-                    (&TEETH, 0.3, 0.04)
-                } else if p.name == "tongue" {
-                    (&TONGUE, 0.35, 0.03)
-                } else {
-                    (&LASHES, 0.6, 0.04)
-                };
-                static LASH_COVERAGE: fn(Vec2) -> f32 = eye::lash_coverage;
-                let coverage: Option<&(dyn Fn(Vec2) -> f32 + Sync)> =
-                    p.name.starts_with("eyelashes").then_some(&LASH_COVERAGE);
-                derma_core::preview::Prop {
-                    mesh: &p.mesh,
-                    albedo,
-                    roughness,
-                    f0,
-                    coverage,
-                }
-            })
-            .collect()
     }
 
     /// A part by name.

@@ -255,55 +255,59 @@ pub fn camera_for(
     )
 }
 
-/// Renders a photo of `mesh` (with `albedo` per surface point) by ray casting through each pixel
-/// (one ray per pixel), shaded by ambient plus a Lambertian key light, times exposure, white
-/// balance and vignetting, then stored as 8-bit sRGB as a camera would.
+/// Renders a photo of `mesh` (with `albedo` per surface point) through derma-render's
+/// rasteriser (one sample per pixel centre, the camera's pinhole), shaded by ambient plus a
+/// Lambertian key light, times exposure, white balance and vignetting, then stored as 8-bit sRGB
+/// as a camera would.
 pub fn render(
     mesh: &TriMesh,
-    bvh: &derma_core::bvh::Bvh,
     cam: &crate::Camera,
     view: &View,
     albedo: &(dyn Fn(Vec3) -> [f32; 3] + Sync),
 ) -> crate::photo::RgbImage {
+    use derma_render::raster::{rasterise, Object, Projection};
     use rayon::prelude::*;
     let (w, h) = (cam.width as usize, cam.height as usize);
-    let rt = cam.rotation_matrix().transpose();
-    let origin = cam.centre().as_vec3();
+    let projection = Projection::Pinhole {
+        rotation: cam.rotation_matrix().as_mat3(),
+        position: cam.centre().as_vec3(),
+        focal: cam.focal_px as f32,
+        principal: glam::Vec2::new(cam.principal[0] as f32, cam.principal[1] as f32),
+    };
+    let hits = rasterise(
+        &[Object {
+            mesh,
+            coverage: None,
+        }],
+        &projection,
+        w,
+        h,
+    );
     let light = view.light.normalize();
     let half_diag = ((w * w + h * h) as f32).sqrt() / 2.0;
-    let mut data = vec![[0.0f32; 3]; w * h];
-    data.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        for (x, out) in row.iter_mut().enumerate() {
-            let (px, py) = (x as f64 + 0.5, y as f64 + 0.5);
-            let d = glam::DVec3::new(
-                (px - cam.principal[0]) / cam.focal_px,
-                (py - cam.principal[1]) / cam.focal_px,
-                1.0,
-            );
-            let dir = (rt * d).normalize().as_vec3();
+    let data: Vec<[f32; 3]> = hits
+        .par_iter()
+        .enumerate()
+        .map(|(i, hit)| {
+            let (x, y) = (i % w, i / w);
             let r = ((x as f32 + 0.5 - w as f32 / 2.0).powi(2)
                 + (y as f32 + 0.5 - h as f32 / 2.0).powi(2))
             .sqrt()
                 / half_diag;
             let vig = 1.0 - view.vignetting * r * r;
-            let c = match bvh.nearest(origin, dir, 0.0, f32::INFINITY) {
+            let c = match hit {
                 Some(hit) => {
-                    let t = mesh.triangles[hit.triangle as usize];
-                    let [b1, b2] = hit.bary;
-                    let n = (mesh.normals[t[0] as usize] * (1.0 - b1 - b2)
-                        + mesh.normals[t[1] as usize] * b1
-                        + mesh.normals[t[2] as usize] * b2)
-                        .normalize_or(Vec3::Z);
-                    let p = origin + dir * hit.t;
+                    let n = hit.interpolate(mesh, &mesh.normals).normalize_or(Vec3::Z);
+                    let p = hit.interpolate(mesh, &mesh.positions);
                     let shade = AMBIENT + (1.0 - AMBIENT) * n.dot(light).max(0.0) / 0.75;
                     albedo(p).map(|a| a * shade)
                 }
                 // A grey backdrop.
                 None => [0.18, 0.19, 0.2],
             };
-            *out = std::array::from_fn(|k| c[k] * view.exposure * view.white_balance[k] * vig);
-        }
-    });
+            std::array::from_fn(|k| c[k] * view.exposure * view.white_balance[k] * vig)
+        })
+        .collect();
     crate::photo::RgbImage {
         width: w,
         height: h,
@@ -411,7 +415,7 @@ pub fn photo_set(
             let name = format!("photo{i}.png");
             let points =
                 clicked_points(&feats, &bvh, &cam, &name, noise_px, seed * 1000 + i as u64);
-            let image = render(mesh, &bvh, &cam, v, albedo);
+            let image = render(mesh, &cam, v, albedo);
             (
                 crate::photo::Photo {
                     name,

@@ -1,4 +1,4 @@
-// The lacrimal lake (EyeMove thesis §4.5, as derma-eyes models it in sdf/lake.rs): the tear
+// The lacrimal lake (EyeMove thesis §4.5; its constants and CPU form are lake.rs): the tear
 // meniscus along the lid margins, over the globes. Pass 1 finds each globe pixel's screen-space
 // distance λ to the nearest skin pixel (exact within the lake's reach Λ) and the meniscus depth
 // that falls linearly with it; pass 2 tilts the globe normal by the depth's slope and returns

@@ -1,22 +1,32 @@
-//! derma-render: seeing derma's skin as users will. A wgpu renderer (headless; Mesa's
-//! lavapipe in CI, any Vulkan/Metal/DX12 GPU otherwise) that draws a head or a user mesh with
+//! derma-render: seeing derma's skin as users will, and the only code that draws. A wgpu
+//! renderer (headless; Mesa's lavapipe in CI, any Vulkan/Metal/DX12 GPU otherwise) that draws a
+//! head or a user mesh with
 //! a derma texture set — diffuse light scattered by the separable screen-space subsurface
 //! blur of Jimenez et al. 2015 with Burley's normalized diffusion per channel (driven by
 //! `sss_color`/`sss_radius`, the match table's fitted profile), GGX specular with Smith
 //! visibility from the roughness and specular maps, a shadowed three-light setup with a
 //! hemisphere environment, and eyes with a refracting cornea — plus turntables and contact
-//! sheets. Exporting (GLB, web, the viewer's server) and rendering from files are derma-export's.
+//! sheets; its CPU renderer ([`cpu`], on the one rasteriser [`raster`]) for previews without a GPU;
+//! the lacrimal lake ([`lake`]) and Burley's profile ([`burley`]) it draws. It depends on
+//! derma-core and derma-head only; the crates above draw through it. Exporting (GLB, web, the
+//! viewer's server) and rendering from files are derma-export's.
 
+pub mod burley;
 pub mod camera;
+pub mod cpu;
+pub mod draw;
 pub mod error;
+pub mod lake;
 pub mod lighting;
 pub mod material;
+pub mod raster;
 pub mod renderer;
 pub mod scene;
 pub mod sheet;
 pub mod sss;
 
 pub use camera::View;
+pub use draw::{renderer, CpuRenderer, Draw};
 pub use error::{RenderError, Result};
 pub use lighting::{Lighting, Setup};
 pub use material::SkinMaps;

@@ -5,9 +5,37 @@
 use crate::error::{RenderError, Result};
 use derma_core::image_io::read_rgb;
 use derma_core::Map;
-use derma_skin::outputs;
-use derma_skin::texture_set::{RenderMaps, SSS_RADIUS_RANGE_MM};
 use std::path::Path;
+
+/// The files of a render texture set as the renderer reads them (the Substance/Unreal names;
+/// derma-skin writes them under these names, docs/render.md lists their encodings).
+pub mod files {
+    /// `base_color.png`: diffuse albedo, 8-bit sRGB.
+    pub const BASE_COLOR: &str = "base_color.png";
+    /// `normal.png`: tangent-space normal as n·½ + ½.
+    pub const NORMAL: &str = "normal.png";
+    /// `roughness.png`: perceptual roughness.
+    pub const ROUGHNESS: &str = "roughness.png";
+    /// `specular.png`: F0 / [`super::SPECULAR_SCALE`].
+    pub const SPECULAR: &str = "specular.png";
+    /// `sss_color.png`: Burley's surface albedo, 8-bit sRGB.
+    pub const SSS_COLOR: &str = "sss_color.png";
+    /// `sss_radius.png`: mean free path / [`super::SSS_RADIUS_RANGE_MM`], 16-bit.
+    pub const SSS_RADIUS: &str = "sss_radius.png";
+}
+
+/// [`crate::Rendered::material`] of the skin mesh.
+pub const MATERIAL_SKIN: u8 = 1;
+/// [`crate::Rendered::material`] of an eye globe.
+pub const MATERIAL_EYE: u8 = 2;
+/// [`crate::Rendered::material`] of anything else: lashes, teeth, tongue, the background.
+pub const MATERIAL_OTHER: u8 = 0;
+
+/// Specular maps store F0 / 0.08 (the Unreal/Substance "specular" convention: 0.5 ↔ F0 = 4 %).
+pub const SPECULAR_SCALE: f32 = 0.08;
+
+/// sss_radius.png stores ℓ / SSS_RADIUS_RANGE_MM (16-bit): 0–8 mm, the radial profile's range.
+pub const SSS_RADIUS_RANGE_MM: f32 = 8.0;
 
 /// A skin texture set as linear maps (all the same size).
 #[derive(Clone)]
@@ -75,19 +103,19 @@ impl SkinMaps {
                 })
             }
         };
-        let bp = need(outputs::BASE_COLOR)?;
+        let bp = need(files::BASE_COLOR)?;
         let base_color = decode_srgb(three(&bp)?);
         let (w, h) = (base_color[0].width(), base_color[0].height());
-        let np = need(outputs::NORMAL)?;
+        let np = need(files::NORMAL)?;
         let normal = three(&np)?;
         check_size(&np, &normal[0], w, h)?;
-        let rp = need(outputs::ROUGHNESS)?;
+        let rp = need(files::ROUGHNESS)?;
         let roughness = three(&rp)?[0].clone();
         check_size(&rp, &roughness, w, h)?;
-        let sp = need(outputs::SPECULAR)?;
+        let sp = need(files::SPECULAR)?;
         let specular = three(&sp)?[0].clone();
         check_size(&sp, &specular, w, h)?;
-        let (cp, rdp) = (dir.join(outputs::SSS_COLOR), dir.join(outputs::SSS_RADIUS));
+        let (cp, rdp) = (dir.join(files::SSS_COLOR), dir.join(files::SSS_RADIUS));
         let subsurface = if cp.is_file() && rdp.is_file() {
             let c = decode_srgb(three(&cp)?);
             check_size(&cp, &c[0], w, h)?;
@@ -110,22 +138,6 @@ impl SkinMaps {
             subsurface,
             wrap: false,
         })
-    }
-
-    /// The maps of a texture set in memory (`derma skin`'s preview).
-    pub fn from_render_maps(r: &RenderMaps, wrap: bool) -> SkinMaps {
-        let enc = |mut m: Map| {
-            m.data_mut().iter_mut().for_each(|v| *v = 0.5 * *v + 0.5);
-            m
-        };
-        SkinMaps {
-            base_color: r.decode_base_color(),
-            normal: r.decode_normal().map(enc),
-            roughness: r.decode_roughness(),
-            specular: r.decode_specular(),
-            subsurface: r.decode_subsurface(),
-            wrap,
-        }
     }
 
     /// (width, height).

@@ -6,6 +6,7 @@
 use crate::camera::{light_view_proj, Camera, View};
 use crate::error::Result;
 use crate::lighting::Lighting;
+use crate::material::{MATERIAL_EYE, MATERIAL_OTHER, MATERIAL_SKIN};
 use crate::scene::{Material, Part, Scene, Vertex};
 use crate::sss;
 use derma_core::gpu::{context, Gpu};
@@ -42,7 +43,7 @@ struct FrameU {
     lights: [[f32; 4]; 6],
 }
 
-/// The lacrimal lake's constants (lake.wgsl), from derma-eyes' model of it.
+/// The lacrimal lake's constants (lake.wgsl), from [`crate::lake`].
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct LakeU {
@@ -52,11 +53,11 @@ struct LakeU {
 
 impl LakeU {
     fn new(enabled: bool) -> LakeU {
-        use derma_eyes::sdf::lake;
+        use crate::lake;
         LakeU {
             shape: [
                 lake::MENISCUS_MM,
-                derma_eyes::sdf::table::RANGE_MM,
+                lake::RANGE_MM,
                 lake::ATTENUATION,
                 lake::F0,
             ],
@@ -92,13 +93,6 @@ pub struct Rendered {
     /// What each pixel shows: [`MATERIAL_SKIN`], [`MATERIAL_EYE`] or [`MATERIAL_OTHER`].
     pub material: Vec<u8>,
 }
-
-/// [`Rendered::material`] of the skin mesh.
-pub const MATERIAL_SKIN: u8 = 1;
-/// [`Rendered::material`] of an eye globe.
-pub const MATERIAL_EYE: u8 = 2;
-/// [`Rendered::material`] of anything else: lashes, teeth, tongue, the background.
-pub const MATERIAL_OTHER: u8 = 0;
 
 /// The material of a post-scatter target's alpha byte (forward.wgsl: skin 1, eye ½).
 fn material_of(alpha: u8) -> u8 {
@@ -597,7 +591,7 @@ impl Renderer {
     }
 
     fn upload(&self, p: &Part) -> Result<GpuPart> {
-        let spec_scale = derma_core::preview::SPECULAR_SCALE;
+        let spec_scale = crate::material::SPECULAR_SCALE;
         let (u, textures, eye, casts) = match &p.material {
             Material::Skin(s) => {
                 let base = self.tex(

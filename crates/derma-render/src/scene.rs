@@ -149,7 +149,8 @@ impl Scene {
         let mut scene = Scene::mesh(&posed, skin);
         let eye_tex = eye_albedo.unwrap_or_else(|| default_eye_texture(512));
         let rot = gaze_rotation(gaze.0, gaze.1);
-        for (part, prop) in head.parts.iter().zip(head.preview_props()) {
+        for part in &head.parts {
+            let prop = derma_head::Look::of(&part.name);
             let centre_uv = glam::Vec2::splat(0.5);
             let material = if let Some(side) = part.name.strip_prefix("eye_") {
                 let eye = if side == "left" {

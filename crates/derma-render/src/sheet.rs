@@ -1,52 +1,72 @@
-//! Layouts of renders for people to judge: `derma skin`'s preview views on the GPU, contact
-//! sheets (views under each lighting setup beside the raw maps) and turntables.
+//! Layouts of renders for people to judge: renders beside map thumbnails, contact sheets (views
+//! under each lighting setup beside the raw maps) and turntables.
 
 use crate::camera::View;
+use crate::draw::Draw;
 use crate::error::Result;
 use crate::lighting::Setup;
 use crate::material::SkinMaps;
-use crate::renderer::Renderer;
-use crate::scene::Scene;
-use derma_core::gpu::Device;
-use derma_core::preview::{compose, normalised};
 use derma_core::Map;
-use derma_skin::config::SurfaceKind;
-use derma_skin::TextureSet;
 
-/// The front and three-quarter views of `derma skin`'s preview, rendered on the GPU when
-/// `device` resolves to one and the set is on a mesh; with the adapter's name. `None`: the
-/// software preview is the one to use (no GPU, `--device cpu`, or a flat patch).
-pub fn skin_views(set: &TextureSet, device: Device) -> Result<Option<(Vec<[Map; 3]>, String)>> {
-    if device.resolve().ok() != Some(Device::Gpu) {
-        return Ok(None);
-    }
-    let Some((mesh, _)) = set.preview_mesh.as_ref() else {
-        return Ok(None);
+/// Lays out the preview: the render(s) on the left, a 3×2 contact sheet of maps on the right
+/// (none when `sheet` is empty).
+/// Returns encoded sRGB channels.
+pub fn compose(renders: &[[Map; 3]], sheet: &[[Map; 3]], panel: usize) -> [Map; 3] {
+    let thumb = panel / 2;
+    let width = panel * renders.len() + if sheet.is_empty() { 0 } else { thumb * 3 };
+    let height = panel;
+    let mut out = [
+        Map::filled(width, height, 0.0),
+        Map::filled(width, height, 0.0),
+        Map::filled(width, height, 0.0),
+    ];
+    let mut blit = |img: &[Map; 3], x0: usize, y0: usize, n: usize, encode: bool| {
+        for k in 0..3 {
+            let r = img[k].resized(n, n);
+            for y in 0..n {
+                for x in 0..n {
+                    let v = r.get(x, y);
+                    out[k].set(
+                        x0 + x,
+                        y0 + y,
+                        if encode {
+                            derma_core::color::srgb_encode(v)
+                        } else {
+                            v
+                        },
+                    );
+                }
+            }
+        }
     };
-    let maps = SkinMaps::from_render_maps(&set.render, false);
-    let scene = if set.inputs.surface == SurfaceKind::Template {
-        Scene::head(derma_head::Head::builtin(), maps, &[], None, (0.0, 0.0))
-    } else {
-        Scene::mesh(mesh, maps)
-    };
-    let r = Renderer::new(&scene)?;
-    let panel = derma_skin::preview::PANEL as u32;
-    let mut views = Vec::new();
-    for yaw in [0.0, 45.0] {
-        let v = View {
-            yaw_deg: yaw,
-            ..Default::default()
-        };
-        views.push(linear(
-            r.render(&v, &Setup::Studio.lighting(), panel, panel)?
-                .display_maps(),
-        ));
+    for (i, r) in renders.iter().enumerate() {
+        blit(r, i * panel, 0, panel, true);
     }
-    Ok(Some((views, r.adapter.clone())))
+    for (i, s) in sheet.iter().take(6).enumerate() {
+        blit(
+            s,
+            panel * renders.len() + (i % 3) * thumb,
+            (i / 3) * thumb,
+            thumb,
+            false,
+        );
+    }
+    out
 }
 
-/// Display values decoded back to linear (derma-core's [`compose`] encodes its renders).
-fn linear(mut m: [Map; 3]) -> [Map; 3] {
+/// Greyscale thumbnail channels of `m` normalised to its [min, max].
+pub fn normalised(m: &Map) -> [Map; 3] {
+    let s = m.stats(None);
+    let span = (s.max - s.min).max(1e-12);
+    let mut n = m.clone();
+    n.data_mut()
+        .iter_mut()
+        .for_each(|v| *v = (*v - s.min) / span);
+    [n.clone(), n.clone(), n]
+}
+
+/// Display values decoded back to linear ([`compose`] encodes its renders).
+pub fn linear(mut m: [Map; 3]) -> [Map; 3] {
     for c in &mut m {
         c.data_mut()
             .iter_mut()
@@ -88,7 +108,7 @@ pub fn map_thumbnails(s: &SkinMaps, size: usize) -> Vec<[Map; 3]> {
 /// A contact sheet: for each setup a row of views (front, three-quarter, profile) at `panel`²,
 /// and beside all rows the raw maps as a grid as tall as the rows (see [`map_grid`]).
 pub fn contact_sheet(
-    r: &Renderer,
+    r: &dyn Draw,
     skin: &SkinMaps,
     setups: &[Setup],
     panel: u32,
@@ -102,7 +122,7 @@ pub fn contact_sheet(
                 ..Default::default()
             };
             views.push(linear(
-                r.render(&v, &s.lighting(), panel, panel)?.display_maps(),
+                r.draw(&v, &s.lighting(), panel, panel)?.display_maps(),
             ));
         }
         rows.push(compose(&views, &[], panel as usize));
@@ -164,7 +184,7 @@ fn stack(rows: &[[Map; 3]]) -> [Map; 3] {
 
 /// `frames` views in a full turn (yaw 0 → 360°) under `setup`, as 8-bit sRGB RGB frames.
 pub fn turntable(
-    r: &Renderer,
+    r: &dyn Draw,
     setup: Setup,
     frames: usize,
     w: u32,
@@ -176,7 +196,7 @@ pub fn turntable(
                 yaw_deg: 360.0 * i as f32 / frames as f32,
                 ..Default::default()
             };
-            let img = r.render(&v, &setup.lighting(), w, h)?;
+            let img = r.draw(&v, &setup.lighting(), w, h)?;
             Ok(img
                 .display
                 .chunks_exact(4)

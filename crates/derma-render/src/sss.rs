@@ -2,7 +2,7 @@
 //! scattering", §3): Burley's normalized diffusion per channel, applied along x then along y
 //! with the profile's marginal as the 1D kernel, the tap weights integrated from its CDF.
 
-use derma_shading::burley;
+use crate::burley;
 
 /// Taps on each side of the centre.
 pub const TAPS: u32 = 12;

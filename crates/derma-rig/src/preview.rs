@@ -13,12 +13,12 @@ pub const PREVIEW_BLOOD_TOP: f32 = 0.1;
 /// The built-in head rendered with `rgb` as base colour, and again with the hemoglobin map as
 /// display grey (dark = more blood), side by side (linear RGB).
 pub fn preview(rgb: &[Map; 3], h: &Map) -> Result<[Map; 3]> {
-    use derma_core::preview::{render_with, FlatMaterial};
+    use derma_render::cpu::{head_props, render_with, FlatMaterial};
     const PANEL: usize = 512;
     let head = derma_head::Head::builtin();
     let mesh = &head.skin;
     let tangents = derma_core::mesh::mikktspace_tangents(mesh);
-    let props = head.preview_props();
+    let props = head_props(head);
     let (w, hh) = (h.width(), h.height());
     // Skin-like specular (F0 = 0.35 × 0.08 = 2.8 %, Kelemen/Jimenez) and roughness, flat normals.
     let material = FlatMaterial::new(0.45, 0.35);

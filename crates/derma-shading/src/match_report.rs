@@ -6,7 +6,7 @@ use crate::brdf_fit::FitGeometry;
 use crate::error::{Result, ShadingError};
 use crate::match_table::{self, MatchOptions, MatchTable};
 use crate::model_kind::ModelKind;
-use crate::{burley, sum_of_gaussians};
+use crate::sum_of_gaussians;
 use derma_core::color::luminance;
 use derma_core::dtab::Dtab;
 use derma_core::plot::{Plot, Series};
@@ -225,7 +225,7 @@ pub fn write_plots(
                 color: col.into(),
                 points: rs
                     .iter()
-                    .map(|&r| (r, burley::profile(r, ba[c], bd[c]).max(1e-6)))
+                    .map(|&r| (r, derma_render::burley::profile(r, ba[c], bd[c]).max(1e-6)))
                     .collect(),
             });
             series.push(Series {

@@ -6,7 +6,7 @@
 //! `derma-relief` folder in the temporary directory, 256²).
 
 use derma_core::plot::{Plot, Series};
-use derma_core::preview::{render_lit, tile, Light};
+use derma_render::cpu::{render_lit, tile, Light};
 use derma_skin::config::{Range, SurfaceKind};
 use derma_skin::{SkinConfig, SkinGenerator, TextureSet};
 use glam::Vec3;
@@ -181,7 +181,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             render_lit(&m, &t, &tex, &[], 0.0, 512, &grazing)
         })
         .collect();
-    let sheet = derma_core::preview::compose(&views, &[], 512);
+    let sheet = derma_render::sheet::compose(&views, &[], 512);
     derma_core::image_io::write_png8(
         &out.join("relief-grazing.png"),
         &[&sheet[0], &sheet[1], &sheet[2]],

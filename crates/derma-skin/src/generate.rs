@@ -437,6 +437,7 @@ impl<'a> SkinGenerator<'a> {
             log: job.finish(),
             started,
             pool: None,
+            device: self.device,
         })
     }
 }
@@ -668,6 +669,7 @@ pub struct TextureSet {
     pub log: Log,
     started: Instant,
     pool: Option<Arc<rayon::ThreadPool>>,
+    device: Device,
 }
 
 /// What [`TextureSet::write`] wrote.
@@ -690,32 +692,17 @@ impl TextureSet {
     }
 
     /// Writes every file of [`outputs::OUTPUTS`] into `dir` — the maps, features.json,
-    /// preview.png, then manifest.json and report.json — each atomically.
+    /// preview.png, then manifest.json and report.json — each atomically. The preview's views
+    /// are drawn by derma-render's GPU renderer where the set's device resolves to a GPU and it
+    /// has a mesh, by its CPU renderer otherwise (a note says which).
     pub fn write(&self, dir: &Path, progress: &dyn Progress) -> Result<Written> {
-        self.write_with(dir, progress, None)
-    }
-
-    /// [`TextureSet::write`] with the preview's shaded views already rendered (linear after tone mapping,
-    /// [`crate::preview::PANEL`]² each, e.g. by derma-render on a GPU); `None` draws them with
-    /// the software renderer.
-    pub fn write_with(
-        &self,
-        dir: &Path,
-        progress: &dyn Progress,
-        shaded: Option<Vec<[derma_core::Map; 3]>>,
-    ) -> Result<Written> {
         match &self.pool {
-            Some(p) => p.install(|| self.write_files(dir, progress, shaded)),
-            None => self.write_files(dir, progress, shaded),
+            Some(p) => p.install(|| self.write_files(dir, progress)),
+            None => self.write_files(dir, progress),
         }
     }
 
-    fn write_files(
-        &self,
-        dir: &Path,
-        progress: &dyn Progress,
-        shaded: Option<Vec<[derma_core::Map; 3]>>,
-    ) -> Result<Written> {
+    fn write_files(&self, dir: &Path, progress: &dyn Progress) -> Result<Written> {
         derma_core::atomic::ensure_writable_dir(dir)?;
         let job = Job::new(progress);
         job.stage("write", 1, Unit::Steps);
@@ -728,8 +715,29 @@ impl TextureSet {
         )?;
         files.push(outputs::FEATURES);
         job.stage("preview", 1, Unit::Steps);
-        let props = if self.inputs.surface == SurfaceKind::Template {
-            derma_head::Head::builtin().preview_props()
+        let template = self.inputs.surface == SurfaceKind::Template;
+        let shaded = match crate::preview::gpu_views(
+            &self.render,
+            self.preview_mesh.as_ref(),
+            template,
+            self.device,
+        ) {
+            Ok(Some((views, adapter))) => {
+                job.note(Note::info(format!(
+                    "preview rendered by derma-render on {adapter}"
+                )));
+                Some(views)
+            }
+            Ok(None) => None,
+            Err(e) => {
+                job.note(Note::warning(format!(
+                    "preview drawn by the CPU renderer: the GPU renderer failed ({e})"
+                )));
+                None
+            }
+        };
+        let props = if template {
+            derma_render::cpu::head_props(derma_head::Head::builtin())
         } else {
             Vec::new()
         };

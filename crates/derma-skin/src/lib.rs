@@ -91,6 +91,9 @@ pub enum SkinError {
     /// From derma-core (files, meshes).
     #[error(transparent)]
     Core(#[from] derma_core::CoreError),
+    /// The GPU renderer failed (the preview's shaded views).
+    #[error(transparent)]
+    Render(#[from] derma_render::RenderError),
     /// The texture set would not fit in memory.
     #[error("output of {width}x{height} texels needs about {need_gib:.1} GiB of memory; {have_gib:.1} GiB are available: choose a smaller --size")]
     TooLarge {

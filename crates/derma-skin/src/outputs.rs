@@ -1,19 +1,22 @@
 //! The files of a texture set (the project's design, §3 "Outputs"): every name, its colour
 //! space and meaning, defined once. Writing, manifest.json and the check that no input is
-//! overwritten all read this table. Names follow the Substance/Unreal convention.
+//! overwritten all read this table. Names follow the Substance/Unreal convention; the maps the
+//! renderer reads take derma-render's names ([`derma_render::material::files`]).
+
+use derma_render::material::files;
 
 /// `base_color.png`: diffuse albedo.
-pub const BASE_COLOR: &str = "base_color.png";
+pub const BASE_COLOR: &str = files::BASE_COLOR;
 /// `normal.png`: tangent-space normal.
-pub const NORMAL: &str = "normal.png";
+pub const NORMAL: &str = files::NORMAL;
 /// `height.exr`: displacement in mm.
 pub const HEIGHT_EXR: &str = "height.exr";
 /// `height.png`: displacement, normalised.
 pub const HEIGHT_PNG: &str = "height.png";
 /// `roughness.png`.
-pub const ROUGHNESS: &str = "roughness.png";
+pub const ROUGHNESS: &str = files::ROUGHNESS;
 /// `specular.png`.
-pub const SPECULAR: &str = "specular.png";
+pub const SPECULAR: &str = files::SPECULAR;
 /// `melanin.exr`.
 pub const MELANIN: &str = "melanin.exr";
 /// `hemoglobin.exr`.
@@ -21,9 +24,9 @@ pub const HEMOGLOBIN: &str = "hemoglobin.exr";
 /// `bio.exr`: every bio parameter.
 pub const BIO: &str = "bio.exr";
 /// `sss_color.png` (with a subsurface-aware appearance).
-pub const SSS_COLOR: &str = "sss_color.png";
+pub const SSS_COLOR: &str = files::SSS_COLOR;
 /// `sss_radius.png` (with a subsurface-aware appearance).
-pub const SSS_RADIUS: &str = "sss_radius.png";
+pub const SSS_RADIUS: &str = files::SSS_RADIUS;
 /// `features.json`: every placed feature.
 pub const FEATURES: &str = "features.json";
 /// `preview.png`.

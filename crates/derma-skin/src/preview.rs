@@ -1,16 +1,55 @@
-//! The texture set's preview: its maps shaded on its surface (derma-core's software renderer,
-//! [`derma_core::preview`]) in front and three-quarter views, next to a contact sheet of the
+//! The texture set's preview: its maps shaded on its surface (derma-render: its GPU renderer
+//! when there is one, its CPU renderer [`derma_render::cpu`] otherwise) in front and three-quarter views, next to a contact sheet of the
 //! maps.
 
 use crate::paint::BioMaps;
 use crate::surface::Surface;
 use crate::texture_set::RenderMaps;
 use derma_core::mesh::TriMesh;
-use derma_core::preview::{compose, normalised, render, render_with, sphere, tile, Prop};
 use derma_core::Map;
+use derma_render::cpu::{render, render_with, sphere, tile, Prop};
+use derma_render::sheet::{compose, normalised};
 
 /// Side of a preview panel (pixels): shaded views are this size, thumbnails half.
 pub const PANEL: usize = 512;
+
+/// The front and three-quarter views of `derma skin`'s preview of `render_maps` on `mesh` (the
+/// built-in head with its parts when `template`), rendered on the GPU when `device` resolves to
+/// one and the set is on a mesh; with the adapter's name. `None`: the CPU preview is the one to
+/// use (no GPU, `--device cpu`, or a flat patch).
+pub fn gpu_views(
+    render_maps: &RenderMaps,
+    mesh: Option<&(TriMesh, Vec<[f32; 4]>)>,
+    template: bool,
+    device: derma_core::gpu::Device,
+) -> crate::Result<Option<(Vec<[Map; 3]>, String)>> {
+    if device.resolve().ok() != Some(derma_core::gpu::Device::Gpu) {
+        return Ok(None);
+    }
+    let Some((mesh, _)) = mesh else {
+        return Ok(None);
+    };
+    let maps = render_maps.skin_maps(false);
+    let scene = if template {
+        derma_render::Scene::head(derma_head::Head::builtin(), maps, &[], None, (0.0, 0.0))
+    } else {
+        derma_render::Scene::mesh(mesh, maps)
+    };
+    let r = derma_render::Renderer::new(&scene)?;
+    let panel = PANEL as u32;
+    let mut views = Vec::new();
+    for yaw in [0.0, 45.0] {
+        let v = derma_render::View {
+            yaw_deg: yaw,
+            ..Default::default()
+        };
+        views.push(derma_render::sheet::linear(
+            r.render(&v, &derma_render::Setup::Studio.lighting(), panel, panel)?
+                .display_maps(),
+        ));
+    }
+    Ok(Some((views, r.adapter.clone())))
+}
 
 /// Shaded views of `render_maps` on its mesh (or a sphere and a tile for patches) plus the contact
 /// sheet (base colour, normal, height, roughness, melanin, blood): preview.png. `shaded`: views

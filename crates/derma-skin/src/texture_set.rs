@@ -11,9 +11,9 @@ use derma_core::color::srgb8_decode;
 use derma_core::exr_writer::{write_exr_rows, ExrChannel, ExrCompression};
 use derma_core::image_io::{quantize16, quantize8, srgb8, write_png_rows, ExrPrecision, PngDepth};
 use derma_core::map::{box_reduced, Taps};
-use derma_core::preview::{Material, MaterialSample};
 use derma_core::Map;
 use derma_optics::bio::names;
+use derma_render::cpu::{Material, MaterialSample};
 use derma_shading::{Appearance, BioTexel};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -22,7 +22,7 @@ use std::path::Path;
 /// Normal-incidence reflectance of hair keratin, n ≈ 1.55 (Stamm, Garcia & Fuchs 1977, "The optical
 /// properties of human hair"): ((1.55 − 1)/(1.55 + 1))² = 0.0465.
 pub const HAIR_F0: f32 = 0.0465;
-pub use derma_core::preview::SPECULAR_SCALE;
+pub use derma_render::material::SPECULAR_SCALE;
 
 /// The render maps as their files store them: what is in memory is what the files hold
 /// (8-bit sRGB colours, 16-bit normals and scatter distances, 8-bit roughness and specular),
@@ -53,8 +53,7 @@ pub struct SubsurfaceMaps {
     pub radius: Vec<[u16; 3]>,
 }
 
-/// sss_radius.png stores ℓ / SSS_RADIUS_RANGE_MM (16-bit): 0–8 mm, the radial profile's range.
-pub const SSS_RADIUS_RANGE_MM: f32 = 8.0;
+pub use derma_render::material::SSS_RADIUS_RANGE_MM;
 
 impl RenderMaps {
     /// Maps of `width` × `height` texels, zero until [`convert`] fills them.
@@ -109,6 +108,23 @@ impl RenderMaps {
                 self.planes(|i| s.radius[i].map(|c| c as f32 / 65535.0 * SSS_RADIUS_RANGE_MM)),
             )
         })
+    }
+
+    /// The maps as derma-render draws them (the normal encoded n·½ + ½ as normal.png stores it);
+    /// `wrap` repeats them (tileable patches).
+    pub fn skin_maps(&self, wrap: bool) -> derma_render::SkinMaps {
+        let enc = |mut m: Map| {
+            m.data_mut().iter_mut().for_each(|v| *v = 0.5 * *v + 0.5);
+            m
+        };
+        derma_render::SkinMaps {
+            base_color: self.decode_base_color(),
+            normal: self.decode_normal().map(enc),
+            roughness: self.decode_roughness(),
+            specular: self.decode_specular(),
+            subsurface: self.decode_subsurface(),
+            wrap,
+        }
     }
 
     /// Base colour (linear), normal and roughness box-filtered by the whole factor `k` (each

@@ -66,6 +66,8 @@ pub struct RenderArgs {
     /// Output directory.
     #[arg(long, default_value = "render")]
     out: PathBuf,
+    #[command(flatten)]
+    device: crate::args::DeviceArg,
 }
 
 fn parse_setup(s: &str) -> Result<Setup, String> {
@@ -95,6 +97,7 @@ pub fn render(a: RenderArgs, bars: &Bars) -> Result<()> {
         iris: a.iris,
         gaze: a.gaze,
         lake: !a.no_lake,
+        device: a.device.device,
         out: a.out,
     };
     let r = derma_export::files::run(&job, bars)?;

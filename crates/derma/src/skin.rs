@@ -181,23 +181,7 @@ pub fn run(args: SkinArgs, bars: &Bars) -> Result<()> {
     }
     generator.check_output(&args.out)?;
     let set = generator.run()?;
-    let shaded = match derma_render::sheet::skin_views(&set, args.device.device) {
-        Ok(Some((views, adapter))) => {
-            bars.say(format!("preview rendered by derma-render on {adapter}"));
-            Some(views)
-        }
-        Ok(None) => {
-            bars.say("preview drawn by the software renderer (no hardware GPU; --device gpu uses any Vulkan/Metal/DX12 adapter)");
-            None
-        }
-        Err(e) => {
-            bars.say(format!(
-                "preview drawn by the software renderer: the GPU renderer failed ({e})"
-            ));
-            None
-        }
-    };
-    set.write_with(&args.out, bars, shaded)?;
+    set.write(&args.out, bars)?;
     if args.glb {
         // The mesh in the unit the set was painted in.
         let unit = match set.mesh_scale {

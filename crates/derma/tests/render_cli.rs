@@ -39,6 +39,8 @@ fn render_writes_each_lighting_a_sheet_and_linear_exr() {
         "--exr",
         "--yaw",
         "20",
+        "--device",
+        "gpu",
         "--out",
         s(&out),
     ]);

@@ -1,8 +1,8 @@
 //! Screen-space distance fields (thesis ch. 4): for every pixel of the globes, the distance λ to
 //! the nearest skin, from a material mask and a depth buffer — the thesis' three samplers
 //! ([`samplers`]), two exact baselines it did not compare against ([`exact`]: Felzenszwalb &
-//! Huttenlocher's linear-time transform; [`jfa`]: jump flooding), and the lacrimal lake they
-//! drive ([`lake`]). [`scene`] renders the mask and depth of the built-in head's eye region.
+//! Huttenlocher's linear-time transform; [`jfa`]: jump flooding), which drive the lacrimal lake
+//! (derma-render's `lake`). [`scene`] renders the mask and depth of the built-in head's eye region.
 //!
 //! Distances are measured in the plane Ψ through the pixel parallel to the image plane (eq. 4.6):
 //! a screen offset of d pixels at view depth z is d z / f millimetres, the same for every
@@ -11,19 +11,18 @@
 pub mod exact;
 pub mod gpu;
 pub mod jfa;
-pub mod lake;
 pub mod samplers;
 pub mod scene;
 pub mod table;
 
-/// Material ids of the mask (the thesis' M(u), one 8-bit channel).
+/// Material ids of the mask (the thesis' M(u), one 8-bit channel): derma-render's.
 pub mod material {
     /// Nothing drawn.
-    pub const NONE: u8 = 0;
+    pub const NONE: u8 = derma_render::material::MATERIAL_OTHER;
     /// Skin.
-    pub const SKIN: u8 = 1;
+    pub const SKIN: u8 = derma_render::material::MATERIAL_SKIN;
     /// An eye globe.
-    pub const EYE: u8 = 2;
+    pub const EYE: u8 = derma_render::material::MATERIAL_EYE;
 }
 
 /// The G-buffer the fields are computed from.

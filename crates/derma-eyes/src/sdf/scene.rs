@@ -1,10 +1,12 @@
 //! The G-buffer of a close-up of the built-in head's eyes (material mask, view depth, normals
-//! and albedo): a perspective z-buffer rasteriser over the skin (lids and sockets as skin) and
-//! the globes, the input the distance fields and the lake compositing need.
+//! and albedo), drawn by derma-render's rasteriser through a pinhole over the skin (lids and
+//! sockets as skin) and the globes: the input the distance fields and the lake compositing need.
 
 use super::{material, GBuffer};
 use derma_core::mesh::TriMesh;
-use glam::{Vec2, Vec3};
+use derma_render::lake::Surfaces;
+use derma_render::raster::{rasterise, Object, Projection};
+use glam::{Mat3, Vec2, Vec3};
 
 /// A pinhole camera looking down −Z (view space), at `position` in head space.
 #[derive(Clone, Copy, Debug)]
@@ -33,17 +35,19 @@ impl Camera {
         }
     }
 
+    /// The camera as derma-render's pinhole (looking down −Z: camera y down, z forward).
+    pub fn projection(&self) -> Projection {
+        Projection::Pinhole {
+            rotation: Mat3::from_diagonal(Vec3::new(1.0, -1.0, -1.0)),
+            position: self.position,
+            focal: self.focal,
+            principal: Vec2::new(self.width as f32 * 0.5, self.height as f32 * 0.5),
+        }
+    }
+
     /// Pixel coordinates and view depth of a head-space point.
     pub fn project(&self, p: Vec3) -> (Vec2, f32) {
-        let v = p - self.position;
-        let z = -v.z;
-        (
-            Vec2::new(
-                self.width as f32 * 0.5 + self.focal * v.x / z,
-                self.height as f32 * 0.5 - self.focal * v.y / z,
-            ),
-            z,
-        )
+        self.projection().project(p)
     }
 }
 
@@ -67,73 +71,31 @@ pub struct Layer<'a> {
     pub albedo: &'a (dyn Fn(Vec2) -> Vec3 + Sync),
 }
 
-/// Rasterises the layers (perspective-correct interpolation, nearest surface wins).
+/// Rasterises the layers with derma-render's rasteriser (perspective-correct interpolation,
+/// nearest surface wins).
 pub fn render(cam: &Camera, layers: &[Layer]) -> Scene {
     let (w, h) = (cam.width, cam.height);
-    let mut depth = vec![f32::INFINITY; w * h];
+    let objects: Vec<Object> = layers
+        .iter()
+        .map(|l| Object {
+            mesh: l.mesh,
+            coverage: None,
+        })
+        .collect();
+    let hits = rasterise(&objects, &cam.projection(), w, h);
+    let mut depth = vec![0.0; w * h];
     let mut mask = vec![material::NONE; w * h];
     let mut normal = vec![Vec3::Z; w * h];
     let mut albedo = vec![Vec3::ZERO; w * h];
-    for l in layers {
-        let m = l.mesh;
-        let proj: Vec<(Vec2, f32)> = m.positions.iter().map(|&p| cam.project(p)).collect();
-        for t in &m.triangles {
-            let [a, b, c] = t.map(|i| proj[i as usize]);
-            if a.1 <= 1.0 || b.1 <= 1.0 || c.1 <= 1.0 {
-                continue;
-            }
-            let area = (b.0 - a.0).perp_dot(c.0 - a.0);
-            if area.abs() < 1e-9 {
-                continue;
-            }
-            let lo = a.0.min(b.0).min(c.0).floor().max(Vec2::ZERO);
-            let hi =
-                a.0.max(b.0)
-                    .max(c.0)
-                    .ceil()
-                    .min(Vec2::new(w as f32 - 1.0, h as f32 - 1.0));
-            if lo.x > hi.x || lo.y > hi.y {
-                continue;
-            }
-            for y in lo.y as usize..=hi.y as usize {
-                for x in lo.x as usize..=hi.x as usize {
-                    let s = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                    let w0 = (c.0 - b.0).perp_dot(s - b.0) / area;
-                    let w1 = (a.0 - c.0).perp_dot(s - c.0) / area;
-                    let w2 = 1.0 - w0 - w1;
-                    if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
-                        continue;
-                    }
-                    // Perspective-correct weights.
-                    let q = [w0 / a.1, w1 / b.1, w2 / c.1];
-                    let qs = q[0] + q[1] + q[2];
-                    let z = 1.0 / qs;
-                    let i = y * w + x;
-                    if z < depth[i] {
-                        depth[i] = z;
-                        mask[i] = l.material;
-                        let bw = q.map(|v| v * z);
-                        let n = t
-                            .iter()
-                            .zip(bw)
-                            .map(|(&k, wk)| m.normals[k as usize] * wk)
-                            .sum::<Vec3>();
-                        normal[i] = n.normalize_or(Vec3::Z);
-                        let uv: Vec2 = t
-                            .iter()
-                            .zip(bw)
-                            .map(|(&k, wk)| m.uvs[k as usize] * wk)
-                            .sum();
-                        albedo[i] = (l.albedo)(uv);
-                    }
-                }
-            }
-        }
-    }
-    for d in depth.iter_mut() {
-        if !d.is_finite() {
-            *d = 0.0;
-        }
+    for (i, hit) in hits.iter().enumerate() {
+        let Some(hit) = hit else { continue };
+        let l = &layers[hit.object as usize];
+        depth[i] = hit.depth;
+        mask[i] = l.material;
+        normal[i] = hit
+            .interpolate(l.mesh, &l.mesh.normals)
+            .normalize_or(Vec3::Z);
+        albedo[i] = (l.albedo)(hit.interpolate(l.mesh, &l.mesh.uvs));
     }
     Scene {
         g: GBuffer {
@@ -145,6 +107,20 @@ pub fn render(cam: &Camera, layers: &[Layer]) -> Scene {
         },
         normal,
         albedo,
+    }
+}
+
+impl Scene {
+    /// The scene as derma-render's lake compositing reads it.
+    pub fn surfaces<'a>(&'a self, px_per_mm: &'a (dyn Fn(usize) -> f32 + Sync)) -> Surfaces<'a> {
+        Surfaces {
+            width: self.g.width,
+            height: self.g.height,
+            material: &self.g.mask,
+            normal: &self.normal,
+            albedo: &self.albedo,
+            px_per_mm,
+        }
     }
 }
 

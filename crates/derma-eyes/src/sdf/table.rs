@@ -6,9 +6,8 @@ use super::{error_percent, exact, jfa, material, GBuffer};
 use serde::Serialize;
 use std::time::Instant;
 
-/// The lake's range Λ (mm) the table uses: the meniscus and its fade reach about a millimetre
-/// from the lid margin.
-pub const RANGE_MM: f32 = 1.0;
+/// The lake's range Λ (mm) the table uses: derma-render's lake.
+pub const RANGE_MM: f32 = derma_render::lake::RANGE_MM;
 
 /// The samplers of the table: the thesis' settings (64 samples at most per texel) and derma's
 /// refined backtracking.

@@ -1,17 +1,17 @@
-//! Previews without a GPU: a small software rasteriser that shades a textured mesh (and props
-//! such as eyes and teeth) under a key and a fill light — Lambert diffuse plus a GGX specular
-//! lobe (Walter et al. 2007) — and lays renders and map thumbnails out as a contact sheet.
-//! Enough to judge a texture set at a glance; the renderer crate is the real thing.
+//! The renderer without a GPU: a textured mesh (and props such as eyes and teeth) rasterised by
+//! [`crate::raster`] and shaded under a key and a fill light — Lambert diffuse plus a GGX
+//! specular lobe (Walter et al. 2007), no subsurface scattering or shadows. What previews use
+//! (`derma skin`'s preview.png, the rig's frames, the eyes' frames) where the GPU path's passes
+//! are not needed.
 
-use crate::color::srgb_encode;
-use crate::mesh::TriMesh;
-use crate::Map;
+use crate::raster::{rasterise, Object, Projection};
+use derma_core::mesh::TriMesh;
+use derma_core::Map;
 use glam::{Mat3, Vec2, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::PI;
 
-/// Specular maps store F0 / 0.08 (the Unreal/Substance "specular" convention: 0.5 ↔ F0 = 4 %).
-pub const SPECULAR_SCALE: f32 = 0.08;
+use crate::material::SPECULAR_SCALE;
 
 /// A uniform material for surfaces without maps of their own: flat normals, one perceptual
 /// roughness and one specular level (F0 / [`SPECULAR_SCALE`]), as 1×1 maps.
@@ -95,7 +95,7 @@ pub trait Material: Sync {
 
 impl Material for Textures<'_> {
     fn sample(&self, uv: Vec2) -> MaterialSample {
-        let taps = crate::map::Taps::uv(
+        let taps = derma_core::map::Taps::uv(
             self.base_color[0].width(),
             self.base_color[0].height(),
             uv.x,
@@ -135,11 +135,21 @@ pub struct Prop<'a> {
     pub coverage: Option<&'a (dyn Fn(Vec2) -> f32 + Sync)>,
 }
 
-/// Threshold in [0, 1) of pixel (x, y): the 4×4 Bayer matrix, so a coverage c draws about c of
-/// the pixels, evenly spread.
-fn dither(x: usize, y: usize) -> f32 {
-    const BAYER: [[u8; 4]; 4] = [[0, 8, 2, 10], [12, 4, 14, 6], [3, 11, 1, 9], [15, 7, 13, 5]];
-    (BAYER[y % 4][x % 4] as f32 + 0.5) / 16.0
+/// The parts of `head` as props with their looks ([`derma_head::Look`]).
+pub fn head_props(head: &derma_head::Head) -> Vec<Prop<'_>> {
+    head.parts
+        .iter()
+        .map(|p| {
+            let look = derma_head::Look::of(&p.name);
+            Prop {
+                mesh: &p.mesh,
+                albedo: look.albedo,
+                roughness: look.roughness,
+                f0: look.f0,
+                coverage: look.coverage,
+            }
+        })
+        .collect()
 }
 
 /// Renders `mesh` (with per-corner tangents) seen from direction `view_yaw` (radians about +Y,
@@ -191,73 +201,36 @@ pub fn render_lit(
     lights: &[Light],
 ) -> [Map; 3] {
     let rot = Mat3::from_rotation_y(-view_yaw);
-    let pts: Vec<Vec3> = mesh.positions.iter().map(|&p| rot * p).collect();
-    let (lo, hi) = pts.iter().fold(
+    let (lo, hi) = mesh.positions.iter().map(|&p| rot * p).fold(
         (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-        |(a, b), &p| (a.min(p), b.max(p)),
+        |(a, b), p| (a.min(p), b.max(p)),
     );
-    let centre = 0.5 * (lo + hi);
-    let scale = 0.92 * size as f32 / (hi - lo).x.max((hi - lo).y);
-    let to_screen = |p: Vec3| {
-        Vec3::new(
-            (p.x - centre.x) * scale + 0.5 * size as f32,
-            (centre.y - p.y) * scale + 0.5 * size as f32,
-            p.z,
-        )
+    let projection = Projection::Orthographic {
+        rotation: rot,
+        centre: 0.5 * (lo + hi),
+        scale: 0.92 * size as f32 / (hi - lo).x.max((hi - lo).y),
+        origin: Vec2::splat(0.5 * size as f32),
     };
-    // G-buffer: object (0 = the surface, k + 1 = prop k), triangle and barycentrics of the
-    // nearest surface per pixel.
-    let mut depth = vec![f32::NEG_INFINITY; size * size];
-    let mut gbuf = vec![(u32::MAX, u32::MAX, 0.0f32, 0.0f32); size * size];
-    let objects = std::iter::once((mesh, None)).chain(props.iter().map(|p| (p.mesh, p.coverage)));
-    for (obj, (m, coverage)) in objects.enumerate() {
-        let scr: Vec<Vec3> = m.positions.iter().map(|&p| to_screen(rot * p)).collect();
-        for (ti, t) in m.triangles.iter().enumerate() {
-            let [a, b, c] = t.map(|i| scr[i as usize]);
-            let area = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
-            if area.abs() < 1e-12 {
-                continue;
-            }
-            let x0 = a.x.min(b.x).min(c.x).floor().max(0.0) as usize;
-            let x1 = (a.x.max(b.x).max(c.x).ceil() as usize).min(size - 1);
-            let y0 = a.y.min(b.y).min(c.y).floor().max(0.0) as usize;
-            let y1 = (a.y.max(b.y).max(c.y).ceil() as usize).min(size - 1);
-            for y in y0..=y1 {
-                for x in x0..=x1 {
-                    let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);
-                    let w1 = ((px - a.x) * (c.y - a.y) - (c.x - a.x) * (py - a.y)) / area;
-                    let w2 = ((b.x - a.x) * (py - a.y) - (px - a.x) * (b.y - a.y)) / area;
-                    let w0 = 1.0 - w1 - w2;
-                    if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
-                        continue;
-                    }
-                    let z = a.z * w0 + b.z * w1 + c.z * w2;
-                    let k = y * size + x;
-                    if let Some(cov) = coverage {
-                        let uv = m.uvs[t[0] as usize] * w0
-                            + m.uvs[t[1] as usize] * w1
-                            + m.uvs[t[2] as usize] * w2;
-                        if cov(uv) <= dither(x, y) {
-                            continue;
-                        }
-                    }
-                    if z > depth[k] {
-                        depth[k] = z;
-                        gbuf[k] = (obj as u32, ti as u32, w1, w2);
-                    }
-                }
-            }
-        }
-    }
+    // Object 0 is the surface, k + 1 prop k.
+    let objects: Vec<Object> = std::iter::once(Object {
+        mesh,
+        coverage: None,
+    })
+    .chain(props.iter().map(|p| Object {
+        mesh: p.mesh,
+        coverage: p.coverage,
+    }))
+    .collect();
+    let hits = rasterise(&objects, &projection, size, size);
     let ambient = Vec3::new(0.08, 0.085, 0.1);
     let view = Vec3::Z;
-    let pixels: Vec<Vec3> = gbuf
+    let pixels: Vec<Vec3> = hits
         .par_iter()
-        .map(|&(obj, ti, w1, w2)| {
-            if ti == u32::MAX {
+        .map(|hit| {
+            let Some(hit) = hit else {
                 return Vec3::splat(0.02);
-            }
-            let w0 = 1.0 - w1 - w2;
+            };
+            let (obj, ti, [w0, w1, w2]) = (hit.object, hit.triangle, hit.weights);
             if obj > 0 {
                 let p = &props[obj as usize - 1];
                 let t = p.mesh.triangles[ti as usize];
@@ -352,7 +325,7 @@ pub fn sphere(radius: f32, seg: usize) -> (TriMesh, Vec<[f32; 4]>) {
             m.triangles.push([b, c, d]);
         }
     }
-    let tangents = crate::mesh::mikktspace_tangents(&m);
+    let tangents = derma_core::mesh::mikktspace_tangents(&m);
     (m, tangents)
 }
 
@@ -370,57 +343,8 @@ pub fn tile(size: f32) -> (TriMesh, Vec<[f32; 4]>) {
         uvs: vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y],
         triangles: vec![[0, 1, 2], [0, 2, 3]],
     };
-    let t = crate::mesh::mikktspace_tangents(&m);
+    let t = derma_core::mesh::mikktspace_tangents(&m);
     (m, t)
-}
-
-/// Lays out the preview: the render(s) on the left, a 3×2 contact sheet of maps on the right
-/// (none when `sheet` is empty).
-/// Returns encoded sRGB channels.
-pub fn compose(renders: &[[Map; 3]], sheet: &[[Map; 3]], panel: usize) -> [Map; 3] {
-    let thumb = panel / 2;
-    let width = panel * renders.len() + if sheet.is_empty() { 0 } else { thumb * 3 };
-    let height = panel;
-    let mut out = [
-        Map::filled(width, height, 0.0),
-        Map::filled(width, height, 0.0),
-        Map::filled(width, height, 0.0),
-    ];
-    let mut blit = |img: &[Map; 3], x0: usize, y0: usize, n: usize, encode: bool| {
-        for k in 0..3 {
-            let r = img[k].resized(n, n);
-            for y in 0..n {
-                for x in 0..n {
-                    let v = r.get(x, y);
-                    out[k].set(x0 + x, y0 + y, if encode { srgb_encode(v) } else { v });
-                }
-            }
-        }
-    };
-    for (i, r) in renders.iter().enumerate() {
-        blit(r, i * panel, 0, panel, true);
-    }
-    for (i, s) in sheet.iter().take(6).enumerate() {
-        blit(
-            s,
-            panel * renders.len() + (i % 3) * thumb,
-            (i / 3) * thumb,
-            thumb,
-            false,
-        );
-    }
-    out
-}
-
-/// Greyscale thumbnail channels of `m` normalised to its [min, max].
-pub fn normalised(m: &Map) -> [Map; 3] {
-    let s = m.stats(None);
-    let span = (s.max - s.min).max(1e-12);
-    let mut n = m.clone();
-    n.data_mut()
-        .iter_mut()
-        .for_each(|v| *v = (*v - s.min) / span);
-    [n.clone(), n.clone(), n]
 }
 
 #[cfg(test)]

@@ -1,6 +1,6 @@
 //! Renders the built-in head with a texture set from `derma skin` under both lighting setups.
 //!
-//! cargo run --release -p derma-render --example 01_render_head -- [SKIN_DIR] [OUT_DIR]
+//! cargo run --release -p derma-skin --example 04_render_head -- [SKIN_DIR] [OUT_DIR]
 //! (default: generates a 1024² set in a temporary directory and writes the renders there)
 
 use derma_render::{Renderer, Scene, Setup, SkinMaps, View};

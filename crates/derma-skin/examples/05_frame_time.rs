@@ -2,11 +2,11 @@
 //! eyes with refracting corneas, the key light's shadow map), rendered frame after frame into
 //! the same targets without read-back, as an interactive viewer would.
 //!
-//! cargo run --release -p derma-render --example 02_frame_time -- [SIZES] [FRAMES]
+//! cargo run --release -p derma-skin --example 05_frame_time -- [SIZES] [FRAMES]
 //! SIZES: comma-separated WxH or N (default 256); FRAMES per size (default 3). bench/render.sh
 //! runs it at 1024² and 1920×1080.
 
-use derma_render::{Renderer, Scene, Setup, SkinMaps, View};
+use derma_render::{Renderer, Scene, Setup, View};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -15,7 +15,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut g = derma_skin::SkinGenerator::new(derma_skin::SkinConfig::default());
     g.config_mut().size = 1024;
     let set = g.run()?;
-    let maps = SkinMaps::from_render_maps(&set.render, false);
+    let maps = set.render.skin_maps(false);
     let scene = Scene::head(derma_head::Head::builtin(), maps, &[], None, (0.0, 0.0));
     let triangles: usize = scene.parts.iter().map(|p| p.vertices.len() / 3).sum();
     let r = Renderer::new(&scene)?;

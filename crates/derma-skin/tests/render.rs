@@ -10,7 +10,7 @@ fn skin(size: u32) -> SkinMaps {
     let mut g = derma_skin::SkinGenerator::new(derma_skin::SkinConfig::default());
     g.config_mut().size = size;
     let set = g.run().expect("skin");
-    SkinMaps::from_render_maps(&set.render, false)
+    set.render.skin_maps(false)
 }
 
 fn frame(r: &Renderer, n: u32) -> Rendered {
@@ -243,7 +243,7 @@ fn the_lacrimal_lake_lines_the_lid_margins_and_touches_nothing_else() {
     if derma_test_support::skip_without_gpu() {
         return;
     }
-    use derma_render::renderer::{MATERIAL_EYE, MATERIAL_SKIN};
+    use derma_render::material::{MATERIAL_EYE, MATERIAL_SKIN};
     let scene = Scene::head(
         derma_head::Head::builtin(),
         skin(256),
@@ -282,7 +282,7 @@ fn the_lacrimal_lake_lines_the_lid_margins_and_touches_nothing_else() {
         .iter()
         .map(|e| (e.centre + glam::Vec3::Z * e.radius - cam.eye).dot(cam.forward))
         .fold(f32::MAX, f32::min);
-    let reach_px = derma_eyes::sdf::table::RANGE_MM * cam.focal_px / near;
+    let reach_px = derma_render::lake::RANGE_MM * cam.focal_px / near;
     let skin_px: Vec<(i64, i64)> = (0..n * n)
         .filter(|&i| m[i] == MATERIAL_SKIN)
         .map(|i| ((i % n) as i64, (i / n) as i64))
@@ -300,7 +300,7 @@ fn the_lacrimal_lake_lines_the_lid_margins_and_touches_nothing_else() {
         "the lake reaches {far} px; Λ is {reach_px} px"
     );
     // Every globe pixel next to the skin is under the meniscus, and it darkens them
-    // (absorption along the double pass, derma-eyes' sdf::lake).
+    // (absorption along the double pass, derma-render's lake).
     let margin: Vec<usize> = (n + 1..n * n - n - 1)
         .filter(|&i| {
             m[i] == MATERIAL_EYE
