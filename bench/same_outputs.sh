@@ -66,8 +66,11 @@ run() { # run BINARY OUT_DIR
   "$d" photo chromophores --texture "$o/photo/bake/texture.exr" --mask "$o/photo/bake/mask.png" --out "$o/photo/chromo" --quiet > "$o/photo/chromo.txt"
   "$d" photo iris --photo "$o/eyes/sdf/lake.png" --size 128 --out "$o/photo/iris" --quiet > "$o/photo/iris.txt"
   "$d" photo teeth --photo "$o/eyes/sdf/lake.png" --size 128 --out "$o/photo/teeth" --quiet > "$o/photo/teeth.txt" || true
-  # Renders of the skin set (GPU renderer where an adapter opens, e.g. lavapipe), GLB and web.
-  "$d" render "$in/skin" --size 160x120 --out "$o/render" --quiet
+  # Renders of the skin set on the GPU renderer (any adapter, e.g. lavapipe; binaries from
+  # before `derma render --device` always took one), GLB and web.
+  local gpu=()
+  if "$d" render --help | grep -q -- --device; then gpu=(--device gpu); fi
+  "$d" render "$in/skin" --size 160x120 "${gpu[@]}" --out "$o/render" --quiet
   mkdir -p "$o/export"
   "$d" export glb "$in/skin" --out "$o/export/head.glb" --quiet
   "$d" export web "$in/skin" --rig "$o/rig" --out "$o/export/web" --quiet

@@ -72,6 +72,47 @@ fn render_writes_each_lighting_a_sheet_and_linear_exr() {
 }
 
 #[test]
+fn render_on_the_cpu_draws_the_same_scene_without_a_gpu_and_repeats_bit_for_bit() {
+    let d = tmp("render-cpu");
+    let set = skin(&d);
+    let go = |out: &Path| {
+        let (ok, _, err) = run(&[
+            "render",
+            s(&set),
+            "--size",
+            "200x160",
+            "--lighting",
+            "studio",
+            "--device",
+            "cpu",
+            "--exr",
+            "--out",
+            s(out),
+        ]);
+        assert!(ok, "{err}");
+    };
+    let (a, b) = (d.join("a"), d.join("b"));
+    go(&a);
+    go(&b);
+    let png = std::fs::read(a.join("studio.png")).unwrap();
+    assert_eq!(png, std::fs::read(b.join("studio.png")).unwrap());
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(a.join("render.json")).unwrap()).unwrap();
+    assert!(
+        report["adapter"].as_str().unwrap().starts_with("CPU"),
+        "{report}"
+    );
+    // The head in the middle of the frame, lit; the corners are background (zero radiance).
+    let exr = derma_core::image_io::read_exr_channels(&a.join("studio.exr")).unwrap();
+    let ch = |n: &str| &exr.iter().find(|c| c.0 == n).unwrap().1;
+    let (r, g, bl) = (ch("R"), ch("G"), ch("B"));
+    assert_eq!(r.get(0, 0), 0.0);
+    // Cheek-level skin: warm (red above green above blue).
+    let (x, y) = (100, 95);
+    assert!(r.get(x, y) > g.get(x, y) && g.get(x, y) > bl.get(x, y) && bl.get(x, y) > 0.0);
+}
+
+#[test]
 fn render_names_what_is_wrong() {
     let d = tmp("render-errors");
     std::fs::create_dir_all(d.join("empty")).unwrap();
