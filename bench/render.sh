@@ -2,8 +2,8 @@
 # Renderer figures (BENCHMARKS.md): frame time of the built-in head with a 1024² texture set —
 # shadow map, forward pass, separable subsurface blur, refracting eyes, composite — at 1024² and
 # 1920×1080, frame after frame without read-back, on whatever adapter wgpu opens (Mesa's
-# lavapipe on a machine without a GPU); then one `derma render` of both setups with read-back
-# and PNG encoding. FRAMES (default 20) per size.
+# lavapipe on a machine without a GPU); then one `derma render --device gpu` (the GPU renderer on
+# any adapter) of both setups with read-back and PNG encoding. FRAMES (default 20) per size.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
@@ -14,4 +14,4 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 target/release/derma skin --size 1024 --out "$work/skin" --quiet
 /usr/bin/time -f "derma render (2 setups, 1024², with read-back and PNG): %e s wall, %M KB peak" \
-  target/release/derma render "$work/skin" --out "$work/render" --quiet
+  target/release/derma render "$work/skin" --device gpu --out "$work/render" --quiet

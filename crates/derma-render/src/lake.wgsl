@@ -64,7 +64,7 @@ fn fs_lake_depth(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {
     return vec4<f32>(lake.shape.x * (1.0 - lambda / lake.shape.y), 0.0, 0.0, 0.0);
 }
 
-// Meniscus depth at p for the slope: skin neighbours stand at the full height (sdf/lake.rs).
+// Meniscus depth at p for the slope: skin neighbours stand at the full height (lake.rs).
 fn depth_at(p: vec2<i32>) -> f32 {
     if (is_skin(p)) {
         return lake.shape.x;
