@@ -3,7 +3,8 @@
 //! same camera, lights, GGX with height-correlated Smith visibility (Heitz 2014), hemisphere
 //! environment (Karis 2014's split-sum fit) and ACES tone mapping (Narkowicz 2015) as
 //! lighting.wgsl and composite.wgsl, without subsurface scattering, shadows, the lacrimal lake
-//! or corneal refraction.
+//! or corneal refraction (and triangles with a corner within 1 mm of the camera are dropped,
+//! not clipped).
 
 use crate::camera::{Camera, View};
 use crate::error::Result;
@@ -198,12 +199,20 @@ impl Draw for CpuRenderer<'_> {
             sky: lighting.sky,
             ground: lighting.ground,
         };
+        // Cards are cut where their coverage falls below ½, as forward.wgsl discards them (the
+        // rasteriser's dither sees only 0 or 1).
         let covers: Vec<Box<dyn Fn(Vec2) -> f32 + Sync>> = self
             .coverage
             .iter()
             .map(|c| -> Box<dyn Fn(Vec2) -> f32 + Sync> {
                 match c {
-                    Some(m) => Box::new(move |uv: Vec2| m.sample_uv(uv.x, uv.y, false)),
+                    Some(m) => Box::new(move |uv: Vec2| {
+                        if m.sample_uv(uv.x, uv.y, false) >= 0.5 {
+                            1.0
+                        } else {
+                            0.0
+                        }
+                    }),
                     None => Box::new(|_| 1.0),
                 }
             })
@@ -219,22 +228,26 @@ impl Draw for CpuRenderer<'_> {
             })
             .collect();
         let hits = rasterise(&objects, &projection, wu, hu);
-        let shaded: Vec<(Vec3, u8)> = hits
+        let shaded: Vec<Option<(Vec3, u8)>> = hits
             .par_iter()
             .map(|hit| {
-                let Some(hit) = hit else {
-                    return (Vec3::NAN, MATERIAL_OTHER);
-                };
+                let hit = hit.as_ref()?;
                 let k = hit.object as usize;
                 let (mesh, part) = (&self.meshes[k], &self.scene.parts[k]);
                 let p = hit.interpolate(mesh, &mesh.positions);
                 let uv = hit.interpolate(mesh, &mesh.uvs);
                 let v = (cam.eye - p).normalize();
                 let mut ng = hit.interpolate(mesh, &mesh.normals).normalize_or(Vec3::Z);
-                if ng.dot(v) < 0.0 {
+                // Back faces show their inside as forward.wgsl does: facing from the triangle's
+                // winding (counter-clockwise in front), not the interpolated normal; the eyes'
+                // shader never flips.
+                let [a, b, c] =
+                    mesh.triangles[hit.triangle as usize].map(|i| mesh.positions[i as usize]);
+                let front = (b - a).cross(c - a).dot(cam.eye - a) >= 0.0;
+                if !front && !matches!(part.material, Material::Eye { .. }) {
                     ng = -ng;
                 }
-                match &part.material {
+                Some(match &part.material {
                     Material::Skin(s) => {
                         let at = |m: &Map| m.sample_uv(uv.x, uv.y, s.wrap);
                         let albedo = Vec3::new(
@@ -284,25 +297,29 @@ impl Draw for CpuRenderer<'_> {
                         let (d, sp) = env.light(ng, ng, v, *roughness, *f0);
                         (d * *albedo + sp, MATERIAL_OTHER)
                     }
-                }
+                })
             })
             .collect();
         let mut display = Vec::with_capacity(4 * wu * hu);
         let mut linear = Vec::with_capacity(wu * hu);
         let mut material = Vec::with_capacity(wu * hu);
-        for (i, &(rgb, m)) in shaded.iter().enumerate() {
-            material.push(m);
-            if rgb.is_nan() {
-                // The background: composite.wgsl's soft vertical gradient.
-                let t = ((i / wu) as f32 + 0.5) / h as f32;
-                let bg = Vec3::new(0.06, 0.065, 0.075).lerp(Vec3::new(0.02, 0.02, 0.025), t);
-                display.extend([byte(bg.x), byte(bg.y), byte(bg.z), 255]);
-                linear.push([0.0; 3]);
-            } else {
-                let enc =
-                    |x: f32| byte(derma_core::color::srgb_encode(aces(x * lighting.exposure)));
-                display.extend([enc(rgb.x), enc(rgb.y), enc(rgb.z), 255]);
-                linear.push(rgb.to_array());
+        for (i, s) in shaded.iter().enumerate() {
+            match *s {
+                None => {
+                    // The background: composite.wgsl's soft vertical gradient.
+                    let t = ((i / wu) as f32 + 0.5) / h as f32;
+                    let bg = Vec3::new(0.06, 0.065, 0.075).lerp(Vec3::new(0.02, 0.02, 0.025), t);
+                    display.extend([byte(bg.x), byte(bg.y), byte(bg.z), 255]);
+                    linear.push([0.0; 3]);
+                    material.push(MATERIAL_OTHER);
+                }
+                Some((rgb, m)) => {
+                    let enc =
+                        |x: f32| byte(derma_core::color::srgb_encode(aces(x * lighting.exposure)));
+                    display.extend([enc(rgb.x), enc(rgb.y), enc(rgb.z), 255]);
+                    linear.push(rgb.to_array());
+                    material.push(m);
+                }
             }
         }
         Ok(Rendered {

@@ -32,8 +32,9 @@ pub fn depth(lambda: f32, range: f32) -> f32 {
 }
 
 /// A G-buffer the CPU compositing reads: per pixel the material ([`MATERIAL_SKIN`],
-/// [`MATERIAL_EYE`], [`MATERIAL_OTHER`] for nothing), view-space normal and linear albedo, and
-/// the pixels per millimetre at the pixel's depth.
+/// [`MATERIAL_EYE`]; anything else, [`MATERIAL_OTHER`], is shaded as the background — the eyes'
+/// close-up draws only skin and globes), view-space normal and linear albedo, and the pixels per
+/// millimetre at the pixel's depth.
 pub struct Surfaces<'a> {
     /// Width (px).
     pub width: usize,

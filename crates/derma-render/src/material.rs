@@ -1,6 +1,7 @@
-//! The materials the renderer draws: a derma texture set (from `derma skin`'s output directory
-//! or straight from memory) as linear maps, and the built-in parts' materials (eyes with their
-//! iris texture, lash cards, teeth, tongue).
+//! The materials the renderer draws: a derma texture set (from `derma skin`'s output directory,
+//! or built by derma-skin's `RenderMaps::skin_maps` in memory) as linear maps, the file names
+//! and encodings it reads, and the built-in parts' materials (eyes with their iris texture, lash
+//! cards, teeth, tongue).
 
 use crate::error::{RenderError, Result};
 use derma_core::image_io::read_rgb;

@@ -728,10 +728,15 @@ impl TextureSet {
                 )));
                 Some(views)
             }
-            Ok(None) => None,
+            Ok(None) => {
+                job.note(Note::info(
+                    "preview drawn by derma-render's CPU previews (no hardware GPU, --device cpu, or a flat patch; --device gpu takes any adapter)",
+                ));
+                None
+            }
             Err(e) => {
                 job.note(Note::warning(format!(
-                    "preview drawn by the CPU renderer: the GPU renderer failed ({e})"
+                    "preview drawn by the CPU previews: the GPU renderer failed ({e})"
                 )));
                 None
             }

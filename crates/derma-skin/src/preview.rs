@@ -53,8 +53,8 @@ pub fn gpu_views(
 
 /// Shaded views of `render_maps` on its mesh (or a sphere and a tile for patches) plus the contact
 /// sheet (base colour, normal, height, roughness, melanin, blood): preview.png. `shaded`: views
-/// already rendered (by the GPU renderer, linear radiance after tone mapping, [`PANEL`]²); `None` draws them with the
-/// software renderer.
+/// already rendered (by the GPU renderer, linear radiance after tone mapping, [`PANEL`]²); `None`
+/// draws them with derma-render's CPU previews.
 pub fn contact_sheet(
     render_maps: &RenderMaps,
     bio: &BioMaps,

@@ -145,7 +145,7 @@ impl RenderMaps {
         ([r, g, b], [nx, ny, nz], ro)
     }
 
-    /// The maps as the software renderer's material, sampled from their encodings (bilinear,
+    /// The maps as a material of derma-render's CPU previews, sampled from their encodings (bilinear,
     /// the same values as sampling [`Self::decode_base_color`] and the others, without the
     /// decoded copies); `wrap` repeats them, `uv_scale` tiles them.
     pub fn material(&self, wrap: bool, uv_scale: glam::Vec2) -> EncodedMaterial<'_> {
@@ -157,7 +157,7 @@ impl RenderMaps {
     }
 }
 
-/// [`RenderMaps`] as a [`Material`] of the software renderer.
+/// [`RenderMaps`] as a [`Material`] of derma-render's CPU previews.
 pub struct EncodedMaterial<'a> {
     maps: &'a RenderMaps,
     wrap: bool,

@@ -74,8 +74,8 @@ pub struct SkinArgs {
     #[arg(long, conflicts_with = "patch")]
     glb: bool,
     /// Where `[detail]`'s exemplar synthesis and the preview's renderer run (the texture files
-    /// are the same on every device; the preview is drawn by derma-render on a GPU and by the
-    /// software renderer otherwise).
+    /// are the same on every device; the preview is drawn by derma-render on a GPU and by its
+    /// CPU renderer otherwise).
     #[command(flatten)]
     device: crate::args::DeviceArg,
 }
