@@ -43,8 +43,11 @@ fn smith_vis(nl: f32, nv: f32, a: f32) -> f32 {
     return 0.5 / max(gv + gl, 1e-5);
 }
 
+// Schlick's Fresnel. The cosine is clamped: a dot product of unit vectors can round past 1, and
+// WGSL's pow of a negative base is undefined (NaN on lavapipe; one such pixel spread by the
+// blur into a 20-pixel black square).
 fn schlick(f0: f32, vh: f32) -> f32 {
-    return f0 + (1.0 - f0) * pow(1.0 - vh, 5.0);
+    return f0 + (1.0 - f0) * pow(clamp(1.0 - vh, 0.0, 1.0), 5.0);
 }
 
 // Hemisphere environment: sky above, ground below, blended over ±0.3 of the up component.

@@ -337,3 +337,34 @@ fn the_lacrimal_lake_lines_the_lid_margins_and_touches_nothing_else() {
         margin.len()
     );
 }
+
+#[test]
+fn no_pixel_is_ever_not_a_number() {
+    // A 512² set seen from 35° once rendered a dot product of unit vectors just past 1 into
+    // Schlick's pow(1 − cos, 5): NaN on lavapipe, spread by the blur into a 20-pixel black
+    // square on the scalp. The same set and view must give finite radiance everywhere.
+    if derma_test_support::skip_without_gpu() {
+        return;
+    }
+    let scene = Scene::head(
+        derma_head::Head::builtin(),
+        skin(512),
+        &[],
+        None,
+        (0.0, 0.0),
+    );
+    let r = Renderer::new(&scene).expect("renderer");
+    let view = View {
+        yaw_deg: 35.0,
+        ..Default::default()
+    };
+    let img = r
+        .render(&view, &Setup::Studio.lighting(), 512, 512)
+        .unwrap();
+    let bad = img
+        .linear
+        .iter()
+        .filter(|p| p.iter().any(|v| !v.is_finite()))
+        .count();
+    assert_eq!(bad, 0, "{bad} pixels are not finite");
+}
