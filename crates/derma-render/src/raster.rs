@@ -122,6 +122,9 @@ pub fn rasterise(
 ) -> Vec<Option<Hit>> {
     let perspective = matches!(projection, Projection::Pinhole { .. });
     let mut out: Vec<Option<Hit>> = vec![None; width * height];
+    if out.is_empty() {
+        return out;
+    }
     let mut depth = vec![f32::INFINITY; width * height];
     for (obj, o) in objects.iter().enumerate() {
         let m = o.mesh;
@@ -274,6 +277,23 @@ mod tests {
             n += 1;
         }
         assert!(n > 500, "{n}");
+    }
+
+    #[test]
+    fn an_empty_image_has_no_pixels() {
+        let m = quad(-10.0, 1.0);
+        let o = [Object {
+            mesh: &m,
+            coverage: None,
+        }];
+        let p = Projection::Orthographic {
+            rotation: Mat3::IDENTITY,
+            centre: Vec3::ZERO,
+            scale: 1.0,
+            origin: Vec2::ZERO,
+        };
+        assert!(rasterise(&o, &p, 0, 8).is_empty());
+        assert!(rasterise(&o, &p, 8, 0).is_empty());
     }
 
     #[test]
