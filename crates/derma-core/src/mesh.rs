@@ -300,6 +300,26 @@ impl TriMesh {
         Ok(())
     }
 
+    /// Triangles wound against their vertex normals: the geometric normal (b − a) × (c − a) of
+    /// a counter-clockwise front face (glTF's and OBJ's convention) points away from the mean
+    /// of its corners' normals. Degenerate triangles and meshes without normals count none.
+    /// Renderers that cull or shade by winding (Blender's Cycles, engines) show these from
+    /// behind.
+    pub fn inward_triangles(&self) -> usize {
+        if self.normals.len() != self.positions.len() {
+            return 0;
+        }
+        self.triangles
+            .iter()
+            .filter(|t| {
+                let [a, b, c] = t.map(|i| self.positions[i as usize]);
+                let g = (b - a).cross(c - a);
+                let n: Vec3 = t.iter().map(|&i| self.normals[i as usize]).sum();
+                g.length_squared() > 1e-20 && g.dot(n) < 0.0
+            })
+            .count()
+    }
+
     /// Largest extent of the axis-aligned bounding box.
     pub fn extent(&self) -> f32 {
         let (lo, hi) = self.bounds();

@@ -124,8 +124,11 @@ pub fn write(
             })
             .collect()
     };
-    let mut target_vecs: Vec<Vec<f64>> = vec![pca.mean.clone()];
-    target_vecs.extend(pca.components.iter().cloned());
+    // glTF's morph weights belong in [0, 1] (Blender's importer clamps them to ±10 and mishandles
+    // larger ones): each component's weights w ∈ [lo, hi] over the clip become (w − lo)/(hi − lo)
+    // on the target scaled by hi − lo, and lo × the component moves into the mean target
+    // (weight 1). The same offsets at every frame, exactly.
+    let (weights, target_vecs) = unit_weights(&pca.mean, &pca.components, &weights);
     let names: Vec<String> = std::iter::once("eyeRegionMean".to_string())
         .chain((1..target_vecs.len()).map(|c| format!("eyeRegionPC{c}")))
         .collect();
@@ -341,5 +344,73 @@ impl CorneaCap for derma_core::mesh::TriMesh {
         self.triangles
             .retain(|t| t.iter().all(|&i| self.positions[i as usize].z >= zl));
         self
+    }
+}
+/// Per-frame `weights` of `components` over a `mean` rewritten so every weight lies in [0, 1]:
+/// returns the new weights and the targets (the mean first, weight 1 at every frame).
+fn unit_weights(
+    mean: &[f64],
+    components: &[Vec<f64>],
+    weights: &[Vec<f64>],
+) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    let mut base = mean.to_vec();
+    let mut targets = Vec::with_capacity(components.len() + 1);
+    let mut ranges = Vec::with_capacity(components.len());
+    for (c, comp) in components.iter().enumerate() {
+        let (lo, hi) = weights
+            .iter()
+            .map(|w| w[c])
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                (a.min(x), b.max(x))
+            });
+        let span = hi - lo;
+        for (b, v) in base.iter_mut().zip(comp) {
+            *b += lo * v;
+        }
+        targets.push(comp.iter().map(|v| v * span).collect::<Vec<f64>>());
+        ranges.push((lo, span));
+    }
+    let unit = weights
+        .iter()
+        .map(|w| {
+            w.iter()
+                .zip(&ranges)
+                .map(|(&x, &(lo, span))| {
+                    if span > 0.0 {
+                        ((x - lo) / span).clamp(0.0, 1.0)
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let mut all = vec![base];
+    all.extend(targets);
+    (unit, all)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unit_weights_keep_every_frame_and_stay_in_zero_one() {
+        // Two components over three coordinates, weights from −29 to 12 (the range a saccade
+        // reached before).
+        let mean = vec![1.0, -2.0, 0.5];
+        let comps = vec![vec![0.3, 0.1, -0.2], vec![-0.05, 0.4, 0.25]];
+        let weights = vec![vec![-29.0, 3.0], vec![12.0, 3.0], vec![0.5, 3.0]];
+        let (unit, targets) = unit_weights(&mean, &comps, &weights);
+        for (w, u) in weights.iter().zip(&unit) {
+            assert!(u.iter().all(|x| (0.0..=1.0).contains(x)), "{u:?}");
+            for j in 0..3 {
+                let before = mean[j] + w[0] * comps[0][j] + w[1] * comps[1][j];
+                let after = targets[0][j] + u[0] * targets[1][j] + u[1] * targets[2][j];
+                assert!((before - after).abs() < 1e-12, "{before} vs {after}");
+            }
+        }
+        // A component constant over the clip folds into the mean with weight 0.
+        assert!(unit.iter().all(|u| u[1] == 0.0));
     }
 }
