@@ -60,6 +60,20 @@ fn eye_texture_png(size: usize, texture: Option<&[derma_core::Map; 3]>) -> crate
     )?)
 }
 
+/// The lash cards' texture as PNG bytes: the lashes' colour ([`derma_head::Look`]) in RGB and
+/// their coverage ([`derma_head::eye::lash_coverage`]) in alpha, for alpha testing.
+fn lash_texture_png(size: usize) -> crate::Result<Vec<u8>> {
+    let look = derma_head::Look::of("eyelashes");
+    let rgb = (look.albedo)(Vec2::splat(0.5))
+        .to_array()
+        .map(|v| derma_core::Map::filled(size, size, derma_core::color::srgb_encode(v)));
+    let alpha = derma_render::material::lash_coverage_map(size);
+    Ok(derma_core::image_io::png8_bytes(
+        "the lash texture",
+        &[&rgb[0], &rgb[1], &rgb[2], &alpha],
+    )?)
+}
+
 /// Writes `path`: the head with `baked` motion on the eye region (`region` maps skin vertices to
 /// model vertices), the globes textured with `eye` (linear RGB on the head's eye UVs) or the
 /// default eye.
@@ -177,7 +191,10 @@ pub fn write(
         {"name": "skin", "pbrMetallicRoughness": {"baseColorFactor": [0.56, 0.36, 0.28, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.55}},
         {"name": "eye", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0, "roughnessFactor": 0.3}},
         {"name": "cornea", "alphaMode": "BLEND", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 0.06], "metallicFactor": 0.0, "roughnessFactor": 0.02}},
-        {"name": "lashes", "pbrMetallicRoughness": {"baseColorFactor": [0.02, 0.015, 0.012, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.6}},
+        // The lash cards: alpha-tested with the head's lash coverage (texture 1), as the head's
+        // own GLB and the renderer cut them.
+        {"name": "lashes", "alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": true,
+         "pbrMetallicRoughness": {"baseColorTexture": {"index": 1}, "metallicFactor": 0.0, "roughnessFactor": 0.6}},
         {"name": "mouth", "pbrMetallicRoughness": {"baseColorFactor": [0.62, 0.56, 0.45, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.35}}
     ]);
     let mut add = |g: &mut Glb,
@@ -291,6 +308,7 @@ pub fn write(
     }
     let png = eye_texture_png(512, eye)?;
     let iv = g.view(&png, None);
+    let lv = g.view(&lash_texture_png(256)?, None);
     let roots: Vec<usize> = (0..nodes.len())
         .filter(|i| {
             !nodes.iter().any(|n| {
@@ -308,9 +326,10 @@ pub fn write(
         "nodes": nodes,
         "meshes": meshes,
         "materials": materials,
-        "images": [{"bufferView": iv, "mimeType": "image/png", "name": "eye"}],
+        "images": [{"bufferView": iv, "mimeType": "image/png", "name": "eye"},
+                   {"bufferView": lv, "mimeType": "image/png", "name": "eyelashes"}],
         "samplers": [{"magFilter": 9729, "minFilter": 9987, "wrapS": 33071, "wrapT": 33071}],
-        "textures": [{"source": 0, "sampler": 0}],
+        "textures": [{"source": 0, "sampler": 0}, {"source": 1, "sampler": 0}],
         "animations": [{"name": "eyes", "samplers": samplers, "channels": channels}],
         "buffers": [{"byteLength": 0}],
         "bufferViews": [],

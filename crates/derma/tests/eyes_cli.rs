@@ -140,6 +140,20 @@ fn an_iris_texture_reaches_the_glb() {
             }
         }
         assert!(n > 0, "no morph weights animated");
+        // The lashes are alpha-tested cards with a coverage texture, not opaque slabs.
+        let lashes = doc
+            .materials()
+            .find(|m| m.name() == Some("lashes"))
+            .expect("a lash material");
+        assert_eq!(lashes.alpha_mode(), gltf::material::AlphaMode::Mask);
+        let t = lashes
+            .pbr_metallic_roughness()
+            .base_color_texture()
+            .unwrap();
+        let img = &images[t.texture().source().index()];
+        assert_eq!(img.format, gltf::image::Format::R8G8B8A8);
+        let alpha: Vec<u8> = img.pixels.chunks_exact(4).map(|p| p[3]).collect();
+        assert!(alpha.iter().any(|&a| a > 200) && alpha.iter().any(|&a| a < 50));
         images[0].pixels.clone()
     };
     let mut images = Vec::new();
