@@ -250,26 +250,31 @@ pub fn animate(o: &AnimateOptions, dir: &Path, progress: &dyn Progress) -> Resul
         .len();
     let mut files = Vec::new();
     files.extend(write_curves(&samples, dir)?);
-    // Evaluate every frame.
-    progress.stage("evaluate frames", samples.len() as u64, Unit::Frames);
+    // The model's cost per frame, on one core, over the first frames (at most 60).
     let mut f = Frame::default();
     let t0 = std::time::Instant::now();
-    let mut positions = Vec::with_capacity(samples.len());
-    let mut rotations = Vec::with_capacity(samples.len());
-    let mut frames = Vec::new();
-    for s in &samples {
+    let timed = samples.len().min(60);
+    for s in &samples[..timed] {
         ev.frame(&s.gaze, &mut f);
-        positions.push(f.positions.clone());
-        rotations.push(s.gaze.eyes.map(|a| a.rotation()));
-        progress.advance(1);
     }
-    let frame_us = t0.elapsed().as_secs_f64() * 1e6 / samples.len().max(1) as f64;
+    let frame_us = t0.elapsed().as_secs_f64() * 1e6 / timed.max(1) as f64;
+    let mut frames = Vec::new();
+    // Frames are evaluated as the GLB's fit and projection ask for them (in parallel, never all
+    // held): memory stays bounded for any clip length.
+    let evaluate = |i: usize| {
+        let mut f = Frame::default();
+        ev.frame(&samples[i].gaze, &mut f);
+        f.positions
+    };
     let baked = glb::Baked {
         times: samples.iter().map(|s| s.t).collect(),
-        positions,
-        rotations,
+        positions: &evaluate,
+        rotations: samples
+            .iter()
+            .map(|s| s.gaze.eyes.map(|a| a.rotation()))
+            .collect(),
     };
-    progress.stage("write the animated GLB", 1, Unit::Steps);
+    progress.stage("evaluate frames and write the animated GLB", 1, Unit::Steps);
     let eye_texture = o.iris.as_deref().map(load_eye_texture).transpose()?;
     let p = dir.join("head.glb");
     let glb = glb::write(head, &rig.region, &baked, eye_texture.as_ref(), &p)?;

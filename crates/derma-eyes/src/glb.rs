@@ -15,12 +15,13 @@ use std::path::Path;
 /// Motion components kept as morph targets (besides the mean).
 pub const COMPONENTS: usize = 12;
 
-/// A baked animation: region-vertex positions per frame and globe rotations.
-pub struct Baked {
+/// A baked animation: frame times, region-vertex positions per frame (evaluated when asked: a
+/// long clip's frames are never all held) and globe rotations.
+pub struct Baked<'a> {
     /// Frame times (s).
     pub times: Vec<f32>,
-    /// Model-vertex positions per frame (mm).
-    pub positions: Vec<Vec<Vec3>>,
+    /// Model-vertex positions (mm) of frame i.
+    pub positions: &'a (dyn Fn(usize) -> Vec<Vec3> + Sync),
     /// Globe rotations per frame.
     pub rotations: Vec<[Quat; 2]>,
 }
@@ -84,42 +85,65 @@ pub fn write(
     eye: Option<&[derma_core::Map; 3]>,
     path: &Path,
 ) -> crate::Result<Report> {
-    let nf = baked.positions.len();
+    use rayon::prelude::*;
+    let nf = baked.times.len();
+    if nf == 0 || baked.rotations.len() != nf {
+        return Err(crate::EyesError::Invalid(format!(
+            "an animation needs frames with one rotation pair each: {nf} times, {} rotations",
+            baked.rotations.len()
+        )));
+    }
     let nm = region.len();
-    // Displacements per frame, flattened, and their principal components.
-    let rows: Vec<Vec<f64>> = baked
-        .positions
-        .iter()
-        .map(|p| {
-            p.iter()
-                .zip(&region.rest)
-                .flat_map(|(a, b)| (*a - *b).to_array())
-                .map(f64::from)
-                .collect()
-        })
-        .collect();
-    let k = COMPONENTS.min(nf.saturating_sub(1)).max(1);
-    let pca = if nf >= 2 {
-        Pca::fit(&rows, k)?
+    // Displacements per frame, flattened (made when needed: a long clip's rows would not fit),
+    // and their principal components fitted on at most FIT_FRAMES frames spread evenly over the
+    // clip, so the fit costs the same for any length; every frame is then projected.
+    let row = |i: usize| -> Vec<f64> {
+        (baked.positions)(i)
+            .iter()
+            .zip(&region.rest)
+            .flat_map(|(a, b)| (*a - *b).to_array())
+            .map(f64::from)
+            .collect()
+    };
+    let fit_rows: Vec<Vec<f64>> = fit_sample(nf).into_par_iter().map(row).collect();
+    let k = COMPONENTS.min(fit_rows.len().saturating_sub(1)).max(1);
+    let pca = if fit_rows.len() >= 2 {
+        Pca::fit(&fit_rows, k)?
     } else {
         Pca {
-            mean: rows[0].clone(),
+            mean: fit_rows[0].clone(),
             components: Vec::new(),
             variances: Vec::new(),
             total_variance: 0.0,
         }
     };
-    let weights: Vec<Vec<f64>> = rows.iter().map(|r| pca.project(r, pca.len())).collect();
+    drop(fit_rows);
+    // Every frame projected and its reconstruction error measured, in parallel; the sums are
+    // taken in frame order (the same bits at any thread count).
+    let per_frame: Vec<(Vec<f64>, f64, f64)> = (0..nf)
+        .into_par_iter()
+        .map(|i| {
+            let r = row(i);
+            let w = pca.project(&r, pca.len());
+            let back = pca.reconstruct(&w);
+            let (mut se, mut worst) = (0.0f64, 0.0f64);
+            for c in r.chunks_exact(3).zip(back.chunks_exact(3)) {
+                let e = ((c.0[0] - c.1[0]).powi(2)
+                    + (c.0[1] - c.1[1]).powi(2)
+                    + (c.0[2] - c.1[2]).powi(2))
+                .sqrt();
+                se += e * e;
+                worst = worst.max(e);
+            }
+            (w, se, worst)
+        })
+        .collect();
     let (mut se, mut worst) = (0.0f64, 0.0f64);
-    for (r, w) in rows.iter().zip(&weights) {
-        let back = pca.reconstruct(w);
-        for c in r.chunks_exact(3).zip(back.chunks_exact(3)) {
-            let e =
-                ((c.0[0] - c.1[0]).powi(2) + (c.0[1] - c.1[1]).powi(2) + (c.0[2] - c.1[2]).powi(2))
-                    .sqrt();
-            se += e * e;
-            worst = worst.max(e);
-        }
+    let mut weights: Vec<Vec<f64>> = Vec::with_capacity(nf);
+    for (w, s, m) in per_frame {
+        se += s;
+        worst = worst.max(m);
+        weights.push(w);
     }
     let rms = (se / (nf * nm) as f64).sqrt() as f32;
     // Per model vertex, a target vector → per skin vertex offsets (every UV copy).
@@ -365,6 +389,23 @@ impl CorneaCap for derma_core::mesh::TriMesh {
         self
     }
 }
+/// Most frames the morph targets are fitted to: 256 spread over a clip hold its poses (a blink
+/// lasts about 0.3 s, so at 30 fps a clip under 8.5 s is fitted on every frame), and the fit's
+/// cost no longer grows with the clip (it was O(frames² · vertices)).
+pub const FIT_FRAMES: usize = 256;
+
+/// The frames of an `n`-frame clip the morph targets are fitted to: all of them up to
+/// [`FIT_FRAMES`], else [`FIT_FRAMES`] evenly spaced from the first to the last.
+pub fn fit_sample(n: usize) -> Vec<usize> {
+    if n <= FIT_FRAMES {
+        (0..n).collect()
+    } else {
+        (0..FIT_FRAMES)
+            .map(|j| j * (n - 1) / (FIT_FRAMES - 1))
+            .collect()
+    }
+}
+
 /// Per-frame `weights` of `components` over a `mean` rewritten so every weight lies in [0, 1]:
 /// returns the new weights and the targets (the mean first, weight 1 at every frame).
 fn unit_weights(
@@ -412,6 +453,15 @@ fn unit_weights(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_fit_sample_is_every_frame_or_an_even_spread_from_first_to_last() {
+        assert_eq!(fit_sample(3), vec![0, 1, 2]);
+        assert_eq!(fit_sample(FIT_FRAMES).len(), FIT_FRAMES);
+        let s = fit_sample(3600);
+        assert_eq!((s.len(), s[0], s[FIT_FRAMES - 1]), (FIT_FRAMES, 0, 3599));
+        assert!(s.windows(2).all(|w| w[1] > w[0] && w[1] - w[0] <= 15));
+    }
 
     #[test]
     fn unit_weights_keep_every_frame_and_stay_in_zero_one() {

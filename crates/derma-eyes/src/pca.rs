@@ -47,7 +47,21 @@ impl Pca {
         // The Gram matrix (n × n) when there are fewer frames than dimensions, else the
         // covariance (d × d); both share the non-zero spectrum.
         let (values, vectors): (Vec<f64>, Vec<Vec<f64>>) = if n < d {
-            let g = Matrix::from_fn(n, n, |i, j| dot(&centred[i], &centred[j]) / n as f64);
+            // Rows of the upper triangle in parallel (each entry one dot product, the same bits
+            // at any thread count), mirrored.
+            use rayon::prelude::*;
+            let upper: Vec<Vec<f64>> = (0..n)
+                .into_par_iter()
+                .map(|i| {
+                    (i..n)
+                        .map(|j| dot(&centred[i], &centred[j]) / n as f64)
+                        .collect()
+                })
+                .collect();
+            let g = Matrix::from_fn(n, n, |i, j| {
+                let (a, b) = if i <= j { (i, j) } else { (j, i) };
+                upper[a][b - a]
+            });
             let e = symmetric_eigen(&g)?;
             (0..k)
                 .map(|c| {
