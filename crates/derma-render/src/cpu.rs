@@ -4,6 +4,7 @@
 //! (`derma skin`'s preview.png, the rig's frames, the eyes' frames) where the GPU path's passes
 //! are not needed.
 
+use crate::brdf::{ggx_d, schlick};
 use crate::raster::{rasterise, Object, Projection};
 use derma_core::mesh::TriMesh;
 use derma_core::Map;
@@ -287,8 +288,8 @@ fn shade(
         let h = (l + view).normalize();
         let nh = nn.dot(h).max(0.0);
         let nv = nn.dot(view).max(1e-3);
-        let d = alpha * alpha / (PI * (nh * nh * (alpha * alpha - 1.0) + 1.0).powi(2));
-        let f = f0 + (1.0 - f0) * (1.0 - view.dot(h).max(0.0)).powi(5);
+        let d = ggx_d(nh, alpha);
+        let f = schlick(f0, view.dot(h).max(0.0));
         let k = alpha * 0.5;
         let g = (nl / (nl * (1.0 - k) + k)) * (nv / (nv * (1.0 - k) + k));
         let spec = d * f * g / (4.0 * nl * nv);

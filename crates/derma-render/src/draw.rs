@@ -6,6 +6,7 @@
 //! or corneal refraction (and triangles with a corner within 1 mm of the camera are dropped,
 //! not clipped).
 
+use crate::brdf::{ggx_d, schlick, smith_vis};
 use crate::camera::{Camera, View};
 use crate::error::Result;
 use crate::lighting::Lighting;
@@ -61,8 +62,6 @@ pub struct CpuRenderer<'a> {
     meshes: Vec<TriMesh>,
     /// Per part, per vertex: the tangent and its bitangent sign.
     tangents: Vec<Vec<Vec4>>,
-    /// Per part: its coverage map (cards).
-    coverage: Vec<Option<&'a Map>>,
 }
 
 impl<'a> CpuRenderer<'a> {
@@ -85,19 +84,10 @@ impl<'a> CpuRenderer<'a> {
             .iter()
             .map(|p| p.vertices.iter().map(|v| Vec4::from(v.tangent)).collect())
             .collect();
-        let coverage = scene
-            .parts
-            .iter()
-            .map(|p| match &p.material {
-                Material::Card { coverage, .. } => Some(&**coverage),
-                _ => None,
-            })
-            .collect();
         CpuRenderer {
             scene,
             meshes,
             tangents,
-            coverage,
         }
     }
 }
@@ -144,25 +134,6 @@ impl Env {
     }
 }
 
-/// GGX / Trowbridge–Reitz distribution (Walter et al. 2007) with α = roughness².
-fn ggx_d(nh: f32, a: f32) -> f32 {
-    let a2 = a * a;
-    let d = nh * nh * (a2 - 1.0) + 1.0;
-    a2 / (PI * d * d)
-}
-
-/// Height-correlated Smith visibility G₂ / (4 n·l n·v) (Heitz 2014, eq. 99).
-fn smith_vis(nl: f32, nv: f32, a: f32) -> f32 {
-    let a2 = a * a;
-    let gv = nl * (nv * nv * (1.0 - a2) + a2).sqrt();
-    let gl = nv * (nl * nl * (1.0 - a2) + a2).sqrt();
-    0.5 / (gv + gl).max(1e-5)
-}
-
-fn schlick(f0: f32, vh: f32) -> f32 {
-    f0 + (1.0 - f0) * (1.0 - vh).powi(5)
-}
-
 /// Karis 2014 ("Physically based shading on mobile"): the split-sum environment BRDF's F0
 /// scale and bias.
 fn env_brdf(rough: f32, nv: f32) -> (f32, f32) {
@@ -201,30 +172,29 @@ impl Draw for CpuRenderer<'_> {
         };
         // Cards are cut where their coverage falls below ½, as forward.wgsl discards them (the
         // rasteriser's dither sees only 0 or 1).
-        let covers: Vec<Box<dyn Fn(Vec2) -> f32 + Sync>> = self
-            .coverage
+        type Cover<'m> = Box<dyn Fn(Vec2) -> f32 + Sync + 'm>;
+        let covers: Vec<Option<Cover>> = self
+            .scene
+            .parts
             .iter()
-            .map(|c| -> Box<dyn Fn(Vec2) -> f32 + Sync> {
-                match c {
-                    Some(m) => Box::new(move |uv: Vec2| {
-                        if m.sample_uv(uv.x, uv.y, false) >= 0.5 {
-                            1.0
-                        } else {
-                            0.0
-                        }
-                    }),
-                    None => Box::new(|_| 1.0),
-                }
+            .map(|p| match &p.material {
+                Material::Card { coverage: m, .. } => Some(Box::new(move |uv: Vec2| {
+                    if m.sample_uv(uv.x, uv.y, false) >= 0.5 {
+                        1.0f32
+                    } else {
+                        0.0
+                    }
+                }) as Cover),
+                _ => None,
             })
             .collect();
         let objects: Vec<Object> = self
             .meshes
             .iter()
-            .zip(&self.coverage)
             .zip(&covers)
-            .map(|((mesh, c), f)| Object {
+            .map(|(mesh, c)| Object {
                 mesh,
-                coverage: c.map(|_| &**f as &(dyn Fn(Vec2) -> f32 + Sync)),
+                coverage: c.as_deref().map(|f| f as &(dyn Fn(Vec2) -> f32 + Sync)),
             })
             .collect();
         let hits = rasterise(&objects, &projection, wu, hu);
@@ -349,16 +319,6 @@ mod tests {
         // Narkowicz 2015: 0 → 0, monotone, saturating at 1.
         assert_eq!(aces(0.0), 0.0);
         assert!(aces(0.18) < aces(0.5) && aces(100.0) == 1.0);
-        // GGX integrates to one over the projected hemisphere: ∫ D (n·h) dω = 1.
-        let a = 0.3;
-        let n = 4000;
-        let s: f32 = (0..n)
-            .map(|i| {
-                let t = (i as f32 + 0.5) / n as f32 * 0.5 * PI;
-                ggx_d(t.cos(), a) * t.cos() * t.sin() * 2.0 * PI * (0.5 * PI / n as f32)
-            })
-            .sum();
-        assert!((s - 1.0).abs() < 1e-2, "{s}");
     }
 
     #[test]

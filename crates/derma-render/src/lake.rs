@@ -115,9 +115,9 @@ fn ggx_spec(n: Vec3, l: Vec3, v: Vec3, h: Vec3, rough: f32) -> f32 {
     let nh = n.dot(h).max(0.0);
     let nl = n.dot(l).max(1e-4);
     let nv = n.dot(v).max(1e-4);
-    let d = a2 / (std::f32::consts::PI * (nh * nh * (a2 - 1.0) + 1.0).powi(2));
+    let d = crate::brdf::ggx_d(nh, rough * rough);
     let g1 = |x: f32| 2.0 * x / (x + (a2 + (1.0 - a2) * x * x).sqrt());
-    let f = F0 + (1.0 - F0) * (1.0 - v.dot(h).max(0.0)).powi(5);
+    let f = crate::brdf::schlick(F0, v.dot(h).max(0.0));
     d * g1(nl) * g1(nv) * f / (4.0 * nv) // × n·l / (n·l) cancels
 }
 

@@ -11,6 +11,7 @@
 //! derma-core and derma-head only; the crates above draw through it. Exporting (GLB, web, the
 //! viewer's server) and rendering from files are derma-export's.
 
+pub mod brdf;
 pub mod burley;
 pub mod camera;
 pub mod cpu;
