@@ -36,6 +36,7 @@ pub mod specimen;
 pub mod tally;
 pub mod transport;
 pub mod transport_lanes;
+pub mod yellow_pigments;
 
 pub use bio::BioTexel;
 pub use derma_core::gpu::Device;

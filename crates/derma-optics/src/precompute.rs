@@ -12,6 +12,7 @@ use crate::error::{OpticsError, Result};
 use crate::simulate::{simulate_skin, SkinResult, SkinSimConfig};
 use crate::specimen::SurfaceModel;
 use crate::tally::{BrdfBins, ProfileBins};
+use crate::yellow_pigments::YellowPigments;
 use derma_core::dtab::{Dtab, DtabAxis, DtabHeader, DtabValue};
 use derma_core::gpu::Device;
 use derma_core::progress::{Folded, Note, Progress, Unit};
@@ -59,6 +60,9 @@ pub struct Grid {
     /// The skin surface's model: `smith` (default) or `thesis`.
     #[serde(default)]
     pub surface: SurfaceModel,
+    /// β-carotene and bilirubin concentrations (`[yellow_pigments]`; default BioSpec's).
+    #[serde(default, rename = "yellow_pigments")]
+    pub yellow: YellowPigments,
     /// The axes.
     pub axes: GridAxes,
 }
@@ -187,6 +191,9 @@ impl Grid {
                 crate::tally::MAX_PROFILE_BINS
             )));
         }
+        self.yellow
+            .validate()
+            .map_err(|e| bad(format!("[yellow_pigments]: {e}")))?;
         Ok(())
     }
 
@@ -228,6 +235,7 @@ impl Grid {
                 d_max_mm: self.profile_d_max_mm,
             },
             surface: self.surface,
+            yellow: self.yellow,
         }
     }
 }

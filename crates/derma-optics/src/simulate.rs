@@ -11,6 +11,7 @@ use crate::run::Run;
 use crate::specimen::{skin_stacks, SurfaceModel, SKIN_LAYER_NAMES};
 use crate::tally::{BrdfBins, ProfileBins, Tally, R_DIFFUSE, R_SPECULAR, TRANSMITTED};
 use crate::transport::Incidence;
+use crate::yellow_pigments::YellowPigments;
 use derma_core::color::{
     cmf, reflectance_to_xyz, wavelength_nm, xyz_to_linear_srgb, Spectrum, D65_10NM, N_WAVELENGTHS,
 };
@@ -32,10 +33,17 @@ pub struct SkinSimConfig {
     /// The skin surface's model (absent in older files: the thesis' sampling they were made with).
     #[serde(default = "thesis_surface")]
     pub surface: SurfaceModel,
+    /// β-carotene and bilirubin (absent in older files: none, as they were made).
+    #[serde(default = "no_yellow_pigments")]
+    pub yellow: YellowPigments,
 }
 
 fn thesis_surface() -> SurfaceModel {
     SurfaceModel::Thesis
+}
+
+fn no_yellow_pigments() -> YellowPigments {
+    YellowPigments::NONE
 }
 
 impl Default for SkinSimConfig {
@@ -56,6 +64,7 @@ impl Default for SkinSimConfig {
                 d_max_mm: 8.0,
             },
             surface: SurfaceModel::Smith,
+            yellow: YellowPigments::BIOSPEC,
         }
     }
 }
@@ -129,7 +138,7 @@ pub struct SkinResult {
 pub fn skin_run(bio: &BioTexel, cfg: &SkinSimConfig) -> Run {
     let nl = N_WAVELENGTHS as f64;
     Run {
-        stacks: skin_stacks(bio)
+        stacks: skin_stacks(bio, &cfg.yellow)
             .into_iter()
             .map(|mut s| {
                 s.surface = cfg.surface.surface();
@@ -231,6 +240,7 @@ pub fn simulate_skin(
     progress: &dyn Progress,
 ) -> Result<SkinResult> {
     bio.validate()?;
+    cfg.yellow.validate()?;
     let run = skin_run(bio, cfg);
     progress.stage("simulate", cfg.photons, Unit::Photons);
     let t0 = std::time::Instant::now();

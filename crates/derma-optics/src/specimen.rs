@@ -5,6 +5,7 @@ use crate::bio::BioTexel;
 use crate::chromophore;
 use crate::layer::{Bottom, Layer, Stack, Surface, N_ABSORBERS};
 use crate::microfacet::BIOSPEC_FOLD_ASPECT;
+use crate::yellow_pigments::YellowPigments;
 use derma_core::color::{wavelength_nm, N_WAVELENGTHS};
 use serde::{Deserialize, Serialize};
 
@@ -73,9 +74,16 @@ fn layer_from_parts(
 /// biology): the stratum corneum has no melanin (thesis §2.1) and baseline absorption only; the
 /// epidermis mixes melanosomes (volume fraction p_m, eu/pheomelanin by p_p) with baseline
 /// tissue; the dermis mixes whole blood (p_b, oxygenation p_o) with baseline tissue. The stratum
-/// corneum scatters like the epidermis (Donner & Jensen give one epidermal σs′).
-pub fn skin_stack(bio: &BioTexel, lambda_nm: f64, blood_oxy_deoxy: [f64; 2]) -> Stack {
-    skin_stack_with_epidermal_blood(bio, 0.0, lambda_nm, blood_oxy_deoxy)
+/// corneum scatters like the epidermis (Donner & Jensen give one epidermal σs′). BioSpec's
+/// yellow pigments (`yellow`) add β-carotene to every layer's tissue and bilirubin to the blood;
+/// their absorbed energy is tallied with the baseline tissue's.
+pub fn skin_stack(
+    bio: &BioTexel,
+    yellow: &YellowPigments,
+    lambda_nm: f64,
+    blood_oxy_deoxy: [f64; 2],
+) -> Stack {
+    skin_stack_with_epidermal_blood(bio, yellow, 0.0, lambda_nm, blood_oxy_deoxy)
 }
 
 /// [`skin_stack`] with whole blood also in the living epidermis, volume fraction
@@ -83,6 +91,7 @@ pub fn skin_stack(bio: &BioTexel, lambda_nm: f64, blood_oxy_deoxy: [f64; 2]) -> 
 /// table 1, has epidermal hemoglobin C_he; it displaces baseline tissue like melanin does).
 pub fn skin_stack_with_epidermal_blood(
     bio: &BioTexel,
+    yellow: &YellowPigments,
     epidermal_blood: f64,
     lambda_nm: f64,
     blood_oxy_deoxy: [f64; 2],
@@ -95,20 +104,23 @@ pub fn skin_stack_with_epidermal_blood(
     let sp_epi = chromophore::epidermis_reduced_scattering(lambda_nm);
     let sp_derm = chromophore::dermis_reduced_scattering(lambda_nm);
     let g_derm = dermis_g(lambda_nm);
+    let carotene_epi = yellow.epidermis(lambda_nm);
+    let carotene_derm = yellow.dermis(lambda_nm);
+    let bilirubin = yellow.blood(lambda_nm);
 
     let mut sc = [0.0; N_ABSORBERS];
-    sc[BASE] = base;
+    sc[BASE] = base + carotene_epi;
     let mut epi = [0.0; N_ABSORBERS];
     epi[EU] = pm * (1.0 - pp) * chromophore::eumelanin(lambda_nm);
     epi[PHEO] = pm * pp * chromophore::pheomelanin(lambda_nm);
     epi[HBO2] = epidermal_blood * po * blood_oxy_deoxy[0];
     epi[HB] = epidermal_blood * (1.0 - po) * blood_oxy_deoxy[1];
-    epi[BASE] = (1.0 - pm - epidermal_blood).max(0.0) * base;
+    epi[BASE] = (1.0 - pm - epidermal_blood).max(0.0) * base + carotene_epi;
     let dermis = |blood: f64| {
         let mut d = [0.0; N_ABSORBERS];
         d[HBO2] = blood * po * blood_oxy_deoxy[0];
         d[HB] = blood * (1.0 - po) * blood_oxy_deoxy[1];
-        d[BASE] = (1.0 - blood) * base;
+        d[BASE] = (1.0 - blood) * base + carotene_derm + blood * bilirubin;
         d
     };
     let layers = vec![
@@ -192,16 +204,20 @@ impl std::str::FromStr for SurfaceModel {
 }
 
 /// The skin stack on derma's 10 nm grid, 380–780 nm.
-pub fn skin_stacks(bio: &BioTexel) -> Vec<Stack> {
-    skin_stacks_with_epidermal_blood(bio, 0.0)
+pub fn skin_stacks(bio: &BioTexel, yellow: &YellowPigments) -> Vec<Stack> {
+    skin_stacks_with_epidermal_blood(bio, yellow, 0.0)
 }
 
 /// [`skin_stacks`] with epidermal blood (see [`skin_stack_with_epidermal_blood`]).
-pub fn skin_stacks_with_epidermal_blood(bio: &BioTexel, epidermal_blood: f64) -> Vec<Stack> {
+pub fn skin_stacks_with_epidermal_blood(
+    bio: &BioTexel,
+    yellow: &YellowPigments,
+    epidermal_blood: f64,
+) -> Vec<Stack> {
     (0..N_WAVELENGTHS)
         .map(|i| {
             let blood = [chromophore::blood(i, 1.0), chromophore::blood(i, 0.0)];
-            skin_stack_with_epidermal_blood(bio, epidermal_blood, wavelength_nm(i), blood)
+            skin_stack_with_epidermal_blood(bio, yellow, epidermal_blood, wavelength_nm(i), blood)
         })
         .collect()
 }
@@ -212,7 +228,7 @@ mod tests {
 
     #[test]
     fn skin_stack_is_valid_and_blood_sits_in_the_dermis() {
-        let stacks = skin_stacks(&BioTexel::FAIR);
+        let stacks = skin_stacks(&BioTexel::FAIR, &YellowPigments::NONE);
         assert_eq!(stacks.len(), N_WAVELENGTHS);
         for s in &stacks {
             s.validate().unwrap();
@@ -237,5 +253,34 @@ mod tests {
         assert!((r / p - 0.91 / 1.2).abs() < 1e-9);
         // van Gemert's dermal g at 550 nm: 0.62 + 0.1595.
         assert!((s.layers[2].g - 0.7795).abs() < 1e-9);
+    }
+
+    #[test]
+    fn yellow_pigments_add_blue_absorption_to_tissue_and_blood_only() {
+        let bio = BioTexel::FAIR;
+        let y = YellowPigments::BIOSPEC;
+        let blood = |l: f64| {
+            let i = ((l - 380.0) / 10.0) as usize;
+            [chromophore::blood(i, 1.0), chromophore::blood(i, 0.0)]
+        };
+        let with = skin_stack(&bio, &y, 450.0, blood(450.0));
+        let without = skin_stack(&bio, &YellowPigments::NONE, 450.0, blood(450.0));
+        let pb = bio.blood as f64;
+        let d = with.layers[2].mua - without.layers[2].mua;
+        assert!(
+            (d - (y.dermis(450.0) + pb * y.blood(450.0))).abs() < 1e-12,
+            "{d}"
+        );
+        let e = with.layers[1].mua - without.layers[1].mua;
+        assert!((e - y.epidermis(450.0)).abs() < 1e-12);
+        // The melanin and blood shares keep their absolute absorption.
+        let eu = |s: &Stack| s.layers[1].absorber_share[EU] * s.layers[1].mua;
+        assert!((eu(&with) - eu(&without)).abs() < 1e-12);
+        // Nothing changes in the red.
+        let r = skin_stack(&bio, &y, 650.0, blood(650.0));
+        let r0 = skin_stack(&bio, &YellowPigments::NONE, 650.0, blood(650.0));
+        for k in 0..4 {
+            assert_eq!(r.layers[k].mua, r0.layers[k].mua);
+        }
     }
 }

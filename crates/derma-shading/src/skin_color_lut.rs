@@ -15,6 +15,7 @@ use derma_optics::run::Run;
 use derma_optics::specimen::skin_stacks_with_epidermal_blood;
 use derma_optics::tally::R_DIFFUSE;
 use derma_optics::transport::Incidence;
+use derma_optics::yellow_pigments::YellowPigments;
 use derma_optics::BioTexel;
 
 /// The committed table (see [`SkinColorLut::builtin`]).
@@ -43,6 +44,8 @@ pub struct LutOptions {
     pub stratum_corneum_um: f64,
     /// Epidermis thickness, µm.
     pub epidermis_um: f64,
+    /// β-carotene and bilirubin (BioSpec's baselines; none in tables made before them).
+    pub yellow: YellowPigments,
 }
 
 impl Default for LutOptions {
@@ -60,6 +63,7 @@ impl Default for LutOptions {
             oxygenation: BioTexel::FAIR.oxygenation as f64,
             stratum_corneum_um: BioTexel::FAIR.stratum_corneum_um as f64,
             epidermis_um: BioTexel::FAIR.epidermis_um as f64,
+            yellow: YellowPigments::BIOSPEC,
         }
     }
 }
@@ -84,7 +88,7 @@ pub fn entry_color(opts: &LutOptions, c_m: f64, c_hd: f64, device: Device) -> Re
         epidermis_um: opts.epidermis_um as f32,
     };
     let run = Run {
-        stacks: skin_stacks_with_epidermal_blood(&bio, opts.epidermal_ratio * c_hd),
+        stacks: skin_stacks_with_epidermal_blood(&bio, &opts.yellow, opts.epidermal_ratio * c_hd),
         photons: opts.photons,
         seed: opts.seed,
         incidence: Incidence::ArcsinZenith,
@@ -201,6 +205,7 @@ impl SkinColorLut {
                     "oxygenation": o.oxygenation,
                     "stratum_corneum_um": o.stratum_corneum_um,
                     "epidermis_um": o.epidermis_um,
+                    "yellow_pigments": o.yellow,
                     "photons_per_entry": o.photons,
                     "seed": o.seed,
                     "png": "u (melanin) along x, v (hemoglobin) along y from the top; sRGB-encoded 16-bit",
@@ -245,6 +250,11 @@ impl SkinColorLut {
             oxygenation: num("oxygenation", d.oxygenation),
             stratum_corneum_um: num("stratum_corneum_um", d.stratum_corneum_um),
             epidermis_um: num("epidermis_um", d.epidermis_um),
+            yellow: match meta.get("yellow_pigments") {
+                None => YellowPigments::NONE,
+                Some(v) => serde_json::from_value(v.clone())
+                    .map_err(|e| bad(format!("yellow_pigments: {e}")))?,
+            },
         };
         if !(options.melanin_max > 0.0 && options.blood_max > 0.0) {
             return Err(bad("axis tops must be positive".into()));

@@ -5,14 +5,16 @@
 //! The layer structure follows Doi & Tominaga 2003 ("Spectral estimation of human skin color
 //! using the Kubelka–Munk theory", SPIE 5008) and BioSpec (Krishnaswamy & Baranoski 2004) for
 //! the white hypodermis; absorption and scattering are those of Donner & Jensen 2006
-//! ([`crate::chromophore`]).
+//! ([`crate::chromophore`]), with BioSpec's yellow pigments at their baselines (β-carotene in
+//! every layer, bilirubin in blood; [`derma_optics::yellow_pigments`]) as in the Monte Carlo skin.
 
 use crate::appearance::{Appearance, BioTexel};
 use crate::chromophore;
 use crate::fresnel::diffuse_reflectance;
 use crate::kubelka_munk::{km_from_transport, layer, stack, LayerRT};
 use crate::lut::{Axis, GridLut};
-use derma_core::color::{reflectance_to_linear_srgb, Spectrum};
+use derma_core::color::{reflectance_to_linear_srgb, wavelength_nm, Spectrum};
+use derma_optics::yellow_pigments::YellowPigments;
 
 /// Fixed properties of the layered skin model.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -46,6 +48,9 @@ struct Spectra {
     blood_deoxy: Spectrum,
     sp_epi: Spectrum,
     sp_derm: Spectrum,
+    carotene_epi: Spectrum,
+    carotene_derm: Spectrum,
+    bilirubin: Spectrum,
 }
 
 impl Spectra {
@@ -58,6 +63,13 @@ impl Spectra {
             blood_deoxy: std::array::from_fn(|i| chromophore::blood(i, 0.0)),
             sp_epi: chromophore::on_grid(chromophore::epidermis_reduced_scattering),
             sp_derm: chromophore::on_grid(chromophore::dermis_reduced_scattering),
+            carotene_epi: std::array::from_fn(|i| {
+                YellowPigments::BIOSPEC.epidermis(wavelength_nm(i))
+            }),
+            carotene_derm: std::array::from_fn(|i| {
+                YellowPigments::BIOSPEC.dermis(wavelength_nm(i))
+            }),
+            bilirubin: std::array::from_fn(|i| YellowPigments::BIOSPEC.blood(wavelength_nm(i))),
         }
     }
 }
@@ -128,10 +140,14 @@ impl SpectralKubelkaMunk {
         };
         std::array::from_fn(|i| {
             // Donner & Jensen 2006 eqs. 5–6: melanin and blood displace baseline tissue.
-            let mu_sc = s.base[i];
-            let mu_epi = cm * (beta * s.eu[i] + (1.0 - beta) * s.pheo[i]) + (1.0 - cm) * s.base[i];
-            let mu_derm =
-                cb * (ox * s.blood_oxy[i] + (1.0 - ox) * s.blood_deoxy[i]) + (1.0 - cb) * s.base[i];
+            let mu_sc = s.base[i] + s.carotene_epi[i];
+            let mu_epi = cm * (beta * s.eu[i] + (1.0 - beta) * s.pheo[i])
+                + (1.0 - cm) * s.base[i]
+                + s.carotene_epi[i];
+            let mu_derm = cb
+                * (ox * s.blood_oxy[i] + (1.0 - ox) * s.blood_deoxy[i] + s.bilirubin[i])
+                + (1.0 - cb) * s.base[i]
+                + s.carotene_derm[i];
             let (k_sc, s_sc) = km_from_transport(mu_sc, s.sp_epi[i]);
             let (k_e, s_e) = km_from_transport(mu_epi, s.sp_epi[i]);
             let (k_d, s_d) = km_from_transport(mu_derm, s.sp_derm[i]);

@@ -10,6 +10,7 @@ use derma_core::progress::Silent;
 use derma_optics::precompute::{self, Grid, Shard};
 use derma_optics::simulate::{simulate_skin, SkinSimConfig};
 use derma_optics::slab::{parse_layer, slab_stack, SlabResult};
+use derma_optics::yellow_pigments::YellowPigments;
 use derma_optics::{BioTexel, Run};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -82,6 +83,15 @@ pub struct SimulateArgs {
     /// (BioSpec's unmasked sampling, for comparison).
     #[arg(long, default_value = "smith")]
     surface: derma_optics::specimen::SurfaceModel,
+    /// β-carotene in the stratum corneum and epidermis, g/L (BioSpec's baseline).
+    #[arg(long, default_value_t = YellowPigments::BIOSPEC.carotene_epidermis_g_per_l)]
+    carotene_epidermis: f64,
+    /// β-carotene in the dermis, g/L (BioSpec's baseline).
+    #[arg(long, default_value_t = YellowPigments::BIOSPEC.carotene_dermis_g_per_l)]
+    carotene_dermis: f64,
+    /// Bilirubin in whole blood, g/L (BioSpec's baseline; jaundice is several times more).
+    #[arg(long, default_value_t = YellowPigments::BIOSPEC.bilirubin_blood_g_per_l)]
+    bilirubin: f64,
     #[command(flatten)]
     run: RunArgs,
     /// Directory for result.json (and the plots).
@@ -183,6 +193,11 @@ fn simulate(a: SimulateArgs, bars: &Bars) -> Result<()> {
         photons: a.run.photons,
         seed: a.run.seed,
         surface: a.surface,
+        yellow: YellowPigments {
+            carotene_epidermis_g_per_l: a.carotene_epidermis,
+            carotene_dermis_g_per_l: a.carotene_dermis,
+            bilirubin_blood_g_per_l: a.bilirubin,
+        },
         ..SkinSimConfig::default()
     };
     let r = simulate_skin(&bio, &cfg, a.run.device.device, bars)?;
