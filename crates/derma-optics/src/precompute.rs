@@ -60,11 +60,16 @@ pub struct Grid {
     /// The skin surface's model: `smith` (default) or `thesis`.
     #[serde(default)]
     pub surface: SurfaceModel,
-    /// β-carotene and bilirubin concentrations (`[yellow_pigments]`; default BioSpec's).
-    #[serde(default, rename = "yellow_pigments")]
+    /// β-carotene and bilirubin concentrations (`[yellow_pigments]`). Absent: none, as every
+    /// grid written before they were modelled was simulated; give the section for BioSpec's.
+    #[serde(default = "no_yellow_pigments", rename = "yellow_pigments")]
     pub yellow: YellowPigments,
     /// The axes.
     pub axes: GridAxes,
+}
+
+fn no_yellow_pigments() -> YellowPigments {
+    YellowPigments::NONE
 }
 
 fn default_brdf() -> [usize; 3] {
@@ -88,6 +93,12 @@ seed = 1
 brdf = [9, 9, 12]
 profile_bins = 64
 profile_d_max_mm = 8.0
+
+# BioSpec's baselines (derma-optics yellow_pigments.rs), g/L.
+[yellow_pigments]
+carotene_epidermis_g_per_l = 0.00021
+carotene_dermis_g_per_l = 0.00007
+bilirubin_blood_g_per_l = 0.05
 
 [axes]
 melanin = [0.002, 0.05, 0.2, 0.5]
@@ -497,6 +508,15 @@ pub fn merge(dirs: &[PathBuf]) -> Result<Dtab> {
             continue;
         };
         let r = read_entry(&path)?;
+        if r.config != grid.config(i) || r.bio != grid.node(i) {
+            return Err(OpticsError::File {
+                path,
+                message: format!(
+                    "entry {i} was simulated with other settings than {}'s node {i} (another grid, or a run before the grid's yellow pigments or surface changed); run it again",
+                    gp.display()
+                ),
+            });
+        }
         photons_total += r.config.photons;
         data.extend(r.linear_srgb.iter().map(|&v| v as f32));
         data.extend(r.r_diffuse.iter().map(|&v| v as f32));
@@ -533,7 +553,7 @@ pub fn merge(dirs: &[PathBuf]) -> Result<Dtab> {
                 "wavelengths_nm": "380..780 step 10",
                 "brdf": "sr^-1, linear sRGB under D65, [theta_in][theta_out][dphi] bins of the grid",
                 "profile_rgb": "mm^-2 per photon, rings of profile_d_max_mm/profile_bins",
-                "absorbed": "fraction per [layer][absorber]: layers SC, epidermis, papillary, reticular; absorbers eumelanin, pheomelanin, oxyhemoglobin, deoxyhemoglobin, baseline",
+                "absorbed": "fraction per [layer][absorber]: layers SC, epidermis, papillary, reticular; absorbers eumelanin, pheomelanin, oxyhemoglobin, deoxyhemoglobin, baseline (with the grid's beta-carotene and bilirubin)",
             }),
         },
         data,

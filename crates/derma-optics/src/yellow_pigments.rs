@@ -3,7 +3,7 @@
 //!
 //! Spectra: PhotochemCAD 2.1a (Du et al. 1998, Photochem Photobiol 68:141; Dixon et al. 2005,
 //! Photochem Photobiol 81:212) as tabulated by S. Prahl (OMLC, 2017): β-carotene in hexane
-//! (R.-C. A. Fuh, 1995), scaled to 139 500 M⁻¹cm⁻¹ at 451 nm (Zechmeister & Polgar 1943);
+//! (R.-C. A. Fuh, 1995), scaled to 139 500 M⁻¹cm⁻¹ at 451 nm (the value OMLC takes from Zechmeister);
 //! bilirubin in chloroform (J. Li, 1997), scaled to 55 000 M⁻¹cm⁻¹ at 450.8 nm (Agati & Fusi
 //! 1990). Each grid value is the mean of the five samples within ±0.5 nm of the node. Beyond
 //! 520 nm both tables sit at their noise floor (±1000 for β-carotene, ±100 for bilirubin, around
@@ -17,8 +17,9 @@
 //! Magnitudes at 450 nm (the peak of both): β-carotene at 2.1·10⁻⁴ g/L absorbs 0.0125 mm⁻¹,
 //! an optical depth of 0.0014 through 0.11 mm of stratum corneum and epidermis; bilirubin at
 //! 0.05 g/L absorbs 1.08 mm⁻¹ in whole blood, 0.013 mm⁻¹ at 1.2 % dermal blood, against
-//! 0.12 mm⁻¹ of bloodless dermis and 0.40 mm⁻¹ of its hemoglobin. Measured with the Monte Carlo
-//! skin (docs/matching.md): b* +0.25 on light skin, +0.02 on dark; L* and a* within 0.04.
+//! 0.12 mm⁻¹ of bloodless dermis and 0.40–0.47 mm⁻¹ of its hemoglobin (fully to 75 % oxygenated).
+//! Measured with the Monte Carlo skin (docs/optics.md): b* +0.25 on light skin, +0.02 on dark;
+//! L* and a* within 0.04.
 
 use serde::{Deserialize, Serialize};
 

@@ -2,6 +2,8 @@
 
 use derma_core::progress::Silent;
 use derma_optics::precompute::{self, Grid, Shard};
+use derma_optics::simulate::SkinSimConfig;
+use derma_optics::yellow_pigments::YellowPigments;
 use derma_optics::Device;
 use std::path::{Path, PathBuf};
 
@@ -92,6 +94,34 @@ fn default_grid_is_4_to_the_6() {
     assert_eq!(g.photons, 1_000_000);
     let last = g.node(4095);
     assert_eq!((last.melanin, last.epidermis_um), (0.5, 200.0));
+    assert_eq!(g.yellow, YellowPigments::BIOSPEC);
+    assert_eq!(g.config(7).yellow, YellowPigments::BIOSPEC);
+}
+
+#[test]
+fn files_from_before_the_yellow_pigments_read_as_without_them() {
+    // A grid (or a run directory's grid.toml) without [yellow_pigments] was simulated without
+    // them: resuming or merging it must not pass for a grid with them.
+    let old = Grid::parse(GRID, Path::new("old.toml")).unwrap();
+    assert_eq!(old.yellow, YellowPigments::NONE);
+    let with = format!("{GRID}\n[yellow_pigments]\ncarotene_epidermis_g_per_l = 0.00021\ncarotene_dermis_g_per_l = 0.00007\nbilirubin_blood_g_per_l = 0.05\n");
+    let new = Grid::parse(&with, Path::new("new.toml")).unwrap();
+    assert_eq!(new.yellow, YellowPigments::BIOSPEC);
+    assert_ne!(old, new);
+    // The same for a simulation's settings (entries and result.json files).
+    let mut v = serde_json::to_value(SkinSimConfig::default()).unwrap();
+    v.as_object_mut().unwrap().remove("yellow");
+    let back: SkinSimConfig = serde_json::from_value(v).unwrap();
+    assert_eq!(back.yellow, YellowPigments::NONE);
+    // Negative concentrations are refused, naming the section.
+    let bad = with.replace("= 0.05", "= -1");
+    let e = Grid::parse(&bad, Path::new("bad.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("bad.toml") && e.contains("yellow_pigments"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -54,6 +54,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "melanin", "pheo", "blood", "oxy", "sc", "epi", "Monte Carlo albedo", "ΔE table", "ΔE KM"
     );
     let (mut st, mut sa) = (0.0, 0.0);
+    let (m, b) = (&grid.axes.melanin, &grid.axes.blood);
     for k in 0..points {
         // Uniform in the table's (cube-root) melanin and blood ranges, off the nodes.
         let u = rng.uniform4(k, 0).map(|x| x as f64);
@@ -63,9 +64,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             grid.node((u[0] * grid.len() as f64) as usize % grid.len())
         } else {
             BioTexel {
-                melanin: cb(0.005, 0.5, u[0]) as f32,
+                melanin: cb(m[0], m[m.len() - 1], u[0]) as f32,
                 pheomelanin: u[1] as f32,
-                blood: cb(0.003, 0.1, u[2]) as f32,
+                blood: cb(b[0], b[b.len() - 1], u[2]) as f32,
                 oxygenation: (0.55 + 0.4 * u[3]) as f32,
                 stratum_corneum_um: (10.0 + 10.0 * v[1]) as f32,
                 epidermis_um: (40.0 + 60.0 * v[0]) as f32,

@@ -42,6 +42,28 @@ pub struct SkinConfig {
     pub relief: ReliefConfig,
     pub person: crate::regional::Person,
     pub regional: RegionalConfig,
+    pub mottling: MottlingConfig,
+}
+
+/// `[mottling]`: centimetre-scale blotches of blood and pigment (see `mottling.rs`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MottlingConfig {
+    pub enabled: bool,
+    pub wavelengths_mm: [f32; 3],
+    pub blood: f32,
+    pub melanin: f32,
+}
+
+impl Default for MottlingConfig {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            wavelengths_mm: [20.0, 10.0, 5.0],
+            blood: 0.7,
+            melanin: 0.15,
+        }
+    }
 }
 
 /// `[relief]`: the micro-relief furrow network (see `features/relief.rs`).
@@ -293,6 +315,7 @@ impl Default for SkinConfig {
             relief: ReliefConfig::default(),
             person: crate::regional::Person::default(),
             regional: RegionalConfig::default(),
+            mottling: MottlingConfig::default(),
         }
     }
 }
@@ -326,8 +349,8 @@ impl Default for BaselineConfig {
                 max: 0.45,
             },
             blood: Range {
-                min: 0.012,
-                max: 0.05,
+                min: 0.003,
+                max: 0.02,
             },
             oxygenation: Range { min: 0.6, max: 0.9 },
             stratum_corneum_um: Range {
@@ -505,7 +528,7 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("baseline.blood_map", "path", 0.0, 0.0, "dermal blood map as baseline.melanin_map (EXR channel hemoglobin or blood, or PNG grey × 0.32)"),
     k("baseline.melanin", "volume fraction", 0.0, 1.0, "melanosome fraction of the epidermis; default 1.3–6.3 % for light-skinned adults (Jacques 1998, skin optics summary); moderately pigmented 11–16 %, dark 18–43 %"),
     k("baseline.pheomelanin", "fraction", 0.0, 1.0, "pheomelanin share of melanin; around Jimenez et al. 2010 §6 (eumelanin 0.61 → pheomelanin 0.39), spread authored"),
-    k("baseline.blood", "volume fraction", 0.0, 1.0, "whole-blood fraction of the dermis before the regional gains; min ≈ BioSpec's papillary 1.2 % (within Jacques' 0.2–7 %), the regions multiply it (regional.rs)"),
+    k("baseline.blood", "volume fraction", 0.0, 1.0, "whole-blood fraction of the dermis before the regional gains: 0.3–2 % (Jacques' 0.2–7 %), which the regions multiply by up to 5.5 (regional.rs) to BioSpec's papillary 1.2 % and above on cheeks and nose; set so the presets' facial a* and b* land near measured faces (docs/head.md)"),
     k("baseline.oxygenation", "fraction", 0.0, 1.0, "oxygenated share of hemoglobin; BioSpec default 0.75 lies inside"),
     k("baseline.stratum_corneum_um", "µm", 0.0, 1000.0, "stratum corneum thickness; BioSpec default 10 µm as minimum"),
     k("baseline.epidermis_um", "µm", 0.0, 2000.0, "living epidermis thickness; BioSpec 100 µm, facial epidermis thinner (Sandby-Møller et al. 2003)"),
@@ -593,6 +616,10 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("person.calibrate_melanin", "-", 0.0, 0.0, "set baseline.melanin so the mean cheek/forehead colour has person.ita_deg under the chosen appearance (bisection on melanin); false keeps baseline.melanin as given — a config that sets baseline.melanin without this key means false"),
     k("person.sex", "-", 0.0, 0.0, "\"male\" (terminal beard follicles on the beard region, builtin_head::BEARD_TO_SCALP) or \"female\" (vellus only)"),
     k("person.age_years", "years", 10.0, 100.0, "age: wrinkle density × age_factor and depth × √age_factor (1 at 40, 0.2 at ≤ 20, 2.2 at ≥ 70; regional::age_factor)"),
+    k("mottling.enabled", "-", 0.0, 0.0, "centimetre-scale blotches of blood and pigment (mottling.rs): the uneven colour within a region of a real face"),
+    k("mottling.wavelengths_mm", "mm", 1.0, 1000.0, "wavelengths of the mottling's three noise octaves (weights ½, ⅓, ⅙): blotches from millimetres to centimetres, the band of measured facial colour heterogeneity"),
+    k("mottling.blood", "-", 0.0, 3.0, "log amplitude of the blood's mottling: the factor exp(a (2n − 1)) spans e^±a; authored and subtle (0.7): the regions carry the face's coarse redness, blotches this strong alone read as a rash"),
+    k("mottling.melanin", "-", 0.0, 3.0, "log amplitude of the melanin's mottling (pigment blotches, independent of the blood's)"),
     k("regional.enabled", "-", 0.0, 0.0, "regional biology of the built-in head (regional.rs GAINS): blood, melanin, oxygenation and epidermis by region"),
     k("material.specular_f0", "-", 0.0, 1.0, "normal-incidence reflectance ((n−1)/(n+1))² for n = 1.4 (Donner & Jensen 2006) = 0.028"),
 ];

@@ -232,5 +232,13 @@ mod tests {
         assert_eq!(streams, [1, 2, 3, 4, 5, 6, 7]);
         assert!(streams.iter().all(|&s| s != crate::noise::NOISE_STREAM));
         assert!(streams.iter().all(|&s| s != crate::noise::RELIEF_STREAM));
+        assert!(streams
+            .iter()
+            .all(|&s| s != crate::mottling::MOTTLING_STREAM));
+        assert_ne!(crate::mottling::MOTTLING_STREAM, crate::noise::NOISE_STREAM);
+        assert_ne!(
+            crate::mottling::MOTTLING_STREAM,
+            crate::noise::RELIEF_STREAM
+        );
     }
 }

@@ -33,6 +33,7 @@ pub mod field;
 pub mod generate;
 pub mod index;
 pub mod kinds;
+pub mod mottling;
 pub mod noise;
 pub mod normal_map;
 pub mod outputs;

@@ -145,6 +145,16 @@ pub fn paint_with(
         b.noise_wavelengths_mm,
         surface.period(),
     );
+    let mottling = cfg.mottling.enabled.then(|| {
+        crate::mottling::Mottling::new(
+            derma_core::rng::Philox::new(cfg.seed, crate::mottling::MOTTLING_STREAM).u32x4(0)[0]
+                as u64,
+            cfg.mottling.wavelengths_mm,
+            cfg.mottling.blood,
+            cfg.mottling.melanin,
+            surface.period(),
+        )
+    });
     let lips_map = if cfg.lips.enabled {
         Some(fields.scalar(&cfg.lips.field)?)
     } else {
@@ -211,6 +221,7 @@ pub fn paint_with(
             let mut cursors: Vec<GridCursor> =
                 kinds.iter().map(|k| GridCursor::new(k.grid())).collect();
             let mut noise_cache = crate::noise::NoiseCache::default();
+            let mut mottling_cache = crate::noise::NoiseCache::default();
             let mut relief_cache = relief::ReliefCache::default();
             for (k, s) in rows.iter_mut().enumerate() {
                 let i = task * w * ROWS_PER_TASK + k;
@@ -243,6 +254,11 @@ pub fn paint_with(
                     s.tissue.melanin *= at(1);
                     s.tissue.oxygenation = (s.tissue.oxygenation + at(2)).clamp(0.0, 1.0);
                     s.tissue.epidermis_um *= at(3);
+                }
+                if let Some(m) = &mottling {
+                    let [b, mel] = m.factors(p, &mut mottling_cache);
+                    s.tissue.blood *= b;
+                    s.tissue.melanin *= mel;
                 }
                 if let Some(m) = &measured.melanin {
                     s.tissue.melanin = m.sample(&taps);

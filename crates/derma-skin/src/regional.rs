@@ -58,11 +58,13 @@ pub const GAINS: [Gain; 12] = [
     // nose and around the mouth; facial erythema is highest on the cheeks and nose. Where the
     // flow is higher the tissue extracts a smaller fraction of the oxygen (Fick's principle), so
     // the well-perfused regions also carry more oxygenated blood: +0.12–0.2 saturation.
-    // Magnitudes are authored against measured facial redness (a*, Xiao et al. 2017; the test
-    // regional_color): the excess over 1 was cut to 0.6× when the optics' surface became the
-    // Smith microsurface, which lets less light out and shows the blood more (a* 17.6 → 16.4).
-    g("cheeks", 3.7, 1.0, 0.2, 1.0),
-    g("nose", 4.0, 1.0, 0.2, 1.0),
+    // Magnitudes are authored against measured facial colour (the test regional_color): the
+    // excess over 1 was cut to 0.6× when the optics' surface became the Smith microsurface;
+    // when the baseline blood was lowered to 0.3–2 % (so facial a* and b* land near measured
+    // faces), cheeks and nose were raised to 5 and 5.5 so their diffuse erythema still stands
+    // out (coarse a* σ ≥ 2.5 on light skin, as a fair face scan's 3.0).
+    g("cheeks", 5.0, 1.0, 0.2, 1.0),
+    g("nose", 5.5, 1.0, 0.2, 1.0),
     g("forehead", 2.56, 1.0, 0.12, 1.0),
     g("chin", 1.96, 1.0, 0.0, 1.0),
     g("upper_lip", 2.08, 1.0, 0.0, 1.0),
@@ -188,13 +190,13 @@ impl Preset {
         }
     }
 
-    /// The ITA° this preset aims at: the middle of its band (dark: −50°), with very light's open
-    /// top closed at 62° (so 58.5°) rather than 70°, because the Monte Carlo skin does not
-    /// reach further: at the cheeks' and forehead's blood and the match table's lowest melanin
-    /// node (0.005) their mean colour is at ITA ≈ 59° (Smith surface; docs/matching.md).
+    /// The ITA° this preset aims at: the middle of its band, the open ends closed at ±70° (very
+    /// light 62.5°), except dark at −40°: the nearer of the two dark facial clusters measured by
+    /// Wee et al. 2009 (ITA −39.9° and −57.8°; crates/derma-skin/data/facial-colour-groups.toml),
+    /// where the Monte Carlo skin's colour is also compared with a measured mean.
     pub fn target_ita_deg(self) -> f32 {
         match self {
-            Preset::VeryLight => 58.5,
+            Preset::Dark => -40.0,
             _ => {
                 let (lo, hi) = self.band();
                 0.5 * (lo + hi)
