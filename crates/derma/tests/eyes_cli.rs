@@ -236,3 +236,30 @@ fn bad_input_is_named() {
     ]);
     assert!(!ok && err.contains("sleeping"), "{err}");
 }
+
+#[test]
+fn the_animated_glb_is_the_same_at_any_thread_count() {
+    // 120 frames: a blink and eleven morph targets, the Gram matrix of the fit and the frames
+    // evaluated in parallel. One and two worker threads must write the same bytes.
+    let d = tmp("threads");
+    let out = |threads: &str| {
+        let dir = d.join(format!("t{threads}"));
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_derma"))
+            .args(["eyes", "animate", "--seconds", "4", "--fps", "30"])
+            .args(["--render", "0", "--quiet", "--out", s(&dir)])
+            .env("RAYON_NUM_THREADS", threads)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        dir
+    };
+    let (a, b) = (out("1"), out("2"));
+    for f in ["head.glb", "curves.csv", "curves.json"] {
+        let (x, y) = (
+            std::fs::read(a.join(f)).unwrap(),
+            std::fs::read(b.join(f)).unwrap(),
+        );
+        assert!(!x.is_empty());
+        assert!(x == y, "{f} differs between 1 and 2 threads");
+    }
+}
