@@ -312,12 +312,17 @@ impl TriMesh {
         self.triangles
             .iter()
             .filter(|t| {
-                let [a, b, c] = t.map(|i| self.positions[i as usize]);
-                let g = (b - a).cross(c - a);
+                let g = self.face_cross(**t);
                 let n: Vec3 = t.iter().map(|&i| self.normals[i as usize]).sum();
                 g.length_squared() > 1e-20 && g.dot(n) < 0.0
             })
             .count()
+    }
+
+    /// (b − a) × (c − a) of triangle `t`: its geometric normal by winding, twice its area long.
+    pub fn face_cross(&self, t: [u32; 3]) -> Vec3 {
+        let [a, b, c] = t.map(|i| self.positions[i as usize]);
+        (b - a).cross(c - a)
     }
 
     /// Largest extent of the axis-aligned bounding box.
@@ -350,10 +355,7 @@ impl TriMesh {
     pub fn area(&self) -> f64 {
         self.triangles
             .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|i| self.positions[i as usize]);
-                0.5 * (b - a).cross(c - a).length() as f64
-            })
+            .map(|t| 0.5 * self.face_cross(*t).length() as f64)
             .sum()
     }
 
@@ -366,8 +368,7 @@ impl TriMesh {
     pub fn compute_normals(&mut self) {
         let mut n = vec![Vec3::ZERO; self.positions.len()];
         for t in &self.triangles {
-            let [a, b, c] = t.map(|i| self.positions[i as usize]);
-            let f = (b - a).cross(c - a);
+            let f = self.face_cross(*t);
             for &i in t {
                 n[i as usize] += f;
             }

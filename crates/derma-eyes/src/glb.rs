@@ -106,9 +106,8 @@ pub fn write(
             .collect()
     };
     let fit_rows: Vec<Vec<f64>> = fit_sample(nf).into_par_iter().map(row).collect();
-    let k = COMPONENTS.min(fit_rows.len().saturating_sub(1)).max(1);
     let pca = if fit_rows.len() >= 2 {
-        Pca::fit(&fit_rows, k)?
+        Pca::fit(&fit_rows, COMPONENTS)?
     } else {
         Pca {
             mean: fit_rows[0].clone(),
@@ -117,14 +116,23 @@ pub fn write(
             total_variance: 0.0,
         }
     };
-    drop(fit_rows);
+    // A clip fitted on every frame projects the rows it already holds; a longer one makes
+    // each row again.
+    let held = (fit_rows.len() == nf).then_some(fit_rows);
     // Every frame projected and its reconstruction error measured, in parallel; the sums are
     // taken in frame order (the same bits at any thread count).
     let per_frame: Vec<(Vec<f64>, f64, f64)> = (0..nf)
         .into_par_iter()
         .map(|i| {
-            let r = row(i);
-            let w = pca.project(&r, pca.len());
+            let made;
+            let r: &[f64] = match &held {
+                Some(rows) => &rows[i],
+                None => {
+                    made = row(i);
+                    &made
+                }
+            };
+            let w = pca.project(r, pca.len());
             let back = pca.reconstruct(&w);
             let (mut se, mut worst) = (0.0f64, 0.0f64);
             for c in r.chunks_exact(3).zip(back.chunks_exact(3)) {
@@ -389,9 +397,12 @@ impl CorneaCap for derma_core::mesh::TriMesh {
         self
     }
 }
-/// Most frames the morph targets are fitted to: 256 spread over a clip hold its poses (a blink
-/// lasts about 0.3 s, so at 30 fps a clip under 8.5 s is fitted on every frame), and the fit's
-/// cost no longer grows with the clip (it was O(frames² · vertices)).
+/// Most frames the morph targets are fitted to, spread evenly over the clip, so the fit's cost no
+/// longer grows with the clip (it was O(frames² · vertices)). A clip under 8.5 s at 30 fps is
+/// fitted on every frame; a longer one samples every (frames / 256)-th, which can step over a
+/// blink (about 0.16 s in derma: a 66 ms down phase and an up phase 1.435× as long, blink.rs).
+/// Every frame is still projected, and the reconstruction error over all of them is the fit RMS
+/// the command reports.
 pub const FIT_FRAMES: usize = 256;
 
 /// The frames of an `n`-frame clip the morph targets are fitted to: all of them up to

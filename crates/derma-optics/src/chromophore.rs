@@ -25,12 +25,18 @@ pub const HEMOGLOBIN_G_PER_L: f64 = 150.0;
 /// Molar mass of hemoglobin, 64 500 g/mol (Prahl, OMLC "Optical absorption of hemoglobin").
 pub const HEMOGLOBIN_G_PER_MOL: f64 = 64_500.0;
 
-/// Absorption of whole blood at grid sample `i` with oxygen saturation `oxygenation`:
-/// μa = ln(10) ε C / M (Prahl), ε from the tabulated molar extinction, converted cm⁻¹ → mm⁻¹.
+/// Absorption (mm⁻¹) of a chromophore of molar extinction `epsilon` (M⁻¹cm⁻¹) at `g_per_l`
+/// and molar mass `g_per_mol`: μa = ln(10) ε C / M (Prahl, OMLC), converted cm⁻¹ → mm⁻¹.
+pub fn molar_absorption(epsilon: f64, g_per_l: f64, g_per_mol: f64) -> f64 {
+    std::f64::consts::LN_10 * epsilon * g_per_l / g_per_mol / 10.0
+}
+
+/// Absorption of whole blood at grid sample `i` with oxygen saturation `oxygenation`
+/// ([`molar_absorption`] of the tabulated molar extinction).
 pub fn blood(i: usize, oxygenation: f64) -> f64 {
     let [e_oxy, e_deoxy] = HEMOGLOBIN_EXTINCTION_10NM[i];
     let e = oxygenation * e_oxy + (1.0 - oxygenation) * e_deoxy;
-    std::f64::consts::LN_10 * e * HEMOGLOBIN_G_PER_L / HEMOGLOBIN_G_PER_MOL / 10.0
+    molar_absorption(e, HEMOGLOBIN_G_PER_L, HEMOGLOBIN_G_PER_MOL)
 }
 
 /// Reduced scattering of the epidermis σs′ = 14.74 λ^−0.22 + 2.2·10¹¹ λ^−4 mm⁻¹ (Donner & Jensen

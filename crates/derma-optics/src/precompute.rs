@@ -62,14 +62,10 @@ pub struct Grid {
     pub surface: SurfaceModel,
     /// β-carotene and bilirubin concentrations (`[yellow_pigments]`). Absent: none, as every
     /// grid written before they were modelled was simulated; give the section for BioSpec's.
-    #[serde(default = "no_yellow_pigments", rename = "yellow_pigments")]
+    #[serde(default = "YellowPigments::none", rename = "yellow_pigments")]
     pub yellow: YellowPigments,
     /// The axes.
     pub axes: GridAxes,
-}
-
-fn no_yellow_pigments() -> YellowPigments {
-    YellowPigments::NONE
 }
 
 fn default_brdf() -> [usize; 3] {

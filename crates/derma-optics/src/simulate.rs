@@ -34,16 +34,12 @@ pub struct SkinSimConfig {
     #[serde(default = "thesis_surface")]
     pub surface: SurfaceModel,
     /// β-carotene and bilirubin (absent in older files: none, as they were made).
-    #[serde(default = "no_yellow_pigments")]
+    #[serde(default = "YellowPigments::none")]
     pub yellow: YellowPigments,
 }
 
 fn thesis_surface() -> SurfaceModel {
     SurfaceModel::Thesis
-}
-
-fn no_yellow_pigments() -> YellowPigments {
-    YellowPigments::NONE
 }
 
 impl Default for SkinSimConfig {

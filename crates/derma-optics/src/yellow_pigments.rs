@@ -21,6 +21,7 @@
 //! Measured with the Monte Carlo skin (docs/optics.md): b* +0.25 on light skin, +0.02 on dark;
 //! L* and a* within 0.04.
 
+use crate::chromophore::molar_absorption;
 use serde::{Deserialize, Serialize};
 
 /// Molar mass of β-carotene, C₄₀H₅₆ (g/mol).
@@ -41,12 +42,6 @@ pub const BILIRUBIN_EXTINCTION_10NM: [f64; 41] = [
     29682.0, 14046.0, 4745.0, 1314.0, 349.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
 ];
-
-/// Absorption (mm⁻¹) of a chromophore of molar extinction `epsilon` (M⁻¹cm⁻¹) at `g_per_l`
-/// and molar mass `g_per_mol`: μa = ln(10) ε C / M, with cm⁻¹ → mm⁻¹.
-pub fn absorption(epsilon: f64, g_per_l: f64, g_per_mol: f64) -> f64 {
-    std::f64::consts::LN_10 * epsilon * g_per_l / g_per_mol / 10.0
-}
 
 /// An extinction table at `lambda_nm`, linear between the 10 nm nodes (0 outside 380–780 nm).
 pub fn at(table: &[f64; 41], lambda_nm: f64) -> f64 {
@@ -78,6 +73,11 @@ impl Default for YellowPigments {
 }
 
 impl YellowPigments {
+    /// [`YellowPigments::NONE`], the serde default of files written before these pigments.
+    pub fn none() -> YellowPigments {
+        YellowPigments::NONE
+    }
+
     /// BioSpec's baselines (see the module comment).
     pub const BIOSPEC: YellowPigments = YellowPigments {
         carotene_epidermis_g_per_l: 2.1e-4,
@@ -94,7 +94,7 @@ impl YellowPigments {
 
     /// Absorption (mm⁻¹) β-carotene adds to the stratum corneum and the epidermis.
     pub fn epidermis(&self, lambda_nm: f64) -> f64 {
-        absorption(
+        molar_absorption(
             at(&BETA_CAROTENE_EXTINCTION_10NM, lambda_nm),
             self.carotene_epidermis_g_per_l,
             BETA_CAROTENE_G_PER_MOL,
@@ -103,7 +103,7 @@ impl YellowPigments {
 
     /// Absorption (mm⁻¹) β-carotene adds to bloodless dermis.
     pub fn dermis(&self, lambda_nm: f64) -> f64 {
-        absorption(
+        molar_absorption(
             at(&BETA_CAROTENE_EXTINCTION_10NM, lambda_nm),
             self.carotene_dermis_g_per_l,
             BETA_CAROTENE_G_PER_MOL,
@@ -112,7 +112,7 @@ impl YellowPigments {
 
     /// Absorption (mm⁻¹) bilirubin adds to whole blood.
     pub fn blood(&self, lambda_nm: f64) -> f64 {
-        absorption(
+        molar_absorption(
             at(&BILIRUBIN_EXTINCTION_10NM, lambda_nm),
             self.bilirubin_blood_g_per_l,
             BILIRUBIN_G_PER_MOL,

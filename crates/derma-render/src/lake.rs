@@ -111,11 +111,12 @@ pub fn shade(s: &Surfaces, lake: Option<(&[f32], &[Vec3])>, l: Vec3, radiance: f
 
 /// GGX specular (Walter et al. 2007) with Schlick Fresnel and Smith's uncorrelated masking.
 fn ggx_spec(n: Vec3, l: Vec3, v: Vec3, h: Vec3, rough: f32) -> f32 {
-    let a2 = (rough * rough).powi(2);
+    let alpha = rough * rough;
+    let a2 = alpha * alpha;
     let nh = n.dot(h).max(0.0);
     let nl = n.dot(l).max(1e-4);
     let nv = n.dot(v).max(1e-4);
-    let d = crate::brdf::ggx_d(nh, rough * rough);
+    let d = crate::brdf::ggx_d(nh, alpha);
     let g1 = |x: f32| 2.0 * x / (x + (a2 + (1.0 - a2) * x * x).sqrt());
     let f = crate::brdf::schlick(F0, v.dot(h).max(0.0));
     d * g1(nl) * g1(nv) * f / (4.0 * nv) // × n·l / (n·l) cancels

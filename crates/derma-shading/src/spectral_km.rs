@@ -13,7 +13,7 @@ use crate::chromophore;
 use crate::fresnel::diffuse_reflectance;
 use crate::kubelka_munk::{km_from_transport, layer, stack, LayerRT};
 use crate::lut::{Axis, GridLut};
-use derma_core::color::{reflectance_to_linear_srgb, wavelength_nm, Spectrum};
+use derma_core::color::{reflectance_to_linear_srgb, Spectrum};
 use derma_optics::yellow_pigments::YellowPigments;
 
 /// Fixed properties of the layered skin model.
@@ -63,13 +63,9 @@ impl Spectra {
             blood_deoxy: std::array::from_fn(|i| chromophore::blood(i, 0.0)),
             sp_epi: chromophore::on_grid(chromophore::epidermis_reduced_scattering),
             sp_derm: chromophore::on_grid(chromophore::dermis_reduced_scattering),
-            carotene_epi: std::array::from_fn(|i| {
-                YellowPigments::BIOSPEC.epidermis(wavelength_nm(i))
-            }),
-            carotene_derm: std::array::from_fn(|i| {
-                YellowPigments::BIOSPEC.dermis(wavelength_nm(i))
-            }),
-            bilirubin: std::array::from_fn(|i| YellowPigments::BIOSPEC.blood(wavelength_nm(i))),
+            carotene_epi: chromophore::on_grid(|l| YellowPigments::BIOSPEC.epidermis(l)),
+            carotene_derm: chromophore::on_grid(|l| YellowPigments::BIOSPEC.dermis(l)),
+            bilirubin: chromophore::on_grid(|l| YellowPigments::BIOSPEC.blood(l)),
         }
     }
 }

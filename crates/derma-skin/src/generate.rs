@@ -729,9 +729,16 @@ impl TextureSet {
                 Some(views)
             }
             Ok(None) => {
-                job.note(Note::info(
-                    "preview drawn by derma-render's CPU previews (no hardware GPU, --device cpu, or a flat patch; --device gpu takes any adapter)",
-                ));
+                let why = if self.preview_mesh.is_none() {
+                    "a flat patch"
+                } else if self.device == Device::Cpu {
+                    "--device cpu"
+                } else {
+                    "no hardware GPU; --device gpu takes any adapter"
+                };
+                job.note(Note::info(format!(
+                    "preview drawn by derma-render's CPU previews ({why})"
+                )));
                 None
             }
             Err(e) => {

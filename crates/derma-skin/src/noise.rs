@@ -21,6 +21,11 @@ pub const NOISE_STREAM: u32 = 100;
 /// Philox stream of the micro-relief's site jitter seed (features/relief.rs).
 pub const RELIEF_STREAM: u32 = 101;
 
+/// The seed of a noise from the skin's seed and its Philox stream (first lane of counter 0).
+pub fn stream_seed(seed: u64, stream: u32) -> u32 {
+    derma_core::rng::Philox::new(seed, stream).u32x4(0)[0]
+}
+
 /// One octave: lattice spacing and optional periods (in cells) for a tileable patch.
 #[derive(Clone, Copy, Debug)]
 struct Octave {

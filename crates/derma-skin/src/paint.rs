@@ -9,7 +9,7 @@ use crate::features::lips::{apply_lips, LipParams};
 use crate::features::relief::{self, ReliefParams};
 use crate::features::{BioSample, PaintPoint};
 use crate::index::GridCursor;
-use crate::noise::{BandNoise, NOISE_STREAM, RELIEF_STREAM};
+use crate::noise::{stream_seed, BandNoise, NOISE_STREAM, RELIEF_STREAM};
 use crate::surface::Surface;
 use derma_core::map::Taps;
 use derma_core::progress::{Progress, Unit};
@@ -141,14 +141,13 @@ pub fn paint_with(
     progress.stage("paint", surface.height as u64, Unit::Rows);
     let b = &cfg.baseline;
     let noise = BandNoise::new(
-        derma_core::rng::Philox::new(cfg.seed, NOISE_STREAM).u32x4(0)[0] as u64,
+        stream_seed(cfg.seed, NOISE_STREAM) as u64,
         b.noise_wavelengths_mm,
         surface.period(),
     );
     let mottling = cfg.mottling.enabled.then(|| {
         crate::mottling::Mottling::new(
-            derma_core::rng::Philox::new(cfg.seed, crate::mottling::MOTTLING_STREAM).u32x4(0)[0]
-                as u64,
+            stream_seed(cfg.seed, crate::mottling::MOTTLING_STREAM) as u64,
             cfg.mottling.wavelengths_mm,
             cfg.mottling.blood,
             cfg.mottling.melanin,
@@ -179,11 +178,7 @@ pub fn paint_with(
     let relief = if cfg.relief.enabled {
         let r = &cfg.relief;
         Some((
-            ReliefParams::from_config(
-                r,
-                derma_core::rng::Philox::new(cfg.seed, RELIEF_STREAM).u32x4(0)[0],
-                surface.period(),
-            ),
+            ReliefParams::from_config(r, stream_seed(cfg.seed, RELIEF_STREAM), surface.period()),
             fields.scalar(&r.field)?,
             fields.vectors.get(&r.vector_field),
         ))

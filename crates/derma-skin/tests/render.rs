@@ -13,6 +13,22 @@ fn skin(size: u32) -> SkinMaps {
     set.render.skin_maps(false)
 }
 
+/// The built-in head with a generated `size`² set, and its renderer; `None` (skip) without a GPU.
+fn head(size: u32) -> Option<(Scene, Renderer)> {
+    if derma_test_support::skip_without_gpu() {
+        return None;
+    }
+    let scene = Scene::head(
+        derma_head::Head::builtin(),
+        skin(size),
+        &[],
+        None,
+        (0.0, 0.0),
+    );
+    let r = Renderer::new(&scene).expect("renderer");
+    Some((scene, r))
+}
+
 fn frame(r: &Renderer, n: u32) -> Rendered {
     r.render(&View::default(), &Setup::Studio.lighting(), n, n)
         .expect("render")
@@ -59,12 +75,9 @@ fn quad(s: f32) -> derma_core::mesh::TriMesh {
 
 #[test]
 fn a_1024_frame_of_the_head_shows_skin_and_eyes_and_repeats_bit_for_bit() {
-    if derma_test_support::skip_without_gpu() {
+    let Some((scene, r)) = head(256) else {
         return;
-    }
-    let maps = skin(256);
-    let scene = Scene::head(derma_head::Head::builtin(), maps, &[], None, (0.0, 0.0));
-    let r = Renderer::new(&scene).expect("renderer");
+    };
     let a = frame(&r, 1024);
     assert_eq!((a.width, a.height), (1024, 1024));
     assert_eq!(a.display.len(), 4 * 1024 * 1024);
@@ -240,18 +253,10 @@ fn a_user_mesh_renders_with_its_own_uvs() {
 
 #[test]
 fn the_lacrimal_lake_lines_the_lid_margins_and_touches_nothing_else() {
-    if derma_test_support::skip_without_gpu() {
-        return;
-    }
     use derma_render::material::{MATERIAL_EYE, MATERIAL_SKIN};
-    let scene = Scene::head(
-        derma_head::Head::builtin(),
-        skin(256),
-        &[],
-        None,
-        (0.0, 0.0),
-    );
-    let r = Renderer::new(&scene).expect("renderer");
+    let Some((scene, r)) = head(256) else {
+        return;
+    };
     let n = 512;
     let view = View {
         zoom: 0.35,
@@ -343,17 +348,9 @@ fn no_pixel_is_ever_not_a_number() {
     // A 512² set seen from 35° once rendered a dot product of unit vectors just past 1 into
     // Schlick's pow(1 − cos, 5): NaN on lavapipe, spread by the blur into a 20-pixel black
     // square on the scalp. The same set and view must give finite radiance everywhere.
-    if derma_test_support::skip_without_gpu() {
+    let Some((_, r)) = head(512) else {
         return;
-    }
-    let scene = Scene::head(
-        derma_head::Head::builtin(),
-        skin(512),
-        &[],
-        None,
-        (0.0, 0.0),
-    );
-    let r = Renderer::new(&scene).expect("renderer");
+    };
     let view = View {
         yaw_deg: 35.0,
         ..Default::default()
