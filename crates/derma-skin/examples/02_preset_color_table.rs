@@ -1,6 +1,7 @@
 //! Prints the colour table of docs/head.md: for each skin-tone preset, the mean CIELAB (D65) and
 //! ITA° of the base colour per region of the built-in head, and the coarse a* deviation over the
-//! face. Run: `cargo run --release -p derma-skin --example 02_preset_color_table [SIZE]`.
+//! face. Run: `cargo run --release -p derma-skin --example 02_preset_color_table [SIZE [SEED]]`
+//! (seed 1 by default; another seed checks the calibration on skin it was not tuned on).
 
 use derma_skin::color_stats::{coarse_std, region_colors};
 use derma_skin::regional::{Preset, Sex};
@@ -8,6 +9,7 @@ use derma_skin::{SkinConfig, SkinGenerator};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let size: u32 = std::env::args().nth(1).map_or(Ok(512), |s| s.parse())?;
+    let seed: u64 = std::env::args().nth(2).map_or(Ok(1), |s| s.parse())?;
     let regions = [
         "forehead",
         "cheeks",
@@ -23,6 +25,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for p in Preset::ALL {
         let cfg = SkinConfig {
             size,
+            seed,
             person: p.person(Sex::Male, 35.0),
             ..SkinConfig::default()
         };
