@@ -179,8 +179,11 @@ impl Dtab {
         crate::atomic::write_bytes(path, &self.to_bytes())?;
         let mut side = path.as_os_str().to_owned();
         side.push(".json");
-        let json = serde_json::to_vec_pretty(&self.header).unwrap_or_default();
-        crate::atomic::write_bytes(Path::new(&side), &json)
+        crate::report::write_json(
+            Path::new(&side),
+            &self.header,
+            crate::report::JsonFormat::DATA_PRETTY,
+        )
     }
 
     /// Reads and checks the table at `path`.

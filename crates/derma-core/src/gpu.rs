@@ -104,7 +104,7 @@ pub enum GpuError {
     /// A buffer is larger than the adapter binds (or allocates) at once.
     #[error(
         "{what} needs {bytes} bytes on the GPU; {adapter} binds at most {limit} bytes per \
-         storage buffer — use a smaller size or --device cpu"
+         storage buffer — use a smaller size or the CPU device"
     )]
     TooLarge {
         /// The buffer, in words ("the rig's colour output at 4096×4096").

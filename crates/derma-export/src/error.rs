@@ -29,6 +29,9 @@ pub enum ExportError {
     /// A rig that cannot be loaded or evaluated.
     #[error(transparent)]
     Rig(#[from] derma_rig::RigError),
+    /// The texture set could not be made or written.
+    #[error(transparent)]
+    Skin(#[from] derma_skin::SkinError),
     /// An eye texture that cannot be read.
     #[error(transparent)]
     Eyes(#[from] derma_eyes::EyesError),

@@ -77,7 +77,7 @@ fn rig_color(f: &RigFrame) -> Result<[Map; 3]> {
         derma_rig::weights::frame_weights(&rig, &f.weights, Normalization::default(), f.global)?;
     let melanin = rig.melanin.clone().ok_or_else(|| ExportError::Input {
         path: f.dir.clone(),
-        detail: "the rig has no melanin map to colour with; build it with --melanin".into(),
+        detail: "the rig has no melanin map to colour with; build the rig with one".into(),
     })?;
     let (_, rgb) = derma_rig::evaluate_frame(
         &rig,

@@ -125,7 +125,7 @@ pub fn export(textures: &Path, rig_dir: Option<&Path>, out: &Path) -> Result<Web
         let (rig, lut, rj) = derma_rig::rig_dir::load(dir)?;
         let melanin = rig.melanin.as_ref().ok_or_else(|| ExportError::Input {
             path: dir.to_path_buf(),
-            detail: "the rig has no melanin map; build it with --melanin".into(),
+            detail: "the rig has no melanin map; build the rig with one".into(),
         })?;
         let rd = out.join("rig");
         derma_core::atomic::ensure_writable_dir(&rd)?;

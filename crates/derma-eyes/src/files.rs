@@ -121,7 +121,7 @@ pub fn synthetic(
 ) -> Result<usize> {
     if !(seconds > 0.0 && fps > 0.0) {
         return Err(EyesError::Invalid(format!(
-            "--seconds {seconds} and --fps {fps} must be positive"
+            "a clip of {seconds} s at {fps} frames per second: both must be positive"
         )));
     }
     progress.stage("synthesise tracked data", 1, Unit::Steps);

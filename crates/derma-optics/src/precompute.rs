@@ -259,7 +259,7 @@ pub struct Shard {
 impl Shard {
     /// Parses "k/n".
     pub fn parse(s: &str) -> Result<Self> {
-        let bad = || OpticsError::Invalid(format!("--shard '{s}': expected k/n with 1 ≤ k ≤ n"));
+        let bad = || OpticsError::Invalid(format!("shard '{s}': expected k/n with 1 ≤ k ≤ n"));
         let (a, b) = s.split_once('/').ok_or_else(bad)?;
         let k: usize = a.trim().parse().map_err(|_| bad())?;
         let n: usize = b.trim().parse().map_err(|_| bad())?;
@@ -299,7 +299,7 @@ impl Shard {
             if step != 1 || max < min || max - min + 1 != count || !(min..=max).contains(&id) {
                 return Err(OpticsError::Invalid(format!(
                     "Slurm array task {id} of {min}-{max} (count {count}, step {step}): shards need \
-                     a contiguous array, e.g. --array=0-{}; or pass --shard k/n",
+                     a contiguous array, e.g. sbatch --array=0-{}; or give the shard as k/n",
                     count.max(1) - 1
                 )));
             }
@@ -350,9 +350,10 @@ pub fn prepare_dir(dir: &Path, grid: &Grid) -> Result<()> {
         if &old_grid != grid {
             return Err(OpticsError::File {
                 path,
-                message: "this directory was started with a different grid; use a new --out \
+                message:
+                    "this directory was started with a different grid; use a new output directory \
                           directory or the same grid"
-                    .into(),
+                        .into(),
             });
         }
         return Ok(());

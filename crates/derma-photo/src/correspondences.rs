@@ -117,7 +117,7 @@ fn resolve(label: &str, surface: &Surface, err: &dyn Fn(String) -> PhotoError) -
     }
     let lm = surface.landmarks.ok_or_else(|| {
         err(format!(
-            "point '{label}' is a landmark name, but the mesh has no landmarks (give --landmarks)"
+            "point '{label}' is a landmark name, but the mesh has no landmarks (give its landmark file)"
         ))
     })?;
     if !lm.points.contains_key(label) {

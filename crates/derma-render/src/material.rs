@@ -100,7 +100,7 @@ impl SkinMaps {
             } else {
                 Err(RenderError::Input {
                     path: p,
-                    detail: "missing; expected a texture set from `derma skin --out DIR`".into(),
+                    detail: "missing; expected a texture set as derma skin writes it".into(),
                 })
             }
         };

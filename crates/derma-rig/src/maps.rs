@@ -128,7 +128,7 @@ pub fn melanin_for(
         None => rig.melanin.clone().ok_or_else(|| {
             crate::error::invalid(
                 "melanin",
-                "the rig has no melanin map to color with; give one (--melanin FILE) or build the rig with a melanin map",
+                "the rig has no melanin map to color with; give a melanin map, or build the rig with one",
             )
         })?,
     };

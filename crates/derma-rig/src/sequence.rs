@@ -247,7 +247,7 @@ fn start_or_resume(out: &Path, json: &AnimationJson, force: bool) -> Result<()> 
         if !same && !force {
             return Err(RigError::File {
                 path: out.to_path_buf(),
-                detail: "holds frames of a different animation (rig, curves or options changed); force a restart (--force) or use another output directory".into(),
+                detail: "holds frames of a different animation (rig, curves or options changed); force a restart or use another output directory".into(),
             });
         }
         if !same {

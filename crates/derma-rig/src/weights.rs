@@ -106,7 +106,7 @@ pub fn resolve(names: &[&str], spec: &WeightSpec, norm: Normalization) -> Result
         Normalization::NeutralTakesRest => Err(invalid(
             "weights",
             format!(
-                "the target weights sum to {rest} > 1 (eq. 6 needs Σ w_i = 1 with the neutral); lower them or ask for normalisation (--normalize)"
+                "the target weights sum to {rest} > 1 (eq. 6 needs Σ w_i = 1 with the neutral); lower them or ask for them to be normalised"
             ),
         )),
     }
@@ -210,7 +210,7 @@ mod tests {
         )
         .unwrap_err()
         .to_string();
-        assert!(e.contains("1.4") && e.contains("--normalize"), "{e}");
+        assert!(e.contains("1.4") && e.contains("normalised"), "{e}");
         let w = resolve(
             &NAMES,
             &spec("happiness=0.8,anger=0.6"),

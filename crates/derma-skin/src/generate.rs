@@ -279,7 +279,7 @@ impl<'a> SkinGenerator<'a> {
         if kind == SurfaceKind::Mesh && mesh_path.is_none() {
             return Err(SkinError::Key {
                 key: "surface.kind".into(),
-                detail: "\"mesh\" needs surface.mesh or --mesh".into(),
+                detail: "\"mesh\" needs surface.mesh or a mesh given to the generator".into(),
             });
         }
         let mut mesh_scale = None;
@@ -301,7 +301,7 @@ impl<'a> SkinGenerator<'a> {
         if has_landmarks && user_regions.is_none() {
             return Err(SkinError::Key {
                 key: "surface.landmarks".into(),
-                detail: "landmarks place the built-in head's fields on a user mesh; give one with --mesh or surface.mesh".into(),
+                detail: "landmarks place the built-in head's fields on a user mesh; give the mesh (surface.mesh or the generator's mesh)".into(),
             });
         }
         let sr = cfg.scatter_resolution as usize;
@@ -332,7 +332,7 @@ impl<'a> SkinGenerator<'a> {
                     "default fields and regional biology placed on the mesh by its landmarks",
                 ));
             } else if self.fields.is_none() && cfg.fields.is_empty() {
-                job.note(Note::info("no --fields given: uniform fields are used (moles, freckles, cysts and pores everywhere; no lips, hair or wrinkles); paint fields to place them"));
+                job.note(Note::info("no fields given: uniform fields are used (moles, freckles, cysts and pores everywhere; no lips, hair or wrinkles); paint fields to place them"));
             }
         }
         // The surface (tangent frames, UV rasters, gutter dilation) and the default fields do
@@ -732,9 +732,9 @@ impl TextureSet {
                 let why = if self.preview_mesh.is_none() {
                     "a flat patch"
                 } else if self.device == Device::Cpu {
-                    "--device cpu"
+                    "the CPU device was chosen"
                 } else {
-                    "no hardware GPU; --device gpu takes any adapter"
+                    "no hardware GPU; choosing the GPU device takes any adapter"
                 };
                 job.note(Note::info(format!(
                     "preview drawn by derma-render's CPU previews ({why})"

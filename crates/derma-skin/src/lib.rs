@@ -96,7 +96,7 @@ pub enum SkinError {
     #[error(transparent)]
     Render(#[from] derma_render::RenderError),
     /// The texture set would not fit in memory.
-    #[error("output of {width}x{height} texels needs about {need_gib:.1} GiB of memory; {have_gib:.1} GiB are available: choose a smaller --size")]
+    #[error("output of {width}x{height} texels needs about {need_gib:.1} GiB of memory; {have_gib:.1} GiB are available: choose a smaller size")]
     TooLarge {
         /// Width asked for.
         width: usize,

@@ -263,7 +263,7 @@ fn check_size(i: usize, width: usize, height: usize, patch: usize) -> Result<()>
             format!("exemplar {}", i + 1),
             format!(
                 "is {width}×{height}, too small for {patch}×{patch} patches: it must be at least \
-                 {0}×{0} (or choose a smaller --patch)",
+                 {0}×{0} (or choose a smaller patch)",
                 2 * patch
             ),
         ));

@@ -179,28 +179,9 @@ pub fn run(args: SkinArgs, bars: &Bars) -> Result<()> {
     if let Some(n) = args.threads {
         generator = generator.threads(n);
     }
-    generator.check_output(&args.out)?;
-    let set = generator.run()?;
-    set.write(&args.out, bars)?;
-    if args.glb {
-        // The mesh in the unit the set was painted in.
-        let unit = match set.mesh_scale {
-            Some(derma_core::mesh::MeshScale { unit: Some(u), .. }) => {
-                derma_core::mesh::HeadUnit::Length(u)
-            }
-            Some(_) => derma_core::mesh::HeadUnit::Fit,
-            None => derma_core::mesh::HeadUnit::Auto,
-        };
-        let report = derma_export::glb::export(
-            &derma_export::glb::GlbOptions {
-                textures: args.out.clone(),
-                mesh: args.mesh.clone(),
-                unit,
-                out: args.out.join("head.glb"),
-                maps: None,
-            },
-            bars,
-        )?;
+    let derma_export::skin::SkinOutput { set, glb, .. } =
+        derma_export::skin::run(&generator, &args.out, args.glb, bars)?;
+    if let Some(report) = glb {
         bars.say(format!(
             "wrote {} ({:.1} MB; meshes {}; {} morph targets)",
             report.path.display(),

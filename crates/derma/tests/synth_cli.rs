@@ -142,7 +142,7 @@ fn errors_name_the_file_or_value() {
     let out = d.join("o.png");
     let (ok, _, err) = run(&["--exemplar", s(&h), "--size", "64", "--out", s(&out)]);
     assert!(
-        !ok && err.contains("40×40") && err.contains("--patch"),
+        !ok && err.contains("40×40") && err.contains("smaller patch"),
         "{err}"
     );
     let (ok, _, err) = run(&["--exemplar", s(&h), "--patch", "16", "--out", s(&h)]);

@@ -58,8 +58,15 @@ fn name_of(krate: &Path) -> String {
 
 /// `src` with comments, string and char literals blanked (newlines kept, so lines still count).
 fn strip_comments_and_strings(src: &str) -> String {
+    scan(src).0
+}
+
+/// [`strip_comments_and_strings`] and the byte ranges of the string literals (same offsets in
+/// both: every byte is blanked to one byte).
+fn scan(src: &str) -> (String, Vec<std::ops::Range<usize>>) {
     let b = src.as_bytes();
     let mut out = Vec::with_capacity(b.len());
+    let mut strings = Vec::new();
     let mut i = 0;
     let blank = |out: &mut Vec<u8>, c: u8| out.push(if c == b'\n' { b'\n' } else { b' ' });
     while i < b.len() {
@@ -117,8 +124,10 @@ fn strip_comments_and_strings(src: &str) -> String {
             for &c in &b[i..j.min(b.len())] {
                 blank(&mut out, c);
             }
+            strings.push(i..j.min(b.len()));
             i = j;
         } else if b[i] == b'"' {
+            let start = i;
             out.push(b' ');
             i += 1;
             while i < b.len() && b[i] != b'"' {
@@ -133,6 +142,7 @@ fn strip_comments_and_strings(src: &str) -> String {
             }
             out.push(b' ');
             i += 1;
+            strings.push(start..i.min(b.len()));
         } else if b[i] == b'\'' {
             // A char literal ('x', '\n', '\u{..}') or a lifetime ('a): blank only the former.
             let end = if b.get(i + 1) == Some(&b'\\') {
@@ -165,7 +175,7 @@ fn strip_comments_and_strings(src: &str) -> String {
             i += 1;
         }
     }
-    String::from_utf8_lossy(&out).into_owned()
+    (String::from_utf8_lossy(&out).into_owned(), strings)
 }
 
 /// The index just past the item that starts at `from` (a `{…}` block or up to a `;` outside any
@@ -192,21 +202,29 @@ fn item_end(code: &[u8], from: usize) -> usize {
     code.len()
 }
 
+/// The byte ranges of the items under `#[cfg(test)]` in comment- and string-free `code`.
+fn test_items(code: &str) -> Vec<std::ops::Range<usize>> {
+    let mut items = Vec::new();
+    let mut at = 0;
+    while let Some(p) = code[at..].find("#[cfg(test)]") {
+        let start = at + p;
+        let end = item_end(code.as_bytes(), start + "#[cfg(test)]".len());
+        items.push(start..end);
+        at = end;
+    }
+    items
+}
+
 /// Comment-free code without the items under `#[cfg(test)]` (test modules and helpers).
 fn non_test_code(src: &str) -> String {
     let code = strip_comments_and_strings(src);
     let mut out = code.clone().into_bytes();
-    let b = code.as_bytes();
-    let mut at = 0;
-    while let Some(p) = code[at..].find("#[cfg(test)]") {
-        let start = at + p;
-        let end = item_end(b, start + "#[cfg(test)]".len());
-        for c in &mut out[start..end] {
+    for r in test_items(&code) {
+        for c in &mut out[r] {
             if *c != b'\n' {
                 *c = b' ';
             }
         }
-        at = end;
     }
     String::from_utf8(out).unwrap()
 }
@@ -680,6 +698,53 @@ fn libraries_never_print() {
         &found,
         "libraries report through derma_core::progress, never print:",
     );
+}
+
+/// The CLI's flags named in the string literals of a library's non-test code (`--size`, not a
+/// peer's own flags such as `sbatch --array`), as `line: literal`.
+fn flags_named(src: &str) -> Vec<String> {
+    let (code, strings) = scan(src);
+    let tests = test_items(&code);
+    let mut found = Vec::new();
+    for r in strings {
+        let lit = &src[r.clone()];
+        if tests.iter().any(|t| t.contains(&r.start)) {
+            continue;
+        }
+        let names_flag = lit.match_indices("--").any(|(i, _)| {
+            let before = lit[..i].chars().last();
+            let after = lit[i + 2..].chars().next();
+            matches!(before, Some(' ' | '"' | '(' | '`'))
+                && after.is_some_and(|c| c.is_ascii_lowercase())
+                && !lit[..i].ends_with("sbatch ")
+        });
+        if names_flag {
+            let line = src[..r.start].lines().count();
+            found.push(format!("{line}: {lit}"));
+        }
+    }
+    found
+}
+
+#[test]
+fn library_messages_leave_flags_to_the_cli() {
+    let mut found = Vec::new();
+    for k in libraries() {
+        for f in rust_files(&k.join("src")) {
+            for hit in flags_named(&std::fs::read_to_string(&f).unwrap()) {
+                found.push(format!("{}:{hit}", f.display()));
+            }
+        }
+    }
+    assert_none(
+        &found,
+        "a library's errors and notes name the value or option, and the CLI names its flag:",
+    );
+    // The check finds a flag in a message, and not in a test or a peer's command line.
+    let probe = "fn f() -> String { \"choose a smaller --size\".into() }\n\
+                 fn g() -> &'static str { \"sbatch --array=1-4\" }\n\
+                 #[cfg(test)]\nmod tests { fn t() { let _ = \"--size 8\"; } }\n";
+    assert_eq!(flags_named(probe).len(), 1, "{:?}", flags_named(probe));
 }
 
 /// The leading `//!` lines of a file.

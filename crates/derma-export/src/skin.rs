@@ -1,0 +1,58 @@
+//! `derma skin` from configuration to files: the texture set derma-skin paints and writes, and
+//! on request its engine GLB on the head it was painted on (docs/skin.md, docs/render.md).
+
+use crate::glb::{self, GlbOptions, GlbReport};
+use crate::Result;
+use derma_core::mesh::{HeadUnit, MeshScale};
+use derma_core::progress::Progress;
+use derma_skin::{SkinGenerator, TextureSet, Written};
+use std::path::Path;
+
+/// What [`run`] made and wrote.
+pub struct SkinOutput {
+    /// The texture set in memory (its maps, features, configuration and log).
+    pub set: TextureSet,
+    /// The files written into the output directory.
+    pub written: Written,
+    /// `head.glb`, when asked for.
+    pub glb: Option<GlbReport>,
+}
+
+/// Checks the output directory, generates the set, writes it into `out` and, with `glb`, writes
+/// `out/head.glb`: the built-in head with its parts, or the set's own mesh in the unit it was
+/// painted in.
+pub fn run(
+    generator: &SkinGenerator,
+    out: &Path,
+    glb: bool,
+    progress: &dyn Progress,
+) -> Result<SkinOutput> {
+    generator.check_output(out)?;
+    let set = generator.run()?;
+    let written = set.write(out, progress)?;
+    let glb = glb
+        .then(|| {
+            glb::export(
+                &GlbOptions {
+                    textures: out.to_path_buf(),
+                    mesh: set.inputs.mesh.clone(),
+                    unit: painted_unit(set.mesh_scale.as_ref()),
+                    out: out.join("head.glb"),
+                    maps: None,
+                },
+                progress,
+            )
+        })
+        .transpose()?;
+    Ok(SkinOutput { set, written, glb })
+}
+
+/// The unit a user mesh was read in when the set was painted: its length unit when one was
+/// found, fitted to a head's size when none was, the loader's own choice for the built-in head.
+fn painted_unit(scale: Option<&MeshScale>) -> HeadUnit {
+    match scale {
+        Some(MeshScale { unit: Some(u), .. }) => HeadUnit::Length(*u),
+        Some(_) => HeadUnit::Fit,
+        None => HeadUnit::Auto,
+    }
+}
