@@ -93,7 +93,7 @@ fn eval(a: EvalArgs, bars: &Bars) -> Result<()> {
         hemoglobin: a.hemoglobin,
         preview: a.preview,
     };
-    let r = derma_rig::frame_job::run(&job, bars)?;
+    let r = derma_rig::frame_job::run(&job, bars).map_err(weights_hint)?;
     line(format!(
         "weights: neutral={:.4}{} global scale {:.4}",
         r.neutral,
@@ -121,7 +121,7 @@ fn animate(a: AnimateArgs, bars: &Bars) -> Result<()> {
         global_scale: a.frame.global_scale,
         melanin: a.frame.melanin.clone(),
     };
-    let run = render_sequence(&a.rig, &a.curves, &opts, &a.out, bars)?;
+    let run = render_sequence(&a.rig, &a.curves, &opts, &a.out, bars).map_err(weights_hint)?;
     bars.finish();
     bars.say(format!(
         "{} frames at {} fps ({} already there) in {:.2} s → {}",
@@ -132,4 +132,15 @@ fn animate(a: AnimateArgs, bars: &Bars) -> Result<()> {
         a.out.display()
     ));
     Ok(())
+}
+
+/// A rig error, with the flag that rescales weights named when the weights were refused.
+fn weights_hint(e: derma_rig::RigError) -> anyhow::Error {
+    let weights = matches!(&e, derma_rig::RigError::Invalid { what, .. } if what == "weights");
+    let e = anyhow::Error::new(e);
+    if weights {
+        e.context("the frame's weights (--normalize rescales weights that sum above one)")
+    } else {
+        e
+    }
 }
