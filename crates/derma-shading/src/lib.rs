@@ -13,6 +13,8 @@
 //!   `data/match-table.dtab`), with [`match_report`]'s residuals and plots.
 //! - [`SkinColorLut`]: melanin × hemoglobin → colour (Jimenez et al. 2010), simulated with the
 //!   same optics; the rig colours with it.
+//! - [`hair`]: a hair fibre's colour from its eumelanin and pheomelanin (d'Eon et al. 2011,
+//!   Chiang et al. 2016), for the strands derma-skin grows.
 
 #![warn(missing_docs)]
 
@@ -26,6 +28,7 @@ pub mod fit_job;
 /// Chromophore spectra and Fresnel reflectance live in the optics crate; re-exported here.
 pub use derma_optics::{chromophore, fresnel};
 pub mod ggx;
+pub mod hair;
 pub mod kelemen;
 pub mod kubelka_munk;
 pub mod lut;
