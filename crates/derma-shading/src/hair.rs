@@ -58,7 +58,10 @@ impl HairMelanin {
         } else if ita_deg <= NODES[5].0 {
             NODES[5].1
         } else {
-            let k = NODES.windows(2).position(|w| ita_deg >= w[1].0).unwrap_or(4);
+            let k = NODES
+                .windows(2)
+                .position(|w| ita_deg >= w[1].0)
+                .unwrap_or(4);
             let ((a, ea), (b, eb)) = (NODES[k], NODES[k + 1]);
             ea + (eb - ea) * (a - ita_deg) / (a - b)
         };
@@ -119,25 +122,55 @@ mod tests {
             for beta in [0.2, 0.3, 0.8] {
                 let back = color_of_absorption(absorption_of_color(c, beta), beta);
                 for k in 0..3 {
-                    assert!((back[k] - c[k]).abs() < 1e-4 * c[k].max(1e-3), "{c:?} {beta}");
+                    assert!(
+                        (back[k] - c[k]).abs() < 1e-4 * c[k].max(1e-3),
+                        "{c:?} {beta}"
+                    );
                 }
             }
         }
         // No melanin: white hair; more eumelanin: darker in every channel.
-        assert_eq!(HairMelanin { eumelanin: 0.0, pheomelanin: 0.0 }.color(), [1.0; 3]);
+        assert_eq!(
+            HairMelanin {
+                eumelanin: 0.0,
+                pheomelanin: 0.0
+            }
+            .color(),
+            [1.0; 3]
+        );
         let (a, b) = (
-            HairMelanin { eumelanin: 0.3, pheomelanin: 0.0 }.color(),
-            HairMelanin { eumelanin: 1.3, pheomelanin: 0.0 }.color(),
+            HairMelanin {
+                eumelanin: 0.3,
+                pheomelanin: 0.0,
+            }
+            .color(),
+            HairMelanin {
+                eumelanin: 1.3,
+                pheomelanin: 0.0,
+            }
+            .color(),
         );
         assert!((0..3).all(|k| b[k] < a[k]));
     }
 
     #[test]
     fn hair_is_red_before_blue_and_pheomelanin_makes_it_redder() {
-        let brown = HairMelanin { eumelanin: 1.3, pheomelanin: 0.0 }.color();
+        let brown = HairMelanin {
+            eumelanin: 1.3,
+            pheomelanin: 0.0,
+        }
+        .color();
         assert!(brown[0] > brown[1] && brown[1] > brown[2], "{brown:?}");
-        let red = HairMelanin { eumelanin: 0.3, pheomelanin: 3.0 }.color();
-        let blonde = HairMelanin { eumelanin: 0.3, pheomelanin: 0.0 }.color();
+        let red = HairMelanin {
+            eumelanin: 0.3,
+            pheomelanin: 3.0,
+        }
+        .color();
+        let blonde = HairMelanin {
+            eumelanin: 0.3,
+            pheomelanin: 0.0,
+        }
+        .color();
         assert!(red[0] / red[1] > blonde[0] / blonde[1]);
     }
 

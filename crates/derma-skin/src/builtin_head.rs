@@ -211,8 +211,58 @@ struct Texel {
     /// Relief depth scale and the tension-line direction (UV, encoded like `wv`).
     relief: f32,
     tv: [f32; 3],
+    /// The hair's growth direction (UV, encoded like `wv`).
+    hv: [f32; 3],
     bio: [f32; regional::CHANNELS.len()],
     regions: regions::Weights,
+}
+
+/// The direction hair grows at `p` (head coordinates, mm; +x the head's left, +y up): along the
+/// brows, medial hairs point up and slightly out, the body sweeps outwards and a little up, the
+/// tail points out and down, and the rows above the brow's crest angle down while those below
+/// angle up, so they meet along it (the herringbone of a brow; angles authored after the
+/// brow-grooming literature's "flow" diagrams). Elsewhere hair points down (beard and
+/// moustache, sideburns). Returns the direction and a length factor: the brow's medial hairs
+/// are short and upright, about half the length of the body's (authored).
+fn hair_direction(r: &Regions, p: Vec3) -> (Vec3, f32) {
+    let this = r.side(p.x);
+    let s = if p.x >= 0.0 { 1.0 } else { -1.0 };
+    let (eye, ci, co) = (this.eye, this.canthus_inner, this.canthus_outer);
+    // The brow's parameter, as derma-head's eyebrow region: −1 medial to 1 at the tail.
+    let (b0, b1) = (ci.x.abs() - 3.0, co.x.abs() + 10.0);
+    let t = (2.0 * (p.x.abs() - b0) / (b1 - b0) - 1.0).clamp(-1.5, 1.5);
+    let brow_y = eye.y + 18.0 + 4.0 * (1.0 - ((t - 0.2) / 1.2).powi(2)).max(0.0);
+    let brow_h = 5.0 - 2.5 * (0.5 * (t + 1.0)).clamp(0.0, 1.0);
+    let near_brow = smoothstep(eye.y + 8.0, eye.y + 12.0, p.y);
+    if near_brow <= 0.0 {
+        // Beard: down, the moustache fanning out from the philtrum.
+        let fan = 0.35
+            * smoothstep(4.0, 20.0, p.x.abs())
+            * smoothstep(-10.0, 5.0, p.y - this.mouth_corner.y);
+        return (Vec3::new(s * fan, -1.0, 0.0).normalize(), 1.0);
+    }
+    // Angle above the outward horizontal, by position along the brow (degrees, authored).
+    const ALONG: [(f32, f32); 5] = [
+        (-1.0, 80.0),
+        (-0.5, 60.0),
+        (0.0, 25.0),
+        (0.5, 5.0),
+        (1.0, -20.0),
+    ];
+    let tt = t.clamp(-1.0, 1.0);
+    let k = ALONG.windows(2).position(|w| tt <= w[1].0).unwrap_or(3);
+    let ((ta, aa), (tb, ab)) = (ALONG[k], ALONG[k + 1]);
+    let along = aa + (ab - aa) * (tt - ta) / (tb - ta);
+    // Rows above the crest angle down and below it up (±25° at the brow's edge).
+    let row = -25.0 * ((p.y - brow_y) / brow_h).clamp(-1.0, 1.0);
+    let a = (along + row).to_radians();
+    let brow = Vec3::new(s * a.cos(), a.sin(), 0.0);
+    let down = Vec3::new(0.0, -1.0, 0.0);
+    let length = 0.5 + 0.5 * smoothstep(-1.0, -0.2, t);
+    (
+        (brow * near_brow + down * (1.0 - near_brow)).normalize_or(brow),
+        1.0 + (length - 1.0) * near_brow,
+    )
 }
 
 /// The default fields of the built-in head for `person`: feature fields ([`FIELD_NAMES`]), the
@@ -245,6 +295,7 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
                     wv: [0.5, 0.5, 0.0],
                     relief: 0.0,
                     tv: [0.5, 0.5, 0.0],
+                    hv: [0.5, 0.5, 0.0],
                     bio: regional::NEUTRAL,
                     regions: [0.0; REGIONS.len()],
                 };
@@ -288,6 +339,8 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
                 Vec3::X
             };
             let tv = to_uv(tension, 1.0);
+            let (hair_dir, hair_len) = hair_direction(regions, p);
+            let hv = to_uv(hair_dir, hair_len);
             let g = |i: usize| w[i];
             let skin = 1.0 - g(region!("mouth_interior")).max(g(region!("eye_sockets")));
             // Relief depth by region (authored): coarser on the nose, finest on the eyelids,
@@ -311,6 +364,7 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
                 wv,
                 relief,
                 tv,
+                hv,
                 bio,
                 regions: w,
             }
@@ -344,6 +398,10 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
     set.vectors.insert(
         "tension_vectors".into(),
         [mk(&|v| v.tv[0]), mk(&|v| v.tv[1]), mk(&|v| v.tv[2])],
+    );
+    set.vectors.insert(
+        "hair_vectors".into(),
+        [mk(&|v| v.hv[0]), mk(&|v| v.hv[1]), mk(&|v| v.hv[2])],
     );
     set
 }

@@ -37,6 +37,7 @@ pub struct SkinConfig {
     pub pore: PoreConfig,
     pub follicle: FollicleConfig,
     pub eyebrow: FollicleConfig,
+    pub hair: HairConfig,
     pub material: MaterialConfig,
     pub detail: DetailConfig,
     pub relief: ReliefConfig,
@@ -277,10 +278,61 @@ pub struct FollicleConfig {
     pub density_per_cm2: f32,
     pub inner_radius_mm: f32,
     pub outer_radius_mm: f32,
-    pub hair_color: [f32; 3],
     pub height_mm: f32,
     pub blood_reduction: f32,
     pub gland_radius_mm: f32,
+}
+
+/// `[hair]`: strands grown from the eyebrow and beard follicles, and the hair's melanins
+/// (see `features/strand.rs`, `derma_shading::hair`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct HairConfig {
+    pub strands: bool,
+    pub melanin_from_skin: bool,
+    pub eumelanin: f32,
+    pub pheomelanin: f32,
+    pub vector_field: String,
+    pub brow_length_mm: Range,
+    pub brow_radius_mm: f32,
+    pub stubble_length_mm: f32,
+    pub stubble_radius_mm: f32,
+    pub beard_field: String,
+}
+
+impl Default for HairConfig {
+    fn default() -> Self {
+        Self {
+            strands: true,
+            melanin_from_skin: true,
+            eumelanin: 0.9,
+            pheomelanin: 0.15,
+            vector_field: "hair_vectors".into(),
+            brow_length_mm: Range {
+                min: 6.0,
+                max: 12.0,
+            },
+            brow_radius_mm: 0.05,
+            stubble_length_mm: 1.0,
+            stubble_radius_mm: 0.05,
+            beard_field: "beard".into(),
+        }
+    }
+}
+
+impl HairConfig {
+    /// The hair's melanins: from the person's skin tone
+    /// ([`derma_shading::hair::HairMelanin::for_skin_tone`]) or as given.
+    pub fn melanin(&self, person: &crate::regional::Person) -> derma_shading::hair::HairMelanin {
+        if self.melanin_from_skin {
+            derma_shading::hair::HairMelanin::for_skin_tone(person.ita_deg)
+        } else {
+            derma_shading::hair::HairMelanin {
+                eumelanin: self.eumelanin,
+                pheomelanin: self.pheomelanin,
+            }
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -310,6 +362,7 @@ impl Default for SkinConfig {
             pore: PoreConfig::default(),
             follicle: FollicleConfig::default(),
             eyebrow: FollicleConfig::eyebrow(),
+            hair: HairConfig::default(),
             material: MaterialConfig::default(),
             detail: DetailConfig::default(),
             relief: ReliefConfig::default(),
@@ -463,7 +516,6 @@ impl Default for FollicleConfig {
             density_per_cm2: crate::builtin_head::DEFAULT_DENSITY.follicle,
             inner_radius_mm: 0.04,
             outer_radius_mm: 0.1,
-            hair_color: [0.03, 0.018, 0.012],
             height_mm: 0.02,
             blood_reduction: 0.5,
             gland_radius_mm: 0.3,
@@ -579,7 +631,6 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("follicle.density_per_cm2", "1/cm²", 0.0, 1e6, "peak density; default: the thesis' 170 000 hairs over the built-in head's scalp field"),
     k("follicle.inner_radius_mm", "mm", 0.0, 10.0, "hair stalk radius r_i (thesis: 0.04)"),
     k("follicle.outer_radius_mm", "mm", 0.0, 10.0, "visible subdermal hair radius r_o (thesis: 0.1)"),
-    k("follicle.hair_color", "linear RGB", 0.0, 1.0, "colour of the hair (extra colour p_c); authored dark brown"),
     k("follicle.height_mm", "mm", 0.0, 10.0, "displacement of a shaven hair stalk (the thesis' 'maximum'; 0.02 mm authored)"),
     k("follicle.blood_reduction", "-", 0.0, 1.0, "share of blood removed at the follicle by the sebaceous gland (thesis §4.8.5 interaction; 0.5 authored)"),
     k("follicle.gland_radius_mm", "mm", 0.0, 10.0, "radius of that blood reduction (0.3 mm authored, about a sebaceous gland)"),
@@ -588,10 +639,19 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("eyebrow.density_per_cm2", "1/cm²", 0.0, 1e6, "peak density; default: 500 hairs (≈ 250 per brow) over the built-in head's eyebrow field"),
     k("eyebrow.inner_radius_mm", "mm", 0.0, 10.0, "hair stalk radius"),
     k("eyebrow.outer_radius_mm", "mm", 0.0, 10.0, "visible radius"),
-    k("eyebrow.hair_color", "linear RGB", 0.0, 1.0, "eyebrow hair colour"),
     k("eyebrow.height_mm", "mm", 0.0, 10.0, "stalk displacement"),
     k("eyebrow.blood_reduction", "-", 0.0, 1.0, "blood removed at the follicle"),
     k("eyebrow.gland_radius_mm", "mm", 0.0, 10.0, "radius of the blood reduction"),
+    k("hair.strands", "-", 0.0, 0.0, "grow hair strands from the eyebrow follicles and (men) the beard follicles: painted into base colour, height and normal, their coverage in hair_coverage.png (features/strand.rs); scalp hair is out of scope"),
+    k("hair.melanin_from_skin", "-", 0.0, 0.0, "the hair's melanins follow person.ita_deg (derma_shading::hair::HairMelanin::for_skin_tone: light brown at very light skin to black at dark; authored); false: hair.eumelanin and hair.pheomelanin"),
+    k("hair.eumelanin", "-", 0.0, 50.0, "the hair fibre's eumelanin in d'Eon et al. 2011's units (blonde ≈ 0.3, brown ≈ 1.3, black ≈ 8; pbrt-v3 §9.9), used when hair.melanin_from_skin = false; the colour of follicles, brows, stubble and lashes"),
+    k("hair.pheomelanin", "-", 0.0, 50.0, "the hair fibre's pheomelanin (red hair: several units), used when hair.melanin_from_skin = false"),
+    k("hair.vector_field", "field", 0.0, 0.0, "vector field of the hair's growth direction, its length scaling the hair's (built-in head: the brows' flow, medial hairs up and the tail down, the upper row angled down and the lower up; beard hair down; medial brow hairs half as long); absent: strands grow along +v of the UV layout"),
+    k("hair.brow_length_mm", "mm", 0.0, 50.0, "length of a brow hair's visible part, drawn uniformly (authored; eyebrow hairs are about a centimetre long and lie at a shallow angle)"),
+    k("hair.brow_radius_mm", "mm", 0.0, 1.0, "brow hair radius (coarse terminal fibres of about 0.1 mm diameter; authored)"),
+    k("hair.stubble_length_mm", "mm", 0.0, 20.0, "stubble on a man's beard follicles: about 1 mm is two to three days of growth at the beard's ≈ 0.4 mm a day (authored); 0 = clean-shaven"),
+    k("hair.stubble_radius_mm", "mm", 0.0, 1.0, "beard hair radius (coarse terminal hair, about 0.1 mm across; authored)"),
+    k("hair.beard_field", "field", 0.0, 0.0, "field of the beard area: a follicle grows stubble with probability BEARD_TO_SCALP·beard / follicle field there (men only)"),
     k("material.roughness_skin", "-", 0.0, 1.0, "glTF perceptual roughness of skin: √α with α ≈ m = 0.3–0.45 (Weyrich et al. 2006, Torrance–Sparrow fits of faces) → 0.6"),
     k("material.roughness_lips", "-", 0.0, 1.0, "roughness on the lips (moist, glossier; authored)"),
     k("material.roughness_hair", "-", 0.0, 1.0, "roughness under hair (authored)"),

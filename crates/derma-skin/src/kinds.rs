@@ -5,7 +5,8 @@
 //!
 //! Painting order (thesis §4.8.5): the baseline and the lips first (`paint.rs`), then features
 //! that add melanin or height, then wrinkles and pores that carve the surface, and follicles
-//! last because they reduce the blood the others have set and cover everything with hair colour.
+//! last because they reduce the blood the others have set and cover everything with hair colour;
+//! the strands grown from them (brows, stubble) lie on top of all.
 
 use crate::config::FollicleConfig;
 use crate::features::cyst::Cyst;
@@ -13,9 +14,11 @@ use crate::features::follicle::{Follicle, FollicleParams};
 use crate::features::freckle::Freckle;
 use crate::features::mole::Mole;
 use crate::features::pore::{Pore, PoreParams};
+use crate::features::strand::{Strand, StrandParams};
 use crate::features::wrinkle::Wrinkle;
-use crate::placement::{walk_wrinkle, PlacedKind, Placing, Scattered, Spec};
+use crate::placement::{walk_strand, walk_wrinkle, PlacedKind, Placing, Scattered, Spec};
 use crate::{Result, SkinError};
+use derma_core::rng::Philox;
 
 /// One kind of feature.
 pub struct KindEntry {
@@ -42,7 +45,7 @@ impl PartialEq for KindEntry {
 }
 
 /// Every kind, in painting order.
-pub const KINDS: [KindEntry; 7] = [
+pub const KINDS: [KindEntry; 9] = [
     KindEntry {
         name: "cyst",
         label: "cysts",
@@ -84,6 +87,18 @@ pub const KINDS: [KindEntry; 7] = [
         label: "eyebrow hairs",
         stream: 7,
         place: place_eyebrows,
+    },
+    KindEntry {
+        name: "brow_hair",
+        label: "brow hairs",
+        stream: 8,
+        place: place_brow_hairs,
+    },
+    KindEntry {
+        name: "stubble",
+        label: "stubble hairs",
+        stream: 9,
+        place: place_stubble,
     },
 ];
 
@@ -198,7 +213,7 @@ fn place_hair(ctx: &Placing, fc: &FollicleConfig, name: &str) -> Result<Box<dyn 
         Some(Follicle::new(p.position, fc, ctx.pitch(&p)))
     })?;
     let params = FollicleParams {
-        hair_color: fc.hair_color,
+        hair_color: ctx.cfg.hair.melanin(&ctx.cfg.person).color(),
         height_mm: fc.height_mm,
         blood_reduction: fc.blood_reduction,
         gland_radius_mm: fc.gland_radius_mm,
@@ -219,6 +234,93 @@ fn place_eyebrows(ctx: &Placing) -> Result<Box<dyn PlacedKind>> {
     place_hair(ctx, &ctx.cfg.eyebrow, "eyebrow")
 }
 
+/// Hair strands grown from the follicles of kind `follicles` (the same scatter, so every strand
+/// starts at one of its follicles): each follicle grows one with probability `share` at its
+/// surface point, of a length drawn by `length` from a uniform number.
+fn place_strands(
+    ctx: &Placing,
+    follicles: (&FollicleConfig, &str),
+    name: &str,
+    share: &(dyn Fn(&crate::scatter::SurfacePoint) -> f32 + Sync),
+    length: &(dyn Fn(f32) -> f32 + Sync),
+    radius: f32,
+    tapered: bool,
+) -> Result<Box<dyn PlacedKind>> {
+    let h = &ctx.cfg.hair;
+    let (fc, kind) = follicles;
+    let on = h.strands && fc.enabled && radius > 0.0;
+    let spec = Spec::new(&fc.field, fc.density_per_cm2, on, stream(kind));
+    let draws = Philox::new(ctx.cfg.seed, stream(name));
+    let items = ctx.scatter(spec, |_, k, p| {
+        let u = draws.uniform4(k, 0);
+        if u[0] >= share(&p) {
+            return None;
+        }
+        let curve = walk_strand(ctx.surface, ctx.fields, &h.vector_field, length(u[1]), p)?;
+        Some(Strand::new(curve, radius, tapered, ctx.pitch(&p)))
+    })?;
+    let params = StrandParams {
+        color: h.melanin(&ctx.cfg.person).color(),
+    };
+    Ok(Box::new(
+        Scattered::with_auto_cell(items, ctx.period(), 4.0, params).listed_as(|items| {
+            serde_json::to_value(items.iter().map(|s| s.curve.p).collect::<Vec<_>>())
+                .unwrap_or_default()
+        }),
+    ))
+}
+
+/// A hair from every eyebrow follicle, along the brows' flow.
+fn place_brow_hairs(ctx: &Placing) -> Result<Box<dyn PlacedKind>> {
+    let r = ctx.cfg.hair.brow_length_mm;
+    place_strands(
+        ctx,
+        (&ctx.cfg.eyebrow, "eyebrow"),
+        "brow_hair",
+        &|_| 1.0,
+        &|u| r.min + (r.max - r.min) * u,
+        ctx.cfg.hair.brow_radius_mm,
+        true,
+    )
+}
+
+/// Stubble on a man's beard follicles: the follicle field is scalp + BEARD_TO_SCALP · beard, so
+/// a follicle is a beard one with probability BEARD_TO_SCALP · beard / field there.
+fn place_stubble(ctx: &Placing) -> Result<Box<dyn PlacedKind>> {
+    let h = &ctx.cfg.hair;
+    let male = ctx.cfg.person.sex == crate::regional::Sex::Male;
+    let (Some(beard), Ok(field)) = (
+        ctx.fields.scalars.get(&h.beard_field),
+        ctx.fields.scalar(&ctx.cfg.follicle.field),
+    ) else {
+        return Ok(Box::new(Scattered::<Strand>::new(
+            Vec::new(),
+            ctx.period(),
+            4.0,
+            StrandParams { color: [0.0; 3] },
+        )));
+    };
+    let wrap = ctx.period().is_some();
+    let share = |p: &crate::scatter::SurfacePoint| {
+        let b = crate::builtin_head::BEARD_TO_SCALP * beard.sample_uv(p.uv.x, p.uv.y, wrap);
+        b / field.sample_uv(p.uv.x, p.uv.y, wrap).max(1e-6)
+    };
+    let length = h.stubble_length_mm;
+    place_strands(
+        ctx,
+        (&ctx.cfg.follicle, "follicle"),
+        "stubble",
+        &share,
+        &|_| length,
+        if male && length > 0.0 {
+            h.stubble_radius_mm
+        } else {
+            0.0
+        },
+        false,
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -229,7 +331,7 @@ mod tests {
         assert_eq!(names.len(), KINDS.len());
         // The streams are part of what a seed means: changing one changes the textures.
         let streams: Vec<u32> = KINDS.iter().map(|k| k.stream).collect();
-        assert_eq!(streams, [1, 2, 3, 4, 5, 6, 7]);
+        assert_eq!(streams, [1, 2, 3, 4, 5, 6, 7, 8, 9]);
         assert!(streams.iter().all(|&s| s != crate::noise::NOISE_STREAM));
         assert!(streams.iter().all(|&s| s != crate::noise::RELIEF_STREAM));
         assert!(streams

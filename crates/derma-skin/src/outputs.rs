@@ -17,6 +17,8 @@ pub const HEIGHT_PNG: &str = "height.png";
 pub const ROUGHNESS: &str = files::ROUGHNESS;
 /// `specular.png`.
 pub const SPECULAR: &str = files::SPECULAR;
+/// `hair_coverage.png`: the hair's coverage.
+pub const HAIR_COVERAGE: &str = "hair_coverage.png";
 /// `melanin.exr`.
 pub const MELANIN: &str = "melanin.exr";
 /// `hemoglobin.exr`.
@@ -56,13 +58,14 @@ const fn out(file: &'static str, color_space: &'static str, meaning: &'static st
 }
 
 /// Every file `derma skin` writes, in manifest order.
-pub const OUTPUTS: [OutputFile; 15] = [
+pub const OUTPUTS: [OutputFile; 16] = [
     out(BASE_COLOR, "sRGB", "diffuse albedo (glTF baseColor / Unreal Base Color), 8-bit sRGB"),
     out(NORMAL, "linear (non-colour)", "tangent-space normal, OpenGL +Y (green up), MikkTSpace frame on meshes; 16-bit, n·½+½"),
     out(HEIGHT_EXR, "linear", "displacement in mm from the mean skin surface (float32)"),
     out(HEIGHT_PNG, "linear (non-colour)", "displacement, 16-bit, 0 ↔ height_range.min_mm and 1 ↔ max_mm (report.json)"),
     out(ROUGHNESS, "linear (non-colour)", "glTF perceptual roughness (Unreal Roughness), 8-bit"),
     out(SPECULAR, "linear (non-colour)", "specular level F0/0.08 (Unreal/Substance Specular: 0.5 ↔ F0 = 4 %), 8-bit"),
+    out(HAIR_COVERAGE, "linear (non-colour)", "coverage of hair (follicles, brow hairs, stubble), 8-bit: an alpha/opacity mask for hair cards or a shader that treats hair apart; base_color already has the hair painted in"),
     out(MELANIN, "linear", "melanosome volume fraction of the epidermis (melanin) and pheomelanin share"),
     out(HEMOGLOBIN, "linear", "whole-blood volume fraction of the dermis (hemoglobin) and its oxygenation"),
     out(BIO, "linear", "every bio parameter as a channel (half float): melanin, pheomelanin, blood, oxygenation, stratum_corneum_um, epidermis_um, height_mm, extra.RGBA, lips"),

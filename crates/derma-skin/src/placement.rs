@@ -236,7 +236,46 @@ pub fn walk_wrinkle(
 ) -> Option<CubicBezier> {
     let wrap = s.period().is_some();
     let v0 = fields.vector(name, start.uv.x, start.uv.y, wrap).ok()?;
-    let length = v0.length * max_length_mm;
+    walk_curve(
+        s,
+        &|uv| fields.vector(name, uv.x, uv.y, wrap).ok(),
+        v0.length * max_length_mm,
+        start,
+    )
+}
+
+/// A hair strand's centre line from its follicle at `start`: `length_mm` times the vector
+/// field's length at the root, walked along the vector field `name`, or `length_mm` along +v of
+/// the UV layout where the fields have no such vector field.
+pub fn walk_strand(
+    s: &Surface,
+    fields: &FieldSet,
+    name: &str,
+    length_mm: f32,
+    start: SurfacePoint,
+) -> Option<CubicBezier> {
+    let wrap = s.period().is_some();
+    let up = crate::field::UvVector {
+        dir: Vec2::Y,
+        length: 1.0,
+    };
+    let dir = |uv: Vec2| match fields.vectors.contains_key(name) {
+        true => fields.vector(name, uv.x, uv.y, wrap).ok(),
+        false => Some(up),
+    };
+    let at_root = dir(start.uv)?.length;
+    walk_curve(s, &dir, length_mm * at_root, start)
+}
+
+/// Three steps of `length`/3 along the directions of `field` from `start` (stopping where it
+/// has none), as the four control points of a cubic Bézier on the surface.
+fn walk_curve(
+    s: &Surface,
+    field: &dyn Fn(Vec2) -> Option<crate::field::UvVector>,
+    length: f32,
+    start: SurfacePoint,
+) -> Option<CubicBezier> {
+    let wrap = s.period().is_some();
     if length <= 0.0 {
         return None;
     }
@@ -245,7 +284,7 @@ pub fn walk_wrinkle(
     let mut uv = start.uv;
     let mut pos = start.position;
     for _ in 0..3 {
-        let v = fields.vector(name, uv.x, uv.y, wrap).ok()?;
+        let v = field(uv)?;
         if v.length <= 0.0 {
             break;
         }

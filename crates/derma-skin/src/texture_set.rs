@@ -540,6 +540,23 @@ pub fn write_maps(
             outputs::SPECULAR,
             Box::new(|| grey8(outputs::SPECULAR, &maps.specular)),
         ),
+        (
+            outputs::HAIR_COVERAGE,
+            Box::new(move || {
+                Ok(write_png_rows(
+                    &path(outputs::HAIR_COVERAGE),
+                    w,
+                    h,
+                    1,
+                    PngDepth::Eight,
+                    |y, out| {
+                        for (o, s) in out.iter_mut().zip(row(y)) {
+                            *o = quantize8(s.extra[3]);
+                        }
+                    },
+                )?)
+            }),
+        ),
     ];
     if let Some(sub) = &maps.subsurface {
         list.insert(

@@ -11,6 +11,14 @@ pub struct CubicBezier {
     pub p: [Vec3; 4],
 }
 
+/// Distance from `p` to the segment [a, b].
+#[inline]
+pub fn segment_distance(p: Vec3, a: Vec3, b: Vec3) -> f32 {
+    let ab = b - a;
+    let t = ((p - a).dot(ab) / ab.length_squared().max(1e-12)).clamp(0.0, 1.0);
+    p.distance(a + ab * t)
+}
+
 /// Golden ratio conjugate (√5 − 1)/2.
 const INV_PHI: f32 = 0.618_034;
 /// Coarse samples used to bracket the global minimum before the golden-section search.
@@ -72,6 +80,36 @@ impl CubicBezier {
         } else {
             best
         }
+    }
+
+    /// (t, squared distance) of the point of the curve closest to `q` measured in the tangent
+    /// plane at `q` (normal `n`): the separation minus its component along the normal, so a
+    /// curve lying on a curved surface is found though its chords sink below it. Points farther
+    /// than `reach` along the normal are on another part of the surface and count as 10⁶ mm².
+    #[inline]
+    pub fn closest_tangential(&self, q: Vec3, n: Vec3, reach: f32) -> (f32, f32) {
+        self.closest_by(|c| {
+            let sep = q - c;
+            let sn = sep.dot(n);
+            (sep - n * sn).length_squared() + if sn.abs() > reach { 1e6 } else { 0.0 }
+        })
+    }
+
+    /// Largest distance of the curve from its chord P₀P₃, bounded by the control points (the
+    /// curve lies in their convex hull).
+    pub fn chord_deviation(&self) -> f32 {
+        let [p0, p1, p2, p3] = self.p;
+        segment_distance(p1, p0, p3).max(segment_distance(p2, p0, p3))
+    }
+
+    /// Whether the curve certainly stays farther than `r` from `q` in the tangent plane at `q`:
+    /// the tangential distance to the chord minus the chord deviation `dev` exceeds `r`
+    /// (projection onto a plane is a contraction), so most points skip the closest-point search.
+    #[inline]
+    pub fn tangentially_beyond(&self, q: Vec3, n: Vec3, dev: f32, r: f32) -> bool {
+        let flat = |v: Vec3| v - n * v.dot(n);
+        let (a, b) = (flat(self.p[0] - q), flat(self.p[3] - q));
+        segment_distance(Vec3::ZERO, a, b) - dev > r
     }
 
     /// Axis-aligned bounds of the control polygon (which contains the curve).

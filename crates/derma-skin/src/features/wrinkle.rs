@@ -33,21 +33,12 @@ pub struct Wrinkle {
     pub chord_deviation: f32,
 }
 
-/// Distance from `p` to the segment [a, b].
-#[inline]
-fn segment_distance(p: Vec3, a: Vec3, b: Vec3) -> f32 {
-    let ab = b - a;
-    let t = ((p - a).dot(ab) / ab.length_squared().max(1e-12)).clamp(0.0, 1.0);
-    p.distance(a + ab * t)
-}
-
 impl Wrinkle {
     /// A crease along `curve` of half-width `width` and depth `depth` (mm), on texels of `pitch_mm`.
     pub fn new(curve: CubicBezier, width: f32, depth: f32, pitch_mm: f32) -> Self {
         // A crease narrower than a texel keeps its cross-section integral (depth × width).
         let w_eff = width.max(super::MIN_TEXELS * pitch_mm);
-        let [p0, p1, p2, p3] = curve.p;
-        let chord_deviation = segment_distance(p1, p0, p3).max(segment_distance(p2, p0, p3));
+        let chord_deviation = curve.chord_deviation();
         Self {
             curve,
             width: w_eff,
@@ -72,20 +63,13 @@ impl Feature for Wrinkle {
     }
     #[inline]
     fn apply(&self, _: &(), q: &PaintPoint, s: &mut BioSample) {
-        let n = q.n;
-        // Early out: the tangential distance to the curve is at least the tangential distance to
-        // the chord minus the chord deviation (projection onto the tangent plane is a contraction).
-        let flat = |v: Vec3| v - n * v.dot(n);
-        let (a, b) = (flat(self.curve.p[0] - q.p), flat(self.curve.p[3] - q.p));
-        if segment_distance(Vec3::ZERO, a, b) - self.chord_deviation > self.width {
+        if self
+            .curve
+            .tangentially_beyond(q.p, q.n, self.chord_deviation, self.width)
+        {
             return;
         }
-        let tangential2 = |c: Vec3| {
-            let sep = q.p - c;
-            let sn = sep.dot(n);
-            (sep - n * sn).length_squared() + if sn.abs() > NORMAL_REACH { 1e6 } else { 0.0 }
-        };
-        let (t, d2) = self.curve.closest_by(tangential2);
+        let (t, d2) = self.curve.closest_tangential(q.p, q.n, NORMAL_REACH);
         let w = wrinkle_taper(t, self.width);
         if w <= 0.0 || d2 >= w * w {
             return;
