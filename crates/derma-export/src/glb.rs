@@ -9,7 +9,7 @@ use derma_core::image_io::png8_bytes;
 use derma_core::mesh::{mikktspace_tangents, split_by_tangent, TriMesh};
 use derma_core::Map;
 use derma_head::export::Glb;
-use derma_render::material::{default_eye_texture, lash_coverage_map, SkinMaps};
+use derma_render::material::{default_eye_texture, SkinMaps};
 use glam::Vec3;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -276,13 +276,19 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
             "eye",
             &png8_bytes("eye", &[&eye[0], &eye[1], &eye[2]])?,
         );
-        let lash = lash_coverage_map(256);
-        let black = Map::filled(256, 256, 0.02f32.powf(1.0 / 2.2));
-        let t_lash = image(
-            &mut g,
-            "eyelashes",
-            &png8_bytes("eyelashes", &[&black, &black, &black, &lash])?,
-        );
+        // The set's lash cards (the hair's colour, lashes as alpha), or near-black lashes.
+        let lashes_png = o.textures.join(derma_render::material::files::LASHES);
+        let lash_bytes = if lashes_png.is_file() {
+            std::fs::read(&lashes_png).map_err(|e| derma_core::CoreError::Read {
+                path: lashes_png.clone(),
+                source: e,
+            })?
+        } else {
+            let lash = derma_head::lashes::coverage_map(512);
+            let black = Map::filled(512, 512, 0.02f32.powf(1.0 / 2.2));
+            png8_bytes("eyelashes", &[&black, &black, &black, &lash])?
+        };
+        let t_lash = image(&mut g, "eyelashes", &lash_bytes);
         for (k, part) in head.parts.iter().enumerate() {
             let prop = derma_head::Look::of(&part.name);
             let mat = if part.name.starts_with("eye_") {

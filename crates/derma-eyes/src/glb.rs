@@ -62,13 +62,13 @@ fn eye_texture_png(size: usize, texture: Option<&[derma_core::Map; 3]>) -> crate
 }
 
 /// The lash cards' texture as PNG bytes: the lashes' colour ([`derma_head::Look`]) in RGB and
-/// their coverage ([`derma_head::eye::lash_coverage`]) in alpha, for alpha testing.
+/// their coverage ([`derma_head::lashes::coverage`]) in alpha, for alpha testing.
 fn lash_texture_png(size: usize) -> crate::Result<Vec<u8>> {
     let look = derma_head::Look::of("eyelashes");
     let rgb = (look.albedo)(Vec2::splat(0.5))
         .to_array()
         .map(|v| derma_core::Map::filled(size, size, derma_core::color::srgb_encode(v)));
-    let alpha = derma_render::material::lash_coverage_map(size);
+    let alpha = derma_head::lashes::coverage_map(size);
     Ok(derma_core::image_io::png8_bytes(
         "the lash texture",
         &[&rgb[0], &rgb[1], &rgb[2], &alpha],

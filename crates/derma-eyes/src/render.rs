@@ -144,7 +144,7 @@ impl<'a> Stage<'a> {
             &DEFAULT_EYE
         };
         static LASHES: fn(Vec2) -> Vec3 = |_| Vec3::new(0.02, 0.015, 0.012);
-        static LASH_COVERAGE: fn(Vec2) -> f32 = derma_head::eye::lash_coverage;
+        static LASH_COVERAGE: fn(Vec2) -> f32 = derma_head::lashes::coverage;
         // Sclera under the tear film: glossy. The iris disc sits behind the (open) cornea, whose
         // highlight a flat disc cannot show: matte, or a flat disc mirrors the key light whole.
         let mut props: Vec<Prop> = globes

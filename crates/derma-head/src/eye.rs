@@ -102,23 +102,6 @@ pub fn default_albedo(uv: Vec2) -> Vec3 {
     Vec3::new(0.72, 0.68, 0.63)
 }
 
-/// Coverage of the eyelash cards (MakeHuman's lash helpers: u along the lid margin; the upper
-/// card spans v ≈ 0.09 (root) to 0.33 (tips), the lower one v ≈ 0.92 to 0.70) for a renderer
-/// without lash textures: the root third of the upper card and the root fifth of the lower one,
-/// which read as the dark lash line at preview sizes where single strands are sub-pixel.
-pub fn lash_coverage(uv: Vec2) -> f32 {
-    let (t, keep) = if uv.y < 0.5 {
-        ((uv.y - 0.09) / 0.24, 0.35)
-    } else {
-        ((0.92 - uv.y) / 0.22, 0.2)
-    };
-    if (0.0..keep).contains(&t) {
-        1.0
-    } else {
-        0.0
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

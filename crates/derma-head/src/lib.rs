@@ -19,6 +19,7 @@ pub mod asset;
 pub mod export;
 pub mod eye;
 pub mod landmarks;
+pub mod lashes;
 pub mod look;
 pub mod regions;
 pub mod subdivision;

@@ -2,7 +2,7 @@
 //! (albedo over each part's UVs, roughness, F0, lash coverage) that every renderer and exporter
 //! draws them with — data, not drawing (derma-render draws them).
 
-use crate::eye;
+use crate::{eye, lashes};
 use glam::{Vec2, Vec3};
 
 /// A part's material: linear albedo over its UVs, perceptual GGX roughness, normal-incidence
@@ -22,14 +22,14 @@ pub struct Look {
 impl Look {
     /// The material of the part called `name`: the eyes with [`eye::default_albedo`] under a
     /// glossy tear film, ivory teeth, a pink tongue and near-black lashes thinning to their tips
-    /// ([`eye::lash_coverage`]).
+    /// ([`lashes::coverage`]: single tapering lashes).
     pub fn of(name: &str) -> Look {
         // Linear albedos: enamel ivory, tongue mucosa pink, lashes near black (authored).
         static TEETH: fn(Vec2) -> Vec3 = |_| Vec3::new(0.62, 0.56, 0.45);
         static TONGUE: fn(Vec2) -> Vec3 = |_| Vec3::new(0.42, 0.12, 0.11);
         static LASHES: fn(Vec2) -> Vec3 = |_| Vec3::new(0.02, 0.015, 0.012);
         static EYE: fn(Vec2) -> Vec3 = eye::default_albedo;
-        static LASH_COVERAGE: fn(Vec2) -> f32 = eye::lash_coverage;
+        static LASH_COVERAGE: fn(Vec2) -> f32 = lashes::coverage;
         type Albedo = &'static (dyn Fn(Vec2) -> Vec3 + Sync);
         let (albedo, roughness, f0): (Albedo, f32, f32) = if name.starts_with("eye_") {
             // The cornea's tear film: glossy; F0 of n ≈ 1.376 (cornea) ≈ 0.025.

@@ -153,6 +153,13 @@ pub fn head_props(head: &derma_head::Head) -> Vec<Prop<'_>> {
         .collect()
 }
 
+/// Gives every card of `props` (the parts with a coverage: the lashes) the albedo `albedo`.
+pub fn recolour_cards<'a>(props: &mut [Prop<'a>], albedo: &'a (dyn Fn(Vec2) -> Vec3 + Sync)) {
+    for p in props.iter_mut().filter(|p| p.coverage.is_some()) {
+        p.albedo = albedo;
+    }
+}
+
 /// Renders `mesh` (with per-corner tangents) seen from direction `view_yaw` (radians about +Y,
 /// 0 = from +Z) into a `size`×`size` linear RGB image with a dark background.
 pub fn render(

@@ -331,6 +331,7 @@ mod tests {
             roughness: one(0.5),
             specular: one(0.35),
             subsurface: None,
+            lash_color: None,
             wrap: false,
         };
         let scene = Scene::mesh(&mesh, maps);

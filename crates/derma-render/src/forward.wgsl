@@ -97,6 +97,14 @@ fn view_depth(world: vec3<f32>) -> f32 {
     return dot(world - frame.camera.xyz, frame.forward.xyz);
 }
 
+/// The 4×4 Bayer threshold of the pixel at `p` (framebuffer coordinates), in (0, 1).
+fn bayer4(p: vec2<f32>) -> f32 {
+    let m = array<u32, 16>(0u, 8u, 2u, 10u, 12u, 4u, 14u, 6u, 3u, 11u, 1u, 9u, 15u, 7u, 13u, 5u);
+    let x = u32(p.x) % 4u;
+    let y = u32(p.y) % 4u;
+    return (f32(m[y * 4u + x]) + 0.5) / 16.0;
+}
+
 @fragment
 fn fs_skin(in: VertexOut, @builtin(front_facing) front: bool) -> GOut {
     var o: GOut;
@@ -118,7 +126,10 @@ fn fs_skin(in: VertexOut, @builtin(front_facing) front: bool) -> GOut {
         rough = rs.r;
         f0 = rs.g * draw.params.w;
     }
-    if (draw.params.z == KIND_CARD && coverage < 0.5) {
+    // Cards are alpha-tested against the 4×4 ordered dither the CPU rasteriser uses
+    // (raster::dither): a card's coverage of c draws a share c of its pixels, so lashes thinner
+    // than a pixel (whose filtered coverage is below ½) thin out instead of vanishing.
+    if (draw.params.z == KIND_CARD && coverage <= bayer4(in.clip.xy)) {
         discard;
     }
     let n = shading_normal(in, ng, textured && draw.params.z == KIND_SKIN);

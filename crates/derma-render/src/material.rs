@@ -23,6 +23,8 @@ pub mod files {
     pub const SSS_COLOR: &str = "sss_color.png";
     /// `sss_radius.png`: mean free path / [`super::SSS_RADIUS_RANGE_MM`], 16-bit.
     pub const SSS_RADIUS: &str = "sss_radius.png";
+    /// `lashes.png`: the lash cards' colour (sRGB) and coverage (alpha), 8-bit RGBA.
+    pub const LASHES: &str = "lashes.png";
 }
 
 /// [`crate::Rendered::material`] of the skin mesh.
@@ -52,6 +54,9 @@ pub struct SkinMaps {
     /// Burley's surface albedo (linear RGB) and mean free path (mm) per channel, when the set
     /// has them; without them the skin is lit without subsurface scattering.
     pub subsurface: Option<([Map; 3], [Map; 3])>,
+    /// The hair's colour (linear RGB) for the lash cards (lashes.png in a set on the built-in
+    /// head); `None`: the cards' authored look ([`derma_head::Look`]).
+    pub lash_color: Option<[f32; 3]>,
     /// Repeat the maps (tileable patches).
     pub wrap: bool,
 }
@@ -131,12 +136,22 @@ impl SkinMaps {
         } else {
             None
         };
+        let lp = dir.join(files::LASHES);
+        let lash_color = if lp.is_file() {
+            let c = three(&lp)?;
+            Some(std::array::from_fn(|k| {
+                derma_core::color::srgb_decode(c[k].get(0, 0))
+            }))
+        } else {
+            None
+        };
         Ok(SkinMaps {
             base_color,
             normal,
             roughness,
             specular,
             subsurface,
+            lash_color,
             wrap: false,
         })
     }
@@ -169,19 +184,4 @@ pub fn default_eye_texture(n: usize) -> [Map; 3] {
         }
     }
     out
-}
-
-/// The lash cards' coverage ([`derma_head::eye::lash_coverage`]) as an `n`×`n` map.
-pub fn lash_coverage_map(n: usize) -> Map {
-    let mut m = Map::filled(n, n, 0.0);
-    for y in 0..n {
-        for x in 0..n {
-            let uv = glam::Vec2::new(
-                (x as f32 + 0.5) / n as f32,
-                1.0 - (y as f32 + 0.5) / n as f32,
-            );
-            m.set(x, y, derma_head::eye::lash_coverage(uv));
-        }
-    }
-    m
 }

@@ -2,7 +2,7 @@
 //! parts with their own materials — eyes with a refracting cornea, lash cards, teeth, tongue —
 //! as GPU-ready vertex lists (one vertex per triangle corner, MikkTSpace tangents).
 
-use crate::material::{default_eye_texture, lash_coverage_map, SkinMaps};
+use crate::material::{default_eye_texture, SkinMaps};
 use derma_core::mesh::{mikktspace_tangents, TriMesh};
 use derma_core::Map;
 use glam::{Quat, Vec3};
@@ -146,6 +146,7 @@ impl Scene {
         } else {
             head.posed_skin(weights)
         };
+        let lash_color = skin.lash_color.map(Vec3::from);
         let mut scene = Scene::mesh(&posed, skin);
         let eye_tex = eye_albedo.unwrap_or_else(|| default_eye_texture(512));
         let rot = gaze_rotation(gaze.0, gaze.1);
@@ -168,8 +169,8 @@ impl Scene {
                 }
             } else if prop.coverage.is_some() {
                 Material::Card {
-                    albedo: (prop.albedo)(centre_uv),
-                    coverage: Box::new(lash_coverage_map(256)),
+                    albedo: lash_color.unwrap_or((prop.albedo)(centre_uv)),
+                    coverage: Box::new(derma_head::lashes::coverage_map(512)),
                     roughness: prop.roughness,
                     f0: prop.f0,
                 }

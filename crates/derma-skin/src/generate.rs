@@ -409,13 +409,16 @@ impl<'a> SkinGenerator<'a> {
         }
 
         job.stage("convert", 1, Unit::Steps);
-        let render = crate::texture_set::convert(
+        let mut render = crate::texture_set::convert(
             &bio,
             &surface,
             appearance,
             &cfg.material,
             dilation.as_deref(),
         );
+        if kind == SurfaceKind::Template {
+            render.lash_color = Some(cfg.hair.melanin(&cfg.person).color());
+        }
         Ok(TextureSet {
             surface,
             fields,
@@ -708,6 +711,14 @@ impl TextureSet {
         job.stage("write", 1, Unit::Steps);
         let (mut files, height_range) =
             crate::texture_set::write_maps(dir, &self.bio, &self.render)?;
+        if let Some(hair) = self.render.lash_color {
+            crate::texture_set::write_lashes(&dir.join(outputs::LASHES), hair)?;
+            let at = files
+                .iter()
+                .position(|f| *f == outputs::HAIR_COVERAGE)
+                .map_or(files.len(), |p| p + 1);
+            files.insert(at, outputs::LASHES);
+        }
         derma_core::report::write_json(
             &dir.join(outputs::FEATURES),
             &self.features.to_json(),
@@ -748,8 +759,14 @@ impl TextureSet {
                 None
             }
         };
+        let lash_color = self.render.lash_color.map(glam::Vec3::from);
+        let lashes = move |_: glam::Vec2| lash_color.unwrap_or_default();
         let props = if template {
-            derma_render::cpu::head_props(derma_head::Head::builtin())
+            let mut props = derma_render::cpu::head_props(derma_head::Head::builtin());
+            if lash_color.is_some() {
+                derma_render::cpu::recolour_cards(&mut props, &lashes);
+            }
+            props
         } else {
             Vec::new()
         };

@@ -19,6 +19,8 @@ pub const ROUGHNESS: &str = files::ROUGHNESS;
 pub const SPECULAR: &str = files::SPECULAR;
 /// `hair_coverage.png`: the hair's coverage.
 pub const HAIR_COVERAGE: &str = "hair_coverage.png";
+/// `lashes.png`: the built-in head's lash cards.
+pub const LASHES: &str = "lashes.png";
 /// `melanin.exr`.
 pub const MELANIN: &str = "melanin.exr";
 /// `hemoglobin.exr`.
@@ -58,7 +60,7 @@ const fn out(file: &'static str, color_space: &'static str, meaning: &'static st
 }
 
 /// Every file `derma skin` writes, in manifest order.
-pub const OUTPUTS: [OutputFile; 16] = [
+pub const OUTPUTS: [OutputFile; 17] = [
     out(BASE_COLOR, "sRGB", "diffuse albedo (glTF baseColor / Unreal Base Color), 8-bit sRGB"),
     out(NORMAL, "linear (non-colour)", "tangent-space normal, OpenGL +Y (green up), MikkTSpace frame on meshes; 16-bit, n·½+½"),
     out(HEIGHT_EXR, "linear", "displacement in mm from the mean skin surface (float32)"),
@@ -66,6 +68,7 @@ pub const OUTPUTS: [OutputFile; 16] = [
     out(ROUGHNESS, "linear (non-colour)", "glTF perceptual roughness (Unreal Roughness), 8-bit"),
     out(SPECULAR, "linear (non-colour)", "specular level F0/0.08 (Unreal/Substance Specular: 0.5 ↔ F0 = 4 %), 8-bit"),
     out(HAIR_COVERAGE, "linear (non-colour)", "coverage of hair (follicles, brow hairs, stubble), 8-bit: an alpha/opacity mask for hair cards or a shader that treats hair apart; base_color already has the hair painted in"),
+    out(LASHES, "sRGB", "the built-in head's eyelash cards (its eyelashes meshes' UVs), 512², 8-bit RGBA: the hair's colour (sRGB) and single tapering lashes as alpha, for alpha testing; written on the built-in head only"),
     out(MELANIN, "linear", "melanosome volume fraction of the epidermis (melanin) and pheomelanin share"),
     out(HEMOGLOBIN, "linear", "whole-blood volume fraction of the dermis (hemoglobin) and its oxygenation"),
     out(BIO, "linear", "every bio parameter as a channel (half float): melanin, pheomelanin, blood, oxygenation, stratum_corneum_um, epidermis_um, height_mm, extra.RGBA, lips"),

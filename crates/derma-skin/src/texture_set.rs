@@ -43,6 +43,8 @@ pub struct RenderMaps {
     pub normal: Vec<[u16; 3]>,
     /// Subsurface maps, when the appearance provides them (the match table does).
     pub subsurface: Option<SubsurfaceMaps>,
+    /// The hair's colour (linear RGB) for the built-in head's lash cards, when on it.
+    pub lash_color: Option<[f32; 3]>,
 }
 
 /// Per-texel subsurface parameters (linear sRGB channels), as their files store them.
@@ -70,6 +72,7 @@ impl RenderMaps {
                 color: vec![[0; 3]; n],
                 radius: vec![[0; 3]; n],
             }),
+            lash_color: None,
         }
     }
 
@@ -123,6 +126,7 @@ impl RenderMaps {
             roughness: self.decode_roughness(),
             specular: self.decode_specular(),
             subsurface: self.decode_subsurface(),
+            lash_color: self.lash_color,
             wrap,
         }
     }
@@ -409,6 +413,23 @@ pub fn write_bio_exr(path: &Path, bio: &BioMaps, compression: ExrCompression) ->
         compression,
         BioSample::channels,
     )
+}
+
+/// Side of lashes.png.
+pub const LASH_MAP_SIZE: usize = 512;
+
+/// Writes `path`, the built-in lash cards' texture: `hair` (linear RGB) as sRGB and the lashes'
+/// coverage ([`derma_head::lashes::coverage_map`]) as alpha.
+pub fn write_lashes(path: &Path, hair: [f32; 3]) -> crate::Result<()> {
+    let n = LASH_MAP_SIZE;
+    let coverage = derma_head::lashes::coverage_map(n);
+    let rgb = hair.map(srgb8);
+    Ok(write_png_rows(path, n, n, 4, PngDepth::Eight, |y, out| {
+        for (x, px) in out.chunks_exact_mut(4).enumerate() {
+            px[..3].copy_from_slice(&rgb);
+            px[3] = quantize8(coverage.get(x, y));
+        }
+    })?)
 }
 
 /// Writes the maps of the texture set into `dir` (each atomically; files in parallel, each
