@@ -1,6 +1,8 @@
 //! Statistics of a texture set by region: mean CIELAB (D65) and ITA° of the base colour
 //! and the standard deviation of its coarse (block-averaged) variation — the figures the
-//! regional biology is checked against (Chardon et al. 1991 for ITA°).
+//! regional biology is checked against (Chardon et al. 1991 for ITA°). They measure the skin's
+//! own colour, as a colorimeter on shaven skin does: hair (follicle stalks, brow hairs, stubble)
+//! is unmixed from the base colour, and texels that are almost all hair are left out.
 
 use crate::regional::ita_deg;
 use crate::TextureSet;
@@ -19,23 +21,38 @@ pub struct RegionColor {
     pub texels: usize,
 }
 
-/// Lab of every texel of the base colour.
+/// Hair coverage above which a texel's skin is not measured (its unmixed colour would amplify
+/// the base colour's 8-bit steps more than twentyfold).
+const MOSTLY_HAIR: f32 = 0.95;
+
+/// Lab of the skin of every texel: the base colour with the hair composited over it (coverage
+/// α, colour h: base = skin + (h − skin)·α) unmixed, skin = (base − α·h) / (1 − α).
 fn lab_map(set: &TextureSet) -> Vec<[f64; 3]> {
     set.render
         .base_color
         .iter()
-        .map(|c| xyz_to_lab(linear_srgb_to_xyz(c.map(|v| srgb8_decode(v) as f64))))
+        .zip(&set.bio.texels)
+        .map(|(c, t)| {
+            let a = t.extra[3].clamp(0.0, MOSTLY_HAIR) as f64;
+            let skin: [f64; 3] = std::array::from_fn(|k| {
+                ((srgb8_decode(c[k]) as f64 - a * t.extra[k] as f64) / (1.0 - a)).max(0.0)
+            });
+            xyz_to_lab(linear_srgb_to_xyz(skin))
+        })
         .collect()
 }
 
-/// Texels where the field `region` exceeds 0.7 (and the surface is covered).
+/// Texels where the field `region` exceeds 0.7, the surface is covered and the skin is not
+/// almost all hair.
 fn in_region(set: &TextureSet, region: &str) -> crate::Result<Vec<bool>> {
     let f = set.fields.scalar(region)?;
     let s = &set.surface;
     Ok((0..s.len())
         .map(|i| {
             let uv = s.uv(i);
-            s.covered(i) && f.sample_uv(uv.x, uv.y, false) > 0.7
+            s.covered(i)
+                && f.sample_uv(uv.x, uv.y, false) > 0.7
+                && set.bio.texels[i].extra[3] < MOSTLY_HAIR
         })
         .collect())
 }
