@@ -106,6 +106,7 @@ pub fn place(
         fields,
         surface: scatter_surface,
         size,
+        scattered: Default::default(),
     };
     let mut set = FeatureSet::default();
     for entry in &KINDS {

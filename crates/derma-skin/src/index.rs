@@ -32,6 +32,10 @@ pub struct Grid {
     inv_cell: f32,
     cells: CellMap,
     items: Vec<u32>,
+    /// Bounds of every item together: points outside find nothing without a look-up (a kind
+    /// confined to the brows or the beard is skipped over the rest of the head).
+    lo: Vec3,
+    hi: Vec3,
 }
 
 const BIAS: i64 = 1 << 20;
@@ -55,7 +59,10 @@ impl Grid {
     pub fn build(cell: f32, bounds: impl Iterator<Item = (Vec3, Vec3)>) -> Grid {
         let inv = 1.0 / cell.max(1e-4);
         let mut pairs: Vec<(u64, u32)> = Vec::new();
+        let (mut all_lo, mut all_hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
         for (idx, (lo, hi)) in bounds.enumerate() {
+            all_lo = all_lo.min(lo);
+            all_hi = all_hi.max(hi);
             let (a, b) = ((lo * inv).floor(), (hi * inv).floor());
             for z in a.z as i64..=b.z as i64 {
                 for y in a.y as i64..=b.y as i64 {
@@ -84,6 +91,8 @@ impl Grid {
             inv_cell: inv,
             cells,
             items,
+            lo: all_lo,
+            hi: all_hi,
         }
     }
 
@@ -149,6 +158,9 @@ impl<'a> GridCursor<'a> {
     pub fn query(&mut self, p: Vec3) -> &'a [u32] {
         if p.cmpge(self.lo).all() && p.cmplt(self.hi).all() {
             return self.last;
+        }
+        if p.cmplt(self.grid.lo).any() || p.cmpgt(self.grid.hi).any() {
+            return &[];
         }
         let c = self.grid.cell_of(p);
         let cell = 1.0 / self.grid.inv_cell;

@@ -179,7 +179,15 @@ pub struct Placing<'a> {
     pub surface: &'a Surface,
     /// Output resolution (texels per side).
     pub size: usize,
+    /// Points already scattered, by spec: the strand kinds grow from the follicle kinds'
+    /// points, drawn once.
+    pub(crate) scattered: Scattering,
 }
+
+/// Points scattered for a spec (field, power, density, stream), each with its draw index.
+pub(crate) type Scattering = std::sync::Mutex<
+    std::collections::HashMap<(String, u32, u32, u32), std::sync::Arc<Vec<(u64, SurfacePoint)>>>,
+>;
 
 impl Placing<'_> {
     /// Output texel pitch (mm) at a scatter point.
@@ -201,6 +209,31 @@ impl Placing<'_> {
         if !spec.enabled || spec.density <= 0.0 {
             return Ok(Vec::new());
         }
+        let rng = Philox::new(self.cfg.seed, spec.stream);
+        let points = self.points(&spec)?;
+        Ok(points
+            .par_iter()
+            .filter_map(|&(k, p)| make(&rng, k, p))
+            .collect())
+    }
+
+    /// The points of `spec` with their draw indices: drawn with probability ∝ field × area, or
+    /// taken from an earlier kind with the same spec.
+    fn points(&self, spec: &Spec) -> Result<std::sync::Arc<Vec<(u64, SurfacePoint)>>> {
+        let key = (
+            spec.field.to_string(),
+            spec.power.to_bits(),
+            spec.density.to_bits(),
+            spec.stream,
+        );
+        if let Some(p) = self
+            .scattered
+            .lock()
+            .ok()
+            .and_then(|m| m.get(&key).cloned())
+        {
+            return Ok(p);
+        }
         let s = self.surface;
         let map = self.fields.scalar(spec.field)?;
         let wrap = s.period().is_some();
@@ -218,10 +251,16 @@ impl Placing<'_> {
         let sampler = Sampler::new(s, |i| weights[i]);
         let n = sampler.count(spec.density);
         let rng = Philox::new(self.cfg.seed, spec.stream);
-        Ok((0..n as u64)
-            .into_par_iter()
-            .filter_map(|k| sampler.sample(&rng, k).and_then(|p| make(&rng, k, p)))
-            .collect())
+        let points = std::sync::Arc::new(
+            (0..n as u64)
+                .into_par_iter()
+                .filter_map(|k| sampler.sample(&rng, k).map(|p| (k, p)))
+                .collect::<Vec<_>>(),
+        );
+        if let Ok(mut m) = self.scattered.lock() {
+            m.insert(key, points.clone());
+        }
+        Ok(points)
     }
 }
 

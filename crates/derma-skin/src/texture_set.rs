@@ -334,8 +334,14 @@ pub fn convert(
             };
             st.normal[k] = nrm.map(|v| quantize16(0.5 * v + 0.5));
             if let (Some(sub), Some((color, radius))) = (sub, st.subsurface.as_mut()) {
-                color[k] = sub.color.map(srgb8);
-                radius[k] = sub.radius_mm.map(|v| quantize16(v / SSS_RADIUS_RANGE_MM));
+                // Hair lies on the skin and scatters no light beneath it: composited over the
+                // subsurface colour as over the base colour, and its share of the texel takes
+                // no part in the blur (renderers diffuse with sss_color where they scatter).
+                color[k] =
+                    std::array::from_fn(|c| srgb8(sub.color[c] + (t.extra[c] - sub.color[c]) * ea));
+                radius[k] = sub
+                    .radius_mm
+                    .map(|v| quantize16(v * (1.0 - ea) / SSS_RADIUS_RANGE_MM));
             }
         }
     });
