@@ -5,8 +5,10 @@
 //! The cards' layout (read from the built-in asset): u runs along the lid margin over
 //! [0, 0.838], mirrored between the eyes (so the fan is symmetric about the lid's middle); the
 //! upper card's lashes rise from v ≈ 0.09 to 0.33, the lower card's fall from v ≈ 0.92 to 0.70.
-//! Counts and sizes: the textbook 100–150 upper and 50–75 lower lashes per lid, upper lashes
-//! 8–12 mm and lower 6–8 mm long (e.g. Wolff's Anatomy of the Eye and Orbit), a shaft of about
+//! Counts and sizes: the textbook 100–150 upper and 50–75 lower lashes per lid (e.g. Wolff's
+//! Anatomy of the Eye and Orbit, which gives upper lashes 8–12 mm and lower 6–8 mm long); the
+//! cards are shorter than that (about 10 and 7 mm), so the lashes here reach at most about
+//! 9.6 mm (upper) and 6.6 mm (lower) mid-lid, about 4 and 3 mm at the corners; a shaft of about
 //! 0.12 mm at the root (authored, the order of terminal hair); the card spans about 32 mm
 //! along u and 10 mm along v, 0.025 UV per mm.
 
@@ -53,10 +55,11 @@ impl Lash {
     }
 
     /// Coverage of the lash at `uv`, antialiased over `aa` UV units: 1 inside the tapering
-    /// shaft, falling to 0 over `aa` outside it.
+    /// shaft, falling to 0 over `aa` at its edge; a shaft narrower than `aa` is widened to it
+    /// with its coverage scaled by the ratio, so its area is kept and thin tips fade.
     fn coverage(&self, uv: Vec2, aa: f32) -> f32 {
         const STEPS: usize = 12;
-        let mut best = f32::INFINITY;
+        let mut best = 0.0f32;
         let mut prev = self.root;
         for k in 1..=STEPS {
             let t = k as f32 / STEPS as f32;
@@ -65,10 +68,13 @@ impl Lash {
             let s = ((uv - prev).dot(ab) / ab.length_squared().max(1e-12)).clamp(0.0, 1.0);
             let d = uv.distance(prev + ab * s);
             let tt = (k as f32 - 1.0 + s) / STEPS as f32;
-            best = best.min(d - self.half_width * (1.0 - tt));
+            let hw = self.half_width * (1.0 - tt);
+            let hw_eff = hw.max(0.5 * aa);
+            let c = (0.5 - (d - hw_eff) / aa).clamp(0.0, 1.0) * (hw / hw_eff);
+            best = best.max(c);
             prev = next;
         }
-        (0.5 - best / aa).clamp(0.0, 1.0)
+        best
     }
 
     fn bounds(&self) -> (Vec2, Vec2) {
@@ -128,7 +134,8 @@ fn all() -> &'static Lashes {
         let bin = |v: f32| ((v * BINS as f32).floor() as i64).clamp(0, BINS as i64 - 1) as usize;
         for (k, l) in lashes.iter().enumerate() {
             let (lo, hi) = l.bounds();
-            let pad = 2.0 / 512.0; // the antialiasing reach of the finest map drawn
+            // The antialiasing reaches ½ texel beyond the shaft: 2/512 covers maps of 128² up.
+            let pad = 2.0 / 512.0;
             for by in bin(lo.y - pad)..=bin(hi.y + pad) {
                 for bx in bin(lo.x - pad)..=bin(hi.x + pad) {
                     bins[by * BINS + bx].push(k as u32);

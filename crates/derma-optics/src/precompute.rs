@@ -352,7 +352,7 @@ pub fn prepare_dir(dir: &Path, grid: &Grid) -> Result<()> {
                 path,
                 message:
                     "this directory was started with a different grid; use a new output directory \
-                          directory or the same grid"
+                          or the same grid"
                         .into(),
             });
         }

@@ -170,21 +170,17 @@ impl Draw for CpuRenderer<'_> {
             sky: lighting.sky,
             ground: lighting.ground,
         };
-        // Cards are cut where their coverage falls below ½, as forward.wgsl discards them (the
-        // rasteriser's dither sees only 0 or 1).
+        // Cards are drawn where their coverage exceeds the rasteriser's ordered dither, as
+        // forward.wgsl discards them.
         type Cover<'m> = Box<dyn Fn(Vec2) -> f32 + Sync + 'm>;
         let covers: Vec<Option<Cover>> = self
             .scene
             .parts
             .iter()
             .map(|p| match &p.material {
-                Material::Card { coverage: m, .. } => Some(Box::new(move |uv: Vec2| {
-                    if m.sample_uv(uv.x, uv.y, false) >= 0.5 {
-                        1.0f32
-                    } else {
-                        0.0
-                    }
-                }) as Cover),
+                Material::Card { coverage: m, .. } => {
+                    Some(Box::new(move |uv: Vec2| m.sample_uv(uv.x, uv.y, false)) as Cover)
+                }
                 _ => None,
             })
             .collect();

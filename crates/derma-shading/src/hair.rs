@@ -6,7 +6,8 @@
 
 use serde::{Deserialize, Serialize};
 
-/// Absorption per unit eumelanin concentration, per unit fibre diameter, in linear R, G, B
+/// Absorption per unit eumelanin concentration, normalised to the fibre's cross-section (pbrt-v3's
+/// convention), in linear R, G, B
 /// (d'Eon et al. 2011, §6.1; pbrt-v3's `HairBSDF::SigmaAFromConcentration` uses the same).
 pub const EUMELANIN_SIGMA_A: [f32; 3] = [0.419, 0.697, 1.37];
 /// Absorption per unit pheomelanin concentration (d'Eon et al. 2011, §6.1).
@@ -26,7 +27,7 @@ pub struct HairMelanin {
 }
 
 impl HairMelanin {
-    /// σ_a = eumelanin · σ_eu + pheomelanin · σ_pheo, per unit fibre diameter.
+    /// σ_a = eumelanin · σ_eu + pheomelanin · σ_pheo, normalised to the fibre's cross-section.
     pub fn absorption(&self) -> [f32; 3] {
         std::array::from_fn(|k| {
             self.eumelanin.max(0.0) * EUMELANIN_SIGMA_A[k]

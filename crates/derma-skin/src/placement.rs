@@ -280,6 +280,7 @@ pub fn walk_wrinkle(
         &|uv| fields.vector(name, uv.x, uv.y, wrap).ok(),
         v0.length * max_length_mm,
         start,
+        true,
     )
 }
 
@@ -303,16 +304,20 @@ pub fn walk_strand(
         false => Some(up),
     };
     let at_root = dir(start.uv)?.length;
-    walk_curve(s, &dir, length_mm * at_root, start)
+    walk_curve(s, &dir, length_mm * at_root, start, false)
 }
 
 /// Three steps of `length`/3 along the directions of `field` from `start` (stopping where it
-/// has none), as the four control points of a cubic Bézier on the surface.
+/// has none), as the four control points of a cubic Bézier on the surface. With `snap`, each
+/// point on a mesh is the position of the scatter texel reached (a wrinkle, centimetres long);
+/// without, the steps are taken in the tangent plane (a hair a millimetre long, shorter than a
+/// few scatter texels, whose centres would bend and stretch it).
 fn walk_curve(
     s: &Surface,
     field: &dyn Fn(Vec2) -> Option<crate::field::UvVector>,
     length: f32,
     start: SurfacePoint,
+    snap: bool,
 ) -> Option<CubicBezier> {
     let wrap = s.period().is_some();
     if length <= 0.0 {
@@ -348,7 +353,7 @@ fn walk_curve(
             if !s.covered(j) {
                 break;
             }
-            pos = if matches!(s.geometry, crate::surface::Geometry::Patch { .. }) {
+            pos = if !snap || matches!(s.geometry, crate::surface::Geometry::Patch { .. }) {
                 pos + dir3 * (step / mm_per_uv)
             } else {
                 s.position(j)

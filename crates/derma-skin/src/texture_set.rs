@@ -335,8 +335,8 @@ pub fn convert(
             st.normal[k] = nrm.map(|v| quantize16(0.5 * v + 0.5));
             if let (Some(sub), Some((color, radius))) = (sub, st.subsurface.as_mut()) {
                 // Hair lies on the skin and scatters no light beneath it: composited over the
-                // subsurface colour as over the base colour, and its share of the texel takes
-                // no part in the blur (renderers diffuse with sss_color where they scatter).
+                // subsurface colour as over the base colour, and the scatter distance shrinks by
+                // its share of the texel (renderers diffuse with sss_color where they scatter).
                 color[k] =
                     std::array::from_fn(|c| srgb8(sub.color[c] + (t.extra[c] - sub.color[c]) * ea));
                 radius[k] = sub
@@ -598,24 +598,15 @@ pub fn write_maps(
             Box::new(|| rgb8(outputs::SSS_COLOR, &sub.color)),
         ));
     }
+    let written: Vec<&'static str> = list.iter().map(|(name, _)| *name).collect();
     list.into_par_iter()
         .map(|(_, j)| j())
         .collect::<crate::Result<Vec<()>>>()?;
-    // Files in manifest order.
+    // The files written, in manifest order.
     let files = outputs::OUTPUTS
         .iter()
         .map(|o| o.file)
-        .filter(|f| {
-            ![
-                outputs::FEATURES,
-                outputs::PREVIEW,
-                outputs::MANIFEST,
-                outputs::REPORT,
-            ]
-            .contains(f)
-                && (maps.subsurface.is_some()
-                    || ![outputs::SSS_COLOR, outputs::SSS_RADIUS].contains(f))
-        })
+        .filter(|f| written.contains(f))
         .collect();
     Ok((files, range))
 }

@@ -719,7 +719,7 @@ fn flags_named(src: &str) -> Vec<String> {
                 && !lit[..i].ends_with("sbatch ")
         });
         if names_flag {
-            let line = src[..r.start].lines().count();
+            let line = src[..r.start].matches('\n').count() + 1;
             found.push(format!("{line}: {lit}"));
         }
     }

@@ -113,10 +113,12 @@ impl Feature for Strand {
         if r <= 0.0 || d2 >= r * r {
             return;
         }
-        // A cylinder seen from above: full cover across, its height the chord of the circle.
+        // A cylinder seen from above: its height the half-chord of its circle, its coverage
+        // falling towards the edges where the fibre thins; widened, both keep their cross-
+        // section (coverage ∝ amp, height ∝ amp² as the fibre's area is).
         let across = (1.0 - d2 / (r * r)).sqrt();
         s.add_extra(prm.color, self.amp * across.min(1.0).sqrt());
-        s.height_mm += self.amp * r * across;
+        s.height_mm += self.amp * self.amp * r * across;
     }
 }
 
