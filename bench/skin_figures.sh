@@ -25,17 +25,21 @@ python3 - "$W" <<'PY'
 import sys
 from PIL import Image
 d = sys.argv[1]
-m = Image.open(f"{d}/tpl/eyelids.png").convert("F")
-w, h = m.size
-px = m.load()
-sx = sy = s = 0.0
-for y in range(h):
-    for x in range(w // 2):
-        v = px[x, y]
-        if v > 0.5 * 65535:
-            sx += x * v; sy += y * v; s += v
-k = 4096 / w
-cx, cy = int(sx / s * k), int(sy / s * k)
+
+def centroid(region):
+    """The centroid, in 4096² texels, of a region mask's strong part on the image's left half."""
+    m = Image.open(f"{d}/tpl/{region}.png").convert("F")
+    w, h = m.size
+    px = m.load()
+    sx = sy = s = 0.0
+    for y in range(h):
+        for x in range(w // 2):
+            v = px[x, y]
+            if v > 0.5 * 65535:
+                sx += x * v; sy += y * v; s += v
+    return int(sx / s * 4096 / w), int(sy / s * 4096 / h)
+
+cx, cy = centroid("eyelids")
 box = (cx - 256, cy - 256, cx + 256, cy + 256)
 sheet = Image.new("RGB", (1024, 512))
 for i, name in enumerate(["base_color", "normal"]):
@@ -43,15 +47,7 @@ for i, name in enumerate(["base_color", "normal"]):
 sheet.save("docs/images/skin-closeup-4096.png")
 print("wrote docs/images/skin-closeup-4096.png, crop", box)
 # The left eyebrow: 640 × 320 texels (about 40 × 20 mm) around its mask's centroid.
-m = Image.open(f"{d}/tpl/eyebrows.png").convert("F")
-px = m.load()
-sx = sy = s = 0.0
-for y in range(h):
-    for x in range(w // 2):
-        v = px[x, y]
-        if v > 0.5 * 65535:
-            sx += x * v; sy += y * v; s += v
-cx, cy = int(sx / s * k), int(sy / s * k)
+cx, cy = centroid("eyebrows")
 box = (cx - 320, cy - 160, cx + 320, cy + 160)
 sheet = Image.new("RGB", (640, 960))
 for i, name in enumerate(["base_color", "normal", "hair_coverage"]):
