@@ -160,6 +160,21 @@ fn glb_carries_the_set_as_pbr_with_tangents_units_and_engine_maps() {
     for n in ["skin", "eye_left", "eye_right"] {
         assert!(names.contains(&n), "mesh {n} in {names:?}");
     }
+    // The lash cards carry the set's lashes.png: the hair's colour, single lashes as alpha.
+    let lash_card = doc
+        .materials()
+        .find(|m| m.name() == Some("eyelashes_left"))
+        .unwrap();
+    assert_eq!(lash_card.alpha_mode(), gltf::material::AlphaMode::Mask);
+    let tex = lash_card
+        .pbr_metallic_roughness()
+        .base_color_texture()
+        .unwrap();
+    let gltf::image::Source::View { view, .. } = tex.texture().source().source() else {
+        panic!("the lash image is not embedded");
+    };
+    let embedded = &buffers[view.buffer().index()][view.offset()..view.offset() + view.length()];
+    assert!(embedded == std::fs::read(set.join("lashes.png")).unwrap().as_slice());
     assert!(names.iter().any(|n| n.contains("teeth")), "{names:?}");
     let skin_mesh = doc.meshes().find(|m| m.name() == Some("skin")).unwrap();
     let prim = skin_mesh.primitives().next().unwrap();
@@ -349,4 +364,18 @@ fn web_export_round_trips_the_rig_within_one_16_bit_step_and_view_serves_it() {
     }
     child.kill().unwrap();
     child.wait().unwrap();
+}
+
+#[test]
+fn skin_glb_writes_the_set_and_its_head_in_one_run() {
+    let d = tmp("skin-glb");
+    let out = d.join("set");
+    let (ok, _, err) = run(&["skin", "--size", "128", "--glb", "--out", s(&out)]);
+    assert!(ok, "{err}");
+    assert!(out.join("base_color.png").is_file() && out.join("lashes.png").is_file());
+    let (doc, _, _) = gltf::import(out.join("head.glb")).unwrap();
+    let names: Vec<&str> = doc.meshes().filter_map(|m| m.name()).collect();
+    for n in ["skin", "eyelashes_left", "eyelashes_right", "tongue"] {
+        assert!(names.contains(&n), "mesh {n} in {names:?}");
+    }
 }
