@@ -310,6 +310,56 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
             meshes.push(pm);
             names.push(part.name.clone());
         }
+        // The brows as an alpha-tested card over the skin, where the set carries its hair.
+        let coverage_png = o
+            .textures
+            .join(derma_render::material::files::HAIR_COVERAGE);
+        if coverage_png.is_file() && lashes_png.is_file() {
+            let coverage = derma_render::material::read_hair_coverage(&coverage_png)?;
+            let hair = derma_core::image_io::read_rgb(&lashes_png)?;
+            let (w, h) = (coverage.width(), coverage.height());
+            let rgb: Vec<Map> = (0..3)
+                .map(|c| Map::filled(w, h, hair.channels[c].get(0, 0)))
+                .collect();
+            let t_brows = image(
+                &mut g,
+                "eyebrows",
+                &png8_bytes("eyebrows", &[&rgb[0], &rgb[1], &rgb[2], &coverage])?,
+            );
+            let look = derma_head::Look::of("eyelashes_left");
+            materials.push(
+                json!({"name": "eyebrows", "alphaMode": "MASK", "alphaCutoff": 0.5,
+                "pbrMetallicRoughness": {"baseColorTexture": {"index": t_brows},
+                "metallicFactor": 0.0, "roughnessFactor": look.roughness}}),
+            );
+            let cards = derma_head::brows::BrowCards::of(head, &head.skin);
+            let mut card_of = std::collections::HashMap::new();
+            for (c, &v) in cards.source.iter().enumerate() {
+                card_of.insert(v, c as u32);
+            }
+            // The skin's face units carried to the card's vertices (one weight array drives both).
+            let offsets: Vec<Vec<(u32, glam::Vec3)>> = units
+                .iter()
+                .map(|u| {
+                    let mut o: Vec<(u32, glam::Vec3)> = u
+                        .skin
+                        .iter()
+                        .filter_map(|(v, d)| card_of.get(v).map(|&c| (c, *d)))
+                        .collect();
+                    o.sort_unstable_by_key(|&(c, _)| c); // glTF's sparse indices increase
+                    o
+                })
+                .collect();
+            let targets: Vec<(&str, &[(u32, glam::Vec3)])> = units
+                .iter()
+                .zip(&offsets)
+                .map(|(u, o)| (u.name.as_str(), o.as_slice()))
+                .collect();
+            let mut bm = g.mesh("eyebrows", &cards.mesh, &targets);
+            bm["primitives"][0]["material"] = json!(materials.len() - 1);
+            meshes.push(bm);
+            names.push("eyebrows".to_string());
+        }
     }
     let nodes: Vec<Value> = meshes
         .iter()

@@ -16,6 +16,7 @@
 #![warn(missing_docs)]
 
 pub mod asset;
+pub mod brows;
 pub mod export;
 pub mod eye;
 pub mod landmarks;

@@ -328,6 +328,7 @@ mod tests {
             specular: one(0.35),
             subsurface: None,
             lash_color: None,
+            hair: None,
             wrap: false,
         };
         let scene = Scene::mesh(&mesh, maps);

@@ -25,6 +25,8 @@ pub mod files {
     pub const SSS_RADIUS: &str = "sss_radius.png";
     /// `lashes.png`: the lash cards' colour (sRGB) and coverage (alpha), 8-bit RGBA.
     pub const LASHES: &str = "lashes.png";
+    /// `hair_coverage.png`: the hair's coverage, 8-bit.
+    pub const HAIR_COVERAGE: &str = "hair_coverage.png";
 }
 
 /// [`crate::Rendered::material`] of the skin mesh.
@@ -36,6 +38,23 @@ pub const MATERIAL_OTHER: u8 = 0;
 
 /// Specular maps store F0 / 0.08 (the Unreal/Substance "specular" convention: 0.5 ↔ F0 = 4 %).
 pub const SPECULAR_SCALE: f32 = 0.08;
+
+/// Largest side of the hair coverage the brow cards are drawn with (box-reduced from the set's).
+pub const HAIR_CARD_SIZE: usize = 2048;
+
+/// The hair coverage of `path`, box-reduced by a whole factor to at most [`HAIR_CARD_SIZE`].
+pub fn read_hair_coverage(path: &Path) -> Result<Map> {
+    let m = derma_core::image_io::read_grey(path)?
+        .channels
+        .swap_remove(0);
+    let (w, h) = (m.width(), m.height());
+    let k = w.max(h).div_ceil(HAIR_CARD_SIZE).max(1);
+    if k == 1 {
+        return Ok(m);
+    }
+    let [r] = derma_core::map::box_reduced(w, h, k, |i| [m.data()[i]]);
+    Ok(r)
+}
 
 /// sss_radius.png stores ℓ / SSS_RADIUS_RANGE_MM (16-bit): 0–8 mm, the radial profile's range.
 pub const SSS_RADIUS_RANGE_MM: f32 = 8.0;
@@ -57,6 +76,9 @@ pub struct SkinMaps {
     /// The hair's colour (linear RGB) for the lash cards (lashes.png in a set on the built-in
     /// head); `None`: the cards' authored look ([`derma_head::Look`]).
     pub lash_color: Option<[f32; 3]>,
+    /// The hair's coverage (hair_coverage.png, at most [`HAIR_CARD_SIZE`]²), when the set has
+    /// it: on the built-in head the brows stand on it as cards ([`derma_head::brows`]).
+    pub hair: Option<Map>,
     /// Repeat the maps (tileable patches).
     pub wrap: bool,
 }
@@ -145,6 +167,12 @@ impl SkinMaps {
         } else {
             None
         };
+        let hp = dir.join(files::HAIR_COVERAGE);
+        let hair = if hp.is_file() {
+            Some(read_hair_coverage(&hp)?)
+        } else {
+            None
+        };
         Ok(SkinMaps {
             base_color,
             normal,
@@ -152,6 +180,7 @@ impl SkinMaps {
             specular,
             subsurface,
             lash_color,
+            hair,
             wrap: false,
         })
     }

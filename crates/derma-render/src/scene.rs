@@ -147,7 +147,23 @@ impl Scene {
             head.posed_skin(weights)
         };
         let lash_color = skin.lash_color.map(Vec3::from);
+        let brow_cards = skin.hair.clone().zip(lash_color);
         let mut scene = Scene::mesh(&posed, skin);
+        // The brows as cards over the skin, where the set carries its hair coverage.
+        if let Some((coverage, albedo)) = brow_cards {
+            let look = derma_head::Look::of("eyelashes_left");
+            let cards = derma_head::brows::BrowCards::of(head, &posed);
+            scene.parts.push(Part {
+                name: "eyebrows".into(),
+                vertices: corner_vertices(&cards.mesh, None),
+                material: Material::Card {
+                    albedo,
+                    coverage: Box::new(coverage),
+                    roughness: look.roughness,
+                    f0: look.f0,
+                },
+            });
+        }
         let eye_tex = eye_albedo.unwrap_or_else(|| default_eye_texture(512));
         let rot = gaze_rotation(gaze.0, gaze.1);
         for part in &head.parts {

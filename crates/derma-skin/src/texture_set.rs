@@ -127,6 +127,8 @@ impl RenderMaps {
             specular: self.decode_specular(),
             subsurface: self.decode_subsurface(),
             lash_color: self.lash_color,
+            // The in-memory previews draw the brows painted only (no cards).
+            hair: None,
             wrap,
         }
     }

@@ -172,6 +172,7 @@ fn subsurface_scattering_blurs_relief_by_each_channels_mean_free_path_and_keeps_
             [flat(1.0), flat(0.4), flat(0.2)],
         )),
         lash_color: None,
+        hair: None,
         wrap: false,
     };
     let mut without = maps.clone();
@@ -242,6 +243,7 @@ fn a_user_mesh_renders_with_its_own_uvs() {
         specular: flat(0.5),
         subsurface: None,
         lash_color: None,
+        hair: None,
         wrap: false,
     };
     let mesh = quad(100.0);

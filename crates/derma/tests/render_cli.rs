@@ -175,6 +175,34 @@ fn glb_carries_the_set_as_pbr_with_tangents_units_and_engine_maps() {
     };
     let embedded = &buffers[view.buffer().index()][view.offset()..view.offset() + view.length()];
     assert!(embedded == std::fs::read(set.join("lashes.png")).unwrap().as_slice());
+    // The brows as a card: alpha-tested, with the skin's face units as morph targets.
+    let brows = doc.meshes().find(|m| m.name() == Some("eyebrows")).unwrap();
+    let bp = brows.primitives().next().unwrap();
+    assert_eq!(bp.material().alpha_mode(), gltf::material::AlphaMode::Mask);
+    let br = bp.reader(|b| Some(&buffers[b.index()]));
+    let skin_prim = doc
+        .meshes()
+        .find(|m| m.name() == Some("skin"))
+        .unwrap()
+        .primitives()
+        .next()
+        .unwrap();
+    let sr = skin_prim.reader(|b| Some(&buffers[b.index()]));
+    assert_eq!(
+        br.read_morph_targets().count(),
+        sr.read_morph_targets().count()
+    );
+    let lifted = bp
+        .material()
+        .pbr_metallic_roughness()
+        .base_color_texture()
+        .unwrap();
+    let alpha = &images[lifted.texture().source().index()];
+    assert_eq!(alpha.format, gltf::image::Format::R8G8B8A8);
+    assert!(
+        alpha.pixels.chunks(4).any(|p| p[3] > 128),
+        "no hair in the brow card"
+    );
     assert!(names.iter().any(|n| n.contains("teeth")), "{names:?}");
     let skin_mesh = doc.meshes().find(|m| m.name() == Some("skin")).unwrap();
     let prim = skin_mesh.primitives().next().unwrap();
@@ -375,7 +403,13 @@ fn skin_glb_writes_the_set_and_its_head_in_one_run() {
     assert!(out.join("base_color.png").is_file() && out.join("lashes.png").is_file());
     let (doc, _, _) = gltf::import(out.join("head.glb")).unwrap();
     let names: Vec<&str> = doc.meshes().filter_map(|m| m.name()).collect();
-    for n in ["skin", "eyelashes_left", "eyelashes_right", "tongue"] {
+    for n in [
+        "skin",
+        "eyelashes_left",
+        "eyelashes_right",
+        "tongue",
+        "eyebrows",
+    ] {
         assert!(names.contains(&n), "mesh {n} in {names:?}");
     }
 }
