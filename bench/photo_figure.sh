@@ -15,10 +15,7 @@ if [ ! -x "$venv/bin/python" ]; then
   "$venv/bin/pip" install -q scikit-image pillow numpy OpenEXR
 fi
 py="$venv/bin/python"
-cargo build --release -q -p derma
-D=target/release/derma
-W=$(mktemp -d)
-trap 'rm -rf "$W"' EXIT
+source bench/common.sh
 $D photo synthetic --width 1600 --out "$W/set" -q
 $D photo calibrate --points "$W/set/points.json" --out "$W/cameras.json" -q >/dev/null
 $D photo unwrap --mesh "$W/set/face.obj" --out "$W/uv.obj" -q >/dev/null

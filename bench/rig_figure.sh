@@ -5,10 +5,7 @@
 # Needs python3 with Pillow to tile the panels.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --release -q -p derma
-D=target/release/derma
-W=$(mktemp -d)
-trap 'rm -rf "$W"' EXIT
+source bench/common.sh
 $D skin --size 1024 --seed 1 --out "$W/skin" -q
 $D rig build --neutral "$W/skin/hemoglobin.exr" --melanin "$W/skin/melanin.exr" --builtin all --radius 24 --out "$W/rig" -q
 NAMES="neutral happiness sadness anger fear surprise disgust exercise alcohol"

@@ -311,22 +311,16 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
             names.push(part.name.clone());
         }
         // The brows as an alpha-tested card over the skin, where the set carries its hair.
-        let coverage_png = o
-            .textures
-            .join(derma_render::material::files::HAIR_COVERAGE);
-        if coverage_png.is_file() && lashes_png.is_file() {
-            let coverage = derma_render::material::read_hair_coverage(&coverage_png)?;
-            let hair = derma_core::image_io::read_rgb(&lashes_png)?;
+        // (The set as read above: its hair coverage and the hair's colour from lashes.png.)
+        if let (Some(coverage), Some(hair)) = (&skin.hair, skin.lash_color) {
             let (w, h) = (coverage.width(), coverage.height());
-            let rgb: Vec<Map> = (0..3)
-                .map(|c| Map::filled(w, h, hair.channels[c].get(0, 0)))
-                .collect();
+            let rgb = hair.map(|c| Map::filled(w, h, derma_core::color::srgb_encode(c)));
             let t_brows = image(
                 &mut g,
                 "eyebrows",
-                &png8_bytes("eyebrows", &[&rgb[0], &rgb[1], &rgb[2], &coverage])?,
+                &png8_bytes("eyebrows", &[&rgb[0], &rgb[1], &rgb[2], coverage])?,
             );
-            let look = derma_head::Look::of("eyelashes_left");
+            let look = derma_head::Look::of("eyebrows");
             materials.push(
                 json!({"name": "eyebrows", "alphaMode": "MASK", "alphaCutoff": 0.5,
                 "pbrMetallicRoughness": {"baseColorTexture": {"index": t_brows},

@@ -131,7 +131,6 @@ fn all() -> &'static Lashes {
             }
         }
         let mut bins = vec![Vec::new(); BINS * BINS];
-        let bin = |v: f32| ((v * BINS as f32).floor() as i64).clamp(0, BINS as i64 - 1) as usize;
         for (k, l) in lashes.iter().enumerate() {
             let (lo, hi) = l.bounds();
             // The antialiasing reaches ½ texel beyond the shaft: 2/512 covers maps of 128² up.
@@ -146,13 +145,17 @@ fn all() -> &'static Lashes {
     })
 }
 
+/// The bin along one axis of a UV coordinate.
+fn bin(v: f32) -> usize {
+    ((v * BINS as f32).floor() as i64).clamp(0, BINS as i64 - 1) as usize
+}
+
 /// Coverage of the lash cards at `uv`, antialiased over `aa` UV units: the union of every lash
 /// there (1 − Π(1 − cᵢ)).
 pub fn coverage_aa(uv: Vec2, aa: f32) -> f32 {
     let a = all();
-    let b = |v: f32| ((v * BINS as f32).floor() as i64).clamp(0, BINS as i64 - 1) as usize;
     let mut clear = 1.0;
-    for &k in &a.bins[b(uv.y) * BINS + b(uv.x)] {
+    for &k in &a.bins[bin(uv.y) * BINS + bin(uv.x)] {
         clear *= 1.0 - a.lashes[k as usize].coverage(uv, aa);
     }
     1.0 - clear

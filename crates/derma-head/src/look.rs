@@ -21,7 +21,8 @@ pub struct Look {
 
 impl Look {
     /// The material of the part called `name`: the eyes with [`eye::default_albedo`] under a
-    /// glossy tear film, ivory teeth, a pink tongue and near-black lashes thinning to their tips
+    /// glossy tear film, ivory teeth, a pink tongue and near-black hair (lashes, brow cards: the
+    /// roughness and F0 of hair; their colour comes from a texture set) thinning to their tips
     /// ([`lashes::coverage`]: single tapering lashes).
     pub fn of(name: &str) -> Look {
         // Linear albedos: enamel ivory, tongue mucosa pink, lashes near black (authored).

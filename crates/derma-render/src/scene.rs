@@ -151,7 +151,7 @@ impl Scene {
         let mut scene = Scene::mesh(&posed, skin);
         // The brows as cards over the skin, where the set carries its hair coverage.
         if let Some((coverage, albedo)) = brow_cards {
-            let look = derma_head::Look::of("eyelashes_left");
+            let look = derma_head::Look::of("eyebrows");
             let cards = derma_head::brows::BrowCards::of(head, &posed);
             scene.parts.push(Part {
                 name: "eyebrows".into(),
