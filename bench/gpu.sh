@@ -13,7 +13,8 @@
 # (target/release/deps/gpu_layout-*): photons/s per kernel layout, to tune Kernel::for_device.
 # EXEMPLARS: a folder with disp256.png (disp128.png for QUICK; bench/synth.sh writes both to
 # bench/out/synth).
-# PMCX_WHEELS: a folder of wheels (pmcx and numpy) to install from where there is no network.
+# PMCX_WHEELS: a folder holding the pmcx wheel (and numpy's, where the machine lacks numpy) to
+# install from where there is no network.
 # QUICK=1: tiny sizes, to check the script on any adapter (lavapipe included).
 set -euo pipefail
 derma=${DERMA:-target/release/derma}
@@ -93,7 +94,8 @@ fi
 # 5. MCX on the same slab: 0.05 mm voxels, 20 × 20 mm, 1 mm deep, refractive mismatch, a pencil
 #    beam at the centre; pmcx's own kernel time and the call's wall time.
 if [ -n "${PMCX_WHEELS:-}" ]; then
-  python3 -m pip install -q --no-index --find-links "$PMCX_WHEELS" --target "$tmp/site" pmcx numpy
+  python3 -c "import numpy" 2>/dev/null && need=(pmcx) || need=(pmcx numpy)
+  python3 -m pip install -q --no-index --no-deps --find-links "$PMCX_WHEELS" --target "$tmp/site" "${need[@]}"
   export PYTHONPATH="$tmp/site${PYTHONPATH:+:$PYTHONPATH}"
 fi
 python3 - "$mcx_n" <<'PY' || echo "MCX: not run (pmcx or a CUDA device is missing)"

@@ -32,9 +32,9 @@ pub struct Kernel {
 
 impl Kernel {
     /// The layout for this device: native products where it has 64-bit integers; on a
-    /// hardware GPU 2^18 threads a dispatch, enough to fill a data-centre GPU (an H200 holds
-    /// 132 SMs × 2048 resident threads: NVIDIA H100 Tensor Core GPU Architecture whitepaper,
-    /// 2022), 32 photons each; on a software adapter (lavapipe, which
+    /// hardware GPU 2^20 threads a dispatch, four times what a data-centre GPU keeps resident
+    /// (an H200 holds 132 SMs × 2048 threads: NVIDIA H100 Tensor Core GPU Architecture
+    /// whitepaper, 2022), 32 photons each; on a software adapter (lavapipe, which
     /// runs a workgroup per CPU thread) 2^12 threads of 8 photons, so that a dispatch takes
     /// under a second there and progress moves.
     pub fn for_device() -> std::result::Result<Self, GpuError> {
@@ -44,7 +44,8 @@ impl Kernel {
         } else {
             Products::Halves
         };
-        let (groups, photons_per_thread) = if ctx.hardware { (4096, 32) } else { (64, 8) };
+        // 16384 × 32 measured fastest on an H200 (BENCHMARKS.md, "GPU figures on an H200").
+        let (groups, photons_per_thread) = if ctx.hardware { (16384, 32) } else { (64, 8) };
         Ok(Self {
             products,
             groups,
