@@ -1,5 +1,7 @@
-//! A bounding-volume hierarchy over a triangle mesh for ray casting (nearest hit and any hit):
-//! axis-aligned boxes split at the median centroid of the longest axis, Möller–Trumbore tests.
+//! A bounding-volume hierarchy over a triangle mesh for ray casting (nearest hit and any hit)
+//! and closest-point queries: axis-aligned boxes split at the median centroid of the longest
+//! axis, Möller–Trumbore ray tests, Ericson's closest point on a triangle (Real-Time Collision
+//! Detection, 2005, §5.1.5).
 
 use glam::Vec3;
 
@@ -60,6 +62,52 @@ impl Bvh {
         self.traverse(origin, dir, t_min, t_max, true).is_some()
     }
 
+    /// The point of the mesh closest to `p` within `max_dist` (None if nothing is that close).
+    pub fn closest(&self, p: Vec3, max_dist: f32) -> Option<Closest> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let mut best: Option<Closest> = None;
+        let mut limit2 = max_dist * max_dist;
+        let mut stack = [0u32; 64];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let idx = stack[sp];
+            let node = self.nodes[idx as usize];
+            let q = p.clamp(node.lo, node.hi);
+            if (q - p).length_squared() > limit2 {
+                continue;
+            }
+            if node.count > 0 {
+                for k in node.start..node.start + node.count {
+                    let ti = self.order[k as usize];
+                    let (point, bary) = closest_on_triangle(p, &self.tris[ti as usize]);
+                    let d2 = (point - p).length_squared();
+                    if d2 <= limit2 {
+                        limit2 = d2;
+                        best = Some(Closest {
+                            triangle: ti,
+                            point,
+                            bary,
+                            distance: d2.sqrt(),
+                        });
+                    }
+                }
+            } else {
+                // Visit the nearer child first so the limit shrinks early.
+                let (l, r) = (idx + 1, node.start);
+                let dl = box_distance2(p, &self.nodes[l as usize]);
+                let dr = box_distance2(p, &self.nodes[r as usize]);
+                let (first, second) = if dl <= dr { (l, r) } else { (r, l) };
+                stack[sp] = second;
+                stack[sp + 1] = first;
+                sp += 2;
+            }
+        }
+        best
+    }
+
     fn traverse(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32, any: bool) -> Option<Hit> {
         if self.nodes.is_empty() {
             return None;
@@ -102,6 +150,76 @@ impl Bvh {
         }
         best
     }
+}
+
+/// The closest point of a mesh to a query point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Closest {
+    /// Triangle index.
+    pub triangle: u32,
+    /// The closest point.
+    pub point: Vec3,
+    /// Barycentric weights of corners 1 and 2.
+    pub bary: [f32; 2],
+    /// Its distance to the query.
+    pub distance: f32,
+}
+
+fn box_distance2(p: Vec3, n: &Node) -> f32 {
+    (p.clamp(n.lo, n.hi) - p).length_squared()
+}
+
+/// The closest point of triangle `t` to `p` and its barycentric weights of corners 1 and 2,
+/// by Voronoi regions (Ericson 2005, §5.1.5).
+pub fn closest_on_triangle(p: Vec3, t: &[Vec3; 3]) -> (Vec3, [f32; 2]) {
+    let [a, b, c] = *t;
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (a, [0.0, 0.0]);
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return (b, [1.0, 0.0]);
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return (a + v * ab, [v, 0.0]);
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return (c, [0.0, 1.0]);
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return (a + w * ac, [0.0, w]);
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (b + w * (c - b), [1.0 - w, w]);
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let (v, w) = (vb * denom, vc * denom);
+    if !(v.is_finite() && w.is_finite()) {
+        // A degenerate triangle: its corners' closest.
+        let best = [a, b, c]
+            .into_iter()
+            .enumerate()
+            .min_by(|x, y| {
+                (x.1 - p)
+                    .length_squared()
+                    .total_cmp(&(y.1 - p).length_squared())
+            })
+            .map(|(i, _)| i)
+            .unwrap_or(0);
+        return ([a, b, c][best], [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]][best]);
+    }
+    (a + ab * v + ac * w, [v, w])
 }
 
 fn build(
@@ -245,5 +363,51 @@ mod tests {
         assert!((h.t - 1.0).abs() < 1e-6 && (h.bary[0] - 0.2).abs() < 1e-6);
         assert!(!bvh.occluded(o, -Vec3::Z, 0.0, 0.999));
         assert!(bvh.occluded(o, -Vec3::Z, 0.0, 1.001));
+    }
+
+    #[test]
+    fn closest_points_match_brute_force_on_random_triangles() {
+        let rng = Philox::new(11, 0);
+        let mut k = 0u64;
+        let mut r = || {
+            k += 1;
+            rng.uniform4(k, 0)[0] * 20.0 - 10.0
+        };
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        for i in 0..200u32 {
+            for _ in 0..3 {
+                positions.push(Vec3::new(r(), r(), r()));
+            }
+            triangles.push([3 * i, 3 * i + 1, 3 * i + 2]);
+        }
+        let bvh = Bvh::new(&positions, &triangles);
+        let tris: Vec<[Vec3; 3]> = triangles
+            .iter()
+            .map(|t| t.map(|i| positions[i as usize]))
+            .collect();
+        for _ in 0..300 {
+            let p = Vec3::new(r(), r(), r()) * 1.5;
+            let c = bvh.closest(p, f32::INFINITY).expect("a mesh is somewhere");
+            // Brute force on a fine barycentric grid bounds the exact answer from above.
+            let mut brute = f32::INFINITY;
+            for t in &tris {
+                let (q, _) = closest_on_triangle(p, t);
+                brute = brute.min((q - p).length());
+                for a in 0..=10 {
+                    for b in 0..=(10 - a) {
+                        let (u, v) = (a as f32 / 10.0, b as f32 / 10.0);
+                        let q = t[0] + u * (t[1] - t[0]) + v * (t[2] - t[0]);
+                        assert!((q - p).length() >= c.distance - 1e-3);
+                    }
+                }
+            }
+            assert!((c.distance - brute).abs() < 1e-4);
+            let t = tris[c.triangle as usize];
+            let q = t[0] + c.bary[0] * (t[1] - t[0]) + c.bary[1] * (t[2] - t[0]);
+            assert!((q - c.point).length() < 1e-3);
+            // Beyond the limit nothing is found.
+            assert!(bvh.closest(p, c.distance * 0.99).is_none() || c.distance == 0.0);
+        }
     }
 }

@@ -2,7 +2,7 @@
 //! base mesh): quads with UVs per group, eye spheres, chart rectangles, landmarks and face units.
 
 use glam::{Vec2, Vec3};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// head.obj: quads, groups skin / mouth / socket_left / socket_right (one surface) and the parts.
@@ -20,7 +20,7 @@ pub struct Group {
 }
 
 /// One eye sphere of head.json.
-#[derive(Clone, Copy, Debug, Deserialize)]
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
 pub struct EyeSphere {
     /// Centre (mm).
     pub centre: [f32; 3],

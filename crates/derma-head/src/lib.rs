@@ -19,6 +19,7 @@ pub mod asset;
 pub mod brows;
 pub mod export;
 pub mod eye;
+pub mod fit;
 pub mod landmarks;
 pub mod lashes;
 pub mod look;
@@ -105,8 +106,11 @@ pub struct Head {
     units: OnceLock<Vec<MorphTarget>>,
 }
 
+/// The groups that make the skin surface (one UV layout).
+pub(crate) const SKIN_GROUPS: [&str; 4] = ["skin", "mouth", "socket_left", "socket_right"];
+
 /// A quad mesh of some of the asset's groups, with local vertex and uv numbering.
-fn local_quads(a: &asset::Asset, groups: &[&str]) -> (QuadMesh, Vec<u32>) {
+pub(crate) fn local_quads(a: &asset::Asset, groups: &[&str]) -> (QuadMesh, Vec<u32>) {
     let mut vmap: BTreeMap<u32, u32> = BTreeMap::new();
     let mut tmap: HashMap<u32, u32> = HashMap::new();
     let mut m = QuadMesh::default();
@@ -173,19 +177,25 @@ impl Head {
     /// The built-in head, built once per process (about a second on one core).
     pub fn builtin() -> &'static Head {
         static HEAD: OnceLock<Head> = OnceLock::new();
-        HEAD.get_or_init(Head::build)
+        HEAD.get_or_init(|| Head::from_asset(asset::parse(), None))
     }
 
-    fn build() -> Head {
-        let a = asset::parse();
-        let (coarse_skin, coarse) =
-            local_quads(&a, &["skin", "mouth", "socket_left", "socket_right"]);
+    /// A head from an asset (the built-in one, or one fitted to a user's mesh by [`fit`]);
+    /// `fine`, when given, replaces the subdivided skin's positions (one per topological vertex
+    /// of the twice-subdivided skin: a fit's final projection onto the scan).
+    pub(crate) fn from_asset(a: asset::Asset, fine: Option<&[Vec3]>) -> Head {
+        let (coarse_skin, coarse) = local_quads(&a, &SKIN_GROUPS);
         assert_eq!(
             coarse.len(),
             a.meta.skin_vertices,
             "head.json's skin vertex count"
         );
-        let (fine, stencils) = subdivide(&coarse_skin, SKIN_LEVELS);
+        let (mut fine_q, stencils) = subdivide(&coarse_skin, SKIN_LEVELS);
+        if let Some(f) = fine {
+            assert_eq!(f.len(), fine_q.positions.len(), "fine skin positions");
+            fine_q.positions = f.to_vec();
+        }
+        let fine = fine_q;
         let (skin, vertex) = to_trimesh(&fine);
         // Local skin vertex of each asset vertex (the script numbers skin vertices first, so the
         // map is the identity; kept general).
@@ -264,6 +274,41 @@ impl Head {
             targets: a.targets,
             units: OnceLock::new(),
         }
+    }
+
+    /// A head fitted to a user's mesh, from the directory `derma head fit` wrote; read once per
+    /// process and directory.
+    pub fn open(
+        dir: &std::path::Path,
+    ) -> std::result::Result<&'static Head, fit::store::StoreError> {
+        use std::sync::Mutex;
+        static OPEN: OnceLock<Mutex<HashMap<std::path::PathBuf, &'static Head>>> = OnceLock::new();
+        let key = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
+        let cache = OPEN.get_or_init(|| Mutex::new(HashMap::new()));
+        if let Some(h) = cache.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
+            return Ok(h);
+        }
+        let head: &'static Head = Box::leak(Box::new(fit::store::read(dir)?.head()));
+        cache
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .insert(key, head);
+        Ok(head)
+    }
+
+    /// The built-in head, or the fitted head in `dir`.
+    pub fn builtin_or(
+        dir: Option<&std::path::Path>,
+    ) -> std::result::Result<&'static Head, fit::store::StoreError> {
+        match dir {
+            Some(d) => Head::open(d),
+            None => Ok(Head::builtin()),
+        }
+    }
+
+    /// Vertices of the subdivided skin's topology (positions shared across UV seams).
+    pub fn skin_topology_len(&self) -> usize {
+        self.skin_lineage.stencils.rows.len()
     }
 
     /// A part by name.

@@ -7,8 +7,11 @@
 //! - [`shared_data`]: the reference data beside the repository (`../shared/data`), or a skip.
 //! - [`quad_glb`]: a minimal valid GLB, for mesh loaders.
 //! - [`proptest_cases`]: how many cases a property test runs.
+//! - [`truth_scan`]: warps and placements that make scans with known correspondence.
 
 #![warn(missing_docs)]
+
+pub mod truth_scan;
 
 use std::path::PathBuf;
 

@@ -1,10 +1,12 @@
 //! Sparse symmetric positive definite systems (Laplacians, screened Poisson problems, mesh
-//! parameterisation): a sparse Cholesky factorisation on faer (supernodal or simplicial,
-//! with a fill-reducing ordering), factorised once and solved for many right-hand sides.
+//! parameterisation, registration): a sparse Cholesky factorisation on faer (supernodal or
+//! simplicial, with a fill-reducing ordering), factorised once and solved for many right-hand
+//! sides; where one pattern is refactorised many times, its symbolic analysis is done once.
 
 use super::NumericsError;
 use faer::linalg::solvers::Solve;
-use faer::sparse::{SparseColMat, Triplet};
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::{SparseColMat, SymbolicSparseColMat, Triplet};
 use faer::Side;
 
 /// A factorised sparse symmetric positive definite matrix.
@@ -82,6 +84,95 @@ impl SparseCholesky {
     }
 }
 
+/// The lower-triangle pattern of a sparse symmetric matrix with its symbolic Cholesky
+/// analysis (ordering, elimination tree, supernodes), for matrices refactorised many times with
+/// new values on the same pattern.
+pub struct SparsePattern {
+    n: usize,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    symbolic: SymbolicLlt<usize>,
+}
+
+impl SparsePattern {
+    /// The pattern of the n × n matrix with entries at `(row, column)` (lower triangle; the
+    /// diagonal must be among them; entries above it are ignored; repeats are merged).
+    pub fn new(n: usize, entries: &[(usize, usize)]) -> Result<Self, NumericsError> {
+        if let Some(&(r, c)) = entries.iter().find(|(r, c)| *r >= n || *c >= n) {
+            return Err(NumericsError::Shape {
+                what: "sparse pattern",
+                detail: format!("entry ({r}, {c}) outside a {n} × {n} matrix"),
+            });
+        }
+        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); n];
+        for &(r, c) in entries.iter().filter(|(r, c)| r >= c) {
+            cols[c].push(r);
+        }
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0);
+        for (c, rows) in cols.iter_mut().enumerate() {
+            rows.push(c);
+            rows.sort_unstable();
+            rows.dedup();
+            row_idx.extend_from_slice(rows);
+            col_ptr.push(row_idx.len());
+        }
+        let sym = SymbolicSparseColMat::new_checked(n, n, col_ptr.clone(), None, row_idx.clone());
+        let symbolic =
+            SymbolicLlt::try_new(sym.as_ref(), Side::Lower).map_err(|e| NumericsError::Shape {
+                what: "sparse pattern",
+                detail: format!("{e:?}"),
+            })?;
+        Ok(Self {
+            n,
+            col_ptr,
+            row_idx,
+            symbolic,
+        })
+    }
+
+    /// Stored entries (the length of a values array).
+    pub fn len(&self) -> usize {
+        self.row_idx.len()
+    }
+
+    /// Whether it stores nothing.
+    pub fn is_empty(&self) -> bool {
+        self.row_idx.is_empty()
+    }
+
+    /// Where entry (row, column) of the lower triangle lives in a values array.
+    pub fn slot(&self, row: usize, col: usize) -> Option<usize> {
+        let (r, c) = if row >= col { (row, col) } else { (col, row) };
+        let (a, b) = (*self.col_ptr.get(c)?, *self.col_ptr.get(c + 1)?);
+        self.row_idx[a..b].binary_search(&r).ok().map(|k| a + k)
+    }
+
+    /// The factorisation of the matrix with these values (in [`SparsePattern::slot`] order).
+    pub fn factor(&self, values: &[f64]) -> Result<SparseCholesky, NumericsError> {
+        if values.len() != self.len() {
+            return Err(NumericsError::Shape {
+                what: "sparse factorisation",
+                detail: format!("{} values for a pattern of {}", values.len(), self.len()),
+            });
+        }
+        let sym = SymbolicSparseColMat::new_checked(
+            self.n,
+            self.n,
+            self.col_ptr.clone(),
+            None,
+            self.row_idx.clone(),
+        );
+        let a = SparseColMat::new(sym, values.to_vec());
+        let llt = Llt::try_new_with_symbolic(self.symbolic.clone(), a.as_ref(), Side::Lower)
+            .map_err(|_| NumericsError::NotPositiveDefinite {
+                what: "sparse Cholesky",
+            })?;
+        Ok(SparseCholesky { n: self.n, llt })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -126,5 +217,43 @@ mod tests {
         let c = SparseCholesky::new(1, &[(0, 0, 4.0)]).unwrap();
         assert_eq!(c.solve(&[2.0]).unwrap(), vec![0.5]);
         assert!(c.solve(&[1.0, 2.0]).is_err());
+    }
+
+    #[test]
+    fn a_reused_pattern_factorises_like_a_fresh_matrix() {
+        let n = 30;
+        let mut pairs = Vec::new();
+        for i in 0..n {
+            pairs.push((i, i));
+            if i > 0 {
+                pairs.push((i, i - 1));
+            }
+            if i > 4 {
+                pairs.push((i, i - 5));
+            }
+        }
+        let pattern = SparsePattern::new(n, &pairs).unwrap();
+        let b: Vec<f64> = (0..n).map(|i| (i % 4) as f64 - 1.5).collect();
+        for scale in [1.0, 3.0] {
+            let mut values = vec![0.0; pattern.len()];
+            let mut entries = Vec::new();
+            for &(r, c) in &pairs {
+                let v = if r == c {
+                    4.0 * scale + r as f64 * 0.01
+                } else {
+                    -0.7
+                };
+                values[pattern.slot(r, c).unwrap()] += v;
+                entries.push((r, c, v));
+            }
+            let x = pattern.factor(&values).unwrap().solve(&b).unwrap();
+            let want = SparseCholesky::new(n, &entries).unwrap().solve(&b).unwrap();
+            for (a, w) in x.iter().zip(&want) {
+                assert!((a - w).abs() < 1e-12);
+            }
+        }
+        assert_eq!(pattern.slot(0, 1), pattern.slot(1, 0));
+        assert!(pattern.slot(7, 0).is_none());
+        assert!(pattern.factor(&[1.0]).is_err());
     }
 }

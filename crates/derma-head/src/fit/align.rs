@@ -1,0 +1,171 @@
+//! The template's first placement on a scan: a similarity from landmark pairs (Umeyama 1991,
+//! "Least-squares estimation of transformation parameters between two point patterns", PAMI
+//! 13(4)), or from the nose tip, then refined by a trimmed similarity ICP (Besl & McKay 1992).
+
+use super::options::{FitError, Similarity};
+use super::scan::Scan;
+use derma_core::numerics::{dense, Matrix};
+use glam::{Mat3, Vec3};
+
+/// The similarity that best maps `src` onto `dst` in least squares with weights (Umeyama 1991,
+/// eqs. 40–42), or None for fewer than three non-collinear pairs.
+pub fn umeyama(src: &[Vec3], dst: &[Vec3], w: &[f32]) -> Option<Similarity> {
+    let total: f64 = w.iter().map(|&x| x as f64).sum();
+    if src.len() < 3 || total <= 0.0 {
+        return None;
+    }
+    let mean = |p: &[Vec3]| -> [f64; 3] {
+        let mut m = [0.0; 3];
+        for (q, &wi) in p.iter().zip(w) {
+            for k in 0..3 {
+                m[k] += wi as f64 * q[k] as f64;
+            }
+        }
+        m.map(|x| x / total)
+    };
+    let (ms, md) = (mean(src), mean(dst));
+    let mut cov = [[0.0f64; 3]; 3];
+    let mut var = 0.0;
+    for ((s, d), &wi) in src.iter().zip(dst).zip(w) {
+        let s = [0, 1, 2].map(|k| s[k] as f64 - ms[k]);
+        let d = [0, 1, 2].map(|k| d[k] as f64 - md[k]);
+        for (i, ci) in cov.iter_mut().enumerate() {
+            for (j, cij) in ci.iter_mut().enumerate() {
+                *cij += wi as f64 * d[i] * s[j];
+            }
+        }
+        var += wi as f64 * (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+    }
+    let cov = Matrix::from_fn(3, 3, |i, j| cov[i][j] / total);
+    let var = var / total;
+    let svd = dense::svd(&cov).ok()?;
+    if svd.s[1] <= 1e-9 * svd.s[0].max(1e-30) {
+        return None;
+    }
+    let (u, v) = (&svd.u, &svd.v);
+    let det = |m: &Matrix| {
+        m[(0, 0)] * (m[(1, 1)] * m[(2, 2)] - m[(1, 2)] * m[(2, 1)])
+            - m[(0, 1)] * (m[(1, 0)] * m[(2, 2)] - m[(1, 2)] * m[(2, 0)])
+            + m[(0, 2)] * (m[(1, 0)] * m[(2, 1)] - m[(1, 1)] * m[(2, 0)])
+    };
+    let sgn = if det(u) * det(v) < 0.0 { -1.0 } else { 1.0 };
+    let d = [1.0, 1.0, sgn];
+    let r = |i: usize, j: usize| (0..3).map(|k| u[(i, k)] * d[k] * v[(j, k)]).sum::<f64>();
+    let rotation = Mat3::from_cols(
+        Vec3::new(r(0, 0) as f32, r(1, 0) as f32, r(2, 0) as f32),
+        Vec3::new(r(0, 1) as f32, r(1, 1) as f32, r(2, 1) as f32),
+        Vec3::new(r(0, 2) as f32, r(1, 2) as f32, r(2, 2) as f32),
+    );
+    let scale = ((0..3).map(|k| svd.s[k] * d[k]).sum::<f64>() / var) as f32;
+    let ms = Vec3::new(ms[0] as f32, ms[1] as f32, ms[2] as f32);
+    let md = Vec3::new(md[0] as f32, md[1] as f32, md[2] as f32);
+    Some(Similarity {
+        scale,
+        rotation,
+        translation: md - scale * (rotation * ms),
+    })
+}
+
+/// Trimmed similarity ICP: `points` (with normals) of the template, already placed by `start`,
+/// are matched to their closest scan points within a shrinking distance and compatible normals,
+/// and the similarity is re-solved; returns the refined similarity (applied after `start`'s
+/// frame, i.e. the whole map) and the share of points matched at the end.
+pub fn icp(
+    scan: &Scan,
+    points: &[Vec3],
+    normals: &[Vec3],
+    start: Similarity,
+    iterations: usize,
+    max_distance: f32,
+) -> (Similarity, f32) {
+    let mut t = start;
+    let mut share = 0.0;
+    for it in 0..iterations {
+        let tau = max_distance * (1.0 - 0.6 * it as f32 / iterations.max(1) as f32);
+        let (mut src, mut dst) = (Vec::new(), Vec::new());
+        for (p, n) in points.iter().zip(normals) {
+            let q = t.apply(*p);
+            let nq = t.rotation * *n;
+            if let Some(c) = scan.matched(q, nq, tau) {
+                src.push(*p);
+                dst.push(c.point);
+            }
+        }
+        share = src.len() as f32 / points.len().max(1) as f32;
+        let w = vec![1.0; src.len()];
+        match umeyama(&src, &dst, &w) {
+            Some(s) if (0.5..2.0).contains(&s.scale) => t = s,
+            _ => break,
+        }
+    }
+    (t, share)
+}
+
+/// The nose tip of a scan facing +Z: its most forward vertex.
+pub fn nose_tip(scan: &Scan) -> Vec3 {
+    scan.mesh
+        .positions
+        .iter()
+        .copied()
+        .max_by(|a, b| a.z.total_cmp(&b.z))
+        .unwrap_or(Vec3::ZERO)
+}
+
+/// Checks given landmarks lie on the scan: each within `limit` mm of its surface.
+pub fn check_on_surface(scan: &Scan, named: &[(String, Vec3)], limit: f32) -> Result<(), FitError> {
+    for (name, p) in named {
+        if !p.is_finite() {
+            return Err(FitError::Landmark {
+                name: name.clone(),
+                detail: format!("{:?} is not a finite point", p.to_array()),
+            });
+        }
+        let d = scan
+            .bvh
+            .closest(*p, f32::INFINITY)
+            .map(|c| c.distance)
+            .unwrap_or(f32::INFINITY);
+        if d > limit {
+            return Err(FitError::Landmark {
+                name: name.clone(),
+                detail: format!(
+                    "it is {d:.1} mm from the scan's surface (at most {limit:.0} mm expected); are the landmarks in the scan's units and frame?"
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn umeyama_recovers_a_known_similarity() {
+        let src: Vec<Vec3> = (0..12)
+            .map(|i| {
+                let f = i as f32;
+                Vec3::new(
+                    (f * 1.7).sin() * 40.0,
+                    (f * 0.9).cos() * 30.0,
+                    f * 3.0 - 10.0,
+                )
+            })
+            .collect();
+        let truth = Similarity {
+            scale: 0.1,
+            rotation: Mat3::from_euler(glam::EulerRot::XYZ, 0.3, -0.7, 1.1),
+            translation: Vec3::new(5.0, -2.0, 30.0),
+        };
+        let dst: Vec<Vec3> = src.iter().map(|p| truth.apply(*p)).collect();
+        let s = umeyama(&src, &dst, &vec![1.0; src.len()]).expect("well posed");
+        assert!((s.scale - 0.1).abs() < 1e-5);
+        for p in &src {
+            assert!((s.apply(*p) - truth.apply(*p)).length() < 1e-3);
+        }
+        // Collinear points do not fix a rotation.
+        let line: Vec<Vec3> = (0..5).map(|i| Vec3::X * i as f32).collect();
+        assert!(umeyama(&line, &line, &[1.0; 5]).is_none());
+    }
+}

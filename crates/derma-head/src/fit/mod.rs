@@ -1,0 +1,552 @@
+//! Fitting the built-in head to a user's head or face mesh: a similarity from landmarks or the
+//! nose tip, optimal-step non-rigid ICP of the skin (Amberg et al. 2007), then everything the
+//! head carries (landmarks, regions, face units, globes, teeth, tongue, lashes) follows.
+//!
+//! The result is a head like the built-in one, with the same topology and UVs, in the scan's
+//! frame (mm): every command that takes a head takes it ([`crate::Head::open`]).
+
+pub mod align;
+pub mod nicp;
+pub mod options;
+pub mod scan;
+pub mod store;
+pub mod template;
+pub mod transfer;
+
+pub use options::{Alignment, FitError, FitOptions, FitReport, Similarity};
+
+use crate::asset::{self, Asset, EyeSphere, SparseTarget};
+use crate::Head;
+use derma_core::mesh::TriMesh;
+use derma_core::progress::{Progress, Unit};
+use glam::Vec3;
+use nicp::{Affines, Pattern, Problem};
+use rayon::prelude::*;
+use scan::Scan;
+use std::collections::HashMap;
+use std::time::Instant;
+use template::Template;
+
+/// A head fitted to a scan: what differs from the built-in head, and the correspondence.
+pub struct Fitted {
+    /// Every asset vertex's position (mm, the scan's frame): the skin's control cage and the
+    /// parts.
+    pub positions: Vec<Vec3>,
+    /// The twice-subdivided skin's positions (per topological vertex), projected onto the scan.
+    pub fine: Vec<Vec3>,
+    /// Eye globes: left, right.
+    pub eyes: [EyeSphere; 2],
+    /// The 52 face units, transferred (asset vertex, offset in mm).
+    pub targets: Vec<SparseTarget>,
+    /// How it went.
+    pub report: FitReport,
+    /// The template's first placement (template mm → scan mm).
+    pub similarity: Similarity,
+}
+
+/// A point on a mesh: triangle and barycentric weights of its corners 1 and 2 (`None` where
+/// nothing lies close).
+pub type SurfacePoint = Option<(u32, [f32; 2])>;
+
+impl Fitted {
+    /// The fitted head.
+    pub fn head(&self) -> Head {
+        let mut a = asset::parse();
+        self.apply(&mut a);
+        Head::from_asset(a, Some(&self.fine))
+    }
+
+    /// Puts the fit into an asset of the built-in head.
+    pub(crate) fn apply(&self, a: &mut Asset) {
+        a.positions.clone_from(&self.positions);
+        for (side, e) in ["left", "right"].iter().zip(&self.eyes) {
+            a.meta.eyes.insert((*side).into(), *e);
+        }
+        a.targets.clone_from(&self.targets);
+    }
+}
+
+/// Template → scan: where each vertex of the fitted head's skin lies on the scan (within 5 mm).
+pub fn template_to_scan(head: &Head, scan: &TriMesh) -> Vec<SurfacePoint> {
+    let bvh = derma_core::bvh::Bvh::new(&scan.positions, &scan.triangles);
+    head.skin
+        .positions
+        .par_iter()
+        .map(|p| bvh.closest(*p, 5.0).map(|c| (c.triangle, c.bary)))
+        .collect()
+}
+
+/// Scan → template: where each scan vertex lies on the fitted head's skin (within 10 mm), the
+/// thesis' B map (EyeMove, eq. 3.4) for the user's own mesh.
+pub fn scan_to_template(head: &Head, scan: &TriMesh) -> Vec<SurfacePoint> {
+    let bvh = derma_core::bvh::Bvh::new(&head.skin.positions, &head.skin.triangles);
+    scan.positions
+        .par_iter()
+        .map(|p| bvh.closest(*p, 10.0).map(|c| (c.triangle, c.bary)))
+        .collect()
+}
+
+/// Fits the built-in head to `scan` (mm; +Y up, facing +Z).
+pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<Fitted, FitError> {
+    let mut seconds: Vec<(String, f64)> = Vec::new();
+    let mut clock = Instant::now();
+    let mut lap = |name: &str, seconds: &mut Vec<(String, f64)>| {
+        seconds.push((name.into(), clock.elapsed().as_secs_f64()));
+        clock = Instant::now();
+    };
+    progress.stage("prepare the scan", 1, Unit::Steps);
+    let asset = asset::parse();
+    let tpl = Template::of(&asset);
+    let builtin = Head::builtin();
+    let scan = Scan::new(scan);
+    lap("prepare", &mut seconds);
+
+    // The template's face points (once subdivided) for the alignment.
+    let l1 = nicp::combine(&tpl.coarse.positions, &tpl.stencils1.rows);
+    let n1 = Template::normals(&tpl.level1, &l1);
+    let lm = &builtin.landmarks;
+    let ear_z = 0.5 * (lm.get("ear_left").z + lm.get("ear_right").z);
+    let (y_lo, y_hi) = (lm.get("menton").y - 5.0, lm.get("hairline").y + 5.0);
+    let face1: Vec<usize> = (0..l1.len())
+        .filter(|&i| tpl.outer1[i] && l1[i].z > ear_z + 20.0 && (y_lo..y_hi).contains(&l1[i].y))
+        .collect();
+    let face_pts: Vec<Vec3> = face1.iter().map(|&i| l1[i]).collect();
+    let face_nrm: Vec<Vec3> = face1.iter().map(|&i| n1[i]).collect();
+
+    progress.stage("align", 1, Unit::Steps);
+    // Landmarks: the fine vertex of each named landmark, as a combination of control vertices.
+    let local: HashMap<u32, u32> = tpl
+        .coarse_ids
+        .iter()
+        .enumerate()
+        .map(|(i, &v)| (v, i as u32))
+        .collect();
+    let mut given: Vec<(String, Vec3, Vec3)> = Vec::new(); // name, template, scan
+    let start = match &opts.alignment {
+        Alignment::Landmarks(l) => {
+            let named: Vec<(String, Vec3)> = l
+                .points
+                .iter()
+                .filter(|(n, _)| !n.starts_with("eye_centre"))
+                .map(|(n, p)| (n.clone(), *p))
+                .collect();
+            align::check_on_surface(&scan, &named, 10.0)?;
+            for (n, p) in named {
+                if lm.points.contains_key(&n) {
+                    given.push((n.clone(), lm.get(&n), p));
+                }
+            }
+            let src: Vec<Vec3> = given.iter().map(|g| g.1).collect();
+            let dst: Vec<Vec3> = given.iter().map(|g| g.2).collect();
+            align::umeyama(&src, &dst, &vec![1.0; src.len()]).ok_or_else(|| FitError::Landmark {
+                name: given.iter().map(|g| g.0.as_str()).collect::<Vec<_>>().join(", "),
+                detail: "these do not fix a placement; give at least the canthi, the nose tip and the mouth corners".into(),
+            })?
+        }
+        Alignment::Auto => Similarity {
+            translation: align::nose_tip(&scan) - lm.get("nose_tip"),
+            ..Similarity::IDENTITY
+        },
+    };
+    check_orientation(&scan, &face_pts, &face_nrm, &start)?;
+    let (sim, share) = align::icp(&scan, &face_pts, &face_nrm, start, 15, 30.0);
+    let nose = sim.apply(lm.get("nose_tip"));
+    let nose_gap = scan
+        .bvh
+        .closest(nose, f32::INFINITY)
+        .map(|c| c.distance)
+        .unwrap_or(f32::INFINITY);
+    if share < 0.5 || nose_gap > 8.0 {
+        return Err(FitError::Scan(format!(
+            "no face found on the scan: after alignment {:.0} % of the template's face lies within reach of it and the nose tip is {nose_gap:.1} mm from it (a face needs ≥ 50 % and ≤ 8 mm); a head faces +Z with +Y up, or give landmarks",
+            share * 100.0
+        )));
+    }
+    lap("align", &mut seconds);
+
+    // Non-rigid registration of the control cage.
+    let control: Vec<Vec3> = tpl.coarse.positions.iter().map(|p| sim.apply(*p)).collect();
+    let rows: Vec<Vec<(u32, f32)>> = (0..tpl.level1.positions.len())
+        .filter(|&i| tpl.outer1[i])
+        .map(|i| tpl.stencils1.rows[i].clone())
+        .collect();
+    let outer_ids: Vec<usize> = (0..tpl.level1.positions.len())
+        .filter(|&i| tpl.outer1[i])
+        .collect();
+    let is_face: Vec<bool> = {
+        let f: std::collections::HashSet<usize> = face1.iter().copied().collect();
+        outer_ids.iter().map(|i| f.contains(i)).collect()
+    };
+    let lm_rows: Vec<(Vec<(u32, f32)>, Vec3)> = given
+        .iter()
+        .map(|(n, _, q)| {
+            let v = asset.meta.landmarks[n];
+            (tpl.stencils2.rows[local[&v] as usize].clone(), *q)
+        })
+        .collect();
+    let extra: Vec<Vec<(u32, f32)>> = lm_rows.iter().map(|r| r.0.clone()).collect();
+    let problem = Problem {
+        control: &control,
+        edges: &tpl.edges,
+        points: &rows,
+    };
+    let pattern = Pattern::new(&problem, &extra)?;
+    let frame = Affines::identity(&control);
+    let mut x = frame.clone();
+    let alpha0 = opts.stiffness.first().copied().unwrap_or(1.0);
+    let total = (opts.stiffness.len() * opts.iterations) as u64;
+    progress.stage("non-rigid registration", total, Unit::Steps);
+    let mut iterations = 0;
+    let mut last: (f32, f32) = (f32::INFINITY, 0.0);
+    for &alpha in &opts.stiffness {
+        let tau = (opts.max_distance_mm * (alpha / alpha0).sqrt() as f32).max(6.0);
+        let mut system: Option<nicp::System> = None;
+        for it in 0..opts.iterations {
+            let all = nicp::positions(&problem, &x, &tpl.stencils1.rows);
+            let normals = Template::normals(&tpl.level1, &all);
+            let found: Vec<Option<Vec3>> = outer_ids
+                .par_iter()
+                .map(|&i| scan.matched(all[i], normals[i], tau).map(|c| c.point))
+                .collect();
+            let (mut sum, mut n, mut matched) = (0.0f64, 0usize, 0usize);
+            for (k, t) in found.iter().enumerate() {
+                if is_face[k] {
+                    if let Some(q) = t {
+                        sum += (all[outer_ids[k]] - *q).length_squared() as f64;
+                        n += 1;
+                    }
+                    matched += t.is_some() as usize;
+                }
+            }
+            last = (
+                (sum / n.max(1) as f64).sqrt() as f32,
+                matched as f32 / face1.len().max(1) as f32,
+            );
+            // A point matched at the stiffness's first iteration and unmatched later is held
+            // where it is.
+            let targets: Vec<Vec3> = found
+                .iter()
+                .zip(&outer_ids)
+                .map(|(t, &i)| t.unwrap_or(all[i]))
+                .collect();
+            if system.is_none() {
+                let weights = found.iter().map(|t| t.is_some() as u8 as f32).collect();
+                system = Some(nicp::System::new(
+                    &problem,
+                    &pattern,
+                    &frame,
+                    alpha,
+                    weights,
+                    &extra,
+                    nicp::LANDMARK_WEIGHT,
+                )?);
+            }
+            let mut next = system.as_ref().expect("built").solve(&targets, &lm_rows)?;
+            let change = next.change(&x);
+            if it > 0 {
+                next.relax(&x, nicp::RELAXATION);
+            }
+            x = next;
+            iterations += 1;
+            progress.advance(1);
+            if change < 1e-4 {
+                progress.advance((opts.iterations - it - 1) as u64);
+                break;
+            }
+        }
+    }
+    lap("non-rigid registration", &mut seconds);
+    if !(last.0 <= opts.max_residual_mm) {
+        return Err(FitError::NoConvergence {
+            rms_mm: last.0,
+            iterations,
+            limit_mm: opts.max_residual_mm,
+        });
+    }
+
+    progress.stage("project and transfer", 1, Unit::Steps);
+    let moved: Vec<Vec3> = (0..control.len()).map(|j| x.moved(j, control[j])).collect();
+    let mut fine = nicp::combine(&moved, &tpl.stencils2.rows);
+    let template_fine: Vec<Vec3> = nicp::combine(&control, &tpl.stencils2.rows);
+    project(&scan, &tpl, &mut fine);
+    untangle(&tpl, &mut fine, &template_fine);
+    let flipped = flipped_quads(&tpl, &fine, &template_fine);
+    let face2: Vec<usize> = (0..fine.len())
+        .filter(|&i| {
+            let p = tpl.level2.positions[i];
+            tpl.outer2[i] && p.z > ear_z + 20.0 && (y_lo..y_hi).contains(&p.y)
+        })
+        .collect();
+    let mut dist: Vec<f32> = face2
+        .par_iter()
+        .filter_map(|&i| scan.bvh.closest(fine[i], 10.0).map(|c| c.distance))
+        .collect();
+    dist.sort_by(f32::total_cmp);
+    let median = dist.get(dist.len() / 2).copied().unwrap_or(f32::INFINITY);
+
+    // Parts and globes follow the local maps; face units by deformation transfer.
+    let map = transfer::LocalMap {
+        affines: &x,
+        control: &control,
+    };
+    let mut positions = asset.positions.clone();
+    for (j, &v) in tpl.coarse_ids.iter().enumerate() {
+        positions[v as usize] = moved[j];
+    }
+    let skin_n = asset.meta.skin_vertices;
+    let is_skin = |v: u32| local.contains_key(&v);
+    for (v, p) in positions.iter_mut().enumerate() {
+        if !is_skin(v as u32) {
+            *p = map.point(sim.apply(asset.positions[v]));
+        }
+    }
+    let eye = |side: &str| {
+        let e = asset.meta.eyes[side];
+        let c = sim.apply(Vec3::from(e.centre));
+        let l = map.linear(c);
+        EyeSphere {
+            centre: map.point(c).to_array(),
+            radius: e.radius * sim.scale * l.determinant().abs().cbrt(),
+        }
+    };
+    let mut eyes = [eye("left"), eye("right")];
+    let forward = sim.rotation * Vec3::Z;
+    for e in &mut eyes {
+        seat_globe(e, &fine, &tpl.outer2, forward);
+    }
+    let triangles: Vec<[u32; 3]> = tpl
+        .coarse
+        .quads
+        .iter()
+        .flat_map(|q| [[q[0].0, q[1].0, q[2].0], [q[0].0, q[2].0, q[3].0]])
+        .collect();
+    let sr = sim.rotation * sim.scale;
+    let targets: Vec<SparseTarget> = asset
+        .targets
+        .par_iter()
+        .map(|t| -> Result<SparseTarget, FitError> {
+            let skin: HashMap<u32, Vec3> = t
+                .offsets
+                .iter()
+                .filter_map(|&(v, d)| local.get(&v).map(|&l| (l, sr * d)))
+                .collect();
+            let mut offsets: Vec<(u32, Vec3)> =
+                transfer::deformation_transfer(&triangles, &control, &moved, &skin)?
+                    .into_iter()
+                    .filter(|(_, d)| d.length_squared() > 1e-10)
+                    .map(|(l, d)| (tpl.coarse_ids[l as usize], d))
+                    .collect();
+            for &(v, d) in &t.offsets {
+                if !is_skin(v) {
+                    let l = map.linear(sim.apply(asset.positions[v as usize]));
+                    offsets.push((v, l * (sr * d)));
+                }
+            }
+            offsets.sort_by_key(|o| o.0);
+            Ok(SparseTarget {
+                name: t.name.clone(),
+                offsets,
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    debug_assert!(skin_n <= positions.len());
+    lap("project and transfer", &mut seconds);
+
+    let landmark_mm = given
+        .iter()
+        .map(|(n, _, q)| {
+            let v = asset.meta.landmarks[n];
+            (n.clone(), (fine[local[&v] as usize] - *q).length())
+        })
+        .collect();
+    Ok(Fitted {
+        positions,
+        fine,
+        eyes,
+        targets,
+        report: FitReport {
+            alignment: match &opts.alignment {
+                Alignment::Landmarks(_) => format!("landmarks: {}", given.len()),
+                Alignment::Auto => "auto (nose tip, then similarity ICP)".into(),
+            },
+            scale: sim.scale,
+            iterations,
+            rms_mm: last.0,
+            median_mm: median,
+            matched: last.1,
+            flipped,
+            landmark_mm,
+            seconds,
+        },
+        similarity: sim,
+    })
+}
+
+/// Refuses a scan whose triangles face inward: near the placed template's face, most closest
+/// scan triangles face against the template's normals.
+fn check_orientation(
+    scan: &Scan,
+    pts: &[Vec3],
+    normals: &[Vec3],
+    s: &Similarity,
+) -> Result<(), FitError> {
+    let (mut with, mut against) = (0usize, 0usize);
+    for (p, n) in pts.iter().zip(normals).step_by(4) {
+        if let Some(c) = scan.bvh.closest(s.apply(*p), 15.0) {
+            let d = scan.face_normals[c.triangle as usize].dot(s.rotation * *n);
+            with += (d > 0.5) as usize;
+            against += (d < -0.5) as usize;
+        }
+    }
+    if against > 2 * with && against > 20 {
+        return Err(FitError::Scan(format!(
+            "the scan's triangles face inward ({against} of {} face points near the template face against it): flip its normals (reverse the winding) and try again",
+            with + against
+        )));
+    }
+    Ok(())
+}
+
+/// Moves the outer skin's fine vertices onto the scan along their normals (within 2.5 mm, where
+/// the scan faces the same way), then undoes the move on any quad it would turn over.
+fn project(scan: &Scan, tpl: &Template, fine: &mut [Vec3]) {
+    let normals = Template::normals(&tpl.level2, fine);
+    let moved: Vec<Option<Vec3>> = (0..fine.len())
+        .into_par_iter()
+        .map(|i| {
+            if !tpl.outer2[i] {
+                return None;
+            }
+            let (p, n) = (fine[i], normals[i]);
+            let hit = |d: Vec3| scan.bvh.nearest(p, d, 0.0, 2.5).map(|h| (h.t, h.triangle));
+            let best = match (hit(n), hit(-n)) {
+                (Some(a), Some(b)) => Some(if a.0 <= b.0 {
+                    (a.0, a.1, n)
+                } else {
+                    (b.0, b.1, -n)
+                }),
+                (Some(a), None) => Some((a.0, a.1, n)),
+                (None, Some(b)) => Some((b.0, b.1, -n)),
+                (None, None) => None,
+            }?;
+            let t = best.1 as usize;
+            (!scan.on_border[t] && scan.face_normals[t].dot(n) >= scan::NORMAL_COS)
+                .then(|| p + best.2 * best.0)
+        })
+        .collect();
+    let before = fine.to_vec();
+    for (f, m) in fine.iter_mut().zip(&moved) {
+        if let Some(q) = m {
+            *f = *q;
+        }
+    }
+    // Undo on quads either of whose triangles turns against its pre-projection orientation
+    // (or by more than 75°); repeat, as undoing one quad can turn a neighbour.
+    for _ in 0..8 {
+        let mut undone = false;
+        for q in &tpl.level2.quads {
+            let [a, b, c, d] = q.map(|c| c.0 as usize);
+            let turned = [[a, b, c], [a, c, d]].iter().any(|t| {
+                let n = |p: &[Vec3]| (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
+                let (n0, n1) = (n(&before), n(fine));
+                n0.dot(n1) <= 0.25 * n0.length() * n1.length()
+            });
+            if turned {
+                for v in [a, b, c, d] {
+                    if fine[v] != before[v] {
+                        fine[v] = before[v];
+                        undone = true;
+                    }
+                }
+            }
+        }
+        if !undone {
+            break;
+        }
+    }
+}
+
+/// Smooths away folds: the corners of every triangle turned over against the template are
+/// moved to their neighbours' mean (umbrella smoothing), locally, until none is left (at most
+/// 50 rounds; what remains is reported as `flipped`).
+fn untangle(tpl: &Template, fine: &mut [Vec3], template: &[Vec3]) {
+    let mut ring: Vec<Vec<u32>> = vec![Vec::new(); fine.len()];
+    for q in &tpl.level2.quads {
+        for k in 0..4 {
+            let (a, b) = (q[k].0, q[(k + 1) % 4].0);
+            ring[a as usize].push(b);
+            ring[b as usize].push(a);
+        }
+    }
+    for r in &mut ring {
+        r.sort_unstable();
+        r.dedup();
+    }
+    for _ in 0..50 {
+        let mut bad: Vec<usize> = Vec::new();
+        for q in &tpl.level2.quads {
+            let [a, b, c, d] = q.map(|c| c.0 as usize);
+            for t in [[a, b, c], [a, c, d]] {
+                let n = |p: &[Vec3]| (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
+                let (n0, n1) = (n(template), n(fine));
+                if n0.length_squared() > 1e-12 && n0.dot(n1) <= 0.1 * n0.length() * n1.length() {
+                    bad.extend(t);
+                }
+            }
+        }
+        if bad.is_empty() {
+            return;
+        }
+        bad.sort_unstable();
+        bad.dedup();
+        // Grow by one ring, so the fold's surroundings relax with it.
+        let mut region: Vec<usize> = bad
+            .iter()
+            .flat_map(|&v| ring[v].iter().map(|&u| u as usize).chain([v]))
+            .collect();
+        region.sort_unstable();
+        region.dedup();
+        let next: Vec<Vec3> = region
+            .iter()
+            .map(|&v| {
+                ring[v].iter().map(|&u| fine[u as usize]).sum::<Vec3>()
+                    / ring[v].len().max(1) as f32
+            })
+            .collect();
+        for (&v, p) in region.iter().zip(next) {
+            fine[v] = p;
+        }
+    }
+}
+
+/// Triangles of the fitted skin turned over against the template's (placed) orientation.
+fn flipped_quads(tpl: &Template, fine: &[Vec3], template: &[Vec3]) -> usize {
+    tpl.level2
+        .quads
+        .iter()
+        .flat_map(|q| {
+            let [a, b, c, d] = q.map(|c| c.0 as usize);
+            [[a, b, c], [a, c, d]]
+        })
+        .filter(|t| {
+            let n = |p: &[Vec3]| (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
+            let (n0, n1) = (n(template), n(fine));
+            n0.length_squared() > 1e-12 && n0.dot(n1) <= 0.0
+        })
+        .count()
+}
+
+/// Pushes a globe back along the head's forward axis until no outer skin vertex lies within
+/// 0.3 mm inside it (a lid resting on the globe, not through it).
+fn seat_globe(e: &mut EyeSphere, fine: &[Vec3], outer: &[bool], forward: Vec3) {
+    let c = Vec3::from(e.centre);
+    let worst = fine
+        .iter()
+        .zip(outer)
+        .filter(|(p, o)| **o && (**p - c).length() < 2.0 * e.radius)
+        .map(|(p, _)| (*p - c).length() - e.radius)
+        .fold(f32::INFINITY, f32::min);
+    if worst < 0.3 {
+        e.centre = (c - forward * (0.3 - worst)).to_array();
+    }
+}

@@ -1,0 +1,68 @@
+//! The user's scan as the registration sees it: its triangles in a hierarchy for closest
+//! points, their orientation, and its open borders (holes, the neck cut), where matches are
+//! refused as Amberg et al. 2007 (§3.2) do.
+
+use derma_core::bvh::{Bvh, Closest};
+use derma_core::mesh::TriMesh;
+use glam::Vec3;
+use std::collections::HashMap;
+
+/// A scan prepared for matching.
+pub struct Scan {
+    /// The mesh (mm).
+    pub mesh: TriMesh,
+    /// Its triangles' hierarchy.
+    pub bvh: Bvh,
+    /// Unit normal of each triangle, by winding.
+    pub face_normals: Vec<Vec3>,
+    /// Per triangle: it touches the border (an edge used by one triangle only).
+    pub on_border: Vec<bool>,
+}
+
+/// Cosine of the largest angle between a template normal and the scan's for a match (60°).
+pub const NORMAL_COS: f32 = 0.5;
+
+impl Scan {
+    /// Prepares a mesh (in mm).
+    pub fn new(mesh: TriMesh) -> Scan {
+        let bvh = Bvh::new(&mesh.positions, &mesh.triangles);
+        let face_normals = mesh
+            .triangles
+            .iter()
+            .map(|t| mesh.face_cross(*t).normalize_or_zero())
+            .collect();
+        let mut uses: HashMap<(u32, u32), u32> = HashMap::with_capacity(mesh.triangles.len() * 2);
+        for t in &mesh.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                *uses.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+            }
+        }
+        let mut border_vertex = vec![false; mesh.positions.len()];
+        for (&(a, b), &n) in &uses {
+            if n == 1 {
+                border_vertex[a as usize] = true;
+                border_vertex[b as usize] = true;
+            }
+        }
+        let on_border = mesh
+            .triangles
+            .iter()
+            .map(|t| t.iter().any(|&i| border_vertex[i as usize]))
+            .collect();
+        Scan {
+            mesh,
+            bvh,
+            face_normals,
+            on_border,
+        }
+    }
+
+    /// The closest scan point to `p` within `tau` mm whose surface faces the same way as `n`
+    /// (within 60°) and that is not on the border; None otherwise.
+    pub fn matched(&self, p: Vec3, n: Vec3, tau: f32) -> Option<Closest> {
+        let c = self.bvh.closest(p, tau)?;
+        let t = c.triangle as usize;
+        (!self.on_border[t] && self.face_normals[t].dot(n) >= NORMAL_COS).then_some(c)
+    }
+}

@@ -1,0 +1,125 @@
+//! Ground truth for the fit: the built-in head's outer skin retriangulated (the other quad
+//! diagonal), its vertices slid along the surface, warped, rotated, moved and put in cm.
+
+use derma_core::mesh::TriMesh;
+use derma_head::fit::{nicp, template::Template, Fitted};
+use derma_test_support::truth_scan::{slide, Placement, Warp};
+use glam::{Mat3, Vec3};
+
+/// A scan with known correspondence.
+pub struct Case {
+    /// The scan (mm: the placement's unit change undone, as the loader would).
+    pub scan: TriMesh,
+    /// The same scan in centimetres, as a user's file would hold it.
+    pub scan_cm: TriMesh,
+    /// Where each template fine vertex truly lies (mm, the scan's frame).
+    pub truth: Vec<Vec3>,
+    /// Template fine vertices of the face (where accuracy is asked).
+    pub face: Vec<usize>,
+    /// The true landmarks (mm, scan frame).
+    pub landmarks: derma_head::Landmarks,
+}
+
+/// Errors of a fit against the truth (mm).
+pub struct Measured {
+    pub rms: f32,
+    pub p95: f32,
+    pub max: f32,
+    pub landmark_max: f32,
+}
+
+/// The case of `seed`, warped by up to `peak_mm`; `levels` more subdivisions change density.
+pub fn case(seed: u64, peak_mm: f32, sigma_mm: f32) -> Case {
+    let asset = derma_head::asset::parse();
+    let tpl = Template::of(&asset);
+    let p2 = nicp::combine(&tpl.coarse.positions, &tpl.stencils2.rows);
+    let n2 = Template::normals(&tpl.level2, &p2);
+    let warp = Warp::random(seed, &p2, 14, sigma_mm, peak_mm);
+    let a = seed as f32;
+    let place = Placement {
+        rotation: Mat3::from_euler(
+            glam::EulerRot::YXZ,
+            (0.15 * (a * 1.3).sin()).to_radians() * 60.0,
+            (0.08 * (a * 2.1).cos()).to_radians() * 60.0,
+            (0.05 * (a * 0.7).sin()).to_radians() * 60.0,
+        ),
+        translation: Vec3::new(12.0 * a.sin(), -30.0, 40.0),
+        mm_per_unit: 10.0,
+    };
+    let mm = |p: Vec3| place.apply(p) * place.mm_per_unit;
+    // Scan vertices: the outer skin's, slid along the surface, then warped and placed.
+    let mut verts = p2.clone();
+    slide(&mut verts, &n2, 1.5, 0.35, seed);
+    let mut index = vec![u32::MAX; p2.len()];
+    let mut scan = TriMesh::default();
+    for (i, v) in verts.iter().enumerate() {
+        if tpl.outer2[i] {
+            index[i] = scan.positions.len() as u32;
+            scan.positions.push(mm(warp.apply(*v)));
+        }
+    }
+    for q in &tpl.level2.quads {
+        let [a, b, c, d] = q.map(|c| index[c.0 as usize]);
+        if [a, b, c, d].contains(&u32::MAX) {
+            continue;
+        }
+        scan.triangles.push([a, b, d]);
+        scan.triangles.push([b, c, d]);
+    }
+    scan.compute_normals();
+    let mut scan_cm = scan.clone();
+    scan_cm.scale(0.1);
+    let truth: Vec<Vec3> = p2.iter().map(|p| mm(warp.apply(*p))).collect();
+    let head = derma_head::Head::builtin();
+    let lm = &head.landmarks;
+    let ear_z = 0.5 * (lm.get("ear_left").z + lm.get("ear_right").z);
+    let (lo, hi) = (lm.get("menton").y, lm.get("hairline").y);
+    let face = (0..p2.len())
+        .filter(|&i| tpl.outer2[i] && p2[i].z > ear_z + 30.0 && (lo..hi).contains(&p2[i].y))
+        .collect();
+    let landmarks = derma_head::Landmarks {
+        points: lm
+            .points
+            .iter()
+            .filter(|(n, _)| !n.starts_with("eye_centre"))
+            .map(|(n, p)| (n.clone(), mm(warp.apply(*p))))
+            .collect(),
+    };
+    Case {
+        scan,
+        scan_cm,
+        truth,
+        face,
+        landmarks,
+    }
+}
+
+impl Case {
+    /// The fit's errors on the face and at the landmarks.
+    pub fn measure(&self, f: &Fitted) -> Measured {
+        let mut e: Vec<f32> = self
+            .face
+            .iter()
+            .map(|&i| (f.fine[i] - self.truth[i]).length())
+            .collect();
+        let rms = (e.iter().map(|x| x * x).sum::<f32>() / e.len() as f32).sqrt();
+        e.sort_by(f32::total_cmp);
+        let asset = derma_head::asset::parse();
+        let landmark_max = self
+            .landmarks
+            .points
+            .keys()
+            .filter(|n| !n.starts_with("ear") && *n != "hairline")
+            .map(|n| {
+                let v = asset.meta.landmarks[n] as usize;
+                (f.fine[v] - self.truth[v]).length()
+            })
+            .fold(0.0f32, f32::max);
+        Measured {
+            rms,
+            p95: e[e.len() * 95 / 100],
+            max: *e.last().unwrap(),
+            landmark_max,
+        }
+    }
+}
