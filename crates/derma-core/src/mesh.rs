@@ -187,8 +187,19 @@ pub fn load_head_mesh(
     unit: HeadUnit,
     progress: &dyn crate::progress::Progress,
 ) -> Result<(TriMesh, MeshScale)> {
+    let (mesh, scale) = load_head_geometry(path, unit, progress)?;
+    mesh.require_uvs(path)?;
+    Ok((mesh, scale))
+}
+
+/// [`load_head_mesh`] for meshes that need no UVs (a scan to fit the head to).
+pub fn load_head_geometry(
+    path: &Path,
+    unit: HeadUnit,
+    progress: &dyn crate::progress::Progress,
+) -> Result<(TriMesh, MeshScale)> {
     use crate::progress::Note;
-    let mut mesh = TriMesh::load(path)?;
+    let mut mesh = TriMesh::load_geometry(path)?;
     let extent = mesh.extent();
     if !(extent > 0.0 && extent.is_finite()) {
         return Err(CoreError::Mesh {
@@ -243,13 +254,18 @@ impl TriMesh {
     /// Loads an OBJ, glTF or GLB file (by extension); it must have UVs.
     pub fn load(path: &Path) -> Result<TriMesh> {
         let mesh = Self::load_geometry(path)?;
-        if mesh.uvs.is_empty() {
+        mesh.require_uvs(path)?;
+        Ok(mesh)
+    }
+
+    fn require_uvs(&self, path: &Path) -> Result<()> {
+        if self.uvs.is_empty() {
             return Err(CoreError::Mesh {
                 path: path.to_path_buf(),
                 detail: "it has no texture coordinates (UVs); derma paints textures in UV space, so unwrap the mesh first (`derma photo unwrap` makes a single-chart UV layout)".into(),
             });
         }
-        Ok(mesh)
+        Ok(())
     }
 
     /// Loads an OBJ, glTF or GLB file (by extension) whether or not it has UVs: without them

@@ -27,8 +27,10 @@ pub struct RigFrame {
 pub struct RenderJob {
     /// The texture set directory.
     pub textures: PathBuf,
-    /// A user mesh; `None`: the built-in head with its eyes, lashes, teeth and tongue.
+    /// A user mesh; `None`: the head with its eyes, lashes, teeth and tongue.
     pub mesh: Option<PathBuf>,
+    /// A fitted head directory (`derma head fit`); `None`: the built-in head.
+    pub head: Option<PathBuf>,
     /// Lighting setups (one image each).
     pub setups: Vec<Setup>,
     /// Image size (pixels).
@@ -131,7 +133,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
                 .iter()
                 .map(|(n, w)| (n.as_str(), *w))
                 .collect();
-            let head = derma_head::Head::builtin();
+            let head = crate::error::head(job.head.as_deref())?;
             for (n, _) in &units {
                 if !head.face_units().iter().any(|u| u.name == *n) {
                     return Err(ExportError::Invalid(format!(

@@ -82,6 +82,8 @@ pub struct GlbOptions {
     pub mesh: Option<PathBuf>,
     /// The user mesh's unit: as `derma skin` read it (its `surface.unit`), or `Auto`.
     pub unit: derma_core::mesh::HeadUnit,
+    /// A fitted head directory (`derma head fit`) instead of the built-in head.
+    pub head: Option<PathBuf>,
     /// The GLB to write.
     pub out: PathBuf,
     /// Loose maps to write beside (directory), with their naming and normal convention.
@@ -161,7 +163,7 @@ pub fn load_mesh_in(
 /// Writes the GLB (and the loose maps when asked); `progress` hears how a user mesh was read.
 pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> Result<GlbReport> {
     let skin = SkinMaps::from_dir(&o.textures)?;
-    let head = derma_head::Head::builtin();
+    let head = crate::error::head(o.head.as_deref())?;
     let read = |f: &str| -> Result<Vec<u8>> {
         let p = o.textures.join(f);
         std::fs::read(&p).map_err(|e| ExportError::Input {

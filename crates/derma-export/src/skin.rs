@@ -37,6 +37,7 @@ pub fn run(
                     textures: out.to_path_buf(),
                     mesh: set.inputs.mesh.clone(),
                     unit: painted_unit(set.mesh_scale.as_ref()),
+                    head: set.inputs.head.clone(),
                     out: out.join("head.glb"),
                     maps: None,
                 },

@@ -55,10 +55,10 @@ fn atlas(tiles: &[Map]) -> Map {
 /// A point deep inside each region of the built-in head, as UV with v up: the centre of the
 /// cell of a coarse grid (the mask area-averaged to 32²) that the region fills most, the first
 /// such cell on ties. The viewer labels them and the browser test probes them.
-fn region_points(n: usize) -> serde_json::Value {
+fn region_points(head: &derma_head::Head, n: usize) -> serde_json::Value {
     const CELLS: usize = 32;
     let mut out = serde_json::Map::new();
-    for (name, m) in derma_head::Head::builtin().region_masks(n) {
+    for (name, m) in head.region_masks(n) {
         let coarse = m.resized(CELLS, CELLS);
         let (i, _) = coarse
             .data()
@@ -100,13 +100,19 @@ pub fn check_export(dir: &Path) -> Result<()> {
 
 /// Writes `out/head.glb` (the built-in head with the set) and, with a rig, `out/rig/*.png` and
 /// `out/manifest.json`.
-pub fn export(textures: &Path, rig_dir: Option<&Path>, out: &Path) -> Result<WebReport> {
+pub fn export(
+    textures: &Path,
+    rig_dir: Option<&Path>,
+    head: Option<&Path>,
+    out: &Path,
+) -> Result<WebReport> {
     derma_core::atomic::ensure_writable_dir(out)?;
     crate::glb::export(
         &crate::glb::GlbOptions {
             textures: textures.to_path_buf(),
             mesh: None,
             unit: derma_core::mesh::HeadUnit::Auto,
+            head: head.map(Path::to_path_buf),
             out: out.join("head.glb"),
             maps: None,
         },
@@ -117,7 +123,7 @@ pub fn export(textures: &Path, rig_dir: Option<&Path>, out: &Path) -> Result<Web
         "version": VERSION,
         "glb": "head.glb",
         "skin_mesh": "skin",
-        "regions": region_points(256),
+        "regions": region_points(crate::error::head(head)?, 256),
         "rig": null,
     });
     let mut targets = 0;

@@ -25,6 +25,11 @@ fn main() {
             .and_then(|s| s.parse().ok())
             .unwrap_or(60.0),
     );
+    if let Ok(path) = std::env::var("WRITE") {
+        case.scan_cm
+            .write_obj(std::path::Path::new(&path))
+            .expect("writing the scan");
+    }
     let opts = FitOptions {
         alignment: if with_landmarks {
             Alignment::Landmarks(case.landmarks.clone())

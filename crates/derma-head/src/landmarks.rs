@@ -149,6 +149,18 @@ impl Landmarks {
     /// Landmarks from JSON: `{"name": [x, y, z], …}` in the mesh's units, scaled by
     /// `mm_per_unit`; every name of [`NAMES`] is required.
     pub fn from_json(text: &str, mm_per_unit: f32) -> Result<Landmarks, LandmarkError> {
+        let lm = Self::from_json_with(text, mm_per_unit, &NAMES)?;
+        lm.check()?;
+        Ok(lm)
+    }
+
+    /// Like [`Landmarks::from_json`], but only the names in `required` must be present (a
+    /// fit's alignment needs fewer than the regions).
+    pub fn from_json_with(
+        text: &str,
+        mm_per_unit: f32,
+        required: &[&str],
+    ) -> Result<Landmarks, LandmarkError> {
         let raw: BTreeMap<String, [f32; 3]> =
             serde_json::from_str(text).map_err(|e| LandmarkError::Json(e.to_string()))?;
         if let Some(unknown) = raw.keys().find(|k| !NAMES.contains(&k.as_str())) {
@@ -160,29 +172,60 @@ impl Landmarks {
                 .map(|(k, v)| (k, Vec3::from(v) * mm_per_unit))
                 .collect(),
         };
-        lm.check()?;
+        if let Some(n) = required.iter().find(|n| !lm.points.contains_key(**n)) {
+            return Err(LandmarkError::Missing((*n).into()));
+        }
+        if let Some((n, p)) = lm.points.iter().find(|(_, p)| !p.is_finite()) {
+            return Err(LandmarkError::NotFinite(n.clone(), p.to_array()));
+        }
         lm.check_orientation()?;
         Ok(lm)
     }
 
-    /// Checks the convention the regions assume: +Y up, the face towards +Z, +X the head's left.
+    /// Checks the convention the regions assume: +Y up, the face towards +Z, +X the head's left
+    /// (each test on the landmarks present).
     pub fn check_orientation(&self) -> Result<(), LandmarkError> {
-        let g = |n: &str| self.get(n);
-        if !(g("eye_centre_left").x > g("eye_centre_right").x) {
-            return Err(LandmarkError::Orientation(
-                "the left eye is not at +x of the right one (+X must be the head's left)".into(),
-            ));
+        let p = |n: &str| self.points.get(n).copied();
+        let pair = [
+            "eye_centre",
+            "canthus_outer",
+            "canthus_inner",
+            "mouth_corner",
+        ]
+        .iter()
+        .find_map(|n| Some((p(&format!("{n}_left"))?, p(&format!("{n}_right"))?)));
+        if let Some((l, r)) = pair {
+            if !(l.x > r.x) {
+                return Err(LandmarkError::Orientation(
+                    "the left eye is not at +x of the right one (+X must be the head's left)"
+                        .into(),
+                ));
+            }
         }
-        if !(g("hairline").y > g("nose_tip").y && g("nose_tip").y > g("menton").y) {
-            return Err(LandmarkError::Orientation(
-                "hairline, nose tip and menton are not in descending y (+Y must be up)".into(),
-            ));
+        if let (Some(h), Some(n), Some(m)) = (p("hairline"), p("nose_tip"), p("menton")) {
+            if !(h.y > n.y && n.y > m.y) {
+                return Err(LandmarkError::Orientation(
+                    "hairline, nose tip and menton are not in descending y (+Y must be up)".into(),
+                ));
+            }
+        } else if let (Some(n), Some(l), Some(r)) = (
+            p("nose_tip"),
+            p("mouth_corner_left"),
+            p("mouth_corner_right"),
+        ) {
+            if !(n.y > 0.5 * (l.y + r.y)) {
+                return Err(LandmarkError::Orientation(
+                    "the nose tip is not above the mouth corners (+Y must be up)".into(),
+                ));
+            }
         }
-        let ears = 0.5 * (g("ear_left").z + g("ear_right").z);
-        if !(g("nose_tip").z > ears) {
-            return Err(LandmarkError::Orientation(
-                "the nose tip is not in front of the ears (the face must look towards +Z)".into(),
-            ));
+        if let (Some(n), Some(l), Some(r)) = (p("nose_tip"), p("ear_left"), p("ear_right")) {
+            if !(n.z > 0.5 * (l.z + r.z)) {
+                return Err(LandmarkError::Orientation(
+                    "the nose tip is not in front of the ears (the face must look towards +Z)"
+                        .into(),
+                ));
+            }
         }
         Ok(())
     }

@@ -83,6 +83,7 @@ pub struct SkinGenerator<'a> {
     config: SkinConfig,
     config_path: Option<PathBuf>,
     mesh: Option<PathBuf>,
+    head: Option<PathBuf>,
     fields: Option<PathBuf>,
     appearance: AppearanceChoice,
     device: Device,
@@ -97,6 +98,7 @@ impl<'a> SkinGenerator<'a> {
             config,
             config_path: None,
             mesh: None,
+            head: None,
             fields: None,
             appearance: AppearanceChoice::Default,
             device: Device::Auto,
@@ -135,6 +137,22 @@ impl<'a> SkinGenerator<'a> {
     pub fn mesh(mut self, path: impl Into<PathBuf>) -> Self {
         self.mesh = Some(path.into());
         self
+    }
+
+    /// A fitted head (`derma head fit`'s directory) instead of the built-in one: painted itself
+    /// (its template skin, derma's UVs), or, with a mesh, the scan it was fitted to, whose
+    /// landmarks and regions it gives.
+    pub fn head(mut self, dir: impl Into<PathBuf>) -> Self {
+        self.head = Some(dir.into());
+        self
+    }
+
+    /// The head: the fitted one given, or the built-in one.
+    fn the_head(&self) -> Result<&'static derma_head::Head> {
+        derma_head::Head::builtin_or(self.head.as_deref()).map_err(|e| SkinError::Input {
+            path: self.head.clone().unwrap_or_default(),
+            detail: e.to_string(),
+        })
     }
 
     /// A directory of painted fields (NAME.png / NAME.exr), over the defaults.
@@ -194,7 +212,11 @@ impl<'a> SkinGenerator<'a> {
     pub fn check_output(&self, dir: &Path) -> Result<()> {
         self.config.validate("the configuration")?;
         check_memory(self.config.size as usize)?;
-        for (what, p) in [("mesh", &self.mesh), ("fields", &self.fields)] {
+        for (what, p) in [
+            ("mesh", &self.mesh),
+            ("fields", &self.fields),
+            ("head", &self.head),
+        ] {
             if let Some(p) = p {
                 if !p.exists() {
                     return Err(SkinError::Input {
@@ -265,7 +287,8 @@ impl<'a> SkinGenerator<'a> {
             self.config.surface.kind
         };
         let on_head = kind == SurfaceKind::Template;
-        let has_landmarks = !self.config.surface.landmarks.trim().is_empty();
+        let head = self.the_head()?;
+        let has_landmarks = !self.config.surface.landmarks.trim().is_empty() || self.head.is_some();
         let regional_gains = (on_head || has_landmarks) && self.config.regional.enabled;
         let (person_cfg, melanin) =
             crate::calibration::apply_person(&self.config, appearance, regional_gains)?;
@@ -285,11 +308,17 @@ impl<'a> SkinGenerator<'a> {
         let mut mesh_scale = None;
         let mut user_regions = None;
         let mesh = match kind {
-            SurfaceKind::Template => Some(crate::builtin_head::head_mesh()),
+            SurfaceKind::Template => Some(head.skin.clone()),
             SurfaceKind::Mesh => {
                 let p = mesh_path.clone().expect("checked");
                 let (m, u) = load_mesh(&p, &cfg.surface.unit, &job)?;
-                if has_landmarks {
+                if self.head.is_some() && self.config.surface.landmarks.trim().is_empty() {
+                    user_regions = Some(derma_head::Regions::new(
+                        head.landmarks.clone(),
+                        Vec::new(),
+                        Vec::new(),
+                    ));
+                } else if has_landmarks {
                     let lm = self.landmarks(&p, u.mm_per_unit)?;
                     user_regions = Some(derma_head::Regions::new(lm, Vec::new(), Vec::new()));
                 }
@@ -298,7 +327,7 @@ impl<'a> SkinGenerator<'a> {
             }
             SurfaceKind::Patch => None,
         };
-        if has_landmarks && user_regions.is_none() {
+        if has_landmarks && user_regions.is_none() && kind != SurfaceKind::Template {
             return Err(SkinError::Key {
                 key: "surface.landmarks".into(),
                 detail: "landmarks place the built-in head's fields on a user mesh; give the mesh (surface.mesh or the generator's mesh)".into(),
@@ -367,8 +396,9 @@ impl<'a> SkinGenerator<'a> {
         // config entries.
         let build_fields = || {
             if kind == SurfaceKind::Template {
-                crate::builtin_head::default_fields(
+                crate::builtin_head::fields_on(
                     mesh.as_ref().expect("template mesh"),
+                    &head.regions,
                     &cfg.person,
                 )
             } else if let Some(regions) = &user_regions {
@@ -434,6 +464,7 @@ impl<'a> SkinGenerator<'a> {
             inputs: InputFiles {
                 config: self.config_path.clone(),
                 mesh: mesh_path,
+                head: self.head.clone(),
                 fields: self.fields.clone(),
                 surface: kind,
             },
@@ -687,6 +718,13 @@ pub struct Written {
 }
 
 impl TextureSet {
+    /// The head the set was painted on or for: the fitted one it was given, or the built-in
+    /// one (a fitted head was read once already, so this does not fail).
+    pub fn head(&self) -> &'static derma_head::Head {
+        derma_head::Head::builtin_or(self.inputs.head.as_deref())
+            .unwrap_or(derma_head::Head::builtin())
+    }
+
     /// Worker threads the set was made with.
     pub fn threads(&self) -> usize {
         self.pool
@@ -730,7 +768,7 @@ impl TextureSet {
         let shaded = match crate::preview::gpu_views(
             &self.render,
             self.preview_mesh.as_ref(),
-            template,
+            template.then(|| self.head()),
             self.device,
         ) {
             Ok(Some((views, adapter))) => {
@@ -762,7 +800,7 @@ impl TextureSet {
         let lash_color = self.render.lash_color.map(glam::Vec3::from);
         let lashes = move |_: glam::Vec2| lash_color.unwrap_or_default();
         let props = if template {
-            let mut props = derma_render::cpu::head_props(derma_head::Head::builtin());
+            let mut props = derma_render::cpu::head_props(self.head());
             if lash_color.is_some() {
                 derma_render::cpu::recolour_cards(&mut props, &lashes);
             }

@@ -14,13 +14,13 @@ use derma_render::sheet::{compose, normalised};
 pub const PANEL: usize = 512;
 
 /// The front and three-quarter views of `derma skin`'s preview of `render_maps` on `mesh` (the
-/// built-in head with its parts when `template`), rendered on the GPU when `device` resolves to
+/// head with its parts when `template` is given), rendered on the GPU when `device` resolves to
 /// one and the set is on a mesh; with the adapter's name. `None`: the CPU preview is the one to
 /// use (no GPU, `--device cpu`, or a flat patch).
 pub fn gpu_views(
     render_maps: &RenderMaps,
     mesh: Option<&(TriMesh, Vec<[f32; 4]>)>,
-    template: bool,
+    template: Option<&derma_head::Head>,
     device: derma_core::gpu::Device,
 ) -> crate::Result<Option<(Vec<[Map; 3]>, String)>> {
     if device.resolve().ok() != Some(derma_core::gpu::Device::Gpu) {
@@ -30,8 +30,8 @@ pub fn gpu_views(
         return Ok(None);
     };
     let maps = render_maps.skin_maps(false);
-    let scene = if template {
-        derma_render::Scene::head(derma_head::Head::builtin(), maps, &[], None, (0.0, 0.0))
+    let scene = if let Some(head) = template {
+        derma_render::Scene::head(head, maps, &[], None, (0.0, 0.0))
     } else {
         derma_render::Scene::mesh(mesh, maps)
     };

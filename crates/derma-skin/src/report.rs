@@ -25,6 +25,8 @@ pub struct InputFiles {
     pub mesh: Option<PathBuf>,
     /// The fields directory, when given.
     pub fields: Option<PathBuf>,
+    /// The fitted head directory, when given.
+    pub head: Option<PathBuf>,
     /// The kind of surface painted.
     pub surface: SurfaceKind,
 }
@@ -156,6 +158,7 @@ pub fn report(set: &Run) -> serde_json::Value {
             "config": file(&set.inputs.config),
             "mesh": mesh,
             "fields": set.inputs.fields.as_ref().map(|p| p.display().to_string()),
+            "head": set.inputs.head.as_ref().map(|p| json!({"path": p.display().to_string(), "sha256": sha256_file(&p.join("head.json"))})),
             "surface": surface,
         },
         "config": set.config,

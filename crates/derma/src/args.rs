@@ -1,4 +1,4 @@
-//! The flag values every command shares, parsed once: `--device`, sizes (`1024`, `1920x1080`),
+//! The flag values every command shares, parsed once: `--device`, `--head`, sizes (`1024`, `1920x1080`),
 //! sizes in mm (`40x30`), lists of numbers (`10,-5`), and `NAME=VALUE` items; each error names
 //! the value.
 
@@ -145,6 +145,15 @@ pub struct DeviceArg {
     /// adapter, software ones such as Mesa's lavapipe included).
     #[arg(long, default_value = "auto", value_parser = parse_device)]
     pub device: derma_core::gpu::Device,
+}
+
+/// `--head`, the same on every command that draws or paints a head.
+#[derive(clap::Args, Clone, Default)]
+pub struct HeadArg {
+    /// A fitted head (the directory `derma head fit` wrote) instead of the built-in head: its
+    /// shape, landmarks, regions, face units, globes, teeth and lashes.
+    #[arg(long, value_name = "DIR")]
+    pub head: Option<PathBuf>,
 }
 
 fn parse_device(s: &str) -> Result<derma_core::gpu::Device, String> {

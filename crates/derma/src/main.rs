@@ -1,10 +1,11 @@
 //! `derma`: the command-line tool. Thin: parses flags, calls the libraries, shows their
 //! progress and notes, and prints results; the libraries do the work and write the files.
 //! Each command's models and sources are in docs/ (skin.md, optics.md, matching.md, rig.md,
-//! synth.md, photo.md, eyes.md, render.md).
+//! synth.md, photo.md, eyes.md, render.md, head.md).
 
 mod args;
 mod eyes;
+mod head;
 mod matching;
 mod optics;
 mod output;
@@ -64,6 +65,9 @@ enum Command {
     /// Files for engines and the web: a GLB with the PBR material, or the web viewer's files.
     #[command(subcommand)]
     Export(render::ExportCommand),
+    /// Your own head: fit the built-in head to your mesh, for --head on every command.
+    #[command(subcommand)]
+    Head(head::HeadCommand),
     /// Serve the web viewer on localhost for a directory from `derma export web`.
     View(render::ViewArgs),
 }
@@ -98,6 +102,7 @@ fn main() {
         Command::Render(args) => render::render(args, &bars),
         Command::Export(cmd) => render::export(cmd, &bars),
         Command::View(args) => render::view(args),
+        Command::Head(cmd) => head::run(cmd, &bars),
     };
     bars.finish();
     if let Err(e) = result {

@@ -18,6 +18,8 @@ pub struct RenderArgs {
     /// eyes, lashes, teeth and tongue.
     #[arg(long)]
     mesh: Option<PathBuf>,
+    #[command(flatten)]
+    head: crate::args::HeadArg,
     /// Lighting setups, comma-separated: studio (three-point), window (one soft side light).
     #[arg(long, default_value = "studio,window", value_delimiter = ',', value_parser = parse_setup)]
     lighting: Vec<Setup>,
@@ -78,6 +80,7 @@ pub fn render(a: RenderArgs, bars: &Bars) -> Result<()> {
     let job = RenderJob {
         textures: a.textures,
         mesh: a.mesh,
+        head: a.head.head,
         setups: a.lighting,
         size: a.size,
         view: View {
@@ -146,6 +149,8 @@ pub struct GlbArgs {
     /// Your mesh with the set's UVs; default: the built-in head and its parts.
     #[arg(long)]
     mesh: Option<PathBuf>,
+    #[command(flatten)]
+    head: crate::args::HeadArg,
     /// The GLB to write.
     #[arg(long, default_value = "head.glb")]
     out: PathBuf,
@@ -160,11 +165,12 @@ pub struct GlbArgs {
     normal: NormalArg,
 }
 
-pub fn glb_options(textures: PathBuf, mesh: Option<PathBuf>, out: PathBuf) -> GlbOptions {
+fn glb_options(textures: PathBuf, mesh: Option<PathBuf>, out: PathBuf) -> GlbOptions {
     GlbOptions {
         textures,
         mesh,
         unit: derma_core::mesh::HeadUnit::Auto,
+        head: None,
         out,
         maps: None,
     }
@@ -177,6 +183,8 @@ pub struct WebArgs {
     /// A rig built from the set (`derma rig build`), for the expression sliders.
     #[arg(long)]
     rig: Option<PathBuf>,
+    #[command(flatten)]
+    head: crate::args::HeadArg,
     /// Output directory (what `derma view` serves).
     #[arg(long, default_value = "web")]
     out: PathBuf,
@@ -186,6 +194,7 @@ pub fn export(cmd: ExportCommand, bars: &Bars) -> Result<()> {
     match cmd {
         ExportCommand::Glb(a) => {
             let mut o = glb_options(a.textures, a.mesh, a.out);
+            o.head = a.head.head;
             o.maps = a.maps.map(|d| {
                 (
                     d,
@@ -217,7 +226,12 @@ pub fn export(cmd: ExportCommand, bars: &Bars) -> Result<()> {
             Ok(())
         }
         ExportCommand::Web(a) => {
-            let r = derma_export::web::export(&a.textures, a.rig.as_deref(), &a.out)?;
+            let r = derma_export::web::export(
+                &a.textures,
+                a.rig.as_deref(),
+                a.head.head.as_deref(),
+                &a.out,
+            )?;
             bars.say(format!(
                 "{}: head.glb, {} rig targets → `derma view {}`",
                 a.out.display(),

@@ -28,6 +28,10 @@ pub struct SkinArgs {
     /// fields and regional biology then follow the mesh.
     #[arg(long, value_name = "mediapipe|FILE.json", requires = "mesh")]
     landmarks: Option<String>,
+    /// With --mesh: the scan the head was fitted to gives its landmarks and regions; alone: the
+    /// fitted template is painted (derma's UV layout).
+    #[command(flatten)]
+    head: crate::args::HeadArg,
     /// Directory of fields: NAME.png / NAME.exr (greyscale), NAME_vectors.png (RGB vector fields).
     #[arg(long)]
     fields: Option<PathBuf>,
@@ -172,6 +176,9 @@ pub fn run(args: SkinArgs, bars: &Bars) -> Result<()> {
         .progress(bars);
     if let Some(m) = &args.mesh {
         generator = generator.mesh(m);
+    }
+    if let Some(h) = &args.head.head {
+        generator = generator.head(h);
     }
     if let Some(f) = &args.fields {
         generator = generator.fields(f);

@@ -7,6 +7,17 @@ use super::scan::Scan;
 use derma_core::numerics::{dense, Matrix};
 use glam::{Mat3, Vec3};
 
+/// The landmarks an alignment from landmarks needs at least.
+pub const REQUIRED: [&str; 7] = [
+    "canthus_inner_left",
+    "canthus_inner_right",
+    "canthus_outer_left",
+    "canthus_outer_right",
+    "nose_tip",
+    "mouth_corner_left",
+    "mouth_corner_right",
+];
+
 /// The similarity that best maps `src` onto `dst` in least squares with weights (Umeyama 1991,
 /// eqs. 40–42), or None for fewer than three non-collinear pairs.
 pub fn umeyama(src: &[Vec3], dst: &[Vec3], w: &[f32]) -> Option<Similarity> {

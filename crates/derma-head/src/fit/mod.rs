@@ -6,6 +6,7 @@
 //! frame (mm): every command that takes a head takes it ([`crate::Head::open`]).
 
 pub mod align;
+pub mod job;
 pub mod nicp;
 pub mod options;
 pub mod scan;
@@ -177,8 +178,10 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
         let f: std::collections::HashSet<usize> = face1.iter().copied().collect();
         outer_ids.iter().map(|i| f.contains(i)).collect()
     };
+    // The hairline is a soft boundary: it places the template, it does not pin it.
     let lm_rows: Vec<(Vec<(u32, f32)>, Vec3)> = given
         .iter()
+        .filter(|g| g.0 != "hairline")
         .map(|(n, _, q)| {
             let v = asset.meta.landmarks[n];
             (tpl.stencils2.rows[local[&v] as usize].clone(), *q)

@@ -413,6 +413,9 @@ mod tests {
         let (stiff_at, stiff_next) = lift(10.0);
         let (soft_at, soft_next) = lift(0.1);
         assert!(soft_at > stiff_at && soft_at > 4.0, "{soft_at} {stiff_at}");
-        assert!(stiff_next / stiff_at > soft_next / soft_at, "{stiff_at} {stiff_next} {soft_at} {soft_next}");
+        assert!(
+            stiff_next / stiff_at > soft_next / soft_at,
+            "{stiff_at} {stiff_next} {soft_at} {soft_next}"
+        );
     }
 }
