@@ -22,12 +22,14 @@ use std::path::{Path, PathBuf};
 pub enum Data {
     /// A tracked-data file (JSON or CSV).
     File(PathBuf),
-    /// `n` sampled poses of the built-in head's rig.
+    /// `n` sampled poses of the head's rig (the built-in head, or a fitted one).
     Rig {
         /// Poses.
         samples: usize,
         /// Seed.
         seed: u64,
+        /// A fitted head directory (`derma head fit`); `None`: the built-in head.
+        head: Option<PathBuf>,
     },
 }
 
@@ -67,8 +69,12 @@ pub fn train(
     let mut files = Vec::new();
     let t = match data {
         Data::File(p) => Tracked::read(p)?,
-        Data::Rig { samples, seed } => {
-            let rig = Rig::new(Head::builtin())?;
+        Data::Rig {
+            samples,
+            seed,
+            head,
+        } => {
+            let rig = Rig::new(the_head(head.as_deref())?)?;
             let t = rig.samples(*samples, *seed);
             let p = dir.join("tracked.json");
             t.write(&p)?;
@@ -117,6 +123,7 @@ pub fn synthetic(
     seconds: f32,
     fps: f32,
     seed: u64,
+    head: Option<&Path>,
     progress: &dyn Progress,
 ) -> Result<usize> {
     if !(seconds > 0.0 && fps > 0.0) {
@@ -125,7 +132,7 @@ pub fn synthetic(
         )));
     }
     progress.stage("synthesise tracked data", 1, Unit::Steps);
-    let head = Head::builtin();
+    let head = the_head(head)?;
     let rig = Rig::new(head)?;
     let t = crate::synthetic::sequence(
         &rig,
@@ -166,6 +173,13 @@ pub struct AnimateOptions {
     /// An eyeball texture on the head's eye UVs (`derma photo iris`: eye.exr linear, or eye.png
     /// sRGB); the default eye otherwise.
     pub iris: Option<PathBuf>,
+    /// A fitted head directory (`derma head fit`); `None`: the built-in head.
+    pub head: Option<PathBuf>,
+}
+
+/// The head: the fitted one in `dir`, or the built-in one.
+pub fn the_head(dir: Option<&Path>) -> Result<&'static Head> {
+    Head::builtin_or(dir).map_err(|e| EyesError::Invalid(e.to_string()))
 }
 
 /// Loads an eyeball texture as linear RGB maps (EXR as stored, other formats sRGB-decoded).
@@ -218,7 +232,7 @@ pub fn load_or_train(p: &Option<PathBuf>, rig: &Rig) -> Result<EyeModel> {
 pub fn animate(o: &AnimateOptions, dir: &Path, progress: &dyn Progress) -> Result<AnimateReport> {
     out_dir(dir)?;
     progress.stage("load or train the model", 1, Unit::Steps);
-    let head = Head::builtin();
+    let head = the_head(o.head.as_deref())?;
     let rig = Rig::new(head)?;
     let m = load_or_train(&o.model, &rig)?;
     progress.advance(1);

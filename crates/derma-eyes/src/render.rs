@@ -33,9 +33,12 @@ impl<'a> Stage<'a> {
     /// The stage of `head`'s eye band (60 mm either side, 28 mm below to 34 mm above the eyes),
     /// the globes textured with `eye` (linear RGB on the head's eye UVs) or the default eye.
     pub fn new(head: &'a Head, region: &'a EyeRegion, eye: Option<[Map; 3]>) -> Stage<'a> {
-        let cy = head.eyes[0].centre.y;
-        let zmin = head.eyes[0].centre.z - 20.0;
-        let keep = |p: Vec3| p.x.abs() < 60.0 && p.y > cy - 28.0 && p.y < cy + 34.0 && p.z > zmin;
+        // Centred between the globes (a fitted head need not be centred on x = 0).
+        let mid = 0.5 * (head.eyes[0].centre + head.eyes[1].centre);
+        let (cx, cy) = (mid.x, mid.y);
+        let zmin = mid.z - 20.0;
+        let keep =
+            |p: Vec3| (p.x - cx).abs() < 60.0 && p.y > cy - 28.0 && p.y < cy + 34.0 && p.z > zmin;
         let skin = &head.skin;
         let mut index = vec![u32::MAX; skin.positions.len()];
         let mut crop = TriMesh::default();

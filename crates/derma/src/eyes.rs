@@ -27,6 +27,8 @@ pub enum EyesCommand {
 
 #[derive(Args)]
 pub struct TrainArgs {
+    #[command(flatten)]
+    head: crate::args::HeadArg,
     /// Tracked data (JSON or CSV, docs/eyes.md); default: sampled poses of the built-in rig.
     #[arg(long)]
     data: Option<PathBuf>,
@@ -48,6 +50,8 @@ pub struct TrainArgs {
 
 #[derive(Args)]
 pub struct SyntheticArgs {
+    #[command(flatten)]
+    head: crate::args::HeadArg,
     #[arg(long, default_value_t = 20.0)]
     seconds: f32,
     #[arg(long, default_value_t = 30.0)]
@@ -61,6 +65,8 @@ pub struct SyntheticArgs {
 
 #[derive(Args)]
 pub struct AnimateArgs {
+    #[command(flatten)]
+    head: crate::args::HeadArg,
     /// A trained model (model.json); default: trained on the rig now.
     #[arg(long)]
     model: Option<PathBuf>,
@@ -129,6 +135,7 @@ pub fn run(cmd: EyesCommand, bars: &Bars) -> Result<()> {
                 None => Data::Rig {
                     samples: a.samples,
                     seed: a.seed,
+                    head: a.head.head,
                 },
             };
             let c = Components {
@@ -160,7 +167,14 @@ pub fn run(cmd: EyesCommand, bars: &Bars) -> Result<()> {
             }
         }
         EyesCommand::Synthetic(a) => {
-            let n = files::synthetic(&a.out, a.seconds, a.fps, a.seed, bars)?;
+            let n = files::synthetic(
+                &a.out,
+                a.seconds,
+                a.fps,
+                a.seed,
+                a.head.head.as_deref(),
+                bars,
+            )?;
             bars.finish();
             line(format!("wrote {} ({n} frames)", a.out.display()))?;
         }
@@ -185,6 +199,7 @@ pub fn run(cmd: EyesCommand, bars: &Bars) -> Result<()> {
                 render: a.render,
                 thickness: a.thickness,
                 iris: a.iris,
+                head: a.head.head,
             };
             let r = files::animate(&o, &a.out, bars)?;
             bars.finish();

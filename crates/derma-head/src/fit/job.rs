@@ -74,11 +74,17 @@ impl FitJob {
         let alignment = match &self.landmarks {
             LandmarkSource::Auto => Alignment::Auto,
             LandmarkSource::MediaPipe => {
-                let mut lm = crate::Landmarks::mediapipe(&scan.positions)
+                // In file order (a loader may reorder vertices to share UVs).
+                let raw: Vec<glam::Vec3> = derma_core::mesh::file_positions(&self.mesh)?
+                    .into_iter()
+                    .map(|p| p * scale.mm_per_unit)
+                    .collect();
+                let mut lm = crate::Landmarks::mediapipe(&raw)
                     .map_err(|e| input(&self.mesh, e.to_string()))?;
                 // MediaPipe's "ears" and "hairline" are the mask's edges, not those points.
-                lm.points
-                    .retain(|n, _| !n.starts_with("ear_") && n != "hairline");
+                lm.points.retain(|n, _| {
+                    !n.starts_with("ear_") && n != "hairline" && !n.starts_with("lid_")
+                });
                 Alignment::Landmarks(lm)
             }
             LandmarkSource::File(p) => {

@@ -45,6 +45,13 @@ pub struct Fitted {
     pub similarity: Similarity,
 }
 
+/// Scales of the template a face may need: adult head breadths and face heights span about
+/// ±15 % around the mean (Farkas 1994, "Anthropometry of the Head and Face"), with a margin.
+pub const SCALE_RANGE: (f32, f32) = (0.7, 1.4);
+
+/// Half-width (mm) of the band along the lid and lip margins left unmatched.
+pub const MARGIN_BAND_MM: f32 = 3.0;
+
 /// A point on a mesh: triangle and barycentric weights of its corners 1 and 2 (`None` where
 /// nothing lies close).
 pub type SurfacePoint = Option<(u32, [f32; 2])>;
@@ -157,6 +164,12 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
         .closest(nose, f32::INFINITY)
         .map(|c| c.distance)
         .unwrap_or(f32::INFINITY);
+    if !(SCALE_RANGE.0..=SCALE_RANGE.1).contains(&sim.scale) {
+        return Err(FitError::Scan(format!(
+            "no face found on the scan: matching the template's face to it would scale the head ×{:.2} (another adult's head is within ×{}–{} once the scan is in mm); check the scan's unit, or give landmarks",
+            sim.scale, SCALE_RANGE.0, SCALE_RANGE.1
+        )));
+    }
     if share < 0.5 || nose_gap > 8.0 {
         return Err(FitError::Scan(format!(
             "no face found on the scan: after alignment {:.0} % of the template's face lies within reach of it and the nose tip is {nose_gap:.1} mm from it (a face needs ≥ 50 % and ≤ 8 mm); a head faces +Z with +Y up, or give landmarks",
@@ -178,6 +191,9 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
         let f: std::collections::HashSet<usize> = face1.iter().copied().collect();
         outer_ids.iter().map(|i| f.contains(i)).collect()
     };
+    // The lid and lip margins are not matched: a scan's eyes may be closed or bulge where the
+    // template's openings are, and its mouth shut; they follow their surroundings.
+    let near_margin = tpl.margin_band(&l1, MARGIN_BAND_MM);
     // The hairline is a soft boundary: it places the template, it does not pin it.
     let lm_rows: Vec<(Vec<(u32, f32)>, Vec3)> = given
         .iter()
@@ -209,7 +225,12 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
             let normals = Template::normals(&tpl.level1, &all);
             let found: Vec<Option<Vec3>> = outer_ids
                 .par_iter()
-                .map(|&i| scan.matched(all[i], normals[i], tau).map(|c| c.point))
+                .map(|&i| {
+                    if near_margin[i] {
+                        return None;
+                    }
+                    scan.matched(all[i], normals[i], tau).map(|c| c.point)
+                })
                 .collect();
             let (mut sum, mut n, mut matched) = (0.0f64, 0usize, 0usize);
             for (k, t) in found.iter().enumerate() {
@@ -271,7 +292,12 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
     let moved: Vec<Vec3> = (0..control.len()).map(|j| x.moved(j, control[j])).collect();
     let mut fine = nicp::combine(&moved, &tpl.stencils2.rows);
     let template_fine: Vec<Vec3> = nicp::combine(&control, &tpl.stencils2.rows);
-    project(&scan, &tpl, &mut fine);
+    // Onto a scan at least as fine as the skin (its median edge within 3 mm; the skin's are
+    // about 1.5 mm); a coarser scan's facets are not the face's shape.
+    let projected = scan.median_edge_mm() <= 3.0;
+    if projected {
+        project(&scan, &tpl, &mut fine);
+    }
     untangle(&tpl, &mut fine, &template_fine);
     let flipped = flipped_quads(&tpl, &fine, &template_fine);
     let face2: Vec<usize> = (0..fine.len())
@@ -377,6 +403,7 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
             rms_mm: last.0,
             median_mm: median,
             matched: last.1,
+            projected,
             flipped,
             landmark_mm,
             seconds,

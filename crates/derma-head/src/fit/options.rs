@@ -87,6 +87,8 @@ pub struct FitReport {
     pub median_mm: f32,
     /// Share of the face's template points matched to the scan in the last iteration.
     pub matched: f32,
+    /// Whether the fitted skin was projected onto the scan (scans finer than about 3 mm).
+    pub projected: bool,
     /// Triangles of the fitted skin whose orientation flipped against the template (0 when
     /// the fit is clean).
     pub flipped: usize,

@@ -58,6 +58,22 @@ impl Scan {
         }
     }
 
+    /// The median edge length (mm).
+    pub fn median_edge_mm(&self) -> f32 {
+        let p = &self.mesh.positions;
+        let mut e: Vec<f32> = self
+            .mesh
+            .triangles
+            .iter()
+            .map(|t| (p[t[1] as usize] - p[t[0] as usize]).length())
+            .collect();
+        if e.is_empty() {
+            return 0.0;
+        }
+        let k = e.len() / 2;
+        *e.select_nth_unstable_by(k, f32::total_cmp).1
+    }
+
     /// The closest scan point to `p` within `tau` mm whose surface faces the same way as `n`
     /// (within 60°) and that is not on the border; None otherwise.
     pub fn matched(&self, p: Vec3, n: Vec3, tau: f32) -> Option<Closest> {

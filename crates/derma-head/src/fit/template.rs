@@ -77,6 +77,31 @@ impl Template {
         }
     }
 
+    /// Per level-1 vertex (at `positions`): within `band` mm of a margin of the outer skin
+    /// (where it meets the eye sockets or the mouth cavity).
+    pub fn margin_band(&self, positions: &[Vec3], band: f32) -> Vec<bool> {
+        let mut on_margin = vec![false; positions.len()];
+        for q in &self.level1.quads {
+            if q.iter().any(|c| !self.outer1[c.0 as usize]) {
+                for c in q {
+                    on_margin[c.0 as usize] |= self.outer1[c.0 as usize];
+                }
+            }
+        }
+        let margin: Vec<Vec3> = (0..positions.len())
+            .filter(|&i| on_margin[i])
+            .map(|i| positions[i])
+            .collect();
+        positions
+            .iter()
+            .map(|p| {
+                margin
+                    .iter()
+                    .any(|m| (*m - *p).length_squared() < band * band)
+            })
+            .collect()
+    }
+
     /// Area-weighted vertex normals of a quad mesh's topology at `positions`.
     pub fn normals(q: &QuadMesh, positions: &[Vec3]) -> Vec<Vec3> {
         let mut n = vec![Vec3::ZERO; positions.len()];
