@@ -2,6 +2,7 @@
 //! through the files a user gives (a cm OBJ without UVs), and what it refuses.
 
 #[path = "support/truth.rs"]
+#[allow(dead_code)]
 mod truth;
 
 use derma_core::mesh::{HeadUnit, TriMesh};
