@@ -42,7 +42,7 @@ pub enum ExportError {
 
 /// The head: the fitted one in `dir` (`derma head fit`), or the built-in one.
 pub fn head(dir: Option<&std::path::Path>) -> Result<&'static derma_head::Head> {
-    derma_head::Head::builtin_or(dir).map_err(|e| ExportError::Input {
+    derma_head::fitted::or_builtin(dir).map_err(|e| ExportError::Input {
         path: dir.map(PathBuf::from).unwrap_or_default(),
         detail: e.to_string(),
     })

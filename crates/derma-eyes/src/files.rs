@@ -179,7 +179,7 @@ pub struct AnimateOptions {
 
 /// The head: the fitted one in `dir`, or the built-in one.
 pub fn the_head(dir: Option<&Path>) -> Result<&'static Head> {
-    Head::builtin_or(dir).map_err(|e| EyesError::Invalid(e.to_string()))
+    derma_head::fitted::or_builtin(dir).map_err(|e| EyesError::Invalid(e.to_string()))
 }
 
 /// Loads an eyeball texture as linear RGB maps (EXR as stored, other formats sRGB-decoded).

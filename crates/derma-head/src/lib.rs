@@ -20,6 +20,7 @@ pub mod brows;
 pub mod export;
 pub mod eye;
 pub mod fit;
+pub mod fitted;
 pub mod landmarks;
 pub mod lashes;
 pub mod look;
@@ -273,36 +274,6 @@ impl Head {
             part_lineage,
             targets: a.targets,
             units: OnceLock::new(),
-        }
-    }
-
-    /// A head fitted to a user's mesh, from the directory `derma head fit` wrote; read once per
-    /// process and directory.
-    pub fn open(
-        dir: &std::path::Path,
-    ) -> std::result::Result<&'static Head, fit::store::StoreError> {
-        use std::sync::Mutex;
-        static OPEN: OnceLock<Mutex<HashMap<std::path::PathBuf, &'static Head>>> = OnceLock::new();
-        let key = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
-        let cache = OPEN.get_or_init(|| Mutex::new(HashMap::new()));
-        if let Some(h) = cache.lock().unwrap_or_else(|p| p.into_inner()).get(&key) {
-            return Ok(h);
-        }
-        let head: &'static Head = Box::leak(Box::new(fit::store::read(dir)?.head()));
-        cache
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .insert(key, head);
-        Ok(head)
-    }
-
-    /// The built-in head, or the fitted head in `dir`.
-    pub fn builtin_or(
-        dir: Option<&std::path::Path>,
-    ) -> std::result::Result<&'static Head, fit::store::StoreError> {
-        match dir {
-            Some(d) => Head::open(d),
-            None => Ok(Head::builtin()),
         }
     }
 

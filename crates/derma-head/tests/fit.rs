@@ -39,7 +39,7 @@ fn a_warped_remeshed_head_in_centimetres_is_fitted_within_a_millimetre() {
     assert!(report.projected);
 
     // The directory reads back as a head: same fine skin, landmarks on it, in the scan's mm.
-    let head = derma_head::Head::open(&out).unwrap();
+    let head = derma_head::fitted::open(&out).unwrap();
     let lm = &head.landmarks;
     let asset = derma_head::asset::parse();
     let tip = fitted.fine[asset.meta.landmarks["nose_tip"] as usize];
@@ -209,7 +209,7 @@ fn bad_files_are_errors_that_name_them_and_leave_nothing_behind() {
     std::fs::write(dir.join("head.json"), "{}").unwrap();
     assert!(e.run(&Silent).is_err());
     // A directory that is no fitted head.
-    let e = derma_head::Head::open(&dir.join("a"))
+    let e = derma_head::fitted::open(&dir.join("a"))
         .err()
         .expect("no head")
         .to_string();

@@ -149,7 +149,7 @@ impl<'a> SkinGenerator<'a> {
 
     /// The head: the fitted one given, or the built-in one.
     fn the_head(&self) -> Result<&'static derma_head::Head> {
-        derma_head::Head::builtin_or(self.head.as_deref()).map_err(|e| SkinError::Input {
+        derma_head::fitted::or_builtin(self.head.as_deref()).map_err(|e| SkinError::Input {
             path: self.head.clone().unwrap_or_default(),
             detail: e.to_string(),
         })
@@ -721,7 +721,7 @@ impl TextureSet {
     /// The head the set was painted on or for: the fitted one it was given, or the built-in
     /// one (a fitted head was read once already, so this does not fail).
     pub fn head(&self) -> &'static derma_head::Head {
-        derma_head::Head::builtin_or(self.inputs.head.as_deref())
+        derma_head::fitted::or_builtin(self.inputs.head.as_deref())
             .unwrap_or(derma_head::Head::builtin())
     }
 
