@@ -120,16 +120,20 @@ fn the_baseline_aperture_lands_in_read_et_al_ranges() {
 
 #[test]
 fn skin_never_penetrates_the_globe_after_sliding() {
-    let (_, m) = model();
-    let head = derma_head::Head::builtin();
-    let ev = evaluate::Evaluator::new(m, &rig().region, head, sliding::THICKNESS).unwrap();
+    no_skin_inside_the_globes(derma_head::Head::builtin(), &rig().region, &model().1);
+}
+
+/// Over the neutral frame, a blink, and gaze ±30° with the lids following, no skin vertex
+/// outside the lids' sliding band lies inside its globe.
+fn no_skin_inside_the_globes(head: &derma_head::Head, region: &region::EyeRegion, m: &EyeModel) {
+    let ev = evaluate::Evaluator::new(m, region, head, sliding::THICKNESS).unwrap();
     let mut f = evaluate::Frame::default();
     // The neutral frame is the rest mesh.
     ev.frame(&ev.neutral, &mut f);
     let worst = f
         .positions
         .iter()
-        .zip(&rig().region.rest)
+        .zip(&region.rest)
         .map(|(a, b)| (*a - *b).length())
         .fold(0.0f32, f32::max);
     assert!(worst < 1e-3, "{worst}");
@@ -138,6 +142,11 @@ fn skin_never_penetrates_the_globe_after_sliding() {
         (25.0, 10.0, 1.0),
         (-20.0, -10.0, 0.0),
         (10.0, 20.0, 0.5),
+        (30.0, 0.0, 1.0),
+        (-30.0, 0.0, 1.0),
+        (0.0, 30.0, 1.0),
+        (0.0, -30.0, 1.0),
+        (0.0, 0.0, 0.0),
     ] {
         let mut g = ev.neutral.clone();
         g.eyes = [Fick { h, v, t: 0.0 }; 2];
@@ -161,6 +170,41 @@ fn skin_never_penetrates_the_globe_after_sliding() {
             }
         }
     }
+}
+
+#[test]
+fn a_fitted_heads_lids_slide_over_its_own_globes() {
+    // A scan: the built-in head's outer skin made wider, shorter and deeper, bent, and moved
+    // (a head of other proportions), fitted; its rig trains its own model.
+    let head = derma_head::Head::builtin();
+    let chart = derma_head::asset::parse().meta.charts["skin"];
+    let inside = |uv: glam::Vec2| {
+        uv.x >= chart[0] && uv.x <= chart[2] && uv.y >= chart[1] && uv.y <= chart[3]
+    };
+    let mut scan = head.skin.clone();
+    scan.triangles
+        .retain(|t| t.iter().all(|&i| inside(head.skin.uvs[i as usize])));
+    for p in &mut scan.positions {
+        *p = glam::Vec3::new(
+            1.08 * p.x,
+            0.95 * p.y + 0.0006 * p.x * p.x,
+            1.04 * p.z,
+        ) + glam::Vec3::new(3.0, -12.0, 20.0);
+    }
+    let fitted = derma_head::fit::fit(
+        scan,
+        &derma_head::fit::FitOptions::default(),
+        &derma_core::progress::Silent,
+    )
+    .unwrap();
+    assert_eq!(fitted.report.flipped, 0);
+    let fitted = fitted.head();
+    let rig = Rig::new(&fitted).unwrap();
+    let m = EyeModel::fit(&rig.samples(300, 1), Components::default()).unwrap();
+    no_skin_inside_the_globes(&fitted, &rig.region, &m);
+    // The globes moved with the head and grew with it.
+    assert!((fitted.eyes[0].centre - head.eyes[0].centre).length() > 10.0);
+    assert!(fitted.eyes[0].radius > head.eyes[0].radius);
 }
 
 #[test]
