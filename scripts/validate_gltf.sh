@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Exports the built-in head (`derma skin --export-template`), an animated eye region (`derma
 # eyes animate`), a texture set on the head (`derma skin --glb`), the same set with Unreal
-# names and DirectX normals (`derma export glb`), and a set on a user mesh (MediaPipe's canonical
-# face from ../shared/data), and checks every GLB with Khronos'
+# names and DirectX normals (`derma export glb`), a set on a user mesh (MediaPipe's canonical
+# face from ../shared/data), and the head fitted to that face (`derma head fit`) with its set
+# and its animated eyes, and checks every GLB with Khronos'
 # glTF-Validator from npm (installed here into a temporary directory, with Node.js from apt when
 # the machine lacks it). Run by scripts/test.sh.
 set -euo pipefail
@@ -22,5 +23,11 @@ target/release/derma export glb "$work/skin" --out "$work/unreal.glb" --maps "$w
   --names unreal --normal directx --quiet
 target/release/derma skin --size 256 --glb --out "$work/user" --quiet \
   --mesh ../shared/data/canonical_face_model.obj --landmarks mediapipe
+target/release/derma head fit --mesh ../shared/data/canonical_face_model.obj --landmarks mediapipe \
+  --out "$work/fitted" --quiet >/dev/null
+target/release/derma skin --size 256 --glb --head "$work/fitted" --out "$work/fitskin" --quiet
+target/release/derma eyes animate --head "$work/fitted" --seconds 1 --fps 10 --render 0 \
+  --out "$work/fiteyes" --quiet >/dev/null
 node scripts/validate_gltf.js "$work/v" "$work/head/head.glb" "$work/eyes/head.glb" \
-  "$work/skin/head.glb" "$work/unreal.glb" "$work/user/head.glb#static"
+  "$work/skin/head.glb" "$work/unreal.glb" "$work/user/head.glb#static" \
+  "$work/fitskin/head.glb" "$work/fiteyes/head.glb"
