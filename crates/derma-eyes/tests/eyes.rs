@@ -185,11 +185,8 @@ fn a_fitted_heads_lids_slide_over_its_own_globes() {
     scan.triangles
         .retain(|t| t.iter().all(|&i| inside(head.skin.uvs[i as usize])));
     for p in &mut scan.positions {
-        *p = glam::Vec3::new(
-            1.08 * p.x,
-            0.95 * p.y + 0.0006 * p.x * p.x,
-            1.04 * p.z,
-        ) + glam::Vec3::new(3.0, -12.0, 20.0);
+        *p = glam::Vec3::new(1.08 * p.x, 0.95 * p.y + 0.0006 * p.x * p.x, 1.04 * p.z)
+            + glam::Vec3::new(3.0, -12.0, 20.0);
     }
     let fitted = derma_head::fit::fit(
         scan,

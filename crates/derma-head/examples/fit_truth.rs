@@ -17,13 +17,12 @@ fn main() {
     let seed: u64 = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(1);
     let peak: f32 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(10.0);
     let with_landmarks = args.get(3).is_some_and(|s| s == "landmarks");
-    let case = truth::case(
+    let env = |k: &str| std::env::var(k).ok().and_then(|s| s.parse::<f32>().ok());
+    let case = truth::case_split(
         seed,
         peak,
-        std::env::var("SIGMA")
-            .ok()
-            .and_then(|s| s.parse().ok())
-            .unwrap_or(60.0),
+        env("SIGMA").unwrap_or(60.0),
+        env("SPLITS").unwrap_or(0.0) as usize,
     );
     if let Ok(path) = std::env::var("WRITE") {
         case.scan_cm

@@ -53,7 +53,10 @@ fn a_fitted_head_and_its_scan_get_the_built_in_heads_regional_colour() {
     let on_scan = colours(SkinGenerator::new(cfg).mesh(&obj).head(&fitted));
     for (name, got) in [("fitted template", &template), ("scan", &on_scan)] {
         for (b, g) in builtin.iter().zip(got) {
-            let de = (0..3).map(|k| (b.lab[k] - g.lab[k]).powi(2)).sum::<f64>().sqrt();
+            let de = (0..3)
+                .map(|k| (b.lab[k] - g.lab[k]).powi(2))
+                .sum::<f64>()
+                .sqrt();
             assert!(
                 de < 2.5 && g.texels > 300,
                 "{name}, {}: {:?} against the built-in head's {:?} (ΔE {de:.2})",
@@ -63,6 +66,9 @@ fn a_fitted_head_and_its_scan_get_the_built_in_heads_regional_colour() {
             );
         }
         // Cheeks and forehead redder than the neck, as on the built-in head.
-        assert!(got[0].lab[1] > got[2].lab[1] && got[1].lab[1] > got[2].lab[1], "{name}");
+        assert!(
+            got[0].lab[1] > got[2].lab[1] && got[1].lab[1] > got[2].lab[1],
+            "{name}"
+        );
     }
 }

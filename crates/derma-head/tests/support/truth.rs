@@ -30,6 +30,11 @@ pub struct Measured {
 
 /// The case of `seed`, warped by up to `peak_mm`; `levels` more subdivisions change density.
 pub fn case(seed: u64, peak_mm: f32, sigma_mm: f32) -> Case {
+    case_split(seed, peak_mm, sigma_mm, 0)
+}
+
+/// [`case`] with the scan's triangles split `splits` times.
+pub fn case_split(seed: u64, peak_mm: f32, sigma_mm: f32, splits: usize) -> Case {
     let asset = derma_head::asset::parse();
     let tpl = Template::of(&asset);
     let p2 = nicp::combine(&tpl.coarse.positions, &tpl.stencils2.rows);
@@ -50,23 +55,36 @@ pub fn case(seed: u64, peak_mm: f32, sigma_mm: f32) -> Case {
     // Scan vertices: the outer skin's, slid along the surface, then warped and placed.
     let mut verts = p2.clone();
     slide(&mut verts, &n2, 1.5, 0.35, seed);
-    let mut index = vec![u32::MAX; p2.len()];
+    // One scan vertex per (position, UV) corner of the outer skin's chart: the chart has a
+    // seam (the back of the head), where a position has two UVs, as scans with UVs do.
+    let chart = asset.meta.charts["skin"];
+    let in_chart =
+        |u: glam::Vec2| u.x >= chart[0] && u.x <= chart[2] && u.y >= chart[1] && u.y <= chart[3];
+    let mut index: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
     let mut scan = TriMesh::default();
-    for (i, v) in verts.iter().enumerate() {
-        if tpl.outer2[i] {
-            index[i] = scan.positions.len() as u32;
-            scan.positions.push(mm(warp.apply(*v)));
-        }
-    }
     for q in &tpl.level2.quads {
-        let [a, b, c, d] = q.map(|c| index[c.0 as usize]);
-        if [a, b, c, d].contains(&u32::MAX) {
+        if !q
+            .iter()
+            .all(|c| tpl.outer2[c.0 as usize] && in_chart(tpl.level2.uvs[c.1 as usize]))
+        {
             continue;
         }
+        let [a, b, c, d] = q.map(|(v, t)| {
+            *index.entry((v, t)).or_insert_with(|| {
+                scan.positions.push(mm(warp.apply(verts[v as usize])));
+                scan.uvs.push(tpl.level2.uvs[t as usize]);
+                (scan.positions.len() - 1) as u32
+            })
+        });
         scan.triangles.push([a, b, d]);
         scan.triangles.push([b, c, d]);
     }
     scan.compute_normals();
+    // Subdivided `splits` times (each triangle into four at its edge midpoints), for timing
+    // the fit at other densities.
+    for _ in 0..splits {
+        scan = split(&scan);
+    }
     let mut scan_cm = scan.clone();
     scan_cm.scale(0.1);
     let truth: Vec<Vec3> = p2.iter().map(|p| mm(warp.apply(*p))).collect();
@@ -92,6 +110,30 @@ pub fn case(seed: u64, peak_mm: f32, sigma_mm: f32) -> Case {
         face,
         landmarks,
     }
+}
+
+/// Each triangle into four at its edge midpoints (flat: the surface is kept).
+fn split(m: &TriMesh) -> TriMesh {
+    let mut out = m.clone();
+    out.triangles.clear();
+    let mut mid: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
+    let mut at = |a: u32, b: u32, out: &mut TriMesh| {
+        *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+            let (a, b) = (a as usize, b as usize);
+            out.positions.push(0.5 * (m.positions[a] + m.positions[b]));
+            out.normals
+                .push((m.normals[a] + m.normals[b]).normalize_or_zero());
+            out.uvs.push(0.5 * (m.uvs[a] + m.uvs[b]));
+            (out.positions.len() - 1) as u32
+        })
+    };
+    for t in &m.triangles {
+        let [a, b, c] = *t;
+        let (ab, bc, ca) = (at(a, b, &mut out), at(b, c, &mut out), at(c, a, &mut out));
+        out.triangles
+            .extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+    }
+    out
 }
 
 impl Case {
