@@ -126,7 +126,31 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     let job_p = Job::new(progress);
     job_p.stage("scene", 1, Unit::Steps);
     let scene = match &job.mesh {
-        Some(p) => Scene::mesh(&crate::glb::load_mesh_mm(p, progress)?, skin.clone()),
+        Some(p) => {
+            let mut mesh = crate::glb::load_mesh_mm(p, progress)?;
+            // Posed through a fitted head's face units, carried onto the mesh.
+            if job.head.is_none() && !job.face_units.is_empty() {
+                return Err(ExportError::Invalid(
+                    "face units pose a user mesh only through the head fitted to it (derma head fit)".into(),
+                ));
+            }
+            if job.head.is_some() && !job.face_units.is_empty() {
+                let head = crate::error::head(job.head.as_deref())?;
+                let units = derma_head::fit::onto::face_units(head, &mesh);
+                for (n, w) in &job.face_units {
+                    let u = units.iter().find(|u| u.name == *n).ok_or_else(|| {
+                        ExportError::Invalid(format!(
+                            "face unit '{n}' is not one of the head's 52 (e.g. mouthSmileLeft, jawOpen, eyeBlinkLeft)"
+                        ))
+                    })?;
+                    for &(v, d) in &u.skin {
+                        mesh.positions[v as usize] += *w * d;
+                    }
+                }
+                mesh.compute_normals();
+            }
+            Scene::mesh(&mesh, skin.clone())
+        }
         None => {
             let units: Vec<(&str, f32)> = job
                 .face_units

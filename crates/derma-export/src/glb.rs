@@ -239,11 +239,16 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
     };
     let corner = mikktspace_tangents(&skin_mesh);
     let (split, tangents, origin) = split_by_tangent(&skin_mesh, &corner);
-    // Morph targets follow the split vertices (built-in head only).
-    let units = if o.mesh.is_none() {
-        head.face_units()
-    } else {
-        &[]
+    // Morph targets follow the split vertices: the head's, or on a user mesh with a fitted
+    // head, carried over through the fit's correspondence.
+    let carried;
+    let units = match (&o.mesh, &o.head) {
+        (None, _) => head.face_units(),
+        (Some(_), Some(_)) => {
+            carried = derma_head::fit::onto::face_units(head, &skin_mesh);
+            &carried[..]
+        }
+        (Some(_), None) => &[],
     };
     let mut copies: Vec<Vec<u32>> = vec![Vec::new(); skin_mesh.positions.len()];
     for (i, &v) in origin.iter().enumerate() {

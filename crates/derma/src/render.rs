@@ -53,8 +53,9 @@ pub struct RenderArgs {
     /// Global hemoglobin scale with --rig: auto or a factor.
     #[arg(long, default_value = "auto", requires = "rig")]
     global_scale: GlobalScale,
-    /// Face units posing the built-in head, NAME=W,… (e.g. mouthSmileLeft=1,mouthSmileRight=1).
-    #[arg(long, default_value = "", conflicts_with = "mesh")]
+    /// Face units posing the head, NAME=W,… (e.g. mouthSmileLeft=1,mouthSmileRight=1); with
+    /// --mesh, through the --head it was fitted to.
+    #[arg(long, default_value = "")]
     pose: WeightSpec,
     /// An eye texture on the head's eye UVs (`derma photo iris`).
     #[arg(long, conflicts_with = "mesh")]

@@ -8,6 +8,7 @@
 pub mod align;
 pub mod job;
 pub mod nicp;
+pub mod onto;
 pub mod options;
 pub mod scan;
 pub mod store;
