@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The README's fitting figure (docs/images/head-fit.png): a user's head (the ground-truth scan
-# of crates/derma-head/tests/support/truth.rs, seed 2: the built-in head's skin retriangulated,
-# warped by up to 10 mm, turned and written in cm, with UVs) painted by `derma skin --mesh
+# The README's fitting figure (docs/images/head-fit.png): a stand-in for a user's head (the
+# ground-truth scan of crates/derma-head/tests/support/truth.rs, seed 2: the built-in head's skin
+# retriangulated, warped by up to 10 mm, turned and written in cm, with the template's UVs) painted by `derma skin --mesh
 # --head` through its fit; the fitted head with its own skin at rest and smiling; and its eyes
 # animated by `derma eyes animate --head` (three frames). Needs python3 with Pillow.
 set -euo pipefail
@@ -22,7 +22,7 @@ python3 - "$W" <<'PY'
 import sys, glob
 from PIL import Image, ImageDraw
 d = sys.argv[1]
-panels = [(f"{d}/r_scan/studio.png", "your mesh (UVs its own), painted through the fit"),
+panels = [(f"{d}/r_scan/studio.png", "a user mesh (its own triangulation), painted through the fit"),
           (f"{d}/r_fit/studio.png", "the fitted head, its own skin"),
           (f"{d}/r_smile/studio.png", "smiling (face units transferred)")]
 ims = [(Image.open(p).convert("RGB"), t) for p, t in panels]

@@ -40,12 +40,11 @@ pub enum ExportError {
     Serve(#[from] std::io::Error),
 }
 
-/// The head: the fitted one in `dir` (`derma head fit`), or the built-in one.
-pub fn head(dir: Option<&std::path::Path>) -> Result<&'static derma_head::Head> {
-    derma_head::fitted::or_builtin(dir).map_err(|e| ExportError::Input {
-        path: dir.map(PathBuf::from).unwrap_or_default(),
-        detail: e.to_string(),
-    })
+impl From<derma_head::fit::store::StoreError> for ExportError {
+    fn from(e: derma_head::fit::store::StoreError) -> Self {
+        let derma_head::fit::store::StoreError::File { path, detail } = e;
+        ExportError::Input { path, detail }
+    }
 }
 
 /// Results of this crate.

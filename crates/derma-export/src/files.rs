@@ -135,8 +135,8 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
                 ));
             }
             if job.head.is_some() && !job.face_units.is_empty() {
-                let head = crate::error::head(job.head.as_deref())?;
-                let units = derma_head::fit::onto::face_units(head, &mesh);
+                let head = derma_head::fitted::or_builtin(job.head.as_deref())?;
+                let units = crate::glb::carried_units(head, &mesh, p)?;
                 for (n, w) in &job.face_units {
                     let u = units.iter().find(|u| u.name == *n).ok_or_else(|| {
                         ExportError::Invalid(format!(
@@ -157,7 +157,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
                 .iter()
                 .map(|(n, w)| (n.as_str(), *w))
                 .collect();
-            let head = crate::error::head(job.head.as_deref())?;
+            let head = derma_head::fitted::or_builtin(job.head.as_deref())?;
             for (n, _) in &units {
                 if !head.face_units().iter().any(|u| u.name == *n) {
                     return Err(ExportError::Invalid(format!(

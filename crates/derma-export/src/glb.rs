@@ -163,7 +163,7 @@ pub fn load_mesh_in(
 /// Writes the GLB (and the loose maps when asked); `progress` hears how a user mesh was read.
 pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> Result<GlbReport> {
     let skin = SkinMaps::from_dir(&o.textures)?;
-    let head = crate::error::head(o.head.as_deref())?;
+    let head = derma_head::fitted::or_builtin(o.head.as_deref())?;
     let read = |f: &str| -> Result<Vec<u8>> {
         let p = o.textures.join(f);
         std::fs::read(&p).map_err(|e| ExportError::Input {
@@ -244,8 +244,8 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
     let carried;
     let units = match (&o.mesh, &o.head) {
         (None, _) => head.face_units(),
-        (Some(_), Some(_)) => {
-            carried = derma_head::fit::onto::face_units(head, &skin_mesh);
+        (Some(p), Some(_)) => {
+            carried = carried_units(head, &skin_mesh, p)?;
             &carried[..]
         }
         (Some(_), None) => &[],
@@ -471,4 +471,25 @@ mod tests {
         assert_eq!(MapNames::Substance.file("normal"), "head_Normal.png");
         assert_eq!(MapNames::Unreal.file("orm"), "T_Head_ORM.png");
     }
+}
+
+/// A fitted head's face units carried onto the user mesh at `path` (read as `mesh`), refused
+/// when most of it lies off the fitted skin.
+pub fn carried_units(
+    head: &derma_head::Head,
+    mesh: &derma_core::mesh::TriMesh,
+    path: &std::path::Path,
+) -> Result<Vec<derma_head::MorphTarget>> {
+    let (units, share) = derma_head::fit::onto::face_units(head, mesh);
+    if share < derma_head::fit::onto::MIN_SHARE {
+        return Err(ExportError::Input {
+            path: path.to_path_buf(),
+            detail: format!(
+                "only {:.0} % of its vertices lie within {} mm of the fitted head; is it the mesh the head was fitted to, read in the same unit?",
+                100.0 * share,
+                derma_head::fit::onto::REACH_MM
+            ),
+        });
+    }
+    Ok(units)
 }

@@ -123,7 +123,7 @@ pub fn export(
         "version": VERSION,
         "glb": "head.glb",
         "skin_mesh": "skin",
-        "regions": region_points(crate::error::head(head)?, 256),
+        "regions": region_points(derma_head::fitted::or_builtin(head)?, 256),
         "rig": null,
     });
     let mut targets = 0;

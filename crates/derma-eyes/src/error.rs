@@ -38,3 +38,9 @@ pub enum EyesError {
 
 /// Results of this crate.
 pub type Result<T, E = EyesError> = std::result::Result<T, E>;
+
+impl From<derma_head::fit::store::StoreError> for EyesError {
+    fn from(e: derma_head::fit::store::StoreError) -> Self {
+        EyesError::Invalid(e.to_string())
+    }
+}

@@ -74,7 +74,7 @@ pub fn train(
             seed,
             head,
         } => {
-            let rig = Rig::new(the_head(head.as_deref())?)?;
+            let rig = Rig::new(derma_head::fitted::or_builtin(head.as_deref())?)?;
             let t = rig.samples(*samples, *seed);
             let p = dir.join("tracked.json");
             t.write(&p)?;
@@ -132,7 +132,7 @@ pub fn synthetic(
         )));
     }
     progress.stage("synthesise tracked data", 1, Unit::Steps);
-    let head = the_head(head)?;
+    let head = derma_head::fitted::or_builtin(head)?;
     let rig = Rig::new(head)?;
     let t = crate::synthetic::sequence(
         &rig,
@@ -175,11 +175,6 @@ pub struct AnimateOptions {
     pub iris: Option<PathBuf>,
     /// A fitted head directory (`derma head fit`); `None`: the built-in head.
     pub head: Option<PathBuf>,
-}
-
-/// The head: the fitted one in `dir`, or the built-in one.
-pub fn the_head(dir: Option<&Path>) -> Result<&'static Head> {
-    derma_head::fitted::or_builtin(dir).map_err(|e| EyesError::Invalid(e.to_string()))
 }
 
 /// Loads an eyeball texture as linear RGB maps (EXR as stored, other formats sRGB-decoded).
@@ -232,7 +227,7 @@ pub fn load_or_train(p: &Option<PathBuf>, rig: &Rig) -> Result<EyeModel> {
 pub fn animate(o: &AnimateOptions, dir: &Path, progress: &dyn Progress) -> Result<AnimateReport> {
     out_dir(dir)?;
     progress.stage("load or train the model", 1, Unit::Steps);
-    let head = the_head(o.head.as_deref())?;
+    let head = derma_head::fitted::or_builtin(o.head.as_deref())?;
     let rig = Rig::new(head)?;
     let m = load_or_train(&o.model, &rig)?;
     progress.advance(1);

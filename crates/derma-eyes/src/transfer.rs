@@ -48,65 +48,23 @@ pub fn extrapolation(
         .collect()
 }
 
-/// The closest point of triangle (a, b, c) to p as barycentric weights (Ericson, "Real-Time
-/// Collision Detection", §5.1.5).
-pub fn closest_barycentric(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> [f32; 3] {
-    let (ab, ac, ap) = (b - a, c - a, p - a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return [1.0, 0.0, 0.0];
-    }
-    let bp = p - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return [0.0, 1.0, 0.0];
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
-        return [1.0 - v, v, 0.0];
-    }
-    let cp = p - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return [0.0, 0.0, 1.0];
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
-        return [1.0 - w, 0.0, w];
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return [0.0, 1.0 - w, w];
-    }
-    let denom = 1.0 / (va + vb + vc);
-    let (v, w) = (vb * denom, vc * denom);
-    [1.0 - v - w, v, w]
-}
-
 /// B of eq. 3.4: for each vertex of a target mesh registered onto the subject (same space), the
 /// subject triangle it snaps to and its barycentric weights, as rows of (subject vertex, weight).
 pub fn barycentric_map(subject: &[Vec3], triangles: &[[u32; 3]], target: &[Vec3]) -> Rows {
     use rayon::prelude::*;
+    let bvh = derma_core::bvh::Bvh::new(subject, triangles);
     target
         .par_iter()
-        .map(|&p| {
-            let mut best = (f32::MAX, [0u32; 3], [1.0f32, 0.0, 0.0]);
-            for t in triangles {
-                let [a, b, c] = t.map(|i| subject[i as usize]);
-                let w = closest_barycentric(p, a, b, c);
-                let q = a * w[0] + b * w[1] + c * w[2];
-                let d = (q - p).length_squared();
-                if d < best.0 {
-                    best = (d, *t, w);
-                }
+        .map(|&p| match bvh.closest(p, f32::INFINITY) {
+            Some(c) => {
+                let t = triangles[c.triangle as usize];
+                let w = [1.0 - c.bary[0] - c.bary[1], c.bary[0], c.bary[1]];
+                (0..3)
+                    .filter(|&k| w[k] > 0.0)
+                    .map(|k| (t[k], w[k]))
+                    .collect()
             }
-            (0..3)
-                .filter(|&k| best.2[k] > 0.0)
-                .map(|k| (best.1[k], best.2[k]))
-                .collect()
+            None => Vec::new(),
         })
         .collect()
 }

@@ -1,5 +1,6 @@
-//! A head fitted to a user's mesh, read from the directory `derma head fit` wrote (see
-//! [`crate::fit`]); read once per process and directory, then shared like the built-in head.
+//! A head fitted to a user's mesh (docs/head.md, "Fitting your head"), read from the directory
+//! `derma head fit` wrote (see [`crate::fit`]); read once per process and directory, then
+//! shared like the built-in head.
 
 use crate::fit::store::{self, StoreError};
 use crate::Head;

@@ -147,14 +147,6 @@ impl<'a> SkinGenerator<'a> {
         self
     }
 
-    /// The head: the fitted one given, or the built-in one.
-    fn the_head(&self) -> Result<&'static derma_head::Head> {
-        derma_head::fitted::or_builtin(self.head.as_deref()).map_err(|e| SkinError::Input {
-            path: self.head.clone().unwrap_or_default(),
-            detail: e.to_string(),
-        })
-    }
-
     /// A directory of painted fields (NAME.png / NAME.exr), over the defaults.
     pub fn fields(mut self, dir: impl Into<PathBuf>) -> Self {
         self.fields = Some(dir.into());
@@ -287,7 +279,19 @@ impl<'a> SkinGenerator<'a> {
             self.config.surface.kind
         };
         let on_head = kind == SurfaceKind::Template;
-        let head = self.the_head()?;
+        if self.head.is_some() && kind == SurfaceKind::Patch {
+            return Err(SkinError::Key {
+                key: "surface.kind".into(),
+                detail: "a fitted head is painted as a head or through a mesh, not as a patch"
+                    .into(),
+            });
+        }
+        // The head (building the built-in one takes about a second): only where it is used.
+        let head = if on_head || self.head.is_some() {
+            Some(derma_head::fitted::or_builtin(self.head.as_deref())?)
+        } else {
+            None
+        };
         let has_landmarks = !self.config.surface.landmarks.trim().is_empty() || self.head.is_some();
         let regional_gains = (on_head || has_landmarks) && self.config.regional.enabled;
         let (person_cfg, melanin) =
@@ -308,11 +312,12 @@ impl<'a> SkinGenerator<'a> {
         let mut mesh_scale = None;
         let mut user_regions = None;
         let mesh = match kind {
-            SurfaceKind::Template => Some(head.skin.clone()),
+            SurfaceKind::Template => Some(head.expect("on the head").skin.clone()),
             SurfaceKind::Mesh => {
                 let p = mesh_path.clone().expect("checked");
                 let (m, u) = load_mesh(&p, &cfg.surface.unit, &job)?;
-                if self.head.is_some() && self.config.surface.landmarks.trim().is_empty() {
+                if let (Some(head), true) = (head, self.config.surface.landmarks.trim().is_empty())
+                {
                     user_regions = Some(derma_head::Regions::new(
                         head.landmarks.clone(),
                         Vec::new(),
@@ -327,7 +332,7 @@ impl<'a> SkinGenerator<'a> {
             }
             SurfaceKind::Patch => None,
         };
-        if has_landmarks && user_regions.is_none() && kind != SurfaceKind::Template {
+        if has_landmarks && user_regions.is_none() && !(on_head && self.head.is_some()) {
             return Err(SkinError::Key {
                 key: "surface.landmarks".into(),
                 detail: "landmarks place the built-in head's fields on a user mesh; give the mesh (surface.mesh or the generator's mesh)".into(),
@@ -398,7 +403,7 @@ impl<'a> SkinGenerator<'a> {
             if kind == SurfaceKind::Template {
                 crate::builtin_head::fields_on(
                     mesh.as_ref().expect("template mesh"),
-                    &head.regions,
+                    &head.expect("on the head").regions,
                     &cfg.person,
                 )
             } else if let Some(regions) = &user_regions {

@@ -123,3 +123,10 @@ pub type Result<T> = std::result::Result<T, SkinError>;
 
 pub use config::SkinConfig;
 pub use generate::{AppearanceChoice, SkinGenerator, TextureSet, Written};
+
+impl From<derma_head::fit::store::StoreError> for SkinError {
+    fn from(e: derma_head::fit::store::StoreError) -> Self {
+        let derma_head::fit::store::StoreError::File { path, detail } = e;
+        SkinError::Input { path, detail }
+    }
+}

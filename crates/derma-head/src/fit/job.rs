@@ -1,5 +1,6 @@
-//! `derma head fit` on files: read the scan (any unit) and its landmarks, fit, and write the
-//! fitted head directory; refuses before any work what would overwrite an input.
+//! `derma head fit` on files (docs/head.md, "Fitting your head"): read the scan (any unit) and
+//! its landmarks, fit, and write the fitted head directory; refuses before any work what would
+//! overwrite an input.
 
 use super::options::{Alignment, FitError, FitOptions, FitReport};
 use super::store::{self, ScanInfo, StoreError};
@@ -79,6 +80,16 @@ impl FitJob {
                     .into_iter()
                     .map(|p| p * scale.mm_per_unit)
                     .collect();
+                // MediaPipe's face mesh has 468 vertices (478 with the irises).
+                if raw.len() != 468 && raw.len() != 478 {
+                    return Err(input(
+                        &self.mesh,
+                        format!(
+                            "{} vertices; MediaPipe's face mesh topology has 468 (or 478 with the irises)",
+                            raw.len()
+                        ),
+                    ));
+                }
                 let mut lm = crate::Landmarks::mediapipe(&raw)
                     .map_err(|e| input(&self.mesh, e.to_string()))?;
                 // MediaPipe's "ears" and "hairline" are the mask's edges, not those points.

@@ -3,7 +3,7 @@
 //! head carries (landmarks, regions, face units, globes, teeth, tongue, lashes) follows.
 //!
 //! The result is a head like the built-in one, with the same topology and UVs, in the scan's
-//! frame (mm): every command that takes a head takes it ([`crate::Head::open`]).
+//! frame (mm): every command that takes a head takes it ([`crate::fitted::open`]).
 
 pub mod align;
 pub mod job;
@@ -111,7 +111,7 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
     lap("prepare", &mut seconds);
 
     // The template's face points (once subdivided) for the alignment.
-    let l1 = nicp::combine(&tpl.coarse.positions, &tpl.stencils1.rows);
+    let l1 = tpl.stencils1.apply(&tpl.coarse.positions);
     let n1 = Template::normals(&tpl.level1, &l1);
     let lm = &builtin.landmarks;
     let ear_z = 0.5 * (lm.get("ear_left").z + lm.get("ear_right").z);
@@ -222,7 +222,7 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
         let tau = (opts.max_distance_mm * (alpha / alpha0).sqrt() as f32).max(6.0);
         let mut system: Option<nicp::System> = None;
         for it in 0..opts.iterations {
-            let all = nicp::positions(&problem, &x, &tpl.stencils1.rows);
+            let all = nicp::positions(&problem, &x, &tpl.stencils1);
             let normals = Template::normals(&tpl.level1, &all);
             let found: Vec<Option<Vec3>> = outer_ids
                 .par_iter()
@@ -243,10 +243,13 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
                     matched += t.is_some() as usize;
                 }
             }
-            last = (
-                (sum / n.max(1) as f64).sqrt() as f32,
-                matched as f32 / face1.len().max(1) as f32,
-            );
+            // No matched face point: the fit has lost the scan (an infinite residual).
+            let rms = if n == 0 {
+                f32::INFINITY
+            } else {
+                (sum / n as f64).sqrt() as f32
+            };
+            last = (rms, matched as f32 / face1.len().max(1) as f32);
             // A point matched at the stiffness's first iteration and unmatched later is held
             // where it is.
             let targets: Vec<Vec3> = found
@@ -281,7 +284,8 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
         }
     }
     lap("non-rigid registration", &mut seconds);
-    if !(last.0 <= opts.max_residual_mm) {
+    // Converged: close to the scan, with most of the face on it.
+    if !(last.0 <= opts.max_residual_mm) || last.1 < 0.5 {
         return Err(FitError::NoConvergence {
             rms_mm: last.0,
             iterations,
@@ -291,8 +295,8 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
 
     progress.stage("project and transfer", 1, Unit::Steps);
     let moved: Vec<Vec3> = (0..control.len()).map(|j| x.moved(j, control[j])).collect();
-    let mut fine = nicp::combine(&moved, &tpl.stencils2.rows);
-    let template_fine: Vec<Vec3> = nicp::combine(&control, &tpl.stencils2.rows);
+    let mut fine = tpl.stencils2.apply(&moved);
+    let template_fine: Vec<Vec3> = tpl.stencils2.apply(&control);
     // Onto a scan at least as fine as the skin (its median edge within 3 mm; the skin's are
     // about 1.5 mm); a coarser scan's facets are not the face's shape.
     let projected = scan.median_edge_mm() <= 3.0;
@@ -312,7 +316,13 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
         .filter_map(|&i| scan.bvh.closest(fine[i], 10.0).map(|c| c.distance))
         .collect();
     dist.sort_by(f32::total_cmp);
-    let median = dist.get(dist.len() / 2).copied().unwrap_or(f32::INFINITY);
+    let Some(&median) = dist.get(dist.len() / 2) else {
+        return Err(FitError::NoConvergence {
+            rms_mm: f32::INFINITY,
+            iterations,
+            limit_mm: opts.max_residual_mm,
+        });
+    };
 
     // Parts and globes follow the local maps; face units by deformation transfer.
     let map = transfer::LocalMap {

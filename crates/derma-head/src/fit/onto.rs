@@ -11,10 +11,13 @@ use rayon::prelude::*;
 pub const REACH_MM: f32 = 10.0;
 
 /// The head's 52 face units as morph targets of `mesh` (mm, the frame the head was fitted in):
-/// vertices farther than [`REACH_MM`] from the fitted skin do not move.
-pub fn face_units(head: &Head, mesh: &TriMesh) -> Vec<MorphTarget> {
+/// vertices farther than [`REACH_MM`] from the fitted skin do not move. Also the share of the
+/// mesh's vertices that follow (near 0: not the mesh the head was fitted to, or another unit).
+pub fn face_units(head: &Head, mesh: &TriMesh) -> (Vec<MorphTarget>, f32) {
     let corr = super::scan_to_template(head, mesh);
-    head.face_units()
+    let share = corr.iter().filter(|c| c.is_some()).count() as f32 / corr.len().max(1) as f32;
+    let units = head
+        .face_units()
         .par_iter()
         .map(|u| {
             let mut dense = vec![Vec3::ZERO; head.skin.positions.len()];
@@ -37,15 +40,20 @@ pub fn face_units(head: &Head, mesh: &TriMesh) -> Vec<MorphTarget> {
                 parts: Vec::new(),
             }
         })
-        .collect()
+        .collect();
+    (units, share)
 }
+
+/// Below this share of a mesh's vertices near the fitted skin, it is not the fitted mesh.
+pub const MIN_SHARE: f32 = 0.5;
 
 #[cfg(test)]
 mod tests {
     #[test]
     fn the_heads_own_skin_gets_its_own_face_units() {
         let head = crate::Head::builtin();
-        let units = super::face_units(head, &head.skin);
+        let (units, share) = super::face_units(head, &head.skin);
+        assert_eq!(share, 1.0);
         let smile = |us: &[crate::MorphTarget]| {
             let u = us.iter().find(|u| u.name == "mouthSmileLeft").unwrap();
             let mut d = vec![glam::Vec3::ZERO; head.skin.positions.len()];

@@ -58,7 +58,7 @@ pub enum FitError {
         detail: String,
     },
     /// The registration ended far from the scan.
-    #[error("the fit did not converge: the face's RMS distance to the scan is {rms_mm:.2} mm after {iterations} iterations (at most {limit_mm:.2} mm accepted); check the scan's orientation (+Y up, facing +Z) or give landmarks")]
+    #[error("the fit did not converge: the face's RMS distance to the scan is {rms_mm:.2} mm after {iterations} iterations (at most {limit_mm:.2} mm accepted, with at least half of the face on the scan); check the scan's orientation (+Y up, facing +Z) or give landmarks")]
     NoConvergence {
         /// RMS residual (mm) over matched face points.
         rms_mm: f32,

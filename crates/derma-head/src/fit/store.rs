@@ -1,6 +1,7 @@
-//! A fitted head on disk: `head.json` (what differs from the built-in head: positions, globes,
-//! face units, and the fit's report), the fitted template as an OBJ with derma's UVs, the
-//! landmarks in the scan's units, and the dense correspondence both ways.
+//! A fitted head on disk (docs/head.md, "Fitting your head"): `head.json` (what differs from
+//! the built-in head: positions, globes, face units, the fit's report), the fitted template as
+//! an OBJ with derma's UVs, the landmarks in the scan's units, and the dense correspondence
+//! both ways (the EyeMove thesis' B map, eq. 3.4).
 
 use super::{FitReport, Fitted, Similarity, SurfacePoint};
 use crate::asset::{EyeSphere, SparseTarget};
@@ -203,7 +204,15 @@ pub fn read(dir: &Path) -> Result<Fitted, StoreError> {
     }
     let finite = |v: &[f32; 3]| v.iter().all(|x| x.is_finite());
     if !f.positions.iter().chain(&f.fine).all(finite)
-        || !f.eyes.iter().all(|e| finite(&e.centre) && e.radius > 0.0)
+        || !f
+            .eyes
+            .iter()
+            .all(|e| finite(&e.centre) && e.radius > 0.0 && e.radius.is_finite())
+        || !f
+            .face_units
+            .iter()
+            .flat_map(|u| &u.offsets)
+            .all(|o| finite(&o.1))
     {
         return Err(err(
             &path,

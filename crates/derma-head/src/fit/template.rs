@@ -1,5 +1,6 @@
 //! The built-in head as a deformable template: the coarse skin's control vertices (the
-//! unknowns of the registration), the subdivided points they move by Catmull–Clark stencils.
+//! unknowns of the registration), the subdivided points they move by Catmull–Clark stencils
+//! (Catmull & Clark 1978, through [`crate::subdivision`]).
 
 use crate::asset::Asset;
 use crate::subdivision::{subdivide, QuadMesh, Stencils};

@@ -54,7 +54,7 @@ impl LocalMap<'_> {
     }
 }
 
-/// Sumner & Popović's fourth vertex: the unit normal scaled by 1/√(2·area), so a triangle's
+/// Sumner & Popović's fourth vertex: the unit normal scaled by √(2·area), so a triangle's
 /// frame [e₁ e₂ n] deforms like a tetrahedron (eq. 1).
 fn frame(a: Vec3, b: Vec3, c: Vec3) -> Mat3 {
     let (e1, e2) = (b - a, c - a);

@@ -2,7 +2,7 @@
 //! diagonal), its vertices slid along the surface, warped, rotated, moved and put in cm.
 
 use derma_core::mesh::TriMesh;
-use derma_head::fit::{nicp, template::Template, Fitted};
+use derma_head::fit::{template::Template, Fitted};
 use derma_test_support::truth_scan::{slide, Placement, Warp};
 use glam::{Mat3, Vec3};
 
@@ -37,7 +37,7 @@ pub fn case(seed: u64, peak_mm: f32, sigma_mm: f32) -> Case {
 pub fn case_split(seed: u64, peak_mm: f32, sigma_mm: f32, splits: usize) -> Case {
     let asset = derma_head::asset::parse();
     let tpl = Template::of(&asset);
-    let p2 = nicp::combine(&tpl.coarse.positions, &tpl.stencils2.rows);
+    let p2 = tpl.stencils2.apply(&tpl.coarse.positions);
     let n2 = Template::normals(&tpl.level2, &p2);
     let warp = Warp::random(seed, &p2, 14, sigma_mm, peak_mm);
     let a = seed as f32;
