@@ -452,27 +452,6 @@ pub fn write_maps(
     Ok(out)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn attenuation_is_beer_lambert_over_the_longest_mean_free_path() {
-        let (c, d) = attenuation([4.0, 2.0, 1.0]);
-        assert!((d - 0.004).abs() < 1e-9);
-        assert!((c[0] - (-1.0f32).exp()).abs() < 1e-6);
-        assert!((c[1] - (-2.0f32).exp()).abs() < 1e-6);
-        assert!((c[2] - (-4.0f32).exp()).abs() < 1e-6);
-    }
-
-    #[test]
-    fn map_names_follow_each_convention() {
-        assert_eq!(MapNames::Derma.file("base_color"), "base_color.png");
-        assert_eq!(MapNames::Substance.file("normal"), "head_Normal.png");
-        assert_eq!(MapNames::Unreal.file("orm"), "T_Head_ORM.png");
-    }
-}
-
 /// A fitted head's face units carried onto the user mesh at `path` (read as `mesh`), refused
 /// when most of it lies off the fitted skin.
 pub fn carried_units(
@@ -492,4 +471,25 @@ pub fn carried_units(
         });
     }
     Ok(units)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn attenuation_is_beer_lambert_over_the_longest_mean_free_path() {
+        let (c, d) = attenuation([4.0, 2.0, 1.0]);
+        assert!((d - 0.004).abs() < 1e-9);
+        assert!((c[0] - (-1.0f32).exp()).abs() < 1e-6);
+        assert!((c[1] - (-2.0f32).exp()).abs() < 1e-6);
+        assert!((c[2] - (-4.0f32).exp()).abs() < 1e-6);
+    }
+
+    #[test]
+    fn map_names_follow_each_convention() {
+        assert_eq!(MapNames::Derma.file("base_color"), "base_color.png");
+        assert_eq!(MapNames::Substance.file("normal"), "head_Normal.png");
+        assert_eq!(MapNames::Unreal.file("orm"), "T_Head_ORM.png");
+    }
 }
