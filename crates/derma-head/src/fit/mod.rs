@@ -50,8 +50,15 @@ pub struct Fitted {
 /// ±15 % around the mean (Farkas 1994, "Anthropometry of the Head and Face"), with a margin.
 pub const SCALE_RANGE: (f32, f32) = (0.7, 1.4);
 
-/// Half-width (mm) of the band along the lid and lip margins left unmatched.
+/// Half-width (mm) of the band along the lid and lip margins left unmatched, on scans fine
+/// enough to show the margins (median edge within [`FINE_SCAN_MM`]).
 pub const MARGIN_BAND_MM: f32 = 3.0;
+/// The band on coarser scans (a face mask whose eyes and mouth are closed surfaces of 5–10 mm
+/// triangles): on MediaPipe's canonical face the 3 mm band leaves 346 triangles turned over at
+/// the canthi and mouth corners, 6 mm none.
+pub const COARSE_MARGIN_BAND_MM: f32 = 6.0;
+/// Median edge (mm) up to which a scan counts as fine: projected onto, with the narrow band.
+pub const FINE_SCAN_MM: f32 = 3.0;
 
 /// A point on a mesh: triangle and barycentric weights of its corners 1 and 2 (`None` where
 /// nothing lies close).
@@ -194,7 +201,19 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
     };
     // The lid and lip margins are not matched: a scan's eyes may be closed or bulge where the
     // template's openings are, and its mouth shut; they follow their surroundings.
-    let near_margin = tpl.margin_band(&l1, MARGIN_BAND_MM);
+    let fine_scan = scan.median_edge_mm() <= FINE_SCAN_MM;
+    let band = if fine_scan {
+        MARGIN_BAND_MM
+    } else {
+        COARSE_MARGIN_BAND_MM
+    };
+    let near_margin = tpl.margin_band(&l1, band);
+    // The face points the fit may match (the margin band is left out on purpose).
+    let face_matchable = outer_ids
+        .iter()
+        .zip(&is_face)
+        .filter(|(&i, &f)| f && !near_margin[i])
+        .count();
     // The hairline is a soft boundary: it places the template, it does not pin it.
     let lm_rows: Vec<(Vec<(u32, f32)>, Vec3)> = given
         .iter()
@@ -249,7 +268,7 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
             } else {
                 (sum / n as f64).sqrt() as f32
             };
-            last = (rms, matched as f32 / face1.len().max(1) as f32);
+            last = (rms, matched as f32 / face_matchable.max(1) as f32);
             // A point matched at the stiffness's first iteration and unmatched later is held
             // where it is.
             let targets: Vec<Vec3> = found
@@ -299,7 +318,7 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
     let template_fine: Vec<Vec3> = tpl.stencils2.apply(&control);
     // Onto a scan at least as fine as the skin (its median edge within 3 mm; the skin's are
     // about 1.5 mm); a coarser scan's facets are not the face's shape.
-    let projected = scan.median_edge_mm() <= 3.0;
+    let projected = fine_scan;
     if projected {
         project(&scan, &tpl, &mut fine);
     }
