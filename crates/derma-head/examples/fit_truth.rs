@@ -3,6 +3,10 @@
 //! centimetres; fitted, and every fitted vertex compared with where its template vertex went.
 //!
 //!   cargo run --release -p derma-head --example fit_truth -- SEED PEAK_MM [LANDMARKS]
+//!
+//! Environment: SIGMA (warp width, mm; 60), SPLITS (split the scan's triangles into four N
+//! times), WRITE (also write the scan there, cm OBJ), STIFFNESS and ITERATIONS (the schedule),
+//! LM (print each landmark's error).
 
 use derma_core::progress::Silent;
 use derma_head::fit::{self, Alignment, FitOptions};
@@ -48,49 +52,11 @@ fn main() {
     let fitted = fit::fit(case.scan.clone(), &opts, &Silent).expect("fit");
     let secs = t0.elapsed().as_secs_f64();
     let m = case.measure(&fitted);
-    if std::env::var("WHERE").is_ok() {
-        let tpl = derma_head::fit::template::Template::of(&derma_head::asset::parse());
-        let p = &tpl.level2.positions;
-        for q in &tpl.level2.quads {
-            let [a, b, c, d] = q.map(|c| c.0 as usize);
-            for t in [[a, b, c], [a, c, d]] {
-                let n = |x: &[glam::Vec3]| (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);
-                let (n0, n1) = (n(&case.truth), n(&fitted.fine));
-                if n0.dot(n1) <= 0.0 {
-                    println!("flip at {:?} outer {}", p[t[0]], tpl.outer2[t[0]]);
-                }
-            }
-        }
-    }
     if std::env::var("LM").is_ok() {
         let asset = derma_head::asset::parse();
         for n in case.landmarks.points.keys() {
             let v = asset.meta.landmarks[n] as usize;
             println!("{n}: {:.2} mm", (fitted.fine[v] - case.truth[v]).length());
-        }
-    }
-    if std::env::var("BINS").is_ok() {
-        let p2 = &derma_head::Head::builtin();
-        let tpl = derma_head::fit::template::Template::of(&derma_head::asset::parse());
-        let _ = p2;
-        let mut bins = std::collections::BTreeMap::new();
-        for &i in &case.face {
-            let p = tpl.level2.positions[i];
-            let key = (((p.y + 200.0) / 25.0) as i32, (p.x.abs() / 20.0) as i32);
-            let e = (fitted.fine[i] - case.truth[i]).length();
-            let b = bins.entry(key).or_insert((0.0f32, 0usize));
-            b.0 += e * e;
-            b.1 += 1;
-        }
-        for ((y, x), (s, n)) in bins {
-            println!(
-                "y {:>4}..{:>4} |x| {:>3}..{:>3}: rms {:.2} ({n})",
-                y * 25 - 200,
-                y * 25 - 175,
-                x * 20,
-                x * 20 + 20,
-                (s / n as f32).sqrt()
-            );
         }
     }
     println!(

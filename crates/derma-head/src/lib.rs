@@ -277,11 +277,6 @@ impl Head {
         }
     }
 
-    /// Vertices of the subdivided skin's topology (positions shared across UV seams).
-    pub fn skin_topology_len(&self) -> usize {
-        self.skin_lineage.stencils.rows.len()
-    }
-
     /// A part by name.
     pub fn part(&self, name: &str) -> Option<&Part> {
         self.parts.iter().find(|p| p.name == name)

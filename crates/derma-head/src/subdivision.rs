@@ -206,6 +206,26 @@ pub fn catmull_clark(m: &QuadMesh) -> (QuadMesh, Stencils) {
     )
 }
 
+/// Vertices of `m` after `levels` Catmull–Clark steps, counted without subdividing: each step
+/// adds a point per edge and per face (V' = V + E + F), splits each edge in two and adds four
+/// per face (E' = 2E + 4F), and makes four quads of each (F' = 4F).
+pub fn vertex_count(m: &QuadMesh, levels: usize) -> usize {
+    let mut edges: Vec<(u32, u32)> = m
+        .quads
+        .iter()
+        .flat_map(|q| {
+            (0..4).map(move |k| (q[k].0.min(q[(k + 1) % 4].0), q[k].0.max(q[(k + 1) % 4].0)))
+        })
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    let (mut v, mut e, mut f) = (m.positions.len(), edges.len(), m.quads.len());
+    for _ in 0..levels {
+        (v, e, f) = (v + e + f, 2 * e + 4 * f, 4 * f);
+    }
+    v
+}
+
 /// `levels` Catmull–Clark steps and the composed stencils from the original vertices.
 pub fn subdivide(m: &QuadMesh, levels: usize) -> (QuadMesh, Stencils) {
     let mut mesh = m.clone();
@@ -307,5 +327,16 @@ mod tests {
         let want =
             (Vec3::new(0., 0., 0.) + 6.0 * Vec3::new(1., 0., 1.) + Vec3::new(2., 0., 0.)) / 8.0;
         assert!((d.positions[1] - want).length() < 1e-6);
+    }
+
+    #[test]
+    fn vertex_counts_match_the_subdivided_mesh() {
+        let c = cube();
+        for levels in 0..3 {
+            assert_eq!(
+                vertex_count(&c, levels),
+                subdivide(&c, levels).0.positions.len()
+            );
+        }
     }
 }

@@ -21,7 +21,7 @@ use crate::asset::{self, Asset, EyeSphere, SparseTarget};
 use crate::Head;
 use derma_core::mesh::TriMesh;
 use derma_core::progress::{Progress, Unit};
-use glam::Vec3;
+use glam::{Mat3, Vec3};
 use nicp::{Affines, Pattern, Problem};
 use rayon::prelude::*;
 use scan::Scan;
@@ -113,16 +113,15 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
     progress.stage("prepare the scan", 1, Unit::Steps);
     let asset = asset::parse();
     let tpl = Template::of(&asset);
-    let builtin = Head::builtin();
     let scan = Scan::new(scan);
     lap("prepare", &mut seconds);
 
     // The template's face points (once subdivided) for the alignment.
     let l1 = tpl.stencils1.apply(&tpl.coarse.positions);
     let n1 = Template::normals(&tpl.level1, &l1);
-    let lm = &builtin.landmarks;
-    let ear_z = 0.5 * (lm.get("ear_left").z + lm.get("ear_right").z);
-    let (y_lo, y_hi) = (lm.get("menton").y - 5.0, lm.get("hairline").y + 5.0);
+    let lm = |n: &str| tpl.landmark(n);
+    let ear_z = 0.5 * (lm("ear_left").z + lm("ear_right").z);
+    let (y_lo, y_hi) = (lm("menton").y - 5.0, lm("hairline").y + 5.0);
     let face1: Vec<usize> = (0..l1.len())
         .filter(|&i| tpl.outer1[i] && l1[i].z > ear_z + 20.0 && (y_lo..y_hi).contains(&l1[i].y))
         .collect();
@@ -148,8 +147,8 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
                 .collect();
             align::check_on_surface(&scan, &named, 10.0)?;
             for (n, p) in named {
-                if lm.points.contains_key(&n) {
-                    given.push((n.clone(), lm.get(&n), p));
+                if tpl.landmarks.contains_key(&n) {
+                    given.push((n.clone(), lm(&n), p));
                 }
             }
             let src: Vec<Vec3> = given.iter().map(|g| g.1).collect();
@@ -160,13 +159,13 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
             })?
         }
         Alignment::Auto => Similarity {
-            translation: align::nose_tip(&scan) - lm.get("nose_tip"),
+            translation: align::nose_tip(&scan) - lm("nose_tip"),
             ..Similarity::IDENTITY
         },
     };
     check_orientation(&scan, &face_pts, &face_nrm, &start)?;
     let (sim, share) = align::icp(&scan, &face_pts, &face_nrm, start, 15, 30.0);
-    let nose = sim.apply(lm.get("nose_tip"));
+    let nose = sim.apply(lm("nose_tip"));
     let nose_gap = scan
         .bvh
         .closest(nose, f32::INFINITY)
@@ -218,10 +217,7 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
     let lm_rows: Vec<(Vec<(u32, f32)>, Vec3)> = given
         .iter()
         .filter(|g| g.0 != "hairline")
-        .map(|(n, _, q)| {
-            let v = asset.meta.landmarks[n];
-            (tpl.stencils2.rows[local[&v] as usize].clone(), *q)
-        })
+        .map(|(n, _, q)| (tpl.stencils2.rows[tpl.landmarks[n]].clone(), *q))
         .collect();
     let extra: Vec<Vec<(u32, f32)>> = lm_rows.iter().map(|r| r.0.clone()).collect();
     let problem = Problem {
@@ -352,8 +348,16 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
     for (j, &v) in tpl.coarse_ids.iter().enumerate() {
         positions[v as usize] = moved[j];
     }
-    let skin_n = asset.meta.skin_vertices;
     let is_skin = |v: u32| local.contains_key(&v);
+    // Each part vertex's local map, once: its position and, for the face units, its offsets.
+    let part_maps: HashMap<u32, Mat3> = (0..asset.positions.len() as u32)
+        .into_par_iter()
+        .filter(|&v| !is_skin(v))
+        .map(|v| {
+            let p = sim.apply(asset.positions[v as usize]);
+            (v, map.linear(p))
+        })
+        .collect();
     for (v, p) in positions.iter_mut().enumerate() {
         if !is_skin(v as u32) {
             *p = map.point(sim.apply(asset.positions[v]));
@@ -396,9 +400,8 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
                     .map(|(l, d)| (tpl.coarse_ids[l as usize], d))
                     .collect();
             for &(v, d) in &t.offsets {
-                if !is_skin(v) {
-                    let l = map.linear(sim.apply(asset.positions[v as usize]));
-                    offsets.push((v, l * (sr * d)));
+                if let Some(l) = part_maps.get(&v) {
+                    offsets.push((v, *l * (sr * d)));
                 }
             }
             offsets.sort_by_key(|o| o.0);
@@ -408,15 +411,11 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
             })
         })
         .collect::<Result<_, _>>()?;
-    debug_assert!(skin_n <= positions.len());
     lap("project and transfer", &mut seconds);
 
     let landmark_mm = given
         .iter()
-        .map(|(n, _, q)| {
-            let v = asset.meta.landmarks[n];
-            (n.clone(), (fine[local[&v] as usize] - *q).length())
-        })
+        .map(|(n, _, q)| (n.clone(), (fine[tpl.landmarks[n]] - *q).length()))
         .collect();
     Ok(Fitted {
         positions,

@@ -190,7 +190,8 @@ pub fn read(dir: &Path) -> Result<Fitted, StoreError> {
         ));
     }
     let a = crate::asset::parse();
-    let fine_n = crate::Head::builtin().skin_topology_len();
+    let (coarse, _) = crate::local_quads(&a, &crate::SKIN_GROUPS);
+    let fine_n = crate::subdivision::vertex_count(&coarse, crate::SKIN_LEVELS);
     if f.positions.len() != a.positions.len() || f.fine.len() != fine_n {
         return Err(err(
             &path,

@@ -5,6 +5,7 @@
 use crate::asset::Asset;
 use crate::subdivision::{subdivide, QuadMesh, Stencils};
 use glam::{Vec2, Vec3};
+use std::collections::{BTreeMap, HashMap};
 
 /// The template the fit deforms.
 pub struct Template {
@@ -27,6 +28,8 @@ pub struct Template {
     pub stencils2: Stencils,
     /// Per level-2 vertex: on the outer skin.
     pub outer2: Vec<bool>,
+    /// Named landmarks as level-2 vertices (Catmull–Clark keeps a cage vertex's index).
+    pub landmarks: BTreeMap<String, usize>,
 }
 
 fn outer(q: &QuadMesh, chart: [f32; 4]) -> Vec<bool> {
@@ -65,6 +68,17 @@ impl Template {
         let chart = a.meta.charts["skin"];
         let outer1 = outer(&level1, chart);
         let outer2 = outer(&level2, chart);
+        let local: HashMap<u32, usize> = coarse_ids
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| (v, i))
+            .collect();
+        let landmarks = a
+            .meta
+            .landmarks
+            .iter()
+            .map(|(n, v)| (n.clone(), local[v]))
+            .collect();
         Template {
             coarse,
             coarse_ids,
@@ -75,7 +89,13 @@ impl Template {
             level2,
             stencils2,
             outer2,
+            landmarks,
         }
+    }
+
+    /// Landmark `name`'s position on the template (panics on a name the asset lacks).
+    pub fn landmark(&self, name: &str) -> Vec3 {
+        self.level2.positions[self.landmarks[name]]
     }
 
     /// Per level-1 vertex (at `positions`): within `band` mm of a margin of the outer skin
