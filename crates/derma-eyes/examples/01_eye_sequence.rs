@@ -53,7 +53,8 @@ fn main() -> Result<()> {
         head.eyes[0].radius + sliding::THICKNESS,
         &drive,
     );
-    let stage = Stage::new(head, &rig.region, None);
+    let skin = derma_eyes::surface::Skin::of_head(head);
+    let stage = Stage::new(head, &rig.region, &skin, None);
     let mut f = Frame::default();
     let mut frames = Vec::new();
     let mut imgs = Vec::new();

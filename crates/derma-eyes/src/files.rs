@@ -9,8 +9,10 @@ use crate::model::{self, Components, Curve, EyeModel};
 use crate::render::{self, Stage};
 use crate::rigdata::Rig;
 use crate::sdf::{self, material};
+use crate::surface::Skin;
 use crate::tracked::Tracked;
 use crate::{EyesError, Result};
+use derma_core::mesh::HeadUnit;
 use derma_core::progress::{Progress, Unit};
 use derma_core::Map;
 use derma_head::Head;
@@ -175,6 +177,9 @@ pub struct AnimateOptions {
     pub iris: Option<PathBuf>,
     /// A fitted head directory (`derma head fit`); `None`: the built-in head.
     pub head: Option<PathBuf>,
+    /// The user's own mesh the head was fitted to (with UVs; needs `head`): the animation moves
+    /// its vertices (through the fit's B map) in place of the fitted head's skin.
+    pub mesh: Option<PathBuf>,
 }
 
 /// Loads an eyeball texture as linear RGB maps (EXR as stored, other formats sRGB-decoded).
@@ -232,6 +237,19 @@ pub fn animate(o: &AnimateOptions, dir: &Path, progress: &dyn Progress) -> Resul
     let m = load_or_train(&o.model, &rig)?;
     progress.advance(1);
     let ev = Evaluator::new(&m, &rig.region, head, o.thickness)?;
+    let skin = match (&o.mesh, &o.head) {
+        (None, _) => Skin::of_head(head),
+        (Some(p), Some(_)) => {
+            let (mesh, _) = derma_core::mesh::load_head_mesh(p, HeadUnit::Auto, progress)?;
+            Skin::user(head, mesh, p)?
+        }
+        (Some(p), None) => {
+            return Err(EyesError::Invalid(format!(
+                "{}: a user's mesh is animated through the head fitted to it; give that head (--head, from 'derma head fit')",
+                p.display()
+            )))
+        }
+    };
     let mut drive = o.drive.clone();
     match &o.targets {
         Targets::Idle => {}
@@ -286,12 +304,12 @@ pub fn animate(o: &AnimateOptions, dir: &Path, progress: &dyn Progress) -> Resul
     progress.stage("evaluate frames and write the animated GLB", 1, Unit::Steps);
     let eye_texture = o.iris.as_deref().map(load_eye_texture).transpose()?;
     let p = dir.join("head.glb");
-    let glb = glb::write(head, &rig.region, &baked, eye_texture.as_ref(), &p)?;
+    let glb = glb::write(head, &rig.region, &skin, &baked, eye_texture.as_ref(), &p)?;
     files.push(p);
     progress.advance(1);
     if o.render > 0 {
         progress.stage("render frames", samples.len() as u64, Unit::Frames);
-        let stage = Stage::new(head, &rig.region, eye_texture.clone());
+        let stage = Stage::new(head, &rig.region, &skin, eye_texture.clone());
         let fdir = dir.join("frames");
         std::fs::create_dir_all(&fdir)
             .map_err(|e| EyesError::Invalid(format!("cannot create {}: {e}", fdir.display())))?;

@@ -76,11 +76,12 @@ fn lash_texture_png(size: usize) -> crate::Result<Vec<u8>> {
 }
 
 /// Writes `path`: the head with `baked` motion on the eye region (`region` maps skin vertices to
-/// model vertices), the globes textured with `eye` (linear RGB on the head's eye UVs) or the
+/// model vertices) carried onto `skin` (the head's own or a user's mesh), the globes textured with `eye` (linear RGB on the head's eye UVs) or the
 /// default eye.
 pub fn write(
     head: &Head,
     region: &crate::region::EyeRegion,
+    skin: &crate::surface::Skin,
     baked: &Baked,
     eye: Option<&[derma_core::Map; 3]>,
     path: &Path,
@@ -154,21 +155,12 @@ pub fn write(
         weights.push(w);
     }
     let rms = (se / (nf * nm) as f64).sqrt() as f32;
-    // Per model vertex, a target vector → per skin vertex offsets (every UV copy).
+    // Per model vertex, a target vector → offsets of the skin's vertices (every UV copy of the
+    // head's skin, or the user's mesh through the fit's B map).
     let to_skin = |v: &[f64]| -> Vec<(u32, Vec3)> {
-        region
-            .skin_to_model
-            .iter()
-            .enumerate()
-            .filter_map(|(i, &m)| {
-                if m == u32::MAX {
-                    return None;
-                }
-                let m = m as usize;
-                let d = Vec3::new(v[3 * m] as f32, v[3 * m + 1] as f32, v[3 * m + 2] as f32);
-                (d.length_squared() > 1e-12).then_some((i as u32, d))
-            })
-            .collect()
+        skin.offsets(region, |m| {
+            Vec3::new(v[3 * m] as f32, v[3 * m + 1] as f32, v[3 * m + 2] as f32)
+        })
     };
     // glTF's morph weights belong in [0, 1] (Blender's importer clamps them to ±10 and mishandles
     // larger ones): each component's weights w ∈ [lo, hi] over the clip become (w − lo)/(hi − lo)
@@ -250,7 +242,7 @@ pub fn write(
         &mut g,
         &mut nodes,
         "skin",
-        &head.skin,
+        skin.mesh(),
         &as_targets(&skin_offs),
         0,
     );

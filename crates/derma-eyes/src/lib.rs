@@ -7,7 +7,8 @@
 //! - [`pca`], [`regression`], [`model`]: the eyelid-shape and skin-motion models (eqs. 3.2–3.11);
 //!   [`transfer`] moves them to other vertices (eqs. 3.4–3.5).
 //! - [`globe`], [`skull`], [`sliding`], [`evaluate`]: the eyeball with its corneal bulge, the
-//!   skull maps and globe sliding (Algorithm 1) that turn a model frame into 3D.
+//!   skull maps and globe sliding (Algorithm 1) that turn a model frame into 3D; [`surface`]
+//!   carries it onto a user's own mesh through a fitted head (eq. 3.4).
 //! - [`blink`], [`saccade`], [`idle`], [`saliency`]: the drivers — stochastic blinks, main-sequence
 //!   saccades, idle gaze and salient gaze targets; [`animate`] turns them into frames and
 //!   [`synthetic`] into noisy tracked sequences.
@@ -38,6 +39,7 @@ pub mod saliency;
 pub mod sdf;
 pub mod skull;
 pub mod sliding;
+pub mod surface;
 pub mod synthetic;
 pub mod tracked;
 pub mod transfer;

@@ -104,6 +104,9 @@ impl EyeRegion {
     ) -> crate::Result<EyeRegion> {
         // Weld skin vertices by position; a welded vertex is in the region when any copy moves
         // and is tracked when any copy lies on the skin chart.
+        // The face's height from the globes to the subnasale, as a fraction of the built-in
+        // head's 51.2 mm.
+        let face = ((0.5 * (eyes[0].y + eyes[1].y) - lm.get("subnasale").y) / 51.2).clamp(0.5, 2.0);
         let mut weld: HashMap<[u32; 3], usize> = HashMap::new();
         let mut welded: Vec<(Vec3, Vec3, bool, bool, bool)> = Vec::new(); // pos, n, moved, skin, socket
         let mut of_vertex = Vec::with_capacity(skin.positions.len());
@@ -114,13 +117,21 @@ impl EyeRegion {
             });
             let w = &mut welded[id];
             // Within the orbit's reach: 32 mm either side of the globe centre, from 30 mm below
-            // it to the brow 32 mm above (the units' far tails on cheek and forehead stay put).
+            // it to the brow 32 mm above on the built-in head, heights scaled by the face's
+            // eye-to-subnasale height (the units' far tails on cheek, nose and forehead stay
+            // put: a shorter fitted face would otherwise bring its nostrils in), and outside
+            // the socket no deeper than the orbit's rim, 15 mm behind the centre (the built-in
+            // head's temples reach 12.6 mm).
+            let in_socket = socket(i);
             let near = eyes.iter().any(|c| {
                 let d = skin.positions[i] - *c;
-                d.x.abs() < 32.0 && d.y > -30.0 && d.y < 32.0
+                d.x.abs() < 32.0
+                    && d.y > -30.0 * face
+                    && d.y < 32.0 * face
+                    && (in_socket || d.z > -15.0)
             });
             w.2 |= moved[i] && near;
-            if socket(i) {
+            if in_socket {
                 w.4 = true;
             } else {
                 w.3 = true;

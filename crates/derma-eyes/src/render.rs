@@ -5,6 +5,7 @@
 use crate::evaluate;
 use crate::globe::Globe;
 use crate::region::EyeRegion;
+use crate::surface::Skin;
 use derma_core::mesh::TriMesh;
 use derma_core::Map;
 use derma_head::Head;
@@ -18,8 +19,9 @@ const SKIN_RGB: [f32; 3] = [0.56, 0.36, 0.28];
 pub struct Stage<'a> {
     head: &'a Head,
     region: &'a EyeRegion,
+    skin: &'a Skin<'a>,
     crop: TriMesh,
-    /// Skin vertex of each crop vertex.
+    /// Vertex of `skin` of each crop vertex.
     source: Vec<u32>,
     tangents: Vec<[f32; 4]>,
     /// Per lash part: its mesh and the nearest margin model vertex of each lash vertex.
@@ -30,34 +32,43 @@ pub struct Stage<'a> {
 }
 
 impl<'a> Stage<'a> {
-    /// The stage of `head`'s eye band (60 mm either side, 28 mm below to 34 mm above the eyes),
-    /// the globes textured with `eye` (linear RGB on the head's eye UVs) or the default eye.
-    pub fn new(head: &'a Head, region: &'a EyeRegion, eye: Option<[Map; 3]>) -> Stage<'a> {
+    /// The stage of `head`'s eye band (60 mm either side, 28 mm below to 34 mm above the eyes)
+    /// with `skin` (the head's own or a user's mesh following it), the globes textured with
+    /// `eye` (linear RGB on the head's eye UVs) or the default eye.
+    pub fn new(
+        head: &'a Head,
+        region: &'a EyeRegion,
+        skin: &'a Skin<'a>,
+        eye: Option<[Map; 3]>,
+    ) -> Stage<'a> {
         // Centred between the globes (a fitted head need not be centred on x = 0).
         let mid = 0.5 * (head.eyes[0].centre + head.eyes[1].centre);
         let (cx, cy) = (mid.x, mid.y);
         let zmin = mid.z - 20.0;
         let keep =
             |p: Vec3| (p.x - cx).abs() < 60.0 && p.y > cy - 28.0 && p.y < cy + 34.0 && p.z > zmin;
-        let skin = &head.skin;
-        let mut index = vec![u32::MAX; skin.positions.len()];
+        let mesh = skin.mesh();
+        let mut index = vec![u32::MAX; mesh.positions.len()];
         let mut crop = TriMesh::default();
         let mut source = Vec::new();
-        for t in &skin.triangles {
-            if !t.iter().all(|&i| keep(skin.positions[i as usize])) {
+        for t in &mesh.triangles {
+            if !t.iter().all(|&i| keep(mesh.positions[i as usize])) {
                 continue;
             }
             let tri = t.map(|i| {
                 if index[i as usize] == u32::MAX {
                     index[i as usize] = crop.positions.len() as u32;
-                    crop.positions.push(skin.positions[i as usize]);
-                    crop.normals.push(skin.normals[i as usize]);
-                    crop.uvs.push(skin.uvs[i as usize]);
+                    crop.positions.push(mesh.positions[i as usize]);
+                    crop.normals.push(mesh.normals.get(i as usize).copied().unwrap_or(Vec3::Z));
+                    crop.uvs.push(mesh.uvs.get(i as usize).copied().unwrap_or(Vec2::ZERO));
                     source.push(i);
                 }
                 index[i as usize]
             });
             crop.triangles.push(tri);
+        }
+        if skin.is_user() {
+            crop.compute_normals_across_seams();
         }
         let tangents = derma_core::mesh::mikktspace_tangents(&crop);
         let margin: Vec<u32> = region.margins.iter().flatten().flatten().copied().collect();
@@ -91,6 +102,7 @@ impl<'a> Stage<'a> {
         Stage {
             head,
             region,
+            skin,
             crop,
             source,
             tangents,
@@ -103,12 +115,11 @@ impl<'a> Stage<'a> {
     /// Renders one frame at `size` px across (linear RGB, cropped to the band's aspect).
     pub fn render(&self, f: &evaluate::Frame, rot: [Quat; 2], size: usize) -> [Map; 3] {
         let mut mesh = self.crop.clone();
-        for (k, &s) in self.source.iter().enumerate() {
-            let m = self.region.skin_to_model[s as usize];
-            if m != u32::MAX {
-                mesh.positions[k] = f.positions[m as usize];
-                mesh.normals[k] = f.normals[m as usize];
-            }
+        let (positions, normals) = self.skin.frame(self.region, f, &self.source);
+        mesh.positions = positions;
+        match normals {
+            Some(n) => mesh.normals = n,
+            None => mesh.compute_normals_across_seams(),
         }
         let lashes: Vec<TriMesh> = self
             .lashes

@@ -189,7 +189,7 @@ fn a_fitted_heads_lids_slide_over_its_own_globes() {
             + glam::Vec3::new(3.0, -12.0, 20.0);
     }
     let fitted = derma_head::fit::fit(
-        scan,
+        scan.clone(),
         &derma_head::fit::FitOptions::default(),
         &derma_core::progress::Silent,
     )
@@ -199,6 +199,44 @@ fn a_fitted_heads_lids_slide_over_its_own_globes() {
     let rig = Rig::new(&fitted).unwrap();
     let m = EyeModel::fit(&rig.samples(300, 1), Components::default()).unwrap();
     no_skin_inside_the_globes(&fitted, &rig.region, &m);
+    // The scan's own vertices, carried through the fit's B map, stay outside the globes too,
+    // and its lids close over a blink.
+    let skin = surface::Skin::user(&fitted, scan, std::path::Path::new("scan")).unwrap();
+    let ev = evaluate::Evaluator::new(&m, &rig.region, &fitted, sliding::THICKNESS).unwrap();
+    let all: Vec<u32> = (0..skin.mesh().positions.len() as u32).collect();
+    let mut f = evaluate::Frame::default();
+    let mut deepest = f32::NEG_INFINITY;
+    let mut moved = 0.0f32;
+    for (h, v, c) in [
+        (0.0, 0.0, 0.0),
+        (0.0, 0.0, 1.0),
+        (30.0, 0.0, 0.0),
+        (-30.0, 0.0, 0.0),
+        (0.0, 30.0, 0.0),
+        (0.0, -30.0, 0.0),
+        (30.0, 0.0, 1.0),
+        (0.0, -30.0, 1.0),
+    ] {
+        let mut g = ev.neutral.clone();
+        g.eyes = [Fick { h, v, t: 0.0 }; 2];
+        g.lids = [0, 1].map(|e| m.baseline_aperture(e, h, v, c));
+        ev.frame(&g, &mut f);
+        let (wi, wd) = f.positions.iter().zip(&rig.region.rest).map(|(a, b)| (*a - *b).length()).enumerate().fold((0, 0.0f32), |a, (i, d)| if d > a.1 { (i, d) } else { a });
+        let (pos, _) = skin.frame(&rig.region, &f, &all);
+        let rot = g.eyes.map(|a| a.rotation());
+        for (p, q) in pos.iter().zip(&skin.mesh().positions) {
+            moved = moved.max((*p - *q).length());
+            for e in 0..2 {
+                let r = rot[e].inverse() * (*p - ev.slider.centres[e]);
+                if r.length() < 20.0 {
+                    let d = ev.slider.maps[e].sample(r.normalize());
+                    deepest = deepest.max(d - r.length());
+                }
+            }
+        }
+    }
+    assert!(moved > 5.0, "the scan's lids barely move: {moved} mm");
+    assert!(deepest < 0.05, "a scan vertex {deepest} mm inside a globe");
     // The globes moved with the head and grew with it.
     assert!((fitted.eyes[0].centre - head.eyes[0].centre).length() > 10.0);
     assert!(fitted.eyes[0].radius > head.eyes[0].radius);
@@ -411,3 +449,4 @@ fn gpu_fields_equal_the_cpu_reference() {
         assert!((ec - eg).abs() < 0.02, "{}: CPU {ec}% GPU {eg}%", s.name());
     }
 }
+

@@ -67,6 +67,10 @@ pub struct SyntheticArgs {
 pub struct AnimateArgs {
     #[command(flatten)]
     head: crate::args::HeadArg,
+    /// Your own mesh (with UVs) the --head was fitted to: its vertices move, in place of the
+    /// fitted head's skin.
+    #[arg(long, requires = "head")]
+    mesh: Option<PathBuf>,
     /// A trained model (model.json); default: trained on the rig now.
     #[arg(long)]
     model: Option<PathBuf>,
@@ -200,6 +204,7 @@ pub fn run(cmd: EyesCommand, bars: &Bars) -> Result<()> {
                 thickness: a.thickness,
                 iris: a.iris,
                 head: a.head.head,
+                mesh: a.mesh,
             };
             let r = files::animate(&o, &a.out, bars)?;
             bars.finish();

@@ -1,6 +1,6 @@
-//! A fitted head's face units carried onto the user's own mesh (its topology and UVs kept)
-//! through the dense correspondence: each vertex takes the offsets of the fitted skin's point
-//! nearest it, interpolated barycentrically (the EyeMove thesis' B map, eq. 3.4).
+//! A fitted head's motion carried onto the user's own mesh (its topology and UVs kept) through
+//! the dense correspondence: each vertex takes the offsets of the fitted skin's point nearest
+//! it, interpolated barycentrically (the EyeMove thesis' B map, eq. 3.4).
 
 use crate::{Head, MorphTarget};
 use derma_core::mesh::TriMesh;
@@ -10,12 +10,70 @@ use rayon::prelude::*;
 /// How far (mm) a mesh vertex may lie from the fitted skin and still follow it.
 pub const REACH_MM: f32 = 10.0;
 
+/// Below this share of a mesh's vertices near the fitted skin, it is not the fitted mesh.
+pub const MIN_SHARE: f32 = 0.5;
+
+/// Where each vertex of a user's mesh lies on a fitted head's skin: the B map that carries any
+/// per-skin-vertex offset field onto the mesh.
+pub struct Carry<'a> {
+    head: &'a Head,
+    corr: Vec<super::SurfacePoint>,
+}
+
+impl<'a> Carry<'a> {
+    /// The map of `mesh` (mm, the frame the head was fitted in) onto `head`'s skin: vertices
+    /// farther than [`REACH_MM`] from it do not move.
+    pub fn new(head: &'a Head, mesh: &TriMesh) -> Carry<'a> {
+        Carry {
+            head,
+            corr: super::scan_to_template(head, mesh),
+        }
+    }
+
+    /// The share of the mesh's vertices that follow the skin (near 0: not the mesh the head was
+    /// fitted to, or read in another unit; below [`MIN_SHARE`] callers refuse it).
+    pub fn share(&self) -> f32 {
+        self.corr.iter().filter(|c| c.is_some()).count() as f32 / self.corr.len().max(1) as f32
+    }
+
+    /// The mesh's vertices.
+    pub fn len(&self) -> usize {
+        self.corr.len()
+    }
+
+    /// True for a mesh with no vertices.
+    pub fn is_empty(&self) -> bool {
+        self.corr.is_empty()
+    }
+
+    /// The offset of mesh vertex `i` from `dense` offsets of the skin's vertices.
+    pub fn offset(&self, i: usize, dense: &[Vec3]) -> Vec3 {
+        match self.corr[i] {
+            Some((t, b)) => {
+                let [a, p, q] = self.head.skin.triangles[t as usize].map(|k| dense[k as usize]);
+                a * (1.0 - b[0] - b[1]) + p * b[0] + q * b[1]
+            }
+            None => Vec3::ZERO,
+        }
+    }
+
+    /// The offsets of the mesh's vertices that move (sparse, by vertex) from `dense` offsets of
+    /// the skin's vertices.
+    pub fn offsets(&self, dense: &[Vec3]) -> Vec<(u32, Vec3)> {
+        (0..self.corr.len())
+            .filter_map(|i| {
+                let d = self.offset(i, dense);
+                (d.length_squared() > 1e-10).then_some((i as u32, d))
+            })
+            .collect()
+    }
+}
+
 /// The head's 52 face units as morph targets of `mesh` (mm, the frame the head was fitted in):
 /// vertices farther than [`REACH_MM`] from the fitted skin do not move. Also the share of the
-/// mesh's vertices that follow (near 0: not the mesh the head was fitted to, or another unit).
+/// mesh's vertices that follow ([`Carry::share`]).
 pub fn face_units(head: &Head, mesh: &TriMesh) -> (Vec<MorphTarget>, f32) {
-    let corr = super::scan_to_template(head, mesh);
-    let share = corr.iter().filter(|c| c.is_some()).count() as f32 / corr.len().max(1) as f32;
+    let carry = Carry::new(head, mesh);
     let units = head
         .face_units()
         .par_iter()
@@ -24,28 +82,15 @@ pub fn face_units(head: &Head, mesh: &TriMesh) -> (Vec<MorphTarget>, f32) {
             for &(v, d) in &u.skin {
                 dense[v as usize] = d;
             }
-            let skin = corr
-                .iter()
-                .enumerate()
-                .filter_map(|(i, c)| {
-                    let (t, b) = (*c)?;
-                    let [a, p, q] = head.skin.triangles[t as usize].map(|k| dense[k as usize]);
-                    let d = a * (1.0 - b[0] - b[1]) + p * b[0] + q * b[1];
-                    (d.length_squared() > 1e-10).then_some((i as u32, d))
-                })
-                .collect();
             MorphTarget {
                 name: u.name.clone(),
-                skin,
+                skin: carry.offsets(&dense),
                 parts: Vec::new(),
             }
         })
         .collect();
-    (units, share)
+    (units, carry.share())
 }
-
-/// Below this share of a mesh's vertices near the fitted skin, it is not the fitted mesh.
-pub const MIN_SHARE: f32 = 0.5;
 
 #[cfg(test)]
 mod tests {
