@@ -391,27 +391,6 @@ impl TriMesh {
         }
         self.normals = n.into_iter().map(|v| v.normalize_or(Vec3::Z)).collect();
     }
-
-    /// As [`TriMesh::compute_normals`], with the copies of a vertex split along UV seams (same
-    /// position) sharing one normal, so a moved mesh shows no seam.
-    pub fn compute_normals_across_seams(&mut self) {
-        let mut first: std::collections::HashMap<[u32; 3], usize> =
-            std::collections::HashMap::with_capacity(self.positions.len());
-        let weld: Vec<usize> = self
-            .positions
-            .iter()
-            .enumerate()
-            .map(|(i, p)| *first.entry(p.to_array().map(f32::to_bits)).or_insert(i))
-            .collect();
-        let mut n = vec![Vec3::ZERO; self.positions.len()];
-        for t in &self.triangles {
-            let f = self.face_cross(*t);
-            for &i in t {
-                n[weld[i as usize]] += f;
-            }
-        }
-        self.normals = weld.iter().map(|&w| n[w].normalize_or(Vec3::Z)).collect();
-    }
 }
 
 fn load_obj(path: &Path) -> Result<TriMesh> {

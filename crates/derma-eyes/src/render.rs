@@ -59,16 +59,15 @@ impl<'a> Stage<'a> {
                 if index[i as usize] == u32::MAX {
                     index[i as usize] = crop.positions.len() as u32;
                     crop.positions.push(mesh.positions[i as usize]);
-                    crop.normals.push(mesh.normals.get(i as usize).copied().unwrap_or(Vec3::Z));
-                    crop.uvs.push(mesh.uvs.get(i as usize).copied().unwrap_or(Vec2::ZERO));
+                    crop.normals
+                        .push(mesh.normals.get(i as usize).copied().unwrap_or(Vec3::Z));
+                    crop.uvs
+                        .push(mesh.uvs.get(i as usize).copied().unwrap_or(Vec2::ZERO));
                     source.push(i);
                 }
                 index[i as usize]
             });
             crop.triangles.push(tri);
-        }
-        if skin.is_user() {
-            crop.compute_normals_across_seams();
         }
         let tangents = derma_core::mesh::mikktspace_tangents(&crop);
         let margin: Vec<u32> = region.margins.iter().flatten().flatten().copied().collect();
@@ -115,12 +114,7 @@ impl<'a> Stage<'a> {
     /// Renders one frame at `size` px across (linear RGB, cropped to the band's aspect).
     pub fn render(&self, f: &evaluate::Frame, rot: [Quat; 2], size: usize) -> [Map; 3] {
         let mut mesh = self.crop.clone();
-        let (positions, normals) = self.skin.frame(self.region, f, &self.source);
-        mesh.positions = positions;
-        match normals {
-            Some(n) => mesh.normals = n,
-            None => mesh.compute_normals_across_seams(),
-        }
+        (mesh.positions, mesh.normals) = self.skin.frame(self.region, f, &self.source);
         let lashes: Vec<TriMesh> = self
             .lashes
             .iter()

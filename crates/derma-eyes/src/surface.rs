@@ -13,7 +13,7 @@ use std::path::Path;
 /// The skin an animation moves.
 pub struct Skin<'a> {
     head: &'a Head,
-    user: Option<(TriMesh, Carry<'a>)>,
+    user: Option<(TriMesh, Carry)>,
 }
 
 impl<'a> Skin<'a> {
@@ -22,10 +22,10 @@ impl<'a> Skin<'a> {
         Skin { head, user: None }
     }
 
-    /// The user's `mesh` (read from `path`, in mm in the frame `head` was fitted in), refused
-    /// when most of it lies off the fitted skin.
+    /// The user's `mesh` (read from `path`, in mm in the frame `head` was fitted in), following
+    /// the outer skin ([`Carry::outer`]); refused when most of it lies off the fitted skin.
     pub fn user(head: &'a Head, mesh: TriMesh, path: &Path) -> Result<Skin<'a>> {
-        let carry = Carry::new(head, &mesh);
+        let carry = Carry::outer(head, &mesh);
         let share = carry.share();
         if share < MIN_SHARE {
             return Err(EyesError::Invalid(format!(
@@ -48,23 +48,14 @@ impl<'a> Skin<'a> {
         }
     }
 
-    /// True for a user's mesh.
-    pub fn is_user(&self) -> bool {
-        self.user.is_some()
-    }
-
     /// Offsets of the head's skin vertices from offsets `model(m)` of the region's model
-    /// vertices (zero outside the region). A user's mesh follows the outer skin alone: the
-    /// socket's hidden inner surfaces (conjunctiva, the lids' backs) swing far with the lid
-    /// margins, and a mesh point that lies nearest them (a modelled socket, a closed eye's
-    /// surface) stays put rather than sweep through the globe.
+    /// vertices (zero outside the region).
     fn dense(&self, region: &EyeRegion, model: &impl Fn(usize) -> Vec3) -> Vec<Vec3> {
-        let outer_only = self.user.is_some();
         region
             .skin_to_model
             .iter()
             .map(|&m| {
-                if m == u32::MAX || (outer_only && region.inner[m as usize]) {
+                if m == u32::MAX {
                     Vec3::ZERO
                 } else {
                     model(m as usize)
@@ -88,40 +79,38 @@ impl<'a> Skin<'a> {
         }
     }
 
-    /// Positions of the vertices `which` of this skin in frame `f`; with the model's normals on
-    /// the head's own skin (`None` on a user's mesh: recompute them from the moved triangles).
-    pub fn frame(
-        &self,
-        region: &EyeRegion,
-        f: &Frame,
-        which: &[u32],
-    ) -> (Vec<Vec3>, Option<Vec<Vec3>>) {
-        let rest = &self.mesh().positions;
+    /// Positions and normals of the vertices `which` of this skin in frame `f`: the model's own
+    /// on the head's skin; on a user's mesh its rest normals turned by the change the model
+    /// makes to the skin's normals, carried like the positions (the shading a viewer gives a
+    /// morph target without normals: no facets where the linear model folds the lid).
+    pub fn frame(&self, region: &EyeRegion, f: &Frame, which: &[u32]) -> (Vec<Vec3>, Vec<Vec3>) {
+        let mesh = self.mesh();
         match &self.user {
-            None => {
-                let mut normals = Vec::with_capacity(which.len());
-                let positions = which
+            None => which
+                .iter()
+                .map(|&s| {
+                    let m = region.skin_to_model[s as usize];
+                    if m == u32::MAX {
+                        (mesh.positions[s as usize], mesh.normals[s as usize])
+                    } else {
+                        (f.positions[m as usize], f.normals[m as usize])
+                    }
+                })
+                .unzip(),
+            Some((_, carry)) => {
+                let moved = self.dense(region, &|m| f.positions[m] - region.rest[m]);
+                let turned = self.dense(region, &|m| f.normals[m] - region.rest_normals[m]);
+                which
                     .iter()
                     .map(|&s| {
-                        let m = region.skin_to_model[s as usize];
-                        if m == u32::MAX {
-                            normals.push(self.head.skin.normals[s as usize]);
-                            rest[s as usize]
-                        } else {
-                            normals.push(f.normals[m as usize]);
-                            f.positions[m as usize]
-                        }
+                        let s = s as usize;
+                        let n = mesh.normals.get(s).copied().unwrap_or(Vec3::Z);
+                        (
+                            mesh.positions[s] + carry.offset(s, &moved),
+                            (n + carry.offset(s, &turned)).normalize_or(n),
+                        )
                     })
-                    .collect();
-                (positions, Some(normals))
-            }
-            Some((_, carry)) => {
-                let dense = self.dense(region, &|m| f.positions[m] - region.rest[m]);
-                let positions = which
-                    .iter()
-                    .map(|&s| rest[s as usize] + carry.offset(s as usize, &dense))
-                    .collect();
-                (positions, None)
+                    .unzip()
             }
         }
     }

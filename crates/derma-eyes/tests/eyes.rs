@@ -221,7 +221,6 @@ fn a_fitted_heads_lids_slide_over_its_own_globes() {
         g.eyes = [Fick { h, v, t: 0.0 }; 2];
         g.lids = [0, 1].map(|e| m.baseline_aperture(e, h, v, c));
         ev.frame(&g, &mut f);
-        let (wi, wd) = f.positions.iter().zip(&rig.region.rest).map(|(a, b)| (*a - *b).length()).enumerate().fold((0, 0.0f32), |a, (i, d)| if d > a.1 { (i, d) } else { a });
         let (pos, _) = skin.frame(&rig.region, &f, &all);
         let rot = g.eyes.map(|a| a.rotation());
         for (p, q) in pos.iter().zip(&skin.mesh().positions) {
@@ -449,4 +448,3 @@ fn gpu_fields_equal_the_cpu_reference() {
         assert!((ec - eg).abs() < 0.02, "{}: CPU {ec}% GPU {eg}%", s.name());
     }
 }
-

@@ -231,6 +231,26 @@ impl Rig {
         targets: &[TargetSpec],
         opts: &BasisOptions,
     ) -> Result<Rig> {
+        Self::build_placed(
+            neutral,
+            mask,
+            melanin,
+            targets,
+            opts,
+            &expression::Placement::Builtin,
+        )
+    }
+
+    /// As [`Rig::build`], built-in library entries placed by `placement` (a user's mesh in its
+    /// own UV layout) instead of on the built-in head's layout.
+    pub fn build_placed(
+        neutral: &Map,
+        mask: Option<&Map>,
+        melanin: Option<Map>,
+        targets: &[TargetSpec],
+        opts: &BasisOptions,
+        placement: &expression::Placement,
+    ) -> Result<Rig> {
         let (w, h) = (neutral.width(), neutral.height());
         check_fractions("neutral hemoglobin map", neutral)?;
         if let Some(m) = &melanin {
@@ -268,7 +288,7 @@ impl Rig {
         let needs_head = targets
             .iter()
             .any(|t| matches!(t.source, TargetSource::Builtin(_)));
-        let points = needs_head.then(|| expression::head_points(gw, gh));
+        let points = needs_head.then(|| placement.points(gw, gh));
         let built: Vec<Target> = targets
             .par_iter()
             .map(|t| -> Result<Target> {
@@ -279,7 +299,7 @@ impl Rig {
                     }
                     TargetSource::Builtin(e) => {
                         let pts = points.as_ref().expect("computed when a builtin is present");
-                        let (gm, gs) = expression::gain_maps(e, pts, gw, gh);
+                        let (gm, gs) = expression::gain_maps(e, pts, placement.regions(), gw, gh);
                         let mul = |a: &Map, b: &Map| a.zip_map(b, |x, y| x * y);
                         (
                             mul(&neutral_stats.mean, &gm),

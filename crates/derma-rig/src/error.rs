@@ -28,6 +28,9 @@ pub enum RigError {
         /// The rig's height.
         want_h: usize,
     },
+    /// A fitted head directory that could not be read.
+    #[error(transparent)]
+    Head(#[from] derma_head::fit::store::StoreError),
     /// The GPU evaluation could not run.
     #[error(transparent)]
     Gpu(#[from] derma_core::gpu::GpuError),

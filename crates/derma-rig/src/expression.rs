@@ -8,8 +8,9 @@
 //! local standard deviation (contrast of the vascular pattern). Gains combine multiplicatively
 //! (in log space), so overlapping regions stay positive and smooth.
 
+use derma_core::mesh::TriMesh;
 use derma_core::Map;
-use derma_head::Head;
+use derma_head::{Head, Regions};
 use glam::Vec3;
 
 /// One region of change.
@@ -233,7 +234,12 @@ pub fn find(name: &str) -> Option<&'static Expression> {
 impl Expression {
     /// (mean gain, σ gain) at point `p` of the built-in head.
     pub fn gains_at(&self, p: Vec3) -> (f32, f32) {
-        let (x, y, front) = Head::builtin().regions.face_coords(p);
+        self.gains_on(p, &Head::builtin().regions)
+    }
+
+    /// (mean gain, σ gain) at point `p` of a head whose regions are `regions`.
+    pub fn gains_on(&self, p: Vec3, regions: &Regions) -> (f32, f32) {
+        let (x, y, front) = regions.face_coords(p);
         if front <= 0.0 {
             return (1.0, 1.0);
         }
@@ -256,22 +262,55 @@ impl Expression {
     }
 }
 
-/// Surface points of the built-in head on a `w × h` UV grid (texel centres), `None` outside
-/// its charts.
-pub fn head_points(w: usize, h: usize) -> Vec<Option<Vec3>> {
-    let skin = &Head::builtin().skin;
-    let raster = derma_core::raster::UvRaster::new(skin, w, h);
-    (0..w * h)
-        .map(|i| raster.covered(i).then(|| raster.position(skin, i)))
-        .collect()
+/// Where the library's regions land: on the built-in head's UV layout (which a fitted head's
+/// template shares), or on a user's mesh in its own UV layout, through the landmarks of the
+/// head fitted to it.
+pub enum Placement<'a> {
+    /// The built-in head's UV layout.
+    Builtin,
+    /// A user's mesh (mm, in the frame its head was fitted in) and that head's regions.
+    Mesh {
+        /// The mesh, with its own UVs.
+        mesh: &'a TriMesh,
+        /// The fitted head's regions (its landmarks in the mesh's frame).
+        regions: &'a Regions,
+    },
 }
 
-/// Gain maps (mean, σ) of `e` on a `w × h` grid of the built-in head's UV layout, from
-/// `points` ([`head_points`]); 1 outside the charts.
-pub fn gain_maps(e: &Expression, points: &[Option<Vec3>], w: usize, h: usize) -> (Map, Map) {
+impl Placement<'_> {
+    /// Surface points on a `w × h` UV grid (texel centres), `None` outside the charts.
+    pub fn points(&self, w: usize, h: usize) -> Vec<Option<Vec3>> {
+        let mesh = match self {
+            Placement::Builtin => &Head::builtin().skin,
+            Placement::Mesh { mesh, .. } => *mesh,
+        };
+        let raster = derma_core::raster::UvRaster::new(mesh, w, h);
+        (0..w * h)
+            .map(|i| raster.covered(i).then(|| raster.position(mesh, i)))
+            .collect()
+    }
+
+    /// The regions that give the points their face coordinates.
+    pub fn regions(&self) -> &Regions {
+        match self {
+            Placement::Builtin => &Head::builtin().regions,
+            Placement::Mesh { regions, .. } => regions,
+        }
+    }
+}
+
+/// Gain maps (mean, σ) of `e` on a `w × h` grid, from `points` ([`Placement::points`]) and the
+/// placement's `regions`; 1 outside the charts.
+pub fn gain_maps(
+    e: &Expression,
+    points: &[Option<Vec3>],
+    regions: &Regions,
+    w: usize,
+    h: usize,
+) -> (Map, Map) {
     let (gm, gs): (Vec<f32>, Vec<f32>) = points
         .iter()
-        .map(|p| p.map_or((1.0, 1.0), |p| e.gains_at(p)))
+        .map(|p| p.map_or((1.0, 1.0), |p| e.gains_on(p, regions)))
         .unzip();
     (Map::from_fn(w, h, |i| gm[i]), Map::from_fn(w, h, |i| gs[i]))
 }
@@ -332,8 +371,14 @@ mod tests {
     #[test]
     fn gain_maps_cover_the_face_of_the_head() {
         let (w, h) = (64, 64);
-        let pts = head_points(w, h);
-        let (gm, _) = gain_maps(find("happiness").unwrap(), &pts, w, h);
+        let pts = Placement::Builtin.points(w, h);
+        let (gm, _) = gain_maps(
+            find("happiness").unwrap(),
+            &pts,
+            Placement::Builtin.regions(),
+            w,
+            h,
+        );
         let st = gm.stats(None);
         assert!(st.max > 1.2 && st.min < 0.92, "{st:?}");
     }

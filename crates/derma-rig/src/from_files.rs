@@ -54,12 +54,56 @@ pub struct BuildFiles {
     pub character: CharacterFiles,
     /// Measured or painted target hemoglobin maps, aligned with the neutral: (name, file).
     pub targets: Vec<(String, PathBuf)>,
-    /// Built-in library entries by name, or "all" (they assume the built-in head's UVs).
+    /// Built-in library entries by name, or "all" (placed on the built-in head's UV layout, or
+    /// on `on_mesh`).
     pub builtin: Vec<String>,
     /// Suggested global hemoglobin scale of targets at full weight: (name, scale).
     pub globals: Vec<(String, f32)>,
     /// A skin-colour LUT (.dtab); `None` for the built-in one.
     pub lut: Option<PathBuf>,
+    /// The maps are on a user's own mesh and UVs: the built-in entries are placed on it
+    /// through the head fitted to it; `None`: the built-in head's UV layout (also a fitted
+    /// head's template).
+    pub on_mesh: Option<OnMesh>,
+}
+
+/// A user's mesh and the head fitted to it (`derma head fit`).
+#[derive(Clone, Debug)]
+pub struct OnMesh {
+    /// The fitted head directory.
+    pub head: PathBuf,
+    /// The mesh (with its UVs) the maps were painted on.
+    pub mesh: PathBuf,
+}
+
+impl OnMesh {
+    /// The mesh in mm and the fitted head's regions; refused when most of the mesh lies off
+    /// the fitted head (another mesh, or another unit).
+    pub fn load(
+        &self,
+        progress: &dyn Progress,
+    ) -> Result<(derma_core::mesh::TriMesh, derma_head::Regions)> {
+        use derma_head::fit::onto::{Carry, MIN_SHARE, REACH_MM};
+        let head = derma_head::fitted::open(&self.head)?;
+        let (mesh, _) = derma_core::mesh::load_head_mesh(
+            &self.mesh,
+            derma_core::mesh::HeadUnit::Auto,
+            progress,
+        )?;
+        let share = Carry::new(head, &mesh).share();
+        if share < MIN_SHARE {
+            return Err(crate::RigError::File {
+                path: self.mesh.clone(),
+                detail: format!(
+                    "only {:.0} % of its vertices lie within {REACH_MM} mm of the head fitted in '{}'; is it the mesh that head was fitted to, read in the same unit?",
+                    100.0 * share,
+                    self.head.display()
+                ),
+            });
+        }
+        let regions = derma_head::Regions::new(head.landmarks.clone(), Vec::new(), Vec::new());
+        Ok((mesh, regions))
+    }
 }
 
 /// The built-in skin-colour LUT, or the one at `path`.
@@ -134,7 +178,15 @@ pub fn build(
             "no targets: give target maps (NAME=FILE) and/or built-in library entries",
         ));
     }
-    let rig = Rig::build(&neutral, mask.as_ref(), melanin, &specs, opts)?;
+    let on_mesh = match &files.on_mesh {
+        Some(m) if !files.builtin.is_empty() => Some(m.load(progress)?),
+        _ => None,
+    };
+    let placement = match &on_mesh {
+        Some((mesh, regions)) => expression::Placement::Mesh { mesh, regions },
+        None => expression::Placement::Builtin,
+    };
+    let rig = Rig::build_placed(&neutral, mask.as_ref(), melanin, &specs, opts, &placement)?;
     let json = rig_dir::save(&rig, &lut, out)?;
     Ok((rig, json))
 }

@@ -9,7 +9,7 @@ use crate::rig_args::{
 };
 use anyhow::Result;
 use derma_rig::frame_job::FrameJob;
-use derma_rig::from_files::{self, BuildFiles};
+use derma_rig::from_files::{self, BuildFiles, OnMesh};
 use derma_rig::sequence::{render_sequence, FrameFormat, SequenceOptions};
 use derma_rig::{expression, BasisOptions, TransferMode};
 use std::time::Instant;
@@ -43,6 +43,10 @@ fn build(a: BuildArgs, bars: &Bars) -> Result<()> {
         builtin: a.builtin,
         globals: a.globals,
         lut: a.lut,
+        on_mesh: a.mesh.map(|mesh| OnMesh {
+            head: a.head.head.expect("clap: --mesh requires --head"),
+            mesh,
+        }),
     };
     let opts = BasisOptions {
         radius: a.radius,

@@ -53,10 +53,17 @@ pub struct BuildArgs {
     /// A measured or painted target hemoglobin map, aligned with the neutral: NAME=FILE (repeat).
     #[arg(long = "target", value_name = "NAME=FILE", value_parser = crate::args::named_file)]
     pub targets: Vec<(String, PathBuf)>,
-    /// Built-in library entries to add (comma-separated names, or "all"); they assume derma's
-    /// built-in head's UV layout (e.g. maps from `derma skin`). See `derma rig library`.
+    /// Built-in library entries to add (comma-separated names, or "all"), placed on derma's
+    /// UV layout (maps from `derma skin`, also on a fitted head), or with --mesh on yours. See
+    /// `derma rig library`.
     #[arg(long, value_delimiter = ',')]
     pub builtin: Vec<String>,
+    #[command(flatten)]
+    pub head: crate::args::HeadArg,
+    /// The mesh (with its own UVs) the maps were painted on (`derma skin --mesh M --head DIR`):
+    /// the built-in entries are placed on it through the --head fitted to it.
+    #[arg(long, requires = "head")]
+    pub mesh: Option<PathBuf>,
     /// Suggested global hemoglobin scale of a target at full weight: NAME=S (repeat).
     #[arg(long = "global", value_name = "NAME=S", value_parser = crate::args::named_number)]
     pub globals: Vec<(String, f32)>,

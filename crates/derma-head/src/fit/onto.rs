@@ -10,24 +10,68 @@ use rayon::prelude::*;
 /// How far (mm) a mesh vertex may lie from the fitted skin and still follow it.
 pub const REACH_MM: f32 = 10.0;
 
+/// How much nearer (mm) the eye socket's hidden surface must be than the outer skin for a mesh
+/// point to count as lying on the socket ([`Carry::outer`]).
+pub const SOCKET_MARGIN_MM: f32 = 0.5;
+
 /// Below this share of a mesh's vertices near the fitted skin, it is not the fitted mesh.
 pub const MIN_SHARE: f32 = 0.5;
 
 /// Where each vertex of a user's mesh lies on a fitted head's skin: the B map that carries any
 /// per-skin-vertex offset field onto the mesh.
-pub struct Carry<'a> {
-    head: &'a Head,
-    corr: Vec<super::SurfacePoint>,
+pub struct Carry {
+    /// Per mesh vertex: the skin triangle's corners and the barycentric weights of corners 1
+    /// and 2 (`None`: nothing within [`REACH_MM`]).
+    corr: Vec<Option<([u32; 3], [f32; 2])>>,
 }
 
-impl<'a> Carry<'a> {
+impl Carry {
     /// The map of `mesh` (mm, the frame the head was fitted in) onto `head`'s skin: vertices
     /// farther than [`REACH_MM`] from it do not move.
-    pub fn new(head: &'a Head, mesh: &TriMesh) -> Carry<'a> {
-        Carry {
-            head,
-            corr: super::scan_to_template(head, mesh),
-        }
+    pub fn new(head: &Head, mesh: &TriMesh) -> Carry {
+        let skin = &head.skin;
+        let bvh = derma_core::bvh::Bvh::new(&skin.positions, &skin.triangles);
+        let corr = mesh
+            .positions
+            .par_iter()
+            .map(|p| {
+                bvh.closest(*p, REACH_MM)
+                    .map(|c| (skin.triangles[c.triangle as usize], c.bary))
+            })
+            .collect();
+        Carry { corr }
+    }
+
+    /// As [`Carry::new`] onto the skin's outer surface alone: the eye sockets' charts (the
+    /// conjunctiva and the lids' backs, hidden surfaces that swing far with the lid margins)
+    /// carry nothing. A mesh point by a thin lid follows the lid's outside; one that lies on
+    /// the socket itself (a modelled socket, nearer it than the outside by over
+    /// [`SOCKET_MARGIN_MM`]) stays put.
+    pub fn outer(head: &Head, mesh: &TriMesh) -> Carry {
+        let skin = &head.skin;
+        let socket = |t: &[u32; 3]| {
+            t.iter()
+                .all(|&i| head.regions.in_socket(skin.uvs[i as usize]))
+        };
+        let outer: Vec<[u32; 3]> = skin
+            .triangles
+            .iter()
+            .copied()
+            .filter(|t| !socket(t))
+            .collect();
+        let all = derma_core::bvh::Bvh::new(&skin.positions, &skin.triangles);
+        let out = derma_core::bvh::Bvh::new(&skin.positions, &outer);
+        let corr = mesh
+            .positions
+            .par_iter()
+            .map(|p| {
+                let o = out.closest(*p, REACH_MM)?;
+                let a = all.closest(*p, REACH_MM)?;
+                (o.distance <= a.distance + SOCKET_MARGIN_MM)
+                    .then(|| (outer[o.triangle as usize], o.bary))
+            })
+            .collect();
+        Carry { corr }
     }
 
     /// The share of the mesh's vertices that follow the skin (near 0: not the mesh the head was
@@ -50,7 +94,7 @@ impl<'a> Carry<'a> {
     pub fn offset(&self, i: usize, dense: &[Vec3]) -> Vec3 {
         match self.corr[i] {
             Some((t, b)) => {
-                let [a, p, q] = self.head.skin.triangles[t as usize].map(|k| dense[k as usize]);
+                let [a, p, q] = t.map(|k| dense[k as usize]);
                 a * (1.0 - b[0] - b[1]) + p * b[0] + q * b[1]
             }
             None => Vec3::ZERO,
