@@ -13,7 +13,7 @@ $D head fit --mesh "$W/scan.obj" --out "$W/fitted" -q
 $D skin --mesh "$W/scan.obj" --head "$W/fitted" --size 1024 --seed 1 --out "$W/scan_skin" -q
 $D skin --head "$W/fitted" --size 1024 --seed 1 --out "$W/fit_skin" -q
 common=(--size 512 --lighting studio --yaw 20 -q)
-$D render "$W/scan_skin" --mesh "$W/scan.obj" --out "$W/r_scan" "${common[@]}" > /dev/null
+$D render "$W/scan_skin" --mesh "$W/scan.obj" --head "$W/fitted" --out "$W/r_scan" "${common[@]}" > /dev/null
 $D render "$W/fit_skin" --head "$W/fitted" --out "$W/r_fit" "${common[@]}" > /dev/null
 $D render "$W/scan_skin" --mesh "$W/scan.obj" --head "$W/fitted" --out "$W/r_smile" "${common[@]}" \
   --pose mouthSmileLeft=1,mouthSmileRight=1,browInnerUp=0.6 > /dev/null

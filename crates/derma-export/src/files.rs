@@ -125,6 +125,13 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     }
     let job_p = Job::new(progress);
     job_p.stage("scene", 1, Unit::Steps);
+    let eye = || {
+        job.iris
+            .as_deref()
+            .map(derma_eyes::files::load_eye_texture)
+            .transpose()
+            .map_err(|e| ExportError::Invalid(e.to_string()))
+    };
     let scene = match &job.mesh {
         Some(p) => {
             let mut mesh = crate::glb::load_mesh_mm(p, progress)?;
@@ -149,7 +156,20 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
                 }
                 mesh.compute_normals();
             }
-            Scene::mesh(&mesh, skin.clone())
+            let lashes = skin.lash_color.map(glam::Vec3::from);
+            let scene = Scene::mesh(&mesh, skin.clone());
+            // The fitted head's globes, lashes, teeth and tongue in the mesh's openings.
+            match job.head.as_deref() {
+                Some(dir) => {
+                    let head = derma_head::fitted::open(dir)?;
+                    if job.face_units.is_empty() {
+                        let share = derma_head::fit::onto::Carry::new(head, &mesh).share();
+                        crate::glb::check_share(share, p)?;
+                    }
+                    scene.with_parts(head, lashes, eye()?, job.gaze)
+                }
+                None => scene,
+            }
         }
         None => {
             let units: Vec<(&str, f32)> = job
@@ -165,16 +185,11 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
                     )));
                 }
             }
-            let eye = job
-                .iris
-                .as_deref()
-                .map(derma_eyes::files::load_eye_texture)
-                .transpose()
-                .map_err(|e| ExportError::Invalid(e.to_string()))?;
-            Scene::head(head, skin.clone(), &units, eye, job.gaze)
+            Scene::head(head, skin.clone(), &units, eye()?, job.gaze)
         }
     };
     debug_assert!(matches!(scene.parts[0].material, Material::Skin(_)));
+    let parts: Vec<String> = scene.parts.iter().map(|p| p.name.clone()).collect();
     let r = derma_render::renderer(&scene, job.device)?;
     r.set_lake(job.lake);
     let mut files = Vec::new();
@@ -236,6 +251,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
         "view": {"yaw_deg": job.view.yaw_deg, "pitch_deg": job.view.pitch_deg, "zoom": job.view.zoom},
         "textures": job.textures,
         "mesh": job.mesh,
+        "parts": parts,
         "files": files,
     });
     derma_core::report::write_json(

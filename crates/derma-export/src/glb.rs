@@ -460,6 +460,12 @@ pub fn carried_units(
     path: &std::path::Path,
 ) -> Result<Vec<derma_head::MorphTarget>> {
     let (units, share) = derma_head::fit::onto::face_units(head, mesh);
+    check_share(share, path)?;
+    Ok(units)
+}
+
+/// Refuses a user mesh at `path` of which only `share` lies near the fitted head.
+pub fn check_share(share: f32, path: &std::path::Path) -> Result<()> {
     if share < derma_head::fit::onto::MIN_SHARE {
         return Err(ExportError::Input {
             path: path.to_path_buf(),
@@ -470,7 +476,7 @@ pub fn carried_units(
             ),
         });
     }
-    Ok(units)
+    Ok(())
 }
 
 #[cfg(test)]

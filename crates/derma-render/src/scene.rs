@@ -164,6 +164,19 @@ impl Scene {
                 },
             });
         }
+        scene.with_parts(head, lash_color, eye_albedo, gaze)
+    }
+
+    /// Adds `head`'s parts (the globes, textured with `eye_albedo` or the built-in eye and
+    /// turned to `gaze`; the lashes in `lash_color` or their own; teeth and tongue) at rest:
+    /// to the head's own skin, or to a user's mesh the head was fitted to.
+    pub fn with_parts(
+        mut self,
+        head: &derma_head::Head,
+        lash_color: Option<Vec3>,
+        eye_albedo: Option<[Map; 3]>,
+        gaze: (f32, f32),
+    ) -> Scene {
         let eye_tex = eye_albedo.unwrap_or_else(|| default_eye_texture(512));
         let rot = gaze_rotation(gaze.0, gaze.1);
         for part in &head.parts {
@@ -206,12 +219,12 @@ impl Scene {
                     *n = rot * *n;
                 }
             }
-            scene.parts.push(Part {
+            self.parts.push(Part {
                 name: part.name.clone(),
                 vertices: corner_vertices(&mesh, None),
                 material,
             });
         }
-        scene
+        self
     }
 }

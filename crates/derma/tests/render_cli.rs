@@ -413,3 +413,92 @@ fn skin_glb_writes_the_set_and_its_head_in_one_run() {
         assert!(names.contains(&n), "mesh {n} in {names:?}");
     }
 }
+
+#[test]
+fn a_users_mesh_renders_with_its_fitted_heads_globes_lashes_and_teeth() {
+    // derma's own head as a user's mesh: exported, fitted, painted through the fit.
+    let d = tmp("render-fitted");
+    let t = d.join("template");
+    let (ok, _, err) = run(&["skin", "--export-template", s(&t)]);
+    assert!(ok, "{err}");
+    let mesh = t.join("head.obj");
+    let fitted = d.join("fitted");
+    let (ok, _, err) = run(&["head", "fit", "--mesh", s(&mesh), "--out", s(&fitted)]);
+    assert!(ok, "{err}");
+    let set = d.join("set");
+    let (ok, _, err) = run(&[
+        "skin",
+        "--mesh",
+        s(&mesh),
+        "--head",
+        s(&fitted),
+        "--size",
+        "128",
+        "--out",
+        s(&set),
+    ]);
+    assert!(ok, "{err}");
+    let parts = |extra: &[&str], tag: &str| -> Vec<String> {
+        let out = d.join(tag);
+        let mut args = vec![
+            "render",
+            s(&set),
+            "--mesh",
+            s(&mesh),
+            "--size",
+            "96",
+            "--device",
+            "cpu",
+            "--out",
+            s(&out),
+        ];
+        args.extend_from_slice(extra);
+        let (ok, _, err) = run(&args);
+        assert!(ok, "{err}");
+        let r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("render.json")).unwrap()).unwrap();
+        r["parts"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_str().unwrap().to_string())
+            .collect()
+    };
+    assert_eq!(parts(&[], "plain"), ["skin"]);
+    let with = parts(&["--head", s(&fitted)], "with-head");
+    for p in [
+        "eye_left",
+        "eye_right",
+        "teeth_upper",
+        "eyelashes_left",
+        "tongue",
+    ] {
+        assert!(
+            with.iter().any(|n| n.starts_with(p)),
+            "{p} missing from {with:?}"
+        );
+    }
+    // A mesh the head was not fitted to is refused, naming it.
+    let other = d.join("other.obj");
+    let mut moved = derma_core::mesh::TriMesh::load(&mesh).unwrap();
+    moved.positions.iter_mut().for_each(|p| p.x += 80.0);
+    moved.write_obj(&other).unwrap();
+    let (ok, _, err) = run(&[
+        "render",
+        s(&set),
+        "--mesh",
+        s(&other),
+        "--head",
+        s(&fitted),
+        "--size",
+        "64",
+        "--device",
+        "cpu",
+        "--out",
+        s(&d.join("other")),
+    ]);
+    assert!(
+        !ok && err.contains("other.obj") && err.contains("fitted"),
+        "{err}"
+    );
+}
