@@ -3,7 +3,7 @@
 # eyes animate`), a texture set on the head (`derma skin --glb`), the same set with Unreal
 # names and DirectX normals (`derma export glb`), a set on a user mesh (MediaPipe's canonical
 # face from ../shared/data), and the head fitted to that face (`derma head fit`) with its set
-# and its animated eyes, and checks every GLB with Khronos'
+# and its animated eyes, on the fitted head and on the face mesh itself, and checks every GLB with Khronos'
 # glTF-Validator from npm (installed here into a temporary directory, with Node.js from apt when
 # the machine lacks it). Run by scripts/test.sh.
 set -euo pipefail
@@ -28,6 +28,8 @@ target/release/derma head fit --mesh ../shared/data/canonical_face_model.obj --l
 target/release/derma skin --size 256 --glb --head "$work/fitted" --out "$work/fitskin" --quiet
 target/release/derma eyes animate --head "$work/fitted" --seconds 1 --fps 10 --render 0 \
   --out "$work/fiteyes" --quiet >/dev/null
+target/release/derma eyes animate --head "$work/fitted" --mesh ../shared/data/canonical_face_model.obj \
+  --seconds 1 --fps 10 --render 0 --out "$work/meshyes" --quiet >/dev/null
 node scripts/validate_gltf.js "$work/v" "$work/head/head.glb" "$work/eyes/head.glb" \
   "$work/skin/head.glb" "$work/unreal.glb" "$work/user/head.glb#static" \
-  "$work/fitskin/head.glb" "$work/fiteyes/head.glb"
+  "$work/fitskin/head.glb" "$work/fiteyes/head.glb" "$work/meshyes/head.glb"
