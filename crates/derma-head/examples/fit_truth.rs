@@ -52,6 +52,18 @@ fn main() {
     let fitted = fit::fit(case.scan.clone(), &opts, &Silent).expect("fit");
     let secs = t0.elapsed().as_secs_f64();
     let m = case.measure(&fitted);
+    for ((n, p), (_, gap)) in fitted
+        .report
+        .detected
+        .iter()
+        .zip(&fitted.report.corner_gap_mm)
+    {
+        let truth = case.landmarks.points[n];
+        println!(
+            "detected {n}: {:.2} mm from the landmark, {gap:.2} mm from the fit's corner",
+            (glam::Vec3::from(*p) - truth).length()
+        );
+    }
     if std::env::var("LM").is_ok() {
         let asset = derma_head::asset::parse();
         for n in case.landmarks.points.keys() {

@@ -37,6 +37,19 @@ fn a_warped_remeshed_head_in_centimetres_is_fitted_within_a_millimetre() {
     assert!(report.median_mm <= 0.2, "median {}", report.median_mm);
     assert_eq!(report.flipped, 0);
     assert!(report.projected);
+    // The automatic alignment found the mouth corners on the scan (its open lips' border)
+    // within a millimetre, and most eye corners; the fit put each opening's corner where the
+    // scan has it.
+    assert!(report.detected.len() >= 4, "{:?}", report.detected);
+    for (n, p) in &report.detected {
+        if n.starts_with("mouth") {
+            let off = (Vec3::from(*p) - case.landmarks.points[n]).length();
+            assert!(off < 1.0, "{n} detected {off} mm off");
+        }
+    }
+    for (n, gap) in &report.corner_gap_mm {
+        assert!(*gap < 1.5, "{n}: the fit's corner {gap} mm from the scan's");
+    }
 
     // The directory reads back as a head: same fine skin, landmarks on it, in the scan's mm.
     let head = derma_head::fitted::open(&out).unwrap();

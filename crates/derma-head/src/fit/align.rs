@@ -122,6 +122,103 @@ pub fn nose_tip(scan: &Scan) -> Vec3 {
         .unwrap_or(Vec3::ZERO)
 }
 
+/// The corners a placement detects on the scan: both canthi of each eye and the mouth corners.
+pub const CORNERS: [&str; 6] = [
+    "canthus_inner_left",
+    "canthus_outer_left",
+    "canthus_inner_right",
+    "canthus_outer_right",
+    "mouth_corner_left",
+    "mouth_corner_right",
+];
+
+/// How far (mm) from where the placed template puts a corner the scan is searched for it.
+pub const CORNER_SEARCH_MM: f32 = 6.0;
+
+/// The eye and mouth corners found on `scan` near `placed` (the template's [`CORNERS`], in
+/// order, placed on the scan by the alignment): each opening's corner is its extreme point
+/// along the line through the opening's two placed corners — among the scan's border vertices
+/// where the opening is a hole (open eyes, parted lips), else among its crease vertices (the
+/// most concave fifth within reach: a closed lid's or lips' meeting line). `None` where the
+/// scan has no vertex within [`CORNER_SEARCH_MM`], or the extreme lies on the search's rim
+/// ([`CORNER_RIM`]).
+pub fn detect_corners(scan: &Scan, placed: &[Vec3; 6]) -> [Option<Vec3>; 6] {
+    let mesh = &scan.mesh;
+    // Concavity: how far the mean of a vertex's neighbours lies along its normal.
+    let mut sum = vec![Vec3::ZERO; mesh.positions.len()];
+    let mut count = vec![0u32; mesh.positions.len()];
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b, c) = (
+                t[k] as usize,
+                t[(k + 1) % 3] as usize,
+                t[(k + 2) % 3] as usize,
+            );
+            sum[a] += mesh.positions[b] + mesh.positions[c];
+            count[a] += 2;
+        }
+    }
+    let concavity = |i: usize| -> f32 {
+        if count[i] == 0 {
+            return f32::NEG_INFINITY;
+        }
+        let n = mesh.normals.get(i).copied().unwrap_or(Vec3::ZERO);
+        (sum[i] / count[i] as f32 - mesh.positions[i]).dot(n)
+    };
+    std::array::from_fn(|k| {
+        // The opening's other corner: inner ↔ outer canthus, left ↔ right mouth corner.
+        let other = placed[k ^ 1];
+        let p0 = placed[k];
+        let axis = (p0 - other).normalize_or_zero();
+        let near: Vec<usize> = (0..mesh.positions.len())
+            .filter(|&i| mesh.positions[i].distance(p0) < CORNER_SEARCH_MM)
+            .collect();
+        let border: Vec<usize> = near
+            .iter()
+            .copied()
+            .filter(|&i| scan.border_vertex[i])
+            .collect();
+        let pool = if border.len() >= 3 {
+            border
+        } else {
+            let mut c: Vec<(f32, usize)> = near.iter().map(|&i| (concavity(i), i)).collect();
+            c.sort_by(|a, b| b.0.total_cmp(&a.0));
+            c.truncate((c.len() / 5).max(1));
+            c.into_iter().map(|x| x.1).collect()
+        };
+        // A corner on the rim of the search is the search's edge, not the opening's corner.
+        extreme(pool.into_iter().map(|i| mesh.positions[i]), other, axis)
+            .filter(|c| c.distance(p0) < CORNER_RIM * CORNER_SEARCH_MM)
+    })
+}
+
+/// The share of [`CORNER_SEARCH_MM`] within which a found corner counts (beyond it, the
+/// opening's corner lies outside the search).
+pub const CORNER_RIM: f32 = 0.75;
+
+/// The point of `pool` farthest along `axis` from `from`: an opening's corner.
+pub fn extreme(pool: impl Iterator<Item = Vec3>, from: Vec3, axis: Vec3) -> Option<Vec3> {
+    pool.max_by(|a, b| (*a - from).dot(axis).total_cmp(&(*b - from).dot(axis)))
+}
+
+/// The corners of the openings of a fitted skin (`margin`: its margin vertices' positions) by
+/// the rule [`detect_corners`] uses on a scan, from its [`CORNERS`] landmarks `fitted`: where
+/// the fit put each opening's corner, to set against the scan's.
+pub fn fitted_corners(margin: &[Vec3], fitted: &[Vec3; 6]) -> [Option<Vec3>; 6] {
+    std::array::from_fn(|k| {
+        let (p0, other) = (fitted[k], fitted[k ^ 1]);
+        let axis = (p0 - other).normalize_or_zero();
+        extreme(
+            margin
+                .iter()
+                .copied()
+                .filter(|m| m.distance(p0) < CORNER_SEARCH_MM),
+            other,
+            axis,
+        )
+    })
+}
+
 /// Checks given landmarks lie on the scan: each within `limit` mm of its surface.
 pub fn check_on_surface(scan: &Scan, named: &[(String, Vec3)], limit: f32) -> Result<(), FitError> {
     for (name, p) in named {

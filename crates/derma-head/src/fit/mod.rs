@@ -183,6 +183,18 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
             share * 100.0
         )));
     }
+    // The eye and mouth corners, found on the scan near where the placement puts them.
+    let detected: Vec<(String, Vec3)> = match opts.alignment {
+        Alignment::Auto => {
+            let placed = align::CORNERS.map(|n| sim.apply(lm(n)));
+            align::CORNERS
+                .iter()
+                .zip(align::detect_corners(&scan, &placed))
+                .filter_map(|(n, p)| Some((n.to_string(), p?)))
+                .collect()
+        }
+        Alignment::Landmarks(_) => Vec::new(),
+    };
     lap("align", &mut seconds);
 
     // Non-rigid registration of the control cage.
@@ -214,11 +226,39 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
         .filter(|(&i, &f)| f && !near_margin[i])
         .count();
     // The hairline is a soft boundary: it places the template, it does not pin it.
-    let lm_rows: Vec<(Vec<(u32, f32)>, Vec3)> = given
+    let mut lm_rows: Vec<(Vec<(u32, f32)>, Vec3)> = given
         .iter()
         .filter(|g| g.0 != "hairline")
         .map(|(n, _, q)| (tpl.stencils2.rows[tpl.landmarks[n]].clone(), *q))
         .collect();
+    // Detected corners hold the template's corner of the same opening (its margin's extreme
+    // vertex, found by the same rule), like given landmarks.
+    if !detected.is_empty() {
+        let margin = Template::margin(&tpl.level2, &tpl.outer2);
+        let pos = &tpl.level2.positions;
+        let corner_vertex = |k: usize| {
+            let (p0, other) = (lm(align::CORNERS[k]), lm(align::CORNERS[k ^ 1]));
+            let axis = (p0 - other).normalize_or_zero();
+            margin
+                .iter()
+                .copied()
+                .filter(|&i| pos[i].distance(p0) < align::CORNER_SEARCH_MM)
+                .max_by(|&a, &b| {
+                    (pos[a] - other)
+                        .dot(axis)
+                        .total_cmp(&(pos[b] - other).dot(axis))
+                })
+        };
+        for (n, q) in &detected {
+            let k = align::CORNERS
+                .iter()
+                .position(|c| c == n)
+                .expect("a corner");
+            if let Some(v) = corner_vertex(k) {
+                lm_rows.push((tpl.stencils2.rows[v].clone(), *q));
+            }
+        }
+    }
     let extra: Vec<Vec<(u32, f32)>> = lm_rows.iter().map(|r| r.0.clone()).collect();
     let problem = Problem {
         control: &control,
@@ -320,6 +360,23 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
     }
     untangle(&tpl, &mut fine, &template_fine);
     let flipped = flipped_quads(&tpl, &fine, &template_fine);
+    // The detected corners against the fitted skin's corners of the same openings.
+    let corner_gap_mm: Vec<(String, f32)> = if detected.is_empty() {
+        Vec::new()
+    } else {
+        let margin: Vec<Vec3> = Template::margin(&tpl.level2, &tpl.outer2)
+            .into_iter()
+            .map(|i| fine[i])
+            .collect();
+        let at = align::fitted_corners(&margin, &align::CORNERS.map(|n| fine[tpl.landmarks[n]]));
+        detected
+            .iter()
+            .filter_map(|(n, p)| {
+                let k = align::CORNERS.iter().position(|c| c == n)?;
+                Some((n.clone(), at[k]?.distance(*p)))
+            })
+            .collect()
+    };
     let face2: Vec<usize> = (0..fine.len())
         .filter(|&i| {
             let p = tpl.level2.positions[i];
@@ -425,7 +482,9 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
         report: FitReport {
             alignment: match &opts.alignment {
                 Alignment::Landmarks(_) => format!("landmarks: {}", given.len()),
-                Alignment::Auto => "auto (nose tip, then similarity ICP)".into(),
+                Alignment::Auto => {
+                    "auto (nose tip, then similarity ICP; eye and mouth corners)".into()
+                }
             },
             scale: sim.scale,
             iterations,
@@ -435,6 +494,11 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
             projected,
             flipped,
             landmark_mm,
+            detected: detected
+                .iter()
+                .map(|(n, p)| (n.clone(), p.to_array()))
+                .collect(),
+            corner_gap_mm,
             seconds,
         },
         similarity: sim,

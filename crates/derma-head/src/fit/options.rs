@@ -94,6 +94,15 @@ pub struct FitReport {
     pub flipped: usize,
     /// Landmark residuals (mm), by name, where landmarks were given.
     pub landmark_mm: Vec<(String, f32)>,
+    /// Eye and mouth corners detected on the scan (mm, the scan's frame) by an automatic
+    /// alignment ([`super::align::detect_corners`]).
+    #[serde(default)]
+    pub detected: Vec<(String, [f32; 3])>,
+    /// Per detected corner, its distance (mm) from the fitted skin's corner of the same
+    /// opening ([`super::align::fitted_corners`]): near 0 where the fit found the scan's eyes
+    /// and mouth.
+    #[serde(default)]
+    pub corner_gap_mm: Vec<(String, f32)>,
     /// Seconds per stage.
     pub seconds: Vec<(String, f64)>,
 }

@@ -17,6 +17,8 @@ pub struct Scan {
     pub face_normals: Vec<Vec3>,
     /// Per triangle: it touches the border (an edge used by one triangle only).
     pub on_border: Vec<bool>,
+    /// Per vertex: it lies on the border.
+    pub border_vertex: Vec<bool>,
 }
 
 /// Cosine of the largest angle between a template normal and the scan's for a match (60°).
@@ -55,6 +57,7 @@ impl Scan {
             bvh,
             face_normals,
             on_border,
+            border_vertex,
         }
     }
 

@@ -101,16 +101,8 @@ impl Template {
     /// Per level-1 vertex (at `positions`): within `band` mm of a margin of the outer skin
     /// (where it meets the eye sockets or the mouth cavity).
     pub fn margin_band(&self, positions: &[Vec3], band: f32) -> Vec<bool> {
-        let mut on_margin = vec![false; positions.len()];
-        for q in &self.level1.quads {
-            if q.iter().any(|c| !self.outer1[c.0 as usize]) {
-                for c in q {
-                    on_margin[c.0 as usize] |= self.outer1[c.0 as usize];
-                }
-            }
-        }
-        let margin: Vec<Vec3> = (0..positions.len())
-            .filter(|&i| on_margin[i])
+        let margin: Vec<Vec3> = Self::margin(&self.level1, &self.outer1)
+            .into_iter()
             .map(|i| positions[i])
             .collect();
         positions
@@ -121,6 +113,20 @@ impl Template {
                     .any(|m| (*m - *p).length_squared() < band * band)
             })
             .collect()
+    }
+
+    /// The outer skin's vertices on a margin (where it meets the eye sockets or the mouth
+    /// cavity) of a level's quads `q` with its outer flags.
+    pub fn margin(q: &QuadMesh, outer: &[bool]) -> Vec<usize> {
+        let mut on_margin = vec![false; outer.len()];
+        for f in &q.quads {
+            if f.iter().any(|c| !outer[c.0 as usize]) {
+                for c in f {
+                    on_margin[c.0 as usize] |= outer[c.0 as usize];
+                }
+            }
+        }
+        (0..outer.len()).filter(|&i| on_margin[i]).collect()
     }
 
     /// Area-weighted vertex normals of a quad mesh's topology at `positions`.
