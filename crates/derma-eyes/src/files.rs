@@ -245,7 +245,7 @@ pub fn animate(o: &AnimateOptions, dir: &Path, progress: &dyn Progress) -> Resul
         }
         (Some(p), None) => {
             return Err(EyesError::Invalid(format!(
-                "{}: a user's mesh is animated through the head fitted to it; give that head (--head, from 'derma head fit')",
+                "{}: a user's mesh is animated through the head fitted to it; give that fitted head directory (from 'derma head fit')",
                 p.display()
             )))
         }
