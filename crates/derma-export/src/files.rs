@@ -134,7 +134,11 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     };
     let scene = match &job.mesh {
         Some(p) => {
-            let mut mesh = crate::glb::load_mesh_mm(p, progress)?;
+            // Through a fitted head, read at the scale the fit read it.
+            let mut mesh = match job.head.as_deref() {
+                Some(dir) => derma_head::fitted::load_scan(dir, p)?,
+                None => crate::glb::load_mesh_mm(p, progress)?,
+            };
             // Posed through a fitted head's face units, carried onto the mesh.
             if job.head.is_none() && !job.face_units.is_empty() {
                 return Err(ExportError::Invalid(

@@ -12,7 +12,6 @@ use crate::sdf::{self, material};
 use crate::surface::Skin;
 use crate::tracked::Tracked;
 use crate::{EyesError, Result};
-use derma_core::mesh::HeadUnit;
 use derma_core::progress::{Progress, Unit};
 use derma_core::Map;
 use derma_head::Head;
@@ -239,10 +238,7 @@ pub fn animate(o: &AnimateOptions, dir: &Path, progress: &dyn Progress) -> Resul
     let ev = Evaluator::new(&m, &rig.region, head, o.thickness)?;
     let skin = match (&o.mesh, &o.head) {
         (None, _) => Skin::of_head(head),
-        (Some(p), Some(_)) => {
-            let (mesh, _) = derma_core::mesh::load_head_mesh(p, HeadUnit::Auto, progress)?;
-            Skin::user(head, mesh, p)?
-        }
+        (Some(p), Some(dir)) => Skin::user(head, derma_head::fitted::load_scan(dir, p)?, p)?,
         (Some(p), None) => {
             return Err(EyesError::Invalid(format!(
                 "{}: a user's mesh is animated through the head fitted to it; give that fitted head directory (from 'derma head fit')",

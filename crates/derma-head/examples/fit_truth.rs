@@ -52,16 +52,13 @@ fn main() {
     let fitted = fit::fit(case.scan.clone(), &opts, &Silent).expect("fit");
     let secs = t0.elapsed().as_secs_f64();
     let m = case.measure(&fitted);
-    for ((n, p), (_, gap)) in fitted
-        .report
-        .detected
-        .iter()
-        .zip(&fitted.report.corner_gap_mm)
-    {
+    for (n, p) in &fitted.report.detected {
         let truth = case.landmarks.points[n];
+        let gap = fitted.report.corner_gap_mm.iter().find(|g| &g.0 == n);
         println!(
-            "detected {n}: {:.2} mm from the landmark, {gap:.2} mm from the fit's corner",
-            (glam::Vec3::from(*p) - truth).length()
+            "detected {n}: {:.2} mm from the landmark, {} from the fit's corner",
+            (glam::Vec3::from(*p) - truth).length(),
+            gap.map_or("no corner".into(), |g| format!("{:.2} mm", g.1))
         );
     }
     if std::env::var("LM").is_ok() {

@@ -25,6 +25,18 @@ pub fn open(dir: &Path) -> Result<&'static Head, StoreError> {
     Ok(head)
 }
 
+/// The mesh at `path` (with UVs) the head in `dir` was fitted to, read in mm at the scale the
+/// fit read it (`head.json`'s millimetres per scan unit, whatever `--unit` the fit was given).
+pub fn load_scan(dir: &Path, path: &Path) -> Result<derma_core::mesh::TriMesh, StoreError> {
+    let scale = store::mm_per_unit(dir)?;
+    let mut mesh = derma_core::mesh::TriMesh::load(path).map_err(|e| StoreError::File {
+        path: path.to_path_buf(),
+        detail: e.to_string(),
+    })?;
+    mesh.scale(scale);
+    Ok(mesh)
+}
+
 /// The fitted head in `dir`, or the built-in head when there is none.
 pub fn or_builtin(dir: Option<&Path>) -> Result<&'static Head, StoreError> {
     match dir {

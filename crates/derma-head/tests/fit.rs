@@ -41,11 +41,16 @@ fn a_warped_remeshed_head_in_centimetres_is_fitted_within_a_millimetre() {
     // within a millimetre, and most eye corners; the fit put each opening's corner where the
     // scan has it.
     assert!(report.detected.len() >= 4, "{:?}", report.detected);
+    // The canthi are found on the skin's opening: the outer 1.3–2.0 mm and the inner about
+    // 5.4 mm from derma's landmarks, which sit inside the socket (docs/head.md).
     for (n, p) in &report.detected {
-        if n.starts_with("mouth") {
-            let off = (Vec3::from(*p) - case.landmarks.points[n]).length();
-            assert!(off < 1.0, "{n} detected {off} mm off");
-        }
+        let off = (Vec3::from(*p) - case.landmarks.points[n]).length();
+        let limit = match n.as_str() {
+            "mouth_corner_left" | "mouth_corner_right" => 1.0,
+            "canthus_outer_left" | "canthus_outer_right" => 2.5,
+            _ => 6.5,
+        };
+        assert!(off < limit, "{n} detected {off} mm off");
     }
     for (n, gap) in &report.corner_gap_mm {
         assert!(*gap < 1.5, "{n}: the fit's corner {gap} mm from the scan's");

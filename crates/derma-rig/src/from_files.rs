@@ -79,17 +79,10 @@ pub struct OnMesh {
 impl OnMesh {
     /// The mesh in mm and the fitted head's regions; refused when most of the mesh lies off
     /// the fitted head (another mesh, or another unit).
-    pub fn load(
-        &self,
-        progress: &dyn Progress,
-    ) -> Result<(derma_core::mesh::TriMesh, derma_head::Regions)> {
+    pub fn load(&self) -> Result<(derma_core::mesh::TriMesh, derma_head::Regions)> {
         use derma_head::fit::onto::{Carry, MIN_SHARE, REACH_MM};
         let head = derma_head::fitted::open(&self.head)?;
-        let (mesh, _) = derma_core::mesh::load_head_mesh(
-            &self.mesh,
-            derma_core::mesh::HeadUnit::Auto,
-            progress,
-        )?;
+        let mesh = derma_head::fitted::load_scan(&self.head, &self.mesh)?;
         let share = Carry::new(head, &mesh).share();
         if share < MIN_SHARE {
             return Err(crate::RigError::File {
@@ -179,8 +172,8 @@ pub fn build(
         ));
     }
     let on_mesh = match &files.on_mesh {
-        Some(m) if !files.builtin.is_empty() => Some(m.load(progress)?),
-        _ => None,
+        Some(m) => Some(m.load()?),
+        None => None,
     };
     let placement = match &on_mesh {
         Some((mesh, regions)) => expression::Placement::Mesh { mesh, regions },

@@ -67,15 +67,16 @@ pub fn run(cmd: HeadCommand, bars: &Bars) -> Result<()> {
             for (n, d) in &r.landmark_mm {
                 line(format!("  landmark {n}: {d:.2} mm"))?;
             }
-            if !r.corner_gap_mm.is_empty() {
+            if !r.detected.is_empty() {
                 let worst = r.corner_gap_mm.iter().map(|g| g.1).fold(0.0f32, f32::max);
                 line(format!(
-                    "  eye and mouth corners found on the scan: {} of 6; the fit's within {worst:.2} mm of them",
-                    r.corner_gap_mm.len()
+                    "  eye and mouth corners found on the scan: {} of 6 ({}); the fit holds them within {worst:.2} mm",
+                    r.detected.len(),
+                    r.detected.iter().map(|d| d.0.as_str()).collect::<Vec<_>>().join(", ")
                 ))?;
                 if worst > 3.0 {
                     bars.say(format!(
-                        "warning: a corner of the fitted eyes or mouth lies {worst:.1} mm from the scan's; check the fit (template.obj) or give landmarks (--landmarks)"
+                        "warning: the fit stays {worst:.1} mm from an eye or mouth corner found on the scan; check the fit (template.obj) or give landmarks (--landmarks)"
                     ));
                 }
             }

@@ -37,6 +37,11 @@ pub fn run(cmd: RigCommand, bars: &Bars) -> Result<()> {
 
 fn build(a: BuildArgs, bars: &Bars) -> Result<()> {
     let t0 = Instant::now();
+    if a.head.head.is_some() && a.mesh.is_none() {
+        anyhow::bail!(
+            "--head places the built-in library on your own mesh's UVs, given with --mesh; a fitted head's own set (derma skin --head) shares derma's UVs and needs neither"
+        );
+    }
     let files = BuildFiles {
         character: a.character.files(),
         targets: a.targets,

@@ -415,7 +415,7 @@ fn skin_glb_writes_the_set_and_its_head_in_one_run() {
 }
 
 #[test]
-fn a_users_mesh_renders_with_its_fitted_heads_globes_lashes_and_teeth() {
+fn a_users_mesh_renders_animates_and_takes_the_rig_through_its_fitted_head() {
     // derma's own head as a user's mesh: exported, fitted, painted through the fit.
     let d = tmp("render-fitted");
     let t = d.join("template");
@@ -501,4 +501,62 @@ fn a_users_mesh_renders_with_its_fitted_heads_globes_lashes_and_teeth() {
         !ok && err.contains("other.obj") && err.contains("fitted"),
         "{err}"
     );
+
+    // Its lids animated: the GLB's skin is the user's mesh, moved by morph targets.
+    let anim = d.join("anim");
+    let (ok, _, err) = run(&[
+        "eyes",
+        "animate",
+        "--head",
+        s(&fitted),
+        "--mesh",
+        s(&mesh),
+        "--seconds",
+        "0.5",
+        "--render",
+        "0",
+        "--out",
+        s(&anim),
+    ]);
+    assert!(ok, "{err}");
+    let g = gltf::Gltf::open(anim.join("head.glb")).unwrap();
+    let skin = g.meshes().find(|m| m.name() == Some("skin")).unwrap();
+    let prim = skin.primitives().next().unwrap();
+    let n = prim.get(&gltf::Semantic::Positions).unwrap().count();
+    let user = derma_core::mesh::TriMesh::load(&mesh).unwrap();
+    assert_eq!(n, user.positions.len());
+    assert!(prim.morph_targets().count() >= 2);
+    // The rig's library on its UVs, through the fit; --head alone is refused with the reason.
+    let (ok, _, err) = run(&[
+        "rig",
+        "build",
+        "--neutral",
+        s(&set.join("hemoglobin.exr")),
+        "--builtin",
+        "happiness",
+        "--radius",
+        "4",
+        "--head",
+        s(&fitted),
+        "--mesh",
+        s(&mesh),
+        "--out",
+        s(&d.join("rig")),
+    ]);
+    assert!(ok, "{err}");
+    let (ok, _, err) = run(&[
+        "rig",
+        "build",
+        "--neutral",
+        s(&set.join("hemoglobin.exr")),
+        "--builtin",
+        "happiness",
+        "--radius",
+        "4",
+        "--head",
+        s(&fitted),
+        "--out",
+        s(&d.join("rig2")),
+    ]);
+    assert!(!ok && err.contains("--mesh"), "{err}");
 }

@@ -162,8 +162,7 @@ pub fn detect_corners(scan: &Scan, placed: &[Vec3; 6]) -> [Option<Vec3>; 6] {
         if count[i] == 0 {
             return f32::NEG_INFINITY;
         }
-        let n = mesh.normals.get(i).copied().unwrap_or(Vec3::ZERO);
-        (sum[i] / count[i] as f32 - mesh.positions[i]).dot(n)
+        (sum[i] / count[i] as f32 - mesh.positions[i]).dot(scan.vertex_normals[i])
     };
     std::array::from_fn(|k| {
         // The opening's other corner: inner ↔ outer canthus, left ↔ right mouth corner.

@@ -94,13 +94,15 @@ pub struct FitReport {
     pub flipped: usize,
     /// Landmark residuals (mm), by name, where landmarks were given.
     pub landmark_mm: Vec<(String, f32)>,
-    /// Eye and mouth corners detected on the scan (mm, the scan's frame) by an automatic
-    /// alignment ([`super::align::detect_corners`]).
+    /// Eye and mouth corners detected on the scan (the scan read in mm) by an automatic
+    /// alignment ([`super::align::detect_corners`]); the registration holds the template's
+    /// corners of the same openings to them.
     #[serde(default)]
     pub detected: Vec<(String, [f32; 3])>,
     /// Per detected corner, its distance (mm) from the fitted skin's corner of the same
-    /// opening ([`super::align::fitted_corners`]): near 0 where the fit found the scan's eyes
-    /// and mouth.
+    /// opening ([`super::align::fitted_corners`]): how closely the registration honoured it
+    /// (near 0; a large gap means the rest of the face pulled against it). It does not tell a
+    /// misdetected corner, which the fit follows; `detected` says where each was found.
     #[serde(default)]
     pub corner_gap_mm: Vec<(String, f32)>,
     /// Seconds per stage.

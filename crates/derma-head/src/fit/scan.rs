@@ -19,6 +19,9 @@ pub struct Scan {
     pub on_border: Vec<bool>,
     /// Per vertex: it lies on the border.
     pub border_vertex: Vec<bool>,
+    /// Area-weighted vertex normals of the scan's own triangles (whatever normals its file
+    /// carries).
+    pub vertex_normals: Vec<Vec3>,
 }
 
 /// Cosine of the largest angle between a template normal and the scan's for a match (60°).
@@ -52,12 +55,23 @@ impl Scan {
             .iter()
             .map(|t| t.iter().any(|&i| border_vertex[i as usize]))
             .collect();
+        let mut vertex_normals = vec![Vec3::ZERO; mesh.positions.len()];
+        for t in &mesh.triangles {
+            let f = mesh.face_cross(*t);
+            for &i in t {
+                vertex_normals[i as usize] += f;
+            }
+        }
+        vertex_normals
+            .iter_mut()
+            .for_each(|n| *n = n.normalize_or_zero());
         Scan {
             mesh,
             bvh,
             face_normals,
             on_border,
             border_vertex,
+            vertex_normals,
         }
     }
 

@@ -167,6 +167,32 @@ pub fn decode(bytes: &[u8]) -> Option<Vec<SurfacePoint>> {
     )
 }
 
+/// Millimetres per unit of the scan a fitted head directory's head was fitted to.
+pub fn mm_per_unit(dir: &Path) -> Result<f32, StoreError> {
+    #[derive(Deserialize)]
+    struct Scale {
+        mm_per_unit: f32,
+    }
+    let path = dir.join("head.json");
+    let text = std::fs::read(&path).map_err(|e| {
+        err(
+            &path,
+            format!(
+                "cannot read it ({e}); a fitted head directory is what 'derma head fit' writes"
+            ),
+        )
+    })?;
+    let s: Scale = serde_json::from_slice(&text)
+        .map_err(|e| err(&path, format!("not a fitted head ({e})")))?;
+    if !(s.mm_per_unit.is_finite() && s.mm_per_unit > 0.0) {
+        return Err(err(
+            &path,
+            format!("mm_per_unit {}; expected a positive scale", s.mm_per_unit),
+        ));
+    }
+    Ok(s.mm_per_unit)
+}
+
 /// Reads a fitted head directory's `head.json`.
 pub fn read(dir: &Path) -> Result<Fitted, StoreError> {
     let path = dir.join("head.json");
