@@ -167,12 +167,8 @@ pub fn decode(bytes: &[u8]) -> Option<Vec<SurfacePoint>> {
     )
 }
 
-/// Millimetres per unit of the scan a fitted head directory's head was fitted to.
-pub fn mm_per_unit(dir: &Path) -> Result<f32, StoreError> {
-    #[derive(Deserialize)]
-    struct Scale {
-        mm_per_unit: f32,
-    }
+/// `head.json` of the fitted head directory `dir`, parsed as `T`, with its path.
+fn head_json<T: serde::de::DeserializeOwned>(dir: &Path) -> Result<(T, PathBuf), StoreError> {
     let path = dir.join("head.json");
     let text = std::fs::read(&path).map_err(|e| {
         err(
@@ -182,8 +178,18 @@ pub fn mm_per_unit(dir: &Path) -> Result<f32, StoreError> {
             ),
         )
     })?;
-    let s: Scale = serde_json::from_slice(&text)
+    let t = serde_json::from_slice(&text)
         .map_err(|e| err(&path, format!("not a fitted head ({e})")))?;
+    Ok((t, path))
+}
+
+/// Millimetres per unit of the scan a fitted head directory's head was fitted to.
+pub fn mm_per_unit(dir: &Path) -> Result<f32, StoreError> {
+    #[derive(Deserialize)]
+    struct Scale {
+        mm_per_unit: f32,
+    }
+    let (s, path) = head_json::<Scale>(dir)?;
     if !(s.mm_per_unit.is_finite() && s.mm_per_unit > 0.0) {
         return Err(err(
             &path,
@@ -195,17 +201,7 @@ pub fn mm_per_unit(dir: &Path) -> Result<f32, StoreError> {
 
 /// Reads a fitted head directory's `head.json`.
 pub fn read(dir: &Path) -> Result<Fitted, StoreError> {
-    let path = dir.join("head.json");
-    let text = std::fs::read(&path).map_err(|e| {
-        err(
-            &path,
-            format!(
-                "cannot read it ({e}); a fitted head directory is what 'derma head fit' writes"
-            ),
-        )
-    })?;
-    let f: File = serde_json::from_slice(&text)
-        .map_err(|e| err(&path, format!("not a fitted head ({e})")))?;
+    let (f, path) = head_json::<File>(dir)?;
     if f.format != FORMAT || f.version != VERSION {
         return Err(err(
             &path,
