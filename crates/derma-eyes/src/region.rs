@@ -120,15 +120,15 @@ impl EyeRegion {
             // it to the brow 32 mm above on the built-in head, heights scaled by the face's
             // eye-to-subnasale height (the units' far tails on cheek, nose and forehead stay
             // put: a shorter fitted face would otherwise bring its nostrils in), and outside
-            // the socket no deeper than the orbit's rim, 15 mm behind the centre (the built-in
-            // head's temples reach 12.6 mm).
+            // the socket no deeper than the orbit's rim, 15 mm behind the centre on the
+            // built-in head (its temples reach 12.6 mm), scaled the same way.
             let in_socket = socket(i);
             let near = eyes.iter().any(|c| {
                 let d = skin.positions[i] - *c;
                 d.x.abs() < 32.0
                     && d.y > -30.0 * face
                     && d.y < 32.0 * face
-                    && (in_socket || d.z > -15.0)
+                    && (in_socket || d.z > -15.0 * face)
             });
             w.2 |= moved[i] && near;
             if in_socket {

@@ -139,6 +139,32 @@ pub fn face_units(head: &Head, mesh: &TriMesh) -> (Vec<MorphTarget>, f32) {
 #[cfg(test)]
 mod tests {
     #[test]
+    fn the_outer_map_carries_the_outside_and_leaves_the_socket() {
+        // The built-in head's own skin as a user's mesh: its outer vertices follow themselves,
+        // its socket vertices (nearer the socket than the outside) do not move.
+        let head = crate::Head::builtin();
+        let skin = &head.skin;
+        let carry = super::Carry::outer(head, skin);
+        let field: Vec<glam::Vec3> = skin.positions.iter().map(|p| *p * 0.01).collect();
+        let (mut outer, mut socket_still, mut socket) = (0.0f32, 0, 0);
+        for i in 0..skin.positions.len() {
+            let got = carry.offset(i, &field);
+            if head.regions.in_socket(skin.uvs[i]) {
+                socket += 1;
+                socket_still += usize::from(got == glam::Vec3::ZERO);
+            } else {
+                outer = outer.max((got - field[i]).length());
+            }
+        }
+        assert!(outer < 1e-4, "an outer vertex off its own field by {outer}");
+        // Most of the socket lies well inside; its rim, by the margins, follows the outside.
+        assert!(
+            socket > 1000 && socket_still * 2 > socket,
+            "{socket_still} of {socket}"
+        );
+    }
+
+    #[test]
     fn the_heads_own_skin_gets_its_own_face_units() {
         let head = crate::Head::builtin();
         let (units, share) = super::face_units(head, &head.skin);
