@@ -99,6 +99,52 @@ fn write_rgb8(path: &Path, m: &[Map; 3]) -> Result<()> {
     )?)
 }
 
+/// Refuses face-unit names `head` lacks.
+fn check_units(head: &derma_head::Head, units: &[(&str, f32)]) -> Result<()> {
+    for (n, _) in units {
+        if !head.face_units().iter().any(|u| u.name == *n) {
+            return Err(ExportError::Invalid(format!(
+                "face unit '{n}' is not one of the head's 52 (e.g. mouthSmileLeft, jawOpen, eyeBlinkLeft)"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The user mesh at `path` through the head fitted to it in `dir`: read at the scale the fit
+/// read it, refused when it is not the fitted mesh, posed by `units` carried onto it through
+/// the fit's correspondence (one map for every unit), with the head's globes, lashes, teeth
+/// and tongue in its openings.
+fn fitted_mesh_scene(
+    path: &Path,
+    dir: &Path,
+    units: &[(&str, f32)],
+    skin: SkinMaps,
+    eye: Option<[Map; 3]>,
+    gaze: (f32, f32),
+) -> Result<Scene> {
+    let head = derma_head::fitted::open(dir)?;
+    check_units(head, units)?;
+    let mut mesh = derma_head::fitted::load_scan(dir, path)?;
+    let carry = derma_head::fit::onto::Carry::new(head, &mesh);
+    crate::glb::check_share(carry.share(), path)?;
+    if !units.is_empty() {
+        let posed = head.posed_skin(units);
+        let dense: Vec<glam::Vec3> = posed
+            .positions
+            .iter()
+            .zip(&head.skin.positions)
+            .map(|(a, b)| *a - *b)
+            .collect();
+        for (v, d) in carry.offsets(&dense) {
+            mesh.positions[v as usize] += d;
+        }
+        mesh.compute_normals();
+    }
+    let lashes = skin.lash_color.map(glam::Vec3::from);
+    Ok(Scene::mesh(&mesh, skin).with_parts(head, lashes, eye, gaze))
+}
+
 /// Runs the job.
 pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     let t0 = Instant::now();
@@ -125,73 +171,31 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     }
     let job_p = Job::new(progress);
     job_p.stage("scene", 1, Unit::Steps);
-    let eye = || {
-        job.iris
-            .as_deref()
-            .map(derma_eyes::files::load_eye_texture)
-            .transpose()
-            .map_err(|e| ExportError::Invalid(e.to_string()))
-    };
-    let scene = match &job.mesh {
-        Some(p) => {
-            // Through a fitted head, read at the scale the fit read it.
-            let mut mesh = match job.head.as_deref() {
-                Some(dir) => derma_head::fitted::load_scan(dir, p)?,
-                None => crate::glb::load_mesh_mm(p, progress)?,
-            };
-            // Posed through a fitted head's face units, carried onto the mesh.
-            if job.head.is_none() && !job.face_units.is_empty() {
-                return Err(ExportError::Invalid(
-                    "face units pose a user mesh only through the head fitted to it (derma head fit)".into(),
-                ));
+    let eye = job
+        .iris
+        .as_deref()
+        .map(derma_eyes::files::load_eye_texture)
+        .transpose()
+        .map_err(|e| ExportError::Invalid(e.to_string()))?;
+    let units: Vec<(&str, f32)> = job
+        .face_units
+        .iter()
+        .map(|(n, w)| (n.as_str(), *w))
+        .collect();
+    let scene =
+        match (&job.mesh, job.head.as_deref()) {
+            (Some(p), Some(dir)) => fitted_mesh_scene(p, dir, &units, skin.clone(), eye, job.gaze)?,
+            (Some(_), None) if !units.is_empty() => return Err(ExportError::Invalid(
+                "face units pose a user mesh only through the head fitted to it (derma head fit)"
+                    .into(),
+            )),
+            (Some(p), None) => Scene::mesh(&crate::glb::load_mesh_mm(p, progress)?, skin.clone()),
+            (None, dir) => {
+                let head = derma_head::fitted::or_builtin(dir)?;
+                check_units(head, &units)?;
+                Scene::head(head, skin.clone(), &units, eye, job.gaze)
             }
-            if job.head.is_some() && !job.face_units.is_empty() {
-                let head = derma_head::fitted::or_builtin(job.head.as_deref())?;
-                let units = crate::glb::carried_units(head, &mesh, p)?;
-                for (n, w) in &job.face_units {
-                    let u = units.iter().find(|u| u.name == *n).ok_or_else(|| {
-                        ExportError::Invalid(format!(
-                            "face unit '{n}' is not one of the head's 52 (e.g. mouthSmileLeft, jawOpen, eyeBlinkLeft)"
-                        ))
-                    })?;
-                    for &(v, d) in &u.skin {
-                        mesh.positions[v as usize] += *w * d;
-                    }
-                }
-                mesh.compute_normals();
-            }
-            let lashes = skin.lash_color.map(glam::Vec3::from);
-            let scene = Scene::mesh(&mesh, skin.clone());
-            // The fitted head's globes, lashes, teeth and tongue in the mesh's openings.
-            match job.head.as_deref() {
-                Some(dir) => {
-                    let head = derma_head::fitted::open(dir)?;
-                    if job.face_units.is_empty() {
-                        let share = derma_head::fit::onto::Carry::new(head, &mesh).share();
-                        crate::glb::check_share(share, p)?;
-                    }
-                    scene.with_parts(head, lashes, eye()?, job.gaze)
-                }
-                None => scene,
-            }
-        }
-        None => {
-            let units: Vec<(&str, f32)> = job
-                .face_units
-                .iter()
-                .map(|(n, w)| (n.as_str(), *w))
-                .collect();
-            let head = derma_head::fitted::or_builtin(job.head.as_deref())?;
-            for (n, _) in &units {
-                if !head.face_units().iter().any(|u| u.name == *n) {
-                    return Err(ExportError::Invalid(format!(
-                        "face unit '{n}' is not one of the head's 52 (e.g. mouthSmileLeft, jawOpen, eyeBlinkLeft)"
-                    )));
-                }
-            }
-            Scene::head(head, skin.clone(), &units, eye()?, job.gaze)
-        }
-    };
+        };
     debug_assert!(matches!(scene.parts[0].material, Material::Skin(_)));
     let parts: Vec<String> = scene.parts.iter().map(|p| p.name.clone()).collect();
     let r = derma_render::renderer(&scene, job.device)?;

@@ -233,9 +233,11 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
     })];
     let mut meshes = Vec::new();
     let mut names = Vec::new();
-    let skin_mesh = match &o.mesh {
-        Some(p) => load_mesh_in(p, o.unit, progress)?,
-        None => head.skin.clone(),
+    let skin_mesh = match (&o.mesh, o.head.as_deref()) {
+        // Through a fitted head, read at the scale the fit read it (as render, eyes and rig do).
+        (Some(p), Some(dir)) => derma_head::fitted::load_scan(dir, p)?,
+        (Some(p), None) => load_mesh_in(p, o.unit, progress)?,
+        (None, _) => head.skin.clone(),
     };
     let corner = mikktspace_tangents(&skin_mesh);
     let (split, tangents, origin) = split_by_tangent(&skin_mesh, &corner);

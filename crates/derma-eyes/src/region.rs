@@ -30,6 +30,10 @@ pub const REGION_UNITS: [&str; 14] = [
 /// third of the ~0.3 mm texel of a 2048² texture, below anything a render shows.
 const SUPPORT_MM: f32 = 0.1;
 
+/// Height (mm) from the built-in head's globe centres down to its subnasale landmark: the face
+/// height the region's box is authored on (measured on the asset; pinned by a test).
+pub const EYE_TO_SUBNASALE_MM: f32 = 51.2;
+
 /// Spacing (mm, in the modelling camera) of the tracked vertices of a capture-like region
 /// ([`EyeRegion::of_head_sampled`]): one per 2.5 mm cell gives about a thousand over both eye
 /// regions, the thesis' "about a thousand vertices" (§3.5); the rest of the region follows them
@@ -105,8 +109,9 @@ impl EyeRegion {
         // Weld skin vertices by position; a welded vertex is in the region when any copy moves
         // and is tracked when any copy lies on the skin chart.
         // The face's height from the globes to the subnasale, as a fraction of the built-in
-        // head's 51.2 mm.
-        let face = ((0.5 * (eyes[0].y + eyes[1].y) - lm.get("subnasale").y) / 51.2).clamp(0.5, 2.0);
+        // head's.
+        let face = ((0.5 * (eyes[0].y + eyes[1].y) - lm.get("subnasale").y) / EYE_TO_SUBNASALE_MM)
+            .clamp(0.5, 2.0);
         let mut weld: HashMap<[u32; 3], usize> = HashMap::new();
         let mut welded: Vec<(Vec3, Vec3, bool, bool, bool)> = Vec::new(); // pos, n, moved, skin, socket
         let mut of_vertex = Vec::with_capacity(skin.positions.len());
@@ -322,4 +327,15 @@ fn loop_around(
         cur = next;
     }
     (ring.len() >= 8).then_some(ring)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_box_is_authored_on_the_built_in_heads_face_height() {
+        let head = derma_head::Head::builtin();
+        let eyes = 0.5 * (head.eyes[0].centre.y + head.eyes[1].centre.y);
+        let h = eyes - head.landmarks.get("subnasale").y;
+        assert!((h - super::EYE_TO_SUBNASALE_MM).abs() < 0.05, "{h}");
+    }
 }

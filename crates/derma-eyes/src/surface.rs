@@ -80,9 +80,9 @@ impl<'a> Skin<'a> {
     }
 
     /// Positions and normals of the vertices `which` of this skin in frame `f`: the model's own
-    /// on the head's skin; on a user's mesh its rest normals turned by the change the model
-    /// makes to the skin's normals, carried like the positions (the shading a viewer gives a
-    /// morph target without normals: no facets where the linear model folds the lid).
+    /// on the head's skin; on a user's mesh its rest normal plus the change the model makes to
+    /// the skin's normals (carried like the positions), renormalised — not normals recomputed
+    /// from the moved triangles, which show the linear model's lid folds as facets.
     pub fn frame(&self, region: &EyeRegion, f: &Frame, which: &[u32]) -> (Vec<Vec3>, Vec<Vec3>) {
         let mesh = self.mesh();
         match &self.user {

@@ -165,10 +165,7 @@ pub fn detect_corners(scan: &Scan, placed: &[Vec3; 6]) -> [Option<Vec3>; 6] {
         (sum[i] / count[i] as f32 - mesh.positions[i]).dot(scan.vertex_normals[i])
     };
     std::array::from_fn(|k| {
-        // The opening's other corner: inner ↔ outer canthus, left ↔ right mouth corner.
-        let other = placed[k ^ 1];
         let p0 = placed[k];
-        let axis = (p0 - other).normalize_or_zero();
         let near: Vec<usize> = (0..mesh.positions.len())
             .filter(|&i| mesh.positions[i].distance(p0) < CORNER_SEARCH_MM)
             .collect();
@@ -186,7 +183,8 @@ pub fn detect_corners(scan: &Scan, placed: &[Vec3; 6]) -> [Option<Vec3>; 6] {
             c.into_iter().map(|x| x.1).collect()
         };
         // A corner on the rim of the search is the search's edge, not the opening's corner.
-        extreme(pool.into_iter().map(|i| mesh.positions[i]), other, axis)
+        opening_corner(&mesh.positions, &pool, placed, k)
+            .map(|i| mesh.positions[i])
             .filter(|c| c.distance(p0) < CORNER_RIM * CORNER_SEARCH_MM)
     })
 }
@@ -195,27 +193,24 @@ pub fn detect_corners(scan: &Scan, placed: &[Vec3; 6]) -> [Option<Vec3>; 6] {
 /// opening's corner lies outside the search).
 pub const CORNER_RIM: f32 = 0.75;
 
-/// The point of `pool` farthest along `axis` from `from`: an opening's corner.
-pub fn extreme(pool: impl Iterator<Item = Vec3>, from: Vec3, axis: Vec3) -> Option<Vec3> {
-    pool.max_by(|a, b| (*a - from).dot(axis).total_cmp(&(*b - from).dot(axis)))
-}
-
-/// The corners of the openings of a fitted skin (`margin`: its margin vertices' positions) by
-/// the rule [`detect_corners`] uses on a scan, from its [`CORNERS`] landmarks `fitted`: where
-/// the fit put each opening's corner, to set against the scan's.
-pub fn fitted_corners(margin: &[Vec3], fitted: &[Vec3; 6]) -> [Option<Vec3>; 6] {
-    std::array::from_fn(|k| {
-        let (p0, other) = (fitted[k], fitted[k ^ 1]);
-        let axis = (p0 - other).normalize_or_zero();
-        extreme(
-            margin
-                .iter()
-                .copied()
-                .filter(|m| m.distance(p0) < CORNER_SEARCH_MM),
-            other,
-            axis,
-        )
-    })
+/// The corner `k` of an opening, by one rule for a scan, the template and the fitted skin:
+/// among `candidates` (indices into `positions`) within [`CORNER_SEARCH_MM`] of `corners[k]`
+/// (the [`CORNERS`] as placed or fitted), the one farthest along the line from the opening's
+/// other corner (inner ↔ outer canthus, left ↔ right mouth corner: `k ^ 1`).
+pub fn opening_corner(
+    positions: &[Vec3],
+    candidates: &[usize],
+    corners: &[Vec3; 6],
+    k: usize,
+) -> Option<usize> {
+    let (p0, other) = (corners[k], corners[k ^ 1]);
+    let axis = (p0 - other).normalize_or_zero();
+    let along = |i: usize| (positions[i] - other).dot(axis);
+    candidates
+        .iter()
+        .copied()
+        .filter(|&i| positions[i].distance(p0) < CORNER_SEARCH_MM)
+        .max_by(|&a, &b| along(a).total_cmp(&along(b)))
 }
 
 /// Checks given landmarks lie on the scan: each within `limit` mm of its surface.

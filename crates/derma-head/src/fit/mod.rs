@@ -184,17 +184,12 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
         )));
     }
     // The eye and mouth corners, found on the scan near where the placement puts them.
-    let detected: Vec<(String, Vec3)> = match opts.alignment {
-        Alignment::Auto => {
-            let placed = align::CORNERS.map(|n| sim.apply(lm(n)));
-            align::CORNERS
-                .iter()
-                .zip(align::detect_corners(&scan, &placed))
-                .filter_map(|(n, p)| Some((n.to_string(), p?)))
-                .collect()
-        }
-        Alignment::Landmarks(_) => Vec::new(),
+    let detected: [Option<Vec3>; 6] = match opts.alignment {
+        Alignment::Auto => align::detect_corners(&scan, &align::CORNERS.map(|n| sim.apply(lm(n)))),
+        Alignment::Landmarks(_) => [None; 6],
     };
+    // The skin's margin vertices (fine level), where the openings' corners lie.
+    let margin2 = Template::margin(&tpl.level2, &tpl.outer2);
     lap("align", &mut seconds);
 
     // Non-rigid registration of the control cage.
@@ -233,30 +228,11 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
         .collect();
     // Detected corners hold the template's corner of the same opening (its margin's extreme
     // vertex, found by the same rule), like given landmarks.
-    if !detected.is_empty() {
-        let margin = Template::margin(&tpl.level2, &tpl.outer2);
-        let pos = &tpl.level2.positions;
-        let corner_vertex = |k: usize| {
-            let (p0, other) = (lm(align::CORNERS[k]), lm(align::CORNERS[k ^ 1]));
-            let axis = (p0 - other).normalize_or_zero();
-            margin
-                .iter()
-                .copied()
-                .filter(|&i| pos[i].distance(p0) < align::CORNER_SEARCH_MM)
-                .max_by(|&a, &b| {
-                    (pos[a] - other)
-                        .dot(axis)
-                        .total_cmp(&(pos[b] - other).dot(axis))
-                })
-        };
-        for (n, q) in &detected {
-            let k = align::CORNERS
-                .iter()
-                .position(|c| c == n)
-                .expect("a corner");
-            if let Some(v) = corner_vertex(k) {
-                lm_rows.push((tpl.stencils2.rows[v].clone(), *q));
-            }
+    let template_corners = align::CORNERS.map(lm);
+    for (k, q) in detected.iter().enumerate() {
+        let corner = align::opening_corner(&tpl.level2.positions, &margin2, &template_corners, k);
+        if let (Some(q), Some(v)) = (q, corner) {
+            lm_rows.push((tpl.stencils2.rows[v].clone(), *q));
         }
     }
     let extra: Vec<Vec<(u32, f32)>> = lm_rows.iter().map(|r| r.0.clone()).collect();
@@ -361,22 +337,14 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
     untangle(&tpl, &mut fine, &template_fine);
     let flipped = flipped_quads(&tpl, &fine, &template_fine);
     // The detected corners against the fitted skin's corners of the same openings.
-    let corner_gap_mm: Vec<(String, f32)> = if detected.is_empty() {
-        Vec::new()
-    } else {
-        let margin: Vec<Vec3> = Template::margin(&tpl.level2, &tpl.outer2)
-            .into_iter()
-            .map(|i| fine[i])
-            .collect();
-        let at = align::fitted_corners(&margin, &align::CORNERS.map(|n| fine[tpl.landmarks[n]]));
-        detected
-            .iter()
-            .filter_map(|(n, p)| {
-                let k = align::CORNERS.iter().position(|c| c == n)?;
-                Some((n.clone(), at[k]?.distance(*p)))
-            })
-            .collect()
-    };
+    let fitted_corners = align::CORNERS.map(|n| fine[tpl.landmarks[n]]);
+    let corner_gap_mm: Vec<(String, f32)> = (0..6)
+        .filter_map(|k| {
+            let q = detected[k]?;
+            let v = align::opening_corner(&fine, &margin2, &fitted_corners, k)?;
+            Some((align::CORNERS[k].to_string(), fine[v].distance(q)))
+        })
+        .collect();
     let face2: Vec<usize> = (0..fine.len())
         .filter(|&i| {
             let p = tpl.level2.positions[i];
@@ -494,9 +462,10 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
             projected,
             flipped,
             landmark_mm,
-            detected: detected
+            detected: align::CORNERS
                 .iter()
-                .map(|(n, p)| (n.clone(), p.to_array()))
+                .zip(&detected)
+                .filter_map(|(n, p)| Some((n.to_string(), p.as_ref()?.to_array())))
                 .collect(),
             corner_gap_mm,
             seconds,

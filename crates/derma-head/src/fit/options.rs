@@ -100,7 +100,7 @@ pub struct FitReport {
     #[serde(default)]
     pub detected: Vec<(String, [f32; 3])>,
     /// Per detected corner, its distance (mm) from the fitted skin's corner of the same
-    /// opening ([`super::align::fitted_corners`]): how closely the registration honoured it
+    /// opening ([`super::align::opening_corner`]): how closely the registration honoured it
     /// (near 0; a large gap means the rest of the face pulled against it). It does not tell a
     /// misdetected corner, which the fit follows; `detected` says where each was found.
     #[serde(default)]
