@@ -24,7 +24,7 @@ npm install --silent --no-audit --no-fund --prefix "$work/pw" playwright-core@1.
 cargo build --release -q --workspace --bins --examples
 d=target/release/derma
 "$d" skin --size 512 --out "$work/skin" --quiet
-"$d" rig build --neutral "$work/skin/hemoglobin.exr" --melanin "$work/skin/melanin.exr" \
+"$d" rig build --set "$work/skin" \
   --builtin all --radius 8 --out "$work/rig" --quiet
 "$d" rig eval --rig "$work/rig" --out "$work/neutral.png" --quiet
 "$d" rig eval --rig "$work/rig" --weights happiness=1 --out "$work/happy.png" --quiet

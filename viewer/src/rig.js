@@ -1,9 +1,11 @@
 // The skin appearance rig of Jimenez et al. 2010 (eqs. 6–7, §6) evaluated on the GPU each time
-// a weight changes: hemoglobin H = g·(Σ w_i bias_i + H_0 · Σ w_i scale_i), colour = LUT(∛C_m, ∛H).
+// a weight changes: hemoglobin H = g·(Σ w_i bias_i + H_0 · Σ w_i scale_i); the colour is the
+// texture set's own skin re-shaded with H (derma-rig's skin_response): base + d1·x + d2·x²,
+// x = ∛H − ∛H_n, so a neutral frame is base_color.png and moles, lips and hair persist.
 //
 // Inputs are `derma export web`'s 16-bit PNGs (manifest.json states each file's value range).
 // The fragment shader repeats derma-rig's rig.wgsl: basis maps upsampled bilinearly with clamp to
-// edge and texel centres at half-integers, the LUT read bilinearly with nodes at its ends.
+// edge and texel centres at half-integers; the skin (base, d1, d2) read per texel.
 import * as THREE from 'three';
 import { decodePng16 } from './png16.js';
 
@@ -51,12 +53,13 @@ precision highp int;
 uniform sampler2D h0Tex;
 uniform sampler2D melaninTex;
 uniform sampler2D basisTex;
-uniform sampler2D lutTex;
+uniform sampler2D baseTex;
+uniform sampler2D d1Tex;
+uniform sampler2D d2Tex;
 uniform float weights[MAX_LAYERS];
 uniform int layers;
 uniform ivec2 size;
 uniform ivec2 basisSize;
-uniform int lutN;
 uniform float globalScale;
 uniform float melaninMax;
 uniform float bloodMax;
@@ -81,20 +84,8 @@ vec2 combined(ivec2 b) {
   return globalScale * s;
 }
 
-vec3 lutAt(int u, int v) { return texelFetch(lutTex, ivec2(u, v), 0).rgb; }
-
-// Eq. 7: bilinear look-up at (∛(C_m / C_m,max), ∛(C_hd / C_hd,max)), nodes at the ends.
-vec3 skinColor(float cm, float chd) {
-  float u = min(pow(max(cm, 0.0) / melaninMax, 1.0 / 3.0), 1.0) * float(lutN - 1);
-  float v = min(pow(max(chd, 0.0) / bloodMax, 1.0 / 3.0), 1.0) * float(lutN - 1);
-  int i = min(int(u), lutN - 2);
-  int j = min(int(v), lutN - 2);
-  float fx = u - float(i);
-  float fy = v - float(j);
-  vec3 top = mix(lutAt(i, j), lutAt(i + 1, j), fx);
-  vec3 bottom = mix(lutAt(i, j + 1), lutAt(i + 1, j + 1), fx);
-  return mix(top, bottom, fy);
-}
+// The neutral's bias μ_n (tile 0) at basis texel b.
+float neutralBias(ivec2 b) { return texelFetch(basisTex, b, 0).r; }
 
 void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
@@ -105,12 +96,21 @@ void main() {
   vec2 top = mix(combined(ivec2(x0, y0)), combined(ivec2(x1, y0)), tx);
   vec2 bottom = mix(combined(ivec2(x0, y1)), combined(ivec2(x1, y1)), tx);
   vec2 bs = mix(top, bottom, ty);
-  float h = clamp(bs.x + texelFetch(h0Tex, p, 0).r * bs.y, 0.0, 1.0);
+  float d0 = texelFetch(h0Tex, p, 0).r;
+  float h = clamp(bs.x + d0 * bs.y, 0.0, 1.0);
+  // H_n: the neutral pose (w_0 = 1, g = 1), upsampled as the frame's maps are.
+  float nt = mix(neutralBias(ivec2(x0, y0)), neutralBias(ivec2(x1, y0)), tx);
+  float nb = mix(neutralBias(ivec2(x0, y1)), neutralBias(ivec2(x1, y1)), tx);
+  float hn = clamp(mix(nt, nb, ty) + d0, 0.0, 1.0);
   float cm = texelFetch(melaninTex, p, 0).r;
   vec3 c;
   if (mode == 1) c = vec3(pow(h / bloodMax, 1.0 / 3.0));
   else if (mode == 2) c = vec3(pow(max(cm, 0.0) / melaninMax, 1.0 / 3.0));
-  else c = skinColor(cm, h);
+  else {
+    float x = h == hn ? 0.0 : pow(h, 1.0 / 3.0) - pow(hn, 1.0 / 3.0);
+    vec3 base = texelFetch(baseTex, p, 0).rgb;
+    c = clamp(base + (texelFetch(d1Tex, p, 0).rgb + texelFetch(d2Tex, p, 0).rgb * x) * x, 0.0, 1.0);
+  }
   outColor = vec4(c, 1.0);
 }
 `;
@@ -125,11 +125,14 @@ export const MODES = { color: 0, hemoglobin: 1, melanin: 2 };
 export class Rig {
   static async load(base, manifest) {
     const r = manifest.rig;
-    const [h0, melanin, basis, lut] = await Promise.all([
+    if (!r.skin) throw new Error('manifest.json: the rig carries no skin (an export of derma before version 2); export it again');
+    const [h0, melanin, basis, skinBase, d1, d2] = await Promise.all([
       png16(base + r.h0.file, r.h0.range),
       png16(base + r.melanin.file, r.melanin.range),
       png16(base + r.basis.file, [0, 1]),
-      png16(base + r.lut.file, r.lut.range),
+      png16(base + r.skin.base.file, r.skin.base.range),
+      png16(base + r.skin.d1.file, r.skin.d1.range),
+      png16(base + r.skin.d2.file, r.skin.d2.range),
     ]);
     // The basis atlas holds bias (R) and scale (G), each normalised to its own range.
     const [bl, bh] = r.basis.bias_range;
@@ -138,7 +141,7 @@ export class Rig {
       basis.data[i] = bl + (bh - bl) * basis.data[i];
       basis.data[i + 1] = sl + (sh - sl) * basis.data[i + 1];
     }
-    return new Rig(manifest, { h0, melanin, basis, lut });
+    return new Rig(manifest, { h0, melanin, basis, skinBase, d1, d2 });
   }
 
   constructor(manifest, maps) {
@@ -173,12 +176,13 @@ export class Rig {
         h0Tex: { value: floatTexture(maps.h0, 1) },
         melaninTex: { value: floatTexture(maps.melanin, 1) },
         basisTex: { value: floatTexture(maps.basis, 4) },
-        lutTex: { value: floatTexture(maps.lut, 4) },
+        baseTex: { value: floatTexture(maps.skinBase, 4) },
+        d1Tex: { value: floatTexture(maps.d1, 4) },
+        d2Tex: { value: floatTexture(maps.d2, 4) },
         weights: { value: new Array(MAX_LAYERS).fill(0) },
         layers: { value: this.targets.length + 1 },
         size: { value: new THREE.Vector2(width, height) },
         basisSize: { value: new THREE.Vector2(bw, bh) },
-        lutN: { value: r.lut.size },
         globalScale: { value: 1 },
         melaninMax: { value: r.lut.melanin_max },
         bloodMax: { value: r.lut.blood_max },

@@ -13,7 +13,7 @@ use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// A rig frame whose colour replaces the texture set's base colour.
+/// A rig frame: the texture set's skin re-shaded with the frame's hemoglobin.
 pub struct RigFrame {
     /// The rig directory (`derma rig build`).
     pub dir: PathBuf,
@@ -73,8 +73,46 @@ pub struct RenderReport {
     pub seconds_per_frame: f64,
 }
 
-fn rig_color(f: &RigFrame) -> Result<[Map; 3]> {
+/// The skin of `rig` (read from `dir`), checked to be the one of the texture set whose decoded
+/// base colour is `base`: refused for a rig of bare maps (its colour is the LUT's, and would
+/// replace the set's) or of another set.
+pub fn skin_of<'a>(
+    rig: &'a derma_rig::Rig,
+    dir: &Path,
+    base: &[Map; 3],
+) -> Result<&'a derma_rig::skin_response::SkinResponse> {
+    let bad = |detail: String| ExportError::Input {
+        path: dir.to_path_buf(),
+        detail,
+    };
+    let skin = rig.skin.as_ref().ok_or_else(|| {
+        bad("built from bare hemoglobin and melanin maps, its colour is the skin-colour LUT's and would replace the set's base colour; build the rig from the texture set".into())
+    })?;
+    let (w, h) = (base[0].width(), base[0].height());
+    if skin.size() != (w, h) {
+        return Err(bad(format!(
+            "its maps are {}×{}; the texture set is {w}×{h} (build the rig from this set)",
+            skin.size().0,
+            skin.size().1
+        )));
+    }
+    let differ = (0..w * h)
+        .filter(|&i| {
+            (0..3).any(|c| derma_core::image_io::srgb8(base[c].data()[i]) != skin.base[i][c])
+        })
+        .count();
+    if differ > 0 {
+        return Err(bad(format!(
+            "its base colour differs from the texture set's on {differ} texels: it was built from another set"
+        )));
+    }
+    Ok(skin)
+}
+
+/// The frame's colour of the rig in `f` on the texture set whose decoded base colour is `base`.
+fn rig_color(f: &RigFrame, base: &[Map; 3]) -> Result<[Map; 3]> {
     let (rig, lut, _) = derma_rig::rig_dir::load(&f.dir)?;
+    skin_of(&rig, &f.dir, base)?;
     let (w, g) =
         derma_rig::weights::frame_weights(&rig, &f.weights, Normalization::default(), f.global)?;
     let melanin = rig.melanin.clone().ok_or_else(|| ExportError::Input {
@@ -154,20 +192,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     }
     let mut skin = SkinMaps::from_dir(&job.textures)?;
     if let Some(f) = &job.rig {
-        let c = rig_color(f)?;
-        if (c[0].width(), c[0].height()) != skin.size() {
-            return Err(ExportError::Input {
-                path: f.dir.clone(),
-                detail: format!(
-                    "its maps are {}×{}; the texture set is {}×{} (build the rig from this set's hemoglobin.exr)",
-                    c[0].width(),
-                    c[0].height(),
-                    skin.size().0,
-                    skin.size().1
-                ),
-            });
-        }
-        skin.base_color = c;
+        skin.base_color = rig_color(f, &skin.base_color)?;
     }
     let job_p = Job::new(progress);
     job_p.stage("scene", 1, Unit::Steps);

@@ -11,8 +11,8 @@ use std::path::Path;
 
 /// The manifest's `format`.
 pub const FORMAT: &str = "derma-web";
-/// Its `version`.
-pub const VERSION: u32 = 1;
+/// Its `version` (2: the rig carries the set's skin, [`derma_rig::skin_response`]).
+pub const VERSION: u32 = 2;
 
 /// What was written.
 #[derive(Clone, Debug)]
@@ -133,6 +133,11 @@ pub fn export(
             path: dir.to_path_buf(),
             detail: "the rig has no melanin map; build the rig with one".into(),
         })?;
+        let skin = crate::files::skin_of(
+            &rig,
+            dir,
+            &derma_render::material::SkinMaps::from_dir(textures)?.base_color,
+        )?;
         let rd = out.join("rig");
         derma_core::atomic::ensure_writable_dir(&rd)?;
         let h0r = range(&[&rig.h0]);
@@ -159,6 +164,17 @@ pub fn export(
             &rd.join("lut.png"),
             &[&normalise(&r, lr), &normalise(&g, lr), &normalise(&b, lr)],
         )?;
+        // The set's skin: its base colour decoded to linear (16-bit, which encodes back to the
+        // set's 8-bit codes exactly) and the response (d1, d2).
+        let (w, h) = skin.size();
+        let base = Map::planes(w, h, |i| skin.base[i].map(derma_core::color::srgb8_decode));
+        write_png16(&rd.join("base.png"), &[&base[0], &base[1], &base[2]])?;
+        let d1r = range(&[&skin.d1[0], &skin.d1[1], &skin.d1[2]]);
+        let d2r = range(&[&skin.d2[0], &skin.d2[1], &skin.d2[2]]);
+        let norm3 = |m: &[Map; 3], r| m.each_ref().map(|p| normalise(p, r));
+        let (n1, n2) = (norm3(&skin.d1, d1r), norm3(&skin.d2, d2r));
+        write_png16(&rd.join("d1.png"), &[&n1[0], &n1[1], &n1[2]])?;
+        write_png16(&rd.join("d2.png"), &[&n2[0], &n2[1], &n2[2]])?;
         targets = rig.targets.len();
         manifest["rig"] = json!({
             "model": rj.model,
@@ -172,6 +188,10 @@ pub fn export(
             "lut": {"file": "rig/lut.png", "range": [lr.0, lr.1], "size": rj.lut.size,
                 "melanin_max": rj.lut.melanin_max, "blood_max": rj.lut.blood_max, "layout": rj.lut.layout},
             "targets": rig.targets.iter().map(|t| json!({"name": t.name, "global_scale": t.global_scale})).collect::<Vec<_>>(),
+            "skin": {"base": {"file": "rig/base.png", "range": [0.0, 1.0]}, "appearance": skin.appearance,
+                "d1": {"file": "rig/d1.png", "range": [d1r.0, d1r.1]},
+                "d2": {"file": "rig/d2.png", "range": [d2r.0, d2r.1]},
+                "formula": derma_rig::rig_dir::SKIN_FORMULA},
             "encoding": "16-bit PNG, value = range[0] + (range[1] - range[0]) × sample; rows top first (v = 1 at the top)",
         });
     }

@@ -97,6 +97,10 @@ pub struct Rig {
     /// Static melanin C_m at full resolution, when given (melanin does not change with
     /// expression: Jimenez et al. 2010 §1).
     pub melanin: Option<Map>,
+    /// The texture set's base colour and its response to hemoglobin, when the rig was built from
+    /// a set: frames then keep the set's skin ([`crate::skin_response`]); without it they are
+    /// the LUT's colour of (C_m, H) (eq. 7).
+    pub skin: Option<crate::skin_response::SkinResponse>,
 }
 
 /// Validates a target name: letters, digits, `_` and `-`, not "neutral".
@@ -327,6 +331,7 @@ impl Rig {
             sigma_floor: eps,
             targets: built,
             melanin,
+            skin: None,
         })
     }
 
@@ -418,6 +423,7 @@ impl Rig {
             sigma_floor: eps,
             targets,
             melanin,
+            skin: None,
         })
     }
 }

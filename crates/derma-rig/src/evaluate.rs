@@ -101,6 +101,23 @@ pub fn hemoglobin(rig: &Rig, w: &[f32], g: f32) -> Result<Map> {
     Ok(Map::from_vec(fw, fh, out)?)
 }
 
+/// The weights of the neutral pose: w_0 = 1, every target 0.
+pub fn neutral_weights(rig: &Rig) -> Vec<f32> {
+    let mut w = vec![0.0; rig.targets.len() + 1];
+    w[0] = 1.0;
+    w
+}
+
+/// Linear sRGB colour of a frame whose hemoglobin is `h`: with the rig's skin (a rig built from
+/// a texture set) the set's base colour re-shaded with H ([`crate::skin_response`]), else the
+/// LUT's colour of (`melanin`, H).
+pub fn frame_color(rig: &Rig, h: &Map, melanin: &Map, lut: &SkinColorLut) -> Result<[Map; 3]> {
+    match &rig.skin {
+        Some(s) => s.color(h, &hemoglobin(rig, &neutral_weights(rig), 1.0)?),
+        None => color(h, melanin, lut),
+    }
+}
+
 /// Linear sRGB colour of hemoglobin `h` and melanin `melanin` through the LUT (bilinear, as a
 /// GPU samples it).
 pub fn color(h: &Map, melanin: &Map, lut: &SkinColorLut) -> Result<[Map; 3]> {
@@ -182,7 +199,7 @@ pub fn evaluate_frame(
         }
         _ => {
             let h = hemoglobin(rig, w, g)?;
-            let rgb = melanin.map(|m| color(&h, m, lut)).transpose()?;
+            let rgb = melanin.map(|m| frame_color(rig, &h, m, lut)).transpose()?;
             Ok((h, rgb))
         }
     }
@@ -193,6 +210,12 @@ impl FramePlan {
     pub fn new(rig: &Rig, melanin: &Map, lut: &SkinColorLut) -> Result<Self> {
         let (w, h) = rig.size();
         rig.check_melanin(melanin)?;
+        if rig.skin.is_some() {
+            return Err(invalid(
+                "rig",
+                "built from a texture set: its frames keep the set's skin, which the LUT's real-time path does not serve; evaluate them with evaluate_frame",
+            ));
+        }
         let n = FRAME_LUT_LEVELS;
         let (mmax, bmax) = (lut.options.melanin_max, lut.options.blood_max);
         let u_index = melanin

@@ -8,6 +8,8 @@ use crate::error::{invalid, Result};
 use crate::expression;
 use crate::maps::{read_map, read_optional, Quantity};
 use crate::rig_dir::{self, RigJson};
+use crate::skin_response::{appearance_of_set, SkinResponse};
+use crate::RigError;
 use derma_core::progress::Progress;
 use derma_core::Map;
 use derma_shading::skin_color_lut::{LutOptions, SkinColorLut};
@@ -22,15 +24,65 @@ pub struct CharacterFiles {
     pub melanin: Option<PathBuf>,
     /// Skin mask (> 0 = skin): texels outside are left out of the statistics.
     pub mask: Option<PathBuf>,
+    /// The texture set the maps are (`derma skin`'s directory): frames then keep its skin
+    /// ([`crate::skin_response`]).
+    pub set: Option<SetFiles>,
+}
+
+/// A texture set a rig is built on.
+#[derive(Clone, Debug, Default)]
+pub struct SetFiles {
+    /// The set's directory.
+    pub dir: PathBuf,
+    /// The match table it was made with, when not the built-in one.
+    pub table: Option<PathBuf>,
 }
 
 impl CharacterFiles {
+    /// The character of the texture set in `set.dir`: its hemoglobin and melanin maps, and its
+    /// skin for the frames' colour.
+    pub fn of_set(set: SetFiles, mask: Option<PathBuf>) -> Self {
+        use crate::skin_response::files;
+        Self {
+            neutral: set.dir.join(files::HEMOGLOBIN),
+            melanin: Some(set.dir.join(files::MELANIN)),
+            mask,
+            set: Some(set),
+        }
+    }
+
     /// Every file, to keep outputs away from them.
     pub fn paths(&self) -> Vec<&Path> {
         let mut v: Vec<&Path> = vec![&self.neutral];
         v.extend(self.melanin.as_deref());
         v.extend(self.mask.as_deref());
+        if let Some(s) = &self.set {
+            v.push(&s.dir);
+            v.extend(s.table.as_deref());
+        }
         v
+    }
+
+    /// The set's skin response, when the character is a set; checked against the rig's size.
+    fn skin(&self, rig: &Rig) -> Result<Option<SkinResponse>> {
+        let Some(s) = &self.set else {
+            return Ok(None);
+        };
+        let appearance = appearance_of_set(&s.dir, s.table.as_deref())?;
+        let r = SkinResponse::of_set(&s.dir, &*appearance)?;
+        if r.size() != rig.size() {
+            return Err(RigError::File {
+                path: s.dir.clone(),
+                detail: format!(
+                    "its base colour is {}×{}; its hemoglobin map {}×{}",
+                    r.size().0,
+                    r.size().1,
+                    rig.size().0,
+                    rig.size().1
+                ),
+            });
+        }
+        Ok(Some(r))
     }
 
     /// (neutral, melanin, mask), PNGs scaled by `lut`'s axis tops.
@@ -179,7 +231,8 @@ pub fn build(
         Some((mesh, regions)) => expression::Placement::Mesh { mesh, regions },
         None => expression::Placement::Builtin,
     };
-    let rig = Rig::build_placed(&neutral, mask.as_ref(), melanin, &specs, opts, &placement)?;
+    let mut rig = Rig::build_placed(&neutral, mask.as_ref(), melanin, &specs, opts, &placement)?;
+    rig.skin = files.character.skin(&rig)?;
     let json = rig_dir::save(&rig, &lut, out)?;
     Ok((rig, json))
 }
@@ -199,7 +252,8 @@ pub fn transfer(
     check_out(out, &inputs)?;
     let (rig, lut, _) = rig_dir::load(rig_dir)?;
     let (neutral, melanin, mask) = character.read(&lut.options, progress)?;
-    let moved = rig.transfer(&neutral, mask.as_ref(), melanin, mode, sigma_floor)?;
+    let mut moved = rig.transfer(&neutral, mask.as_ref(), melanin, mode, sigma_floor)?;
+    moved.skin = character.skin(&moved)?;
     rig_dir::save(&moved, &lut, out)?;
     Ok(moved)
 }

@@ -24,7 +24,8 @@ struct Params {
     global_scale: f32,
     melanin_max: f32,
     blood_max: f32,
-    pad: [u32; 3],
+    has_skin: u32,
+    pad: [u32; 2],
 }
 
 struct Pipelines {
@@ -40,9 +41,9 @@ static PIPELINES: GpuCell<Pipelines> = GpuCell::new();
 
 fn pipelines() -> Result<(&'static derma_core::gpu::Gpu, &'static Pipelines)> {
     Ok(PIPELINES.get_or_init(|ctx| {
-        // Binding 0 the parameters, 1–5 read-only inputs, 6–8 the outputs and the scratch.
+        // Binding 0 the parameters, 1–6 read-only inputs, 7–9 the outputs and the scratch.
         let (layout, [combine, main]) =
-            ctx.entry_points("rig.wgsl", SHADER, 5, 3, ["combine", "main"])?;
+            ctx.entry_points("rig.wgsl", SHADER, 6, 3, ["combine", "main"])?;
         Ok(Pipelines {
             layout,
             combine,
@@ -97,6 +98,28 @@ impl GpuRig {
         let mel_buf = init("melanin", bytemuck::cast_slice(melanin.data()), read);
         let basis_buf = init("basis", bytemuck::cast_slice(&basis), read);
         let lut_buf = init("lut", bytemuck::cast_slice(&lut_data), read);
+        // The set's skin: per texel its base colour (linear), d1 and d2 as three vec4.
+        let skin: Vec<[f32; 4]> = match &rig.skin {
+            Some(s) => (0..w * h)
+                .flat_map(|i| {
+                    let (d1, d2) = s.at(i);
+                    let b = s.base[i].map(derma_core::color::srgb8_decode);
+                    [
+                        [b[0], b[1], b[2], 0.0],
+                        [d1[0], d1[1], d1[2], 0.0],
+                        [d2[0], d2[1], d2[2], 0.0],
+                    ]
+                })
+                .collect(),
+            None => vec![[0.0; 4]],
+        };
+        if rig.skin.is_some() {
+            ctx.check_storage(
+                format!("the rig's skin response at {w}×{h}"),
+                (w * h * 48) as u64,
+            )?;
+        }
+        let skin_buf = init("skin", bytemuck::cast_slice(&skin), read);
         let weights_buf = init(
             "weights",
             bytemuck::cast_slice(&vec![0.0f32; layers]),
@@ -123,7 +146,8 @@ impl GpuRig {
             global_scale: 1.0,
             melanin_max: lut.options.melanin_max as f32,
             blood_max: lut.options.blood_max as f32,
-            pad: [0; 3],
+            has_skin: rig.skin.is_some() as u32,
+            pad: [0; 2],
         };
         let params_buf = init(
             "params",
@@ -140,6 +164,7 @@ impl GpuRig {
                 &mel_buf,
                 &basis_buf,
                 &lut_buf,
+                &skin_buf,
                 &hemoglobin_buf,
                 &color_buf,
                 &combined_buf,

@@ -30,6 +30,7 @@ pub mod maps;
 pub mod preview;
 pub mod rig_dir;
 pub mod sequence;
+pub mod skin_response;
 pub mod upsample;
 pub mod weights;
 

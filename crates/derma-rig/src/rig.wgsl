@@ -16,6 +16,9 @@
 //                                                        (neutral.exr, targets/NAME.exr)
 //   lut      n × n × 3    linear RGB at [v][u], u = ∛(C_m/melanin_max), v = ∛(H/blood_max)
 //   weights  w_0 … w_k (sum to one; w_0 is the neutral pose)
+//   skin     W × H × 3: the texture set's base colour (linear), d1, d2 (skin_response.exr), when
+//            has_skin = 1 (a rig built from a set; otherwise one unused element): the colour is
+//            then base + d1·x + d2·x², x = ∛H − ∛H_n, H_n the neutral's H, and not the LUT's
 // Scratch: combined  BH × BW × (bias, scale).
 // Basis maps are upsampled bilinearly with clamp to edge and texel centres at half-integers.
 
@@ -29,7 +32,7 @@ struct Params {
     global_scale: f32,
     melanin_max: f32,
     blood_max: f32,
-    _pad0: u32,
+    has_skin: u32,
     _pad1: u32,
     _pad2: u32,
 };
@@ -40,9 +43,10 @@ struct Params {
 @group(0) @binding(3) var<storage, read> melanin: array<f32>;
 @group(0) @binding(4) var<storage, read> basis: array<f32>;
 @group(0) @binding(5) var<storage, read> lut: array<f32>;
-@group(0) @binding(6) var<storage, read_write> hemoglobin_out: array<f32>;
-@group(0) @binding(7) var<storage, read_write> color_out: array<vec4<f32>>;
-@group(0) @binding(8) var<storage, read_write> combined: array<vec2<f32>>;
+@group(0) @binding(6) var<storage, read> skin: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> hemoglobin_out: array<f32>;
+@group(0) @binding(8) var<storage, read_write> color_out: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read_write> combined: array<vec2<f32>>;
 
 struct Tap {
     i0: u32,
@@ -68,6 +72,28 @@ fn upsampled(cx: Tap, cy: Tap) -> vec2<f32> {
     let top = a0 + (a1 - a0) * cx.t;
     let bottom = b0 + (b1 - b0) * cx.t;
     return top + (bottom - top) * cy.t;
+}
+
+// The neutral's bias μ_n (basis layer 0) upsampled as `upsampled` does the combined maps: at
+// w_0 = 1 and g = 1 the two give the same bits, so a neutral frame has x = 0 exactly.
+fn upsampled_neutral(cx: Tap, cy: Tap) -> f32 {
+    let r0 = cy.i0 * params.basis_width;
+    let r1 = cy.i1 * params.basis_width;
+    let a0 = basis[r0 + cx.i0];
+    let a1 = basis[r0 + cx.i1];
+    let b0 = basis[r1 + cx.i0];
+    let b1 = basis[r1 + cx.i1];
+    let top = a0 + (a1 - a0) * cx.t;
+    let bottom = b0 + (b1 - b0) * cx.t;
+    return top + (bottom - top) * cy.t;
+}
+
+// x = ∛H − ∛H_n, exactly 0 when the two are equal.
+fn cube_root_step(h: f32, hn: f32) -> f32 {
+    if (h == hn) {
+        return 0.0;
+    }
+    return pow(max(h, 0.0), 1.0 / 3.0) - pow(max(hn, 0.0), 1.0 / 3.0);
 }
 
 fn lut_at(u: u32, v: u32) -> vec3<f32> {
@@ -118,8 +144,19 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     }
     let x = k % params.width;
     let y = k / params.width;
-    let c = upsampled(tap(x, params.basis_width, params.width), tap(y, params.basis_height, params.height));
+    let cx = tap(x, params.basis_width, params.width);
+    let cy = tap(y, params.basis_height, params.height);
+    let c = upsampled(cx, cy);
     let h = clamp(c.x + h0[k] * c.y, 0.0, 1.0);
     hemoglobin_out[k] = h;
-    color_out[k] = vec4<f32>(skin_color(melanin[k], h), 1.0);
+    if (params.has_skin == 1u) {
+        let hn = clamp(upsampled_neutral(cx, cy) + h0[k] * 1.0, 0.0, 1.0);
+        let s = cube_root_step(h, hn);
+        let base = skin[3u * k].rgb;
+        let d1 = skin[3u * k + 1u].rgb;
+        let d2 = skin[3u * k + 2u].rgb;
+        color_out[k] = vec4<f32>(clamp(base + (d1 + d2 * s) * s, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0);
+    } else {
+        color_out[k] = vec4<f32>(skin_color(melanin[k], h), 1.0);
+    }
 }

@@ -5,6 +5,7 @@
 
 use crate::basis::{check_name, Rig, Target};
 use crate::error::{Result, RigError};
+use crate::skin_response::SkinResponse;
 use derma_core::dtab::Dtab;
 use derma_core::image_io::{read_exr_channels, write_exr, write_png16, ExrPrecision};
 use derma_core::Map;
@@ -64,7 +65,31 @@ pub struct Files {
     pub lut_png: String,
     /// The run-time evaluation as a WGSL compute shader (the one derma's GPU path runs).
     pub shader: String,
+    /// The texture set's skin, when the rig was built from a set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skin: Option<SkinFiles>,
 }
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+/// The files of a rig built from a texture set ([`crate::skin_response`]).
+pub struct SkinFiles {
+    /// The set's base colour, 8-bit sRGB (a copy of its base_color.png).
+    pub base_color: String,
+    /// Full resolution, channels `d1.R`, `d1.G`, `d1.B`, `d2.R`, `d2.G`, `d2.B` (float).
+    pub response: String,
+    /// The appearance that made the set and its response.
+    pub appearance: String,
+    /// How a frame's colour is formed from them.
+    pub formula: String,
+}
+
+/// [`SkinFiles::formula`].
+pub const SKIN_FORMULA: &str = "colour (linear sRGB) = srgb_decode(base_color) + d1*x + d2*x^2, \
+x = cbrt(H) - cbrt(Hn), Hn = H evaluated with w0 = 1 and g = 1 (the neutral); replaces the LUT colour";
+
+/// Channel names of the response file, d1 then d2.
+pub const RESPONSE_CHANNELS: [&str; 6] = ["d1.R", "d1.G", "d1.B", "d2.R", "d2.G", "d2.B"];
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -152,6 +177,10 @@ pub fn save(rig: &Rig, lut: &SkinColorLut, dir: &Path) -> Result<RigJson> {
         &[&enc(&r), &enc(&g), &enc(&b)],
     )?;
     derma_core::atomic::write_bytes(&dir.join("rig.wgsl"), crate::gpu_eval::SHADER.as_bytes())?;
+    let skin = match &rig.skin {
+        Some(s) => Some(save_skin(s, dir)?),
+        None => None,
+    };
     let (w, h) = rig.size();
     let (bw, bh) = rig.basis_size();
     let json = RigJson {
@@ -171,6 +200,7 @@ pub fn save(rig: &Rig, lut: &SkinColorLut, dir: &Path) -> Result<RigJson> {
             lut_exr: "skin_color_lut.exr".into(),
             lut_png: "skin_color_lut.png".into(),
             shader: "rig.wgsl".into(),
+            skin,
         },
         lut: lut_json(lut),
         targets,
@@ -181,6 +211,57 @@ pub fn save(rig: &Rig, lut: &SkinColorLut, dir: &Path) -> Result<RigJson> {
         derma_core::report::JsonFormat::DATA_PRETTY,
     )?;
     Ok(json)
+}
+
+fn save_skin(s: &SkinResponse, dir: &Path) -> Result<SkinFiles> {
+    let (w, h) = s.size();
+    let codes = Map::planes(w, h, |i| s.base[i].map(|c| c as f32 / 255.0));
+    derma_core::image_io::write_png8(
+        &dir.join("base_color.png"),
+        &[&codes[0], &codes[1], &codes[2]],
+    )?;
+    let planes: Vec<(&str, &Map)> = RESPONSE_CHANNELS
+        .iter()
+        .zip(s.d1.iter().chain(&s.d2))
+        .map(|(n, m)| (*n, m))
+        .collect();
+    write_exr(&dir.join("skin_response.exr"), &planes, ExrPrecision::F32)?;
+    Ok(SkinFiles {
+        base_color: "base_color.png".into(),
+        response: "skin_response.exr".into(),
+        appearance: s.appearance.clone(),
+        formula: SKIN_FORMULA.into(),
+    })
+}
+
+fn load_skin(dir: &Path, f: &SkinFiles, full: (usize, usize)) -> Result<SkinResponse> {
+    let bp = dir.join(&f.base_color);
+    let img = derma_core::image_io::read_rgb(&bp)?;
+    let m = &img.channels;
+    if (m[0].width(), m[0].height()) != full {
+        return Err(RigError::File {
+            path: bp,
+            detail: format!(
+                "is {}×{}; rig.json says {}×{}",
+                m[0].width(),
+                m[0].height(),
+                full.0,
+                full.1
+            ),
+        });
+    }
+    let code = |v: f32| (v * 255.0).round().clamp(0.0, 255.0) as u8;
+    let base = (0..full.0 * full.1)
+        .map(|i| std::array::from_fn(|c| code(m[c].data()[i])))
+        .collect();
+    let rp = dir.join(&f.response);
+    let c = read_exr_channels(&rp)?;
+    let p: Vec<Map> = RESPONSE_CHANNELS
+        .iter()
+        .map(|n| channel(&rp, &c, n, full))
+        .collect::<Result<_>>()?;
+    let [a, b, cc, d, e, g]: [Map; 6] = p.try_into().expect("six channels");
+    SkinResponse::from_parts(base, [a, b, cc], [d, e, g], &f.appearance)
 }
 
 fn channel(path: &Path, chans: &[(String, Map)], name: &str, size: (usize, usize)) -> Result<Map> {
@@ -265,6 +346,10 @@ pub fn load(dir: &Path) -> Result<(Rig, SkinColorLut, RigJson)> {
             source: t.source.clone(),
         });
     }
+    let skin = match &json.files.skin {
+        Some(f) => Some(load_skin(dir, f, full)?),
+        None => None,
+    };
     let lp = dir.join(&json.files.lut_dtab);
     let lut = SkinColorLut::from_dtab(&Dtab::read(&lp)?, &lp.display().to_string())?;
     let rig = Rig {
@@ -275,6 +360,7 @@ pub fn load(dir: &Path) -> Result<(Rig, SkinColorLut, RigJson)> {
         sigma_floor: json.sigma_floor,
         targets,
         melanin,
+        skin,
     };
     Ok((rig, lut, json))
 }

@@ -7,7 +7,7 @@
 use crate::animation::Curves;
 use crate::basis::Rig;
 use crate::error::{invalid, Result, RigError};
-use crate::evaluate::{color, hemoglobin, unpack_rgba8, FramePlan};
+use crate::evaluate::{frame_color, hemoglobin, unpack_rgba8, FramePlan};
 use crate::maps::{melanin_for, write_color, write_hemoglobin};
 use crate::weights::{frame_weights, GlobalScale, Normalization};
 use derma_core::progress::{Progress, Unit};
@@ -163,7 +163,8 @@ pub fn render_sequence(
         frames,
     };
     start_or_resume(out, &json, opts.force)?;
-    let mut plan = (opts.format == FrameFormat::Png)
+    // The real-time path serves the LUT's colour; a rig with a set's skin composes exactly.
+    let mut plan = (opts.format == FrameFormat::Png && rig.skin.is_none())
         .then(|| FramePlan::new(&rig, &mel, &lut))
         .transpose()?;
     let (fw, fh) = rig.size();
@@ -187,7 +188,7 @@ pub fn render_sequence(
                 }
                 None => {
                     let h = hemoglobin(&rig, &w, f.global_scale)?;
-                    write_color(&color_path, &color(&h, &mel, &lut)?)?;
+                    write_color(&color_path, &frame_color(&rig, &h, &mel, &lut)?)?;
                     Some(h)
                 }
             };

@@ -44,7 +44,7 @@ pub struct RenderArgs {
     /// Also the linear radiance as EXR (before tone mapping).
     #[arg(long)]
     exr: bool,
-    /// Colour from a rig (`derma rig build`) at --weights instead of base_color.png.
+    /// A rig built from this set (`derma rig build --set`): the skin re-shaded with its hemoglobin at --weights.
     #[arg(long)]
     rig: Option<PathBuf>,
     /// Rig target weights NAME=W,… (with --rig).

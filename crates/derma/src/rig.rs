@@ -61,13 +61,17 @@ fn build(a: BuildArgs, bars: &Bars) -> Result<()> {
     let (rig, json) = from_files::build(&files, &opts, &a.out, bars)?;
     let (w, h) = rig.size();
     bars.say(format!(
-        "rig: {} targets ({}), {w}×{h} maps, basis {}×{}, r = {} texels, σ floor {:.3e}, in {:.2} s → {}",
+        "rig: {} targets ({}), {w}×{h} maps, basis {}×{}, r = {} texels, σ floor {:.3e}, colour {}, in {:.2} s → {}",
         json.targets.len(),
         json.targets.iter().map(|t| t.name.as_str()).collect::<Vec<_>>().join(", "),
         json.basis_size[0],
         json.basis_size[1],
         a.radius,
         rig.sigma_floor,
+        match &rig.skin {
+            Some(s) => format!("the set's skin re-shaded ('{}' appearance)", s.appearance),
+            None => "the skin-colour LUT's (no set given)".into(),
+        },
         t0.elapsed().as_secs_f64(),
         a.out.display()
     ));
@@ -82,9 +86,14 @@ fn transfer(a: TransferArgs, bars: &Bars) -> Result<()> {
     let character = a.character.files();
     let moved = from_files::transfer(&a.rig, &character, mode, a.sigma_floor, &a.out, bars)?;
     bars.say(format!(
-        "transferred {} targets onto '{}' → {}",
+        "transferred {} targets onto '{}'{} → {}",
         moved.targets.len(),
-        a.character.neutral.display(),
+        character.neutral.display(),
+        if moved.skin.is_some() {
+            " (frames keep the set's skin)"
+        } else {
+            ""
+        },
         a.out.display()
     ));
     Ok(())

@@ -3,7 +3,7 @@
 
 use crate::args::DeviceArg;
 use clap::{Args, Subcommand, ValueEnum};
-use derma_rig::from_files::CharacterFiles;
+use derma_rig::from_files::{CharacterFiles, SetFiles};
 use derma_rig::{GlobalScale, Normalization, WeightSpec};
 use std::path::PathBuf;
 
@@ -24,10 +24,18 @@ pub enum RigCommand {
 /// A character's maps.
 #[derive(Args)]
 pub struct CharacterArgs {
-    /// Neutral hemoglobin map H_n: EXR (dermal blood volume fraction; channel hemoglobin, blood,
-    /// Y or the only one) or PNG (grey × the LUT's top, 0.32: Jimenez et al. 2010 table 1).
-    #[arg(long)]
-    pub neutral: PathBuf,
+    /// A texture set from `derma skin`: its hemoglobin and melanin maps, and its skin, which
+    /// every frame keeps (the base colour re-shaded with the frame's hemoglobin).
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["neutral", "melanin"])]
+    pub set: Option<PathBuf>,
+    /// The match table the --set was made with (`derma skin --table`), when not the built-in one.
+    #[arg(long, value_name = "FILE.dtab", requires = "set")]
+    pub table: Option<PathBuf>,
+    /// Neutral hemoglobin map H_n, without a set: EXR (dermal blood volume fraction; channel
+    /// hemoglobin, blood, Y or the only one) or PNG (grey × the LUT's top, 0.32: Jimenez et al.
+    /// 2010 table 1). Frames are then the LUT's colour.
+    #[arg(long, required_unless_present = "set")]
+    pub neutral: Option<PathBuf>,
     /// Melanin map C_m (EXR volume fraction, or PNG grey × the LUT's top, 0.5), for colour output.
     #[arg(long)]
     pub melanin: Option<PathBuf>,
@@ -38,10 +46,20 @@ pub struct CharacterArgs {
 
 impl CharacterArgs {
     pub fn files(&self) -> CharacterFiles {
-        CharacterFiles {
-            neutral: self.neutral.clone(),
-            melanin: self.melanin.clone(),
-            mask: self.mask.clone(),
+        match &self.set {
+            Some(dir) => CharacterFiles::of_set(
+                SetFiles {
+                    dir: dir.clone(),
+                    table: self.table.clone(),
+                },
+                self.mask.clone(),
+            ),
+            None => CharacterFiles {
+                neutral: self.neutral.clone().expect("clap: --neutral or --set"),
+                melanin: self.melanin.clone(),
+                mask: self.mask.clone(),
+                set: None,
+            },
         }
     }
 }

@@ -278,10 +278,8 @@ fn web_export_round_trips_the_rig_within_one_16_bit_step_and_view_serves_it() {
     let (ok, _, err) = run(&[
         "rig",
         "build",
-        "--neutral",
-        s(&set.join("hemoglobin.exr")),
-        "--melanin",
-        s(&set.join("melanin.exr")),
+        "--set",
+        s(&set),
         "--builtin",
         "all",
         "--radius",
