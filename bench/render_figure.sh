@@ -16,7 +16,7 @@ $D skin --size 2048 --seed 1 --out "$W/head" -q
 $D render "$W/head" --sheet --size 1024 --out "$W/head-render" --device gpu -q
 $D skin --size 2048 --seed 1 --mesh "$mesh" --landmarks mediapipe --out "$W/user" -q
 $D render "$W/user" --mesh "$mesh" --sheet --size 1024 --out "$W/user-render" --device gpu -q
-$D rig build --neutral "$W/head/hemoglobin.exr" --melanin "$W/head/melanin.exr" --builtin all --radius 48 \
+$D rig build --set "$W/head" --builtin all --radius 48 \
   --out "$W/rig" -q
 smile=mouthSmileLeft=1,mouthSmileRight=1,cheekSquintLeft=0.7,cheekSquintRight=0.7
 $D render "$W/head" --rig "$W/rig" --lighting studio --size 1024 --zoom 0.7 --out "$W/neutral" --device gpu -q

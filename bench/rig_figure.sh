@@ -7,7 +7,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 source bench/common.sh
 $D skin --size 1024 --seed 1 --out "$W/skin" -q
-$D rig build --neutral "$W/skin/hemoglobin.exr" --melanin "$W/skin/melanin.exr" --builtin all --radius 24 --out "$W/rig" -q
+$D rig build --set "$W/skin" --builtin all --radius 24 --out "$W/rig" -q
 NAMES="neutral happiness sadness anger fear surprise disgust exercise alcohol"
 for n in $NAMES; do
   w=""; [ "$n" != neutral ] && w="$n=1"
