@@ -61,17 +61,18 @@ fn tap(x: u32, src: u32, dst: u32) -> Tap {
     return Tap(i0, min(i0 + 1u, src - 1u), f - f32(i0));
 }
 
-// Bilinear upsampling of the combined (bias, scale): horizontal lerps first, then vertical.
-fn upsampled(cx: Tap, cy: Tap) -> vec2<f32> {
-    let r0 = cy.i0 * params.basis_width;
-    let r1 = cy.i1 * params.basis_width;
-    let a0 = combined[r0 + cx.i0];
-    let a1 = combined[r0 + cx.i1];
-    let b0 = combined[r1 + cx.i0];
-    let b1 = combined[r1 + cx.i1];
+// Bilinear interpolation of four basis texels: horizontal lerps first, then vertical.
+fn bilinear(a0: vec2<f32>, a1: vec2<f32>, b0: vec2<f32>, b1: vec2<f32>, cx: Tap, cy: Tap) -> vec2<f32> {
     let top = a0 + (a1 - a0) * cx.t;
     let bottom = b0 + (b1 - b0) * cx.t;
     return top + (bottom - top) * cy.t;
+}
+
+// Bilinear upsampling of the combined (bias, scale).
+fn upsampled(cx: Tap, cy: Tap) -> vec2<f32> {
+    let r0 = cy.i0 * params.basis_width;
+    let r1 = cy.i1 * params.basis_width;
+    return bilinear(combined[r0 + cx.i0], combined[r0 + cx.i1], combined[r1 + cx.i0], combined[r1 + cx.i1], cx, cy);
 }
 
 // The neutral's bias μ_n (basis layer 0) upsampled as `upsampled` does the combined maps: at
@@ -79,13 +80,9 @@ fn upsampled(cx: Tap, cy: Tap) -> vec2<f32> {
 fn upsampled_neutral(cx: Tap, cy: Tap) -> f32 {
     let r0 = cy.i0 * params.basis_width;
     let r1 = cy.i1 * params.basis_width;
-    let a0 = basis[r0 + cx.i0];
-    let a1 = basis[r0 + cx.i1];
-    let b0 = basis[r1 + cx.i0];
-    let b1 = basis[r1 + cx.i1];
-    let top = a0 + (a1 - a0) * cx.t;
-    let bottom = b0 + (b1 - b0) * cx.t;
-    return top + (bottom - top) * cy.t;
+    let z = 0.0;
+    return bilinear(vec2<f32>(basis[r0 + cx.i0], z), vec2<f32>(basis[r0 + cx.i1], z),
+        vec2<f32>(basis[r1 + cx.i0], z), vec2<f32>(basis[r1 + cx.i1], z), cx, cy).x;
 }
 
 // x = ∛H − ∛H_n, exactly 0 when the two are equal.
