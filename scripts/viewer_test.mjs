@@ -2,7 +2,8 @@
 // through playwright-core (installed by the script, never a dependency of derma) opens
 // `derma view`, loads the exported GLB with three.js' GLTFLoader, checks the shader-evaluated
 // rig against derma's CPU evaluation (`derma rig eval`), moves the "happiness" (smile) slider
-// and checks that the cheeks flush while the forehead stays, then saves a screenshot.
+// and checks that the cheeks flush while the forehead stays and that the crow's feet deepen in
+// the normal map only inside the regions the smile drives, then saves a screenshot.
 // Usage: node viewer_test.mjs PLAYWRIGHT_DIR URL NEUTRAL.png HAPPY.png SCREENSHOT.png
 import fs from 'node:fs';
 import path from 'node:path';
@@ -88,6 +89,8 @@ try {
 
   // 2. The smile, moved as a user would. The built-in happiness target raises perfusion over
   // the cheekbones (Jimenez et al. 2010 §3.1, obs. 2): search the cheek region for its peak.
+  const normalRest = await page.evaluate(() => window.derma.wrinkleNormal());
+  if (!normalRest) fail('the export carries no expression wrinkles');
   const [cu, cv] = state.regions.cheeks;
   const grid = [];
   for (let i = -6; i <= 6; i++) for (let j = -6; j <= 6; j++) grid.push([cu + 0.008 * i, cv + 0.008 * j]);
@@ -124,6 +127,37 @@ try {
   if (h.error || !(h.max <= 2 && h.mean < 0.05)) fail(`smile albedo differs from the CPU's: ${JSON.stringify(h)}`);
   const units = await page.evaluate(() => window.derma.units());
   if (!((units.mouthSmileLeft ?? 0) > 0.9)) fail(`the smile did not pose the face (mouthSmileLeft ${units.mouthSmileLeft})`);
+
+  // The smile's expression wrinkles: the blended normal map changes in the crow's feet, and
+  // nowhere outside the regions the smile drives (crow's feet, under-eye, nasolabial).
+  if (normalRest) {
+    const wr = await page.evaluate(async (rest) => {
+      const decode = async (src) => {
+        const img = await createImageBitmap(await (await fetch(src)).blob(), { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
+        const c = new OffscreenCanvas(img.width, img.height);
+        const ctx = c.getContext('2d');
+        ctx.drawImage(img, 0, 0);
+        return ctx.getImageData(0, 0, img.width, img.height).data;
+      };
+      const a = await decode(rest);
+      const b = await decode(window.derma.wrinkleNormal());
+      // RGB images of three regions each: [forehead L, R, glabella L], [glabella R, crow's feet
+      // L, R], [under-eye L, R, nasolabial L], [nasolabial R].
+      const m = await Promise.all([0, 1, 2, 3].map((k) => decode(`data/wrinkles/masks_${k}.png`)));
+      if (m[1].length !== a.length) return { error: 'masks and normal map differ in size' };
+      let crows = 0, outside = 0, changed = 0;
+      for (let i = 0; i < a.length; i += 4) {
+        const d = Math.max(...[0, 1, 2].map((k) => Math.abs(a[i + k] - b[i + k])));
+        if (d <= 1) continue;
+        changed += 1;
+        if (Math.max(m[1][i + 1], m[1][i + 2]) > 128) crows += 1;
+        if (Math.max(m[1][i + 1], m[1][i + 2], m[2][i], m[2][i + 1], m[2][i + 2], m[3][i]) === 0) outside += 1;
+      }
+      return { changed, crows, outside };
+    }, normalRest);
+    console.log(`smile wrinkles: ${wr.changed} normal texels changed, ${wr.crows} in the crow's feet, ${wr.outside} outside the driven regions`);
+    if (wr.error || !(wr.crows >= 10 && wr.outside === 0)) fail(`the smile's wrinkles: ${JSON.stringify(wr)}`);
+  }
 
   // 3. Gaze and blink drive the face units.
   await page.locator('#gaze-yaw').fill('20');

@@ -23,7 +23,7 @@ npm install --silent --no-audit --no-fund --prefix "$work/pw" playwright-core@1.
 # The workspace feature set of the test command, so its build is reused.
 cargo build --release -q --workspace --bins --examples
 d=target/release/derma
-"$d" skin --size 512 --out "$work/skin" --quiet
+"$d" skin --size 512 --age 60 --out "$work/skin" --quiet
 "$d" rig build --set "$work/skin" \
   --builtin all --radius 8 --out "$work/rig" --quiet
 "$d" rig eval --rig "$work/rig" --out "$work/neutral.png" --quiet

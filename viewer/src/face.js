@@ -3,30 +3,6 @@
 import * as THREE from 'three';
 
 /**
- * Face units that pose each of the rig's built-in expressions (weights at full expression).
- * Authored from the Action Units of EMFACS prototypes (Ekman & Friesen, Facial Action Coding
- * System, 1978; Friesen & Ekman 1983): happiness AU6+12, sadness AU1+4+15, anger AU4+5+7+23,
- * fear AU1+2+4+5+20+26, surprise AU1+2+5B+26, disgust AU9+15+16; each AU mapped to the ARKit
- * unit that moves the same region.
- */
-export const EXPRESSION_UNITS = {
-  happiness: { mouthSmileLeft: 1, mouthSmileRight: 1, cheekSquintLeft: 0.7, cheekSquintRight: 0.7 },
-  sadness: { browInnerUp: 0.8, browDownLeft: 0.3, browDownRight: 0.3, mouthFrownLeft: 0.8, mouthFrownRight: 0.8 },
-  anger: {
-    browDownLeft: 1, browDownRight: 1, eyeWideLeft: 0.3, eyeWideRight: 0.3,
-    eyeSquintLeft: 0.5, eyeSquintRight: 0.5, mouthPressLeft: 0.8, mouthPressRight: 0.8,
-  },
-  fear: {
-    browInnerUp: 1, browOuterUpLeft: 0.6, browOuterUpRight: 0.6, eyeWideLeft: 0.8, eyeWideRight: 0.8,
-    mouthStretchLeft: 0.7, mouthStretchRight: 0.7, jawOpen: 0.2,
-  },
-  surprise: {
-    browInnerUp: 1, browOuterUpLeft: 1, browOuterUpRight: 1, eyeWideLeft: 0.6, eyeWideRight: 0.6, jawOpen: 0.5,
-  },
-  disgust: { noseSneerLeft: 1, noseSneerRight: 1, mouthUpperUpLeft: 0.6, mouthUpperUpRight: 0.6, mouthFrownLeft: 0.4, mouthFrownRight: 0.4 },
-};
-
-/**
  * Eye rotation (degrees) at which an eyeLook* unit reaches weight 1: ±35° horizontally, 25° up,
  * 30° down — authored to the oculomotor range used in everyday gaze (most saccades stay within
  * ±15°, Bahill et al. 1975), so the lids track comfortably over the sliders' range.
@@ -48,9 +24,14 @@ export function blinkCurve(t) {
   return 0;
 }
 
-/** The head's animated parts: meshes with face units, and the eyes on pivots at their centres. */
+/**
+ * The head's animated parts: meshes with face units, and the eyes on pivots at their centres.
+ * `expressionUnits`: the face units posing each rig expression at full weight (manifest.json's
+ * `expression_units`, from derma-rig's expression library).
+ */
 export class Face {
-  constructor(root) {
+  constructor(root, expressionUnits = {}) {
+    this.expressionUnits = expressionUnits;
     this.morphed = [];
     this.eyes = [];
     root.traverse((o) => {
@@ -98,7 +79,7 @@ export class Face {
     const add = (n, w) => (u[n] = Math.min((u[n] ?? 0) + w, 1));
     if (this.poseExpressions) {
       for (const [e, w] of Object.entries(this.expression)) {
-        for (const [n, k] of Object.entries(EXPRESSION_UNITS[e] ?? {})) add(n, w * k);
+        for (const [n, k] of Object.entries(this.expressionUnits[e] ?? {})) add(n, w * k);
       }
     }
     // Gaze: positive yaw to the subject's left (+X), positive pitch up.

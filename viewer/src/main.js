@@ -1,12 +1,14 @@
 // derma's web viewer: the head of `derma export web` lit by an image-based environment and a
-// key light, its albedo re-evaluated from the skin appearance rig (Jimenez et al. 2010 §6) as
-// expression sliders move, with gaze, aperture and blinks on the head's face units.
+// key light, its albedo re-evaluated from the skin appearance rig (Jimenez et al. 2010 §6) and its
+// normal map from the expression wrinkles (wrinkles.js) as expression sliders move, with gaze,
+// aperture and blinks on the head's face units.
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { RoomEnvironment } from 'three/addons/environments/RoomEnvironment.js';
 import { Rig, MODES } from './rig.js';
 import { Face, blinkCurve, BLINK_MS } from './face.js';
+import { Wrinkles } from './wrinkles.js';
 
 // Where the export lives: ?data=URL, else the `data/` that `derma view` serves beside the viewer.
 const base = (new URLSearchParams(location.search).get('data') ?? 'data').replace(/\/?$/, '/');
@@ -47,6 +49,14 @@ const api = {
     const x = c[0] / 255;
     return x <= 0.04045 ? x / 12.92 : ((x + 0.055) / 1.055) ** 2.4;
   },
+  // The skin's normal map with the expression wrinkles of the current face units, as a PNG
+  // data URL (rows from the top, as the texture files); null without wrinkle maps.
+  wrinkleNormal: () => {
+    if (!wrinkles) return null;
+    face.apply();
+    wrinkles.evaluate(renderer, face.units);
+    return wrinkles.toDataURL(renderer);
+  },
   regions: {},
   setWeight: (name, w) => setWeight(name, w),
 };
@@ -85,6 +95,7 @@ const controls = new OrbitControls(camera, canvas);
 controls.enableDamping = true;
 
 let rig = null;
+let wrinkles = null;
 let face = null;
 let skin = null;
 const original = {};
@@ -264,7 +275,13 @@ async function load() {
     specularIntensityMap: mat.specularIntensityMap ?? null,
     roughness: mat.roughness,
   });
-  face = new Face(gltf.scene);
+  face = new Face(gltf.scene, manifest.expression_units ?? {});
+  if (manifest.wrinkles && mat.normalMap) {
+    wrinkles = await Wrinkles.load(base, manifest, mat.normalMap);
+    wrinkles.evaluate(renderer, {});
+    original.normalMap = mat.normalMap = wrinkles.target.texture;
+    mat.needsUpdate = true;
+  }
   if (manifest.rig) {
     status.textContent = 'loading the rig…';
     rig = await Rig.load(base, manifest);
@@ -285,7 +302,7 @@ async function load() {
   controls.target.copy(c);
   controls.update();
   buildControls();
-  status.textContent = `${manifest.glb}: ${rig ? rig.targets.length + ' rig targets' : 'no rig'}, ${face.unitNames().length} face units`;
+  status.textContent = `${manifest.glb}: ${rig ? rig.targets.length + ' rig targets' : 'no rig'}, ${face.unitNames().length} face units${wrinkles ? ', expression wrinkles' : ''}`;
   api.ready = true;
 }
 
@@ -300,6 +317,7 @@ function frame(now) {
   face.blink = blinkCurve(t);
   if (t > BLINK_MS.close + BLINK_MS.hold + BLINK_MS.open) blinkStart = -1;
   face.apply();
+  wrinkles?.evaluate(renderer, face.units);
   refresh();
   controls.update();
   renderer.render(scene, camera);

@@ -183,6 +183,28 @@ fn fitted_mesh_scene(
     Ok(Scene::mesh(&mesh, skin).with_parts(head, lashes, eye, gaze))
 }
 
+/// The face units posing the head: the job's own, plus (where the head can be posed: the
+/// built-in or a fitted head) the rig frame's library expressions through their face units
+/// ([`derma_rig::expression::face_units`]); a unit given both ways adds up to at most 1.
+fn posing_units(job: &RenderJob) -> Vec<(&str, f32)> {
+    let mut units: Vec<(&str, f32)> = job
+        .face_units
+        .iter()
+        .map(|(n, w)| (n.as_str(), *w))
+        .collect();
+    let posable = job.mesh.is_none() || job.head.is_some();
+    if let (Some(f), true) = (&job.rig, posable) {
+        let e = f.weights.entries.iter().map(|(n, w)| (n.as_str(), *w));
+        for (u, w) in derma_rig::expression::face_units(e) {
+            match units.iter_mut().find(|(n, _)| *n == u) {
+                Some(x) => x.1 = (x.1 + w).min(1.0),
+                None => units.push((u, w)),
+            }
+        }
+    }
+    units
+}
+
 /// Runs the job.
 pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     let t0 = Instant::now();
@@ -202,11 +224,12 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
         .map(derma_eyes::files::load_eye_texture)
         .transpose()
         .map_err(|e| ExportError::Invalid(e.to_string()))?;
-    let units: Vec<(&str, f32)> = job
-        .face_units
-        .iter()
-        .map(|(n, w)| (n.as_str(), *w))
-        .collect();
+    let units = posing_units(job);
+    if !units.is_empty() {
+        if let Some(wm) = derma_render::wrinkles::WrinkleMaps::from_dir(&job.textures)? {
+            skin.normal = wm.blend(&skin.normal, units.iter().copied(), skin.wrap)?;
+        }
+    }
     let scene =
         match (&job.mesh, job.head.as_deref()) {
             (Some(p), Some(dir)) => fitted_mesh_scene(p, dir, &units, skin.clone(), eye, job.gaze)?,

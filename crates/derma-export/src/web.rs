@@ -98,6 +98,54 @@ pub fn check_export(dir: &Path) -> Result<()> {
     }
 }
 
+/// A (face unit, weight) table as a JSON object.
+fn table(t: &[(&str, f32)]) -> serde_json::Value {
+    serde_json::Value::Object(t.iter().map(|(u, k)| (u.to_string(), json!(k))).collect())
+}
+
+/// Region names of the wrinkle masks, three to an RGB image (no alpha: browsers and engine
+/// importers premultiply it, which would wipe the other channels where it is 0), in
+/// [`derma_head::wrinkle_regions::REGIONS`] order.
+pub fn wrinkle_mask_images() -> Vec<Vec<&'static str>> {
+    derma_head::wrinkle_regions::REGIONS
+        .chunks(3)
+        .map(|c| c.iter().map(|r| r.name).collect())
+        .collect()
+}
+
+/// Writes the set's expression-wrinkle maps for the viewer (`wrinkles/normal.png`, 16-bit as
+/// the set's; `wrinkles/masks_K.png`, three regions to a 16-bit RGB image) and returns their
+/// manifest entry: the files, the regions with their face-unit drivers and the blend; null
+/// where the set has none.
+fn write_wrinkles(textures: &Path, out: &Path) -> Result<serde_json::Value> {
+    let Some(wm) = derma_render::wrinkles::WrinkleMaps::from_dir(textures)? else {
+        return Ok(serde_json::Value::Null);
+    };
+    let wd = out.join("wrinkles");
+    derma_core::atomic::ensure_writable_dir(&wd)?;
+    let n = &wm.normal;
+    write_png16(&wd.join("normal.png"), &[&n[0], &n[1], &n[2]])?;
+    let (w, h) = (wm.masks[0].width(), wm.masks[0].height());
+    let zero = Map::filled(w, h, 0.0);
+    let mut images = Vec::new();
+    for (k, chunk) in wm.masks.chunks(3).enumerate() {
+        let mut ch: Vec<&Map> = chunk.iter().collect();
+        ch.resize(3, &zero);
+        let file = format!("wrinkles/masks_{k}.png");
+        write_png16(&out.join(&file), &ch)?;
+        images.push(json!({"file": file, "channels": wrinkle_mask_images()[k]}));
+    }
+    Ok(json!({
+        "normal": {"file": "wrinkles/normal.png", "encoding": "n·½+½, as normal.png"},
+        "masks": images,
+        "regions": derma_head::wrinkle_regions::REGIONS.iter().map(|r| json!({
+            "name": r.name,
+            "drivers": table(r.drivers),
+        })).collect::<Vec<_>>(),
+        "formula": derma_head::wrinkle_regions::FORMULA,
+    }))
+}
+
 /// Writes `out/head.glb` (the built-in head with the set) and, with a rig, `out/rig/*.png` and
 /// `out/manifest.json`.
 pub fn export(
@@ -126,6 +174,12 @@ pub fn export(
         "regions": region_points(derma_head::fitted::or_builtin(head)?, 256),
         "rig": null,
     });
+    manifest["expression_units"] = json!(derma_rig::expression::LIBRARY
+        .iter()
+        .filter(|e| !e.face_units.is_empty())
+        .map(|e| (e.name.to_string(), table(e.face_units)))
+        .collect::<serde_json::Map<_, _>>());
+    manifest["wrinkles"] = write_wrinkles(textures, out)?;
     let mut targets = 0;
     if let Some(dir) = rig_dir {
         let (rig, lut, rj) = derma_rig::rig_dir::load(dir)?;

@@ -26,6 +26,7 @@ pub mod lashes;
 pub mod look;
 pub mod regions;
 pub mod subdivision;
+pub mod wrinkle_regions;
 
 pub use eye::Eye;
 pub use landmarks::Landmarks;

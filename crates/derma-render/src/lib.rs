@@ -25,6 +25,7 @@ pub mod renderer;
 pub mod scene;
 pub mod sheet;
 pub mod sss;
+pub mod wrinkles;
 
 pub use camera::View;
 pub use draw::{renderer, CpuRenderer, Draw};

@@ -27,6 +27,10 @@ pub mod files {
     pub const LASHES: &str = "lashes.png";
     /// `hair_coverage.png`: the hair's coverage, 8-bit.
     pub const HAIR_COVERAGE: &str = "hair_coverage.png";
+    /// `wrinkle_normal.png`: the normal with every expression furrow at full activation.
+    pub const WRINKLE_NORMAL: &str = "wrinkle_normal.png";
+    /// `wrinkle_masks.exr`: the regions of expression wrinkles, a channel each.
+    pub const WRINKLE_MASKS: &str = "wrinkle_masks.exr";
 }
 
 /// [`crate::Rendered::material`] of the skin mesh.

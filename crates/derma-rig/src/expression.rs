@@ -53,6 +53,12 @@ pub struct Expression {
     pub face_gain: f32,
     /// The regions of local change.
     pub regions: &'static [Region],
+    /// Face units (ARKit names, weights at full expression) that pose the head for it: the
+    /// Action Units of EMFACS prototypes (Ekman & Friesen, Facial Action Coding System, 1978;
+    /// Friesen & Ekman 1983) — happiness AU6+12, sadness AU1+4+15, anger AU4+5+7+23, fear
+    /// AU1+2+4+5+20+26, surprise AU1+2+5B+26, disgust AU9+15+16 — each mapped to the unit that
+    /// moves the same region (authored). Empty for the global states.
+    pub face_units: &'static [(&'static str, f32)],
     /// What the entry encodes and which observation it follows.
     pub notes: &'static str,
 }
@@ -90,6 +96,7 @@ pub const LIBRARY: [Expression; 8] = [
             // Lips stretched over the teeth.
             r((0.0, -46.0), (18.0, 6.0), false, 0.9, 0.9),
         ],
+        face_units: &[("mouthSmileLeft", 1.0), ("mouthSmileRight", 1.0), ("cheekSquintLeft", 0.7), ("cheekSquintRight", 0.7)],
         notes: "smile: cheekbone perfusion up, crow's feet, nasolabial folds and stretched lips drained (Jimenez et al. 2010 §3.1 obs. 2, fig. 1 'sad smile')",
     },
     Expression {
@@ -106,6 +113,7 @@ pub const LIBRARY: [Expression; 8] = [
             r((22.0, 14.0), (8.0, 6.0), true, 1.15, 1.1),
             r((0.0, -6.0), (7.0, 7.0), false, 1.12, 1.05),
         ],
+        face_units: &[("browInnerUp", 0.8), ("browDownLeft", 0.3), ("browDownRight", 0.3), ("mouthFrownLeft", 0.8), ("mouthFrownRight", 0.8)],
         notes: "inner brows up and chin boss compressed (drained); eyes and nose tip redder (authored after fig. 12)",
     },
     Expression {
@@ -122,6 +130,7 @@ pub const LIBRARY: [Expression; 8] = [
             r((0.0, 54.0), (26.0, 8.0), false, 1.12, 1.1),
             r((11.0, -10.0), (5.0, 5.0), true, 1.15, 1.1),
         ],
+        face_units: &[("browDownLeft", 1.0), ("browDownRight", 1.0), ("eyeWideLeft", 0.3), ("eyeWideRight", 0.3), ("eyeSquintLeft", 0.5), ("eyeSquintRight", 0.5), ("mouthPressLeft", 0.8), ("mouthPressRight", 0.8)],
         notes: "glabella and pressed lips drained, forehead and nostrils flushed; global blushing ×1.27 (Jimenez et al. 2010 §7, fig. 1)",
     },
     Expression {
@@ -137,6 +146,7 @@ pub const LIBRARY: [Expression; 8] = [
             // Upper lids raised: stretched, drained.
             r((32.0, 27.0), (9.0, 4.0), true, 0.88, 0.9),
         ],
+        face_units: &[("browInnerUp", 1.0), ("browOuterUpLeft", 0.6), ("browOuterUpRight", 0.6), ("eyeWideLeft", 0.8), ("eyeWideRight", 0.8), ("mouthStretchLeft", 0.7), ("mouthStretchRight", 0.7), ("jawOpen", 0.2)],
         notes: "forehead, stretched lips and upper lids drained; global pallor ×0.81 (Jimenez et al. 2010 §7, fig. 1)",
     },
     Expression {
@@ -153,6 +163,7 @@ pub const LIBRARY: [Expression; 8] = [
             r((0.0, -46.0), (18.0, 7.0), false, 0.85, 0.9),
             r((0.0, -72.0), (12.0, 8.0), false, 0.9, 0.95),
         ],
+        face_units: &[("browInnerUp", 1.0), ("browOuterUpLeft", 1.0), ("browOuterUpRight", 1.0), ("eyeWideLeft", 0.6), ("eyeWideRight", 0.6), ("jawOpen", 0.5)],
         notes: "raised brows fold and drain the forehead, open lids and dropped jaw stretch (drain) lids, lips and chin (fig. 11)",
     },
     Expression {
@@ -168,6 +179,7 @@ pub const LIBRARY: [Expression; 8] = [
             // Cheeks pushed up.
             r((36.0, 0.0), (11.0, 10.0), true, 1.2, 1.1),
         ],
+        face_units: &[("noseSneerLeft", 1.0), ("noseSneerRight", 1.0), ("mouthUpperUpLeft", 0.6), ("mouthUpperUpRight", 0.6), ("mouthFrownLeft", 0.4), ("mouthFrownRight", 0.4)],
         notes: "nasal bridge compressed (drained), raised upper lip and cheeks flushed (Jimenez et al. 2010 fig. 1, 13)",
     },
     Expression {
@@ -181,6 +193,7 @@ pub const LIBRARY: [Expression; 8] = [
             r((0.0, 56.0), (34.0, 10.0), false, 1.22, 1.1),
             r((0.0, -74.0), (12.0, 8.0), false, 1.12, 1.05),
         ],
+        face_units: &[],
         notes: "global state: the whole face +12 %, lateral cheeks and forehead most (authored after fig. 5 top and fig. 10; obs. 5: a spatial pattern of its own)",
     },
     Expression {
@@ -194,6 +207,7 @@ pub const LIBRARY: [Expression; 8] = [
             r((26.0, -6.0), (10.0, 10.0), true, 1.3, 1.15),
             r((24.0, 20.0), (9.0, 5.0), true, 1.12, 1.05),
         ],
+        face_units: &[],
         notes: "global state: the whole face +8 %, nose and medial cheeks most, a pattern distinct from exercise (authored after fig. 5 top and fig. 10; obs. 5)",
     },
 ];
@@ -260,6 +274,24 @@ impl Expression {
         }
         ((front * lm).exp(), (front * ls).exp())
     }
+}
+
+/// The face units posing expression weights `weights` (by library name): Σ_e w_e · units_e
+/// per unit, at most 1, in the order units first appear; names outside the library pose
+/// nothing.
+pub fn face_units<'a>(
+    weights: impl IntoIterator<Item = (&'a str, f32)>,
+) -> Vec<(&'static str, f32)> {
+    let mut out: Vec<(&'static str, f32)> = Vec::new();
+    for (name, w) in weights {
+        for (u, k) in find(name).map_or(&[][..], |e| e.face_units) {
+            match out.iter_mut().find(|(n, _)| n == u) {
+                Some(e) => e.1 = (e.1 + w * k).min(1.0),
+                None => out.push((u, (w * k).min(1.0))),
+            }
+        }
+    }
+    out
 }
 
 /// Where the library's regions land: on the built-in head's UV layout (which a fitted head's
@@ -366,6 +398,35 @@ mod tests {
         let nose = face(0.0, -4.0);
         assert!(ex.gains_at(lateral).0 > ex.gains_at(nose).0);
         assert!(al.gains_at(nose).0 > al.gains_at(lateral).0);
+    }
+
+    #[test]
+    fn expressions_pose_the_heads_face_units() {
+        let head = Head::builtin();
+        for e in &LIBRARY {
+            assert_eq!(
+                e.face_units.is_empty(),
+                e.kind == Kind::Global,
+                "{}",
+                e.name
+            );
+            for (u, k) in e.face_units {
+                assert!(
+                    head.face_units().iter().any(|t| t.name == *u),
+                    "{}: {u}",
+                    e.name
+                );
+                assert!(*k > 0.0 && *k <= 1.0);
+            }
+        }
+        let u = face_units([("happiness", 0.5), ("surprise", 1.0)]);
+        assert_eq!(u[0], ("mouthSmileLeft", 0.5));
+        assert!(u.contains(&("cheekSquintLeft", 0.35)));
+        assert!(u.contains(&("browInnerUp", 1.0)));
+        // Two expressions that share a unit add up to at most 1.
+        let u = face_units([("fear", 1.0), ("surprise", 1.0)]);
+        assert!(u.contains(&("browInnerUp", 1.0)) && u.contains(&("jawOpen", 0.7)));
+        assert!(face_units([("exercise", 1.0), ("nonsense", 1.0)]).is_empty());
     }
 
     #[test]

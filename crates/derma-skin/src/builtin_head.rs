@@ -12,7 +12,7 @@ use crate::regional::{self, Person};
 use derma_core::mesh::TriMesh;
 use derma_core::raster::{apply_dilation, dilation_sources, UvRaster};
 use derma_core::Map;
-use derma_head::{region, regions, Head, Regions, REGIONS};
+use derma_head::{region, regions, wrinkle_regions, Head, Regions, REGIONS};
 use glam::{Vec2, Vec3};
 
 /// Resolution of the generated fields.
@@ -215,6 +215,13 @@ struct Texel {
     hv: [f32; 3],
     bio: [f32; regional::CHANNELS.len()],
     regions: regions::Weights,
+    /// Masks of the regions of expression wrinkles (derma_head::wrinkle_regions).
+    wrinkle: [f32; wrinkle_regions::COUNT],
+}
+
+/// The field name of expression-wrinkle region `name`'s mask (`wrinkle_mask_forehead_left`…).
+pub fn wrinkle_mask_field(name: &str) -> String {
+    format!("wrinkle_mask_{name}")
 }
 
 /// The direction hair grows at `p` (head coordinates, mm; +x the head's left, +y up): along the
@@ -298,6 +305,7 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
                     hv: [0.5, 0.5, 0.0],
                     bio: regional::NEUTRAL,
                     regions: [0.0; REGIONS.len()],
+                    wrinkle: [0.0; wrinkle_regions::COUNT],
                 };
             }
             let p = raster.position(mesh, i);
@@ -367,6 +375,8 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
                 hv,
                 bio,
                 regions: w,
+                // Skin only: not the mouth's or the eye sockets' charts beside the folds.
+                wrinkle: wrinkle_regions::masks(regions, p).map(|m| m * skin),
             }
         })
         .collect();
@@ -389,6 +399,10 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
     }
     for (k, name) in regional::CHANNELS.iter().enumerate() {
         set.scalars.insert((*name).into(), mk(&|v| v.bio[k]));
+    }
+    for (k, r) in wrinkle_regions::REGIONS.iter().enumerate() {
+        set.scalars
+            .insert(wrinkle_mask_field(r.name), mk(&|v| v.wrinkle[k]));
     }
     set.vectors.insert(
         "wrinkle_vectors".into(),

@@ -762,6 +762,19 @@ impl TextureSet {
                 .map_or(files.len(), |p| p + 1);
             files.insert(at, outputs::LASHES);
         }
+        if crate::texture_set::write_wrinkle_masks(
+            &dir.join(outputs::WRINKLE_MASKS),
+            &self.fields,
+            self.bio.width,
+            self.bio.height,
+            self.surface.period().is_some(),
+        )? {
+            let at = files
+                .iter()
+                .position(|f| *f == outputs::WRINKLE_NORMAL)
+                .map_or(files.len(), |p| p + 1);
+            files.insert(at, outputs::WRINKLE_MASKS);
+        }
         derma_core::report::write_json(
             &dir.join(outputs::FEATURES),
             &self.features.to_json(),

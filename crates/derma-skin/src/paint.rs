@@ -238,6 +238,7 @@ pub fn paint_with(
                     height_mm: v(6),
                     extra: [0.0; 4],
                     lips: 0.0,
+                    furrow_mm: 0.0,
                 };
                 // Every field this texel reads, sampled through one set of bilinear taps
                 // (the fields share a size; others are sampled on their own).

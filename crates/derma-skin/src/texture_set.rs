@@ -41,6 +41,10 @@ pub struct RenderMaps {
     pub specular: Vec<u8>,
     /// normal.png: tangent-space normal as n·½ + ½, 16-bit.
     pub normal: Vec<[u16; 3]>,
+    /// wrinkle_normal.png where it differs from normal.png: the normal of the surface with
+    /// every expression furrow at full activation, as (texel, n·½ + ½), by texel (sparse: only
+    /// texels within a texel of a wrinkle).
+    pub wrinkle_normal: Vec<(u32, [u16; 3])>,
     /// Subsurface maps, when the appearance provides them (the match table does).
     pub subsurface: Option<SubsurfaceMaps>,
     /// The hair's colour (linear RGB) for the built-in head's lash cards, when on it.
@@ -68,6 +72,7 @@ impl RenderMaps {
             roughness: vec![0; n],
             specular: vec![0; n],
             normal: vec![[0; 3]; n],
+            wrinkle_normal: Vec::new(),
             subsurface: subsurface.then(|| SubsurfaceMaps {
                 color: vec![[0; 3]; n],
                 radius: vec![[0; 3]; n],
@@ -259,6 +264,8 @@ struct Strip<'a> {
     specular: &'a mut [u8],
     normal: &'a mut [[u16; 3]],
     subsurface: Option<SubsurfaceRows<'a>>,
+    /// The strip's wrinkle normals (texel, encoded), in texel order.
+    wrinkle_normal: Vec<(u32, [u16; 3])>,
 }
 
 /// Converts painted bio maps (already dilated on meshes, see [`BioMaps::dilate`]) to render maps
@@ -299,10 +306,13 @@ pub fn convert(
                 subsurface: sss
                     .as_mut()
                     .map(|(c, r)| (c.next().expect("rows"), r.next().expect("rows"))),
+                wrinkle_normal: Vec::new(),
             });
         }
     }
-    strips.into_par_iter().for_each(|mut st| {
+    let furrow = |j: usize| bio.texels[j].furrow_mm;
+    let with_furrows = |j: usize| bio.texels[j].height_mm + bio.texels[j].furrow_mm;
+    strips.par_iter_mut().for_each(|st| {
         let first = st.first_row * w;
         let len = st.roughness.len();
         // The appearance over the whole strip at once (the match table interpolates eight
@@ -335,6 +345,11 @@ pub fn convert(
                 [0.0, 0.0, 1.0]
             };
             st.normal[k] = nrm.map(|v| quantize16(0.5 * v + 0.5));
+            if surface.covered(i) && near_furrow(furrow, w, h, x, y) {
+                let n = crate::normal_map::tangent_normal(surface, with_furrows, x, y);
+                st.wrinkle_normal
+                    .push((i as u32, n.map(|v| quantize16(0.5 * v + 0.5))));
+            }
             if let (Some(sub), Some((color, radius))) = (sub, st.subsurface.as_mut()) {
                 // Hair lies on the skin and scatters no light beneath it: composited over the
                 // subsurface colour as over the base colour, and the scatter distance shrinks by
@@ -347,10 +362,43 @@ pub fn convert(
             }
         }
     });
+    maps.wrinkle_normal = strips
+        .into_iter()
+        .flat_map(|st| st.wrinkle_normal)
+        .collect();
     if let Some(src) = dilation {
         derma_core::raster::apply_dilation(&mut maps.normal, src);
+        maps.wrinkle_normal = dilate_sparse(&maps.wrinkle_normal, src);
     }
     maps
+}
+
+/// Whether texel (`x`, `y`) or one of its four neighbours has an expression furrow: only there
+/// can the wrinkle normal differ from the rest normal.
+fn near_furrow(furrow: impl Fn(usize) -> f32, w: usize, h: usize, x: usize, y: usize) -> bool {
+    let i = y * w + x;
+    furrow(i) != 0.0
+        || (x > 0 && furrow(i - 1) != 0.0)
+        || (x + 1 < w && furrow(i + 1) != 0.0)
+        || (y > 0 && furrow(i - w) != 0.0)
+        || (y + 1 < h && furrow(i + w) != 0.0)
+}
+
+/// A sparse per-texel list (sorted by texel) with the gutter's texels added from their dilation
+/// sources `src`, as [`derma_core::raster::apply_dilation`] fills a full map.
+fn dilate_sparse<T: Copy>(list: &[(u32, T)], src: &[u32]) -> Vec<(u32, T)> {
+    let find = |t: u32| {
+        list.binary_search_by_key(&t, |e| e.0)
+            .ok()
+            .map(|k| list[k].1)
+    };
+    let mut out: Vec<(u32, T)> = (0..src.len() as u32)
+        .filter(|&i| src[i as usize] != i)
+        .filter_map(|i| find(src[i as usize]).map(|v| (i, v)))
+        .collect();
+    out.extend_from_slice(list);
+    out.sort_unstable_by_key(|e| e.0);
+    out
 }
 
 /// Range of the height map, for decoding height.png.
@@ -421,6 +469,55 @@ pub fn write_bio_exr(path: &Path, bio: &BioMaps, compression: ExrCompression) ->
         compression,
         BioSample::channels,
     )
+}
+
+/// Largest side of wrinkle_masks.exr: the masks vary over millimetres, not texels.
+pub const WRINKLE_MASK_MAX_SIZE: usize = 1024;
+
+/// Writes `path`, the masks of the expression-wrinkle regions (one channel per
+/// [`derma_head::wrinkle_regions::REGIONS`] entry, by name) sampled from `fields` at a set of
+/// `width` × `height` texels, at most [`WRINKLE_MASK_MAX_SIZE`] a side. Returns false (and
+/// writes nothing) where the fields carry no masks: a surface without landmarks.
+pub fn write_wrinkle_masks(
+    path: &Path,
+    fields: &crate::field::FieldSet,
+    width: usize,
+    height: usize,
+    wrap: bool,
+) -> crate::Result<bool> {
+    use derma_head::wrinkle_regions::{COUNT, REGIONS};
+    let masks: Option<Vec<&Map>> = REGIONS
+        .iter()
+        .map(|r| {
+            fields
+                .scalars
+                .get(&crate::builtin_head::wrinkle_mask_field(r.name))
+        })
+        .collect();
+    let Some(masks) = masks else {
+        return Ok(false);
+    };
+    let (w, h) = (
+        width.min(WRINKLE_MASK_MAX_SIZE),
+        height.min(WRINKLE_MASK_MAX_SIZE),
+    );
+    let names = REGIONS.map(|r| r.name);
+    let list: [ExrChannel; COUNT] = std::array::from_fn(|k| ExrChannel {
+        name: names[k],
+        precision: ExrPrecision::F16,
+    });
+    write_exr_rows(path, w, h, &list, ExrCompression::Zip, |y, rows| {
+        for x in 0..w {
+            let (u, v) = (
+                (x as f32 + 0.5) / w as f32,
+                1.0 - (y as f32 + 0.5) / h as f32,
+            );
+            for (c, m) in masks.iter().enumerate() {
+                rows[c][x] = m.sample(&Taps::uv(m.width(), m.height(), u, v, wrap));
+            }
+        }
+    })?;
+    Ok(true)
 }
 
 /// Side of lashes.png.
@@ -527,15 +624,40 @@ pub fn write_maps(
             Box::new(|| rgb16(outputs::NORMAL, &maps.normal)),
         ),
         (
+            outputs::WRINKLE_NORMAL,
+            Box::new(|| {
+                Ok(write_png_rows(
+                    &path(outputs::WRINKLE_NORMAL),
+                    w,
+                    h,
+                    3,
+                    PngDepth::Sixteen,
+                    |y, out| {
+                        let (a, b) = (y * w, (y + 1) * w);
+                        let wn = &maps.wrinkle_normal;
+                        let first = wn.partition_point(|e| (e.0 as usize) < a);
+                        let last = wn.partition_point(|e| (e.0 as usize) < b);
+                        let mut row = maps.normal[a..b].to_vec();
+                        for (i, n) in &wn[first..last] {
+                            row[*i as usize - a] = *n;
+                        }
+                        for (o, v) in out.chunks_exact_mut(2).zip(row.as_flattened()) {
+                            o.copy_from_slice(&v.to_be_bytes());
+                        }
+                    },
+                )?)
+            }),
+        ),
+        (
             outputs::HEIGHT_EXR,
             Box::new(|| {
                 exr(
                     &path(outputs::HEIGHT_EXR),
                     bio,
-                    ["height_mm"],
+                    ["height_mm", "expression_furrow_mm"],
                     f32,
                     none,
-                    |s| [s.height_mm],
+                    |s| [s.height_mm, s.furrow_mm],
                 )
             }),
         ),

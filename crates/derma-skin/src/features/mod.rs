@@ -33,6 +33,9 @@ pub struct BioSample {
     pub extra: [f32; 4],
     /// Lip field value ∆(p) where lips were painted.
     pub lips: f32,
+    /// Displacement (mm) the expression wrinkles add at full activation (features/wrinkle.rs):
+    /// `height_mm + m · furrow_mm` is the surface at furrow activation m.
+    pub furrow_mm: f32,
 }
 
 impl BioSample {
