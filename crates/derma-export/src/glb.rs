@@ -88,6 +88,32 @@ pub struct GlbOptions {
     pub out: PathBuf,
     /// Loose maps to write beside (directory), with their naming and normal convention.
     pub maps: Option<(PathBuf, MapNames, NormalConvention)>,
+    /// Carry the set's expression-wrinkle maps (where it has them) as extra textures, named in
+    /// the skin material's `extras.derma_wrinkles` with the weight table.
+    pub wrinkles: bool,
+}
+
+/// A (face unit, weight) table as a JSON object.
+pub fn unit_table(t: &[(&str, f32)]) -> serde_json::Value {
+    serde_json::Value::Object(t.iter().map(|(u, k)| (u.to_string(), json!(k))).collect())
+}
+
+/// Region names of the wrinkle masks, three to an RGB image (no alpha: browsers and engine
+/// importers premultiply it, which would wipe the other channels where it is 0), in
+/// [`derma_head::wrinkle_regions::REGIONS`] order.
+pub fn wrinkle_mask_images() -> Vec<Vec<&'static str>> {
+    derma_head::wrinkle_regions::REGIONS
+        .chunks(3)
+        .map(|c| c.iter().map(|r| r.name).collect())
+        .collect()
+}
+
+/// The wrinkle regions with their face-unit drivers, as the GLB's and the web export's JSON.
+pub fn wrinkle_regions_json() -> Value {
+    json!(derma_head::wrinkle_regions::REGIONS
+        .iter()
+        .map(|r| json!({"name": r.name, "drivers": unit_table(r.drivers)}))
+        .collect::<Vec<_>>())
 }
 
 /// What was written.
@@ -231,6 +257,32 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
         "normalTexture": {"index": t_norm},
         "extensions": exts
     })];
+    if o.wrinkles {
+        if let Some(wm) = derma_render::wrinkles::WrinkleMaps::from_dir(&o.textures)? {
+            let t_wn = image(
+                &mut g,
+                "wrinkle_normal",
+                &read(derma_skin::outputs::WRINKLE_NORMAL)?,
+            );
+            let (mw, mh) = (wm.masks[0].width(), wm.masks[0].height());
+            let zero = Map::filled(mw, mh, 0.0);
+            let mut masks = Vec::new();
+            for (k, chunk) in wm.masks.chunks(3).enumerate() {
+                let mut ch: Vec<&Map> = chunk.iter().collect();
+                ch.resize(3, &zero);
+                let name = format!("wrinkle_masks_{k}");
+                let t = image(&mut g, &name, &png8_bytes(&name, &ch)?);
+                masks.push(json!({"index": t, "channels": wrinkle_mask_images()[k]}));
+            }
+            materials[0]["extras"] = json!({"derma_wrinkles": {
+                "normalTexture": {"index": t_wn, "encoding": "n·½+½ as normalTexture, every furrow at full activation"},
+                "maskTextures": masks,
+                "regions": wrinkle_regions_json(),
+                "formula": derma_head::wrinkle_regions::FORMULA,
+                "units": "the mesh's morph target weights by name (the 52 face units)"
+            }});
+        }
+    }
     let mut meshes = Vec::new();
     let mut names = Vec::new();
     let skin_mesh = match (&o.mesh, o.head.as_deref()) {

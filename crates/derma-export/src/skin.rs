@@ -40,6 +40,7 @@ pub fn run(
                     head: set.inputs.head.clone(),
                     out: out.join("head.glb"),
                     maps: None,
+                    wrinkles: true,
                 },
                 progress,
             )

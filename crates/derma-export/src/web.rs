@@ -98,21 +98,6 @@ pub fn check_export(dir: &Path) -> Result<()> {
     }
 }
 
-/// A (face unit, weight) table as a JSON object.
-fn table(t: &[(&str, f32)]) -> serde_json::Value {
-    serde_json::Value::Object(t.iter().map(|(u, k)| (u.to_string(), json!(k))).collect())
-}
-
-/// Region names of the wrinkle masks, three to an RGB image (no alpha: browsers and engine
-/// importers premultiply it, which would wipe the other channels where it is 0), in
-/// [`derma_head::wrinkle_regions::REGIONS`] order.
-pub fn wrinkle_mask_images() -> Vec<Vec<&'static str>> {
-    derma_head::wrinkle_regions::REGIONS
-        .chunks(3)
-        .map(|c| c.iter().map(|r| r.name).collect())
-        .collect()
-}
-
 /// Writes the set's expression-wrinkle maps for the viewer (`wrinkles/normal.png`, 16-bit as
 /// the set's; `wrinkles/masks_K.png`, three regions to a 16-bit RGB image) and returns their
 /// manifest entry: the files, the regions with their face-unit drivers and the blend; null
@@ -133,15 +118,12 @@ fn write_wrinkles(textures: &Path, out: &Path) -> Result<serde_json::Value> {
         ch.resize(3, &zero);
         let file = format!("wrinkles/masks_{k}.png");
         write_png16(&out.join(&file), &ch)?;
-        images.push(json!({"file": file, "channels": wrinkle_mask_images()[k]}));
+        images.push(json!({"file": file, "channels": crate::glb::wrinkle_mask_images()[k]}));
     }
     Ok(json!({
         "normal": {"file": "wrinkles/normal.png", "encoding": "n·½+½, as normal.png"},
         "masks": images,
-        "regions": derma_head::wrinkle_regions::REGIONS.iter().map(|r| json!({
-            "name": r.name,
-            "drivers": table(r.drivers),
-        })).collect::<Vec<_>>(),
+        "regions": crate::glb::wrinkle_regions_json(),
         "formula": derma_head::wrinkle_regions::FORMULA,
     }))
 }
@@ -163,6 +145,8 @@ pub fn export(
             head: head.map(Path::to_path_buf),
             out: out.join("head.glb"),
             maps: None,
+            // The viewer reads its own 16-bit copies (wrinkles/).
+            wrinkles: false,
         },
         &derma_core::progress::Silent,
     )?;
@@ -177,7 +161,7 @@ pub fn export(
     manifest["expression_units"] = json!(derma_rig::expression::LIBRARY
         .iter()
         .filter(|e| !e.face_units.is_empty())
-        .map(|e| (e.name.to_string(), table(e.face_units)))
+        .map(|e| (e.name.to_string(), crate::glb::unit_table(e.face_units)))
         .collect::<serde_json::Map<_, _>>());
     manifest["wrinkles"] = write_wrinkles(textures, out)?;
     let mut targets = 0;

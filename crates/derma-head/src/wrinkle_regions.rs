@@ -158,13 +158,11 @@ pub fn masks(r: &Regions, p: Vec3) -> [f32; COUNT] {
     let (eye, co, mc) = (this.eye, this.canthus_outer, this.mouth_corner);
     // The share of the subject's left, blended over the midline (forehead and glabella cross it).
     let left = smoothstep(-8.0, 8.0, p.x);
-    // Forehead: above the brows, up to the hairline and across to the temples.
+    // Forehead: above the brows, past the hairline landmark (the top lines reach it) and across
+    // to the temples.
+    let hairline = r.landmarks().get("hairline").y;
     let forehead = smoothstep(eye.y + 18.0, eye.y + 26.0, p.y)
-        * smoothstep(
-            r.landmarks().get("hairline").y + 8.0,
-            r.landmarks().get("hairline").y,
-            p.y,
-        )
+        * smoothstep(hairline + 20.0, hairline + 10.0, p.y)
         * smoothstep(70.0, 55.0, p.x.abs());
     // Glabella: between the brows, from the nasion up into the lower forehead.
     let glabella = smoothstep(14.0, 9.0, p.x.abs())

@@ -375,8 +375,9 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
                 hv,
                 bio,
                 regions: w,
-                // Skin only: not the mouth's or the eye sockets' charts beside the folds.
-                wrinkle: wrinkle_regions::masks(regions, p).map(|m| m * skin),
+                // By position, as the furrows are painted (a fold's furrow reaches the texels of
+                // the mouth's or the eye sockets' charts that lie beside it in space).
+                wrinkle: wrinkle_regions::masks(regions, p),
             }
         })
         .collect();

@@ -174,6 +174,7 @@ fn glb_options(textures: PathBuf, mesh: Option<PathBuf>, out: PathBuf) -> GlbOpt
         head: None,
         out,
         maps: None,
+        wrinkles: true,
     }
 }
 
