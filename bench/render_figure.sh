@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The renderer's README figures (docs/images/render-*.png, viewer.png): contact sheets of the
 # built-in head and of a user mesh (MediaPipe's canonical face from ../shared/data) under both
-# lighting setups beside the raw maps; the head neutral and smiling (the rig's colour and the
-# face units' pose); the web viewer in headless Chromium; the GLB in Blender's Cycles.
+# lighting setups beside the raw maps; the web viewer in headless Chromium; the GLB in
+# Blender's Cycles. The expression sequence is bench/expression_figure.sh's.
 # Needs python3 with Pillow to scale and label the sheets.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -16,12 +16,6 @@ $D skin --size 2048 --seed 1 --out "$W/head" -q
 $D render "$W/head" --sheet --size 1024 --out "$W/head-render" --device gpu -q
 $D skin --size 2048 --seed 1 --mesh "$mesh" --landmarks mediapipe --out "$W/user" -q
 $D render "$W/user" --mesh "$mesh" --sheet --size 1024 --out "$W/user-render" --device gpu -q
-$D rig build --set "$W/head" --builtin all --radius 48 \
-  --out "$W/rig" -q
-smile=mouthSmileLeft=1,mouthSmileRight=1,cheekSquintLeft=0.7,cheekSquintRight=0.7
-$D render "$W/head" --rig "$W/rig" --lighting studio --size 1024 --zoom 0.7 --out "$W/neutral" --device gpu -q
-$D render "$W/head" --rig "$W/rig" --weights happiness=1 --pose "$smile" --lighting studio \
-  --size 1024 --zoom 0.7 --device gpu --out "$W/smile" -q
 python3 - "$W" <<'PY'
 import sys
 from PIL import Image, ImageDraw
@@ -43,13 +37,6 @@ labels = [(0, 0, "studio"), (0, P, "window")]
 labels += [(3 * P + (i % 2) * tile, (i // 2) * tile, m) for i, m in enumerate(maps)]
 labelled(f"{d}/head-render/sheet.png", "docs/images/render-head.png", labels)
 labelled(f"{d}/user-render/sheet.png", "docs/images/render-user-mesh.png", labels)
-a, b = Image.open(f"{d}/neutral/studio.png"), Image.open(f"{d}/smile/studio.png")
-pair = Image.new("RGB", (a.width + b.width, a.height))
-pair.paste(a, (0, 0))
-pair.paste(b, (a.width, 0))
-pair.save(f"{d}/pair.png")
-labelled(f"{d}/pair.png", "docs/images/render-expression.png",
-         [(0, 0, "neutral"), (a.width, 0, "happiness = 1 (rig colour + face units)")])
 PY
 SHOT=docs/images/viewer.png bash scripts/viewer_test.sh
 $D export glb "$W/head" --out "$W/head.glb" -q

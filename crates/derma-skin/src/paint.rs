@@ -320,6 +320,7 @@ mod tests {
             height_mm: -0.02,
             extra: [0.5, 0.6, 0.7, 0.8],
             lips: 0.9,
+            furrow_mm: -0.05,
         };
         let by_table: Vec<f32> = BIO_CHANNELS.iter().map(|(_, f)| f(&s)).collect();
         assert_eq!(s.channels().to_vec(), by_table);

@@ -47,14 +47,16 @@ pub struct RenderArgs {
     /// A rig built from this set (`derma rig build --set`): the skin re-shaded with its hemoglobin at --weights.
     #[arg(long)]
     rig: Option<PathBuf>,
-    /// Rig target weights NAME=W,… (with --rig).
+    /// Rig target weights NAME=W,… (with --rig); the library's expressions also pose the head
+    /// through their face units, which drive the set's expression wrinkles.
     #[arg(long, default_value = "", requires = "rig")]
     weights: WeightSpec,
     /// Global hemoglobin scale with --rig: auto or a factor.
     #[arg(long, default_value = "auto", requires = "rig")]
     global_scale: GlobalScale,
-    /// Face units posing the head, NAME=W,… (e.g. mouthSmileLeft=1,mouthSmileRight=1); with
-    /// --mesh, through the --head it was fitted to.
+    /// Face units posing the head, NAME=W,… (e.g. mouthSmileLeft=1,mouthSmileRight=1), and
+    /// deepening the set's expression wrinkles they drive; with --mesh, through the --head it
+    /// was fitted to.
     #[arg(long, default_value = "")]
     pose: WeightSpec,
     /// An eye texture on the head's eye UVs (`derma photo iris`).

@@ -149,14 +149,15 @@ mod tests {
             w.apply(&(), &q, &mut s);
             (s.height_mm, s.height_mm + s.furrow_mm)
         };
-        // On the line: 2.5× the rest depth.
+        // On the line: EXPRESSION_DEEPEN × the rest depth.
         let (rest, full) = at(0.0);
         assert!(
             (full - EXPRESSION_DEEPEN * rest).abs() < 1e-5,
             "{rest} {full}"
         );
-        // Beyond the narrower half-width (0.6 mm) the furrow is gone and the flank lifts back.
-        let (rest, full) = at(0.7);
+        // Beyond the narrower half-width (1 mm × EXPRESSION_NARROW) the furrow is gone and the
+        // flank lifts back.
+        let (rest, full) = at(0.5 * (1.0 + EXPRESSION_NARROW));
         assert!(rest < 0.0 && full == 0.0);
         // The cross-section's area grows by deepen × narrow (∫þ over the half-width scales).
         let area =
