@@ -51,6 +51,8 @@ pub struct RenderJob {
     pub iris: Option<PathBuf>,
     /// Gaze yaw and pitch (degrees).
     pub gaze: (f32, f32),
+    /// Lid closure in [0, 1] (a blink's peak; 0 open).
+    pub blink: f32,
     /// Draw the lacrimal lake along the lid margins.
     pub lake: bool,
     /// Where to draw: a GPU (the full renderer) or the CPU (no subsurface scattering, shadows,
@@ -241,7 +243,25 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
             (None, dir) => {
                 let head = derma_head::fitted::or_builtin(dir)?;
                 check_units(head, &units)?;
-                Scene::head(head, skin.clone(), &units, eye, job.gaze)
+                let pose = derma_eyes::still::EyePose {
+                    gaze: job.gaze,
+                    closure: job.blink,
+                };
+                if pose == derma_eyes::still::EyePose::REST {
+                    Scene::head(head, skin.clone(), &units, eye, job.gaze)
+                } else {
+                    // The lids and the skin around the eyes follow the gaze through the trained
+                    // eye-region model (thesis §3.9), the pose's units among its inputs.
+                    let mut posed = head.posed_skin(&units);
+                    let lashes = derma_eyes::still::StillModel::new(head)
+                        .map_err(|e| ExportError::Invalid(e.to_string()))?
+                        .pose_skin(head, pose, &units, &mut posed);
+                    let mut scene = Scene::posed_head(head, posed, skin.clone(), eye, job.gaze);
+                    for (name, mesh) in &lashes {
+                        scene.replace_part_mesh(name, mesh);
+                    }
+                    scene
+                }
             }
         };
     debug_assert!(matches!(scene.parts[0].material, Material::Skin(_)));

@@ -39,6 +39,7 @@ pub mod saliency;
 pub mod sdf;
 pub mod skull;
 pub mod sliding;
+pub mod still;
 pub mod surface;
 pub mod synthetic;
 pub mod tracked;

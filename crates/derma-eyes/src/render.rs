@@ -24,8 +24,8 @@ pub struct Stage<'a> {
     /// Vertex of `skin` of each crop vertex.
     source: Vec<u32>,
     tangents: Vec<[f32; 4]>,
-    /// Per lash part: its mesh and the nearest margin model vertex of each lash vertex.
-    lashes: Vec<(TriMesh, Vec<u32>)>,
+    /// The lash parts riding on the lid margins.
+    lashes: Vec<crate::still::LashAnchors>,
     globes: [(TriMesh, TriMesh); 2],
     /// Eyeball texture (linear RGB on the head's eye UVs); the default eye when `None`.
     eye: Option<[Map; 3]>,
@@ -70,30 +70,7 @@ impl<'a> Stage<'a> {
             crop.triangles.push(tri);
         }
         let tangents = derma_core::mesh::mikktspace_tangents(&crop);
-        let margin: Vec<u32> = region.margins.iter().flatten().flatten().copied().collect();
-        let lashes = head
-            .parts
-            .iter()
-            .filter(|p| p.name.starts_with("eyelashes"))
-            .map(|p| {
-                let near = p
-                    .mesh
-                    .positions
-                    .iter()
-                    .map(|q| {
-                        *margin
-                            .iter()
-                            .min_by(|&&a, &&b| {
-                                (region.rest[a as usize] - *q)
-                                    .length_squared()
-                                    .total_cmp(&(region.rest[b as usize] - *q).length_squared())
-                            })
-                            .expect("margins")
-                    })
-                    .collect();
-                (p.mesh.clone(), near)
-            })
-            .collect();
+        let lashes = crate::still::lash_anchors(head, region);
         let globes = [0, 1].map(|e| {
             let g = Globe::of(&head.eyes[e]);
             (g.shell(false), g.iris())
@@ -118,13 +95,7 @@ impl<'a> Stage<'a> {
         let lashes: Vec<TriMesh> = self
             .lashes
             .iter()
-            .map(|(m, near)| {
-                let mut m = m.clone();
-                for (p, &n) in m.positions.iter_mut().zip(near) {
-                    *p += f.positions[n as usize] - self.region.rest[n as usize];
-                }
-                m
-            })
+            .map(|l| l.moved(&self.region.rest, &f.positions))
             .collect();
         let globes: Vec<TriMesh> = (0..2)
             .flat_map(|e| {

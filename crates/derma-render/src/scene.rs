@@ -146,6 +146,18 @@ impl Scene {
         } else {
             head.posed_skin(weights)
         };
+        Scene::posed_head(head, posed, skin, eye_albedo, gaze)
+    }
+
+    /// As [`Scene::head`] with the head's skin already posed (`posed`: the head's skin mesh,
+    /// its vertices moved; e.g. by face units and the eye-region model).
+    pub fn posed_head(
+        head: &derma_head::Head,
+        posed: TriMesh,
+        skin: SkinMaps,
+        eye_albedo: Option<[Map; 3]>,
+        gaze: (f32, f32),
+    ) -> Scene {
         let lash_color = skin.lash_color.map(Vec3::from);
         let brow_cards = skin.hair.clone().zip(lash_color);
         let mut scene = Scene::mesh(&posed, skin);
@@ -165,6 +177,18 @@ impl Scene {
             });
         }
         scene.with_parts(head, lash_color, eye_albedo, gaze)
+    }
+
+    /// The part named `name` drawn with `mesh` instead (a lash riding on a moved lid); false
+    /// when the scene has no such part.
+    pub fn replace_part_mesh(&mut self, name: &str, mesh: &TriMesh) -> bool {
+        match self.parts.iter_mut().find(|p| p.name == name) {
+            Some(p) => {
+                p.vertices = corner_vertices(mesh, None);
+                true
+            }
+            None => false,
+        }
     }
 
     /// Adds `head`'s parts (the globes, textured with `eye_albedo` or the built-in eye and

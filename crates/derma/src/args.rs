@@ -77,6 +77,14 @@ pub fn pair(s: &str) -> Result<(f32, f32), String> {
     Ok((v[0], v[1]))
 }
 
+/// A number in [0, 1] (a lid closure, a weight).
+pub fn unit_interval(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+        _ => Err(format!("'{s}': expected a number from 0 to 1")),
+    }
+}
+
 /// A point `X,Y` (pixels).
 pub fn point(s: &str) -> Result<[f64; 2], String> {
     let v = numbers(s, 2)?;

@@ -62,9 +62,13 @@ pub struct RenderArgs {
     /// An eye texture on the head's eye UVs (`derma photo iris`).
     #[arg(long, conflicts_with = "mesh")]
     iris: Option<PathBuf>,
-    /// Gaze yaw,pitch in degrees (positive yaw: to the subject's left).
+    /// Gaze yaw,pitch in degrees (positive yaw: to the subject's left); on the head the lids
+    /// and the skin around the eyes follow through the trained eye-region model.
     #[arg(long, default_value = "0,0", value_parser = crate::args::pair, allow_negative_numbers = true)]
     gaze: (f32, f32),
+    /// Lid closure from 0 (open) to 1 (a full blink), through the eye-region model.
+    #[arg(long, default_value_t = 0.0, value_parser = crate::args::unit_interval)]
+    blink: f32,
     /// Leave out the lacrimal lake (the tear meniscus along the lid margins).
     #[arg(long)]
     no_lake: bool,
@@ -102,6 +106,7 @@ pub fn render(a: RenderArgs, bars: &Bars) -> Result<()> {
         face_units: a.pose.entries,
         iris: a.iris,
         gaze: a.gaze,
+        blink: a.blink,
         lake: !a.no_lake,
         device: a.device.device,
         out: a.out,

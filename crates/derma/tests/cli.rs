@@ -31,7 +31,7 @@ fn run(args: &[&str]) -> (bool, String) {
     )
 }
 
-const ALL: [derma_skin::outputs::OutputFile; 17] = derma_skin::outputs::OUTPUTS;
+const ALL: [derma_skin::outputs::OutputFile; 19] = derma_skin::outputs::OUTPUTS;
 
 fn report(dir: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
