@@ -172,19 +172,18 @@ impl StillModel {
 mod tests {
     use super::*;
 
-    fn lid_height(head: &Head, skin: &derma_core::mesh::TriMesh, m: &StillModel) -> f32 {
-        // The upper lid margin's mean height over the left eye.
+    /// The height (mm) of the left upper lid's margin at its middle vertex.
+    fn lid_height(skin: &derma_core::mesh::TriMesh, m: &StillModel) -> f32 {
         let chain = &m.rig.region.margins[0][0];
-        let mut s = 0.0;
-        let mut n = 0;
-        for (v, &k) in m.rig.region.skin_to_model.iter().enumerate() {
-            if k != u32::MAX && chain.contains(&k) {
-                s += skin.positions[v].y;
-                n += 1;
-            }
-        }
-        let _ = head;
-        s / n.max(1) as f32
+        let mid = chain[chain.len() / 2];
+        let v = m
+            .rig
+            .region
+            .skin_to_model
+            .iter()
+            .position(|&k| k == mid)
+            .expect("the margin is on the skin");
+        skin.positions[v].y
     }
 
     #[test]
@@ -195,7 +194,7 @@ mod tests {
             let mut skin = head.skin.clone();
             let lashes = m.pose_skin(head, pose, &[], &mut skin);
             assert_eq!(lashes.len(), 2);
-            (lid_height(head, &skin, &m), lashes[0].1.positions[0].y)
+            (lid_height(&skin, &m), lashes[0].1.positions[0].y)
         };
         let (rest, lash_rest) = at(EyePose::REST);
         let (up, _) = at(EyePose {
@@ -211,12 +210,14 @@ mod tests {
             closure: 1.0,
         });
         eprintln!("upper lid y: rest {rest:.2}, up {up:.2}, down {down:.2}, shut {shut:.2} mm");
-        assert!(up > rest + 0.5 && down < rest - 0.5, "{up} {rest} {down}");
-        assert!(shut < rest - 2.0, "{shut} {rest}");
+        // The rig-trained model lifts the lid little in upgaze (the built-in eyeLookUp units
+        // do) and lowers it more in downgaze.
+        assert!(up > rest + 0.2 && down < rest - 0.8, "{up} {rest} {down}");
+        assert!(shut < rest - 5.0, "{shut} {rest}");
         // The lashes ride down with the lid.
         assert!(lash_shut < lash_rest - 1.0, "{lash_rest} → {lash_shut}");
         // At rest the model gives back the rest mesh.
-        let rest_lid = lid_height(head, &head.skin, &m);
-        assert!((rest - rest_lid).abs() < 0.3, "{rest} {rest_lid}");
+        let rest_lid = lid_height(&head.skin, &m);
+        assert!((rest - rest_lid).abs() < 0.1, "{rest} {rest_lid}");
     }
 }
