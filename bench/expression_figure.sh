@@ -18,8 +18,8 @@ $D rig build --set "$W/set" --builtin all --radius 48 --out "$W/rig" -q
 for e in neutral happiness surprise anger; do
   w=""
   [ "$e" = neutral ] || w="$e=1"
-  $D render "$W/set" --rig "$W/rig" --weights "$w" --lighting window --size 768 --zoom 0.62 \
-    --pitch 8 --device gpu --out "$W/$e" -q
+  $D render "$W/set" --rig "$W/rig" --weights "$w" --lighting window --size 768 --zoom 0.85 \
+    --pitch 4 --device gpu --out "$W/$e" -q
 done
 for p in rest raised; do
   u=""
@@ -35,7 +35,7 @@ names = ["neutral", "happiness", "surprise", "anger"]
 frames = [Image.open(f"{d}/{n}/window.png").convert("RGB") for n in names]
 w, h = frames[0].size
 crops = [Image.open(f"{d}/brow-{p}/window.png").convert("RGB").crop((0, 0, 1024, 420))
-         .resize((2 * w, 2 * w * 420 // 1024 // 2)) for p in ["rest", "raised"]]
+         .resize((2 * w, 2 * w * 420 // 1024)) for p in ["rest", "raised"]]
 ch = crops[0].height
 out = Image.new("RGB", (4 * w, h + ch), (12, 12, 14))
 draw = ImageDraw.Draw(out)

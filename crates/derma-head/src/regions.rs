@@ -170,6 +170,11 @@ impl Regions {
         &self.lm
     }
 
+    /// The hairline landmark.
+    pub fn hairline(&self) -> Vec3 {
+        self.at.hairline
+    }
+
     /// The subnasale landmark.
     pub fn subnasale(&self) -> Vec3 {
         self.at.subnasale

@@ -32,7 +32,7 @@ const fn region(name: &'static str, drivers: &'static [(&'static str, f32)]) -> 
 }
 
 /// Every region, in a fixed order (mask channels, the GLB's and the web export's packing:
-/// four regions per RGBA image in this order). "left" is the subject's left (+X), as in the
+/// three regions per RGB image in this order). "left" is the subject's left (+X), as in the
 /// face units' names.
 pub const REGIONS: [WrinkleRegion; 10] = [
     // Frontalis: the inner brow raiser (AU1) folds the middle of the forehead, the outer brow
@@ -104,7 +104,7 @@ pub const REGIONS: [WrinkleRegion; 10] = [
 ];
 
 /// The blend, as the GLB and web exports state it.
-pub const FORMULA: &str = "w_r = clamp(sum_u gain_(r,u) * unit_u, 0, 1); m = clamp(sum_r w_r * mask_r, 0, 1); normal = normalize(lerp(2*normal_rest - 1, 2*normal_wrinkled - 1, m)); height = height_rest + m * expression_furrow_mm";
+pub const FORMULA: &str = "w_r = clamp(sum_u gain_(r,u) * unit_u, 0, 1); m = clamp(sum_r w_r * mask_r, 0, 1); normal = normalize(lerp(2*normal_rest - 1, 2*normal_wrinkled - 1, m)); height = height_rest + m * height_mm_furrow";
 
 /// Number of regions.
 pub const COUNT: usize = REGIONS.len();
@@ -160,7 +160,7 @@ pub fn masks(r: &Regions, p: Vec3) -> [f32; COUNT] {
     let left = smoothstep(-8.0, 8.0, p.x);
     // Forehead: above the brows, past the hairline landmark (the top lines reach it) and across
     // to the temples.
-    let hairline = r.landmarks().get("hairline").y;
+    let hairline = r.hairline().y;
     let forehead = smoothstep(eye.y + 18.0, eye.y + 26.0, p.y)
         * smoothstep(hairline + 20.0, hairline + 10.0, p.y)
         * smoothstep(70.0, 55.0, p.x.abs());

@@ -76,7 +76,8 @@ impl WrinkleMaps {
     }
 
     /// The rest normal `rest` (n·½ + ½, as normal.png) with the furrows of face units `units`
-    /// blended in; `rest` itself, to the bit, on every texel whose activation is 0.
+    /// blended in; `rest` itself, to the bit, on every texel whose activation is 0 or whose
+    /// wrinkled normal is the rest one (no furrow within a texel).
     pub fn blend<'a>(
         &self,
         rest: &[Map; 3],
@@ -97,17 +98,20 @@ impl WrinkleMaps {
             return Ok(rest.clone());
         }
         let m = self.activation(&weights, wrap);
+        use rayon::prelude::*;
         let px: Vec<[f32; 3]> = (0..w * h)
+            .into_par_iter()
             .map(|i| {
                 let a = m.data()[i];
-                if a == 0.0 {
-                    return [rest[0].data()[i], rest[1].data()[i], rest[2].data()[i]];
+                let r = [0, 1, 2].map(|c| rest[c].data()[i]);
+                let f = [0, 1, 2].map(|c| self.normal[c].data()[i]);
+                // No furrow here (the wrinkled normal is the rest one) or no activation.
+                if a == 0.0 || f == r {
+                    return r;
                 }
-                let n = std::array::from_fn(|c| {
-                    let (r, f) = (rest[c].data()[i], self.normal[c].data()[i]);
-                    2.0 * (r + (f - r) * a) - 1.0
-                });
-                blend_normal(n)
+                blend_normal(std::array::from_fn(|c| {
+                    2.0 * (r[c] + (f[c] - r[c]) * a) - 1.0
+                }))
             })
             .collect();
         Ok(std::array::from_fn(|c| Map::from_fn(w, h, |i| px[i][c])))

@@ -774,6 +774,15 @@ impl TextureSet {
                 .position(|f| *f == outputs::WRINKLE_NORMAL)
                 .map_or(files.len(), |p| p + 1);
             files.insert(at, outputs::WRINKLE_MASKS);
+        } else {
+            // No landmarks, no masks: a previous run's masks would not match this set.
+            let stale = dir.join(outputs::WRINKLE_MASKS);
+            if stale.is_file() {
+                std::fs::remove_file(&stale).map_err(|e| crate::SkinError::Input {
+                    path: stale.clone(),
+                    detail: format!("cannot remove a previous run's masks ({e})"),
+                })?;
+            }
         }
         derma_core::report::write_json(
             &dir.join(outputs::FEATURES),

@@ -69,7 +69,7 @@ pub const OUTPUTS: [OutputFile; 19] = [
     out(NORMAL, "linear (non-colour)", "tangent-space normal, OpenGL +Y (green up), MikkTSpace frame on meshes; 16-bit, n·½+½"),
     out(WRINKLE_NORMAL, "linear (non-colour)", "normal.png with every expression wrinkle at full activation (furrows 4× deeper and 0.75× as wide); blend per texel n = normalize(lerp(normal, wrinkle_normal, m)), m = clamp(Σ_r w_r·mask_r, 0, 1) from wrinkle_masks.exr and the face units (docs/rig.md, Expression wrinkles); 16-bit"),
     out(WRINKLE_MASKS, "linear", "the regions of expression wrinkles (one half-float channel each: forehead, glabella, crow's feet, under-eye, nasolabial, left and right) at up to 1024²; written where the head's landmarks place them"),
-    out(HEIGHT_EXR, "linear", "displacement in mm from the mean skin surface (height_mm) and what the expression wrinkles add at full activation (expression_furrow_mm), float32"),
+    out(HEIGHT_EXR, "linear", "displacement in mm from the mean skin surface (height_mm) and what the expression wrinkles add at full activation (height_mm_furrow), float32"),
     out(HEIGHT_PNG, "linear (non-colour)", "displacement, 16-bit, 0 ↔ height_range.min_mm and 1 ↔ max_mm (report.json)"),
     out(ROUGHNESS, "linear (non-colour)", "glTF perceptual roughness (Unreal Roughness), 8-bit"),
     out(SPECULAR, "linear (non-colour)", "specular level F0/0.08 (Unreal/Substance Specular: 0.5 ↔ F0 = 4 %), 8-bit"),

@@ -311,6 +311,7 @@ pub fn convert(
         }
     }
     let furrow = |j: usize| bio.texels[j].furrow_mm;
+    let wrap = surface.period().is_some();
     let with_furrows = |j: usize| bio.texels[j].height_mm + bio.texels[j].furrow_mm;
     strips.par_iter_mut().for_each(|st| {
         let first = st.first_row * w;
@@ -345,7 +346,7 @@ pub fn convert(
                 [0.0, 0.0, 1.0]
             };
             st.normal[k] = nrm.map(|v| quantize16(0.5 * v + 0.5));
-            if surface.covered(i) && near_furrow(furrow, w, h, x, y) {
+            if surface.covered(i) && near_furrow(furrow, (w, h), (x, y), wrap) {
                 let n = crate::normal_map::tangent_normal(surface, with_furrows, x, y);
                 st.wrinkle_normal
                     .push((i as u32, n.map(|v| quantize16(0.5 * v + 0.5))));
@@ -373,15 +374,27 @@ pub fn convert(
     maps
 }
 
-/// Whether texel (`x`, `y`) or one of its four neighbours has an expression furrow: only there
-/// can the wrinkle normal differ from the rest normal.
-fn near_furrow(furrow: impl Fn(usize) -> f32, w: usize, h: usize, x: usize, y: usize) -> bool {
-    let i = y * w + x;
-    furrow(i) != 0.0
-        || (x > 0 && furrow(i - 1) != 0.0)
-        || (x + 1 < w && furrow(i + 1) != 0.0)
-        || (y > 0 && furrow(i - w) != 0.0)
-        || (y + 1 < h && furrow(i + w) != 0.0)
+/// Whether texel (`x`, `y`) or one of the four neighbours the normal reads (across the edges
+/// when `wrap`, as [`crate::normal_map::tangent_normal`] does) has an expression furrow: only
+/// there can the wrinkle normal differ from the rest normal.
+fn near_furrow(
+    furrow: impl Fn(usize) -> f32,
+    (w, h): (usize, usize),
+    (x, y): (usize, usize),
+    wrap: bool,
+) -> bool {
+    let at = |dx: i64, dy: i64| {
+        let (xx, yy) = (x as i64 + dx, y as i64 + dy);
+        let (xx, yy) = if wrap {
+            (xx.rem_euclid(w as i64), yy.rem_euclid(h as i64))
+        } else if xx < 0 || yy < 0 || xx >= w as i64 || yy >= h as i64 {
+            return false;
+        } else {
+            (xx, yy)
+        };
+        furrow(yy as usize * w + xx as usize) != 0.0
+    };
+    at(0, 0) || at(-1, 0) || at(1, 0) || at(0, -1) || at(0, 1)
 }
 
 /// A sparse per-texel list (sorted by texel) with the gutter's texels added from their dilation
@@ -654,7 +667,7 @@ pub fn write_maps(
                 exr(
                     &path(outputs::HEIGHT_EXR),
                     bio,
-                    ["height_mm", "expression_furrow_mm"],
+                    ["height_mm", "height_mm_furrow"],
                     f32,
                     none,
                     |s| [s.height_mm, s.furrow_mm],

@@ -62,12 +62,12 @@ pub struct RenderArgs {
     /// An eye texture on the head's eye UVs (`derma photo iris`).
     #[arg(long, conflicts_with = "mesh")]
     iris: Option<PathBuf>,
-    /// Gaze yaw,pitch in degrees (positive yaw: to the subject's left); on the head the lids
-    /// and the skin around the eyes follow through the trained eye-region model.
+    /// Gaze yaw,pitch in degrees (positive yaw: to the subject's left); on the head (not with
+    /// --mesh) the lids and the skin around the eyes follow through the trained eye-region model.
     #[arg(long, default_value = "0,0", value_parser = crate::args::pair, allow_negative_numbers = true)]
     gaze: (f32, f32),
     /// Lid closure from 0 (open) to 1 (a full blink), through the eye-region model.
-    #[arg(long, default_value_t = 0.0, value_parser = crate::args::unit_interval)]
+    #[arg(long, default_value_t = 0.0, value_parser = crate::args::unit_interval, conflicts_with = "mesh")]
     blink: f32,
     /// Leave out the lacrimal lake (the tear meniscus along the lid margins).
     #[arg(long)]

@@ -48,14 +48,14 @@ fn case(k: usize) -> &'static PathBuf {
     })
 }
 
-/// (height_mm, expression_furrow_mm) of a set.
+/// (height_mm, height_mm_furrow) of a set.
 fn heights(set: &std::path::Path) -> (Map, Map) {
     let mut ch = read_exr_channels(&set.join("height.exr")).unwrap();
     let mut take = |n: &str| {
         let k = ch.iter().position(|(c, _)| c == n).unwrap();
         ch.swap_remove(k).1
     };
-    (take("height_mm"), take("expression_furrow_mm"))
+    (take("height_mm"), take("height_mm_furrow"))
 }
 
 /// The masks of every texel (the set's size), by region.
