@@ -16,6 +16,10 @@
 # PMCX_WHEELS: a folder holding the pmcx wheel (and numpy's, where the machine lacks numpy) to
 # install from where there is no network.
 # QUICK=1: tiny sizes, to check the script on any adapter (lavapipe included).
+# A headless NVIDIA machine whose Vulkan ICD (libGLX_nvidia) cannot create an instance: carry
+# this machine's libvulkan.so.1 and point the loader at the EGL library instead, e.g.
+#   LD_LIBRARY_PATH=DIR:/usr/lib VK_ICD_FILENAMES=DIR/nvidia_egl_icd.json
+# with the JSON's "library_path" set to libEGL_nvidia.so.0's path.
 set -euo pipefail
 derma=${DERMA:-target/release/derma}
 ex=${EXEMPLARS:-bench/out/synth}

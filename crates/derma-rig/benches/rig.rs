@@ -6,7 +6,8 @@
 //! Mesa's lavapipe it times the CPU's emulation).
 //!
 //!     cargo bench -p derma-rig --bench rig
-//!     cargo bench -p derma-rig --bench rig -- gpu_frame      (the GPU frame alone)
+//!     cargo bench -p derma-rig --bench rig -- gpu_frame      (the GPU frame alone, without
+//!                                                             and with a set's skin)
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use derma_core::Map;
@@ -122,22 +123,41 @@ fn gpu_frame(c: &mut Criterion) {
     let mut g = c.benchmark_group("rig_gpu_frame_8_targets");
     g.sample_size(20);
     for w in [2048usize, 4096] {
-        let (rig, melanin) = frame_rig(w);
-        let gpu = match derma_rig::gpu_eval::GpuRig::new(&rig, &melanin, &lut) {
-            Ok(gpu) => gpu,
-            Err(e) => {
-                eprintln!("rig_gpu_frame skipped: {e}");
-                return;
+        let (mut rig, melanin) = frame_rig(w);
+        // Without and with a texture set's skin (the composition's three extra reads a texel).
+        for with_skin in [false, true] {
+            if with_skin {
+                let ramp = |k: f32| Map::from_fn(w, w, |i| k * (i % 7) as f32);
+                let skin = derma_rig::skin_response::SkinResponse::from_parts(
+                    (0..w * w).map(|i| [(i % 251) as u8, 120, 90]).collect(),
+                    [ramp(-0.01), ramp(-0.02), ramp(-0.015)],
+                    [ramp(0.001), ramp(0.002), ramp(0.001)],
+                    "bench",
+                )
+                .unwrap();
+                rig.skin = Some(skin);
             }
-        };
-        g.bench_function(BenchmarkId::from_parameter(w), |b| {
-            b.iter_custom(|iters| {
-                let s = gpu
-                    .seconds_per_frame(&weights, 1.1, iters as usize)
-                    .unwrap();
-                Duration::from_secs_f64(s * iters as f64)
-            })
-        });
+            let gpu = match derma_rig::gpu_eval::GpuRig::new(&rig, &melanin, &lut) {
+                Ok(gpu) => gpu,
+                Err(e) => {
+                    eprintln!("rig_gpu_frame skipped: {e}");
+                    return;
+                }
+            };
+            let id = if with_skin {
+                format!("{w}_with_skin")
+            } else {
+                w.to_string()
+            };
+            g.bench_function(BenchmarkId::from_parameter(id), |b| {
+                b.iter_custom(|iters| {
+                    let s = gpu
+                        .seconds_per_frame(&weights, 1.1, iters as usize)
+                        .unwrap();
+                    Duration::from_secs_f64(s * iters as f64)
+                })
+            });
+        }
     }
     g.finish();
 }
