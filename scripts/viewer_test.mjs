@@ -36,15 +36,8 @@ const hue = (c) => (Math.atan2(lab(c)[2], lab(c)[1]) * 180) / Math.PI;
 async function compare(page, refFile) {
   const ref = fs.readFileSync(refFile).toString('base64');
   return page.evaluate(async (b64) => {
-    const decode = async (src) => {
-      const img = await createImageBitmap(await (await fetch(src)).blob(), { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
-      const c = new OffscreenCanvas(img.width, img.height);
-      const ctx = c.getContext('2d');
-      ctx.drawImage(img, 0, 0);
-      return ctx.getImageData(0, 0, img.width, img.height).data;
-    };
-    const a = await decode(window.derma.albedo());
-    const b = await decode(`data:image/png;base64,${b64}`);
+    const a = await window.testDecode(window.derma.albedo());
+    const b = await window.testDecode(`data:image/png;base64,${b64}`);
     if (a.length !== b.length) return { error: `sizes differ: ${a.length / 4} vs ${b.length / 4} texels` };
     let max = 0, sum = 0, n = 0;
     for (let i = 0; i < a.length; i += 4) {
@@ -68,6 +61,16 @@ try {
   const consoleErrors = [];
   page.on('console', (m) => m.type() === 'error' && consoleErrors.push(m.text()));
   page.on('pageerror', (e) => consoleErrors.push(String(e)));
+  // 8-bit RGBA of an image URL, decoded in the page (no colour conversion, no premultiplying).
+  await page.addInitScript(() => {
+    window.testDecode = async (src) => {
+      const img = await createImageBitmap(await (await fetch(src)).blob(), { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
+      const c = new OffscreenCanvas(img.width, img.height);
+      const ctx = c.getContext('2d');
+      ctx.drawImage(img, 0, 0);
+      return ctx.getImageData(0, 0, img.width, img.height).data;
+    };
+  });
   await page.goto(url);
   await page.waitForFunction(() => window.derma && (window.derma.ready || window.derma.errors.length), null, {
     timeout: 180_000,
@@ -132,18 +135,11 @@ try {
   // nowhere outside the regions the smile drives (crow's feet, under-eye, nasolabial).
   if (normalRest) {
     const wr = await page.evaluate(async (rest) => {
-      const decode = async (src) => {
-        const img = await createImageBitmap(await (await fetch(src)).blob(), { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
-        const c = new OffscreenCanvas(img.width, img.height);
-        const ctx = c.getContext('2d');
-        ctx.drawImage(img, 0, 0);
-        return ctx.getImageData(0, 0, img.width, img.height).data;
-      };
-      const a = await decode(rest);
-      const b = await decode(window.derma.wrinkleNormal());
+      const a = await window.testDecode(rest);
+      const b = await window.testDecode(window.derma.wrinkleNormal());
       // RGB images of three regions each: [forehead L, R, glabella L], [glabella R, crow's feet
       // L, R], [under-eye L, R, nasolabial L], [nasolabial R].
-      const m = await Promise.all([0, 1, 2, 3].map((k) => decode(`data/wrinkles/masks_${k}.png`)));
+      const m = await Promise.all([0, 1, 2, 3].map((k) => window.testDecode(`data/wrinkles/masks_${k}.png`)));
       if (m[1].length !== a.length) return { error: 'masks and normal map differ in size' };
       let crows = 0, outside = 0, changed = 0;
       for (let i = 0; i < a.length; i += 4) {

@@ -25,7 +25,7 @@ export async function png16(url, range) {
 }
 
 /** A float texture for texelFetch (rows from the image's top at t = 0, as glTF samples). */
-function floatTexture(img, wanted) {
+export function floatTexture(img, wanted) {
   const { width, height, channels, data } = img;
   let out = data;
   if (channels !== wanted) {
@@ -45,6 +45,59 @@ function floatTexture(img, wanted) {
 const vertexShader = /* glsl */ `
 void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }
 `;
+
+/**
+ * A fragment shader run once per texel of a `width` × `height` texture (mipmapped, 8-bit,
+ * `colorSpace`): the viewer's way of re-making a material's texture on the GPU. Row y of the
+ * texture is gl_FragCoord.y = y + ½, rows from the image's top at t = 0 as glTF samples.
+ */
+export class TexturePass {
+  constructor(width, height, colorSpace, fragmentShader, uniforms) {
+    this.size = [width, height];
+    this.target = new THREE.WebGLRenderTarget(width, height, {
+      type: THREE.UnsignedByteType,
+      colorSpace,
+      generateMipmaps: true,
+      minFilter: THREE.LinearMipmapLinearFilter,
+      magFilter: THREE.LinearFilter,
+      depthBuffer: false,
+    });
+    this.target.texture.anisotropy = 8;
+    this.material = new THREE.ShaderMaterial({
+      glslVersion: THREE.GLSL3,
+      vertexShader,
+      fragmentShader,
+      depthTest: false,
+      depthWrite: false,
+      uniforms,
+    });
+    const quad = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), this.material);
+    quad.frustumCulled = false;
+    this.scene = new THREE.Scene();
+    this.scene.add(quad);
+    this.camera = new THREE.OrthographicCamera(-1, 1, 1, -1, 0, 1);
+  }
+
+  /** Runs the shader into the texture. */
+  render(renderer) {
+    const previous = renderer.getRenderTarget();
+    renderer.setRenderTarget(this.target);
+    renderer.render(this.scene, this.camera);
+    renderer.setRenderTarget(previous);
+  }
+
+  /** The texture as a PNG data URL (rows from the image's top, as the texture files). */
+  toDataURL(renderer) {
+    const [w, h] = this.size;
+    const buf = new Uint8Array(w * h * 4);
+    renderer.readRenderTargetPixels(this.target, 0, 0, w, h, buf);
+    const c = document.createElement('canvas');
+    c.width = w;
+    c.height = h;
+    c.getContext('2d').putImageData(new ImageData(new Uint8ClampedArray(buf.buffer), w, h), 0, 0);
+    return c.toDataURL('image/png');
+  }
+}
 
 const fragmentShader = /* glsl */ `
 precision highp float;
@@ -157,43 +210,24 @@ export class Rig {
     const { width, height } = maps.h0;
     this.size = [width, height];
     const [bw, bh] = r.basis_size;
-    this.target = new THREE.WebGLRenderTarget(width, height, {
-      type: THREE.UnsignedByteType,
-      colorSpace: THREE.SRGBColorSpace,
-      generateMipmaps: true,
-      minFilter: THREE.LinearMipmapLinearFilter,
-      magFilter: THREE.LinearFilter,
-      depthBuffer: false,
+    this.pass = new TexturePass(width, height, THREE.SRGBColorSpace, fragmentShader, {
+      h0Tex: { value: floatTexture(maps.h0, 1) },
+      melaninTex: { value: floatTexture(maps.melanin, 1) },
+      basisTex: { value: floatTexture(maps.basis, 4) },
+      baseTex: { value: floatTexture(maps.skinBase, 4) },
+      d1Tex: { value: floatTexture(maps.d1, 4) },
+      d2Tex: { value: floatTexture(maps.d2, 4) },
+      weights: { value: new Array(MAX_LAYERS).fill(0) },
+      layers: { value: this.targets.length + 1 },
+      size: { value: new THREE.Vector2(width, height) },
+      basisSize: { value: new THREE.Vector2(bw, bh) },
+      globalScale: { value: 1 },
+      melaninMax: { value: r.lut.melanin_max },
+      bloodMax: { value: r.lut.blood_max },
+      mode: { value: 0 },
     });
-    this.target.texture.anisotropy = 8;
-    this.material = new THREE.ShaderMaterial({
-      glslVersion: THREE.GLSL3,
-      vertexShader,
-      fragmentShader,
-      depthTest: false,
-      depthWrite: false,
-      uniforms: {
-        h0Tex: { value: floatTexture(maps.h0, 1) },
-        melaninTex: { value: floatTexture(maps.melanin, 1) },
-        basisTex: { value: floatTexture(maps.basis, 4) },
-        baseTex: { value: floatTexture(maps.skinBase, 4) },
-        d1Tex: { value: floatTexture(maps.d1, 4) },
-        d2Tex: { value: floatTexture(maps.d2, 4) },
-        weights: { value: new Array(MAX_LAYERS).fill(0) },
-        layers: { value: this.targets.length + 1 },
-        size: { value: new THREE.Vector2(width, height) },
-        basisSize: { value: new THREE.Vector2(bw, bh) },
-        globalScale: { value: 1 },
-        melaninMax: { value: r.lut.melanin_max },
-        bloodMax: { value: r.lut.blood_max },
-        mode: { value: 0 },
-      },
-    });
-    this.quad = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), this.material);
-    this.quad.frustumCulled = false;
-    this.scene = new THREE.Scene();
-    this.scene.add(this.quad);
-    this.camera = new THREE.OrthographicCamera(-1, 1, 1, -1, 0, 1);
+    this.target = this.pass.target;
+    this.material = this.pass.material;
   }
 
   /** w_0 … w_k as derma-rig forms them: the neutral takes the rest; above one, rescaled. */
@@ -216,23 +250,12 @@ export class Rig {
     w.forEach((x, i) => (u.weights.value[i] = x));
     u.globalScale.value = this.scale(w);
     u.mode.value = this.mode;
-    const previous = renderer.getRenderTarget();
-    renderer.setRenderTarget(this.target);
-    renderer.render(this.scene, this.camera);
-    renderer.setRenderTarget(previous);
+    this.pass.render(renderer);
   }
 
   /** The evaluated texture as a PNG data URL (sRGB, rows from the image's top). */
   toDataURL(renderer) {
-    const [w, h] = this.size;
-    const buf = new Uint8Array(w * h * 4);
-    renderer.readRenderTargetPixels(this.target, 0, 0, w, h, buf);
-    const c = document.createElement('canvas');
-    c.width = w;
-    c.height = h;
-    const ctx = c.getContext('2d');
-    ctx.putImageData(new ImageData(new Uint8ClampedArray(buf.buffer), w, h), 0, 0);
-    return c.toDataURL('image/png');
+    return this.pass.toDataURL(renderer);
   }
 
   /** sRGB bytes of the evaluated texture, averaged over (2r+1)² texels around (u, v), v up. */

@@ -4,11 +4,7 @@
 // w_r = clamp(Σ_u gain_{r,u}·unit_u, 0, 1), m = clamp(Σ_r w_r·mask_r, 0, 1),
 // n = normalize(lerp(n_rest, n_wrinkled, m)). Texels with m = 0 keep the rest normal.
 import * as THREE from 'three';
-import { png16 } from './rig.js';
-
-const vertexShader = /* glsl */ `
-void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }
-`;
+import { png16, floatTexture, TexturePass } from './rig.js';
 
 const fragmentShader = /* glsl */ `
 precision highp float;
@@ -55,20 +51,6 @@ function byteTexture(img) {
   return t;
 }
 
-/** A float texture for texelFetch (rows from the image's top at t = 0, as glTF samples). */
-function floatTexture(img) {
-  const { width, height, channels, data } = img;
-  const out = new Float32Array(width * height * 4);
-  for (let i = 0; i < width * height; i++) {
-    for (let c = 0; c < 4; c++) out[i * 4 + c] = c < channels ? data[i * channels + c] : 1;
-  }
-  const t = new THREE.DataTexture(out, width, height, THREE.RGBAFormat, THREE.FloatType);
-  t.minFilter = t.magFilter = THREE.NearestFilter;
-  t.colorSpace = THREE.NoColorSpace;
-  t.needsUpdate = true;
-  return t;
-}
-
 /** The expression wrinkles of a `derma export web` directory over the skin's rest normal map. */
 export class Wrinkles {
   static async load(base, manifest, restNormal) {
@@ -83,43 +65,22 @@ export class Wrinkles {
     // Region order of the mask channels, and each region's face-unit drivers.
     this.regions = spec.masks.flatMap((m) => m.channels);
     this.drivers = Object.fromEntries(spec.regions.map((r) => [r.name, r.drivers]));
-    this.size = [full.width, full.height];
-    this.target = new THREE.WebGLRenderTarget(full.width, full.height, {
-      type: THREE.UnsignedByteType,
-      colorSpace: THREE.NoColorSpace,
-      generateMipmaps: true,
-      minFilter: THREE.LinearMipmapLinearFilter,
-      magFilter: THREE.LinearFilter,
-      depthBuffer: false,
-    });
-    this.target.texture.anisotropy = 8;
     const maskTex = masks.map(byteTexture);
     while (maskTex.length < 4) maskTex.push(byteTexture({ width: 1, height: 1, channels: 1, data: [0] }));
-    this.material = new THREE.ShaderMaterial({
-      glslVersion: THREE.GLSL3,
-      vertexShader,
-      fragmentShader,
-      depthTest: false,
-      depthWrite: false,
-      uniforms: {
-        restTex: { value: restNormal },
-        fullTex: { value: floatTexture(full) },
-        mask0: { value: maskTex[0] },
-        mask1: { value: maskTex[1] },
-        mask2: { value: maskTex[2] },
-        mask3: { value: maskTex[3] },
-        w0: { value: new THREE.Vector3() },
-        w1: { value: new THREE.Vector3() },
-        w2: { value: new THREE.Vector3() },
-        w3: { value: new THREE.Vector3() },
-        size: { value: new THREE.Vector2(full.width, full.height) },
-      },
+    this.pass = new TexturePass(full.width, full.height, THREE.NoColorSpace, fragmentShader, {
+      restTex: { value: restNormal },
+      fullTex: { value: floatTexture(full, 4) },
+      mask0: { value: maskTex[0] },
+      mask1: { value: maskTex[1] },
+      mask2: { value: maskTex[2] },
+      mask3: { value: maskTex[3] },
+      w0: { value: new THREE.Vector3() },
+      w1: { value: new THREE.Vector3() },
+      w2: { value: new THREE.Vector3() },
+      w3: { value: new THREE.Vector3() },
+      size: { value: new THREE.Vector2(full.width, full.height) },
     });
-    this.quad = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), this.material);
-    this.quad.frustumCulled = false;
-    this.scene = new THREE.Scene();
-    this.scene.add(this.quad);
-    this.camera = new THREE.OrthographicCamera(-1, 1, 1, -1, 0, 1);
+    this.target = this.pass.target;
     this.key = null;
   }
 
@@ -137,25 +98,15 @@ export class Wrinkles {
     const key = w.join(',');
     if (key === this.key) return false;
     this.key = key;
-    const u = this.material.uniforms;
+    const u = this.pass.material.uniforms;
     const at = (i) => w[i] ?? 0;
     [u.w0, u.w1, u.w2, u.w3].forEach((x, k) => x.value.set(at(3 * k), at(3 * k + 1), at(3 * k + 2)));
-    const previous = renderer.getRenderTarget();
-    renderer.setRenderTarget(this.target);
-    renderer.render(this.scene, this.camera);
-    renderer.setRenderTarget(previous);
+    this.pass.render(renderer);
     return true;
   }
 
   /** The blended normal map as a PNG data URL (rows from the image's top). */
   toDataURL(renderer) {
-    const [w, h] = this.size;
-    const buf = new Uint8Array(w * h * 4);
-    renderer.readRenderTargetPixels(this.target, 0, 0, w, h, buf);
-    const c = document.createElement('canvas');
-    c.width = w;
-    c.height = h;
-    c.getContext('2d').putImageData(new ImageData(new Uint8ClampedArray(buf.buffer), w, h), 0, 0);
-    return c.toDataURL('image/png');
+    return this.pass.toDataURL(renderer);
   }
 }

@@ -25,6 +25,20 @@ pub fn normals_from_height(surface: &Surface, height: &Map) -> [Map; 3] {
     [ch(0), ch(1), ch(2)]
 }
 
+/// The index of texel (`x`, `y`) of a `w` × `h` map: across the edges when `wrap`, else `None`
+/// outside.
+#[inline]
+pub fn texel_at((w, h): (usize, usize), x: i64, y: i64, wrap: bool) -> Option<usize> {
+    let (x, y) = if wrap {
+        (x.rem_euclid(w as i64), y.rem_euclid(h as i64))
+    } else if x < 0 || y < 0 || x >= w as i64 || y >= h as i64 {
+        return None;
+    } else {
+        (x, y)
+    };
+    Some(y as usize * w + x as usize)
+}
+
 /// The tangent-space normal of covered texel (`x`, `y`) from the heights (mm) of its
 /// neighbours on the surface, `height(j)` giving texel `j`'s.
 #[inline]
@@ -38,14 +52,7 @@ pub fn tangent_normal(
     let wrap = surface.period().is_some();
     let i = y * w + x;
     let at = |xx: i64, yy: i64| -> Option<f32> {
-        let (xx, yy) = if wrap {
-            (xx.rem_euclid(w as i64), yy.rem_euclid(h as i64))
-        } else if xx < 0 || yy < 0 || xx >= w as i64 || yy >= h as i64 {
-            return None;
-        } else {
-            (xx, yy)
-        };
-        let j = yy as usize * w + xx as usize;
+        let j = texel_at((w, h), xx, yy, wrap)?;
         surface.covered(j).then(|| height(j))
     };
     let c = height(i);

@@ -384,15 +384,8 @@ fn near_furrow(
     wrap: bool,
 ) -> bool {
     let at = |dx: i64, dy: i64| {
-        let (xx, yy) = (x as i64 + dx, y as i64 + dy);
-        let (xx, yy) = if wrap {
-            (xx.rem_euclid(w as i64), yy.rem_euclid(h as i64))
-        } else if xx < 0 || yy < 0 || xx >= w as i64 || yy >= h as i64 {
-            return false;
-        } else {
-            (xx, yy)
-        };
-        furrow(yy as usize * w + xx as usize) != 0.0
+        crate::normal_map::texel_at((w, h), x as i64 + dx, y as i64 + dy, wrap)
+            .is_some_and(|j| furrow(j) != 0.0)
     };
     at(0, 0) || at(-1, 0) || at(1, 0) || at(0, -1) || at(0, 1)
 }
