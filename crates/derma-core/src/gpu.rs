@@ -167,6 +167,13 @@ fn open() -> Result<Gpu, GpuError> {
     })
 }
 
+/// WGSL's `pack2x16float(vec2(a, b))`: `a` and `b` as IEEE half floats (round to nearest even),
+/// `a` in the low 16 bits; `unpack2x16float` in a shader gives them back.
+pub fn pack2x16float(a: f32, b: f32) -> u32 {
+    let h = |v: f32| half::f16::from_f32(v).to_bits() as u32;
+    h(a) | (h(b) << 16)
+}
+
 /// Workgroups for `threads` threads of `workgroup` each, as a two-dimensional grid (a dimension
 /// holds at most 65 535 workgroups): rows of 65 535 when one row is not enough, so a shader
 /// finds its thread as `gid.x + gid.y · 65 535 · workgroup`.

@@ -16,7 +16,8 @@
 //                                                        (neutral.exr, targets/NAME.exr)
 //   lut      n × n × 3    linear RGB at [v][u], u = ∛(C_m/melanin_max), v = ∛(H/blood_max)
 //   weights  w_0 … w_k (sum to one; w_0 is the neutral pose)
-//   skin     W × H × 3: the texture set's base colour (linear), d1, d2 (skin_response.exr), when
+//   skin     W × H vec4<u32>: the texture set's base colour as 8-bit sRGB codes (x: R | G << 8 |
+//            B << 16), then d1.rg, d1.b d2.r, d2.gb as half-float pairs (skin_response.exr), when
 //            has_skin = 1 (a rig built from a set; otherwise one unused element): the colour is
 //            then base + d1·x + d2·x², x = ∛H − ∛H_n, H_n the neutral's H, and not the LUT's
 // Scratch: combined  BH × BW × (bias, scale).
@@ -43,7 +44,7 @@ struct Params {
 @group(0) @binding(3) var<storage, read> melanin: array<f32>;
 @group(0) @binding(4) var<storage, read> basis: array<f32>;
 @group(0) @binding(5) var<storage, read> lut: array<f32>;
-@group(0) @binding(6) var<storage, read> skin: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read> skin: array<vec4<u32>>;
 @group(0) @binding(7) var<storage, read_write> hemoglobin_out: array<f32>;
 @group(0) @binding(8) var<storage, read_write> color_out: array<vec4<f32>>;
 @group(0) @binding(9) var<storage, read_write> combined: array<vec2<f32>>;
@@ -99,6 +100,11 @@ fn lut_at(u: u32, v: u32) -> vec3<f32> {
 }
 
 // Eq. 7: bilinear lookup at (∛(C_m/C_m,max), ∛(C_hd/C_hd,max)), nodes at the ends.
+// IEC 61966-2-1's decoding of sRGB values in [0, 1] (derma_core::color::srgb_decode).
+fn srgb_decode(c: vec3<f32>) -> vec3<f32> {
+    return select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
+}
+
 fn skin_color(c_m: f32, c_hd: f32) -> vec3<f32> {
     let n = params.lut_n;
     let u = min(pow(max(c_m, 0.0) / params.melanin_max, 1.0 / 3.0), 1.0) * f32(n - 1u);
@@ -149,9 +155,13 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if (params.has_skin == 1u) {
         let hn = clamp(upsampled_neutral(cx, cy) + h0[k] * 1.0, 0.0, 1.0);
         let s = cube_root_step(h, hn);
-        let base = skin[3u * k].rgb;
-        let d1 = skin[3u * k + 1u].rgb;
-        let d2 = skin[3u * k + 2u].rgb;
+        let t = skin[k];
+        let base = srgb_decode(unpack4x8unorm(t.x).rgb);
+        let a = unpack2x16float(t.y);
+        let b = unpack2x16float(t.z);
+        let c = unpack2x16float(t.w);
+        let d1 = vec3<f32>(a.x, a.y, b.x);
+        let d2 = vec3<f32>(b.y, c.x, c.y);
         color_out[k] = vec4<f32>(clamp(base + (d1 + d2 * s) * s, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0);
     } else {
         color_out[k] = vec4<f32>(skin_color(melanin[k], h), 1.0);
