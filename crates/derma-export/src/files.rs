@@ -198,10 +198,7 @@ fn posing_units(job: &RenderJob) -> Vec<(&str, f32)> {
     if let (Some(f), true) = (&job.rig, posable) {
         let e = f.weights.entries.iter().map(|(n, w)| (n.as_str(), *w));
         for (u, w) in derma_rig::expression::face_units(e) {
-            match units.iter_mut().find(|(n, _)| *n == u) {
-                Some(x) => x.1 = (x.1 + w).min(1.0),
-                None => units.push((u, w)),
-            }
+            derma_rig::expression::add_unit(&mut units, u, w);
         }
     }
     units

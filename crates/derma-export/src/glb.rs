@@ -98,13 +98,23 @@ pub fn unit_table(t: &[(&str, f32)]) -> serde_json::Value {
     serde_json::Value::Object(t.iter().map(|(u, k)| (u.to_string(), json!(k))).collect())
 }
 
-/// Region names of the wrinkle masks, three to an RGB image (no alpha: browsers and engine
+/// The wrinkle masks packed three regions to an RGB image (no alpha: browsers and engine
 /// importers premultiply it, which would wipe the other channels where it is 0), in
-/// [`derma_head::wrinkle_regions::REGIONS`] order.
-pub fn wrinkle_mask_images() -> Vec<Vec<&'static str>> {
-    derma_head::wrinkle_regions::REGIONS
+/// [`derma_head::wrinkle_regions::REGIONS`] order, the last image padded with zeros; with each
+/// image's region names.
+pub fn wrinkle_mask_images(
+    wm: &derma_render::wrinkles::WrinkleMaps,
+) -> Vec<([Map; 3], Vec<&'static str>)> {
+    let (w, h) = (wm.masks[0].width(), wm.masks[0].height());
+    wm.masks
         .chunks(3)
-        .map(|c| c.iter().map(|r| r.name).collect())
+        .zip(derma_head::wrinkle_regions::REGIONS.chunks(3))
+        .map(|(m, r)| {
+            let ch = std::array::from_fn(|c| {
+                m.get(c).cloned().unwrap_or_else(|| Map::filled(w, h, 0.0))
+            });
+            (ch, r.iter().map(|r| r.name).collect())
+        })
         .collect()
 }
 
@@ -264,15 +274,11 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
                 "wrinkle_normal",
                 &read(derma_skin::outputs::WRINKLE_NORMAL)?,
             );
-            let (mw, mh) = (wm.masks[0].width(), wm.masks[0].height());
-            let zero = Map::filled(mw, mh, 0.0);
             let mut masks = Vec::new();
-            for (k, chunk) in wm.masks.chunks(3).enumerate() {
-                let mut ch: Vec<&Map> = chunk.iter().collect();
-                ch.resize(3, &zero);
+            for (k, ([r, gr, b], names)) in wrinkle_mask_images(&wm).iter().enumerate() {
                 let name = format!("wrinkle_masks_{k}");
-                let t = image(&mut g, &name, &png8_bytes(&name, &ch)?);
-                masks.push(json!({"index": t, "channels": wrinkle_mask_images()[k]}));
+                let t = image(&mut g, &name, &png8_bytes(&name, &[r, gr, b])?);
+                masks.push(json!({"index": t, "channels": names}));
             }
             materials[0]["extras"] = json!({"derma_wrinkles": {
                 "normalTexture": {"index": t_wn, "encoding": "n·½+½ as normalTexture, every furrow at full activation"},

@@ -110,15 +110,11 @@ fn write_wrinkles(textures: &Path, out: &Path) -> Result<serde_json::Value> {
     derma_core::atomic::ensure_writable_dir(&wd)?;
     let n = &wm.normal;
     write_png16(&wd.join("normal.png"), &[&n[0], &n[1], &n[2]])?;
-    let (w, h) = (wm.masks[0].width(), wm.masks[0].height());
-    let zero = Map::filled(w, h, 0.0);
     let mut images = Vec::new();
-    for (k, chunk) in wm.masks.chunks(3).enumerate() {
-        let mut ch: Vec<&Map> = chunk.iter().collect();
-        ch.resize(3, &zero);
+    for (k, ([r, g, b], names)) in crate::glb::wrinkle_mask_images(&wm).iter().enumerate() {
         let file = format!("wrinkles/masks_{k}.png");
-        write_png16(&out.join(&file), &ch)?;
-        images.push(json!({"file": file, "channels": crate::glb::wrinkle_mask_images()[k]}));
+        write_png16(&out.join(&file), &[r, g, b])?;
+        images.push(json!({"file": file, "channels": names}));
     }
     Ok(json!({
         "normal": {"file": "wrinkles/normal.png", "encoding": "n·½+½, as normal.png"},

@@ -285,13 +285,18 @@ pub fn face_units<'a>(
     let mut out: Vec<(&'static str, f32)> = Vec::new();
     for (name, w) in weights {
         for (u, k) in find(name).map_or(&[][..], |e| e.face_units) {
-            match out.iter_mut().find(|(n, _)| n == u) {
-                Some(e) => e.1 = (e.1 + w * k).min(1.0),
-                None => out.push((u, (w * k).min(1.0))),
-            }
+            add_unit(&mut out, u, w * k);
         }
     }
     out
+}
+
+/// Adds weight `w` of face unit `u` to `units`: a unit already there sums, at most 1.
+pub fn add_unit<'a>(units: &mut Vec<(&'a str, f32)>, u: &'a str, w: f32) {
+    match units.iter_mut().find(|(n, _)| *n == u) {
+        Some(e) => e.1 = (e.1 + w).min(1.0),
+        None => units.push((u, w.min(1.0))),
+    }
 }
 
 /// Where the library's regions land: on the built-in head's UV layout (which a fitted head's
