@@ -3,7 +3,9 @@
 // `derma view`, loads the exported GLB with three.js' GLTFLoader, checks the shader-evaluated
 // rig against derma's CPU evaluation (`derma rig eval`), moves the "happiness" (smile) slider
 // and checks that the cheeks flush while the forehead stays and that the crow's feet deepen in
-// the normal map only inside the regions the smile drives, then saves a screenshot.
+// the normal map only inside the regions the smile drives, checks the live eye model against
+// derma's evaluator and that the upper lid follows the gaze in the picture, then saves a
+// screenshot (EYESHOT=PREFIX also saves crops of the eyes at several gazes).
 // Usage: node viewer_test.mjs PLAYWRIGHT_DIR URL NEUTRAL.png HAPPY.png SCREENSHOT.png
 import fs from 'node:fs';
 import path from 'node:path';
@@ -155,7 +157,66 @@ try {
     if (wr.error || !(wr.crows >= 10 && wr.outside === 0)) fail(`the smile's wrinkles: ${JSON.stringify(wr)}`);
   }
 
-  // 3. Gaze and blink drive the face units.
+  // 3. The trained eye model live: the JS port against derma's evaluator at the export's check
+  // poses, then the upper lid followed in the picture as the gaze drops: in a column of pixels
+  // through a margin vertex, the lid's edge is the strongest rise in luminance going down from
+  // the lid onto the eye, searched from just above the vertex's projection to 30 px below it.
+  const check = await page.evaluate(() => window.derma.eyeCheck());
+  console.log(`eye model: the viewer's port within ${check?.toFixed(5)} mm of derma's evaluator`);
+  if (!(check !== null && check < 0.01)) fail(`the viewer's eye model differs from derma's by ${check} mm`);
+  await page.locator('#w-happiness').fill('0');
+  await page.evaluate(() => window.derma.lookAtEyes(0.09));
+  const along = [0.2, 0.35, 0.5];
+  const lidEdges = async (pitch) => {
+    await page.locator('#gaze-pitch').fill(String(pitch));
+    const at = await page.evaluate((ts) => ts.map((t) => window.derma.upperLidPixel(0, t)), along);
+    await page.waitForFunction((f) => window.derma.frames > f + 1, await page.evaluate(() => window.derma.frames), { timeout: 60_000 });
+    const out = [];
+    for (const [x, y] of at) {
+      const top = Math.round(y) - 10;
+      const col = await page.screenshot({ clip: { x: Math.round(x), y: top, width: 1, height: 44 } });
+      const row = await page.evaluate(async (b64) => {
+        const d = await window.testDecode(`data:image/png;base64,${b64}`);
+        const lum = [];
+        for (let i = 0; i < d.length; i += 4) lum.push(0.2126 * d[i] + 0.7152 * d[i + 1] + 0.0722 * d[i + 2]);
+        let best = -Infinity, at = 0;
+        for (let r = 2; r < lum.length - 2; r++) {
+          const rise = lum[r + 1] + lum[r + 2] - lum[r - 1] - lum[r - 2];
+          if (rise > best) [best, at] = [rise, r];
+        }
+        return at;
+      }, col.toString('base64'));
+      out.push({ vertex: y, edge: top + row });
+    }
+    return out;
+  };
+  const ahead = await lidEdges(0);
+  const down = await lidEdges(-25);
+  along.forEach((t, i) => {
+    const dv = down[i].vertex - ahead[i].vertex;
+    const de = down[i].edge - ahead[i].edge;
+    console.log(`upper lid at ${t} of its margin, gaze 0 → −25°: vertex ${dv.toFixed(1)} px lower, the lid's edge in the picture ${de} px lower`);
+    if (!(dv > 3)) fail(`the eye model did not lower the upper lid in downgaze (${dv.toFixed(1)} px at ${t})`);
+    if (!(de >= 0.5 * dv && de <= 2 * dv + 4)) fail(`the upper lid's edge in the picture did not follow its vertex at ${t} (${de} px for ${dv.toFixed(1)})`);
+  });
+  if (process.env.EYESHOT) {
+    // The eye model in the viewer (README figure): both eyes at four gazes and a half blink.
+    await page.evaluate(() => window.derma.lookAtEyes(0.1));
+    for (const [name, yaw, pitch, ap] of [['up', 0, 20, 0], ['ahead', 0, 0, 0], ['down', 0, -25, 0], ['left', 25, 0, 0], ['half', 0, 0, -0.5]]) {
+      await page.locator('#gaze-yaw').fill(String(yaw));
+      await page.locator('#gaze-pitch').fill(String(pitch));
+      await page.locator('#aperture').fill(String(ap));
+      await page.waitForFunction((f) => window.derma.frames > f + 1, await page.evaluate(() => window.derma.frames), { timeout: 60_000 });
+      const box = await page.locator('#view').boundingBox();
+      await page.screenshot({ path: `${process.env.EYESHOT}-${name}.png`, clip: { x: box.x, y: box.y + box.height / 2 - 130, width: box.width, height: 260 } });
+    }
+    await page.locator('#aperture').fill('0');
+  }
+  await page.evaluate(() => window.derma.frameFace());
+  await page.locator('#gaze-pitch').fill('0');
+  await page.locator('#w-happiness').fill('1');
+
+  // 4. Gaze and blink drive the face units.
   await page.locator('#gaze-yaw').fill('20');
   const look = await page.evaluate(() => window.derma.units());
   if (!(look.eyeLookOutLeft > 0.5 && look.eyeLookInRight > 0.5)) fail(`gaze did not move the lids: ${JSON.stringify(look)}`);

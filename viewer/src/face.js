@@ -27,10 +27,11 @@ export function blinkCurve(t) {
 /**
  * The head's animated parts: meshes with face units, and the eyes on pivots at their centres.
  * `expressionUnits`: the face units posing each rig expression at full weight (manifest.json's
- * `expression_units`, from derma-rig's expression library).
+ * `expression_units`, from derma-rig's expression library); `centres`: the globe centres (m,
+ * left then right) where the export knows them (its eye model), else found from each globe.
  */
 export class Face {
-  constructor(root, expressionUnits = {}) {
+  constructor(root, expressionUnits = {}, centres = null) {
     this.expressionUnits = expressionUnits;
     this.morphed = [];
     this.eyes = [];
@@ -46,10 +47,13 @@ export class Face {
       // The globe's centre: mid-box across, one radius behind the back of the globe's front
       // (the cornea bulges forward along +Z, so the box centre would sit in front of it).
       const r = (b.max.x - b.min.x) / 2;
-      const c = new THREE.Vector3((b.min.x + b.max.x) / 2, (b.min.y + b.max.y) / 2, b.min.z + r);
+      const c = centres
+        ? new THREE.Vector3(...centres[this.eyes.length])
+        : new THREE.Vector3((b.min.x + b.max.x) / 2, (b.min.y + b.max.y) / 2, b.min.z + r);
       const pivot = new THREE.Group();
       pivot.name = `${name}_pivot`;
-      pivot.position.copy(c).applyMatrix4(eye.matrix);
+      pivot.position.copy(c);
+      if (!centres) pivot.position.applyMatrix4(eye.matrix);
       eye.parent.add(pivot);
       pivot.add(eye);
       eye.position.sub(c);

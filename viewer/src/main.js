@@ -1,7 +1,8 @@
 // derma's web viewer: the head of `derma export web` lit by an image-based environment and a
 // key light, its albedo re-evaluated from the skin appearance rig (Jimenez et al. 2010 §6) and its
-// normal map from the expression wrinkles (wrinkles.js) as expression sliders move, with gaze,
-// aperture and blinks on the head's face units.
+// normal map from the expression wrinkles (wrinkles.js) as expression sliders move, and the lids
+// and the skin around the eyes from the trained eye-region model (eyes.js) as gaze, aperture and
+// blinks move.
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
@@ -9,6 +10,7 @@ import { RoomEnvironment } from 'three/addons/environments/RoomEnvironment.js';
 import { Rig, MODES } from './rig.js';
 import { Face, blinkCurve, BLINK_MS } from './face.js';
 import { Wrinkles } from './wrinkles.js';
+import { EyeModel, LiveEyes } from './eyes.js';
 
 // Where the export lives: ?data=URL, else the `data/` that `derma view` serves beside the viewer.
 const base = (new URLSearchParams(location.search).get('data') ?? 'data').replace(/\/?$/, '/');
@@ -57,6 +59,32 @@ const api = {
     wrinkles.evaluate(renderer, face.units);
     return wrinkles.toDataURL(renderer);
   },
+  // The eye model's port against derma's evaluator: largest distance (mm) over the export's
+  // check poses; null without a model.
+  eyeCheck: () => eyes?.check() ?? null,
+  // Canvas pixel (x, y from the top-left) of the upper lid of eye `e` (0 left, 1 right) as last
+  // posed, at fraction `t` of its margin from the inner canthus.
+  upperLidPixel: (e = 0, t = 0.5) => {
+    if (!eyes) return null;
+    face.apply();
+    eyes.apply(face.gaze, 0, face.units);
+    camera.updateMatrixWorld();
+    const chain = eyes.model.h.margins[e][0];
+    const p = new THREE.Vector3(...eyes.vertex(chain[Math.round(t * (chain.length - 1))])).project(camera);
+    return [((p.x + 1) / 2) * canvas.clientWidth, ((1 - p.y) / 2) * canvas.clientHeight];
+  },
+  // Frames the eyes: the camera in front of the globes' midpoint, `span` metres across the view.
+  lookAtEyes: (span = 0.09) => {
+    if (!eyes) return false;
+    const [l, r] = eyes.model.h.centres;
+    const c = new THREE.Vector3(...l.map((x, i) => (0.0005 * (x + r[i]))));
+    const dist = span / camera.aspect / (2 * Math.tan((camera.fov * Math.PI) / 360));
+    camera.position.set(c.x, c.y, c.z + dist);
+    controls.target.copy(c);
+    controls.update();
+    return true;
+  },
+  frameFace: () => frameFace(),
   regions: {},
   setWeight: (name, w) => setWeight(name, w),
 };
@@ -97,6 +125,7 @@ controls.enableDamping = true;
 let rig = null;
 let wrinkles = null;
 let face = null;
+let eyes = null;
 let skin = null;
 const original = {};
 let dirty = true;
@@ -189,6 +218,7 @@ function buildControls() {
   b.textContent = 'blink';
   b.addEventListener('click', () => (blinkStart = performance.now()));
   e.append(b);
+  if (eyes) checkbox(e, 'eye-model', 'lids from the trained eye-region model (off: face units)', true, (on) => (eyes.enabled = on));
   checkbox(e, 'auto-blink', 'blink on its own (every 2–6 s)', false, (on) => {
     nextAutoBlink = on ? performance.now() + 1000 : 0;
   });
@@ -254,6 +284,20 @@ function setDisplay(mode) {
   }
 }
 
+// Frames the face: the skin's bounds, seen from the front a little above eye level.
+function frameFace() {
+  const box = new THREE.Box3().setFromObject(skin);
+  const c = box.getCenter(new THREE.Vector3());
+  const size = box.getSize(new THREE.Vector3());
+  const dist = (0.9 * size.y) / (2 * Math.tan((camera.fov * Math.PI) / 360));
+  camera.position.set(c.x, c.y + 0.05 * size.y, c.z + dist);
+  camera.near = dist / 20;
+  camera.far = dist * 20;
+  camera.updateProjectionMatrix();
+  controls.target.copy(c);
+  controls.update();
+}
+
 // ---- loading ----
 async function load() {
   const res = await fetch(base + 'manifest.json');
@@ -275,7 +319,12 @@ async function load() {
     specularIntensityMap: mat.specularIntensityMap ?? null,
     roughness: mat.roughness,
   });
-  face = new Face(gltf.scene, manifest.expression_units ?? {});
+  const centres = manifest.eyes?.centres.map((c) => c.map((x) => x * 0.001));
+  face = new Face(gltf.scene, manifest.expression_units ?? {}, centres);
+  if (manifest.eyes) {
+    status.textContent = 'loading the eye model…';
+    eyes = new LiveEyes(await EyeModel.load(base, manifest.eyes), skin, gltf.scene, face.eyes);
+  }
   if (manifest.wrinkles && mat.normalMap) {
     wrinkles = await Wrinkles.load(base, manifest, mat.normalMap);
     wrinkles.evaluate(renderer, {});
@@ -290,19 +339,9 @@ async function load() {
     mat.map = rig.target.texture;
     mat.needsUpdate = true;
   }
-  // Frame the face: the skin's bounds, seen from the front a little above eye level.
-  const box = new THREE.Box3().setFromObject(skin);
-  const c = box.getCenter(new THREE.Vector3());
-  const size = box.getSize(new THREE.Vector3());
-  const dist = (0.9 * size.y) / (2 * Math.tan((camera.fov * Math.PI) / 360));
-  camera.position.set(c.x, c.y + 0.05 * size.y, c.z + dist);
-  camera.near = dist / 20;
-  camera.far = dist * 20;
-  camera.updateProjectionMatrix();
-  controls.target.copy(c);
-  controls.update();
+  frameFace();
   buildControls();
-  status.textContent = `${manifest.glb}: ${rig ? rig.targets.length + ' rig targets' : 'no rig'}, ${face.unitNames().length} face units${wrinkles ? ', expression wrinkles' : ''}`;
+  status.textContent = `${manifest.glb}: ${rig ? rig.targets.length + ' rig targets' : 'no rig'}, ${face.unitNames().length} face units${wrinkles ? ', expression wrinkles' : ''}${eyes ? ', eye model' : ''}`;
   api.ready = true;
 }
 
@@ -317,6 +356,7 @@ function frame(now) {
   face.blink = blinkCurve(t);
   if (t > BLINK_MS.close + BLINK_MS.hold + BLINK_MS.open) blinkStart = -1;
   face.apply();
+  eyes?.apply(face.gaze, 0, face.units);
   wrinkles?.evaluate(renderer, face.units);
   refresh();
   controls.update();

@@ -141,6 +141,9 @@ pub struct GlbReport {
     pub extensions: Vec<String>,
     /// Loose maps written.
     pub maps: Vec<PathBuf>,
+    /// Per vertex of the GLB's skin mesh, the source mesh's vertex it copies (the exporter splits
+    /// vertices where mirrored UVs flip the tangent).
+    pub skin_origin: Vec<u32>,
 }
 
 fn srgb_encoded(m: &[Map; 3]) -> [Map; 3] {
@@ -461,6 +464,7 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
         morph_targets: units.len(),
         extensions: ext_used,
         maps,
+        skin_origin: origin,
     })
 }
 

@@ -124,6 +124,24 @@ fn write_wrinkles(textures: &Path, out: &Path) -> Result<serde_json::Value> {
     }))
 }
 
+/// Writes the head's eye-region model for the viewer's live evaluation (`eyes/model.bin`, the
+/// arrays of [`derma_eyes::live::pack`]) and returns its manifest entry (the header, with the
+/// file): trained on the head's rig as `derma render --gaze` trains it.
+fn write_eyes(
+    head: &derma_head::Head,
+    skin_origin: &[u32],
+    out: &Path,
+) -> Result<serde_json::Value> {
+    let model = derma_eyes::still::StillModel::new(head)
+        .map_err(|e| ExportError::Invalid(format!("the eye-region model: {e}")))?;
+    let (mut header, bin) = derma_eyes::live::pack(&model, head, skin_origin);
+    let dir = out.join("eyes");
+    derma_core::atomic::ensure_writable_dir(&dir)?;
+    derma_core::atomic::write_bytes(&dir.join("model.bin"), &bin)?;
+    header["file"] = json!("eyes/model.bin");
+    Ok(header)
+}
+
 /// Writes `out/head.glb` (the built-in head with the set) and, with a rig, `out/rig/*.png` and
 /// `out/manifest.json`.
 pub fn export(
@@ -133,7 +151,7 @@ pub fn export(
     out: &Path,
 ) -> Result<WebReport> {
     derma_core::atomic::ensure_writable_dir(out)?;
-    crate::glb::export(
+    let glb = crate::glb::export(
         &crate::glb::GlbOptions {
             textures: textures.to_path_buf(),
             mesh: None,
@@ -160,6 +178,7 @@ pub fn export(
         .map(|e| (e.name.to_string(), crate::glb::unit_table(e.face_units)))
         .collect::<serde_json::Map<_, _>>());
     manifest["wrinkles"] = write_wrinkles(textures, out)?;
+    manifest["eyes"] = write_eyes(derma_head::fitted::or_builtin(head)?, &glb.skin_origin, out)?;
     let mut targets = 0;
     if let Some(dir) = rig_dir {
         let (rig, lut, rj) = derma_rig::rig_dir::load(dir)?;

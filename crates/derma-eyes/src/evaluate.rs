@@ -30,13 +30,13 @@ pub struct Evaluator {
     pub globes: [Globe; 2],
     /// Per vertex: rest position minus T(ũ⁺ at the neutral input), so the neutral frame is the
     /// rest mesh exactly (vertices hidden in folds keep their depth).
-    offset: Vec<Vec3>,
+    pub(crate) offset: Vec<Vec3>,
     /// Per vertex: ũ⁺ at the neutral input.
-    u0: Vec<Vec2>,
+    pub(crate) u0: Vec<Vec2>,
     /// Per vertex: the rest normal minus Υ(ũ⁺ neutral).
-    normal_offset: Vec<Vec3>,
+    pub(crate) normal_offset: Vec<Vec3>,
     /// Rest normals.
-    rest_normals: Vec<Vec3>,
+    pub(crate) rest_normals: Vec<Vec3>,
     /// The neutral input.
     pub neutral: Gaze,
 }

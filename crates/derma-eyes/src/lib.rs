@@ -9,6 +9,8 @@
 //! - [`globe`], [`skull`], [`sliding`], [`evaluate`]: the eyeball with its corneal bulge, the
 //!   skull maps and globe sliding (Algorithm 1) that turn a model frame into 3D; [`surface`]
 //!   carries it onto a user's own mesh through a fitted head (eq. 3.4).
+//! - [`still`], [`live`]: one frame for a posed head (`derma render --gaze`), and the bound
+//!   model as data for a real-time evaluator (the web viewer).
 //! - [`blink`], [`saccade`], [`idle`], [`saliency`]: the drivers — stochastic blinks, main-sequence
 //!   saccades, idle gaze and salient gaze targets; [`animate`] turns them into frames and
 //!   [`synthetic`] into noisy tracked sequences.
@@ -28,6 +30,7 @@ pub mod glb;
 pub mod globe;
 pub mod idle;
 pub mod lids;
+pub mod live;
 pub mod model;
 pub mod pca;
 pub mod region;

@@ -34,10 +34,10 @@ impl EyePose {
 /// The eye-region model of `head`, trained once on its rig (300 poses, as `derma eyes
 /// animate` trains it when given no model).
 pub struct StillModel {
-    rig: Rig,
-    model: EyeModel,
-    evaluator: Evaluator,
-    lashes: Vec<LashAnchors>,
+    pub(crate) rig: Rig,
+    pub(crate) model: EyeModel,
+    pub(crate) evaluator: Evaluator,
+    pub(crate) lashes: Vec<LashAnchors>,
 }
 
 /// A lash part and, per vertex, the lid-margin model vertex it rides on (the nearest at rest).
@@ -111,7 +111,8 @@ impl StillModel {
     }
 
     /// The model's input g̃ for `pose` with face units `units` (by name; the model reads the
-    /// region's units, others are ignored) on `head`.
+    /// region's squint units as inputs and its blink and wide units as lid openings, others
+    /// are ignored) on `head`.
     pub fn gaze(&self, head: &Head, pose: EyePose, units: &[(&str, f32)]) -> Gaze {
         let centres = [head.eyes[0].centre, head.eyes[1].centre];
         let mid = 0.5 * (centres[0] + centres[1]);
@@ -121,12 +122,6 @@ impl StillModel {
             t: 0.0,
         };
         let eyes = verge(centres, mid + FIXATION_MM * cyc.direction());
-        // Closure c is the peak of a blink of c × the full amplitude (blink.rs).
-        let closure = pose.closure.clamp(0.0, 1.0);
-        let lids = [0, 1].map(|e| {
-            self.model
-                .baseline_aperture(e, eyes[e].h, eyes[e].v, 1.0 - closure)
-        });
         let weight = |name: &str| {
             units
                 .iter()
@@ -135,6 +130,20 @@ impl StillModel {
                 .sum::<f32>()
                 .clamp(0.0, 1.0)
         };
+        // Closure c is the peak of a blink of c × the full amplitude (blink.rs); a pose's
+        // eyeBlink units close the lids as far, its eyeWide units open them toward the widest
+        // opening of the training (normalised 1), less as they close.
+        let lids = [0, 1].map(|e| {
+            let side = ["Left", "Right"][e];
+            let c = pose
+                .closure
+                .max(weight(&format!("eyeBlink{side}")))
+                .clamp(0.0, 1.0);
+            let wide = weight(&format!("eyeWide{side}")) * (1.0 - c);
+            self.model
+                .baseline_aperture(e, eyes[e].h, eyes[e].v, 1.0 - c)
+                .map(|b| b + wide * (1.0 - b))
+        });
         Gaze {
             eyes,
             lids,
@@ -143,7 +152,7 @@ impl StillModel {
     }
 
     /// `skin` (the head's skin, posed by `units` or at rest) with its eye-region vertices where
-    /// the model puts them for `pose`, and the lash parts riding on the lid margins (name,
+    /// the model puts them for `pose` plus the offsets of the units outside the region, and the lash parts riding on the lid margins (name,
     /// moved mesh).
     pub fn pose_skin(
         &self,
@@ -155,9 +164,27 @@ impl StillModel {
         let g = self.gaze(head, pose, units);
         let mut f = Frame::default();
         self.evaluator.frame(&g, &mut f);
+        // The model replaces what the region's own units (gaze, blink, squint, wide) do to its
+        // vertices; the other units (a raised brow, a smile's cheeks) still add their offsets.
+        let mut own = vec![glam::Vec3::ZERO; skin.positions.len()];
+        for u in head.face_units() {
+            let w: f32 = units
+                .iter()
+                .filter(|(n, _)| *n == u.name)
+                .map(|(_, w)| *w)
+                .sum();
+            if w != 0.0 && crate::region::REGION_UNITS.contains(&u.name.as_str()) {
+                for &(v, d) in &u.skin {
+                    if let Some(o) = own.get_mut(v as usize) {
+                        *o += w * d;
+                    }
+                }
+            }
+        }
         for (v, &m) in self.rig.region.skin_to_model.iter().enumerate() {
             if m != u32::MAX && v < skin.positions.len() {
-                skin.positions[v] = f.positions[m as usize];
+                let others = skin.positions[v] - head.skin.positions[v] - own[v];
+                skin.positions[v] = f.positions[m as usize] + others;
             }
         }
         skin.compute_normals();

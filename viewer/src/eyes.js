@@ -1,0 +1,284 @@
+// The trained eye-region model live (EyeMove thesis §3.9, fig. 3.14 and Algorithm 1): g̃ from
+// gaze, lid closure and the face units → e = W g̃ → ũ⁺ = Ũ e → T(ũ⁺), Υ(ũ⁺) → globe sliding,
+// as derma_eyes::evaluate does, on the arrays `derma export web` writes (eyes/model.bin).
+
+const DEG = Math.PI / 180;
+const sign = (x) => (x >= 0 ? 1 : -1); // glam's signum: +0 → +1
+
+/** Rotation matrix (row-major 3×3) of Fick angles (h, v): R = R_Y(h) · R_X(−v). */
+function fick(h, v) {
+  const [ch, sh, cv, sv] = [Math.cos(h * DEG), Math.sin(h * DEG), Math.cos(-v * DEG), Math.sin(-v * DEG)];
+  return [ch, sh * sv, sh * cv, 0, cv, -sv, -sh, ch * sv, ch * cv];
+}
+
+export class EyeModel {
+  constructor(header, bin) {
+    this.h = header;
+    const arr = (name) => {
+      const a = header.arrays[name];
+      if (!a) throw new Error(`eyes/model.bin: no array '${name}'`);
+      const Type = a.type === 'u32' ? Uint32Array : Float32Array;
+      if (a.offset + 4 * a.count * a.components > bin.byteLength) throw new Error(`eyes/model.bin: array '${name}' past the end of the file`);
+      return new Type(bin, a.offset, a.count * a.components);
+    };
+    for (const n of ['basis', 'u0', 'offset', 'normal_offset', 'rest', 'rest_normals', 'eye', 'slide', 'skull', 'radial', 'skin_vertices']) this[n] = arr(n);
+    this.lashAnchors = Object.fromEntries(header.lashes.map((l) => [l.name, arr(l.anchors)]));
+    this.n = header.vertices;
+    this.k = header.k;
+    this.pos = new Float32Array(3 * this.n);
+    this.nrm = new Float32Array(3 * this.n);
+    this.angles = [
+      [0, 0],
+      [0, 0],
+    ];
+  }
+
+  static async load(base, entry) {
+    const res = await fetch(base + entry.file);
+    if (!res.ok) throw new Error(`${base}${entry.file}: HTTP ${res.status}`);
+    return new EyeModel(entry, await res.arrayBuffer());
+  }
+
+  /** g̃ for gaze (yaw, pitch)° of the cyclopean eye, lid closure and face units by name. */
+  inputs(gaze, closure, units) {
+    const h = this.h;
+    const c = h.centres;
+    const mid = [0, 1, 2].map((i) => 0.5 * (c[0][i] + c[1][i]));
+    const [yh, yv] = [gaze[0] * DEG, gaze[1] * DEG];
+    const dir = [Math.sin(yh) * Math.cos(yv), Math.sin(yv), Math.cos(yh) * Math.cos(yv)];
+    const target = mid.map((m, i) => m + h.fixation_mm * dir[i]);
+    const w = (name) => Math.min(Math.max(units[name] ?? 0, 0), 1);
+    const g = [];
+    for (let e = 0; e < 2; e++) {
+      const d = target.map((t, i) => t - c[e][i]);
+      const len = Math.hypot(...d);
+      const eh = Math.atan2(d[0], d[2]) / DEG;
+      const ev = Math.asin(Math.min(Math.max(d[1] / len, -1), 1)) / DEG;
+      this.angles[e] = [eh, ev];
+      const side = e === 0 ? 'Left' : 'Right';
+      const ce = Math.min(Math.max(Math.max(closure, w(`eyeBlink${side}`)), 0), 1);
+      const wide = w(`eyeWide${side}`) * (1 - ce);
+      const f = [eh, Math.abs(eh), Math.max(ev, 0), Math.min(ev, 0), 1];
+      const lids = h.baseline.rows[e].map((row) => {
+        const b = (1 - ce) * row.reduce((s, x, i) => s + x * f[i], 0);
+        return b + wide * (1 - b);
+      });
+      g.push(eh, ev, 0, lids[0], lids[1]);
+    }
+    for (const u of h.units) g.push(w(u));
+    return g;
+  }
+
+  /** Model-vertex positions and normals (mm) into this.pos / this.nrm. */
+  evaluate(gaze, closure, units) {
+    const g = this.inputs(gaze, closure, units);
+    const e = this.h.w.map((row) => row.reduce((s, x, i) => s + x * (i < g.length ? g[i] : 1), 0));
+    const { basis, u0, offset, normal_offset: noff, pos, nrm, k } = this;
+    const sk = this.h.skull;
+    const [ox, oy] = sk.origin;
+    const [W, H, T] = [sk.width, sk.height, sk.texel_mm];
+    const S = this.skull;
+    const stride = 2 * (k + 1);
+    const un2 = 1 / (this.h.unfold_mm * this.h.unfold_mm);
+    const o = new Float32Array(6);
+    for (let i = 0; i < this.n; i++) {
+      let x = basis[i * stride];
+      let y = basis[i * stride + 1];
+      for (let j = 0; j < k; j++) {
+        x += e[j] * basis[i * stride + 2 + 2 * j];
+        y += e[j] * basis[i * stride + 3 + 2 * j];
+      }
+      // T(ũ), Υ(ũ): bilinear over the skull map.
+      const fx = Math.min(Math.max((x - ox) / T, 0), W - 1 - 1e-3);
+      const fy = Math.min(Math.max((y - oy) / T, 0), H - 1 - 1e-3);
+      const [x0, y0] = [Math.floor(fx), Math.floor(fy)];
+      const [tx, ty] = [fx - x0, fy - y0];
+      const a = 6 * (y0 * W + x0);
+      const b = a + 6;
+      const cc = a + 6 * W;
+      const d = cc + 6;
+      for (let q = 0; q < 6; q++) {
+        const top = S[a + q] + (S[b + q] - S[a + q]) * tx;
+        const bot = S[cc + q] + (S[d + q] - S[cc + q]) * tx;
+        o[q] = top + (bot - top) * ty;
+      }
+      // Skin hidden in a fold at rest unfolds as it slides: its offset fades over unfold_mm.
+      const dx = x - u0[2 * i];
+      const dy = y - u0[2 * i + 1];
+      const keep = Math.max(1 - (dx * dx + dy * dy) * un2, 0);
+      let nx = o[3], ny = o[4], nz = o[5];
+      if (keep > 0) {
+        nx += noff[3 * i] * keep;
+        ny += noff[3 * i + 1] * keep;
+        nz += noff[3 * i + 2] * keep;
+      }
+      const nl = 1 / Math.hypot(nx, ny, nz);
+      for (let q = 0; q < 3; q++) pos[3 * i + q] = o[q] + offset[3 * i + q] * keep;
+      nrm[3 * i] = nx * nl;
+      nrm[3 * i + 1] = ny * nl;
+      nrm[3 * i + 2] = nz * nl;
+    }
+    this.slideOnGlobes();
+  }
+
+  /** D(dir): the globe's radial distance along a unit direction of its own frame (bilinear). */
+  radius(eye, x, y, z) {
+    const size = this.h.radial.size;
+    const l1 = Math.abs(x) + Math.abs(y) + Math.abs(z);
+    let [px, py] = [x / l1, y / l1];
+    if (z < 0) [px, py] = [(1 - Math.abs(py)) * sign(px), (1 - Math.abs(px)) * sign(py)];
+    const fx = Math.min(Math.max((px * 0.5 + 0.5) * size - 0.5, 0), size - 1 - 1e-3);
+    const fy = Math.min(Math.max((py * 0.5 + 0.5) * size - 0.5, 0), size - 1 - 1e-3);
+    const [x0, y0] = [Math.floor(fx), Math.floor(fy)];
+    const [tx, ty] = [fx - x0, fy - y0];
+    const r = this.radial;
+    const i = eye * size * size + y0 * size + x0;
+    const top = r[i] + (r[i + 1] - r[i]) * tx;
+    const bot = r[i + size] + (r[i + size + 1] - r[i + size]) * tx;
+    return top + (bot - top) * ty;
+  }
+
+  /** Algorithm 1: skin inside a globe (in its current orientation) pushed out to its surface. */
+  slideOnGlobes() {
+    const { pos, nrm, slide, eye: eyeOf, rest_normals: rn } = this;
+    const rot = this.angles.map(([h, v]) => fick(h, v));
+    const reach = this.h.radial.reach;
+    const c = this.h.centres;
+    for (let i = 0; i < this.n; i++) {
+      const kind = slide[6 * i];
+      if (kind < 0) continue;
+      const t = slide[6 * i + 1];
+      const e = eyeOf[i];
+      const R = rot[e];
+      const [qx, qy, qz] = [0, 1, 2].map((j) => pos[3 * i + j] - c[e][j]);
+      // Into the globe's frame (Rᵀ).
+      const rx = R[0] * qx + R[3] * qy + R[6] * qz;
+      const ry = R[1] * qx + R[4] * qy + R[7] * qz;
+      const rz = R[2] * qx + R[5] * qy + R[8] * qz;
+      const len = Math.max(Math.hypot(rx, ry, rz), 1e-6);
+      const [dx, dy, dz] = [rx / len, ry / len, rz / len];
+      // Back to head space: R · dir.
+      const tau = [R[0] * dx + R[1] * dy + R[2] * dz, R[3] * dx + R[4] * dy + R[5] * dz, R[6] * dx + R[7] * dy + R[8] * dz];
+      if (kind === 0) {
+        if (len >= reach[e] + t) continue;
+        const delta = this.radius(e, dx, dy, dz) + t;
+        if (delta > len) {
+          for (let j = 0; j < 3; j++) {
+            pos[3 * i + j] = c[e][j] + tau[j] * delta;
+            nrm[3 * i + j] = tau[j];
+          }
+        }
+      } else {
+        const delta = this.radius(e, dx, dy, dz) + t + slide[6 * i + 2];
+        const n = [0, 1, 2].map((j) => rn[3 * i + j] + tau[j] - slide[6 * i + 3 + j]);
+        const nl = 1 / Math.hypot(...n);
+        for (let j = 0; j < 3; j++) {
+          pos[3 * i + j] = c[e][j] + tau[j] * delta;
+          nrm[3 * i + j] = n[j] * nl;
+        }
+      }
+    }
+  }
+
+  /** Largest distance (mm) between this port and derma's evaluator over the header's checks. */
+  check() {
+    let worst = 0;
+    for (const p of this.h.checks.poses) {
+      this.evaluate(p.gaze, p.closure, p.units);
+      this.h.checks.vertices.forEach((v, j) => {
+        const d = Math.hypot(...[0, 1, 2].map((q) => this.pos[3 * v + q] - p.positions[j][q]));
+        worst = Math.max(worst, d);
+      });
+    }
+    return worst;
+  }
+}
+
+/**
+ * The model bound to the scene: writes the skin's region vertices (the model's positions plus
+ * the offsets of the face units outside the region, as derma render composes them), the lashes
+ * riding on their lid margins, and the globes' verged angles.
+ */
+export class LiveEyes {
+  constructor(model, skin, root, pivots) {
+    this.model = model;
+    this.skin = skin;
+    this.pivots = pivots;
+    this.enabled = true;
+    const geo = skin.geometry;
+    this.restPos = geo.attributes.position.array.slice();
+    this.restNrm = geo.attributes.normal.array.slice();
+    this.lashes = Object.entries(model.lashAnchors).flatMap(([name, anchors]) => {
+      const o = root.getObjectByName(name);
+      const mesh = o && (o.isMesh ? o : o.getObjectByProperty('isMesh', true));
+      return mesh ? [{ mesh, anchors, rest: mesh.geometry.attributes.position.array.slice() }] : [];
+    });
+    this.key = '';
+  }
+
+  /** Poses the region for gaze (yaw, pitch)°, closure and the face units (after Face.apply). */
+  apply(gaze, closure, units) {
+    const m = this.model;
+    const geo = this.skin.geometry;
+    const P = geo.attributes.position;
+    const N = geo.attributes.normal;
+    // The lashes ride on the model's lid margins, not on the face units.
+    if (this.enabled) for (const l of this.lashes) l.mesh.morphTargetInfluences?.fill(0);
+    const key = this.enabled ? JSON.stringify([gaze, closure, units]) : 'off';
+    if (key === this.key) {
+      if (this.enabled) this.turnGlobes();
+      return;
+    }
+    this.key = key;
+    if (!this.enabled) {
+      P.array.set(this.restPos);
+      N.array.set(this.restNrm);
+      for (const l of this.lashes) l.mesh.geometry.attributes.position.array.set(l.rest);
+      P.needsUpdate = N.needsUpdate = true;
+      for (const l of this.lashes) l.mesh.geometry.attributes.position.needsUpdate = true;
+      return;
+    }
+    m.evaluate(gaze, closure, units);
+    // The region units' morphs that three.js will add on top, to take back off.
+    const dict = this.skin.morphTargetDictionary;
+    const morphs = m.h.region_units
+      .filter((u) => (units[u] ?? 0) !== 0 && dict[u] !== undefined)
+      .map((u) => [units[u], geo.morphAttributes.position[dict[u]].array]);
+    const sv = m.skin_vertices;
+    for (let j = 0; j < sv.length; j += 2) {
+      const [g, v] = [sv[j], sv[j + 1]];
+      for (let q = 0; q < 3; q++) {
+        let x = m.pos[3 * v + q] * 0.001;
+        for (const [w, d] of morphs) x -= w * d[3 * g + q];
+        P.array[3 * g + q] = x;
+        N.array[3 * g + q] = m.nrm[3 * v + q];
+      }
+    }
+    P.needsUpdate = N.needsUpdate = true;
+    for (const l of this.lashes) {
+      const a = l.mesh.geometry.attributes.position;
+      for (let j = 0; j < l.anchors.length; j++) {
+        const v = l.anchors[j];
+        for (let q = 0; q < 3; q++) a.array[3 * j + q] = l.rest[3 * j + q] + (m.pos[3 * v + q] - m.rest[3 * v + q]) * 0.001;
+      }
+      a.needsUpdate = true;
+    }
+    this.turnGlobes();
+  }
+
+  /** Each globe to its own (verged) Fick angles. */
+  turnGlobes() {
+    this.model.angles.forEach(([h, v], e) => this.pivots[e]?.rotation.set(-v * DEG, h * DEG, 0, 'YXZ'));
+  }
+
+  /** The port against derma's evaluator (mm); the next apply re-evaluates. */
+  check() {
+    this.key = '';
+    return this.model.check();
+  }
+
+  /** Head-space position (m) of model vertex `v` as last evaluated. */
+  vertex(v) {
+    return [0, 1, 2].map((q) => this.model.pos[3 * v + q] * 0.001);
+  }
+}
