@@ -164,6 +164,8 @@ try {
   const check = await page.evaluate(() => window.derma.eyeCheck());
   console.log(`eye model: the viewer's port within ${check?.toFixed(5)} mm of derma's evaluator`);
   if (!(check !== null && check < 0.01)) fail(`the viewer's eye model differs from derma's by ${check} mm`);
+  const ms = await page.evaluate(() => [0.25, 0.5, 1].map((s) => window.derma.eyeFrameMs(20, s)));
+  console.log(`eye model in JavaScript: ${ms.map((x) => x.toFixed(2)).join(' / ')} ms a frame over ¼ / ½ / all of the region's vertices`);
   await page.locator('#w-happiness').fill('0');
   await page.evaluate(() => window.derma.lookAtEyes(0.09));
   const along = [0.2, 0.35, 0.5];

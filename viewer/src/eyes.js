@@ -91,8 +91,10 @@ export class EyeModel {
       // T(ũ), Υ(ũ): bilinear over the skull map.
       const fx = Math.min(Math.max((x - ox) / T, 0), W - 1 - 1e-3);
       const fy = Math.min(Math.max((y - oy) / T, 0), H - 1 - 1e-3);
-      const [x0, y0] = [Math.floor(fx), Math.floor(fy)];
-      const [tx, ty] = [fx - x0, fy - y0];
+      const x0 = Math.floor(fx);
+      const y0 = Math.floor(fy);
+      const tx = fx - x0;
+      const ty = fy - y0;
       const a = 6 * (y0 * W + x0);
       const b = a + 6;
       const cc = a + 6 * W;
@@ -112,7 +114,7 @@ export class EyeModel {
         ny += noff[3 * i + 1] * keep;
         nz += noff[3 * i + 2] * keep;
       }
-      const nl = 1 / Math.hypot(nx, ny, nz);
+      const nl = 1 / Math.sqrt(nx * nx + ny * ny + nz * nz);
       for (let q = 0; q < 3; q++) pos[3 * i + q] = o[q] + offset[3 * i + q] * keep;
       nrm[3 * i] = nx * nl;
       nrm[3 * i + 1] = ny * nl;
@@ -125,12 +127,19 @@ export class EyeModel {
   radius(eye, x, y, z) {
     const size = this.h.radial.size;
     const l1 = Math.abs(x) + Math.abs(y) + Math.abs(z);
-    let [px, py] = [x / l1, y / l1];
-    if (z < 0) [px, py] = [(1 - Math.abs(py)) * sign(px), (1 - Math.abs(px)) * sign(py)];
+    let px = x / l1;
+    let py = y / l1;
+    if (z < 0) {
+      const qx = (1 - Math.abs(py)) * sign(px);
+      py = (1 - Math.abs(px)) * sign(py);
+      px = qx;
+    }
     const fx = Math.min(Math.max((px * 0.5 + 0.5) * size - 0.5, 0), size - 1 - 1e-3);
     const fy = Math.min(Math.max((py * 0.5 + 0.5) * size - 0.5, 0), size - 1 - 1e-3);
-    const [x0, y0] = [Math.floor(fx), Math.floor(fy)];
-    const [tx, ty] = [fx - x0, fy - y0];
+    const x0 = Math.floor(fx);
+    const y0 = Math.floor(fy);
+    const tx = fx - x0;
+    const ty = fy - y0;
     const r = this.radial;
     const i = eye * size * size + y0 * size + x0;
     const top = r[i] + (r[i + 1] - r[i]) * tx;
@@ -145,37 +154,51 @@ export class EyeModel {
     const reach = this.h.radial.reach;
     const c = this.h.centres;
     for (let i = 0; i < this.n; i++) {
-      const kind = slide[6 * i];
+      const s = 6 * i;
+      const kind = slide[s];
       if (kind < 0) continue;
-      const t = slide[6 * i + 1];
+      const t = slide[s + 1];
       const e = eyeOf[i];
       const R = rot[e];
-      const [qx, qy, qz] = [0, 1, 2].map((j) => pos[3 * i + j] - c[e][j]);
+      const [cx, cy, cz] = c[e];
+      const qx = pos[3 * i] - cx;
+      const qy = pos[3 * i + 1] - cy;
+      const qz = pos[3 * i + 2] - cz;
       // Into the globe's frame (Rᵀ).
       const rx = R[0] * qx + R[3] * qy + R[6] * qz;
       const ry = R[1] * qx + R[4] * qy + R[7] * qz;
       const rz = R[2] * qx + R[5] * qy + R[8] * qz;
-      const len = Math.max(Math.hypot(rx, ry, rz), 1e-6);
-      const [dx, dy, dz] = [rx / len, ry / len, rz / len];
-      // Back to head space: R · dir.
-      const tau = [R[0] * dx + R[1] * dy + R[2] * dz, R[3] * dx + R[4] * dy + R[5] * dz, R[6] * dx + R[7] * dy + R[8] * dz];
+      const len = Math.max(Math.sqrt(rx * rx + ry * ry + rz * rz), 1e-6);
+      if (kind === 0 && len >= reach[e] + t) continue;
+      const dx = rx / len;
+      const dy = ry / len;
+      const dz = rz / len;
+      // Back to head space: τ = R · dir.
+      const tx = R[0] * dx + R[1] * dy + R[2] * dz;
+      const ty = R[3] * dx + R[4] * dy + R[5] * dz;
+      const tz = R[6] * dx + R[7] * dy + R[8] * dz;
       if (kind === 0) {
-        if (len >= reach[e] + t) continue;
         const delta = this.radius(e, dx, dy, dz) + t;
         if (delta > len) {
-          for (let j = 0; j < 3; j++) {
-            pos[3 * i + j] = c[e][j] + tau[j] * delta;
-            nrm[3 * i + j] = tau[j];
-          }
+          pos[3 * i] = cx + tx * delta;
+          pos[3 * i + 1] = cy + ty * delta;
+          pos[3 * i + 2] = cz + tz * delta;
+          nrm[3 * i] = tx;
+          nrm[3 * i + 1] = ty;
+          nrm[3 * i + 2] = tz;
         }
       } else {
-        const delta = this.radius(e, dx, dy, dz) + t + slide[6 * i + 2];
-        const n = [0, 1, 2].map((j) => rn[3 * i + j] + tau[j] - slide[6 * i + 3 + j]);
-        const nl = 1 / Math.hypot(...n);
-        for (let j = 0; j < 3; j++) {
-          pos[3 * i + j] = c[e][j] + tau[j] * delta;
-          nrm[3 * i + j] = n[j] * nl;
-        }
+        const delta = this.radius(e, dx, dy, dz) + t + slide[s + 2];
+        const nx = rn[3 * i] + tx - slide[s + 3];
+        const ny = rn[3 * i + 1] + ty - slide[s + 4];
+        const nz = rn[3 * i + 2] + tz - slide[s + 5];
+        const nl = 1 / Math.sqrt(nx * nx + ny * ny + nz * nz);
+        pos[3 * i] = cx + tx * delta;
+        pos[3 * i + 1] = cy + ty * delta;
+        pos[3 * i + 2] = cz + tz * delta;
+        nrm[3 * i] = nx * nl;
+        nrm[3 * i + 1] = ny * nl;
+        nrm[3 * i + 2] = nz * nl;
       }
     }
   }

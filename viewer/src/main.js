@@ -62,6 +62,20 @@ const api = {
   // The eye model's port against derma's evaluator: largest distance (mm) over the export's
   // check poses; null without a model.
   eyeCheck: () => eyes?.check() ?? null,
+  // Milliseconds per eye-model frame in this browser (the mean of `n` frames at moving gazes),
+  // over the first `share` of the region's vertices (how the cost grows with them).
+  eyeFrameMs: (n = 20, share = 1) => {
+    if (!eyes) return null;
+    const m = eyes.model;
+    const all = m.n;
+    m.n = Math.round(share * all);
+    const t0 = performance.now();
+    for (let i = 0; i < n; i++) m.evaluate([10 * Math.sin(i), 10 * Math.cos(i)], 0, {});
+    const ms = (performance.now() - t0) / n;
+    m.n = all;
+    eyes.key = '';
+    return ms;
+  },
   // Canvas pixel (x, y from the top-left) of the upper lid of eye `e` (0 left, 1 right) as last
   // posed, at fraction `t` of its margin from the inner canthus.
   upperLidPixel: (e = 0, t = 0.5) => {

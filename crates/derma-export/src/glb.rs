@@ -91,6 +91,9 @@ pub struct GlbOptions {
     /// Carry the set's expression-wrinkle maps (where it has them) as extra textures, named in
     /// the skin material's `extras.derma_wrinkles` with the weight table.
     pub wrinkles: bool,
+    /// An eye texture on the head's eye UVs (`derma photo iris`'s eye.png or eye.exr); default:
+    /// the built-in eye.
+    pub iris: Option<PathBuf>,
 }
 
 /// A (face unit, weight) table as a JSON object.
@@ -340,7 +343,11 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
     meshes.push(m);
     names.push("skin".to_string());
     if o.mesh.is_none() {
-        let eye = srgb_encoded(&default_eye_texture(512));
+        let eye = srgb_encoded(&match &o.iris {
+            Some(p) => derma_eyes::files::load_eye_texture(p)
+                .map_err(|e| ExportError::Invalid(e.to_string()))?,
+            None => default_eye_texture(512),
+        });
         let t_eye = image(
             &mut g,
             "eye",

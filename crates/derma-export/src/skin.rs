@@ -41,6 +41,7 @@ pub fn run(
                     out: out.join("head.glb"),
                     maps: None,
                     wrinkles: true,
+                    iris: None,
                 },
                 progress,
             )

@@ -142,12 +142,13 @@ fn write_eyes(
     Ok(header)
 }
 
-/// Writes `out/head.glb` (the built-in head with the set) and, with a rig, `out/rig/*.png` and
-/// `out/manifest.json`.
+/// Writes `out/head.glb` (the built-in head with the set, its globes with `iris` or the built-in
+/// eye) and, with a rig, `out/rig/*.png` and `out/manifest.json`.
 pub fn export(
     textures: &Path,
     rig_dir: Option<&Path>,
     head: Option<&Path>,
+    iris: Option<&Path>,
     out: &Path,
 ) -> Result<WebReport> {
     derma_core::atomic::ensure_writable_dir(out)?;
@@ -161,6 +162,7 @@ pub fn export(
             maps: None,
             // The viewer reads its own 16-bit copies (wrinkles/).
             wrinkles: false,
+            iris: iris.map(Path::to_path_buf),
         },
         &derma_core::progress::Silent,
     )?;

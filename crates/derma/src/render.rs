@@ -171,6 +171,9 @@ pub struct GlbArgs {
     /// Normal-map convention of the loose maps (the GLB's is glTF's, OpenGL, by its spec).
     #[arg(long, value_enum, default_value = "opengl")]
     normal: NormalArg,
+    /// An eye texture for the globes (`derma photo iris`'s eye.png or eye.exr).
+    #[arg(long)]
+    iris: Option<PathBuf>,
 }
 
 fn glb_options(textures: PathBuf, mesh: Option<PathBuf>, out: PathBuf) -> GlbOptions {
@@ -182,6 +185,7 @@ fn glb_options(textures: PathBuf, mesh: Option<PathBuf>, out: PathBuf) -> GlbOpt
         out,
         maps: None,
         wrinkles: true,
+        iris: None,
     }
 }
 
@@ -197,6 +201,9 @@ pub struct WebArgs {
     /// Output directory (what `derma view` serves).
     #[arg(long, default_value = "web")]
     out: PathBuf,
+    /// An eye texture for the globes (`derma photo iris`'s eye.png or eye.exr).
+    #[arg(long)]
+    iris: Option<PathBuf>,
 }
 
 pub fn export(cmd: ExportCommand, bars: &Bars) -> Result<()> {
@@ -204,6 +211,7 @@ pub fn export(cmd: ExportCommand, bars: &Bars) -> Result<()> {
         ExportCommand::Glb(a) => {
             let mut o = glb_options(a.textures, a.mesh, a.out);
             o.head = a.head.head;
+            o.iris = a.iris;
             o.maps = a.maps.map(|d| {
                 (
                     d,
@@ -239,6 +247,7 @@ pub fn export(cmd: ExportCommand, bars: &Bars) -> Result<()> {
                 &a.textures,
                 a.rig.as_deref(),
                 a.head.head.as_deref(),
+                a.iris.as_deref(),
                 &a.out,
             )?;
             bars.say(format!(

@@ -133,6 +133,10 @@ fn glb_carries_the_set_as_pbr_with_tangents_units_and_engine_maps() {
     let set = skin(&d);
     let glb = d.join("head.glb");
     let maps = d.join("unreal");
+    // An eye texture as `derma photo iris` writes one (sRGB PNG): a green eye.
+    let iris = d.join("eye.png");
+    let plane = |v: f32| derma_core::map::Map::filled(64, 64, v);
+    derma_core::image_io::write_png8(&iris, &[&plane(0.2), &plane(0.6), &plane(0.3)]).unwrap();
     let (ok, _, err) = run(&[
         "export",
         "glb",
@@ -145,9 +149,22 @@ fn glb_carries_the_set_as_pbr_with_tangents_units_and_engine_maps() {
         "unreal",
         "--normal",
         "directx",
+        "--iris",
+        s(&iris),
     ]);
     assert!(ok, "{err}");
     let (doc, buffers, images) = gltf::import(&glb).unwrap();
+    // The globes carry the given eye texture (its sRGB codes back within a level).
+    for eye in ["eye_left", "eye_right"] {
+        let m = doc.materials().find(|m| m.name() == Some(eye)).unwrap();
+        let t = m.pbr_metallic_roughness().base_color_texture().unwrap();
+        let img = &images[t.texture().source().index()];
+        assert_eq!((img.width, img.height), (64, 64), "{eye}");
+        let px = &img.pixels[..3];
+        for (got, want) in px.iter().zip([0.2f32, 0.6, 0.3]) {
+            assert!((*got as f32 - want * 255.0).abs() <= 1.0, "{eye}: {px:?}");
+        }
+    }
     let used: Vec<&str> = doc.extensions_used().collect();
     for e in [
         "KHR_materials_specular",
