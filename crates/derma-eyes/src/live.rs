@@ -23,23 +23,38 @@ struct Blob {
 }
 
 impl Blob {
-    fn f32s(&mut self, name: &str, components: usize, data: impl IntoIterator<Item = f32>) {
+    /// Appends `words` (4 bytes each, little-endian) as array `name` of `ty`.
+    fn words(
+        &mut self,
+        name: &str,
+        ty: &str,
+        components: usize,
+        words: impl Iterator<Item = [u8; 4]>,
+    ) {
         let offset = self.bin.len();
-        self.bin.extend(data.into_iter().flat_map(f32::to_le_bytes));
+        self.bin.extend(words.flatten());
         let count = (self.bin.len() - offset) / 4 / components;
         self.arrays.insert(
             name.into(),
-            json!({"type": "f32", "offset": offset, "count": count, "components": components}),
+            json!({"type": ty, "offset": offset, "count": count, "components": components}),
+        );
+    }
+
+    fn f32s(&mut self, name: &str, components: usize, data: impl IntoIterator<Item = f32>) {
+        self.words(
+            name,
+            "f32",
+            components,
+            data.into_iter().map(f32::to_le_bytes),
         );
     }
 
     fn u32s(&mut self, name: &str, components: usize, data: impl IntoIterator<Item = u32>) {
-        let offset = self.bin.len();
-        self.bin.extend(data.into_iter().flat_map(u32::to_le_bytes));
-        let count = (self.bin.len() - offset) / 4 / components;
-        self.arrays.insert(
-            name.into(),
-            json!({"type": "u32", "offset": offset, "count": count, "components": components}),
+        self.words(
+            name,
+            "u32",
+            components,
+            data.into_iter().map(u32::to_le_bytes),
         );
     }
 }
