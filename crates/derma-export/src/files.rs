@@ -49,6 +49,8 @@ pub struct RenderJob {
     pub face_units: Vec<(String, f32)>,
     /// An eye texture on the head's eye UVs (`derma photo iris`).
     pub iris: Option<PathBuf>,
+    /// A teeth texture on the head's teeth UVs (`derma photo teeth`).
+    pub teeth: Option<PathBuf>,
     /// Gaze yaw and pitch (degrees).
     pub gaze: (f32, f32),
     /// Lid closure in [0, 1] (a blink's peak; 0 open).
@@ -261,6 +263,15 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
                 }
             }
         };
+    let mut scene = scene;
+    if let Some(p) = &job.teeth {
+        if scene.texture_parts("teeth", &derma_render::material::read_albedo(p)?) == 0 {
+            return Err(ExportError::Invalid(format!(
+                "{}: a teeth texture needs the head's teeth; this scene has none (a user mesh)",
+                p.display()
+            )));
+        }
+    }
     debug_assert!(matches!(scene.parts[0].material, Material::Skin(_)));
     let parts: Vec<String> = scene.parts.iter().map(|p| p.name.clone()).collect();
     let r = derma_render::renderer(&scene, job.device)?;

@@ -183,22 +183,7 @@ pub struct AnimateOptions {
 
 /// Loads an eyeball texture as linear RGB maps (EXR as stored, other formats sRGB-decoded).
 pub fn load_eye_texture(path: &Path) -> Result<[Map; 3]> {
-    let img = derma_core::image_io::read_rgb(path)?;
-    let exr = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-    let mut rgb: [Map; 3] = img
-        .channels
-        .try_into()
-        .map_err(|_| EyesError::Invalid(format!("{}: expected an RGB image", path.display())))?;
-    if !exr {
-        for m in rgb.iter_mut() {
-            m.data_mut()
-                .iter_mut()
-                .for_each(|v| *v = derma_core::color::srgb_decode(*v));
-        }
-    }
-    Ok(rgb)
+    derma_render::material::read_albedo(path).map_err(|e| EyesError::Invalid(e.to_string()))
 }
 
 /// What `animate` wrote and measured.

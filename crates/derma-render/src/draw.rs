@@ -213,6 +213,9 @@ impl Draw for CpuRenderer<'_> {
                 if !front && !matches!(part.material, Material::Eye { .. }) {
                     ng = -ng;
                 }
+                // A part's own albedo texture at the hit (eyes, textured parts).
+                let rgb_at =
+                    |m: &[Map; 3]| Vec3::from(m.each_ref().map(|c| c.sample_uv(uv.x, uv.y, false)));
                 Some(match &part.material {
                     Material::Skin(s) => {
                         let at = |m: &Map| m.sample_uv(uv.x, uv.y, s.wrap);
@@ -243,11 +246,18 @@ impl Draw for CpuRenderer<'_> {
                         f0,
                         ..
                     } => {
-                        let a =
-                            Vec3::from(albedo.each_ref().map(|m| m.sample_uv(uv.x, uv.y, false)));
+                        let a = rgb_at(albedo);
                         let (d, _) = env.light(ng, ng, v, 1.0, 0.0);
                         let (_, sp) = env.light(ng, ng, v, *roughness, *f0);
                         (d * a + sp, MATERIAL_EYE)
+                    }
+                    Material::Textured {
+                        albedo,
+                        roughness,
+                        f0,
+                    } => {
+                        let (d, sp) = env.light(ng, ng, v, *roughness, *f0);
+                        (d * rgb_at(albedo) + sp, MATERIAL_OTHER)
                     }
                     Material::Flat {
                         albedo,

@@ -195,6 +195,26 @@ impl SkinMaps {
     }
 }
 
+/// An albedo texture as linear RGB maps: EXR as stored, other formats (PNG, JPEG) sRGB-decoded —
+/// how `derma photo iris` and `derma photo teeth` textures are read for the parts.
+pub fn read_albedo(path: &std::path::Path) -> crate::Result<[Map; 3]> {
+    let img = derma_core::image_io::read_rgb(path)?;
+    let exr = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    let mut rgb: [Map; 3] = img.channels.try_into().map_err(|_| {
+        crate::RenderError::Invalid(format!("{}: expected an RGB image", path.display()))
+    })?;
+    if !exr {
+        for m in rgb.iter_mut() {
+            m.data_mut()
+                .iter_mut()
+                .for_each(|v| *v = derma_core::color::srgb_decode(*v));
+        }
+    }
+    Ok(rgb)
+}
+
 /// Linear RGB maps of size `n`×`n` on the eye globe's UVs (derma-head's azimuthal map): the
 /// built-in eye ([`derma_head::eye::default_albedo`]) or a `derma photo iris` texture.
 pub fn default_eye_texture(n: usize) -> [Map; 3] {

@@ -590,6 +590,21 @@ impl Renderer {
         self.gpu.texture("uniform", &[v], 1, 1, format)
     }
 
+    /// A part's five textures: its albedo, a flat normal, uniform roughness and F0, and no
+    /// subsurface maps.
+    fn part_textures(&self, albedo: wgpu::Texture, roughness: f32, f0: f32) -> [wgpu::Texture; 5] {
+        [
+            albedo,
+            self.one([0.5, 0.5, 1.0, 1.0], TexelFormat::Float16),
+            self.one(
+                [roughness, f0 / crate::material::SPECULAR_SCALE, 0.0, 1.0],
+                TexelFormat::Linear8,
+            ),
+            self.one([0.0; 4], TexelFormat::Srgb8),
+            self.one([0.0; 4], TexelFormat::Float16),
+        ]
+    }
+
     fn upload(&self, p: &Part) -> Result<GpuPart> {
         let spec_scale = crate::material::SPECULAR_SCALE;
         let (u, textures, eye, casts) = match &p.material {
@@ -646,21 +661,40 @@ impl Renderer {
                     eye: [centre.x, centre.y, centre.z, *radius],
                     eye_axis: [axis.x, axis.y, axis.z, 0.0],
                 },
-                [
+                self.part_textures(
                     self.tex(
                         "eye",
                         &[&albedo[0], &albedo[1], &albedo[2]],
                         TexelFormat::Srgb8,
                     ),
-                    self.one([0.5, 0.5, 1.0, 1.0], TexelFormat::Float16),
-                    self.one(
-                        [*roughness, f0 / spec_scale, 0.0, 1.0],
-                        TexelFormat::Linear8,
-                    ),
-                    self.one([0.0; 4], TexelFormat::Srgb8),
-                    self.one([0.0; 4], TexelFormat::Float16),
-                ],
+                    *roughness,
+                    *f0,
+                ),
                 true,
+                true,
+            ),
+            Material::Textured {
+                albedo,
+                roughness,
+                f0,
+            } => (
+                // A flat part (kind 2) whose albedo, roughness and F0 come from its textures.
+                DrawU {
+                    albedo: [1.0, 1.0, 1.0, 1.0],
+                    params: [*roughness, *f0, 2.0, spec_scale],
+                    eye: [0.0; 4],
+                    eye_axis: [0.0; 4],
+                },
+                self.part_textures(
+                    self.tex(
+                        "part albedo",
+                        &[&albedo[0], &albedo[1], &albedo[2]],
+                        TexelFormat::Srgb8,
+                    ),
+                    *roughness,
+                    *f0,
+                ),
+                false,
                 true,
             ),
             Material::Flat {
@@ -674,16 +708,7 @@ impl Renderer {
                     eye: [0.0; 4],
                     eye_axis: [0.0; 4],
                 },
-                [
-                    self.one([1.0; 4], TexelFormat::Srgb8),
-                    self.one([0.5, 0.5, 1.0, 1.0], TexelFormat::Float16),
-                    self.one(
-                        [*roughness, f0 / spec_scale, 0.0, 1.0],
-                        TexelFormat::Linear8,
-                    ),
-                    self.one([0.0; 4], TexelFormat::Srgb8),
-                    self.one([0.0; 4], TexelFormat::Float16),
-                ],
+                self.part_textures(self.one([1.0; 4], TexelFormat::Srgb8), *roughness, *f0),
                 false,
                 true,
             ),
@@ -706,16 +731,11 @@ impl Renderer {
                         eye: [0.0; 4],
                         eye_axis: [0.0; 4],
                     },
-                    [
+                    self.part_textures(
                         self.gpu.texture("card", &px, w, h, TexelFormat::Srgb8),
-                        self.one([0.5, 0.5, 1.0, 1.0], TexelFormat::Float16),
-                        self.one(
-                            [*roughness, f0 / spec_scale, 0.0, 1.0],
-                            TexelFormat::Linear8,
-                        ),
-                        self.one([0.0; 4], TexelFormat::Srgb8),
-                        self.one([0.0; 4], TexelFormat::Float16),
-                    ],
+                        *roughness,
+                        *f0,
+                    ),
                     false,
                     false,
                 )

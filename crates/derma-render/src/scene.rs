@@ -42,6 +42,15 @@ pub enum Material {
         /// Tear film F0.
         f0: f32,
     },
+    /// A part with its own albedo texture on its UVs (teeth from `derma photo teeth`).
+    Textured {
+        /// Linear RGB on the part's UVs.
+        albedo: Box<[Map; 3]>,
+        /// Perceptual roughness.
+        roughness: f32,
+        /// F0.
+        f0: f32,
+    },
     /// A uniform material.
     Flat {
         /// Linear albedo.
@@ -177,6 +186,24 @@ impl Scene {
             });
         }
         scene.with_parts(head, lash_color, eye_albedo, gaze)
+    }
+
+    /// Gives every flat part whose name starts with `prefix` (`teeth` for `teeth_upper` and
+    /// `teeth_lower`) the albedo texture `albedo` on its UVs, keeping its roughness and F0.
+    /// Returns how many parts took it.
+    pub fn texture_parts(&mut self, prefix: &str, albedo: &[Map; 3]) -> usize {
+        let mut n = 0;
+        for p in self.parts.iter_mut().filter(|p| p.name.starts_with(prefix)) {
+            if let Material::Flat { roughness, f0, .. } = p.material {
+                p.material = Material::Textured {
+                    albedo: Box::new(albedo.clone()),
+                    roughness,
+                    f0,
+                };
+                n += 1;
+            }
+        }
+        n
     }
 
     /// The part named `name` drawn with `mesh` instead (a lash riding on a moved lid); false

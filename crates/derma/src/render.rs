@@ -62,6 +62,9 @@ pub struct RenderArgs {
     /// An eye texture on the head's eye UVs (`derma photo iris`).
     #[arg(long, conflicts_with = "mesh")]
     iris: Option<PathBuf>,
+    /// A teeth texture on the head's teeth (`derma photo teeth`'s teeth.png).
+    #[arg(long, conflicts_with = "mesh")]
+    teeth: Option<PathBuf>,
     /// Gaze yaw,pitch in degrees (positive yaw: to the subject's left); on the head (not with
     /// --mesh) the lids and the skin around the eyes follow through the trained eye-region model.
     #[arg(long, default_value = "0,0", value_parser = crate::args::pair, allow_negative_numbers = true)]
@@ -105,6 +108,7 @@ pub fn render(a: RenderArgs, bars: &Bars) -> Result<()> {
         }),
         face_units: a.pose.entries,
         iris: a.iris,
+        teeth: a.teeth,
         gaze: a.gaze,
         blink: a.blink,
         lake: !a.no_lake,

@@ -113,6 +113,72 @@ fn render_on_the_cpu_draws_the_same_scene_without_a_gpu_and_repeats_bit_for_bit(
 }
 
 #[test]
+fn a_teeth_texture_reaches_the_teeth_and_nothing_else() {
+    // `derma photo teeth`'s texture on the head's teeth, the mouth opened: a blue texture turns
+    // only teeth pixels blue; on a user mesh (no teeth) it is refused, naming the file.
+    let d = tmp("render-teeth");
+    let set = skin(&d);
+    let teeth = d.join("teeth.png");
+    let plane = |v: f32| derma_core::map::Map::filled(32, 32, v);
+    derma_core::image_io::write_png8(&teeth, &[&plane(0.15), &plane(0.35), &plane(0.9)]).unwrap();
+    let go = |out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "render",
+            s(&set),
+            "--pose",
+            "jawOpen=1",
+            "--size",
+            "256",
+            "--lighting",
+            "studio",
+            "--device",
+            "cpu",
+            "--out",
+            s(out),
+        ];
+        args.extend_from_slice(extra);
+        run(&args)
+    };
+    let (a, b) = (d.join("plain"), d.join("blue"));
+    assert!(go(&a, &[]).0);
+    let (ok, _, err) = go(&b, &["--teeth", s(&teeth)]);
+    assert!(ok, "{err}");
+    let (pa, pb) = (rgb(&a.join("studio.png")), rgb(&b.join("studio.png")));
+    let (w, h) = (pa.channels[0].width(), pa.channels[0].height());
+    let (mut changed, mut bluer, mut rows) = (0, 0, (usize::MAX, 0));
+    for i in 0..w * h {
+        let (p, q) = (
+            [0, 1, 2].map(|c| pa.channels[c].data()[i]),
+            [0, 1, 2].map(|c| pb.channels[c].data()[i]),
+        );
+        if p != q {
+            changed += 1;
+            bluer += usize::from(q[2] - q[0] > p[2] - p[0]);
+            rows = (rows.0.min(i / w), rows.1.max(i / w));
+        }
+    }
+    // Every changed pixel is bluer, and they lie in the lower half of the frame (the mouth).
+    assert!(
+        changed > 50 && bluer == changed,
+        "{changed} changed, {bluer} bluer"
+    );
+    assert!(rows.0 > h / 2, "changed rows {rows:?} of {}", h);
+    let mesh = d.join("head.obj");
+    derma_head::Head::builtin().skin.write_obj(&mesh).unwrap();
+    let (ok, _, err) = run(&[
+        "render",
+        s(&set),
+        "--mesh",
+        s(&mesh),
+        "--teeth",
+        s(&teeth),
+        "--out",
+        s(&d.join("m")),
+    ]);
+    assert!(!ok && err.contains("--teeth"), "{err}");
+}
+
+#[test]
 fn render_names_what_is_wrong() {
     let d = tmp("render-errors");
     std::fs::create_dir_all(d.join("empty")).unwrap();
