@@ -166,12 +166,14 @@ pub fn export(
         },
         &derma_core::progress::Silent,
     )?;
+    // The head the GLB was built on, read once for the regions and the eye model.
+    let model_head = derma_head::fitted::or_builtin(head)?;
     let mut manifest = json!({
         "format": FORMAT,
         "version": VERSION,
         "glb": "head.glb",
         "skin_mesh": "skin",
-        "regions": region_points(derma_head::fitted::or_builtin(head)?, 256),
+        "regions": region_points(model_head, 256),
         "rig": null,
     });
     manifest["expression_units"] = json!(derma_rig::expression::LIBRARY
@@ -180,7 +182,7 @@ pub fn export(
         .map(|e| (e.name.to_string(), crate::glb::unit_table(e.face_units)))
         .collect::<serde_json::Map<_, _>>());
     manifest["wrinkles"] = write_wrinkles(textures, out)?;
-    manifest["eyes"] = write_eyes(derma_head::fitted::or_builtin(head)?, &glb.skin_origin, out)?;
+    manifest["eyes"] = write_eyes(model_head, &glb.skin_origin, out)?;
     let mut targets = 0;
     if let Some(dir) = rig_dir {
         let (rig, lut, rj) = derma_rig::rig_dir::load(dir)?;
