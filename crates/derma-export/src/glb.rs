@@ -94,6 +94,9 @@ pub struct GlbOptions {
     /// An eye texture on the head's eye UVs (`derma photo iris`'s eye.png or eye.exr); default:
     /// the built-in eye.
     pub iris: Option<PathBuf>,
+    /// A teeth texture on the head's teeth UVs (`derma photo teeth`'s teeth.png or .exr);
+    /// default: the teeth's flat colour.
+    pub teeth: Option<PathBuf>,
 }
 
 /// A (face unit, weight) table as a JSON object.
@@ -342,7 +345,27 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
     m["primitives"][0]["material"] = json!(0);
     meshes.push(m);
     names.push("skin".to_string());
+    if o.mesh.is_some() && o.teeth.is_some() {
+        return Err(ExportError::Invalid(format!(
+            "{}: a teeth texture needs the head's teeth; a user mesh has none",
+            o.teeth
+                .as_ref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_default()
+        )));
+    }
     if o.mesh.is_none() {
+        let t_teeth = match &o.teeth {
+            Some(p) => {
+                let rgb = srgb_encoded(&derma_render::material::read_albedo(p)?);
+                Some(image(
+                    &mut g,
+                    "teeth",
+                    &png8_bytes("teeth", &[&rgb[0], &rgb[1], &rgb[2]])?,
+                ))
+            }
+            None => None,
+        };
         let eye = srgb_encoded(&match &o.iris {
             Some(p) => derma_eyes::files::load_eye_texture(p)
                 .map_err(|e| ExportError::Invalid(e.to_string()))?,
@@ -374,6 +397,9 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
             } else if prop.coverage.is_some() {
                 json!({"name": part.name, "alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": true,
                     "pbrMetallicRoughness": {"baseColorTexture": {"index": t_lash},
+                    "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
+            } else if let (Some(t), true) = (t_teeth, part.name.starts_with("teeth")) {
+                json!({"name": part.name, "pbrMetallicRoughness": {"baseColorTexture": {"index": t},
                     "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
             } else {
                 let a = (prop.albedo)(glam::Vec2::splat(0.5));

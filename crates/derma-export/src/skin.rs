@@ -42,6 +42,7 @@ pub fn run(
                     maps: None,
                     wrinkles: true,
                     iris: None,
+                    teeth: None,
                 },
                 progress,
             )

@@ -142,13 +142,23 @@ fn write_eyes(
     Ok(header)
 }
 
+/// Textures for the head's parts, from `derma photo`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PartTextures<'a> {
+    /// An eye texture for the globes (`derma photo iris`).
+    pub iris: Option<&'a Path>,
+    /// A teeth texture for the teeth (`derma photo teeth`).
+    pub teeth: Option<&'a Path>,
+}
+
 /// Writes `out/head.glb` (the built-in head with the set, its globes with `iris` or the built-in
-/// eye) and, with a rig, `out/rig/*.png` and `out/manifest.json`.
+/// eye, its teeth with `teeth` or their flat colour) and, with a rig, `out/rig/*.png` and
+/// `out/manifest.json`.
 pub fn export(
     textures: &Path,
     rig_dir: Option<&Path>,
     head: Option<&Path>,
-    iris: Option<&Path>,
+    parts: PartTextures<'_>,
     out: &Path,
 ) -> Result<WebReport> {
     derma_core::atomic::ensure_writable_dir(out)?;
@@ -162,7 +172,8 @@ pub fn export(
             maps: None,
             // The viewer reads its own 16-bit copies (wrinkles/).
             wrinkles: false,
-            iris: iris.map(Path::to_path_buf),
+            iris: parts.iris.map(Path::to_path_buf),
+            teeth: parts.teeth.map(Path::to_path_buf),
         },
         &derma_core::progress::Silent,
     )?;

@@ -4,6 +4,7 @@
 //! synth.md, photo.md, eyes.md, render.md, head.md).
 
 mod args;
+mod export;
 mod eyes;
 mod head;
 mod matching;
@@ -64,12 +65,12 @@ enum Command {
     Render(render::RenderArgs),
     /// Files for engines and the web: a GLB with the PBR material, or the web viewer's files.
     #[command(subcommand)]
-    Export(render::ExportCommand),
+    Export(export::ExportCommand),
     /// Your own head: fit the built-in head to your mesh, for --head on every command.
     #[command(subcommand)]
     Head(head::HeadCommand),
     /// Serve the web viewer on localhost for a directory from `derma export web`.
-    View(render::ViewArgs),
+    View(export::ViewArgs),
 }
 
 fn main() {
@@ -100,8 +101,8 @@ fn main() {
         Command::Photo(cmd) => photo::run(cmd, &bars),
         Command::Eyes(cmd) => eyes::run(cmd, &bars),
         Command::Render(args) => render::render(args, &bars),
-        Command::Export(cmd) => render::export(cmd, &bars),
-        Command::View(args) => render::view(args),
+        Command::Export(cmd) => export::export(cmd, &bars),
+        Command::View(args) => export::view(args),
         Command::Head(cmd) => head::run(cmd, &bars),
     };
     bars.finish();

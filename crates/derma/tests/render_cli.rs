@@ -203,6 +203,10 @@ fn glb_carries_the_set_as_pbr_with_tangents_units_and_engine_maps() {
     let iris = d.join("eye.png");
     let plane = |v: f32| derma_core::map::Map::filled(64, 64, v);
     derma_core::image_io::write_png8(&iris, &[&plane(0.2), &plane(0.6), &plane(0.3)]).unwrap();
+    // A teeth texture as `derma photo teeth` writes one (sRGB PNG, 2:1): ivory.
+    let teeth = d.join("teeth.png");
+    let ivory = |v: f32| derma_core::map::Map::filled(32, 16, v);
+    derma_core::image_io::write_png8(&teeth, &[&ivory(0.8), &ivory(0.75), &ivory(0.6)]).unwrap();
     let (ok, _, err) = run(&[
         "export",
         "glb",
@@ -217,9 +221,30 @@ fn glb_carries_the_set_as_pbr_with_tangents_units_and_engine_maps() {
         "directx",
         "--iris",
         s(&iris),
+        "--teeth",
+        s(&teeth),
     ]);
     assert!(ok, "{err}");
     let (doc, buffers, images) = gltf::import(&glb).unwrap();
+    // Both teeth carry the given teeth texture; nothing else does.
+    let holders: Vec<&str> = doc
+        .materials()
+        .filter(|m| {
+            m.pbr_metallic_roughness()
+                .base_color_texture()
+                .is_some_and(|t| {
+                    let img = &images[t.texture().source().index()];
+                    let px = &img.pixels[..3];
+                    (img.width, img.height) == (32, 16)
+                        && px
+                            .iter()
+                            .zip([204, 191, 153])
+                            .all(|(&a, b)| a.abs_diff(b) <= 1)
+                })
+        })
+        .filter_map(|m| m.name())
+        .collect();
+    assert_eq!(holders, ["teeth_upper", "teeth_lower"]);
     // The globes carry the given eye texture (its sRGB codes back within a level).
     for eye in ["eye_left", "eye_right"] {
         let m = doc.materials().find(|m| m.name() == Some(eye)).unwrap();
@@ -372,12 +397,32 @@ fn web_export_round_trips_the_rig_within_one_16_bit_step_and_view_serves_it() {
     ]);
     assert!(ok, "{err}");
     let web = d.join("web");
-    let (ok, _, err) = run(&["export", "web", s(&set), "--rig", s(&rig), "--out", s(&web)]);
+    // A teeth texture reaches the viewer's head.glb (the GLB export's own test checks its texels).
+    let teeth = d.join("teeth.png");
+    let ivory = |v: f32| derma_core::map::Map::filled(32, 16, v);
+    derma_core::image_io::write_png8(&teeth, &[&ivory(0.8), &ivory(0.75), &ivory(0.6)]).unwrap();
+    let (ok, _, err) = run(&[
+        "export",
+        "web",
+        s(&set),
+        "--rig",
+        s(&rig),
+        "--teeth",
+        s(&teeth),
+        "--out",
+        s(&web),
+    ]);
     assert!(ok, "{err}");
     let m: serde_json::Value =
         serde_json::from_slice(&std::fs::read(web.join("manifest.json")).unwrap()).unwrap();
     assert_eq!(m["format"], "derma-web");
-    assert!(web.join(m["glb"].as_str().unwrap()).is_file());
+    let (doc, _, images) = gltf::import(web.join(m["glb"].as_str().unwrap())).unwrap();
+    for t in ["teeth_upper", "teeth_lower"] {
+        let mat = doc.materials().find(|x| x.name() == Some(t)).unwrap();
+        let tex = mat.pbr_metallic_roughness().base_color_texture();
+        let img = &images[tex.expect(t).texture().source().index()];
+        assert_eq!((img.width, img.height), (32, 16), "{t}");
+    }
     let targets = m["rig"]["targets"].as_array().unwrap();
     assert!(
         targets.iter().any(|t| t["name"] == "happiness"),
