@@ -33,6 +33,7 @@ pub mod run;
 pub mod simulate;
 pub mod slab;
 pub mod specimen;
+pub mod surface_reflection;
 pub mod tally;
 pub mod transport;
 pub mod transport_lanes;

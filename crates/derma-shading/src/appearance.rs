@@ -14,6 +14,16 @@ pub struct Subsurface {
     pub radius_mm: [f32; 3],
 }
 
+/// The skin surface's specular lobe, as glTF's metallic-roughness material (and Unreal's and
+/// Unity's) takes it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceSpecular {
+    /// glTF perceptual roughness (α = r²).
+    pub roughness: f32,
+    /// Normal-incidence reflectance F0.
+    pub f0: f32,
+}
+
 /// Converts bio parameters to render parameters.
 pub trait Appearance: Send + Sync {
     /// Short name for reports ("spectral-km").
@@ -24,6 +34,11 @@ pub trait Appearance: Send + Sync {
     fn albedo(&self, bio: &BioTexel) -> [f32; 3];
     /// Subsurface parameters, where the implementation knows them.
     fn subsurface(&self, _bio: &BioTexel) -> Option<Subsurface> {
+        None
+    }
+    /// The surface's specular lobe, where the implementation has a model of the surface (the
+    /// match table's fit, [`crate::surface_fit`]); `None`: the caller's authored values.
+    fn specular(&self) -> Option<SurfaceSpecular> {
         None
     }
     /// Albedo and subsurface together (one table lookup for implementations that can).

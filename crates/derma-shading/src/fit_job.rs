@@ -82,3 +82,17 @@ pub fn run(job: &FitJob, progress: &dyn Progress) -> Result<FitReport> {
         plots,
     })
 }
+
+/// `derma match surface`: match table `table` with the surface's specular fit added (or redone,
+/// [`match_table::add_surface_fit`]), written to `out`; `table` itself is left as it is.
+pub fn add_surface(
+    table: &std::path::Path,
+    out: &std::path::Path,
+    progress: &dyn Progress,
+) -> Result<crate::surface_fit::SurfaceFit> {
+    derma_core::atomic::check_inputs_spared(&[out.to_path_buf()], &[table])?;
+    let mut t = MatchTable::read(table)?;
+    let fit = match_table::add_surface_fit(&mut t, progress)?;
+    t.dtab.write(out)?;
+    Ok(fit)
+}

@@ -41,9 +41,10 @@ pub mod skin_color_lut;
 pub mod skin_dual_lobe;
 pub mod spectral_km;
 pub mod sum_of_gaussians;
+pub mod surface_fit;
 pub mod table_appearance;
 
-pub use appearance::{Appearance, BioTexel, Subsurface};
+pub use appearance::{Appearance, BioTexel, Subsurface, SurfaceSpecular};
 pub use error::{Result, ShadingError};
 pub use match_table::MatchTable;
 pub use model_kind::ModelKind;

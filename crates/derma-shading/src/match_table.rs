@@ -7,6 +7,7 @@ use crate::brdf_fit::{fit_brdf, FitGeometry, FitOptions, Weighting};
 use crate::error::{Result, ShadingError};
 use crate::model_kind::ModelKind;
 use crate::render_model::{n_params, param_names};
+use crate::surface_fit::SurfaceFit;
 use crate::{burley, sum_of_gaussians};
 use derma_core::dtab::{Dtab, DtabHeader, DtabValue};
 use derma_core::progress::{Progress, Unit};
@@ -150,6 +151,14 @@ pub fn fit_table(
             Ok(row)
         })
         .collect::<Result<_>>()?;
+    let surface = crate::surface_fit::fit_surface(
+        grid.surface,
+        bins,
+        opts.weighting,
+        opts.max_zenith_deg,
+        grid.seed,
+        progress,
+    )?;
     let layout = value_layout(opts);
     let mut header = DtabHeader {
         axes: pre.header.axes.clone(),
@@ -190,9 +199,55 @@ pub fn fit_table(
         "burley": "Burley 2015 normalized diffusion per channel: albedo A, shape d (mm), mean free path l = d s(A) (Christensen & Burley 2015)",
         "sog": "d'Eon et al. 2007 sum of Gaussians: variances (mm^2), weights [gaussian][rgb]",
         "residuals": summaries,
+        "surface_specular_doc": SURFACE_DOC,
     });
+    header.meta[crate::surface_fit::META_KEY] = serde_json::to_value(&surface).expect("plain");
     let data = rows.into_iter().flatten().collect();
     Ok((Dtab { header, data }, summaries))
+}
+
+/// What the surface fit in a match table's metadata is.
+const SURFACE_DOC: &str = "glTF GGX (roughness, F0) fitted to the light the skin's surface reflects without entering (derma-optics surface_reflection); the specular and roughness maps' source";
+
+/// Adds (or replaces) the surface's specular fit in match table `table`: the surface of its
+/// precompute grid, fitted with the table's weighting and zenith cutoff. For tables fitted before
+/// the surface fit was part of `fit_table`.
+pub fn add_surface_fit(table: &mut MatchTable, progress: &dyn Progress) -> Result<SurfaceFit> {
+    let meta = &table.dtab.header.meta;
+    let grid: Grid = serde_json::from_value(meta["precompute"]["grid"].clone()).map_err(|e| {
+        ShadingError::Invalid(format!(
+            "the match table does not say which precompute grid it was fitted to (meta.precompute.grid: {e})"
+        ))
+    })?;
+    let weighting = match meta["weighting"].as_str() {
+        Some("uniform") => Weighting::Uniform,
+        Some("cosine") | None => Weighting::Cosine,
+        Some(other) => {
+            return Err(ShadingError::Invalid(format!(
+                "the match table's meta.weighting is '{other}'; expected 'cosine' or 'uniform'"
+            )))
+        }
+    };
+    let max_zenith = meta["max_zenith_deg"]
+        .as_f64()
+        .unwrap_or(crate::brdf_fit::DEFAULT_MAX_ZENITH_DEG);
+    let bins = derma_optics::tally::BrdfBins {
+        theta_in: grid.brdf[0],
+        theta_out: grid.brdf[1],
+        phi: grid.brdf[2],
+    };
+    let fit = crate::surface_fit::fit_surface(
+        grid.surface,
+        bins,
+        weighting,
+        max_zenith,
+        grid.seed,
+        progress,
+    )?;
+    let meta = &mut table.dtab.header.meta;
+    meta["surface_specular_doc"] = serde_json::json!(SURFACE_DOC);
+    meta[crate::surface_fit::META_KEY] = serde_json::to_value(&fit).expect("plain");
+    Ok(fit)
 }
 
 fn fit_node(
@@ -397,6 +452,12 @@ impl MatchTable {
         Self::new(Dtab::read(path)?, path)
     }
 
+    /// The surface's specular fit, where the table has one (tables fitted before it was part of
+    /// the fit have none: [`add_surface_fit`] adds it).
+    pub fn surface_fit(&self) -> Option<SurfaceFit> {
+        serde_json::from_value(self.dtab.header.meta[crate::surface_fit::META_KEY].clone()).ok()
+    }
+
     /// Table coordinates of a texel.
     pub fn coords(&self, bio: &derma_optics::BioTexel) -> Vec<f64> {
         let v = bio.to_array();
@@ -450,6 +511,24 @@ impl MatchTable {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_committed_surface_fit_is_what_the_table_makes_again() {
+        // The committed table's surface fit, redone from its own metadata (grid surface, bins,
+        // seed, weighting): the same values, so the maps' source is rebuildable.
+        let read = || {
+            let d =
+                Dtab::from_bytes(crate::table_appearance::BUILTIN_TABLE, Path::new("t")).unwrap();
+            MatchTable::new(d, Path::new("t")).unwrap()
+        };
+        let committed = read().surface_fit().expect("a surface fit");
+        let mut t = read();
+        t.dtab.header.meta[crate::surface_fit::META_KEY] = serde_json::Value::Null;
+        assert!(t.surface_fit().is_none());
+        let again = add_surface_fit(&mut t, &derma_core::progress::Silent).unwrap();
+        assert_eq!(again, committed);
+        assert_eq!(t.surface_fit(), Some(committed));
+    }
 
     #[test]
     fn multilinear_is_exact_at_nodes_and_linear_along_edges() {

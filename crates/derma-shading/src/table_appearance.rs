@@ -68,6 +68,8 @@ pub struct TableAppearance {
     values: Vec<[f32; N]>,
     /// Where the base colour comes from.
     pub base: BaseColor,
+    /// The table's surface fit ([`crate::surface_fit`]), when it has one.
+    specular: Option<crate::appearance::SurfaceSpecular>,
 }
 
 impl TableAppearance {
@@ -171,6 +173,7 @@ impl TableAppearance {
             corner,
             values,
             base,
+            specular: table.surface_fit().map(|f| f.specular()),
         })
     }
 
@@ -464,6 +467,9 @@ impl Appearance for TableAppearance {
     }
     fn subsurface(&self, bio: &BioTexel) -> Option<Subsurface> {
         self.shade(bio).1
+    }
+    fn specular(&self) -> Option<crate::appearance::SurfaceSpecular> {
+        self.specular
     }
     fn shade(&self, bio: &BioTexel) -> ([f32; 3], Option<Subsurface>) {
         shade_of(&self.lookup(bio))

@@ -339,6 +339,7 @@ impl HairConfig {
 #[serde(deny_unknown_fields, default)]
 /// `[material]`: specular and roughness of skin, lips and hair.
 pub struct MaterialConfig {
+    pub fitted_surface: bool,
     pub roughness_skin: f32,
     pub roughness_lips: f32,
     pub roughness_hair: f32,
@@ -537,6 +538,7 @@ impl FollicleConfig {
 impl Default for MaterialConfig {
     fn default() -> Self {
         Self {
+            fitted_surface: true,
             roughness_skin: 0.6,
             roughness_lips: 0.45,
             roughness_hair: 0.75,
@@ -652,7 +654,8 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("hair.stubble_length_mm", "mm", 0.0, 20.0, "stubble on a man's beard follicles: about 1 mm is two to three days of growth at the beard's ≈ 0.4 mm a day (authored); 0 = clean-shaven"),
     k("hair.stubble_radius_mm", "mm", 0.0, 1.0, "beard hair radius (coarse terminal hair, about 0.1 mm across; authored)"),
     k("hair.beard_field", "field", 0.0, 0.0, "field of the beard area: a follicle grows stubble with probability BEARD_TO_SCALP·beard / follicle field there (men only)"),
-    k("material.roughness_skin", "-", 0.0, 1.0, "glTF perceptual roughness of skin: √α with α ≈ m = 0.3–0.45 (Weyrich et al. 2006, Torrance–Sparrow fits of faces) → 0.6"),
+    k("material.fitted_surface", "-", 0.0, 0.0, "the skin's roughness and specular level from the appearance's fit of the Monte Carlo surface (the match table's: glTF GGX fitted to the light the surface reflects without entering, docs/matching.md), lips and hair blended over it as below; false, or the analytic appearance (no surface model): material.roughness_skin and material.specular_f0 — a config that sets either without this key means false"),
+    k("material.roughness_skin", "-", 0.0, 1.0, "glTF perceptual roughness of skin where the surface is not fitted: √α with α ≈ m = 0.3–0.45 (Weyrich et al. 2006, Torrance–Sparrow fits of faces) → 0.6"),
     k("material.roughness_lips", "-", 0.0, 1.0, "roughness on the lips (moist, glossier; authored)"),
     k("material.roughness_hair", "-", 0.0, 1.0, "roughness under hair (authored)"),
     k("detail.height", "path", 0.0, 0.0, "grey exemplar of fine relief (PNG/EXR; empty = none), synthesised into a tileable tile by derma-synth and added to the height (and so the normals)"),
@@ -681,14 +684,16 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("mottling.blood", "-", 0.0, 3.0, "log amplitude of the blood's mottling: the factor exp(a (2n − 1)) spans e^±a; authored and subtle (0.7): the regions carry the face's coarse redness, blotches this strong alone read as a rash"),
     k("mottling.melanin", "-", 0.0, 3.0, "log amplitude of the melanin's mottling (pigment blotches, independent of the blood's)"),
     k("regional.enabled", "-", 0.0, 0.0, "regional biology of the built-in head (regional.rs GAINS): blood, melanin, oxygenation and epidermis by region"),
-    k("material.specular_f0", "-", 0.0, 1.0, "normal-incidence reflectance ((n−1)/(n+1))² for n = 1.4 (Donner & Jensen 2006) = 0.028"),
+    k("material.specular_f0", "-", 0.0, 1.0, "normal-incidence reflectance of skin where the surface is not fitted: ((n−1)/(n+1))² for n = 1.4 (Donner & Jensen 2006, the analytic appearance's index) = 0.028"),
 ];
 
 impl SkinConfig {
     /// Parses TOML, rejecting unknown keys and out-of-range values. `source` names the file.
     ///
     /// A config that sets `baseline.melanin` and says nothing of `person.calibrate_melanin`
-    /// means that melanin: calibration to `person.ita_deg` is then off.
+    /// means that melanin: calibration to `person.ita_deg` is then off. Likewise one that sets
+    /// `material.roughness_skin` or `material.specular_f0` and says nothing of
+    /// `material.fitted_surface` means those values.
     pub fn from_toml(text: &str, source: &str) -> Result<SkinConfig, crate::SkinError> {
         let mut cfg: SkinConfig = toml::from_str(text).map_err(|e| crate::SkinError::Config {
             origin: source.into(),
@@ -706,6 +711,11 @@ impl SkinConfig {
         };
         if has("baseline", "melanin") && !has("person", "calibrate_melanin") {
             cfg.person.calibrate_melanin = false;
+        }
+        if (has("material", "roughness_skin") || has("material", "specular_f0"))
+            && !has("material", "fitted_surface")
+        {
+            cfg.material.fitted_surface = false;
         }
         cfg.validate(source)?;
         Ok(cfg)
@@ -884,6 +894,21 @@ mod tests {
         // Floats print as written: 0.028, not the f32's binary value in full.
         assert!(printed.contains("specular_f0 = 0.028\n"), "{printed}");
         assert!(!printed.contains("0.0279999"), "{printed}");
+    }
+
+    #[test]
+    fn a_config_that_sets_the_skins_roughness_or_f0_keeps_them() {
+        let m = |t: &str| {
+            SkinConfig::from_toml(t, "m")
+                .unwrap()
+                .material
+                .fitted_surface
+        };
+        assert!(m("seed = 3\n"));
+        assert!(!m("[material]\nroughness_skin = 0.5\n"));
+        assert!(!m("[material]\nspecular_f0 = 0.04\n"));
+        assert!(m("[material]\nspecular_f0 = 0.04\nfitted_surface = true\n"));
+        assert!(m("[material]\nroughness_lips = 0.3\n"));
     }
 
     #[test]

@@ -463,6 +463,7 @@ impl<'a> SkinGenerator<'a> {
             mesh_scale,
             preview_mesh,
             appearance: appearance.name(),
+            skin_surface: crate::texture_set::skin_surface(&cfg.material, appearance),
             // As given (the person's derived melanin and wrinkles are in the notes): rerunning
             // report.json's config reproduces the set.
             config: self.config.clone(),
@@ -699,6 +700,8 @@ pub struct TextureSet {
     pub preview_mesh: Option<(TriMesh, Vec<[f32; 4]>)>,
     /// Name of the appearance that made the colours.
     pub appearance: &'static str,
+    /// The skin's roughness and F0 under lips, hair and cavities, and their source.
+    pub skin_surface: crate::texture_set::SkinSurface,
     /// The configuration as given (before the person's calibration and age scaling, which
     /// `generate` derives again from it).
     pub config: SkinConfig,
@@ -870,6 +873,7 @@ impl TextureSet {
             mesh_scale: self.mesh_scale,
             threads: self.threads(),
             appearance: self.appearance,
+            skin_surface: self.skin_surface,
             surface: &self.surface,
             bio: &self.bio,
             render: &self.render,

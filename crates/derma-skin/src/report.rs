@@ -43,6 +43,8 @@ pub struct Run<'a> {
     pub threads: usize,
     /// Name of the appearance that made the colours.
     pub appearance: &'a str,
+    /// The skin's roughness and F0 and their source.
+    pub skin_surface: crate::texture_set::SkinSurface,
     /// The surface (its chart coverage masks the statistics).
     pub surface: &'a Surface,
     /// The painted bio maps.
@@ -154,6 +156,7 @@ pub fn report(set: &Run) -> serde_json::Value {
         "size": set.config.size,
         "threads": set.threads,
         "appearance": set.appearance,
+        "skin_surface": set.skin_surface,
         "inputs": {
             "config": file(&set.inputs.config),
             "mesh": mesh,

@@ -231,6 +231,35 @@ pub fn cavity(height_mm: &Map) -> Vec<f32> {
         .collect()
 }
 
+/// The skin's roughness and F0 before lips, hair and cavities, and where they came from.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct SkinSurface {
+    /// glTF perceptual roughness.
+    pub roughness: f32,
+    /// Normal-incidence reflectance.
+    pub f0: f32,
+    /// True: the appearance's fit of the Monte Carlo surface; false: the authored values.
+    pub fitted: bool,
+}
+
+/// The appearance's fit of the Monte Carlo surface where it has one and
+/// `material.fitted_surface` asks for it (the match table's, derma_shading::surface_fit), else
+/// the authored `roughness_skin` and `specular_f0`.
+pub fn skin_surface(material: &MaterialConfig, appearance: &dyn Appearance) -> SkinSurface {
+    match appearance.specular().filter(|_| material.fitted_surface) {
+        Some(s) => SkinSurface {
+            roughness: s.roughness,
+            f0: s.f0,
+            fitted: true,
+        },
+        None => SkinSurface {
+            roughness: material.roughness_skin,
+            f0: material.specular_f0,
+            fitted: false,
+        },
+    }
+}
+
 /// Roughness and specular occlusion in a cavity `c`: inside a furrow the walls hide part of
 /// the specular lobe (specular occlusion, as Jimenez et al. 2016, "Practical realtime
 /// strategies for accurate indirect occlusion", apply it to cavities), so specular falls by up
@@ -313,6 +342,11 @@ pub fn convert(
     let furrow = |j: usize| bio.texels[j].furrow_mm;
     let wrap = surface.period().is_some();
     let with_furrows = |j: usize| bio.texels[j].height_mm + bio.texels[j].furrow_mm;
+    let SkinSurface {
+        roughness: skin_r,
+        f0: skin_f0,
+        ..
+    } = skin_surface(material, appearance);
     strips.par_iter_mut().for_each(|st| {
         let first = st.first_row * w;
         let len = st.roughness.len();
@@ -331,10 +365,9 @@ pub fn convert(
             let (a, sub) = shade[k];
             let ea = t.extra[3].clamp(0.0, 1.0);
             st.base_color[k] = std::array::from_fn(|c| srgb8(a[c] + (t.extra[c] - a[c]) * ea));
-            let base_r = material.roughness_skin
-                + (material.roughness_lips - material.roughness_skin) * t.lips;
+            let base_r = skin_r + (material.roughness_lips - skin_r) * t.lips;
             let r = base_r + (material.roughness_hair - base_r) * ea;
-            let s = (material.specular_f0 + (HAIR_F0 - material.specular_f0) * ea) / SPECULAR_SCALE;
+            let s = (skin_f0 + (HAIR_F0 - skin_f0) * ea) / SPECULAR_SCALE;
             let (r, s) = occlude(r, s, cavity_at(height, w, h, x, y));
             st.roughness[k] = quantize8(r);
             st.specular[k] = quantize8(s);

@@ -282,3 +282,62 @@ fn measured_chromophore_maps_replace_the_baseline() {
         "{e}"
     );
 }
+
+#[test]
+fn the_skins_roughness_and_specular_are_the_match_tables_surface_fit_unless_authored() {
+    use derma_shading::Appearance;
+    let fit = derma_shading::TableAppearance::builtin()
+        .specular()
+        .expect("the committed table has its surface fit");
+    // Median of a map's bytes over the covered texels of plain skin (no lips or hair over
+    // them; cavities, which raise roughness and lower specular, are a minority).
+    let median = |g: &TextureSet, m: &[u8]| {
+        let plain = |i: usize| {
+            let t = &g.bio.texels[i];
+            g.surface.covered(i) && t.lips == 0.0 && t.extra[3] == 0.0
+        };
+        let mut v: Vec<u8> = (0..m.len()).filter(|&i| plain(i)).map(|i| m[i]).collect();
+        v.sort_unstable();
+        v[v.len() / 2]
+    };
+    let byte = derma_core::image_io::quantize8;
+    let scale = derma_render::material::SPECULAR_SCALE;
+    let cfg = small(128);
+    let fitted = run_with_threads(&cfg, 2);
+    assert!(fitted.skin_surface.fitted);
+    assert_eq!(
+        median(&fitted, &fitted.render.roughness),
+        byte(fit.roughness)
+    );
+    assert_eq!(
+        median(&fitted, &fitted.render.specular),
+        byte(fit.f0 / scale)
+    );
+    // The lips keep their authored roughness over the fitted skin (raised by at most 0.15 in
+    // their lines' cavities).
+    let lo = cfg.material.roughness_lips;
+    let lips: Vec<u8> = (0..fitted.bio.texels.len())
+        .filter(|&i| fitted.surface.covered(i) && fitted.bio.texels[i].lips > 0.999)
+        .map(|i| fitted.render.roughness[i])
+        .collect();
+    assert!(!lips.is_empty());
+    assert!(
+        lips.iter().all(|&r| r >= byte(lo) && r <= byte(lo + 0.15)),
+        "{lips:?}"
+    );
+    // Authored: a config that sets the skin's roughness means it.
+    let authored = SkinConfig::from_toml(
+        "size = 128\nscatter_resolution = 256\n[material]\nroughness_skin = 0.55\n",
+        "authored",
+    )
+    .unwrap();
+    let a = run_with_threads(&authored, 2);
+    assert!(!a.skin_surface.fitted);
+    assert_eq!(median(&a, &a.render.roughness), byte(0.55));
+    assert_eq!(
+        median(&a, &a.render.specular),
+        byte(authored.material.specular_f0 / scale)
+    );
+    // The base colour does not depend on the surface's source.
+    assert!(a.render.base_color == fitted.render.base_color);
+}

@@ -21,6 +21,19 @@ pub enum MatchCommand {
     Fit(FitArgs),
     /// The skin-colour lookup table of Jimenez et al. 2010 (melanin × hemoglobin → RGB).
     Lut(LutArgs),
+    /// Add the skin surface's specular fit (the roughness and specular maps' source) to a match
+    /// table fitted before `derma match fit` made it.
+    Surface(SurfaceArgs),
+}
+
+#[derive(Args)]
+pub struct SurfaceArgs {
+    /// The match table (.dtab from `derma match fit`); it is read, not changed.
+    #[arg(long)]
+    table: PathBuf,
+    /// The match table to write, with the fit (a .json sidecar is written beside it).
+    #[arg(long)]
+    out: PathBuf,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -85,6 +98,15 @@ pub fn run(cmd: MatchCommand, bars: &Bars) -> Result<()> {
     match cmd {
         MatchCommand::Fit(a) => fit(a, bars),
         MatchCommand::Lut(a) => lut(a, bars),
+        MatchCommand::Surface(a) => {
+            let f = derma_shading::fit_job::add_surface(&a.table, &a.out, bars)
+                .with_context(|| format!("fitting the surface of {}", a.table.display()))?;
+            bars.finish();
+            line(format!(
+                "surface ({}): roughness {:.4}, F0 {:.4} (relative RMS {:.3}; albedo {:.4} under diffuse light; {} photons) → {}",
+                f.surface.name(), f.roughness, f.f0, f.relative_rms, f.albedo, f.photons, a.out.display()
+            ))
+        }
     }
 }
 
