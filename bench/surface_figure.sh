@@ -21,19 +21,19 @@ import sys
 from PIL import Image, ImageDraw
 d = sys.argv[1]
 tiles = [(s, l) for l in ("studio", "window") for s in ("authored", "fitted")]
-box = (300, 80, 980, 840)
+box = (192, 60, 832, 780)
 ims = [Image.open(f"{d}/{s}-render/{l}.png").convert("RGB").crop(box) for s, l in tiles]
+ims = [im.resize((im.width * 3 // 5, im.height * 3 // 5), Image.LANCZOS) for im in ims]
 w, h = ims[0].size
 out = Image.new("RGB", (w * len(ims), h), (12, 12, 14))
 draw = ImageDraw.Draw(out)
 names = {"authored": "authored: roughness 0.6, F0 0.028", "fitted": "fitted: roughness 0.857, F0 0.056"}
 for i, (im, (s, l)) in enumerate(zip(ims, tiles)):
     out.paste(im, (i * w, 0))
-    text = f"{l} - {names[s]}"
-    b = draw.textbbox((i * w + 10, 8), text)
-    draw.rectangle((b[0] - 4, b[1] - 3, b[2] + 4, b[3] + 3), fill=(12, 12, 14))
-    draw.text((i * w + 10, 8), text, fill=(235, 235, 235))
-out = out.resize((out.width // 2, out.height // 2), Image.LANCZOS)
+    for k, text in enumerate((l, names[s])):
+        b = draw.textbbox((i * w + 8, 6 + 14 * k), text)
+        draw.rectangle((b[0] - 3, b[1] - 2, b[2] + 3, b[3] + 2), fill=(12, 12, 14))
+        draw.text((i * w + 8, 6 + 14 * k), text, fill=(235, 235, 235))
 out.save("docs/images/surface-fit.png", optimize=True)
 PY
 echo docs/images/surface-fit.png
