@@ -182,6 +182,12 @@ pub fn read(
                 )));
             }
             let (label, world) = if let Some(w) = q.world {
+                if !w.iter().all(|v| v.is_finite()) {
+                    return Err(err(format!(
+                        "photo '{}', point {k}: world {w:?} is not finite",
+                        p.image
+                    )));
+                }
                 (format!("p{k}"), DVec3::from(w))
             } else if let Some(v) = q.vertex {
                 let l = format!("v{v}");
@@ -268,7 +274,14 @@ fn parse_csv(text: &str, err: &dyn Fn(String) -> PhotoError) -> Result<Vec<Photo
         }
         let num = |s: &str, what: &str| -> Result<f64> {
             s.parse::<f64>()
-                .map_err(|_| err(format!("line {}: {what} '{s}' is not a number", n + 1)))
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| {
+                    err(format!(
+                        "line {}: {what} '{s}' is not a finite number",
+                        n + 1
+                    ))
+                })
         };
         let pixel = [num(f[2], "x")?, num(f[3], "y")?];
         let world = if has_world && f.len() >= 7 && !f[4].is_empty() {
@@ -514,6 +527,16 @@ mod tests {
             ),
             ("e.csv", "img,pt,x,y\n", "expected image,point,x,y"),
             ("f.json", r#"{"photos": []}"#, "no photos"),
+            (
+                "g.csv",
+                "image,point,x,y,X,Y,Z\nx.jpg,p0,10,20,1,NaN,3\n",
+                "line 2: Y 'NaN' is not a finite number",
+            ),
+            (
+                "h.csv",
+                "image,point,x,y\nx.jpg,chin,inf,20\n",
+                "line 2: x 'inf' is not a finite number",
+            ),
         ];
         for (name, text, want) in cases {
             let p = d.join(name);

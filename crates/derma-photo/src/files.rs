@@ -16,11 +16,12 @@ use crate::unwrap::{unwrap, Stretch, UnwrapOptions};
 use derma_core::atomic::{check_inputs_spared, ensure_writable_dir};
 use derma_core::image_io::{write_exr, write_png8, ExrPrecision};
 use derma_core::mesh::TriMesh;
-use derma_core::progress::{Progress, Unit};
+use derma_core::progress::{Note, Progress, Unit};
 use derma_core::report::{write_json, JsonFormat};
 use derma_core::Map;
 use derma_head::Head;
 use derma_shading::skin_color_lut::SkinColorLut;
+use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -75,7 +76,16 @@ pub struct CameraEntry {
     /// Every point's reprojection error under the camera.
     #[serde(default)]
     pub points: Vec<crate::resection::PointError>,
+    /// Standard error of the focal length (pixels); absent where it was given.
+    #[serde(default)]
+    pub focal_se_px: Option<f64>,
+    /// Standard error of the camera's distance to the mesh's origin (mesh units).
+    #[serde(default)]
+    pub distance_se: f64,
 }
+
+/// A standard error above this fraction of its value makes [`calibrate`] warn.
+pub const ILL_DETERMINED: f64 = 0.05;
 
 /// Options of [`calibrate`] beyond the resection's.
 pub struct CalibrateInputs<'a> {
@@ -142,6 +152,35 @@ pub fn calibrate(
     }
     let photos: Vec<_> = entries.iter().map(|e| e.points.clone()).collect();
     let res = resect(&photos, opts)?;
+    for r in &res {
+        let distance = DVec3::from(r.camera.translation).length();
+        let mut weak = Vec::new();
+        if let Some(se) = r
+            .focal_se_px
+            .filter(|se| *se > ILL_DETERMINED * r.camera.focal_px)
+        {
+            weak.push(format!(
+                "focal length {:.0} ± {se:.0} px ({:.0} %)",
+                r.camera.focal_px,
+                100.0 * se / r.camera.focal_px
+            ));
+        }
+        if r.distance_se > ILL_DETERMINED * distance {
+            weak.push(format!(
+                "distance {distance:.4} ± {:.4} ({:.0} %)",
+                r.distance_se,
+                100.0 * r.distance_se / distance
+            ));
+        }
+        if !weak.is_empty() {
+            progress.note(Note::warning(format!(
+                "photo '{}': {} ill-determined by its {} points (one standard error); give the focal length (focal_px, EXIF), one shared camera, or more points spread in depth",
+                r.photo,
+                weak.join(" and "),
+                r.points.iter().filter(|p| !p.outlier).count()
+            )));
+        }
+    }
     let dir = out.parent().unwrap_or(Path::new("."));
     let file = CamerasFile {
         photos: entries
@@ -158,6 +197,8 @@ pub fn calibrate(
                     .map(|p| p.label.clone())
                     .collect(),
                 points: r.points.clone(),
+                focal_se_px: r.focal_se_px,
+                distance_se: r.distance_se,
             })
             .collect(),
     };
@@ -165,10 +206,19 @@ pub fn calibrate(
     Ok(res)
 }
 
+/// `p` relative to folder `dir` (with `..` where it lies beside or above it), so cameras.json
+/// moves with its photos; absolute only where the two share no root.
 fn relative(p: &Path, dir: &Path) -> PathBuf {
     let canon = |x: &Path| std::fs::canonicalize(x).unwrap_or_else(|_| x.to_path_buf());
     let (cp, cd) = (canon(p), canon(dir));
-    cp.strip_prefix(&cd).map(Path::to_path_buf).unwrap_or(cp)
+    let (a, b): (Vec<_>, Vec<_>) = (cp.components().collect(), cd.components().collect());
+    let common = a.iter().zip(&b).take_while(|(x, y)| x == y).count();
+    if common == 0 {
+        return cp;
+    }
+    let mut out: PathBuf = b[common..].iter().map(|_| "..").collect();
+    out.extend(&a[common..]);
+    out
 }
 
 /// Unwraps a mesh into one chart and writes it as OBJ with UVs.
@@ -478,4 +528,33 @@ pub fn synthetic_set(
         &serde_json::json!({"photos": truth}),
     )?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cameras_name_photos_relative_to_their_folder_even_beside_it() {
+        let d = derma_test_support::scratch_dir("relative_paths");
+        for sub in ["photos", "calib/out"] {
+            std::fs::create_dir_all(d.join(sub)).unwrap();
+        }
+        std::fs::write(d.join("photos/a.png"), b"").unwrap();
+        std::fs::write(d.join("calib/b.png"), b"").unwrap();
+        assert_eq!(
+            relative(&d.join("photos/a.png"), &d.join("calib/out")),
+            Path::new("../../photos/a.png")
+        );
+        assert_eq!(
+            relative(&d.join("calib/b.png"), &d.join("calib")),
+            Path::new("b.png")
+        );
+        // What read_cameras does with it: joined to the folder, the same file.
+        let back = d.join("calib/out").join("../../photos/a.png");
+        assert_eq!(
+            std::fs::canonicalize(back).unwrap(),
+            std::fs::canonicalize(d.join("photos/a.png")).unwrap()
+        );
+    }
 }

@@ -49,6 +49,11 @@ pub struct ResectionOptions {
     /// A point is an outlier when its reprojection error exceeds this many pixels and three
     /// robust standard deviations (1.4826 × median) of its photo's errors.
     pub outlier_px: f64,
+    /// With per-photo intrinsics: the relative standard deviation of each photo's focal length
+    /// around the one shared camera's, fitted first — a log-normal prior, so each photo's
+    /// focal length is a maximum a posteriori estimate (a face's points pin it poorly alone);
+    /// `f64::INFINITY`: no prior.
+    pub focal_deviation: f64,
 }
 
 impl Default for ResectionOptions {
@@ -59,6 +64,7 @@ impl Default for ResectionOptions {
             refine_principal: false,
             refine_distortion: false,
             outlier_px: 4.0,
+            focal_deviation: 0.1,
         }
     }
 }
@@ -87,6 +93,27 @@ pub struct Resection {
     pub rms_px: f64,
     /// Every point's error.
     pub points: Vec<PointError>,
+    /// Standard error of the focal length (pixels) from the fit's covariance σ²(JᵀJ)⁻¹;
+    /// `None` where the focal length was given.
+    pub focal_se_px: Option<f64>,
+    /// Standard error of the camera's distance to the mesh's origin (mesh units).
+    pub distance_se: f64,
+}
+
+/// A prior on a photo's focal length: ln f ~ N(ln `focal_px`, `relative`²), weighed against
+/// reprojection residuals of standard deviation `noise_px`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct FocalPrior {
+    focal_px: f64,
+    relative: f64,
+    noise_px: f64,
+}
+
+/// A fitted camera's standard errors.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Spread {
+    focal: Option<f64>,
+    distance: f64,
 }
 
 /// Points needed by the DLT (11 unknowns, two equations per point).
@@ -302,13 +329,16 @@ impl Layout {
 }
 
 /// Refines the cameras of `photos` (starting from `cams`) over the inlier points `use_point`:
-/// a pose each, intrinsics per photo or shared.
+/// a pose each, intrinsics per photo or shared, the focal length under `prior` where given.
+/// Returns each camera's standard errors.
 fn refine(
     photos: &[PhotoPoints],
     cams: &mut [Camera],
     use_point: &[Vec<bool>],
     opts: &ResectionOptions,
-) {
+    prior: Option<FocalPrior>,
+) -> Vec<Spread> {
+    let mut spread = vec![Spread::default(); photos.len()];
     let fixed_focal = photos.iter().any(|p| p.focal_px.is_some());
     let layout = Layout {
         focal: opts.refine_focal && !fixed_focal,
@@ -335,10 +365,12 @@ fn refine(
             lo.extend([-1e12; 3]);
             hi.extend([1e12; 3]);
         }
+        let prior = prior.filter(|_| layout.focal);
         let m: usize = group
             .iter()
             .map(|&i| 2 * use_point[i].iter().filter(|u| **u).count())
-            .sum();
+            .sum::<usize>()
+            + prior.is_some() as usize;
         let base: Vec<Camera> = group.iter().map(|&i| cams[i]).collect();
         let eval = |p: &[f64], r: &mut [f64]| {
             let mut row = 0;
@@ -367,6 +399,10 @@ fn refine(
                     r[row + 1] = px.y - pt.pixel.y;
                     row += 2;
                 }
+            }
+            if let Some(q) = prior {
+                // The prior as one more residual, in pixels of the points' noise.
+                r[row] = q.noise_px * (p[0] / q.focal_px).ln() / q.relative;
             }
         };
         let n = p0.len();
@@ -401,14 +437,73 @@ fn refine(
                 ..Default::default()
             },
         );
+        let cov = covariance(&mut residuals, &p, m);
         for (g, &i) in group.iter().enumerate() {
             let c = &mut cams[i];
             layout.unpack(&p[..nk], c);
             let o = nk + 6 * g;
             c.rotation = [p[o], p[o + 1], p[o + 2]];
             c.translation = [p[o + 3], p[o + 4], p[o + 5]];
+            if let Some(cov) = &cov {
+                // The distance |t| to the origin: its gradient is t/|t| in the translation.
+                let t = DVec3::from(c.translation);
+                let u = t / t.length().max(1e-12);
+                let mut var = 0.0;
+                for a in 0..3 {
+                    for b in 0..3 {
+                        var += u[a] * u[b] * cov[(o + 3 + a) * n + o + 3 + b];
+                    }
+                }
+                spread[i] = Spread {
+                    focal: layout.focal.then(|| cov[0].max(0.0).sqrt()),
+                    distance: var.max(0.0).sqrt(),
+                };
+            }
         }
     }
+    spread
+}
+
+/// Residuals (and their Jacobian, when asked) at parameters p, as Levenberg–Marquardt takes them.
+type Residuals<'a> = dyn FnMut(&[f64], &mut [f64], Option<&mut [f64]>) + 'a;
+
+/// The parameters' covariance σ²(JᵀJ)⁻¹ at `p` (row-major n × n), σ² = Σr²/(m − n); `None`
+/// when there are no more residuals than parameters or JᵀJ is singular.
+fn covariance(
+    residuals: &mut Residuals<'_>,
+    p: &[f64],
+    m: usize,
+) -> Option<Vec<f64>> {
+    let n = p.len();
+    if m <= n {
+        return None;
+    }
+    let mut r = vec![0.0; m];
+    let mut j = vec![0.0; m * n];
+    residuals(p, &mut r, Some(&mut j));
+    let sigma2 = r.iter().map(|v| v * v).sum::<f64>() / (m - n) as f64;
+    let mut jtj = vec![0.0; n * n];
+    for row in 0..m {
+        let jr = &j[row * n..(row + 1) * n];
+        for a in 0..n {
+            if jr[a] == 0.0 {
+                continue;
+            }
+            for b in 0..n {
+                jtj[a * n + b] += jr[a] * jr[b];
+            }
+        }
+    }
+    let mut inv = vec![0.0; n * n];
+    for k in 0..n {
+        let mut e = vec![0.0; n];
+        e[k] = 1.0;
+        let x = derma_core::numerics::dense::solve(&jtj, &e, n)?;
+        for a in 0..n {
+            inv[a * n + k] = sigma2 * x[a];
+        }
+    }
+    Some(inv)
 }
 
 fn errors(photo: &PhotoPoints, cam: &Camera) -> Vec<f64> {
@@ -475,8 +570,41 @@ pub fn resect(photos: &[PhotoPoints], opts: &ResectionOptions) -> Result<Vec<Res
         refine_distortion: false,
         ..*opts
     };
-    refine(photos, &mut cams, &all, &pose_only);
-    refine(photos, &mut cams, &all, opts);
+    refine(photos, &mut cams, &all, &pose_only, None);
+    // Per-photo focal lengths: one shared camera first, then each photo's focal length within
+    // `focal_deviation` of it (a bounded deviation: the prior that keeps an ill-posed photo
+    // near the others). Shared pixels need one image size; without it the bound is skipped.
+    let same_size = photos
+        .iter()
+        .all(|p| (p.width, p.height) == (photos[0].width, photos[0].height));
+    let mut prior = None;
+    let scheduled = !opts.shared_intrinsics
+        && opts.refine_focal
+        && photos.iter().all(|p| p.focal_px.is_none())
+        && photos.len() > 1
+        && same_size
+        && opts.focal_deviation.is_finite();
+    if scheduled {
+        let shared = ResectionOptions {
+            shared_intrinsics: true,
+            ..*opts
+        };
+        refine(photos, &mut cams, &all, &shared, None);
+        // The points' noise per coordinate, from the shared fit's reprojection errors.
+        let (mut sum, mut k) = (0.0, 0usize);
+        for (p, c) in photos.iter().zip(&cams) {
+            for e in errors(p, c).into_iter().filter(|e| e.is_finite()) {
+                sum += e * e;
+                k += 1;
+            }
+        }
+        prior = Some(FocalPrior {
+            focal_px: cams[0].focal_px,
+            relative: opts.focal_deviation.max(1e-6),
+            noise_px: (sum / (2 * k.max(1)) as f64).sqrt().max(1e-3),
+        });
+    }
+    let mut spread = refine(photos, &mut cams, &all, opts, prior);
     // Flag outliers and refit without them.
     let mut inlier = all.clone();
     let mut any = false;
@@ -494,7 +622,7 @@ pub fn resect(photos: &[PhotoPoints], opts: &ResectionOptions) -> Result<Vec<Res
         }
     }
     if any {
-        refine(photos, &mut cams, &inlier, opts);
+        spread = refine(photos, &mut cams, &inlier, opts, prior);
     }
     let mut out = Vec::with_capacity(photos.len());
     for (i, p) in photos.iter().enumerate() {
@@ -522,6 +650,8 @@ pub fn resect(photos: &[PhotoPoints], opts: &ResectionOptions) -> Result<Vec<Res
                     outlier: !u,
                 })
                 .collect(),
+            focal_se_px: spread[i].focal,
+            distance_se: spread[i].distance,
         });
     }
     Ok(out)
@@ -612,6 +742,90 @@ mod tests {
             assert!(r.rms_px < 2.5, "{} rms {}", r.photo, r.rms_px);
             assert!((r.camera.centre() - c.centre()).length() < 0.05 * 600.0);
         }
+    }
+
+    #[test]
+    fn per_photo_focal_lengths_stay_near_the_shared_fit_and_report_their_spread() {
+        // Five views from 1.8 m (a telephoto portrait: little perspective, so focal length and
+        // distance trade off) whose focal lengths differ by up to 8 % (zoom, refocus), 15
+        // clicked points each with 1.5 px noise: per photo, a focal length is ill-posed alone.
+        let truth = [0.92, 0.96, 1.0, 1.04, 1.08].map(|k| 12_600.0 * k);
+        let cams: Vec<Camera> = [-35.0f32, -15.0, 0.0, 15.0, 35.0]
+            .iter()
+            .zip(truth)
+            .map(|(&az, f)| {
+                let a = az.to_radians();
+                let eye = Vec3::new(1800.0 * a.sin(), 40.0, 1800.0 * a.cos());
+                let mut c = Camera::look_at(3000, 2000, eye, Vec3::new(0.0, 0.0, 20.0), Vec3::Y, f);
+                c.principal = [1500.0, 1000.0];
+                c
+            })
+            .collect();
+        let photos: Vec<PhotoPoints> = cams
+            .iter()
+            .enumerate()
+            .map(|(i, c)| photo(c, 1.5, 30 + i as u64))
+            .collect();
+        let run = |deviation: f64| {
+            let o = ResectionOptions {
+                shared_intrinsics: false,
+                focal_deviation: deviation,
+                ..Default::default()
+            };
+            let res = resect(&photos, &o).unwrap();
+            let err: Vec<f64> = res
+                .iter()
+                .zip(truth)
+                .map(|(r, f)| (r.camera.focal_px / f - 1.0).abs())
+                .collect();
+            (res, err)
+        };
+        let (free, free_err) = run(f64::INFINITY);
+        let (with_prior, prior_err) = run(0.1);
+        let mean = |e: &[f64]| e.iter().sum::<f64>() / e.len() as f64;
+        let worst = |e: &[f64]| e.iter().cloned().fold(0.0, f64::max);
+        println!("no prior {free_err:?}\nprior {prior_err:?}");
+        assert!(
+            mean(&prior_err) <= mean(&free_err),
+            "{prior_err:?} vs {free_err:?}"
+        );
+        assert!(
+            worst(&prior_err) < worst(&free_err),
+            "{prior_err:?} vs {free_err:?}"
+        );
+        // The reported standard errors are honest: each photo's focal error within 3.5 of them,
+        // and the per-photo fits without the prior are the ill-determined ones.
+        for (r, f) in free.iter().zip(truth) {
+            let se = r.focal_se_px.unwrap();
+            println!(
+                "{}: f {:.0} (true {f:.0}) ± {se:.0}",
+                r.photo, r.camera.focal_px
+            );
+            assert!(
+                (r.camera.focal_px - f).abs() < 3.5 * se,
+                "{}: {} vs {f} ± {se}",
+                r.photo,
+                r.camera.focal_px
+            );
+        }
+        assert!(free
+            .iter()
+            .any(|r| r.focal_se_px.unwrap() > 0.05 * r.camera.focal_px));
+        assert!(with_prior.iter().all(|r| r.distance_se > 0.0));
+        // One shared camera of the earlier test's views pins f to well under 5 %.
+        let same: Vec<PhotoPoints> = [-35.0, -10.0, 10.0, 35.0]
+            .map(camera)
+            .iter()
+            .enumerate()
+            .map(|(i, c)| photo(c, 1.5, 10 + i as u64))
+            .collect();
+        let shared = resect(&same, &ResectionOptions::default()).unwrap();
+        let se = shared[0].focal_se_px.unwrap();
+        assert!(se < 0.05 * shared[0].camera.focal_px, "{se}");
+        assert!(
+            (shared[0].camera.focal_px - 4200.0).abs() < 3.5 * se,
+            "{se}"
+        );
     }
 
     #[test]

@@ -64,6 +64,14 @@ impl UnwrapOptions {
                 self.margin
             )));
         }
+        if let Some(v) = self.view {
+            if !v.is_finite() || v.length() < 1e-6 {
+                return Err(PhotoError::Invalid(format!(
+                    "unwrap view direction ({}, {}, {}) has no direction; expected a vector such as 0,0,-1 (or none for a view-independent layout)",
+                    v.x, v.y, v.z
+                )));
+            }
+        }
         Ok(())
     }
 }
@@ -698,6 +706,19 @@ pub fn stretch_of(mesh: &TriMesh, view: Option<Vec3>, k: f32) -> Result<Stretch>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_view_without_direction_is_refused() {
+        for v in [Vec3::ZERO, Vec3::new(f32::NAN, 0.0, -1.0)] {
+            let o = UnwrapOptions {
+                view: Some(v),
+                ..Default::default()
+            };
+            let e = o.check().unwrap_err().to_string();
+            assert!(e.contains("view direction") && e.contains("0,0,-1"), "{e}");
+        }
+        assert!(UnwrapOptions::default().check().is_ok());
+    }
     use crate::topology::grid_mesh;
 
     #[test]

@@ -57,6 +57,7 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
                 shared_intrinsics: !a.per_photo,
                 refine_principal: a.refine_principal,
                 refine_distortion: a.refine_distortion,
+                focal_deviation: a.focal_deviation,
                 ..Default::default()
             };
             let res = files::calibrate(&inp, &opts, &a.out, bars)?;
@@ -67,13 +68,17 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
                     .filter(|p| p.outlier)
                     .map(|p| p.label.as_str())
                     .collect();
+                let se = r
+                    .focal_se_px
+                    .map_or(String::new(), |s| format!(" ± {s:.1}"));
                 line(format!(
-                    "{}: {} points, RMS {:.2} px, f {:.1} px (DLT {:.1}), outliers {:?}",
+                    "{}: {} points, RMS {:.2} px, f {:.1}{se} px (DLT {:.1}), distance ± {:.3}, outliers {:?}",
                     r.photo,
                     r.points.len(),
                     r.rms_px,
                     r.camera.focal_px,
                     r.dlt_focal_px,
+                    r.distance_se,
                     out
                 ))?;
             }

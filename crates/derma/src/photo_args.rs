@@ -24,6 +24,10 @@ pub struct CalibrateArgs {
     /// Intrinsics per photo instead of one shared camera.
     #[arg(long)]
     pub per_photo: bool,
+    /// With --per-photo: each photo's focal length stays within this fraction of the shared
+    /// camera's, fitted first ("inf": unbounded).
+    #[arg(long, default_value_t = 0.15)]
+    pub focal_deviation: f64,
     /// Also refine the principal point.
     #[arg(long)]
     pub refine_principal: bool,
