@@ -469,11 +469,7 @@ type Residuals<'a> = dyn FnMut(&[f64], &mut [f64], Option<&mut [f64]>) + 'a;
 
 /// The parameters' covariance σ²(JᵀJ)⁻¹ at `p` (row-major n × n), σ² = Σr²/(m − n); `None`
 /// when there are no more residuals than parameters or JᵀJ is singular.
-fn covariance(
-    residuals: &mut Residuals<'_>,
-    p: &[f64],
-    m: usize,
-) -> Option<Vec<f64>> {
+fn covariance(residuals: &mut Residuals<'_>, p: &[f64], m: usize) -> Option<Vec<f64>> {
     let n = p.len();
     if m <= n {
         return None;
