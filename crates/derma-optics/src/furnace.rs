@@ -10,7 +10,6 @@ use crate::layer::{Bottom, Layer, Stack};
 use crate::run::Run;
 use crate::specimen::SurfaceModel;
 use crate::tally::BrdfBins;
-use crate::transport::Incidence;
 use derma_core::progress::Progress;
 use std::f64::consts::FRAC_PI_2;
 
@@ -62,15 +61,7 @@ pub fn furnace(
         theta_out: zenith_bins,
         phi: 1,
     };
-    let run = Run {
-        stacks: vec![furnace_stack(surface)],
-        photons,
-        seed,
-        incidence: Incidence::ArcsinZenith,
-        brdf: Some(bins),
-        profile: None,
-        channel_weights: Vec::new(),
-    };
+    let run = Run::brdf(furnace_stack(surface), photons, seed, bins);
     let t = run_cpu(&run, progress)?;
     let n = zenith_bins;
     let mut pi_brdf = vec![vec![0.0; n]; n];

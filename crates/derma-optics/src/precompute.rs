@@ -227,16 +227,21 @@ impl Grid {
         BioTexel::from_array(v.map(|x| x as f32))
     }
 
+    /// The BRDF bins of every node.
+    pub fn brdf_bins(&self) -> BrdfBins {
+        BrdfBins {
+            theta_in: self.brdf[0],
+            theta_out: self.brdf[1],
+            phi: self.brdf[2],
+        }
+    }
+
     /// Simulation settings of node `i`: its own seed so entries are independent of sharding.
     pub fn config(&self, i: usize) -> SkinSimConfig {
         SkinSimConfig {
             photons: self.photons,
             seed: self.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ i as u64,
-            brdf: BrdfBins {
-                theta_in: self.brdf[0],
-                theta_out: self.brdf[1],
-                phi: self.brdf[2],
-            },
+            brdf: self.brdf_bins(),
             profile: ProfileBins {
                 bins: self.profile_bins,
                 d_max_mm: self.profile_d_max_mm,

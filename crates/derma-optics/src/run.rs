@@ -40,6 +40,20 @@ impl Run {
         }
     }
 
+    /// A single-wavelength run under cosine-weighted incidence (thesis §4.5.2), recording the
+    /// BRDF into `bins`.
+    pub fn brdf(stack: Stack, photons: u64, seed: u64, bins: BrdfBins) -> Self {
+        Self {
+            stacks: vec![stack],
+            photons,
+            seed,
+            incidence: Incidence::ArcsinZenith,
+            brdf: Some(bins),
+            profile: None,
+            channel_weights: Vec::new(),
+        }
+    }
+
     /// Checks the stacks, counts and bins; the error says which is wrong.
     pub fn validate(&self) -> Result<()> {
         if self.stacks.is_empty() {

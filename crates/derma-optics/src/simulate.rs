@@ -42,6 +42,14 @@ fn thesis_surface() -> SurfaceModel {
     SurfaceModel::Thesis
 }
 
+/// The default BRDF bins of a skin simulation and a precompute grid: 9 × 9 zeniths of 10° and
+/// 12 azimuths of 15°.
+pub const DEFAULT_BRDF_BINS: BrdfBins = BrdfBins {
+    theta_in: 9,
+    theta_out: 9,
+    phi: 12,
+};
+
 impl Default for SkinSimConfig {
     /// 10⁶ photons; BRDF bins of 10° in both zeniths and 15° in azimuth difference; radial
     /// profile in 64 rings of 0.125 mm up to D_max = 8 mm (skin's red diffusion profile is
@@ -50,11 +58,7 @@ impl Default for SkinSimConfig {
         Self {
             photons: 1_000_000,
             seed: 1,
-            brdf: BrdfBins {
-                theta_in: 9,
-                theta_out: 9,
-                phi: 12,
-            },
+            brdf: DEFAULT_BRDF_BINS,
             profile: ProfileBins {
                 bins: 64,
                 d_max_mm: 8.0,

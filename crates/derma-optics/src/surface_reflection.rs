@@ -8,7 +8,6 @@ use crate::layer::{Bottom, Layer, Stack};
 use crate::run::Run;
 use crate::specimen::{SurfaceModel, LAYER_INDEX};
 use crate::tally::{BrdfBins, R_SPECULAR};
-use crate::transport::Incidence;
 use derma_core::progress::Progress;
 
 /// Absorption of the stand-in tissue, per mm: the first interaction absorbs the photon outright
@@ -54,15 +53,7 @@ pub fn surface_reflection(
     seed: u64,
     progress: &dyn Progress,
 ) -> Result<SurfaceReflection> {
-    let run = Run {
-        stacks: vec![surface_stack(surface)],
-        photons,
-        seed,
-        incidence: Incidence::ArcsinZenith,
-        brdf: Some(bins),
-        profile: None,
-        channel_weights: Vec::new(),
-    };
+    let run = Run::brdf(surface_stack(surface), photons, seed, bins);
     let t = run_cpu(&run, progress)?;
     let brdf = (0..bins.len())
         .map(|k| {
@@ -83,12 +74,8 @@ mod tests {
     use super::*;
     use crate::fresnel::fresnel_unpolarised;
 
-    /// 9 × 9 × 12: the precompute grid's bins.
-    const BINS: BrdfBins = BrdfBins {
-        theta_in: 9,
-        theta_out: 9,
-        phi: 12,
-    };
+    /// 9 × 9 × 12: the precompute grid's default bins.
+    const BINS: BrdfBins = crate::simulate::DEFAULT_BRDF_BINS;
 
     #[test]
     fn a_smooth_surface_reflects_fresnel_into_the_mirror_bin_only() {
@@ -96,15 +83,7 @@ mod tests {
         // into the mirror direction and nothing elsewhere: the binning and normalisation check.
         let mut s = surface_stack(SurfaceModel::Smith);
         s.surface = crate::layer::Surface::Smooth;
-        let run = Run {
-            stacks: vec![s],
-            photons: 200_000,
-            seed: 3,
-            incidence: Incidence::ArcsinZenith,
-            brdf: Some(BINS),
-            profile: None,
-            channel_weights: Vec::new(),
-        };
+        let run = Run::brdf(s, 200_000, 3, BINS);
         let t = run_cpu(&run, &derma_core::progress::Silent).unwrap();
         for ti in 0..BINS.theta_in {
             let n_in = t.brdf_in[ti] as f64;

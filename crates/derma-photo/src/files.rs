@@ -84,7 +84,8 @@ pub struct CameraEntry {
     pub distance_se: f64,
 }
 
-/// A standard error above this fraction of its value makes [`calibrate`] warn.
+/// A standard error above this fraction of its value makes [`calibrate`] warn (authored: 5 %
+/// of the focal length moves a face's outline by a few pixels in a typical portrait).
 pub const ILL_DETERMINED: f64 = 0.05;
 
 /// Options of [`calibrate`] beyond the resection's.

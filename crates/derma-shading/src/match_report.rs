@@ -96,11 +96,7 @@ pub fn write_plots(
     }
     derma_core::atomic::ensure_writable_dir(dir)?;
     let grid = match_table::precompute_grid(pre)?;
-    let bins = derma_optics::tally::BrdfBins {
-        theta_in: grid.brdf[0],
-        theta_out: grid.brdf[1],
-        phi: grid.brdf[2],
-    };
+    let bins = grid.brdf_bins();
     let geom = FitGeometry::with_cutoff(bins, opts.weighting, opts.max_zenith_deg);
     let pstride = pre.header.stride();
     let mstride = mt.dtab.header.stride();

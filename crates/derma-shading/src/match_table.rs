@@ -127,11 +127,7 @@ pub fn fit_table(
     progress: &dyn Progress,
 ) -> Result<(Dtab, Vec<ResidualSummary>)> {
     let grid = precompute_grid(pre)?;
-    let bins = derma_optics::tally::BrdfBins {
-        theta_in: grid.brdf[0],
-        theta_out: grid.brdf[1],
-        phi: grid.brdf[2],
-    };
+    let bins = grid.brdf_bins();
     let pbins = ProfileBins {
         bins: grid.profile_bins,
         d_max_mm: grid.profile_d_max_mm,
@@ -231,11 +227,7 @@ pub fn add_surface_fit(table: &mut MatchTable, progress: &dyn Progress) -> Resul
     let max_zenith = meta["max_zenith_deg"]
         .as_f64()
         .unwrap_or(crate::brdf_fit::DEFAULT_MAX_ZENITH_DEG);
-    let bins = derma_optics::tally::BrdfBins {
-        theta_in: grid.brdf[0],
-        theta_out: grid.brdf[1],
-        phi: grid.brdf[2],
-    };
+    let bins = grid.brdf_bins();
     let fit = crate::surface_fit::fit_surface(
         grid.surface,
         bins,

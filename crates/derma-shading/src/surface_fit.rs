@@ -87,11 +87,7 @@ pub fn fit_surface(
 mod tests {
     use super::*;
 
-    const BINS: BrdfBins = BrdfBins {
-        theta_in: 9,
-        theta_out: 9,
-        phi: 12,
-    };
+    const BINS: BrdfBins = derma_optics::simulate::DEFAULT_BRDF_BINS;
 
     #[test]
     fn the_fit_finds_the_optics_own_surface() {
