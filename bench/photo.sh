@@ -145,7 +145,7 @@ from PIL import Image
 out = sys.argv[1]
 for size in (2048, 4096):
     src = np.asarray(Image.open(f"{out}/bake{size}/source.png").convert("L"))
-    tex = np.asarray(Image.open(f"{out}/bake{size}/texture.png").convert("RGB"))
+    tex = np.asarray(Image.open(f"{out}/bake{size}/albedo.png").convert("RGB"))
     imgs, masks = [], []
     levels = sorted(set(np.unique(src)) - {0})
     for k, lv in enumerate(levels[:5]):

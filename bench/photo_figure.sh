@@ -22,7 +22,7 @@ $D photo unwrap --mesh "$W/set/face.obj" --out "$W/uv.obj" -q >/dev/null
 $D photo bake --mesh "$W/uv.obj" --cameras "$W/cameras.json" --size 2048 --out "$W/bake" -q >/dev/null
 # The synthetic photos are lit at a known level (exposure 0.9, docs/photo.md): pass it, as a
 # calibrated capture would; the auto fit trades brightness for melanin on this set.
-$D photo chromophores --texture "$W/bake/texture.exr" --mask "$W/bake/mask.png" --exposure 0.9 --out "$W/chromo" -q >/dev/null
+$D photo chromophores --texture "$W/bake/albedo.exr" --mask "$W/bake/mask.png" --exposure 0.9 --out "$W/chromo" -q >/dev/null
 # Astronaut crops: her right eye (image left) and the smile, upsampled ×4 (Lanczos).
 "$py" - "$W" <<'PY'
 import sys
@@ -56,7 +56,7 @@ def label(im, text):
     return im
 
 photos = [label(Image.open(f"{w}/set/photo{i}.png").convert("RGB").resize((320, 240)), f"photo {i}") for i in range(5)]
-tex = label(Image.open(f"{w}/bake/texture.png").convert("RGB").resize((480, 480)), "baked texture 2048^2")
+tex = label(Image.open(f"{w}/bake/albedo.png").convert("RGB").resize((480, 480)), "de-lit albedo 2048^2")
 src = label(Image.open(f"{w}/bake/source.png").convert("RGB").resize((480, 480)), "best photo per texel")
 mask = np.asarray(Image.open(f"{w}/bake/mask.png").convert("L")) > 127
 hb = exr(f"{w}/chromo/hemoglobin.exr", "hemoglobin")

@@ -63,7 +63,7 @@ run() { # run BINARY OUT_DIR
   "$d" photo calibrate --points "$o/photo/set/points.json" --out "$o/photo/cameras.json" --quiet > "$o/photo/calibrate.txt"
   "$d" photo unwrap --mesh "$o/photo/set/face.obj" --out "$o/photo/face_uv.obj" --quiet > "$o/photo/unwrap.txt"
   "$d" photo bake --mesh "$o/photo/face_uv.obj" --cameras "$o/photo/cameras.json" --size 256 --out "$o/photo/bake" --quiet > "$o/photo/bake.txt"
-  "$d" photo chromophores --texture "$o/photo/bake/texture.exr" --mask "$o/photo/bake/mask.png" --out "$o/photo/chromo" --quiet > "$o/photo/chromo.txt"
+  "$d" photo chromophores --texture "$o/photo/bake/albedo.exr" --mask "$o/photo/bake/mask.png" --out "$o/photo/chromo" --quiet > "$o/photo/chromo.txt"
   "$d" photo iris --photo "$o/eyes/sdf/lake.png" --size 128 --out "$o/photo/iris" --quiet > "$o/photo/iris.txt"
   "$d" photo teeth --photo "$o/eyes/sdf/lake.png" --size 128 --out "$o/photo/teeth" --quiet > "$o/photo/teeth.txt" || true
   # Renders of the skin set on the GPU renderer (any adapter, e.g. lavapipe; binaries from

@@ -13,6 +13,7 @@
 //!   typed [`GpuError`]s.
 //! - [`numerics`]: the one numerics module (small dense solves, Levenberg–Marquardt, NNLS;
 //!   faer's decompositions).
+//! - [`sh`]: order-2 spherical harmonics and shadowed irradiance transfer over a [`bvh`].
 //! - [`atomic`], [`report`], [`memory`], [`dtab`], [`plot`]: atomic outputs that spare inputs,
 //!   reports with hashes, memory checks, derma's table format, SVG plots.
 //!
@@ -43,6 +44,7 @@ pub mod pyramid;
 pub mod raster;
 pub mod report;
 pub mod rng;
+pub mod sh;
 
 pub use error::{CoreError, Result};
 pub use gpu::{Device, GpuError};

@@ -5,6 +5,7 @@
 
 use crate::blend::{default_levels, multiband_with, Plane};
 use crate::camera::Prepared;
+use crate::delight::{estimate, DelightOptions, Lighting, Sample, Surface, MIN_SHADING};
 use crate::error::{PhotoError, Result};
 use crate::gain::Overlaps;
 use crate::photo::{Photo, RgbImage};
@@ -30,7 +31,14 @@ pub const SOURCE_NONE: u8 = 255;
 pub struct BakeOptions {
     /// Texture width and height in texels.
     pub size: usize,
-    /// Solve per-photo gains and white balance before blending (Brown & Lowe 2007).
+    /// Take each photo's lighting out before blending ([`crate::delight`]); `None` keeps it.
+    pub delight: Option<DelightOptions>,
+    /// Rays per vertex (this number squared) for the mesh's shadowed SH transfer.
+    pub transfer_side: usize,
+    /// Render each photo's recovered shading in its own frame ([`Baked::shading`]).
+    pub shading_images: bool,
+    /// Solve per-photo gains and white balance before blending (Brown & Lowe 2007), normalised
+    /// per channel to a geometric mean of 1; with de-lighting the gains come from the lighting.
     pub gain_compensation: bool,
     /// Blend with multiresolution splines (Burt & Adelson 1983); else the weighted mean.
     pub multiband: bool,
@@ -47,6 +55,9 @@ impl Default for BakeOptions {
     fn default() -> Self {
         Self {
             size: 2048,
+            delight: Some(DelightOptions::default()),
+            transfer_side: 8,
+            shading_images: false,
             gain_compensation: true,
             multiband: true,
             levels: None,
@@ -82,14 +93,21 @@ pub struct BakeReport {
     pub unbound_vertices: usize,
     /// Share of the chart's texels coloured from photos directly (case 1).
     pub photo_coverage: f64,
-    /// Wall-clock seconds of the stages: binding and gains, resampling, spline blending.
+    /// Each photo's lighting as de-lighting found it (`None` when the lighting was kept).
+    pub lighting: Option<Lighting>,
+    /// Wall-clock seconds of the stages: binding, gains and de-lighting, resampling, spline
+    /// blending.
     pub seconds: [f64; 3],
 }
 
 /// A baked texture.
 pub struct Baked {
-    /// Linear RGB, row 0 at v = 1.
+    /// Linear RGB, row 0 at v = 1: the albedo (in the scale of mean gain 1) when de-lit, else
+    /// the photos' colour.
     pub texture: RgbImage,
+    /// Per photo with [`BakeOptions::shading_images`] and de-lighting: the shading taken out
+    /// (irradiance × exposure × white balance × vignetting) in the photo's frame, 0 off the mesh.
+    pub shading: Vec<RgbImage>,
     /// Per texel: the best photo's index, [`SOURCE_INTERPOLATED`] or [`SOURCE_NONE`].
     pub source: Vec<u8>,
     /// The summary.
@@ -120,6 +138,9 @@ fn weight(cam: &Prepared, p: Vec3, n: Vec3, falloff: [f32; 2]) -> Option<(f32, g
     (wgt > 0.0).then_some((wgt, px))
 }
 
+/// A vertex seen in a photo: (photo, colour, view weight, r², unit direction to the camera).
+type VertexSample = (usize, [f32; 3], f32, f32, Vec3);
+
 /// A mesh vertex seen from a photo: its pixel and ⟨N, V⟩.
 type Corner = ([f32; 2], f32);
 
@@ -136,6 +157,63 @@ fn texel_weight(cam: &crate::Camera, px: [f32; 2], cos: f32, falloff: [f32; 2]) 
     let wgt =
         cos * smoothstep(falloff[0], falloff[1], cos) * smoothstep(0.0, 0.02 * w.max(h), edge);
     (wgt > 0.0).then_some(wgt)
+}
+
+/// Squared distance of pixel `px` from the image centre, 1 at the corner (vignetting's r²).
+fn radius2(cam: &crate::Camera, px: [f32; 2]) -> f32 {
+    let (w, h) = (cam.width as f32, cam.height as f32);
+    ((px[0] - w / 2.0).powi(2) + (px[1] - h / 2.0).powi(2)) / ((w * w + h * h) / 4.0)
+}
+
+/// Photo k's shading (per welded vertex, `shade`) times its vignetting, drawn in its own frame
+/// by derma-render's rasteriser; 0 off the mesh.
+fn shading_image(
+    topo: &Topology,
+    shade: &[[f32; 3]],
+    cam: &crate::Camera,
+    lighting: &Lighting,
+    k: usize,
+) -> RgbImage {
+    use derma_render::raster::{rasterise, Object, Projection};
+    let welded = TriMesh {
+        positions: topo.positions.clone(),
+        triangles: topo.triangles.clone(),
+        ..Default::default()
+    };
+    let shade: Vec<Vec3> = shade.iter().map(|s| Vec3::from(*s)).collect();
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let projection = Projection::Pinhole {
+        rotation: cam.rotation_matrix().as_mat3(),
+        position: cam.centre().as_vec3(),
+        focal: cam.focal_px as f32,
+        principal: glam::Vec2::new(cam.principal[0] as f32, cam.principal[1] as f32),
+    };
+    let hits = rasterise(
+        &[Object {
+            mesh: &welded,
+            coverage: None,
+        }],
+        &projection,
+        w,
+        h,
+    );
+    let data = hits
+        .par_iter()
+        .enumerate()
+        .map(|(i, hit)| match hit {
+            Some(hit) => {
+                let s = hit.interpolate(&welded, &shade);
+                let px = [(i % w) as f32 + 0.5, (i / w) as f32 + 0.5];
+                (s * lighting.vignette(k, radius2(cam, px))).to_array()
+            }
+            None => [0.0; 3],
+        })
+        .collect();
+    RgbImage {
+        width: w,
+        height: h,
+        data,
+    }
 }
 
 /// Vertex-to-photo binding (Rocchini et al. 1999 as in §3.2): bit i is set when vertex v
@@ -281,9 +359,9 @@ pub fn bake(
     let extent = mesh.extent();
     let masks = bind(&topo, &wnormals, photos, &bvh, opts.ray_offset * extent);
     let cams: Vec<Prepared> = photos.iter().map(|p| Prepared::new(&p.camera)).collect();
-    // Gains from every vertex seen by two or more photos.
-    // Each vertex sampled once in every photo it is bound to: (photo, colour, weight).
-    let samples: Vec<Vec<(usize, [f32; 3], f32)>> = (0..topo.positions.len())
+    // Each vertex sampled once in every photo it is bound to: (photo, colour, weight, r², unit
+    // direction to the camera).
+    let samples: Vec<Vec<VertexSample>> = (0..topo.positions.len())
         .into_par_iter()
         .map(|v| {
             let p = topo.positions[v];
@@ -291,32 +369,135 @@ pub fn bake(
                 .filter(|i| masks[v] & (1 << i) != 0)
                 .filter_map(|i| {
                     let (w, px) = weight(&cams[i], p, wnormals[v], opts.falloff)?;
-                    Some((i, photos[i].image.sample(px), w))
+                    let r2 = radius2(&cams[i].camera, [px.x as f32, px.y as f32]);
+                    let view = (cams[i].centre - p.as_dvec3()).normalize().as_vec3();
+                    Some((i, photos[i].image.sample(px), w, r2, view))
                 })
                 .collect()
         })
         .collect();
-    let gains: Vec<[f32; 3]> = if opts.gain_compensation {
-        // Sums in vertex order: the same gains at any thread count.
-        let mut o = Overlaps::new(photos.len());
-        for s in samples.iter().filter(|s| s.len() >= 2) {
-            let pairs: Vec<(usize, [f32; 3])> = s.iter().map(|(i, c, _)| (*i, *c)).collect();
-            o.add(&pairs);
+    // De-lighting: per photo and welded vertex, the shading to divide by and the robust weight.
+    let delit = opts.delight.map(|d| {
+        progress.stage("estimate the lighting", 0, Unit::Steps);
+        let offset = opts.ray_offset * extent;
+        let transfer = derma_core::sh::shadowed_transfer(
+            &topo.positions,
+            &wnormals,
+            &bvh,
+            opts.transfer_side.max(1),
+            offset,
+            0,
+        );
+        let open = |v: usize, dir: Vec3| {
+            !bvh.occluded(topo.positions[v] + wnormals[v] * offset, dir, 0.0, f32::MAX)
+        };
+        let surface = Surface {
+            normals: &wnormals,
+            transfer: &transfer,
+            open: &open,
+        };
+        let obs: Vec<Vec<Sample>> = samples
+            .iter()
+            .map(|s| {
+                s.iter()
+                    .map(|(i, c, _, r2, view)| Sample {
+                        photo: *i,
+                        colour: *c,
+                        r2: *r2,
+                        view: *view,
+                    })
+                    .collect()
+            })
+            .collect();
+        estimate(&surface, &obs, photos.len(), &d)
+    });
+    let gains: Vec<[f32; 3]> = match &delit {
+        // The shading holds exposure and white balance.
+        Some(_) => vec![[1.0; 3]; photos.len()],
+        None if opts.gain_compensation => {
+            // Sums in vertex order: the same gains at any thread count.
+            let mut o = Overlaps::new(photos.len());
+            for s in samples.iter().filter(|s| s.len() >= 2) {
+                let pairs: Vec<(usize, [f32; 3])> = s.iter().map(|(i, c, ..)| (*i, *c)).collect();
+                o.add(&pairs);
+            }
+            crate::gain::unit_mean(o.gains())
         }
-        o.gains()
-    } else {
-        vec![[1.0; 3]; photos.len()]
+        None => vec![[1.0; 3]; photos.len()],
     };
-    // Vertex colours (case 2) and the fill (case 3), from the gain-corrected samples.
+    // Per photo and welded vertex: shading (floored) and robust weight.
+    let (vshade, vweight): (Vec<Vec<[f32; 3]>>, Vec<Vec<f32>>) = match &delit {
+        Some(d) => {
+            let nv = topo.positions.len();
+            let shade: Vec<Vec<[f32; 3]>> = (0..photos.len())
+                .map(|k| {
+                    let raw: Vec<[f32; 3]> =
+                        (0..nv).into_par_iter().map(|v| d.shading(k, v)).collect();
+                    let mean: [f32; 3] = std::array::from_fn(|c| {
+                        let (mut s, mut n) = (0.0f64, 0usize);
+                        for (v, smp) in samples.iter().enumerate() {
+                            if smp.iter().any(|x| x.0 == k) {
+                                s += raw[v][c] as f64;
+                                n += 1;
+                            }
+                        }
+                        (s / n.max(1) as f64) as f32
+                    });
+                    raw.iter()
+                        .map(|r| std::array::from_fn(|c| r[c].max(MIN_SHADING * mean[c])))
+                        .collect()
+                })
+                .collect();
+            // Robust weights, times (S / mean S)² up to 1: dividing a dim sample amplifies its
+            // noise and any error of the shadow model (the least-squares weight of I / S).
+            let level: Vec<f32> = shade
+                .iter()
+                .map(|s| {
+                    let (mut sum, mut n) = (0.0f64, 0usize);
+                    for (v, smp) in samples.iter().enumerate() {
+                        if smp.iter().any(|x| std::ptr::eq(s, &shade[x.0])) {
+                            sum += s[v].iter().sum::<f32>() as f64;
+                            n += 1;
+                        }
+                    }
+                    (sum / n.max(1) as f64) as f32
+                })
+                .collect();
+            let mut wt = vec![vec![1.0f32; nv]; photos.len()];
+            for (v, (s, w)) in samples.iter().zip(&d.weights).enumerate() {
+                for (x, w) in s.iter().zip(w) {
+                    let r = shade[x.0][v].iter().sum::<f32>() / level[x.0].max(1e-12);
+                    wt[x.0][v] = *w * (r * r).min(1.0);
+                }
+            }
+            (shade, wt)
+        }
+        None => (Vec::new(), Vec::new()),
+    };
+    // A sample's colour with the lighting (or the gain) taken out.
+    let unlit = |k: usize, v: usize, c: [f32; 3], r2: f32| -> [f32; 3] {
+        match &delit {
+            Some(d) => {
+                let f = d.lighting.vignette(k, r2).max(0.2);
+                std::array::from_fn(|j| c[j] / (vshade[k][v][j] * f))
+            }
+            None => std::array::from_fn(|j| c[j] * gains[k][j]),
+        }
+    };
+    // Vertex colours (case 2) and the fill (case 3), from the corrected samples, each weighted
+    // by its view and robust weight.
     let mut vcolor: Vec<Option<[f32; 3]>> = samples
         .par_iter()
-        .map(|s| {
-            let wsum: f32 = s.iter().map(|x| x.2).sum();
+        .enumerate()
+        .map(|(v, s)| {
+            let rw = |k: usize| vweight.get(k).map_or(1.0, |w| w[v]);
+            let wsum: f32 = s.iter().map(|x| x.2 * rw(x.0)).sum();
             (wsum > 0.0).then(|| {
                 let mut c = [0.0f32; 3];
-                for (i, col, w) in s {
+                for (i, col, w, r2, _) in s {
+                    let u = unlit(*i, v, *col, *r2);
                     for k in 0..3 {
-                        c[k] += col[k] * gains[*i][k] * w / wsum;
+                        c[k] += u[k] * w * rw(*i) / wsum;
                     }
                 }
                 c
@@ -420,13 +601,29 @@ pub fn bake(
         let b0 = 1.0 - b1 - b2;
         let cos = b0 * c0.1 + b1 * c1.1 + b2 * c2.1;
         let px = [0, 1].map(|a| b0 * c0.0[a] + b1 * c1.0[a] + b2 * c2.0[a]);
-        let w = texel_weight(&cams[k].camera, px, cos, opts.falloff)?;
-        let px = glam::DVec2::new(px[0] as f64, px[1] as f64);
-        let mut c = photos[k].image.sample(px);
-        for j in 0..3 {
-            c[j] *= gains[k][j];
-        }
-        Some((c, w))
+        let mut w = texel_weight(&cams[k].camera, px, cos, opts.falloff)?;
+        let c = photos[k]
+            .image
+            .sample(glam::DVec2::new(px[0] as f64, px[1] as f64));
+        let c = match &delit {
+            Some(d) => {
+                let wv = tri_w[raster.triangle[i] as usize];
+                let b = [b0, b1, b2];
+                let sh: [f32; 3] = std::array::from_fn(|j| {
+                    (0..3).map(|q| vshade[k][wv[q] as usize][j] * b[q]).sum()
+                });
+                w *= (0..3)
+                    .map(|q| vweight[k][wv[q] as usize] * b[q])
+                    .sum::<f32>();
+                let f = d
+                    .lighting
+                    .vignette(k, radius2(&cams[k].camera, px))
+                    .max(0.2);
+                std::array::from_fn(|j| c[j] / (sh[j] * f))
+            }
+            None => std::array::from_fn(|j| c[j] * gains[k][j]),
+        };
+        (w > 0.0).then_some((c, w))
     };
     let covered: Vec<bool> = raster.triangle.iter().map(|t| *t != NO_TRIANGLE).collect();
     let dil = dilation_sources(&covered, size, size).ok_or_else(|| {
@@ -613,7 +810,7 @@ pub fn bake(
             .enumerate()
             .map(|(i, p)| PhotoReport {
                 name: p.name.clone(),
-                gain: gains[i],
+                gain: delit.as_ref().map_or(gains[i], |d| d.lighting.gains[i]),
                 bound_vertices: masks.iter().filter(|m| *m & (1 << i) != 0).count(),
                 best_share: source.iter().filter(|s| **s as usize == i).count() as f64
                     / chart as f64,
@@ -622,13 +819,21 @@ pub fn bake(
         triangle_cases: cases,
         unbound_vertices: unbound,
         photo_coverage,
+        lighting: delit.as_ref().map(|d| d.lighting.clone()),
         seconds: [
             t_bind,
             t_resample,
             t0.elapsed().as_secs_f64() - t_bind - t_resample,
         ],
     };
+    let shading = match (&delit, opts.shading_images) {
+        (Some(d), true) => (0..photos.len())
+            .map(|k| shading_image(&topo, &vshade[k], &photos[k].camera, &d.lighting, k))
+            .collect(),
+        _ => Vec::new(),
+    };
     Ok(Baked {
+        shading,
         texture: RgbImage {
             width: size,
             height: size,

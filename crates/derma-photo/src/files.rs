@@ -276,9 +276,12 @@ pub fn read_photos(list: &[(PathBuf, String, Camera)]) -> Result<Vec<Photo>> {
         .collect()
 }
 
-/// Bakes a texture from calibrated photos onto a UV-mapped mesh; writes `texture.png` (sRGB),
-/// `texture.exr` (linear), `source.png` (which photo each texel came from), `mask.png` (texels
-/// coloured from photos: the input of `derma photo chromophores --mask`) and `bake.json`.
+/// Bakes a texture from calibrated photos onto a UV-mapped mesh. De-lit (the default):
+/// `albedo.png` (sRGB), `albedo.exr` (linear) and `shading_K.png` per photo K (the shading taken
+/// out, in the photo's frame, scaled by ½ so that twice the mean level still fits); with the
+/// lighting kept: `texture.png` and `texture.exr`. Both: `source.png` (which photo each texel
+/// came from), `mask.png` (texels coloured from photos: the input of `derma photo chromophores
+/// --mask`) and `bake.json`.
 pub fn bake_files(
     mesh: &Path,
     cameras: &Path,
@@ -287,24 +290,43 @@ pub fn bake_files(
     progress: &dyn Progress,
 ) -> Result<BakeReport> {
     ensure_writable_dir(out_dir)?;
-    let names = [
-        "texture.png",
-        "texture.exr",
-        "source.png",
-        "bake.json",
-        "mask.png",
-    ];
-    let outs: Vec<PathBuf> = names.iter().map(|n| out_dir.join(n)).collect();
     let list = read_cameras(cameras)?;
+    let colour = if opts.delight.is_some() {
+        "albedo"
+    } else {
+        "texture"
+    };
+    let mut names: Vec<String> = vec![
+        format!("{colour}.png"),
+        format!("{colour}.exr"),
+        "source.png".into(),
+        "bake.json".into(),
+        "mask.png".into(),
+    ];
+    if opts.delight.is_some() {
+        names.extend((0..list.len()).map(|k| format!("shading_{k}.png")));
+    }
+    let outs: Vec<PathBuf> = names.iter().map(|n| out_dir.join(n)).collect();
     let mut inputs = vec![mesh, cameras];
     inputs.extend(list.iter().map(|(p, _, _)| p.as_path()));
     check_inputs_spared(&outs, &inputs)?;
     let photos = read_photos(&list)?;
     let m = TriMesh::load(mesh)?;
-    let b = bake(&m, &photos, opts, progress)?;
+    let opts = BakeOptions {
+        shading_images: opts.delight.is_some(),
+        ..*opts
+    };
+    let b = bake(&m, &photos, &opts, progress)?;
     progress.stage("write", 0, Unit::Steps);
     b.texture.write_linear(&outs[0])?;
     b.texture.write_linear(&outs[1])?;
+    for (k, s) in b.shading.iter().enumerate() {
+        let half = RgbImage {
+            data: s.data.iter().map(|c| c.map(|v| 0.5 * v)).collect(),
+            ..s.clone()
+        };
+        half.write_linear(&outs[5 + k])?;
+    }
     let n = photos.len().max(1);
     let src: Vec<f32> = b
         .source

@@ -82,6 +82,28 @@ impl Overlaps {
     }
 }
 
+/// `gains` scaled per channel so that their geometric mean over the photos is 1: eq. 29's prior
+/// pulls every gain toward 1 but, with differently lit views, unevenly per channel, which tints
+/// the whole texture; the overall level and colour of the light are not recoverable anyway, so
+/// the light is taken as neutral on average.
+pub fn unit_mean(mut gains: Vec<[f32; 3]>) -> Vec<[f32; 3]> {
+    for c in 0..3 {
+        let logs: Vec<f64> = gains
+            .iter()
+            .filter(|g| g[c] > 0.0)
+            .map(|g| (g[c] as f64).ln())
+            .collect();
+        if logs.is_empty() {
+            continue;
+        }
+        let m = (logs.iter().sum::<f64>() / logs.len() as f64).exp() as f32;
+        for g in gains.iter_mut() {
+            g[c] /= m;
+        }
+    }
+    gains
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -107,6 +129,17 @@ mod tests {
             // From 1.25/0.8 = 1.56 before to within 3 % (the prior keeps a little of it).
             assert!(spread < 1.03, "channel {c}: {corrected:?} from gains {g:?}");
         }
+    }
+
+    #[test]
+    fn unit_mean_gains_have_no_cast() {
+        let g = unit_mean(vec![[0.72, 0.88, 0.9], [0.8, 0.9, 1.0], [0.6, 0.85, 0.95]]);
+        for c in 0..3 {
+            let p: f32 = g.iter().map(|x| x[c]).product();
+            assert!((p - 1.0).abs() < 1e-5, "channel {c}: {p}");
+        }
+        // Ratios between photos are kept.
+        assert!((g[0][0] / g[1][0] - 0.9).abs() < 1e-5);
     }
 
     #[test]

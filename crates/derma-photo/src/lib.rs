@@ -18,6 +18,7 @@ pub mod blend;
 pub mod camera;
 pub mod chromophores;
 pub mod correspondences;
+pub mod delight;
 pub mod error;
 pub mod files;
 pub mod gain;

@@ -170,6 +170,13 @@ pub struct View {
     pub elevation_deg: f32,
     /// Direction toward the key light (world).
     pub light: Vec3,
+    /// Irradiance of the key light on a surface facing it (casts hard shadows).
+    pub key: f32,
+    /// Irradiance of the uniform ambient sky on an open surface (occluded by the mesh).
+    pub ambient: f32,
+    /// Normal-incidence reflectance of the white surface lobe (GGX, roughness
+    /// [`SPECULAR_ROUGHNESS`]); 0 for none.
+    pub specular_f0: f32,
     /// Exposure factor.
     pub exposure: f32,
     /// White-balance factors per channel.
@@ -178,56 +185,103 @@ pub struct View {
     pub vignetting: f32,
 }
 
-/// Five views as a photographer would take them (front, ±35°, ±70°), each with its own key
-/// light, exposure (×0.7–1.3), white balance and vignetting.
+/// Five views as a photographer would take them without a light tent (front, ±35°, ±70°): each
+/// its own directional key light with hard shadows (key 0.65–1.0), a weaker ambient sky
+/// (0.25–0.45) occluded by the face, a specular sheen (F0 0.035–0.05, an oily forehead and nose;
+/// skin's F0 is ≈ 0.028 for n ≈ 1.4, Weyrich et al. 2006), exposure ×0.7–1.3, white balance and
+/// vignetting.
 pub fn default_views() -> Vec<View> {
+    let v = |az: f32, el: f32, light: [f32; 3], key: f32, ambient: f32, f0: f32| View {
+        azimuth_deg: az,
+        elevation_deg: el,
+        light: Vec3::from(light),
+        key,
+        ambient,
+        specular_f0: f0,
+        exposure: 1.0,
+        white_balance: [1.0; 3],
+        vignetting: 0.2,
+    };
     vec![
         View {
-            azimuth_deg: 0.0,
-            elevation_deg: 5.0,
-            light: Vec3::new(0.3, 0.4, 1.0),
-            exposure: 1.0,
-            white_balance: [1.0, 1.0, 1.0],
-            vignetting: 0.2,
+            ..v(0.0, 5.0, [0.3, 0.4, 1.0], 0.8, 0.35, 0.04)
         },
         View {
-            azimuth_deg: 35.0,
-            elevation_deg: 0.0,
-            light: Vec3::new(0.8, 0.3, 0.6),
             exposure: 1.3,
             white_balance: [1.08, 1.0, 0.9],
             vignetting: 0.3,
+            ..v(35.0, 0.0, [0.8, 0.3, 0.6], 0.7, 0.3, 0.05)
         },
         View {
-            azimuth_deg: -35.0,
-            elevation_deg: 0.0,
-            light: Vec3::new(-0.6, 0.5, 0.7),
             exposure: 0.7,
             white_balance: [0.93, 1.0, 1.1],
             vignetting: 0.25,
+            ..v(-35.0, 0.0, [-0.6, 0.5, 0.7], 1.0, 0.25, 0.035)
         },
         View {
-            azimuth_deg: 70.0,
-            elevation_deg: -5.0,
-            light: Vec3::new(1.0, 0.2, 0.2),
             exposure: 1.15,
             white_balance: [1.0, 0.97, 0.95],
             vignetting: 0.3,
+            ..v(70.0, -5.0, [1.0, 0.2, 0.2], 0.65, 0.45, 0.04)
         },
         View {
-            azimuth_deg: -70.0,
-            elevation_deg: 10.0,
-            light: Vec3::new(-1.0, 0.1, 0.3),
             exposure: 0.85,
             white_balance: [0.97, 1.0, 1.05],
-            vignetting: 0.2,
+            ..v(-70.0, 10.0, [-1.0, 0.1, 0.3], 0.9, 0.3, 0.045)
         },
     ]
 }
 
-/// Share of diffuse ambient light in the synthetic photos (the rest from the key light): the
-/// "uniform, diffuse illumination" Tarini et al. §3 recommend, not perfectly achieved.
-pub const AMBIENT: f32 = 0.7;
+/// GGX roughness of the synthetic photos' surface lobe: a skin-like sheen (Weyrich et al. 2006
+/// fit Torrance–Sparrow roughness 0.3–0.45 on faces).
+pub const SPECULAR_ROUGHNESS: f32 = 0.35;
+
+/// Ray offset of the synthetic renders' shadow and sky rays (mm).
+const RAY_OFFSET_MM: f32 = 0.05;
+
+/// A mesh ready to be photographed: its ray-casting hierarchy and each vertex's sky visibility
+/// (the ambient occlusion, 16² cosine-weighted rays), computed once for all views.
+pub struct Stage<'a> {
+    mesh: &'a TriMesh,
+    bvh: derma_core::bvh::Bvh,
+    sky: Vec<f32>,
+}
+
+impl<'a> Stage<'a> {
+    /// Prepares `mesh` (with normals).
+    pub fn new(mesh: &'a TriMesh) -> Self {
+        use derma_core::sh::stratified_direction;
+        use rayon::prelude::*;
+        let bvh = derma_core::bvh::Bvh::new(&mesh.positions, &mesh.triangles);
+        let rng = derma_core::rng::Philox::new(0x5ce7e, 3);
+        let side = 16;
+        let sky = mesh
+            .positions
+            .par_iter()
+            .zip(&mesh.normals)
+            .enumerate()
+            .map(|(v, (p, n))| {
+                let n = n.normalize_or(Vec3::Z);
+                let o = *p + n * RAY_OFFSET_MM;
+                let open = (0..side * side)
+                    .filter(|&k| {
+                        let d = stratified_direction(n, &rng, v as u64, k, side);
+                        !bvh.occluded(o, d, 0.0, f32::MAX)
+                    })
+                    .count();
+                open as f32 / (side * side) as f32
+            })
+            .collect();
+        Self { mesh, bvh, sky }
+    }
+}
+
+/// GGX's normal distribution D(h) for α = roughness² (Walter et al. 2007 eq. 33).
+fn ggx_d(n_h: f32, alpha: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let d = n_h * n_h * (a2 - 1.0) + 1.0;
+    a2 / (std::f32::consts::PI * d * d)
+}
 
 /// A camera for `view` framing the head's face from `distance_mm`.
 pub fn camera_for(
@@ -255,18 +309,21 @@ pub fn camera_for(
     )
 }
 
-/// Renders a photo of `mesh` (with `albedo` per surface point) through derma-render's
-/// rasteriser (one sample per pixel centre, the camera's pinhole), shaded by ambient plus a
-/// Lambertian key light, times exposure, white balance and vignetting, then stored as 8-bit sRGB
-/// as a camera would.
+/// Renders a photo of the staged mesh (with `albedo` per surface point) through
+/// derma-render's rasteriser (one sample per pixel centre, the camera's pinhole): a Lambertian
+/// surface under the view's ambient sky (times the vertex's sky visibility) and key light (with
+/// a hard shadow ray), plus a white GGX sheen from the key (Schlick's Fresnel, Smith's masking
+/// left out), times exposure, white balance and vignetting, then stored as 8-bit sRGB as a
+/// camera would.
 pub fn render(
-    mesh: &TriMesh,
+    stage: &Stage,
     cam: &crate::Camera,
     view: &View,
     albedo: &(dyn Fn(Vec3) -> [f32; 3] + Sync),
 ) -> crate::photo::RgbImage {
     use derma_render::raster::{rasterise, Object, Projection};
     use rayon::prelude::*;
+    let mesh = stage.mesh;
     let (w, h) = (cam.width as usize, cam.height as usize);
     let projection = Projection::Pinhole {
         rotation: cam.rotation_matrix().as_mat3(),
@@ -284,6 +341,8 @@ pub fn render(
         h,
     );
     let light = view.light.normalize();
+    let eye = cam.centre().as_vec3();
+    let alpha = SPECULAR_ROUGHNESS * SPECULAR_ROUGHNESS;
     let half_diag = ((w * w + h * h) as f32).sqrt() / 2.0;
     let data: Vec<[f32; 3]> = hits
         .par_iter()
@@ -299,8 +358,25 @@ pub fn render(
                 Some(hit) => {
                     let n = hit.interpolate(mesh, &mesh.normals).normalize_or(Vec3::Z);
                     let p = hit.interpolate(mesh, &mesh.positions);
-                    let shade = AMBIENT + (1.0 - AMBIENT) * n.dot(light).max(0.0) / 0.75;
-                    albedo(p).map(|a| a * shade)
+                    let sky = hit.interpolate(mesh, &stage.sky);
+                    let n_l = n.dot(light);
+                    let lit = n_l > 0.0
+                        && !stage
+                            .bvh
+                            .occluded(p + n * RAY_OFFSET_MM, light, 0.0, f32::MAX);
+                    let key = if lit { view.key * n_l } else { 0.0 };
+                    let v = (eye - p).normalize();
+                    let n_v = n.dot(v).max(0.05);
+                    let hv = (light + v).normalize();
+                    let fresnel =
+                        view.specular_f0 + (1.0 - view.specular_f0) * (1.0 - hv.dot(v)).powi(5);
+                    let sheen = if lit && view.specular_f0 > 0.0 {
+                        view.key * fresnel * ggx_d(n.dot(hv).max(0.0), alpha) / (4.0 * n_v)
+                    } else {
+                        0.0
+                    };
+                    let diffuse = view.ambient * sky + key;
+                    albedo(p).map(|a| a * diffuse + sheen)
                 }
                 // A grey backdrop.
                 None => [0.18, 0.19, 0.2],
@@ -405,7 +481,7 @@ pub fn photo_set(
     noise_px: f64,
     seed: u64,
 ) -> (Vec<crate::photo::Photo>, Vec<crate::resection::PhotoPoints>) {
-    let bvh = derma_core::bvh::Bvh::new(&mesh.positions, &mesh.triangles);
+    let stage = Stage::new(mesh);
     let feats = feature_points(head, mesh);
     default_views()
         .iter()
@@ -413,9 +489,15 @@ pub fn photo_set(
         .map(|(i, v)| {
             let cam = camera_for(head, v, width, height, 550.0);
             let name = format!("photo{i}.png");
-            let points =
-                clicked_points(&feats, &bvh, &cam, &name, noise_px, seed * 1000 + i as u64);
-            let image = render(mesh, &cam, v, albedo);
+            let points = clicked_points(
+                &feats,
+                &stage.bvh,
+                &cam,
+                &name,
+                noise_px,
+                seed * 1000 + i as u64,
+            );
+            let image = render(&stage, &cam, v, albedo);
             (
                 crate::photo::Photo {
                     name,
@@ -434,6 +516,11 @@ pub struct TextureScores {
     /// PSNR (dB, peak 1) over texels coloured from photos, after the one per-channel scale
     /// that best matches the truth (exposure and shading level are not recoverable).
     pub psnr_db: f64,
+    /// That per-channel scale (recovered / true).
+    pub channel_scale: [f64; 3],
+    /// The colour cast: the mean over channels of |scale / mean scale − 1| (0 when the texture
+    /// is the truth times one number).
+    pub cast: f64,
     /// Mean squared gradient of the error (recovered − scaled truth) across seams: between
     /// neighbouring texels whose best photo differs.
     pub seam_gradient_energy: f64,
@@ -501,8 +588,15 @@ pub fn evaluate(
             }
         }
     }
+    let mean_scale = scale.iter().sum::<f64>() / 3.0;
     TextureScores {
         psnr_db: -10.0 * mse.max(1e-30).log10(),
+        channel_scale: scale,
+        cast: scale
+            .iter()
+            .map(|s| (s / mean_scale - 1.0).abs())
+            .sum::<f64>()
+            / 3.0,
         seam_gradient_energy: seam / pairs.max(1) as f64,
         seam_pairs: pairs,
     }

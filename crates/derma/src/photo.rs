@@ -22,7 +22,8 @@ pub enum PhotoCommand {
     Calibrate(CalibrateArgs),
     /// One flip-free, stretch-minimising UV chart for a disc-shaped face mesh → OBJ with UVs.
     Unwrap(UnwrapArgs),
-    /// Resample the photos into the mesh's texture (gains, spline blending) → texture.png/.exr.
+    /// Resample the photos into the mesh's texture with their lighting taken out (spline
+    /// blending) → albedo.png/.exr, shading_K.png.
     Bake(BakeArgs),
     /// Melanin and hemoglobin maps of a texture through the skin-colour LUT → EXR maps.
     Chromophores(ChromophoreArgs),
@@ -102,12 +103,15 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
             done(bars, "unwrapped", t0, &a.out);
         }
         PhotoCommand::Bake(a) => {
-            let opts = BakeOptions {
+            let mut opts = BakeOptions {
                 size: a.size,
                 gain_compensation: !a.no_gain,
                 multiband: !a.no_multiband,
                 ..Default::default()
             };
+            if a.keep_lighting {
+                opts.delight = None;
+            }
             let r = files::bake_files(&a.mesh, &a.cameras, &opts, &a.out, bars)?;
             for p in &r.photos {
                 line(format!(
@@ -118,6 +122,16 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
                     p.gain[2],
                     p.bound_vertices,
                     100.0 * p.best_share
+                ))?;
+            }
+            if let Some(l) = &r.lighting {
+                let keys = l.key_direction.iter().filter(|d| d.is_some()).count();
+                line(format!(
+                    "lighting: a key light in {keys} of {} photos; relative misfit {:.3}; {:.1} % of samples weighted out (highlights, shadows); vignetting {:?}",
+                    l.key_direction.len(),
+                    l.rms_relative,
+                    100.0 * l.outlier_share,
+                    l.vignetting.iter().map(|v| (v * 1000.0).round() / 1000.0).collect::<Vec<_>>()
                 ))?;
             }
             line(format!(

@@ -67,7 +67,11 @@ pub struct BakeArgs {
     /// Texture size (texels).
     #[arg(long, default_value_t = 2048)]
     pub size: usize,
-    /// No per-photo gain and white-balance compensation.
+    /// Keep each photo's lighting in the texture (no de-lighting): writes texture.png/.exr
+    /// instead of albedo.png/.exr and shading_K.png.
+    #[arg(long)]
+    pub keep_lighting: bool,
+    /// No per-photo gain and white-balance compensation (with --keep-lighting).
     #[arg(long)]
     pub no_gain: bool,
     /// No multiresolution spline: the weighted mean only.

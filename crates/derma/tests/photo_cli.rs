@@ -50,9 +50,11 @@ fn the_pipeline_runs_from_synthetic_photos_to_a_rig() {
     ]);
     assert!(ok, "{err}");
     assert!(out.contains("gain"), "{out}");
+    assert!(out.contains("lighting:"), "{out}");
     for f in [
-        "texture.png",
-        "texture.exr",
+        "albedo.png",
+        "albedo.exr",
+        "shading_0.png",
         "source.png",
         "mask.png",
         "bake.json",
@@ -64,7 +66,7 @@ fn the_pipeline_runs_from_synthetic_photos_to_a_rig() {
         "photo",
         "chromophores",
         "--texture",
-        s(&bake.join("texture.exr")),
+        s(&bake.join("albedo.exr")),
         "--mask",
         s(&bake.join("mask.png")),
         "--out",
