@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The README's photo figures:
-#  docs/images/photo-pipeline.png — the synthetic set (five photos of the built-in face, varied
-#    light, exposure, white balance and vignetting), the baked 2048² texture, which photo each
-#    texel came from, and the recovered hemoglobin and melanin maps;
+#  docs/images/photo-pipeline.png — the synthetic set (five photos of the built-in face, each
+#    with its own key light, shadows, sheen, exposure, white balance and vignetting), the 2048²
+#    bake with the lighting kept and de-lit, the shading taken out of photo 2, and the hemoglobin
+#    and melanin maps recovered from the albedo (--exposure auto);
 #  docs/images/photo-iris-teeth.png — scikit-image's astronaut photo (NASA, public domain)
 #    through the iris and teeth pipelines: the eye and smile crops, the eyeball texture and
 #    its polar iris, the labelled and equalised teeth.
@@ -20,9 +21,8 @@ $D photo synthetic --width 1600 --out "$W/set" -q
 $D photo calibrate --points "$W/set/points.json" --out "$W/cameras.json" -q >/dev/null
 $D photo unwrap --mesh "$W/set/face.obj" --out "$W/uv.obj" -q >/dev/null
 $D photo bake --mesh "$W/uv.obj" --cameras "$W/cameras.json" --size 2048 --out "$W/bake" -q >/dev/null
-# The synthetic photos are lit at a known level (exposure 0.9, docs/photo.md): pass it, as a
-# calibrated capture would; the auto fit trades brightness for melanin on this set.
-$D photo chromophores --texture "$W/bake/albedo.exr" --mask "$W/bake/mask.png" --exposure 0.9 --out "$W/chromo" -q >/dev/null
+$D photo bake --mesh "$W/uv.obj" --cameras "$W/cameras.json" --size 2048 --keep-lighting --out "$W/lit" -q >/dev/null
+$D photo chromophores --texture "$W/bake/albedo.exr" --mask "$W/bake/mask.png" --exposure auto --out "$W/chromo" -q >/dev/null
 # Astronaut crops: her right eye (image left) and the smile, upsampled ×4 (Lanczos).
 "$py" - "$W" <<'PY'
 import sys
@@ -56,18 +56,22 @@ def label(im, text):
     return im
 
 photos = [label(Image.open(f"{w}/set/photo{i}.png").convert("RGB").resize((320, 240)), f"photo {i}") for i in range(5)]
-tex = label(Image.open(f"{w}/bake/albedo.png").convert("RGB").resize((480, 480)), "de-lit albedo 2048^2")
-src = label(Image.open(f"{w}/bake/source.png").convert("RGB").resize((480, 480)), "best photo per texel")
+S = 384
+lit = label(Image.open(f"{w}/lit/texture.png").convert("RGB").resize((S, S)), "lighting kept")
+tex = label(Image.open(f"{w}/bake/albedo.png").convert("RGB").resize((S, S)), "de-lit albedo 2048^2")
+shade = Image.new("RGB", (S, S), (0, 0, 0))
+shade.paste(Image.open(f"{w}/bake/shading_2.png").convert("RGB").resize((S, S * 3 // 4)), (0, S // 8))
+shade = label(shade, "shading taken out of photo 2")
 mask = np.asarray(Image.open(f"{w}/bake/mask.png").convert("L")) > 127
 hb = exr(f"{w}/chromo/hemoglobin.exr", "hemoglobin")
 me = exr(f"{w}/chromo/melanin.exr", "melanin")
-hb_im = label(grey(np.where(mask, hb, 0), 0.0, 0.12).resize((480, 480)), "hemoglobin 0-0.12")
-me_im = label(grey(np.where(mask, me, 0), 0.0, 0.15).resize((480, 480)), "melanin 0-0.15")
-sheet = Image.new("RGB", (1920, 240 + 480), (16, 16, 16))
+hb_im = label(grey(np.where(mask, hb, 0), 0.0, 0.12).resize((S, S)), "hemoglobin 0-0.12")
+me_im = label(grey(np.where(mask, me, 0), 0.0, 0.15).resize((S, S)), "melanin 0-0.15")
+sheet = Image.new("RGB", (1920, 240 + S), (16, 16, 16))
 for i, p in enumerate(photos):
     sheet.paste(p, (i * 384 + 32, 0))
-for i, p in enumerate([tex, src, hb_im, me_im]):
-    sheet.paste(p, (i * 480, 240))
+for i, p in enumerate([lit, tex, shade, hb_im, me_im]):
+    sheet.paste(p, (i * S, 240))
 sheet.save("docs/images/photo-pipeline.png")
 
 eye = label(Image.open(f"{w}/eye.png").convert("RGB").resize((288, 224)), "astronaut eye x4")

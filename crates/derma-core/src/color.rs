@@ -131,7 +131,7 @@ pub fn xyz_to_lab(xyz: [f64; 3]) -> [f64; 3] {
     let n = [0.95047, 1.0, 1.08883];
     let f = |t: f64| {
         if t > (6.0f64 / 29.0).powi(3) {
-            t.cbrt()
+            crate::numerics::fastmath::cbrt_f64(t)
         } else {
             t / (3.0 * (6.0f64 / 29.0).powi(2)) + 4.0 / 29.0
         }

@@ -174,29 +174,14 @@ fn shading_image(
     lighting: &Lighting,
     k: usize,
 ) -> RgbImage {
-    use derma_render::raster::{rasterise, Object, Projection};
     let welded = TriMesh {
         positions: topo.positions.clone(),
         triangles: topo.triangles.clone(),
         ..Default::default()
     };
     let shade: Vec<Vec3> = shade.iter().map(|s| Vec3::from(*s)).collect();
-    let (w, h) = (cam.width as usize, cam.height as usize);
-    let projection = Projection::Pinhole {
-        rotation: cam.rotation_matrix().as_mat3(),
-        position: cam.centre().as_vec3(),
-        focal: cam.focal_px as f32,
-        principal: glam::Vec2::new(cam.principal[0] as f32, cam.principal[1] as f32),
-    };
-    let hits = rasterise(
-        &[Object {
-            mesh: &welded,
-            coverage: None,
-        }],
-        &projection,
-        w,
-        h,
-    );
+    let w = cam.width as usize;
+    let hits = cam.rasterise(&welded);
     let data = hits
         .par_iter()
         .enumerate()
@@ -211,9 +196,78 @@ fn shading_image(
         .collect();
     RgbImage {
         width: w,
-        height: h,
+        height: cam.height as usize,
         data,
     }
+}
+
+/// Smoothing passes of [`level_views`]: about 4–5 rings of the mesh, 5–10 mm on a face.
+pub const LEVEL_PASSES: usize = 24;
+
+/// Seam levelling: each photo's de-lit colour at its vertices against the shared albedo, the ratio
+/// smoothed over the mesh ([`LEVEL_PASSES`] passes of one-ring averaging: its low frequencies
+/// only) and folded into that photo's shading, so that neighbouring regions from different
+/// photos agree in level while each keeps its own detail. Each view's shading error (a shadow
+/// edge a little off, a light the model does not hold) is its own, and would otherwise show as
+/// a seam where the best view changes.
+fn level_views(
+    neighbours: &[Vec<u32>],
+    samples: &[Vec<VertexSample>],
+    albedo: &[[f32; 3]],
+    weight: &[Vec<f32>],
+    shade: Vec<Vec<[f32; 3]>>,
+    vignette: impl Fn(usize, f32) -> f32 + Sync,
+) -> Vec<Vec<[f32; 3]>> {
+    let nv = samples.len();
+    shade
+        .into_par_iter()
+        .enumerate()
+        .map(|(k, mut sh)| {
+            // The ratio albedo / de-lit colour where the photo sees the vertex and trusts it.
+            let mut cur: Vec<Option<[f32; 3]>> = (0..nv)
+                .map(|v| {
+                    let x = samples[v].iter().find(|x| x.0 == k)?;
+                    if weight[k][v] < 0.25 {
+                        return None;
+                    }
+                    let f = vignette(k, x.3);
+                    let r: [f32; 3] = std::array::from_fn(|c| {
+                        let unlit = x.1[c] / (sh[v][c] * f);
+                        if unlit > 1e-4 {
+                            (albedo[v][c] / unlit).clamp(0.5, 2.0)
+                        } else {
+                            1.0
+                        }
+                    });
+                    Some(r)
+                })
+                .collect();
+            for _ in 0..LEVEL_PASSES {
+                cur = (0..nv)
+                    .map(|v| {
+                        let (mut sum, mut n) = ([0.0f32; 3], 0usize);
+                        for &u in std::iter::once(&(v as u32)).chain(&neighbours[v]) {
+                            if let Some(r) = cur[u as usize] {
+                                for c in 0..3 {
+                                    sum[c] += r[c];
+                                }
+                                n += 1;
+                            }
+                        }
+                        (n > 0).then(|| sum.map(|s| s / n as f32))
+                    })
+                    .collect();
+            }
+            for (s, r) in sh.iter_mut().zip(&cur) {
+                if let Some(r) = r {
+                    for c in 0..3 {
+                        s[c] /= r[c];
+                    }
+                }
+            }
+            sh
+        })
+        .collect()
 }
 
 /// Vertex-to-photo binding (Rocchini et al. 1999 as in §3.2): bit i is set when vertex v
@@ -470,6 +524,14 @@ pub fn bake(
                     wt[x.0][v] = *w * (r * r).min(1.0);
                 }
             }
+            let shade = level_views(
+                &topo.neighbours,
+                &samples,
+                &d.albedo,
+                &wt,
+                shade,
+                |k, r2| d.lighting.vignette(k, r2).max(0.2),
+            );
             (shade, wt)
         }
         None => (Vec::new(), Vec::new()),
@@ -590,7 +652,8 @@ pub fn bake(
         let w = tri_w[raster.triangle[i] as usize];
         masks[w[0] as usize] & masks[w[1] as usize] & masks[w[2] as usize]
     };
-    let sample = |i: usize, k: usize| -> Option<([f32; 3], f32)> {
+    // (colour, weight, trust): trust is the robust weight (1 with the lighting kept).
+    let sample = |i: usize, k: usize| -> Option<([f32; 3], f32, f32)> {
         let t = mesh.triangles[raster.triangle[i] as usize];
         let [b1, b2] = raster.bary[i];
         let (c0, c1, c2) = (
@@ -602,6 +665,7 @@ pub fn bake(
         let cos = b0 * c0.1 + b1 * c1.1 + b2 * c2.1;
         let px = [0, 1].map(|a| b0 * c0.0[a] + b1 * c1.0[a] + b2 * c2.0[a]);
         let mut w = texel_weight(&cams[k].camera, px, cos, opts.falloff)?;
+        let mut trust = 1.0;
         let c = photos[k]
             .image
             .sample(glam::DVec2::new(px[0] as f64, px[1] as f64));
@@ -612,9 +676,11 @@ pub fn bake(
                 let sh: [f32; 3] = std::array::from_fn(|j| {
                     (0..3).map(|q| vshade[k][wv[q] as usize][j] * b[q]).sum()
                 });
-                w *= (0..3)
+                trust = (0..3)
                     .map(|q| vweight[k][wv[q] as usize] * b[q])
-                    .sum::<f32>();
+                    .sum::<f32>()
+                    .min(1.0);
+                w *= trust;
                 let f = d
                     .lighting
                     .vignette(k, radius2(&cams[k].camera, px))
@@ -623,7 +689,7 @@ pub fn bake(
             }
             None => std::array::from_fn(|j| c[j] * gains[k][j]),
         };
-        (w > 0.0).then_some((c, w))
+        (w > 0.0).then_some((c, w, trust))
     };
     let covered: Vec<bool> = raster.triangle.iter().map(|t| *t != NO_TRIANGLE).collect();
     let dil = dilation_sources(&covered, size, size).ok_or_else(|| {
@@ -686,12 +752,19 @@ pub fn bake(
                 None
             };
             let c = match seen {
-                Some((c, w)) => {
+                Some((c, w, trust)) => {
                     for j in 0..3 {
                         arow[x][j] += c[j] * w;
                     }
                     wrow[x] += w;
-                    c
+                    // The spline image keeps what the photo is trusted with; a highlight or a
+                    // deep shadow gives way to the vertices' robust colour.
+                    if trust < 1.0 && irow.is_some() {
+                        let v = interpolate(i);
+                        std::array::from_fn(|j| trust * c[j] + (1.0 - trust) * v[j])
+                    } else {
+                        c
+                    }
                 }
                 None if irow.is_some() => interpolate(i),
                 None => continue,

@@ -157,6 +157,30 @@ impl Camera {
     pub fn in_image(&self, px: DVec2) -> bool {
         px.x >= 0.0 && px.y >= 0.0 && px.x < self.width as f64 && px.y < self.height as f64
     }
+
+    /// What this camera sees of `mesh`, per pixel (row-major, one sample at each pixel centre):
+    /// derma-render's rasteriser through the pinhole.
+    pub fn rasterise(
+        &self,
+        mesh: &derma_core::mesh::TriMesh,
+    ) -> Vec<Option<derma_render::raster::Hit>> {
+        use derma_render::raster::{rasterise, Object, Projection};
+        let projection = Projection::Pinhole {
+            rotation: self.rotation_matrix().as_mat3(),
+            position: self.centre().as_vec3(),
+            focal: self.focal_px as f32,
+            principal: glam::Vec2::new(self.principal[0] as f32, self.principal[1] as f32),
+        };
+        rasterise(
+            &[Object {
+                mesh,
+                coverage: None,
+            }],
+            &projection,
+            self.width as usize,
+            self.height as usize,
+        )
+    }
 }
 
 #[cfg(test)]

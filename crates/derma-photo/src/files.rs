@@ -278,7 +278,7 @@ pub fn read_photos(list: &[(PathBuf, String, Camera)]) -> Result<Vec<Photo>> {
 
 /// Bakes a texture from calibrated photos onto a UV-mapped mesh. De-lit (the default):
 /// `albedo.png` (sRGB), `albedo.exr` (linear) and `shading_K.png` per photo K (the shading taken
-/// out, in the photo's frame, scaled by ½ so that twice the mean level still fits); with the
+/// out, in the photo's frame, scaled so that its 99th percentile is white); with the
 /// lighting kept: `texture.png` and `texture.exr`. Both: `source.png` (which photo each texel
 /// came from), `mask.png` (texels coloured from photos: the input of `derma photo chromophores
 /// --mask`) and `bake.json`.
@@ -321,11 +321,28 @@ pub fn bake_files(
     b.texture.write_linear(&outs[0])?;
     b.texture.write_linear(&outs[1])?;
     for (k, s) in b.shading.iter().enumerate() {
-        let half = RgbImage {
-            data: s.data.iter().map(|c| c.map(|v| 0.5 * v)).collect(),
+        // Scaled so that the 99th percentile of the lit pixels is white.
+        let mut lum: Vec<f32> = s
+            .data
+            .iter()
+            .map(|c| c.iter().sum::<f32>() / 3.0)
+            .filter(|l| *l > 0.0)
+            .collect();
+        let top = if lum.is_empty() {
+            1.0
+        } else {
+            let i = (lum.len() - 1) * 99 / 100;
+            *lum.select_nth_unstable_by(i, f32::total_cmp).1
+        };
+        let scaled = RgbImage {
+            data: s
+                .data
+                .iter()
+                .map(|c| c.map(|v| v / top.max(1e-6)))
+                .collect(),
             ..s.clone()
         };
-        half.write_linear(&outs[5 + k])?;
+        scaled.write_linear(&outs[5 + k])?;
     }
     let n = photos.len().max(1);
     let src: Vec<f32> = b
@@ -421,7 +438,7 @@ pub fn teeth_files(
 }
 
 /// Turns a baked texture into melanin and hemoglobin maps; writes `melanin.exr`,
-/// `hemoglobin.exr` (the channels `derma rig` and `derma skin` read), `residual.exr` (ΔE*ab)
+/// `hemoglobin.exr` (the channels `derma rig` and `derma skin` read), `residual.exr` (ΔE*ab), `confidence.exr`
 /// and `chromophores.json`. `exposure`: `None` fits it. The mask selects the texels the fit and
 /// the report use; every texel gets its maps.
 pub fn chromophore_files(
@@ -437,6 +454,7 @@ pub fn chromophore_files(
         "melanin.exr",
         "hemoglobin.exr",
         "residual.exr",
+        "confidence.exr",
         "chromophores.json",
     ]
     .iter()
@@ -487,7 +505,12 @@ pub fn chromophore_files(
         ExrPrecision::F32,
     )?;
     write_exr(&outs[2], &[("delta_e", &c.residual)], ExrPrecision::F32)?;
-    json_out(&outs[3], &c.report)?;
+    write_exr(
+        &outs[3],
+        &[("confidence", &c.confidence)],
+        ExrPrecision::F32,
+    )?;
+    json_out(&outs[4], &c.report)?;
     Ok(c.report)
 }
 

@@ -321,25 +321,10 @@ pub fn render(
     view: &View,
     albedo: &(dyn Fn(Vec3) -> [f32; 3] + Sync),
 ) -> crate::photo::RgbImage {
-    use derma_render::raster::{rasterise, Object, Projection};
     use rayon::prelude::*;
     let mesh = stage.mesh;
     let (w, h) = (cam.width as usize, cam.height as usize);
-    let projection = Projection::Pinhole {
-        rotation: cam.rotation_matrix().as_mat3(),
-        position: cam.centre().as_vec3(),
-        focal: cam.focal_px as f32,
-        principal: glam::Vec2::new(cam.principal[0] as f32, cam.principal[1] as f32),
-    };
-    let hits = rasterise(
-        &[Object {
-            mesh,
-            coverage: None,
-        }],
-        &projection,
-        w,
-        h,
-    );
+    let hits = cam.rasterise(mesh);
     let light = view.light.normalize();
     let eye = cam.centre().as_vec3();
     let alpha = SPECULAR_ROUGHNESS * SPECULAR_ROUGHNESS;

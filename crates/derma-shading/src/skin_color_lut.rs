@@ -162,8 +162,15 @@ impl SkinColorLut {
 
     /// Bilinear lookup, as a GPU samples the texture.
     pub fn lookup(&self, c_m: f64, c_hd: f64) -> [f64; 3] {
-        let n = self.options.size;
         let (u, v) = self.uv(c_m, c_hd);
+        self.lookup_uv(u, v)
+    }
+
+    /// Bilinear lookup at the table's own coordinates (u, v) = (∛(C_m / max), ∛(C_hd / max)) in
+    /// [0, 1]² (clamped): what an inversion searching that square calls.
+    pub fn lookup_uv(&self, u: f64, v: f64) -> [f64; 3] {
+        let n = self.options.size;
+        let (u, v) = (u.clamp(0.0, 1.0), v.clamp(0.0, 1.0));
         let (x, y) = (u * (n - 1) as f64, v * (n - 1) as f64);
         let (i, j) = ((x as usize).min(n - 2), (y as usize).min(n - 2));
         let (fx, fy) = (x - i as f64, y - j as f64);

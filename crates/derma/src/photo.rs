@@ -154,11 +154,12 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
             let r =
                 files::chromophore_files(&a.texture, a.mask.as_deref(), exposure, &a.out, bars)?;
             line(format!(
-                "exposure {:.3}; ΔE*ab median {:.2}, 95th percentile {:.2}; {:.2} % clamped to the gamut; {} texels",
+                "exposure {:.3}; ΔE*ab median {:.2}, 95th percentile {:.2}; {:.2} % clamped to the gamut; {:.2} % flips; {} texels",
                 r.exposure,
                 r.median_delta_e,
                 r.p95_delta_e,
                 100.0 * r.clamped_share,
+                100.0 * r.flips,
                 r.texels
             ))?;
             done(bars, "chromophores", t0, &a.out);

@@ -67,6 +67,22 @@ pub fn cbrt_f32(x: f32) -> f32 {
     y
 }
 
+/// ∛x for finite x > 0 in f64, relative error below 10⁻¹³: the exponent thirded (within ~3 %),
+/// then two Halley steps y ← y (y³ + 2x) / (2y³ + x) (cubic convergence); 0 at 0. About 3× libm's
+/// `cbrt` here, which dominated CIELAB conversions.
+#[inline(always)]
+pub fn cbrt_f64(x: f64) -> f64 {
+    if x <= 0.0 {
+        return if x == 0.0 { 0.0 } else { -cbrt_f64(-x) };
+    }
+    let mut y = f64::from_bits(x.to_bits() / 3 + 0x2A9F_7893_782D_A1CE);
+    for _ in 0..2 {
+        let y3 = y * y * y;
+        y *= (y3 + 2.0 * x) / (2.0 * y3 + x);
+    }
+    y
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -74,6 +90,19 @@ mod tests {
     /// Points spread geometrically and linearly over a range, ends included.
     fn samples(lo: f32, hi: f32, n: usize) -> impl Iterator<Item = f32> {
         (0..=n).map(move |i| lo + (hi - lo) * i as f32 / n as f32)
+    }
+
+    #[test]
+    fn cbrt_f64_matches_the_standard_library() {
+        for k in -300..300 {
+            for m in [1.0, 1.37, 2.9, 5.5, 9.99] {
+                let x = m * 10f64.powi(k);
+                let (a, b) = (cbrt_f64(x), x.cbrt());
+                assert!(((a - b) / b).abs() < 1e-13, "∛{x}: {a} vs {b}");
+                assert!(((cbrt_f64(-x) + b) / b).abs() < 1e-13);
+            }
+        }
+        assert_eq!(cbrt_f64(0.0), 0.0);
     }
 
     #[test]
