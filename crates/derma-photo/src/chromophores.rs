@@ -231,11 +231,13 @@ pub fn fit_exposure(lut: &SkinColorLut, texels: &[[f32; 3]]) -> f64 {
 }
 
 /// λ of the spatial prior: the cost of a unit step of (∛C_m, ∛C_hd) between neighbours, in
-/// ΔE*ab² (so a step of 0.02, about 0.007 in melanin at C_m = 0.06, costs as much as 1 ΔE² of
-/// colour). Authored: the 8-bit quantisation of a photo is ~0.3–0.5 ΔE.
-pub const SMOOTHNESS: f64 = 2500.0;
-/// Jacobi sweeps of the spatial prior.
-pub const SWEEPS: usize = 24;
+/// ΔE*ab² (a step of 0.01, about 0.0036 in melanin at C_m = 0.06, costs as much as 1 ΔE² of
+/// colour). Authored: at 2500 the photos' 8-bit steps (~0.3–0.5 ΔE) still showed as contour
+/// bands in a 2048² hemoglobin map; at 10 000 they are gone while the melanin keeps its 1–2 mm
+/// freckles (the colour pins melanin ~10× harder than blood).
+pub const SMOOTHNESS: f64 = 10_000.0;
+/// Jacobi sweeps of the spatial prior at each level of its coarse-to-fine cascade.
+pub const SWEEPS: usize = 12;
 
 /// JᵀJ of Lab over (u, v) at (u, v) (forward differences inside the box): [a11, a12, a22].
 fn normal_matrix(t: &LabTable, u: f64, v: f64) -> [f32; 3] {
@@ -262,44 +264,128 @@ fn weaker_sensitivity(h: [f32; 3]) -> f32 {
 
 /// The spatial prior (beyond the per-texel fit; as a Gaussian Markov random field): minimises
 /// Σ (x − x̂)ᵀ H (x − x̂) + λ Σ_neighbours |x_i − x_j|² over x = (∛C_m, ∛C_hd), x̂ the texel's own
-/// best match and H its JᵀJ (the colour's quadratic cost around it), by Jacobi sweeps over the
-/// 4-neighbourhood: where the colour pins a chromophore (melanin, mostly) the texel keeps it;
-/// where it hardly does (blood under much melanin) the neighbours decide, so no texel jumps
-/// between explanations its colour cannot tell apart.
+/// best match and H its JᵀJ (the colour's quadratic cost around it): where the colour pins a
+/// chromophore (melanin, mostly) the texel keeps it; where it hardly does (blood under much
+/// melanin) the neighbours decide, so no texel jumps between explanations its colour cannot
+/// tell apart. Solved coarse to fine (a multigrid cascade): each coarser level sums its 2 × 2
+/// children's data terms (H and H x̂; λ is unchanged, the membrane energy being scale-free in
+/// 2D), is relaxed by [`SWEEPS`] Jacobi sweeps over the 4-neighbourhood from the coarser answer,
+/// and hands its answer down; so the prior reaches across a whole 2048² map in a few sweeps per
+/// level.
 fn smooth(res: &mut [Texel], w: usize, h: usize, lambda: f64, sweeps: usize) {
-    let own: Vec<[f32; 2]> = res.iter().map(|r| r.uv).collect();
     let lambda = lambda as f32;
-    for _ in 0..sweeps {
-        let cur: Vec<[f32; 2]> = res.iter().map(|r| r.uv).collect();
-        res.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-            for (x, r) in row.iter_mut().enumerate() {
-                let i = y * w + x;
-                let (mut sum, mut n) = ([0.0f32; 2], 0.0f32);
-                for (dx, dy) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
-                    let (nx, ny) = (x as i64 + dx, y as i64 + dy);
-                    if nx < 0 || ny < 0 || nx >= w as i64 || ny >= h as i64 {
-                        continue;
-                    }
-                    let j = ny as usize * w + nx as usize;
-                    sum[0] += cur[j][0];
-                    sum[1] += cur[j][1];
-                    n += 1.0;
-                }
+    // Level 0: the texels' own data terms.
+    let mut levels: Vec<Level> = vec![Level {
+        w,
+        h,
+        hm: res.iter().map(|r| r.h).collect(),
+        b: res
+            .iter()
+            .map(|r| {
                 let [a, b, c] = r.h;
-                let (m11, m12, m22) = (a + n * lambda, b, c + n * lambda);
-                let rhs = [
-                    a * own[i][0] + b * own[i][1] + lambda * sum[0],
-                    b * own[i][0] + c * own[i][1] + lambda * sum[1],
-                ];
-                let det = m11 * m22 - m12 * m12;
-                if det.abs() > 1e-12 {
-                    r.uv = [
-                        ((m22 * rhs[0] - m12 * rhs[1]) / det).clamp(0.0, 1.0),
-                        ((m11 * rhs[1] - m12 * rhs[0]) / det).clamp(0.0, 1.0),
-                    ];
+                [a * r.uv[0] + b * r.uv[1], b * r.uv[0] + c * r.uv[1]]
+            })
+            .collect(),
+        x: res.iter().map(|r| r.uv).collect(),
+    }];
+    while levels.last().is_some_and(|l| l.w.min(l.h) > 8) {
+        let f = levels.last().expect("a level");
+        let (cw, ch) = (f.w.div_ceil(2), f.h.div_ceil(2));
+        let mut c = Level {
+            w: cw,
+            h: ch,
+            hm: vec![[0.0; 3]; cw * ch],
+            b: vec![[0.0; 2]; cw * ch],
+            x: vec![[0.0; 2]; cw * ch],
+        };
+        let mut n = vec![0.0f32; cw * ch];
+        for y in 0..f.h {
+            for x in 0..f.w {
+                let (i, j) = (y * f.w + x, (y / 2) * cw + x / 2);
+                for k in 0..3 {
+                    c.hm[j][k] += f.hm[i][k];
                 }
+                for k in 0..2 {
+                    c.b[j][k] += f.b[i][k];
+                    c.x[j][k] += f.x[i][k];
+                }
+                n[j] += 1.0;
             }
-        });
+        }
+        for (x, n) in c.x.iter_mut().zip(&n) {
+            *x = x.map(|v| v / n);
+        }
+        levels.push(c);
+    }
+    // Coarse to fine.
+    for l in (0..levels.len()).rev() {
+        if l + 1 < levels.len() {
+            let (fine, coarse) = levels.split_at_mut(l + 1);
+            let (f, c) = (&mut fine[l], &coarse[0]);
+            let fw = f.w;
+            f.x.par_chunks_mut(fw).enumerate().for_each(|(y, row)| {
+                for (x, v) in row.iter_mut().enumerate() {
+                    *v = c.x[(y / 2) * c.w + x / 2];
+                }
+            });
+        }
+        levels[l].relax(lambda, sweeps);
+    }
+    for (r, x) in res.iter_mut().zip(&levels[0].x) {
+        r.uv = *x;
+    }
+}
+
+/// One level of [`smooth`]'s cascade: per texel, the data term's matrix H ([a11, a12, a22]) and
+/// vector H x̂, and the current answer.
+struct Level {
+    w: usize,
+    h: usize,
+    hm: Vec<[f32; 3]>,
+    b: Vec<[f32; 2]>,
+    x: Vec<[f32; 2]>,
+}
+
+impl Level {
+    /// Jacobi sweeps: x_i = (H + nλ)⁻¹ (H x̂ + λ Σ_j x_j) over the n neighbours in the image.
+    fn relax(&mut self, lambda: f32, sweeps: usize) {
+        let (w, h) = (self.w, self.h);
+        let mut next = self.x.clone();
+        for _ in 0..sweeps {
+            let cur = &self.x;
+            next.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+                for (x, out) in row.iter_mut().enumerate() {
+                    let i = y * w + x;
+                    let (mut sum, mut n) = ([0.0f32; 2], 0.0f32);
+                    for (dx, dy) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
+                        let (nx, ny) = (x as i64 + dx, y as i64 + dy);
+                        if nx < 0 || ny < 0 || nx >= w as i64 || ny >= h as i64 {
+                            continue;
+                        }
+                        let j = ny as usize * w + nx as usize;
+                        sum[0] += cur[j][0];
+                        sum[1] += cur[j][1];
+                        n += 1.0;
+                    }
+                    let [a, b, c] = self.hm[i];
+                    let (m11, m12, m22) = (a + n * lambda, b, c + n * lambda);
+                    let rhs = [
+                        self.b[i][0] + lambda * sum[0],
+                        self.b[i][1] + lambda * sum[1],
+                    ];
+                    let det = m11 * m22 - m12 * m12;
+                    *out = if det.abs() > 1e-12 {
+                        [
+                            ((m22 * rhs[0] - m12 * rhs[1]) / det).clamp(0.0, 1.0),
+                            ((m11 * rhs[1] - m12 * rhs[0]) / det).clamp(0.0, 1.0),
+                        ]
+                    } else {
+                        cur[i]
+                    };
+                }
+            });
+            std::mem::swap(&mut self.x, &mut next);
+        }
     }
 }
 
