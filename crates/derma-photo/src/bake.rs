@@ -138,9 +138,6 @@ fn weight(cam: &Prepared, p: Vec3, n: Vec3, falloff: [f32; 2]) -> Option<(f32, g
     (wgt > 0.0).then_some((wgt, px))
 }
 
-/// A vertex seen in a photo: (photo, colour, view weight, r², unit direction to the camera).
-type VertexSample = (usize, [f32; 3], f32, f32, Vec3);
-
 /// A mesh vertex seen from a photo: its pixel and ⟨N, V⟩.
 type Corner = ([f32; 2], f32);
 
@@ -212,7 +209,7 @@ pub const LEVEL_PASSES: usize = 24;
 /// a seam where the best view changes.
 fn level_views(
     neighbours: &[Vec<u32>],
-    samples: &[Vec<VertexSample>],
+    samples: &[Vec<Sample>],
     albedo: &[[f32; 3]],
     weight: &[Vec<f32>],
     shade: Vec<Vec<[f32; 3]>>,
@@ -226,13 +223,13 @@ fn level_views(
             // The ratio albedo / de-lit colour where the photo sees the vertex and trusts it.
             let mut cur: Vec<Option<[f32; 3]>> = (0..nv)
                 .map(|v| {
-                    let x = samples[v].iter().find(|x| x.0 == k)?;
+                    let x = samples[v].iter().find(|x| x.photo == k)?;
                     if weight[k][v] < 0.25 {
                         return None;
                     }
-                    let f = vignette(k, x.3);
+                    let f = vignette(k, x.r2);
                     let r: [f32; 3] = std::array::from_fn(|c| {
-                        let unlit = x.1[c] / (sh[v][c] * f);
+                        let unlit = x.colour[c] / (sh[v][c] * f);
                         if unlit > 1e-4 {
                             (albedo[v][c] / unlit).clamp(0.5, 2.0)
                         } else {
@@ -413,9 +410,8 @@ pub fn bake(
     let extent = mesh.extent();
     let masks = bind(&topo, &wnormals, photos, &bvh, opts.ray_offset * extent);
     let cams: Vec<Prepared> = photos.iter().map(|p| Prepared::new(&p.camera)).collect();
-    // Each vertex sampled once in every photo it is bound to: (photo, colour, weight, r², unit
-    // direction to the camera).
-    let samples: Vec<Vec<VertexSample>> = (0..topo.positions.len())
+    // Each vertex sampled once in every photo it is bound to, with that view's weight.
+    let (samples, view_weights): (Vec<Vec<Sample>>, Vec<Vec<f32>>) = (0..topo.positions.len())
         .into_par_iter()
         .map(|v| {
             let p = topo.positions[v];
@@ -423,13 +419,17 @@ pub fn bake(
                 .filter(|i| masks[v] & (1 << i) != 0)
                 .filter_map(|i| {
                     let (w, px) = weight(&cams[i], p, wnormals[v], opts.falloff)?;
-                    let r2 = radius2(&cams[i].camera, [px.x as f32, px.y as f32]);
-                    let view = (cams[i].centre - p.as_dvec3()).normalize().as_vec3();
-                    Some((i, photos[i].image.sample(px), w, r2, view))
+                    let sample = Sample {
+                        photo: i,
+                        colour: photos[i].image.sample(px),
+                        r2: radius2(&cams[i].camera, [px.x as f32, px.y as f32]),
+                        view: (cams[i].centre - p.as_dvec3()).normalize().as_vec3(),
+                    };
+                    Some((sample, w))
                 })
-                .collect()
+                .unzip()
         })
-        .collect();
+        .unzip();
     // De-lighting: per photo and welded vertex, the shading to divide by and the robust weight.
     let delit = opts.delight.map(|d| {
         progress.stage("estimate the lighting", 0, Unit::Steps);
@@ -450,20 +450,7 @@ pub fn bake(
             transfer: &transfer,
             open: &open,
         };
-        let obs: Vec<Vec<Sample>> = samples
-            .iter()
-            .map(|s| {
-                s.iter()
-                    .map(|(i, c, _, r2, view)| Sample {
-                        photo: *i,
-                        colour: *c,
-                        r2: *r2,
-                        view: *view,
-                    })
-                    .collect()
-            })
-            .collect();
-        estimate(&surface, &obs, photos.len(), &d)
+        estimate(&surface, &samples, photos.len(), &d)
     });
     let gains: Vec<[f32; 3]> = match &delit {
         // The shading holds exposure and white balance.
@@ -472,7 +459,7 @@ pub fn bake(
             // Sums in vertex order: the same gains at any thread count.
             let mut o = Overlaps::new(photos.len());
             for s in samples.iter().filter(|s| s.len() >= 2) {
-                let pairs: Vec<(usize, [f32; 3])> = s.iter().map(|(i, c, ..)| (*i, *c)).collect();
+                let pairs: Vec<(usize, [f32; 3])> = s.iter().map(|x| (x.photo, x.colour)).collect();
                 o.add(&pairs);
             }
             crate::gain::unit_mean(o.gains())
@@ -483,20 +470,25 @@ pub fn bake(
     let (vshade, vweight): (Vec<Vec<[f32; 3]>>, Vec<Vec<f32>>) = match &delit {
         Some(d) => {
             let nv = topo.positions.len();
+            // Per photo: the mean of per-vertex values over the vertices it sees.
+            let mean_seen = |k: usize, val: &dyn Fn(usize) -> [f32; 3]| -> [f32; 3] {
+                let (mut sum, mut n) = ([0.0f64; 3], 0usize);
+                for (v, smp) in samples.iter().enumerate() {
+                    if smp.iter().any(|x| x.photo == k) {
+                        let x = val(v);
+                        for c in 0..3 {
+                            sum[c] += x[c] as f64;
+                        }
+                        n += 1;
+                    }
+                }
+                sum.map(|s| (s / n.max(1) as f64) as f32)
+            };
             let shade: Vec<Vec<[f32; 3]>> = (0..photos.len())
                 .map(|k| {
                     let raw: Vec<[f32; 3]> =
                         (0..nv).into_par_iter().map(|v| d.shading(k, v)).collect();
-                    let mean: [f32; 3] = std::array::from_fn(|c| {
-                        let (mut s, mut n) = (0.0f64, 0usize);
-                        for (v, smp) in samples.iter().enumerate() {
-                            if smp.iter().any(|x| x.0 == k) {
-                                s += raw[v][c] as f64;
-                                n += 1;
-                            }
-                        }
-                        (s / n.max(1) as f64) as f32
-                    });
+                    let mean = mean_seen(k, &|v| raw[v]);
                     raw.iter()
                         .map(|r| std::array::from_fn(|c| r[c].max(MIN_SHADING * mean[c])))
                         .collect()
@@ -504,24 +496,14 @@ pub fn bake(
                 .collect();
             // Robust weights, times (S / mean S)² up to 1: dividing a dim sample amplifies its
             // noise and any error of the shadow model (the least-squares weight of I / S).
-            let level: Vec<f32> = shade
-                .iter()
-                .map(|s| {
-                    let (mut sum, mut n) = (0.0f64, 0usize);
-                    for (v, smp) in samples.iter().enumerate() {
-                        if smp.iter().any(|x| std::ptr::eq(s, &shade[x.0])) {
-                            sum += s[v].iter().sum::<f32>() as f64;
-                            n += 1;
-                        }
-                    }
-                    (sum / n.max(1) as f64) as f32
-                })
+            let level: Vec<f32> = (0..photos.len())
+                .map(|k| mean_seen(k, &|v| shade[k][v]).iter().sum())
                 .collect();
             let mut wt = vec![vec![1.0f32; nv]; photos.len()];
             for (v, (s, w)) in samples.iter().zip(&d.weights).enumerate() {
                 for (x, w) in s.iter().zip(w) {
-                    let r = shade[x.0][v].iter().sum::<f32>() / level[x.0].max(1e-12);
-                    wt[x.0][v] = *w * (r * r).min(1.0);
+                    let r = shade[x.photo][v].iter().sum::<f32>() / level[x.photo].max(1e-12);
+                    wt[x.photo][v] = *w * (r * r).min(1.0);
                 }
             }
             let shade = level_views(
@@ -530,7 +512,7 @@ pub fn bake(
                 &d.albedo,
                 &wt,
                 shade,
-                |k, r2| d.lighting.vignette(k, r2).max(0.2),
+                |k, r2| d.lighting.vignette(k, r2),
             );
             (shade, wt)
         }
@@ -540,7 +522,7 @@ pub fn bake(
     let unlit = |k: usize, v: usize, c: [f32; 3], r2: f32| -> [f32; 3] {
         match &delit {
             Some(d) => {
-                let f = d.lighting.vignette(k, r2).max(0.2);
+                let f = d.lighting.vignette(k, r2);
                 std::array::from_fn(|j| c[j] / (vshade[k][v][j] * f))
             }
             None => std::array::from_fn(|j| c[j] * gains[k][j]),
@@ -550,16 +532,17 @@ pub fn bake(
     // by its view and robust weight.
     let mut vcolor: Vec<Option<[f32; 3]>> = samples
         .par_iter()
+        .zip(&view_weights)
         .enumerate()
-        .map(|(v, s)| {
+        .map(|(v, (s, vw))| {
             let rw = |k: usize| vweight.get(k).map_or(1.0, |w| w[v]);
-            let wsum: f32 = s.iter().map(|x| x.2 * rw(x.0)).sum();
+            let wsum: f32 = s.iter().zip(vw).map(|(x, w)| w * rw(x.photo)).sum();
             (wsum > 0.0).then(|| {
                 let mut c = [0.0f32; 3];
-                for (i, col, w, r2, _) in s {
-                    let u = unlit(*i, v, *col, *r2);
+                for (x, w) in s.iter().zip(vw) {
+                    let u = unlit(x.photo, v, x.colour, x.r2);
                     for k in 0..3 {
-                        c[k] += u[k] * w * rw(*i) / wsum;
+                        c[k] += u[k] * w * rw(x.photo) / wsum;
                     }
                 }
                 c
@@ -681,10 +664,7 @@ pub fn bake(
                     .sum::<f32>()
                     .min(1.0);
                 w *= trust;
-                let f = d
-                    .lighting
-                    .vignette(k, radius2(&cams[k].camera, px))
-                    .max(0.2);
+                let f = d.lighting.vignette(k, radius2(&cams[k].camera, px));
                 std::array::from_fn(|j| c[j] / (sh[j] * f))
             }
             None => std::array::from_fn(|j| c[j] * gains[k][j]),

@@ -1,9 +1,10 @@
-//! De-lighting: each photo's lighting (order-2 SH irradiance per channel, which also holds its
-//! exposure and white balance; Ramamoorthi & Hanrahan 2001) and vignetting, estimated jointly
-//! with one shared albedo per vertex on the known mesh, with the mesh's own shadows in each
-//! vertex's transfer (Sloan et al. 2002), so that photo = albedo × shading and the bake can
-//! divide the shading out. Alternating least squares with iteratively reweighted residuals
-//! (Cauchy weights on the relative error) so highlights and hard shadows do not bend the fit.
+//! De-lighting: each photo's lighting — soft light as SH bands 0–1 through each vertex's shadowed
+//! transfer (Ramamoorthi & Hanrahan 2001; Sloan et al. 2002) plus one key light with its hard
+//! shadows, per channel so that exposure and white balance are in it — and its vignetting,
+//! estimated with one shared albedo per vertex on the known mesh: photo = albedo × shading, so the
+//! bake can divide the shading out. The lights come from the photos' ratios (the albedo cancels)
+//! as a generalized eigenproblem; highlights are masked and residuals reweighted (Cauchy) so
+//! highlights and hard shadows do not bend the fit.
 
 use derma_core::numerics::dense::{smallest_generalized_eigenpair, solve, Matrix};
 use derma_core::sh::SH9;
@@ -86,7 +87,8 @@ pub struct Lighting {
 }
 
 impl Lighting {
-    /// Photo k's vignetting factor at squared radius r2.
+    /// Photo k's vignetting factor at squared radius r2 (≥ 0.2 inside the image: v ≤ 0.8,
+    /// r² ≤ 1).
     pub fn vignette(&self, k: usize, r2: f32) -> f32 {
         1.0 - self.vignetting[k] * r2
     }
@@ -120,8 +122,8 @@ impl Delit {
     /// Photo k's shading at vertex v (irradiance × exposure × white balance), without
     /// vignetting.
     pub fn shading(&self, k: usize, v: usize) -> [f32; 3] {
-        let phi = features(&self.transfer[v], self.key_terms[k][v]);
-        std::array::from_fn(|c| dot_p(&phi, &self.lighting.coefficients[k][c]))
+        let shade = shader(&self.transfer, &self.key_terms, &self.lighting.coefficients);
+        std::array::from_fn(|c| shade(k, v, c))
     }
 }
 
@@ -141,6 +143,16 @@ fn features(t: &[f32; SH9], key: f32) -> [f32; PARAMS] {
 
 fn dot_p(a: &[f32; PARAMS], b: &[f32; PARAMS]) -> f32 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Photo k's shading at vertex v in channel c, from the transfer, the keys' terms and the
+/// coefficients.
+fn shader<'a>(
+    transfer: &'a [[f32; SH9]],
+    keys: &'a [Vec<f32>],
+    coef: &'a [[[f32; PARAMS]; 3]],
+) -> impl Fn(usize, usize, usize) -> f32 + Sync + 'a {
+    move |k, v, c| dot_p(&features(&transfer[v], keys[k][v]), &coef[k][c])
 }
 
 /// Per vertex: max(⟨n, l⟩, 0) × visibility of l (vertices in `only`, or all).
@@ -204,7 +216,7 @@ impl Problem<'_> {
             // The colours with vignetting divided out.
             let val: Vec<f64> = s
                 .iter()
-                .map(|x| colour(x) as f64 / (1.0 - vig[x.photo] * x.r2).max(0.2) as f64)
+                .map(|x| colour(x) as f64 / (1.0 - vig[x.photo] * x.r2) as f64)
                 .collect();
             for a in 0..s.len() {
                 let ja = s[a].photo * p;
@@ -299,10 +311,7 @@ impl Problem<'_> {
             for &v in vertices {
                 let s = &self.samples[v];
                 let t = &self.surface.transfer[v];
-                let f: Vec<f64> = s
-                    .iter()
-                    .map(|x| (1.0 - vig[x.photo] * x.r2 as f64).max(0.2))
-                    .collect();
+                let f: Vec<f64> = s.iter().map(|x| 1.0 - vig[x.photo] * x.r2 as f64).collect();
                 for c in 0..3 {
                     let sh: Vec<f64> = s
                         .iter()
@@ -534,9 +543,7 @@ pub fn estimate(
                 vig = prob.vignetting(&sub, &keys, &coef, &w, &vig);
             }
         }
-        let shade = |k: usize, v: usize, c: usize| -> f32 {
-            dot_p(&features(&transfer[v], keys[k][v]), &coef[k][c])
-        };
+        let shade = shader(transfer, &keys, &coef);
         let mean_shade = mean_shading(samples, &shade, photos);
         albedo = solve_albedo(samples, &w, &shade, &vig, &mean_shade);
         if it + 1 >= opts.robust_after && it + 1 < opts.iterations {
@@ -548,11 +555,8 @@ pub fn estimate(
         .zip(&lit)
         .map(|(r, l)| r.iter().zip(l).map(|(a, b)| a * b).collect())
         .collect();
-    let shade = |k: usize, v: usize, c: usize| -> f32 {
-        dot_p(&features(&transfer[v], keys[k][v]), &coef[k][c])
-    };
     // Normalise: per channel, the geometric mean over photos of their mean shading is 1.
-    let mean_shade = mean_shading(samples, &shade, photos);
+    let mean_shade = mean_shading(samples, &shader(transfer, &keys, &coef), photos);
     let mut gains = vec![[1.0f32; 3]; photos];
     for c in 0..3 {
         let logs: Vec<f64> = (0..photos)
@@ -578,19 +582,19 @@ pub fn estimate(
             a[c] *= g;
         }
     }
-    let shade = |k: usize, v: usize, c: usize| -> f32 {
-        dot_p(&features(&transfer[v], keys[k][v]), &coef[k][c])
-    };
-    let mean_shade = mean_shading(samples, &shade, photos);
     let (mut se, mut n, mut low) = (0.0f64, 0usize, 0usize);
-    for v in 0..nv {
-        for (x, w) in samples[v].iter().zip(&weights[v]) {
-            if *w >= 0.5 {
-                let e = relative_residual(x, v, &albedo[v], &shade, vig[x.photo], &mean_shade);
-                se += e * e;
-                n += 1;
-            } else {
-                low += 1;
+    {
+        let shade = shader(transfer, &keys, &coef);
+        let mean_shade = mean_shading(samples, &shade, photos);
+        for v in 0..nv {
+            for (x, w) in samples[v].iter().zip(&weights[v]) {
+                if *w >= 0.5 {
+                    let e = relative_residual(x, v, &albedo[v], &shade, vig[x.photo], &mean_shade);
+                    se += e * e;
+                    n += 1;
+                } else {
+                    low += 1;
+                }
             }
         }
     }
