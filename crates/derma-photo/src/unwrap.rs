@@ -17,7 +17,7 @@
 use crate::error::{PhotoError, Result};
 use crate::topology::Topology;
 use derma_core::mesh::TriMesh;
-use derma_core::numerics::sparse::SparseCholesky;
+use derma_core::numerics::sparse::{SimplicialCholesky, SparseCholesky};
 use glam::{DVec2, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -185,67 +185,146 @@ fn measure(frames: &[Frame], tris: &[[u32; 3]], uv: &[DVec2]) -> Stretch {
     }
 }
 
+/// Triangles per partial sum: the energies are summed per fixed chunk and the chunks in order,
+/// the same sum at any thread count.
+const CHUNK: usize = 2048;
+
 /// The symmetric Dirichlet energy Σ c (‖J/s‖² + ‖(J/s)⁻¹‖²) (Smith & Schaefer 2015 eq. 2 with
-/// §3.1's per-triangle target scale s), infinite when a triangle flips; with its gradient per
-/// vertex when asked.
-fn sd_energy(
-    frames: &[Frame],
-    tris: &[[u32; 3]],
-    uv: &[DVec2],
-    gradient: bool,
-) -> (f64, Vec<DVec2>) {
-    // One triangle's term: (J, det J, ‖J‖², s², energy), or `None` when it is flipped.
-    let term = |f: &Frame, t: &[u32; 3]| {
-        let j = jacobian(f, t.map(|i| uv[i as usize]));
-        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-        if det <= 0.0 {
-            return None;
-        }
-        let n2 = j[0][0].powi(2) + j[0][1].powi(2) + j[1][0].powi(2) + j[1][1].powi(2);
-        let s2 = f.s * f.s;
-        Some((j, det, n2, s2, f.c * (n2 / s2 + s2 * n2 / (det * det))))
-    };
-    if !gradient {
-        // Energy only: per-triangle terms collected, then summed in triangle order (the same
-        // sum at any thread count).
-        let per: Vec<f64> = frames
-            .par_iter()
-            .zip(tris)
-            .map(|(f, t)| term(f, t).map_or(f64::INFINITY, |x| x.4))
-            .collect();
-        return (per.iter().sum(), Vec::new());
+/// §3.1's per-triangle target scale s), infinite when a triangle flips, and its gradient per
+/// vertex (gathered per vertex over its triangles, so both cores work and the order is fixed).
+struct Energy<'a> {
+    frames: &'a [Frame],
+    tris: &'a [[u32; 3]],
+    /// Each vertex's (triangle, corner) pairs: `incident[start[v]..start[v + 1]]`.
+    start: Vec<u32>,
+    incident: Vec<(u32, u8)>,
+    /// ∂E/∂uv of every triangle's three corners, reused between gradients.
+    corners: Vec<[DVec2; 3]>,
+}
+
+/// One triangle's Jacobian J with det J, ‖J‖², its target scale² and its energy.
+struct Term {
+    j: [[f64; 2]; 2],
+    det: f64,
+    n2: f64,
+    s2: f64,
+    energy: f64,
+}
+
+/// One triangle's [`Term`], or `None` when it is flipped.
+fn sd_term(f: &Frame, t: &[u32; 3], uv: &[DVec2]) -> Option<Term> {
+    let j = jacobian(f, t.map(|i| uv[i as usize]));
+    let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+    if det <= 0.0 {
+        return None;
     }
-    let per: Vec<(f64, [[f64; 2]; 2])> = frames
-        .par_iter()
-        .zip(tris)
-        .map(|(f, t)| {
-            let Some((j, det, n2, s2, e)) = term(f, t) else {
-                return (f64::INFINITY, [[0.0; 2]; 2]);
-            };
-            // ∂/∂J: 2J/s² + s² (2J/det² − 2‖J‖² cof(J)/det³).
-            let cof = [[j[1][1], -j[1][0]], [-j[0][1], j[0][0]]];
-            let a = 2.0 / s2 + 2.0 * s2 / (det * det);
-            let b = 2.0 * s2 * n2 / (det * det * det);
-            let dj = std::array::from_fn(|r| {
-                std::array::from_fn(|c| f.c * (a * j[r][c] - b * cof[r][c]))
-            });
-            (e, dj)
-        })
-        .collect();
-    let energy: f64 = per.iter().map(|p| p.0).sum();
-    let mut grad = Vec::new();
-    if gradient && energy.is_finite() {
-        grad = vec![DVec2::ZERO; uv.len()];
-        for ((f, t), (_, dj)) in frames.iter().zip(tris).zip(&per) {
-            for a in 0..3 {
-                grad[t[a] as usize] += DVec2::new(
-                    dj[0][0] * f.g[0][a] + dj[0][1] * f.g[1][a],
-                    dj[1][0] * f.g[0][a] + dj[1][1] * f.g[1][a],
-                );
+    let n2 = j[0][0].powi(2) + j[0][1].powi(2) + j[1][0].powi(2) + j[1][1].powi(2);
+    let s2 = f.s * f.s;
+    Some(Term {
+        j,
+        det,
+        n2,
+        s2,
+        energy: f.c * (n2 / s2 + s2 * n2 / (det * det)),
+    })
+}
+
+impl<'a> Energy<'a> {
+    fn new(frames: &'a [Frame], tris: &'a [[u32; 3]], vertices: usize) -> Self {
+        let mut start = vec![0u32; vertices + 1];
+        for t in tris {
+            for &v in t {
+                start[v as usize + 1] += 1;
             }
         }
+        for v in 0..vertices {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        let mut incident = vec![(0u32, 0u8); 3 * tris.len()];
+        for (i, t) in tris.iter().enumerate() {
+            for (corner, &v) in t.iter().enumerate() {
+                incident[fill[v as usize] as usize] = (i as u32, corner as u8);
+                fill[v as usize] += 1;
+            }
+        }
+        Self {
+            frames,
+            tris,
+            start,
+            incident,
+            corners: vec![[DVec2::ZERO; 3]; tris.len()],
+        }
     }
-    (energy, grad)
+
+    /// E(uv).
+    fn value(&self, uv: &[DVec2]) -> f64 {
+        let partial: Vec<f64> = self
+            .frames
+            .par_chunks(CHUNK)
+            .zip(self.tris.par_chunks(CHUNK))
+            .map(|(fs, ts)| {
+                fs.iter()
+                    .zip(ts)
+                    .map(|(f, t)| sd_term(f, t, uv).map_or(f64::INFINITY, |x| x.energy))
+                    .sum::<f64>()
+            })
+            .collect();
+        partial.iter().sum()
+    }
+
+    /// E(uv), with ∇E written to `grad` when E is finite.
+    fn gradient(&mut self, uv: &[DVec2], grad: &mut [DVec2]) -> f64 {
+        let partial: Vec<f64> = self
+            .corners
+            .par_chunks_mut(CHUNK)
+            .zip(self.frames.par_chunks(CHUNK))
+            .zip(self.tris.par_chunks(CHUNK))
+            .map(|((cs, fs), ts)| {
+                let mut sum = 0.0;
+                for ((corner, f), t) in cs.iter_mut().zip(fs).zip(ts) {
+                    let Some(Term {
+                        j,
+                        det,
+                        n2,
+                        s2,
+                        energy: e,
+                    }) = sd_term(f, t, uv)
+                    else {
+                        return f64::INFINITY;
+                    };
+                    // ∂/∂J: 2J/s² + s² (2J/det² − 2‖J‖² cof(J)/det³); ∂J/∂uv_k = g_k.
+                    let cof = [[j[1][1], -j[1][0]], [-j[0][1], j[0][0]]];
+                    let a = 2.0 / s2 + 2.0 * s2 / (det * det);
+                    let b = 2.0 * s2 * n2 / (det * det * det);
+                    let dj: [[f64; 2]; 2] = std::array::from_fn(|r| {
+                        std::array::from_fn(|c| f.c * (a * j[r][c] - b * cof[r][c]))
+                    });
+                    *corner = std::array::from_fn(|k| {
+                        DVec2::new(
+                            dj[0][0] * f.g[0][k] + dj[0][1] * f.g[1][k],
+                            dj[1][0] * f.g[0][k] + dj[1][1] * f.g[1][k],
+                        )
+                    });
+                    sum += e;
+                }
+                sum
+            })
+            .collect();
+        let energy: f64 = partial.iter().sum();
+        if energy.is_finite() {
+            let corners = &self.corners;
+            grad.par_iter_mut().enumerate().for_each(|(v, g)| {
+                let (a, b) = (self.start[v] as usize, self.start[v + 1] as usize);
+                *g = self.incident[a..b]
+                    .iter()
+                    .fold(DVec2::ZERO, |acc, &(t, k)| {
+                        acc + corners[t as usize][k as usize]
+                    });
+            });
+        }
+        energy
+    }
 }
 
 /// Largest step α ∈ (0, 1] along `d` from `uv` that keeps every triangle's signed area positive
@@ -268,6 +347,10 @@ fn max_flip_free_step(tris: &[[u32; 3]], uv: &[DVec2], d: &[DVec2]) -> f64 {
 }
 
 fn smallest_positive_root(a: f64, b: f64, c: f64) -> f64 {
+    // With a > 0 (an unflipped triangle), b ≥ 0 and c ≥ 0 keep the area growing: no root.
+    if a > 0.0 && b >= 0.0 && c >= 0.0 {
+        return f64::INFINITY;
+    }
     let scale = a.abs().max(b.abs()).max(c.abs());
     if c.abs() <= 1e-12 * scale {
         if b < 0.0 {
@@ -406,50 +489,47 @@ fn lscm(topo: &Topology, p: &[DVec3], frames: &[Frame]) -> Result<Option<Vec<DVe
             m += 1;
         }
     }
-    // Residuals per triangle (× √A): ∂u/∂x − ∂v/∂y and ∂u/∂y + ∂v/∂x. Unknown 2i is u, 2i+1 v.
-    let mut entries = Vec::with_capacity(21 * topo.triangles.len());
+    // The conformal energy Σ A (|∇u|² + |∇v|²) − 2·(texture area) (Lévy et al. 2002 §3; the
+    // residuals ∂u/∂x − ∂v/∂y, ∂u/∂y + ∂v/∂x squared and summed): the cotangent Laplacian on u
+    // and on v, and the area's boundary sum Σ u_i v_j − u_j v_i over boundary edges i → j (in
+    // the triangles' winding) coupling them. Unknown 2i is u, 2i + 1 is v; pinned vertices move
+    // to the right-hand side.
+    let mut entries = Vec::with_capacity(9 * topo.triangles.len() + 2 * boundary.len());
     let mut rhs = vec![0.0; 2 * m];
+    let mut add = |(v1, c1): (usize, usize), (v2, c2): (usize, usize), x: f64| {
+        let i = index[v1];
+        if i == usize::MAX {
+            return;
+        }
+        let row = 2 * i + c1;
+        match index[v2] {
+            usize::MAX => {
+                let q = pin.iter().find(|(pv, _)| *pv == v2).expect("pinned").1;
+                rhs[row] -= x * q[c2];
+            }
+            j if row >= 2 * j + c2 => entries.push((row, 2 * j + c2, x)),
+            _ => {}
+        }
+    };
     for (f, t) in frames.iter().zip(&topo.triangles) {
-        let w = f.area;
-        // Coefficients (vertex, is_v, value) of the two residuals.
-        let r1: [(usize, usize, f64); 6] = std::array::from_fn(|k| {
-            let c = k % 3;
-            if k < 3 {
-                (t[c] as usize, 0, f.g[0][c])
-            } else {
-                (t[c] as usize, 1, -f.g[1][c])
-            }
-        });
-        let r2: [(usize, usize, f64); 6] = std::array::from_fn(|k| {
-            let c = k % 3;
-            if k < 3 {
-                (t[c] as usize, 0, f.g[1][c])
-            } else {
-                (t[c] as usize, 1, f.g[0][c])
-            }
-        });
-        for r in [r1, r2] {
-            for &(v1, c1, x1) in &r {
-                if index[v1] == usize::MAX {
-                    continue;
-                }
-                let row = 2 * index[v1] + c1;
-                for &(v2, c2, x2) in &r {
-                    match index[v2] {
-                        usize::MAX => {
-                            let q = pin.iter().find(|(pv, _)| *pv == v2).expect("pinned").1;
-                            rhs[row] -= w * x1 * x2 * q[c2];
-                        }
-                        j => {
-                            let col = 2 * j + c2;
-                            if row >= col {
-                                entries.push((row, col, w * x1 * x2));
-                            }
-                        }
-                    }
-                }
+        for a in 0..3 {
+            for b in 0..3 {
+                let x = f.area * (f.g[0][a] * f.g[0][b] + f.g[1][a] * f.g[1][b]);
+                let (va, vb) = (t[a] as usize, t[b] as usize);
+                add((va, 0), (vb, 0), x);
+                add((va, 1), (vb, 1), x);
             }
         }
+    }
+    for k in 0..boundary.len() {
+        let (i, j) = (
+            boundary[k] as usize,
+            boundary[(k + 1) % boundary.len()] as usize,
+        );
+        add((i, 0), (j, 1), -0.5);
+        add((j, 1), (i, 0), -0.5);
+        add((j, 0), (i, 1), 0.5);
+        add((i, 1), (j, 0), 0.5);
     }
     let chol = SparseCholesky::new(2 * m, &entries)?;
     let x = chol.solve(&rhs)?;
@@ -530,62 +610,67 @@ pub fn unwrap(mesh: &TriMesh, opts: &UnwrapOptions) -> Result<Unwrap> {
         f.c = f.omega * f.area / wa;
         f.s /= sa.sqrt();
     }
-    let tutte_uv = tutte(&topo, &p)?;
+    // The conformal start on one core; Tutte's embedding (the fallback, and the reported
+    // start) and the proxy's factorisation on the other.
+    let n = p.len();
+    let (conformal, rest) = rayon::join(
+        || lscm(&topo, &p, &frames),
+        || -> Result<_> {
+            let tutte_uv = tutte(&topo, &p)?;
+            // The global matrix K = Σ c GᵀG, vertex 0 pinned.
+            let mut entries = Vec::with_capacity(6 * topo.triangles.len());
+            for (f, t) in frames.iter().zip(&topo.triangles) {
+                for a in 0..3 {
+                    for b in 0..3 {
+                        let (va, vb) = (t[a] as usize, t[b] as usize);
+                        if va == 0 || vb == 0 || va < vb {
+                            continue;
+                        }
+                        let k = f.c * (f.g[0][a] * f.g[0][b] + f.g[1][a] * f.g[1][b]);
+                        entries.push((va - 1, vb - 1, k));
+                    }
+                }
+            }
+            Ok((tutte_uv, SimplicialCholesky::new(n - 1, &entries)?))
+        },
+    );
+    let (tutte_uv, chol) = rest?;
     let tutte_stretch = measure(&frames, &topo.triangles, &tutte_uv);
     // Start from the conformal map when it is flip-free (much nearer the optimum), else Tutte.
-    let mut uv = match lscm(&topo, &p, &frames)? {
-        Some(c) => c,
-        None => tutte_uv,
-    };
-    // The global matrix K = Σ c GᵀG, vertex 0 pinned.
-    let n = p.len();
-    let mut entries = Vec::with_capacity(6 * topo.triangles.len());
-    for (f, t) in frames.iter().zip(&topo.triangles) {
-        for a in 0..3 {
-            for b in 0..3 {
-                let (va, vb) = (t[a] as usize, t[b] as usize);
-                if va == 0 || vb == 0 || va < vb {
-                    continue;
-                }
-                let k = f.c * (f.g[0][a] * f.g[0][b] + f.g[1][a] * f.g[1][b]);
-                entries.push((va - 1, vb - 1, k));
-            }
-        }
-    }
-    let chol = SparseCholesky::new(n - 1, &entries)?;
+    let mut uv = conformal?.unwrap_or(tutte_uv);
     let mut iterations = 0;
-    let mut d = vec![DVec2::ZERO; n];
-    let (mut energy, _) = sd_energy(&frames, &topo.triangles, &uv, false);
+    let mut sd = Energy::new(&frames, &topo.triangles, n);
+    let mut energy = sd.value(&uv);
     let mut prev = uv.clone();
     let mut history: Vec<f64> = vec![energy];
     let mut last_alpha = 1.0f64;
-    let mut trial = uv.clone();
+    // Buffers reused by every iteration.
+    let (mut ext, mut trial, mut grad) = (uv.clone(), uv.clone(), vec![DVec2::ZERO; n]);
+    let mut d = vec![DVec2::ZERO; n];
+    let mut x = vec![[0.0f64; 2]; n - 1];
     for it in 0..opts.iterations {
         iterations += 1;
-        // Nesterov-style extrapolation (Kovalsky et al. 2016 §4), kept only when flip-free.
+        // Nesterov-style extrapolation (Kovalsky et al. 2016 §4), kept only when it lowers the
+        // energy without a flip.
         let theta = (1.0 - (2.0f64).sqrt() / (it as f64 + 2.0).sqrt()).clamp(0.0, 0.9);
-        let ext: Vec<DVec2> = uv
-            .iter()
+        ext.par_iter_mut()
+            .zip(&uv)
             .zip(&prev)
-            .map(|(u, p)| *u + theta * (*u - *p))
-            .collect();
-        let (ext, ext_energy) = {
-            let (e, _) = sd_energy(&frames, &topo.triangles, &ext, false);
-            if e.is_finite() && e <= energy {
-                (ext, e)
-            } else {
-                (uv.clone(), energy)
-            }
-        };
-        let (_, grad) = sd_energy(&frames, &topo.triangles, &ext, true);
+            .for_each(|((e, u), p)| *e = *u + theta * (*u - *p));
+        let mut ext_energy = sd.value(&ext);
+        if !(ext_energy.is_finite() && ext_energy <= energy) {
+            ext.copy_from_slice(&uv);
+            ext_energy = energy;
+        }
+        sd.gradient(&ext, &mut grad);
         // Direction: the Laplacian proxy's Newton step, −K⁻¹∇E, vertex 0 fixed.
-        let gu: Vec<f64> = grad[1..].iter().map(|g| -g.x).collect();
-        let gv: Vec<f64> = grad[1..].iter().map(|g| -g.y).collect();
-        let x = chol.solve_many(&[&gu, &gv])?;
-        let (xu, xv) = (&x[0], &x[1]);
+        for (x, g) in x.iter_mut().zip(&grad[1..]) {
+            *x = [-g.x, -g.y];
+        }
+        chol.solve_pairs(&mut x)?;
         d[0] = DVec2::ZERO;
-        for v in 1..n {
-            d[v] = DVec2::new(xu[v - 1], xv[v - 1]);
+        for (d, x) in d[1..].iter_mut().zip(&x) {
+            *d = DVec2::from_array(*x);
         }
         let slope: f64 = grad.iter().zip(&d).map(|(g, d)| g.dot(*d)).sum();
         // Backtracking on the true energy (Armijo) from the largest flip-free step, or twice
@@ -598,7 +683,7 @@ pub fn unwrap(mesh: &TriMesh, opts: &UnwrapOptions) -> Result<Unwrap> {
                 .zip(&ext)
                 .zip(&d)
                 .for_each(|((t, u), d)| *t = *u + alpha * *d);
-            let (e, _) = sd_energy(&frames, &topo.triangles, &trial, false);
+            let e = sd.value(&trial);
             if e.is_finite() && e <= ext_energy + 1e-4 * alpha * slope {
                 accepted = Some(e);
                 break;
@@ -732,6 +817,48 @@ mod tests {
         for q in &u.mesh.uvs {
             assert!(q.x >= 0.0 && q.y >= 0.0 && q.x <= 1.0 && q.y <= 1.0);
         }
+    }
+
+    #[test]
+    fn the_conformal_start_of_a_flat_patch_is_a_similarity() {
+        // A planar, irregular patch (a jittered grid, squeezed): its least-squares conformal map
+        // is the patch itself up to rotation, scale and translation (Lévy et al. 2002), so every
+        // triangle's Jacobian is the same multiple of a rotation, and no triangle flips.
+        let mut m = grid_mesh(10, |_, _| 0.0);
+        for (i, p) in m.positions.iter_mut().enumerate() {
+            let j = ((i * 37) % 11) as f32 / 11.0 - 0.5;
+            *p = Vec3::new(1.7 * p.x + 0.02 * j, p.y - 0.015 * j, 0.0);
+        }
+        let topo = Topology::new(&m).unwrap();
+        let p: Vec<DVec3> = topo.positions.iter().map(|v| v.as_dvec3()).collect();
+        let frames: Vec<Frame> = topo
+            .triangles
+            .iter()
+            .map(|t| {
+                let (g, area) = frame(t.map(|i| p[i as usize]));
+                Frame {
+                    g,
+                    area,
+                    c: area,
+                    s: 1.0,
+                    omega: 1.0,
+                }
+            })
+            .collect();
+        let uv = lscm(&topo, &p, &frames).unwrap().expect("flip-free");
+        let mut scales = Vec::new();
+        for (f, t) in frames.iter().zip(&topo.triangles) {
+            // Frames differ per triangle by a rotation, so compare J's conformal invariants:
+            // a similarity has J = [[a, −b], [b, a]] (up to the frame's reflection).
+            let j = jacobian(f, t.map(|i| uv[i as usize]));
+            let (a, b) = (j[0][0] - j[1][1], j[0][1] + j[1][0]);
+            assert!(a.abs() + b.abs() < 1e-9, "{j:?}");
+            scales.push((j[0][0] * j[1][1] - j[0][1] * j[1][0]).sqrt());
+        }
+        let (lo, hi) = scales
+            .iter()
+            .fold((f64::MAX, 0.0f64), |(l, h), s| (l.min(*s), h.max(*s)));
+        assert!(hi - lo < 1e-9 * hi, "{lo} {hi}");
     }
 
     #[test]

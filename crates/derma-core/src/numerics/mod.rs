@@ -20,7 +20,7 @@ pub use dense::{solve, Eigen, Matrix, Svd};
 pub use faer;
 pub use levenberg_marquardt::{levenberg_marquardt, DenseSolver, LmOptions, ResidualFn};
 pub use nnls::nnls_normal;
-pub use sparse::{SparseCholesky, SparsePattern};
+pub use sparse::{SimplicialCholesky, SparseCholesky, SparsePattern};
 
 /// Why a decomposition or solve failed.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

@@ -19,23 +19,7 @@ impl SparseCholesky {
     /// Factorises the n × n matrix given by (row, column, value) entries of its lower triangle
     /// (entries above the diagonal are ignored; repeated entries are summed).
     pub fn new(n: usize, entries: &[(usize, usize, f64)]) -> Result<Self, NumericsError> {
-        if let Some(&(r, c, _)) = entries.iter().find(|(r, c, _)| *r >= n || *c >= n) {
-            return Err(NumericsError::Shape {
-                what: "sparse Cholesky",
-                detail: format!("entry ({r}, {c}) outside a {n} × {n} matrix"),
-            });
-        }
-        let lower: Vec<Triplet<usize, usize, f64>> = entries
-            .iter()
-            .filter(|(r, c, _)| r >= c)
-            .map(|&(r, c, v)| Triplet::new(r, c, v))
-            .collect();
-        let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &lower).map_err(|e| {
-            NumericsError::Shape {
-                what: "sparse Cholesky",
-                detail: format!("{e:?}"),
-            }
-        })?;
+        let a = lower_matrix(n, entries, "sparse Cholesky")?;
         let llt = a
             .sp_cholesky(Side::Lower)
             .map_err(|_| NumericsError::NotPositiveDefinite {
@@ -82,6 +66,155 @@ impl SparseCholesky {
         let x = self.llt.solve(faer::Mat::from_fn(self.n, 1, |i, _| b[i]));
         Ok((0..self.n).map(|i| x[(i, 0)]).collect())
     }
+}
+
+/// A sparse Cholesky factor P A Pᵀ = L Lᵀ kept column by column (simplicial, in a
+/// fill-reducing order) for iterations that solve with one matrix hundreds of times: its
+/// [`SimplicialCholesky::solve_pairs`] runs both columns of a 2-column right-hand side (u and
+/// v of a parameterisation) through one pass over L, which a supernodal solve does not.
+pub struct SimplicialCholesky {
+    n: usize,
+    /// perm[i]: the original index of row i of P A Pᵀ.
+    perm: Vec<u32>,
+    col_ptr: Vec<u32>,
+    /// Row of each stored entry; a column's diagonal comes first.
+    row_idx: Vec<u32>,
+    values: Vec<f64>,
+}
+
+impl SimplicialCholesky {
+    /// Factorises the n × n matrix given by (row, column, value) entries of its lower triangle
+    /// (entries above the diagonal are ignored; repeated entries are summed).
+    pub fn new(n: usize, entries: &[(usize, usize, f64)]) -> Result<Self, NumericsError> {
+        use faer::dyn_stack::{MemBuffer, MemStack};
+        use faer::sparse::linalg::cholesky::{
+            factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholeskyRaw,
+            SymmetricOrdering,
+        };
+        use faer::sparse::linalg::SupernodalThreshold;
+        let a = lower_matrix(n, entries, "simplicial Cholesky")?;
+        let shape = |detail: String| NumericsError::Shape {
+            what: "simplicial Cholesky",
+            detail,
+        };
+        let symbolic = factorize_symbolic_cholesky(
+            a.symbolic(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams {
+                supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SIMPLICIAL,
+                ..Default::default()
+            },
+        )
+        .map_err(|e| shape(format!("{e:?}")))?;
+        let mut values = vec![0.0; symbolic.len_val()];
+        let mut buffer = MemBuffer::new(
+            symbolic.factorize_numeric_llt_scratch::<f64>(faer::Par::Seq, Default::default()),
+        );
+        symbolic
+            .factorize_numeric_llt(
+                &mut values,
+                a.as_ref(),
+                Side::Lower,
+                Default::default(),
+                faer::Par::Seq,
+                MemStack::new(&mut buffer),
+                Default::default(),
+            )
+            .map_err(|_| NumericsError::NotPositiveDefinite {
+                what: "simplicial Cholesky",
+            })?;
+        let SymbolicCholeskyRaw::Simplicial(raw) = symbolic.raw() else {
+            return Err(shape("faer chose a supernodal factor".into()));
+        };
+        let narrow = |v: &[usize]| -> Vec<u32> { v.iter().map(|&x| x as u32).collect() };
+        let perm = match symbolic.perm() {
+            Some(p) => narrow(p.arrays().0),
+            None => (0..n as u32).collect(),
+        };
+        let (col_ptr, row_idx) = (narrow(raw.col_ptr()), narrow(raw.row_idx()));
+        if u32::try_from(values.len()).is_err()
+            || (0..n).any(|j| row_idx[col_ptr[j] as usize] as usize != j)
+        {
+            return Err(shape("a factor without its diagonal first".into()));
+        }
+        Ok(Self {
+            n,
+            perm,
+            col_ptr,
+            row_idx,
+            values,
+        })
+    }
+
+    /// Solves A X = B in place for a 2-column B given as rows [b₀, b₁].
+    pub fn solve_pairs(&self, b: &mut [[f64; 2]]) -> Result<(), NumericsError> {
+        if b.len() != self.n {
+            return Err(NumericsError::Shape {
+                what: "simplicial Cholesky solve",
+                detail: format!(
+                    "right-hand side of {} for a {} × {} matrix",
+                    b.len(),
+                    self.n,
+                    self.n
+                ),
+            });
+        }
+        let mut y: Vec<[f64; 2]> = self.perm.iter().map(|&i| b[i as usize]).collect();
+        // L y = P b, column by column.
+        for j in 0..self.n {
+            let (s, e) = (self.col_ptr[j] as usize, self.col_ptr[j + 1] as usize);
+            let d = self.values[s];
+            let yj = [y[j][0] / d, y[j][1] / d];
+            y[j] = yj;
+            for k in s + 1..e {
+                let (r, l) = (self.row_idx[k] as usize, self.values[k]);
+                y[r][0] -= l * yj[0];
+                y[r][1] -= l * yj[1];
+            }
+        }
+        // Lᵀ z = y, from the last column.
+        for j in (0..self.n).rev() {
+            let (s, e) = (self.col_ptr[j] as usize, self.col_ptr[j + 1] as usize);
+            let mut acc = y[j];
+            for k in s + 1..e {
+                let (r, l) = (self.row_idx[k] as usize, self.values[k]);
+                acc[0] -= l * y[r][0];
+                acc[1] -= l * y[r][1];
+            }
+            let d = self.values[s];
+            y[j] = [acc[0] / d, acc[1] / d];
+        }
+        for (&i, z) in self.perm.iter().zip(&y) {
+            b[i as usize] = *z;
+        }
+        Ok(())
+    }
+}
+
+/// The matrix from (row, column, value) entries of its lower triangle, repeats summed.
+fn lower_matrix(
+    n: usize,
+    entries: &[(usize, usize, f64)],
+    what: &'static str,
+) -> Result<SparseColMat<usize, f64>, NumericsError> {
+    if let Some(&(r, c, _)) = entries.iter().find(|(r, c, _)| *r >= n || *c >= n) {
+        return Err(NumericsError::Shape {
+            what,
+            detail: format!("entry ({r}, {c}) outside a {n} × {n} matrix"),
+        });
+    }
+    let lower: Vec<Triplet<usize, usize, f64>> = entries
+        .iter()
+        .filter(|(r, c, _)| r >= c)
+        .map(|&(r, c, v)| Triplet::new(r, c, v))
+        .collect();
+    SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &lower).map_err(|e| {
+        NumericsError::Shape {
+            what,
+            detail: format!("{e:?}"),
+        }
+    })
 }
 
 /// The lower-triangle pattern of a sparse symmetric matrix with its symbolic Cholesky
@@ -208,6 +341,49 @@ mod tests {
             assert!((a - w).abs() < 1e-10, "{a} vs {w}");
         }
         assert!(chol.solve_many(&[&b, &b2[1..]]).is_err());
+    }
+
+    #[test]
+    fn simplicial_pair_solves_match_the_supernodal_factor() {
+        // A 2-D screened grid Laplacian (12 × 12), so that the ordering permutes and L fills.
+        let w = 12;
+        let n = w * w;
+        let mut entries = Vec::new();
+        for i in 0..n {
+            entries.push((i, i, 4.05 + (i % 3) as f64 * 0.1));
+            if i % w > 0 {
+                entries.push((i, i - 1, -1.0));
+            }
+            if i >= w {
+                entries.push((i, i - w, -1.0));
+            }
+        }
+        let b0: Vec<f64> = (0..n).map(|i| ((i * 7) % 5) as f64 - 2.0).collect();
+        let b1: Vec<f64> = (0..n).map(|i| ((i * 3) % 11) as f64 * 0.3).collect();
+        let want = SparseCholesky::new(n, &entries)
+            .unwrap()
+            .solve_many(&[&b0, &b1])
+            .unwrap();
+        let simplicial = SimplicialCholesky::new(n, &entries).unwrap();
+        assert_ne!(simplicial.perm, (0..n as u32).collect::<Vec<_>>());
+        let mut pairs: Vec<[f64; 2]> = b0.iter().zip(&b1).map(|(a, b)| [*a, *b]).collect();
+        simplicial.solve_pairs(&mut pairs).unwrap();
+        for (i, x) in pairs.iter().enumerate() {
+            assert!(
+                (x[0] - want[0][i]).abs() < 1e-12,
+                "{} vs {}",
+                x[0],
+                want[0][i]
+            );
+            assert!(
+                (x[1] - want[1][i]).abs() < 1e-12,
+                "{} vs {}",
+                x[1],
+                want[1][i]
+            );
+        }
+        assert!(simplicial.solve_pairs(&mut pairs[1..]).is_err());
+        assert!(SimplicialCholesky::new(2, &[(0, 0, 1.0), (1, 1, -1.0)]).is_err());
     }
 
     #[test]
