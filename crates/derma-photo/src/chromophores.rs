@@ -43,23 +43,77 @@ pub struct ChromophoreReport {
     pub flips: f64,
 }
 
-/// The LUT resampled in Lab for matching, with its bilinear evaluation in (u, v) ∈ [0, 1]².
-struct LabTable<'a> {
-    lut: &'a SkinColorLut,
+/// Nodes of [`LabTable`] per LUT cell and side.
+const LAB_REFINE: usize = 8;
+
+/// The LUT resampled in Lab for matching: Lab of the LUT's bilinear colour on a grid
+/// [`LAB_REFINE`]× finer than the LUT, interpolated bilinearly (within 0.01 ΔE of converting
+/// every lookup; see the tests), so a colour and its Jacobian over (u, v) ∈ [0, 1]² cost one
+/// cell's four nodes instead of three cube roots per evaluation and finite differences.
+struct LabTable {
+    n: usize,
+    lab: Vec<[f64; 3]>,
 }
 
 fn lab_of(rgb: [f64; 3]) -> [f64; 3] {
     xyz_to_lab(linear_srgb_to_xyz(rgb.map(|v| v.max(0.0))))
 }
 
-impl LabTable<'_> {
-    /// The LUT's linear RGB at (u, v), bilinear as [`SkinColorLut::lookup`].
-    fn rgb(&self, u: f64, v: f64) -> [f64; 3] {
-        self.lut.lookup_uv(u, v)
+impl LabTable {
+    fn new(lut: &SkinColorLut) -> Self {
+        let n = (lut.options.size - 1) * LAB_REFINE + 1;
+        let at = |i: usize| i as f64 / (n - 1) as f64;
+        let lab = (0..n * n)
+            .into_par_iter()
+            .map(|k| lab_of(lut.lookup_uv(at(k % n), at(k / n))))
+            .collect();
+        Self { n, lab }
     }
 
+    /// The cell of (u, v) (clamped to the box) and the position inside it.
+    fn cell(&self, u: f64, v: f64) -> (usize, f64, f64) {
+        let m = (self.n - 1) as f64;
+        let (x, y) = (u.clamp(0.0, 1.0) * m, v.clamp(0.0, 1.0) * m);
+        let (i, j) = ((x as usize).min(self.n - 2), (y as usize).min(self.n - 2));
+        (j * self.n + i, x - i as f64, y - j as f64)
+    }
+
+    /// Lab at (u, v).
     fn lab(&self, u: f64, v: f64) -> [f64; 3] {
-        lab_of(self.rgb(u, v))
+        let (k, fx, fy) = self.cell(u, v);
+        let (a, b, c, d) = (
+            self.lab[k],
+            self.lab[k + 1],
+            self.lab[k + self.n],
+            self.lab[k + self.n + 1],
+        );
+        std::array::from_fn(|q| {
+            let top = a[q] + (b[q] - a[q]) * fx;
+            let bot = c[q] + (d[q] - c[q]) * fx;
+            top + (bot - top) * fy
+        })
+    }
+
+    /// Lab at (u, v) with its derivatives along u and v.
+    fn lab_jacobian(&self, u: f64, v: f64) -> ([f64; 3], [f64; 3], [f64; 3]) {
+        let (k, fx, fy) = self.cell(u, v);
+        let m = (self.n - 1) as f64;
+        let (a, b, c, d) = (
+            self.lab[k],
+            self.lab[k + 1],
+            self.lab[k + self.n],
+            self.lab[k + self.n + 1],
+        );
+        let mut l = [0.0; 3];
+        let (mut ju, mut jv) = ([0.0; 3], [0.0; 3]);
+        for q in 0..3 {
+            let top = a[q] + (b[q] - a[q]) * fx;
+            let bot = c[q] + (d[q] - c[q]) * fx;
+            l[q] = top + (bot - top) * fy;
+            ju[q] = ((b[q] - a[q]) * (1.0 - fy) + (d[q] - c[q]) * fy) * m;
+            jv[q] = (bot - top) * m;
+        }
+        (l, ju, jv)
     }
 }
 
@@ -70,11 +124,7 @@ fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
 /// (u, v, ΔE, clamped) of the LUT colour closest in Lab to `target`: a search over a 17 × 17
 /// grid, then damped Gauss–Newton steps in the box [0, 1]² from the three best grid points (the
 /// table is nearly flat in blood where blood saturates the colour; one start can stall there).
-fn invert_one(
-    t: &LabTable,
-    target: [f64; 3],
-    coarse: &[(f64, f64, [f64; 3])],
-) -> (f64, f64, f64, bool) {
+fn invert_one(t: &LabTable, target: [f64; 3], coarse: &Coarse) -> (f64, f64, f64, bool) {
     // The three best grid points in one pass (ties to the lower (u, v), as a sort would).
     let key = |a: &(f64, f64, f64)| (a.2, a.0, a.1);
     let less = |a: &(f64, f64, f64), b: &(f64, f64, f64)| {
@@ -84,9 +134,18 @@ fn invert_one(
             .then(ka.2.total_cmp(&kb.2))
             .is_lt()
     };
+    let mut d = [0.0f64; COARSE * COARSE];
+    for (k, d) in d.iter_mut().enumerate() {
+        *d = (coarse.lab[0][k] - target[0]).powi(2)
+            + (coarse.lab[1][k] - target[1]).powi(2)
+            + (coarse.lab[2][k] - target[2]).powi(2);
+    }
     let mut starts = [(0.0, 0.0, f64::INFINITY); 3];
-    for (u, v, lab) in coarse {
-        let c = (*u, *v, dist2(*lab, target));
+    for (k, d) in d.iter().enumerate() {
+        if *d > starts[2].2 {
+            continue;
+        }
+        let c = (Coarse::at(k % COARSE), Coarse::at(k / COARSE), *d);
         if less(&c, &starts[2]) {
             starts[2] = c;
             if less(&starts[2], &starts[1]) {
@@ -119,18 +178,11 @@ fn invert_one(
 
 /// Damped Gauss–Newton from (u, v): (u, v, squared ΔE).
 fn refine(t: &LabTable, target: [f64; 3], mut u: f64, mut v: f64) -> (f64, f64, f64) {
-    let mut cur = dist2(t.lab(u, v), target);
+    // Each trial point is evaluated with its Jacobian, which the next iteration starts from.
+    let (mut l0, mut ju, mut jv) = t.lab_jacobian(u, v);
+    let mut cur = dist2(l0, target);
     let mut lambda = 1e-3;
     for _ in 0..20 {
-        let h = 1e-4;
-        let l0 = t.lab(u, v);
-        let lu = t.lab((u + h).min(1.0), v);
-        let lv = t.lab(u, (v + h).min(1.0));
-        let (hu, hv) = ((u + h).min(1.0) - u, (v + h).min(1.0) - v);
-        let ju: [f64; 3] =
-            std::array::from_fn(|k| if hu > 0.0 { (lu[k] - l0[k]) / hu } else { 0.0 });
-        let jv: [f64; 3] =
-            std::array::from_fn(|k| if hv > 0.0 { (lv[k] - l0[k]) / hv } else { 0.0 });
         let r: [f64; 3] = std::array::from_fn(|k| l0[k] - target[k]);
         let (a11, a12, a22) = (
             ju.iter().map(|x| x * x).sum::<f64>(),
@@ -152,8 +204,10 @@ fn refine(t: &LabTable, target: [f64; 3], mut u: f64, mut v: f64) -> (f64, f64, 
             let du = -(d22 * g1 - a12 * g2) / det;
             let dv = -(-a12 * g1 + d11 * g2) / det;
             let (nu, nv) = ((u + du).clamp(0.0, 1.0), (v + dv).clamp(0.0, 1.0));
-            let c = dist2(t.lab(nu, nv), target);
+            let (nl, nju, njv) = t.lab_jacobian(nu, nv);
+            let c = dist2(nl, target);
             if c < cur {
+                (l0, ju, jv) = (nl, nju, njv);
                 let step = (nu - u).abs() + (nv - v).abs();
                 let gain = cur - c;
                 u = nu;
@@ -173,24 +227,39 @@ fn refine(t: &LabTable, target: [f64; 3], mut u: f64, mut v: f64) -> (f64, f64, 
     (u, v, cur)
 }
 
-fn coarse_grid(t: &LabTable) -> Vec<(f64, f64, [f64; 3])> {
-    let n = 17;
-    let mut g = Vec::with_capacity(n * n);
-    for j in 0..n {
-        for i in 0..n {
-            let (u, v) = (i as f64 / (n - 1) as f64, j as f64 / (n - 1) as f64);
-            g.push((u, v, t.lab(u, v)));
+/// Nodes per side of [`Coarse`].
+const COARSE: usize = 17;
+
+/// The starting grid of [`invert_one`]: Lab at COARSE × COARSE points of the box, one array per
+/// coordinate (so that the distances to a target are computed several at a time).
+struct Coarse {
+    lab: [Vec<f64>; 3],
+}
+
+impl Coarse {
+    fn new(t: &LabTable) -> Self {
+        let mut lab = [const { Vec::new() }; 3];
+        for k in 0..COARSE * COARSE {
+            let l = t.lab(Self::at(k % COARSE), Self::at(k / COARSE));
+            for q in 0..3 {
+                lab[q].push(l[q]);
+            }
         }
+        Self { lab }
     }
-    g
+
+    /// The coordinate of grid line i.
+    fn at(i: usize) -> f64 {
+        i as f64 / (COARSE - 1) as f64
+    }
 }
 
 /// The exposure factor that best explains a texture as LUT colours: the mean ΔE*ab of the best
 /// 90 % of a sample of texels is minimised over factors 0.25–4 (golden-section search in log
 /// space).
 pub fn fit_exposure(lut: &SkinColorLut, texels: &[[f32; 3]]) -> f64 {
-    let t = LabTable { lut };
-    let coarse = coarse_grid(&t);
+    let t = LabTable::new(lut);
+    let coarse = Coarse::new(&t);
     let step = (texels.len() / 2000).max(1);
     let sample: Vec<[f32; 3]> = texels.iter().step_by(step).copied().collect();
     let cost = |log_e: f64| -> f64 {
@@ -239,17 +308,9 @@ pub const SMOOTHNESS: f64 = 10_000.0;
 /// Jacobi sweeps of the spatial prior at each level of its coarse-to-fine cascade.
 pub const SWEEPS: usize = 12;
 
-/// JᵀJ of Lab over (u, v) at (u, v) (forward differences inside the box): [a11, a12, a22].
+/// JᵀJ of Lab over (u, v) at (u, v): [a11, a12, a22].
 fn normal_matrix(t: &LabTable, u: f64, v: f64) -> [f32; 3] {
-    let h = 1e-3;
-    let l0 = t.lab(u, v);
-    let (uu, vv) = (
-        if u + h <= 1.0 { u + h } else { u - h },
-        if v + h <= 1.0 { v + h } else { v - h },
-    );
-    let (lu, lv) = (t.lab(uu, v), t.lab(u, vv));
-    let ju: [f64; 3] = std::array::from_fn(|k| (lu[k] - l0[k]) / (uu - u));
-    let jv: [f64; 3] = std::array::from_fn(|k| (lv[k] - l0[k]) / (vv - v));
+    let (_, ju, jv) = t.lab_jacobian(u, v);
     let d = |a: &[f64; 3], b: &[f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     [d(&ju, &ju) as f32, d(&ju, &jv) as f32, d(&jv, &jv) as f32]
 }
@@ -278,19 +339,20 @@ fn smooth(res: &mut [Texel], w: usize, h: usize, lambda: f64, sweeps: usize) {
     let mut levels: Vec<Level> = vec![Level {
         w,
         h,
-        hm: res.iter().map(|r| r.h).collect(),
+        hm: res.par_iter().map(|r| r.h).collect(),
         b: res
-            .iter()
+            .par_iter()
             .map(|r| {
                 let [a, b, c] = r.h;
                 [a * r.uv[0] + b * r.uv[1], b * r.uv[0] + c * r.uv[1]]
             })
             .collect(),
-        x: res.iter().map(|r| r.uv).collect(),
+        x: res.par_iter().map(|r| r.uv).collect(),
     }];
     while levels.last().is_some_and(|l| l.w.min(l.h) > 8) {
         let f = levels.last().expect("a level");
         let (cw, ch) = (f.w.div_ceil(2), f.h.div_ceil(2));
+        // Each coarse texel sums its children row by row (the order a raster pass would).
         let mut c = Level {
             w: cw,
             h: ch,
@@ -298,23 +360,29 @@ fn smooth(res: &mut [Texel], w: usize, h: usize, lambda: f64, sweeps: usize) {
             b: vec![[0.0; 2]; cw * ch],
             x: vec![[0.0; 2]; cw * ch],
         };
-        let mut n = vec![0.0f32; cw * ch];
-        for y in 0..f.h {
-            for x in 0..f.w {
-                let (i, j) = (y * f.w + x, (y / 2) * cw + x / 2);
-                for k in 0..3 {
-                    c.hm[j][k] += f.hm[i][k];
+        c.hm.par_chunks_mut(cw)
+            .zip(c.b.par_chunks_mut(cw))
+            .zip(c.x.par_chunks_mut(cw))
+            .enumerate()
+            .for_each(|(cy, ((hm, b), xs))| {
+                let mut n = vec![0.0f32; cw];
+                for y in 2 * cy..(2 * cy + 2).min(f.h) {
+                    for x in 0..f.w {
+                        let (i, j) = (y * f.w + x, x / 2);
+                        for k in 0..3 {
+                            hm[j][k] += f.hm[i][k];
+                        }
+                        for k in 0..2 {
+                            b[j][k] += f.b[i][k];
+                            xs[j][k] += f.x[i][k];
+                        }
+                        n[j] += 1.0;
+                    }
                 }
-                for k in 0..2 {
-                    c.b[j][k] += f.b[i][k];
-                    c.x[j][k] += f.x[i][k];
+                for (x, n) in xs.iter_mut().zip(&n) {
+                    *x = x.map(|v| v / n);
                 }
-                n[j] += 1.0;
-            }
-        }
-        for (x, n) in c.x.iter_mut().zip(&n) {
-            *x = x.map(|v| v / n);
-        }
+            });
         levels.push(c);
     }
     // Coarse to fine.
@@ -354,25 +422,34 @@ impl Level {
         for _ in 0..sweeps {
             let cur = &self.x;
             next.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+                let up = (y > 0).then(|| &cur[(y - 1) * w..y * w]);
+                let down = (y + 1 < h).then(|| &cur[(y + 1) * w..(y + 2) * w]);
+                let mid = &cur[y * w..(y + 1) * w];
+                let (hm, b) = (&self.hm[y * w..(y + 1) * w], &self.b[y * w..(y + 1) * w]);
+                let vertical = up.is_some() as u8 + down.is_some() as u8;
                 for (x, out) in row.iter_mut().enumerate() {
-                    let i = y * w + x;
-                    let (mut sum, mut n) = ([0.0f32; 2], 0.0f32);
-                    for (dx, dy) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
-                        let (nx, ny) = (x as i64 + dx, y as i64 + dy);
-                        if nx < 0 || ny < 0 || nx >= w as i64 || ny >= h as i64 {
-                            continue;
-                        }
-                        let j = ny as usize * w + nx as usize;
-                        sum[0] += cur[j][0];
-                        sum[1] += cur[j][1];
-                        n += 1.0;
+                    let mut sum = [0.0f32; 2];
+                    // The sum in the order left, right, up, down.
+                    let mut add = |q: [f32; 2]| {
+                        sum[0] += q[0];
+                        sum[1] += q[1];
+                    };
+                    if x > 0 {
+                        add(mid[x - 1]);
                     }
-                    let [a, b, c] = self.hm[i];
-                    let (m11, m12, m22) = (a + n * lambda, b, c + n * lambda);
-                    let rhs = [
-                        self.b[i][0] + lambda * sum[0],
-                        self.b[i][1] + lambda * sum[1],
-                    ];
+                    if x + 1 < w {
+                        add(mid[x + 1]);
+                    }
+                    if let Some(up) = up {
+                        add(up[x]);
+                    }
+                    if let Some(down) = down {
+                        add(down[x]);
+                    }
+                    let n = ((x > 0) as u8 + (x + 1 < w) as u8 + vertical) as f32;
+                    let [a, bb, c] = hm[x];
+                    let (m11, m12, m22) = (a + n * lambda, bb, c + n * lambda);
+                    let rhs = [b[x][0] + lambda * sum[0], b[x][1] + lambda * sum[1]];
                     let det = m11 * m22 - m12 * m12;
                     *out = if det.abs() > 1e-12 {
                         [
@@ -380,7 +457,7 @@ impl Level {
                             ((m11 * rhs[1] - m12 * rhs[0]) / det).clamp(0.0, 1.0),
                         ]
                     } else {
-                        cur[i]
+                        mid[x]
                     };
                 }
             });
@@ -391,24 +468,28 @@ impl Level {
 
 /// Share of 4-neighbour pairs of used texels whose melanin differs by more than 0.05.
 fn flip_share(res: &[Texel], w: usize, h: usize) -> f64 {
-    let (mut pairs, mut flips) = (0usize, 0usize);
-    for y in 0..h {
-        for x in 0..w {
-            let i = y * w + x;
-            if !res[i].used {
-                continue;
-            }
-            for j in [(x + 1 < w).then_some(i + 1), (y + 1 < h).then_some(i + w)]
-                .into_iter()
-                .flatten()
-            {
-                if res[j].used {
-                    pairs += 1;
-                    flips += ((res[i].melanin - res[j].melanin).abs() > 0.05) as usize;
+    let (pairs, flips) = (0..h)
+        .into_par_iter()
+        .map(|y| {
+            let (mut pairs, mut flips) = (0usize, 0usize);
+            for x in 0..w {
+                let i = y * w + x;
+                if !res[i].used {
+                    continue;
+                }
+                for j in [(x + 1 < w).then_some(i + 1), (y + 1 < h).then_some(i + w)]
+                    .into_iter()
+                    .flatten()
+                {
+                    if res[j].used {
+                        pairs += 1;
+                        flips += ((res[i].melanin - res[j].melanin).abs() > 0.05) as usize;
+                    }
                 }
             }
-        }
-    }
+            (pairs, flips)
+        })
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
     flips as f64 / pairs.max(1) as f64
 }
 
@@ -462,8 +543,8 @@ pub fn invert_with(
             )));
         }
     }
-    let t = LabTable { lut };
-    let coarse = coarse_grid(&t);
+    let t = LabTable::new(lut);
+    let coarse = Coarse::new(&t);
     let o = &lut.options;
     // Rows in parallel; a texel with exactly its left neighbour's colour (a texture's dilated
     // gutter, flat regions) reuses its result — the same answer, computed once.
@@ -482,6 +563,8 @@ pub fn invert_with(
         },
     );
     res.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        // ΔE of the row's last texel matched by the full search.
+        let mut anchor = 0.0f64;
         for x in 0..w {
             let i = y * w + x;
             let used = mask.is_none_or(|m| m[i]);
@@ -491,17 +574,25 @@ pub fn invert_with(
             }
             let c = texture.data[i].map(|x| x as f64 / exposure);
             let target = lab_of(c);
-            // Continuation: start from the left neighbour's answer; keep it when it explains the
-            // colour within ΔE 0.5 inside the box (neighbouring skin is alike, and this keeps
-            // neighbours on the same branch of a curve of nearly one colour); else search.
+            // Continuation: start from the left neighbour's answer; keep it when it lands inside
+            // the box and explains the colour within ΔE 0.5 of the last full search's match
+            // (at least within ΔE 0.5: neighbouring skin is alike, and this keeps neighbours on
+            // the same branch of a curve of nearly one colour, even out of the gamut, where no
+            // colour is matched within 0.5); else search.
             let from_left = (x > 0 && !row[x - 1].clamped).then(|| {
                 let [u0, v0] = row[x - 1].uv;
                 refine(&t, target, u0 as f64, v0 as f64)
             });
             let inside = |u: f64, v: f64| u > 1e-6 && v > 1e-6 && u < 1.0 - 1e-6 && v < 1.0 - 1e-6;
             let (u, v, de, clamped) = match from_left {
-                Some((u, v, d2)) if d2 < 0.25 && inside(u, v) => (u, v, d2.sqrt(), false),
-                _ => invert_one(&t, target, &coarse),
+                Some((u, v, d2)) if d2.sqrt() < 0.5 + anchor && inside(u, v) => {
+                    (u, v, d2.sqrt(), false)
+                }
+                _ => {
+                    let found = invert_one(&t, target, &coarse);
+                    anchor = found.2;
+                    found
+                }
             };
             row[x] = Texel {
                 melanin: (u.powi(3) * o.melanin_max) as f32,
@@ -526,24 +617,35 @@ pub fn invert_with(
         let target = lab_of(texture.data[i].map(|x| x as f64 / exposure));
         r.delta_e = dist2(t.lab(u, v), target).sqrt() as f32;
     });
-    let used: Vec<&Texel> = res.iter().filter(|r| r.used).collect();
-    let mut de: Vec<f64> = used.iter().map(|r| r.delta_e as f64).collect();
-    de.sort_by(f64::total_cmp);
-    let pct = |p: f64| {
-        de.get(((de.len() as f64 - 1.0) * p).round() as usize)
-            .copied()
-            .unwrap_or(0.0)
+    let mut de: Vec<f64> = res
+        .par_iter()
+        .filter(|r| r.used)
+        .map(|r| r.delta_e as f64)
+        .collect();
+    let clamped = res.par_iter().filter(|r| r.used && r.clamped).count();
+    // The k-th smallest, as a sort would place it (without sorting millions).
+    let mut pct = |p: f64| {
+        if de.is_empty() {
+            return 0.0;
+        }
+        let k = ((de.len() as f64 - 1.0) * p).round() as usize;
+        *de.select_nth_unstable_by(k, f64::total_cmp).1
     };
+    let (median, p95) = (pct(0.5), pct(0.95));
     let report = ChromophoreReport {
         exposure,
-        median_delta_e: pct(0.5),
-        p95_delta_e: pct(0.95),
-        clamped_share: used.iter().filter(|r| r.clamped).count() as f64 / used.len().max(1) as f64,
-        texels: used.len(),
+        median_delta_e: median,
+        p95_delta_e: p95,
+        clamped_share: clamped as f64 / de.len().max(1) as f64,
+        texels: de.len(),
         flips: flip_share(&res, w, h),
     };
     let map = |f: fn(&Texel) -> f32| {
-        Map::from_vec(texture.width, texture.height, res.iter().map(f).collect())
+        Map::from_vec(
+            texture.width,
+            texture.height,
+            res.par_iter().map(f).collect(),
+        )
     };
     Ok(Chromophores {
         melanin: map(|r| r.melanin)?,
@@ -552,7 +654,7 @@ pub fn invert_with(
         confidence: Map::from_vec(
             texture.width,
             texture.height,
-            res.iter()
+            res.par_iter()
                 .map(|r| {
                     let smin = weaker_sensitivity(r.h);
                     smin / (smin + (smoothness as f32).sqrt()).max(1e-12)
@@ -566,6 +668,31 @@ pub fn invert_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_lab_table_matches_converting_every_lookup() {
+        // Between its nodes the table interpolates Lab; converting the LUT's own bilinear colour
+        // at every point is the reference. Its analytic Jacobian matches central differences.
+        let lut = SkinColorLut::builtin();
+        let t = LabTable::new(&lut);
+        let mut worst = 0.0f64;
+        for j in 0..=97 {
+            for i in 0..=97 {
+                let (u, v) = (i as f64 / 97.0, j as f64 / 97.0);
+                worst = worst.max(dist2(t.lab(u, v), lab_of(lut.lookup_uv(u, v))).sqrt());
+            }
+        }
+        assert!(worst < 0.01, "ΔE {worst}");
+        assert!(worst > 0.0, "the table should interpolate Lab, not convert");
+        let (u, v, h) = (0.4137, 0.2911, 1e-6);
+        let (_, ju, jv) = t.lab_jacobian(u, v);
+        for k in 0..3 {
+            let du = (t.lab(u + h, v)[k] - t.lab(u - h, v)[k]) / (2.0 * h);
+            let dv = (t.lab(u, v + h)[k] - t.lab(u, v - h)[k]) / (2.0 * h);
+            assert!((ju[k] - du).abs() < 1e-5 * (1.0 + du.abs()), "{ju:?} {du}");
+            assert!((jv[k] - dv).abs() < 1e-5 * (1.0 + dv.abs()), "{jv:?} {dv}");
+        }
+    }
 
     #[test]
     fn lut_colours_invert_to_their_chromophores() {

@@ -464,10 +464,14 @@ pub fn chromophore_files(
     inputs.extend(mask);
     check_inputs_spared(&outs, &inputs)?;
     progress.stage("invert the skin-colour LUT", 0, Unit::Steps);
-    let tex = RgbImage::read_linear(texture)?;
-    let m: Option<Vec<bool>> = match mask {
-        Some(p) => {
-            let g = derma_core::image_io::read_grey(p)?;
+    // The texture and the mask are read at once.
+    let (tex, grey) = rayon::join(
+        || RgbImage::read_linear(texture),
+        || mask.map(derma_core::image_io::read_grey).transpose(),
+    );
+    let tex = tex?;
+    let m: Option<Vec<bool>> = match (mask, grey?) {
+        (Some(p), Some(g)) => {
             let g = &g.channels[0];
             if (g.width(), g.height()) != (tex.width, tex.height) {
                 return Err(PhotoError::Invalid(format!(
@@ -481,7 +485,7 @@ pub fn chromophore_files(
             }
             Some(g.data().iter().map(|v| *v > 0.5).collect())
         }
-        None => None,
+        _ => None,
     };
     let lut = SkinColorLut::builtin();
     let e = match exposure {
