@@ -178,6 +178,12 @@ fn key_term(surface: &Surface, l: Vec3, only: Option<&[usize]>) -> Vec<f32> {
     }
 }
 
+/// One chunk's share of [`Problem::lights`]: its two normal matrices, samples per photo and rows.
+type Normals = (Vec<f64>, Vec<f64>, Vec<usize>, usize);
+
+/// Vertices per partial sum of [`Problem::lights`].
+const LIGHT_CHUNK: usize = 256;
+
 /// A sample's weight: vertex, then the sample's place in the vertex's list.
 type Weight<'a> = dyn Fn(usize, usize) -> f32 + Sync + 'a;
 
@@ -189,65 +195,107 @@ struct Problem<'a> {
 }
 
 impl Problem<'_> {
+    /// Vertex v's rows of [`Problem::lights`] added to its normal matrices; returns how many.
+    #[allow(clippy::too_many_arguments)]
+    fn accumulate<K: AsRef<[f32]> + Sync>(
+        &self,
+        v: usize,
+        keys: &[K],
+        vig: &[f32],
+        weight: &Weight,
+        p: usize,
+        colour: &(dyn Fn(&Sample) -> f32 + Sync),
+        m: &mut [f64],
+        nrm: &mut [f64],
+    ) -> usize {
+        let dim = p * self.photos;
+        let mut rows = 0;
+        let s = &self.samples[v];
+        let t = &self.surface.transfer[v];
+        let phi: Vec<[f32; PARAMS]> = s
+            .iter()
+            .map(|x| features(t, keys[x.photo].as_ref()[v]))
+            .collect();
+        // The colours with vignetting divided out.
+        let val: Vec<f64> = s
+            .iter()
+            .map(|x| colour(x) as f64 / (1.0 - vig[x.photo] * x.r2) as f64)
+            .collect();
+        for a in 0..s.len() {
+            let ja = s[a].photo * p;
+            let wa = weight(v, a) as f64;
+            for i in 0..p {
+                for j in 0..p {
+                    nrm[(ja + i) * dim + ja + j] += wa * (phi[a][i] * phi[a][j]) as f64;
+                }
+            }
+            for b in a + 1..s.len() {
+                let jb = s[b].photo * p;
+                let sum = val[a] + val[b];
+                if sum <= 0.0 {
+                    continue;
+                }
+                let w = wa * weight(v, b) as f64 / (sum * sum);
+                rows += 1;
+                // r = [block a: I_b φ_a, block b: −I_a φ_b].
+                let ra: [f64; PARAMS] = std::array::from_fn(|i| val[b] * phi[a][i] as f64);
+                let rb: [f64; PARAMS] = std::array::from_fn(|i| -val[a] * phi[b][i] as f64);
+                for i in 0..p {
+                    for j in 0..p {
+                        m[(ja + i) * dim + ja + j] += w * ra[i] * ra[j];
+                        m[(jb + i) * dim + jb + j] += w * rb[i] * rb[j];
+                        m[(ja + i) * dim + jb + j] += w * ra[i] * rb[j];
+                        m[(jb + i) * dim + ja + j] += w * rb[i] * ra[j];
+                    }
+                }
+            }
+        }
+        rows
+    }
+
     /// Every photo's light coefficients at once, without the albedo: where photos j and k see
     /// vertex v, I_k S_j − I_j S_k = 0 (the albedo cancels), linear in the coefficients; the
     /// least-squares solution with mean squared shading fixed is the smallest generalized
     /// eigenvector. Rows are weighted by the samples' robust weights over (I_j + I_k)² (relative
     /// errors). Per channel (`colour` maps a sample to the value solved for), over `vertices`.
     /// Returns the coefficients per photo and the eigenvalue (the weighted misfit).
-    fn lights(
+    fn lights<K: AsRef<[f32]> + Sync>(
         &self,
         vertices: &[usize],
-        keys: &[Vec<f32>],
+        keys: &[K],
         vig: &[f32],
         weight: &Weight,
         p: usize,
-        colour: &dyn Fn(&Sample) -> f32,
+        colour: &(dyn Fn(&Sample) -> f32 + Sync),
     ) -> Option<(Vec<[f32; PARAMS]>, f64)> {
         let dim = p * self.photos;
+        // The normal matrices summed per fixed chunk of vertices, the chunks in order (the same
+        // sums at any thread count).
+        let partial: Vec<Normals> = vertices
+            .par_chunks(LIGHT_CHUNK)
+            .map(|chunk| {
+                let mut m = vec![0.0f64; dim * dim];
+                let mut nrm = vec![0.0f64; dim * dim];
+                let mut count = vec![0usize; self.photos];
+                let mut rows = 0usize;
+                for &v in chunk {
+                    rows += self.accumulate(v, keys, vig, weight, p, colour, &mut m, &mut nrm);
+                    for x in &self.samples[v] {
+                        count[x.photo] += 1;
+                    }
+                }
+                (m, nrm, count, rows)
+            })
+            .collect();
         let mut m = vec![0.0f64; dim * dim];
         let mut nrm = vec![0.0f64; dim * dim];
         let mut count = vec![0usize; self.photos];
         let mut rows = 0usize;
-        for &v in vertices {
-            let s = &self.samples[v];
-            let t = &self.surface.transfer[v];
-            let phi: Vec<[f32; PARAMS]> = s.iter().map(|x| features(t, keys[x.photo][v])).collect();
-            // The colours with vignetting divided out.
-            let val: Vec<f64> = s
-                .iter()
-                .map(|x| colour(x) as f64 / (1.0 - vig[x.photo] * x.r2) as f64)
-                .collect();
-            for a in 0..s.len() {
-                let ja = s[a].photo * p;
-                let wa = weight(v, a) as f64;
-                for i in 0..p {
-                    for j in 0..p {
-                        nrm[(ja + i) * dim + ja + j] += wa * (phi[a][i] * phi[a][j]) as f64;
-                    }
-                }
-                count[s[a].photo] += 1;
-                for b in a + 1..s.len() {
-                    let jb = s[b].photo * p;
-                    let sum = val[a] + val[b];
-                    if sum <= 0.0 {
-                        continue;
-                    }
-                    let w = wa * weight(v, b) as f64 / (sum * sum);
-                    rows += 1;
-                    // r = [block a: I_b φ_a, block b: −I_a φ_b].
-                    let ra: Vec<f64> = (0..p).map(|i| val[b] * phi[a][i] as f64).collect();
-                    let rb: Vec<f64> = (0..p).map(|i| -val[a] * phi[b][i] as f64).collect();
-                    for i in 0..p {
-                        for j in 0..p {
-                            m[(ja + i) * dim + ja + j] += w * ra[i] * ra[j];
-                            m[(jb + i) * dim + jb + j] += w * rb[i] * rb[j];
-                            m[(ja + i) * dim + jb + j] += w * ra[i] * rb[j];
-                            m[(jb + i) * dim + ja + j] += w * rb[i] * ra[j];
-                        }
-                    }
-                }
-            }
+        for (pm, pn, pc, pr) in partial {
+            m.iter_mut().zip(&pm).for_each(|(a, b)| *a += b);
+            nrm.iter_mut().zip(&pn).for_each(|(a, b)| *a += b);
+            count.iter_mut().zip(&pc).for_each(|(a, b)| *a += b);
+            rows += pr;
         }
         // Mean squared shading per photo.
         for k in 0..self.photos {
@@ -379,11 +427,12 @@ fn search_key(
     let sum = |x: &Sample| x.colour.iter().sum::<f32>();
     let normals = prob.surface.normals;
     let cost = |d: Option<Vec3>| {
-        let mut ks = keys.to_vec();
-        ks[k] = match d {
+        let term = match d {
             Some(d) => key_term(prob.surface, d, Some(sub)),
             None => vec![0.0; normals.len()],
         };
+        let mut ks: Vec<&[f32]> = keys.iter().map(|x| x.as_slice()).collect();
+        ks[k] = &term;
         let w = |v: usize, a: usize| {
             let x = &prob.samples[v][a];
             match d {
@@ -394,23 +443,35 @@ fn search_key(
         prob.lights(sub, &ks, vig, &w, PARAMS, &sum)
             .map_or(f64::INFINITY, |r| r.1)
     };
-    let soft = cost(None);
-    let mut best = match start {
-        Some(d) => (d, cost(Some(d))),
-        None => (Vec3::Z, f64::INFINITY),
-    };
-    if step_deg > 4.0 {
-        let g = std::f32::consts::PI * (3.0 - 5f32.sqrt());
-        for i in 0..64 {
-            let z = 1.0 - 2.0 * (i as f32 + 0.5) / 64.0;
-            let r = (1.0 - z * z).sqrt();
-            let d = Vec3::new(r * (g * i as f32).cos(), r * (g * i as f32).sin(), z);
-            let c = cost(Some(d));
+    // Candidates are scored in parallel and taken in their order (the first of equal costs).
+    let take = |best: &mut (Vec3, f64), candidates: &[Vec3]| {
+        let costs: Vec<f64> = candidates.par_iter().map(|d| cost(Some(*d))).collect();
+        for (d, c) in candidates.iter().zip(costs) {
             if c < best.1 {
-                best = (d, c);
+                *best = (*d, c);
             }
         }
+    };
+    let (soft, mut best) = rayon::join(
+        || cost(None),
+        || match start {
+            Some(d) => (d, cost(Some(d))),
+            None => (Vec3::Z, f64::INFINITY),
+        },
+    );
+    if step_deg > 4.0 {
+        let g = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+        let lattice: Vec<Vec3> = (0..64)
+            .map(|i| {
+                let z = 1.0 - 2.0 * (i as f32 + 0.5) / 64.0;
+                let r = (1.0 - z * z).sqrt();
+                Vec3::new(r * (g * i as f32).cos(), r * (g * i as f32).sin(), z)
+            })
+            .collect();
+        take(&mut best, &lattice);
     }
+    // A compass search: each neighbour at the current step in turn, moving at once to any
+    // better one; the step halves when none is.
     let mut step = step_deg.to_radians();
     while step > 0.4f32.to_radians() {
         let (a, b) = best.0.any_orthonormal_pair();

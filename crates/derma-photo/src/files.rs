@@ -22,6 +22,7 @@ use derma_core::Map;
 use derma_head::Head;
 use derma_shading::skin_color_lut::SkinColorLut;
 use glam::DVec3;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -263,7 +264,8 @@ pub fn read_cameras(cameras: &Path) -> Result<Vec<(PathBuf, String, Camera)>> {
 
 /// Reads the photos of [`read_cameras`]' list, each checked against its camera's size.
 pub fn read_photos(list: &[(PathBuf, String, Camera)]) -> Result<Vec<Photo>> {
-    list.iter()
+    // Decoded in parallel, kept in the list's order (the first failure in that order reported).
+    list.par_iter()
         .map(|(path, name, camera)| {
             let p = Photo {
                 name: name.clone(),
@@ -318,57 +320,76 @@ pub fn bake_files(
     };
     let b = bake(&m, &photos, &opts, progress)?;
     progress.stage("write", 0, Unit::Steps);
-    b.texture.write_linear(&outs[0])?;
-    b.texture.write_linear(&outs[1])?;
-    for (k, s) in b.shading.iter().enumerate() {
-        // Scaled so that the 99th percentile of the lit pixels is white.
-        let mut lum: Vec<f32> = s
+    // Every file written at once (each to a temporary name, renamed when complete).
+    let n = photos.len().max(1);
+    let jobs: Vec<Box<dyn Fn() -> Result<()> + Sync + '_>> = {
+        let mut jobs: Vec<Box<dyn Fn() -> Result<()> + Sync + '_>> = vec![
+            Box::new(|| Ok(b.texture.write_linear(&outs[0])?)),
+            Box::new(|| Ok(b.texture.write_linear(&outs[1])?)),
+            Box::new(|| {
+                let src: Vec<f32> = b
+                    .source
+                    .iter()
+                    .map(|s| match *s {
+                        SOURCE_NONE => 0.0,
+                        SOURCE_INTERPOLATED => 0.15,
+                        k => 0.3 + 0.7 * k as f32 / n as f32,
+                    })
+                    .collect();
+                Ok(write_png8(
+                    &outs[2],
+                    &[&Map::from_vec(b.texture.width, b.texture.height, src)?],
+                )?)
+            }),
+            Box::new(|| json_out(&outs[3], &b.report)),
+            Box::new(|| {
+                let mask: Vec<f32> = b
+                    .source
+                    .iter()
+                    .map(|s| ((*s as usize) < photos.len()) as u8 as f32)
+                    .collect();
+                Ok(write_png8(
+                    &outs[4],
+                    &[&Map::from_vec(b.texture.width, b.texture.height, mask)?],
+                )?)
+            }),
+        ];
+        for (k, s) in b.shading.iter().enumerate() {
+            let out = &outs[5 + k];
+            jobs.push(Box::new(move || write_shading(s, out)));
+        }
+        jobs
+    };
+    jobs.par_iter()
+        .map(|job| job())
+        .collect::<Result<Vec<()>>>()?;
+    drop(jobs);
+    Ok(b.report)
+}
+
+/// Writes photo K's shading scaled so that the 99th percentile of its lit pixels is white.
+fn write_shading(s: &RgbImage, out: &Path) -> Result<()> {
+    let mut lum: Vec<f32> = s
+        .data
+        .iter()
+        .map(|c| c.iter().sum::<f32>() / 3.0)
+        .filter(|l| *l > 0.0)
+        .collect();
+    let top = if lum.is_empty() {
+        1.0
+    } else {
+        let i = (lum.len() - 1) * 99 / 100;
+        *lum.select_nth_unstable_by(i, f32::total_cmp).1
+    };
+    let scaled = RgbImage {
+        data: s
             .data
             .iter()
-            .map(|c| c.iter().sum::<f32>() / 3.0)
-            .filter(|l| *l > 0.0)
-            .collect();
-        let top = if lum.is_empty() {
-            1.0
-        } else {
-            let i = (lum.len() - 1) * 99 / 100;
-            *lum.select_nth_unstable_by(i, f32::total_cmp).1
-        };
-        let scaled = RgbImage {
-            data: s
-                .data
-                .iter()
-                .map(|c| c.map(|v| v / top.max(1e-6)))
-                .collect(),
-            ..s.clone()
-        };
-        scaled.write_linear(&outs[5 + k])?;
-    }
-    let n = photos.len().max(1);
-    let src: Vec<f32> = b
-        .source
-        .iter()
-        .map(|s| match *s {
-            SOURCE_NONE => 0.0,
-            SOURCE_INTERPOLATED => 0.15,
-            k => 0.3 + 0.7 * k as f32 / n as f32,
-        })
-        .collect();
-    write_png8(
-        &outs[2],
-        &[&Map::from_vec(b.texture.width, b.texture.height, src)?],
-    )?;
-    json_out(&outs[3], &b.report)?;
-    let mask: Vec<f32> = b
-        .source
-        .iter()
-        .map(|s| ((*s as usize) < photos.len()) as u8 as f32)
-        .collect();
-    write_png8(
-        &outs[4],
-        &[&Map::from_vec(b.texture.width, b.texture.height, mask)?],
-    )?;
-    Ok(b.report)
+            .map(|c| c.map(|v| v / top.max(1e-6)))
+            .collect(),
+        ..s.clone()
+    };
+    Ok(scaled.write_linear(out)?)
 }
 
 /// Makes the iris texture of an eye photo; writes `eye.png` (sRGB), `eye.exr`, `iris_polar.png`
