@@ -113,7 +113,18 @@ impl Rgb {
             .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
         let (w, h) = (img.channels[0].width(), img.channels[0].height());
         let [r, g, b] = [0, 1, 2].map(|c| img.channels[c].data());
-        let f = |v: f32| if linear { srgb_decode(v) } else { v };
+        // 8-bit codes (code / 255 exactly) through the table, the same values as decoding.
+        let f = |v: f32| {
+            if !linear {
+                return v;
+            }
+            let code = (v * 255.0).round().clamp(0.0, 255.0) as u8;
+            if code as f32 / 255.0 == v {
+                crate::color::srgb8_decode(code)
+            } else {
+                srgb_decode(v)
+            }
+        };
         Ok(Self::from_fn(w, h, |i| [f(r[i]), f(g[i]), f(b[i])]))
     }
 

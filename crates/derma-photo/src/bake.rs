@@ -4,14 +4,17 @@
 //! empty; gains solved globally first; then the multiresolution spline with shrunk masks.
 
 use crate::blend::{default_levels, multiband_with, Plane};
-use crate::camera::Prepared;
-use crate::delight::{estimate, DelightOptions, Lighting, Sample, Surface, MIN_SHADING};
+use crate::camera::{Camera, Prepared};
+use crate::delight::{
+    estimate, estimate_from, DelightOptions, Lighting, Sample, Surface, MIN_SHADING,
+};
 use crate::error::{PhotoError, Result};
 use crate::gain::Overlaps;
 use crate::photo::{Photo, RgbImage};
+use crate::register::{luminance_pyramid, register, RegisterOptions, Registration};
 use crate::topology::Topology;
 use derma_core::bvh::Bvh;
-use derma_core::image::Image;
+use derma_core::image::{Grey, Image};
 use derma_core::mesh::TriMesh;
 use derma_core::progress::{Progress, Unit};
 use derma_core::raster::{dilation_sources, UvRaster, NO_TRIANGLE};
@@ -49,6 +52,9 @@ pub struct BakeOptions {
     pub falloff: [f32; 2],
     /// Ray offset for the visibility test, as a fraction of the mesh's extent.
     pub ray_offset: f32,
+    /// Refine the cameras photometrically on the de-lit photos ([`crate::register`]; with
+    /// de-lighting only); `None` takes them as given.
+    pub register: Option<RegisterOptions>,
 }
 
 impl Default for BakeOptions {
@@ -64,6 +70,7 @@ impl Default for BakeOptions {
             // cos 84° and cos 60°.
             falloff: [0.1, 0.5],
             ray_offset: 1e-3,
+            register: Some(RegisterOptions::default()),
         }
     }
 }
@@ -95,6 +102,8 @@ pub struct BakeReport {
     pub photo_coverage: f64,
     /// Each photo's lighting as de-lighting found it (`None` when the lighting was kept).
     pub lighting: Option<Lighting>,
+    /// Each photo's photometric registration (empty when the cameras were taken as given).
+    pub registration: Vec<Registration>,
     /// Wall-clock seconds of the stages: binding, gains and de-lighting, resampling, spline
     /// blending.
     pub seconds: [f64; 3],
@@ -409,9 +418,10 @@ pub fn bake(
     let bvh = Bvh::new(&topo.positions, &topo.triangles);
     let extent = mesh.extent();
     let masks = bind(&topo, &wnormals, photos, &bvh, opts.ray_offset * extent);
-    let cams: Vec<Prepared> = photos.iter().map(|p| Prepared::new(&p.camera)).collect();
+    let given: Vec<Prepared> = photos.iter().map(|p| Prepared::new(&p.camera)).collect();
+    let cams = given;
     // Each vertex sampled once in every photo it is bound to, with that view's weight.
-    let (samples, view_weights): (Vec<Vec<Sample>>, Vec<Vec<f32>>) = (0..topo.positions.len())
+    let (mut samples, view_weights): (Vec<Vec<Sample>>, Vec<Vec<f32>>) = (0..topo.positions.len())
         .into_par_iter()
         .map(|v| {
             let p = topo.positions[v];
@@ -431,27 +441,108 @@ pub fn bake(
         })
         .unzip();
     // De-lighting: per photo and welded vertex, the shading to divide by and the robust weight.
-    let delit = opts.delight.map(|d| {
-        progress.stage("estimate the lighting", 0, Unit::Steps);
-        let offset = opts.ray_offset * extent;
-        let transfer = derma_core::sh::shadowed_transfer(
+    let offset = opts.ray_offset * extent;
+    let transfer = match opts.delight {
+        Some(_) => derma_core::sh::shadowed_transfer(
             &topo.positions,
             &wnormals,
             &bvh,
             opts.transfer_side.max(1),
             offset,
             0,
-        );
-        let open = |v: usize, dir: Vec3| {
-            !bvh.occluded(topo.positions[v] + wnormals[v] * offset, dir, 0.0, f32::MAX)
-        };
-        let surface = Surface {
-            normals: &wnormals,
-            transfer: &transfer,
-            open: &open,
-        };
+        ),
+        None => Vec::new(),
+    };
+    let open = |v: usize, dir: Vec3| {
+        !bvh.occluded(topo.positions[v] + wnormals[v] * offset, dir, 0.0, f32::MAX)
+    };
+    let surface = Surface {
+        normals: &wnormals,
+        transfer: &transfer,
+        open: &open,
+    };
+    let mut delit = opts.delight.map(|d| {
+        progress.stage("estimate the lighting", 0, Unit::Steps);
         estimate(&surface, &samples, photos.len(), &d)
     });
+    // Photometric registration on the de-lit photos: the cameras nudged so that the photos'
+    // detail coincides, each vertex weighted as the blend weights it (view × robust weight);
+    // where a correction is kept, every sample is taken again through its photo's refined
+    // camera and the lighting estimated again, warm from the keys found (the misregistered
+    // samples had blurred it: on issue 38's ground truth a key and the vignetting are found
+    // only after registration).
+    let registration = match (&delit, opts.register) {
+        (Some(d), Some(r)) if photos.len() >= 2 => {
+            progress.stage("register the photos", 0, Unit::Steps);
+            let nv = topo.positions.len();
+            let mut wt = vec![vec![0.0f32; nv]; photos.len()];
+            let mut sh = vec![vec![0.0f32; nv]; photos.len()];
+            for (v, s) in samples.iter().enumerate() {
+                for (a, x) in s.iter().enumerate() {
+                    wt[x.photo][v] = view_weights[v][a] * d.weights[v][a];
+                    sh[x.photo][v] = d.shading(x.photo, v).iter().sum::<f32>()
+                        * d.lighting.vignette(x.photo, x.r2);
+                }
+            }
+            let signals: Vec<Vec<Grey>> = photos
+                .par_iter()
+                .map(|p| luminance_pyramid(&p.image, r.levels))
+                .collect();
+            let cameras: Vec<Camera> = photos.iter().map(|p| p.camera).collect();
+            register(
+                &topo.positions,
+                &|v, k| wt[k][v],
+                &|v, k| sh[k][v],
+                &cameras,
+                &signals,
+                &r,
+            )
+        }
+        _ => Vec::new(),
+    };
+    let cams: Vec<Prepared> = match registration.is_empty() {
+        true => cams,
+        false => registration
+            .iter()
+            .map(|r| Prepared::new(&r.camera))
+            .collect(),
+    };
+    if registration.iter().any(|r| r.kept) {
+        samples.par_iter_mut().enumerate().for_each(|(v, s)| {
+            let p = topo.positions[v];
+            for x in s.iter_mut() {
+                let cam = &cams[x.photo];
+                if let Some(px) = cam
+                    .project(p.as_dvec3())
+                    .filter(|q| cam.camera.in_image(*q))
+                {
+                    x.colour = photos[x.photo].image.sample(px);
+                    x.r2 = radius2(&cam.camera, [px.x as f32, px.y as f32]);
+                    x.view = (cam.centre - p.as_dvec3()).normalize().as_vec3();
+                }
+            }
+        });
+        if let Some(d) = opts.delight {
+            progress.stage("estimate the lighting again", 0, Unit::Steps);
+            let keys: Vec<Option<Vec3>> = delit
+                .as_ref()
+                .map(|x| {
+                    x.lighting
+                        .key_direction
+                        .iter()
+                        .map(|d| d.map(Vec3::from_array))
+                        .collect()
+                })
+                .unwrap_or_default();
+            delit = Some(estimate_from(
+                &surface,
+                &samples,
+                photos.len(),
+                &d,
+                Some(&keys),
+            ));
+        }
+    }
     let gains: Vec<[f32; 3]> = match &delit {
         // The shading holds exposure and white balance.
         Some(_) => vec![[1.0; 3]; photos.len()],
@@ -873,6 +964,7 @@ pub fn bake(
         unbound_vertices: unbound,
         photo_coverage,
         lighting: delit.as_ref().map(|d| d.lighting.clone()),
+        registration,
         seconds: [
             t_bind,
             t_resample,
@@ -881,7 +973,7 @@ pub fn bake(
     };
     let shading = match (&delit, opts.shading_images) {
         (Some(d), true) => (0..photos.len())
-            .map(|k| shading_image(&topo, &vshade[k], &photos[k].camera, &d.lighting, k))
+            .map(|k| shading_image(&topo, &vshade[k], &cams[k].camera, &d.lighting, k))
             .collect(),
         _ => Vec::new(),
     };

@@ -503,6 +503,19 @@ pub fn estimate(
     photos: usize,
     opts: &DelightOptions,
 ) -> Delit {
+    estimate_from(surface, samples, photos, opts, None)
+}
+
+/// [`estimate`] warm-started from key directions found before (per photo; `None` where no key
+/// was found): those keys are only refined by the fine compass search, the others searched for
+/// from scratch (after the cameras were registered, the lighting moves little).
+pub fn estimate_from(
+    surface: &Surface,
+    samples: &[Vec<Sample>],
+    photos: usize,
+    opts: &DelightOptions,
+    warm: Option<&[Option<Vec3>]>,
+) -> Delit {
     let transfer = surface.transfer;
     assert_eq!(transfer.len(), samples.len());
     let nv = samples.len();
@@ -567,13 +580,18 @@ pub fn estimate(
             // vignetting and weights have settled).
             for k in 0..photos {
                 let w = |v: usize, a: usize| robust[v][a] * lit[v][a];
-                // Coarse twice (the second time with every other key in place), then fine.
-                let (start, step) = if it <= soft + 1 {
-                    (dirs[k], 8.0)
-                } else {
-                    (dirs[k], 2.0)
+                let known = warm.and_then(|w| w.get(k).copied().flatten());
+                let d = match known {
+                    // A key found before: placed at the first pass, refined at the fine one.
+                    Some(d) if it == soft => Some(d),
+                    Some(_) if it == soft + 1 => dirs[k],
+                    _ => {
+                        // Coarse twice (the second time with every other key in place), then
+                        // fine.
+                        let step = if it <= soft + 1 { 8.0 } else { 2.0 };
+                        search_key(&prob, &search, k, dirs[k], step, &keys, &vig, &w)
+                    }
                 };
-                let d = search_key(&prob, &search, k, start, step, &keys, &vig, &w);
                 dirs[k] = d;
                 keys[k] = match d {
                     Some(d) => key_term(surface, d, None),

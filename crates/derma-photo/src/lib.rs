@@ -24,6 +24,7 @@ pub mod files;
 pub mod gain;
 pub mod iris;
 pub mod photo;
+pub mod register;
 pub mod resection;
 pub mod synthetic;
 pub mod teeth;

@@ -90,4 +90,75 @@ fn a_real_skin_on_another_face_is_de_lit() {
     // add no cast.
     assert!(delit.psnr_db > kept.psnr_db + 3.0, "{delit:?} vs {kept:?}");
     assert!(delit.cast <= 0.03, "{delit:?}");
+
+    // The same photos with each camera turned by a known small rotation (0.8–1.5 mrad about
+    // its own axes, 0.9–1.7 px here, as resection from 1.5 px clicks leaves): registration
+    // should bring the cameras back toward the true ones and the albedo with them.
+    let off: Vec<Photo> = photos
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let s = |k: usize| if (i + k).is_multiple_of(2) { 1.0 } else { -1.0 };
+            let turn = derma_photo::camera::rodrigues([
+                s(0) * 0.0009,
+                s(1) * 0.0011,
+                s(2) * 0.0004 * (i % 3) as f64,
+            ]);
+            let mut camera = p.camera;
+            let r = turn * camera.rotation_matrix();
+            camera.rotation = derma_photo::camera::rotation_vector(r);
+            camera.translation = (turn * glam::DVec3::from(camera.translation)).to_array();
+            Photo {
+                camera,
+                ..p.clone()
+            }
+        })
+        .collect();
+    let registered = |register: bool| {
+        let opts = BakeOptions {
+            size: 256,
+            register: if register {
+                Some(Default::default())
+            } else {
+                None
+            },
+            ..Default::default()
+        };
+        let b = bake(&mesh, &off, &opts, &derma_core::Silent).unwrap();
+        (evaluate(&mesh, &b, &truth), b.report.registration)
+    };
+    // Over the vertices the photo sees face on (⟨N, V⟩ > 0.5).
+    let rms = |a: &Camera, b: &Camera| {
+        let (mut e, mut n) = (0.0, 0);
+        for (p, nrm) in mesh.positions.iter().zip(&mesh.normals) {
+            let v = (a.centre() - p.as_dvec3()).normalize();
+            if nrm.as_dvec3().dot(v) < 0.5 {
+                continue;
+            }
+            if let (Some(x), Some(y)) = (a.project(p.as_dvec3()), b.project(p.as_dvec3())) {
+                e += (x - y).length_squared();
+                n += 1;
+            }
+        }
+        (e / n as f64).sqrt()
+    };
+    let ((plain, _), (fixed, regs)) = (registered(false), registered(true));
+    let (mut before, mut after) = (0.0, 0.0);
+    for ((t, o), g) in photos.iter().zip(&off).zip(&regs) {
+        let (b, a) = (rms(&t.camera, &o.camera), rms(&t.camera, &g.camera));
+        eprintln!("{}: {b:.2} px → {a:.2} px from the true camera", t.name);
+        before += b;
+        after += a;
+    }
+    eprintln!("held out, cameras off: {plain:?}\nregistered: {fixed:?}");
+    // 7.9 → 4.6 px (sums) and 26.6 → 27.8 dB when this was written: what is left is the
+    // cameras' common error, which the photos cannot see (they agree with each other).
+    assert!(
+        after < 0.7 * before,
+        "registration: {before} → {after} px (sums)"
+    );
+    assert!(
+        fixed.psnr_db > plain.psnr_db + 0.5,
+        "{fixed:?} vs {plain:?}"
+    );
 }

@@ -112,6 +112,9 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
             if a.keep_lighting {
                 opts.delight = None;
             }
+            if a.no_register {
+                opts.register = None;
+            }
             let r = files::bake_files(&a.mesh, &a.cameras, &opts, &a.out, bars)?;
             for p in &r.photos {
                 line(format!(
@@ -122,6 +125,20 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
                     p.gain[2],
                     p.bound_vertices,
                     100.0 * p.best_share
+                ))?;
+            }
+            if !r.registration.is_empty() {
+                let shifts: Vec<String> = r
+                    .registration
+                    .iter()
+                    .map(|g| match g.kept {
+                        true => format!("{:.2}", g.shift_px),
+                        false => "kept as calibrated".into(),
+                    })
+                    .collect();
+                line(format!(
+                    "registration: cameras moved by [{}] px (RMS over the surface)",
+                    shifts.join(", ")
                 ))?;
             }
             if let Some(l) = &r.lighting {

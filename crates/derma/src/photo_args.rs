@@ -77,6 +77,9 @@ pub struct BakeArgs {
     /// No multiresolution spline: the weighted mean only.
     #[arg(long)]
     pub no_multiband: bool,
+    /// Take the cameras as calibrated (no photometric registration of the de-lit photos).
+    #[arg(long)]
+    pub no_register: bool,
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
