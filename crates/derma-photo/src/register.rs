@@ -1,5 +1,6 @@
-//! Photometric registration of the photos: each camera's pose is nudged so that the detail it
-//! puts on the surface lands where the other photos put it (after Zhou & Koltun 2014, §4).
+//! Photometric registration of the photos: each camera's pose and focal length are nudged so that
+//! the detail it puts on the surface lands where the other photos put it (after Zhou & Koltun
+//! 2014, "Color Map Optimization for 3D Reconstruction with Consumer Depth Cameras", §4).
 //!
 //! Cameras resected from a few dozen clicked points are off by about a pixel (issue 38's ground
 //! truth: 0.6–1.4 px RMS from 1.5 px clicks); 1–2 mm freckles are a few pixels across, so each
@@ -7,7 +8,7 @@
 //! Gauss–Newton on the disagreement between its colours and the surface's consensus. The
 //! colour compared here is a *signal* per photo (the de-lit luminance: the photo's luminance
 //! over its shading at the vertex, which [`crate::delight`] found) with one gain per photo
-//! fitted alongside the pose; each photo is refined against the other photos' weighted mean
+//! fitted alongside the pose and focal length; each photo is refined against the other photos' weighted mean
 //! (all photos from the same consensus, each moving (n − 1)/n of its correction, so their order
 //! does not matter and they meet at their mean), coarse to fine over an image pyramid, with
 //! Cauchy weights; a correction larger than [`RegisterOptions::max_shift_px`] is refused.
@@ -52,7 +53,8 @@ pub struct Registration {
     pub camera: Camera,
     /// RMS displacement of the surface's points in the photo (pixels) from the camera given.
     pub shift_px: f64,
-    /// Robust misfit of the contrast against the other photos', before and after.
+    /// Robust misfit (mean Cauchy cost) of its de-lit signal, gain-matched, against the other
+    /// photos' at full resolution, before and after.
     pub misfit: [f64; 2],
     /// Whether the correction was kept.
     pub kept: bool,
