@@ -484,6 +484,22 @@ mod tests {
         (points, cam, image)
     }
 
+    /// Two photos registered, every point weighted 1 and unshaded.
+    fn two(
+        points: &[Vec3],
+        cameras: [Camera; 2],
+        images: [&RgbImage; 2],
+        max_shift_px: f64,
+    ) -> Vec<Registration> {
+        let w = |_: usize, _: usize| 1.0f32;
+        let signals = images.map(|im| luminance_pyramid(im, 3));
+        let opts = RegisterOptions {
+            max_shift_px,
+            ..Default::default()
+        };
+        register(points, &w, &w, &cameras, &signals, &opts)
+    }
+
     #[test]
     fn a_camera_nudged_off_is_brought_back() {
         let (points, truth, image) = scene();
@@ -491,46 +507,25 @@ mod tests {
         // and moved 1 unit (about 4–5 px at this distance), exposure doubled (the gain).
         let off = moved(&truth, &[0.004, -0.003, 0.002, 1.0, -0.5, 0.0, 0.0]);
         let brighter = RgbImage::from_fn(480, 360, |i| image.data[i].map(|v| 2.0 * v));
-        let w = |_: usize, _: usize| 1.0f32;
-        let signals = [
-            luminance_pyramid(&image, 3),
-            luminance_pyramid(&brighter, 3),
-        ];
-        let regs = register(
-            &points,
-            &w,
-            &w,
-            &[truth, off],
-            &signals,
-            &RegisterOptions::default(),
+        let regs = two(&points, [truth, off], [&image, &brighter], 12.0);
+        // RMS distance between two cameras' pixels of the plane's points.
+        let apart = |a: &Camera, b: &Camera| {
+            let (a, b) = (Prepared::new(a), Prepared::new(b));
+            let s: f64 = points
+                .iter()
+                .map(|p| {
+                    (a.project(p.as_dvec3()).unwrap() - b.project(p.as_dvec3()).unwrap())
+                        .length_squared()
+                })
+                .sum();
+            (s / points.len() as f64).sqrt()
+        };
+        let relative = apart(&regs[0].camera, &regs[1].camera);
+        let (before, e0, e1) = (
+            apart(&truth, &off),
+            apart(&truth, &regs[0].camera),
+            apart(&truth, &regs[1].camera),
         );
-        let err = |c: &Camera| {
-            let (a, b) = (Prepared::new(&truth), Prepared::new(c));
-            let s: f64 = points
-                .iter()
-                .map(|p| {
-                    (a.project(p.as_dvec3()).unwrap() - b.project(p.as_dvec3()).unwrap())
-                        .length_squared()
-                })
-                .sum();
-            (s / points.len() as f64).sqrt()
-        };
-        let relative = {
-            let (a, b) = (
-                Prepared::new(&regs[0].camera),
-                Prepared::new(&regs[1].camera),
-            );
-            let s: f64 = points
-                .iter()
-                .map(|p| {
-                    (a.project(p.as_dvec3()).unwrap() - b.project(p.as_dvec3()).unwrap())
-                        .length_squared()
-                })
-                .sum();
-            (s / points.len() as f64).sqrt()
-        };
-        let (before, e0, e1) = (err(&off), err(&regs[0].camera), err(&regs[1].camera));
-        eprintln!("{before} {e0} {e1} {relative} {regs:?}");
         assert!(before > 3.0, "{before}");
         assert!(regs.iter().all(|r| r.kept), "{regs:?}");
         // The two photos now agree to a fraction of a pixel, and they met half way (the
@@ -547,19 +542,7 @@ mod tests {
     fn a_correction_beyond_the_limit_is_refused() {
         let (points, truth, image) = scene();
         let off = moved(&truth, &[0.004, -0.003, 0.002, 1.0, -0.5, 0.0, 0.0]);
-        let w = |_: usize, _: usize| 1.0f32;
-        let signals = [luminance_pyramid(&image, 3), luminance_pyramid(&image, 3)];
-        let regs = register(
-            &points,
-            &w,
-            &w,
-            &[truth, off],
-            &signals,
-            &RegisterOptions {
-                max_shift_px: 0.5,
-                ..Default::default()
-            },
-        );
+        let regs = two(&points, [truth, off], [&image, &image], 0.5);
         assert!(!regs[1].kept);
         assert_eq!(regs[1].camera, off);
         assert_eq!(regs[1].shift_px, 0.0);
