@@ -421,25 +421,26 @@ pub fn bake(
     let given: Vec<Prepared> = photos.iter().map(|p| Prepared::new(&p.camera)).collect();
     let cams = given;
     // Each vertex sampled once in every photo it is bound to, with that view's weight.
-    let (mut samples, view_weights): (Vec<Vec<Sample>>, Vec<Vec<f32>>) = (0..topo.positions.len())
-        .into_par_iter()
-        .map(|v| {
-            let p = topo.positions[v];
-            (0..photos.len())
-                .filter(|i| masks[v] & (1 << i) != 0)
-                .filter_map(|i| {
-                    let (w, px) = weight(&cams[i], p, wnormals[v], opts.falloff)?;
-                    let sample = Sample {
-                        photo: i,
-                        colour: photos[i].image.sample(px),
-                        r2: radius2(&cams[i].camera, [px.x as f32, px.y as f32]),
-                        view: (cams[i].centre - p.as_dvec3()).normalize().as_vec3(),
-                    };
-                    Some((sample, w))
-                })
-                .unzip()
-        })
-        .unzip();
+    let (mut samples, mut view_weights): (Vec<Vec<Sample>>, Vec<Vec<f32>>) =
+        (0..topo.positions.len())
+            .into_par_iter()
+            .map(|v| {
+                let p = topo.positions[v];
+                (0..photos.len())
+                    .filter(|i| masks[v] & (1 << i) != 0)
+                    .filter_map(|i| {
+                        let (w, px) = weight(&cams[i], p, wnormals[v], opts.falloff)?;
+                        let sample = Sample {
+                            photo: i,
+                            colour: photos[i].image.sample(px),
+                            r2: radius2(&cams[i].camera, [px.x as f32, px.y as f32]),
+                            view: (cams[i].centre - p.as_dvec3()).normalize().as_vec3(),
+                        };
+                        Some((sample, w))
+                    })
+                    .unzip()
+            })
+            .unzip();
     // De-lighting: per photo and welded vertex, the shading to divide by and the robust weight.
     let offset = opts.ray_offset * extent;
     let transfer = match opts.delight {
@@ -508,20 +509,27 @@ pub fn bake(
             .collect(),
     };
     if registration.iter().any(|r| r.kept) {
-        samples.par_iter_mut().enumerate().for_each(|(v, s)| {
-            let p = topo.positions[v];
-            for x in s.iter_mut() {
-                let cam = &cams[x.photo];
-                if let Some(px) = cam
-                    .project(p.as_dvec3())
-                    .filter(|q| cam.camera.in_image(*q))
-                {
-                    x.colour = photos[x.photo].image.sample(px);
-                    x.r2 = radius2(&cam.camera, [px.x as f32, px.y as f32]);
-                    x.view = (cam.centre - p.as_dvec3()).normalize().as_vec3();
+        // Each sample and its view weight again; one the refined camera no longer sees (off
+        // the image's edge) keeps no weight.
+        samples
+            .par_iter_mut()
+            .zip(view_weights.par_iter_mut())
+            .enumerate()
+            .for_each(|(v, (s, vw))| {
+                let p = topo.positions[v];
+                for (x, w) in s.iter_mut().zip(vw.iter_mut()) {
+                    let cam = &cams[x.photo];
+                    *w = match weight(cam, p, wnormals[v], opts.falloff) {
+                        Some((wt, px)) => {
+                            x.colour = photos[x.photo].image.sample(px);
+                            x.r2 = radius2(&cam.camera, [px.x as f32, px.y as f32]);
+                            x.view = (cam.centre - p.as_dvec3()).normalize().as_vec3();
+                            wt
+                        }
+                        None => 0.0,
+                    };
                 }
-            }
-        });
+            });
         if let Some(d) = opts.delight {
             progress.stage("estimate the lighting again", 0, Unit::Steps);
             let keys: Vec<Option<Vec3>> = delit

@@ -43,11 +43,15 @@ pub struct ChromophoreReport {
     pub flips: f64,
 }
 
+/// The largest residual ΔE*ab a full search lends the continuations after it (out of the gamut,
+/// beyond it they search again).
+const ANCHOR_MAX: f64 = 2.0;
+
 /// Nodes of [`LabTable`] per LUT cell and side.
 const LAB_REFINE: usize = 8;
 
 /// The LUT resampled in Lab for matching: Lab of the LUT's bilinear colour on a grid
-/// [`LAB_REFINE`]× finer than the LUT, interpolated bilinearly (within 0.01 ΔE of converting
+/// [`LAB_REFINE`]× finer than the LUT, interpolated bilinearly (within 0.001 ΔE of converting
 /// every lookup; see the tests), so a colour and its Jacobian over (u, v) ∈ [0, 1]² cost one
 /// cell's four nodes instead of three cube roots per evaluation and finite differences.
 struct LabTable {
@@ -563,7 +567,8 @@ pub fn invert_with(
         },
     );
     res.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        // ΔE of the row's last texel matched by the full search.
+        // ΔE of the row's last full search, while the continuations after it stay out of the
+        // gamut; at most ANCHOR_MAX.
         let mut anchor = 0.0f64;
         for x in 0..w {
             let i = y * w + x;
@@ -575,10 +580,11 @@ pub fn invert_with(
             let c = texture.data[i].map(|x| x as f64 / exposure);
             let target = lab_of(c);
             // Continuation: start from the left neighbour's answer; keep it when it lands inside
-            // the box and explains the colour within ΔE 0.5 of the last full search's match
-            // (at least within ΔE 0.5: neighbouring skin is alike, and this keeps neighbours on
-            // the same branch of a curve of nearly one colour, even out of the gamut, where no
-            // colour is matched within 0.5); else search.
+            // the box and explains the colour within ΔE 0.5, or within ΔE 0.5 of the last full
+            // search's residual while the colours stay out of the gamut (neighbouring skin is
+            // alike, and this keeps neighbours on the same branch of a curve of nearly one
+            // colour, also where no colour matches within 0.5); else search. A colour matched
+            // within 0.5 resets the allowance, so one poor match does not loosen a whole row.
             let from_left = (x > 0 && !row[x - 1].clamped).then(|| {
                 let [u0, v0] = row[x - 1].uv;
                 refine(&t, target, u0 as f64, v0 as f64)
@@ -586,11 +592,18 @@ pub fn invert_with(
             let inside = |u: f64, v: f64| u > 1e-6 && v > 1e-6 && u < 1.0 - 1e-6 && v < 1.0 - 1e-6;
             let (u, v, de, clamped) = match from_left {
                 Some((u, v, d2)) if d2.sqrt() < 0.5 + anchor && inside(u, v) => {
+                    if d2 < 0.25 {
+                        anchor = 0.0;
+                    }
                     (u, v, d2.sqrt(), false)
                 }
                 _ => {
                     let found = invert_one(&t, target, &coarse);
-                    anchor = found.2;
+                    anchor = if found.2 < 0.5 {
+                        0.0
+                    } else {
+                        found.2.min(ANCHOR_MAX)
+                    };
                     found
                 }
             };
@@ -682,7 +695,7 @@ mod tests {
                 worst = worst.max(dist2(t.lab(u, v), lab_of(lut.lookup_uv(u, v))).sqrt());
             }
         }
-        assert!(worst < 0.01, "ΔE {worst}");
+        assert!(worst < 0.001, "ΔE {worst}");
         assert!(worst > 0.0, "the table should interpolate Lab, not convert");
         let (u, v, h) = (0.4137, 0.2911, 1e-6);
         let (_, ju, jv) = t.lab_jacobian(u, v);

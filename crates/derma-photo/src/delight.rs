@@ -507,8 +507,10 @@ pub fn estimate(
 }
 
 /// [`estimate`] warm-started from key directions found before (per photo; `None` where no key
-/// was found): those keys are only refined by the fine compass search, the others searched for
-/// from scratch (after the cameras were registered, the lighting moves little).
+/// was found): those keys are placed at once (skipping the coarse searches) and then go through
+/// the fine compass search, which keeps them only where they still lower the misfit by 3 %; the
+/// others are searched for from scratch (after the cameras were registered, the lighting moves
+/// little). With fewer than 6 iterations there is no fine search, and a warm key stays unchecked.
 pub fn estimate_from(
     surface: &Surface,
     samples: &[Vec<Sample>],

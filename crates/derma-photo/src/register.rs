@@ -11,7 +11,9 @@
 //! fitted alongside the pose and focal length; each photo is refined against the other photos' weighted mean
 //! (all photos from the same consensus, each moving (n − 1)/n of its correction, so their order
 //! does not matter and they meet at their mean), coarse to fine over an image pyramid, with
-//! Cauchy weights; a correction larger than [`RegisterOptions::max_shift_px`] is refused.
+//! Cauchy weights. The corrections are kept for all photos or none: refused when one moves the
+//! surface by more than [`RegisterOptions::max_shift_px`] or when the photos' misfits together
+//! do not fall.
 //! Comparing local contrast of the lit photos instead was tried and rejected: under key lights
 //! that differ per view, shadow edges outweigh the skin's detail and the cameras drift.
 
@@ -29,10 +31,11 @@ use serde::Serialize;
 pub struct RegisterOptions {
     /// Pyramid levels (the coarsest first; each halves the resolution).
     pub levels: usize,
-    /// Gauss–Newton iterations per level.
+    /// Levenberg–Marquardt iterations per level.
     pub iterations: usize,
     /// The largest RMS displacement (pixels) of the surface's points a correction may make; a
-    /// larger one is refused (the calibration, not the registration, is then wrong).
+    /// larger one refuses the registration (the calibration, not the registration, is then
+    /// wrong).
     pub max_shift_px: f64,
 }
 
@@ -51,12 +54,13 @@ impl Default for RegisterOptions {
 pub struct Registration {
     /// The refined camera (the one given when the correction was refused).
     pub camera: Camera,
-    /// RMS displacement of the surface's points in the photo (pixels) from the camera given.
+    /// RMS displacement of the surface's points in the photo (pixels) from the camera given; 0
+    /// when the registration was refused.
     pub shift_px: f64,
     /// Robust misfit (mean Cauchy cost) of its de-lit signal, gain-matched, against the other
     /// photos' at full resolution, before and after.
     pub misfit: [f64; 2],
-    /// Whether the correction was kept.
+    /// Whether the registration was kept (for all photos or none).
     pub kept: bool,
 }
 
@@ -187,11 +191,20 @@ pub fn register(
             cams[k] = part_way(&cams[k], &c, alpha);
         }
     }
-    // The misfit at full resolution before and after, on the same scale.
+    // The misfit at full resolution before and after, on the same scale and the same points
+    // (a point the refined camera loses counts as a large residual).
     let (before, after) = (observe(cameras, 0), observe(&cams, 0));
     let misfit: Vec<[f64; 2]> = (0..n)
         .map(|k| {
-            let (tb, ta) = (consensus(&before, k), consensus(&after, k));
+            let tb = consensus(&before, k);
+            let mut now = vec![None; points.len()];
+            for (v, t, _) in consensus(&after, k) {
+                now[v] = Some(t);
+            }
+            let ta: Vec<(usize, f64, f64)> = tb
+                .iter()
+                .map(|&(v, _, w)| (v, now[v].unwrap_or(f64::NAN), w))
+                .collect();
             let scale = robust_scale(&tb, &before[k]);
             [
                 robust_cost(&tb, &before[k], scale),
@@ -199,7 +212,7 @@ pub fn register(
             ]
         })
         .collect();
-    (0..n)
+    let shifts: Vec<f64> = (0..n)
         .map(|k| {
             let (a, b) = (Prepared::new(&cameras[k]), Prepared::new(&cams[k]));
             let (mut s, mut m) = (0.0f64, 0usize);
@@ -212,14 +225,20 @@ pub fn register(
                     m += 1;
                 }
             }
-            let shift_px = (s / m.max(1) as f64).sqrt();
-            let kept = shift_px <= opts.max_shift_px && misfit[k][1] < misfit[k][0];
-            Registration {
-                camera: if kept { cams[k] } else { cameras[k] },
-                shift_px: if kept { shift_px } else { 0.0 },
-                misfit: misfit[k],
-                kept,
-            }
+            (s / m.max(1) as f64).sqrt()
+        })
+        .collect();
+    // All or none: each photo moved on the assumption that the others moved too, so keeping
+    // some would leave them half way to cameras that never moved. Kept when no photo moves
+    // beyond the limit and the photos' misfits together fall.
+    let total = |i: usize| misfit.iter().map(|m| m[i]).sum::<f64>();
+    let kept = shifts.iter().all(|s| *s <= opts.max_shift_px) && total(1) < total(0);
+    (0..n)
+        .map(|k| Registration {
+            camera: if kept { cams[k] } else { cameras[k] },
+            shift_px: if kept { shifts[k] } else { 0.0 },
+            misfit: misfit[k],
+            kept,
         })
         .collect()
 }
@@ -248,7 +267,7 @@ fn part_way(a: &Camera, b: &Camera, alpha: f64) -> Camera {
 fn mean_gain(target: &[(usize, f64, f64)], observed: &[f32]) -> f64 {
     let (mut num, mut den) = (0.0, 0.0);
     for &(v, t, w) in target {
-        if !observed[v].is_nan() {
+        if !observed[v].is_nan() && !t.is_nan() {
             num += w * t;
             den += w * observed[v] as f64;
         }
@@ -281,7 +300,7 @@ fn robust_cost(target: &[(usize, f64, f64)], observed: &[f32], scale: f64) -> f6
     let g = mean_gain(target, observed);
     let (mut s, mut ws) = (0.0, 0.0);
     for &(v, t, w) in target {
-        let r = if observed[v].is_nan() {
+        let r = if observed[v].is_nan() || t.is_nan() {
             1e3 * scale
         } else {
             g * observed[v] as f64 - t
@@ -292,8 +311,9 @@ fn robust_cost(target: &[(usize, f64, f64)], observed: &[f32], scale: f64) -> f6
     s / ws.max(1e-30)
 }
 
-/// Levenberg–Marquardt on one photo's pose and log gain against `target` ((point, consensus,
-/// weight)), its signal at a point times `inv` (1 / shading) and the gain, at pyramid level `l`;
+/// Levenberg–Marquardt on one photo's pose, log focal length and log gain against `target`
+/// ((point, consensus, weight)), its signal at a point times `inv` (1 / shading) and the gain, at
+/// pyramid level `l`;
 /// returns the camera and the robust misfit before and after.
 fn refine(
     camera: &Camera,

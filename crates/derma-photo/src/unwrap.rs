@@ -459,9 +459,9 @@ fn signed_areas<'a>(tris: &'a [[u32; 3]], uv: &'a [DVec2]) -> impl Iterator<Item
     })
 }
 
-/// Least-squares conformal map (Lévy et al. 2002): free boundary, the two boundary vertices
-/// farthest apart pinned; `None` when it flips a triangle (then Tutte's embedding starts).
-fn lscm(topo: &Topology, p: &[DVec3], frames: &[Frame]) -> Result<Option<Vec<DVec2>>> {
+/// The least-squares conformal map (Lévy et al. 2002) as solved, with the two boundary vertices
+/// farthest apart pinned (its orientation unchecked: [`lscm`] checks it).
+fn conformal_map(topo: &Topology, p: &[DVec3], frames: &[Frame]) -> Result<Vec<DVec2>> {
     let n = p.len();
     let boundary = &topo.boundary_loops[0];
     // Pins: a boundary vertex and the boundary vertex farthest from it, at their 3D distance.
@@ -540,6 +540,13 @@ fn lscm(topo: &Topology, p: &[DVec3], frames: &[Frame]) -> Result<Option<Vec<DVe
             i => DVec2::new(x[2 * i], x[2 * i + 1]),
         };
     }
+    Ok(uv)
+}
+
+/// Least-squares conformal map (Lévy et al. 2002): free boundary, the two boundary vertices
+/// farthest apart pinned; `None` when it flips a triangle (then Tutte's embedding starts).
+fn lscm(topo: &Topology, p: &[DVec3], frames: &[Frame]) -> Result<Option<Vec<DVec2>>> {
+    let uv = conformal_map(topo, p, frames)?;
     let positive = signed_areas(&topo.triangles, &uv)
         .filter(|s| *s > 0.0)
         .count();
@@ -845,7 +852,10 @@ mod tests {
                 }
             })
             .collect();
-        let uv = lscm(&topo, &p, &frames).unwrap().expect("flip-free");
+        // As solved, before `lscm` could mirror it: a wrong sign of the area term would give
+        // the mirror image (every triangle flipped), which `lscm` would quietly turn back.
+        let uv = conformal_map(&topo, &p, &frames).unwrap();
+        assert!(signed_areas(&topo.triangles, &uv).all(|a| a > 0.0));
         let mut scales = Vec::new();
         for (f, t) in frames.iter().zip(&topo.triangles) {
             // Frames differ per triangle by a rotation, so compare J's conformal invariants:
