@@ -501,12 +501,13 @@ pub fn bake(
         }
         _ => Vec::new(),
     };
-    let cams: Vec<Prepared> = match registration.is_empty() {
-        true => cams,
-        false => registration
+    let cams: Vec<Prepared> = if registration.iter().any(|r| r.kept) {
+        registration
             .iter()
             .map(|r| Prepared::new(&r.camera))
-            .collect(),
+            .collect()
+    } else {
+        cams
     };
     if registration.iter().any(|r| r.kept) {
         // Each sample and its view weight again; one the refined camera no longer sees (off

@@ -86,6 +86,20 @@ impl Prepared {
     }
 }
 
+/// The RMS distance (pixels) between where cameras `a` and `b` put the same points (those both
+/// see in front of them); 0 for none.
+pub fn pixel_distance(a: &Camera, b: &Camera, points: impl IntoIterator<Item = DVec3>) -> f64 {
+    let (a, b) = (Prepared::new(a), Prepared::new(b));
+    let (mut s, mut n) = (0.0f64, 0usize);
+    for p in points {
+        if let (Some(x), Some(y)) = (a.project(p), b.project(p)) {
+            s += (x - y).length_squared();
+            n += 1;
+        }
+    }
+    (s / n.max(1) as f64).sqrt()
+}
+
 impl Camera {
     /// A camera at `eye` looking at `target` with `up` roughly up in the image, focal length
     /// `focal_px`, principal point at the image centre and no distortion.

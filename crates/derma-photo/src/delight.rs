@@ -7,6 +7,7 @@
 //! highlights and hard shadows do not bend the fit.
 
 use derma_core::numerics::dense::{smallest_generalized_eigenpair, solve, Matrix};
+use derma_core::numerics::robust::mad_sigma;
 use derma_core::sh::SH9;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -829,13 +830,7 @@ fn reweight(
         .filter(|r| r.len() >= 2)
         .flat_map(|r| r.iter().map(|e| e.abs()))
         .collect();
-    let sigma = if abs.is_empty() {
-        0.01
-    } else {
-        let mid = abs.len() / 2;
-        let (_, m, _) = abs.select_nth_unstable_by(mid, f64::total_cmp);
-        (1.4826 * *m).max(0.01)
-    };
+    let sigma = mad_sigma(&mut abs).map_or(0.01, |s| s.max(0.01));
     res.iter()
         .map(|r| {
             r.iter()

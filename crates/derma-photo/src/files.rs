@@ -322,47 +322,28 @@ pub fn bake_files(
     progress.stage("write", 0, Unit::Steps);
     // Every file written at once (each to a temporary name, renamed when complete).
     let n = photos.len().max(1);
-    let jobs: Vec<Box<dyn Fn() -> Result<()> + Sync + '_>> = {
-        let mut jobs: Vec<Box<dyn Fn() -> Result<()> + Sync + '_>> = vec![
-            Box::new(|| Ok(b.texture.write_linear(&outs[0])?)),
-            Box::new(|| Ok(b.texture.write_linear(&outs[1])?)),
-            Box::new(|| {
-                let src: Vec<f32> = b
-                    .source
-                    .iter()
-                    .map(|s| match *s {
-                        SOURCE_NONE => 0.0,
-                        SOURCE_INTERPOLATED => 0.15,
-                        k => 0.3 + 0.7 * k as f32 / n as f32,
-                    })
-                    .collect();
-                Ok(write_png8(
-                    &outs[2],
-                    &[&Map::from_vec(b.texture.width, b.texture.height, src)?],
-                )?)
-            }),
-            Box::new(|| json_out(&outs[3], &b.report)),
-            Box::new(|| {
-                let mask: Vec<f32> = b
-                    .source
-                    .iter()
-                    .map(|s| ((*s as usize) < photos.len()) as u8 as f32)
-                    .collect();
-                Ok(write_png8(
-                    &outs[4],
-                    &[&Map::from_vec(b.texture.width, b.texture.height, mask)?],
-                )?)
-            }),
-        ];
-        for (k, s) in b.shading.iter().enumerate() {
-            let out = &outs[5 + k];
-            jobs.push(Box::new(move || write_shading(s, out)));
-        }
-        jobs
+    let (w, h) = (b.texture.width, b.texture.height);
+    let grey = |path: &Path, f: &dyn Fn(u8) -> f32| -> Result<()> {
+        let values = b.source.iter().map(|s| f(*s)).collect();
+        Ok(write_png8(path, &[&Map::from_vec(w, h, values)?])?)
     };
-    jobs.par_iter()
-        .map(|job| job())
-        .collect::<Result<Vec<()>>>()?;
+    let mut jobs: Vec<Box<dyn Fn() -> Result<()> + Sync + '_>> = vec![
+        Box::new(|| Ok(b.texture.write_linear(&outs[0])?)),
+        Box::new(|| Ok(b.texture.write_linear(&outs[1])?)),
+        Box::new(|| {
+            grey(&outs[2], &|s| match s {
+                SOURCE_NONE => 0.0,
+                SOURCE_INTERPOLATED => 0.15,
+                k => 0.3 + 0.7 * k as f32 / n as f32,
+            })
+        }),
+        Box::new(|| json_out(&outs[3], &b.report)),
+        Box::new(|| grey(&outs[4], &|s| ((s as usize) < photos.len()) as u8 as f32)),
+    ];
+    for (s, out) in b.shading.iter().zip(&outs[5..]) {
+        jobs.push(Box::new(move || write_shading(s, out)));
+    }
+    jobs.par_iter().try_for_each(|job| job())?;
     drop(jobs);
     Ok(b.report)
 }
@@ -382,12 +363,13 @@ fn write_shading(s: &RgbImage, out: &Path) -> Result<()> {
         *lum.select_nth_unstable_by(i, f32::total_cmp).1
     };
     let scaled = RgbImage {
+        width: s.width,
+        height: s.height,
         data: s
             .data
             .iter()
             .map(|c| c.map(|v| v / top.max(1e-6)))
             .collect(),
-        ..s.clone()
     };
     Ok(scaled.write_linear(out)?)
 }

@@ -17,10 +17,11 @@
 //! Comparing local contrast of the lit photos instead was tried and rejected: under key lights
 //! that differ per view, shadow edges outweigh the skin's detail and the cameras drift.
 
-use crate::camera::{rodrigues, rotation_vector, Camera, Prepared};
+use crate::camera::{pixel_distance, rodrigues, rotation_vector, Camera, Prepared};
 use crate::photo::RgbImage;
 use derma_core::image::Grey;
 use derma_core::numerics::dense::solve;
+use derma_core::numerics::robust::mad_sigma;
 use derma_core::pyramid::{gaussian_pyramid, BURT_ADELSON};
 use glam::{DVec2, DVec3, Vec3};
 use rayon::prelude::*;
@@ -115,7 +116,6 @@ pub fn register(
         .levels
         .max(1)
         .min(signals.iter().map(|p| p.len()).min().unwrap_or(1));
-    let pyramids = signals;
     // Every photo's de-lit signal at every point it sees at level l (NaN elsewhere).
     let observe = |cams: &[Camera], l: usize| -> Vec<Vec<f32>> {
         (0..n)
@@ -135,7 +135,7 @@ pub fn register(
                         }
                         cam.project(p.as_dvec3())
                             .filter(|px| cam.camera.in_image(*px))
-                            .map_or(f32::NAN, |px| pyramids[k][l].sample(at_level(px, l))[0] / s)
+                            .map_or(f32::NAN, |px| signals[k][l].sample(at_level(px, l))[0] / s)
                     })
                     .collect()
             })
@@ -175,7 +175,7 @@ pub fn register(
                     .collect();
                 refine(
                     &cams[k],
-                    &pyramids[k][l],
+                    &signals[k][l],
                     l,
                     points,
                     &target,
@@ -214,18 +214,8 @@ pub fn register(
         .collect();
     let shifts: Vec<f64> = (0..n)
         .map(|k| {
-            let (a, b) = (Prepared::new(&cameras[k]), Prepared::new(&cams[k]));
-            let (mut s, mut m) = (0.0f64, 0usize);
-            for (v, p) in points.iter().enumerate() {
-                if weight(v, k) <= 0.0 {
-                    continue;
-                }
-                if let (Some(x), Some(y)) = (a.project(p.as_dvec3()), b.project(p.as_dvec3())) {
-                    s += (x - y).length_squared();
-                    m += 1;
-                }
-            }
-            (s / m.max(1) as f64).sqrt()
+            let seen = (0..points.len()).filter(|&v| weight(v, k) > 0.0);
+            pixel_distance(&cameras[k], &cams[k], seen.map(|v| points[v].as_dvec3()))
         })
         .collect();
     // All or none: each photo moved on the assumption that the others moved too, so keeping
@@ -287,11 +277,7 @@ fn robust_scale(target: &[(usize, f64, f64)], observed: &[f32]) -> f64 {
         .filter(|&&(v, _, _)| !observed[v].is_nan())
         .map(|&(v, t, _)| (g * observed[v] as f64 - t).abs())
         .collect();
-    if abs.is_empty() {
-        return 1.0;
-    }
-    let mid = abs.len() / 2;
-    (1.4826 * *abs.select_nth_unstable_by(mid, f64::total_cmp).1).max(1e-9)
+    mad_sigma(&mut abs).map_or(1.0, |s| s.max(1e-9))
 }
 
 /// The weighted mean Cauchy cost ln(1 + (r/s)²) of observed (times its mean gain) against
@@ -358,8 +344,7 @@ fn refine(
     if abs.len() < 12 {
         return (*camera, [0.0; 2]);
     }
-    let mid = abs.len() / 2;
-    let scale = (1.4826 * *abs.select_nth_unstable_by(mid, f64::total_cmp).1).max(1e-6);
+    let scale = mad_sigma(&mut abs).map_or(1.0, |s| s.max(1e-6));
     let cost = |cam: &Camera, lg: f64| -> f64 {
         let p = Prepared::new(cam);
         let (mut c, mut ws) = (0.0, 0.0);
@@ -528,18 +513,8 @@ mod tests {
         let off = moved(&truth, &[0.004, -0.003, 0.002, 1.0, -0.5, 0.0, 0.0]);
         let brighter = RgbImage::from_fn(480, 360, |i| image.data[i].map(|v| 2.0 * v));
         let regs = two(&points, [truth, off], [&image, &brighter], 12.0);
-        // RMS distance between two cameras' pixels of the plane's points.
-        let apart = |a: &Camera, b: &Camera| {
-            let (a, b) = (Prepared::new(a), Prepared::new(b));
-            let s: f64 = points
-                .iter()
-                .map(|p| {
-                    (a.project(p.as_dvec3()).unwrap() - b.project(p.as_dvec3()).unwrap())
-                        .length_squared()
-                })
-                .sum();
-            (s / points.len() as f64).sqrt()
-        };
+        let pts = || points.iter().map(|p| p.as_dvec3());
+        let apart = |a: &Camera, b: &Camera| pixel_distance(a, b, pts());
         let relative = apart(&regs[0].camera, &regs[1].camera);
         let (before, e0, e1) = (
             apart(&truth, &off),

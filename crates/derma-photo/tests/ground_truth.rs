@@ -79,14 +79,8 @@ fn cameras_texture_and_chromophores_are_recovered() {
     // Registration brings the resected cameras toward the true ones (RMS pixel distance of the
     // face's vertices: 0.6–1.4 px from the clicks, 0.3–0.8 px after, when this was written).
     let rms = |a: &derma_photo::camera::Camera, b: &derma_photo::camera::Camera| {
-        let (mut e, mut n) = (0.0, 0);
-        for p in s.mesh.positions.iter().step_by(7) {
-            if let (Some(x), Some(y)) = (a.project(p.as_dvec3()), b.project(p.as_dvec3())) {
-                e += (x - y).length_squared();
-                n += 1;
-            }
-        }
-        (e / n as f64).sqrt()
+        let face = s.mesh.positions.iter().step_by(7).map(|p| p.as_dvec3());
+        derma_photo::camera::pixel_distance(a, b, face)
     };
     let (mut before, mut after) = (0.0, 0.0);
     for ((t, r), g) in s

@@ -129,18 +129,13 @@ fn a_real_skin_on_another_face_is_de_lit() {
     };
     // Over the vertices the photo sees face on (⟨N, V⟩ > 0.5).
     let rms = |a: &Camera, b: &Camera| {
-        let (mut e, mut n) = (0.0, 0);
-        for (p, nrm) in mesh.positions.iter().zip(&mesh.normals) {
-            let v = (a.centre() - p.as_dvec3()).normalize();
-            if nrm.as_dvec3().dot(v) < 0.5 {
-                continue;
-            }
-            if let (Some(x), Some(y)) = (a.project(p.as_dvec3()), b.project(p.as_dvec3())) {
-                e += (x - y).length_squared();
-                n += 1;
-            }
-        }
-        (e / n as f64).sqrt()
+        let facing = mesh
+            .positions
+            .iter()
+            .zip(&mesh.normals)
+            .filter(|(p, n)| n.as_dvec3().dot((a.centre() - p.as_dvec3()).normalize()) >= 0.5)
+            .map(|(p, _)| p.as_dvec3());
+        derma_photo::camera::pixel_distance(a, b, facing)
     };
     let ((plain, _), (fixed, regs)) = (registered(false), registered(true));
     let (mut before, mut after) = (0.0, 0.0);

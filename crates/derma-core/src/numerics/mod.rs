@@ -14,6 +14,7 @@ pub mod fastmath;
 pub mod lanes;
 pub mod levenberg_marquardt;
 pub mod nnls;
+pub mod robust;
 pub mod sparse;
 
 pub use dense::{solve, Eigen, Matrix, Svd};
