@@ -132,7 +132,11 @@ pub fn trace_range_on(
             return unsafe { walk_avx2(t, run, &slab, range) };
         }
     }
-    walk::<PortableF32>((), run, &slab, range)
+    if slab.layers == 1 {
+        walk::<PortableF32, true>((), run, &slab, range)
+    } else {
+        walk::<PortableF32, false>((), run, &slab, range)
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -143,7 +147,12 @@ unsafe fn walk_avx2(
     slab: &Slab,
     range: std::ops::Range<u64>,
 ) -> Tally {
-    walk::<derma_core::numerics::lanes::Avx2F32>(t, run, slab, range)
+    use derma_core::numerics::lanes::Avx2F32;
+    if slab.layers == 1 {
+        walk::<Avx2F32, true>(t, run, slab, range)
+    } else {
+        walk::<Avx2F32, false>(t, run, slab, range)
+    }
 }
 
 /// Per-photon sums of one lane, in f64. Absorption is booked per stay in a layer: the weight
@@ -251,11 +260,17 @@ impl<L: Lanes> Streams<L> {
     }
 }
 
-/// The walk, generic over the lanes.
+/// The walk, generic over the lanes; `ONE` is a single layer (every [`pick`] is then one
+/// constant, held out of the loop).
 #[inline(always)]
-fn walk<L: Lanes>(t: L::Token, run: &Run, slab: &Slab, range: std::ops::Range<u64>) -> Tally {
+fn walk<L: Lanes, const ONE: bool>(
+    t: L::Token,
+    run: &Run,
+    slab: &Slab,
+    range: std::ops::Range<u64>,
+) -> Tally {
     let mut tally = run.empty_tally();
-    let nl = slab.layers;
+    let nl = if ONE { 1 } else { slab.layers };
     let splat = |v: f32| L::splat(t, v);
     let isplat = |v: i32| L::I::splat(t, v);
     let (zero, one) = (splat(0.0), splat(1.0));
