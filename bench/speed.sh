@@ -5,8 +5,8 @@
 #  2. a new user's first command in a scratch clone with its own target directory:
 #     `cargo build --release -p derma` then `derma skin --out out/` (crates already downloaded:
 #     the figure is compile time, not the network's);
-#  3. exemplar synthesis against texture-synthesis (bench/synth.sh at 1024²: grey and colour
-#     exemplars, ratios and quality in its table);
+#  3. exemplar synthesis against texture-synthesis (bench/synth.sh at 1024²: two grey and two
+#     colour exemplars, ratios and quality in its table);
 #  4. the optics' photons per second per core beside MCML (bench/mcml.sh).
 #   bash bench/speed.sh [main] [build] [synth] [optics]    (default: all four)
 set -euo pipefail

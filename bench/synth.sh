@@ -24,8 +24,9 @@ cargo build --release -q -p derma -p derma-synth --example 02_quality
 derma=target/release/derma
 quality=target/release/examples/02_quality
 
-# The exemplars: the forehead displacement crop at 128² and 256², the forehead albedo crop
-# (256×128, colour). Provenance: ../shared/data/skin_exemplars.PROVENANCE.txt.
+# The exemplars, two grey and two colour: the forehead displacement crop at 128² and 256², the
+# forehead albedo crop (256×128) and its left 128². No synthesis test reads the albedo (only the
+# photo pipeline's held-out test does). Provenance: ../shared/data/skin_exemplars.PROVENANCE.txt.
 python3 - "$data" "$out" <<'PY'
 import sys
 from PIL import Image
@@ -33,7 +34,9 @@ data, out = sys.argv[1], sys.argv[2]
 d = Image.open(f"{data}/skin_displacement_forehead_512.png")
 d.crop((0, 0, 128, 128)).save(f"{out}/disp128.png")
 d.crop((0, 0, 256, 256)).save(f"{out}/disp256.png")
-Image.open(f"{data}/skin_albedo_forehead_256x128.png").convert("RGB").save(f"{out}/albedo256x128.png")
+a = Image.open(f"{data}/skin_albedo_forehead_256x128.png").convert("RGB")
+a.save(f"{out}/albedo256x128.png")
+a.crop((0, 0, 128, 128)).save(f"{out}/albedo128.png")
 PY
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
@@ -46,7 +49,7 @@ wall() { # seconds of wall clock of a command
   t1=$(date +%s.%N)
   python3 -c "print(f'{$t1 - $t0:.2f}')"
 }
-for ex in disp128 disp256 albedo256x128; do
+for ex in disp128 disp256 albedo128 albedo256x128; do
   for s in "${sizes[@]}"; do
     d_s=$(wall "$derma" synth -q --exemplar "$out/$ex.png" --size "$s" --seed 1 --out "$out/${ex}_${s}_derma.png")
     p_s=$(wall "$peer" --no-progress --seed 1 --out-size "$s" --out "$out/${ex}_${s}_peer.png" generate "$out/$ex.png")
