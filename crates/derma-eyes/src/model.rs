@@ -10,6 +10,7 @@ use crate::pca::Pca;
 use crate::regression::Linear;
 use crate::tracked::{Frame, Tracked};
 use crate::{EyesError, Result};
+use derma_core::numerics::robust::mad_sigma;
 use glam::Vec2;
 use serde::{Deserialize, Serialize};
 
@@ -280,9 +281,7 @@ impl EyeModel {
             .zip(&ys)
             .map(|(x, y)| sq(&a.apply(x), y).sqrt())
             .collect();
-        let mut sorted = res.clone();
-        sorted.sort_by(f64::total_cmp);
-        let mad = 1.4826 * sorted[sorted.len() / 2];
+        let mad = mad_sigma(&mut res.clone()).expect("a fit has samples");
         let keep: Vec<usize> = (0..xs.len())
             .filter(|&i| res[i] <= 3.0 * mad.max(1e-6))
             .collect();

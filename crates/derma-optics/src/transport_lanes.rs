@@ -132,11 +132,7 @@ pub fn trace_range_on(
             return unsafe { walk_avx2(t, run, &slab, range) };
         }
     }
-    if slab.layers == 1 {
-        walk::<PortableF32, true>((), run, &slab, range)
-    } else {
-        walk::<PortableF32, false>((), run, &slab, range)
-    }
+    walk_slab::<PortableF32>((), run, &slab, range)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -147,11 +143,16 @@ unsafe fn walk_avx2(
     slab: &Slab,
     range: std::ops::Range<u64>,
 ) -> Tally {
-    use derma_core::numerics::lanes::Avx2F32;
+    walk_slab::<derma_core::numerics::lanes::Avx2F32>(t, run, slab, range)
+}
+
+/// [`walk`] with its layer count fixed at compile time where the slab has a single layer.
+#[inline(always)]
+fn walk_slab<L: Lanes>(t: L::Token, run: &Run, slab: &Slab, range: std::ops::Range<u64>) -> Tally {
     if slab.layers == 1 {
-        walk::<Avx2F32, true>(t, run, slab, range)
+        walk::<L, true>(t, run, slab, range)
     } else {
-        walk::<Avx2F32, false>(t, run, slab, range)
+        walk::<L, false>(t, run, slab, range)
     }
 }
 

@@ -171,6 +171,26 @@ fn radius2(cam: &crate::Camera, px: [f32; 2]) -> f32 {
     ((px[0] - w / 2.0).powi(2) + (px[1] - h / 2.0).powi(2)) / ((w * w + h * h) / 4.0)
 }
 
+/// Photo `i`'s sample of the point `p` (normal `n`) through `cam`, with its view weight; `None`
+/// where the photo does not see it ([`weight`]).
+fn sample_at(
+    cam: &Prepared,
+    photo: &Photo,
+    i: usize,
+    p: Vec3,
+    n: Vec3,
+    falloff: [f32; 2],
+) -> Option<(Sample, f32)> {
+    let (w, px) = weight(cam, p, n, falloff)?;
+    let sample = Sample {
+        photo: i,
+        colour: photo.image.sample(px),
+        r2: radius2(&cam.camera, [px.x as f32, px.y as f32]),
+        view: (cam.centre - p.as_dvec3()).normalize().as_vec3(),
+    };
+    Some((sample, w))
+}
+
 /// Photo k's shading (per welded vertex, `shade`) times its vignetting, drawn in its own frame
 /// by derma-render's rasteriser; 0 off the mesh.
 fn shading_image(
@@ -418,30 +438,24 @@ pub fn bake(
     let bvh = Bvh::new(&topo.positions, &topo.triangles);
     let extent = mesh.extent();
     let masks = bind(&topo, &wnormals, photos, &bvh, opts.ray_offset * extent);
-    let given: Vec<Prepared> = photos.iter().map(|p| Prepared::new(&p.camera)).collect();
-    let cams = given;
+    let cams: Vec<Prepared> = photos.iter().map(|p| Prepared::new(&p.camera)).collect();
     // Each vertex sampled once in every photo it is bound to, with that view's weight.
-    let (mut samples, mut view_weights): (Vec<Vec<Sample>>, Vec<Vec<f32>>) =
-        (0..topo.positions.len())
-            .into_par_iter()
-            .map(|v| {
-                let p = topo.positions[v];
-                (0..photos.len())
-                    .filter(|i| masks[v] & (1 << i) != 0)
-                    .filter_map(|i| {
-                        let (w, px) = weight(&cams[i], p, wnormals[v], opts.falloff)?;
-                        let sample = Sample {
-                            photo: i,
-                            colour: photos[i].image.sample(px),
-                            r2: radius2(&cams[i].camera, [px.x as f32, px.y as f32]),
-                            view: (cams[i].centre - p.as_dvec3()).normalize().as_vec3(),
-                        };
-                        Some((sample, w))
-                    })
-                    .unzip()
-            })
-            .unzip();
+    let (mut samples, mut view_weights): (Vec<Vec<Sample>>, Vec<Vec<f32>>) = (0..topo
+        .positions
+        .len())
+        .into_par_iter()
+        .map(|v| {
+            let p = topo.positions[v];
+            (0..photos.len())
+                .filter(|i| masks[v] & (1 << i) != 0)
+                .filter_map(|i| sample_at(&cams[i], &photos[i], i, p, wnormals[v], opts.falloff))
+                .unzip()
+        })
+        .unzip();
     // De-lighting: per photo and welded vertex, the shading to divide by and the robust weight.
+    if opts.delight.is_some() {
+        progress.stage("estimate the lighting", 0, Unit::Steps);
+    }
     let offset = opts.ray_offset * extent;
     let transfer = match opts.delight {
         Some(_) => derma_core::sh::shadowed_transfer(
@@ -462,10 +476,9 @@ pub fn bake(
         transfer: &transfer,
         open: &open,
     };
-    let mut delit = opts.delight.map(|d| {
-        progress.stage("estimate the lighting", 0, Unit::Steps);
-        estimate(&surface, &samples, photos.len(), &d)
-    });
+    let mut delit = opts
+        .delight
+        .map(|d| estimate(&surface, &samples, photos.len(), &d));
     // Photometric registration on the de-lit photos: the cameras nudged so that the photos'
     // detail coincides, each vertex weighted as the blend weights it (view × robust weight);
     // where a correction is kept, every sample is taken again through its photo's refined
@@ -501,7 +514,9 @@ pub fn bake(
         }
         _ => Vec::new(),
     };
-    let cams: Vec<Prepared> = if registration.iter().any(|r| r.kept) {
+    // Kept for all photos or none.
+    let kept = registration.first().is_some_and(|r| r.kept);
+    let cams: Vec<Prepared> = if kept {
         registration
             .iter()
             .map(|r| Prepared::new(&r.camera))
@@ -509,7 +524,7 @@ pub fn bake(
     } else {
         cams
     };
-    if registration.iter().any(|r| r.kept) {
+    if kept {
         // Each sample and its view weight again; one the refined camera no longer sees (off
         // the image's edge) keeps no weight.
         samples
@@ -519,30 +534,25 @@ pub fn bake(
             .for_each(|(v, (s, vw))| {
                 let p = topo.positions[v];
                 for (x, w) in s.iter_mut().zip(vw.iter_mut()) {
-                    let cam = &cams[x.photo];
-                    *w = match weight(cam, p, wnormals[v], opts.falloff) {
-                        Some((wt, px)) => {
-                            x.colour = photos[x.photo].image.sample(px);
-                            x.r2 = radius2(&cam.camera, [px.x as f32, px.y as f32]);
-                            x.view = (cam.centre - p.as_dvec3()).normalize().as_vec3();
+                    let i = x.photo;
+                    *w = match sample_at(&cams[i], &photos[i], i, p, wnormals[v], opts.falloff) {
+                        Some((again, wt)) => {
+                            *x = again;
                             wt
                         }
                         None => 0.0,
                     };
                 }
             });
-        if let Some(d) = opts.delight {
+        // Registration ran on the de-lit photos, so both are there.
+        if let (Some(d), Some(first)) = (opts.delight, &delit) {
             progress.stage("estimate the lighting again", 0, Unit::Steps);
-            let keys: Vec<Option<Vec3>> = delit
-                .as_ref()
-                .map(|x| {
-                    x.lighting
-                        .key_direction
-                        .iter()
-                        .map(|d| d.map(Vec3::from_array))
-                        .collect()
-                })
-                .unwrap_or_default();
+            let keys: Vec<Option<Vec3>> = first
+                .lighting
+                .key_direction
+                .iter()
+                .map(|k| k.map(Vec3::from_array))
+                .collect();
             delit = Some(estimate_from(
                 &surface,
                 &samples,

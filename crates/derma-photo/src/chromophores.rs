@@ -43,6 +43,10 @@ pub struct ChromophoreReport {
     pub flips: f64,
 }
 
+/// ΔE*ab within which a continuation from the left neighbour's answer is kept without a search
+/// (authored: below the photos' 8-bit steps of about 0.3–0.5 ΔE, see [`SMOOTHNESS`]).
+const CONTINUE_DE: f64 = 0.5;
+
 /// The largest residual ΔE*ab a full search lends the continuations after it (out of the gamut,
 /// beyond it they search again).
 const ANCHOR_MAX: f64 = 2.0;
@@ -591,15 +595,15 @@ pub fn invert_with(
             });
             let inside = |u: f64, v: f64| u > 1e-6 && v > 1e-6 && u < 1.0 - 1e-6 && v < 1.0 - 1e-6;
             let (u, v, de, clamped) = match from_left {
-                Some((u, v, d2)) if d2.sqrt() < 0.5 + anchor && inside(u, v) => {
-                    if d2 < 0.25 {
+                Some((u, v, d2)) if d2.sqrt() < CONTINUE_DE + anchor && inside(u, v) => {
+                    if d2 < CONTINUE_DE * CONTINUE_DE {
                         anchor = 0.0;
                     }
                     (u, v, d2.sqrt(), false)
                 }
                 _ => {
                     let found = invert_one(&t, target, &coarse);
-                    anchor = if found.2 < 0.5 {
+                    anchor = if found.2 < CONTINUE_DE {
                         0.0
                     } else {
                         found.2.min(ANCHOR_MAX)

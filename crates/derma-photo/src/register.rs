@@ -41,6 +41,10 @@ pub struct RegisterOptions {
 }
 
 impl Default for RegisterOptions {
+    /// Authored: three levels (an 8 px error at full resolution is 2 px at the coarsest, within
+    /// the reach of a one-pixel gradient); eight iterations a level (each stops early once a
+    /// step gains less than 10⁻⁶ of the cost); 12 px, about ten times the clicked cameras'
+    /// 0.6–1.4 px errors.
     fn default() -> Self {
         Self {
             levels: 3,
@@ -165,7 +169,7 @@ pub fn register(
     let mut cams = cameras.to_vec();
     for l in (0..levels).rev() {
         let observed = observe(&cams, l);
-        let refined: Vec<(Camera, [f64; 2])> = (0..n)
+        let refined: Vec<Camera> = (0..n)
             .into_par_iter()
             .map(|k| {
                 let target = consensus(&observed, k);
@@ -187,7 +191,7 @@ pub fn register(
         // Each photo moves (n − 1)/n of the way to the others' consensus: where the offsets
         // add up linearly, all then meet at their mean in one round, whatever their order.
         let alpha = (n as f64 - 1.0) / n as f64;
-        for (k, (c, _)) in refined.into_iter().enumerate() {
+        for (k, c) in refined.into_iter().enumerate() {
             cams[k] = part_way(&cams[k], &c, alpha);
         }
     }
@@ -297,10 +301,16 @@ fn robust_cost(target: &[(usize, f64, f64)], observed: &[f32], scale: f64) -> f6
     s / ws.max(1e-30)
 }
 
+/// The fewest points a photo is refined on: eight unknowns, with a margin for the robust scale.
+const MIN_POINTS: usize = 12;
+
 /// Levenberg–Marquardt on one photo's pose, log focal length and log gain against `target`
 /// ((point, consensus, weight)), its signal at a point times `inv` (1 / shading) and the gain, at
-/// pyramid level `l`;
-/// returns the camera and the robust misfit before and after.
+/// pyramid level `l`; returns the refined camera (the one given where there is too little to fit).
+/// Marquardt's damping of the normal equations' diagonal (Marquardt 1963; the schedule — start
+/// 10⁻³, ×0.3 on a step that lowers the cost, ×10 on one that does not, six tries — is ours) with
+/// iteratively reweighted Cauchy residuals, so the step is taken on the robust cost itself.
+/// At least [`MIN_POINTS`] points are needed.
 fn refine(
     camera: &Camera,
     image: &Grey,
@@ -309,10 +319,10 @@ fn refine(
     target: &[(usize, f64, f64)],
     inv: &[f64],
     iterations: usize,
-) -> (Camera, [f64; 2]) {
+) -> Camera {
     const P: usize = 8;
-    if target.len() < 12 {
-        return (*camera, [0.0; 2]);
+    if target.len() < MIN_POINTS {
+        return *camera;
     }
     let sample = |cam: &Prepared, v: usize| -> Option<DVec2> {
         cam.project(points[v].as_dvec3())
@@ -322,35 +332,41 @@ fn refine(
     let value = |q: DVec2| image.sample(q)[0] as f64;
     // The gain that matches the consensus on average to start from.
     let start = Prepared::new(camera);
+    let at_start: Vec<Option<f64>> = target
+        .iter()
+        .map(|&(v, _, _)| sample(&start, v).map(value))
+        .collect();
     let (mut num, mut den) = (0.0, 0.0);
-    for (&(v, t, w), s) in target.iter().zip(inv) {
-        if let Some(q) = sample(&start, v) {
+    for ((&(_, t, w), s), val) in target.iter().zip(inv).zip(&at_start) {
+        if let Some(val) = val {
             num += w * t;
-            den += w * value(q) * s;
+            den += w * val * s;
         }
     }
     if !(num > 0.0 && den > 0.0) {
-        return (*camera, [0.0; 2]);
+        return *camera;
     }
     let mut log_gain = (num / den).ln();
     // The residuals' scale: 1.4826 × the median |r| at the start (fixed for this level).
+    let gain0 = log_gain.exp();
     let mut abs: Vec<f64> = target
         .iter()
         .zip(inv)
-        .filter_map(|(&(v, t, _), s)| {
-            sample(&start, v).map(|q| (log_gain.exp() * value(q) * s - t).abs())
-        })
+        .zip(&at_start)
+        .filter_map(|((&(_, t, _), s), val)| val.map(|val| (gain0 * val * s - t).abs()))
         .collect();
-    if abs.len() < 12 {
-        return (*camera, [0.0; 2]);
+    if abs.len() < MIN_POINTS {
+        return *camera;
     }
     let scale = mad_sigma(&mut abs).map_or(1.0, |s| s.max(1e-6));
     let cost = |cam: &Camera, lg: f64| -> f64 {
         let p = Prepared::new(cam);
+        let gain = lg.exp();
         let (mut c, mut ws) = (0.0, 0.0);
         for (&(v, t, w), s) in target.iter().zip(inv) {
-            // A point leaving the image counts as a large residual.
-            let r2 = sample(&p, v).map_or(1e6, |q| ((lg.exp() * value(q) * s - t) / scale).powi(2));
+            // A point leaving the image counts as a large residual (10³ scales: it dominates a
+            // Cauchy cost of in-image residuals, which grows only as their logarithm).
+            let r2 = sample(&p, v).map_or(1e6, |q| ((gain * value(q) * s - t) / scale).powi(2));
             c += w * (1.0 + r2).ln();
             ws += w;
         }
@@ -358,7 +374,6 @@ fn refine(
     };
     let mut cam = *camera;
     let mut cur = cost(&cam, log_gain);
-    let first = cur;
     let mut mu = 1e-3;
     // Steps of the finite differences: 10⁻⁶ rad, 10⁻⁴ mesh units and 10⁻⁶ of the focal length.
     let h = [1e-6, 1e-6, 1e-6, 1e-4, 1e-4, 1e-4, 1e-6];
@@ -423,7 +438,7 @@ fn refine(
             break;
         }
     }
-    (cam, [first, cur])
+    cam
 }
 
 #[cfg(test)]

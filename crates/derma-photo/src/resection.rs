@@ -6,6 +6,7 @@ use crate::camera::{rotation_vector, Camera};
 use crate::error::{PhotoError, Result};
 use derma_core::numerics::dense::{matrix_from_rows, svd};
 use derma_core::numerics::levenberg_marquardt::{levenberg_marquardt, LmOptions, ResidualFn};
+use derma_core::numerics::robust::mad_sigma;
 use glam::{DMat3, DVec2, DVec3};
 use serde::Serialize;
 
@@ -604,9 +605,7 @@ pub fn resect(photos: &[PhotoPoints], opts: &ResectionOptions) -> Result<Vec<Res
     let mut any = false;
     for (i, p) in photos.iter().enumerate() {
         let e = errors(p, &cams[i]);
-        let mut s = e.clone();
-        s.sort_by(f64::total_cmp);
-        let sigma = 1.4826 * s[s.len() / 2];
+        let sigma = mad_sigma(&mut e.clone()).expect("a calibrated photo has points");
         let limit = opts.outlier_px.max(3.0 * sigma);
         for (k, &v) in e.iter().enumerate() {
             if v > limit && inlier[i].iter().filter(|u| **u).count() > MIN_POINTS {
