@@ -9,7 +9,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
-cargo build --release -q -p derma
+cargo build --release -q -p derma --features gpu
 D=target/release/derma
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT

@@ -7,6 +7,6 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 D=${1:-target/release/derma}
-[ -x "$D" ] || { cargo build --release -q -p derma; D=target/release/derma; }
+[ -x "$D" ] || { cargo build --release -q -p derma --features gpu; D=target/release/derma; }
 echo "machine: $(nproc) cores, $(date -u +%F); $(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null || echo 'no nvidia-smi')"
 "$D" eyes sdf --device gpu --runs 50 -o "${TMPDIR:-/tmp}/derma-eyes-gpu"

@@ -7,9 +7,10 @@
 # minutes on one data-centre GPU. Run where the GPU is:
 #   DERMA=path/to/derma RIG_BENCH=path/to/rig-bench LAYOUT_BENCH=path/to/gpu_layout-bench \
 #   EXEMPLARS=dir bash bench/gpu.sh
-# DERMA: the release binary (default target/release/derma). RIG_BENCH: the criterion binary of
-# `cargo bench -p derma-rig --bench rig --no-run` (target/release/deps/rig-*; skipped if unset).
-# LAYOUT_BENCH: that of `cargo bench -p derma-optics --bench gpu_layout --no-run`
+# DERMA: the release binary built with the `gpu` feature (`cargo build --release -p derma
+# --features gpu`; default target/release/derma). RIG_BENCH: the criterion binary of
+# `cargo bench -p derma-rig --features gpu --bench rig --no-run` (target/release/deps/rig-*; skipped if unset).
+# LAYOUT_BENCH: that of `cargo bench -p derma-optics --features gpu --bench gpu_layout --no-run`
 # (target/release/deps/gpu_layout-*): photons/s per kernel layout, to tune Kernel::for_device.
 # EXEMPLARS: a folder with disp256.png (disp128.png for QUICK; bench/synth.sh writes both to
 # bench/out/synth).

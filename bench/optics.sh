@@ -8,7 +8,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 which="${1:-both}"
-cargo build --release -q -p derma
+cargo build --release -q -p derma --features gpu
 bin=target/release/derma
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 devices=()

@@ -8,7 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
-cargo build --release -q -p derma -p derma-skin --example 05_frame_time
+cargo build --release -q -p derma -p derma-skin --features derma/gpu,derma-skin/gpu --example 05_frame_time
 target/release/examples/05_frame_time 1024,1920x1080 "${FRAMES:-20}"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT

@@ -7,7 +7,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
-cargo build --release -q --workspace --bins --examples
+cargo build --release -q --workspace --bins --examples --all-features
 D=target/release/derma
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT

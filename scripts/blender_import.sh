@@ -16,7 +16,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 glb=${1:-}
 if [ -z "$glb" ]; then
-  cargo build --release -q --workspace --bins
+  cargo build --release -q --workspace --bins --all-features
   target/release/derma skin --size 512 --glb --out "$work/skin" --quiet
   glb="$work/skin/head.glb"
 fi

@@ -2,7 +2,7 @@
 # The project's test command (README.md; CI runs it on a fresh machine): installs what the tests
 # need; checks formatting and lints; checks the committed adding-doubling references against
 # iadpython and the histogram-matching reference against scikit-image; checks deploy/; runs the
-# workspace tests with the GPU tests required (on Mesa's lavapipe); validates the exported GLBs with
+# workspace tests with the `gpu` feature and the GPU tests required (on Mesa's lavapipe); validates the exported GLBs with
 # Khronos' glTF-Validator; runs every numbered example; and drives the web viewer in headless
 # Chromium (scripts/viewer_test.sh).
 set -euo pipefail
@@ -15,19 +15,21 @@ for c in clippy rustfmt; do
   rustup component list --installed 2>/dev/null | grep -q "^$c" || rustup component add "$c"
 done
 cargo fmt --all -- --check
+# Both builds: the default (CPU only, what `cargo run -p derma` makes) and the GPU one.
 cargo clippy --workspace --all-targets -- -D warnings
+cargo clippy --workspace --all-targets --all-features -- -D warnings
 python3 scripts/iad_reference.py --check
 python3 scripts/histmatch_reference.py --check
 # The cluster deployment files parse and validate (Slurm scripts, Kubernetes manifests).
 bash deploy/check.sh
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
-DERMA_REQUIRE_GPU=1 cargo test --workspace --release
+DERMA_REQUIRE_GPU=1 cargo test --workspace --release --all-features
 # The exported head opens without errors or warnings in Khronos' glTF-Validator.
 bash scripts/validate_gltf.sh
 # Every numbered example runs (the Monte Carlo ones with fewer photons than their defaults),
 # built once with the workspace's features (a per-crate `cargo run -p` would rebuild its
 # dependencies with another feature set).
-cargo build --release -q --workspace --bins --examples
+cargo build --release -q --workspace --bins --examples --all-features
 tmp=$(mktemp -d)
 for f in crates/*/examples/[0-9][0-9]_*.rs; do
   ex=$(basename "$f" .rs)

@@ -15,7 +15,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 npm install --silent --prefix "$work/v" gltf-validator@2.0.0-dev.3.10 >/dev/null
 # The workspace feature set of the test command, so its build is reused.
-cargo build --release -q --workspace --bins --examples
+cargo build --release -q --workspace --bins --examples --all-features
 target/release/derma skin --export-template "$work/head" --quiet
 target/release/derma eyes animate --seconds 1 --fps 10 --render 0 --out "$work/eyes" --quiet >/dev/null
 target/release/derma skin --size 256 --glb --out "$work/skin" --quiet

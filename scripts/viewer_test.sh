@@ -21,7 +21,7 @@ npm --prefix viewer ci --silent --no-audit --no-fund
 npm --prefix viewer run build --silent >/dev/null
 npm install --silent --no-audit --no-fund --prefix "$work/pw" playwright-core@1.65.1 >/dev/null
 # The workspace feature set of the test command, so its build is reused.
-cargo build --release -q --workspace --bins --examples
+cargo build --release -q --workspace --bins --examples --all-features
 d=target/release/derma
 "$d" skin --size 512 --age 60 --out "$work/skin" --quiet
 "$d" rig build --set "$work/skin" \

@@ -1,4 +1,4 @@
-//! The hand-written small solver against faer on the systems the model matcher solves: the
+//! The hand-written small solver against the general dense LU and Cholesky on the systems the model matcher solves: the
 //! damped normal equations of its Levenberg–Marquardt fits (symmetric positive definite, 3–12
 //! unknowns). Whole fits with each solver: `cargo bench -p derma-shading --bench fits`.
 //!
@@ -30,19 +30,16 @@ fn system(n: usize) -> (Vec<f64>, Vec<f64>) {
     (a, b)
 }
 
-fn faer_lu(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
+fn lu(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
     lu_solve(&matrix_from_rows(n, n, a).ok()?, b).ok()
 }
 
-fn faer_cholesky(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
+fn cholesky(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
     cholesky_solve(&matrix_from_rows(n, n, a).ok()?, b).ok()
 }
 
-const SOLVERS: [(&str, LinearSolve); 3] = [
-    ("elimination", solve),
-    ("faer LU", faer_lu),
-    ("faer Cholesky", faer_cholesky),
-];
+const SOLVERS: [(&str, LinearSolve); 3] =
+    [("elimination", solve), ("LU", lu), ("Cholesky", cholesky)];
 
 fn solves(c: &mut Criterion) {
     let mut g = c.benchmark_group("solve");

@@ -9,10 +9,10 @@
 //! - [`mesh`]: OBJ and glTF/GLB loading, unit detection, and [`raster`]: UV-space rasterisation
 //!   of a mesh into per-texel surface points.
 //! - [`progress`]: the one way a long job reports (stages, units, steps, notes, timings).
-//! - [`gpu`]: the one device choice ([`Device`]: auto, cpu, gpu), the shared wgpu context and
-//!   typed [`GpuError`]s.
+//! - [`gpu`]: the one device choice ([`Device`]: auto, cpu, gpu), typed [`GpuError`]s and, with
+//!   the `gpu` feature, the shared wgpu context.
 //! - [`numerics`]: the one numerics module (small dense solves, Levenberg–Marquardt, NNLS;
-//!   faer's decompositions).
+//!   LU, Cholesky, QR, SVD, symmetric eigen and sparse Cholesky of its own).
 //! - [`sh`]: order-2 spherical harmonics and shadowed irradiance transfer over a [`bvh`].
 //! - [`atomic`], [`report`], [`memory`], [`dtab`], [`plot`]: atomic outputs that spare inputs,
 //!   reports with hashes, memory checks, derma's table format, SVG plots.
@@ -31,6 +31,7 @@ pub mod dtab;
 pub mod error;
 pub mod exr_writer;
 pub mod gpu;
+#[cfg(feature = "gpu")]
 pub mod gpu_texture;
 pub mod image;
 pub mod image_io;

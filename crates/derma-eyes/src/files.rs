@@ -367,10 +367,16 @@ pub fn distance_fields(
     let head = Head::builtin();
     let scene = sdf::scene::head_close_up(head, width, height);
     let range = sdf::table::RANGE_MM;
+    // Resolved in every build: `gpu` where the build has no GPU is an error, not a quiet CPU run.
+    let device = device.resolve()?;
+    #[cfg_attr(not(feature = "gpu"), allow(unused_mut))]
     let mut rows = sdf::table::measure(&scene.g, range, runs);
-    if device.resolve()? == derma_core::Device::Gpu {
+    #[cfg(feature = "gpu")]
+    if device == derma_core::Device::Gpu {
         rows.extend(sdf::table::measure_gpu(&scene.g, range, runs.max(10))?);
     }
+    #[cfg(not(feature = "gpu"))]
+    let _ = device;
     derma_core::atomic::write_bytes(
         &dir.join("table.md"),
         sdf::table::markdown(&rows, width, height).as_bytes(),

@@ -399,6 +399,7 @@ fn the_saliency_map_finds_the_odd_one_out() {
     );
 }
 
+#[cfg(feature = "gpu")]
 #[test]
 fn gpu_fields_equal_the_cpu_reference() {
     if derma_test_support::skip_without_gpu() {

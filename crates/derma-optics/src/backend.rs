@@ -13,6 +13,7 @@ use derma_core::progress::Progress;
 pub fn run_on(run: &Run, device: Device, progress: &dyn Progress) -> Result<(Tally, Device)> {
     let device = device.resolve()?;
     let tally = match device {
+        #[cfg(feature = "gpu")]
         Device::Gpu => crate::gpu::run_gpu(run, progress)?,
         _ => run_cpu(run, progress)?,
     };

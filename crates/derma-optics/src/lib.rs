@@ -2,13 +2,13 @@
 //!
 //! The skin optics of derma: chromophore spectra ([`chromophore`]), the BioSpec four-layer
 //! specimen built from bio parameters ([`specimen`]), a Monte Carlo photon transport that follows
-//! thesis §4.4–4.5 ([`transport`]) on the CPU ([`cpu`]) and the GPU ([`gpu`]), its tallies
+//! thesis §4.4–4.5 ([`transport`]) on the CPU ([`cpu`]) and the GPU (`gpu`, the `gpu` feature), its tallies
 //! ([`tally`]: sampled BRDF, spectrum, radial profile, absorption per layer and chromophore),
 //! and the precompute grid over bio parameters ([`precompute`]).
 //!
 //! Data flow: a [`BioTexel`] → [`specimen::skin_stacks`] (a [`Stack`] per wavelength) →
 //! [`simulate::simulate_skin`] on a [`Device`] ([`backend::run_on`]: [`cpu::run_cpu`] or
-//! [`gpu::run_gpu`], the same random stream per photon) → a [`Tally`] → a
+//! `gpu::run_gpu`, the same random stream per photon) → a [`Tally`] → a
 //! [`simulate::SkinResult`] (spectrum, colour, BRDF, profile; [`plots`] draws them). Over a grid:
 //! [`precompute::run_shard`] per shard → [`precompute::merge`] → a `.dtab` for derma-shading.
 
@@ -21,6 +21,7 @@ pub mod cpu;
 pub mod error;
 pub mod fresnel;
 pub mod furnace;
+#[cfg(feature = "gpu")]
 pub mod gpu;
 mod hemoglobin_table;
 pub mod layer;

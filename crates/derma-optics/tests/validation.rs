@@ -269,6 +269,7 @@ fn sampled_brdf_is_reciprocal() {
     assert!(worst < 0.05, "worst relative asymmetry {worst:.3}");
 }
 
+#[cfg(feature = "gpu")]
 #[test]
 fn cpu_and_gpu_agree() {
     if derma_test_support::skip_without_gpu() {
@@ -331,6 +332,7 @@ fn cpu_and_gpu_agree() {
     }
 }
 
+#[cfg(feature = "gpu")]
 #[test]
 fn gpu_results_do_not_depend_on_the_kernel_layout() {
     if derma_test_support::skip_without_gpu() {

@@ -17,7 +17,7 @@
 use crate::error::{PhotoError, Result};
 use crate::topology::Topology;
 use derma_core::mesh::TriMesh;
-use derma_core::numerics::sparse::{SimplicialCholesky, SparseCholesky};
+use derma_core::numerics::sparse::SparseCholesky;
 use glam::{DVec2, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -638,7 +638,7 @@ pub fn unwrap(mesh: &TriMesh, opts: &UnwrapOptions) -> Result<Unwrap> {
                     }
                 }
             }
-            Ok((tutte_uv, SimplicialCholesky::new(n - 1, &entries)?))
+            Ok((tutte_uv, SparseCholesky::new(n - 1, &entries)?))
         },
     );
     let (tutte_uv, chol) = rest?;

@@ -12,7 +12,9 @@ use crate::error::Result;
 use crate::lighting::Lighting;
 use crate::material::{MATERIAL_EYE, MATERIAL_OTHER, MATERIAL_SKIN, SPECULAR_SCALE};
 use crate::raster::{rasterise, Object, Projection};
-use crate::renderer::{Rendered, Renderer};
+use crate::rendered::Rendered;
+#[cfg(feature = "gpu")]
+use crate::renderer::Renderer;
 use crate::scene::{Material, Scene};
 use derma_core::gpu::Device;
 use derma_core::mesh::TriMesh;
@@ -31,6 +33,7 @@ pub trait Draw {
     fn set_lake(&self, _on: bool) {}
 }
 
+#[cfg(feature = "gpu")]
 impl Draw for Renderer {
     fn draw(&self, view: &View, lighting: &Lighting, w: u32, h: u32) -> Result<Rendered> {
         self.render(view, lighting, w, h)
@@ -43,10 +46,11 @@ impl Draw for Renderer {
     }
 }
 
-/// The renderer for `scene` on `device`: the GPU renderer where `device` resolves to a GPU, the
-/// CPU renderer otherwise.
+/// The renderer for `scene` on `device`: the GPU renderer where `device` resolves to a GPU (only
+/// in a build with the `gpu` feature), the CPU renderer otherwise.
 pub fn renderer<'a>(scene: &'a Scene, device: Device) -> Result<Box<dyn Draw + 'a>> {
     Ok(match device.resolve()? {
+        #[cfg(feature = "gpu")]
         Device::Gpu => Box::new(Renderer::new(scene)?),
         _ => Box::new(CpuRenderer::new(scene)),
     })

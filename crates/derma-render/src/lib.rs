@@ -1,5 +1,6 @@
 //! derma-render: seeing derma's skin as users will, and the only code that draws. A wgpu
-//! renderer (headless; Mesa's lavapipe in CI, any Vulkan/Metal/DX12 GPU otherwise) that draws a
+//! renderer (the `gpu` feature; headless; Mesa's lavapipe in CI, any Vulkan/Metal/DX12 GPU
+//! otherwise) that draws a
 //! head or a user mesh with
 //! a derma texture set — diffuse light scattered by the separable screen-space subsurface
 //! blur of Jimenez et al. 2015 with Burley's normalized diffusion per channel (driven by
@@ -21,6 +22,8 @@ pub mod lake;
 pub mod lighting;
 pub mod material;
 pub mod raster;
+pub mod rendered;
+#[cfg(feature = "gpu")]
 pub mod renderer;
 pub mod scene;
 pub mod sheet;
@@ -32,5 +35,7 @@ pub use draw::{renderer, CpuRenderer, Draw};
 pub use error::{RenderError, Result};
 pub use lighting::{Lighting, Setup};
 pub use material::SkinMaps;
-pub use renderer::{Rendered, Renderer};
+pub use rendered::Rendered;
+#[cfg(feature = "gpu")]
+pub use renderer::Renderer;
 pub use scene::Scene;

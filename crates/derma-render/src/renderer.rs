@@ -7,6 +7,7 @@ use crate::camera::{light_view_proj, Camera, View};
 use crate::error::Result;
 use crate::lighting::Lighting;
 use crate::material::{MATERIAL_EYE, MATERIAL_OTHER, MATERIAL_SKIN};
+use crate::rendered::Rendered;
 use crate::scene::{Material, Part, Scene, Vertex};
 use crate::sss;
 use derma_core::gpu::{context, Gpu};
@@ -80,44 +81,12 @@ struct DrawU {
     eye_axis: [f32; 4],
 }
 
-/// One rendered frame.
-pub struct Rendered {
-    /// Width in pixels.
-    pub width: usize,
-    /// Height in pixels.
-    pub height: usize,
-    /// Tone-mapped sRGB, RGBA 8-bit, top row first.
-    pub display: Vec<u8>,
-    /// Scene-referred linear RGB radiance (0 on the background).
-    pub linear: Vec<[f32; 3]>,
-    /// What each pixel shows: [`MATERIAL_SKIN`], [`MATERIAL_EYE`] or [`MATERIAL_OTHER`].
-    pub material: Vec<u8>,
-}
-
 /// The material of a post-scatter target's alpha byte (forward.wgsl: skin 1, eye ½).
 fn material_of(alpha: u8) -> u8 {
     match alpha {
         192..=255 => MATERIAL_SKIN,
         100..=150 => MATERIAL_EYE,
         _ => MATERIAL_OTHER,
-    }
-}
-
-impl Rendered {
-    /// The display image as three maps with values in [0, 1] (sRGB-encoded).
-    pub fn display_maps(&self) -> [Map; 3] {
-        let ch = |k: usize| {
-            Map::from_fn(self.width, self.height, |i| {
-                self.display[4 * i + k] as f32 / 255.0
-            })
-        };
-        [ch(0), ch(1), ch(2)]
-    }
-
-    /// The linear radiance as three maps.
-    pub fn linear_maps(&self) -> [Map; 3] {
-        let ch = |k: usize| Map::from_fn(self.width, self.height, |i| self.linear[i][k]);
-        [ch(0), ch(1), ch(2)]
     }
 }
 

@@ -117,6 +117,7 @@ fn stats(c: &mut Criterion) {
     g.finish();
 }
 
+#[cfg(feature = "gpu")]
 fn gpu_frame(c: &mut Criterion) {
     let lut = SkinColorLut::builtin();
     let weights = vec![0.2, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1];
@@ -162,5 +163,8 @@ fn gpu_frame(c: &mut Criterion) {
     g.finish();
 }
 
+#[cfg(feature = "gpu")]
 criterion_group!(benches, build, frame, stats, gpu_frame);
+#[cfg(not(feature = "gpu"))]
+criterion_group!(benches, build, frame, stats);
 criterion_main!(benches);

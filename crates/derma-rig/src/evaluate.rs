@@ -184,6 +184,7 @@ pub fn evaluate_frame(
     device: derma_core::gpu::Device,
 ) -> Result<(Map, Option<[Map; 3]>)> {
     match device.resolve()? {
+        #[cfg(feature = "gpu")]
         derma_core::gpu::Device::Gpu => {
             // Without melanin only the hemoglobin is wanted; colour with C_m = 0 is discarded.
             let zero;

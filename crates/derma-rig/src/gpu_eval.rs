@@ -8,8 +8,7 @@ use derma_core::gpu::GpuCell;
 use derma_core::Map;
 use derma_shading::skin_color_lut::SkinColorLut;
 
-/// The shader, also written into every rig directory as `rig.wgsl` for engines.
-pub const SHADER: &str = include_str!("rig.wgsl");
+use crate::rig_dir::SHADER;
 const WORKGROUP: usize = 64;
 
 #[repr(C)]

@@ -24,6 +24,7 @@ pub mod evaluate;
 pub mod expression;
 pub mod frame_job;
 pub mod from_files;
+#[cfg(feature = "gpu")]
 pub mod gpu_eval;
 pub mod local_stats;
 pub mod maps;

@@ -14,6 +14,10 @@ use derma_shading::skin_color_lut::SkinColorLut;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// The rig's shader (the GPU frame runs it), written into every rig directory as `rig.wgsl` for
+/// engines, in every build.
+pub const SHADER: &str = include_str!("rig.wgsl");
+
 /// The `format` of rig.json.
 pub const FORMAT: &str = "derma-rig";
 /// The `version` of rig.json this code reads and writes.
@@ -176,7 +180,7 @@ pub fn save(rig: &Rig, lut: &SkinColorLut, dir: &Path) -> Result<RigJson> {
         &dir.join("skin_color_lut.png"),
         &[&enc(&r), &enc(&g), &enc(&b)],
     )?;
-    derma_core::atomic::write_bytes(&dir.join("rig.wgsl"), crate::gpu_eval::SHADER.as_bytes())?;
+    derma_core::atomic::write_bytes(&dir.join("rig.wgsl"), SHADER.as_bytes())?;
     let skin = match &rig.skin {
         Some(s) => Some(save_skin(s, dir)?),
         None => None,

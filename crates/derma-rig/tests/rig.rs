@@ -407,6 +407,7 @@ fn deterministic_across_thread_counts() {
     assert_eq!(run(1).data(), run(3).data());
 }
 
+#[cfg(feature = "gpu")]
 #[test]
 fn gpu_shader_agrees_with_the_cpu_path() {
     if derma_test_support::skip_without_gpu() {

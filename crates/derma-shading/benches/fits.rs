@@ -1,5 +1,5 @@
 //! The model matcher's fits with each solver of the Levenberg–Marquardt normal equations
-//! (derma-core's hand-written elimination against faer's Cholesky): time per table, and the
+//! (derma-core's hand-written elimination against the dense Cholesky): time per table, and the
 //! residuals each reaches, on a small precompute table simulated in the setup (2 × 2 nodes of
 //! melanin and blood, 2·10⁴ photons each, the default BRDF and profile bins).
 //!

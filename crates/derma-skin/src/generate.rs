@@ -812,6 +812,8 @@ impl TextureSet {
                     "a flat patch"
                 } else if self.device == Device::Cpu {
                     "the CPU device was chosen"
+                } else if !derma_core::gpu::BUILT {
+                    "a build without the gpu feature"
                 } else {
                     "no hardware GPU; choosing the GPU device takes any adapter"
                 };

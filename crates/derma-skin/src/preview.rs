@@ -35,7 +35,7 @@ pub fn gpu_views(
     } else {
         derma_render::Scene::mesh(mesh, maps)
     };
-    let r = derma_render::Renderer::new(&scene)?;
+    let r = derma_render::renderer(&scene, derma_core::gpu::Device::Gpu)?;
     let panel = PANEL as u32;
     let mut views = Vec::new();
     for yaw in [0.0, 45.0] {
@@ -44,11 +44,11 @@ pub fn gpu_views(
             ..Default::default()
         };
         views.push(derma_render::sheet::linear(
-            r.render(&v, &derma_render::Setup::Studio.lighting(), panel, panel)?
+            r.draw(&v, &derma_render::Setup::Studio.lighting(), panel, panel)?
                 .display_maps(),
         ));
     }
-    Ok(Some((views, r.adapter.clone())))
+    Ok(Some((views, r.name())))
 }
 
 /// Shaded views of `render_maps` on its mesh (or a sphere and a tile for patches) plus the contact

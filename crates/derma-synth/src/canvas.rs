@@ -3,6 +3,7 @@
 
 use crate::error::Result;
 use crate::exemplar::ExemplarSet;
+#[cfg(feature = "gpu")]
 use crate::resident::Blended;
 use crate::search::Plane;
 
@@ -22,7 +23,8 @@ pub(crate) struct Canvas {
     pub src: Vec<u32>,
     /// The values, codes and sources of the last E-step where it ran on the GPU, kept there for
     /// the next pass's search: newer than `values`, `codes`, `src` and `src_exemplar` until
-    /// [`Canvas::sync`].
+    /// [`Canvas::sync`]. Only in a build with the `gpu` feature.
+    #[cfg(feature = "gpu")]
     pub blended: Option<Blended>,
 }
 
@@ -38,20 +40,38 @@ impl Canvas {
             codes: vec![0; n * channels],
             src_exemplar: vec![0; n],
             src: vec![NO_SOURCE; n],
+            #[cfg(feature = "gpu")]
             blended: None,
         }
     }
 
     /// Brings values, codes and sources kept on the GPU (by its E-step) back to the host.
     pub fn sync(&mut self) -> Result<()> {
-        match self.blended.take() {
-            Some(b) => b.read_into(
+        #[cfg(feature = "gpu")]
+        if let Some(b) = self.blended.take() {
+            return b.read_into(
                 &mut self.values,
                 &mut self.codes,
                 &mut self.src,
                 &mut self.src_exemplar,
-            ),
-            None => Ok(()),
+            );
+        }
+        Ok(())
+    }
+
+    /// Whether the newest values, codes and sources are on the GPU (not yet [`Canvas::sync`]ed).
+    pub fn on_gpu(&self) -> bool {
+        #[cfg(feature = "gpu")]
+        return self.blended.is_some();
+        #[cfg(not(feature = "gpu"))]
+        false
+    }
+
+    /// Forgets what the GPU holds (everything is about to be blended anew on the host).
+    pub fn drop_gpu(&mut self) {
+        #[cfg(feature = "gpu")]
+        {
+            self.blended = None;
         }
     }
 
@@ -89,6 +109,7 @@ impl Canvas {
             channels: self.channels,
             wrap: self.tile,
             codes: &self.codes,
+            #[cfg(feature = "gpu")]
             gpu: self.blended.as_ref().map(Blended::plane),
         }
     }
@@ -105,7 +126,7 @@ impl Canvas {
         w: usize,
         probes: &[(usize, usize)],
     ) -> Vec<u32> {
-        debug_assert!(self.blended.is_none(), "guesses from a canvas not synced");
+        debug_assert!(!self.on_gpu(), "guesses from a canvas not synced");
         let e = &set.exemplars[ex];
         let (cw, ch) = e.candidates(w);
         let mut out = Vec::with_capacity(probes.len());
@@ -156,7 +177,7 @@ impl Canvas {
     /// and source.
     #[inline]
     pub fn copy_texel(&mut self, set: &ExemplarSet, t: usize, ex: usize, s: usize) {
-        debug_assert!(self.blended.is_none(), "copy into a canvas not synced");
+        debug_assert!(!self.on_gpu(), "copy into a canvas not synced");
         let e = &set.exemplars[ex];
         let c = self.channels;
         self.values[t * c..(t + 1) * c].copy_from_slice(&e.texture.data[s * c..(s + 1) * c]);

@@ -17,7 +17,6 @@
 use crate::canvas::{Canvas, NO_SOURCE};
 use crate::error::Result;
 use crate::exemplar::ExemplarSet;
-use crate::gpu_correction::GpuCorrection;
 use crate::guide::Guide;
 use derma_core::gpu::Device;
 use derma_core::progress::{Job, Progress, Unit};
@@ -44,11 +43,29 @@ pub(crate) fn correct(
     progress: &Job,
     device: Device,
 ) -> Result<()> {
-    let gpu = if passes > 0 && device == Device::Gpu {
-        GpuCorrection::new(canvas, set, guide)?
-    } else {
-        None
-    };
+    #[cfg(feature = "gpu")]
+    if passes > 0 && device == Device::Gpu {
+        if let Some(g) = crate::gpu_correction::GpuCorrection::new(canvas, set, guide)? {
+            each_subpass(passes, progress, |ox, oy| g.subpass(ox, oy))?;
+            return g.finish(canvas, set);
+        }
+    }
+    #[cfg(not(feature = "gpu"))]
+    let _ = device;
+    each_subpass(passes, progress, |ox, oy| {
+        for (t, ex, s) in decide(canvas, set, guide, ox, oy) {
+            canvas.copy_texel(set, t, ex as usize, s as usize);
+        }
+        Ok(())
+    })
+}
+
+/// Runs `subpass` for every parity class of `passes` passes, each pass a stage of `progress`.
+fn each_subpass(
+    passes: usize,
+    progress: &Job,
+    mut subpass: impl FnMut(usize, usize) -> Result<()>,
+) -> Result<()> {
     for pass in 0..passes {
         progress.stage(
             &format!("correction {}", pass + 1),
@@ -56,19 +73,9 @@ pub(crate) fn correct(
             Unit::Steps,
         );
         for &(ox, oy) in &PARITIES {
-            match &gpu {
-                Some(g) => g.subpass(ox, oy)?,
-                None => {
-                    for (t, ex, s) in decide(canvas, set, guide, ox, oy) {
-                        canvas.copy_texel(set, t, ex as usize, s as usize);
-                    }
-                }
-            }
+            subpass(ox, oy)?;
             progress.advance(1);
         }
-    }
-    if let Some(g) = gpu {
-        g.finish(canvas, set)?;
     }
     Ok(())
 }

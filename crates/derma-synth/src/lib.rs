@@ -5,7 +5,7 @@
 //! pass ([`patch_pass`]), self-adaptive optimisation passes ([`optimize`]), then a texel-level
 //! coherent [`correction`]. Every
 //! best-match search is the exact integer search of [`search`], run by a [`Matcher`]: the CPU
-//! one ([`CpuMatcher`], rayon) or the GPU one (`gpu::GpuMatcher`, WGSL), which give identical
+//! one ([`CpuMatcher`], rayon) or, with the `gpu` feature, the GPU one (`gpu::GpuMatcher`, WGSL), which give identical
 //! answers, so a seed gives the same texture on either. [`quality`] holds the metrics that
 //! judge the result without neural networks.
 
@@ -17,10 +17,15 @@ mod e_step;
 pub mod error;
 pub mod exemplar;
 pub mod files;
+#[cfg(feature = "gpu")]
 pub mod gpu;
+#[cfg(feature = "gpu")]
 mod gpu_correction;
+#[cfg(feature = "gpu")]
 pub mod gpu_e_step;
+#[cfg(feature = "gpu")]
 mod gpu_matcher;
+#[cfg(feature = "gpu")]
 mod gpu_patch_pass;
 pub mod guide;
 pub mod job;
@@ -29,6 +34,7 @@ pub mod optimize;
 mod pass_context;
 pub mod patch_pass;
 pub mod quality;
+#[cfg(feature = "gpu")]
 mod resident;
 pub mod search;
 pub mod synthesize;
@@ -37,9 +43,11 @@ pub mod texture;
 
 pub use error::{Result, SynthError};
 pub use exemplar::{Exemplar, ExemplarSet, Quantizer};
+#[cfg(feature = "gpu")]
 pub use gpu::GpuMatcher;
 pub use guide::Guide;
 pub use matcher::{CpuMatcher, Matcher, PatchPlan};
+#[cfg(feature = "gpu")]
 pub use resident::GpuPlane;
 pub use search::{Match, Plane, Query, Search, Tolerance, WindowQuery, MAX_GUESSES};
 pub use synthesize::{synthesize, SynthOptions, Synthesis};

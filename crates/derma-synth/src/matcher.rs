@@ -80,7 +80,7 @@ pub(crate) fn gathered_window_matches<M: Matcher + ?Sized>(
     queries: &[WindowQuery],
     progress: &dyn Progress,
 ) -> Result<Vec<Match>> {
-    if plane.gpu.is_some() {
+    if plane.on_gpu() {
         return Err(invalid(
             "window query",
             "the plane's current codes are on the GPU; the host's copy is older",

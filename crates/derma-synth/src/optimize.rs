@@ -17,9 +17,11 @@
 use crate::canvas::{origins, Canvas};
 use crate::e_step::{e_step, Blend};
 use crate::error::Result;
+#[cfg(feature = "gpu")]
 use crate::gpu_e_step;
 use crate::pass_context::PassContext;
 use crate::search::{Search, Tolerance, WindowQuery};
+#[cfg(feature = "gpu")]
 use derma_core::gpu::Device;
 use derma_core::progress::Unit;
 use derma_core::rng::Philox;
@@ -66,7 +68,7 @@ pub(crate) fn optimise_pass(
                 x: px as u32,
                 y: py as u32,
                 // Where the sources are on the GPU, its matcher makes the same guesses there.
-                guesses: if canvas.blended.is_some() {
+                guesses: if canvas.on_gpu() {
                     Vec::new()
                 } else {
                     canvas.coherent_guess(set, ex, px, py, w, &probes)
@@ -138,9 +140,13 @@ pub(crate) fn optimise_pass(
         weights,
     };
     let t3 = Instant::now();
-    if ctx.matcher.device() != Device::Gpu || !gpu_e_step::e_step(canvas, set, &blend)? {
+    #[cfg(feature = "gpu")]
+    let on_gpu = ctx.matcher.device() == Device::Gpu && gpu_e_step::e_step(canvas, set, &blend)?;
+    #[cfg(not(feature = "gpu"))]
+    let on_gpu = false;
+    if !on_gpu {
         // Every value and code is blended anew, so any kept on the GPU are dropped.
-        canvas.blended = None;
+        canvas.drop_gpu();
         e_step(canvas, set, &blend);
     }
     let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;

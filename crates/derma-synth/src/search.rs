@@ -174,11 +174,21 @@ pub struct Plane<'a> {
     /// `width × height × channels` codes, rows from the top.
     pub codes: &'a [u8],
     /// The same plane kept on the GPU by the GPU's E-step. Where given, it is current and
-    /// `codes` may be older: only a GPU matcher, which reads it, takes such a plane.
+    /// `codes` may be older: only a GPU matcher, which reads it, takes such a plane. Only in a
+    /// build with the `gpu` feature.
+    #[cfg(feature = "gpu")]
     pub gpu: Option<crate::resident::GpuPlane<'a>>,
 }
 
 impl Plane<'_> {
+    /// Whether the current codes are on the GPU (and `codes` may be older).
+    pub fn on_gpu(&self) -> bool {
+        #[cfg(feature = "gpu")]
+        return self.gpu.is_some();
+        #[cfg(not(feature = "gpu"))]
+        false
+    }
+
     /// The codes of the `w × w` window at (x, y), rows from the top, channels interleaved.
     pub fn window(&self, x: usize, y: usize, w: usize) -> Vec<u8> {
         let c = self.channels;

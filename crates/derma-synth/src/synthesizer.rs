@@ -14,6 +14,7 @@
 
 use crate::error::Result;
 use crate::exemplar::ExemplarSet;
+#[cfg(feature = "gpu")]
 use crate::gpu::GpuMatcher;
 use crate::guide::Guide;
 use crate::matcher::{CpuMatcher, Matcher};
@@ -26,6 +27,7 @@ use derma_core::progress::{Progress, Silent};
 /// the CPU).
 pub fn matcher_for(device: Device) -> Result<Box<dyn Matcher>> {
     Ok(match device.resolve()? {
+        #[cfg(feature = "gpu")]
         Device::Gpu => Box::new(GpuMatcher::new()?),
         _ => Box::new(CpuMatcher),
     })

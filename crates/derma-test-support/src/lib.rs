@@ -23,10 +23,11 @@ pub fn scratch_dir(tag: &str) -> PathBuf {
     d
 }
 
-/// True (skip the test) when no GPU adapter opens, after a note on stderr; panics instead when
-/// `DERMA_REQUIRE_GPU` is set, so a missing driver fails CI rather than passing silently.
+/// True (skip the test) when no GPU adapter opens (or the build has no `gpu` feature), after a
+/// note on stderr; panics instead when `DERMA_REQUIRE_GPU` is set, so a missing driver or a
+/// build without the feature fails CI rather than passing silently.
 pub fn skip_without_gpu() -> bool {
-    match derma_core::gpu::context() {
+    match derma_core::Device::Gpu.resolve() {
         Ok(_) => false,
         Err(e) => {
             assert!(

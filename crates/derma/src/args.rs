@@ -150,7 +150,8 @@ pub fn named_files(s: &str) -> Result<Vec<(String, PathBuf)>, String> {
 #[derive(clap::Args, Clone, Copy)]
 pub struct DeviceArg {
     /// Where to run: auto (a hardware GPU when there is one, else the CPU), cpu, or gpu (any
-    /// adapter, software ones such as Mesa's lavapipe included).
+    /// adapter, software ones such as Mesa's lavapipe included; needs a build with the `gpu`
+    /// feature).
     #[arg(long, default_value = "auto", value_parser = parse_device)]
     pub device: derma_core::gpu::Device,
 }

@@ -908,6 +908,57 @@ fn every_crate_that_reads_files_has_property_tests() {
 }
 
 #[test]
+fn the_gpu_is_a_feature_and_off_by_default() {
+    let mut wrong = Vec::new();
+    for k in crates() {
+        let manifest = std::fs::read_to_string(k.join("Cargo.toml")).unwrap();
+        let name = name_of(&k);
+        let deps = table_lines(&manifest, "dependencies");
+        if let Some(w) = deps.iter().find(|t| t.starts_with("wgpu")) {
+            if !w.contains("optional = true") {
+                wrong.push(format!("{name}: wgpu is not optional ({w})"));
+            }
+            let gpu = table_lines(&manifest, "features")
+                .into_iter()
+                .find(|t| t.starts_with("gpu ="));
+            match gpu {
+                Some(f)
+                    if f.contains("\"dep:wgpu\"")
+                        && (name == "derma-core" || f.contains("\"derma-core/gpu\"")) => {}
+                _ => wrong.push(format!(
+                    "{name}: no `gpu` feature with dep:wgpu and derma-core/gpu"
+                )),
+            }
+        }
+        for t in table_lines(&manifest, "features") {
+            if t.starts_with("default") && t.contains("gpu") {
+                wrong.push(format!(
+                    "{name}: the default features include the GPU ({t})"
+                ));
+            }
+        }
+        for lib in ["faer", "nalgebra", "ndarray-linalg", "lapack"] {
+            if deps
+                .iter()
+                .any(|t| t.split(['=', '.', ' ']).next() == Some(lib))
+            {
+                wrong.push(format!(
+                    "{name}: declares {lib} (numerics is derma-core's own)"
+                ));
+            }
+        }
+    }
+    let root = std::fs::read_to_string(workspace().join("Cargo.toml")).unwrap();
+    if table_lines(&root, "workspace.dependencies")
+        .iter()
+        .any(|t| t.starts_with("faer"))
+    {
+        wrong.push("the workspace declares faer".into());
+    }
+    assert_none(&wrong, "the GPU stays a feature, off by default:");
+}
+
+#[test]
 fn every_dependency_is_declared_once_in_the_workspace() {
     let mut local = Vec::new();
     for k in crates() {

@@ -17,7 +17,8 @@ pub enum DenseSolver {
     /// few unknowns (BENCHMARKS.md, "Numerics").
     #[default]
     Elimination,
-    /// faer's Cholesky factorisation.
+    /// Cholesky factorisation ([`crate::numerics::dense::cholesky_solve`]): for badly scaled
+    /// systems whose pivots the elimination rejects.
     Cholesky,
 }
 

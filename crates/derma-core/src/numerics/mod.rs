@@ -1,12 +1,12 @@
 //! Numerics shared by every crate: small dense solves, non-negative least squares,
-//! Levenberg–Marquardt, and on `faer` the decompositions larger problems need (LU, Cholesky,
-//! least squares by QR, SVD, symmetric eigen, sparse Cholesky).
+//! Levenberg–Marquardt, and the decompositions larger problems need (LU, Cholesky, least
+//! squares by QR, SVD, symmetric eigen, sparse Cholesky), all derma's own.
 //!
 //! The model matcher's systems are tiny (3–12 unknowns, solved millions of times), where the
-//! hand-written elimination of [`dense::solve`] is faster than a general library
-//! (BENCHMARKS.md, "Numerics"); everything else goes through `faer`, which is pure Rust,
-//! runs here without its thread pool (so results never depend on the thread count) and is
-//! re-exported as [`faer`] for callers that need its full API.
+//! hand-written elimination of [`dense::solve`] is fastest (BENCHMARKS.md, "Numerics"). The
+//! rest are textbook algorithms ([`dense`], [`sparse`]) run on one thread, so results never
+//! depend on the thread count; they replaced a linear-algebra library whose build cost a new
+//! user a quarter of the first build (BENCHMARKS.md, "first build").
 
 pub mod bessel;
 pub mod dense;
@@ -18,10 +18,9 @@ pub mod robust;
 pub mod sparse;
 
 pub use dense::{solve, Eigen, Matrix, Svd};
-pub use faer;
 pub use levenberg_marquardt::{levenberg_marquardt, DenseSolver, LmOptions, ResidualFn};
 pub use nnls::nnls_normal;
-pub use sparse::{SimplicialCholesky, SparseCholesky, SparsePattern};
+pub use sparse::{SparseCholesky, SparsePattern};
 
 /// Why a decomposition or solve failed.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

@@ -9,6 +9,7 @@
 //! method, so the exact transform is the reference for all of them.
 
 pub mod exact;
+#[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod jfa;
 pub mod samplers;

@@ -122,6 +122,7 @@ pub fn markdown(rows: &[Row], w: usize, h: usize) -> String {
     s
 }
 
+#[cfg(feature = "gpu")]
 /// The GPU rows: jump flooding and every sampler on the device, each the mean of `runs`
 /// back-to-back dispatches after a warm-up (device time without transfers), with their errors.
 pub fn measure_gpu(g: &GBuffer, range: f32, runs: usize) -> crate::Result<Vec<Row>> {
