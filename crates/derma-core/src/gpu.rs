@@ -4,7 +4,7 @@
 //! first use, per-crate pipelines built once ([`GpuCell`]) and the buffer read-back every
 //! backend needs. Crates build their own pipelines on it (one algorithm, two backends: the CPU
 //! path is the reference, the WGSL path differs only in dispatch). Without the feature (the
-//! default build, a quarter faster to compile) `auto` is the CPU and `gpu` a clear error.
+//! default build, which compiles without wgpu) `auto` is the CPU and `gpu` a clear error.
 
 use serde::{Deserialize, Serialize};
 

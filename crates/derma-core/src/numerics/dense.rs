@@ -323,15 +323,20 @@ pub fn least_squares(a: &Matrix, b: &[f64]) -> Result<Vec<f64>, NumericsError> {
     // length) makes the rank deficient.
     let lengths: Vec<f64> = (0..n).map(|j| dot(a.col(j), a.col(j)).sqrt()).collect();
     for k in 0..n {
-        let norm = dot(&r.col(k)[k..], &r.col(k)[k..]).sqrt();
-        if norm <= m as f64 * f64::EPSILON * lengths[k] {
+        // As in the tridiagonal reduction: v from the column scaled by its largest entry.
+        let big = r.col(k)[k..].iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let mut v: Vec<f64> = r.col(k)[k..]
+            .iter()
+            .map(|x| x / big.max(f64::MIN_POSITIVE))
+            .collect();
+        let norm = dot(&v, &v).sqrt() * big;
+        if !(norm > m as f64 * f64::EPSILON * lengths[k]) {
             return Err(NumericsError::Singular {
                 what: "least-squares",
             });
         }
-        let alpha = if r[(k, k)] > 0.0 { -norm } else { norm };
-        let mut v = r.col(k)[k..].to_vec();
-        v[0] -= alpha;
+        let scaled = norm / big;
+        v[0] -= if v[0] > 0.0 { -scaled } else { scaled };
         let scale = 2.0 / dot(&v, &v);
         for j in k..n {
             let cj = &mut r.col_mut(j)[k..m];
@@ -516,14 +521,21 @@ fn tridiagonalise(t: &mut Matrix, q: &mut Matrix) -> (Vec<f64>, Vec<f64>) {
     let mut v = vec![0.0; n];
     let mut p = vec![0.0; n];
     for k in 0..n.saturating_sub(2) {
-        let norm = t.col(k)[k + 1..].iter().map(|x| x * x).sum::<f64>().sqrt();
-        if norm == 0.0 {
+        // The reflector from the column scaled by its largest entry, so that squares neither
+        // underflow nor overflow (H does not depend on v's scale).
+        let big = t.col(k)[k + 1..].iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        if big == 0.0 {
             continue;
         }
-        let alpha = if t[(k + 1, k)] > 0.0 { -norm } else { norm };
         v.fill(0.0);
-        v[k + 1..].copy_from_slice(&t.col(k)[k + 1..]);
-        v[k + 1] -= alpha;
+        v[k + 1..]
+            .iter_mut()
+            .zip(&t.col(k)[k + 1..])
+            .for_each(|(vi, x)| *vi = x / big);
+        let norm = dot(&v[k + 1..], &v[k + 1..]).sqrt();
+        let scaled = if v[k + 1] > 0.0 { -norm } else { norm };
+        let alpha = scaled * big;
+        v[k + 1] -= scaled;
         let beta = 2.0 / dot(&v[k + 1..], &v[k + 1..]);
         // p = β T v, w = p − (β/2)(pᵀv) v, T ← T − v wᵀ − w vᵀ on the trailing block.
         for i in k + 1..n {
@@ -858,6 +870,19 @@ mod tests {
             "{:?}",
             &e.values[110..]
         );
+        // Entries whose squares underflow (10⁻¹⁷⁰) or overflow (10¹⁶⁰): the reflectors are
+        // built from scaled columns, so the spectrum scales exactly with the matrix.
+        let base = symmetric_eigen(&symmetric(7)).unwrap();
+        for scale in [1e-170, 1e160] {
+            let scaled = Matrix::from_fn(7, 7, |i, j| symmetric(7)[(i, j)] * scale);
+            let e = symmetric_eigen(&scaled).unwrap();
+            for (got, want) in e.values.iter().zip(&base.values) {
+                assert!(
+                    (got / scale - want).abs() < 1e-12 * 4.0,
+                    "{scale:e}: {got:e} vs {want}"
+                );
+            }
+        }
         // Only the lower half is read.
         let mut upper_junk = symmetric(5);
         upper_junk[(0, 3)] = 99.0;
