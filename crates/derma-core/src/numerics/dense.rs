@@ -321,7 +321,14 @@ pub fn least_squares(a: &Matrix, b: &[f64]) -> Result<Vec<f64>, NumericsError> {
     let mut y = b.to_vec();
     // A column whose part outside the span of those before it is rounding noise (m ε of its
     // length) makes the rank deficient.
-    let lengths: Vec<f64> = (0..n).map(|j| dot(a.col(j), a.col(j)).sqrt()).collect();
+    let length = |x: &[f64]| {
+        let big = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if big == 0.0 || !big.is_finite() {
+            return big;
+        }
+        x.iter().map(|v| (v / big) * (v / big)).sum::<f64>().sqrt() * big
+    };
+    let lengths: Vec<f64> = (0..n).map(|j| length(a.col(j))).collect();
     for k in 0..n {
         // As in the tridiagonal reduction: v from the column scaled by its largest entry.
         let big = r.col(k)[k..].iter().fold(0.0f64, |m, x| m.max(x.abs()));
@@ -379,16 +386,27 @@ pub fn svd(a: &Matrix) -> Result<Svd, NumericsError> {
         });
     }
     let (m, n) = (a.nrows(), a.ncols());
-    let mut w = a.clone();
+    // Scaled by its largest entry, so the columns' squared norms neither overflow nor underflow;
+    // the singular values are scaled back at the end.
+    let big = a.data.iter().fold(0.0f64, |b, x| b.max(x.abs()));
+    let unscale = if big > 0.0 && big.is_finite() {
+        big
+    } else {
+        1.0
+    };
+    let mut w = Matrix::from_fn(m, n, |i, j| a[(i, j)] / unscale);
     let mut v = Matrix::identity(n);
     let mut converged = false;
+    // Columns count as orthogonal below √m ε of their lengths (the rounding of a dot product of
+    // m terms; LAPACK's dgesvj uses the same).
+    let tolerance = (m as f64).sqrt() * f64::EPSILON;
     for _ in 0..MAX_SWEEPS {
         let mut rotated = false;
         for p in 0..n {
             for q in p + 1..n {
                 let (wp, wq) = w.col_pair(p, q);
                 let (alpha, beta, gamma) = (dot(wp, wp), dot(wq, wq), dot(wp, wq));
-                if gamma == 0.0 || gamma.abs() <= f64::EPSILON * (alpha * beta).sqrt() {
+                if gamma == 0.0 || gamma.abs() <= tolerance * alpha.sqrt() * beta.sqrt() {
                     continue;
                 }
                 rotated = true;
@@ -420,7 +438,7 @@ pub fn svd(a: &Matrix) -> Result<Svd, NumericsError> {
     let mut s = Vec::with_capacity(n);
     let mut missing = Vec::new();
     for (k, &j) in order.iter().enumerate() {
-        s.push(norms[j]);
+        s.push(norms[j] * unscale);
         vs.col_mut(k).copy_from_slice(v.col(j));
         if norms[j] > m as f64 * f64::EPSILON * top {
             let inv = 1.0 / norms[j];
@@ -448,15 +466,16 @@ fn rotate(x: &mut [f64], y: &mut [f64], c: f64, s: f64) {
 }
 
 /// Fills column k of `u` with a unit vector orthogonal to its columns with a non-zero singular
-/// value and to those completed before it: the first coordinate axis that survives two rounds
-/// of Gram–Schmidt with most of its length.
+/// value and to those completed before it: the coordinate axis that keeps the most of its
+/// length through two rounds of Gram–Schmidt (at least 1/√m of it: the squared residuals of
+/// all axes sum to the number of columns still free).
 fn complete_column(u: &mut Matrix, k: usize, s: &[f64]) {
     let m = u.nrows();
     let top = s.iter().copied().fold(0.0, f64::max);
     let filled: Vec<usize> = (0..u.ncols())
         .filter(|&j| j != k && (s[j] > m as f64 * f64::EPSILON * top || j < k))
         .collect();
-    for axis in 0..m {
+    let residual = |axis: usize| {
         let mut x = vec![0.0; m];
         x[axis] = 1.0;
         for _ in 0..2 {
@@ -465,14 +484,21 @@ fn complete_column(u: &mut Matrix, k: usize, s: &[f64]) {
                 x.iter_mut().zip(u.col(j)).for_each(|(a, b)| *a -= d * b);
             }
         }
+        x
+    };
+    let mut best: Option<(f64, Vec<f64>)> = None;
+    for axis in 0..m {
+        let x = residual(axis);
         let len = dot(&x, &x).sqrt();
-        if len > 0.5 {
-            u.col_mut(k)
-                .iter_mut()
-                .zip(&x)
-                .for_each(|(d, a)| *d = a / len);
-            return;
+        if best.as_ref().is_none_or(|(l, _)| len > *l) {
+            best = Some((len, x));
         }
+    }
+    if let Some((len, x)) = best {
+        u.col_mut(k)
+            .iter_mut()
+            .zip(&x)
+            .for_each(|(d, a)| *d = a / len);
     }
 }
 
@@ -922,6 +948,42 @@ mod tests {
                     assert!((r - a[(i, j)]).abs() < 1e-12 * top.max(1.0));
                 }
             }
+        }
+    }
+
+    #[test]
+    fn svd_completes_spread_null_spaces_and_survives_extreme_scales() {
+        // The centring matrix I − 11ᵀ/5: rank 4, its null vector (1, …, 1)/√5 spread over every
+        // axis, so no coordinate axis keeps half its length after Gram–Schmidt.
+        let c = Matrix::from_fn(5, 5, |i, j| (i == j) as u8 as f64 - 0.2);
+        let d = svd(&c).unwrap();
+        let utu = d.u.transpose() * &d.u;
+        for i in 0..5 {
+            for j in 0..5 {
+                let id = (i == j) as u8 as f64;
+                assert!((utu[(i, j)] - id).abs() < 1e-12, "UᵀU at ({i}, {j})");
+            }
+        }
+        assert!(d.s[4] < 1e-12 && (d.s[0] - 1.0).abs() < 1e-12);
+        // Entries whose squares overflow or underflow: the same singular values, scaled.
+        let a = Matrix::from_fn(6, 3, |i, j| {
+            ((i * 3 + j) as f64 * 0.9).sin() + (i == j) as u8 as f64
+        });
+        let base = svd(&a).unwrap().s;
+        for scale in [1e160, 1e-170] {
+            let scaled = Matrix::from_fn(6, 3, |i, j| a[(i, j)] * scale);
+            let got = svd(&scaled).unwrap().s;
+            for (g, b) in got.iter().zip(&base) {
+                assert!(
+                    (g / scale - b).abs() < 1e-12 * 4.0,
+                    "{scale:e}: {got:?} vs {base:?}"
+                );
+            }
+            let ys: Vec<f64> = (0..6).map(|i| i as f64 * scale).collect();
+            assert!(
+                least_squares(&scaled, &ys).is_ok(),
+                "{scale:e}: called singular"
+            );
         }
     }
 

@@ -555,10 +555,12 @@ impl Dissection<'_> {
                 .min_by_key(|&v| (self.adj[v as usize].len(), v))
                 .expect("the last level is not empty");
             let (s2, d2) = self.levels(last, label);
-            if d2 <= depth {
+            // `level` now holds the search from `last`: its visiting order goes with it.
+            let deeper = d2 > depth;
+            (seen, depth) = (s2, d2);
+            if !deeper {
                 break;
             }
-            (seen, depth) = (s2, d2);
         }
         if depth < 3 {
             // No level splits it (a clique-like part): minimum degree orders it whole.
