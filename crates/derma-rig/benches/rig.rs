@@ -6,8 +6,8 @@
 //! Mesa's lavapipe it times the CPU's emulation).
 //!
 //!     cargo bench -p derma-rig --bench rig
-//!     cargo bench -p derma-rig --bench rig -- gpu_frame      (the GPU frame alone, without
-//!                                                             and with a set's skin)
+//!     cargo bench -p derma-rig --features gpu --bench rig -- gpu_frame   (the GPU frame alone,
+//!                                                  without and with a set's skin; gpu feature)
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use derma_core::Map;
