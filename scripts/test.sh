@@ -24,6 +24,8 @@ python3 scripts/histmatch_reference.py --check
 bash deploy/check.sh
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 DERMA_REQUIRE_GPU=1 cargo test --workspace --release --all-features
+# The default build's device choice (no GPU compiled in: `auto` is the CPU, `gpu` a clear error).
+cargo test --release -q -p derma-core --lib gpu::tests
 # The exported head opens without errors or warnings in Khronos' glTF-Validator.
 bash scripts/validate_gltf.sh
 # Every numbered example runs (the Monte Carlo ones with fewer photons than their defaults),

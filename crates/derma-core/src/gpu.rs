@@ -143,3 +143,32 @@ pub enum GpuError {
         adapter: String,
     },
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_build_parses_the_choice_and_resolves_the_cpu() {
+        for d in Device::ALL {
+            assert_eq!(d.name().parse::<Device>(), Ok(d));
+        }
+        assert!("tpu"
+            .parse::<Device>()
+            .unwrap_err()
+            .contains("auto, cpu or gpu"));
+        assert_eq!(Device::Cpu.resolve(), Ok(Device::Cpu));
+    }
+
+    /// Without the `gpu` feature (the default build; the test command runs this once so):
+    /// `auto` is the CPU and `gpu` an error that says how to get it.
+    #[cfg(not(feature = "gpu"))]
+    #[test]
+    fn a_build_without_the_feature_runs_auto_on_the_cpu_and_refuses_gpu() {
+        assert!(!BUILT);
+        assert_eq!(Device::Auto.resolve(), Ok(Device::Cpu));
+        let e = Device::Gpu.resolve().unwrap_err();
+        assert_eq!(e, GpuError::NotBuilt);
+        assert!(e.to_string().contains("cargo feature `gpu`"), "{e}");
+    }
+}

@@ -21,10 +21,19 @@ mod synth;
 
 use clap::{Parser, Subcommand};
 
+/// `derma --version`: the version and whether this build has the GPU backends.
+#[cfg(feature = "gpu")]
+const VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), " (with the gpu feature)");
+#[cfg(not(feature = "gpu"))]
+const VERSION: &str = concat!(
+    env!("CARGO_PKG_VERSION"),
+    " (CPU only; build with --features gpu for --device gpu)"
+);
+
 #[derive(Parser)]
 #[command(
     name = "derma",
-    version,
+    version = VERSION,
     about = "The appearance of digital humans, from biology"
 )]
 struct Cli {
