@@ -35,7 +35,7 @@ impl Symbolic {
     /// Orders the graph of the lower pattern (`col_ptr`, `row_idx`: each column's rows
     /// ascending, the diagonal among them) by minimum degree and records L's pattern on the way.
     /// `Effort::Refactorised`: the pattern will be factorised many times, so both orders of
-    /// [`fill_reducing_order`] are tried and the one with less fill is kept.
+    /// [`fill_reducing_orders`] are tried and the one with less fill is kept.
     fn analyse(
         n: usize,
         col_ptr: &[usize],
@@ -68,13 +68,18 @@ impl Symbolic {
             }
             inverse
         };
-        let mut perm = fill_reducing_order(&adj, LEAF);
+        // The supervariables once, ordered once or twice.
+        let leaves: &[usize] = match effort {
+            Effort::Once => &[LEAF],
+            Effort::Refactorised => &[LEAF, usize::MAX],
+        };
+        let mut orders = fill_reducing_orders(&adj, leaves).into_iter();
+        let mut perm = orders.next().expect("one order per leaf size");
         let mut inverse = inverse_of(&perm);
         let (mut l_ptr, mut l_row) = pattern_of_l(n, col_ptr, row_idx, &inverse);
-        if effort == Effort::Refactorised {
+        if let Some(md) = orders.next() {
             // Minimum degree on the whole graph (no dissection): slower to find, sometimes
             // much less fill on graphs that are not flat meshes (the registration's).
-            let md = fill_reducing_order(&adj, usize::MAX);
             let md_inverse = inverse_of(&md);
             let (p2, r2) = pattern_of_l(n, col_ptr, row_idx, &md_inverse);
             if r2.len() < l_row.len() {
@@ -349,11 +354,12 @@ fn pattern_of_l(
     (l_ptr, l_row)
 }
 
-/// The order of [`nested_dissection`] on the graph's supervariables: vertices with the same
+/// The orders of [`nested_dissection`], one per leaf size in `leaves`, on the graph's
+/// supervariables (found once): vertices with the same
 /// neighbours and each other (the unknowns of one vertex of a mesh, such as the registration's
 /// 4 × 4 blocks) are ordered as one and numbered consecutively, so no separator splits them and
 /// the order costs a fraction (George & Liu §5.3, indistinguishable nodes).
-fn fill_reducing_order(adj: &[Vec<u32>], leaf: usize) -> Vec<u32> {
+fn fill_reducing_orders(adj: &[Vec<u32>], leaves: &[usize]) -> Vec<Vec<u32>> {
     let n = adj.len();
     let closed = |v: usize| {
         let a = &adj[v];
@@ -364,7 +370,8 @@ fn fill_reducing_order(adj: &[Vec<u32>], leaf: usize) -> Vec<u32> {
             .chain(std::iter::once(v as u32))
             .chain(a[at..].iter().copied())
     };
-    // FNV-1a over each closed neighbourhood; equal hashes are compared in full.
+    // FNV-1a over each closed neighbourhood (the 64-bit offset basis and prime of Fowler, Noll
+    // & Vo's FNV specification); equal hashes are compared in full.
     let hash = |v: usize| {
         closed(v).fold(0xcbf2_9ce4_8422_2325u64, |h, u| {
             (h ^ u as u64).wrapping_mul(0x0000_0100_0000_01b3)
@@ -425,13 +432,19 @@ fn fill_reducing_order(adj: &[Vec<u32>], leaf: usize) -> Vec<u32> {
             a
         })
         .collect();
-    let mut order = Vec::with_capacity(n);
-    for q in nested_dissection(&quotient, leaf) {
-        let mut m = members[by_first[q as usize] as usize].clone();
+    for m in &mut members {
         m.sort_unstable();
-        order.extend(m);
     }
-    order
+    leaves
+        .iter()
+        .map(|&leaf| {
+            let mut order = Vec::with_capacity(n);
+            for q in nested_dissection(&quotient, leaf) {
+                order.extend_from_slice(&members[by_first[q as usize] as usize]);
+            }
+            order
+        })
+        .collect()
 }
 
 /// Subgraphs at most this large are ordered by minimum degree instead of being dissected: small
