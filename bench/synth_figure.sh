@@ -10,7 +10,7 @@ import sys
 from PIL import Image, ImageDraw
 src, dst = sys.argv[1], sys.argv[2]
 cell, pad, label_h = 384, 8, 22
-rows = ["disp128", "disp256", "albedo256x128"]
+rows = ["disp128", "disp256", "albedo128", "albedo256x128"]
 cols = ["exemplar", "derma synth", "texture-synthesis (peer)"]
 fig = Image.new("RGB", (3 * cell + 4 * pad, len(rows) * (cell + label_h + pad) + pad), "white")
 draw = ImageDraw.Draw(fig)

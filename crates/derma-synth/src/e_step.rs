@@ -1,17 +1,19 @@
-//! The E-step of an optimisation pass (Shen et al. §3.3, after Kwatra et al. 2005 §3): each
-//! texel becomes the weighted mean of the best matches of the windows covering it, on the CPU.
+//! The E-step of an optimisation pass (Shen et al. §3.3, after Kwatra et al. 2005 §3), on the CPU:
+//! the covering windows' low bands blended, the best-matching one's high band (see [`crate::optimize`]).
 
 use crate::canvas::{Canvas, NO_SOURCE};
 use crate::exemplar::ExemplarSet;
 use rayon::prelude::*;
 
-/// What the E-step blends: the windows (origins along each axis, row-major), where each
-/// window's best match lies (exemplar, x, y) and its weight.
-pub(crate) struct Blend {
+/// What the E-step works from: the windows (origins along each axis, row-major), where each
+/// window's best match lies (exemplar, x, y), its cost (the integer distance to it) and its
+/// weight in the low band's mean.
+pub(crate) struct Windows {
     pub w: usize,
     pub xs: Vec<usize>,
     pub ys: Vec<usize>,
     pub placed: Vec<(usize, usize, usize)>,
+    pub costs: Vec<u32>,
     pub weights: Vec<f32>,
 }
 
@@ -29,8 +31,16 @@ pub(crate) fn cover(len: usize, origins: &[usize], w: usize, tile: bool) -> Vec<
 }
 
 /// The E-step on the CPU, texel by texel in a fixed order of windows (the same sums on any
-/// thread count; `e_step.wgsl` reproduces them bit for bit).
-pub(crate) fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) {
+/// thread count; `e_step.wgsl` reproduces them bit for bit): each texel becomes the weighted
+/// mean of its covering windows' low bands plus the high band of the one with the least cost,
+/// the first in order among equals, whose exemplar texel becomes its source. `bands` holds
+/// (low, high) per exemplar ([`crate::bands`]).
+pub(crate) fn e_step(
+    canvas: &mut Canvas,
+    set: &ExemplarSet,
+    b: &Windows,
+    bands: &[(Vec<f32>, Vec<f32>)],
+) {
     let c = canvas.channels;
     let cover_x = cover(canvas.width, &b.xs, b.w, canvas.tile);
     let cover_y = cover(canvas.height, &b.ys, b.w, canvas.tile);
@@ -46,29 +56,43 @@ pub(crate) fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) {
             let mut src_row = vec![(0u8, NO_SOURCE); width];
             let mut acc = vec![0f64; c];
             for x in 0..width {
-                acc.iter_mut().for_each(|a| *a = 0.0);
+                // The chosen window first: the least cost, the first in order among equals.
                 let mut wsum = 0f64;
-                let mut best = (f32::NEG_INFINITY, 0u8, NO_SOURCE);
+                let mut best = (u32::MAX, 0usize, NO_SOURCE);
                 for &(jy, oy) in &cover_y[y] {
                     for &(ix, ox) in &cover_x[x] {
                         let k = jy as usize * nwx + ix as usize;
-                        let (ex, mx, my) = b.placed[k];
-                        let e = &set.exemplars[ex];
-                        let s = (my + oy as usize) * e.width() + mx + ox as usize;
-                        let wk = b.weights[k];
-                        for (a, &v) in acc.iter_mut().zip(&e.texture.data[s * c..(s + 1) * c]) {
-                            *a += wk as f64 * v as f64;
+                        wsum += b.weights[k] as f64;
+                        if best.2 == NO_SOURCE || b.costs[k] < best.0 {
+                            let (ex, mx, my) = b.placed[k];
+                            let s =
+                                (my + oy as usize) * set.exemplars[ex].width() + mx + ox as usize;
+                            best = (b.costs[k], ex, s as u32);
                         }
-                        wsum += wk as f64;
-                        if wk > best.0 {
-                            best = (wk, ex as u8, s as u32);
+                    }
+                }
+                let (_, ex, s) = best;
+                let high = &bands[ex].1[s as usize * c..(s as usize + 1) * c];
+                // Σ ω (L + H) / Σ ω, each product exact in f64 (e_step.wgsl sums the same terms
+                // in the same order).
+                acc.iter_mut().for_each(|a| *a = 0.0);
+                for &(jy, oy) in &cover_y[y] {
+                    for &(ix, ox) in &cover_x[x] {
+                        let k = jy as usize * nwx + ix as usize;
+                        let (wex, mx, my) = b.placed[k];
+                        let ws = (my + oy as usize) * set.exemplars[wex].width() + mx + ox as usize;
+                        let wk = b.weights[k] as f64;
+                        let low = &bands[wex].0[ws * c..(ws + 1) * c];
+                        for ((a, &l), &h) in acc.iter_mut().zip(low).zip(high) {
+                            *a += wk * l as f64;
+                            *a += wk * h as f64;
                         }
                     }
                 }
                 for k in 0..c {
                     row[x * c + k] = (acc[k] / wsum) as f32;
                 }
-                src_row[x] = (best.1, best.2);
+                src_row[x] = (ex as u8, s);
             }
             (row, src_row)
         })
@@ -92,4 +116,90 @@ pub(crate) fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) {
                 code[k] = q.quantize(k, v[k]);
             }
         });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::texture::Texture;
+    use derma_core::rng::Philox;
+
+    #[test]
+    fn low_bands_are_blended_and_the_least_cost_window_gives_the_grain_and_source() {
+        let rng = Philox::new(5, 2);
+        let (ew, eh, c) = (12, 12, 2);
+        let data = (0..ew * eh * c)
+            .map(|i| rng.uniform4(i as u64, 0)[0])
+            .collect();
+        let set = ExemplarSet::new(vec![Texture::new(ew, eh, c, data).unwrap()], 4).unwrap();
+        let (w, side) = (4, 10);
+        let origins = [0, 2, 4, 6];
+        let n = origins.len() * origins.len();
+        let cw = ew + 1 - w;
+        let placed: Vec<(usize, usize, usize)> = (0..n)
+            .map(|k| {
+                let r = rng.u32x4(100 + k as u64);
+                (0, r[0] as usize % cw, r[1] as usize % cw)
+            })
+            .collect();
+        // Few distinct costs, so most texels meet ties.
+        let costs: Vec<u32> = (0..n).map(|k| rng.u32x4(200 + k as u64)[2] % 3).collect();
+        let weights: Vec<f32> = (0..n)
+            .map(|k| 0.5 + rng.uniform4(300 + k as u64, 0)[0])
+            .collect();
+        let bands = crate::bands::bands(&set, w);
+        let mut canvas = Canvas::new(side, side, c, false);
+        let windows = Windows {
+            w,
+            xs: origins.to_vec(),
+            ys: origins.to_vec(),
+            placed: placed.clone(),
+            costs: costs.clone(),
+            weights: weights.clone(),
+        };
+        e_step(&mut canvas, &set, &windows, &bands);
+        let (low, high) = &bands[0];
+        for y in 0..side {
+            for x in 0..side {
+                // Windows in row-major order; the least cost, the first among equals.
+                let covering: Vec<usize> = (0..n)
+                    .filter(|&k| {
+                        let (ox, oy) = (origins[k % 4], origins[k / 4]);
+                        (ox..ox + w).contains(&x) && (oy..oy + w).contains(&y)
+                    })
+                    .collect();
+                let mut best: Option<(u32, usize)> = None;
+                for &k in &covering {
+                    if best.is_none_or(|b| costs[k] < b.0) {
+                        best = Some((costs[k], k));
+                    }
+                }
+                let k = best.expect("every texel is covered").1;
+                let (_, mx, my) = placed[k];
+                let s = (my + y - origins[k / 4]) * ew + mx + x - origins[k % 4];
+                let t = y * side + x;
+                assert_eq!(canvas.src[t], s as u32, "texel ({x}, {y})");
+                assert_eq!(canvas.src_exemplar[t], 0);
+                for ch in 0..c {
+                    // The mean of the covering windows' low bands plus the chosen high band.
+                    let (mut acc, mut low_sum, mut wsum) = (0f64, 0f64, 0f64);
+                    for &k in &covering {
+                        let (_, mx, my) = placed[k];
+                        let ws = (my + y - origins[k / 4]) * ew + mx + x - origins[k % 4];
+                        let wk = weights[k] as f64;
+                        acc += wk * low[ws * c + ch] as f64;
+                        acc += wk * high[s * c + ch] as f64;
+                        low_sum += wk * low[ws * c + ch] as f64;
+                        wsum += wk;
+                    }
+                    let want = (acc / wsum) as f32;
+                    assert_eq!(canvas.values[t * c + ch], want, "texel ({x}, {y})");
+                    assert_eq!(canvas.codes[t * c + ch], set.quantizer.quantize(ch, want));
+                    // Which is, to rounding, the low bands' mean plus the chosen high band.
+                    let split = low_sum / wsum + high[s * c + ch] as f64;
+                    assert!((want as f64 - split).abs() < 1e-6, "{want} vs {split}");
+                }
+            }
+        }
+    }
 }

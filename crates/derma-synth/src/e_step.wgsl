@@ -1,10 +1,13 @@
-// The E-step of Shen et al. §3.3 (Kwatra et al. 2005, §3) on the GPU: each texel becomes the
-// weighted mean of the best matches of the windows covering it, bit for bit as optimize.rs's.
+// The E-step of Shen et al. §3.3 (Kwatra et al. 2005, §3) in two bands on the GPU: each texel
+// becomes the weighted mean of its covering windows' low bands plus the high band of the one of
+// least cost, bit for bit as e_step.rs's (see optimize.rs and bands.rs for why).
 //
-// Exactness. The CPU sums ω·v in f64 over the covering windows in a fixed order (rows of
-// windows, then columns) and rounds (acc / Σω) to f32. Here: ω and v are f32, so each product
-// is exact in f64 (48 significant bits) and a fused multiply-add rounds exactly as the CPU's
-// separate multiply and add; f64 additions are correctly rounded on Vulkan, in the same order.
+// Exactness. The CPU finds the window of least cost (the first among equals), then sums
+// ω·L + ω·H in f64 over the covering windows in a fixed order (rows of windows, then columns),
+// L the window's low band and H the chosen window's high band, and rounds (acc / Σω) to f32.
+// Here: ω, L and H are f32, so each product is exact in f64 (48 significant bits) and a fused
+// multiply-add rounds exactly as the CPU's separate multiply and add; f64 additions are
+// correctly rounded on Vulkan, in the same order.
 // The f64 division is not (Vulkan allows 2.5 ulp), so the quotient is formed by integer long
 // division and rounded twice, to f64 then f32, both to nearest even, as Rust's `as f32` does.
 // The codes come from the quantiser's boundaries (exemplar.rs, `boundaries`), compared as
@@ -18,7 +21,7 @@ struct Params {
     cols: u32,
     // Texels to blend (the `quotients` check: pairs to divide).
     count: u32,
-    // Where the exemplars' values start in `exemplars` (after two words per exemplar).
+    // Where the exemplars' low bands start in `exemplars` (after two words per exemplar).
     values_at: u32,
     pad0: u32,
     pad1: u32,
@@ -26,19 +29,21 @@ struct Params {
 
 @group(0) @binding(0) var<uniform> p: Params;
 // Per window: exemplar, texel of its match's top-left corner in that exemplar (y · width + x),
-// the window's weight (f32 bits), unused.
+// the window's weight (f32 bits), its cost.
 @group(0) @binding(1) var<storage, read> windows: array<vec4<u32>>;
 // Which windows cover each column and row: width + 1 column offsets, height + 1 row offsets
 // (indices of the first pair of each list in this array), then (window, offset in it) pairs.
 @group(0) @binding(2) var<storage, read> cover: array<u32>;
-// Per exemplar (width, first word of its values), then the values (f32 bits, interleaved).
+// Per exemplar (width, first word of its low band), then the low bands (f32 bits, interleaved).
 @group(0) @binding(3) var<storage, read> exemplars: array<u32>;
+// The high bands, word k at `exemplars`' word values_at + k.
+@group(0) @binding(4) var<storage, read> high: array<u32>;
 // The quantiser's boundaries: 256 order keys per channel (entry 0 unused).
-@group(0) @binding(4) var<storage, read> bounds: array<u32>;
-@group(0) @binding(5) var<storage, read_write> values: array<u32>;
-@group(0) @binding(6) var<storage, read_write> sources: array<u32>;
-@group(0) @binding(7) var<storage, read_write> source_exemplars: array<u32>;
-@group(0) @binding(8) var<storage, read_write> codes: array<u32>;
+@group(0) @binding(5) var<storage, read> bounds: array<u32>;
+@group(0) @binding(6) var<storage, read_write> values: array<u32>;
+@group(0) @binding(7) var<storage, read_write> sources: array<u32>;
+@group(0) @binding(8) var<storage, read_write> source_exemplars: array<u32>;
+@group(0) @binding(9) var<storage, read_write> codes: array<u32>;
 
 const WORKGROUP: u32 = 64u;
 const MANTISSA: u64 = 0xffffffffffffflu;
@@ -137,8 +142,8 @@ fn code_of(bits: u32, k: u32) -> u32 {
     return n;
 }
 
-// The value of channel k of window `win`'s match at offset (ox, oy).
-fn match_value(win: vec4<u32>, ox: u32, oy: u32, k: u32) -> f32 {
+// The low band of channel k of window `win`'s match at offset (ox, oy).
+fn match_low(win: vec4<u32>, ox: u32, oy: u32, k: u32) -> f32 {
     let ew = exemplars[2u * win.x];
     let s = win.y + oy * ew + ox;
     return bitcast<f32>(exemplars[exemplars[2u * win.x + 1u] + s * p.channels + k]);
@@ -156,9 +161,8 @@ fn blend(@builtin(global_invocation_id) gid: vec3<u32>) {
     let x1 = cover[x + 1u];
     let y0 = cover[p.width + 1u + y];
     let y1 = cover[p.width + 2u + y];
-    // The source: the window of largest weight, the first in order among equals (weights are
-    // positive, so their bits order like them).
-    var best_bits = 0u;
+    // The chosen window: the least cost, the first in order among equals.
+    var best_cost = 0xffffffffu;
     var best_ex = 0u;
     var best_src = 0xffffffffu;
     var wsum = f64(0.0);
@@ -166,20 +170,23 @@ fn blend(@builtin(global_invocation_id) gid: vec3<u32>) {
         for (var i = x0; i < x1; i += 2u) {
             let win = windows[cover[j] * p.cols + cover[i]];
             wsum += f64(bitcast<f32>(win.z));
-            if (win.z > best_bits) {
-                best_bits = win.z;
+            if (best_src == 0xffffffffu || win.w < best_cost) {
+                best_cost = win.w;
                 best_ex = win.x;
                 best_src = win.y + cover[j + 1u] * exemplars[2u * win.x] + cover[i + 1u];
             }
         }
     }
+    let first_high = exemplars[2u * best_ex + 1u] - p.values_at + best_src * p.channels;
     for (var k = 0u; k < p.channels; k++) {
+        let h = f64(bitcast<f32>(high[first_high + k]));
         var acc = f64(0.0);
         for (var j = y0; j < y1; j += 2u) {
             for (var i = x0; i < x1; i += 2u) {
                 let win = windows[cover[j] * p.cols + cover[i]];
-                let v = match_value(win, cover[i + 1u], cover[j + 1u], k);
-                acc += f64(bitcast<f32>(win.z)) * f64(v);
+                let wk = f64(bitcast<f32>(win.z));
+                acc += wk * f64(match_low(win, cover[i + 1u], cover[j + 1u], k));
+                acc += wk * h;
             }
         }
         let bits = quotient_f32(acc, wsum);

@@ -1,16 +1,16 @@
-//! The E-step of an optimisation pass (Shen et al. §3.3, after Kwatra et al. 2005 §3) on the GPU,
-//! `e_step.wgsl`: every texel's weighted mean, source and codes, bit for bit as the CPU's.
+//! The E-step of an optimisation pass (Shen et al. §3.3, after Kwatra et al. 2005 §3) in two bands
+//! on the GPU, `e_step.wgsl`: every texel's value, source and codes, bit for bit as the CPU's.
 //!
-//! The host uploads the windows' matches and weights (one word triple per window), the cover
-//! lists and the exemplars' values; one dispatch blends all texels. Values, codes and sources
+//! The host uploads the windows' matches, weights and costs (one word quadruple per window),
+//! the cover lists and the exemplars' two bands; one dispatch blends all texels. Values, codes and sources
 //! stay on the GPU, where the next pass makes its coherent guesses (`guesses.wgsl`) and
 //! searches, until the canvas is synced after the last pass (`Blended`, `Canvas::sync`). Needs
 //! 64-bit floats and integers (`SHADER_F64`, `SHADER_INT64`); without them, for a canvas
-//! larger than the adapter binds, or for exemplars with subnormal values, the caller blends on
-//! the CPU.
+//! larger than the adapter binds, or for exemplars whose bands hold subnormal values, the caller
+//! blends on the CPU.
 
 use crate::canvas::Canvas;
-use crate::e_step::{cover, Blend};
+use crate::e_step::{cover, Windows};
 use crate::error::Result;
 use crate::exemplar::{ExemplarSet, Quantizer};
 use crate::resident::Blended;
@@ -47,9 +47,9 @@ fn pipelines() -> Result<Option<(&'static Gpu, &'static Pipelines)>> {
         if !ctx.device.features().contains(needs) {
             return Ok(None);
         }
-        // Binding 0 uniform, 1–4 read-only storage, 5–8 read-write storage.
+        // Binding 0 uniform, 1–5 read-only storage, 6–9 read-write storage.
         let (layout, [blend, quotients]) =
-            ctx.entry_points("e_step.wgsl", SHADER, 4, 4, ["blend", "quotients"])?;
+            ctx.entry_points("e_step.wgsl", SHADER, 5, 4, ["blend", "quotients"])?;
         Ok(Some(Pipelines {
             layout,
             blend,
@@ -77,7 +77,7 @@ fn run(
 
 /// The cover lists of both axes in `e_step.wgsl`'s layout: column offsets, row offsets, then
 /// the (window, offset) pairs.
-fn cover_words(b: &Blend, canvas: &Canvas) -> Vec<u32> {
+fn cover_words(b: &Windows, canvas: &Canvas) -> Vec<u32> {
     let cx = cover(canvas.width, &b.xs, b.w, canvas.tile);
     let cy = cover(canvas.height, &b.ys, b.w, canvas.tile);
     let heads = cx.len() + cy.len() + 2;
@@ -97,20 +97,24 @@ fn cover_words(b: &Blend, canvas: &Canvas) -> Vec<u32> {
     words
 }
 
-/// Blends the canvas on the GPU; false where this device cannot (the caller then blends on the
-/// CPU).
-pub(crate) fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) -> Result<bool> {
+/// Blends the canvas on the GPU from the exemplars' `bands` ((low, high) per exemplar); false
+/// where this device cannot (the caller then blends on the CPU).
+pub(crate) fn e_step(
+    canvas: &mut Canvas,
+    set: &ExemplarSet,
+    b: &Windows,
+    bands: &[(Vec<f32>, Vec<f32>)],
+) -> Result<bool> {
     let Some((ctx, pipes)) = pipelines()? else {
         return Ok(false);
     };
     // A GPU may flush subnormal f32s to zero where it widens them to f64 (Vulkan leaves the
-    // default denormal mode to the implementation); exemplars holding any blend on the CPU.
-    if set
-        .exemplars
+    // default denormal mode to the implementation); bands holding any blend on the CPU.
+    if bands
         .iter()
-        .any(|e| e.texture.data.iter().any(|v| v.is_subnormal()))
+        .any(|(low, high)| low.iter().chain(high).any(|v| v.is_subnormal()))
     {
-        tracing::debug!("E-step on the CPU: the exemplars hold subnormal values");
+        tracing::debug!("E-step on the CPU: the exemplars' bands hold subnormal values");
         return Ok(false);
     }
     let prepared = std::time::Instant::now();
@@ -123,22 +127,28 @@ pub(crate) fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) -> Resul
         exemplars.extend([e.width() as u32, at as u32]);
         at += e.texture.data.len();
     }
-    for e in &set.exemplars {
-        exemplars.extend(e.texture.data.iter().map(|v| v.to_bits()));
+    for (low, _) in bands {
+        exemplars.extend(low.iter().map(|v| v.to_bits()));
     }
+    let high: Vec<u32> = bands
+        .iter()
+        .flat_map(|(_, high)| high.iter().map(|v| v.to_bits()))
+        .collect();
     let windows: Vec<[u32; 4]> = b
         .placed
         .iter()
         .zip(&b.weights)
-        .map(|(&(ex, mx, my), &wk)| {
+        .zip(&b.costs)
+        .map(|((&(ex, mx, my), &wk), &cost)| {
             let ew = set.exemplars[ex].width();
-            [ex as u32, (my * ew + mx) as u32, wk.to_bits(), 0]
+            [ex as u32, (my * ew + mx) as u32, wk.to_bits(), cost]
         })
         .collect();
     let cover = cover_words(b, canvas);
     let fits = |what: &str, bytes: usize| ctx.check_storage(what, bytes as u64).is_ok();
     if !fits("the blended values", texels * c * 4)
-        || !fits("the exemplar values", exemplars.len() * 4)
+        || !fits("the exemplars' low bands", exemplars.len() * 4)
+        || !fits("the exemplars' high bands", high.len() * 4)
         || !fits("the windows", windows.len() * 16)
         || !fits("the cover lists", cover.len() * 4)
         || exemplars.len() > u32::MAX as usize
@@ -174,6 +184,7 @@ pub(crate) fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) -> Resul
             bytemuck::cast_slice(&exemplars),
             U::STORAGE,
         ),
+        init("e-step high bands", bytemuck::cast_slice(&high), U::STORAGE),
         init(
             "e-step boundaries",
             bytemuck::cast_slice(&bounds),
@@ -184,11 +195,11 @@ pub(crate) fn e_step(canvas: &mut Canvas, set: &ExemplarSet, b: &Blend) -> Resul
         out("e-step source exemplars", texels),
         out("canvas codes", texels * c),
     ];
-    drop((exemplars, windows, cover));
+    drop((exemplars, high, windows, cover));
     let started = std::time::Instant::now();
     run(ctx, pipes, &pipes.blend, &buffers, texels, "blending")?;
     let blended = started.elapsed();
-    let [_, _, _, _, _, values, sources, source_exemplars, codes] = buffers;
+    let [_, _, _, _, _, _, values, sources, source_exemplars, codes] = buffers;
     tracing::debug!(
         "E-step on the GPU, {w}×{h}: preparation and uploads {:.1} ms, blend {:.1} ms",
         (started - prepared).as_secs_f64() * 1e3,
@@ -247,6 +258,7 @@ pub fn gpu_quotients(
         init("quotient pairs", bytemuck::cast_slice(&words), U::STORAGE),
         init("unused", bytemuck::cast_slice(&zero), U::STORAGE),
         init("unused", bytemuck::cast_slice(&zero), U::STORAGE),
+        init("unused", bytemuck::cast_slice(&zero), U::STORAGE),
         init(
             "boundaries",
             bytemuck::cast_slice(&quantizer.boundaries(0)),
@@ -266,8 +278,8 @@ pub fn gpu_quotients(
         ),
     ];
     run(ctx, pipes, &pipes.quotients, &buffers, n, "dividing")?;
-    let bits: Vec<u32> = ctx.read_back(&buffers[5], n)?;
-    let codes: Vec<u32> = ctx.read_back(&buffers[8], n)?;
+    let bits: Vec<u32> = ctx.read_back(&buffers[6], n)?;
+    let codes: Vec<u32> = ctx.read_back(&buffers[9], n)?;
     Ok(Some(
         bits.into_iter()
             .zip(codes)

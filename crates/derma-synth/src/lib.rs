@@ -11,6 +11,7 @@
 
 #![warn(missing_docs)]
 
+mod bands;
 pub mod canvas;
 pub mod correction;
 mod e_step;

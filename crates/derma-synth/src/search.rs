@@ -676,6 +676,7 @@ mod tests {
         let (cw, ch) = e.candidates(w);
         let prep = Prepared::new(&set, w);
         let rng = Philox::new(3, 1);
+        let mut batch = Vec::new();
         for i in 0..40u64 {
             let r = rng.u32x4(i);
             // Queries: exemplar windows with noise added, and pure noise.
@@ -729,6 +730,25 @@ mod tests {
                     assert_eq!(split, vec![want]);
                 }
             }
+            batch.push(q);
+        }
+        // Batches of several queries, on two threads.
+        let s = Search {
+            w,
+            tol: Tolerance::from_fraction(0.1),
+            penalty: None,
+        };
+        let want: Vec<Match> = batch
+            .iter()
+            .map(|q| best_match_brute(&set, &s, q))
+            .collect();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        for n in [3, 7, 40] {
+            let got = pool.install(|| CpuMatcher.best_matches(&set, &s, &batch[..n]).unwrap());
+            assert_eq!(got, want[..n], "{n} queries");
         }
     }
 

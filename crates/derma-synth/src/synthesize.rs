@@ -7,7 +7,7 @@ use crate::error::{invalid, Result};
 use crate::exemplar::ExemplarSet;
 use crate::guide::Guide;
 use crate::matcher::Matcher;
-use crate::optimize::{optimise_pass, KWATRA_R};
+use crate::optimize::optimise_pass;
 use crate::pass_context::PassContext;
 use crate::patch_pass::{initialise_noise, patch_pass};
 use crate::search::{window_fits, Tolerance};
@@ -32,8 +32,6 @@ pub struct SynthOptions {
     pub patch: usize,
     /// Optimisation passes (§3.3: at least three); pass k uses windows of side N/2ᵏ.
     pub passes: usize,
-    /// Kwatra's robust exponent r (§3.3: 0.8).
-    pub r: f32,
     /// Tolerance of the patch pass's choice among near-best patches (image quilting's ε,
     /// Efros & Freeman 2001 §2.1: 0.1); 0 takes the best match only.
     pub tolerance: f64,
@@ -55,7 +53,6 @@ impl Default for SynthOptions {
             height: 512,
             patch: 32,
             passes: 3,
-            r: KWATRA_R,
             tolerance: 0.1,
             occurrence: 1.0,
             seed: 1,
@@ -138,9 +135,6 @@ impl SynthOptions {
                 format!("{} (expected a finite λ ≥ 0)", self.occurrence),
             ));
         }
-        if !(self.r > 0.0 && self.r <= 2.0) {
-            return Err(invalid("r", format!("{} (expected 0 < r ≤ 2)", self.r)));
-        }
         Ok(())
     }
 }
@@ -201,7 +195,7 @@ pub fn synthesize(
     let tol = Tolerance::from_fraction(opts.tolerance);
     patch_pass(&mut canvas, &ctx, opts.patch, tol, opts.occurrence)?;
     for w in opts.pass_windows() {
-        optimise_pass(&mut canvas, &ctx, w, opts.r)?;
+        optimise_pass(&mut canvas, &ctx, w)?;
     }
     canvas.sync()?;
     correct(

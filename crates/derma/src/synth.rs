@@ -76,7 +76,6 @@ pub fn run(args: SynthArgs, bars: &Bars) -> Result<()> {
             correction: args.correction,
             seed: args.seed,
             tile: args.tile,
-            ..Default::default()
         },
         device: args.device.device,
         metrics: args.metrics,
