@@ -7,8 +7,9 @@
 //! low band of the overlapping windows' matches, whose transitions then span the windows'
 //! overlap, and takes the high band from one window, so the grain is never averaged.
 
-/// Radius ρ of the low band's box for windows of side `w`: w/4, at least 1, so the box (w/2 + 1
-/// texels a side) spans the windows' overlap of w/2. Shading broader than the overlap is blended
+/// Radius ρ of the low band's box for windows of side `w`: ⌊w/4⌋, at least 1, so the box
+/// (2ρ + 1 texels a side, w/2 + 1 for the passes' sides, cut off at the exemplar's edges) spans
+/// the windows' overlap of w/2. Shading broader than the overlap is blended
 /// across it; detail that fits inside it comes whole from one window.
 pub(crate) fn radius(w: usize) -> usize {
     (w / 4).max(1)

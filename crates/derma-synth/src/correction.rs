@@ -1,10 +1,11 @@
 //! Texel-level coherent correction after the optimisation passes: each texel becomes an exact
 //! exemplar texel again, chosen among its neighbours' coherent continuations (k-coherence).
 //!
-//! Why: the E-step of §3.3 averages the four windows covering a texel, and where they disagree
-//! the average is smoother than any exemplar texel — the output loses about a third of the
-//! exemplar's finest grain (`quality::grain_ratio` ≈ 0.6–0.7 on the skin crops). The
-//! correction is Ashikhmin's coherent candidate set (Ashikhmin 2001, "Synthesizing natural
+//! Why: it was added when the E-step of §3.3 averaged the whole values of the four windows
+//! covering a texel, which lost about a third of the exemplar's finest grain
+//! (`quality::grain_ratio` ≈ 0.6–0.7 on the skin crops). The E-step now blends only the low
+//! band ([`crate::optimize`]) and the correction changes the grain little; it leaves every
+//! output texel an exemplar texel. The correction is Ashikhmin's coherent candidate set (Ashikhmin 2001, "Synthesizing natural
 //! textures", §3) as run in parallel by Lefebvre & Hoppe 2005 ("Parallel controllable texture
 //! synthesis", §3.3–3.4): for texel p, each neighbour q in the 3 × 3 around p proposes the
 //! exemplar texel S(q) + (p − q), the continuation of its source; p takes the proposal whose

@@ -126,20 +126,34 @@ mod tests {
 
     #[test]
     fn low_bands_are_blended_and_the_least_cost_window_gives_the_grain_and_source() {
+        // Two exemplars of different sizes, windows matched in either.
         let rng = Philox::new(5, 2);
-        let (ew, eh, c) = (12, 12, 2);
-        let data = (0..ew * eh * c)
-            .map(|i| rng.uniform4(i as u64, 0)[0])
+        let c = 2;
+        let sizes = [(12, 12), (15, 13)];
+        let textures = sizes
+            .iter()
+            .enumerate()
+            .map(|(e, &(ew, eh))| {
+                let data = (0..ew * eh * c)
+                    .map(|i| rng.uniform4(i as u64, e as u32)[0])
+                    .collect();
+                Texture::new(ew, eh, c, data).unwrap()
+            })
             .collect();
-        let set = ExemplarSet::new(vec![Texture::new(ew, eh, c, data).unwrap()], 4).unwrap();
+        let set = ExemplarSet::new(textures, 4).unwrap();
         let (w, side) = (4, 10);
         let origins = [0, 2, 4, 6];
         let n = origins.len() * origins.len();
-        let cw = ew + 1 - w;
         let placed: Vec<(usize, usize, usize)> = (0..n)
             .map(|k| {
                 let r = rng.u32x4(100 + k as u64);
-                (0, r[0] as usize % cw, r[1] as usize % cw)
+                let ex = r[2] as usize % 2;
+                let (ew, eh) = sizes[ex];
+                (
+                    ex,
+                    r[0] as usize % (ew + 1 - w),
+                    r[1] as usize % (eh + 1 - w),
+                )
             })
             .collect();
         // Few distinct costs, so most texels meet ties.
@@ -158,7 +172,15 @@ mod tests {
             weights: weights.clone(),
         };
         e_step(&mut canvas, &set, &windows, &bands);
-        let (low, high) = &bands[0];
+        // The exemplar texel under (x, y) of window k.
+        let texel = |k: usize, x: usize, y: usize| {
+            let (ex, mx, my) = placed[k];
+            (
+                ex,
+                (my + y - origins[k / 4]) * sizes[ex].0 + mx + x - origins[k % 4],
+            )
+        };
+        let mut from = [0; 2];
         for y in 0..side {
             for x in 0..side {
                 // Windows in row-major order; the least cost, the first among equals.
@@ -174,22 +196,21 @@ mod tests {
                         best = Some((costs[k], k));
                     }
                 }
-                let k = best.expect("every texel is covered").1;
-                let (_, mx, my) = placed[k];
-                let s = (my + y - origins[k / 4]) * ew + mx + x - origins[k % 4];
+                let (ex, s) = texel(best.expect("every texel is covered").1, x, y);
                 let t = y * side + x;
                 assert_eq!(canvas.src[t], s as u32, "texel ({x}, {y})");
-                assert_eq!(canvas.src_exemplar[t], 0);
+                assert_eq!(canvas.src_exemplar[t] as usize, ex);
+                from[ex] += 1;
+                let high = &bands[ex].1;
                 for ch in 0..c {
                     // The mean of the covering windows' low bands plus the chosen high band.
                     let (mut acc, mut low_sum, mut wsum) = (0f64, 0f64, 0f64);
                     for &k in &covering {
-                        let (_, mx, my) = placed[k];
-                        let ws = (my + y - origins[k / 4]) * ew + mx + x - origins[k % 4];
+                        let (wex, ws) = texel(k, x, y);
                         let wk = weights[k] as f64;
-                        acc += wk * low[ws * c + ch] as f64;
+                        acc += wk * bands[wex].0[ws * c + ch] as f64;
                         acc += wk * high[s * c + ch] as f64;
-                        low_sum += wk * low[ws * c + ch] as f64;
+                        low_sum += wk * bands[wex].0[ws * c + ch] as f64;
                         wsum += wk;
                     }
                     let want = (acc / wsum) as f32;
@@ -201,5 +222,9 @@ mod tests {
                 }
             }
         }
+        assert!(
+            from[0] > 0 && from[1] > 0,
+            "texels from each exemplar: {from:?}"
+        );
     }
 }

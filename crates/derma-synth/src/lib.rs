@@ -2,7 +2,7 @@
 //! texture synthesis for digital human model" (`../shared/seeds/gpu-skin-texture-synthesis-shen.txt`).
 //!
 //! [`synthesize()`] grows a texture of any size from one or more exemplars: white noise, a patch
-//! pass ([`patch_pass`]), self-adaptive optimisation passes ([`optimize`]), then a texel-level
+//! pass ([`patch_pass`]), optimisation passes with a two-band E-step ([`optimize`]), then a texel-level
 //! coherent [`correction`]. Every
 //! best-match search is the exact integer search of [`search`], run by a [`Matcher`]: the CPU
 //! one ([`CpuMatcher`], rayon) or, with the `gpu` feature, the GPU one (`gpu::GpuMatcher`, WGSL), which give identical

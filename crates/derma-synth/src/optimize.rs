@@ -10,9 +10,9 @@
 //!    window b of least distance ‖x_b − z_b‖ (the first in a fixed order among equals), whose
 //!    exemplar texel becomes its source.
 //!
-//! Step 3 is where we depart from the paper. Kwatra's E-step and Shen's eq. 3 take the weighted
-//! mean of the whole values, with ω_p = P(x_p) · ‖x_p − z_p‖^(r−2), which the paper says is there
-//! to eliminate high-frequency information. On skin that is the pores and the grain: every pass
+//! Step 3 is where we depart from the paper. Shen's eq. 3 takes Kwatra's E-step, the weighted
+//! mean of the whole values, with a factor of its own in the weight, ω_p = P(x_p) · ‖x_p −
+//! z_p‖^(r−2), which the paper says is there to eliminate high-frequency information. On skin that is the pores and the grain: every pass
 //! fed the next a smoother canvas, whose best matches were the exemplar's smoothest windows, and
 //! P (the share of matches landing in the same exemplar region) favoured those popular ones.
 //! Taking the whole texel of the best window instead keeps the grain but leaves hard edges
@@ -110,7 +110,7 @@ pub(crate) fn optimise_pass(canvas: &mut Canvas, ctx: &PassContext, w: usize) ->
             rms.max(1.0 / 255.0).powf(KWATRA_R as f64 - 2.0) as f32
         })
         .collect();
-    let windows = Windows {
+    let matched = Windows {
         w,
         xs,
         ys,
@@ -122,17 +122,17 @@ pub(crate) fn optimise_pass(canvas: &mut Canvas, ctx: &PassContext, w: usize) ->
     let t3 = Instant::now();
     #[cfg(feature = "gpu")]
     let on_gpu =
-        ctx.matcher.device() == Device::Gpu && gpu_e_step::e_step(canvas, set, &windows, &bands)?;
+        ctx.matcher.device() == Device::Gpu && gpu_e_step::e_step(canvas, set, &matched, &bands)?;
     #[cfg(not(feature = "gpu"))]
     let on_gpu = false;
     if !on_gpu {
         // Every value and code is blended anew, so any kept on the GPU are dropped.
         canvas.drop_gpu();
-        e_step(canvas, set, &windows, &bands);
+        e_step(canvas, set, &matched, &bands);
     }
     let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
     tracing::debug!(
-        "optimisation {w}×{w}: queries {:.1} ms, search {:.1} ms, sources {:.1} ms, E-step {:.1} ms",
+        "optimisation {w}×{w}: queries {:.1} ms, search {:.1} ms, weights and bands {:.1} ms, E-step {:.1} ms",
         ms(t0, t1),
         ms(t1, t2),
         ms(t2, t3),

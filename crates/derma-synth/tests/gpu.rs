@@ -100,8 +100,8 @@ fn a_seed_gives_the_same_texture_on_cpu_and_gpu() {
     let gpu = GpuMatcher::new().unwrap();
     let tight = GpuMatcher::with_patch_schedule(1, 3).unwrap();
     let set = ExemplarSet::new(vec![exemplar(48, 48, 2, 5)], 16).unwrap();
-    // Without the correction, the E-step's averages are the output (the correction makes
-    // most texels exemplar copies again).
+    // Without the correction, the E-step's two-band blend is the output (the correction makes
+    // every texel an exemplar copy again).
     for (tile, width, height, occurrence, correction) in [
         (false, 80, 64, 1.0, 1),
         (true, 80, 64, 1.0, 0),
@@ -211,7 +211,8 @@ fn a_guided_tileable_synthesis_is_the_same_on_cpu_and_gpu() {
     let set = ExemplarSet::new(vec![exemplar(40, 40, 1, 3), exemplar(36, 44, 1, 4)], 16).unwrap();
     let levels: Vec<f32> = (0..16 * 16).map(|t| ((t % 16) / 8) as f32).collect();
     let guide = Guide::from_levels(16, 16, &levels, 2);
-    for correction in [1, 2] {
+    // Without the correction the E-step's blend is the output: both exemplars' bands on the GPU.
+    for correction in [0, 1, 2] {
         let opts = SynthOptions {
             width: 64,
             height: 48,

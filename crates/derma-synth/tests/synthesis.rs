@@ -191,6 +191,7 @@ fn the_optimisation_passes_remove_the_patch_seams_and_the_output_resembles_the_e
     let refined = run(&set, &base, None);
     let seams_before = seam_energy(&coarse, 8).unwrap();
     let seams_after = seam_energy(&refined, 8).unwrap();
+    eprintln!("seam energy {seams_before:.2} → {seams_after:.2}");
     assert!(
         seams_before > 0.3,
         "the patch pass leaves seams: {seams_before}"
@@ -282,6 +283,8 @@ fn the_optimisation_keeps_the_grain_and_the_correction_leaves_exemplar_texels() 
         );
         let g = grain_ratio(&out, &ex).unwrap();
         eprintln!("correction {correction}: grain ratio {g:.3}");
+        // (Measured 0.987 and 0.992; the weighted mean gave 0.94 without the correction, so
+        // that half is the check of the E-step.)
         assert!(g > 0.97, "correction {correction}: grain ratio {g}");
         let copies = out.data.iter().all(|v| texels.contains(&v.to_bits()));
         // The E-step blends the low band, so its texels are new values; the correction makes
@@ -328,9 +331,10 @@ fn dark_parts(t: &Texture, below: f32) -> Vec<usize> {
 }
 
 #[test]
-fn a_mole_in_the_exemplar_comes_out_whole() {
+fn a_mole_in_the_exemplar_comes_out_whole_or_nearly() {
     // One dark disc (radius 5) on the blobs' lighter ground: the output's dark parts must be
-    // whole moles (at most a fifth of one missing), not halves or dashes of one.
+    // moles with at least four fifths of the disc, not halves or dashes of one, with and
+    // without the correction.
     let mut ex = blobs(80, 80, 1, 3, 0.6);
     for y in 0..80 {
         for x in 0..80 {
@@ -342,26 +346,32 @@ fn a_mole_in_the_exemplar_comes_out_whole() {
     let mole = dark_parts(&ex, 0.3);
     assert_eq!(mole.len(), 1, "the exemplar's dark parts: {mole:?}");
     let set = ExemplarSet::new(vec![ex.clone()], 16).unwrap();
-    let out = run(
-        &set,
-        &SynthOptions {
-            width: 192,
-            height: 192,
-            patch: 16,
-            ..Default::default()
-        },
-        None,
-    );
-    let parts = dark_parts(&out, 0.3);
-    eprintln!("mole of {} texels; output parts {parts:?}", mole[0]);
-    assert!(parts.len() >= 2, "the mole is used: {parts:?}");
-    // (Measured: five parts, four whole and one of 61 texels; the weighted-mean E-step this
-    // replaced gave five whole ones.)
-    assert!(
-        parts.iter().all(|&n| n * 5 >= mole[0] * 4),
-        "parts of a mole of {} texels: {parts:?}",
-        mole[0]
-    );
+    for correction in [0, 1] {
+        let out = run(
+            &set,
+            &SynthOptions {
+                width: 192,
+                height: 192,
+                patch: 16,
+                correction,
+                ..Default::default()
+            },
+            None,
+        );
+        let parts = dark_parts(&out, 0.3);
+        eprintln!(
+            "correction {correction}: mole of {} texels; output parts {parts:?}",
+            mole[0]
+        );
+        // (Measured: five parts, four whole and one of 61 texels, with the correction; the
+        // weighted-mean E-step this replaced gave five whole ones.)
+        assert!(parts.len() >= 2, "the mole is used: {parts:?}");
+        assert!(
+            parts.iter().all(|&n| n * 5 >= mole[0] * 4),
+            "correction {correction}: parts of a mole of {} texels: {parts:?}",
+            mole[0]
+        );
+    }
 }
 
 #[test]
