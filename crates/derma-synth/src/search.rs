@@ -288,23 +288,38 @@ impl Runs {
 }
 
 /// As [`ssd_at`], but may stop early and return any value above `limit` once the partial sum
-/// exceeds it.
+/// exceeds it. The squares go to 16 lanes, summed across only every [`CHECK_EVERY`] runs for the
+/// early exit (integers: the order of the sums does not change the total).
 #[inline(always)]
 fn ssd_at_bounded(e: &Exemplar, runs: &Runs, codes: &[u8], x: usize, y: usize, limit: u32) -> u32 {
     let c = e.channels();
     let ew = e.width();
     let w = runs.w;
-    let mut total = 0u32;
-    for &(r, start, len) in &runs.runs {
+    let mut lanes = [0u32; 16];
+    let mut rest = 0u32;
+    for (i, &(r, start, len)) in runs.runs.iter().enumerate() {
         let a = &e.codes[((y + r) * ew + x + start) * c..][..len * c];
         let b = &codes[(r * w + start) * c..][..len * c];
-        total += row_ssd(a, b);
-        if total > limit {
-            return total;
+        let (mut pa, mut pb) = (a.chunks_exact(16), b.chunks_exact(16));
+        for (qa, qb) in (&mut pa).zip(&mut pb) {
+            for j in 0..16 {
+                let d = qa[j] as i32 - qb[j] as i32;
+                lanes[j] += (d * d) as u32;
+            }
+        }
+        rest += row_ssd(pa.remainder(), pb.remainder());
+        if i % CHECK_EVERY == CHECK_EVERY - 1 {
+            let total = lanes.iter().sum::<u32>() + rest;
+            if total > limit {
+                return total;
+            }
         }
     }
-    total
+    lanes.iter().sum::<u32>() + rest
 }
+
+/// Runs of known texels between the early-exit checks of [`ssd_at_bounded`].
+const CHECK_EVERY: usize = 2;
 
 #[inline(always)]
 fn row_ssd(a: &[u8], b: &[u8]) -> u32 {
@@ -376,6 +391,9 @@ pub fn initial_cost(set: &ExemplarSet, s: &Search, q: &Query) -> u32 {
         .unwrap_or(u32::MAX)
 }
 
+/// Candidates whose bounds are tested together (vectorised).
+const CHUNK: usize = 16;
+
 /// Quadrant block sums of each exemplar for one window side.
 struct Prepared {
     half: usize,
@@ -396,7 +414,18 @@ impl Prepared {
             sums: set.exemplars.iter().map(|e| e.block_sums(half)).collect(),
             fine,
             fine_sums: if fine > 0 {
-                set.exemplars.iter().map(|e| e.block_sums(fine)).collect()
+                // Padded by a chunk, so the bound of every chunk reads 16 values (those past the
+                // row's end are never used).
+                set.exemplars
+                    .iter()
+                    .map(|e| {
+                        let mut planes = e.block_sums(fine);
+                        planes
+                            .iter_mut()
+                            .for_each(|p| p.resize(p.len() + CHUNK, 0.0));
+                        planes
+                    })
+                    .collect()
             } else {
                 Vec::new()
             },
@@ -569,7 +598,7 @@ fn scan_pruned_body(
         }
         // Most candidates fail the coarse bound: test 16 at a time (vectorised) before
         // looking at any one. A penalty only raises a cost, so the shared limit is safe.
-        for (chunk_no, chunk) in acc.chunks(16).enumerate() {
+        for (chunk_no, chunk) in acc.chunks(CHUNK).enumerate() {
             if chunk
                 .iter()
                 .map(|&b| u32::from(b <= coarse_limit))
@@ -578,19 +607,20 @@ fn scan_pruned_body(
             {
                 continue;
             }
-            let x0 = chunk_no * 16;
-            let len = chunk.len();
+            let x0 = chunk_no * CHUNK;
             // The finer bound of the whole chunk, vectorised the same way.
-            let mut fine_bound = [0f32; 16];
+            // Always a whole chunk (the planes are padded), so the sums stay in registers.
+            let mut fine_bound = [0f32; CHUNK];
             if let Some(fs) = fine_sums {
                 let base = y * fine_w + x0;
                 for (i, &at) in fine_at.iter().enumerate() {
                     for (k, plane) in fs.iter().enumerate() {
                         let t = fine_target[i * c + k];
-                        let row = &plane[base + at..][..len];
-                        for (b, &v) in fine_bound.iter_mut().zip(row) {
-                            let d = v - t;
-                            *b += d * d;
+                        let row: &[f32; CHUNK] =
+                            plane[base + at..][..CHUNK].try_into().expect("a chunk");
+                        for j in 0..CHUNK {
+                            let d = row[j] - t;
+                            fine_bound[j] += d * d;
                         }
                     }
                 }
