@@ -69,7 +69,10 @@ run() { # run BINARY OUT_DIR
   # Renders of the skin set on the GPU renderer (any adapter, e.g. lavapipe; binaries from
   # before `derma render --device` always took one), GLB and web.
   local gpu=()
-  if "$d" render --help | grep -q -- --device; then gpu=(--device gpu); fi
+  # (A build without the gpu feature says "CPU only" in --version and renders on the CPU.)
+  if "$d" render --help | grep -q -- --device && ! "$d" --version | grep -q 'CPU only'; then
+    gpu=(--device gpu)
+  fi
   "$d" render "$in/skin" --size 160x120 "${gpu[@]}" --out "$o/render" --quiet
   mkdir -p "$o/export"
   "$d" export glb "$in/skin" --out "$o/export/head.glb" --quiet

@@ -11,7 +11,7 @@
 # is no GPU: brows, lashes and the male default's stubble). Needs python3 with Pillow.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-source bench/common.sh
+FEATURES=gpu source bench/common.sh
 $D skin --seed 1 --out "$W/head" -q
 cp "$W/head/preview.png" docs/images/skin-preview-head.png
 $D skin --patch 30 --size 1024 --seed 1 --out "$W/patch" -q

@@ -3,7 +3,8 @@
 # the 128² and 256² skin crops, with the CPU path on the same machine for the ratio, and a
 # bitwise check that both give the same file. Run where the GPU is:
 #   DERMA=path/to/derma EXEMPLARS=dir/with/disp128.png,disp256.png bash bench/synth_gpu.sh
-# (bench/synth.sh writes the crops to bench/out/synth/.)
+# (bench/synth.sh writes the crops to bench/out/synth/.) DERMA must be a build with the gpu
+# feature: cargo build --release -p derma --features gpu.
 set -euo pipefail
 derma=${DERMA:-target/release/derma}
 ex=${EXEMPLARS:-bench/out/synth}

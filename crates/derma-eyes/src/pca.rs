@@ -167,9 +167,7 @@ impl Pca {
     }
 }
 
-pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
+pub(crate) use derma_core::numerics::dense::dot;
 
 fn normalise(v: &mut [f64]) {
     let n = dot(v, v).sqrt();

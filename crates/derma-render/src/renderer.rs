@@ -199,27 +199,6 @@ fn layout(gpu: &Gpu, label: &str, entries: &[wgpu::BindGroupLayoutEntry]) -> wgp
         })
 }
 
-fn bind(
-    gpu: &Gpu,
-    label: &str,
-    l: &wgpu::BindGroupLayout,
-    res: &[wgpu::BindingResource],
-) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry> = res
-        .iter()
-        .enumerate()
-        .map(|(i, r)| wgpu::BindGroupEntry {
-            binding: i as u32,
-            resource: r.clone(),
-        })
-        .collect();
-    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some(label),
-        layout: l,
-        entries: &entries,
-    })
-}
-
 struct PipeSpec<'a> {
     label: &'a str,
     module: &'a wgpu::ShaderModule,
@@ -485,14 +464,12 @@ impl Renderer {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        let shadow_bind = bind(
-            gpu,
+        let shadow_bind = gpu.bind(
             "shadow frame",
             &shadow_layout,
             &[frame_buf.as_entire_binding()],
         );
-        let main_bind = bind(
-            gpu,
+        let main_bind = gpu.bind(
             "frame",
             &frame_layout,
             &[
@@ -716,7 +693,7 @@ impl Renderer {
         let views: Vec<wgpu::TextureView> = textures.iter().map(view).collect();
         let mut res = vec![ubuf.as_entire_binding()];
         res.extend(views.iter().map(wgpu::BindingResource::TextureView));
-        let bind = bind(self.gpu, &p.name, &self.draw_layout, &res);
+        let bind = self.gpu.bind(&p.name, &self.draw_layout, &res);
         let vertices = self.gpu.upload(
             &p.name,
             bytemuck::cast_slice(&p.vertices),
@@ -820,8 +797,7 @@ impl Renderer {
         let depth = target("depth", DEPTH);
         let sv = view(&sssp);
         let blur_group = |src: &wgpu::Texture, k: usize| {
-            bind(
-                gpu,
+            gpu.bind(
                 "blur",
                 &self.blur_layout,
                 &[
@@ -836,8 +812,7 @@ impl Renderer {
         };
         let blur_x = blur_group(&diffuse, 0);
         let blur_y = blur_group(&ping, 1);
-        let composite = bind(
-            gpu,
+        let composite = gpu.bind(
             "composite",
             &self.comp_layout,
             &[
@@ -855,8 +830,8 @@ impl Renderer {
             wgpu::BindingResource::TextureView(&sv),
             wgpu::BindingResource::TextureView(&lv),
         ];
-        let lake_depth = bind(gpu, "lake depth", &self.lake_depth_layout, &lake_in[..3]);
-        let lake_shade = bind(gpu, "lake shade", &self.lake_shade_layout, &lake_in);
+        let lake_depth = gpu.bind("lake depth", &self.lake_depth_layout, &lake_in[..3]);
+        let lake_shade = gpu.bind("lake shade", &self.lake_shade_layout, &lake_in);
         Targets {
             size: (w, h),
             diffuse,

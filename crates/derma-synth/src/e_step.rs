@@ -55,44 +55,40 @@ pub(crate) fn e_step(
             let mut row = vec![0f32; width * c];
             let mut src_row = vec![(0u8, NO_SOURCE); width];
             let mut acc = vec![0f64; c];
+            // The windows covering a texel, in order: (window, exemplar, its texel there).
+            let mut covering: Vec<(usize, usize, usize)> = Vec::new();
             for x in 0..width {
-                // The chosen window first: the least cost, the first in order among equals.
-                let mut wsum = 0f64;
-                let mut best = (u32::MAX, 0usize, NO_SOURCE);
+                covering.clear();
                 for &(jy, oy) in &cover_y[y] {
                     for &(ix, ox) in &cover_x[x] {
                         let k = jy as usize * nwx + ix as usize;
-                        wsum += b.weights[k] as f64;
-                        if best.2 == NO_SOURCE || b.costs[k] < best.0 {
-                            let (ex, mx, my) = b.placed[k];
-                            let s =
-                                (my + oy as usize) * set.exemplars[ex].width() + mx + ox as usize;
-                            best = (b.costs[k], ex, s as u32);
-                        }
+                        let (ex, mx, my) = b.placed[k];
+                        let s = (my + oy as usize) * set.exemplars[ex].width() + mx + ox as usize;
+                        covering.push((k, ex, s));
                     }
                 }
-                let (_, ex, s) = best;
-                let high = &bands[ex].1[s as usize * c..(s as usize + 1) * c];
+                // The chosen window: the least cost, the first in order among equals.
+                let &(_, ex, s) = covering
+                    .iter()
+                    .min_by_key(|w| b.costs[w.0])
+                    .expect("every texel is covered");
+                let wsum: f64 = covering.iter().map(|w| b.weights[w.0] as f64).sum();
+                let high = &bands[ex].1[s * c..(s + 1) * c];
                 // Σ ω (L + H) / Σ ω, each product exact in f64 (e_step.wgsl sums the same terms
                 // in the same order).
                 acc.iter_mut().for_each(|a| *a = 0.0);
-                for &(jy, oy) in &cover_y[y] {
-                    for &(ix, ox) in &cover_x[x] {
-                        let k = jy as usize * nwx + ix as usize;
-                        let (wex, mx, my) = b.placed[k];
-                        let ws = (my + oy as usize) * set.exemplars[wex].width() + mx + ox as usize;
-                        let wk = b.weights[k] as f64;
-                        let low = &bands[wex].0[ws * c..(ws + 1) * c];
-                        for ((a, &l), &h) in acc.iter_mut().zip(low).zip(high) {
-                            *a += wk * l as f64;
-                            *a += wk * h as f64;
-                        }
+                for &(k, wex, ws) in &covering {
+                    let wk = b.weights[k] as f64;
+                    let low = &bands[wex].0[ws * c..(ws + 1) * c];
+                    for ((a, &l), &h) in acc.iter_mut().zip(low).zip(high) {
+                        *a += wk * l as f64;
+                        *a += wk * h as f64;
                     }
                 }
                 for k in 0..c {
                     row[x * c + k] = (acc[k] / wsum) as f32;
                 }
-                src_row[x] = (ex as u8, s);
+                src_row[x] = (ex as u8, s as u32);
             }
             (row, src_row)
         })

@@ -118,10 +118,7 @@ impl Mul<&Matrix> for &Matrix {
             let cj = c.col_mut(j);
             for k in 0..self.cols {
                 let bkj = b[(k, j)];
-                for (ci, a) in cj
-                    .iter_mut()
-                    .zip(&self.data[k * self.rows..(k + 1) * self.rows])
-                {
+                for (ci, a) in cj.iter_mut().zip(self.col(k)) {
                     *ci += a * bkj;
                 }
             }
@@ -154,8 +151,8 @@ pub fn matrix_from_rows(rows: usize, cols: usize, data: &[f64]) -> Result<Matrix
 
 /// Solves A x = b for a small square A (row-major n × n) by Gaussian elimination with partial
 /// pivoting; `None` when a pivot falls below 10⁻¹⁴ of the largest diagonal entry. For the
-/// matcher's 3–12 unknowns it is faster than a general factorisation (BENCHMARKS.md,
-/// "Numerics"); badly scaled systems, whose pivots that threshold rejects, want
+/// matcher's 3–12 unknowns it was faster than faer's general factorisation when that was
+/// measured (BENCHMARKS.md, "Numerics"); badly scaled systems, whose pivots that threshold rejects, want
 /// [`cholesky_solve`] instead.
 pub fn solve(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
     let mut m = a.to_vec();
@@ -219,7 +216,8 @@ fn finite(what: &'static str, x: Vec<f64>) -> Result<Vec<f64>, NumericsError> {
     }
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
+/// The dot product of two slices (over the shorter's length), summed in order.
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
@@ -369,8 +367,9 @@ pub struct Svd {
     pub v: Matrix,
 }
 
-/// Sweeps after which a Jacobi iteration is declared not to converge (both converge
-/// quadratically; a few sweeps suffice for the sizes derma meets).
+/// Sweeps of the Jacobi SVD, and QL steps per eigenvalue, after which the iteration is declared
+/// not to converge. Both converge quadratically and a few suffice for the sizes derma meets;
+/// LAPACK's dgesvj allows 30 sweeps and EISPACK's tql2 30 steps per eigenvalue, twice that here.
 const MAX_SWEEPS: usize = 60;
 
 /// The thin SVD of `a`, by one-sided Jacobi rotations of its columns (Hestenes 1958; G&VL
@@ -440,6 +439,8 @@ pub fn svd(a: &Matrix) -> Result<Svd, NumericsError> {
     for (k, &j) in order.iter().enumerate() {
         s.push(norms[j] * unscale);
         vs.col_mut(k).copy_from_slice(v.col(j));
+        // Below m·ε·σ₁ a singular value cannot be told from rounding (the rank cut-off of
+        // LAPACK-style codes; NumPy's matrix_rank uses max(m, n)·ε·σ₁).
         if norms[j] > m as f64 * f64::EPSILON * top {
             let inv = 1.0 / norms[j];
             u.col_mut(k)
@@ -654,11 +655,7 @@ fn tridiagonal_ql(d: &mut [f64], e: &mut [f64], z: &mut Matrix) -> Result<(), Nu
                 d[i + 1] = g + p;
                 g = c * r - b;
                 let (zi, zi1) = z.col_pair(i, i + 1);
-                for (a, b) in zi.iter_mut().zip(zi1.iter_mut()) {
-                    let f = *b;
-                    *b = s * *a + c * f;
-                    *a = c * *a - s * f;
-                }
+                rotate(zi, zi1, c, s);
             }
             if deflated {
                 continue;
@@ -700,6 +697,8 @@ pub fn smallest_generalized_eigenpair(
             detail: "B is not positive definite".into(),
         });
     }
+    // B's eigenvalues floored at 10⁻¹² of the largest (its condition capped at 10¹²), so a
+    // nearly singular direction of B is not divided by zero.
     let w = Matrix::from_fn(n, n, |i, j| {
         eb.vectors[(i, j)] / eb.values[j].max(1e-12 * top).sqrt()
     });
@@ -825,7 +824,7 @@ mod tests {
     }
 
     /// A deterministic symmetric n × n matrix with spread, clustered and repeated eigenvalues
-    /// (a full-rank random-like part plus a rank-2 bump).
+    /// (a full-rank random-like part plus 0–3 on the diagonal).
     fn symmetric(n: usize) -> Matrix {
         Matrix::from_fn(n, n, |i, j| {
             let (a, b) = (i.min(j) as f64, i.max(j) as f64);
@@ -869,7 +868,7 @@ mod tests {
             assert!((v - 3.0).abs() < 1e-12, "{:?}", e.values);
         }
         assert!((e.values[n - 1] - 9.0).abs() < 1e-12);
-        // A Gram matrix of 120 points in 4 dimensions with noise at 10⁻⁶: four large
+        // A Gram matrix of 120 points in 4 dimensions with noise at 10⁻¹²: four large
         // eigenvalues and 116 near 10⁻¹², the shape principal components meet (fewer distinct
         // poses than frames). The cluster must converge, not stall on rounding.
         let pts: Vec<[f64; 4]> = (0..120)

@@ -9,6 +9,9 @@ use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::sync::Arc;
 
+/// An absent index in the linked lists and marks below.
+const NONE: u32 = u32::MAX;
+
 /// What does not depend on the values: the order, the pattern of L and where each stored entry
 /// of A lands in it.
 struct Symbolic {
@@ -33,7 +36,8 @@ struct Symbolic {
 
 impl Symbolic {
     /// Orders the graph of the lower pattern (`col_ptr`, `row_idx`: each column's rows
-    /// ascending, the diagonal among them) by minimum degree and records L's pattern on the way.
+    /// ascending, the diagonal among them) by nested dissection with minimum-degree leaves and
+    /// records L's pattern on the way.
     /// `Effort::Refactorised`: the pattern will be factorised many times, so both orders of
     /// [`fill_reducing_orders`] are tried and the one with less fill is kept.
     fn analyse(
@@ -161,7 +165,6 @@ impl Symbolic {
         for (&slot, v) in self.a_to_l.iter().zip(values) {
             lv[slot] += v;
         }
-        const NONE: u32 = u32::MAX;
         // head[k]: the first supernode waiting to update supernode k; next chains them; at[d]:
         // the index in d's rows of the first row it has yet to update.
         let mut head = vec![NONE; supernodes];
@@ -310,7 +313,6 @@ fn pattern_of_l(
             }
         }
     }
-    const NONE: u32 = u32::MAX;
     let mut first_child = vec![NONE; n];
     let mut next_sibling = vec![NONE; n];
     let mut mark = vec![NONE; n];
@@ -558,7 +560,8 @@ impl Dissection<'_> {
         }
         let (nodes, label) = components.pop().expect("a part is not empty");
         // A pseudo-peripheral root: restart from the last level's lowest-degree vertex while the
-        // search gets deeper (George & Liu 1979).
+        // search gets deeper (George & Liu 1979), at most four times (the depth rarely grows after
+        // two; each restart is one more breadth-first search of the part).
         let (mut seen, mut depth) = self.levels(nodes[0], label);
         for _ in 0..4 {
             let last = seen
@@ -795,6 +798,8 @@ impl SparseCholesky {
         }
         let n = self.symbolic.n;
         let mut out = Vec::with_capacity(b.len());
+        // Four right-hand sides a pass: one f64x4 row each, as the factor's kernel takes four
+        // columns a pass.
         for chunk in b.chunks(4) {
             let mut rows: Vec<[f64; 4]> = (0..n)
                 .map(|i| std::array::from_fn(|c| chunk.get(c).map_or(0.0, |col| col[i])))
