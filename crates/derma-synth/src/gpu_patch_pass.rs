@@ -23,9 +23,10 @@ struct PatchPipelines {
     /// the indirect arguments (which a dispatch may not also bind as storage).
     schedule_layout: wgpu::BindGroupLayout,
     schedule: wgpu::ComputePipeline,
-    /// `advance`, `gather`, then per round: `penalty_rows`, `penalty_table`, `prepare_round`, `screen`,
-    /// `cost`, `min_cost`, `settle`, `choose`, `pick`, `finish`, `accept`, `paste`.
-    steps: [wgpu::ComputePipeline; 14],
+    /// `advance`, `gather`, then per round: `penalty_rows`, `penalty_table`, `bar`,
+    /// `prepare_round`, `screen`, `cost`, `min_cost`, `settle`, `choose`, `pick`, `finish`,
+    /// `accept`, `paste`.
+    steps: [wgpu::ComputePipeline; 15],
 }
 
 static PATCH_PIPELINES: GpuCell<Option<PatchPipelines>> = GpuCell::new();
@@ -49,6 +50,7 @@ fn patch_pipelines() -> Result<(
                 "gather",
                 "penalty_rows",
                 "penalty_table",
+                "bar",
                 "prepare_round",
                 "screen",
                 "cost",
@@ -78,9 +80,9 @@ fn patch_pipelines() -> Result<(
 }
 
 /// Indirect-dispatch words of one round (three per dispatch; patch_schedule.wgsl's ROUND_ARGS).
-const ROUND_ARGS: usize = 36;
+const ROUND_ARGS: usize = 39;
 /// Words of the patch pass's state before the per-patch statuses (patch_pass.wgsl).
-const STATE_STATUS: usize = 9;
+const STATE_STATUS: usize = 10;
 const STATE_MAX_ROUNDS: usize = 8;
 /// Most rounds recorded per wavefront when the schedule adapts to the rounds wavefronts took.
 const MAX_PATCH_ROUNDS: usize = 32;
@@ -234,7 +236,7 @@ impl GpuMatcher {
             )
         };
         q.write_buffer(&params, 0, bytemuck::bytes_of(&params_all));
-        let [advance, gather, rows, table, prepare_round, screen, cost, min_cost, settle, choose, pick, finish, accept, paste] =
+        let [advance, gather, rows, table, bar, prepare_round, screen, cost, min_cost, settle, choose, pick, finish, accept, paste] =
             &pipes.steps;
         let per_query = derma_core::gpu::grid(nq_max, WORKGROUP);
         let screen_dims = ((candidates.div_ceil(WORKGROUP)) as u32, nq_max as u32);
@@ -242,6 +244,7 @@ impl GpuMatcher {
         let round: [(&wgpu::ComputePipeline, (u32, u32)); ROUND_ARGS / 3] = [
             (rows, derma_core::gpu::grid(cw * e.height(), WORKGROUP)),
             (table, derma_core::gpu::grid(candidates, WORKGROUP)),
+            (bar, derma_core::gpu::grid(candidates, WORKGROUP)),
             (prepare_round, per_query),
             (screen, screen_dims),
             (cost, survivor_dims),

@@ -13,6 +13,7 @@
 
 mod bands;
 pub mod canvas;
+mod clash_rounds;
 pub mod correction;
 mod e_step;
 pub mod error;

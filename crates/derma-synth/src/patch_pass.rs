@@ -18,11 +18,13 @@
 //! before, though, and patches in alike surroundings along a wavefront would pick the same
 //! windows (bands along the wavefronts); so a patch whose match overlaps one accepted earlier
 //! in its wavefront by more than half a patch each way is searched again with those windows
-//! barred, which is what a scanline order with the penalty updated per patch would discourage.
+//! barred, which is what a scanline order with the penalty updated per patch would discourage
+//! ([`crate::clash_rounds`]: the rounds, at a cost linear in the patches).
 //! Where the output wraps (tileable) or the last patch is pulled in to the edge, the order is
 //! simply wavefront by wavefront, and within one, scanline.
 
 use crate::canvas::{origins, Canvas, NO_SOURCE};
+use crate::clash_rounds::{ClashRounds, Window};
 use crate::error::Result;
 use crate::exemplar::ExemplarSet;
 use crate::matcher::PatchPlan;
@@ -168,41 +170,28 @@ pub(crate) fn patch_pass(
         // wavefront pick the same windows and the output shows bands along the wavefronts.
         // So, in scanline order, a patch whose match overlaps (by more than half a patch each
         // way) a window accepted earlier in its wavefront is searched again, with the accepted
-        // windows' neighbourhoods penalised and the counts updated; repeated until none clashes
-        // (each round accepts its first patch whatever it overlaps). Deterministic, as the
-        // searches are.
-        let mut pending: Vec<usize> = (0..patches.len()).collect();
-        let mut accepted: Vec<(u32, usize, usize)> = Vec::new();
-        while !pending.is_empty() {
-            let penalty = occ.penalties_excluding(&accepted, d);
+        // windows' neighbourhoods barred and the counts updated (see [`crate::clash_rounds`]).
+        let mut rounds = ClashRounds::new(patches.len());
+        while let Some(live) = rounds.next_live() {
+            let (penalty, open) = occ.penalties_excluding(rounds.accepted(), d);
             let search = Search {
                 w: n,
                 tol,
                 penalty: penalty.as_deref(),
             };
-            let batch: Vec<Query> = pending.iter().map(|&k| queries[k].clone()).collect();
+            let batch: Vec<Query> = live.iter().map(|&k| queries[k].clone()).collect();
             let matches = ctx.matcher.best_matches(set, &search, &batch)?;
-            let mut redo = Vec::new();
-            for (i, (&k, m)) in pending.iter().zip(&matches).enumerate() {
+            for (&k, m) in live.iter().zip(&matches) {
                 let ex = queries[k].exemplar;
                 let cw = set.exemplars[ex as usize].width() + 1 - n;
                 let (mx, my) = (m.index as usize % cw, m.index as usize / cw);
-                // (The first of a round is accepted whatever it overlaps: the loop ends.)
-                let clash = i > 0
-                    && accepted
-                        .iter()
-                        .any(|&(e, ax, ay)| e == ex && ax.abs_diff(mx) < d && ay.abs_diff(my) < d);
-                if clash {
-                    redo.push(k);
-                    continue;
+                if rounds.offer(k, (ex, mx, my), d, open[ex as usize]) {
+                    let (px, py, _) = patches[k];
+                    occ.remove(canvas, px, py, n);
+                    canvas.paste(set, ex as usize, m.index, px, py, n);
+                    occ.add(canvas, px, py, n);
                 }
-                accepted.push((ex, mx, my));
-                let (px, py, _) = patches[k];
-                occ.remove(canvas, px, py, n);
-                canvas.paste(set, ex as usize, m.index, px, py, n);
-                occ.add(canvas, px, py, n);
             }
-            pending = redo;
         }
         progress.advance(patches.len() as u64);
     }
@@ -282,35 +271,43 @@ impl Occurrence {
     }
 
     /// [`Self::penalties`], with every candidate within `d` texels (each way) of an
-    /// `(exemplar, x, y)` window of `taken` charged the cap; `None` when there is nothing to
-    /// charge.
+    /// `(exemplar, x, y)` window of `taken` charged the cap (`None` when there is nothing to
+    /// charge), and per exemplar whether any candidate is left uncharged by `taken`. Where
+    /// none is, that exemplar's windows are not charged: every candidate at the cap would
+    /// leave the search nothing to prune and make its near-best choice a random one.
     fn penalties_excluding(
         &self,
-        taken: &[(u32, usize, usize)],
+        taken: &[Window],
         d: usize,
-    ) -> Option<Vec<Vec<u32>>> {
+    ) -> (Option<Vec<Vec<u32>>>, Vec<bool>) {
         let mut p = self.penalties();
-        if taken.is_empty() {
-            return p;
-        }
         let n = self.n;
-        let cap = MAX_PENALTY_TOTAL / (n * n) as u32;
-        let p = p.get_or_insert_with(|| {
-            self.sizes
-                .iter()
-                .map(|&(w, h)| vec![0; (w + 1 - n) * (h + 1 - n)])
-                .collect()
-        });
+        let mut barred: Vec<Vec<bool>> = self
+            .sizes
+            .iter()
+            .map(|&(w, h)| vec![false; (w + 1 - n) * (h + 1 - n)])
+            .collect();
         for &(ex, ax, ay) in taken {
             let (w, h) = self.sizes[ex as usize];
             let (cw, ch) = (w + 1 - n, h + 1 - n);
             for y in ay.saturating_sub(d - 1)..(ay + d).min(ch) {
-                for x in ax.saturating_sub(d - 1)..(ax + d).min(cw) {
-                    p[ex as usize][y * cw + x] = cap;
-                }
+                barred[ex as usize][y * cw + ax.saturating_sub(d - 1)..y * cw + (ax + d).min(cw)]
+                    .fill(true);
             }
         }
-        Some(std::mem::take(p))
+        let open: Vec<bool> = barred.iter().map(|b| b.contains(&false)).collect();
+        let charged = |e: usize| open[e] && barred[e].contains(&true);
+        if !(0..barred.len()).any(charged) {
+            return (p, open);
+        }
+        let cap = MAX_PENALTY_TOTAL / (n * n) as u32;
+        let p = p.get_or_insert_with(|| barred.iter().map(|b| vec![0; b.len()]).collect());
+        for (e, b) in barred.iter().enumerate().filter(|&(e, _)| charged(e)) {
+            for (pen, _) in p[e].iter_mut().zip(b).filter(|(_, &b)| b) {
+                *pen = cap;
+            }
+        }
+        (Some(std::mem::take(p)), open)
     }
 
     /// λ · C · v̄ in 16.16 fixed point, at most 2³² (the factor of [`penalty`]; 0 when λ = 0).
@@ -386,5 +383,41 @@ mod tests {
         }
         assert_eq!(penalty(10_000, texels, n, 1024, 1 << 40, 77), 77);
         assert_eq!(penalty(0, texels, n, 1024, 1 << 20, 77), 0);
+    }
+
+    #[test]
+    fn windows_are_barred_while_the_exemplar_has_candidates_left() {
+        // A 24² exemplar, 8² windows: 17² candidates; d = 4 bars 7² around each window taken.
+        let tex = crate::search::tests::noise_texture(24, 24, 1, 3);
+        let set = ExemplarSet::new(vec![tex], 8).unwrap();
+        let (n, d, cw) = (8, 4, 17);
+        let cap = MAX_PENALTY_TOTAL / (n * n) as u32;
+        for lambda in [0.0, 1.0] {
+            let occ = Occurrence::new(&set, n, lambda);
+            let (p, open) = occ.penalties_excluding(&[], d);
+            assert_eq!((p.is_some(), open), (lambda > 0.0, vec![true]));
+            // One window at (8, 8): its 7² neighbours pay the cap, the rest nothing.
+            let (p, open) = occ.penalties_excluding(&[(0, 8, 8)], d);
+            let p = p.unwrap();
+            assert!(open[0]);
+            for (i, &v) in p[0].iter().enumerate() {
+                let near = (i % cw).abs_diff(8) < d && (i / cw).abs_diff(8) < d;
+                assert_eq!(v, if near { cap } else { 0 }, "candidate {i}");
+            }
+            // Windows 7 apart cover all 17² candidates: none is left, so none is charged
+            // (the search then picks on the occurrence penalty alone).
+            let all: Vec<Window> = (0..3)
+                .flat_map(|y| (0..3).map(move |x| (0, 1 + 7 * x, 1 + 7 * y)))
+                .collect();
+            let (p, open) = occ.penalties_excluding(&all, d);
+            assert!(!open[0]);
+            assert!(
+                p.is_none_or(|p| p[0].iter().all(|&v| v < cap)),
+                "λ {lambda}"
+            );
+            // One fewer window leaves candidates: charged again.
+            let (p, open) = occ.penalties_excluding(&all[..8], d);
+            assert!(open[0] && p.unwrap()[0].contains(&cap));
+        }
     }
 }

@@ -4,10 +4,12 @@
 // next one when the last has settled (else it stops the submission's remaining work, and the
 // host adds rounds), `gather` reads its patches' windows, masks and coherent guesses from the
 // canvas kept here; then each round builds the
-// penalties from the occurrence counts (`penalty_rows`, `penalty_table`), searches the patches
-// still pending (`prepare_round`, then search.wgsl's steps), accepts in scanline order those
+// penalties from the occurrence counts (`penalty_rows`, `penalty_table`, `bar`), searches the
+// patches live in it (`prepare_round`, then search.wgsl's steps), accepts in scanline order those
 // that do not clash with a window accepted earlier in the wavefront (`accept`, one thread) and
-// pastes them, updating the counts (`paste`). The same integers as the CPU decide every step.
+// pastes them, updating the counts (`paste`). The rounds follow clash_rounds.rs: the first
+// searches every patch, each later one the first LATER_ROUND_PATCHES pending. The same integers
+// as the CPU decide every step.
 
 // The canvas: codes (one per word, channels interleaved) and sources (exemplar texel, NONE
 // where none); one exemplar.
@@ -17,8 +19,9 @@
 @group(0) @binding(13) var<storage, read_write> counts: array<atomic<u32>>;
 // [total drawn, pending patches, windows accepted in the wavefront, the wavefront, stalled
 // (1: a wavefront did not settle in its rounds, so nothing more runs), its patches, whether they
-// overlap, its rounds so far, the most rounds any wavefront took, then per patch its status
-// (PENDING, PASTE, DONE), then the accepted windows' (x, y)].
+// overlap, its rounds so far, the most rounds any wavefront took, whether the accepted windows
+// left any candidate unbarred at the round's start, then per patch its status (PENDING, PASTE,
+// DONE), then the accepted windows' (x, y)].
 @group(0) @binding(14) var<storage, read_write> state: array<atomic<u32>>;
 // Per exemplar row and candidate column: counts summed over a row of n texels.
 @group(0) @binding(15) var<storage, read_write> row_sums: array<u32>;
@@ -38,7 +41,13 @@ const STATE_COUNT: u32 = 5u;
 const STATE_OVERLAP: u32 = 6u;
 const STATE_ROUNDS: u32 = 7u;
 const STATE_MAX_ROUNDS: u32 = 8u;
-const STATE_STATUS: u32 = 9u;
+const STATE_OPEN: u32 = 9u;
+const STATE_STATUS: u32 = 10u;
+// Patches searched in each round after the first (clash_rounds.rs, LATER_ROUND_PATCHES).
+const LATER_ROUND_PATCHES: u32 = 4u;
+// The mark of a barred candidate in `penalty` between `penalty_table` and `bar` (penalties are
+// below 2³¹: MAX_PENALTY_TOTAL / w²).
+const BARRED: u32 = 0x80000000u;
 
 fn stalled() -> bool {
     return atomicLoad(&state[STATE_STALLED]) != 0u;
@@ -139,6 +148,8 @@ fn penalty_rows(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = thread_of(gid);
     let ex_h = p.cand_h + p.w - 1u;
     if (i >= p.cand_w * ex_h || nothing_pending()) { return; }
+    // No candidate is known unbarred yet (`penalty_table` marks them; this dispatch precedes it).
+    if (i == 0u) { atomicStore(&state[STATE_OPEN], 0u); }
     let x = i % p.cand_w;
     let y = i / p.cand_w;
     var sum = 0u;
@@ -149,7 +160,8 @@ fn penalty_rows(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 
 // The penalty per known texel of each candidate (patch_pass.rs, `penalty`): the window's count
-// o against the mean use, in 64-bit integers; the cap near windows accepted in the wavefront.
+// o against the mean use, in 64-bit integers; marked BARRED near windows accepted in the
+// wavefront, and the state told when a candidate is not.
 @compute @workgroup_size(64)
 fn penalty_table(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = thread_of(gid);
@@ -179,12 +191,40 @@ fn penalty_table(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let d = p.w / 2u;
     let accepted = atomicLoad(&state[STATE_ACCEPTED]);
+    var barred = false;
     for (var a = 0u; a < accepted; a++) {
         let ax = atomicLoad(&state[accepted_at(a)]);
         let ay = atomicLoad(&state[accepted_at(a) + 1u]);
-        if (max(ax, x) - min(ax, x) < d && max(ay, y) - min(ay, y) < d) { pen = p.cap; }
+        if (max(ax, x) - min(ax, x) < d && max(ay, y) - min(ay, y) < d) { barred = true; }
+    }
+    if (barred) {
+        pen |= BARRED;
+    } else {
+        atomicStore(&state[STATE_OPEN], 1u);
     }
     penalty[i] = pen;
+}
+
+// Barred candidates pay the cap while some candidate is not barred; else none is charged
+// (patch_pass.rs, `penalties_excluding`).
+@compute @workgroup_size(64)
+fn bar(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = thread_of(gid);
+    if (i >= p.cand_w * p.cand_h || nothing_pending()) { return; }
+    let pen = penalty[i];
+    if ((pen & BARRED) == 0u) { return; }
+    penalty[i] = select(pen & ~BARRED, p.cap, atomicLoad(&state[STATE_OPEN]) != 0u);
+}
+
+// Whether pending patch q is searched this round: all in the first round, then the first
+// LATER_ROUND_PATCHES pending in scanline order.
+fn live(q: u32) -> bool {
+    if (atomicLoad(&state[STATE_ROUNDS]) == 0u) { return true; }
+    var rank = 0u;
+    for (var q2 = 0u; q2 < q; q2++) {
+        if (atomicLoad(&state[STATE_STATUS + q2]) == PENDING) { rank++; }
+    }
+    return rank < LATER_ROUND_PATCHES;
 }
 
 // A round's start: patches pasted in the last round are done; the pending ones start from the
@@ -197,7 +237,7 @@ fn prepare_round(@builtin(global_invocation_id) gid: vec3<u32>) {
     let status = atomicLoad(&state[STATE_STATUS + q]);
     if (status == PASTE) { atomicStore(&state[STATE_STATUS + q], DONE); }
     let base = q * p.info_stride;
-    if (status != PENDING || stalled()) {
+    if (status != PENDING || stalled() || !live(q)) {
         info[base + INFO_FLAGS] = 1u;
         return;
     }
@@ -208,13 +248,16 @@ fn prepare_round(@builtin(global_invocation_id) gid: vec3<u32>) {
     atomicStore(&result[2u * q + 1u], NONE);
 }
 
-// In scanline order, a pending patch is accepted unless its match lies within half a patch
-// (each way) of a window accepted earlier in the wavefront; the round's first always is.
+// In scanline order, a patch searched this round is accepted unless its match lies within half
+// a patch (each way) of a window accepted earlier in the wavefront while a candidate was left
+// unbarred at the round's start; the round's first always is.
 @compute @workgroup_size(1)
 fn accept() {
     if (nothing_pending()) { return; }
     // The rounds this wavefront has taken, and the most any has (the host records that many).
     let rounds = atomicLoad(&state[STATE_ROUNDS]) + 1u;
+    let open = atomicLoad(&state[STATE_OPEN]) != 0u;
+    var searched = 0u;
     atomicStore(&state[STATE_ROUNDS], rounds);
     atomicMax(&state[STATE_MAX_ROUNDS], rounds);
     let d = p.w / 2u;
@@ -223,11 +266,17 @@ fn accept() {
     var pending = 0u;
     for (var q = 0u; q < p.n_queries; q++) {
         if (atomicLoad(&state[STATE_STATUS + q]) != PENDING) { continue; }
+        // Not searched this round (`live`): still pending.
+        if (rounds > 1u && searched >= LATER_ROUND_PATCHES) {
+            pending++;
+            continue;
+        }
+        searched++;
         let index = atomicLoad(&result[2u * q + 1u]);
         let mx = index % p.cand_w;
         let my = index / p.cand_w;
         var clash = false;
-        if (!first) {
+        if (!first && open) {
             for (var a = 0u; a < accepted; a++) {
                 let ax = atomicLoad(&state[accepted_at(a)]);
                 let ay = atomicLoad(&state[accepted_at(a) + 1u]);

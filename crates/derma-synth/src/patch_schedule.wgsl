@@ -1,5 +1,5 @@
 // The patch pass's round schedule on the GPU (patch_pass.wgsl): before each round, the
-// workgroup counts of its twelve dispatches, copied from the full counts while the wavefront
+// workgroup counts of its thirteen dispatches, copied from the full counts while the wavefront
 // has patches pending and nothing has stopped the submission, else zero, so a settled
 // wavefront's remaining rounds dispatch nothing. Read as indirect dispatch arguments.
 
@@ -10,7 +10,7 @@
 // The round's full workgroup counts (x, y, z per dispatch), then the live ones.
 @group(0) @binding(2) var<storage, read_write> args: array<u32>;
 
-const ROUND_ARGS: u32 = 36u;
+const ROUND_ARGS: u32 = 39u;
 
 @compute @workgroup_size(1)
 fn schedule() {

@@ -664,7 +664,7 @@ fn scan_pruned_body(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::matcher::{CpuMatcher, Matcher};
     use crate::texture::Texture;
