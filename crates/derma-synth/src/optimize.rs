@@ -83,6 +83,7 @@ pub(crate) fn optimise_pass(canvas: &mut Canvas, ctx: &PassContext, w: usize) ->
         w,
         tol: Tolerance(0),
         penalty: None,
+        prepared: None,
     };
     let t1 = Instant::now();
     let matches = ctx

@@ -29,7 +29,7 @@ use crate::error::Result;
 use crate::exemplar::ExemplarSet;
 use crate::matcher::PatchPlan;
 use crate::pass_context::PassContext;
-use crate::search::{Query, Search, Tolerance, MAX_PENALTY_TOTAL};
+use crate::search::{Prepared, Query, Search, Tolerance, MAX_PENALTY_TOTAL};
 use derma_core::gpu::Device;
 use derma_core::progress::Unit;
 use derma_core::rng::Philox;
@@ -148,6 +148,8 @@ pub(crate) fn patch_pass(
             return Ok(());
         }
     }
+    // The exemplars' block sums, once for every round's searches.
+    let prepared = Prepared::new(set, n);
     for patches in fronts {
         if patches.is_empty() {
             continue;
@@ -177,7 +179,8 @@ pub(crate) fn patch_pass(
             let search = Search {
                 w: n,
                 tol,
-                penalty: penalty.as_deref(),
+                penalty,
+                prepared: Some(&prepared),
             };
             let batch: Vec<Query> = live.iter().map(|&k| queries[k].clone()).collect();
             let matches = ctx.matcher.best_matches(set, &search, &batch)?;
@@ -223,6 +226,12 @@ struct Occurrence {
     sizes: Vec<(usize, usize)>,
     count: Vec<Vec<u32>>,
     total: Vec<u64>,
+    /// The penalties last made, per exemplar, per candidate (kept to be refilled each round).
+    table: Vec<Vec<u32>>,
+    /// Per exemplar, per candidate: barred by a window taken (refilled each round).
+    barred: Vec<Vec<bool>>,
+    /// Room for one exemplar's summed-area table of counts.
+    sat: Vec<u64>,
 }
 
 impl Occurrence {
@@ -243,6 +252,17 @@ impl Occurrence {
                 .map(|e| vec![0; e.width() * e.height()])
                 .collect(),
             total: vec![0; set.exemplars.len()],
+            table: set
+                .exemplars
+                .iter()
+                .map(|e| vec![0; e.candidates(n).0 * e.candidates(n).1])
+                .collect(),
+            barred: set
+                .exemplars
+                .iter()
+                .map(|e| vec![false; e.candidates(n).0 * e.candidates(n).1])
+                .collect(),
+            sat: Vec::new(),
         }
     }
 
@@ -270,44 +290,48 @@ impl Occurrence {
         }
     }
 
-    /// [`Self::penalties`], with every candidate within `d` texels (each way) of an
-    /// `(exemplar, x, y)` window of `taken` charged the cap (`None` when there is nothing to
-    /// charge), and per exemplar whether any candidate is left uncharged by `taken`. Where
-    /// none is, that exemplar's windows are not charged: every candidate at the cap would
-    /// leave the search nothing to prune and make its near-best choice a random one.
+    /// The penalties per known texel of every candidate ([`Self::fill_penalties`]), with every
+    /// candidate within `d` texels (each way) of an `(exemplar, x, y)` window of `taken`
+    /// charged the cap (`None` when there is nothing to charge), and per exemplar whether any
+    /// candidate is left uncharged by `taken`. Where none is, that exemplar's windows are not
+    /// charged: every candidate at the cap would leave the search nothing to prune and make its
+    /// near-best choice a random one.
     fn penalties_excluding(
-        &self,
+        &mut self,
         taken: &[Window],
         d: usize,
-    ) -> (Option<Vec<Vec<u32>>>, Vec<bool>) {
-        let mut p = self.penalties();
+    ) -> (Option<&[Vec<u32>]>, Vec<bool>) {
         let n = self.n;
-        let mut barred: Vec<Vec<bool>> = self
-            .sizes
-            .iter()
-            .map(|&(w, h)| vec![false; (w + 1 - n) * (h + 1 - n)])
-            .collect();
+        self.barred.iter_mut().for_each(|b| b.fill(false));
         for &(ex, ax, ay) in taken {
             let (w, h) = self.sizes[ex as usize];
             let (cw, ch) = (w + 1 - n, h + 1 - n);
             for y in ay.saturating_sub(d - 1)..(ay + d).min(ch) {
-                barred[ex as usize][y * cw + ax.saturating_sub(d - 1)..y * cw + (ax + d).min(cw)]
+                self.barred[ex as usize]
+                    [y * cw + ax.saturating_sub(d - 1)..y * cw + (ax + d).min(cw)]
                     .fill(true);
             }
         }
-        let open: Vec<bool> = barred.iter().map(|b| b.contains(&false)).collect();
-        let charged = |e: usize| open[e] && barred[e].contains(&true);
-        if !(0..barred.len()).any(charged) {
-            return (p, open);
+        let open: Vec<bool> = self.barred.iter().map(|b| b.contains(&false)).collect();
+        let charged: Vec<bool> = (self.barred.iter().zip(&open))
+            .map(|(b, &o)| o && !taken.is_empty() && b.contains(&true))
+            .collect();
+        if self.lambda <= 0.0 && !charged.contains(&true) {
+            return (None, open);
         }
+        self.fill_penalties();
         let cap = MAX_PENALTY_TOTAL / (n * n) as u32;
-        let p = p.get_or_insert_with(|| barred.iter().map(|b| vec![0; b.len()]).collect());
-        for (e, b) in barred.iter().enumerate().filter(|&(e, _)| charged(e)) {
-            for (pen, _) in p[e].iter_mut().zip(b).filter(|(_, &b)| b) {
+        for (e, table) in self
+            .table
+            .iter_mut()
+            .enumerate()
+            .filter(|&(e, _)| charged[e])
+        {
+            for (pen, _) in table.iter_mut().zip(&self.barred[e]).filter(|(_, &b)| b) {
                 *pen = cap;
             }
         }
-        (Some(std::mem::take(p)), open)
+        (Some(&self.table), open)
     }
 
     /// λ · C · v̄ in 16.16 fixed point, at most 2³² (the factor of [`penalty`]; 0 when λ = 0).
@@ -317,46 +341,38 @@ impl Occurrence {
             .min(4_294_967_296.0) as u64
     }
 
-    /// Per exemplar, per candidate: the penalty per known texel; `None` when λ = 0.
-    fn penalties(&self) -> Option<Vec<Vec<u32>>> {
-        if self.lambda <= 0.0 {
-            return None;
-        }
+    /// Per exemplar, per candidate, into `table`: the penalty per known texel (0 when λ = 0).
+    fn fill_penalties(&mut self) {
         let n = self.n;
         let cap = MAX_PENALTY_TOTAL / (n * n) as u32;
-        Some(
-            self.count
-                .iter()
-                .zip(&self.sizes)
-                .zip(&self.total)
-                .map(|((count, &(w, h)), &total)| {
-                    let (cw, ch) = (w + 1 - n, h + 1 - n);
-                    if total == 0 {
-                        return vec![0; cw * ch];
-                    }
-                    // Summed-area table of the counts.
-                    let mut sat = vec![0u64; (w + 1) * (h + 1)];
-                    for y in 0..h {
-                        let mut row = 0u64;
-                        for x in 0..w {
-                            row += count[y * w + x] as u64;
-                            sat[(y + 1) * (w + 1) + x + 1] = sat[y * (w + 1) + x + 1] + row;
-                        }
-                    }
-                    let k16 = self.weight16();
-                    let mut out = vec![0u32; cw * ch];
-                    for y in 0..ch {
-                        for x in 0..cw {
-                            let o = sat[(y + n) * (w + 1) + x + n] + sat[y * (w + 1) + x]
-                                - sat[y * (w + 1) + x + n]
-                                - sat[(y + n) * (w + 1) + x];
-                            out[y * cw + x] = penalty(o, (w * h) as u64, n, total, k16, cap);
-                        }
-                    }
-                    out
-                })
-                .collect(),
-        )
+        let k16 = self.weight16();
+        for (e, &(w, h)) in self.sizes.iter().enumerate() {
+            let (cw, ch) = (w + 1 - n, h + 1 - n);
+            let (count, total, out) = (&self.count[e], self.total[e], &mut self.table[e]);
+            if total == 0 || k16 == 0 {
+                out.fill(0);
+                continue;
+            }
+            // Summed-area table of the counts.
+            let sat = &mut self.sat;
+            sat.clear();
+            sat.resize((w + 1) * (h + 1), 0);
+            for y in 0..h {
+                let mut row = 0u64;
+                for x in 0..w {
+                    row += count[y * w + x] as u64;
+                    sat[(y + 1) * (w + 1) + x + 1] = sat[y * (w + 1) + x + 1] + row;
+                }
+            }
+            for y in 0..ch {
+                for x in 0..cw {
+                    let o = sat[(y + n) * (w + 1) + x + n] + sat[y * (w + 1) + x]
+                        - sat[y * (w + 1) + x + n]
+                        - sat[(y + n) * (w + 1) + x];
+                    out[y * cw + x] = penalty(o, (w * h) as u64, n, total, k16, cap);
+                }
+            }
+        }
     }
 }
 
@@ -393,7 +409,7 @@ mod tests {
         let (n, d, cw) = (8, 4, 17);
         let cap = MAX_PENALTY_TOTAL / (n * n) as u32;
         for lambda in [0.0, 1.0] {
-            let occ = Occurrence::new(&set, n, lambda);
+            let mut occ = Occurrence::new(&set, n, lambda);
             let (p, open) = occ.penalties_excluding(&[], d);
             assert_eq!((p.is_some(), open), (lambda > 0.0, vec![true]));
             // One window at (8, 8): its 7² neighbours pay the cap, the rest nothing.
@@ -418,6 +434,22 @@ mod tests {
             // One fewer window leaves candidates: charged again.
             let (p, open) = occ.penalties_excluding(&all[..8], d);
             assert!(open[0] && p.unwrap()[0].contains(&cap));
+            // The table is refilled each round: nothing taken, nothing barred.
+            let (p, _) = occ.penalties_excluding(&[], d);
+            assert!(p.is_none_or(|p| !p[0].contains(&cap)), "λ {lambda}");
+        }
+        // Fifty output texels drawn from exemplar texel (10, 10): the candidates whose window
+        // holds it pay the formula's penalty for o = 50, the others none.
+        let mut occ = Occurrence::new(&set, n, 1.0);
+        occ.count[0][10 * 24 + 10] = 50;
+        occ.total[0] = 50;
+        let want = penalty(50, 24 * 24, n, 50, occ.weight16(), cap);
+        assert!(want > 0);
+        let (p, _) = occ.penalties_excluding(&[], d);
+        let p = p.unwrap();
+        for (i, &v) in p[0].iter().enumerate() {
+            let holds = (3..=10).contains(&(i % cw)) && (3..=10).contains(&(i / cw));
+            assert_eq!(v, if holds { want } else { 0 }, "candidate {i}");
         }
     }
 }

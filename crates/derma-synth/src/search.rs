@@ -142,6 +142,9 @@ pub struct Search<'a> {
     /// Per exemplar, per candidate index: occurrence penalty per known texel, each at most
     /// `MAX_PENALTY_TOTAL / w²` (the patch pass's; `None` elsewhere).
     pub penalty: Option<&'a [Vec<u32>]>,
+    /// The exemplar set's block sums for windows of side `w`, made once for many searches (the
+    /// patch pass's rounds); `None`: the CPU makes them per call. The GPU keeps its own.
+    pub prepared: Option<&'a Prepared>,
 }
 
 impl Search<'_> {
@@ -394,8 +397,10 @@ pub fn initial_cost(set: &ExemplarSet, s: &Search, q: &Query) -> u32 {
 /// Candidates whose bounds are tested together (vectorised).
 const CHUNK: usize = 16;
 
-/// Quadrant block sums of each exemplar for one window side.
-struct Prepared {
+/// Quadrant block sums of each exemplar of a set for one window side, which the CPU search's
+/// bounds read (see the module comment).
+pub struct Prepared {
+    w: usize,
     half: usize,
     /// Per exemplar, per channel: sums over `half × half` blocks.
     sums: Vec<Vec<Vec<f32>>>,
@@ -405,11 +410,19 @@ struct Prepared {
     fine_sums: Vec<Vec<Vec<f32>>>,
 }
 
+impl std::fmt::Debug for Prepared {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Prepared {{ w: {} }}", self.w)
+    }
+}
+
 impl Prepared {
-    fn new(set: &ExemplarSet, w: usize) -> Self {
+    /// The block sums of `set`'s exemplars for windows of side `w`.
+    pub fn new(set: &ExemplarSet, w: usize) -> Self {
         let half = w / 2;
         let fine = if half >= 2 { half / 2 } else { 0 };
         Self {
+            w,
             half,
             sums: set.exemplars.iter().map(|e| e.block_sums(half)).collect(),
             fine,
@@ -464,15 +477,23 @@ pub(crate) fn known_block_sums(
 }
 
 /// The CPU backend's answers to `queries`: spread over all cores with rayon; each search prunes
-/// with the block-sum bounds, the exemplars' block sums prepared once per call.
+/// with the block-sum bounds, the exemplars' block sums those of the search or prepared once
+/// per call.
 pub(crate) fn best_matches_cpu(set: &ExemplarSet, s: &Search, queries: &[Query]) -> Vec<Match> {
-    let prep = Prepared::new(set, s.w);
+    let own;
+    let prep = match s.prepared {
+        Some(p) if p.w == s.w => p,
+        _ => {
+            own = Prepared::new(set, s.w);
+            &own
+        }
+    };
     let threads = rayon::current_num_threads();
     if queries.len() >= threads {
         return queries
             .par_iter()
             .with_min_len(1)
-            .map(|q| best_match_pruned(set, &prep, s, q))
+            .map(|q| best_match_pruned(set, prep, s, q))
             .collect();
     }
     // Fewer queries than threads (the patch pass's last searches of a wavefront): each
@@ -486,7 +507,7 @@ pub(crate) fn best_matches_cpu(set: &ExemplarSet, s: &Search, queries: &[Query])
             let parts = (threads * 4).min(ch);
             let found: Vec<(Vec<(u32, u32)>, u32)> = (0..parts)
                 .into_par_iter()
-                .map(|p| scan_pruned(set, &prep, s, q, p * ch / parts..(p + 1) * ch / parts))
+                .map(|p| scan_pruned(set, prep, s, q, p * ch / parts..(p + 1) * ch / parts))
                 .collect();
             let best = found.iter().map(|f| f.1).min().unwrap_or(u32::MAX);
             let mut kept: Vec<(u32, u32)> = found.into_iter().flat_map(|f| f.0).collect();
@@ -744,7 +765,12 @@ pub(crate) mod tests {
                 Tolerance::from_fraction(0.5),
             ] {
                 for penalty in [None, Some(&pen[..])] {
-                    let s = Search { w, tol, penalty };
+                    let s = Search {
+                        w,
+                        tol,
+                        penalty,
+                        prepared: None,
+                    };
                     let want = best_match_brute(&set, &s, &q);
                     assert_eq!(best_match_pruned(&set, &prep, &s, &q), want);
                     // One query on a pool of three threads: its rows are split among them.
@@ -758,6 +784,17 @@ pub(crate) mod tests {
                             .unwrap()
                     });
                     assert_eq!(split, vec![want]);
+                    // The block sums made once for many searches give the same answer.
+                    let shared = Search {
+                        prepared: Some(&prep),
+                        ..s
+                    };
+                    let split = pool.install(|| {
+                        CpuMatcher
+                            .best_matches(&set, &shared, std::slice::from_ref(&q))
+                            .unwrap()
+                    });
+                    assert_eq!(split, vec![want]);
                 }
             }
             batch.push(q);
@@ -767,6 +804,7 @@ pub(crate) mod tests {
             w,
             tol: Tolerance::from_fraction(0.1),
             penalty: None,
+            prepared: None,
         };
         let want: Vec<Match> = batch
             .iter()
@@ -788,6 +826,7 @@ pub(crate) mod tests {
             w: 8,
             tol: Tolerance(0),
             penalty: None,
+            prepared: None,
         };
         CpuMatcher.best_matches(set, &s, &[q]).unwrap()
     }

@@ -67,7 +67,12 @@ fn gpu_search_equals_cpu_search() {
     let cramped = GpuMatcher::with_survivor_room(100).unwrap();
     for tol in [Tolerance(0), Tolerance::from_fraction(0.1)] {
         for penalty in [None, Some(&pen[..])] {
-            let s = Search { w, tol, penalty };
+            let s = Search {
+                w,
+                tol,
+                penalty,
+                prepared: None,
+            };
             let a = CpuMatcher.best_matches(&set, &s, &queries).unwrap();
             let b = gpu.best_matches(&set, &s, &queries).unwrap();
             assert_eq!(a, b, "tolerance {tol:?}, penalty {}", penalty.is_some());
@@ -190,6 +195,7 @@ fn windows_of_the_canvas_kept_on_the_gpu_get_the_cpu_answers() {
                     w,
                     tol,
                     penalty: None,
+                    prepared: None,
                 };
                 let a = CpuMatcher
                     .window_matches(&set, &s, &plane, &queries, &Silent)
