@@ -95,6 +95,9 @@ pub enum SkinError {
     /// The GPU renderer failed (the preview's shaded views).
     #[error(transparent)]
     Render(#[from] derma_render::RenderError),
+    /// The GPU was chosen and cannot be used (a build without it, or no adapter).
+    #[error(transparent)]
+    Gpu(#[from] derma_core::gpu::GpuError),
     /// The texture set would not fit in memory.
     #[error("output of {width}x{height} texels needs about {need_gib:.1} GiB of memory; {have_gib:.1} GiB are available: choose a smaller size")]
     TooLarge {

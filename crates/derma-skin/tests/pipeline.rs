@@ -341,3 +341,21 @@ fn the_skins_roughness_and_specular_are_the_match_tables_surface_fit_unless_auth
     // The base colour does not depend on the surface's source.
     assert!(a.render.base_color == fitted.render.base_color);
 }
+
+#[test]
+fn choosing_the_gpu_without_one_is_an_error_before_any_work() {
+    // A build without the gpu feature cannot honour `--device gpu`: the job says so, naming
+    // the feature, instead of quietly painting on the CPU (synthesis and the optics do the
+    // same). With the feature, the GPU (lavapipe in CI) opens and the job runs.
+    if derma_core::gpu::BUILT {
+        return;
+    }
+    let run = SkinGenerator::new(small(64))
+        .device(derma_core::gpu::Device::Gpu)
+        .run();
+    let e = run.err().expect("no GPU in this build").to_string();
+    assert!(
+        e.contains("without GPU support") && e.contains("`gpu`"),
+        "{e}"
+    );
+}
