@@ -208,11 +208,16 @@ fn check_square(what: &'static str, a: &Matrix, b: &[f64]) -> Result<(), Numeric
     Ok(())
 }
 
-fn finite(what: &'static str, x: Vec<f64>) -> Result<Vec<f64>, NumericsError> {
+fn finite(what: &'static str, a: &Matrix, x: Vec<f64>) -> Result<Vec<f64>, NumericsError> {
     if x.iter().all(|x| x.is_finite()) {
         Ok(x)
     } else {
-        Err(NumericsError::Singular { what })
+        Err(NumericsError::Singular {
+            what,
+            rows: a.nrows(),
+            cols: a.ncols(),
+            column: None,
+        })
     }
 }
 
@@ -240,7 +245,12 @@ pub fn lu_solve(a: &Matrix, b: &[f64]) -> Result<Vec<f64>, NumericsError> {
             .max_by(|&i, &j| m[(i, k)].abs().total_cmp(&m[(j, k)].abs()))
             .unwrap_or(k);
         if m[(p, k)] == 0.0 {
-            return Err(NumericsError::Singular { what: "LU" });
+            return Err(NumericsError::Singular {
+                what: "LU",
+                rows: n,
+                cols: n,
+                column: Some(k),
+            });
         }
         if p != k {
             for j in 0..n {
@@ -267,7 +277,7 @@ pub fn lu_solve(a: &Matrix, b: &[f64]) -> Result<Vec<f64>, NumericsError> {
         }
     }
     back_substitute(&m, &mut x);
-    finite("LU", x)
+    finite("LU", a, x)
 }
 
 /// Solves A x = b for a symmetric positive definite A by Cholesky (LLᵀ; the lower half is read;
@@ -279,7 +289,12 @@ pub fn cholesky_solve(a: &Matrix, b: &[f64]) -> Result<Vec<f64>, NumericsError> 
     for j in 0..n {
         let d = a[(j, j)] - (0..j).map(|k| l[(j, k)] * l[(j, k)]).sum::<f64>();
         if !(d > 0.0) {
-            return Err(NumericsError::NotPositiveDefinite { what: "Cholesky" });
+            return Err(NumericsError::NotPositiveDefinite {
+                what: "Cholesky",
+                n,
+                column: j,
+                pivot: d,
+            });
         }
         let d = d.sqrt();
         l[(j, j)] = d;
@@ -297,7 +312,7 @@ pub fn cholesky_solve(a: &Matrix, b: &[f64]) -> Result<Vec<f64>, NumericsError> 
         let s = x[i] - (i + 1..n).map(|k| l[(k, i)] * x[k]).sum::<f64>();
         x[i] = s / l[(i, i)];
     }
-    finite("Cholesky", x)
+    finite("Cholesky", a, x)
 }
 
 /// The x minimising ‖A x − b‖² for a tall A (rows ≥ cols) of full column rank, by Householder
@@ -338,6 +353,9 @@ pub fn least_squares(a: &Matrix, b: &[f64]) -> Result<Vec<f64>, NumericsError> {
         if !(norm > m as f64 * f64::EPSILON * lengths[k]) {
             return Err(NumericsError::Singular {
                 what: "least-squares",
+                rows: m,
+                cols: n,
+                column: Some(k),
             });
         }
         let scaled = norm / big;
@@ -353,7 +371,7 @@ pub fn least_squares(a: &Matrix, b: &[f64]) -> Result<Vec<f64>, NumericsError> {
     }
     y.truncate(n);
     back_substitute(&r, &mut y);
-    finite("least-squares", y)
+    finite("least-squares", a, y)
 }
 
 /// A thin singular value decomposition A = U diag(s) Vᵀ.
@@ -426,7 +444,12 @@ pub fn svd(a: &Matrix) -> Result<Svd, NumericsError> {
         }
     }
     if !converged {
-        return Err(NumericsError::NoConvergence { what: "SVD" });
+        return Err(NumericsError::NoConvergence {
+            what: "SVD",
+            rows: m,
+            cols: n,
+            sweeps: MAX_SWEEPS,
+        });
     }
     let norms: Vec<f64> = (0..n).map(|j| dot(w.col(j), w.col(j)).sqrt()).collect();
     let mut order: Vec<usize> = (0..n).collect();
@@ -628,6 +651,9 @@ fn tridiagonal_ql(d: &mut [f64], e: &mut [f64], z: &mut Matrix) -> Result<(), Nu
             if steps > MAX_SWEEPS {
                 return Err(NumericsError::NoConvergence {
                     what: "eigendecomposition",
+                    rows: n,
+                    cols: n,
+                    sweeps: MAX_SWEEPS,
                 });
             }
             let mut g = (d[l + 1] - d[l]) / (2.0 * e[l]);
@@ -751,9 +777,33 @@ mod tests {
                 }
             }
         }
+        // The second column is twice the first: the errors name the size and the column.
         let singular = matrix_from_rows(2, 2, &[1.0, 2.0, 2.0, 4.0]).unwrap();
-        assert!(cholesky_solve(&singular, &[1.0, 1.0]).is_err());
-        assert!(lu_solve(&singular, &[1.0, 1.0]).is_err());
+        let e = cholesky_solve(&singular, &[1.0, 1.0]).unwrap_err();
+        assert_eq!(
+            e,
+            NumericsError::NotPositiveDefinite {
+                what: "Cholesky",
+                n: 2,
+                column: 1,
+                pivot: 0.0
+            }
+        );
+        assert!(e.to_string().contains("2 × 2") && e.to_string().contains("column 1"));
+        let e = lu_solve(&singular, &[1.0, 1.0]).unwrap_err();
+        assert_eq!(
+            e,
+            NumericsError::Singular {
+                what: "LU",
+                rows: 2,
+                cols: 2,
+                column: Some(1)
+            }
+        );
+        assert_eq!(
+            e.to_string(),
+            "the 2 × 2 LU matrix is singular (column 1 depends on those before it)"
+        );
         assert!(lu_solve(&singular, &[1.0]).is_err());
     }
 
@@ -1002,6 +1052,14 @@ mod tests {
             assert!((g - w).abs() < 1e-10, "{x:?} vs {want:?}");
         }
         let rank_deficient = Matrix::from_fn(4, 2, |i, _| i as f64);
-        assert!(least_squares(&rank_deficient, &[0.0, 1.0, 2.0, 3.0]).is_err());
+        assert_eq!(
+            least_squares(&rank_deficient, &[0.0, 1.0, 2.0, 3.0]).unwrap_err(),
+            NumericsError::Singular {
+                what: "least-squares",
+                rows: 4,
+                cols: 2,
+                column: Some(1)
+            }
+        );
     }
 }

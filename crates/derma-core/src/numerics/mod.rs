@@ -22,26 +22,53 @@ pub use levenberg_marquardt::{levenberg_marquardt, DenseSolver, LmOptions, Resid
 pub use nnls::nnls_normal;
 pub use sparse::{SparseCholesky, SparsePattern};
 
+/// Where a singular matrix showed it, for [`NumericsError::Singular`]'s message.
+fn at_column(column: Option<usize>) -> String {
+    match column {
+        Some(c) => format!(" (column {c} depends on those before it)"),
+        None => ": the solution is not finite".into(),
+    }
+}
+
 /// Why a decomposition or solve failed.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum NumericsError {
     /// The matrix is singular (or numerically so).
-    #[error("the {what} matrix is singular")]
+    #[error("the {rows} × {cols} {what} matrix is singular{}", at_column(*.column))]
     Singular {
         /// Which matrix.
         what: &'static str,
+        /// Its rows.
+        rows: usize,
+        /// Its columns.
+        cols: usize,
+        /// The column found dependent on those before it (`None`: the solution came out not
+        /// finite).
+        column: Option<usize>,
     },
     /// A Cholesky factorisation met a non-positive pivot.
-    #[error("the {what} matrix is not positive definite")]
+    #[error("the {n} × {n} {what} matrix is not positive definite: the pivot of column {column} is {pivot:e}")]
     NotPositiveDefinite {
         /// Which matrix.
         what: &'static str,
+        /// Its order.
+        n: usize,
+        /// The column (of the matrix as given) whose pivot is not positive.
+        column: usize,
+        /// That pivot.
+        pivot: f64,
     },
     /// An iterative decomposition (SVD, eigen) did not converge.
-    #[error("the {what} did not converge")]
+    #[error("the {what} of a {rows} × {cols} matrix did not converge in {sweeps} sweeps")]
     NoConvergence {
         /// Which decomposition.
         what: &'static str,
+        /// The matrix's rows.
+        rows: usize,
+        /// Its columns.
+        cols: usize,
+        /// The sweeps (or steps) it took before giving up.
+        sweeps: usize,
     },
     /// Operands whose sizes do not fit together.
     #[error("{what}: {detail}")]

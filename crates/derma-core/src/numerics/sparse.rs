@@ -222,6 +222,9 @@ impl Symbolic {
                 if !(diag > 0.0) {
                     return Err(NumericsError::NotPositiveDefinite {
                         what: "sparse Cholesky",
+                        n: self.n,
+                        column: self.perm[f + j] as usize,
+                        pivot: diag,
                     });
                 }
                 let diag = diag.sqrt();
@@ -1135,6 +1138,22 @@ mod tests {
     #[test]
     fn indefinite_and_misshapen_inputs_are_errors() {
         assert!(SparseCholesky::new(2, &[(0, 0, 1.0), (1, 1, -1.0)]).is_err());
+        // A star of eight whose hub (0) has a negative diagonal: the hub is ordered last, and
+        // the error names it as the matrix was given, not by its place in the ordering.
+        let mut star: Vec<(usize, usize, f64)> = (0..8)
+            .map(|i| (i, i, if i == 0 { -4.0 } else { 4.0 }))
+            .collect();
+        star.extend((1..8).map(|i| (i, 0, -1.0)));
+        match SparseCholesky::new(8, &star) {
+            Err(NumericsError::NotPositiveDefinite {
+                n, column, pivot, ..
+            }) => {
+                assert_eq!((n, column), (8, 0));
+                assert!(pivot <= 0.0);
+            }
+            Err(e) => panic!("{e}"),
+            Ok(_) => panic!("an indefinite matrix factorised"),
+        }
         assert!(SparseCholesky::new(2, &[(0, 2, 1.0)]).is_err());
         let c = SparseCholesky::new(1, &[(0, 0, 4.0)]).unwrap();
         assert_eq!(c.solve(&[2.0]).unwrap(), vec![0.5]);
