@@ -260,8 +260,10 @@ impl<'a> SkinGenerator<'a> {
         let started = Instant::now();
         self.config.validate("the configuration")?;
         // A GPU chosen outright is opened now, so a build or machine without one is told so
-        // before any work, as every other command does (auto falls back to the CPU).
-        self.device.resolve()?;
+        // before any work, as every other command does (auto falls back to the CPU later).
+        if self.device == Device::Gpu {
+            self.device.resolve()?;
+        }
         let analytic;
         let builtin;
         let appearance: &dyn Appearance = match &self.appearance {

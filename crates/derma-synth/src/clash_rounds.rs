@@ -1,24 +1,26 @@
-//! The clash rounds of the patch pass: no exemplar window twice in one wavefront (a rule of
-//! derma's on Shen et al. §3.2's patch order, patch_pass.rs), decided round by round.
+//! The clash rounds of the patch pass: no exemplar window twice among a wavefront's recent
+//! windows (a rule of derma's on Shen et al. §3.2's patch order, patch_pass.rs), round by round.
 //!
 //! The first round searches all of a wavefront's patches at once; in scanline order each match
 //! is accepted unless it lies within half a patch (each way) of a window accepted earlier in
-//! the wavefront. The clashing patches are searched again with those windows barred, but each
-//! later round searches only the first [`LATER_ROUND_PATCHES`] still pending: searching them
-//! all again, most would pick the same new window and clash again, and the rounds cost the
-//! square of the wavefront's length (a 2048² output from a 128² exemplar took ten times as long
-//! as four 1024² ones). A round's first patch is always accepted, and a match is accepted
-//! whatever it overlaps once the accepted windows bar every candidate of its exemplar — a
-//! search again could not avoid them. The GPU's `accept` and `prepare_round`
-//! (patch_pass.wgsl) follow the same rules.
+//! the wavefront and still in force. The clashing patches are searched again with the windows
+//! in force barred, but each later round searches only the first [`LATER_ROUND_PATCHES`] still
+//! pending: searching them all again, most would pick the same new window and clash again, and
+//! the rounds cost the square of the wavefront's length. A round's first patch is always
+//! accepted, so the rounds end. Every accepted window is in force until the exemplar has no
+//! candidate left that none bars; then the oldest drop out until one is free
+//! (`patch_pass.rs`, `penalties_excluding`): a small exemplar has room for only so many windows
+//! apart, and the patches accepted longest ago lie farthest along the wavefront. The GPU's
+//! `penalty_table`, `bar`, `live`, `prepare_round` and `accept` (patch_pass.wgsl) follow the
+//! same rules.
 
 /// An exemplar window: (exemplar, x, y) of its top-left texel.
 pub(crate) type Window = (u32, usize, usize);
 
-/// Patches searched in each round after the first. Of 1, 2, 4 and all, four gave the fastest
-/// patch pass from the 128² bench crops at 1024² and 2048², with patch SWD within 0.0001 of the
-/// best (BENCHMARKS.md, "Synthesis grows linearly"): a round's searches run side by side, and
-/// at most three are lost when they clash with its first.
+/// Patches searched in each round after the first (the GPU's copy, patch_pass.wgsl's
+/// LATER_ROUND_PATCHES, is checked against it by a test): measured against 1, 2 and all in
+/// BENCHMARKS.md, "Synthesis grows linearly". A round's searches run side by side, and at most
+/// three are lost when they clash with its first.
 pub(crate) const LATER_ROUND_PATCHES: usize = 4;
 
 /// The state of one wavefront's rounds.
@@ -63,14 +65,12 @@ impl ClashRounds {
         &self.accepted
     }
 
-    /// Offers patch `k`'s match `w`; whether it is accepted (else `k` stays pending). `open`:
-    /// whether the windows accepted before the round left any candidate of `w`'s exemplar
-    /// unbarred; `d`: half the patch side.
-    pub(crate) fn offer(&mut self, k: usize, w: Window, d: usize, open: bool) -> bool {
+    /// Offers patch `k`'s match `w`; whether it is accepted (else `k` stays pending). `from`:
+    /// the first accepted window still in force for `w`'s exemplar at the round's start (see
+    /// `patch_pass.rs`, `penalties_excluding`); `d`: half the patch side.
+    pub(crate) fn offer(&mut self, k: usize, w: Window, d: usize, from: usize) -> bool {
         let clash = !self.first
-            && open
-            && self
-                .accepted
+            && self.accepted[from.min(self.accepted.len())..]
                 .iter()
                 .any(|&(e, ax, ay)| e == w.0 && ax.abs_diff(w.1) < d && ay.abs_diff(w.2) < d);
         self.first = false;
@@ -87,20 +87,26 @@ impl ClashRounds {
 mod tests {
     use super::*;
 
-    /// Plays a wavefront whose patches all want window (0, 0, 0) until barred, then the next
-    /// free one along x, `d` apart: every round's searches, in order.
-    fn play(patches: usize, open_after: usize) -> (Vec<Vec<usize>>, Vec<Window>) {
+    /// Plays a wavefront whose patches all want the free window with the least x, windows
+    /// `d` apart along x (one row), in an exemplar with room for `room` of them: past that the
+    /// oldest windows are dropped from force (as `penalties_excluding` does), and the search
+    /// finds the one the oldest in force leaves free. Every round's searches, in order.
+    fn play(patches: usize, room: usize) -> (Vec<Vec<usize>>, Vec<Window>) {
         let d = 4;
         let mut r = ClashRounds::new(patches);
         let mut log = Vec::new();
         while let Some(live) = r.next_live() {
             let taken = r.accepted().len();
+            let from = taken.saturating_sub(room - 1);
+            // The free slot: after `room` windows, the one the oldest in force vacated.
+            let x = if taken < room {
+                taken * d
+            } else {
+                r.accepted()[from - 1].1
+            };
             log.push(live.clone());
             for k in live {
-                // A search barred from the accepted windows finds the next one along x.
-                let open = taken < open_after;
-                let x = if open { taken * d } else { 0 };
-                r.offer(k, (0, x, 0), d, open);
+                r.offer(k, (0, x, 0), d, from);
             }
         }
         (log, r.accepted.clone())
@@ -127,29 +133,41 @@ mod tests {
     }
 
     #[test]
-    fn once_every_candidate_is_barred_clashes_are_accepted() {
-        // After two windows the exemplar has no candidate left unbarred: from the round that
-        // sees that, every live patch is accepted, clash or not.
-        let b = LATER_ROUND_PATCHES;
-        let (log, accepted) = play(6, 2);
-        assert_eq!(log[0], vec![0, 1, 2, 3, 4, 5]);
-        assert_eq!(log[1], (1..(1 + b).min(6)).collect::<Vec<_>>());
-        // Rounds 3 on take the four left, b at a time, all accepted.
-        assert_eq!(log.len(), 2 + 4usize.div_ceil(b));
-        assert_eq!(log[2][0], 2);
-        assert_eq!(accepted.len(), 6);
-        assert_eq!(accepted.iter().filter(|w| w.1 == 0).count(), 5);
+    fn past_the_exemplar_s_room_the_oldest_windows_come_round_again() {
+        // Room for three windows apart: the fourth patch reuses the first window, the fifth
+        // the second, and no window repeats among any three in a row.
+        let (_, accepted) = play(7, 3);
+        let xs: Vec<usize> = accepted.iter().map(|w| w.1).collect();
+        assert_eq!(xs, vec![0, 4, 8, 0, 4, 8, 0]);
+        // Only windows in force clash.
+        let offer_third = |x: usize, from: usize| {
+            let mut r = ClashRounds::new(3);
+            r.next_live();
+            assert!(r.offer(0, (0, 0, 0), 4, 0));
+            assert!(r.offer(1, (0, 8, 0), 4, 0));
+            r.offer(2, (0, x, 0), 4, from)
+        };
+        assert!(!offer_third(1, 0), "near window 0, in force");
+        assert!(offer_third(1, 1), "near window 0, out of force");
+        assert!(!offer_third(9, 1), "near window 1, in force");
+    }
+
+    #[test]
+    fn the_gpu_rounds_follow_the_same_constants() {
+        let wgsl = include_str!("patch_pass.wgsl");
+        let want = format!("const LATER_ROUND_PATCHES: u32 = {LATER_ROUND_PATCHES}u;");
+        assert!(wgsl.contains(&want), "patch_pass.wgsl lacks `{want}`");
     }
 
     #[test]
     fn a_match_apart_from_every_accepted_window_is_accepted_in_the_first_round() {
         let mut r = ClashRounds::new(3);
         assert_eq!(r.next_live(), Some(vec![0, 1, 2]));
-        assert!(r.offer(0, (0, 0, 0), 8, true));
+        assert!(r.offer(0, (0, 0, 0), 8, 0));
         // 8 apart along x: no clash (within d means closer than d).
-        assert!(r.offer(1, (0, 8, 0), 8, true));
+        assert!(r.offer(1, (0, 8, 0), 8, 0));
         // Another exemplar's window never clashes.
-        assert!(r.offer(2, (1, 0, 0), 8, true));
+        assert!(r.offer(2, (1, 0, 0), 8, 0));
         assert_eq!(r.next_live(), None);
     }
 }

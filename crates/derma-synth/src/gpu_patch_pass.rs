@@ -346,3 +346,20 @@ impl GpuMatcher {
         Ok(Some(sources))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_schedule_shader_knows_the_round_s_dispatches() {
+        let wgsl = include_str!("patch_schedule.wgsl");
+        let want = format!("const ROUND_ARGS: u32 = {ROUND_ARGS}u;");
+        assert!(wgsl.contains(&want), "patch_schedule.wgsl lacks `{want}`");
+        let want = format!("const STATE_STATUS: u32 = {STATE_STATUS}u;");
+        assert!(
+            PATCH_SHADER.contains(&want),
+            "patch_pass.wgsl lacks `{want}`"
+        );
+    }
+}

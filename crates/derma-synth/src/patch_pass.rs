@@ -29,7 +29,7 @@ use crate::error::Result;
 use crate::exemplar::ExemplarSet;
 use crate::matcher::PatchPlan;
 use crate::pass_context::PassContext;
-use crate::search::{Prepared, Query, Search, Tolerance, MAX_PENALTY_TOTAL};
+use crate::search::{Prepared, Query, Search, Tolerance, MAX_GUESSES, MAX_PENALTY_TOTAL};
 use derma_core::gpu::Device;
 use derma_core::progress::Unit;
 use derma_core::rng::Philox;
@@ -148,8 +148,8 @@ pub(crate) fn patch_pass(
             return Ok(());
         }
     }
-    // The exemplars' block sums, once for every round's searches.
-    let prepared = Prepared::new(set, n);
+    // The exemplars' block sums, once for every round's searches on the CPU.
+    let prepared = (ctx.matcher.device() == Device::Cpu).then(|| Prepared::new(set, n));
     for patches in fronts {
         if patches.is_empty() {
             continue;
@@ -175,20 +175,33 @@ pub(crate) fn patch_pass(
         // windows' neighbourhoods barred and the counts updated (see [`crate::clash_rounds`]).
         let mut rounds = ClashRounds::new(patches.len());
         while let Some(live) = rounds.next_live() {
-            let (penalty, open) = occ.penalties_excluding(rounds.accepted(), d);
+            let (penalty, barring) = occ.penalties_excluding(rounds.accepted(), d);
             let search = Search {
                 w: n,
                 tol,
                 penalty,
-                prepared: Some(&prepared),
+                prepared: prepared.as_ref(),
             };
-            let batch: Vec<Query> = live.iter().map(|&k| queries[k].clone()).collect();
+            // A candidate left free joins the guesses: where the coherent ones are barred, it
+            // gives the search a first limit below the cap (the answer is the same).
+            let batch: Vec<Query> = live
+                .iter()
+                .map(|&k| {
+                    let mut q = queries[k].clone();
+                    if let Some(f) = barring.free[q.exemplar as usize] {
+                        if q.guesses.len() < MAX_GUESSES && !q.guesses.contains(&f) {
+                            q.guesses.push(f);
+                        }
+                    }
+                    q
+                })
+                .collect();
             let matches = ctx.matcher.best_matches(set, &search, &batch)?;
             for (&k, m) in live.iter().zip(&matches) {
                 let ex = queries[k].exemplar;
                 let cw = set.exemplars[ex as usize].width() + 1 - n;
                 let (mx, my) = (m.index as usize % cw, m.index as usize / cw);
-                if rounds.offer(k, (ex, mx, my), d, open[ex as usize]) {
+                if rounds.offer(k, (ex, mx, my), d, barring.from[ex as usize]) {
                     let (px, py, _) = patches[k];
                     occ.remove(canvas, px, py, n);
                     canvas.paste(set, ex as usize, m.index, px, py, n);
@@ -216,6 +229,15 @@ pub(crate) fn penalty(o: u64, texels: u64, n: usize, total: u64, k16: u64, cap: 
     pen.min(cap as u64) as u32
 }
 
+/// Which of a wavefront's accepted windows bar candidates in a round, per exemplar.
+struct Barring {
+    /// The first accepted window in force (those before it are dropped: see
+    /// [`Occurrence::penalties_excluding`]).
+    from: Vec<usize>,
+    /// A candidate no window in force bars, where some are barred (a guess for the searches).
+    free: Vec<Option<u32>>,
+}
+
 /// How often each exemplar texel is the source of an output texel, and the penalties that
 /// follow (see the module comment).
 struct Occurrence {
@@ -228,8 +250,9 @@ struct Occurrence {
     total: Vec<u64>,
     /// The penalties last made, per exemplar, per candidate (kept to be refilled each round).
     table: Vec<Vec<u32>>,
-    /// Per exemplar, per candidate: barred by a window taken (refilled each round).
-    barred: Vec<Vec<bool>>,
+    /// Per exemplar, per candidate: 1 + the index of the last window taken that bars it, 0
+    /// where none does (refilled each round).
+    barred: Vec<Vec<u32>>,
     /// Room for one exemplar's summed-area table of counts.
     sat: Vec<u64>,
 }
@@ -260,7 +283,7 @@ impl Occurrence {
             barred: set
                 .exemplars
                 .iter()
-                .map(|e| vec![false; e.candidates(n).0 * e.candidates(n).1])
+                .map(|e| vec![0; e.candidates(n).0 * e.candidates(n).1])
                 .collect(),
             sat: Vec::new(),
         }
@@ -290,34 +313,48 @@ impl Occurrence {
         }
     }
 
-    /// The penalties per known texel of every candidate ([`Self::fill_penalties`]), with every
-    /// candidate within `d` texels (each way) of an `(exemplar, x, y)` window of `taken`
-    /// charged the cap (`None` when there is nothing to charge), and per exemplar whether any
-    /// candidate is left uncharged by `taken`. Where none is, that exemplar's windows are not
-    /// charged: every candidate at the cap would leave the search nothing to prune and make its
-    /// near-best choice a random one.
+    /// The penalties per known texel of every candidate ([`Self::fill_penalties`]) with the
+    /// windows of `taken` barred (`None` when there is nothing to charge), and per exemplar the
+    /// first of `taken` still in force. A candidate within `d` texels (each way) of a window in
+    /// force pays the cap. All are in force while the exemplar has a candidate none of them
+    /// bars; past that, the oldest are dropped until one is free again: a small exemplar has
+    /// room for only so many windows apart, and a wavefront's patches long accepted lie far
+    /// along it. (Every candidate at the cap would leave the search nothing to prune and make
+    /// its near-best choice a random one.)
     fn penalties_excluding(
         &mut self,
         taken: &[Window],
         d: usize,
-    ) -> (Option<&[Vec<u32>]>, Vec<bool>) {
+    ) -> (Option<&[Vec<u32>]>, Barring) {
         let n = self.n;
-        self.barred.iter_mut().for_each(|b| b.fill(false));
-        for &(ex, ax, ay) in taken {
+        self.barred.iter_mut().for_each(|b| b.fill(0));
+        for (a, &(ex, ax, ay)) in taken.iter().enumerate() {
             let (w, h) = self.sizes[ex as usize];
             let (cw, ch) = (w + 1 - n, h + 1 - n);
             for y in ay.saturating_sub(d - 1)..(ay + d).min(ch) {
                 self.barred[ex as usize]
                     [y * cw + ax.saturating_sub(d - 1)..y * cw + (ax + d).min(cw)]
-                    .fill(true);
+                    .fill(a as u32 + 1);
             }
         }
-        let open: Vec<bool> = self.barred.iter().map(|b| b.contains(&false)).collect();
-        let charged: Vec<bool> = (self.barred.iter().zip(&open))
-            .map(|(b, &o)| o && !taken.is_empty() && b.contains(&true))
+        // The first window in force: one past the oldest last-barring window of any candidate.
+        let from: Vec<usize> = self
+            .barred
+            .iter()
+            .map(|b| b.iter().copied().min().unwrap_or(0) as usize)
             .collect();
+        let charged = |e: usize| self.barred[e].iter().any(|&l| l as usize > from[e]);
+        let charged: Vec<bool> = (0..self.barred.len()).map(charged).collect();
+        let free = (self.barred.iter().zip(&from).zip(&charged))
+            .map(|((b, &f), &c)| {
+                c.then(|| b.iter().position(|&l| l as usize <= f))
+                    .flatten()
+                    .map(|i| i as u32)
+            })
+            .collect();
+        let barring = Barring { from, free };
         if self.lambda <= 0.0 && !charged.contains(&true) {
-            return (None, open);
+            return (None, barring);
         }
         self.fill_penalties();
         let cap = MAX_PENALTY_TOTAL / (n * n) as u32;
@@ -327,11 +364,14 @@ impl Occurrence {
             .enumerate()
             .filter(|&(e, _)| charged[e])
         {
-            for (pen, _) in table.iter_mut().zip(&self.barred[e]).filter(|(_, &b)| b) {
+            let from = barring.from[e];
+            for (pen, _) in
+                (table.iter_mut().zip(&self.barred[e])).filter(|(_, &l)| l as usize > from)
+            {
                 *pen = cap;
             }
         }
-        (Some(&self.table), open)
+        (Some(&self.table), barring)
     }
 
     /// λ · C · v̄ in 16.16 fixed point, at most 2³² (the factor of [`penalty`]; 0 when λ = 0).
@@ -402,38 +442,50 @@ mod tests {
     }
 
     #[test]
-    fn windows_are_barred_while_the_exemplar_has_candidates_left() {
+    fn windows_in_force_are_barred_and_the_oldest_drop_out_when_none_is_left() {
         // A 24² exemplar, 8² windows: 17² candidates; d = 4 bars 7² around each window taken.
         let tex = crate::search::tests::noise_texture(24, 24, 1, 3);
         let set = ExemplarSet::new(vec![tex], 8).unwrap();
         let (n, d, cw) = (8, 4, 17);
         let cap = MAX_PENALTY_TOTAL / (n * n) as u32;
+        // Where candidate i lies: the block of the 3 × 3 grid of windows below that bars it.
+        let block = |i: usize| {
+            let at = |v: usize| [0..5, 5..12, 12..17].iter().position(|r| r.contains(&v));
+            at(i / cw).unwrap() * 3 + at(i % cw).unwrap()
+        };
         for lambda in [0.0, 1.0] {
             let mut occ = Occurrence::new(&set, n, lambda);
-            let (p, open) = occ.penalties_excluding(&[], d);
-            assert_eq!((p.is_some(), open), (lambda > 0.0, vec![true]));
-            // One window at (8, 8): its 7² neighbours pay the cap, the rest nothing.
-            let (p, open) = occ.penalties_excluding(&[(0, 8, 8)], d);
-            let p = p.unwrap();
-            assert!(open[0]);
-            for (i, &v) in p[0].iter().enumerate() {
+            let (p, b) = occ.penalties_excluding(&[], d);
+            assert_eq!(
+                (p.is_some(), b.from, b.free),
+                (lambda > 0.0, vec![0], vec![None])
+            );
+            // One window at (8, 8): its 7² neighbours pay the cap, the rest nothing; the first
+            // free candidate in scan order is a guess.
+            let (p, b) = occ.penalties_excluding(&[(0, 8, 8)], d);
+            assert_eq!((b.from.clone(), b.free.clone()), (vec![0], vec![Some(0)]));
+            for (i, &v) in p.unwrap()[0].iter().enumerate() {
                 let near = (i % cw).abs_diff(8) < d && (i / cw).abs_diff(8) < d;
                 assert_eq!(v, if near { cap } else { 0 }, "candidate {i}");
             }
-            // Windows 7 apart cover all 17² candidates: none is left, so none is charged
-            // (the search then picks on the occurrence penalty alone).
+            // Nine windows 7 apart bar all 17² candidates, each candidate by one (block i by
+            // window i): the first goes out of force, and its block comes free.
             let all: Vec<Window> = (0..3)
                 .flat_map(|y| (0..3).map(move |x| (0, 1 + 7 * x, 1 + 7 * y)))
                 .collect();
-            let (p, open) = occ.penalties_excluding(&all, d);
-            assert!(!open[0]);
-            assert!(
-                p.is_none_or(|p| p[0].iter().all(|&v| v < cap)),
-                "λ {lambda}"
-            );
-            // One fewer window leaves candidates: charged again.
-            let (p, open) = occ.penalties_excluding(&all[..8], d);
-            assert!(open[0] && p.unwrap()[0].contains(&cap));
+            let (p, b) = occ.penalties_excluding(&all, d);
+            assert_eq!((b.from, b.free), (vec![1], vec![Some(0)]));
+            for (i, &v) in p.unwrap()[0].iter().enumerate() {
+                assert_eq!(v == cap, block(i) != 0, "candidate {i}, λ {lambda}");
+            }
+            // Window 0 again, last: now block 1 is the oldest, and comes free.
+            let mut again = all.clone();
+            again.push(all[0]);
+            let (p, b) = occ.penalties_excluding(&again, d);
+            assert_eq!(b.from, vec![2]);
+            for (i, &v) in p.unwrap()[0].iter().enumerate() {
+                assert_eq!(v == cap, block(i) != 1, "candidate {i}, λ {lambda}");
+            }
             // The table is refilled each round: nothing taken, nothing barred.
             let (p, _) = occ.penalties_excluding(&[], d);
             assert!(p.is_none_or(|p| !p[0].contains(&cap)), "λ {lambda}");

@@ -19,9 +19,9 @@
 @group(0) @binding(13) var<storage, read_write> counts: array<atomic<u32>>;
 // [total drawn, pending patches, windows accepted in the wavefront, the wavefront, stalled
 // (1: a wavefront did not settle in its rounds, so nothing more runs), its patches, whether they
-// overlap, its rounds so far, the most rounds any wavefront took, whether the accepted windows
-// left any candidate unbarred at the round's start, then per patch its status (PENDING, PASTE,
-// DONE), then the accepted windows' (x, y)].
+// overlap, its rounds so far, the most rounds any wavefront took, the first accepted window in
+// force in the round (patch_pass.rs, `penalties_excluding`), then per patch its status
+// (PENDING, PASTE, DONE), then the accepted windows' (x, y)].
 @group(0) @binding(14) var<storage, read_write> state: array<atomic<u32>>;
 // Per exemplar row and candidate column: counts summed over a row of n texels.
 @group(0) @binding(15) var<storage, read_write> row_sums: array<u32>;
@@ -41,13 +41,10 @@ const STATE_COUNT: u32 = 5u;
 const STATE_OVERLAP: u32 = 6u;
 const STATE_ROUNDS: u32 = 7u;
 const STATE_MAX_ROUNDS: u32 = 8u;
-const STATE_OPEN: u32 = 9u;
+const STATE_FROM: u32 = 9u;
 const STATE_STATUS: u32 = 10u;
 // Patches searched in each round after the first (clash_rounds.rs, LATER_ROUND_PATCHES).
 const LATER_ROUND_PATCHES: u32 = 4u;
-// The mark of a barred candidate in `penalty` between `penalty_table` and `bar` (penalties are
-// below 2³¹: MAX_PENALTY_TOTAL / w²).
-const BARRED: u32 = 0x80000000u;
 
 fn stalled() -> bool {
     return atomicLoad(&state[STATE_STALLED]) != 0u;
@@ -148,8 +145,9 @@ fn penalty_rows(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = thread_of(gid);
     let ex_h = p.cand_h + p.w - 1u;
     if (i >= p.cand_w * ex_h || nothing_pending()) { return; }
-    // No candidate is known unbarred yet (`penalty_table` marks them; this dispatch precedes it).
-    if (i == 0u) { atomicStore(&state[STATE_OPEN], 0u); }
+    // The first window in force is the least over the candidates (`penalty_table`, which this
+    // dispatch precedes).
+    if (i == 0u) { atomicStore(&state[STATE_FROM], 0xffffffffu); }
     let x = i % p.cand_w;
     let y = i / p.cand_w;
     var sum = 0u;
@@ -160,8 +158,8 @@ fn penalty_rows(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 
 // The penalty per known texel of each candidate (patch_pass.rs, `penalty`): the window's count
-// o against the mean use, in 64-bit integers; marked BARRED near windows accepted in the
-// wavefront, and the state told when a candidate is not.
+// o against the mean use, in 64-bit integers; and the first window in force, the least over
+// the candidates of one past the last accepted window that bars each.
 @compute @workgroup_size(64)
 fn penalty_table(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = thread_of(gid);
@@ -189,31 +187,32 @@ fn penalty_table(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
         }
     }
-    let d = p.w / 2u;
-    let accepted = atomicLoad(&state[STATE_ACCEPTED]);
-    var barred = false;
-    for (var a = 0u; a < accepted; a++) {
-        let ax = atomicLoad(&state[accepted_at(a)]);
-        let ay = atomicLoad(&state[accepted_at(a) + 1u]);
-        if (max(ax, x) - min(ax, x) < d && max(ay, y) - min(ay, y) < d) { barred = true; }
-    }
-    if (barred) {
-        pen |= BARRED;
-    } else {
-        atomicStore(&state[STATE_OPEN], 1u);
-    }
+    atomicMin(&state[STATE_FROM], last_barring(x, y));
     penalty[i] = pen;
 }
 
-// Barred candidates pay the cap while some candidate is not barred; else none is charged
-// (patch_pass.rs, `penalties_excluding`).
+// One past the last window accepted in the wavefront within half a patch (each way) of
+// candidate (x, y); 0 where none is.
+fn last_barring(x: u32, y: u32) -> u32 {
+    let d = p.w / 2u;
+    let accepted = atomicLoad(&state[STATE_ACCEPTED]);
+    var last = 0u;
+    for (var a = 0u; a < accepted; a++) {
+        let ax = atomicLoad(&state[accepted_at(a)]);
+        let ay = atomicLoad(&state[accepted_at(a) + 1u]);
+        if (max(ax, x) - min(ax, x) < d && max(ay, y) - min(ay, y) < d) { last = a + 1u; }
+    }
+    return last;
+}
+
+// Candidates barred by a window in force pay the cap (patch_pass.rs, `penalties_excluding`).
 @compute @workgroup_size(64)
 fn bar(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = thread_of(gid);
     if (i >= p.cand_w * p.cand_h || nothing_pending()) { return; }
-    let pen = penalty[i];
-    if ((pen & BARRED) == 0u) { return; }
-    penalty[i] = select(pen & ~BARRED, p.cap, atomicLoad(&state[STATE_OPEN]) != 0u);
+    if (last_barring(i % p.cand_w, i / p.cand_w) > atomicLoad(&state[STATE_FROM])) {
+        penalty[i] = p.cap;
+    }
 }
 
 // Whether pending patch q is searched this round: all in the first round, then the first
@@ -249,14 +248,14 @@ fn prepare_round(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 
 // In scanline order, a patch searched this round is accepted unless its match lies within half
-// a patch (each way) of a window accepted earlier in the wavefront while a candidate was left
-// unbarred at the round's start; the round's first always is.
+// a patch (each way) of a window accepted earlier in the wavefront and in force (from the
+// round's first in force on); the round's first always is.
 @compute @workgroup_size(1)
 fn accept() {
     if (nothing_pending()) { return; }
     // The rounds this wavefront has taken, and the most any has (the host records that many).
     let rounds = atomicLoad(&state[STATE_ROUNDS]) + 1u;
-    let open = atomicLoad(&state[STATE_OPEN]) != 0u;
+    let in_force = atomicLoad(&state[STATE_FROM]);
     var searched = 0u;
     atomicStore(&state[STATE_ROUNDS], rounds);
     atomicMax(&state[STATE_MAX_ROUNDS], rounds);
@@ -276,8 +275,8 @@ fn accept() {
         let mx = index % p.cand_w;
         let my = index / p.cand_w;
         var clash = false;
-        if (!first && open) {
-            for (var a = 0u; a < accepted; a++) {
+        if (!first) {
+            for (var a = in_force; a < accepted; a++) {
                 let ax = atomicLoad(&state[accepted_at(a)]);
                 let ay = atomicLoad(&state[accepted_at(a) + 1u]);
                 if (max(ax, mx) - min(ax, mx) < d && max(ay, my) - min(ay, my) < d) { clash = true; }

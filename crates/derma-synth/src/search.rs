@@ -144,7 +144,7 @@ pub struct Search<'a> {
     pub penalty: Option<&'a [Vec<u32>]>,
     /// The exemplar set's block sums for windows of side `w`, made once for many searches (the
     /// patch pass's rounds); `None`: the CPU makes them per call. The GPU keeps its own.
-    pub prepared: Option<&'a Prepared>,
+    pub prepared: Option<&'a Prepared<'a>>,
 }
 
 impl Search<'_> {
@@ -398,8 +398,10 @@ pub fn initial_cost(set: &ExemplarSet, s: &Search, q: &Query) -> u32 {
 const CHUNK: usize = 16;
 
 /// Quadrant block sums of each exemplar of a set for one window side, which the CPU search's
-/// bounds read (see the module comment).
-pub struct Prepared {
+/// bounds read (see the module comment). It borrows the set: a search of another set makes its
+/// own.
+pub struct Prepared<'s> {
+    set: &'s ExemplarSet,
     w: usize,
     half: usize,
     /// Per exemplar, per channel: sums over `half × half` blocks.
@@ -410,18 +412,19 @@ pub struct Prepared {
     fine_sums: Vec<Vec<Vec<f32>>>,
 }
 
-impl std::fmt::Debug for Prepared {
+impl std::fmt::Debug for Prepared<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "Prepared {{ w: {} }}", self.w)
     }
 }
 
-impl Prepared {
+impl<'s> Prepared<'s> {
     /// The block sums of `set`'s exemplars for windows of side `w`.
-    pub fn new(set: &ExemplarSet, w: usize) -> Self {
+    pub fn new(set: &'s ExemplarSet, w: usize) -> Self {
         let half = w / 2;
         let fine = if half >= 2 { half / 2 } else { 0 };
         Self {
+            set,
             w,
             half,
             sums: set.exemplars.iter().map(|e| e.block_sums(half)).collect(),
@@ -482,7 +485,7 @@ pub(crate) fn known_block_sums(
 pub(crate) fn best_matches_cpu(set: &ExemplarSet, s: &Search, queries: &[Query]) -> Vec<Match> {
     let own;
     let prep = match s.prepared {
-        Some(p) if p.w == s.w => p,
+        Some(p) if p.w == s.w && std::ptr::eq(p.set, set) => p,
         _ => {
             own = Prepared::new(set, s.w);
             &own
@@ -629,6 +632,18 @@ fn scan_pruned_body(
                 continue;
             }
             let x0 = chunk_no * CHUNK;
+            // Where the patch pass bars windows most candidates may carry the cap: a chunk
+            // none of whose coarse survivors could pay its penalty within the limit is done.
+            if let Some(p) = penalties {
+                let pens = &p[y * cw + x0..][..chunk.len()];
+                if !chunk
+                    .iter()
+                    .zip(pens)
+                    .any(|(&b, &pen)| b <= coarse_limit && pen * known <= limit)
+                {
+                    continue;
+                }
+            }
             // The finer bound of the whole chunk, vectorised the same way.
             // Always a whole chunk (the planes are padded), so the sums stay in registers.
             let mut fine_bound = [0f32; CHUNK];

@@ -106,8 +106,9 @@ fn a_seed_gives_the_same_texture_on_cpu_and_gpu() {
     let tight = GpuMatcher::with_patch_schedule(1, 3).unwrap();
     let set = ExemplarSet::new(vec![exemplar(48, 48, 2, 5)], 16).unwrap();
     // The smallest exemplar for 16² patches, 32², has 17² candidates; one accepted window bars
-    // up to 15² of them, two may bar all: wavefronts run out of windows apart, and from then on
-    // their clashes are accepted.
+    // up to 15² of them, and four windows can bar all: the 160 × 144 output's wavefronts (up to
+    // ten patches) run out of windows apart, so the oldest drop out of force and later rounds
+    // search four patches at a time (breaking either rule in the shader fails this test).
     let small = ExemplarSet::new(vec![exemplar(32, 32, 1, 9)], 16).unwrap();
     // Without the correction, the E-step's two-band blend is the output (the correction makes
     // every texel an exemplar copy again).

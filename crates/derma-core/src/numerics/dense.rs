@@ -395,7 +395,21 @@ const MAX_SWEEPS: usize = 60;
 /// of (numerically) zero singular values are completed to an orthonormal set.
 pub fn svd(a: &Matrix) -> Result<Svd, NumericsError> {
     if a.nrows() < a.ncols() {
-        let t = svd(&a.transpose())?;
+        // Errors name the matrix as given, not its transpose.
+        let t = svd(&a.transpose()).map_err(|e| match e {
+            NumericsError::NoConvergence {
+                what,
+                rows,
+                cols,
+                iterations,
+            } => NumericsError::NoConvergence {
+                what,
+                rows: cols,
+                cols: rows,
+                iterations,
+            },
+            e => e,
+        })?;
         return Ok(Svd {
             u: t.v,
             s: t.s,
@@ -448,7 +462,7 @@ pub fn svd(a: &Matrix) -> Result<Svd, NumericsError> {
             what: "SVD",
             rows: m,
             cols: n,
-            sweeps: MAX_SWEEPS,
+            iterations: MAX_SWEEPS,
         });
     }
     let norms: Vec<f64> = (0..n).map(|j| dot(w.col(j), w.col(j)).sqrt()).collect();
@@ -653,7 +667,7 @@ fn tridiagonal_ql(d: &mut [f64], e: &mut [f64], z: &mut Matrix) -> Result<(), Nu
                     what: "eigendecomposition",
                     rows: n,
                     cols: n,
-                    sweeps: MAX_SWEEPS,
+                    iterations: steps,
                 });
             }
             let mut g = (d[l + 1] - d[l]) / (2.0 * e[l]);

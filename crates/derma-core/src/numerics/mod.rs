@@ -59,7 +59,7 @@ pub enum NumericsError {
         pivot: f64,
     },
     /// An iterative decomposition (SVD, eigen) did not converge.
-    #[error("the {what} of a {rows} × {cols} matrix did not converge in {sweeps} sweeps")]
+    #[error("the {what} of a {rows} × {cols} matrix did not converge in {iterations} iterations")]
     NoConvergence {
         /// Which decomposition.
         what: &'static str,
@@ -67,8 +67,8 @@ pub enum NumericsError {
         rows: usize,
         /// Its columns.
         cols: usize,
-        /// The sweeps (or steps) it took before giving up.
-        sweeps: usize,
+        /// The iterations (Jacobi sweeps, QL steps) it took before giving up.
+        iterations: usize,
     },
     /// Operands whose sizes do not fit together.
     #[error("{what}: {detail}")]
