@@ -82,7 +82,7 @@ fn patch_pipelines() -> Result<(
 /// Indirect-dispatch words of one round (three per dispatch; patch_schedule.wgsl's ROUND_ARGS).
 const ROUND_ARGS: usize = 39;
 /// Words of the patch pass's state before the per-patch statuses (patch_pass.wgsl).
-const STATE_STATUS: usize = 10;
+const STATE_STATUS: usize = 11;
 const STATE_MAX_ROUNDS: usize = 8;
 /// Most rounds recorded per wavefront when the schedule adapts to the rounds wavefronts took.
 const MAX_PATCH_ROUNDS: usize = 32;

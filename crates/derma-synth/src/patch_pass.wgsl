@@ -20,8 +20,9 @@
 // [total drawn, pending patches, windows accepted in the wavefront, the wavefront, stalled
 // (1: a wavefront did not settle in its rounds, so nothing more runs), its patches, whether they
 // overlap, its rounds so far, the most rounds any wavefront took, the first accepted window in
-// force in the round (patch_pass.rs, `penalties_excluding`), then per patch its status
-// (PENDING, PASTE, DONE), then the accepted windows' (x, y)].
+// force in the round (patch_pass.rs, `penalties_excluding`), the first candidate no window in
+// force bars (NONE: none), then per patch its status (PENDING, PASTE, DONE), then the accepted
+// windows' (x, y)].
 @group(0) @binding(14) var<storage, read_write> state: array<atomic<u32>>;
 // Per exemplar row and candidate column: counts summed over a row of n texels.
 @group(0) @binding(15) var<storage, read_write> row_sums: array<u32>;
@@ -42,7 +43,8 @@ const STATE_OVERLAP: u32 = 6u;
 const STATE_ROUNDS: u32 = 7u;
 const STATE_MAX_ROUNDS: u32 = 8u;
 const STATE_FROM: u32 = 9u;
-const STATE_STATUS: u32 = 10u;
+const STATE_FREE: u32 = 10u;
+const STATE_STATUS: u32 = 11u;
 // Patches searched in each round after the first (clash_rounds.rs, LATER_ROUND_PATCHES).
 const LATER_ROUND_PATCHES: u32 = 4u;
 
@@ -147,7 +149,10 @@ fn penalty_rows(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (i >= p.cand_w * ex_h || nothing_pending()) { return; }
     // The first window in force is the least over the candidates (`penalty_table`, which this
     // dispatch precedes).
-    if (i == 0u) { atomicStore(&state[STATE_FROM], 0xffffffffu); }
+    if (i == 0u) {
+        atomicStore(&state[STATE_FROM], 0xffffffffu);
+        atomicStore(&state[STATE_FREE], NONE);
+    }
     let x = i % p.cand_w;
     let y = i / p.cand_w;
     var sum = 0u;
@@ -205,13 +210,16 @@ fn last_barring(x: u32, y: u32) -> u32 {
     return last;
 }
 
-// Candidates barred by a window in force pay the cap (patch_pass.rs, `penalties_excluding`).
+// Candidates barred by a window in force pay the cap (patch_pass.rs, `penalties_excluding`);
+// the first of the others is noted, a guess for the round's searches.
 @compute @workgroup_size(64)
 fn bar(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = thread_of(gid);
     if (i >= p.cand_w * p.cand_h || nothing_pending()) { return; }
     if (last_barring(i % p.cand_w, i / p.cand_w) > atomicLoad(&state[STATE_FROM])) {
         penalty[i] = p.cap;
+    } else {
+        atomicMin(&state[STATE_FREE], i);
     }
 }
 
@@ -241,7 +249,14 @@ fn prepare_round(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     info[base + INFO_FLAGS] = 0u;
-    let first = guesses_cost(q);
+    // The coherent guesses' least cost, or a free candidate's where that is less: where the
+    // guesses are barred, their cost includes the cap and would prune nothing (the answer is
+    // the same; patch_pass.rs adds the free candidate to the guesses likewise).
+    var first = guesses_cost(q);
+    let free = atomicLoad(&state[STATE_FREE]);
+    if (free != NONE) {
+        first = min(first, distance(q, free % p.cand_w, free / p.cand_w, NONE) + candidate_penalty(q, free));
+    }
     info[base + 3u] = first;
     atomicStore(&result[2u * q], first);
     atomicStore(&result[2u * q + 1u], NONE);
