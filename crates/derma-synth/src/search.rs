@@ -537,7 +537,7 @@ fn scan_pruned(
         // SAFETY: the token proves the CPU has the features the function is compiled for.
         return unsafe { scan_pruned_avx2(set, prep, s, q, rows) };
     }
-    scan_pruned_body(set, prep, s, q, rows)
+    scan_pruned_body::<false>(set, prep, s, q, rows)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -549,11 +549,81 @@ unsafe fn scan_pruned_avx2(
     q: &Query,
     rows: std::ops::Range<usize>,
 ) -> (Vec<(u32, u32)>, u32) {
-    scan_pruned_body(set, prep, s, q, rows)
+    scan_pruned_body::<true>(set, prep, s, q, rows)
+}
+
+/// The exact distance of [`ssd_at_bounded`], on AVX2 where `AVX2` (only so instantiated inside
+/// [`scan_pruned_avx2`], which runs after the processor was found to have it).
+#[inline(always)]
+fn ssd_bounded_on<const AVX2: bool>(
+    e: &Exemplar,
+    runs: &Runs,
+    codes: &[u8],
+    x: usize,
+    y: usize,
+    limit: u32,
+) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    if AVX2 {
+        // SAFETY: see the function's comment.
+        return unsafe { ssd_at_bounded_avx2(e, runs, codes, x, y, limit) };
+    }
+    ssd_at_bounded(e, runs, codes, x, y, limit)
+}
+
+/// [`ssd_at_bounded`] with the differences of 16 codes at a time in 16 bits, their squares
+/// summed in pairs into eight 32-bit lanes (vpmaddwd: at most 2 · 255² a pair) and the lanes
+/// added across only at the early-exit checks; the same integers.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn ssd_at_bounded_avx2(
+    e: &Exemplar,
+    runs: &Runs,
+    codes: &[u8],
+    x: usize,
+    y: usize,
+    limit: u32,
+) -> u32 {
+    use std::arch::x86_64::*;
+    let c = e.channels();
+    let (ew, w) = (e.width(), runs.w);
+    let mut acc = _mm256_setzero_si256();
+    let mut rest = 0u32;
+    let total = |acc: __m256i, rest: u32| {
+        let mut lanes = [0u32; 8];
+        // SAFETY: `lanes` holds 32 bytes.
+        unsafe { _mm256_storeu_si256(lanes.as_mut_ptr().cast(), acc) };
+        lanes.iter().fold(rest, |s, &l| s.wrapping_add(l))
+    };
+    for (i, &(r, start, len)) in runs.runs.iter().enumerate() {
+        let a = &e.codes[((y + r) * ew + x + start) * c..][..len * c];
+        let b = &codes[(r * w + start) * c..][..len * c];
+        let mut k = 0;
+        while k + 16 <= a.len() {
+            // SAFETY: k + 16 ≤ the length of both slices.
+            let (va, vb) = unsafe {
+                (
+                    _mm_loadu_si128(a.as_ptr().add(k).cast()),
+                    _mm_loadu_si128(b.as_ptr().add(k).cast()),
+                )
+            };
+            let d = _mm256_sub_epi16(_mm256_cvtepu8_epi16(va), _mm256_cvtepu8_epi16(vb));
+            acc = _mm256_add_epi32(acc, _mm256_madd_epi16(d, d));
+            k += 16;
+        }
+        rest += row_ssd(&a[k..], &b[k..]);
+        if i % CHECK_EVERY == CHECK_EVERY - 1 {
+            let t = total(acc, rest);
+            if t > limit {
+                return t;
+            }
+        }
+    }
+    total(acc, rest)
 }
 
 #[inline(always)]
-fn scan_pruned_body(
+fn scan_pruned_body<const AVX2: bool>(
     set: &ExemplarSet,
     prep: &Prepared,
     s: &Search,
@@ -653,7 +723,17 @@ fn scan_pruned_body(
                     }
                 }
             }
-            for (j, &bound) in chunk.iter().enumerate() {
+            // The chunk's survivors of both bounds as bits, without a branch per candidate
+            // (which bound passes is unpredictable); each is checked again below, as the
+            // limits may fall within the chunk.
+            let mut survivors = 0u32;
+            for (j, (&b, &f)) in chunk.iter().zip(&fine_bound).enumerate() {
+                survivors |= u32::from((b <= coarse_limit) & (f <= fine_limit)) << j;
+            }
+            while survivors != 0 {
+                let j = survivors.trailing_zeros() as usize;
+                survivors &= survivors - 1;
+                let bound = chunk[j];
                 if bound > coarse_limit || fine_bound[j] > fine_limit {
                     continue;
                 }
@@ -673,7 +753,7 @@ fn scan_pruned_body(
                 if guesses.contains(&index) {
                     continue;
                 }
-                let ssd = ssd_at_bounded(e, &runs, &q.codes, x, y, own_limit);
+                let ssd = ssd_bounded_on::<AVX2>(e, &runs, &q.codes, x, y, own_limit);
                 if ssd > own_limit {
                     continue;
                 }
@@ -724,6 +804,50 @@ pub(crate) mod tests {
         (0..w)
             .flat_map(|r| e.codes[((y + r) * e.width() + x) * c..][..w * c].to_vec())
             .collect()
+    }
+
+    #[test]
+    fn the_avx2_distance_is_the_definition() {
+        // Rows of 8 to 96 codes (16 at a time, and the rest), with and without a mask, against
+        // ssd_at; and the early exit returns more than the limit exactly when the distance is.
+        let rng = Philox::new(3, 9);
+        for (c, w) in [(1, 8), (3, 8), (3, 16), (2, 32), (3, 32), (4, 12)] {
+            let set = ExemplarSet::new(vec![noise_texture(48, 40, c, 7 + c as u64)], 8).unwrap();
+            let e = &set.exemplars[0];
+            let (cw, ch) = e.candidates(w);
+            for k in 0..24u64 {
+                let mask = (k % 2 == 1).then(|| {
+                    (0..w * w)
+                        .map(|t| u8::from(rng.uniform4(k, t as u32)[0] < 0.6))
+                        .collect::<Vec<u8>>()
+                });
+                let q = Query {
+                    exemplar: 0,
+                    codes: window(e, w, (k as usize * 5) % cw, (k as usize * 3) % ch),
+                    mask,
+                    guesses: vec![0],
+                    salt: 0,
+                };
+                let runs = Runs::of(&q, w);
+                let (x, y) = ((k as usize * 11) % cw, (k as usize * 7) % ch);
+                let want = ssd_at(e, w, &q, x, y);
+                assert_eq!(
+                    ssd_bounded_on::<false>(e, &runs, &q.codes, x, y, u32::MAX),
+                    want
+                );
+                if derma_core::numerics::lanes::Avx2::detect().is_none() {
+                    continue;
+                }
+                assert_eq!(
+                    ssd_bounded_on::<true>(e, &runs, &q.codes, x, y, u32::MAX),
+                    want
+                );
+                for limit in [0, want / 2, want.saturating_sub(1), want] {
+                    let got = ssd_bounded_on::<true>(e, &runs, &q.codes, x, y, limit);
+                    assert_eq!(got > limit, want > limit, "c {c}, w {w}, limit {limit}");
+                }
+            }
+        }
     }
 
     #[test]
