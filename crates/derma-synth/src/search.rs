@@ -566,7 +566,7 @@ fn ssd_bounded_on<const AVX2: bool>(
     #[cfg(target_arch = "x86_64")]
     if AVX2 {
         // SAFETY: see the function's comment.
-        return unsafe { ssd_at_bounded_avx2(e, runs, codes, x, y, limit) };
+        return unsafe { ssd_at_bounded_avx2(e, runs, codes, (x, y), limit) };
     }
     ssd_at_bounded(e, runs, codes, x, y, limit)
 }
@@ -580,8 +580,7 @@ unsafe fn ssd_at_bounded_avx2(
     e: &Exemplar,
     runs: &Runs,
     codes: &[u8],
-    x: usize,
-    y: usize,
+    (x, y): (usize, usize),
     limit: u32,
 ) -> u32 {
     use std::arch::x86_64::*;
