@@ -6,7 +6,8 @@
 #     `cargo build --release -p derma` then `derma skin --out out/` (crates already downloaded:
 #     the figure is compile time, not the network's);
 #  3. exemplar synthesis against texture-synthesis (bench/synth.sh at 1024²: two grey and two
-#     colour exemplars, ratios and quality in its table);
+#     colour exemplars, the median of three alternating runs of each tool, ratios and quality
+#     in its table);
 #  4. the optics' photons per second per core beside MCML (bench/mcml.sh).
 #   bash bench/speed.sh [main] [build] [synth] [optics]    (default: all four)
 set -euo pipefail
@@ -46,7 +47,7 @@ if has build; then
 fi
 
 if has synth; then
-  bash bench/synth.sh 1024
+  RUNS=3 bash bench/synth.sh 1024
 fi
 
 if has optics; then

@@ -6,6 +6,8 @@
 # (derma-synth's 02_quality example: patch SWD at full, half and quarter resolution, contrast and
 # grain ratios, verbatim-copy ratio, seam energy).
 #   bash bench/synth.sh [SIZES...]      (default: 512 1024 2048)
+# RUNS=n times each tool n times, alternating, and reports the median of each (default 1);
+# EXEMPLARS="albedo128 ..." picks exemplars (default: all four).
 # Needs ../shared/data (the skin crops) and python3 with Pillow (for cropping and the figure).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -37,10 +39,19 @@ wall() { # seconds of wall clock of a command
   t1=$(date +%s.%N)
   python3 -c "print(f'{$t1 - $t0:.2f}')"
 }
-for ex in disp128 disp256 albedo128 albedo256x128; do
+median() { python3 -c "import statistics, sys; print(f'{statistics.median(map(float, sys.argv[1:])):.2f}')" "$@"; }
+runs=${RUNS:-1}
+read -r -a exemplars <<<"${EXEMPLARS:-disp128 disp256 albedo128 albedo256x128}"
+for ex in "${exemplars[@]}"; do
   for s in "${sizes[@]}"; do
-    d_s=$(wall "$derma" synth -q --exemplar "$out/$ex.png" --size "$s" --seed 1 --out "$out/${ex}_${s}_derma.png")
-    p_s=$(wall "$peer" --no-progress --seed 1 --out-size "$s" --out "$out/${ex}_${s}_peer.png" generate "$out/$ex.png")
+    d_all=() p_all=()
+    for _ in $(seq "$runs"); do
+      d_all+=("$(wall "$derma" synth -q --exemplar "$out/$ex.png" --size "$s" --seed 1 --out "$out/${ex}_${s}_derma.png")")
+      p_all+=("$(wall "$peer" --no-progress --seed 1 --out-size "$s" --out "$out/${ex}_${s}_peer.png" generate "$out/$ex.png")")
+    done
+    d_s=$(median "${d_all[@]}")
+    p_s=$(median "${p_all[@]}")
+    if [ "$runs" -gt 1 ]; then echo "$ex ${s}²: derma runs ${d_all[*]} s, peer runs ${p_all[*]} s"; fi
     for tool in derma peer; do
       secs=$d_s; [ $tool = peer ] && secs=$p_s
       read -r _ swd _ swd2 _ swd4 _ contrast _ grain _ verb _ seam \
