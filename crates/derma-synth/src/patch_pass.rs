@@ -123,7 +123,7 @@ pub(crate) fn patch_pass(
             n,
             tol,
             weight16: occ.weight16(),
-            cap: MAX_PENALTY_TOTAL / (n * n) as u32,
+            cap: penalty_cap(n),
             wavefronts: fronts
                 .iter()
                 .map(|f| {
@@ -214,6 +214,12 @@ pub(crate) fn patch_pass(
     Ok(())
 }
 
+/// The most a candidate pays per known texel for windows of side `n`: the cost of a whole
+/// window's penalty stays within [`MAX_PENALTY_TOTAL`].
+fn penalty_cap(n: usize) -> u32 {
+    MAX_PENALTY_TOTAL / (n * n) as u32
+}
+
 /// The penalty per known texel of a window from which `o` output texels are drawn, in an
 /// exemplar of `texels` texels of which `total` output texels are drawn, for windows of side `n`:
 /// λ·C·v̄ · max(0, O/(N² ō) − 1) of the module comment in integers, so the GPU gives the same
@@ -260,6 +266,12 @@ struct Occurrence {
 impl Occurrence {
     fn new(set: &ExemplarSet, n: usize, lambda: f64) -> Self {
         let var: f64 = set.code_stats().iter().map(|s| s.1).sum();
+        let per_candidate = || -> Vec<Vec<u32>> {
+            let size = |(cw, ch): (usize, usize)| cw * ch;
+            (set.exemplars.iter())
+                .map(|e| vec![0; size(e.candidates(n))])
+                .collect()
+        };
         Self {
             lambda,
             n,
@@ -275,16 +287,8 @@ impl Occurrence {
                 .map(|e| vec![0; e.width() * e.height()])
                 .collect(),
             total: vec![0; set.exemplars.len()],
-            table: set
-                .exemplars
-                .iter()
-                .map(|e| vec![0; e.candidates(n).0 * e.candidates(n).1])
-                .collect(),
-            barred: set
-                .exemplars
-                .iter()
-                .map(|e| vec![0; e.candidates(n).0 * e.candidates(n).1])
-                .collect(),
+            table: per_candidate(),
+            barred: per_candidate(),
             sat: Vec::new(),
         }
     }
@@ -357,7 +361,7 @@ impl Occurrence {
             return (None, barring);
         }
         self.fill_penalties();
-        let cap = MAX_PENALTY_TOTAL / (n * n) as u32;
+        let cap = penalty_cap(n);
         for (e, table) in self
             .table
             .iter_mut()
@@ -384,7 +388,7 @@ impl Occurrence {
     /// Per exemplar, per candidate, into `table`: the penalty per known texel (0 when λ = 0).
     fn fill_penalties(&mut self) {
         let n = self.n;
-        let cap = MAX_PENALTY_TOTAL / (n * n) as u32;
+        let cap = penalty_cap(n);
         let k16 = self.weight16();
         for (e, &(w, h)) in self.sizes.iter().enumerate() {
             let (cw, ch) = (w + 1 - n, h + 1 - n);
@@ -447,7 +451,7 @@ mod tests {
         let tex = crate::search::tests::noise_texture(24, 24, 1, 3);
         let set = ExemplarSet::new(vec![tex], 8).unwrap();
         let (n, d, cw) = (8, 4, 17);
-        let cap = MAX_PENALTY_TOTAL / (n * n) as u32;
+        let cap = penalty_cap(n);
         // Where candidate i lies: the block of the 3 × 3 grid of windows below that bars it.
         let block = |i: usize| {
             let at = |v: usize| [0..5, 5..12, 12..17].iter().position(|r| r.contains(&v));
