@@ -7,6 +7,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use derma_skin::features::relief::{height_cached, ReliefCache, ReliefParams};
+use derma_skin::features::relief_lanes::{heights, ReliefTexel};
 use derma_skin::{SkinConfig, SkinGenerator};
 use glam::Vec3;
 
@@ -54,6 +55,23 @@ fn bench(c: &mut Criterion) {
                 .iter()
                 .map(|(p, n)| height_cached(&prm, *p, *n, Vec3::X, 1.0, 0.14, &mut cache))
                 .sum::<f32>()
+        })
+    });
+    let texels: Vec<ReliefTexel> = points
+        .iter()
+        .map(|&(p, n)| ReliefTexel {
+            p,
+            n,
+            tension: Vec3::X,
+            scale: 1.0,
+            texel_mm: 0.14,
+        })
+        .collect();
+    let mut out = vec![0.0f32; texels.len()];
+    g.bench_function("relief_lanes_100k_texels", |b| {
+        b.iter(|| {
+            heights(&prm, &texels, &mut out, &mut ReliefCache::default());
+            out.iter().sum::<f32>()
         })
     });
     g.finish();

@@ -7,6 +7,7 @@ use crate::config::SkinConfig;
 use crate::feature_set::FeatureSet;
 use crate::features::lips::{apply_lips, LipParams};
 use crate::features::relief::{self, ReliefParams};
+use crate::features::relief_lanes::{heights, ReliefTexel};
 use crate::features::{BioSample, PaintPoint};
 use crate::index::GridCursor;
 use crate::noise::{stream_seed, BandNoise, NOISE_STREAM, RELIEF_STREAM};
@@ -159,7 +160,7 @@ pub fn paint_with(
     } else {
         None
     };
-    let lip = LipParams {
+    let lip_params = LipParams {
         blood: cfg.lips.blood,
         pheomelanin: cfg.lips.pheomelanin,
         epidermis_um: cfg.lips.epidermis_um,
@@ -218,80 +219,114 @@ pub fn paint_with(
             let mut noise_cache = crate::noise::NoiseCache::default();
             let mut mottling_cache = crate::noise::NoiseCache::default();
             let mut relief_cache = relief::ReliefCache::default();
-            for (k, s) in rows.iter_mut().enumerate() {
-                let i = task * w * ROWS_PER_TASK + k;
-                if !surface.covered(i) {
-                    continue;
-                }
-                let p = surface.position(i);
-                let n = noise.eval_cached(p, &mut noise_cache);
-                let v = |c: usize| chans[c].0 + chans[c].1 * n[c];
-                *s = BioSample {
-                    tissue: BioTexel {
-                        melanin: v(0),
-                        pheomelanin: v(1),
-                        blood: v(2),
-                        oxygenation: v(3),
-                        stratum_corneum_um: v(4),
-                        epidermis_um: v(5),
-                    },
-                    height_mm: v(6),
-                    extra: [0.0; 4],
-                    lips: 0.0,
-                    furrow_mm: 0.0,
-                };
-                // Every field this texel reads, sampled through one set of bilinear taps
-                // (the fields share a size; others are sampled on their own).
-                let uv = surface.uv(i);
-                let taps = Taps::uv(field_size.0, field_size.1, uv.x, uv.y, wrap);
-                if let Some(r) = &regional {
-                    let at = |k: usize| r[k].sample(&taps);
-                    s.tissue.blood *= at(0);
-                    s.tissue.melanin *= at(1);
-                    s.tissue.oxygenation = (s.tissue.oxygenation + at(2)).clamp(0.0, 1.0);
-                    s.tissue.epidermis_um *= at(3);
-                }
-                if let Some(m) = &mottling {
-                    let [b, mel] = m.factors(p, &mut mottling_cache);
-                    s.tissue.blood *= b;
-                    s.tissue.melanin *= mel;
-                }
-                if let Some(m) = &measured.melanin {
-                    s.tissue.melanin = m.sample(&taps);
-                }
-                if let Some(m) = &measured.blood {
-                    s.tissue.blood = m.sample(&taps);
-                }
-                let (n, [dpdu, dpdv]) = surface.normal_jacobian(i);
-                if let Some((prm, depth, tension)) = &relief {
-                    let scale = depth.sample(&taps).max(0.0);
-                    if scale > 0.0 {
-                        let t = tension
-                            .map(|maps| crate::field::decode_vector_at(maps, &taps))
-                            .map_or(glam::Vec3::ZERO, |v| {
-                                let d = dpdu * v.dir.x + dpdv * v.dir.y;
-                                (d - n * n.dot(d)).normalize_or_zero()
+            // One row at a time in three passes, so the micro-relief runs across the row's
+            // texels in SIMD lanes (relief_lanes.rs): the baseline and the inputs of the relief;
+            // the relief; the lips and the features. Each texel sees the same operations in the
+            // same order as when painted alone.
+            let mut row_points: Vec<(usize, PaintPoint, f32)> = Vec::with_capacity(w);
+            let mut relief_in: Vec<ReliefTexel> = Vec::with_capacity(w);
+            let mut relief_at: Vec<usize> = Vec::with_capacity(w);
+            let mut relief_out: Vec<f32> = Vec::with_capacity(w);
+            for (r, row) in rows.chunks_mut(w).enumerate() {
+                row_points.clear();
+                relief_in.clear();
+                relief_at.clear();
+                for (x, s) in row.iter_mut().enumerate() {
+                    let i = (task * ROWS_PER_TASK + r) * w + x;
+                    if !surface.covered(i) {
+                        continue;
+                    }
+                    let p = surface.position(i);
+                    let n = noise.eval_cached(p, &mut noise_cache);
+                    let v = |c: usize| chans[c].0 + chans[c].1 * n[c];
+                    *s = BioSample {
+                        tissue: BioTexel {
+                            melanin: v(0),
+                            pheomelanin: v(1),
+                            blood: v(2),
+                            oxygenation: v(3),
+                            stratum_corneum_um: v(4),
+                            epidermis_um: v(5),
+                        },
+                        height_mm: v(6),
+                        extra: [0.0; 4],
+                        lips: 0.0,
+                        furrow_mm: 0.0,
+                    };
+                    // Every field this texel reads, sampled through one set of bilinear taps
+                    // (the fields share a size; others are sampled on their own).
+                    let uv = surface.uv(i);
+                    let taps = Taps::uv(field_size.0, field_size.1, uv.x, uv.y, wrap);
+                    if let Some(r) = &regional {
+                        let at = |k: usize| r[k].sample(&taps);
+                        s.tissue.blood *= at(0);
+                        s.tissue.melanin *= at(1);
+                        s.tissue.oxygenation = (s.tissue.oxygenation + at(2)).clamp(0.0, 1.0);
+                        s.tissue.epidermis_um *= at(3);
+                    }
+                    if let Some(m) = &mottling {
+                        let [b, mel] = m.factors(p, &mut mottling_cache);
+                        s.tissue.blood *= b;
+                        s.tissue.melanin *= mel;
+                    }
+                    if let Some(m) = &measured.melanin {
+                        s.tissue.melanin = m.sample(&taps);
+                    }
+                    if let Some(m) = &measured.blood {
+                        s.tissue.blood = m.sample(&taps);
+                    }
+                    let (n, [dpdu, dpdv]) = surface.normal_jacobian(i);
+                    if let Some((_, depth, tension)) = &relief {
+                        let scale = depth.sample(&taps).max(0.0);
+                        if scale > 0.0 {
+                            let t = tension
+                                .map(|maps| crate::field::decode_vector_at(maps, &taps))
+                                .map_or(glam::Vec3::ZERO, |v| {
+                                    let d = dpdu * v.dir.x + dpdv * v.dir.y;
+                                    (d - n * n.dot(d)).normalize_or_zero()
+                                });
+                            let texel_mm = crate::surface::texel_area(
+                                dpdu,
+                                dpdv,
+                                surface.width,
+                                surface.height,
+                            )
+                            .sqrt();
+                            relief_in.push(ReliefTexel {
+                                p,
+                                n,
+                                tension: t,
+                                scale,
+                                texel_mm,
                             });
-                        let texel =
-                            crate::surface::texel_area(dpdu, dpdv, surface.width, surface.height)
-                                .sqrt();
-                        s.height_mm +=
-                            relief::height_cached(prm, p, n, t, scale, texel, &mut relief_cache);
+                            relief_at.push(x);
+                        }
+                    }
+                    let lip = lips_map.map_or(0.0, |m| m.sample(&taps));
+                    row_points.push((x, PaintPoint { p, n }, lip));
+                }
+                if let Some((prm, _, _)) = &relief {
+                    relief_out.resize(relief_in.len(), 0.0);
+                    heights(prm, &relief_in, &mut relief_out, &mut relief_cache);
+                    for (&x, h) in relief_at.iter().zip(&relief_out) {
+                        row[x].height_mm += h;
                     }
                 }
-                if let Some(m) = lips_map {
-                    apply_lips(&lip, m.sample(&taps).clamp(0.0, 1.0), s);
-                }
-                let q = PaintPoint { p, n };
-                for (kind, cursor) in kinds.iter().zip(cursors.iter_mut()) {
-                    let ids = cursor.query(q.p);
-                    if !ids.is_empty() {
-                        kind.paint(ids, &q, s);
+                for (x, q, lip) in &row_points {
+                    let s = &mut row[*x];
+                    if lips_map.is_some() {
+                        apply_lips(&lip_params, lip.clamp(0.0, 1.0), s);
                     }
+                    for (kind, cursor) in kinds.iter().zip(cursors.iter_mut()) {
+                        let ids = cursor.query(q.p);
+                        if !ids.is_empty() {
+                            kind.paint(ids, q, s);
+                        }
+                    }
+                    s.tissue.melanin = s.tissue.melanin.clamp(0.0, 1.0);
+                    s.tissue.pheomelanin = s.tissue.pheomelanin.clamp(0.0, 1.0);
+                    s.tissue.blood = s.tissue.blood.clamp(0.0, 1.0);
                 }
-                s.tissue.melanin = s.tissue.melanin.clamp(0.0, 1.0);
-                s.tissue.pheomelanin = s.tissue.pheomelanin.clamp(0.0, 1.0);
-                s.tissue.blood = s.tissue.blood.clamp(0.0, 1.0);
             }
             progress.advance((rows.len() / w) as u64);
         });

@@ -238,6 +238,7 @@ impl Placing<'_> {
         let map = self.fields.scalar(spec.field)?;
         let wrap = s.period().is_some();
         let weights: Vec<f32> = (0..s.len())
+            .into_par_iter()
             .map(|i| {
                 let uv = s.uv(i);
                 let v = map.sample_uv(uv.x, uv.y, wrap).clamp(0.0, 1.0);

@@ -5,6 +5,7 @@
 use crate::surface::{Frame, Surface};
 use derma_core::rng::Philox;
 use glam::{Vec2, Vec3};
+use rayon::prelude::*;
 
 /// A sampled point on the surface.
 #[derive(Clone, Copy, Debug)]
@@ -25,20 +26,33 @@ pub struct Sampler<'a> {
 }
 
 impl<'a> Sampler<'a> {
-    /// `weight(i)` is the field value (already raised to any power) at scatter texel `i`.
-    pub fn new(surface: &'a Surface, weight: impl Fn(usize) -> f32) -> Self {
+    /// `weight(i)` is the field value (already raised to any power) at scatter texel `i`. Each
+    /// texel's share (weight × area) is found in parallel, the running sum then in texel order,
+    /// so the sums do not depend on the number of threads.
+    pub fn new(surface: &'a Surface, weight: impl Fn(usize) -> f32 + Sync) -> Self {
+        let shares: Vec<f64> = (0..surface.len())
+            .into_par_iter()
+            .map(|i| {
+                let w = if surface.covered(i) {
+                    weight(i).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                if w <= 0.0 {
+                    return -1.0;
+                }
+                w as f64 * surface.frame(i).texel_area(surface.width, surface.height) as f64
+            })
+            .collect();
         let mut texels = Vec::new();
         let mut cumulative = Vec::new();
         let mut acc = 0.0f64;
-        for i in 0..surface.len() {
-            if !surface.covered(i) {
+        for (i, &share) in shares.iter().enumerate() {
+            // A negative share marks a texel off the surface or of no weight.
+            if share < 0.0 {
                 continue;
             }
-            let w = weight(i).clamp(0.0, 1.0);
-            if w <= 0.0 {
-                continue;
-            }
-            acc += w as f64 * surface.frame(i).texel_area(surface.width, surface.height) as f64;
+            acc += share;
             texels.push(i as u32);
             cumulative.push(acc);
         }

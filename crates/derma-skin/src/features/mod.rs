@@ -12,6 +12,7 @@ pub mod perimeter;
 pub mod pore;
 pub mod profile;
 pub mod relief;
+pub mod relief_lanes;
 pub mod strand;
 pub mod wrinkle;
 

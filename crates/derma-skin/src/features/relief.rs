@@ -37,6 +37,23 @@ pub struct ReliefParams {
 }
 
 impl ReliefParams {
+    /// An octave's cell size (mm, x y z) for nominal size `cell`, and the cells per period in x
+    /// and y on a tileable patch: there the cells fit the period a whole number of times (cell
+    /// sizes change by at most half a cell per period).
+    #[inline]
+    pub(crate) fn cells(&self, cell: f32) -> (Vec3, Option<[i32; 2]>) {
+        match self.period {
+            None => (Vec3::splat(cell), None),
+            Some([px, py]) => {
+                let (nx, ny) = ((px / cell).round().max(1.0), (py / cell).round().max(1.0));
+                (
+                    Vec3::new(px / nx, py / ny, cell),
+                    Some([nx as i32, ny as i32]),
+                )
+            }
+        }
+    }
+
     /// The parameters of config `[relief]` with a jitter seed and a tiling period.
     pub fn from_config(
         c: &crate::config::ReliefConfig,
@@ -99,12 +116,16 @@ fn site(c: [i32; 3], o: u32, seed: u32) -> Vec3 {
 /// stay in that cell (texels are much smaller than cells, so most texels reuse them); when the
 /// texel moves to a neighbouring cell, the sites the two blocks share are kept and only the
 /// others computed. Sites are stored as coordinate columns (in [`NEIGHBOURS`] order, padded
-/// to 28 with a far site) for the distance loop.
+/// to [`SLOTS_PADDED`] with a far site) for the distance loop.
 #[derive(Clone, Copy, Debug)]
-struct CellSites {
+pub(crate) struct CellSites {
     base: [i32; 3],
-    columns: [[f32; 28]; 3],
+    /// x, y and z of the sites.
+    pub(crate) columns: [[f32; SLOTS_PADDED]; 3],
 }
+
+/// Slots of a block: the 27 sites and far padding, four rows of eight SIMD lanes.
+pub(crate) const SLOTS_PADDED: usize = 32;
 
 /// A coordinate no site has: the padding slot's distance is never among the smallest two.
 const FAR: f32 = 1e18;
@@ -190,10 +211,7 @@ struct Blocks {
 
 impl Default for Blocks {
     fn default() -> Self {
-        let empty = CellSites {
-            base: [0; 3],
-            columns: [[FAR; 28]; 3],
-        };
+        let empty = CellSites::far();
         Blocks {
             blocks: [empty; 2],
             current: 0,
@@ -202,16 +220,16 @@ impl Default for Blocks {
     }
 }
 
-/// The two nearest sites of `q` (in cell units) and their squared distances (of sites at
-/// exactly equal distances, the first in [`NEIGHBOURS`] order).
+/// The block of sites around the cell of `q` (in cell units), octave `o`, from `cache`
+/// (refilled, keeping the sites it shares with the previous block, when `q` left its cell).
 #[inline]
-fn nearest_two(
+pub(crate) fn block<'c>(
     q: Vec3,
     o: usize,
     seed: u32,
     wrap: Option<[i32; 2]>,
-    cache: &mut ReliefCache,
-) -> (Vec3, f32, Vec3, f32) {
+    cache: &'c mut ReliefCache,
+) -> &'c CellSites {
     let base = q.floor();
     let b = [base.x as i32, base.y as i32, base.z as i32];
     let oct = &mut cache.octaves[o];
@@ -245,18 +263,46 @@ fn nearest_two(
         oct.current ^= 1;
         oct.valid = true;
     }
-    let cell = &oct.blocks[oct.current];
+    &oct.blocks[oct.current]
+}
+
+impl CellSites {
+    /// A block of far sites only (what an empty cache holds).
+    pub(crate) fn far() -> Self {
+        CellSites {
+            base: [0; 3],
+            columns: [[FAR; SLOTS_PADDED]; 3],
+        }
+    }
+
+    /// Site `k` of the block.
+    #[inline]
+    pub(crate) fn site(&self, k: usize) -> Vec3 {
+        Vec3::new(self.columns[0][k], self.columns[1][k], self.columns[2][k])
+    }
+}
+
+/// The two nearest sites of `q` (in cell units) and their squared distances (of sites at
+/// exactly equal distances, the first in [`NEIGHBOURS`] order).
+#[inline]
+fn nearest_two(
+    q: Vec3,
+    o: usize,
+    seed: u32,
+    wrap: Option<[i32; 2]>,
+    cache: &mut ReliefCache,
+) -> (Vec3, f32, Vec3, f32) {
+    let cell = block(q, o, seed, wrap, cache);
     let (i1, d1, i2, d2) = two_smallest(&squared_distances(q, &cell.columns));
-    let site = |k: usize| Vec3::new(cell.columns[0][k], cell.columns[1][k], cell.columns[2][k]);
-    (site(i1), d1, site(i2), d2)
+    (cell.site(i1), d1, cell.site(i2), d2)
 }
 
 /// Squared distances from `q` to the sites in `columns`, as `(s − q).length_squared()`
 /// computes them: (dx² + dy²) + dz².
 #[inline]
-fn squared_distances(q: Vec3, columns: &[[f32; 28]; 3]) -> [f32; 28] {
-    let mut d = [0.0f32; 28];
-    for k in 0..28 {
+fn squared_distances(q: Vec3, columns: &[[f32; SLOTS_PADDED]; 3]) -> [f32; SLOTS_PADDED] {
+    let mut d = [0.0f32; SLOTS_PADDED];
+    for k in 0..SLOTS_PADDED {
         let (dx, dy, dz) = (
             columns[0][k] - q.x,
             columns[1][k] - q.y,
@@ -269,7 +315,7 @@ fn squared_distances(q: Vec3, columns: &[[f32; 28]; 3]) -> [f32; 28] {
 
 /// The smallest of `d` (four lanes of minima, then across them).
 #[inline]
-fn smallest(d: &[f32; 28]) -> f32 {
+fn smallest(d: &[f32; SLOTS_PADDED]) -> f32 {
     let mut m = [f32::MAX; 4];
     for c in d.chunks_exact(4) {
         for l in 0..4 {
@@ -282,14 +328,16 @@ fn smallest(d: &[f32; 28]) -> f32 {
 
 /// The smallest and second smallest of `d` with their indices (ties to the lower index).
 #[inline]
-fn two_smallest(d: &[f32; 28]) -> (usize, f32, usize, f32) {
+fn two_smallest(d: &[f32; SLOTS_PADDED]) -> (usize, f32, usize, f32) {
     let d1 = smallest(d);
     let i1 = d.iter().position(|&v| v == d1).unwrap_or(0);
     // The second: the smallest of the others (an equal distance elsewhere included).
     let mut others = *d;
     others[i1] = f32::MAX;
     let d2 = smallest(&others);
-    let i2 = (0..28).find(|&k| k != i1 && d[k] == d2).unwrap_or(0);
+    let i2 = (0..SLOTS_PADDED)
+        .find(|&k| k != i1 && d[k] == d2)
+        .unwrap_or(0);
     (i1, d1, i2, d2)
 }
 
@@ -341,18 +389,7 @@ pub fn height_cached(
         if w_oct <= 0.0 || depth <= 0.0 {
             continue;
         }
-        // On a tileable patch the cells fit the period a whole number of times (cell sizes
-        // change by at most half a cell per period).
-        let (cell3, wrap) = match prm.period {
-            None => (Vec3::splat(cell), None),
-            Some([px, py]) => {
-                let (nx, ny) = ((px / cell).round().max(1.0), (py / cell).round().max(1.0));
-                (
-                    Vec3::new(px / nx, py / ny, cell),
-                    Some([nx as i32, ny as i32]),
-                )
-            }
-        };
+        let (cell3, wrap) = prm.cells(cell);
         let q = p / cell3;
         let (s1, d1, s2, _) = nearest_two(q, o, prm.seed, wrap, cache);
         let sep = s2 - s1;
