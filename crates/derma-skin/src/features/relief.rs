@@ -223,13 +223,13 @@ impl Default for Blocks {
 /// The block of sites around the cell of `q` (in cell units), octave `o`, from `cache`
 /// (refilled, keeping the sites it shares with the previous block, when `q` left its cell).
 #[inline]
-pub(crate) fn block<'c>(
+pub(crate) fn block(
     q: Vec3,
     o: usize,
     seed: u32,
     wrap: Option<[i32; 2]>,
-    cache: &'c mut ReliefCache,
-) -> &'c CellSites {
+    cache: &mut ReliefCache,
+) -> &CellSites {
     let base = q.floor();
     let b = [base.x as i32, base.y as i32, base.z as i32];
     let oct = &mut cache.octaves[o];
