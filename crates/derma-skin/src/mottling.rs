@@ -15,7 +15,7 @@
 //! says it must. Its mean factor is within about 1 % of 1, which the ITA° calibration (on mean
 //! texels) neglects.
 
-use crate::noise::{BandNoise, NoiseCache};
+use crate::noise::{BandNoise, NoiseCache, CHANNELS};
 use glam::Vec3;
 
 /// Philox stream of the mottling's noise seed (the baseline noise is 100, the relief 101).
@@ -56,7 +56,17 @@ impl Mottling {
     /// vascular blotches and pigment blotches are not the same blotches.
     #[inline]
     pub fn factors(&self, p: Vec3, cache: &mut NoiseCache) -> [f32; 2] {
-        let n = self.noise.eval_cached(p, cache);
+        self.factors_of(&self.noise.eval_cached(p, cache))
+    }
+
+    /// The noise behind the factors (for evaluating many points at once).
+    pub fn noise(&self) -> &BandNoise {
+        &self.noise
+    }
+
+    /// [`Mottling::factors`] from the noise's value at the point.
+    #[inline]
+    pub fn factors_of(&self, n: &[f32; CHANNELS]) -> [f32; 2] {
         [factor(self.blood, n[0]), factor(self.melanin, n[1])]
     }
 }

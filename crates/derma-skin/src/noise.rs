@@ -124,6 +124,40 @@ impl BandNoise {
     /// are visited in scanline order and cells are millimetres wide, so most calls hit.
     #[inline]
     pub fn eval_cached(&self, p: Vec3, cache: &mut NoiseCache) -> [f32; CHANNELS] {
+        self.eval_inline(p, cache)
+    }
+
+    /// [`BandNoise::eval_cached`] at each point of `ps` (a row of texels), compiled for AVX2
+    /// where the CPU has it: the eight channels of a corner are blended in one register. The
+    /// same operations in the same order, so the same values.
+    pub fn eval_many(&self, ps: &[Vec3], out: &mut [[f32; CHANNELS]], cache: &mut NoiseCache) {
+        assert_eq!(ps.len(), out.len(), "one value per point");
+        #[cfg(target_arch = "x86_64")]
+        if derma_core::numerics::lanes::Avx2::detect().is_some() {
+            // SAFETY: the CPU has AVX2 and FMA (detected just now).
+            unsafe { self.eval_many_avx2(ps, out, cache) };
+            return;
+        }
+        for (o, &p) in out.iter_mut().zip(ps) {
+            *o = self.eval_inline(p, cache);
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn eval_many_avx2(
+        &self,
+        ps: &[Vec3],
+        out: &mut [[f32; CHANNELS]],
+        cache: &mut NoiseCache,
+    ) {
+        for (o, &p) in out.iter_mut().zip(ps) {
+            *o = self.eval_inline(p, cache);
+        }
+    }
+
+    #[inline(always)]
+    fn eval_inline(&self, p: Vec3, cache: &mut NoiseCache) -> [f32; CHANNELS] {
         let mut out = [0.0f32; CHANNELS];
         for (k, o) in self.octaves.iter().enumerate() {
             let q = Vec3::new(p.x * o.inv_cell, p.y * o.inv_cell_y, p.z * o.inv_cell);
@@ -186,6 +220,23 @@ mod tests {
             // continuous: a 1 µm step changes little
             let c = n.eval(p + Vec3::new(0.001, 0.0, 0.0));
             assert!((a[0] - c[0]).abs() < 0.02);
+        }
+    }
+
+    #[test]
+    fn a_row_at_once_gives_each_point_s_bits() {
+        // eval_many (AVX2 where the CPU has it) against eval, point by point, on a patch that
+        // tiles and in open space, with steps within and across cells.
+        for period in [None, Some([20.0, 10.0])] {
+            let n = BandNoise::new(4, [8.0, 2.0, 0.5], period);
+            let ps: Vec<Vec3> = (0..3000)
+                .map(|i| Vec3::new(i as f32 * 0.0731 - 40.0, (i % 37) as f32 * 0.61, 0.2))
+                .collect();
+            let mut out = vec![[0.0; CHANNELS]; ps.len()];
+            n.eval_many(&ps, &mut out, &mut NoiseCache::default());
+            for (p, o) in ps.iter().zip(&out) {
+                assert_eq!(o.map(f32::to_bits), n.eval(*p).map(f32::to_bits), "at {p}");
+            }
         }
     }
 

@@ -10,7 +10,7 @@ use crate::features::relief::{self, ReliefParams};
 use crate::features::relief_lanes::{heights, ReliefTexel};
 use crate::features::{BioSample, PaintPoint};
 use crate::index::GridCursor;
-use crate::noise::{stream_seed, BandNoise, NOISE_STREAM, RELIEF_STREAM};
+use crate::noise::{stream_seed, BandNoise, CHANNELS, NOISE_STREAM, RELIEF_STREAM};
 use crate::surface::Surface;
 use derma_core::map::Taps;
 use derma_core::progress::{Progress, Unit};
@@ -227,17 +227,32 @@ pub fn paint_with(
             let mut relief_in: Vec<ReliefTexel> = Vec::with_capacity(w);
             let mut relief_at: Vec<usize> = Vec::with_capacity(w);
             let mut relief_out: Vec<f32> = Vec::with_capacity(w);
+            let mut covered: Vec<usize> = Vec::with_capacity(w);
+            let mut points: Vec<glam::Vec3> = Vec::with_capacity(w);
+            let mut base_noise: Vec<[f32; CHANNELS]> = Vec::with_capacity(w);
+            let mut mottling_noise: Vec<[f32; CHANNELS]> = Vec::with_capacity(w);
             for (r, row) in rows.chunks_mut(w).enumerate() {
                 row_points.clear();
                 relief_in.clear();
                 relief_at.clear();
-                for (x, s) in row.iter_mut().enumerate() {
-                    let i = (task * ROWS_PER_TASK + r) * w + x;
-                    if !surface.covered(i) {
-                        continue;
-                    }
-                    let p = surface.position(i);
-                    let n = noise.eval_cached(p, &mut noise_cache);
+                // The covered texels' points, and the noises there for the whole row at once.
+                let first = (task * ROWS_PER_TASK + r) * w;
+                covered.clear();
+                covered.extend((0..w).filter(|&x| surface.covered(first + x)));
+                points.clear();
+                points.extend(covered.iter().map(|&x| surface.position(first + x)));
+                base_noise.resize(points.len(), [0.0; CHANNELS]);
+                noise.eval_many(&points, &mut base_noise, &mut noise_cache);
+                if let Some(m) = &mottling {
+                    mottling_noise.resize(points.len(), [0.0; CHANNELS]);
+                    m.noise()
+                        .eval_many(&points, &mut mottling_noise, &mut mottling_cache);
+                }
+                for (k, &x) in covered.iter().enumerate() {
+                    let s = &mut row[x];
+                    let i = first + x;
+                    let p = points[k];
+                    let n = base_noise[k];
                     let v = |c: usize| chans[c].0 + chans[c].1 * n[c];
                     *s = BioSample {
                         tissue: BioTexel {
@@ -265,7 +280,7 @@ pub fn paint_with(
                         s.tissue.epidermis_um *= at(3);
                     }
                     if let Some(m) = &mottling {
-                        let [b, mel] = m.factors(p, &mut mottling_cache);
+                        let [b, mel] = m.factors_of(&mottling_noise[k]);
                         s.tissue.blood *= b;
                         s.tissue.melanin *= mel;
                     }
