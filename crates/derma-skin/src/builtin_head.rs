@@ -293,133 +293,194 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
             1.0 - ((i / n) as f32 + 0.5) / n as f32,
         )
     };
-    let values: Vec<Texel> = (0..n * n)
-        .into_par_iter()
-        .map(|i| {
-            if !covered[i] {
-                return Texel {
-                    f: [0.0; 10],
-                    wv: [0.5, 0.5, 0.0],
-                    relief: 0.0,
-                    tv: [0.5, 0.5, 0.0],
-                    hv: [0.5, 0.5, 0.0],
-                    bio: regional::NEUTRAL,
-                    regions: [0.0; REGIONS.len()],
-                    wrinkle: [0.0; wrinkle_regions::COUNT],
-                };
-            }
-            let p = raster.position(mesh, i);
-            let w = regions.weights(p, uv_of(i));
-            let (f, dir3, len) = feature_values(regions, &w, p, person);
-            // The 3D wrinkle direction in UV coordinates: least squares on the texel's Jacobian
-            // (central differences of the rasterised positions).
-            let (x, y) = (i % n, i / n);
-            let at = |xx: usize, yy: usize| {
-                let j = yy * n + xx;
-                covered[j].then(|| raster.position(mesh, j))
+    // Each texel's values, made a band of rows at a time and spread into the planar fields, so
+    // only a band is ever held as structs (6.5 MB, not 200 MB at FIELD_RESOLUTION²).
+    let texel = |i: usize| -> Texel {
+        if !covered[i] {
+            return Texel {
+                f: [0.0; 10],
+                wv: [0.5, 0.5, 0.0],
+                relief: 0.0,
+                tv: [0.5, 0.5, 0.0],
+                hv: [0.5, 0.5, 0.0],
+                bio: regional::NEUTRAL,
+                regions: [0.0; REGIONS.len()],
+                wrinkle: [0.0; wrinkle_regions::COUNT],
             };
-            let du = match (at((x + 1).min(n - 1), y), at(x.saturating_sub(1), y)) {
-                (Some(a), Some(b)) => (a - b) * (n as f32 / 2.0),
-                _ => Vec3::ZERO,
-            };
-            let dv = match (at(x, y.saturating_sub(1)), at(x, (y + 1).min(n - 1))) {
-                (Some(a), Some(b)) => (a - b) * (n as f32 / 2.0),
-                _ => Vec3::ZERO,
-            };
-            let (a11, a12, a22) = (du.dot(du), du.dot(dv), dv.dot(dv));
-            let det = a11 * a22 - a12 * a12;
-            let to_uv = |dir3: Vec3, len: f32| {
-                if len > 0.0 && det > 1e-9 {
-                    let (b1, b2) = (du.dot(dir3), dv.dot(dir3));
-                    let d = Vec2::new(a22 * b1 - a12 * b2, a11 * b2 - a12 * b1).normalize_or_zero();
-                    [0.5 + 0.5 * d.x, 0.5 + 0.5 * d.y, len]
-                } else {
-                    [0.5, 0.5, 0.0]
-                }
-            };
-            let wv = to_uv(dir3, len);
-            // Tension lines: relaxed skin tension lines run with the expression lines (Borges
-            // 1984) — the wrinkle families' directions where they are, horizontal elsewhere (as
-            // RSTLs run on the forehead, temples and neck).
-            let tension = if f[9] > 0.05 && len > 0.0 {
-                dir3
-            } else {
-                Vec3::X
-            };
-            let tv = to_uv(tension, 1.0);
-            let (hair_dir, hair_len) = hair_direction(regions, p);
-            let hv = to_uv(hair_dir, hair_len);
-            let g = |i: usize| w[i];
-            let skin = 1.0 - g(region!("mouth_interior")).max(g(region!("eye_sockets")));
-            // Relief depth by region (authored): coarser on the nose, finest on the eyelids,
-            // none on the lip vermilion (its own vertical folds are not modelled).
-            let relief = (skin
-                * (1.0 - g(region!("lips")))
-                * (1.0 + 0.3 * g(region!("nose"))
-                    - 0.5 * g(region!("eyelids"))
-                    - 0.2 * g(region!("scalp"))
-                    - 0.2 * g(region!("ears"))))
-            .clamp(0.0, 1.5);
-            let t = mesh.triangles[raster.triangle[i] as usize];
-            let [b1, b2] = raster.bary[i];
-            let bio = [0, 1, 2, 3].map(|c| {
-                gains[t[0] as usize][c] * (1.0 - b1 - b2)
-                    + gains[t[1] as usize][c] * b1
-                    + gains[t[2] as usize][c] * b2
-            });
-            Texel {
-                f,
-                wv,
-                relief,
-                tv,
-                hv,
-                bio,
-                regions: w,
-                // By position, as the furrows are painted (a fold's furrow reaches the texels of
-                // the mouth's or the eye sockets' charts that lie beside it in space).
-                wrinkle: wrinkle_regions::masks(regions, p),
-            }
-        })
-        .collect();
-    let src = dilation_sources(&covered, n, n);
-    let mk = |f: &(dyn Fn(&Texel) -> f32 + Sync)| {
-        let mut m = Map::from_par_fn(n, n, |i| f(&values[i]));
-        if let Some(src) = &src {
-            apply_dilation(m.data_mut(), src);
         }
-        m
+        let p = raster.position(mesh, i);
+        let w = regions.weights(p, uv_of(i));
+        let (f, dir3, len) = feature_values(regions, &w, p, person);
+        // The 3D wrinkle direction in UV coordinates: least squares on the texel's Jacobian
+        // (central differences of the rasterised positions).
+        let (x, y) = (i % n, i / n);
+        let at = |xx: usize, yy: usize| {
+            let j = yy * n + xx;
+            covered[j].then(|| raster.position(mesh, j))
+        };
+        let du = match (at((x + 1).min(n - 1), y), at(x.saturating_sub(1), y)) {
+            (Some(a), Some(b)) => (a - b) * (n as f32 / 2.0),
+            _ => Vec3::ZERO,
+        };
+        let dv = match (at(x, y.saturating_sub(1)), at(x, (y + 1).min(n - 1))) {
+            (Some(a), Some(b)) => (a - b) * (n as f32 / 2.0),
+            _ => Vec3::ZERO,
+        };
+        let (a11, a12, a22) = (du.dot(du), du.dot(dv), dv.dot(dv));
+        let det = a11 * a22 - a12 * a12;
+        let to_uv = |dir3: Vec3, len: f32| {
+            if len > 0.0 && det > 1e-9 {
+                let (b1, b2) = (du.dot(dir3), dv.dot(dir3));
+                let d = Vec2::new(a22 * b1 - a12 * b2, a11 * b2 - a12 * b1).normalize_or_zero();
+                [0.5 + 0.5 * d.x, 0.5 + 0.5 * d.y, len]
+            } else {
+                [0.5, 0.5, 0.0]
+            }
+        };
+        let wv = to_uv(dir3, len);
+        // Tension lines: relaxed skin tension lines run with the expression lines (Borges
+        // 1984) — the wrinkle families' directions where they are, horizontal elsewhere (as
+        // RSTLs run on the forehead, temples and neck).
+        let tension = if f[9] > 0.05 && len > 0.0 {
+            dir3
+        } else {
+            Vec3::X
+        };
+        let tv = to_uv(tension, 1.0);
+        let (hair_dir, hair_len) = hair_direction(regions, p);
+        let hv = to_uv(hair_dir, hair_len);
+        let g = |i: usize| w[i];
+        let skin = 1.0 - g(region!("mouth_interior")).max(g(region!("eye_sockets")));
+        // Relief depth by region (authored): coarser on the nose, finest on the eyelids,
+        // none on the lip vermilion (its own vertical folds are not modelled).
+        let relief = (skin
+            * (1.0 - g(region!("lips")))
+            * (1.0 + 0.3 * g(region!("nose"))
+                - 0.5 * g(region!("eyelids"))
+                - 0.2 * g(region!("scalp"))
+                - 0.2 * g(region!("ears"))))
+        .clamp(0.0, 1.5);
+        let t = mesh.triangles[raster.triangle[i] as usize];
+        let [b1, b2] = raster.bary[i];
+        let bio = [0, 1, 2, 3].map(|c| {
+            gains[t[0] as usize][c] * (1.0 - b1 - b2)
+                + gains[t[1] as usize][c] * b1
+                + gains[t[2] as usize][c] * b2
+        });
+        Texel {
+            f,
+            wv,
+            relief,
+            tv,
+            hv,
+            bio,
+            regions: w,
+            // By position, as the furrows are painted (a fold's furrow reaches the texels of
+            // the mouth's or the eye sockets' charts that lie beside it in space).
+            wrinkle: wrinkle_regions::masks(regions, p),
+        }
     };
-    let mut set = FieldSet::default();
+    // The fields in the order they are inserted (a later insertion of a name replaces an earlier
+    // one; the regions' weights only fill names not taken), each with its value in a texel.
+    type Get = Box<dyn Fn(&Texel) -> f32 + Sync>;
+    let mut scalars: Vec<(String, Get)> = Vec::new();
+    let mut insert = |name: String, get: Get, replace: bool| match scalars
+        .iter_mut()
+        .find(|(n, _)| *n == name)
+    {
+        Some(entry) if replace => entry.1 = get,
+        Some(_) => {}
+        None => scalars.push((name, get)),
+    };
     for (k, name) in FIELD_NAMES.iter().enumerate() {
-        set.scalars.insert((*name).into(), mk(&|v| v.f[k]));
+        insert((*name).into(), Box::new(move |v| v.f[k]), true);
     }
     for (k, name) in REGIONS.iter().enumerate() {
-        set.scalars
-            .entry((*name).into())
-            .or_insert_with(|| mk(&|v| v.regions[k]));
+        insert((*name).into(), Box::new(move |v| v.regions[k]), false);
     }
     for (k, name) in regional::CHANNELS.iter().enumerate() {
-        set.scalars.insert((*name).into(), mk(&|v| v.bio[k]));
+        insert((*name).into(), Box::new(move |v| v.bio[k]), true);
     }
     for (k, r) in wrinkle_regions::REGIONS.iter().enumerate() {
-        set.scalars
-            .insert(wrinkle_mask_field(r.name), mk(&|v| v.wrinkle[k]));
+        insert(
+            wrinkle_mask_field(r.name),
+            Box::new(move |v| v.wrinkle[k]),
+            true,
+        );
     }
-    set.vectors.insert(
-        "wrinkle_vectors".into(),
-        [mk(&|v| v.wv[0]), mk(&|v| v.wv[1]), mk(&|v| v.wv[2])],
-    );
-    set.scalars.insert("relief".into(), mk(&|v| v.relief));
-    set.vectors.insert(
-        "tension_vectors".into(),
-        [mk(&|v| v.tv[0]), mk(&|v| v.tv[1]), mk(&|v| v.tv[2])],
-    );
-    set.vectors.insert(
-        "hair_vectors".into(),
-        [mk(&|v| v.hv[0]), mk(&|v| v.hv[1]), mk(&|v| v.hv[2])],
-    );
+    insert("relief".into(), Box::new(|v| v.relief), true);
+    let vectors: [(&str, [Get; 3]); 3] = [
+        (
+            "wrinkle_vectors",
+            [
+                Box::new(|v| v.wv[0]),
+                Box::new(|v| v.wv[1]),
+                Box::new(|v| v.wv[2]),
+            ],
+        ),
+        (
+            "tension_vectors",
+            [
+                Box::new(|v| v.tv[0]),
+                Box::new(|v| v.tv[1]),
+                Box::new(|v| v.tv[2]),
+            ],
+        ),
+        (
+            "hair_vectors",
+            [
+                Box::new(|v| v.hv[0]),
+                Box::new(|v| v.hv[1]),
+                Box::new(|v| v.hv[2]),
+            ],
+        ),
+    ];
+    let gets: Vec<&Get> = scalars
+        .iter()
+        .map(|(_, g)| g)
+        .chain(vectors.iter().flat_map(|(_, g)| g.iter()))
+        .collect();
+    let mut planes: Vec<Vec<f32>> = gets.iter().map(|_| vec![0.0f32; n * n]).collect();
+    let mut band: Vec<Texel> = Vec::with_capacity(FIELD_BAND_ROWS * n);
+    for lo in (0..n).step_by(FIELD_BAND_ROWS) {
+        let texels = lo * n..(lo + FIELD_BAND_ROWS).min(n) * n;
+        texels
+            .clone()
+            .into_par_iter()
+            .map(texel)
+            .collect_into_vec(&mut band);
+        planes.par_iter_mut().zip(&gets).for_each(|(plane, get)| {
+            for (o, v) in plane[texels.clone()].iter_mut().zip(&band) {
+                *o = get(v);
+            }
+        });
+    }
+    drop(band);
+    let src = dilation_sources(&covered, n, n);
+    let maps: Vec<Map> = planes
+        .into_par_iter()
+        .map(|mut plane| {
+            if let Some(src) = &src {
+                apply_dilation(&mut plane, src);
+            }
+            Map::from_vec(n, n, plane).expect("a field of FIELD_RESOLUTION²")
+        })
+        .collect();
+    let mut next = maps.into_iter();
+    let mut set = FieldSet::default();
+    for (name, _) in &scalars {
+        set.scalars
+            .insert(name.clone(), next.next().expect("one map per field"));
+    }
+    for (name, _) in &vectors {
+        let mut take = || next.next().expect("one map per field");
+        set.vectors.insert((*name).into(), [take(), take(), take()]);
+    }
     set
 }
+
+/// Rows of the built-in head's fields made at a time ([`fields_on`]).
+const FIELD_BAND_ROWS: usize = 32;
 
 /// Smoothing of the regional biology over the surface (mm): no anatomical boundary is sharp in
 /// blood or pigment; facial hemoglobin maps vary smoothly on the scale of a centimetre
