@@ -422,20 +422,26 @@ pub fn height_cached(
     h * scale
 }
 
+/// The relief the tests use: finer than the default, so small patches hold many cells.
+#[cfg(test)]
+pub(crate) fn test_params(period: Option<[f32; 2]>) -> ReliefParams {
+    ReliefParams {
+        cell_mm: [1.0, 0.4, 0.15],
+        depth_mm: [0.03, 0.015, 0.006],
+        width_fraction: 0.12,
+        dome_fraction: 0.3,
+        anisotropy: 0.6,
+        seed: 7,
+        period,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn prm() -> ReliefParams {
-        ReliefParams {
-            cell_mm: [1.0, 0.4, 0.15],
-            depth_mm: [0.03, 0.015, 0.006],
-            width_fraction: 0.12,
-            dome_fraction: 0.3,
-            anisotropy: 0.6,
-            seed: 7,
-            period: None,
-        }
+        test_params(None)
     }
 
     #[test]

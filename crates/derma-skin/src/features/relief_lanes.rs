@@ -255,20 +255,8 @@ fn nearest_two_on<L: Lanes>(t: L::Token, q: Vec3, sites: &CellSites) -> (usize, 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::features::relief::height_cached;
+    use crate::features::relief::{height_cached, test_params as prm};
     use derma_core::numerics::lanes::PortableF32;
-
-    fn prm(period: Option<[f32; 2]>) -> ReliefParams {
-        ReliefParams {
-            cell_mm: [1.0, 0.4, 0.15],
-            depth_mm: [0.03, 0.015, 0.006],
-            width_fraction: 0.12,
-            dome_fraction: 0.3,
-            anisotropy: 0.6,
-            seed: 7,
-            period,
-        }
-    }
 
     /// Texels along a wandering curve, with every case the scalar code branches on: faded
     /// octaves (large texels), no relief (scale ≤ 0), no tension, steps within and across cells.
