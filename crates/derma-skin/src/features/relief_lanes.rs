@@ -4,9 +4,11 @@
 //! Each texel's two nearest sites are found with the block's 32 slots in four rows of eight
 //! lanes (distances, least, and the first slot holding it by a lane mask); the furrow and dome
 //! arithmetic then runs across eight texels at once. Every lane performs the scalar code's
-//! operations in its order (no fused multiply–adds, negation and absolute value as bit
-//! operations), so the heights are bit-identical to [`super::relief::height_cached`]'s on every
-//! path — a test compares them.
+//! operations in its order (no fused multiply–adds; negation as a product with −1, absolute
+//! value by clearing the sign bit; `max` and `min` with the operands placed so a NaN gives what
+//! `f32::max` and `f32::min` give), so the heights are bit-identical to
+//! [`super::relief::height_cached`]'s on every path — a test compares them, non-finite points
+//! included.
 
 use super::relief::{block, octave_weight, CellSites, ReliefCache, ReliefParams, SLOTS_PADDED};
 use derma_core::numerics::lanes::Lanes;
@@ -164,7 +166,8 @@ fn group_heights<L: Lanes>(
         let one = splat(1.0);
         let orient = isotropic.select(one, one.sub(splat(prm.anisotropy).mul(one.sub(c.mul(c)))));
         let w_nom = prm.width_fraction * cell;
-        let w = splat(w_nom).max(splat(0.75).mul(texel));
+        // f32::max(w_nom, 0.75·texel): the lanes' max gives its second operand on a NaN.
+        let w = splat(0.75).mul(texel).max(splat(w_nom));
         let furrow_depth = splat(depth).mul(orient).mul(splat(w_nom).div(w));
         let tt = d_border.div(w);
         let rim = one.sub(tt.mul(tt));
@@ -239,8 +242,17 @@ fn nearest_two_on<L: Lanes>(t: L::Token, q: Vec3, sites: &CellSites) -> (usize, 
             bits | (r.eq(v).mask_bits() << (LANES * j))
         })
     };
+    // The first slot in `bits` (slot 0 when none: no distance is a number, as the scalar
+    // search falls back).
+    let first = |bits: u32| {
+        if bits == 0 {
+            0
+        } else {
+            bits.trailing_zeros() as usize
+        }
+    };
     let d1 = least(&d);
-    let i1 = slots_of(d1).trailing_zeros() as usize;
+    let i1 = first(slots_of(d1));
     // The second: the least of the other slots (an equal distance elsewhere included).
     let others: [L; SLOTS_PADDED / LANES] = std::array::from_fn(|j| {
         let slot = L::from_array(t, std::array::from_fn(|l| (j * LANES + l) as f32));
@@ -248,7 +260,7 @@ fn nearest_two_on<L: Lanes>(t: L::Token, q: Vec3, sites: &CellSites) -> (usize, 
             .select(L::splat(t, f32::MAX), d[j])
     });
     let d2 = least(&others);
-    let i2 = (slots_of(d2) & !(1u32 << i1)).trailing_zeros() as usize;
+    let i2 = first(slots_of(d2) & !(1u32 << i1));
     (i1, d1, i2)
 }
 
@@ -259,7 +271,8 @@ mod tests {
     use derma_core::numerics::lanes::PortableF32;
 
     /// Texels along a wandering curve, with every case the scalar code branches on: faded
-    /// octaves (large texels), no relief (scale ≤ 0), no tension, steps within and across cells.
+    /// octaves (large texels), no relief (scale ≤ 0), no tension, steps within and across cells,
+    /// a run of eight that skips every octave, and points and a texel size that are not numbers.
     fn texels() -> Vec<ReliefTexel> {
         let rng = derma_core::rng::Philox::new(5, 1);
         let mut p = Vec3::new(3.0, -2.0, 40.0);
@@ -282,6 +295,34 @@ mod tests {
                     texel_mm: [0.01, 0.05, 0.14, 0.3, 2.0][(k % 5) as usize] * (0.8 + 0.4 * v[3]),
                 }
             })
+            .chain((0..8).map(|k| ReliefTexel {
+                p: Vec3::new(k as f32, 1.0, 2.0),
+                n: Vec3::Z,
+                tension: Vec3::X,
+                scale: 1.0,
+                texel_mm: 10.0,
+            }))
+            .chain(
+                [
+                    Vec3::new(f32::NAN, 1.0, 2.0),
+                    Vec3::new(f32::INFINITY, 1.0, 2.0),
+                    Vec3::new(1.0, f32::NEG_INFINITY, 2.0),
+                ]
+                .map(|p| ReliefTexel {
+                    p,
+                    n: Vec3::Z,
+                    tension: Vec3::X,
+                    scale: 1.0,
+                    texel_mm: 0.05,
+                }),
+            )
+            .chain(std::iter::once(ReliefTexel {
+                p: Vec3::new(0.3, 0.2, 0.1),
+                n: Vec3::Z,
+                tension: Vec3::X,
+                scale: 1.0,
+                texel_mm: f32::NAN,
+            }))
             .collect()
     }
 
@@ -297,8 +338,12 @@ mod tests {
 
     #[test]
     fn the_lanes_give_the_scalar_bits() {
-        for period in [None, Some([20.0, 30.0])] {
-            let prm = prm(period);
+        let shallow = ReliefParams {
+            depth_mm: [0.03, 0.0, 0.006],
+            ..prm(None)
+        };
+        for prm in [prm(None), prm(Some([20.0, 30.0])), shallow] {
+            let period = prm.period;
             let texels = texels();
             let want = scalar(&prm, &texels);
             assert!(want.iter().filter(|&&b| f32::from_bits(b) != 0.0).count() > 2000);
