@@ -83,12 +83,14 @@ impl BioMaps {
         }
     }
 
-    /// One channel box-filtered by the whole factor `k` (each texel the mean of a k × k block),
-    /// without making the full-size map.
-    pub fn channel_reduced(&self, k: usize, f: fn(&BioSample) -> f32) -> Map {
-        let [m] =
-            derma_core::map::box_reduced(self.width, self.height, k, |i| [f(&self.texels[i])]);
-        m
+    /// Channels box-filtered by the whole factor `k` (each texel the mean of a k × k block),
+    /// without making the full-size maps, in one pass over the samples.
+    pub fn channels_reduced<const C: usize>(
+        &self,
+        k: usize,
+        f: impl Fn(&BioSample) -> [f32; C] + Sync,
+    ) -> [Map; C] {
+        derma_core::map::box_reduced(self.width, self.height, k, |i| f(&self.texels[i]))
     }
 
     /// One channel as a planar map.

@@ -114,14 +114,16 @@ pub fn contact_sheet(
     let k = (bio.width.max(bio.height) / (2 * t)).max(1);
     let (base, normal, rough) = r.reduced(k);
     let rough = small(&rough);
-    let bio_small = |f: fn(&crate::features::BioSample) -> f32| small(&bio.channel_reduced(k, f));
+    let [height, melanin, blood] = bio
+        .channels_reduced(k, |s| [s.height_mm, s.tissue.melanin, s.tissue.blood])
+        .map(|m| small(&m));
     let sheet = vec![
         base.each_ref().map(enc),
         normal.each_ref().map(half),
-        normalised(&bio_small(|s| s.height_mm)),
+        normalised(&height),
         [rough.clone(), rough.clone(), rough],
-        normalised(&bio_small(|s| s.tissue.melanin)),
-        normalised(&bio_small(|s| s.tissue.blood)),
+        normalised(&melanin),
+        normalised(&blood),
     ];
     compose(&renders, &sheet, PANEL)
 }
