@@ -380,64 +380,35 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
             wrinkle: wrinkle_regions::masks(regions, p),
         }
     };
-    // The fields in the order they are inserted (a later insertion of a name replaces an earlier
-    // one; the regions' weights only fill names not taken), each with its value in a texel.
+    // Each field with its value in a texel, named as the set names them: a later insertion of a
+    // name replaces an earlier one; the regions' weights only fill names not taken.
     type Get = Box<dyn Fn(&Texel) -> f32 + Sync>;
-    let mut scalars: Vec<(String, Get)> = Vec::new();
-    let mut insert = |name: String, get: Get, replace: bool| match scalars
-        .iter_mut()
-        .find(|(n, _)| *n == name)
-    {
-        Some(entry) if replace => entry.1 = get,
-        Some(_) => {}
-        None => scalars.push((name, get)),
-    };
+    let mut scalars: std::collections::BTreeMap<String, Get> = Default::default();
     for (k, name) in FIELD_NAMES.iter().enumerate() {
-        insert((*name).into(), Box::new(move |v| v.f[k]), true);
+        scalars.insert((*name).into(), Box::new(move |v| v.f[k]));
     }
     for (k, name) in REGIONS.iter().enumerate() {
-        insert((*name).into(), Box::new(move |v| v.regions[k]), false);
+        scalars
+            .entry((*name).into())
+            .or_insert_with(|| Box::new(move |v| v.regions[k]));
     }
     for (k, name) in regional::CHANNELS.iter().enumerate() {
-        insert((*name).into(), Box::new(move |v| v.bio[k]), true);
+        scalars.insert((*name).into(), Box::new(move |v| v.bio[k]));
     }
     for (k, r) in wrinkle_regions::REGIONS.iter().enumerate() {
-        insert(
-            wrinkle_mask_field(r.name),
-            Box::new(move |v| v.wrinkle[k]),
-            true,
-        );
+        scalars.insert(wrinkle_mask_field(r.name), Box::new(move |v| v.wrinkle[k]));
     }
-    insert("relief".into(), Box::new(|v| v.relief), true);
+    scalars.insert("relief".into(), Box::new(|v| v.relief));
+    let xyz = |f: fn(&Texel) -> &[f32; 3]| -> [Get; 3] {
+        std::array::from_fn(|c| -> Get { Box::new(move |v| f(v)[c]) })
+    };
     let vectors: [(&str, [Get; 3]); 3] = [
-        (
-            "wrinkle_vectors",
-            [
-                Box::new(|v| v.wv[0]),
-                Box::new(|v| v.wv[1]),
-                Box::new(|v| v.wv[2]),
-            ],
-        ),
-        (
-            "tension_vectors",
-            [
-                Box::new(|v| v.tv[0]),
-                Box::new(|v| v.tv[1]),
-                Box::new(|v| v.tv[2]),
-            ],
-        ),
-        (
-            "hair_vectors",
-            [
-                Box::new(|v| v.hv[0]),
-                Box::new(|v| v.hv[1]),
-                Box::new(|v| v.hv[2]),
-            ],
-        ),
+        ("wrinkle_vectors", xyz(|v| &v.wv)),
+        ("tension_vectors", xyz(|v| &v.tv)),
+        ("hair_vectors", xyz(|v| &v.hv)),
     ];
     let gets: Vec<&Get> = scalars
-        .iter()
-        .map(|(_, g)| g)
+        .values()
         .chain(vectors.iter().flat_map(|(_, g)| g.iter()))
         .collect();
     let mut planes: Vec<Vec<f32>> = gets.iter().map(|_| vec![0.0f32; n * n]).collect();
@@ -468,7 +439,7 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
         .collect();
     let mut next = maps.into_iter();
     let mut set = FieldSet::default();
-    for (name, _) in &scalars {
+    for name in scalars.keys() {
         set.scalars
             .insert(name.clone(), next.next().expect("one map per field"));
     }

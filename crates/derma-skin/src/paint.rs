@@ -200,13 +200,24 @@ pub fn paint_with(
         amp(b.epidermis_um),
         amp(b.height_mm),
     ];
-    let wrap = surface.period().is_some();
     // The size most fields share (the built-in head's are all FIELD_RESOLUTION²).
     let field_size = regional
         .as_ref()
         .and_then(|r| r.first().copied())
         .or(lips_map)
         .map_or((1, 1), |m| (m.width(), m.height()));
+    let painter = Painter {
+        surface,
+        noise,
+        mottling,
+        lips: lips_map.map(|m| (m, lip_params)),
+        regional,
+        measured,
+        relief,
+        chans,
+        wrap: surface.period().is_some(),
+        field_size,
+    };
     let w = surface.width;
     // Filled in parallel: the first touch of these pages (about 1 GB at 4096²) is spread over
     // the threads instead of one.
@@ -218,132 +229,10 @@ pub fn paint_with(
         .for_each(|(task, rows)| {
             let mut cursors: Vec<GridCursor> =
                 kinds.iter().map(|k| GridCursor::new(k.grid())).collect();
-            let mut noise_cache = crate::noise::NoiseCache::default();
-            let mut mottling_cache = crate::noise::NoiseCache::default();
-            let mut relief_cache = relief::ReliefCache::default();
-            // One row at a time in three passes, so the micro-relief runs across the row's
-            // texels in SIMD lanes (relief_lanes.rs): the baseline and the inputs of the relief;
-            // the relief; the lips and the features. Each texel sees the same operations in the
-            // same order as when painted alone.
-            let mut row_points: Vec<(usize, PaintPoint, f32)> = Vec::with_capacity(w);
-            let mut relief_in: Vec<ReliefTexel> = Vec::with_capacity(w);
-            let mut relief_at: Vec<usize> = Vec::with_capacity(w);
-            let mut relief_out: Vec<f32> = Vec::with_capacity(w);
-            let mut covered: Vec<usize> = Vec::with_capacity(w);
-            let mut points: Vec<glam::Vec3> = Vec::with_capacity(w);
-            let mut base_noise: Vec<[f32; CHANNELS]> = Vec::with_capacity(w);
-            let mut mottling_noise: Vec<[f32; CHANNELS]> = Vec::with_capacity(w);
+            let mut scratch = Scratch::default();
             for (r, row) in rows.chunks_mut(w).enumerate() {
-                row_points.clear();
-                relief_in.clear();
-                relief_at.clear();
-                // The covered texels' points, and the noises there for the whole row at once.
                 let first = (task * ROWS_PER_TASK + r) * w;
-                covered.clear();
-                covered.extend((0..w).filter(|&x| surface.covered(first + x)));
-                points.clear();
-                points.extend(covered.iter().map(|&x| surface.position(first + x)));
-                base_noise.resize(points.len(), [0.0; CHANNELS]);
-                noise.eval_many(&points, &mut base_noise, &mut noise_cache);
-                if let Some(m) = &mottling {
-                    mottling_noise.resize(points.len(), [0.0; CHANNELS]);
-                    m.noise()
-                        .eval_many(&points, &mut mottling_noise, &mut mottling_cache);
-                }
-                for (k, &x) in covered.iter().enumerate() {
-                    let s = &mut row[x];
-                    let i = first + x;
-                    let p = points[k];
-                    let n = base_noise[k];
-                    let v = |c: usize| chans[c].0 + chans[c].1 * n[c];
-                    *s = BioSample {
-                        tissue: BioTexel {
-                            melanin: v(0),
-                            pheomelanin: v(1),
-                            blood: v(2),
-                            oxygenation: v(3),
-                            stratum_corneum_um: v(4),
-                            epidermis_um: v(5),
-                        },
-                        height_mm: v(6),
-                        extra: [0.0; 4],
-                        lips: 0.0,
-                        furrow_mm: 0.0,
-                    };
-                    // Every field this texel reads, sampled through one set of bilinear taps
-                    // (the fields share a size; others are sampled on their own).
-                    let uv = surface.uv(i);
-                    let taps = Taps::uv(field_size.0, field_size.1, uv.x, uv.y, wrap);
-                    if let Some(r) = &regional {
-                        let at = |k: usize| r[k].sample(&taps);
-                        s.tissue.blood *= at(0);
-                        s.tissue.melanin *= at(1);
-                        s.tissue.oxygenation = (s.tissue.oxygenation + at(2)).clamp(0.0, 1.0);
-                        s.tissue.epidermis_um *= at(3);
-                    }
-                    if let Some(m) = &mottling {
-                        let [b, mel] = m.factors_of(&mottling_noise[k]);
-                        s.tissue.blood *= b;
-                        s.tissue.melanin *= mel;
-                    }
-                    if let Some(m) = &measured.melanin {
-                        s.tissue.melanin = m.sample(&taps);
-                    }
-                    if let Some(m) = &measured.blood {
-                        s.tissue.blood = m.sample(&taps);
-                    }
-                    let (n, [dpdu, dpdv]) = surface.normal_jacobian(i);
-                    if let Some((_, depth, tension)) = &relief {
-                        let scale = depth.sample(&taps).max(0.0);
-                        if scale > 0.0 {
-                            let t = tension
-                                .map(|maps| crate::field::decode_vector_at(maps, &taps))
-                                .map_or(glam::Vec3::ZERO, |v| {
-                                    let d = dpdu * v.dir.x + dpdv * v.dir.y;
-                                    (d - n * n.dot(d)).normalize_or_zero()
-                                });
-                            let texel_mm = crate::surface::texel_area(
-                                dpdu,
-                                dpdv,
-                                surface.width,
-                                surface.height,
-                            )
-                            .sqrt();
-                            relief_in.push(ReliefTexel {
-                                p,
-                                n,
-                                tension: t,
-                                scale,
-                                texel_mm,
-                            });
-                            relief_at.push(x);
-                        }
-                    }
-                    let lip = lips_map.map_or(0.0, |m| m.sample(&taps));
-                    row_points.push((x, PaintPoint { p, n }, lip));
-                }
-                if let Some((prm, _, _)) = &relief {
-                    relief_out.resize(relief_in.len(), 0.0);
-                    heights(prm, &relief_in, &mut relief_out, &mut relief_cache);
-                    for (&x, h) in relief_at.iter().zip(&relief_out) {
-                        row[x].height_mm += h;
-                    }
-                }
-                for (x, q, lip) in &row_points {
-                    let s = &mut row[*x];
-                    if lips_map.is_some() {
-                        apply_lips(&lip_params, lip.clamp(0.0, 1.0), s);
-                    }
-                    for (kind, cursor) in kinds.iter().zip(cursors.iter_mut()) {
-                        let ids = cursor.query(q.p);
-                        if !ids.is_empty() {
-                            kind.paint(ids, q, s);
-                        }
-                    }
-                    s.tissue.melanin = s.tissue.melanin.clamp(0.0, 1.0);
-                    s.tissue.pheomelanin = s.tissue.pheomelanin.clamp(0.0, 1.0);
-                    s.tissue.blood = s.tissue.blood.clamp(0.0, 1.0);
-                }
+                painter.row(first, row, &kinds, &mut cursors, &mut scratch);
             }
             progress.advance((rows.len() / w) as u64);
         });
@@ -352,6 +241,170 @@ pub fn paint_with(
         height: surface.height,
         texels,
     })
+}
+
+/// What painting a row reads, shared by every task.
+struct Painter<'a> {
+    surface: &'a Surface,
+    noise: BandNoise,
+    mottling: Option<crate::mottling::Mottling>,
+    lips: Option<(&'a Map, LipParams)>,
+    regional: Option<Vec<&'a Map>>,
+    measured: &'a BaselineMaps,
+    relief: Option<(ReliefParams, &'a Map, Option<&'a [Map; 3]>)>,
+    /// Per baseline channel: minimum and amplitude of its noise.
+    chans: [(f32, f32); 7],
+    wrap: bool,
+    field_size: (usize, usize),
+}
+
+/// A task's caches and a row's buffers, reused from row to row.
+#[derive(Default)]
+struct Scratch {
+    noise_cache: crate::noise::NoiseCache,
+    mottling_cache: crate::noise::NoiseCache,
+    relief_cache: relief::ReliefCache,
+    covered: Vec<usize>,
+    points: Vec<glam::Vec3>,
+    base_noise: Vec<[f32; CHANNELS]>,
+    mottling_noise: Vec<[f32; CHANNELS]>,
+    /// Per covered texel: its column, point and lip mask.
+    row_points: Vec<(usize, PaintPoint, f32)>,
+    relief_in: Vec<ReliefTexel>,
+    relief_at: Vec<usize>,
+    relief_out: Vec<f32>,
+}
+
+impl Painter<'_> {
+    /// Paints `row`, whose first texel is `first`, in three passes, so the micro-relief runs
+    /// across the row's texels in SIMD lanes (relief_lanes.rs): the baseline and the inputs of
+    /// the relief; the relief; the lips and the features. Each texel sees the same operations
+    /// in the same order as when painted alone.
+    fn row(
+        &self,
+        first: usize,
+        row: &mut [BioSample],
+        kinds: &[&dyn crate::placement::PlacedKind],
+        cursors: &mut [GridCursor],
+        sc: &mut Scratch,
+    ) {
+        self.baseline(first, row, sc);
+        if let Some((prm, _, _)) = &self.relief {
+            sc.relief_out.resize(sc.relief_in.len(), 0.0);
+            heights(prm, &sc.relief_in, &mut sc.relief_out, &mut sc.relief_cache);
+            for (&x, h) in sc.relief_at.iter().zip(&sc.relief_out) {
+                row[x].height_mm += h;
+            }
+        }
+        for (x, q, lip) in &sc.row_points {
+            let s = &mut row[*x];
+            if let Some((_, params)) = &self.lips {
+                apply_lips(params, lip.clamp(0.0, 1.0), s);
+            }
+            for (kind, cursor) in kinds.iter().zip(cursors.iter_mut()) {
+                let ids = cursor.query(q.p);
+                if !ids.is_empty() {
+                    kind.paint(ids, q, s);
+                }
+            }
+            s.tissue.melanin = s.tissue.melanin.clamp(0.0, 1.0);
+            s.tissue.pheomelanin = s.tissue.pheomelanin.clamp(0.0, 1.0);
+            s.tissue.blood = s.tissue.blood.clamp(0.0, 1.0);
+        }
+    }
+
+    /// The first pass: each covered texel's baseline, regional gains, mottling and measured
+    /// maps, and what the later passes need (its point and lip mask, the relief's inputs).
+    fn baseline(&self, first: usize, row: &mut [BioSample], sc: &mut Scratch) {
+        let surface = self.surface;
+        sc.row_points.clear();
+        sc.relief_in.clear();
+        sc.relief_at.clear();
+        // The covered texels' points, and the noises there for the whole row at once.
+        sc.covered.clear();
+        sc.covered
+            .extend((0..row.len()).filter(|&x| surface.covered(first + x)));
+        sc.points.clear();
+        sc.points
+            .extend(sc.covered.iter().map(|&x| surface.position(first + x)));
+        sc.base_noise.resize(sc.points.len(), [0.0; CHANNELS]);
+        self.noise
+            .eval_many(&sc.points, &mut sc.base_noise, &mut sc.noise_cache);
+        if let Some(m) = &self.mottling {
+            sc.mottling_noise.resize(sc.points.len(), [0.0; CHANNELS]);
+            m.noise()
+                .eval_many(&sc.points, &mut sc.mottling_noise, &mut sc.mottling_cache);
+        }
+        let chans = &self.chans;
+        for (k, &x) in sc.covered.iter().enumerate() {
+            let s = &mut row[x];
+            let i = first + x;
+            let p = sc.points[k];
+            let n = sc.base_noise[k];
+            let v = |c: usize| chans[c].0 + chans[c].1 * n[c];
+            *s = BioSample {
+                tissue: BioTexel {
+                    melanin: v(0),
+                    pheomelanin: v(1),
+                    blood: v(2),
+                    oxygenation: v(3),
+                    stratum_corneum_um: v(4),
+                    epidermis_um: v(5),
+                },
+                height_mm: v(6),
+                extra: [0.0; 4],
+                lips: 0.0,
+                furrow_mm: 0.0,
+            };
+            // Every field this texel reads, sampled through one set of bilinear taps (the
+            // fields share a size; others are sampled on their own).
+            let uv = surface.uv(i);
+            let taps = Taps::uv(self.field_size.0, self.field_size.1, uv.x, uv.y, self.wrap);
+            if let Some(r) = &self.regional {
+                let at = |k: usize| r[k].sample(&taps);
+                s.tissue.blood *= at(0);
+                s.tissue.melanin *= at(1);
+                s.tissue.oxygenation = (s.tissue.oxygenation + at(2)).clamp(0.0, 1.0);
+                s.tissue.epidermis_um *= at(3);
+            }
+            if let Some(m) = &self.mottling {
+                let [b, mel] = m.factors_of(&sc.mottling_noise[k]);
+                s.tissue.blood *= b;
+                s.tissue.melanin *= mel;
+            }
+            if let Some(m) = &self.measured.melanin {
+                s.tissue.melanin = m.sample(&taps);
+            }
+            if let Some(m) = &self.measured.blood {
+                s.tissue.blood = m.sample(&taps);
+            }
+            let (n, [dpdu, dpdv]) = surface.normal_jacobian(i);
+            if let Some((_, depth, tension)) = &self.relief {
+                let scale = depth.sample(&taps).max(0.0);
+                if scale > 0.0 {
+                    let t = tension
+                        .map(|maps| crate::field::decode_vector_at(maps, &taps))
+                        .map_or(glam::Vec3::ZERO, |v| {
+                            let d = dpdu * v.dir.x + dpdv * v.dir.y;
+                            (d - n * n.dot(d)).normalize_or_zero()
+                        });
+                    let texel_mm =
+                        crate::surface::texel_area(dpdu, dpdv, surface.width, surface.height)
+                            .sqrt();
+                    sc.relief_in.push(ReliefTexel {
+                        p,
+                        n,
+                        tension: t,
+                        scale,
+                        texel_mm,
+                    });
+                    sc.relief_at.push(x);
+                }
+            }
+            let lip = self.lips.as_ref().map_or(0.0, |(m, _)| m.sample(&taps));
+            sc.row_points.push((x, PaintPoint { p, n }, lip));
+        }
+    }
 }
 
 #[cfg(test)]

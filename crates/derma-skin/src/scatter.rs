@@ -30,7 +30,8 @@ impl<'a> Sampler<'a> {
     /// texel's share (weight × area) is found in parallel, the running sum then in texel order,
     /// so the sums do not depend on the number of threads.
     pub fn new(surface: &'a Surface, weight: impl Fn(usize) -> f32 + Sync) -> Self {
-        let shares: Vec<f64> = (0..surface.len())
+        // None: off the surface, or of no weight.
+        let shares: Vec<Option<f64>> = (0..surface.len())
             .into_par_iter()
             .map(|i| {
                 let w = if surface.covered(i) {
@@ -38,23 +39,20 @@ impl<'a> Sampler<'a> {
                 } else {
                     0.0
                 };
-                if w <= 0.0 {
-                    return -1.0;
-                }
-                w as f64 * surface.frame(i).texel_area(surface.width, surface.height) as f64
+                (!(w <= 0.0)).then(|| {
+                    w as f64 * surface.frame(i).texel_area(surface.width, surface.height) as f64
+                })
             })
             .collect();
         let mut texels = Vec::new();
         let mut cumulative = Vec::new();
         let mut acc = 0.0f64;
-        for (i, &share) in shares.iter().enumerate() {
-            // A negative share marks a texel off the surface or of no weight.
-            if share < 0.0 {
-                continue;
+        for (i, share) in shares.iter().enumerate() {
+            if let Some(share) = share {
+                acc += share;
+                texels.push(i as u32);
+                cumulative.push(acc);
             }
-            acc += share;
-            texels.push(i as u32);
-            cumulative.push(acc);
         }
         Self {
             surface,
