@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Checks the deploy/ files: the Slurm scripts parse (bash -n) and their #SBATCH lines are
 # options sbatch knows; the Kubernetes manifests validate against the API schemas
-# (kubernetes-validate from PyPI, strict: no unknown fields), and each precompute Job's
-# DERMA_SHARD_COUNT equals its completions. Run by scripts/test.sh.
+# (kubernetes-validate from PyPI, strict: no unknown fields), and each sharded Job's
+# (precompute, batch) DERMA_SHARD_COUNT equals its completions. Run by scripts/test.sh.
 set -euo pipefail
 cd "$(dirname "$0")"
 for f in slurm/*.sbatch; do
@@ -20,7 +20,7 @@ venv=${DERMA_TOOLS:-../target/peer-deploy}
   "$venv/bin/pip" install --quiet kubernetes-validate==1.37.0
 }
 "$venv/bin/kubernetes-validate" --strict -k 1.31.0 kubernetes/*.yaml
-for f in kubernetes/precompute-*.yaml; do
+for f in kubernetes/precompute-*.yaml kubernetes/batch.yaml; do
   c=$(sed -n 's/^  completions: //p' "$f")
   n=$(grep -A1 'name: DERMA_SHARD_COUNT' "$f" | sed -n 's/.*value: "\(.*\)"/\1/p')
   [ "$c" = "$n" ] || { echo "$f: completions $c but DERMA_SHARD_COUNT $n" >&2; exit 1; }

@@ -46,6 +46,7 @@ pub mod raster;
 pub mod report;
 pub mod rng;
 pub mod sh;
+pub mod shard;
 
 pub use error::{CoreError, Result};
 pub use gpu::{Device, GpuError};

@@ -1,8 +1,8 @@
 //! The texture set for engines: a glTF 2.0 binary with the head (or a user mesh) and its parts
 //! as named meshes, MikkTSpace tangents, the face units as morph targets, and the skin as a
 //! metallic-roughness material with KHR_materials_specular (F0 from the specular map),
-//! KHR_materials_diffuse_transmission and KHR_materials_volume (attenuation from the mean free
-//! paths of `sss_radius`); plus the maps as loose files under engine naming conventions.
+//! KHR_materials_diffuse_transmission and, on request, KHR_materials_volume (attenuation from
+//! the mean free paths of `sss_radius`); plus the maps as loose files under engine naming conventions.
 
 use crate::error::{ExportError, Result};
 use derma_core::image_io::png8_bytes;
@@ -97,6 +97,11 @@ pub struct GlbOptions {
     /// A teeth texture on the head's teeth UVs (`derma photo teeth`'s teeth.png or .exr);
     /// default: the teeth's flat colour.
     pub teeth: Option<PathBuf>,
+    /// Also KHR_materials_volume on the skin (attenuation from `sss_radius`). Off by default:
+    /// glTF gives a volume no effect without KHR_materials_transmission, which skin has none
+    /// of, while Blender's importer turns it into a volume absorption that darkens the head's
+    /// bounding box in Eevee.
+    pub volume: bool,
 }
 
 /// A (face unit, weight) table as a JSON object.
@@ -257,13 +262,15 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
             "diffuseTransmissionFactor": 0.25,
             "diffuseTransmissionColorFactor": color
         });
-        exts["KHR_materials_volume"] = json!({
-            "thicknessFactor": 0.01,
-            "attenuationDistance": dist,
-            "attenuationColor": att
-        });
         ext_used.push("KHR_materials_diffuse_transmission".into());
-        ext_used.push("KHR_materials_volume".into());
+        if o.volume {
+            exts["KHR_materials_volume"] = json!({
+                "thicknessFactor": 0.01,
+                "attenuationDistance": dist,
+                "attenuationColor": att
+            });
+            ext_used.push("KHR_materials_volume".into());
+        }
     }
     let mut materials = vec![json!({
         "name": "skin",

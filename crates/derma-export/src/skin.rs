@@ -43,6 +43,7 @@ pub fn run(
                     wrinkles: true,
                     iris: None,
                     teeth: None,
+                    volume: false,
                 },
                 progress,
             )

@@ -174,6 +174,7 @@ pub fn export(
             wrinkles: false,
             iris: parts.iris.map(Path::to_path_buf),
             teeth: parts.teeth.map(Path::to_path_buf),
+            volume: false,
         },
         &derma_core::progress::Silent,
     )?;

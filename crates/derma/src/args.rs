@@ -165,6 +165,26 @@ pub struct HeadArg {
     pub head: Option<PathBuf>,
 }
 
+/// `--shard`, the same on every command that splits its work over a cluster job.
+#[derive(clap::Args, Clone, Default)]
+pub struct ShardArg {
+    /// This process's share, k/n (1-based). Default: from the scheduler's environment (a Slurm
+    /// job array's SLURM_ARRAY_TASK_ID, a Kubernetes Indexed Job's JOB_COMPLETION_INDEX with
+    /// DERMA_SHARD_COUNT), else all of it.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+}
+
+impl ShardArg {
+    /// The shard and where it came from (the flag, or derma-core's reading of the environment).
+    pub fn resolve(&self) -> derma_core::Result<(derma_core::shard::Shard, &'static str)> {
+        match &self.shard {
+            Some(s) => Ok((derma_core::shard::Shard::parse(s)?, "--shard")),
+            None => derma_core::shard::Shard::from_env(|k| std::env::var(k).ok()),
+        }
+    }
+}
+
 fn parse_device(s: &str) -> Result<derma_core::gpu::Device, String> {
     s.parse()
 }

@@ -10,7 +10,8 @@ use std::path::PathBuf;
 #[derive(Subcommand)]
 pub enum ExportCommand {
     /// A glTF 2.0 binary for engines: the head (or your mesh) with the texture set as a PBR
-    /// material (KHR_materials_specular, _volume, _diffuse_transmission), tangents, face units.
+    /// material (KHR_materials_specular, _diffuse_transmission, _volume on request), tangents,
+    /// face units.
     Glb(GlbArgs),
     /// The web viewer's files: the GLB, and the rig as 16-bit PNG textures with a JSON manifest.
     Web(WebArgs),
@@ -61,6 +62,10 @@ pub struct GlbArgs {
     /// A teeth texture for the head's teeth (`derma photo teeth`'s teeth.png).
     #[arg(long)]
     teeth: Option<PathBuf>,
+    /// Also KHR_materials_volume (the subsurface mean free paths as attenuation). glTF gives it
+    /// no effect without transmission; Blender's importer makes it a volume that darkens Eevee.
+    #[arg(long)]
+    volume: bool,
 }
 
 fn glb_options(textures: PathBuf, mesh: Option<PathBuf>, out: PathBuf) -> GlbOptions {
@@ -74,6 +79,7 @@ fn glb_options(textures: PathBuf, mesh: Option<PathBuf>, out: PathBuf) -> GlbOpt
         wrinkles: true,
         iris: None,
         teeth: None,
+        volume: false,
     }
 }
 
@@ -104,6 +110,7 @@ pub fn export(cmd: ExportCommand, bars: &Bars) -> Result<()> {
             o.head = a.head.head;
             o.iris = a.iris;
             o.teeth = a.teeth;
+            o.volume = a.volume;
             o.maps = a.maps.map(|d| {
                 (
                     d,

@@ -4,6 +4,7 @@
 //! synth.md, photo.md, eyes.md, render.md, head.md).
 
 mod args;
+mod batch;
 mod export;
 mod eyes;
 mod head;
@@ -81,6 +82,9 @@ enum Command {
     Head(head::HeadCommand),
     /// Serve the web viewer on localhost for a directory from `derma export web`.
     View(export::ViewArgs),
+    /// Many identities from one spec (skin tone, sex, age, mesh distributions): resumable,
+    /// sharded by a Slurm array or Kubernetes Indexed Job, merged into a manifest.
+    Batch(batch::BatchArgs),
 }
 
 fn main() {
@@ -114,6 +118,7 @@ fn main() {
         Command::Export(cmd) => export::export(cmd, &bars),
         Command::View(args) => export::view(args),
         Command::Head(cmd) => head::run(cmd, &bars),
+        Command::Batch(args) => batch::run(args, &bars),
     };
     bars.finish();
     if let Err(e) = result {

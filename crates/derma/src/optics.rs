@@ -7,7 +7,7 @@ use crate::progress::Bars;
 use anyhow::{bail, Result};
 use clap::{Args, Subcommand};
 use derma_core::progress::Silent;
-use derma_optics::precompute::{self, Grid, Shard};
+use derma_optics::precompute::{self, Grid};
 use derma_optics::simulate::{simulate_skin, SkinSimConfig};
 use derma_optics::slab::{parse_layer, slab_stack, SlabResult};
 use derma_optics::yellow_pigments::YellowPigments;
@@ -109,11 +109,8 @@ pub struct PrecomputeArgs {
     grid: String,
     #[arg(long, required_unless_present = "print_grid")]
     out: Option<PathBuf>,
-    /// This process's share of the grid, k/n (1-based). Default: from the scheduler's
-    /// environment (a Slurm job array's SLURM_ARRAY_TASK_ID, a Kubernetes Indexed Job's
-    /// JOB_COMPLETION_INDEX with DERMA_SHARD_COUNT), else the whole grid.
-    #[arg(long)]
-    shard: Option<String>,
+    #[command(flatten)]
+    shard: crate::args::ShardArg,
     #[command(flatten)]
     device: DeviceArg,
     /// Print the built-in grid and exit.
@@ -252,10 +249,7 @@ fn precompute(a: PrecomputeArgs, bars: &Bars) -> Result<()> {
         bail!("--out DIR is required (or --print-grid)");
     };
     let grid = Grid::load(&a.grid)?;
-    let (shard, source) = match &a.shard {
-        Some(s) => (Shard::parse(s)?, "--shard"),
-        None => Shard::from_env(|k| std::env::var(k).ok())?,
-    };
+    let (shard, source) = a.shard.resolve()?;
     bars.say(format!("shard {}/{} ({source})", shard.k, shard.n));
     let t0 = Instant::now();
     let done = precompute::run_shard(&out, &grid, shard, a.device.device, bars)?;

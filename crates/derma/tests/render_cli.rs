@@ -223,6 +223,7 @@ fn glb_carries_the_set_as_pbr_with_tangents_units_and_engine_maps() {
         s(&iris),
         "--teeth",
         s(&teeth),
+        "--volume",
     ]);
     assert!(ok, "{err}");
     let (doc, buffers, images) = gltf::import(&glb).unwrap();
@@ -528,6 +529,11 @@ fn skin_glb_writes_the_set_and_its_head_in_one_run() {
     assert!(ok, "{err}");
     assert!(out.join("base_color.png").is_file() && out.join("lashes.png").is_file());
     let (doc, _, _) = gltf::import(out.join("head.glb")).unwrap();
+    // No volume unless asked: without transmission it does nothing in glTF, and Blender's
+    // importer makes it a volume absorption that darkens Eevee.
+    let used: Vec<&str> = doc.extensions_used().collect();
+    assert!(!used.contains(&"KHR_materials_volume"), "{used:?}");
+    assert!(used.contains(&"KHR_materials_specular"), "{used:?}");
     let names: Vec<&str> = doc.meshes().filter_map(|m| m.name()).collect();
     for n in [
         "skin",

@@ -1,0 +1,675 @@
+//! Many faces from one spec (docs/batch.md): identity i's person (skin tone, sex, age), mesh and
+//! seed drawn from the spec's distributions by i alone, painted by the main job into its own
+//! directory, sharded over a cluster job as precompute is (derma_core::shard), resumable, and
+//! merged into a manifest of one JSON line per identity.
+
+use crate::error::{ExportError, Result};
+use derma_core::progress::{Job, Note, Progress, Silent, Unit};
+use derma_core::report::{sha256_file, write_json, JsonFormat};
+use derma_core::rng::Philox;
+use derma_core::shard::Shard;
+use derma_skin::regional::{Person, Preset, Sex};
+use derma_skin::{AppearanceChoice, SkinConfig, SkinGenerator};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The batch's own Philox stream ("batc"): identity i's draws are `Philox(seed, STREAM)` at
+/// index i, so they do not depend on the shards or the order identities run in.
+pub const STREAM: u32 = 0x6261_7463;
+
+/// The spec as written (`derma batch SPEC.toml`); paths relative to the spec's directory.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BatchSpec {
+    /// How many identities (0 … count − 1).
+    pub count: usize,
+    /// The batch's seed: every identity's draws and its own skin seed come from it.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Texture size in texels (square), every identity.
+    #[serde(default = "default_size")]
+    pub size: u32,
+    /// Skin tones drawn uniformly from these presets (Chardon et al. 1991's ITA° categories:
+    /// very-light, light, intermediate, tan, brown, dark), each at its target ITA°; default all
+    /// six. Not with `ita_deg`.
+    #[serde(default)]
+    pub presets: Vec<String>,
+    /// Skin tone as ITA° drawn uniformly in [min, max] instead of presets.
+    #[serde(default)]
+    pub ita_deg: Option<[f32; 2]>,
+    /// Probability that an identity is male (beard follicles), in [0, 1].
+    #[serde(default = "default_male")]
+    pub male: f32,
+    /// Age in years drawn uniformly in [min, max] (wrinkles, lentigines), to 0.1 year.
+    #[serde(default = "default_ages")]
+    pub age_years: [f32; 2],
+    /// Meshes with UVs (OBJ, glTF, GLB), one drawn uniformly per identity; empty: the
+    /// built-in head (or `heads`).
+    #[serde(default)]
+    pub meshes: Vec<String>,
+    /// Fitted heads (`derma head fit` directories), one drawn uniformly per identity, each
+    /// painted on its template skin. Not with `meshes`.
+    #[serde(default)]
+    pub heads: Vec<String>,
+    /// A skin configuration (TOML, `derma skin --print-config`) for every other key; its size,
+    /// seed and person are replaced by the batch's.
+    #[serde(default)]
+    pub config: Option<String>,
+    /// The bio → render conversion: "table" (the Monte Carlo match table) or "analytic".
+    #[serde(default = "default_appearance")]
+    pub appearance: String,
+    /// Also head.glb beside each set (the head it was painted on, PBR material).
+    #[serde(default)]
+    pub glb: bool,
+    /// The set's files to keep (names as written: base_color.png, normal.png, melanin.exr, …;
+    /// docs/skin.md); empty: all of them. report.json is always kept (the manifest's timings),
+    /// head.glb whenever `glb` is on. features.json alone is about 19 MB on the built-in head
+    /// whatever the size, so a batch for training data usually names its maps.
+    #[serde(default)]
+    pub outputs: Vec<String>,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+fn default_size() -> u32 {
+    1024
+}
+fn default_male() -> f32 {
+    0.5
+}
+fn default_ages() -> [f32; 2] {
+    [20.0, 70.0]
+}
+fn default_appearance() -> String {
+    "table".into()
+}
+
+/// The file a batch directory keeps its spec in (paths resolved), to resume and merge by.
+pub const SPEC_FILE: &str = "batch.toml";
+/// The merged manifest: one JSON object per line, identity 0 first.
+pub const MANIFEST: &str = "manifest.jsonl";
+/// Each identity's record, written last into its directory (the directory is renamed into
+/// place after it, so a directory under its final name is complete).
+pub const IDENTITY_FILE: &str = "identity.json";
+/// The set's report: it carries timings, so it is not hashed.
+const UNHASHED: &str = derma_skin::outputs::REPORT;
+
+/// What identity i is: its draws and the files it became.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Identity {
+    /// Its index, 0 … count − 1.
+    pub index: usize,
+    /// Its directory under the batch's output.
+    pub dir: String,
+    /// The skin's seed (below 2⁵³).
+    pub seed: u64,
+    /// The preset drawn (None when ITA° was drawn from a range).
+    pub preset: Option<String>,
+    /// The person painted: ITA°, sex, age.
+    pub ita_deg: f32,
+    /// "male" or "female".
+    pub sex: Sex,
+    /// Years.
+    pub age_years: f32,
+    /// The mesh, as the spec names it.
+    pub mesh: Option<String>,
+    /// The fitted head, as the spec names it.
+    pub head: Option<String>,
+    /// Texture size.
+    pub size: u32,
+    /// SHA-256 of every file but report.json, by name.
+    pub files: BTreeMap<String, String>,
+}
+
+impl BatchSpec {
+    /// Parses a spec; `origin` names it in errors.
+    pub fn parse(text: &str, origin: &str) -> Result<Self> {
+        let spec: BatchSpec = toml::from_str(text)
+            .map_err(|e| ExportError::Invalid(format!("{origin}: {}", e.to_string().trim())))?;
+        spec.validate(origin)?;
+        Ok(spec)
+    }
+
+    /// Reads a spec file and resolves its relative paths against its directory.
+    pub fn read(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| ExportError::Input {
+            path: path.to_path_buf(),
+            detail: format!("cannot read the batch spec ({e})"),
+        })?;
+        let mut spec = Self::parse(&text, &path.display().to_string())?;
+        let dir = path.parent().unwrap_or(Path::new(""));
+        let resolve = |p: &mut String| {
+            if !Path::new(p.as_str()).is_absolute() {
+                *p = dir.join(&*p).display().to_string();
+            }
+        };
+        spec.meshes.iter_mut().for_each(resolve);
+        spec.heads.iter_mut().for_each(resolve);
+        spec.config.iter_mut().for_each(resolve);
+        // Every input is there before the first identity is painted.
+        let named = (spec.meshes.iter().map(|p| ("meshes", p)))
+            .chain(spec.heads.iter().map(|p| ("heads", p)))
+            .chain(spec.config.iter().map(|p| ("config", p)));
+        for (key, p) in named {
+            if !Path::new(p).exists() {
+                return Err(ExportError::Input {
+                    path: path.to_path_buf(),
+                    detail: format!("{key}: '{p}' does not exist"),
+                });
+            }
+        }
+        Ok(spec)
+    }
+
+    fn validate(&self, origin: &str) -> Result<()> {
+        let bad = |key: &str, detail: String| {
+            Err(ExportError::Invalid(format!("{origin}: {key}: {detail}")))
+        };
+        if self.count == 0 {
+            return bad("count", "expected at least one identity".into());
+        }
+        if !(16..=16384).contains(&self.size) {
+            return bad("size", format!("{} texels: expected 16 … 16384", self.size));
+        }
+        for p in &self.presets {
+            if Preset::parse(p).is_none() {
+                let all = Preset::ALL.map(|p| p.name()).join(", ");
+                return bad("presets", format!("'{p}': expected one of {all}"));
+            }
+        }
+        if let Some([lo, hi]) = self.ita_deg {
+            if !self.presets.is_empty() {
+                return bad("ita_deg", "give presets or ita_deg, not both".into());
+            }
+            if !(lo.is_finite() && hi.is_finite() && lo <= hi && lo >= -90.0 && hi <= 90.0) {
+                return bad(
+                    "ita_deg",
+                    format!("[{lo}, {hi}]: expected −90 ≤ min ≤ max ≤ 90"),
+                );
+            }
+        }
+        if !(0.0..=1.0).contains(&self.male) {
+            return bad(
+                "male",
+                format!("{}: expected a probability in [0, 1]", self.male),
+            );
+        }
+        let [a0, a1] = self.age_years;
+        if !(a0.is_finite() && a1.is_finite() && 0.0 <= a0 && a0 <= a1 && a1 <= 120.0) {
+            return bad(
+                "age_years",
+                format!("[{a0}, {a1}]: expected 0 ≤ min ≤ max ≤ 120"),
+            );
+        }
+        if !self.meshes.is_empty() && !self.heads.is_empty() {
+            return bad("heads", "give meshes or heads, not both".into());
+        }
+        for f in &self.outputs {
+            if derma_skin::outputs::output(f).is_none() {
+                let all: Vec<&str> = derma_skin::outputs::OUTPUTS
+                    .iter()
+                    .map(|o| o.file)
+                    .collect();
+                return bad(
+                    "outputs",
+                    format!("'{f}': expected one of {}", all.join(", ")),
+                );
+            }
+        }
+        if !["table", "analytic"].contains(&self.appearance.as_str()) {
+            return bad(
+                "appearance",
+                format!("'{}': expected table or analytic", self.appearance),
+            );
+        }
+        Ok(())
+    }
+
+    /// Identity i's draws (its files empty): four uniforms of `Philox(seed, STREAM)` at index i
+    /// for tone, sex, age and mesh, and a second draw for its skin seed.
+    pub fn identity(&self, i: usize) -> Identity {
+        let rng = Philox::new(self.seed, STREAM);
+        let [u_tone, u_sex, u_age, u_mesh] = rng.uniform4(i as u64, 0);
+        let pick = |u: f32, n: usize| ((u * n as f32) as usize).min(n - 1);
+        let w = rng.u32x4_sub(i as u64, 1);
+        // 53 bits: exact as a JSON number in every reader (Python, JavaScript) and in TOML.
+        let seed = (u64::from(w[0]) << 21) | u64::from(w[1] >> 11);
+        let sex = if u_sex < self.male {
+            Sex::Male
+        } else {
+            Sex::Female
+        };
+        let [a0, a1] = self.age_years;
+        let age_years = ((a0 + u_age * (a1 - a0)) * 10.0).round() / 10.0;
+        let (preset, ita_deg) = match self.ita_deg {
+            Some([lo, hi]) => (None, lo + u_tone * (hi - lo)),
+            None => {
+                let names: Vec<&str> = if self.presets.is_empty() {
+                    Preset::ALL.iter().map(|p| p.name()).collect()
+                } else {
+                    self.presets.iter().map(String::as_str).collect()
+                };
+                let p = Preset::parse(names[pick(u_tone, names.len())]).expect("validated");
+                (Some(p.name().to_string()), p.target_ita_deg())
+            }
+        };
+        let choose =
+            |list: &[String]| (!list.is_empty()).then(|| list[pick(u_mesh, list.len())].clone());
+        Identity {
+            index: i,
+            dir: dir_name(i, self.count),
+            seed,
+            preset,
+            ita_deg,
+            sex,
+            age_years,
+            mesh: choose(&self.meshes),
+            head: choose(&self.heads),
+            size: self.size,
+            files: BTreeMap::new(),
+        }
+    }
+}
+
+/// Identity i's directory name: its index, zero-padded to the count's digits (at least 6).
+pub fn dir_name(i: usize, count: usize) -> String {
+    let digits = count.saturating_sub(1).to_string().len().max(6);
+    format!("{i:0digits$}")
+}
+
+/// Writes the spec into `out` on the first run, or checks that the one there is the same:
+/// a batch directory holds one batch.
+pub fn prepare(out: &Path, spec: &BatchSpec) -> Result<()> {
+    derma_core::atomic::ensure_writable_dir(out)?;
+    let path = out.join(SPEC_FILE);
+    let text = toml::to_string(spec).map_err(|e| ExportError::Invalid(e.to_string()))?;
+    if path.exists() {
+        let old = read_spec_file(&path)?;
+        if &old != spec {
+            return Err(ExportError::Input {
+                path,
+                detail: "this directory holds another batch (its spec differs); use a new output \
+                         directory or the same spec"
+                    .into(),
+            });
+        }
+        return Ok(());
+    }
+    derma_core::atomic::write_bytes(&path, text.as_bytes())?;
+    Ok(())
+}
+
+fn read_spec_file(path: &Path) -> Result<BatchSpec> {
+    let text = std::fs::read_to_string(path).map_err(|e| ExportError::Input {
+        path: path.to_path_buf(),
+        detail: format!("cannot read ({e})"),
+    })?;
+    BatchSpec::parse(&text, &path.display().to_string())
+}
+
+/// How one shard's run went.
+#[derive(Clone, Debug, Default)]
+pub struct ShardReport {
+    /// Identities this shard owns.
+    pub owned: usize,
+    /// Already complete from an earlier run, skipped.
+    pub skipped: usize,
+    /// Painted now.
+    pub made: usize,
+    /// Unfinished directories of an earlier run, removed and made again.
+    pub resumed: usize,
+}
+
+/// How the main job runs for each identity.
+#[derive(Clone, Copy)]
+pub struct RunOptions {
+    /// Where `[detail]` synthesis and the preview run.
+    pub device: derma_core::gpu::Device,
+    /// Worker threads (None: all cores).
+    pub threads: Option<usize>,
+}
+
+/// Paints every identity `shard` owns that is not complete in `out`, each into
+/// `out/NNNNNN.partial` then renamed to `out/NNNNNN`. An unfinished directory left by a killed
+/// run is removed and its identity made again, so a rerun of the same command resumes.
+pub fn run_shard(
+    out: &Path,
+    spec: &BatchSpec,
+    shard: Shard,
+    opts: RunOptions,
+    progress: &dyn Progress,
+) -> Result<ShardReport> {
+    prepare(out, spec)?;
+    let base = match &spec.config {
+        Some(p) => SkinGenerator::from_config_file(Path::new(p))?
+            .config()
+            .clone(),
+        None => SkinConfig::default(),
+    };
+    let appearance = match spec.appearance.as_str() {
+        "analytic" => AppearanceChoice::Analytic,
+        _ => AppearanceChoice::Default,
+    };
+    let owned: Vec<usize> = (0..spec.count).filter(|&i| shard.owns(i)).collect();
+    let mut report = ShardReport {
+        owned: owned.len(),
+        ..Default::default()
+    };
+    let job = Job::new(progress);
+    job.stage("identities", owned.len() as u64, Unit::Steps);
+    for &i in &owned {
+        let mut id = spec.identity(i);
+        let done = out.join(&id.dir);
+        if done.join(IDENTITY_FILE).is_file() {
+            report.skipped += 1;
+            job.advance(1);
+            continue;
+        }
+        let partial = out.join(format!("{}.partial", id.dir));
+        if partial.exists() {
+            std::fs::remove_dir_all(&partial).map_err(|e| io(&partial, e))?;
+            report.resumed += 1;
+        }
+        let mut cfg = base.clone();
+        cfg.size = spec.size;
+        cfg.seed = id.seed;
+        cfg.person = Person {
+            ita_deg: id.ita_deg,
+            calibrate_melanin: true,
+            sex: id.sex,
+            age_years: id.age_years,
+        };
+        let mut generator = SkinGenerator::new(cfg)
+            .appearance(appearance.clone())
+            .device(opts.device)
+            .progress(&Silent);
+        if let Some(m) = &id.mesh {
+            generator = generator.mesh(m);
+        }
+        if let Some(h) = &id.head {
+            generator = generator.head(h);
+        }
+        if let Some(n) = opts.threads {
+            generator = generator.threads(n);
+        }
+        let started = Instant::now();
+        crate::skin::run(&generator, &partial, spec.glb, &Silent)
+            .map_err(|e| ExportError::Invalid(format!("identity {} ({}): {e}", i, id.dir)))?;
+        keep_outputs(&partial, spec)?;
+        id.files = hashes(&partial)?;
+        write_json(&partial.join(IDENTITY_FILE), &id, JsonFormat::DATA_PRETTY)?;
+        if done.exists() {
+            // A directory under the final name without its record: a rename never finished.
+            std::fs::remove_dir_all(&done).map_err(|e| io(&done, e))?;
+        }
+        std::fs::rename(&partial, &done).map_err(|e| io(&done, e))?;
+        report.made += 1;
+        job.note(Note::info(format!(
+            "identity {} ({}, {:.0}°, {}, {} years) in {:.1} s",
+            id.dir,
+            id.preset.as_deref().unwrap_or("ITA"),
+            id.ita_deg,
+            sex_name(id.sex),
+            id.age_years,
+            started.elapsed().as_secs_f64()
+        )));
+        job.advance(1);
+    }
+    Ok(report)
+}
+
+/// Removes the set's files the spec's `outputs` leaves out (none when it names none).
+fn keep_outputs(dir: &Path, spec: &BatchSpec) -> Result<()> {
+    if spec.outputs.is_empty() {
+        return Ok(());
+    }
+    for o in derma_skin::outputs::OUTPUTS.iter() {
+        let p = dir.join(o.file);
+        if o.file != UNHASHED && !spec.outputs.iter().any(|f| f == o.file) && p.exists() {
+            std::fs::remove_file(&p).map_err(|e| io(&p, e))?;
+        }
+    }
+    Ok(())
+}
+
+fn sex_name(s: Sex) -> &'static str {
+    match s {
+        Sex::Male => "male",
+        Sex::Female => "female",
+    }
+}
+
+fn io(path: &Path, e: std::io::Error) -> ExportError {
+    ExportError::Input {
+        path: path.to_path_buf(),
+        detail: e.to_string(),
+    }
+}
+
+/// SHA-256 of every file in `dir` but report.json and the record itself, by name.
+fn hashes(dir: &Path) -> Result<BTreeMap<String, String>> {
+    let names: Vec<String> = std::fs::read_dir(dir)
+        .map_err(|e| io(dir, e))?
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().is_file())
+        .filter_map(|e| e.file_name().into_string().ok())
+        .filter(|n| n != UNHASHED && n != IDENTITY_FILE)
+        .collect();
+    names
+        .into_iter()
+        .map(|n| {
+            let p = dir.join(&n);
+            let h = sha256_file(&p).ok_or_else(|| ExportError::Input {
+                path: p.clone(),
+                detail: "cannot read to hash".into(),
+            })?;
+            Ok((n, h))
+        })
+        .collect()
+}
+
+/// What [`merge`] found and wrote.
+#[derive(Clone, Debug)]
+pub struct Merged {
+    /// The manifest written.
+    pub manifest: PathBuf,
+    /// Identities in it.
+    pub identities: usize,
+    /// Files checked against their hashes.
+    pub files: usize,
+}
+
+/// One manifest line: the identity's record and the seconds its set took (report.json's).
+#[derive(Serialize)]
+struct ManifestLine<'a> {
+    #[serde(flatten)]
+    identity: &'a Identity,
+    seconds: Option<f64>,
+}
+
+/// Checks that every identity of the batch in `out` is present and complete — its record
+/// matches the spec's draws and every file its hash — and writes `out/manifest.jsonl`.
+/// The error lists what is missing or wrong.
+pub fn merge(out: &Path, progress: &dyn Progress) -> Result<Merged> {
+    let spec = read_spec_file(&out.join(SPEC_FILE))?;
+    let job = Job::new(progress);
+    job.stage("check", spec.count as u64, Unit::Steps);
+    let mut lines = String::new();
+    let mut problems: Vec<String> = Vec::new();
+    let mut files = 0;
+    for i in 0..spec.count {
+        job.advance(1);
+        let want = spec.identity(i);
+        let dir = out.join(&want.dir);
+        let record = dir.join(IDENTITY_FILE);
+        let Ok(text) = std::fs::read_to_string(&record) else {
+            problems.push(format!("{}: missing", want.dir));
+            continue;
+        };
+        let got: Identity = match serde_json::from_str(&text) {
+            Ok(g) => g,
+            Err(e) => {
+                problems.push(format!("{}: unreadable record ({e})", want.dir));
+                continue;
+            }
+        };
+        let drawn = Identity {
+            files: BTreeMap::new(),
+            ..got.clone()
+        };
+        if drawn != want {
+            problems.push(format!(
+                "{}: its record is not this spec's identity {i}",
+                want.dir
+            ));
+            continue;
+        }
+        let now = hashes(&dir)?;
+        if now != got.files {
+            let differ: Vec<&str> = got
+                .files
+                .iter()
+                .filter(|(n, h)| now.get(*n) != Some(*h))
+                .map(|(n, _)| n.as_str())
+                .collect();
+            problems.push(format!(
+                "{}: files changed or missing: {}",
+                want.dir,
+                differ.join(", ")
+            ));
+            continue;
+        }
+        files += now.len();
+        let seconds = std::fs::read_to_string(dir.join(UNHASHED))
+            .ok()
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+            .and_then(|v| total_seconds(&v));
+        let line = serde_json::to_string(&ManifestLine {
+            identity: &got,
+            seconds,
+        })
+        .map_err(|e| ExportError::Invalid(e.to_string()))?;
+        lines.push_str(&line);
+        lines.push('\n');
+    }
+    if !problems.is_empty() {
+        let n = problems.len();
+        problems.truncate(20);
+        return Err(ExportError::Input {
+            path: out.to_path_buf(),
+            detail: format!(
+                "{n} of {} identities are not complete (run the missing shards again): {}{}",
+                spec.count,
+                problems.join("; "),
+                if n > 20 { "; …" } else { "" }
+            ),
+        });
+    }
+    let manifest = out.join(MANIFEST);
+    derma_core::atomic::write_bytes(&manifest, lines.as_bytes())?;
+    Ok(Merged {
+        manifest,
+        identities: spec.count,
+        files,
+    })
+}
+
+/// The whole run's seconds from a set's report.json (its `timings_s` stage "total").
+fn total_seconds(report: &serde_json::Value) -> Option<f64> {
+    report
+        .get("timings_s")?
+        .as_array()?
+        .iter()
+        .find(|t| t.get("stage").and_then(|s| s.as_str()) == Some("total"))?
+        .get("seconds")?
+        .as_f64()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(extra: &str) -> BatchSpec {
+        BatchSpec::parse(&format!("count = 6000\nseed = 4\n{extra}"), "test").unwrap()
+    }
+
+    #[test]
+    fn draws_follow_the_spec_s_distributions() {
+        let all = spec("male = 0.3\nage_years = [30.0, 40.0]");
+        let ids: Vec<Identity> = (0..all.count).map(|i| all.identity(i)).collect();
+        // Presets uniform: each of six within four standard deviations of 1000.
+        let sd = (6000.0f64 * (1.0 / 6.0) * (5.0 / 6.0)).sqrt();
+        for p in Preset::ALL {
+            let n = ids
+                .iter()
+                .filter(|d| d.preset.as_deref() == Some(p.name()))
+                .count();
+            assert!((n as f64 - 1000.0).abs() < 4.0 * sd, "{}: {n}", p.name());
+            assert!(ids
+                .iter()
+                .filter(|d| d.preset.as_deref() == Some(p.name()))
+                .all(|d| d.ita_deg == p.target_ita_deg()));
+        }
+        let male = ids.iter().filter(|d| d.sex == Sex::Male).count() as f64;
+        let sd = (6000.0f64 * 0.3 * 0.7).sqrt();
+        assert!((male - 1800.0).abs() < 4.0 * sd, "{male}");
+        assert!(ids
+            .iter()
+            .all(|d| (30.0..=40.0).contains(&d.age_years) && (d.age_years * 10.0).fract() == 0.0));
+        let mean_age = ids.iter().map(|d| d.age_years as f64).sum::<f64>() / 6000.0;
+        assert!((mean_age - 35.0).abs() < 0.2, "{mean_age}");
+        // Every identity its own seed.
+        let seeds: std::collections::BTreeSet<u64> = ids.iter().map(|d| d.seed).collect();
+        assert_eq!(seeds.len(), 6000);
+        assert!(seeds.iter().all(|&s| s < 1 << 53));
+    }
+
+    #[test]
+    fn ranges_lists_and_the_ends_of_probability() {
+        let s = spec("ita_deg = [-20.0, 10.0]\nmale = 0.0\nmeshes = [\"a.obj\", \"b.obj\"]");
+        let ids: Vec<Identity> = (0..s.count).map(|i| s.identity(i)).collect();
+        assert!(ids.iter().all(|d| d.preset.is_none()
+            && (-20.0..=10.0).contains(&d.ita_deg)
+            && d.sex == Sex::Female
+            && d.head.is_none()));
+        let a = ids
+            .iter()
+            .filter(|d| d.mesh.as_deref() == Some("a.obj"))
+            .count();
+        assert!((2800..3200).contains(&a), "{a}");
+        let s = spec("presets = [\"tan\", \"dark\"]\nmale = 1.0");
+        assert!((0..100).all(|i| {
+            let d = s.identity(i);
+            d.sex == Sex::Male && ["tan", "dark"].contains(&d.preset.as_deref().unwrap())
+        }));
+    }
+
+    #[test]
+    fn an_identity_depends_on_its_index_and_the_seed_alone() {
+        let small = BatchSpec::parse("count = 8\nseed = 9", "t").unwrap();
+        let large = BatchSpec::parse("count = 8000000\nseed = 9", "t").unwrap();
+        let other = BatchSpec::parse("count = 8\nseed = 10", "t").unwrap();
+        for i in 0..8 {
+            let (a, b) = (small.identity(i), large.identity(i));
+            assert_eq!(
+                (a.seed, a.preset, a.age_years),
+                (b.seed, b.preset, b.age_years)
+            );
+            assert_eq!(
+                (a.dir.as_str(), b.dir.as_str()),
+                (&*format!("{i:06}"), &*format!("{i:07}"))
+            );
+            assert_ne!(a.seed, other.identity(i).seed);
+        }
+    }
+
+    #[test]
+    fn a_spec_round_trips_through_the_batch_directory_s_copy() {
+        let s = spec("ita_deg = [0.0, 30.0]\nglb = true\nappearance = \"analytic\"");
+        let text = toml::to_string(&s).unwrap();
+        assert_eq!(BatchSpec::parse(&text, "copy").unwrap(), s);
+    }
+}

@@ -1,0 +1,231 @@
+//! `derma batch` as a cluster runs it: 8 identities at 256² as four concurrent shards into one
+//! directory — their indices from a Slurm job array's environment, a Kubernetes Indexed Job's and
+//! `--shard` — one killed while painting and resumed, then `--merge`; every file equals a single
+//! process's byte for byte. And the errors a user meets: a bad spec, another spec in the same
+//! directory, an incomplete or altered batch at merge.
+
+mod common;
+
+use common::{run, s};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command};
+use std::time::{Duration, Instant};
+
+const SPEC: &str = r#"
+count = 8
+seed = 11
+size = 256
+age_years = [25.0, 75.0]
+"#;
+
+fn batch(spec: &Path, out: &Path, env: &[(&str, &str)], shard: Option<&str>) -> Child {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_derma"));
+    c.args(["batch", s(spec), "--out", s(out), "--quiet"]);
+    if let Some(k) = shard {
+        c.args(["--shard", k]);
+    }
+    for v in [
+        "SLURM_ARRAY_TASK_ID",
+        "SLURM_ARRAY_TASK_MIN",
+        "SLURM_ARRAY_TASK_MAX",
+        "SLURM_ARRAY_TASK_COUNT",
+        "SLURM_ARRAY_TASK_STEP",
+        "JOB_COMPLETION_INDEX",
+        "DERMA_SHARD_COUNT",
+    ] {
+        c.env_remove(v);
+    }
+    c.envs(env.iter().copied()).spawn().unwrap()
+}
+
+/// Every file under `dir` but the sets' report.json (it carries timings) and the manifest.
+fn files(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if !p.ends_with("report.json") && !p.ends_with("manifest.jsonl") {
+                out.insert(
+                    p.strip_prefix(dir).unwrap().to_path_buf(),
+                    std::fs::read(&p).unwrap(),
+                );
+            }
+        }
+    }
+    out
+}
+
+/// manifest.jsonl's lines without their timings.
+fn manifest(dir: &Path) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(dir.join("manifest.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
+            let secs = v.as_object_mut().unwrap().remove("seconds").unwrap();
+            assert!(secs.as_f64().unwrap() > 0.0, "{l}");
+            v
+        })
+        .collect()
+}
+
+#[test]
+fn four_shards_one_killed_and_resumed_equal_one_process_byte_for_byte() {
+    let d = common::tmp("batch", "cluster");
+    let spec = d.join("spec.toml");
+    std::fs::write(&spec, SPEC).unwrap();
+
+    let single = d.join("single");
+    assert!(batch(&spec, &single, &[], None).wait().unwrap().success());
+    let (ok, _, err) = run(&["batch", "--merge", "--out", s(&single)]);
+    assert!(ok, "{err}");
+
+    let shared = d.join("shared");
+    let slurm = |id: &'static str| {
+        vec![
+            ("SLURM_ARRAY_TASK_ID", id),
+            ("SLURM_ARRAY_TASK_MIN", "1"),
+            ("SLURM_ARRAY_TASK_MAX", "4"),
+            ("SLURM_ARRAY_TASK_COUNT", "4"),
+        ]
+    };
+    let k8s = [("JOB_COMPLETION_INDEX", "1"), ("DERMA_SHARD_COUNT", "4")];
+    // Shard 3/4 owns identities 2 and 6: an unfinished directory of a killed earlier run is
+    // waiting for it, with a stray file that must not reach the result.
+    std::fs::create_dir_all(shared.join("000002.partial")).unwrap();
+    std::fs::write(shared.join("000002.partial/base_color.png"), b"half").unwrap();
+    let mut first = batch(&spec, &shared, &slurm("1"), None);
+    let mut victim = batch(&spec, &shared, &k8s, None);
+    let mut third = batch(&spec, &shared, &[], Some("3/4"));
+    let mut fourth = batch(&spec, &shared, &slurm("4"), None);
+    // Kill shard 2/4 (identities 1 and 5) while it paints its first identity.
+    let t0 = Instant::now();
+    while !shared.join("000001.partial").exists() {
+        assert!(
+            t0.elapsed() < Duration::from_secs(120),
+            "shard 2 never began"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    victim.kill().unwrap();
+    victim.wait().unwrap();
+    for c in [&mut first, &mut third, &mut fourth] {
+        assert!(c.wait().unwrap().success());
+    }
+    assert!(
+        !shared.join("000001").exists(),
+        "killed, yet identity 1 is complete"
+    );
+    // Merging now names what is missing.
+    let (ok, _, err) = run(&["batch", "--merge", "--out", s(&shared)]);
+    assert!(!ok && err.contains("000001: missing"), "{err}");
+    assert!(
+        err.contains("000005: missing") && err.contains("2 of 8"),
+        "{err}"
+    );
+    // The same Indexed Job pod again: it resumes.
+    assert!(batch(&spec, &shared, &k8s, None).wait().unwrap().success());
+    let (ok, _, err) = run(&["batch", "--merge", "--out", s(&shared)]);
+    assert!(ok, "{err}");
+
+    let (want, got) = (files(&single), files(&shared));
+    assert_eq!(
+        want.keys().collect::<Vec<_>>(),
+        got.keys().collect::<Vec<_>>()
+    );
+    // Each set: its 18 files but report.json, and identity.json; and the spec.
+    assert_eq!(want.len(), 8 * 19 + 1);
+    for (p, bytes) in &want {
+        assert!(bytes == &got[p], "{} differs", p.display());
+    }
+    let lines = manifest(&shared);
+    assert_eq!(lines, manifest(&single));
+    // Each line names its identity's draws, and they vary across the batch.
+    assert_eq!(lines.len(), 8);
+    for (i, l) in lines.iter().enumerate() {
+        assert_eq!(l["index"], i);
+        let age = l["age_years"].as_f64().unwrap();
+        assert!((25.0..=75.0).contains(&age), "{l}");
+        assert!(l["files"]["base_color.png"].as_str().unwrap().len() == 64);
+    }
+    let seeds: std::collections::BTreeSet<u64> =
+        lines.iter().map(|l| l["seed"].as_u64().unwrap()).collect();
+    assert_eq!(seeds.len(), 8);
+}
+
+#[test]
+fn a_batch_names_what_is_wrong() {
+    let d = common::tmp("batch", "errors");
+    let bad = |text: &str, want: &[&str]| {
+        let spec = d.join("bad.toml");
+        std::fs::write(&spec, text).unwrap();
+        let (ok, _, err) = run(&["batch", s(&spec), "--out", s(&d.join("bad"))]);
+        assert!(!ok, "{text}");
+        for w in want {
+            assert!(err.contains(w), "{text}: {err}");
+        }
+    };
+    bad(
+        "count = 2\npresets = [\"beige\"]",
+        &["presets", "'beige'", "very-light"],
+    );
+    bad("count = 0", &["count", "at least one"]);
+    bad("count = 2\nmale = 1.5", &["male", "1.5"]);
+    bad(
+        "count = 2\nita_deg = [40.0, 10.0]",
+        &["ita_deg", "min ≤ max"],
+    );
+    bad(
+        "count = 2\nmeshes = [\"a.obj\"]\nheads = [\"h\"]",
+        &["meshes or heads"],
+    );
+    bad("count = 2\ncolour = 3", &["unknown field", "colour"]);
+    bad(
+        "count = 2\noutputs = [\"albedo.png\"]",
+        &["outputs", "'albedo.png'", "base_color.png"],
+    );
+    bad(
+        "count = 1\nsize = 64\nmeshes = [\"nowhere.obj\"]",
+        &["nowhere.obj", "does not exist"],
+    );
+
+    // A directory holds one batch: another spec is refused before any work.
+    let spec = d.join("one.toml");
+    let keep = "outputs = [\"base_color.png\", \"roughness.png\"]";
+    std::fs::write(&spec, format!("count = 1\nsize = 64\nseed = 1\n{keep}")).unwrap();
+    let out = d.join("one");
+    let (ok, _, err) = run(&["batch", s(&spec), "--out", s(&out)]);
+    assert!(ok, "{err}");
+    // Only the outputs asked for, the report (the manifest's timings) and the record.
+    let mut kept: Vec<String> = std::fs::read_dir(out.join("000000"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    kept.sort();
+    assert_eq!(
+        kept,
+        [
+            "base_color.png",
+            "identity.json",
+            "report.json",
+            "roughness.png"
+        ]
+    );
+    std::fs::write(&spec, format!("count = 1\nsize = 64\nseed = 2\n{keep}")).unwrap();
+    let (ok, _, err) = run(&["batch", s(&spec), "--out", s(&out)]);
+    assert!(!ok && err.contains("another batch"), "{err}");
+    // An altered file fails the merge, naming it.
+    std::fs::write(out.join("000000/roughness.png"), b"not the painted file").unwrap();
+    let (ok, _, err) = run(&["batch", "--merge", "--out", s(&out)]);
+    assert!(
+        !ok && err.contains("000000") && err.contains("roughness.png"),
+        "{err}"
+    );
+    // Merging a directory that holds no batch names the spec it looked for.
+    let (ok, _, err) = run(&["batch", "--merge", "--out", s(&d.join("none"))]);
+    assert!(!ok && err.contains("batch.toml"), "{err}");
+}
