@@ -3,7 +3,8 @@
 # need; checks formatting and lints; checks the committed adding-doubling references against
 # iadpython and the histogram-matching reference against scikit-image; checks deploy/; runs the
 # workspace tests with the `gpu` feature and the GPU tests required (on Mesa's lavapipe); validates the exported GLBs with
-# Khronos' glTF-Validator; runs every numbered example; and drives the web viewer in headless
+# Khronos' glTF-Validator; runs every numbered example; builds the Python wheel, installs it in
+# a fresh virtual environment and runs its tests; and drives the web viewer in headless
 # Chromium (scripts/viewer_test.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -43,6 +44,18 @@ for f in crates/*/examples/[0-9][0-9]_*.rs; do
   echo "example $ex"
   "target/release/examples/$ex" "${args[@]}" > "$tmp/$ex.log" 2>&1 || { cat "$tmp/$ex.log"; exit 1; }
 done
+# The Python package: the abi3 wheel built from this tree by maturin (with the GPU backends, as
+# the workspace's tests just built them), installed into a fresh virtual environment, used as a
+# user would, its stubs checked against the module (mypy's stubtest), and its pytest tests.
+python3 -m pip install --quiet "maturin>=1.5,<2"
+rm -rf target/wheels target/py-venv
+python3 -m maturin build --release --quiet -m crates/derma-py/Cargo.toml -o target/wheels
+python3 -m venv target/py-venv
+target/py-venv/bin/pip install --quiet target/wheels/derma-*.whl pytest mypy
+py=$PWD/target/py-venv/bin/python
+(cd "$tmp" && "$py" -c "import derma; s = derma.skin(size=256); print(s['base_color'].shape)")
+(cd "$tmp" && "$py" -m mypy.stubtest derma._derma)
+"$py" -m pytest -q -p no:cacheprovider crates/derma-py/tests
 rm -rf "$tmp"
 # The web viewer in Debian's chromium: the GLB loads, the smile slider flushes the cheeks.
 bash scripts/viewer_test.sh

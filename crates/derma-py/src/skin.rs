@@ -1,0 +1,254 @@
+//! `derma.skin`: the main job (docs/skin.md) from Python — the person, size, seed and mesh as
+//! arguments, the texture set's maps back as arrays in their files' encodings, a set written on request.
+
+use crate::array::Array;
+use crate::errors::message;
+use crate::progress::Callback;
+use derma_skin::regional::{Preset, Sex};
+use derma_skin::{AppearanceChoice, SkinConfig, SkinGenerator, TextureSet};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::PathBuf;
+
+/// What the Python call asked for, as derma-skin's generator takes it.
+struct Request {
+    size: Option<u32>,
+    seed: Option<u64>,
+    preset: Option<String>,
+    ita_deg: Option<f32>,
+    sex: Option<String>,
+    age: Option<f32>,
+    mesh: Option<PathBuf>,
+    head: Option<PathBuf>,
+    fields: Option<PathBuf>,
+    config: Option<PathBuf>,
+    appearance: String,
+    threads: Option<usize>,
+    device: String,
+}
+
+impl Request {
+    /// The generator, with `derma skin`'s precedence: the config, then each argument given.
+    fn generator<'a>(&self, progress: &'a Callback) -> PyResult<SkinGenerator<'a>> {
+        let mut g = match &self.config {
+            Some(p) => SkinGenerator::from_config_file(p).map_err(crate::errors::error)?,
+            None => SkinGenerator::new(SkinConfig::default()),
+        };
+        let cfg = g.config_mut();
+        if let Some(s) = self.size {
+            cfg.size = s;
+        }
+        if let Some(s) = self.seed {
+            cfg.seed = s;
+        }
+        if let Some(s) = &self.sex {
+            cfg.person.sex = match s.as_str() {
+                "male" => Sex::Male,
+                "female" => Sex::Female,
+                _ => {
+                    return Err(crate::errors::invalid(
+                        "sex",
+                        format!("'{s}': expected 'male' or 'female'"),
+                    ))
+                }
+            };
+        }
+        if let Some(a) = self.age {
+            cfg.person.age_years = a;
+        }
+        match (&self.preset, self.ita_deg) {
+            (Some(_), Some(_)) => {
+                return Err(crate::errors::invalid(
+                    "ita_deg",
+                    "give preset or ita_deg, not both",
+                ))
+            }
+            (Some(p), None) => {
+                let preset = Preset::parse(p).ok_or_else(|| {
+                    let all = Preset::ALL.map(|p| p.name()).join(", ");
+                    crate::errors::invalid("preset", format!("'{p}': expected one of {all}"))
+                })?;
+                cfg.person = preset.person(cfg.person.sex, cfg.person.age_years);
+            }
+            (None, Some(ita)) => {
+                cfg.person.ita_deg = ita;
+                cfg.person.calibrate_melanin = true;
+            }
+            (None, None) => {}
+        }
+        let appearance = match self.appearance.as_str() {
+            "table" => AppearanceChoice::Default,
+            "analytic" => AppearanceChoice::Analytic,
+            a => {
+                return Err(crate::errors::invalid(
+                    "appearance",
+                    format!("'{a}': expected 'table' or 'analytic'"),
+                ))
+            }
+        };
+        g = g
+            .appearance(appearance)
+            .device(crate::errors::device(&self.device)?)
+            .progress(progress);
+        if let Some(m) = &self.mesh {
+            g = g.mesh(m);
+        }
+        if let Some(h) = &self.head {
+            g = g.head(h);
+        }
+        if let Some(f) = &self.fields {
+            g = g.fields(f);
+        }
+        if let Some(n) = self.threads {
+            g = g.threads(n);
+        }
+        Ok(g)
+    }
+}
+
+/// The set's maps as arrays, rows from the top of the texture (v = 1) as the files store them.
+fn maps(mut set: TextureSet) -> Vec<(&'static str, Array)> {
+    let (w, h) = (set.render.width, set.render.height);
+    let r = &mut set.render;
+    let mut out = vec![
+        (
+            "base_color",
+            Array::new::<u8, _>(std::mem::take(&mut r.base_color), &[h, w, 3]),
+        ),
+        (
+            "normal",
+            Array::new::<u16, _>(std::mem::take(&mut r.normal), &[h, w, 3]),
+        ),
+        (
+            "roughness",
+            Array::new::<u8, _>(std::mem::take(&mut r.roughness), &[h, w]),
+        ),
+        (
+            "specular",
+            Array::new::<u8, _>(std::mem::take(&mut r.specular), &[h, w]),
+        ),
+    ];
+    if let Some(ss) = r.subsurface.take() {
+        out.push(("sss_color", Array::new::<u8, _>(ss.color, &[h, w, 3])));
+        out.push(("sss_radius", Array::new::<u16, _>(ss.radius, &[h, w, 3])));
+    }
+    let channels = derma_skin::paint::BIO_CHANNELS;
+    let bio: Vec<f32> = set
+        .bio
+        .texels
+        .iter()
+        .flat_map(|s| channels.map(|(_, get)| get(s)))
+        .collect();
+    let plane = |get: fn(&derma_skin::features::BioSample) -> f32| -> Vec<f32> {
+        set.bio.texels.iter().map(get).collect()
+    };
+    out.push((
+        "melanin",
+        Array::new::<f32, _>(plane(|s| s.tissue.melanin), &[h, w]),
+    ));
+    out.push((
+        "hemoglobin",
+        Array::new::<f32, _>(plane(|s| s.tissue.blood), &[h, w]),
+    ));
+    out.push((
+        "height_mm",
+        Array::new::<f32, _>(plane(|s| s.height_mm), &[h, w]),
+    ));
+    out.push(("bio", Array::new::<f32, _>(bio, &[h, w, channels.len()])));
+    out
+}
+
+/// Paints a texture set (derma-skin's generator; docs/python.md has the arguments and the
+/// arrays' encodings), writes it into `out` when given, and returns its maps and report.
+#[pyfunction]
+#[pyo3(signature = (*, size=None, seed=None, preset=None, ita_deg=None, sex=None, age=None,
+    mesh=None, head=None, fields=None, config=None, appearance="table".to_string(), threads=None,
+    device="auto".to_string(), out=None, glb=false, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn skin<'py>(
+    py: Python<'py>,
+    size: Option<u32>,
+    seed: Option<u64>,
+    preset: Option<String>,
+    ita_deg: Option<f32>,
+    sex: Option<String>,
+    age: Option<f32>,
+    mesh: Option<PathBuf>,
+    head: Option<PathBuf>,
+    fields: Option<PathBuf>,
+    config: Option<PathBuf>,
+    appearance: String,
+    threads: Option<usize>,
+    device: String,
+    out: Option<PathBuf>,
+    glb: bool,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let request = Request {
+        size,
+        seed,
+        preset,
+        ita_deg,
+        sex,
+        age,
+        mesh,
+        head,
+        fields,
+        config,
+        appearance,
+        threads,
+        device,
+    };
+    let callback = Callback::new(progress);
+    let generator = request.generator(&callback)?;
+    let made = py.detach(
+        || -> Result<(TextureSet, Option<Vec<&'static str>>), String> {
+            match &out {
+                Some(dir) => {
+                    let o = derma_export::skin::run(&generator, dir, glb, &callback)
+                        .map_err(|e| message(&e))?;
+                    Ok((o.set, Some(o.written.files)))
+                }
+                None => {
+                    let size = generator.config().size as usize;
+                    generator
+                        .config()
+                        .validate("the configuration")
+                        .and_then(|()| derma_skin::generate::check_memory(size))
+                        .and_then(|()| generator.run())
+                        .map(|set| (set, None))
+                        .map_err(|e| message(&e))
+                }
+            }
+        },
+    );
+    drop(generator);
+    let notes = callback.finish()?;
+    let (set, files) = made.map_err(crate::errors::DermaError::new_err)?;
+    let d = PyDict::new(py);
+    let info = PyDict::new(py);
+    info.set_item("size", set.config.size)?;
+    info.set_item("seed", set.config.seed)?;
+    info.set_item("appearance", set.appearance)?;
+    info.set_item("features", set.features.total())?;
+    info.set_item("ita_deg", set.config.person.ita_deg)?;
+    info.set_item(
+        "sex",
+        match set.config.person.sex {
+            Sex::Male => "male",
+            Sex::Female => "female",
+        },
+    )?;
+    info.set_item("age_years", set.config.person.age_years)?;
+    info.set_item(
+        "bio_channels",
+        derma_skin::paint::BIO_CHANNELS.map(|(n, _)| n).to_vec(),
+    )?;
+    info.set_item("notes", notes)?;
+    info.set_item("files", files)?;
+    for (name, a) in maps(set) {
+        d.set_item(name, Bound::new(py, a)?)?;
+    }
+    d.set_item("info", info)?;
+    Ok(d)
+}
