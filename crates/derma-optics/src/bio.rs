@@ -23,8 +23,10 @@ pub mod names {
 }
 
 /// The bio parameters of one texel that determine its colour (thesis §5.2, with the thesis'
-/// cm thicknesses expressed in micrometres as derma's configs are).
+/// cm thicknesses expressed in micrometres as derma's configs are). `repr(C)`: six f32 in field
+/// order (derma-skin's samples are viewed as float arrays by derma-py).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[repr(C)]
 pub struct BioTexel {
     /// Melanosome volume fraction of the epidermis, p_m ∈ [0, 1].
     pub melanin: f32,

@@ -4,6 +4,8 @@
 use crate::array::Array;
 use crate::errors::message;
 use crate::progress::Callback;
+use derma_shading::BioTexel;
+use derma_skin::features::BioSample;
 use derma_skin::regional::{Preset, Sex};
 use derma_skin::{AppearanceChoice, SkinConfig, SkinGenerator, TextureSet};
 use pyo3::prelude::*;
@@ -106,6 +108,41 @@ impl Request {
     }
 }
 
+/// The fields of a [`BioSample`] in memory order: the samples are viewed as (h, w, 13) float32.
+const SAMPLE_CHANNELS: [&str; 13] = [
+    "melanin",
+    "pheomelanin",
+    "blood",
+    "oxygenation",
+    "stratum_corneum_um",
+    "epidermis_um",
+    "height_mm",
+    "extra.R",
+    "extra.G",
+    "extra.B",
+    "extra.A",
+    "lips",
+    "furrow_mm",
+];
+
+// The view is only right if a sample is exactly these thirteen f32 in this order (both structs
+// are `repr(C)`); a change to either struct fails the build here.
+const _: () = {
+    use std::mem::{offset_of, size_of};
+    assert!(size_of::<BioSample>() == 13 * 4);
+    assert!(offset_of!(BioSample, tissue) == 0);
+    assert!(offset_of!(BioTexel, melanin) == 0);
+    assert!(offset_of!(BioTexel, pheomelanin) == 4);
+    assert!(offset_of!(BioTexel, blood) == 8);
+    assert!(offset_of!(BioTexel, oxygenation) == 12);
+    assert!(offset_of!(BioTexel, stratum_corneum_um) == 16);
+    assert!(offset_of!(BioTexel, epidermis_um) == 20);
+    assert!(offset_of!(BioSample, height_mm) == 24);
+    assert!(offset_of!(BioSample, extra) == 28);
+    assert!(offset_of!(BioSample, lips) == 44);
+    assert!(offset_of!(BioSample, furrow_mm) == 48);
+};
+
 /// The set's maps as arrays, rows from the top of the texture (v = 1) as the files store them.
 fn maps(mut set: TextureSet) -> Vec<(&'static str, Array)> {
     let (w, h) = (set.render.width, set.render.height);
@@ -132,29 +169,11 @@ fn maps(mut set: TextureSet) -> Vec<(&'static str, Array)> {
         out.push(("sss_color", Array::new::<u8, _>(ss.color, &[h, w, 3])));
         out.push(("sss_radius", Array::new::<u16, _>(ss.radius, &[h, w, 3])));
     }
-    let channels = derma_skin::paint::BIO_CHANNELS;
-    let bio: Vec<f32> = set
-        .bio
-        .texels
-        .iter()
-        .flat_map(|s| channels.map(|(_, get)| get(s)))
-        .collect();
-    let plane = |get: fn(&derma_skin::features::BioSample) -> f32| -> Vec<f32> {
-        set.bio.texels.iter().map(get).collect()
-    };
+    let texels = std::mem::take(&mut set.bio.texels);
     out.push((
-        "melanin",
-        Array::new::<f32, _>(plane(|s| s.tissue.melanin), &[h, w]),
+        "bio",
+        Array::new::<f32, _>(texels, &[h, w, SAMPLE_CHANNELS.len()]),
     ));
-    out.push((
-        "hemoglobin",
-        Array::new::<f32, _>(plane(|s| s.tissue.blood), &[h, w]),
-    ));
-    out.push((
-        "height_mm",
-        Array::new::<f32, _>(plane(|s| s.height_mm), &[h, w]),
-    ));
-    out.push(("bio", Array::new::<f32, _>(bio, &[h, w, channels.len()])));
     out
 }
 
@@ -240,10 +259,7 @@ pub fn skin<'py>(
         },
     )?;
     info.set_item("age_years", set.config.person.age_years)?;
-    info.set_item(
-        "bio_channels",
-        derma_skin::paint::BIO_CHANNELS.map(|(n, _)| n).to_vec(),
-    )?;
+    info.set_item("bio_channels", SAMPLE_CHANNELS.to_vec())?;
     info.set_item("notes", notes)?;
     info.set_item("files", files)?;
     for (name, a) in maps(set) {

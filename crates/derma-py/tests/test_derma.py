@@ -85,12 +85,21 @@ def test_the_arrays_are_the_files_the_same_call_writes(written):
         assert np.array_equal(a, read_png(out / f"{key}.png")), key
     for key in ["melanin", "hemoglobin", "height_mm"]:
         assert s[key].shape == (128, 128) and s[key].dtype == np.float32
-    assert s["bio"].shape == (128, 128, len(s["info"]["bio_channels"]))
+        assert np.shares_memory(s[key], s["bio"]), key
+    assert s["bio"].shape == (128, 128, 13) and len(s["info"]["bio_channels"]) == 13
     bio = dict(zip(s["info"]["bio_channels"], np.moveaxis(s["bio"], 2, 0)))
-    assert np.array_equal(bio["melanin"], s["melanin"])
     assert np.array_equal(bio["blood"], s["hemoglobin"])
-    assert np.array_equal(bio["height_mm"], s["height_mm"])
-    assert 0.0 < s["melanin"].min() and s["melanin"].max() < 1.0
+    # The view's channels are the painted quantities: height.png is height_mm over the
+    # report's range in 16 bits; the fractions and thicknesses lie in their ranges.
+    rng = json.loads((out / "report.json").read_text())["height_range"]
+    span = rng["max_mm"] - rng["min_mm"]
+    codes = np.round((bio["height_mm"] - rng["min_mm"]) / span * 65535)
+    assert np.abs(codes - read_png(out / "height.png")).max() <= 1
+    for name in ["melanin", "pheomelanin", "blood", "oxygenation", "lips", "extra.A"]:
+        assert 0.0 <= bio[name].min() and bio[name].max() <= 1.0, name
+    assert 0.0 < s["melanin"].min() and s["melanin"].max() < 0.5
+    assert 0.5 < bio["oxygenation"].mean() < 1.0
+    assert 5.0 < bio["stratum_corneum_um"].mean() < 50.0 < bio["epidermis_um"].mean() < 150.0
     info = s["info"]
     assert (info["size"], info["seed"], info["sex"], info["age_years"]) == (128, 5, "female", 52.0)
     assert 10.0 <= info["ita_deg"] <= 28.0  # tan: Chardon et al.'s band

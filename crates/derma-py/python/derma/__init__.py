@@ -81,9 +81,10 @@ def skin(
     encodings of the files: ``base_color`` (h, w, 3) uint8 sRGB, ``normal`` (h, w, 3) uint16
     (n·½+½, OpenGL +Y), ``roughness`` and ``specular`` (h, w) uint8 (specular = F0 / 0.08),
     ``sss_color`` (h, w, 3) uint8 sRGB and ``sss_radius`` (h, w, 3) uint16 (the table
-    appearance only), ``melanin`` and ``hemoglobin`` (h, w) float32 volume fractions,
-    ``height_mm`` (h, w) float32, ``bio`` (h, w, 12) float32 (channels in
-    ``info["bio_channels"]``); and ``info``: size, seed, person, feature count, notes, files.
+    appearance only), ``bio`` (h, w, 13) float32 — every bio parameter per texel, channels
+    named in ``info["bio_channels"]`` — and, as views into it, ``melanin`` and ``hemoglobin``
+    (h, w) volume fractions and ``height_mm`` (h, w); and ``info``: size, seed, person,
+    feature count, notes, files. No map is copied: each is a view of derma's own memory.
     The same arguments and seed give the same arrays, bit for bit, at any thread count.
     """
     d = _derma.skin(
@@ -104,7 +105,12 @@ def skin(
         glb=glb,
         progress=progress,
     )
-    return _arrays(d)
+    maps = _arrays(d)
+    # The bio samples are one (h, w, 13) array; the main planes are views into it.
+    channel = {name: i for i, name in enumerate(maps["info"]["bio_channels"])}
+    for key, name in [("melanin", "melanin"), ("hemoglobin", "blood"), ("height_mm", "height_mm")]:
+        maps[key] = maps["bio"][:, :, channel[name]]
+    return maps
 
 
 def head(fitted: Optional[PathLike] = None) -> dict:

@@ -22,8 +22,10 @@ use serde::Serialize;
 
 /// Every bio parameter of one texel while it is painted (thesis §5.2): the tissue the optics
 /// turn into colour, plus displacement, an extra colour and a lip mask that the material stage
-/// uses for roughness.
+/// uses for roughness. `repr(C)`: thirteen f32 in field order, no padding, so a set's samples
+/// can be handed out as an (h, w, 13) float32 array without a copy (derma-py).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[repr(C)]
 pub struct BioSample {
     /// Melanin, blood, oxygenation and layer thicknesses: what an
     /// [`derma_shading::Appearance`] turns into colour.
