@@ -465,10 +465,24 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
             names.push("eyebrows".to_string());
         }
     }
+    // The skin's node names the rig library's expressions by the face units they pose, for
+    // tools that drive morph targets from expressions (Blender's importer makes node extras
+    // custom properties; blender/derma_skin builds drivers from them).
+    let expressions: serde_json::Map<String, Value> = derma_rig::expression::LIBRARY
+        .iter()
+        .filter(|e| !e.face_units.is_empty())
+        .map(|e| (e.name.to_string(), unit_table(e.face_units)))
+        .collect();
     let nodes: Vec<Value> = meshes
         .iter()
         .enumerate()
-        .map(|(i, m)| json!({"name": m["name"], "mesh": i}))
+        .map(|(i, m)| {
+            let mut n = json!({"name": m["name"], "mesh": i});
+            if m["name"] == "skin" && m["extras"]["targetNames"].is_array() {
+                n["extras"] = json!({"derma_expressions": expressions});
+            }
+            n
+        })
         .collect();
     let n_images = images.len();
     let mut doc = json!({

@@ -534,6 +534,30 @@ fn skin_glb_writes_the_set_and_its_head_in_one_run() {
     let used: Vec<&str> = doc.extensions_used().collect();
     assert!(!used.contains(&"KHR_materials_volume"), "{used:?}");
     assert!(used.contains(&"KHR_materials_specular"), "{used:?}");
+    // The skin's node names the expressions by the face units they pose (Blender's importer
+    // makes them custom properties; the add-on drives the shape keys from them).
+    let bytes = std::fs::read(out.join("head.glb")).unwrap();
+    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let json: serde_json::Value = serde_json::from_slice(&bytes[20..20 + len]).unwrap();
+    let skin = json["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| n["name"] == "skin")
+        .unwrap();
+    let happiness = &skin["extras"]["derma_expressions"]["happiness"];
+    assert_eq!(happiness["mouthSmileLeft"], 1.0, "{skin}");
+    let target_names = &json["meshes"][skin["mesh"].as_u64().unwrap() as usize]["extras"];
+    for unit in happiness.as_object().unwrap().keys() {
+        assert!(
+            target_names["targetNames"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|t| t == unit.as_str()),
+            "{unit}"
+        );
+    }
     let names: Vec<&str> = doc.meshes().filter_map(|m| m.name()).collect();
     for n in [
         "skin",

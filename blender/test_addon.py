@@ -1,0 +1,127 @@
+"""The derma add-on in Blender, headless (bench/blender.sh): installs it from a zip, paints
+derma's built-in head through its operator, checks the material's inputs are wired, the
+expression sliders drive the face units, renders 256² with Cycles (no denoiser) and checks the
+image is neither black nor the missing-texture pink. Run as
+  blender -b --factory-startup --python-exit-code 1 --python blender/test_addon.py -- OUT_DIR
+with DERMA set to the derma binary (or the derma Python package importable)."""
+
+import os
+import shutil
+import sys
+
+import bpy
+
+out = os.path.abspath(sys.argv[sys.argv.index("--") + 1])
+here = os.path.dirname(os.path.abspath(__file__))
+os.makedirs(out, exist_ok=True)
+print("derma add-on test on Blender", bpy.app.version_string)
+
+# Install and enable the add-on as a user would: from a zip of its folder.
+archive = shutil.make_archive(os.path.join(out, "derma_skin"), "zip", here, "derma_skin")
+bpy.ops.preferences.addon_install(filepath=archive, overwrite=True)
+bpy.ops.preferences.addon_enable(module="derma_skin")
+prefs = bpy.context.preferences.addons["derma_skin"].preferences
+prefs.executable = os.environ.get("DERMA", "derma")
+
+# Empty the factory scene, then paint derma's head at 1024².
+for o in list(bpy.data.objects):
+    bpy.data.objects.remove(o)
+scene = bpy.context.scene
+s = scene.derma
+s.target, s.preset, s.sex, s.age, s.size, s.seed = "BUILTIN", "tan", "female", 45.0, 1024, 3
+s.out_dir = os.path.join(out, "set")
+assert bpy.ops.derma.paint_skin() == {"FINISHED"}
+
+skin = next(o for o in bpy.data.objects if o.type == "MESH" and o.name.startswith("skin"))
+mat = skin.active_material
+assert mat.name.startswith("derma skin"), mat.name
+nodes = mat.node_tree.nodes
+
+
+def linked(node, names):
+    for n in names:
+        if n in node.inputs:
+            return node.inputs[n].is_linked
+    raise AssertionError(f"{node.name} has none of {names}")
+
+
+cycles = nodes["derma skin (Cycles)"]
+eevee = nodes["derma skin (Eevee)"]
+for bsdf in (cycles, eevee):
+    for names in (["Base Color"], ["Roughness"], ["Specular IOR Level", "Specular"], ["Normal"]):
+        assert linked(bsdf, names), (bsdf.name, names)
+assert linked(cycles, ["Subsurface Radius"]), "Cycles: the radius per texel"
+if "Subsurface Color" in cycles.inputs:
+    assert linked(cycles, ["Subsurface Color"]), "Blender 3: sss_color.png"
+radius = eevee.inputs["Subsurface Radius"]
+assert not radius.is_linked and all(1e-5 < r < 0.01 for r in radius.default_value), tuple(
+    radius.default_value
+)
+assert nodes["derma normal map"].inputs["Color"].is_linked
+for name in ["base_color.png", "sss_color.png"]:
+    assert nodes["derma " + name].image.colorspace_settings.name == "sRGB"
+for name in ["normal.png", "roughness.png", "specular.png", "sss_radius.png"]:
+    assert nodes["derma " + name].image.colorspace_settings.name == "Non-Color"
+print("material: every input wired; Eevee radius (m)", tuple(round(r, 5) for r in radius.default_value))
+
+# The happiness slider poses the smile through the face units' shape keys.
+keys = skin.data.shape_keys.key_blocks
+fcurves = skin.data.shape_keys.animation_data.drivers
+assert all(fc.driver.is_valid for fc in fcurves), [fc.data_path for fc in fcurves if not fc.driver.is_valid]
+skin["happiness"] = 1.0
+skin.update_tag()
+scene.frame_set(scene.frame_current)
+bpy.context.view_layer.update()
+assert abs(keys["mouthSmileLeft"].value - 1.0) < 1e-6, keys["mouthSmileLeft"].value
+assert abs(keys["cheekSquintLeft"].value - 0.7) < 1e-6, keys["cheekSquintLeft"].value
+skin["happiness"] = 0.0
+skin.update_tag()
+scene.frame_set(scene.frame_current)
+assert keys["mouthSmileLeft"].value == 0.0
+print("drivers: happiness 1 → mouthSmileLeft 1, cheekSquintLeft 0.7")
+
+# A front view, a key and a fill light; Cycles at 256², 16 samples, no denoiser.
+lo = [min((skin.matrix_world @ v.co)[i] for v in skin.data.vertices) for i in range(3)]
+hi = [max((skin.matrix_world @ v.co)[i] for v in skin.data.vertices) for i in range(3)]
+centre = [(a + b) / 2 for a, b in zip(lo, hi)]
+target = bpy.data.objects.new("target", None)
+target.location = (centre[0], centre[1], centre[2] + 0.1 * (hi[2] - lo[2]))
+scene.collection.objects.link(target)
+cam = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+cam.data.lens = 85
+cam.location = (centre[0], lo[1] - 0.75, target.location[2])
+cam.constraints.new("TRACK_TO").target = target
+scene.collection.objects.link(cam)
+scene.camera = cam
+for name, loc, energy in (("key", (-0.6, -1.0, 0.5), 120.0), ("fill", (0.8, -0.8, 0.1), 40.0)):
+    light = bpy.data.objects.new(name, bpy.data.lights.new(name, "POINT"))
+    light.data.energy = energy
+    light.location = tuple(c + d for c, d in zip(centre, loc))
+    scene.collection.objects.link(light)
+scene.render.engine = "CYCLES"
+scene.cycles.device = "CPU"
+scene.cycles.samples = int(os.environ.get("DERMA_SAMPLES", "16"))
+scene.cycles.use_denoising = False
+scene.render.resolution_x = scene.render.resolution_y = int(os.environ.get("DERMA_RES", "256"))
+scene.render.resolution_percentage = 100
+scene.render.film_transparent = True
+# derma's maps are sRGB-calibrated: show them without Filmic's tone curve.
+scene.view_settings.view_transform = "Standard"
+scene.render.filepath = os.path.join(out, "render.png")
+bpy.ops.render.render(write_still=True)
+
+import numpy as np  # noqa: E402  (Blender's Python; Debian: python3-numpy)
+
+img = bpy.data.images.load(scene.render.filepath)
+px = np.empty(len(img.pixels), dtype=np.float32)
+img.pixels.foreach_get(px)
+px = px.reshape(-1, 4)
+head = px[px[:, 3] > 0.5][:, :3]
+assert len(head) > 0.1 * len(px), f"the head covers {len(head)} of {len(px)} pixels"
+mean = head.mean(axis=0)
+pink = (head[:, 0] > 0.8) & (head[:, 1] < 0.2) & (head[:, 2] > 0.8)
+assert mean.max() > 0.05, f"black: mean {mean}"
+assert pink.mean() < 0.01, f"missing-texture pink on {pink.mean():.1%} of the head"
+assert mean[0] > mean[1] > mean[2], f"not skin-coloured: mean RGB {mean}"
+print(f"render: {scene.render.filepath}, head on {len(head)} px, mean RGB {np.round(mean, 3)}")
+print("derma add-on test passed")
