@@ -9,7 +9,7 @@
 #                                     BLENDER_CURRENT=0 skips the second run)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if ! command -v blender >/dev/null || ! python3 -c 'import sys' >/dev/null; then
+if ! command -v blender >/dev/null || ! /usr/bin/python3 -c 'import numpy' 2>/dev/null; then
   apt-get install -y blender python3-numpy || { apt-get update && apt-get install -y blender python3-numpy; }
 fi
 cargo build --release -q -p derma

@@ -124,4 +124,26 @@ assert mean.max() > 0.05, f"black: mean {mean}"
 assert pink.mean() < 0.01, f"missing-texture pink on {pink.mean():.1%} of the head"
 assert mean[0] > mean[1] > mean[2], f"not skin-coloured: mean RGB {mean}"
 print(f"render: {scene.render.filepath}, head on {len(head)} px, mean RGB {np.round(mean, 3)}")
+# A user's own mesh: a head-sized UV sphere (0.1 m radius), active but not selected, beside
+# another selected object; painted on its own UVs at 256², in metres as derma reads it.
+bpy.ops.mesh.primitive_uv_sphere_add(radius=0.1, location=(1.0, 0.0, 0.0))
+ball = bpy.context.active_object
+bpy.ops.mesh.primitive_cube_add(size=0.1, location=(2.0, 0.0, 0.0))
+cube = bpy.context.active_object
+ball.data.materials.append(bpy.data.materials.new("keep me"))
+ball.data.materials.append(bpy.data.materials.new("slot two"))
+ball.active_material_index = 1
+bpy.context.view_layer.objects.active = ball
+ball.select_set(False)
+s.target, s.size, s.out_dir = "SELECTED", 256, os.path.join(out, "sphere")
+assert bpy.ops.derma.paint_skin() == {"FINISHED"}
+assert [m.name for m in ball.data.materials][0] == "keep me"
+assert ball.material_slots[1].material.name.startswith("derma skin")
+assert cube.select_get() and not ball.select_get(), "the user's selection is given back"
+import json  # noqa: E402
+
+with open(os.path.join(out, "sphere", "report.json"), encoding="utf-8") as f:
+    mesh_in = json.load(f)["inputs"]["mesh"]
+assert mesh_in["mm_per_unit"] == 1000.0, mesh_in
+print("selected mesh: painted on its UVs in metres, in its active slot; selection kept")
 print("derma add-on test passed")

@@ -9,7 +9,7 @@ for f in slurm/*.sbatch; do
   bash -n "$f"
   grep '^#SBATCH' "$f" | sed 's/^#SBATCH //' | while read -r opt; do
     case "${opt%%=*}" in
-      --job-name|--gres|--cpus-per-task|--mem|--time|--requeue|--output|--array|--partition) ;;
+      --job-name|--gres|--cpus-per-task|--mem|--time|--requeue|--open-mode|--output|--array|--partition) ;;
       *) echo "$f: unexpected sbatch option '$opt'" >&2; exit 1 ;;
     esac
   done

@@ -68,8 +68,9 @@ class DermaSettings(bpy.types.PropertyGroup):
     )
     out_dir: StringProperty(
         name="Textures",
-        description="Where the texture set is written (empty: a new temporary folder)",
-        default="",
+        description="Where the texture set is written (relative to the .blend file with //; "
+        "an unsaved file uses a new temporary folder, which the images are then packed from)",
+        default="//derma/",
         subtype="DIR_PATH",
     )
 
@@ -143,7 +144,10 @@ class DERMA_OT_paint_skin(bpy.types.Operator):
     def execute(self, context):
         s = context.scene.derma
         prefs = context.preferences.addons[__name__].preferences
-        out = bpy.path.abspath(s.out_dir) if s.out_dir else tempfile.mkdtemp(prefix="derma-")
+        # A path relative to an unsaved .blend has no folder: paint into a temporary one and
+        # pack the images into the .blend, so the material keeps them.
+        transient = not s.out_dir or (s.out_dir.startswith("//") and not bpy.data.filepath)
+        out = tempfile.mkdtemp(prefix="derma-") if transient else bpy.path.abspath(s.out_dir)
         try:
             if s.target == "SELECTED":
                 obj = context.active_object
@@ -152,15 +156,23 @@ class DERMA_OT_paint_skin(bpy.types.Operator):
                     return {"CANCELLED"}
                 mesh = os.path.join(out, "mesh.obj")
                 os.makedirs(out, exist_ok=True)
-                for o in context.selected_objects:
-                    o.select_set(o == obj)
-                bpy.ops.wm.obj_export(
-                    filepath=mesh,
-                    export_selected_objects=True,
-                    export_materials=False,
-                    export_normals=True,
-                    export_uv=True,
-                )
+                # Export the active mesh alone, then give the user their selection back.
+                selected = list(context.selected_objects)
+                for o in selected:
+                    o.select_set(False)
+                obj.select_set(True)
+                try:
+                    bpy.ops.wm.obj_export(
+                        filepath=mesh,
+                        export_selected_objects=True,
+                        export_materials=False,
+                        export_normals=True,
+                        export_uv=True,
+                    )
+                finally:
+                    obj.select_set(obj in selected)
+                    for o in selected:
+                        o.select_set(True)
                 report = runner.run_skin(
                     prefs.executable, out, s.preset, s.sex, s.age, s.size, s.seed, mesh=mesh
                 )
@@ -176,8 +188,16 @@ class DERMA_OT_paint_skin(bpy.types.Operator):
             return {"CANCELLED"}
         uv = skin.data.uv_layers.active.name if skin.data.uv_layers else ""
         mat = material.build("derma skin", out, runner.mm_per_unit(report), uv_map=uv)
-        skin.data.materials.clear()
-        skin.data.materials.append(mat)
+        if transient:
+            for node in mat.node_tree.nodes:
+                if node.type == "TEX_IMAGE" and node.image is not None:
+                    node.image.pack()
+        # The skin takes the material in its active slot (a new slot when it has none); other
+        # slots of a user's multi-material mesh are left alone.
+        if skin.material_slots:
+            skin.material_slots[skin.active_material_index].material = mat
+        else:
+            skin.data.materials.append(mat)
         driven = drive_expressions(skin, objects) if s.target == "BUILTIN" else []
         self.report(
             {"INFO"},

@@ -12,15 +12,17 @@ message. See docs/python.md in the repository.
 from __future__ import annotations
 
 import json
+import numbers
 import os
 from typing import Any, Callable, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
 # Mesa's Vulkan drivers print "XDG_RUNTIME_DIR is invalid or not set" when wgpu opens them
-# without one (headless servers); derma's CLI gives them the temporary directory, and so does
-# the package when the variable is unset.
-os.environ.setdefault("XDG_RUNTIME_DIR", __import__("tempfile").gettempdir())
+# without one (headless servers). Where it is unset, the package gives them a private
+# directory of its own (0700, as the XDG specification asks); where it is set, nothing changes.
+if not os.environ.get("XDG_RUNTIME_DIR"):
+    os.environ["XDG_RUNTIME_DIR"] = __import__("tempfile").mkdtemp(prefix="derma-xdg-")
 
 from . import _derma  # noqa: E402
 from ._derma import DermaError, __version__  # noqa: E402
@@ -151,7 +153,9 @@ def synth(
     if ex.ndim != 3:
         raise DermaError(f"exemplar: shape {np.shape(exemplar)}: expected (h, w) or (h, w, c)")
     ex = np.ascontiguousarray(ex, dtype=np.float32)
-    w, h = (size, size) if isinstance(size, int) else tuple(size)
+    w, h = (size, size) if isinstance(size, numbers.Integral) else tuple(size)
+    if not (int(w) > 0 and int(h) > 0):
+        raise DermaError(f"size: {w}×{h}: expected positive whole numbers of texels")
     out = np.asarray(
         _derma.synth(
             ex.tobytes(),
@@ -190,11 +194,16 @@ class Rig:
         builtin: Optional[Sequence[str]] = None,
         targets: Optional[Mapping[str, PathLike]] = None,
         mask: Optional[PathLike] = None,
+        basis_size: int = 256,
+        sigma_floor: Optional[float] = None,
         progress: Optional[Progress] = None,
     ) -> "Rig":
         """Builds a rig on the set in ``set_dir`` with the built-in expression library entries
         ``builtin`` (default ["all"]) and target maps {name: file}; ``radius`` is the local
-        statistics' disk radius in texels. Saves it into ``out``."""
+        statistics' disk radius in texels, ``basis_size`` the scale/bias textures' resolution
+        (Jimenez et al. 2010 §6: 256; it must divide the map), ``sigma_floor`` the σ floor as a
+        fraction of the neutral's RMS local σ (None: derma's default). Saves it into ``out``."""
+        extra = {} if sigma_floor is None else {"sigma_floor": sigma_floor}
         return Rig(
             _derma.Rig.build(
                 _path(set_dir),
@@ -203,7 +212,9 @@ class Rig:
                 builtin=None if builtin is None else list(builtin),
                 targets=None if targets is None else {k: _path(v) for k, v in targets.items()},
                 mask=_path(mask),
+                basis_size=basis_size,
                 progress=progress,
+                **extra,
             )
         )
 
