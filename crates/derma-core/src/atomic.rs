@@ -4,13 +4,40 @@
 use crate::error::{CoreError, Result};
 use std::path::{Path, PathBuf};
 
-/// The temporary sibling used while `path` is being written.
+/// A name part that no other writer into the same directory uses at the same time: the host
+/// (containers sharing a volume all run as process 1), the process, and a counter within it.
+pub fn unique_tag() -> String {
+    static HOST: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let host = HOST.get_or_init(|| {
+        let raw = std::fs::read_to_string("/proc/sys/kernel/hostname")
+            .ok()
+            .or_else(|| std::env::var("HOSTNAME").ok())
+            .or_else(|| std::env::var("COMPUTERNAME").ok())
+            .unwrap_or_default();
+        let clean: String = raw
+            .trim()
+            .chars()
+            .filter(|c| c.is_ascii_alphanumeric() || *c == '-')
+            .take(40)
+            .collect();
+        if clean.is_empty() {
+            "host".into()
+        } else {
+            clean
+        }
+    });
+    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    format!("{host}.{}.{n}", std::process::id())
+}
+
+/// The temporary sibling used while `path` is being written (unique to this writer).
 pub fn temp_path(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+    path.with_file_name(format!(".{name}.{}.tmp", unique_tag()))
 }
 
 /// Writes through `write` into a temporary file, then renames it to `path`. On failure the
@@ -51,7 +78,7 @@ pub fn ensure_writable_dir(dir: &Path) -> Result<()> {
         path: dir.to_path_buf(),
         source,
     })?;
-    let probe = dir.join(format!(".derma-write-probe.{}", std::process::id()));
+    let probe = dir.join(format!(".derma-write-probe.{}", unique_tag()));
     std::fs::write(&probe, b"probe").map_err(|source| CoreError::Write {
         path: dir.to_path_buf(),
         source,
@@ -132,6 +159,25 @@ fn canonical(p: &Path) -> PathBuf {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn temporary_names_are_unique_to_the_writer() {
+        // Pods on a shared volume all run as process 1: the host and a counter keep two
+        // writers of the same file (two shards writing batch.toml) off each other's temporary.
+        let p = Path::new("/some/dir/batch.toml");
+        let (a, b) = (temp_path(p), temp_path(p));
+        assert_ne!(a, b);
+        assert_eq!(a.parent(), p.parent());
+        let name = a.file_name().unwrap().to_str().unwrap();
+        assert!(
+            name.starts_with(".batch.toml.") && name.ends_with(".tmp"),
+            "{name}"
+        );
+        assert!(
+            name.contains(&format!(".{}.", std::process::id())),
+            "{name}"
+        );
+    }
 
     #[test]
     fn failed_write_leaves_target_untouched() {

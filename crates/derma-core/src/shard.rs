@@ -43,17 +43,18 @@ impl Shard {
     ///   (the Job's `completions`, which Kubernetes does not put in the environment);
     /// - neither: the whole of the work, 1/1.
     pub fn from_env(var: impl Fn(&str) -> Option<String>) -> Result<(Self, &'static str)> {
-        let num =
-            |name: &str| -> Result<Option<usize>> {
-                match var(name) {
-                    None => Ok(None),
-                    Some(v) => v.trim().parse().map(Some).map_err(|_| {
-                        invalid(name, format!("{name}='{v}': expected a whole number"))
-                    }),
-                }
-            };
+        let num = |name: &str| -> Result<Option<usize>> {
+            match var(name) {
+                None => Ok(None),
+                Some(v) => v
+                    .trim()
+                    .parse()
+                    .map(Some)
+                    .map_err(|_| invalid(name, format!("'{v}': expected a whole number"))),
+            }
+        };
         let need = |name: &str, why: &str| -> Result<usize> {
-            num(name)?.ok_or_else(|| invalid(name, format!("{name} is not set; {why}")))
+            num(name)?.ok_or_else(|| invalid(name, format!("not set; {why}")))
         };
         if let Some(id) = num("SLURM_ARRAY_TASK_ID")? {
             let why = "Slurm sets it for job arrays (sbatch --array=MIN-MAX)";
@@ -89,7 +90,7 @@ impl Shard {
             if index >= n {
                 return Err(invalid(
                     "JOB_COMPLETION_INDEX",
-                    format!("JOB_COMPLETION_INDEX {index} is not below DERMA_SHARD_COUNT {n}"),
+                    format!("{index} is not below DERMA_SHARD_COUNT {n}"),
                 ));
             }
             return Ok((Self { k: index + 1, n }, "JOB_COMPLETION_INDEX"));

@@ -140,7 +140,13 @@ impl BatchSpec {
             detail: format!("cannot read the batch spec ({e})"),
         })?;
         let mut spec = Self::parse(&text, &path.display().to_string())?;
-        let dir = path.parent().unwrap_or(Path::new(""));
+        // Resolved from the spec's real place, so a rerun that spells its path otherwise
+        // (relative, absolute, through a link) stores the same spec.
+        let real = std::fs::canonicalize(path).map_err(|e| ExportError::Input {
+            path: path.to_path_buf(),
+            detail: format!("cannot resolve ({e})"),
+        })?;
+        let dir = real.parent().unwrap_or(Path::new(""));
         let resolve = |p: &mut String| {
             if !Path::new(p.as_str()).is_absolute() {
                 *p = dir.join(&*p).display().to_string();
@@ -319,7 +325,7 @@ pub struct ShardReport {
     pub skipped: usize,
     /// Painted now.
     pub made: usize,
-    /// Unfinished directories of an earlier run, removed and made again.
+    /// Unfinished directories of ended runs on this host, removed (their identities made again).
     pub resumed: usize,
 }
 
@@ -332,9 +338,10 @@ pub struct RunOptions {
     pub threads: Option<usize>,
 }
 
-/// Paints every identity `shard` owns that is not complete in `out`, each into
-/// `out/NNNNNN.partial` then renamed to `out/NNNNNN`. An unfinished directory left by a killed
-/// run is removed and its identity made again, so a rerun of the same command resumes.
+/// Paints every identity `shard` owns that is not complete in `out`, each into its own
+/// `out/NNNNNN.partial.HOST.PID.N` then renamed to `out/NNNNNN`. An unfinished directory left by
+/// a killed run on this host is removed and its identity made again, so a rerun of the same
+/// command resumes; one left on another host is removed by [`merge`].
 pub fn run_shard(
     out: &Path,
     spec: &BatchSpec,
@@ -343,16 +350,41 @@ pub fn run_shard(
     progress: &dyn Progress,
 ) -> Result<ShardReport> {
     prepare(out, spec)?;
-    let base = match &spec.config {
-        Some(p) => SkinGenerator::from_config_file(Path::new(p))?
-            .config()
-            .clone(),
-        None => SkinConfig::default(),
+    // The config is read for each identity (its relative paths resolve against its own
+    // directory); once here, so a bad one fails before any work.
+    let generator_for = |id: &Identity| -> Result<SkinGenerator<'_>> {
+        let mut g = match &spec.config {
+            Some(p) => SkinGenerator::from_config_file(Path::new(p))?,
+            None => SkinGenerator::new(SkinConfig::default()),
+        };
+        let cfg = g.config_mut();
+        cfg.size = spec.size;
+        cfg.seed = id.seed;
+        cfg.person = Person {
+            ita_deg: id.ita_deg,
+            calibrate_melanin: true,
+            sex: id.sex,
+            age_years: id.age_years,
+        };
+        g = g
+            .appearance(match spec.appearance.as_str() {
+                "analytic" => AppearanceChoice::Analytic,
+                _ => AppearanceChoice::Default,
+            })
+            .device(opts.device)
+            .progress(&Silent);
+        if let Some(m) = &id.mesh {
+            g = g.mesh(m);
+        }
+        if let Some(h) = &id.head {
+            g = g.head(h);
+        }
+        if let Some(n) = opts.threads {
+            g = g.threads(n);
+        }
+        Ok(g)
     };
-    let appearance = match spec.appearance.as_str() {
-        "analytic" => AppearanceChoice::Analytic,
-        _ => AppearanceChoice::Default,
-    };
+    generator_for(&spec.identity(0))?;
     let owned: Vec<usize> = (0..spec.count).filter(|&i| shard.owns(i)).collect();
     let mut report = ShardReport {
         owned: owned.len(),
@@ -368,42 +400,35 @@ pub fn run_shard(
             job.advance(1);
             continue;
         }
-        let partial = out.join(format!("{}.partial", id.dir));
-        if partial.exists() {
-            std::fs::remove_dir_all(&partial).map_err(|e| io(&partial, e))?;
-            report.resumed += 1;
-        }
-        let mut cfg = base.clone();
-        cfg.size = spec.size;
-        cfg.seed = id.seed;
-        cfg.person = Person {
-            ita_deg: id.ita_deg,
-            calibrate_melanin: true,
-            sex: id.sex,
-            age_years: id.age_years,
-        };
-        let mut generator = SkinGenerator::new(cfg)
-            .appearance(appearance.clone())
-            .device(opts.device)
-            .progress(&Silent);
-        if let Some(m) = &id.mesh {
-            generator = generator.mesh(m);
-        }
-        if let Some(h) = &id.head {
-            generator = generator.head(h);
-        }
-        if let Some(n) = opts.threads {
-            generator = generator.threads(n);
-        }
+        report.resumed += remove_stale_partials(out, &id.dir)?;
+        // This process's own unfinished directory: two workers on one identity (a replaced
+        // pod still stopping, a requeued task) never write into the same one.
+        let partial = out.join(format!(
+            "{}{PARTIAL}{}",
+            id.dir,
+            derma_core::atomic::unique_tag()
+        ));
+        let generator = generator_for(&id)?;
         let started = Instant::now();
         crate::skin::run(&generator, &partial, spec.glb, &Silent)
             .map_err(|e| ExportError::Invalid(format!("identity {} ({}): {e}", i, id.dir)))?;
         keep_outputs(&partial, spec)?;
         id.files = hashes(&partial)?;
         write_json(&partial.join(IDENTITY_FILE), &id, JsonFormat::DATA_PRETTY)?;
+        if done.join(IDENTITY_FILE).is_file() {
+            // Another worker finished it meanwhile: the same bytes; keep theirs.
+            std::fs::remove_dir_all(&partial).map_err(|e| io(&partial, e))?;
+            report.skipped += 1;
+            job.advance(1);
+            continue;
+        }
         if done.exists() {
-            // A directory under the final name without its record: a rename never finished.
-            std::fs::remove_dir_all(&done).map_err(|e| io(&done, e))?;
+            // A directory under the final name without its record is not derma's: refuse to
+            // guess rather than delete it.
+            return Err(ExportError::Input {
+                path: done,
+                detail: format!("exists without its {IDENTITY_FILE}; move it away and run again"),
+            });
         }
         std::fs::rename(&partial, &done).map_err(|e| io(&done, e))?;
         report.made += 1;
@@ -419,6 +444,40 @@ pub fn run_shard(
         job.advance(1);
     }
     Ok(report)
+}
+
+/// What follows an identity's directory name in an unfinished directory's:
+/// `NNNNNN.partial.HOST.PID.N` (derma_core::atomic::unique_tag).
+const PARTIAL: &str = ".partial.";
+
+/// Removes the unfinished directories of identity `dir` that no live process is writing:
+/// those of this host whose process has ended (or is this one). Those of other hosts are left
+/// to their writers, or to [`merge`] once the batch is complete. Returns how many it removed.
+fn remove_stale_partials(out: &Path, dir: &str) -> Result<usize> {
+    let tag = derma_core::atomic::unique_tag();
+    let (host, pid) = {
+        let mut parts = tag.split('.');
+        (
+            parts.next().unwrap_or("").to_string(),
+            parts.next().unwrap_or("").to_string(),
+        )
+    };
+    let mut removed = 0;
+    for e in std::fs::read_dir(out).map_err(|e| io(out, e))?.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let Some(rest) = name.strip_prefix(dir).and_then(|r| r.strip_prefix(PARTIAL)) else {
+            continue;
+        };
+        let mut parts = rest.split('.');
+        let (h, p) = (parts.next().unwrap_or(""), parts.next().unwrap_or(""));
+        let ended = p == pid || !Path::new("/proc").join(p).exists();
+        if h == host && ended && Path::new("/proc/self").exists() {
+            let path = e.path();
+            std::fs::remove_dir_all(&path).map_err(|e| io(&path, e))?;
+            removed += 1;
+        }
+    }
+    Ok(removed)
 }
 
 /// Removes the set's files the spec's `outputs` leaves out (none when it names none).
@@ -480,6 +539,8 @@ pub struct Merged {
     pub identities: usize,
     /// Files checked against their hashes.
     pub files: usize,
+    /// Unfinished directories of killed or duplicate workers, removed.
+    pub removed: usize,
 }
 
 /// One manifest line: the identity's record and the seconds its set took (report.json's).
@@ -535,10 +596,23 @@ pub fn merge(out: &Path, progress: &dyn Progress) -> Result<Merged> {
                 .filter(|(n, h)| now.get(*n) != Some(*h))
                 .map(|(n, _)| n.as_str())
                 .collect();
+            let extra: Vec<&str> = now
+                .keys()
+                .filter(|n| !got.files.contains_key(*n))
+                .map(String::as_str)
+                .collect();
+            let mut what = Vec::new();
+            if !differ.is_empty() {
+                what.push(format!("changed or missing: {}", differ.join(", ")));
+            }
+            if !extra.is_empty() {
+                what.push(format!("not in its record: {}", extra.join(", ")));
+            }
             problems.push(format!(
-                "{}: files changed or missing: {}",
+                "{}: {} (delete {}/ and run its shard again)",
                 want.dir,
-                differ.join(", ")
+                what.join("; "),
+                want.dir
             ));
             continue;
         }
@@ -561,12 +635,22 @@ pub fn merge(out: &Path, progress: &dyn Progress) -> Result<Merged> {
         return Err(ExportError::Input {
             path: out.to_path_buf(),
             detail: format!(
-                "{n} of {} identities are not complete (run the missing shards again): {}{}",
+                "{n} of {} identities are not complete (run their shards again): {}{}",
                 spec.count,
                 problems.join("; "),
                 if n > 20 { "; …" } else { "" }
             ),
         });
+    }
+    // Every identity is complete: an unfinished directory left now is a killed or duplicate
+    // worker's (on any host), never needed again.
+    let mut removed = 0;
+    for e in std::fs::read_dir(out).map_err(|e| io(out, e))?.flatten() {
+        if e.file_name().to_string_lossy().contains(PARTIAL) && e.path().is_dir() {
+            let path = e.path();
+            std::fs::remove_dir_all(&path).map_err(|e| io(&path, e))?;
+            removed += 1;
+        }
     }
     let manifest = out.join(MANIFEST);
     derma_core::atomic::write_bytes(&manifest, lines.as_bytes())?;
@@ -574,6 +658,7 @@ pub fn merge(out: &Path, progress: &dyn Progress) -> Result<Merged> {
         manifest,
         identities: spec.count,
         files,
+        removed,
     })
 }
 

@@ -5,10 +5,26 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 /// Element types numpy knows by their array-interface type strings (little-endian).
-pub(crate) trait Element: Copy + Send + Sync + 'static {
+pub(crate) trait Element: Plain {
     /// numpy's type string: `|u1`, `<u2`, `<u4`, `<f4`.
     const TYPESTR: &'static str;
 }
+
+/// Storage that is whole elements and nothing else: no padding, every bit pattern a value,
+/// aligned at least as its elements. Implemented only for the types handed to numpy here.
+///
+/// # Safety
+/// An implementor is `size_of::<Self>()` bytes of initialised scalars with no padding.
+pub(crate) unsafe trait Plain: Copy + Send + Sync + 'static {}
+
+// SAFETY: scalars and arrays of them have no padding.
+unsafe impl Plain for u8 {}
+unsafe impl Plain for u16 {}
+unsafe impl Plain for u32 {}
+unsafe impl Plain for f32 {}
+unsafe impl<T: Plain, const N: usize> Plain for [T; N] {}
+// SAFETY: repr(C), thirteen f32 (asserted at compile time in skin.rs).
+unsafe impl Plain for derma_skin::features::BioSample {}
 
 impl Element for u8 {
     const TYPESTR: &'static str = "|u1";
@@ -38,10 +54,8 @@ pub struct Array {
 impl Array {
     /// `data` (elements of `E`, or arrays of them) as an array of `shape`, row-major; the
     /// product of `shape` must be the number of scalars in `data`.
-    pub(crate) fn new<E: Element, T: Copy + Send + Sync + 'static>(
-        data: Vec<T>,
-        shape: &[usize],
-    ) -> Self {
+    pub(crate) fn new<E: Element, T: Plain>(data: Vec<T>, shape: &[usize]) -> Self {
+        const { assert!(std::mem::align_of::<T>() >= std::mem::align_of::<E>()) };
         let scalars = data.len() * std::mem::size_of::<T>() / std::mem::size_of::<E>();
         assert_eq!(
             std::mem::size_of::<T>() % std::mem::size_of::<E>(),

@@ -1,5 +1,6 @@
 //! derma-core's progress as a Python callback: `callback(stage, done, total)` at each stage's
-//! start and end and at most ten times a second between, called with the GIL taken again.
+//! start and end and at most ten times a second between, called with the GIL taken again and
+//! no lock held (a slow callback delays only the worker that calls it).
 
 use derma_core::progress::{Note, Progress, Unit};
 use pyo3::prelude::*;
@@ -43,8 +44,12 @@ impl Callback {
     /// Ends the last stage (a call with done = total) and gives the notes, or the callback's
     /// first exception.
     pub(crate) fn finish(self) -> PyResult<Vec<String>> {
+        let last = {
+            let mut s = self.state.lock().unwrap_or_else(|p| p.into_inner());
+            close_stage(&self.callable, &mut s)
+        };
+        self.make([last]);
         let mut s = self.state.into_inner().unwrap_or_else(|p| p.into_inner());
-        close_stage(&self.callable, &mut s);
         match s.raised.take() {
             Some(e) => Err(e),
             None => Ok(s.notes),
@@ -52,44 +57,67 @@ impl Callback {
     }
 }
 
-/// Calls the callback with the state's stage, unless an earlier call raised.
-fn call(callable: &Option<Py<PyAny>>, s: &mut State) {
-    let Some(c) = callable else { return };
+/// A call to make: the arguments, taken under the lock and made after it is released.
+type Call = (String, u64, u64);
+
+/// The call for the state's stage now, unless an earlier call raised.
+fn due_call(callable: &Option<Py<PyAny>>, s: &mut State) -> Option<Call> {
+    callable.as_ref()?;
     if s.raised.is_some() {
-        return;
+        return None;
     }
     s.last = Some(Instant::now());
-    let args = (s.stage.clone(), s.done, s.total);
-    if let Err(e) = Python::attach(|py| c.call1(py, args).map(drop)) {
-        s.raised = Some(e);
-    }
+    Some((s.stage.clone(), s.done, s.total))
 }
 
-/// Reports the current stage as done, when it was not yet.
-fn close_stage(callable: &Option<Py<PyAny>>, s: &mut State) {
+/// Reports the current stage as done when it was not yet: the call to make.
+fn close_stage(callable: &Option<Py<PyAny>>, s: &mut State) -> Option<Call> {
     if !s.stage.is_empty() && s.done < s.total {
         s.done = s.total;
-        call(callable, s);
+        return due_call(callable, s);
+    }
+    None
+}
+
+impl Callback {
+    /// Makes the calls (outside the lock); the first exception is kept for [`Callback::finish`].
+    fn make(&self, calls: impl IntoIterator<Item = Option<Call>>) {
+        let Some(c) = &self.callable else { return };
+        for args in calls.into_iter().flatten() {
+            if let Err(e) = Python::attach(|py| c.call1(py, args).map(drop)) {
+                let mut s = self.state.lock().unwrap_or_else(|p| p.into_inner());
+                s.raised.get_or_insert(e);
+                return;
+            }
+        }
     }
 }
 
 impl Progress for Callback {
     fn stage(&self, name: &str, total: u64, _unit: Unit) {
-        let mut s = self.state.lock().unwrap_or_else(|p| p.into_inner());
-        close_stage(&self.callable, &mut s);
-        s.stage = name.to_string();
-        s.done = 0;
-        s.total = total;
-        call(&self.callable, &mut s);
+        let calls = {
+            let mut s = self.state.lock().unwrap_or_else(|p| p.into_inner());
+            let closed = close_stage(&self.callable, &mut s);
+            s.stage = name.to_string();
+            s.done = 0;
+            s.total = total;
+            [closed, due_call(&self.callable, &mut s)]
+        };
+        self.make(calls);
     }
 
     fn advance(&self, steps: u64) {
-        let mut s = self.state.lock().unwrap_or_else(|p| p.into_inner());
-        s.done += steps;
-        let due = s.last.is_none_or(|t| t.elapsed() >= INTERVAL);
-        if due || s.done == s.total {
-            call(&self.callable, &mut s);
-        }
+        let call = {
+            let mut s = self.state.lock().unwrap_or_else(|p| p.into_inner());
+            s.done += steps;
+            let due = s.last.is_none_or(|t| t.elapsed() >= INTERVAL);
+            if due || s.done == s.total {
+                due_call(&self.callable, &mut s)
+            } else {
+                None
+            }
+        };
+        self.make([call]);
     }
 
     fn note(&self, note: Note) {

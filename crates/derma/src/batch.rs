@@ -11,7 +11,7 @@ use std::time::Instant;
 #[derive(Args)]
 pub struct BatchArgs {
     /// The batch spec (TOML: count, seed, size, presets or ita_deg, male, age_years, meshes or
-    /// heads, config, appearance, glb; see docs/batch.md). Not with --merge.
+    /// heads, config, appearance, glb, outputs; see docs/batch.md). Not with --merge.
     #[arg(required_unless_present = "merge", conflicts_with = "merge")]
     spec: Option<PathBuf>,
     /// Output directory: one directory per identity (000000, 000001, …), the spec, the manifest.
@@ -36,10 +36,12 @@ pub fn run(a: BatchArgs, bars: &Bars) -> Result<()> {
         let m = batch::merge(&a.out, bars)?;
         bars.finish();
         bars.say(format!(
-            "wrote {}: {} identities, {} files checked against their hashes",
+            "wrote {}: {} identities, {} files checked against their hashes; {} unfinished \
+             directories of killed runs removed",
             m.manifest.display(),
             m.identities,
-            m.files
+            m.files,
+            m.removed
         ));
         return Ok(());
     }
@@ -64,8 +66,8 @@ pub fn run(a: BatchArgs, bars: &Bars) -> Result<()> {
     )?;
     bars.finish();
     bars.say(format!(
-        "{} identities of this shard: {} made ({} resumed from an unfinished run), {} already \
-         complete, in {:.1} s",
+        "{} identities of this shard: {} made ({} unfinished directories of ended runs removed), \
+         {} already complete, in {:.1} s",
         r.owned,
         r.made,
         r.resumed,

@@ -25,18 +25,10 @@ fn batch(spec: &Path, out: &Path, env: &[(&str, &str)], shard: Option<&str>) -> 
     if let Some(k) = shard {
         c.args(["--shard", k]);
     }
-    for v in [
-        "SLURM_ARRAY_TASK_ID",
-        "SLURM_ARRAY_TASK_MIN",
-        "SLURM_ARRAY_TASK_MAX",
-        "SLURM_ARRAY_TASK_COUNT",
-        "SLURM_ARRAY_TASK_STEP",
-        "JOB_COMPLETION_INDEX",
-        "DERMA_SHARD_COUNT",
-    ] {
-        c.env_remove(v);
-    }
-    c.envs(env.iter().copied()).spawn().unwrap()
+    common::without_scheduler(&mut c)
+        .envs(env.iter().copied())
+        .spawn()
+        .unwrap()
 }
 
 /// Every file under `dir` but the sets' report.json (it carries timings) and the manifest.
@@ -57,6 +49,21 @@ fn files(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
         }
     }
     out
+}
+
+/// How many unfinished directories of identity `dir` are in `out`.
+fn partials(out: &Path, dir: &str) -> usize {
+    std::fs::read_dir(out)
+        .map(|r| {
+            r.filter_map(|e| e.ok())
+                .filter(|e| {
+                    e.file_name()
+                        .to_string_lossy()
+                        .starts_with(&format!("{dir}.partial."))
+                })
+                .count()
+        })
+        .unwrap_or(0)
 }
 
 /// manifest.jsonl's lines without their timings.
@@ -94,17 +101,18 @@ fn four_shards_one_killed_and_resumed_equal_one_process_byte_for_byte() {
         ]
     };
     let k8s = [("JOB_COMPLETION_INDEX", "1"), ("DERMA_SHARD_COUNT", "4")];
-    // Shard 3/4 owns identities 2 and 6: an unfinished directory of a killed earlier run is
-    // waiting for it, with a stray file that must not reach the result.
-    std::fs::create_dir_all(shared.join("000002.partial")).unwrap();
-    std::fs::write(shared.join("000002.partial/base_color.png"), b"half").unwrap();
+    // Shard 3/4 owns identities 2 and 6: an unfinished directory a killed pod on another host
+    // left is waiting, with a stray file that must not reach the result.
+    let foreign = shared.join("000002.partial.other-host.1.0");
+    std::fs::create_dir_all(&foreign).unwrap();
+    std::fs::write(foreign.join("base_color.png"), b"half").unwrap();
     let mut first = batch(&spec, &shared, &slurm("1"), None);
     let mut victim = batch(&spec, &shared, &k8s, None);
     let mut third = batch(&spec, &shared, &[], Some("3/4"));
     let mut fourth = batch(&spec, &shared, &slurm("4"), None);
     // Kill shard 2/4 (identities 1 and 5) while it paints its first identity.
     let t0 = Instant::now();
-    while !shared.join("000001.partial").exists() {
+    while partials(&shared, "000001") == 0 {
         assert!(
             t0.elapsed() < Duration::from_secs(120),
             "shard 2 never began"
@@ -127,10 +135,24 @@ fn four_shards_one_killed_and_resumed_equal_one_process_byte_for_byte() {
         err.contains("000005: missing") && err.contains("2 of 8"),
         "{err}"
     );
-    // The same Indexed Job pod again: it resumes.
+    assert_eq!(
+        partials(&shared, "000001"),
+        1,
+        "the killed shard's unfinished directory"
+    );
+    // The same Indexed Job pod again: it removes its ended run's directory and resumes.
     assert!(batch(&spec, &shared, &k8s, None).wait().unwrap().success());
+    assert_eq!(partials(&shared, "000001"), 0);
+    assert!(
+        foreign.is_dir(),
+        "another host's directory is left to its writer or the merge"
+    );
     let (ok, _, err) = run(&["batch", "--merge", "--out", s(&shared)]);
     assert!(ok, "{err}");
+    assert!(
+        !foreign.exists(),
+        "the merge of a complete batch removes what was left"
+    );
 
     let (want, got) = (files(&single), files(&shared));
     assert_eq!(
@@ -228,4 +250,45 @@ fn a_batch_names_what_is_wrong() {
     // Merging a directory that holds no batch names the spec it looked for.
     let (ok, _, err) = run(&["batch", "--merge", "--out", s(&d.join("none"))]);
     assert!(!ok && err.contains("batch.toml"), "{err}");
+}
+
+#[test]
+fn a_spec_s_config_keeps_its_own_relative_paths() {
+    // The config names its mesh relative to itself; the batch runs from elsewhere, with the
+    // spec's path spelled relative to the working directory.
+    let d = common::tmp("batch", "config");
+    std::fs::create_dir_all(d.join("cfg")).unwrap();
+    std::fs::write(d.join("cfg/quad.glb"), derma_test_support::quad_glb()).unwrap();
+    std::fs::write(
+        d.join("cfg/skin.toml"),
+        "[surface]\nkind = \"mesh\"\nmesh = \"quad.glb\"\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("spec.toml"),
+        "count = 1\nsize = 64\nconfig = \"cfg/skin.toml\"\noutputs = [\"base_color.png\"]\n",
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_derma"))
+        .current_dir(&d)
+        .args(["batch", "spec.toml", "--out", "out", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(d.join("out/000000/report.json")).unwrap()).unwrap();
+    let mesh = report["inputs"]["mesh"]["path"].as_str().unwrap();
+    assert!(mesh.ends_with("quad.glb"), "{mesh}");
+    assert!(
+        report["inputs"]["config"].is_object(),
+        "{}",
+        report["inputs"]
+    );
+    // The same spec by its absolute path is the same batch: nothing is refused or redone.
+    let (ok, _, err) = run(&["batch", s(&d.join("spec.toml")), "--out", s(&d.join("out"))]);
+    assert!(ok, "{err}");
 }

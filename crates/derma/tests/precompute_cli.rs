@@ -33,18 +33,10 @@ fn precompute(grid: &Path, out: &Path, env: &[(&str, &str)], shard: Option<&str>
     if let Some(k) = shard {
         c.args(["--shard", k]);
     }
-    for v in [
-        "SLURM_ARRAY_TASK_ID",
-        "SLURM_ARRAY_TASK_MIN",
-        "SLURM_ARRAY_TASK_MAX",
-        "SLURM_ARRAY_TASK_COUNT",
-        "SLURM_ARRAY_TASK_STEP",
-        "JOB_COMPLETION_INDEX",
-        "DERMA_SHARD_COUNT",
-    ] {
-        c.env_remove(v);
-    }
-    c.envs(env.iter().copied()).spawn().unwrap()
+    common::without_scheduler(&mut c)
+        .envs(env.iter().copied())
+        .spawn()
+        .unwrap()
 }
 
 fn entries(dir: &Path, shard: usize) -> usize {

@@ -29,3 +29,22 @@ pub fn run(args: &[&str]) -> (bool, String, String) {
 pub fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
+
+/// Removes every scheduler variable derma reads its shard from (Slurm arrays, Kubernetes
+/// Indexed Jobs), so a test's process sees only the ones it sets. (Only the sharding tests use
+/// it; each test binary compiles this module.)
+#[allow(dead_code)]
+pub fn without_scheduler(c: &mut Command) -> &mut Command {
+    for v in [
+        "SLURM_ARRAY_TASK_ID",
+        "SLURM_ARRAY_TASK_MIN",
+        "SLURM_ARRAY_TASK_MAX",
+        "SLURM_ARRAY_TASK_COUNT",
+        "SLURM_ARRAY_TASK_STEP",
+        "JOB_COMPLETION_INDEX",
+        "DERMA_SHARD_COUNT",
+    ] {
+        c.env_remove(v);
+    }
+    c
+}
