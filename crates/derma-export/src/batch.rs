@@ -28,9 +28,11 @@ pub struct BatchSpec {
     /// The batch's seed: every identity's draws and its own skin seed come from it.
     #[serde(default = "default_seed")]
     pub seed: u64,
-    /// Texture size in texels (square), every identity.
+    /// Texture size in texels (square), every identity: one size (the set's files in the
+    /// identity's directory) or a list (`size = [512, 2048]`: the identity painted at each, the
+    /// same person and seed, into `NNNNNN/512/`, `NNNNNN/2048/`).
     #[serde(default = "default_size")]
-    pub size: u32,
+    pub size: Sizes,
     /// Skin tones drawn uniformly from these presets (Chardon et al. 1991's ITA° categories:
     /// very-light, light, intermediate, tan, brown, dark), each at its target ITA°; default all
     /// six. Not with `ita_deg`.
@@ -74,8 +76,28 @@ pub struct BatchSpec {
 fn default_seed() -> u64 {
     1
 }
-fn default_size() -> u32 {
-    1024
+fn default_size() -> Sizes {
+    Sizes::One(1024)
+}
+
+/// One texture size, or several (each in a directory of its own).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Sizes {
+    /// Every identity at this size, its files in its directory.
+    One(u32),
+    /// Every identity at each size, in `NNNNNN/SIZE/`.
+    Each(Vec<u32>),
+}
+
+impl Sizes {
+    /// The sizes, with the subdirectory each set goes into ("" for a single size).
+    pub fn dirs(&self) -> Vec<(u32, String)> {
+        match self {
+            Sizes::One(n) => vec![(*n, String::new())],
+            Sizes::Each(v) => v.iter().map(|n| (*n, n.to_string())).collect(),
+        }
+    }
 }
 fn default_male() -> f32 {
     0.5
@@ -118,8 +140,8 @@ pub struct Identity {
     pub mesh: Option<String>,
     /// The fitted head, as the spec names it.
     pub head: Option<String>,
-    /// Texture size.
-    pub size: u32,
+    /// Texture size, or sizes (each set in its own subdirectory).
+    pub size: Sizes,
     /// SHA-256 of every file but report.json, by name.
     pub files: BTreeMap<String, String>,
 }
@@ -177,8 +199,24 @@ impl BatchSpec {
         if self.count == 0 {
             return bad("count", "expected at least one identity".into());
         }
-        if !(16..=16384).contains(&self.size) {
-            return bad("size", format!("{} texels: expected 16 … 16384", self.size));
+        let sizes = self.size.dirs();
+        if sizes.is_empty() {
+            return bad(
+                "size",
+                "an empty list: expected a size or a list of sizes".into(),
+            );
+        }
+        for (n, _) in &sizes {
+            if !(16..=16384).contains(n) {
+                return bad("size", format!("{n} texels: expected 16 … 16384"));
+            }
+        }
+        if sizes
+            .iter()
+            .enumerate()
+            .any(|(i, a)| sizes[..i].iter().any(|b| b.0 == a.0))
+        {
+            return bad("size", "a size is listed twice".into());
         }
         for p in &self.presets {
             if Preset::parse(p).is_none() {
@@ -274,7 +312,7 @@ impl BatchSpec {
             age_years,
             mesh: choose(&self.meshes),
             head: choose(&self.heads),
-            size: self.size,
+            size: self.size.clone(),
             files: BTreeMap::new(),
         }
     }
@@ -352,13 +390,13 @@ pub fn run_shard(
     prepare(out, spec)?;
     // The config is read for each identity (its relative paths resolve against its own
     // directory); once here, so a bad one fails before any work.
-    let generator_for = |id: &Identity| -> Result<SkinGenerator<'_>> {
+    let generator_for = |id: &Identity, size: u32| -> Result<SkinGenerator<'_>> {
         let mut g = match &spec.config {
             Some(p) => SkinGenerator::from_config_file(Path::new(p))?,
             None => SkinGenerator::new(SkinConfig::default()),
         };
         let cfg = g.config_mut();
-        cfg.size = spec.size;
+        cfg.size = size;
         cfg.seed = id.seed;
         cfg.person = Person {
             ita_deg: id.ita_deg,
@@ -384,7 +422,7 @@ pub fn run_shard(
         }
         Ok(g)
     };
-    generator_for(&spec.identity(0))?;
+    generator_for(&spec.identity(0), spec.size.dirs()[0].0)?;
     let owned: Vec<usize> = (0..spec.count).filter(|&i| shard.owns(i)).collect();
     let mut report = ShardReport {
         owned: owned.len(),
@@ -408,11 +446,15 @@ pub fn run_shard(
             id.dir,
             derma_core::atomic::unique_tag()
         ));
-        let generator = generator_for(&id)?;
         let started = Instant::now();
-        crate::skin::run(&generator, &partial, spec.glb, &Silent)
-            .map_err(|e| ExportError::Invalid(format!("identity {} ({}): {e}", i, id.dir)))?;
-        keep_outputs(&partial, spec)?;
+        for (size, sub) in spec.size.dirs() {
+            let generator = generator_for(&id, size)?;
+            let set = partial.join(&sub);
+            crate::skin::run(&generator, &set, spec.glb, &Silent).map_err(|e| {
+                ExportError::Invalid(format!("identity {} ({}) at {size}²: {e}", i, id.dir))
+            })?;
+            keep_outputs(&set, spec)?;
+        }
         id.files = hashes(&partial)?;
         write_json(&partial.join(IDENTITY_FILE), &id, JsonFormat::DATA_PRETTY)?;
         if done.join(IDENTITY_FILE).is_file() {
@@ -508,26 +550,45 @@ fn io(path: &Path, e: std::io::Error) -> ExportError {
     }
 }
 
-/// SHA-256 of every file in `dir` but report.json and the record itself, by name.
+/// SHA-256 of every file under `dir` (one level of size directories deep) but the sets'
+/// report.json and the record itself, by path relative to `dir` ("1024/base_color.png").
 fn hashes(dir: &Path) -> Result<BTreeMap<String, String>> {
-    let names: Vec<String> = std::fs::read_dir(dir)
-        .map_err(|e| io(dir, e))?
-        .filter_map(|e| e.ok())
-        .filter(|e| e.path().is_file())
-        .filter_map(|e| e.file_name().into_string().ok())
-        .filter(|n| n != UNHASHED && n != IDENTITY_FILE)
-        .collect();
-    names
-        .into_iter()
-        .map(|n| {
-            let p = dir.join(&n);
+    let mut out = BTreeMap::new();
+    let entries = |d: &Path| -> Result<Vec<std::fs::DirEntry>> {
+        Ok(std::fs::read_dir(d)
+            .map_err(|e| io(d, e))?
+            .filter_map(|e| e.ok())
+            .collect())
+    };
+    for e in entries(dir)? {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let files = if e.path().is_dir() {
+            entries(&e.path())?
+                .into_iter()
+                .filter(|f| f.path().is_file())
+                .map(|f| {
+                    (
+                        format!("{name}/{}", f.file_name().to_string_lossy()),
+                        f.path(),
+                    )
+                })
+                .collect()
+        } else {
+            vec![(name, e.path())]
+        };
+        for (key, p) in files {
+            let base = key.rsplit('/').next().unwrap_or(&key);
+            if base == UNHASHED || key == IDENTITY_FILE {
+                continue;
+            }
             let h = sha256_file(&p).ok_or_else(|| ExportError::Input {
                 path: p.clone(),
                 detail: "cannot read to hash".into(),
             })?;
-            Ok((n, h))
-        })
-        .collect()
+            out.insert(key, h);
+        }
+    }
+    Ok(out)
 }
 
 /// What [`merge`] found and wrote.
@@ -543,7 +604,7 @@ pub struct Merged {
     pub removed: usize,
 }
 
-/// One manifest line: the identity's record and the seconds its set took (report.json's).
+/// One manifest line: the identity's record and the seconds its sets took (their report.json's).
 #[derive(Serialize)]
 struct ManifestLine<'a> {
     #[serde(flatten)]
@@ -617,10 +678,18 @@ pub fn merge(out: &Path, progress: &dyn Progress) -> Result<Merged> {
             continue;
         }
         files += now.len();
-        let seconds = std::fs::read_to_string(dir.join(UNHASHED))
-            .ok()
-            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-            .and_then(|v| total_seconds(&v));
+        // The sets' own totals (each size's report.json), summed.
+        let seconds = spec
+            .size
+            .dirs()
+            .iter()
+            .map(|(_, sub)| {
+                std::fs::read_to_string(dir.join(sub).join(UNHASHED))
+                    .ok()
+                    .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+                    .and_then(|v| total_seconds(&v))
+            })
+            .sum::<Option<f64>>();
         let line = serde_json::to_string(&ManifestLine {
             identity: &got,
             seconds,
@@ -753,8 +822,13 @@ mod tests {
 
     #[test]
     fn a_spec_round_trips_through_the_batch_directory_s_copy() {
-        let s = spec("ita_deg = [0.0, 30.0]\nglb = true\nappearance = \"analytic\"");
-        let text = toml::to_string(&s).unwrap();
-        assert_eq!(BatchSpec::parse(&text, "copy").unwrap(), s);
+        for extra in [
+            "ita_deg = [0.0, 30.0]\nglb = true\nappearance = \"analytic\"",
+            "size = [256, 1024]\noutputs = [\"normal.png\"]",
+        ] {
+            let s = spec(extra);
+            let text = toml::to_string(&s).unwrap();
+            assert_eq!(BatchSpec::parse(&text, "copy").unwrap(), s, "{text}");
+        }
     }
 }

@@ -10,7 +10,7 @@ use std::time::Instant;
 
 #[derive(Args)]
 pub struct BatchArgs {
-    /// The batch spec (TOML: count, seed, size, presets or ita_deg, male, age_years, meshes or
+    /// The batch spec (TOML: count, seed, size or sizes, presets or ita_deg, male, age_years, meshes or
     /// heads, config, appearance, glb, outputs; see docs/batch.md). Not with --merge.
     #[arg(required_unless_present = "merge", conflicts_with = "merge")]
     spec: Option<PathBuf>,

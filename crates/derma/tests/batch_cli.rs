@@ -197,6 +197,9 @@ fn a_batch_names_what_is_wrong() {
     );
     bad("count = 0", &["count", "at least one"]);
     bad("count = 2\nmale = 1.5", &["male", "1.5"]);
+    bad("count = 2\nsize = []", &["size", "empty"]);
+    bad("count = 2\nsize = [64, 64]", &["size", "twice"]);
+    bad("count = 2\nsize = 8", &["size", "8 texels"]);
     bad(
         "count = 2\nita_deg = [40.0, 10.0]",
         &["ita_deg", "min ≤ max"],
@@ -291,4 +294,48 @@ fn a_spec_s_config_keeps_its_own_relative_paths() {
     // The same spec by its absolute path is the same batch: nothing is refused or redone.
     let (ok, _, err) = run(&["batch", s(&d.join("spec.toml")), "--out", s(&d.join("out"))]);
     assert!(ok, "{err}");
+}
+
+#[test]
+fn a_list_of_sizes_paints_each_identity_at_each() {
+    let d = common::tmp("batch", "sizes");
+    let spec = d.join("spec.toml");
+    std::fs::write(
+        &spec,
+        "count = 2\nseed = 4\nsize = [64, 128]\noutputs = [\"base_color.png\", \"melanin.exr\"]\n",
+    )
+    .unwrap();
+    let out = d.join("out");
+    let (ok, _, err) = run(&["batch", s(&spec), "--out", s(&out)]);
+    assert!(ok, "{err}");
+    let (ok, _, err) = run(&["batch", "--merge", "--out", s(&out)]);
+    assert!(ok, "{err}");
+    let lines = manifest(&out);
+    for (i, l) in lines.iter().enumerate() {
+        let files: Vec<&String> = l["files"].as_object().unwrap().keys().collect();
+        assert_eq!(
+            files,
+            [
+                "128/base_color.png",
+                "128/melanin.exr",
+                "64/base_color.png",
+                "64/melanin.exr"
+            ],
+            "{l}"
+        );
+        assert_eq!(l["size"], serde_json::json!([64, 128]));
+        for n in [64u32, 128] {
+            let dir = out.join(format!("{i:06}/{n}"));
+            let img = derma_core::image_io::read_rgb(&dir.join("base_color.png")).unwrap();
+            assert_eq!(img.channels[0].width(), n as usize);
+            assert!(dir.join("report.json").is_file());
+        }
+    }
+    // The same person at both sizes: the one seed in both reports.
+    let seed = |n: u32| -> serde_json::Value {
+        let r = std::fs::read(out.join(format!("000001/{n}/report.json"))).unwrap();
+        serde_json::from_slice::<serde_json::Value>(&r).unwrap()["seed"].clone()
+    };
+    assert_eq!(seed(64), seed(128));
+    assert_eq!(seed(64), lines[1]["seed"]);
 }
