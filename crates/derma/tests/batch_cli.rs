@@ -10,7 +10,6 @@ use common::{run, s};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command};
-use std::time::{Duration, Instant};
 
 const SPEC: &str = r#"
 count = 8
@@ -111,16 +110,11 @@ fn four_shards_one_killed_and_resumed_equal_one_process_byte_for_byte() {
     let mut third = batch(&spec, &shared, &[], Some("3/4"));
     let mut fourth = batch(&spec, &shared, &slurm("4"), None);
     // Kill shard 2/4 (identities 1 and 5) while it paints its first identity.
-    let t0 = Instant::now();
-    while partials(&shared, "000001") == 0 {
-        assert!(
-            t0.elapsed() < Duration::from_secs(120),
-            "shard 2 never began"
-        );
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    victim.kill().unwrap();
-    victim.wait().unwrap();
+    common::kill_when(
+        &mut victim,
+        || partials(&shared, "000001") > 0,
+        "shard 2 never began",
+    );
     for c in [&mut first, &mut third, &mut fourth] {
         assert!(c.wait().unwrap().success());
     }

@@ -8,7 +8,6 @@ mod common;
 use common::{run, s};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command};
-use std::time::{Duration, Instant};
 
 const GRID: &str = r#"
 photons = 20000
@@ -91,16 +90,11 @@ fn four_concurrent_shards_one_killed_and_resumed_merge_to_the_single_process_tab
     let mut third = precompute(&grid, &shared, &[], Some("3/4"));
     let mut fourth = precompute(&grid, &shared, &slurm("3"), None);
     // Kill shard 2/4 (the Indexed Job's index 1) once it has written its first entry.
-    let t0 = Instant::now();
-    while entries(&shared, 2) == 0 {
-        assert!(
-            t0.elapsed() < Duration::from_secs(120),
-            "shard 2 wrote nothing"
-        );
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    victim.kill().unwrap();
-    victim.wait().unwrap();
+    common::kill_when(
+        &mut victim,
+        || entries(&shared, 2) > 0,
+        "shard 2 wrote nothing",
+    );
     let done = entries(&shared, 2);
     assert!(
         done < 4,

@@ -48,3 +48,16 @@ pub fn without_scheduler(c: &mut Command) -> &mut Command {
     }
     c
 }
+
+/// Waits (two minutes at most) until `began` holds, then kills `child` and reaps it: a shard
+/// killed mid-way, as a scheduler's preemption does.
+#[allow(dead_code)]
+pub fn kill_when(child: &mut std::process::Child, began: impl Fn() -> bool, what: &str) {
+    let t0 = std::time::Instant::now();
+    while !began() {
+        assert!(t0.elapsed() < std::time::Duration::from_secs(120), "{what}");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+}
