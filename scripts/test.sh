@@ -55,7 +55,7 @@ target/py-venv/bin/pip install --quiet target/wheels/derma-*.whl pytest mypy
 py=$PWD/target/py-venv/bin/python
 (cd "$tmp" && "$py" -c "import derma; s = derma.skin(size=256); print(s['base_color'].shape)")
 (cd "$tmp" && "$py" -m mypy.stubtest derma._derma)
-"$py" -m pytest -q -p no:cacheprovider crates/derma-py/tests
+DERMA_CLI=$PWD/target/release/derma "$py" -m pytest -q -p no:cacheprovider crates/derma-py/tests
 rm -rf "$tmp"
 # The web viewer in Debian's chromium: the GLB loads, the smile slider flushes the cheeks.
 bash scripts/viewer_test.sh
