@@ -5,7 +5,9 @@ sss_radius.png per texel) and one for Eevee (the radius as a constant, which Eev
 The maps' meanings are derma's (docs/skin.md, docs/render.md): base_color.png sRGB diffuse
 albedo; normal.png tangent space, OpenGL +Y (Blender's convention); roughness.png glTF
 perceptual roughness (Blender's); specular.png = F0 / 0.08, which is Blender 3's "Specular"
-(F0 = 0.08 · s) and Blender 4's "Specular IOR Level" at IOR 1.5 (F0 = 0.04 · 2 · s);
+(F0 = 0.08 · s: the Blender manual's Principled BSDF, "0.5 = 4 % reflectance") and Blender 4's
+"Specular IOR Level" at IOR 1.5 (F0 = ((1.5 − 1)/(1.5 + 1))² · 2 · s = 0.04 · 2 · s, the same
+manual's 4.x page: level 0.5 leaves the IOR's F0);
 sss_color.png Burley's surface albedo (sRGB); sss_radius.png the mean free path per channel as
 a fraction of 8 mm (derma_render::material::SSS_RADIUS_RANGE_MM), linear 16-bit.
 """
@@ -95,7 +97,6 @@ def build(name, set_dir, mm_per_unit, uv_map=""):
     if tex["sss_radius"] is not None:
         radius_mean = [r / mm_per_unit for r in mean_radius_mm(tex["sss_radius"].image)]
 
-    outputs = []
     for engine, y in (("CYCLES", 300), ("EEVEE", -300)):
         bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
         bsdf.name = bsdf.label = f"derma skin ({engine.title()})"
@@ -139,7 +140,6 @@ def build(name, set_dir, mm_per_unit, uv_map=""):
         out.name = f"derma output ({engine.title()})"
         out.location = (200, y)
         links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
-        outputs.append(out)
     if hasattr(mat, "use_sss_translucency"):
         mat.use_sss_translucency = True
     return mat

@@ -4,12 +4,20 @@
 use crate::error::{CoreError, Result};
 use std::path::{Path, PathBuf};
 
-/// A name part that no other writer into the same directory uses at the same time: the host
-/// (containers sharing a volume all run as process 1), the process, and a counter within it.
+/// A name part that no other writer into the same directory uses at the same time:
+/// `HOST.PID.N` — the host (containers sharing a volume all run as process 1), the process, and
+/// a counter within it.
 pub fn unique_tag() -> String {
-    static HOST: std::sync::OnceLock<String> = std::sync::OnceLock::new();
     static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-    let host = HOST.get_or_init(|| {
+    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    format!("{}.{}.{n}", host(), std::process::id())
+}
+
+/// This machine's name as [`unique_tag`] writes it: ASCII letters, digits and '-', at most 40
+/// ("host" when it has none).
+pub fn host() -> &'static str {
+    static HOST: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    HOST.get_or_init(|| {
         let raw = std::fs::read_to_string("/proc/sys/kernel/hostname")
             .ok()
             .or_else(|| std::env::var("HOSTNAME").ok())
@@ -26,9 +34,7 @@ pub fn unique_tag() -> String {
         } else {
             clean
         }
-    });
-    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    format!("{host}.{}.{n}", std::process::id())
+    })
 }
 
 /// The temporary sibling used while `path` is being written (unique to this writer).

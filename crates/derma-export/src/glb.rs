@@ -104,6 +104,18 @@ pub struct GlbOptions {
     pub volume: bool,
 }
 
+/// The rig library's expressions that pose the face, each as its (face unit, weight) table:
+/// {"happiness": {"mouthSmileLeft": 1.0, …}, …} (the GLB's skin node, the viewer's manifest).
+pub fn expression_units() -> Value {
+    Value::Object(
+        derma_rig::expression::LIBRARY
+            .iter()
+            .filter(|e| !e.face_units.is_empty())
+            .map(|e| (e.name.to_string(), unit_table(e.face_units)))
+            .collect(),
+    )
+}
+
 /// A (face unit, weight) table as a JSON object.
 pub fn unit_table(t: &[(&str, f32)]) -> serde_json::Value {
     serde_json::Value::Object(t.iter().map(|(u, k)| (u.to_string(), json!(k))).collect())
@@ -468,11 +480,7 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
     // The skin's node names the rig library's expressions by the face units they pose, for
     // tools that drive morph targets from expressions (Blender's importer makes node extras
     // custom properties; blender/derma_skin builds drivers from them).
-    let expressions: serde_json::Map<String, Value> = derma_rig::expression::LIBRARY
-        .iter()
-        .filter(|e| !e.face_units.is_empty())
-        .map(|e| (e.name.to_string(), unit_table(e.face_units)))
-        .collect();
+    let expressions = expression_units();
     let nodes: Vec<Value> = meshes
         .iter()
         .enumerate()

@@ -188,11 +188,7 @@ pub fn export(
         "regions": region_points(model_head, 256),
         "rig": null,
     });
-    manifest["expression_units"] = json!(derma_rig::expression::LIBRARY
-        .iter()
-        .filter(|e| !e.face_units.is_empty())
-        .map(|e| (e.name.to_string(), crate::glb::unit_table(e.face_units)))
-        .collect::<serde_json::Map<_, _>>());
+    manifest["expression_units"] = crate::glb::expression_units();
     manifest["wrinkles"] = write_wrinkles(textures, out)?;
     manifest["eyes"] = write_eyes(model_head, &glb.skin_origin, out)?;
     let mut targets = 0;

@@ -19,6 +19,7 @@ pub fn head(py: Python<'_>, fitted: Option<PathBuf>) -> PyResult<Bound<'_, PyDic
     let h = py
         .detach(|| {
             let h = derma_head::fitted::or_builtin(fitted.as_deref())?;
+            // The face units are built on first use (about a second): here, off the GIL.
             h.face_units();
             Ok::<_, derma_head::fit::store::StoreError>(h)
         })

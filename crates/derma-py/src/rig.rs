@@ -128,10 +128,8 @@ impl Rig {
             .map_err(crate::errors::error)?;
         let (fw, fh) = (h.width(), h.height());
         let d = PyDict::new(py);
-        if let Some(rgb) = rgb {
-            let color: Vec<[f32; 3]> = (0..fw * fh)
-                .map(|i| [rgb[0].data()[i], rgb[1].data()[i], rgb[2].data()[i]])
-                .collect();
+        if let Some([r, g, b]) = rgb {
+            let color = derma_core::image::Rgb::from_planes([&r, &g, &b]).data;
             d.set_item(
                 "color",
                 Bound::new(py, Array::new::<f32, _>(color, &[fh, fw, 3]))?,

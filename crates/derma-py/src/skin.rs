@@ -12,8 +12,11 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
 
-/// What the Python call asked for, as derma-skin's generator takes it.
-struct Request {
+/// What the Python call asked for, as derma-skin's generator takes it: the wrapper's keyword
+/// arguments as one dict (every key present), None where the config's value stands.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct Request {
     size: Option<u32>,
     seed: Option<u64>,
     preset: Option<String>,
@@ -24,9 +27,11 @@ struct Request {
     head: Option<PathBuf>,
     fields: Option<PathBuf>,
     config: Option<PathBuf>,
-    appearance: String,
+    /// "table" (default) or "analytic".
+    appearance: Option<String>,
     threads: Option<usize>,
-    device: String,
+    /// "auto" (default), "cpu" or "gpu".
+    device: Option<String>,
 }
 
 impl Request {
@@ -44,16 +49,9 @@ impl Request {
             cfg.seed = s;
         }
         if let Some(s) = &self.sex {
-            cfg.person.sex = match s.as_str() {
-                "male" => Sex::Male,
-                "female" => Sex::Female,
-                _ => {
-                    return Err(crate::errors::invalid(
-                        "sex",
-                        format!("'{s}': expected 'male' or 'female'"),
-                    ))
-                }
-            };
+            cfg.person.sex = Sex::parse(s).ok_or_else(|| {
+                crate::errors::invalid("sex", format!("'{s}': expected 'male' or 'female'"))
+            })?;
         }
         if let Some(a) = self.age {
             cfg.person.age_years = a;
@@ -78,7 +76,7 @@ impl Request {
             }
             (None, None) => {}
         }
-        let appearance = match self.appearance.as_str() {
+        let appearance = match self.appearance.as_deref().unwrap_or("table") {
             "table" => AppearanceChoice::Default,
             "analytic" => AppearanceChoice::Analytic,
             a => {
@@ -90,7 +88,9 @@ impl Request {
         };
         g = g
             .appearance(appearance)
-            .device(crate::errors::device(&self.device)?)
+            .device(crate::errors::device(
+                self.device.as_deref().unwrap_or("auto"),
+            )?)
             .progress(progress);
         if let Some(m) = &self.mesh {
             g = g.mesh(m);
@@ -178,46 +178,17 @@ fn maps(mut set: TextureSet) -> Vec<(&'static str, Array)> {
 }
 
 /// Paints a texture set (derma-skin's generator; docs/python.md has the arguments and the
-/// arrays' encodings), writes it into `out` when given, and returns its maps and report.
+/// arrays' encodings) from `request` (the package's keyword arguments), writes it into `out`
+/// when given, and returns its maps and report.
 #[pyfunction]
-#[pyo3(signature = (*, size=None, seed=None, preset=None, ita_deg=None, sex=None, age=None,
-    mesh=None, head=None, fields=None, config=None, appearance="table".to_string(), threads=None,
-    device="auto".to_string(), out=None, glb=false, progress=None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (request, *, out=None, glb=false, progress=None))]
 pub fn skin<'py>(
     py: Python<'py>,
-    size: Option<u32>,
-    seed: Option<u64>,
-    preset: Option<String>,
-    ita_deg: Option<f32>,
-    sex: Option<String>,
-    age: Option<f32>,
-    mesh: Option<PathBuf>,
-    head: Option<PathBuf>,
-    fields: Option<PathBuf>,
-    config: Option<PathBuf>,
-    appearance: String,
-    threads: Option<usize>,
-    device: String,
+    request: Request,
     out: Option<PathBuf>,
     glb: bool,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let request = Request {
-        size,
-        seed,
-        preset,
-        ita_deg,
-        sex,
-        age,
-        mesh,
-        head,
-        fields,
-        config,
-        appearance,
-        threads,
-        device,
-    };
     let callback = Callback::new(progress);
     let generator = request.generator(&callback)?;
     let made = py.detach(
@@ -251,13 +222,7 @@ pub fn skin<'py>(
     info.set_item("appearance", set.appearance)?;
     info.set_item("features", set.features.total())?;
     info.set_item("ita_deg", set.config.person.ita_deg)?;
-    info.set_item(
-        "sex",
-        match set.config.person.sex {
-            Sex::Male => "male",
-            Sex::Female => "female",
-        },
-    )?;
+    info.set_item("sex", set.config.person.sex.name())?;
     info.set_item("age_years", set.config.person.age_years)?;
     info.set_item("bio_channels", SAMPLE_CHANNELS.to_vec())?;
     info.set_item("notes", notes)?;

@@ -112,6 +112,21 @@ pub enum Sex {
     Female,
 }
 
+impl Sex {
+    /// Its name, as configs and reports write it ("male", "female").
+    pub fn name(self) -> &'static str {
+        match self {
+            Sex::Male => "male",
+            Sex::Female => "female",
+        }
+    }
+
+    /// Parses a name.
+    pub fn parse(s: &str) -> Option<Sex> {
+        [Sex::Male, Sex::Female].into_iter().find(|x| x.name() == s)
+    }
+}
+
 /// The person the skin belongs to (`[person]`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]

@@ -19,15 +19,7 @@ age_years = [25.0, 75.0]
 "#;
 
 fn batch(spec: &Path, out: &Path, env: &[(&str, &str)], shard: Option<&str>) -> Child {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_derma"));
-    c.args(["batch", s(spec), "--out", s(out), "--quiet"]);
-    if let Some(k) = shard {
-        c.args(["--shard", k]);
-    }
-    common::without_scheduler(&mut c)
-        .envs(env.iter().copied())
-        .spawn()
-        .unwrap()
+    common::spawn_shard(&["batch", s(spec), "--out", s(out), "--quiet"], env, shard)
 }
 
 /// Every file under `dir` but the sets' report.json (it carries timings) and the manifest.

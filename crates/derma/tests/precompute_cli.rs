@@ -25,17 +25,12 @@ epidermis_um = [80.0]
 "#;
 
 fn precompute(grid: &Path, out: &Path, env: &[(&str, &str)], shard: Option<&str>) -> Child {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_derma"));
-    c.args(["optics", "precompute", "--grid", s(grid), "--out", s(out)])
-        .args(["--device", "cpu", "--quiet"])
-        .env("RAYON_NUM_THREADS", "1");
-    if let Some(k) = shard {
-        c.args(["--shard", k]);
-    }
-    common::without_scheduler(&mut c)
-        .envs(env.iter().copied())
-        .spawn()
-        .unwrap()
+    // One worker thread per shard: four shards share the machine's cores.
+    let mut env = env.to_vec();
+    env.push(("RAYON_NUM_THREADS", "1"));
+    let args = ["optics", "precompute", "--grid", s(grid), "--out", s(out)];
+    let args = [&args[..], &["--device", "cpu", "--quiet"]].concat();
+    common::spawn_shard(&args, &env, shard)
 }
 
 fn entries(dir: &Path, shard: usize) -> usize {

@@ -89,7 +89,7 @@ def skin(
     feature count, notes, files. No map is copied: each is a view of derma's own memory.
     The same arguments and seed give the same arrays, bit for bit, at any thread count.
     """
-    d = _derma.skin(
+    request = dict(
         size=size,
         seed=seed,
         preset=preset,
@@ -103,10 +103,8 @@ def skin(
         appearance=appearance,
         threads=threads,
         device=device,
-        out=_path(out),
-        glb=glb,
-        progress=progress,
     )
+    d = _derma.skin(request, out=_path(out), glb=glb, progress=progress)
     maps = _arrays(d)
     # The bio samples are one (h, w, 13) array; the main planes are views into it.
     channel = {name: i for i, name in enumerate(maps["info"]["bio_channels"])}

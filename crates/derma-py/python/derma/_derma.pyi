@@ -30,21 +30,10 @@ class Array:
 
 _Progress = Optional[Callable[[str, int, int], Any]]
 
+# `request`: every keyword of `derma.skin` but out, glb and progress (None: the config's value).
 def skin(
+    request: dict[str, Any],
     *,
-    size: Optional[int] = ...,
-    seed: Optional[int] = ...,
-    preset: Optional[str] = ...,
-    ita_deg: Optional[float] = ...,
-    sex: Optional[str] = ...,
-    age: Optional[float] = ...,
-    mesh: Optional[str] = ...,
-    head: Optional[str] = ...,
-    fields: Optional[str] = ...,
-    config: Optional[str] = ...,
-    appearance: str = ...,
-    threads: Optional[int] = ...,
-    device: str = ...,
     out: Optional[str] = ...,
     glb: bool = ...,
     progress: _Progress = ...,

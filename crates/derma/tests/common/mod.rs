@@ -30,11 +30,21 @@ pub fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-/// Removes every scheduler variable derma reads its shard from (Slurm arrays, Kubernetes
-/// Indexed Jobs), so a test's process sees only the ones it sets. (Only the sharding tests use
-/// it; each test binary compiles this module.)
+/// Starts `derma ARGS` as one shard of a cluster job: only the scheduler variables in `env`
+/// (Slurm arrays, Kubernetes Indexed Jobs; every other one derma reads is removed), and
+/// `--shard K/N` when `shard` is given. (Only the sharding tests use it; each test binary
+/// compiles this module.)
 #[allow(dead_code)]
-pub fn without_scheduler(c: &mut Command) -> &mut Command {
+pub fn spawn_shard(
+    args: &[&str],
+    env: &[(&str, &str)],
+    shard: Option<&str>,
+) -> std::process::Child {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_derma"));
+    c.args(args);
+    if let Some(k) = shard {
+        c.args(["--shard", k]);
+    }
     for v in [
         "SLURM_ARRAY_TASK_ID",
         "SLURM_ARRAY_TASK_MIN",
@@ -46,7 +56,7 @@ pub fn without_scheduler(c: &mut Command) -> &mut Command {
     ] {
         c.env_remove(v);
     }
-    c
+    c.envs(env.iter().copied()).spawn().unwrap()
 }
 
 /// Waits (two minutes at most) until `began` holds, then kills `child` and reaps it: a shard
