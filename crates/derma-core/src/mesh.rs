@@ -2,7 +2,8 @@
 //! vertex normals and MikkTSpace tangents (`bevy_mikktspace`, lives in derma-skin's normal map).
 
 use crate::error::{CoreError, Result};
-use glam::{Mat4, Vec2, Vec3};
+use crate::mesh_parts::{Chosen, Part, PartChoice};
+use glam::{Vec2, Vec3};
 use std::path::Path;
 
 /// An indexed triangle mesh with one UV set. Positions are in millimetres once
@@ -145,111 +146,6 @@ pub const HEAD_EXTENT_MM: (f32, f32) = (100.0, 350.0);
 /// adult head, about 215–230 mm (Farkas 1994, "Anthropometry of the Head and Face").
 pub const NOMINAL_HEAD_EXTENT_MM: f32 = 225.0;
 
-/// How a mesh's coordinates became millimetres.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct MeshScale {
-    /// The length unit, or `None` when the mesh was fitted to [`NOMINAL_HEAD_EXTENT_MM`].
-    pub unit: Option<LengthUnit>,
-    /// Millimetres per mesh unit.
-    pub mm_per_unit: f32,
-}
-
-/// The unit a user's head mesh is read in.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum HeadUnit {
-    /// The unit that makes the mesh head-sized ([`LengthUnit::for_head`]), else a fit.
-    Auto,
-    /// Scaled so its largest extent is [`NOMINAL_HEAD_EXTENT_MM`].
-    Fit,
-    /// A given unit.
-    Length(LengthUnit),
-}
-
-impl HeadUnit {
-    /// `auto`, `fit`, `mm`, `cm` or `m`.
-    pub fn parse(s: &str) -> Option<HeadUnit> {
-        Some(match s {
-            "auto" => HeadUnit::Auto,
-            "fit" => HeadUnit::Fit,
-            "mm" => HeadUnit::Length(LengthUnit::Mm),
-            "cm" => HeadUnit::Length(LengthUnit::Cm),
-            "m" => HeadUnit::Length(LengthUnit::M),
-            _ => return None,
-        })
-    }
-}
-
-/// Loads a user's head or face mesh with UVs in millimetres: the one loader every command uses,
-/// with one set of rules. `unit` says how its coordinates are read; `Auto` takes the unit that
-/// makes it head-sized and otherwise fits it (with a warning); `progress` is told which.
-pub fn load_head_mesh(
-    path: &Path,
-    unit: HeadUnit,
-    progress: &dyn crate::progress::Progress,
-) -> Result<(TriMesh, MeshScale)> {
-    let (mesh, scale) = load_head_geometry(path, unit, progress)?;
-    mesh.require_uvs(path)?;
-    Ok((mesh, scale))
-}
-
-/// [`load_head_mesh`] for meshes that need no UVs (a scan to fit the head to).
-pub fn load_head_geometry(
-    path: &Path,
-    unit: HeadUnit,
-    progress: &dyn crate::progress::Progress,
-) -> Result<(TriMesh, MeshScale)> {
-    use crate::progress::Note;
-    let mut mesh = TriMesh::load_geometry(path)?;
-    let extent = mesh.extent();
-    if !(extent > 0.0 && extent.is_finite()) {
-        return Err(CoreError::Mesh {
-            path: path.to_path_buf(),
-            detail: format!("its largest extent is {extent}; expected a positive size"),
-        });
-    }
-    let fit = MeshScale {
-        unit: None,
-        mm_per_unit: NOMINAL_HEAD_EXTENT_MM / extent,
-    };
-    let of = |u: LengthUnit| MeshScale {
-        unit: Some(u),
-        mm_per_unit: u.to_mm(),
-    };
-    let (lo, hi) = HEAD_EXTENT_MM;
-    let scale = match unit {
-        HeadUnit::Auto => match LengthUnit::for_head(extent) {
-            Some(u) => {
-                progress.note(Note::info(format!(
-                    "mesh '{}': largest extent {extent:.3} units, read as {} ({:.0} mm; a head or face is {lo:.0}–{hi:.0} mm; give its unit to override)",
-                    path.display(),
-                    u.long_name(),
-                    extent * u.to_mm()
-                )));
-                of(u)
-            }
-            None => {
-                progress.note(Note::warning(format!(
-                    "mesh '{}': largest extent {extent:.3} units is no head in mm, cm or m ({lo:.0}–{hi:.0} mm); scaled ×{:.4} to a nominal {NOMINAL_HEAD_EXTENT_MM:.0} mm head (give its unit to override)",
-                    path.display(),
-                    fit.mm_per_unit
-                )));
-                fit
-            }
-        },
-        HeadUnit::Fit => {
-            progress.note(Note::info(format!(
-                "mesh '{}': scaled ×{:.4} so its largest extent is {NOMINAL_HEAD_EXTENT_MM:.0} mm",
-                path.display(),
-                fit.mm_per_unit
-            )));
-            fit
-        }
-        HeadUnit::Length(u) => of(u),
-    };
-    mesh.scale(scale.mm_per_unit);
-    Ok((mesh, scale))
-}
-
 impl TriMesh {
     /// Loads an OBJ, glTF or GLB file (by extension); it must have UVs.
     pub fn load(path: &Path) -> Result<TriMesh> {
@@ -258,7 +154,8 @@ impl TriMesh {
         Ok(mesh)
     }
 
-    fn require_uvs(&self, path: &Path) -> Result<()> {
+    /// An error naming the file unless the mesh has UVs.
+    pub fn require_uvs(&self, path: &Path) -> Result<()> {
         if self.uvs.is_empty() {
             return Err(CoreError::Mesh {
                 path: path.to_path_buf(),
@@ -269,24 +166,24 @@ impl TriMesh {
     }
 
     /// Loads an OBJ, glTF or GLB file (by extension) whether or not it has UVs: without them
-    /// `uvs` is empty (for the tools that make UVs, such as `derma photo unwrap`).
+    /// `uvs` is empty (for the tools that make UVs, such as `derma photo unwrap`). A file of
+    /// several parts is read as [`crate::mesh_parts::choose`] picks its skin.
     pub fn load_geometry(path: &Path) -> Result<TriMesh> {
-        let ext = path
-            .extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase())
-            .unwrap_or_default();
-        let mesh = match ext.as_str() {
-            "obj" => load_obj(path)?,
-            "gltf" | "glb" => load_gltf(path)?,
-            _ => {
-                return Err(CoreError::Mesh {
-                    path: path.to_path_buf(),
-                    detail: format!("unknown extension '.{ext}'; expected .obj, .gltf or .glb"),
-                })
-            }
-        };
+        Ok(Self::load_part(path, &PartChoice::Auto)?.0)
+    }
+
+    /// Loads the parts `choice` picks of an OBJ, glTF or GLB file (UVs optional), and says
+    /// which.
+    pub fn load_part(path: &Path, choice: &PartChoice) -> Result<(TriMesh, Chosen)> {
+        let parts = load_parts(path)?;
+        let chosen =
+            crate::mesh_parts::choose(&parts, choice).map_err(|detail| CoreError::Mesh {
+                path: path.to_path_buf(),
+                detail,
+            })?;
+        let (mesh, _) = crate::mesh_parts::merge(&parts, &chosen.parts);
         mesh.validate(path)?;
-        Ok(mesh)
+        Ok((mesh, chosen))
     }
 
     fn validate(&self, path: &Path) -> Result<()> {
@@ -393,140 +290,131 @@ impl TriMesh {
     }
 }
 
-fn load_obj(path: &Path) -> Result<TriMesh> {
+/// Every part of an OBJ, glTF or GLB file (by extension), in the file's frame and units.
+pub fn load_parts(path: &Path) -> Result<Vec<Part>> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    match ext.as_str() {
+        "obj" => load_obj(path),
+        "gltf" | "glb" => crate::gltf_scene::read(path),
+        _ => Err(CoreError::Mesh {
+            path: path.to_path_buf(),
+            detail: format!("unknown extension '.{ext}'; expected .obj, .gltf or .glb"),
+        }),
+    }
+}
+
+/// An OBJ's objects, each split by material (`usemtl`): the material names come from the OBJ
+/// itself, so a missing `.mtl` file changes nothing.
+fn load_obj(path: &Path) -> Result<Vec<Part>> {
     let opts = tobj::LoadOptions {
         single_index: true,
         triangulate: true,
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, _) = tobj::load_obj(path, &opts).map_err(|e| match e {
-        tobj::LoadError::OpenFileFailed => CoreError::Read {
-            path: path.to_path_buf(),
-            source: std::io::Error::new(std::io::ErrorKind::NotFound, "cannot open file"),
-        },
-        other => CoreError::Mesh {
-            path: path.to_path_buf(),
-            detail: format!("OBJ parse error: {other}"),
-        },
+    let text = std::fs::read(path).map_err(|e| CoreError::Read {
+        path: path.to_path_buf(),
+        source: e,
     })?;
-    let mut mesh = TriMesh::default();
-    let mut any_missing_normals = false;
-    let mut any_missing_uvs = false;
+    // The materials the OBJ uses, by name, stand in for its library.
+    let mut used: Vec<String> = Vec::new();
+    for line in text.split(|&b| b == b'\n') {
+        let line = String::from_utf8_lossy(line);
+        if let Some(m) = line.trim_start().strip_prefix("usemtl") {
+            let m = m.trim().to_string();
+            if !m.is_empty() && !used.contains(&m) {
+                used.push(m);
+            }
+        }
+    }
+    let library = || -> tobj::MTLLoadResult {
+        let materials = used
+            .iter()
+            .map(|n| tobj::Material {
+                name: n.clone(),
+                ..Default::default()
+            })
+            .collect();
+        let map = used
+            .iter()
+            .enumerate()
+            .map(|(i, n)| (n.clone(), i))
+            .collect();
+        Ok((materials, map))
+    };
+    let mut reader = std::io::BufReader::new(&text[..]);
+    let (models, _) =
+        tobj::load_obj_buf(&mut reader, &opts, |_| library()).map_err(|e| CoreError::Mesh {
+            path: path.to_path_buf(),
+            detail: format!("OBJ parse error: {e}"),
+        })?;
+    let mut order: Vec<String> = Vec::new();
+    let mut parts = Vec::with_capacity(models.len());
     for m in models {
-        let m = m.mesh;
-        let base = mesh.positions.len() as u32;
-        let nv = m.positions.len() / 3;
-        if m.texcoords.len() / 2 == nv {
-            for i in 0..nv {
-                mesh.uvs
-                    .push(Vec2::new(m.texcoords[2 * i], m.texcoords[2 * i + 1]));
+        let node_index = match order.iter().position(|n| *n == m.name) {
+            Some(k) => k,
+            None => {
+                order.push(m.name.clone());
+                order.len() - 1
             }
-        } else {
-            any_missing_uvs = true;
+        };
+        let material = m
+            .mesh
+            .material_id
+            .and_then(|k| used.get(k).cloned())
+            .unwrap_or_default();
+        let geometry = obj_geometry(&m.mesh);
+        if geometry.triangles.is_empty() {
+            continue;
         }
-        for i in 0..nv {
-            mesh.positions.push(Vec3::new(
-                m.positions[3 * i],
-                m.positions[3 * i + 1],
-                m.positions[3 * i + 2],
-            ));
-        }
-        if m.normals.len() / 3 == nv {
-            for i in 0..nv {
-                mesh.normals.push(
-                    Vec3::new(m.normals[3 * i], m.normals[3 * i + 1], m.normals[3 * i + 2])
-                        .normalize_or(Vec3::Z),
-                );
-            }
-        } else {
-            any_missing_normals = true;
-            mesh.normals.extend(std::iter::repeat_n(Vec3::ZERO, nv));
-        }
-        for t in m.indices.chunks_exact(3) {
-            mesh.triangles.push([base + t[0], base + t[1], base + t[2]]);
-        }
+        parts.push(Part {
+            node: m.name.clone(),
+            node_index,
+            mesh: m.name,
+            material,
+            geometry,
+            targets: Vec::new(),
+        });
     }
-    if any_missing_uvs {
-        // Some objects without UVs: the mesh as a whole has none.
-        mesh.uvs.clear();
-    }
-    if any_missing_normals {
-        mesh.compute_normals();
-    }
-    Ok(mesh)
+    Ok(parts)
 }
 
-fn load_gltf(path: &Path) -> Result<TriMesh> {
-    let (doc, buffers, _) = gltf::import(path).map_err(|e| CoreError::Mesh {
-        path: path.to_path_buf(),
-        detail: format!("glTF error: {e}"),
-    })?;
-    let mut mesh = TriMesh::default();
-    let mut missing_normals = false;
-    let mut missing_uvs = false;
-    let scene = doc.default_scene().or_else(|| doc.scenes().next());
-    let mut stack: Vec<(gltf::Node, Mat4)> = match &scene {
-        Some(s) => s.nodes().map(|n| (n, Mat4::IDENTITY)).collect(),
-        None => doc.nodes().map(|n| (n, Mat4::IDENTITY)).collect(),
+/// One tobj model as a mesh (normals computed where it has none).
+fn obj_geometry(m: &tobj::Mesh) -> TriMesh {
+    let nv = m.positions.len() / 3;
+    let mut mesh = TriMesh {
+        positions: m
+            .positions
+            .chunks_exact(3)
+            .map(|p| Vec3::new(p[0], p[1], p[2]))
+            .collect(),
+        ..TriMesh::default()
     };
-    while let Some((node, parent)) = stack.pop() {
-        let xf = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-        for child in node.children() {
-            stack.push((child, xf));
-        }
-        let Some(gmesh) = node.mesh() else { continue };
-        let normal_xf = xf.inverse().transpose();
-        for prim in gmesh.primitives() {
-            if prim.mode() != gltf::mesh::Mode::Triangles {
-                continue;
-            }
-            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-            let Some(pos) = reader.read_positions() else {
-                continue;
-            };
-            let base = mesh.positions.len() as u32;
-            let pos: Vec<Vec3> = pos.map(|p| xf.transform_point3(Vec3::from(p))).collect();
-            let nv = pos.len();
-            match reader.read_tex_coords(0) {
-                // glTF puts v = 0 at the top of the image; derma uses OpenGL's v up.
-                Some(tc) => mesh
-                    .uvs
-                    .extend(tc.into_f32().map(|t| Vec2::new(t[0], 1.0 - t[1]))),
-                None => {
-                    missing_uvs = true;
-                    mesh.uvs.extend(std::iter::repeat_n(Vec2::ZERO, nv));
-                }
-            }
-            match reader.read_normals() {
-                Some(n) => mesh.normals.extend(n.map(|n| {
-                    normal_xf
-                        .transform_vector3(Vec3::from(n))
-                        .normalize_or(Vec3::Z)
-                })),
-                None => {
-                    missing_normals = true;
-                    mesh.normals.extend(std::iter::repeat_n(Vec3::ZERO, nv));
-                }
-            }
-            mesh.positions.extend(pos);
-            let idx: Vec<u32> = match reader.read_indices() {
-                Some(i) => i.into_u32().collect(),
-                None => (0..nv as u32).collect(),
-            };
-            for t in idx.chunks_exact(3) {
-                mesh.triangles.push([base + t[0], base + t[1], base + t[2]]);
-            }
-        }
+    if m.texcoords.len() / 2 == nv {
+        mesh.uvs = m
+            .texcoords
+            .chunks_exact(2)
+            .map(|t| Vec2::new(t[0], t[1]))
+            .collect();
     }
-    if missing_uvs {
-        // A primitive without TEXCOORD_0: the mesh as a whole has none.
-        mesh.uvs.clear();
-    }
-    if missing_normals {
+    mesh.triangles = m
+        .indices
+        .chunks_exact(3)
+        .map(|t| [t[0], t[1], t[2]])
+        .collect();
+    if m.normals.len() / 3 == nv {
+        mesh.normals = m
+            .normals
+            .chunks_exact(3)
+            .map(|n| Vec3::new(n[0], n[1], n[2]).normalize_or(Vec3::Z))
+            .collect();
+    } else {
         mesh.compute_normals();
     }
-    Ok(mesh)
+    mesh
 }
 
 /// MikkTSpace tangents of a mesh, per triangle corner (xyz, sign).

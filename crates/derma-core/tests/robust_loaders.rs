@@ -1,6 +1,7 @@
 //! Loaders never panic or hang on bad files: arbitrary bytes, and valid files truncated or with
 //! a byte changed, give an error (or, for a harmless change, a valid result) — images (PNG,
-//! EXR), meshes (OBJ, glTF, GLB) and `.dtab` tables.
+//! EXR), meshes (OBJ, glTF, GLB: quantized, meshopt- and Draco-compressed, texture-transformed,
+//! skinned) and `.dtab` tables.
 
 use derma_core::dtab::{Dtab, DtabAxis, DtabHeader, DtabValue};
 use derma_core::image_io::{read_grey, read_rgb, write_exr, write_png16, write_png8, ExrPrecision};
@@ -63,6 +64,22 @@ fn table() -> Dtab {
     }
 }
 
+/// The decoding fixtures of tests/gltf_as_shipped.rs.
+const GLTF_FIXTURES: [&str; 6] = [
+    "face_quantized.glb",
+    "face_meshopt.glb",
+    "face_meshopt_oct.glb",
+    "face_meshopt_exp.glb",
+    "face_draco.glb",
+    "rig_meshopt.glb",
+];
+
+fn gltf_fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/gltf")
+        .join(name)
+}
+
 const OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n";
 
 proptest! {
@@ -90,6 +107,13 @@ proptest! {
     fn damaged_meshes_and_tables_are_errors_not_panics(cut in 0.0f64..1.0, at in 0.0f64..1.0, flip in 1u8..=255) {
         load_all("d.obj", &damaged(OBJ.as_bytes(), cut, at, flip));
         load_all("d.glb", &damaged(&derma_test_support::quad_glb(), cut, at, flip));
+        // glTF as shipped: quantized, meshopt-compressed (with filters), Draco-compressed, under
+        // texture transforms, skinned and morphing (tests/gltf_as_shipped.rs).
+        for f in GLTF_FIXTURES {
+            let bytes = std::fs::read(gltf_fixture(f)).unwrap();
+            let name = format!("d-{f}");
+            load_all(&name, &damaged(&bytes, cut, at, flip));
+        }
         let t = table().to_bytes();
         let d = damaged(&t, cut, at, flip);
         // Any change to a table is caught: by the checksum, or by the length check.

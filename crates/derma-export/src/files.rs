@@ -167,7 +167,13 @@ fn fitted_mesh_scene(
 ) -> Result<Scene> {
     let head = derma_head::fitted::open(dir)?;
     check_units(head, units)?;
-    let mut mesh = derma_head::fitted::load_scan(dir, path)?;
+    let mut mesh = derma_head::fitted::load_scan(
+        dir,
+        path,
+        derma_core::head_mesh::HeadUnit::Auto,
+        &Default::default(),
+        &derma_core::Silent,
+    )?;
     let carry = derma_head::fit::onto::Carry::new(head, &mesh);
     crate::glb::check_share(carry.share(), path)?;
     if !units.is_empty() {

@@ -80,8 +80,11 @@ pub struct GlbOptions {
     /// A user mesh, read in `unit` (derma-core's one head-mesh loader); `None`: the built-in
     /// head with eyes, lashes, teeth and tongue.
     pub mesh: Option<PathBuf>,
-    /// The user mesh's unit: as `derma skin` read it (its `surface.unit`), or `Auto`.
-    pub unit: derma_core::mesh::HeadUnit,
+    /// The user mesh's unit: as `derma skin` read it (its `surface.unit`), or `Auto` (with a
+    /// fitted head, the fit's).
+    pub unit: derma_core::head_mesh::HeadUnit,
+    /// The part of the user mesh's file: as `derma skin` read it, or `Auto`.
+    pub part: derma_core::mesh_parts::PartChoice,
     /// A fitted head directory (`derma head fit`) instead of the built-in head.
     pub head: Option<PathBuf>,
     /// The GLB to write.
@@ -206,20 +209,27 @@ fn tangent_accessor(g: &mut Glb, t: &[[f32; 4]]) -> usize {
     g.accessor(json!({"bufferView": view, "componentType": 5126, "count": t.len(), "type": "VEC4"}))
 }
 
-/// Loads a user mesh in mm through derma-core's one head-mesh loader, with `derma skin`'s
-/// rules: the unit that makes it head-sized, else a fit to a nominal head.
-/// `progress` is told which unit was read or that the mesh was fitted.
+/// Loads a user mesh in derma's frame through derma-core's one head-mesh loader, with `derma
+/// skin`'s rules: the unit that makes it head-sized, else a fit to a nominal head; the skin
+/// among its parts. `progress` is told how it was read.
 pub fn load_mesh_mm(path: &Path, progress: &dyn derma_core::progress::Progress) -> Result<TriMesh> {
-    load_mesh_in(path, derma_core::mesh::HeadUnit::Auto, progress)
+    use derma_core::head_mesh::HeadUnit;
+    load_mesh_in(path, HeadUnit::Auto, &Default::default(), progress)
 }
 
-/// As [`load_mesh_mm`], the mesh read in `unit`.
+/// As [`load_mesh_mm`], the mesh read in `unit`, its part `part`.
 pub fn load_mesh_in(
     path: &Path,
-    unit: derma_core::mesh::HeadUnit,
+    unit: derma_core::head_mesh::HeadUnit,
+    part: &derma_core::mesh_parts::PartChoice,
     progress: &dyn derma_core::progress::Progress,
 ) -> Result<TriMesh> {
-    Ok(derma_core::mesh::load_head_mesh(path, unit, progress)?.0)
+    let how = derma_core::head_mesh::HeadRead {
+        unit,
+        part: part.clone(),
+        fitted: None,
+    };
+    Ok(derma_core::head_mesh::load_head_mesh(path, &how, progress)?.0)
 }
 
 /// Writes the GLB (and the loose maps when asked); `progress` hears how a user mesh was read.
@@ -320,9 +330,9 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
     let mut meshes = Vec::new();
     let mut names = Vec::new();
     let skin_mesh = match (&o.mesh, o.head.as_deref()) {
-        // Through a fitted head, read at the scale the fit read it (as render, eyes and rig do).
-        (Some(p), Some(dir)) => derma_head::fitted::load_scan(dir, p)?,
-        (Some(p), None) => load_mesh_in(p, o.unit, progress)?,
+        // Through a fitted head, read in the frame the fit found (as render, eyes and rig do).
+        (Some(p), Some(dir)) => derma_head::fitted::load_scan(dir, p, o.unit, &o.part, progress)?,
+        (Some(p), None) => load_mesh_in(p, o.unit, &o.part, progress)?,
         (None, _) => head.skin.clone(),
     };
     let corner = mikktspace_tangents(&skin_mesh);

@@ -3,7 +3,8 @@
 
 use crate::glb::{self, GlbOptions, GlbReport};
 use crate::Result;
-use derma_core::mesh::{HeadUnit, MeshScale};
+use derma_core::head_mesh::{HeadUnit, MeshFrame};
+use derma_core::mesh_parts::PartChoice;
 use derma_core::progress::Progress;
 use derma_skin::{SkinGenerator, TextureSet, Written};
 use std::path::Path;
@@ -30,13 +31,15 @@ pub fn run(
     generator.check_output(out)?;
     let set = generator.run()?;
     let written = set.write(out, progress)?;
+    let (unit, part) = painted_read(set.mesh_scale.as_ref(), set.inputs.head.is_some());
     let glb = glb
         .then(|| {
             glb::export(
                 &GlbOptions {
                     textures: out.to_path_buf(),
                     mesh: set.inputs.mesh.clone(),
-                    unit: painted_unit(set.mesh_scale.as_ref()),
+                    unit,
+                    part: part.clone(),
                     head: set.inputs.head.clone(),
                     out: out.join("head.glb"),
                     maps: None,
@@ -52,12 +55,16 @@ pub fn run(
     Ok(SkinOutput { set, written, glb })
 }
 
-/// The unit a user mesh was read in when the set was painted: its length unit when one was
-/// found, fitted to a head's size when none was, the loader's own choice for the built-in head.
-fn painted_unit(scale: Option<&MeshScale>) -> HeadUnit {
-    match scale {
-        Some(MeshScale { unit: Some(u), .. }) => HeadUnit::Length(*u),
-        Some(_) => HeadUnit::Fit,
-        None => HeadUnit::Auto,
+/// How a user mesh was read when the set was painted: its length unit when one was found,
+/// fitted to a head's size when none was (through a fitted head, its frame decides), and its
+/// part; the loader's own choice for the built-in head.
+fn painted_read(frame: Option<&MeshFrame>, fitted: bool) -> (HeadUnit, PartChoice) {
+    match frame {
+        _ if fitted => (HeadUnit::Auto, PartChoice::Auto),
+        Some(f) => (
+            f.unit.map_or(HeadUnit::Fit, HeadUnit::Length),
+            f.part_choice(),
+        ),
+        None => (HeadUnit::Auto, PartChoice::Auto),
     }
 }

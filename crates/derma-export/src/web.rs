@@ -166,7 +166,8 @@ pub fn export(
         &crate::glb::GlbOptions {
             textures: textures.to_path_buf(),
             mesh: None,
-            unit: derma_core::mesh::HeadUnit::Auto,
+            unit: derma_core::head_mesh::HeadUnit::Auto,
+            part: Default::default(),
             head: head.map(Path::to_path_buf),
             out: out.join("head.glb"),
             maps: None,

@@ -19,9 +19,9 @@ fn a_mesh_in_no_unit_is_fitted_as_derma_skin_fits_it() {
     )
     .unwrap();
     let m = load_mesh_mm(&p, &derma_core::progress::Silent).unwrap();
-    let (_, scale) = derma_core::mesh::load_head_mesh(
+    let (_, scale) = derma_core::head_mesh::load_head_mesh(
         &p,
-        derma_core::mesh::HeadUnit::Auto,
+        &derma_core::head_mesh::HeadRead::default(),
         &derma_core::progress::Silent,
     )
     .unwrap();

@@ -223,7 +223,16 @@ pub fn animate(o: &AnimateOptions, dir: &Path, progress: &dyn Progress) -> Resul
     let ev = Evaluator::new(&m, &rig.region, head, o.thickness)?;
     let skin = match (&o.mesh, &o.head) {
         (None, _) => Skin::of_head(head),
-        (Some(p), Some(dir)) => Skin::user(head, derma_head::fitted::load_scan(dir, p)?, p)?,
+        (Some(p), Some(dir)) => {
+            let mesh = derma_head::fitted::load_scan(
+                dir,
+                p,
+                derma_core::head_mesh::HeadUnit::Auto,
+                &Default::default(),
+                progress,
+            )?;
+            Skin::user(head, mesh, p)?
+        }
         (Some(p), None) => {
             return Err(EyesError::Invalid(format!(
                 "{}: a user's mesh is animated through the head fitted to it; give that fitted head directory (from 'derma head fit')",

@@ -37,7 +37,7 @@ fn main() {
         alignment: if with_landmarks {
             Alignment::Landmarks(case.landmarks.clone())
         } else {
-            Alignment::Auto
+            fit::auto_alignment(&case.scan).expect("a face")
         },
         ..FitOptions::default()
     };

@@ -4,6 +4,10 @@
 
 use crate::fit::store::{self, StoreError};
 use crate::Head;
+use derma_core::head_mesh::{load_head_mesh, HeadRead, HeadUnit};
+use derma_core::mesh::TriMesh;
+use derma_core::mesh_parts::PartChoice;
+use derma_core::progress::Progress;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, OnceLock};
@@ -25,16 +29,54 @@ pub fn open(dir: &Path) -> Result<&'static Head, StoreError> {
     Ok(head)
 }
 
-/// The mesh at `path` (with UVs) the head in `dir` was fitted to, read in mm at the scale the
-/// fit read it (`head.json`'s millimetres per scan unit, whatever `--unit` the fit was given).
-pub fn load_scan(dir: &Path, path: &Path) -> Result<derma_core::mesh::TriMesh, StoreError> {
-    let scale = store::mm_per_unit(dir)?;
-    let mut mesh = derma_core::mesh::TriMesh::load(path).map_err(|e| StoreError::File {
+/// The mesh at `path` (with UVs) the head in `dir` was fitted to, read in the fit's frame
+/// (`head.json`: its unit, axes and part); a unit or part asked for that contradicts it is an
+/// error naming both.
+pub fn load_scan(
+    dir: &Path,
+    path: &Path,
+    unit: HeadUnit,
+    part: &PartChoice,
+    progress: &dyn Progress,
+) -> Result<TriMesh, StoreError> {
+    let frame = store::frame(dir)?;
+    let how = HeadRead {
+        unit,
+        part: part.clone(),
+        fitted: Some(&frame),
+    };
+    let (mesh, _) = load_head_mesh(path, &how, progress).map_err(|e| StoreError::File {
         path: path.to_path_buf(),
         detail: e.to_string(),
     })?;
-    mesh.scale(scale);
     Ok(mesh)
+}
+
+/// A user's mesh in derma's frame: through the fitted head's frame when there is one
+/// ([`load_scan`]), else by derma-core's rules for a mesh alone.
+pub fn load_user_mesh(
+    head: Option<&Path>,
+    path: &Path,
+    unit: HeadUnit,
+    part: &PartChoice,
+    progress: &dyn Progress,
+) -> Result<TriMesh, StoreError> {
+    match head {
+        Some(dir) => load_scan(dir, path, unit, part, progress),
+        None => {
+            let how = HeadRead {
+                unit,
+                part: part.clone(),
+                fitted: None,
+            };
+            load_head_mesh(path, &how, progress)
+                .map(|m| m.0)
+                .map_err(|e| StoreError::File {
+                    path: path.to_path_buf(),
+                    detail: e.to_string(),
+                })
+        }
+    }
 }
 
 /// The fitted head in `dir`, or the built-in head when there is none.

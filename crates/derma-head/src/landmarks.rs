@@ -161,16 +161,27 @@ impl Landmarks {
         mm_per_unit: f32,
         required: &[&str],
     ) -> Result<Landmarks, LandmarkError> {
+        let mut lm = Self::raw_from_json(text, required)?;
+        for p in lm.points.values_mut() {
+            *p *= mm_per_unit;
+        }
+        if let Some((n, p)) = lm.points.iter().find(|(_, p)| !p.is_finite()) {
+            return Err(LandmarkError::NotFinite(n.clone(), p.to_array()));
+        }
+        lm.check_orientation()?;
+        Ok(lm)
+    }
+
+    /// Landmarks from JSON as written, in the file's own units and axes (no orientation is
+    /// assumed: a fit finds the frame from them); names known, `required` present, finite.
+    pub fn raw_from_json(text: &str, required: &[&str]) -> Result<Landmarks, LandmarkError> {
         let raw: BTreeMap<String, [f32; 3]> =
             serde_json::from_str(text).map_err(|e| LandmarkError::Json(e.to_string()))?;
         if let Some(unknown) = raw.keys().find(|k| !NAMES.contains(&k.as_str())) {
             return Err(LandmarkError::Unknown(unknown.clone()));
         }
         let lm = Landmarks {
-            points: raw
-                .into_iter()
-                .map(|(k, v)| (k, Vec3::from(v) * mm_per_unit))
-                .collect(),
+            points: raw.into_iter().map(|(k, v)| (k, Vec3::from(v))).collect(),
         };
         if let Some(n) = required.iter().find(|n| !lm.points.contains_key(**n)) {
             return Err(LandmarkError::Missing((*n).into()));
@@ -178,7 +189,6 @@ impl Landmarks {
         if let Some((n, p)) = lm.points.iter().find(|(_, p)| !p.is_finite()) {
             return Err(LandmarkError::NotFinite(n.clone(), p.to_array()));
         }
-        lm.check_orientation()?;
         Ok(lm)
     }
 

@@ -5,7 +5,9 @@
 #[allow(dead_code)]
 mod truth;
 
-use derma_core::mesh::{HeadUnit, TriMesh};
+use derma_core::head_mesh::HeadUnit;
+use derma_core::mesh::TriMesh;
+use derma_core::mesh_parts::PartChoice;
 use derma_core::progress::Silent;
 use derma_head::fit::job::{FitJob, LandmarkSource};
 use derma_head::fit::{self, store, Alignment, FitError, FitOptions};
@@ -22,6 +24,8 @@ fn a_warped_remeshed_head_in_centimetres_is_fitted_within_a_millimetre() {
     let report = FitJob {
         mesh: obj.clone(),
         unit: HeadUnit::Auto,
+        part: PartChoice::Auto,
+        axes: None,
         landmarks: LandmarkSource::Auto,
         out: out.clone(),
     }
@@ -135,8 +139,8 @@ fn what_is_no_face_or_cannot_fit_is_refused_by_name() {
         Err(e) => e,
         Ok(_) => panic!("a fit that should fail succeeded"),
     };
-    // A sphere is no face.
-    let e = fail(sphere(100.0), &FitOptions::default());
+    // A sphere is no face: at no orientation, size or place.
+    let e = fit::auto_alignment(&sphere(100.0)).expect_err("no face");
     assert!(
         matches!(e, FitError::Scan(_)) && e.to_string().contains("no face found"),
         "{e}"
@@ -147,7 +151,19 @@ fn what_is_no_face_or_cannot_fit_is_refused_by_name() {
     for t in &mut inward.triangles {
         t.swap(1, 2);
     }
-    let e = fail(inward, &FitOptions::default());
+    let e = fit::auto_alignment(&inward).expect_err("inward");
+    assert!(e.to_string().contains("face inward"), "{e}");
+    // Placed by hand, the fit refuses it too.
+    let auto = fit::auto_alignment(&case.scan).expect("the head's face");
+    let placed = FitOptions {
+        alignment: auto.clone(),
+        ..FitOptions::default()
+    };
+    let mut inward = case.scan.clone();
+    for t in &mut inward.triangles {
+        t.swap(1, 2);
+    }
+    let e = fail(inward, &placed);
     assert!(e.to_string().contains("face inward"), "{e}");
     // A landmark far from the surface is named.
     let mut lm = case.landmarks.clone();
@@ -163,6 +179,7 @@ fn what_is_no_face_or_cannot_fit_is_refused_by_name() {
     );
     // A fit that cannot reach the scan says so with its residual.
     let opts = FitOptions {
+        alignment: auto,
         stiffness: vec![1000.0],
         iterations: 1,
         max_residual_mm: 1e-4,
@@ -185,6 +202,8 @@ fn bad_files_are_errors_that_name_them_and_leave_nothing_behind() {
     let job = |mesh: &std::path::Path, out: &str| FitJob {
         mesh: mesh.to_path_buf(),
         unit: HeadUnit::Auto,
+        part: PartChoice::Auto,
+        axes: None,
         landmarks: LandmarkSource::Auto,
         out: dir.join(out),
     };
@@ -221,6 +240,8 @@ fn bad_files_are_errors_that_name_them_and_leave_nothing_behind() {
     let e = FitJob {
         mesh: dir.join("head.json"),
         unit: HeadUnit::Auto,
+        part: PartChoice::Auto,
+        axes: None,
         landmarks: LandmarkSource::Auto,
         out: dir.clone(),
     };

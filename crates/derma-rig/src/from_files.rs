@@ -134,7 +134,13 @@ impl OnMesh {
     pub fn load(&self) -> Result<(derma_core::mesh::TriMesh, derma_head::Regions)> {
         use derma_head::fit::onto::{Carry, MIN_SHARE, REACH_MM};
         let head = derma_head::fitted::open(&self.head)?;
-        let mesh = derma_head::fitted::load_scan(&self.head, &self.mesh)?;
+        let mesh = derma_head::fitted::load_scan(
+            &self.head,
+            &self.mesh,
+            derma_core::head_mesh::HeadUnit::Auto,
+            &Default::default(),
+            &derma_core::Silent,
+        )?;
         let share = Carry::new(head, &mesh).share();
         if share < MIN_SHARE {
             return Err(crate::RigError::File {

@@ -169,6 +169,7 @@ pub struct SurfaceConfig {
     pub tileable: bool,
     pub mesh: String,
     pub unit: String,
+    pub part: String,
     pub landmarks: String,
 }
 
@@ -382,6 +383,7 @@ impl Default for SurfaceConfig {
             tileable: true,
             mesh: String::new(),
             unit: "auto".into(),
+            part: String::new(),
             landmarks: String::new(),
         }
     }
@@ -573,7 +575,8 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("surface.patch_size_mm", "mm", 0.1, 10000.0, "physical width and height of a patch"),
     k("surface.tileable", "-", 0.0, 0.0, "patch wraps around so the output tiles seamlessly (thesis §3.3, a modulo space)"),
     k("surface.mesh", "path", 0.0, 0.0, "OBJ, glTF or GLB mesh with UVs (kind = \"mesh\")"),
-    k("surface.unit", "-", 0.0, 0.0, "mesh length unit: \"auto\" (the unit of mm, cm, m that makes its largest extent a head or face, 100–350 mm; otherwise as \"fit\"), \"fit\" (scaled so its largest extent is 225 mm, adult vertex–gnathion height, Farkas 1994), \"mm\", \"cm\" or \"m\""),
+    k("surface.unit", "-", 0.0, 0.0, "mesh length unit: \"auto\" (with a fitted head, the unit and axes its fit found; else the unit of mm, cm, m that makes its largest extent a head or face, 100–350 mm, otherwise as \"fit\"), \"fit\" (scaled so its largest extent is 225 mm, adult vertex–gnathion height, Farkas 1994), \"mm\", \"cm\" or \"m\"; a unit that contradicts a fitted head's is an error"),
+    k("surface.part", "-", 0.0, 0.0, "the part of a mesh file of several to paint: a node, mesh or material name; empty = the skin, chosen by name and size (eyes, teeth, lashes, brows and hair left out; the node named head or face first, else the largest); with a fitted head, the part it was fitted to"),
     k("surface.landmarks", "-", 0.0, 0.0, "landmarks of a user mesh, so the built-in head's default fields and regional biology follow it: \"mediapipe\" (the mesh has MediaPipe's 468-point topology, vertex index = landmark id) or a JSON file {\"name\": [x, y, z]} in the mesh's units with every name of derma_head::landmarks::NAMES; +Y up, facing +Z; empty = none"),
     k("fields", "-", 0.0, 0.0, "named fields: name = \"file.png\" or an expression such as \"face - eyes - lips\" (operators + - * and min, max, clamp, pow, smooth)"),
     k("baseline.phi", "-", 0.0, 1.0, "noise amplitude as a share of each parameter's plausible range (thesis §5.3.1: φ = 0.1)"),

@@ -22,7 +22,8 @@ use crate::surface::Surface;
 use crate::texture_set::{HeightRange, RenderMaps};
 use crate::{Result, SkinError};
 use derma_core::gpu::Device;
-use derma_core::mesh::{MeshScale, TriMesh};
+use derma_core::head_mesh::MeshFrame;
+use derma_core::mesh::TriMesh;
 use derma_core::progress::{Job, Log, Note, Prefixed, Progress, Silent, Unit};
 use derma_core::Map;
 use derma_shading::Appearance;
@@ -320,7 +321,7 @@ impl<'a> SkinGenerator<'a> {
             SurfaceKind::Template => Some(head.expect("on the head").skin.clone()),
             SurfaceKind::Mesh => {
                 let p = mesh_path.clone().expect("checked");
-                let (m, u) = load_mesh(&p, &cfg.surface.unit, &job)?;
+                let (m, u) = load_mesh(&p, &cfg.surface, self.head.as_deref(), &job)?;
                 if let (Some(head), true) = (head, self.config.surface.landmarks.trim().is_empty())
                 {
                     user_regions = Some(derma_head::Regions::new(
@@ -634,16 +635,33 @@ impl SkinGenerator<'_> {
     }
 }
 
-/// Loads a mesh and converts it to millimetres: by its unit (`mm`, `cm`, `m`), by the unit that
-/// makes it head-sized (`auto`), or by scaling it to a nominal head (`fit`, and `auto` when no
-/// unit makes it head-sized); the choice is noted.
-/// The user's mesh through derma-core's one head-mesh loader, `surface.unit` checked here.
-fn load_mesh(path: &Path, unit: &str, progress: &dyn Progress) -> Result<(TriMesh, MeshScale)> {
-    let unit = derma_core::mesh::HeadUnit::parse(unit).ok_or_else(|| SkinError::Key {
+/// The user's mesh in derma's frame (mm, +Y up, facing +Z) through derma-core's one head-mesh
+/// loader: with a fitted head, in the frame its fit found (unit, axes, part); else by
+/// `surface.unit` (its unit, the unit that makes it head-sized, or a nominal head's size) and
+/// `surface.part`. The choice is noted.
+fn load_mesh(
+    path: &Path,
+    surface: &crate::config::SurfaceConfig,
+    head: Option<&Path>,
+    progress: &dyn Progress,
+) -> Result<(TriMesh, MeshFrame)> {
+    use derma_core::head_mesh::{load_head_mesh, HeadRead, HeadUnit};
+    use derma_core::mesh_parts::PartChoice;
+    let unit = HeadUnit::parse(&surface.unit).ok_or_else(|| SkinError::Key {
         key: "surface.unit".into(),
-        detail: format!("'{unit}': expected auto, fit, mm, cm or m"),
+        detail: format!("'{}': expected auto, fit, mm, cm or m", surface.unit),
     })?;
-    Ok(derma_core::mesh::load_head_mesh(path, unit, progress)?)
+    let part = match surface.part.trim() {
+        "" => PartChoice::Auto,
+        n => PartChoice::Named(n.to_string()),
+    };
+    let fitted = head.map(derma_head::fit::store::frame).transpose()?;
+    let how = HeadRead {
+        unit,
+        part,
+        fitted: fitted.as_ref(),
+    };
+    Ok(load_head_mesh(path, &how, progress)?)
 }
 
 /// Notes UV overlaps and charts outside [0, 1]; fails when no triangle covers a texel.
@@ -700,7 +718,7 @@ pub struct TextureSet {
     /// The render maps.
     pub render: RenderMaps,
     /// The unit a user mesh was read in.
-    pub mesh_scale: Option<MeshScale>,
+    pub mesh_scale: Option<MeshFrame>,
     /// Mesh and tangents for the preview (template, user mesh, or none for patches).
     pub preview_mesh: Option<(TriMesh, Vec<[f32; 4]>)>,
     /// Name of the appearance that made the colours.
@@ -877,7 +895,7 @@ impl TextureSet {
         let report = crate::report::report(&crate::report::Run {
             config: &self.config,
             inputs: &self.inputs,
-            mesh_scale: self.mesh_scale,
+            mesh_scale: self.mesh_scale.clone(),
             threads: self.threads(),
             appearance: self.appearance,
             skin_surface: self.skin_surface,

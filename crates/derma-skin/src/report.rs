@@ -8,8 +8,8 @@ use crate::outputs;
 use crate::paint::BioMaps;
 use crate::surface::Surface;
 use crate::texture_set::{HeightRange, RenderMaps};
+use derma_core::head_mesh::MeshFrame;
 use derma_core::map::MapStats;
-use derma_core::mesh::MeshScale;
 use derma_core::progress::Log;
 use derma_core::report::sha256_file;
 use derma_optics::bio::names;
@@ -37,8 +37,8 @@ pub struct Run<'a> {
     pub config: &'a SkinConfig,
     /// The files read.
     pub inputs: &'a InputFiles,
-    /// How a user mesh became millimetres (its unit, or the fitted scale).
-    pub mesh_scale: Option<MeshScale>,
+    /// How a user mesh became derma's frame (its unit or scale, axes and part).
+    pub mesh_scale: Option<MeshFrame>,
     /// Worker threads.
     pub threads: usize,
     /// Name of the appearance that made the colours.
@@ -140,9 +140,13 @@ pub fn report(set: &Run) -> serde_json::Value {
             .map(|p| json!({"path": p.display().to_string(), "sha256": sha256_file(p)}))
     };
     let mut mesh = file(&set.inputs.mesh);
-    if let (Some(m), Some(scale)) = (mesh.as_mut(), set.mesh_scale) {
+    if let (Some(m), Some(scale)) = (mesh.as_mut(), set.mesh_scale.as_ref()) {
         m["unit"] = json!(scale.unit.map_or("fit", |u| u.name()));
         m["mm_per_unit"] = json!(derma_core::report::as_written(scale.mm_per_unit as f64));
+        m["axes"] = json!(scale.axes_in_words());
+        if let Some(p) = &scale.part {
+            m["part"] = json!(p);
+        }
     }
     let surface = match set.inputs.surface {
         SurfaceKind::Template => "template",

@@ -2,7 +2,7 @@
 //! the scan it was fitted to painted with the regions the fit gives, against the built-in head's
 //! regional colour.
 
-use derma_core::mesh::HeadUnit;
+use derma_core::head_mesh::HeadUnit;
 use derma_core::progress::Silent;
 use derma_head::fit::job::{FitJob, LandmarkSource};
 use derma_skin::color_stats::region_colors;
@@ -34,6 +34,8 @@ fn a_fitted_head_and_its_scan_get_the_built_in_heads_regional_colour() {
     FitJob {
         mesh: obj.clone(),
         unit: HeadUnit::Auto,
+        part: Default::default(),
+        axes: None,
         landmarks: LandmarkSource::Auto,
         out: fitted.clone(),
     }

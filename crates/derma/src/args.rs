@@ -165,6 +165,38 @@ pub struct HeadArg {
     pub head: Option<PathBuf>,
 }
 
+/// `--unit` and `--node`, the same on every command that reads a user's mesh.
+#[derive(clap::Args, Clone, Default)]
+pub struct MeshReadArg {
+    /// The mesh's unit: auto (with --head, the unit its fit found; else the one of mm, cm, m
+    /// that makes it head-sized), mm, cm, m, or fit (its largest extent made an adult head's).
+    /// A unit that contradicts the fitted head's is refused.
+    #[arg(long, value_name = "auto|mm|cm|m|fit")]
+    pub unit: Option<String>,
+    /// The part of a mesh file of several to read: a node, mesh or material name. Default: the
+    /// skin, chosen by name and size (eyes, teeth, lashes, brows and hair left out; the node
+    /// named head or face first, else the largest); the choice is reported.
+    #[arg(long, value_name = "NAME")]
+    pub node: Option<String>,
+}
+
+impl MeshReadArg {
+    /// The unit asked for (`auto` when none).
+    pub fn head_unit(&self) -> anyhow::Result<derma_core::head_mesh::HeadUnit> {
+        let u = self.unit.as_deref().unwrap_or("auto");
+        derma_core::head_mesh::HeadUnit::parse(u)
+            .ok_or_else(|| anyhow::anyhow!("--unit {u}: expected auto, mm, cm, m or fit"))
+    }
+
+    /// The part asked for.
+    pub fn part(&self) -> derma_core::mesh_parts::PartChoice {
+        match &self.node {
+            Some(n) => derma_core::mesh_parts::PartChoice::Named(n.clone()),
+            None => derma_core::mesh_parts::PartChoice::Auto,
+        }
+    }
+}
+
 /// `--shard`, the same on every command that splits its work over a cluster job.
 #[derive(clap::Args, Clone, Default)]
 pub struct ShardArg {

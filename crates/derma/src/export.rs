@@ -43,6 +43,8 @@ pub struct GlbArgs {
     #[arg(long)]
     mesh: Option<PathBuf>,
     #[command(flatten)]
+    read: crate::args::MeshReadArg,
+    #[command(flatten)]
     head: crate::args::HeadArg,
     /// The GLB to write.
     #[arg(long, default_value = "head.glb")]
@@ -72,7 +74,8 @@ fn glb_options(textures: PathBuf, mesh: Option<PathBuf>, out: PathBuf) -> GlbOpt
     GlbOptions {
         textures,
         mesh,
-        unit: derma_core::mesh::HeadUnit::Auto,
+        unit: derma_core::head_mesh::HeadUnit::Auto,
+        part: Default::default(),
         head: None,
         out,
         maps: None,
@@ -107,6 +110,8 @@ pub fn export(cmd: ExportCommand, bars: &Bars) -> Result<()> {
     match cmd {
         ExportCommand::Glb(a) => {
             let mut o = glb_options(a.textures, a.mesh, a.out);
+            o.unit = a.read.head_unit()?;
+            o.part = a.read.part();
             o.head = a.head.head;
             o.iris = a.iris;
             o.teeth = a.teeth;

@@ -3,9 +3,8 @@
 
 use crate::output::line;
 use crate::progress::Bars;
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
-use derma_core::mesh::HeadUnit;
 use derma_head::fit::job::{FitJob, LandmarkSource};
 use std::path::PathBuf;
 
@@ -18,7 +17,8 @@ pub enum HeadCommand {
 
 #[derive(Args)]
 pub struct FitArgs {
-    /// Your head or face mesh (OBJ, glTF or GLB; UVs optional), +Y up, facing +Z.
+    /// Your head or face mesh (OBJ, glTF or GLB; UVs optional), in any unit and orientation:
+    /// both are found from its face.
     #[arg(long)]
     mesh: PathBuf,
     /// Its landmarks: "mediapipe" (MediaPipe's 468-vertex topology) or a JSON file
@@ -26,9 +26,13 @@ pub struct FitArgs {
     /// mouth corners; none: found on the mesh (the nose tip, then an ICP of the face).
     #[arg(long)]
     landmarks: Option<String>,
-    /// The mesh's unit: auto (the one that makes it head-sized), mm, cm, m, or fit.
-    #[arg(long, default_value = "auto")]
-    unit: String,
+    /// The mesh's unit and part.
+    #[command(flatten)]
+    read: crate::args::MeshReadArg,
+    /// The mesh's axes as UP,FRONT (e.g. +Z,-Y: its +Z is up, its face looks along −Y); default:
+    /// found from the face.
+    #[arg(long, value_name = "UP,FRONT", value_parser = derma_core::head_mesh::parse_axes)]
+    axes: Option<glam::Mat3>,
     /// The fitted head directory to write.
     #[arg(long)]
     out: PathBuf,
@@ -37,9 +41,7 @@ pub struct FitArgs {
 pub fn run(cmd: HeadCommand, bars: &Bars) -> Result<()> {
     match cmd {
         HeadCommand::Fit(a) => {
-            let Some(unit) = HeadUnit::parse(&a.unit) else {
-                bail!("--unit {}: expected auto, fit, mm, cm or m", a.unit);
-            };
+            let unit = a.read.head_unit()?;
             let landmarks = match a.landmarks.as_deref() {
                 None => LandmarkSource::Auto,
                 Some("mediapipe") => LandmarkSource::MediaPipe,
@@ -48,12 +50,25 @@ pub fn run(cmd: HeadCommand, bars: &Bars) -> Result<()> {
             let job = FitJob {
                 mesh: a.mesh.clone(),
                 unit,
+                part: a.read.part(),
+                axes: a.axes,
                 landmarks,
                 out: a.out.clone(),
             };
             let r = job
                 .run(bars)
                 .with_context(|| format!("fitting the head to {}", a.mesh.display()))?;
+            if let Some(f) = &r.frame {
+                line(format!(
+                    "found: {}; {} mm per unit ({}; the face ×{:.2} the template's)",
+                    f.axes,
+                    f.mm_per_unit,
+                    f.unit
+                        .as_deref()
+                        .unwrap_or("no unit of mm, cm or m: from the face's size, ±15 %"),
+                    f.face_scale
+                ))?;
+            }
             line(format!(
                 "fitted ({}): scale {:.3}, {} iterations, face RMS {:.2} mm before projection, median {:.3} mm after, {:.0} % of the face matched, {} flipped triangles",
                 r.alignment,

@@ -23,6 +23,8 @@ pub struct SkinArgs {
     /// Mesh with UVs (OBJ, glTF, GLB) instead of the built-in head.
     #[arg(long, conflicts_with = "patch")]
     mesh: Option<PathBuf>,
+    #[command(flatten)]
+    read: crate::args::MeshReadArg,
     /// Landmarks of the --mesh: `mediapipe` (MediaPipe's 468-point topology) or a JSON file
     /// {"name": [x, y, z]} (see --print-config, surface.landmarks); the built-in head's default
     /// fields and regional biology then follow the mesh.
@@ -156,6 +158,13 @@ pub fn run(args: SkinArgs, bars: &Bars) -> Result<()> {
     apply_person(cfg, &args);
     if let Some(l) = &args.landmarks {
         cfg.surface.landmarks = l.clone();
+    }
+    if let Some(u) = &args.read.unit {
+        args.read.head_unit()?;
+        cfg.surface.unit = u.clone();
+    }
+    if let Some(n) = &args.read.node {
+        cfg.surface.part = n.clone();
     }
     if let Some(p) = args.patch {
         cfg.surface.kind = SurfaceKind::Patch;

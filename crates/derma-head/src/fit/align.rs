@@ -104,22 +104,13 @@ pub fn icp(
         }
         share = src.len() as f32 / points.len().max(1) as f32;
         let w = vec![1.0; src.len()];
+        // The scale may move by at most ×2 from the start's (a scan in any unit).
         match umeyama(&src, &dst, &w) {
-            Some(s) if (0.5..2.0).contains(&s.scale) => t = s,
+            Some(s) if (0.5..2.0).contains(&(s.scale / start.scale)) => t = s,
             _ => break,
         }
     }
     (t, share)
-}
-
-/// The nose tip of a scan facing +Z: its most forward vertex.
-pub fn nose_tip(scan: &Scan) -> Vec3 {
-    scan.mesh
-        .positions
-        .iter()
-        .copied()
-        .max_by(|a, b| a.z.total_cmp(&b.z))
-        .unwrap_or(Vec3::ZERO)
 }
 
 /// The corners a placement detects on the scan: both canthi of each eye and the mouth corners.

@@ -1,11 +1,17 @@
-//! `derma head fit` on files (docs/head.md, "Fitting your head"): read the scan (any unit) and
-//! its landmarks, fit, and write the fitted head directory; refuses before any work what would
+//! `derma head fit` on files (docs/head.md, "Fitting your head"): read the scan (any unit, any
+//! axes, the skin among its parts) and its landmarks, find its frame from the face, fit, and
+//! write the fitted head directory with that frame; refuses before any work what would
 //! overwrite an input.
 
+use super::frame;
 use super::options::{Alignment, FitError, FitOptions, FitReport};
+use super::scan::Scan;
 use super::store::{self, ScanInfo, StoreError};
-use derma_core::mesh::{load_head_geometry, HeadUnit};
-use derma_core::progress::Progress;
+use derma_core::head_mesh::HeadUnit;
+use derma_core::mesh::TriMesh;
+use derma_core::mesh_parts::PartChoice;
+use derma_core::progress::{Note, Progress, Unit};
+use glam::Vec3;
 use std::path::{Path, PathBuf};
 
 /// Where the landmarks come from.
@@ -23,8 +29,12 @@ pub enum LandmarkSource {
 pub struct FitJob {
     /// The scan (OBJ, glTF or GLB).
     pub mesh: PathBuf,
-    /// Its unit.
+    /// Its unit (`Auto`: found from the face).
     pub unit: HeadUnit,
+    /// Which of its parts to fit to.
+    pub part: PartChoice,
+    /// Its axes (the rotation to derma's frame), when given; else found from the face.
+    pub axes: Option<glam::Mat3>,
     /// Its landmarks.
     pub landmarks: LandmarkSource,
     /// The fitted head directory to write.
@@ -67,68 +77,164 @@ impl FitJob {
             inputs.push(p);
         }
         derma_core::atomic::check_inputs_spared(&outputs, &inputs)?;
-        let (scan, scale) = load_head_geometry(&self.mesh, self.unit, progress)?;
-        let input = |path: &Path, detail: String| JobError::Input {
-            path: path.to_path_buf(),
-            detail,
+        let (raw, chosen) = TriMesh::load_part(&self.mesh, &self.part)?;
+        if let Some(n) = &chosen.note {
+            progress.note(Note::info(format!("mesh '{}': {n}", self.mesh.display())));
+        }
+        let fixed_mm = self.fixed_mm(&raw)?;
+        let face = super::TemplateFace::builtin();
+        let named = self.named_landmarks()?;
+        progress.stage("find the face", 1, Unit::Steps);
+        let clock = std::time::Instant::now();
+        let fit_err = |source: FitError| JobError::Fit {
+            path: self.mesh.clone(),
+            source,
         };
-        let alignment = match &self.landmarks {
-            LandmarkSource::Auto => Alignment::Auto,
-            LandmarkSource::MediaPipe => {
-                // In file order (a loader may reorder vertices to share UVs).
-                let raw: Vec<glam::Vec3> = derma_core::mesh::file_positions(&self.mesh)?
+        let found = match &named {
+            Some(points) => from_landmarks(points, fixed_mm).map_err(fit_err)?,
+            None => {
+                let given = frame::Given {
+                    mm_per_unit: fixed_mm,
+                    axes: self.axes,
+                };
+                frame::search(&Scan::new(raw.clone()), &face.view(), given).map_err(fit_err)?
+            }
+        };
+        let search_seconds = clock.elapsed().as_secs_f64();
+        let mut frame = found.frame.clone();
+        frame.part = match &self.part {
+            PartChoice::Named(n) => Some(n.clone()),
+            PartChoice::Auto => None,
+        };
+        progress.note(Note::info(format!(
+            "mesh '{}': {}, {}; unit: {}",
+            self.mesh.display(),
+            if named.is_some() {
+                "placed by its landmarks"
+            } else {
+                "face found"
+            },
+            frame.axes_in_words(),
+            found.unit_in_words()
+        )));
+        let mut scan = raw;
+        frame.apply(&mut scan);
+        let alignment = match named {
+            Some(points) => Alignment::Landmarks(crate::Landmarks {
+                points: points
                     .into_iter()
-                    .map(|p| p * scale.mm_per_unit)
-                    .collect();
-                // MediaPipe's face mesh has 468 vertices (478 with the irises).
-                if raw.len() != 468 && raw.len() != 478 {
-                    return Err(input(
-                        &self.mesh,
-                        format!(
-                            "{} vertices; MediaPipe's face mesh topology has 468 (or 478 with the irises)",
-                            raw.len()
-                        ),
-                    ));
-                }
-                let mut lm = crate::Landmarks::mediapipe(&raw)
-                    .map_err(|e| input(&self.mesh, e.to_string()))?;
-                // MediaPipe's "ears" and "hairline" are the mask's edges, not those points.
-                lm.points.retain(|n, _| {
-                    !n.starts_with("ear_") && n != "hairline" && !n.starts_with("lid_")
-                });
-                Alignment::Landmarks(lm)
-            }
-            LandmarkSource::File(p) => {
-                let text = std::fs::read_to_string(p)
-                    .map_err(|e| input(p, format!("cannot read the landmarks ({e})")))?;
-                Alignment::Landmarks(
-                    crate::Landmarks::from_json_with(
-                        &text,
-                        scale.mm_per_unit,
-                        &super::align::REQUIRED,
-                    )
-                    .map_err(|e| input(p, e.to_string()))?,
-                )
-            }
+                    .map(|(n, p)| (n, frame.point(p)))
+                    .collect(),
+            }),
+            None => Alignment::Auto(found.start),
         };
         let opts = FitOptions {
             alignment,
             ..FitOptions::default()
         };
-        let fitted = super::fit(scan.clone(), &opts, progress).map_err(|source| JobError::Fit {
-            path: self.mesh.clone(),
-            source,
-        })?;
+        let mut fitted = super::fit(scan.clone(), &opts, progress).map_err(fit_err)?;
+        fitted
+            .report
+            .seconds
+            .insert(0, ("find the face".into(), search_seconds));
+        fitted.report.frame = Some(super::options::FrameReport {
+            mm_per_unit: frame.mm_per_unit,
+            unit: frame.unit.map(|u| u.name().to_string()),
+            face_scale: found.face_scale,
+            axes: frame.axes_in_words(),
+            placements_tried: found.tried,
+            face_score: found.score,
+        });
         let name = self.mesh.display().to_string();
         store::write(
             &fitted,
             &ScanInfo {
                 name: &name,
-                mm_per_unit: scale.mm_per_unit,
+                frame: &frame,
                 mesh: &scan,
             },
             &self.out,
         )?;
         Ok(fitted.report)
     }
+
+    /// Millimetres per unit when the unit is given (`fit`: the mesh's largest extent made a
+    /// nominal head's).
+    fn fixed_mm(&self, raw: &TriMesh) -> Result<Option<f32>, JobError> {
+        Ok(match self.unit {
+            HeadUnit::Auto => None,
+            HeadUnit::Length(u) => Some(u.to_mm()),
+            HeadUnit::Fit => {
+                let e = raw.extent();
+                if !(e > 0.0 && e.is_finite()) {
+                    return Err(JobError::Input {
+                        path: self.mesh.clone(),
+                        detail: format!("its largest extent is {e}; expected a positive size"),
+                    });
+                }
+                Some(derma_core::mesh::NOMINAL_HEAD_EXTENT_MM / e)
+            }
+        })
+    }
+
+    /// The landmarks given, by name, in the scan's own coordinates (MediaPipe's eye centres
+    /// and its mask-edge points left out: they are not those points).
+    fn named_landmarks(&self) -> Result<Option<Vec<(String, Vec3)>>, JobError> {
+        let input = |path: &Path, detail: String| JobError::Input {
+            path: path.to_path_buf(),
+            detail,
+        };
+        let points = match &self.landmarks {
+            LandmarkSource::Auto => return Ok(None),
+            LandmarkSource::MediaPipe => {
+                // In file order (a loader may reorder vertices to share UVs).
+                let raw = derma_core::mesh::file_positions(&self.mesh)?;
+                if raw.len() != 468 && raw.len() != 478 {
+                    return Err(input(
+                        &self.mesh,
+                        format!(
+                            "{} vertices; MediaPipe's face mesh topology has 468 (or 478 with the irises): give landmarks of another kind, or none",
+                            raw.len()
+                        ),
+                    ));
+                }
+                crate::landmarks::MEDIAPIPE
+                    .iter()
+                    .filter(|(n, _)| !n.starts_with("ear_") && !n.starts_with("lid_"))
+                    .map(|&(n, i)| (n.to_string(), raw[i]))
+                    .collect()
+            }
+            LandmarkSource::File(p) => {
+                let text = std::fs::read_to_string(p)
+                    .map_err(|e| input(p, format!("cannot read the landmarks ({e})")))?;
+                crate::Landmarks::raw_from_json(&text, &super::align::REQUIRED)
+                    .map_err(|e| input(p, e.to_string()))?
+                    .points
+                    .into_iter()
+                    .filter(|(n, _)| !n.starts_with("eye_centre"))
+                    .collect()
+            }
+        };
+        Ok(Some(points))
+    }
+}
+
+/// The frame the landmarks imply: the similarity from the template's landmarks to them.
+fn from_landmarks(
+    points: &[(String, Vec3)],
+    fixed_mm: Option<f32>,
+) -> Result<frame::Found, FitError> {
+    let tpl = super::template::Template::of(&crate::asset::parse());
+    let pairs: Vec<(Vec3, Vec3)> = points
+        .iter()
+        .filter(|(n, _)| tpl.landmarks.contains_key(n))
+        .map(|(n, p)| (tpl.landmark(n), *p))
+        .collect();
+    let src: Vec<Vec3> = pairs.iter().map(|p| p.0).collect();
+    let dst: Vec<Vec3> = pairs.iter().map(|p| p.1).collect();
+    let s = super::align::umeyama(&src, &dst, &vec![1.0; src.len()]).ok_or_else(|| FitError::Landmark {
+        name: points.iter().map(|p| p.0.as_str()).collect::<Vec<_>>().join(", "),
+        detail: "these do not fix a placement; give at least the canthi, the nose tip and the mouth corners".into(),
+    })?;
+    Ok(frame::from_landmarks(&s, fixed_mm))
 }

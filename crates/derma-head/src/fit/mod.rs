@@ -6,6 +6,7 @@
 //! frame (mm): every command that takes a head takes it ([`crate::fitted::open`]).
 
 pub mod align;
+pub mod frame;
 pub mod job;
 pub mod nicp;
 pub mod onto;
@@ -102,7 +103,101 @@ pub fn scan_to_template(head: &Head, scan: &TriMesh) -> Vec<SurfacePoint> {
         .collect()
 }
 
-/// Fits the built-in head to `scan` (mm; +Y up, facing +Z).
+/// The template's face as the search for a face sees it ([`frame::Face`]): the once-subdivided
+/// outer skin between menton and hairline, 20 mm in front of the ears, with its normals.
+pub struct TemplateFace {
+    /// Points (template mm).
+    pub points: Vec<Vec3>,
+    /// Their normals.
+    pub normals: Vec<Vec3>,
+    /// The nose tip.
+    pub nose: Vec3,
+    /// Menton to hairline (mm).
+    pub height: f32,
+    /// Points of the whole head above the chin (the face, cranium and ears; template mm).
+    pub head_points: Vec<Vec3>,
+    /// Their normals.
+    pub head_normals: Vec<Vec3>,
+    /// Points of the nose (the face within 25 mm of its tip).
+    pub nose_points: Vec<Vec3>,
+    /// Their normals.
+    pub nose_normals: Vec<Vec3>,
+}
+
+impl TemplateFace {
+    /// The built-in head's.
+    pub fn builtin() -> TemplateFace {
+        let tpl = Template::of(&asset::parse());
+        let (points, normals, _) = face_points(&tpl);
+        let lm = |n: &str| tpl.landmark(n);
+        let l1 = tpl.stencils1.apply(&tpl.coarse.positions);
+        let n1 = Template::normals(&tpl.level1, &l1);
+        let head: Vec<usize> = (0..l1.len())
+            .filter(|&i| tpl.outer1[i] && l1[i].y > lm("menton").y)
+            .step_by(4)
+            .collect();
+        let nose = lm("nose_tip");
+        let near_nose: Vec<usize> = (0..points.len())
+            .filter(|&i| points[i].distance(nose) < 25.0)
+            .collect();
+        TemplateFace {
+            nose_points: near_nose.iter().map(|&i| points[i]).collect(),
+            nose_normals: near_nose.iter().map(|&i| normals[i]).collect(),
+            points,
+            normals,
+            nose,
+            height: lm("hairline").y - lm("menton").y,
+            head_points: head.iter().map(|&i| l1[i]).collect(),
+            head_normals: head.iter().map(|&i| n1[i]).collect(),
+        }
+    }
+
+    /// As the search takes it.
+    pub fn view(&self) -> frame::Face<'_> {
+        frame::Face {
+            points: &self.points,
+            normals: &self.normals,
+            nose: self.nose,
+            height: self.height,
+            head_points: &self.head_points,
+            head_normals: &self.head_normals,
+            nose_points: &self.nose_points,
+            nose_normals: &self.nose_normals,
+        }
+    }
+}
+
+/// The face's once-subdivided points and normals (template mm) and their level-1 indices.
+fn face_points(tpl: &Template) -> (Vec<Vec3>, Vec<Vec3>, Vec<usize>) {
+    let l1 = tpl.stencils1.apply(&tpl.coarse.positions);
+    let n1 = Template::normals(&tpl.level1, &l1);
+    let lm = |n: &str| tpl.landmark(n);
+    let ear_z = 0.5 * (lm("ear_left").z + lm("ear_right").z);
+    let (y_lo, y_hi) = (lm("menton").y - 5.0, lm("hairline").y + 5.0);
+    let face1: Vec<usize> = (0..l1.len())
+        .filter(|&i| tpl.outer1[i] && l1[i].z > ear_z + 20.0 && (y_lo..y_hi).contains(&l1[i].y))
+        .collect();
+    (
+        face1.iter().map(|&i| l1[i]).collect(),
+        face1.iter().map(|&i| n1[i]).collect(),
+        face1,
+    )
+}
+
+/// The automatic alignment of a scan already in mm (any orientation): where the search finds
+/// the face ([`frame::search`] at 1 mm per unit), in the scan's own coordinates.
+pub fn auto_alignment(scan: &TriMesh) -> Result<Alignment, FitError> {
+    let face = TemplateFace::builtin();
+    let given = frame::Given {
+        mm_per_unit: Some(1.0),
+        axes: None,
+    };
+    let found = frame::search(&Scan::new(scan.clone()), &face.view(), given)?;
+    Ok(Alignment::Auto(found.placement))
+}
+
+/// Fits the built-in head to `scan` (mm, in derma's frame: +Y up, facing +Z; see
+/// [`frame::search`] for a scan in any unit and orientation).
 pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<Fitted, FitError> {
     let mut seconds: Vec<(String, f64)> = Vec::new();
     let mut clock = Instant::now();
@@ -117,16 +212,10 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
     lap("prepare", &mut seconds);
 
     // The template's face points (once subdivided) for the alignment.
-    let l1 = tpl.stencils1.apply(&tpl.coarse.positions);
-    let n1 = Template::normals(&tpl.level1, &l1);
+    let (face_pts, face_nrm, face1) = face_points(&tpl);
     let lm = |n: &str| tpl.landmark(n);
     let ear_z = 0.5 * (lm("ear_left").z + lm("ear_right").z);
     let (y_lo, y_hi) = (lm("menton").y - 5.0, lm("hairline").y + 5.0);
-    let face1: Vec<usize> = (0..l1.len())
-        .filter(|&i| tpl.outer1[i] && l1[i].z > ear_z + 20.0 && (y_lo..y_hi).contains(&l1[i].y))
-        .collect();
-    let face_pts: Vec<Vec3> = face1.iter().map(|&i| l1[i]).collect();
-    let face_nrm: Vec<Vec3> = face1.iter().map(|&i| n1[i]).collect();
 
     progress.stage("align", 1, Unit::Steps);
     // Landmarks: the fine vertex of each named landmark, as a combination of control vertices.
@@ -158,10 +247,7 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
                 detail: "these do not fix a placement; give at least the canthi, the nose tip and the mouth corners".into(),
             })?
         }
-        Alignment::Auto => Similarity {
-            translation: align::nose_tip(&scan) - lm("nose_tip"),
-            ..Similarity::IDENTITY
-        },
+        Alignment::Auto(start) => *start,
     };
     check_orientation(&scan, &face_pts, &face_nrm, &start)?;
     let (sim, share) = align::icp(&scan, &face_pts, &face_nrm, start, 15, 30.0);
@@ -185,7 +271,9 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
     }
     // The eye and mouth corners, found on the scan near where the placement puts them.
     let detected: [Option<Vec3>; 6] = match opts.alignment {
-        Alignment::Auto => align::detect_corners(&scan, &align::CORNERS.map(|n| sim.apply(lm(n)))),
+        Alignment::Auto(_) => {
+            align::detect_corners(&scan, &align::CORNERS.map(|n| sim.apply(lm(n))))
+        }
         Alignment::Landmarks(_) => [None; 6],
     };
     // The skin's margin vertices (fine level), where the openings' corners lie.
@@ -213,7 +301,7 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
     } else {
         COARSE_MARGIN_BAND_MM
     };
-    let near_margin = tpl.margin_band(&l1, band);
+    let near_margin = tpl.margin_band(&tpl.stencils1.apply(&tpl.coarse.positions), band);
     // The face points the fit may match (the margin band is left out on purpose).
     let face_matchable = outer_ids
         .iter()
@@ -450,8 +538,8 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
         report: FitReport {
             alignment: match &opts.alignment {
                 Alignment::Landmarks(_) => format!("landmarks: {}", given.len()),
-                Alignment::Auto => {
-                    "auto (nose tip, then similarity ICP; eye and mouth corners)".into()
+                Alignment::Auto(_) => {
+                    "auto (the face found at every orientation and size, then similarity ICP; eye and mouth corners)".into()
                 }
             },
             scale: sim.scale,
@@ -469,6 +557,7 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
                 .collect(),
             corner_gap_mm,
             seconds,
+            frame: None,
         },
         similarity: sim,
     })

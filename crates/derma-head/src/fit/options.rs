@@ -11,9 +11,9 @@ pub enum Alignment {
     /// [`crate::landmarks::NAMES`] that is given is used; at least the canthi, nose tip and
     /// mouth corners.
     Landmarks(crate::Landmarks),
-    /// Found on the mesh: the nose tip as the most forward point of the face (the scan faces
-    /// +Z, +Y up), then a similarity ICP of the template's face.
-    Auto,
+    /// Found on the mesh: the template's face placed where [`super::frame::search`] found a face
+    /// (this similarity, template mm → scan mm), then refined by a similarity ICP.
+    Auto(Similarity),
 }
 
 /// Options of a fit.
@@ -34,7 +34,7 @@ pub struct FitOptions {
 impl Default for FitOptions {
     fn default() -> Self {
         Self {
-            alignment: Alignment::Auto,
+            alignment: Alignment::Auto(Similarity::IDENTITY),
             stiffness: vec![40.0, 20.0, 10.0, 5.0, 2.5, 1.2, 0.6],
             iterations: 10,
             max_distance_mm: 25.0,
@@ -107,6 +107,27 @@ pub struct FitReport {
     pub corner_gap_mm: Vec<(String, f32)>,
     /// Seconds per stage.
     pub seconds: Vec<(String, f64)>,
+    /// The scan's unit and axes as found (`derma head fit` on files).
+    #[serde(default)]
+    pub frame: Option<FrameReport>,
+}
+
+/// The scan's frame as `derma head fit` found it (docs/head.md, "Meshes as they come").
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct FrameReport {
+    /// Millimetres per scan unit.
+    pub mm_per_unit: f32,
+    /// The unit's name, or None when the scale came from the face's size.
+    pub unit: Option<String>,
+    /// The face's size relative to the template's, read so.
+    pub face_scale: f32,
+    /// The scan's own axes ("+Z up, facing −Y").
+    pub axes: String,
+    /// Placements the search tried (1 with landmarks).
+    pub placements_tried: usize,
+    /// How well the template's face fits where it was found (of at most 2; a face needs
+    /// [`super::frame::MIN_SCORE`]).
+    pub face_score: f32,
 }
 
 /// A similarity transform x ↦ s R x + t.

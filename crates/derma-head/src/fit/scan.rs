@@ -36,20 +36,24 @@ impl Scan {
             .iter()
             .map(|t| mesh.face_cross(*t).normalize_or_zero())
             .collect();
+        // Vertices split at UV seams or for flat shading share their position: the border is
+        // the welded surface's.
+        let weld = welded(&mesh.positions);
         let mut uses: HashMap<(u32, u32), u32> = HashMap::with_capacity(mesh.triangles.len() * 2);
         for t in &mesh.triangles {
             for k in 0..3 {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
+                let (a, b) = (weld[t[k] as usize], weld[t[(k + 1) % 3] as usize]);
                 *uses.entry((a.min(b), a.max(b))).or_insert(0) += 1;
             }
         }
-        let mut border_vertex = vec![false; mesh.positions.len()];
+        let mut border_welded = vec![false; mesh.positions.len()];
         for (&(a, b), &n) in &uses {
             if n == 1 {
-                border_vertex[a as usize] = true;
-                border_vertex[b as usize] = true;
+                border_welded[a as usize] = true;
+                border_welded[b as usize] = true;
             }
         }
+        let border_vertex: Vec<bool> = weld.iter().map(|&w| border_welded[w as usize]).collect();
         let on_border = mesh
             .triangles
             .iter()
@@ -97,5 +101,49 @@ impl Scan {
         let c = self.bvh.closest(p, tau)?;
         let t = c.triangle as usize;
         (!self.on_border[t] && self.face_normals[t].dot(n) >= NORMAL_COS).then_some(c)
+    }
+}
+
+/// Per vertex, the first vertex at exactly its position (bitwise): the mesh welded.
+fn welded(positions: &[Vec3]) -> Vec<u32> {
+    let mut first: HashMap<[u32; 3], u32> = HashMap::with_capacity(positions.len());
+    positions
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            *first
+                .entry(p.to_array().map(f32::to_bits))
+                .or_insert(i as u32)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn split_vertices_do_not_make_a_border() {
+        // Two triangles of a square sharing an edge whose vertices are split (as flat-shaded or
+        // UV-seamed exports write them): the shared edge is not a border.
+        let m = TriMesh {
+            positions: vec![
+                Vec3::ZERO,
+                Vec3::X,
+                Vec3::Y,
+                Vec3::X,
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::Y,
+            ],
+            normals: vec![Vec3::Z; 6],
+            uvs: Vec::new(),
+            triangles: vec![[0, 1, 2], [3, 4, 5]],
+        };
+        let s = Scan::new(m);
+        // Every vertex is on the square's outline, but the diagonal is interior: the outline has
+        // four edges, each used once; the diagonal twice.
+        assert!(s.border_vertex.iter().all(|&b| b));
+        let weld = welded(&s.mesh.positions);
+        assert_eq!(weld, vec![0, 1, 2, 1, 4, 2]);
     }
 }

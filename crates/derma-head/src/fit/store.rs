@@ -6,14 +6,15 @@
 use super::{FitReport, Fitted, Similarity, SurfacePoint};
 use crate::asset::{EyeSphere, SparseTarget};
 use derma_core::atomic;
+use derma_core::head_mesh::MeshFrame;
 use glam::{Mat3, Vec3};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// The format name in `head.json`.
 pub const FORMAT: &str = "derma fitted head";
-/// Its version.
-pub const VERSION: u32 = 1;
+/// Its version: 2 adds the scan's frame (unit, axes, part); version 1 files read as scale only.
+pub const VERSION: u32 = 2;
 
 /// The files a fitted head directory holds.
 pub const FILES: [&str; 6] = [
@@ -52,6 +53,9 @@ struct File {
     /// The scan the head was fitted to, and millimetres per scan unit.
     scan: String,
     mm_per_unit: f32,
+    /// How the scan's coordinates become the fitted head's (version 2).
+    #[serde(default)]
+    frame: Option<MeshFrame>,
     similarity: [f32; 13],
     report: FitReport,
     eyes: [EyeSphere; 2],
@@ -71,9 +75,9 @@ fn err(path: &Path, detail: impl Into<String>) -> StoreError {
 pub struct ScanInfo<'a> {
     /// The scan's file name as given.
     pub name: &'a str,
-    /// Millimetres per scan unit.
-    pub mm_per_unit: f32,
-    /// The scan (mm).
+    /// How its coordinates became derma's.
+    pub frame: &'a MeshFrame,
+    /// The scan (mm, derma's frame).
     pub mesh: &'a derma_core::mesh::TriMesh,
 }
 
@@ -91,7 +95,8 @@ pub fn write(fitted: &Fitted, scan: &ScanInfo, dir: &Path) -> Result<(), StoreEr
         version: VERSION,
         unit: "mm".into(),
         scan: scan.name.into(),
-        mm_per_unit: scan.mm_per_unit,
+        mm_per_unit: scan.frame.mm_per_unit,
+        frame: Some(scan.frame.clone()),
         similarity: sim,
         report: fitted.report.clone(),
         eyes: fitted.eyes,
@@ -119,7 +124,7 @@ pub fn write(fitted: &Fitted, scan: &ScanInfo, dir: &Path) -> Result<(), StoreEr
         .landmarks
         .points
         .iter()
-        .map(|(n, p)| (n.as_str(), (*p / scan.mm_per_unit).to_array()))
+        .map(|(n, p)| (n.as_str(), scan.frame.to_file(*p).to_array()))
         .collect();
     put(
         "landmarks.json",
@@ -183,30 +188,42 @@ fn head_json<T: serde::de::DeserializeOwned>(dir: &Path) -> Result<(T, PathBuf),
     Ok((t, path))
 }
 
-/// Millimetres per unit of the scan a fitted head directory's head was fitted to.
-pub fn mm_per_unit(dir: &Path) -> Result<f32, StoreError> {
+/// How the scan a fitted head directory's head was fitted to is read: its unit, axes and part
+/// (`head.json`; a version-1 file gives its scale only).
+pub fn frame(dir: &Path) -> Result<MeshFrame, StoreError> {
     #[derive(Deserialize)]
     struct Scale {
         mm_per_unit: f32,
+        #[serde(default)]
+        frame: Option<MeshFrame>,
     }
     let (s, path) = head_json::<Scale>(dir)?;
-    if !(s.mm_per_unit.is_finite() && s.mm_per_unit > 0.0) {
+    let f = s
+        .frame
+        .unwrap_or_else(|| MeshFrame::scaled(None, s.mm_per_unit));
+    let rotation_ok = (f.rotation * f.rotation.transpose()).abs_diff_eq(Mat3::IDENTITY, 1e-4)
+        && (f.rotation.determinant() - 1.0).abs() < 1e-4;
+    if !(f.mm_per_unit.is_finite() && f.mm_per_unit > 0.0 && rotation_ok) {
         return Err(err(
             &path,
-            format!("mm_per_unit {}; expected a positive scale", s.mm_per_unit),
+            format!(
+                "mm_per_unit {} and rotation {:?}; expected a positive scale and a rotation",
+                f.mm_per_unit,
+                f.rotation.to_cols_array()
+            ),
         ));
     }
-    Ok(s.mm_per_unit)
+    Ok(f)
 }
 
 /// Reads a fitted head directory's `head.json`.
 pub fn read(dir: &Path) -> Result<Fitted, StoreError> {
     let (f, path) = head_json::<File>(dir)?;
-    if f.format != FORMAT || f.version != VERSION {
+    if f.format != FORMAT || !(1..=VERSION).contains(&f.version) {
         return Err(err(
             &path,
             format!(
-                "format '{}' version {}; expected '{FORMAT}' version {VERSION}",
+                "format '{}' version {}; expected '{FORMAT}' version 1 to {VERSION}",
                 f.format, f.version
             ),
         ));
