@@ -29,6 +29,14 @@ fn extension_is_understood(name: &str) -> bool {
     ) || name.starts_with("KHR_materials_")
 }
 
+/// A primitive's geometry as read: positions, normals, UVs and indices.
+type Geometry = (
+    Vec<Vec3>,
+    Option<Vec<Vec3>>,
+    Option<Vec<Vec2>>,
+    Option<Vec<u32>>,
+);
+
 /// Largest element count an accessor may declare (2²⁸): more is a damaged file, refused before
 /// any allocation.
 const MAX_COUNT: u64 = 1 << 28;
@@ -260,11 +268,7 @@ impl Doc {
     }
 
     /// An uncompressed primitive's positions, normals, UVs (set `tex_set`) and indices.
-    fn attributes(
-        &self,
-        prim: &json::mesh::Primitive,
-        tex_set: u32,
-    ) -> Result<compressed::Geometry> {
+    fn attributes(&self, prim: &json::mesh::Primitive, tex_set: u32) -> Result<Geometry> {
         use json::mesh::Semantic;
         let attr = |s: Semantic| {
             prim.attributes

@@ -91,7 +91,7 @@ pub fn upright(up: Vec3, front: Vec3) -> Mat3 {
 
 /// A mesh's axes as words give them, `UP,FRONT` ("+Z,-Y": the file's +Z is up and its face
 /// looks along −Y): the rotation to derma's frame.
-pub fn parse_axes(s: &str) -> std::result::Result<Mat3, String> {
+pub fn parse_axes(s: &str) -> Result<Mat3> {
     let axis = |t: &str| -> Option<Vec3> {
         let t = t.trim();
         let (sign, name) = match t.strip_prefix('-').or_else(|| t.strip_prefix('−')) {
@@ -106,8 +106,12 @@ pub fn parse_axes(s: &str) -> std::result::Result<Mat3, String> {
         };
         Some(v * sign)
     };
-    let bad =
-        || format!("'{s}': expected UP,FRONT as two of ±X, ±Y, ±Z at right angles, e.g. +Z,-Y");
+    let bad = || CoreError::Invalid {
+        what: "the mesh's axes".into(),
+        detail: format!(
+            "'{s}': expected UP,FRONT as two of ±X, ±Y, ±Z at right angles, e.g. +Z,-Y"
+        ),
+    };
     let (u, f) = s.split_once(',').ok_or_else(bad)?;
     let (up, front) = (axis(u).ok_or_else(bad)?, axis(f).ok_or_else(bad)?);
     if up.dot(front) != 0.0 {

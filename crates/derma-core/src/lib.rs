@@ -6,8 +6,9 @@
 //! - [`color`]: spectra on the 380–780 nm grid, the CIE 1931 observer, XYZ ↔ linear sRGB.
 //! - [`image_io`]: PNG (8/16-bit) and OpenEXR reading and atomic writing; [`exr_writer`]: EXR
 //!   files streamed from their rows, blocks compressed in parallel.
-//! - [`mesh`]: OBJ and glTF/GLB loading ([`gltf_scene`]: glTF as the web ships it; [`mesh_parts`]:
-//!   which parts are the skin), unit detection, and [`raster`]: UV-space rasterisation of a mesh
+//! - [`mesh`]: triangle meshes and units; [`mesh_file`]: OBJ and glTF/GLB loading ([`gltf_scene`]:
+//!   glTF as the web ships it; [`mesh_parts`]: which parts are the skin); [`head_mesh`]: a user's
+//!   head mesh in derma's frame, and [`raster`]: UV-space rasterisation of a mesh
 //!   into per-texel surface points.
 //! - [`progress`]: the one way a long job reports (stages, units, steps, notes, timings).
 //! - [`gpu`]: the one device choice ([`Device`]: auto, cpu, gpu), typed [`GpuError`]s and, with
@@ -41,6 +42,7 @@ pub mod image_io;
 pub mod map;
 pub mod memory;
 pub mod mesh;
+pub mod mesh_file;
 pub mod mesh_parts;
 pub mod numerics;
 pub mod plot;

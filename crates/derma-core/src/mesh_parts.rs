@@ -2,6 +2,7 @@
 //! by material; eyes, teeth, lashes, brows and hair are left out by name and the node named
 //! like a head or face is preferred, else the largest (docs/head.md, "Meshes as they come").
 
+use crate::error::CoreError;
 use crate::mesh::TriMesh;
 use glam::Vec3;
 
@@ -103,9 +104,17 @@ fn rank(name: &str) -> u8 {
 /// are left out (all are kept when that leaves none); then, of the nodes left, the one whose
 /// name says head or face (else skin or body, else any) with the largest surface; all its
 /// remaining parts are read. Errors name what the file holds.
-pub fn choose(parts: &[Part], choice: &PartChoice) -> Result<Chosen, String> {
+pub fn choose(
+    path: &std::path::Path,
+    parts: &[Part],
+    choice: &PartChoice,
+) -> Result<Chosen, CoreError> {
+    let err = |detail: String| CoreError::Mesh {
+        path: path.to_path_buf(),
+        detail,
+    };
     if parts.is_empty() {
-        return Err("it contains no triangles".into());
+        return Err(err("it contains no triangles".into()));
     }
     let label = |p: &Part| {
         if p.material.is_empty() {
@@ -120,10 +129,10 @@ pub fn choose(parts: &[Part], choice: &PartChoice) -> Result<Chosen, String> {
             .filter(|&i| hit(&parts[i].node) || hit(&parts[i].mesh) || hit(&parts[i].material))
             .collect();
         if chosen.is_empty() {
-            return Err(format!(
+            return Err(err(format!(
                 "no node, mesh or material is called '{name}'; it holds {}",
                 names(parts.iter().map(label))
-            ));
+            )));
         }
         return Ok(Chosen {
             node: Some(name.clone()),
@@ -227,6 +236,8 @@ pub fn merge(parts: &[Part], chosen: &[usize]) -> (TriMesh, MorphTargets) {
 mod tests {
     use super::*;
 
+    const P: &str = "parts.glb";
+
     fn part(node: &str, index: usize, material: &str, size: f32) -> Part {
         Part {
             node: node.into(),
@@ -255,7 +266,7 @@ mod tests {
             part("Casual_Head", 1, "Eye", 1.0),
             part("Casual_Head", 1, "Hair", 4.0),
         ];
-        let c = choose(&parts, &PartChoice::Auto).unwrap();
+        let c = choose(P.as_ref(), &parts, &PartChoice::Auto).unwrap();
         assert_eq!(c.parts, vec![2]);
         assert_eq!(c.node.as_deref(), Some("Casual_Head"));
         let note = c.note.unwrap();
@@ -270,7 +281,10 @@ mod tests {
             part("teeth_upper", 2, "", 1.0),
             part("eyelashes_left", 3, "", 1.0),
         ];
-        assert_eq!(choose(&tpl, &PartChoice::Auto).unwrap().parts, vec![1]);
+        assert_eq!(
+            choose(P.as_ref(), &tpl, &PartChoice::Auto).unwrap().parts,
+            vec![1]
+        );
         // One object split by material (ICT-FaceKit's layout): both skin materials are read.
         let one = vec![
             part("face", 0, "M_Face", 5.0),
@@ -279,12 +293,15 @@ mod tests {
             part("face", 0, "M_EyeLashes", 1.0),
             part("face", 0, "M_GumsTongue", 1.0),
         ];
-        let c = choose(&one, &PartChoice::Auto).unwrap();
+        let c = choose(P.as_ref(), &one, &PartChoice::Auto).unwrap();
         assert_eq!(c.parts, vec![0, 1]);
         assert_eq!(c.node, None);
         // Without names, the largest node.
         let plain = vec![part("a", 0, "", 1.0), part("b", 1, "", 2.0)];
-        assert_eq!(choose(&plain, &PartChoice::Auto).unwrap().parts, vec![1]);
+        assert_eq!(
+            choose(P.as_ref(), &plain, &PartChoice::Auto).unwrap().parts,
+            vec![1]
+        );
         // Names that contain a non-skin word and are skin.
         assert!(!is_not_skin("upper_eyelid") && is_not_skin("EyeLeft"));
     }
@@ -292,11 +309,13 @@ mod tests {
     #[test]
     fn a_named_part_is_chosen_or_the_error_lists_what_there_is() {
         let parts = vec![part("skin", 0, "", 3.0), part("eye_left", 1, "iris", 1.0)];
-        let c = choose(&parts, &PartChoice::Named("EYE_LEFT".into())).unwrap();
+        let c = choose(P.as_ref(), &parts, &PartChoice::Named("EYE_LEFT".into())).unwrap();
         assert_eq!(c.parts, vec![1]);
-        let by_material = choose(&parts, &PartChoice::Named("iris".into())).unwrap();
+        let by_material = choose(P.as_ref(), &parts, &PartChoice::Named("iris".into())).unwrap();
         assert_eq!(by_material.parts, vec![1]);
-        let e = choose(&parts, &PartChoice::Named("face".into())).unwrap_err();
+        let e = choose(P.as_ref(), &parts, &PartChoice::Named("face".into()))
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("'face'") && e.contains("'skin'") && e.contains("'eye_left (iris)'"),
             "{e}"

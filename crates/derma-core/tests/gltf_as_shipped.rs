@@ -5,7 +5,8 @@
 //! morphing, node-transformed file before and after gltfpack. `scripts/make_gltf_fixtures.py`
 //! made the files; tests/data/gltf/PROVENANCE.md says how.
 
-use derma_core::mesh::{load_parts, TriMesh};
+use derma_core::mesh::TriMesh;
+use derma_core::mesh_file::load_parts;
 use derma_core::mesh_parts::Part;
 use glam::Vec3;
 use std::path::{Path, PathBuf};

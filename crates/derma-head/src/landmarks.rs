@@ -294,7 +294,7 @@ mod tests {
         let Some(path) = derma_test_support::shared_data("canonical_face_model.obj") else {
             return;
         };
-        let pts = derma_core::mesh::file_positions(&path).unwrap();
+        let pts = derma_core::mesh_file::file_positions(&path).unwrap();
         // The canonical model is in centimetres.
         let pts: Vec<Vec3> = pts.iter().map(|p| *p * 10.0).collect();
         let lm = Landmarks::mediapipe(&pts).unwrap();

@@ -614,7 +614,7 @@ impl SkinGenerator<'_> {
     fn landmarks(&self, mesh: &Path, mm_per_unit: f32) -> Result<derma_head::Landmarks> {
         let v = self.config.surface.landmarks.trim();
         if v == "mediapipe" {
-            let pts: Vec<glam::Vec3> = derma_core::mesh::file_positions(mesh)?
+            let pts: Vec<glam::Vec3> = derma_core::mesh_file::file_positions(mesh)?
                 .into_iter()
                 .map(|p| p * mm_per_unit)
                 .collect();

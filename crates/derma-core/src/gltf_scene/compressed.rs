@@ -3,7 +3,7 @@
 //! `KHR_draco_mesh_compression` (decoded by the pure-Rust `draco-core`), as the two extension
 //! specifications define them.
 
-use super::{Doc, MAX_COUNT};
+use super::{Doc, Geometry, MAX_COUNT};
 use crate::error::Result;
 use glam::{Vec2, Vec3};
 use std::borrow::Cow;
@@ -30,14 +30,6 @@ struct Draco {
     buffer_view: usize,
     attributes: std::collections::BTreeMap<String, u32>,
 }
-
-/// A primitive's geometry as read: positions, normals, UVs and indices.
-pub(super) type Geometry = (
-    Vec<Vec3>,
-    Option<Vec<Vec3>>,
-    Option<Vec<Vec2>>,
-    Option<Vec<u32>>,
-);
 
 impl Doc {
     /// A buffer view's bytes: a slice of its buffer, or the view decoded from its

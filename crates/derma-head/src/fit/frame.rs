@@ -5,7 +5,7 @@
 //! (Farkas 1994, "Anthropometry of the Head and Face": ±15 %) then tells a unit from a guess.
 
 use super::align;
-use super::options::{FitError, Similarity};
+use super::options::{FitError, Similarity, SCALE_RANGE};
 use super::scan::Scan;
 use derma_core::head_mesh::{axis_name, upright, MeshFrame};
 use derma_core::mesh::LengthUnit;
@@ -392,8 +392,7 @@ fn refine(
     });
     // A short refinement of each on fewer points, then the best continued on more.
     let scale_ok = |s: &Similarity| {
-        fixed_mm
-            .is_none_or(|k| (super::SCALE_RANGE.0..=super::SCALE_RANGE.1).contains(&(s.scale * k)))
+        fixed_mm.is_none_or(|k| (SCALE_RANGE.0..=SCALE_RANGE.1).contains(&(s.scale * k)))
     };
     let judge = |s: Similarity, pts: &[Vec3], nrm: &[Vec3], head: &[Vec3]| {
         let fit = if scale_ok(&s) && resolved(scan, &s, face) {
@@ -562,7 +561,7 @@ fn settle(s: &Similarity, score: f32, fixed_mm: Option<f32>, tried: usize) -> Fo
         None => {
             let fits = |u: &LengthUnit| {
                 let r = u.to_mm() / face_mm;
-                (super::SCALE_RANGE.0..=super::SCALE_RANGE.1).contains(&r)
+                (SCALE_RANGE.0..=SCALE_RANGE.1).contains(&r)
             };
             match [LengthUnit::Mm, LengthUnit::Cm, LengthUnit::M]
                 .into_iter()

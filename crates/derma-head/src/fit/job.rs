@@ -188,7 +188,7 @@ impl FitJob {
             LandmarkSource::Auto => return Ok(None),
             LandmarkSource::MediaPipe => {
                 // In file order (a loader may reorder vertices to share UVs).
-                let raw = derma_core::mesh::file_positions(&self.mesh)?;
+                let raw = derma_core::mesh_file::file_positions(&self.mesh)?;
                 if raw.len() != 468 && raw.len() != 478 {
                     return Err(input(
                         &self.mesh,

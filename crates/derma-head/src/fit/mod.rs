@@ -16,7 +16,7 @@ pub mod store;
 pub mod template;
 pub mod transfer;
 
-pub use options::{Alignment, FitError, FitOptions, FitReport, Similarity};
+pub use options::{Alignment, FitError, FitOptions, FitReport, Similarity, SCALE_RANGE};
 
 use crate::asset::{self, Asset, EyeSphere, SparseTarget};
 use crate::Head;
@@ -46,10 +46,6 @@ pub struct Fitted {
     /// The template's first placement (template mm → scan mm).
     pub similarity: Similarity,
 }
-
-/// Scales of the template a face may need: adult head breadths and face heights span about
-/// ±15 % around the mean (Farkas 1994, "Anthropometry of the Head and Face"), with a margin.
-pub const SCALE_RANGE: (f32, f32) = (0.7, 1.4);
 
 /// Half-width (mm) of the band along the lid and lip margins left unmatched, on scans fine
 /// enough to show the margins (median edge within [`FINE_SCAN_MM`]).
@@ -647,11 +643,53 @@ fn project(scan: &Scan, tpl: &Template, fine: &mut [Vec3]) {
     }
 }
 
-/// Smooths away folds: the corners of every triangle turned over against the template are
-/// moved to their neighbours' mean (umbrella smoothing), locally, until none is left (at most
-/// 50 rounds; what remains is reported as `flipped`).
+/// Smooths away folds, locally, in two passes (what remains is reported as `flipped`):
+/// 1. the corners of every triangle turned over against the template, and their ring, move to
+///    their neighbours' mean (umbrella smoothing), for at most 50 rounds: small folds on the
+///    surface open;
+/// 2. where folds remain (an ear or a canthus the registration folded, its scan's shape unlike
+///    the template's), the displacement from the placed template is smoothed instead, over a
+///    region that grows by a ring at a time: the template's own shape returns there, moved
+///    with its surroundings.
 fn untangle(tpl: &Template, fine: &mut [Vec3], template: &[Vec3]) {
-    let mut ring: Vec<Vec<u32>> = vec![Vec::new(); fine.len()];
+    let ring = vertex_rings(tpl, fine.len());
+    for _ in 0..50 {
+        let bad = folded(tpl, fine, template, 0.1);
+        if bad.is_empty() {
+            return;
+        }
+        let region = grown(&bad, &ring, 1);
+        let next: Vec<Vec3> = region
+            .iter()
+            .map(|&v| mean(&ring[v], |u| fine[u]))
+            .collect();
+        for (&v, p) in region.iter().zip(next) {
+            fine[v] = p;
+        }
+    }
+    for rings in 1..=40 {
+        let bad = folded(tpl, fine, template, 0.1);
+        if bad.is_empty() {
+            return;
+        }
+        let region = grown(&bad, &ring, rings);
+        // Enough sweeps for the displacement to settle over the region (diffusion over k
+        // rings takes about k² of them).
+        for _ in 0..(4 * rings * rings).clamp(20, 400) {
+            let next: Vec<Vec3> = region
+                .iter()
+                .map(|&v| template[v] + mean(&ring[v], |u| fine[u] - template[u]))
+                .collect();
+            for (&v, p) in region.iter().zip(next) {
+                fine[v] = p;
+            }
+        }
+    }
+}
+
+/// Each fine skin vertex's neighbours along quad edges.
+fn vertex_rings(tpl: &Template, n: usize) -> Vec<Vec<u32>> {
+    let mut ring: Vec<Vec<u32>> = vec![Vec::new(); n];
     for q in &tpl.level2.quads {
         for k in 0..4 {
             let (a, b) = (q[k].0, q[(k + 1) % 4].0);
@@ -663,41 +701,44 @@ fn untangle(tpl: &Template, fine: &mut [Vec3], template: &[Vec3]) {
         r.sort_unstable();
         r.dedup();
     }
-    for _ in 0..50 {
-        let mut bad: Vec<usize> = Vec::new();
-        for q in &tpl.level2.quads {
-            let [a, b, c, d] = q.map(|c| c.0 as usize);
-            for t in [[a, b, c], [a, c, d]] {
-                let n = |p: &[Vec3]| (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
-                let (n0, n1) = (n(template), n(fine));
-                if n0.length_squared() > 1e-12 && n0.dot(n1) <= 0.1 * n0.length() * n1.length() {
-                    bad.extend(t);
-                }
+    ring
+}
+
+/// The corners of triangles turned (by more than acos `cos`) against the template's.
+fn folded(tpl: &Template, fine: &[Vec3], template: &[Vec3], cos: f32) -> Vec<usize> {
+    let mut bad: Vec<usize> = Vec::new();
+    for q in &tpl.level2.quads {
+        let [a, b, c, d] = q.map(|c| c.0 as usize);
+        for t in [[a, b, c], [a, c, d]] {
+            let n = |p: &[Vec3]| (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
+            let (n0, n1) = (n(template), n(fine));
+            if n0.length_squared() > 1e-12 && n0.dot(n1) <= cos * n0.length() * n1.length() {
+                bad.extend(t);
             }
         }
-        if bad.is_empty() {
-            return;
-        }
-        bad.sort_unstable();
-        bad.dedup();
-        // Grow by one ring, so the fold's surroundings relax with it.
-        let mut region: Vec<usize> = bad
+    }
+    bad.sort_unstable();
+    bad.dedup();
+    bad
+}
+
+/// `seed` and its `k`-ring.
+fn grown(seed: &[usize], ring: &[Vec<u32>], k: usize) -> Vec<usize> {
+    let mut region = seed.to_vec();
+    for _ in 0..k {
+        region = region
             .iter()
             .flat_map(|&v| ring[v].iter().map(|&u| u as usize).chain([v]))
             .collect();
         region.sort_unstable();
         region.dedup();
-        let next: Vec<Vec3> = region
-            .iter()
-            .map(|&v| {
-                ring[v].iter().map(|&u| fine[u as usize]).sum::<Vec3>()
-                    / ring[v].len().max(1) as f32
-            })
-            .collect();
-        for (&v, p) in region.iter().zip(next) {
-            fine[v] = p;
-        }
     }
+    region
+}
+
+/// The mean of `f` over a ring.
+fn mean(ring: &[u32], f: impl Fn(usize) -> Vec3) -> Vec3 {
+    ring.iter().map(|&u| f(u as usize)).sum::<Vec3>() / ring.len().max(1) as f32
 }
 
 /// Triangles of the fitted skin turned over against the template's (placed) orientation.

@@ -4,6 +4,10 @@
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
+/// Scales of the template a face may need: adult head breadths and face heights span about
+/// ±15 % around the mean (Farkas 1994, "Anthropometry of the Head and Face"), with a margin.
+pub const SCALE_RANGE: (f32, f32) = (0.7, 1.4);
+
 /// How the template is first placed on the scan.
 #[derive(Clone, Debug)]
 pub enum Alignment {
