@@ -109,6 +109,10 @@ pub struct FitReport {
     /// misdetected corner, which the fit follows; `detected` says where each was found.
     #[serde(default)]
     pub corner_gap_mm: Vec<(String, f32)>,
+    /// The corners of the fitted skin's eye and mouth openings (mm, the fitted head's frame):
+    /// where its lid and lip margins meet on the surface ([`super::align::opening_corner`]).
+    #[serde(default)]
+    pub opening_corners: Vec<(String, [f32; 3])>,
     /// Seconds per stage.
     pub seconds: Vec<(String, f64)>,
     /// The scan's unit and axes as found (`derma head fit` on files).

@@ -141,6 +141,109 @@ pub fn deformation_transfer(
         .collect())
 }
 
+/// What the registration carries besides the skin: every asset vertex's position (the cage's
+/// registered, the parts' by their local maps), the globes (radius by the cube root of the
+/// local map's determinant, seated behind the lids), and the 52 face units (the skin's by
+/// deformation transfer, the parts' through their local maps).
+pub struct Carried {
+    /// Every asset vertex (mm, the scan's frame).
+    pub positions: Vec<Vec3>,
+    /// Left and right globes.
+    pub eyes: [crate::asset::EyeSphere; 2],
+    /// The face units.
+    pub targets: Vec<crate::asset::SparseTarget>,
+}
+
+/// Carries the asset through the registration `x` of its placed cage `control` (placed by
+/// `sim`), the fine skin already fitted.
+pub fn carry(
+    asset: &crate::asset::Asset,
+    tpl: &super::template::Template,
+    sim: &super::options::Similarity,
+    x: &Affines,
+    control: &[Vec3],
+    fine: &[Vec3],
+) -> Result<Carried, NumericsError> {
+    use crate::asset::{EyeSphere, SparseTarget};
+    use rayon::prelude::*;
+    let moved: Vec<Vec3> = (0..control.len()).map(|j| x.moved(j, control[j])).collect();
+    let map = LocalMap {
+        affines: x,
+        control,
+    };
+    let local: HashMap<u32, u32> = tpl
+        .coarse_ids
+        .iter()
+        .enumerate()
+        .map(|(i, &v)| (v, i as u32))
+        .collect();
+    let mut positions = asset.positions.clone();
+    for (j, &v) in tpl.coarse_ids.iter().enumerate() {
+        positions[v as usize] = moved[j];
+    }
+    // Each part vertex's local map, once: its position and, for the face units, its offsets.
+    let part_maps: HashMap<u32, Mat3> = (0..asset.positions.len() as u32)
+        .into_par_iter()
+        .filter(|v| !local.contains_key(v))
+        .map(|v| (v, map.linear(sim.apply(asset.positions[v as usize]))))
+        .collect();
+    for (v, p) in positions.iter_mut().enumerate() {
+        if !local.contains_key(&(v as u32)) {
+            *p = map.point(sim.apply(asset.positions[v]));
+        }
+    }
+    let eye = |side: &str| {
+        let e = asset.meta.eyes[side];
+        let c = sim.apply(Vec3::from(e.centre));
+        let mut sphere = EyeSphere {
+            centre: map.point(c).to_array(),
+            radius: e.radius * sim.scale * map.linear(c).determinant().abs().cbrt(),
+        };
+        super::finish::seat_globe(&mut sphere, fine, &tpl.outer2, sim.rotation * Vec3::Z);
+        sphere
+    };
+    let eyes = [eye("left"), eye("right")];
+    let triangles: Vec<[u32; 3]> = tpl
+        .coarse
+        .quads
+        .iter()
+        .flat_map(|q| [[q[0].0, q[1].0, q[2].0], [q[0].0, q[2].0, q[3].0]])
+        .collect();
+    let sr = sim.rotation * sim.scale;
+    let targets: Vec<SparseTarget> = asset
+        .targets
+        .par_iter()
+        .map(|t| -> Result<SparseTarget, NumericsError> {
+            let skin: HashMap<u32, Vec3> = t
+                .offsets
+                .iter()
+                .filter_map(|&(v, d)| local.get(&v).map(|&l| (l, sr * d)))
+                .collect();
+            let mut offsets: Vec<(u32, Vec3)> =
+                deformation_transfer(&triangles, control, &moved, &skin)?
+                    .into_iter()
+                    .filter(|(_, d)| d.length_squared() > 1e-10)
+                    .map(|(l, d)| (tpl.coarse_ids[l as usize], d))
+                    .collect();
+            for &(v, d) in &t.offsets {
+                if let Some(l) = part_maps.get(&v) {
+                    offsets.push((v, *l * (sr * d)));
+                }
+            }
+            offsets.sort_by_key(|o| o.0);
+            Ok(SparseTarget {
+                name: t.name.clone(),
+                offsets,
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(Carried {
+        positions,
+        eyes,
+        targets,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
