@@ -1,9 +1,20 @@
 // The trained eye-region model live (EyeMove thesis §3.9, fig. 3.14 and Algorithm 1): g̃ from
-// gaze, lid closure and the face units → e = W g̃ → ũ⁺ = Ũ e → T(ũ⁺), Υ(ũ⁺) → globe sliding,
-// as derma_eyes::evaluate does, on the arrays `derma export web` writes (eyes/model.bin).
+// gaze, lid closure and the face units → e = W g̃ → ũ⁺ = Ũ e → the lids' contact → depth and
+// normals linear in e → globe sliding, as derma_eyes::evaluate does, on the arrays
+// `derma export web` writes (eyes/model.bin).
 
 const DEG = Math.PI / 180;
 const sign = (x) => (x >= 0 ? 1 : -1); // glam's signum: +0 → +1
+
+/** The polyline [[x, y]…]'s height at x (linear between its points; null outside it). */
+function heightAt(chain, x) {
+  for (let j = 0; j + 1 < chain.length; j++) {
+    const [[ax, ay], [bx, by]] = [chain[j], chain[j + 1]];
+    const [lo, hi] = [Math.min(ax, bx), Math.max(ax, bx)];
+    if (x >= lo && x <= hi && hi > lo) return ay + ((by - ay) * (x - ax)) / (bx - ax);
+  }
+  return null;
+}
 
 /** Rotation matrix (row-major 3×3) of Fick angles (h, v): R = R_Y(h) · R_X(−v). */
 function fick(h, v) {
@@ -21,10 +32,11 @@ export class EyeModel {
       if (a.offset + 4 * a.count * a.components > bin.byteLength) throw new Error(`eyes/model.bin: array '${name}' past the end of the file`);
       return new Type(bin, a.offset, a.count * a.components);
     };
-    for (const n of ['basis', 'u0', 'offset', 'normal_offset', 'rest', 'rest_normals', 'eye', 'slide', 'skull', 'radial', 'skin_vertices']) this[n] = arr(n);
+    for (const n of ['basis', 'depth', 'lift', 'offset', 'normal_offset', 'rest', 'rest_normals', 'eye', 'slide', 'radial', 'skin_vertices']) this[n] = arr(n);
     this.lashAnchors = Object.fromEntries(header.lashes.map((l) => [l.name, arr(l.anchors)]));
     this.n = header.vertices;
     this.k = header.k;
+    this.u = new Float32Array(2 * this.n);
     this.pos = new Float32Array(3 * this.n);
     this.nrm = new Float32Array(3 * this.n);
     this.angles = [
@@ -73,14 +85,8 @@ export class EyeModel {
   evaluate(gaze, closure, units) {
     const g = this.inputs(gaze, closure, units);
     const e = this.h.w.map((row) => row.reduce((s, x, i) => s + x * (i < g.length ? g[i] : 1), 0));
-    const { basis, u0, offset, normal_offset: noff, pos, nrm, k } = this;
-    const sk = this.h.skull;
-    const [ox, oy] = sk.origin;
-    const [W, H, T] = [sk.width, sk.height, sk.texel_mm];
-    const S = this.skull;
+    const { basis, depth, offset, normal_offset: noff, pos, nrm, k, u } = this;
     const stride = 2 * (k + 1);
-    const un2 = 1 / (this.h.unfold_mm * this.h.unfold_mm);
-    const o = new Float32Array(6);
     for (let i = 0; i < this.n; i++) {
       let x = basis[i * stride];
       let y = basis[i * stride + 1];
@@ -88,39 +94,50 @@ export class EyeModel {
         x += e[j] * basis[i * stride + 2 + 2 * j];
         y += e[j] * basis[i * stride + 3 + 2 * j];
       }
-      // T(ũ), Υ(ũ): bilinear over the skull map.
-      const fx = Math.min(Math.max((x - ox) / T, 0), W - 1 - 1e-3);
-      const fy = Math.min(Math.max((y - oy) / T, 0), H - 1 - 1e-3);
-      const x0 = Math.floor(fx);
-      const y0 = Math.floor(fy);
-      const tx = fx - x0;
-      const ty = fy - y0;
-      const a = 6 * (y0 * W + x0);
-      const b = a + 6;
-      const cc = a + 6 * W;
-      const d = cc + 6;
-      for (let q = 0; q < 6; q++) {
-        const top = S[a + q] + (S[b + q] - S[a + q]) * tx;
-        const bot = S[cc + q] + (S[d + q] - S[cc + q]) * tx;
-        o[q] = top + (bot - top) * ty;
+      u[2 * i] = x;
+      u[2 * i + 1] = y;
+    }
+    this.contact();
+    // Depth and normal, each linear in e: [value at e = 0, k columns] × (z, n_x, n_y, n_z).
+    const k1 = k + 1;
+    const at = (b) => {
+      let v = depth[b];
+      for (let j = 0; j < k; j++) v += e[j] * depth[b + 1 + j];
+      return v;
+    };
+    for (let i = 0; i < this.n; i++) {
+      const b = 4 * k1 * i;
+      const n = [at(b + k1), at(b + 2 * k1), at(b + 3 * k1)];
+      const p = [u[2 * i], u[2 * i + 1], at(b)];
+      let nl = Math.hypot(n[0], n[1], n[2]);
+      const m = nl > 0 ? n.map((c) => c / nl) : [0, 0, 1];
+      for (let q = 0; q < 3; q++) {
+        pos[3 * i + q] = p[q] + offset[3 * i + q];
+        m[q] += noff[3 * i + q];
       }
-      // Skin hidden in a fold at rest unfolds as it slides: its offset fades over unfold_mm.
-      const dx = x - u0[2 * i];
-      const dy = y - u0[2 * i + 1];
-      const keep = Math.max(1 - (dx * dx + dy * dy) * un2, 0);
-      let nx = o[3], ny = o[4], nz = o[5];
-      if (keep > 0) {
-        nx += noff[3 * i] * keep;
-        ny += noff[3 * i + 1] * keep;
-        nz += noff[3 * i + 2] * keep;
-      }
-      const nl = 1 / Math.sqrt(nx * nx + ny * ny + nz * nz);
-      for (let q = 0; q < 3; q++) pos[3 * i + q] = o[q] + offset[3 * i + q] * keep;
-      nrm[3 * i] = nx * nl;
-      nrm[3 * i + 1] = ny * nl;
-      nrm[3 * i + 2] = nz * nl;
+      nl = 1 / Math.hypot(m[0], m[1], m[2]);
+      for (let q = 0; q < 3; q++) nrm[3 * i + q] = m[q] * nl;
     }
     this.slideOnGlobes();
+  }
+
+  /** The lids' contact: each eye's upper lid lifted where its margin falls below the lower. */
+  contact() {
+    const { u, lift, eye: eyeOf } = this;
+    const chain = (c) => c.map((i) => [u[2 * i], u[2 * i + 1]]);
+    this.h.margins.forEach(([upperIdx, lowerIdx], e) => {
+      const [upper, lower] = [chain(upperIdx), chain(lowerIdx)];
+      const short = upper.map(([x, y], j) => {
+        const h = heightAt(lower, x);
+        const inner = j > 0 && j + 1 < upper.length;
+        return [x, inner && h !== null ? Math.max(h - y, 0) : 0];
+      });
+      if (short.every(([, s]) => s === 0)) return;
+      for (let i = 0; i < this.n; i++) {
+        if (eyeOf[i] !== e || lift[i] <= 0) continue;
+        u[2 * i + 1] += lift[i] * (heightAt(short, u[2 * i]) ?? 0);
+      }
+    });
   }
 
   /** D(dir): the globe's radial distance along a unit direction of its own frame (bilinear). */

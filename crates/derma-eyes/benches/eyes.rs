@@ -1,5 +1,5 @@
 //! Eye-region benchmarks (BENCHMARKS.md, "Eye region"): one model frame on one core — the
-//! per-vertex linear model ũ⁺ = Ũ e alone and the whole frame (skull-map lift and globe
+//! per-vertex linear model ũ⁺ = Ũ e alone and the whole frame (contact, depth and globe
 //! sliding included) over the built-in head's region — and the exact distance transform at
 //! 1920 × 1080.
 //!
@@ -35,7 +35,7 @@ fn frames(c: &mut Criterion) {
         })
     });
     let mut f = Frame::default();
-    grp.bench_function("whole frame (skull map, sliding)", |b| {
+    grp.bench_function("whole frame (contact, depth, sliding)", |b| {
         b.iter(|| ev.frame(&g, &mut f))
     });
     grp.finish();

@@ -1,19 +1,14 @@
 //! Per-frame synthesis (thesis §3.9, fig. 3.14 and Algorithm 1): g̃ → e = W g̃ → ũ⁺ = Ũ e →
-//! 3D positions from the skull map T and normals from Υ → globe sliding. Everything a frame
-//! needs is precomputed here, so a frame is a few multiply-adds and two texture look-ups per
-//! vertex.
+//! the lids' contact ([`crate::contact`]) → depth and normals linear in e ([`crate::depth`], in
+//! place of the thesis's skull map) → globe sliding. Everything a frame needs is precomputed
+//! here, so a frame is a few multiply-adds per vertex and one radial-map look-up near a globe.
 
 use crate::gaze::Gaze;
 use crate::globe::{Globe, RadialMap};
 use crate::model::{EyeModel, Optimised, MAX_COEF};
 use crate::region::EyeRegion;
-use crate::skull::SkullMap;
 use crate::sliding::Slider;
 use glam::{Vec2, Vec3};
-
-/// Travel (mm, in the modelling camera) over which a vertex's rest offset from the skull map
-/// fades (authored: about the depth of the upper-lid crease).
-pub const UNFOLD_MM: f32 = 1.0;
 
 /// Texels per side of each globe's radial map (0.2 mm arc per texel on a 12 mm globe).
 pub const RADIAL_MAP_SIZE: usize = 128;
@@ -22,21 +17,21 @@ pub const RADIAL_MAP_SIZE: usize = 128;
 pub struct Evaluator {
     /// The optimised model over every region vertex (tracked, then extrapolated).
     pub optimised: Optimised,
-    /// T and Υ.
-    pub skull: SkullMap,
+    /// Depth and normals from the coefficients.
+    pub depth: crate::depth::DepthModel,
     /// Globe sliding.
     pub slider: Slider,
     /// The globes (own frame).
     pub globes: [Globe; 2],
-    /// Per vertex: rest position minus T(ũ⁺ at the neutral input), so the neutral frame is the
-    /// rest mesh exactly (vertices hidden in folds keep their depth).
+    /// Per vertex: the rest position minus the model's at the neutral input (its fit's residual
+    /// there, held constant), so the neutral frame is the rest mesh exactly.
     pub(crate) offset: Vec<Vec3>,
-    /// Per vertex: ũ⁺ at the neutral input.
-    pub(crate) u0: Vec<Vec2>,
-    /// Per vertex: the rest normal minus Υ(ũ⁺ neutral).
+    /// Per vertex: the rest normal minus the model's at the neutral input.
     pub(crate) normal_offset: Vec<Vec3>,
     /// Rest normals.
     pub(crate) rest_normals: Vec<Vec3>,
+    /// The lids' contact (the upper margin kept above the lower).
+    pub(crate) contact: crate::contact::Contact,
     /// The neutral input.
     pub neutral: Gaze,
 }
@@ -111,35 +106,8 @@ impl Evaluator {
             rows[i - nt] = r;
         }
         let optimised = model.optimised(&rows);
-        let (lo, hi) = region.rest.iter().fold(
-            (Vec2::splat(f32::MAX), Vec2::splat(f32::MIN)),
-            |(a, b), p| (a.min(p.truncate()), b.max(p.truncate())),
-        );
-        let margin = Vec2::splat(6.0);
-        let skin = &head.skin;
-        // The face's front surface: skin-chart triangles in front of the globe centres (the
-        // camera would otherwise see the inside of the back of the head through the openings).
-        let front = head.eyes[0].centre.z.min(head.eyes[1].centre.z) - 8.0;
-        let keep = |t: usize| {
-            let tri = skin.triangles[t];
-            !tri.iter()
-                .any(|&i| head.regions.in_socket(skin.uvs[i as usize]))
-                && tri.iter().all(|&i| skin.positions[i as usize].z > front)
-        };
-        // The head's own closed lids close the openings (its blink pose).
-        let mut closed = head.posed_skin(&[("eyeBlinkLeft", 1.0), ("eyeBlinkRight", 1.0)]);
-        closed.compute_normals();
-        let keep_closed = |t: usize| {
-            let tri = closed.triangles[t];
-            !tri.iter()
-                .any(|&i| head.regions.in_socket(closed.uvs[i as usize]))
-                && tri.iter().all(|&i| closed.positions[i as usize].z > front)
-        };
-        let skull = SkullMap::layered(
-            &[(skin, &keep), (&closed, &keep_closed)],
-            lo - margin,
-            hi + margin,
-        )?;
+        let rig = crate::rigdata::Rig::with_region(head, region.clone());
+        let depth = crate::depth::DepthModel::fit(model, &optimised, &rig)?;
         let globes = [Globe::of(&head.eyes[0]), Globe::of(&head.eyes[1])];
         let maps = globes.map(|g| RadialMap::from_mesh(&g.shell(true), RADIAL_MAP_SIZE));
         let centres = [head.eyes[0].centre, head.eyes[1].centre];
@@ -157,24 +125,22 @@ impl Evaluator {
             units: vec![0.0; model.units.len()],
         };
         let e = optimised.coefficients(&neutral);
-        let mut u = vec![Vec2::ZERO; optimised.len()];
+        let n = optimised.len();
+        let mut u = vec![Vec2::ZERO; n];
         optimised.evaluate(&e, &mut u);
-        let mut offset = Vec::with_capacity(u.len());
-        let mut normal_offset = Vec::with_capacity(u.len());
-        for (i, ui) in u.iter().enumerate() {
-            let (p, n) = skull.sample(*ui);
-            offset.push(region.rest[i] - p);
-            normal_offset.push(region.rest_normals[i] - n);
-        }
+        let (mut p, mut nn) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+        depth.evaluate(&e, &u, &mut p, &mut nn);
+        let offset = (0..n).map(|i| region.rest[i] - p[i]).collect();
+        let normal_offset = (0..n).map(|i| region.rest_normals[i] - nn[i]).collect();
         Ok(Evaluator {
             optimised,
-            skull,
+            depth,
             slider,
             globes,
             offset,
-            u0: u,
             normal_offset,
             rest_normals: region.rest_normals.clone(),
+            contact: crate::contact::Contact::new(region),
             neutral,
         })
     }
@@ -192,24 +158,13 @@ impl Evaluator {
         f.positions.resize(n, Vec3::ZERO);
         f.normals.resize(n, Vec3::ZERO);
         self.optimised.evaluate(e, &mut f.u);
+        self.contact.apply(&mut f.u);
+        self.depth
+            .evaluate(e, &f.u, &mut f.positions, &mut f.normals);
         for i in 0..n {
-            let (p, nn) = self.skull.sample(f.u[i]);
-            // Skin hidden in a fold at rest (the upper lid under its crease) unfolds onto the
-            // visible surface as it slides away: its rest offset fades over UNFOLD_MM of travel.
-            // (1 − (travel / UNFOLD_MM)²)⁺: no square root per vertex.
-            let travel2 = (f.u[i] - self.u0[i]).length_squared();
-            let keep = (1.0 - travel2 * (1.0 / (UNFOLD_MM * UNFOLD_MM))).max(0.0);
-            f.positions[i] = p + self.offset[i] * keep;
-            // The rest normal turned as the skull normal turns (to first order: the skull normal
-            // plus the rest normal's difference from it, cheaper than a rotation per vertex and
-            // exact at rest); the difference fades with the offset, so unfolded skin takes the
-            // surface's normal. The map's normals are unit at its texels.
-            let n = if keep > 0.0 {
-                nn + self.normal_offset[i] * keep
-            } else {
-                nn
-            };
-            f.normals[i] = n * n.length_recip();
+            f.positions[i] += self.offset[i];
+            let nn = f.normals[i] + self.normal_offset[i];
+            f.normals[i] = nn * nn.length_recip();
         }
         let rot = g.eyes.map(|a| a.rotation());
         self.slider

@@ -6,8 +6,9 @@
 //!   format; [`rigdata`] makes training data from the head's face units.
 //! - [`pca`], [`regression`], [`model`]: the eyelid-shape and skin-motion models (eqs. 3.2–3.11);
 //!   [`transfer`] moves them to other vertices (eqs. 3.4–3.5).
-//! - [`globe`], [`skull`], [`sliding`], [`evaluate`]: the eyeball with its corneal bulge, the
-//!   skull maps and globe sliding (Algorithm 1) that turn a model frame into 3D; [`surface`]
+//! - [`contact`], [`depth`], [`globe`], [`sliding`], [`evaluate`]: the lids' contact, depth and
+//!   normals learnt from the rig (in place of the thesis's skull map), the eyeball with its
+//!   corneal bulge and globe sliding (Algorithm 1) that turn a model frame into 3D; [`surface`]
 //!   carries it onto a user's own mesh through a fitted head (eq. 3.4).
 //! - [`still`], [`live`]: one frame for a posed head (`derma render --gaze`), and the bound
 //!   model as data for a real-time evaluator (the web viewer).
@@ -22,6 +23,8 @@
 
 pub mod animate;
 pub mod blink;
+pub mod contact;
+pub mod depth;
 pub mod error;
 pub mod evaluate;
 pub mod files;
@@ -40,7 +43,6 @@ pub mod rigdata;
 pub mod saccade;
 pub mod saliency;
 pub mod sdf;
-pub mod skull;
 pub mod sliding;
 pub mod still;
 pub mod surface;

@@ -1,11 +1,12 @@
 //! The bound eye-region model as data for a real-time evaluator (thesis §3.9, fig. 3.14 and
-//! Algorithm 1): W, the per-vertex Ũ, the unfold offsets, the skull map T/Υ, the globes' radial
-//! maps and each vertex's sliding mode, packed as a JSON header and little-endian arrays, so the
-//! web viewer (or an engine's vertex shader) evaluates ẽ = W g̃, ũ⁺ = Ũ e, T(ũ⁺) and globe
-//! sliding per frame exactly as [`crate::evaluate::Evaluator::frame`] does. Check poses with
+//! Algorithm 1): W, the per-vertex Ũ, the lids' contact weights, the depth and normal bases, the
+//! rest offsets, the globes' radial maps and each vertex's sliding mode, packed as a JSON header
+//! and little-endian arrays, so the web viewer (or an engine's vertex shader) evaluates
+//! ẽ = W g̃, ũ⁺ = Ũ e, the contact, the depth and globe sliding per frame exactly as
+//! [`crate::evaluate::Evaluator::frame`] does. Check poses with
 //! the evaluator's own output travel with the data, so a port can test itself against it.
 
-use crate::evaluate::{Frame, RADIAL_MAP_SIZE, UNFOLD_MM};
+use crate::evaluate::{Frame, RADIAL_MAP_SIZE};
 use crate::sliding::Mode;
 use crate::still::{EyePose, StillModel, FIXATION_MM};
 use serde_json::{json, Value};
@@ -13,7 +14,7 @@ use serde_json::{json, Value};
 /// Format tag of the header.
 pub const FORMAT: &str = "derma-eye-model";
 /// Version of the layout.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 
 /// Little-endian arrays and their header entries (byte offset, count, components).
 #[derive(Default)]
@@ -97,7 +98,12 @@ pub fn pack(m: &StillModel, head: &derma_head::Head, skin_origin: &[u32]) -> (Va
     let n = opt.len();
     let mut b = Blob::default();
     b.f32s("basis", 2 * (opt.k + 1), opt.basis.iter().copied());
-    b.f32s("u0", 2, ev.u0.iter().flat_map(|u| u.to_array()));
+    b.f32s(
+        "depth",
+        4 * (ev.depth.k + 1),
+        ev.depth.basis.iter().copied(),
+    );
+    b.f32s("lift", 1, ev.contact.lift.iter().map(|&(_, w)| w));
     b.f32s("offset", 3, ev.offset.iter().flat_map(|v| v.to_array()));
     b.f32s(
         "normal_offset",
@@ -115,7 +121,7 @@ pub fn pack(m: &StillModel, head: &derma_head::Head, skin_origin: &[u32]) -> (Va
         ev.rest_normals.iter().flat_map(|v| v.to_array()),
     );
     b.u32s("eye", 1, ev.slider.eye.iter().map(|&e| e as u32));
-    // Sliding per vertex: [kind (0 skull, 1 offset, -1 never reaches a globe), t, δ₀, τ̂₀].
+    // Sliding per vertex: [kind (0 surface, 1 offset, -1 never reaches a globe), t, δ₀, τ̂₀].
     let mut near = vec![false; n];
     for &i in &ev.slider.near {
         near[i as usize] = true;
@@ -133,7 +139,6 @@ pub fn pack(m: &StillModel, head: &derma_head::Head, skin_origin: &[u32]) -> (Va
                 Mode::Offset { delta0, t, tau0 } => [1.0, t, delta0, tau0.x, tau0.y, tau0.z],
             }),
     );
-    b.f32s("skull", 6, ev.skull.texels.iter().flatten().copied());
     b.f32s(
         "radial",
         1,
@@ -187,6 +192,14 @@ pub fn pack(m: &StillModel, head: &derma_head::Head, skin_origin: &[u32]) -> (Va
             },
             vec![("eyeSquintLeft", 0.8), ("eyeSquintRight", 0.8)],
         ),
+        // Closed: the lids' contact acts.
+        (
+            EyePose {
+                gaze: (0.0, 0.0),
+                closure: 1.0,
+            },
+            vec![],
+        ),
     ]
     .iter()
     .map(|(p, u)| check(m, head, *p, u, &probes))
@@ -208,9 +221,9 @@ pub fn pack(m: &StillModel, head: &derma_head::Head, skin_origin: &[u32]) -> (Va
         },
         "fixation_mm": FIXATION_MM,
         "centres": [head.eyes[0].centre.to_array(), head.eyes[1].centre.to_array()],
-        "unfold_mm": UNFOLD_MM,
-        "skull": {"origin": ev.skull.origin.to_array(), "width": ev.skull.width, "height": ev.skull.height,
-            "texel_mm": crate::skull::TEXEL_MM, "layout": "rows from origin.y up, position then normal (unnormalised), bilinear"},
+        "depth": {"k": ev.depth.k,
+            "layout": "per vertex z then n_x, n_y, n_z, each its value at e = 0 then k coefficient columns; position (ũ⁺, z) + offset, normal normalise(n + normal_offset)"},
+        "contact": {"layout": "lift: per vertex the share of its upper margin's shortfall below the lower margin (linear along x in the modelling camera; none at the canthi) added to ũ⁺.y"},
         "radial": {"size": RADIAL_MAP_SIZE, "reach": ev.slider.reach,
             "layout": "per eye size² texels, octahedral coordinates of the globe-frame direction, texel centres at (i + ½)/size, bilinear"},
         "lashes": lashes,
@@ -246,7 +259,8 @@ mod tests {
             end = off + 4 * count * comps;
             if [
                 "basis",
-                "u0",
+                "depth",
+                "lift",
                 "offset",
                 "normal_offset",
                 "rest",
@@ -271,10 +285,9 @@ mod tests {
             h["arrays"]["skin_vertices"]["count"].as_u64().unwrap() as usize,
             on_skin
         );
-        let sk = &h["skull"];
         assert_eq!(
-            h["arrays"]["skull"]["count"].as_u64().unwrap(),
-            sk["width"].as_u64().unwrap() * sk["height"].as_u64().unwrap()
+            h["arrays"]["depth"]["components"].as_u64().unwrap(),
+            4 * (h["depth"]["k"].as_u64().unwrap() + 1)
         );
         // The checks: downgaze lowers both upper lids (probe 0: left upper, 2: right upper).
         let y = |pose: usize, probe: usize| {

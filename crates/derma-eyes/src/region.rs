@@ -173,8 +173,8 @@ impl EyeRegion {
         let mut eye = Vec::new();
         let mut inner = Vec::new();
         let mut tracked = 0;
-        // Model vertices in Morton order of their camera position: a frame samples the skull
-        // map vertex after vertex, and neighbours in memory then read neighbouring texels.
+        // Model vertices in Morton order of their camera position: neighbours in memory are
+        // neighbours on the face, so a frame's radial-map reads near a globe stay in cache.
         let morton = |p: Vec3| {
             let q = |v: f32| ((v + 128.0).clamp(0.0, 255.99) * 4.0) as u32; // 0.25 mm cells
             let spread = |mut v: u32| {

@@ -39,12 +39,26 @@ pub struct Rig {
     /// The region.
     pub region: EyeRegion,
     units: Vec<(String, Vec<(u32, Vec3)>)>,
+    /// The skin's triangles that touch the region, their corners as model vertices or, outside
+    /// the region, fixed rest positions (for the posed region's normals).
+    triangles: Vec<[Corner; 3]>,
+}
+
+/// A triangle corner of the rig's region: a model vertex, or a skin vertex that never moves.
+#[derive(Clone, Copy, Debug)]
+enum Corner {
+    Model(u32),
+    Fixed(Vec3),
 }
 
 impl Rig {
-    /// The rig of the built-in head.
+    /// The rig of a head (its eye region, [`EyeRegion::of_head`]).
     pub fn new(head: &Head) -> crate::Result<Rig> {
-        let region = EyeRegion::of_head(head)?;
+        Ok(Self::with_region(head, EyeRegion::of_head(head)?))
+    }
+
+    /// The rig of a head over a given region of it.
+    pub fn with_region(head: &Head, region: EyeRegion) -> Rig {
         let units = crate::region::REGION_UNITS
             .iter()
             .map(|&name| {
@@ -66,7 +80,49 @@ impl Rig {
                 (name.to_string(), offs)
             })
             .collect();
-        Ok(Rig { region, units })
+        let triangles = head
+            .skin
+            .triangles
+            .iter()
+            .filter(|t| {
+                t.iter()
+                    .any(|&s| region.skin_to_model[s as usize] != u32::MAX)
+            })
+            .map(|t| {
+                t.map(|s| match region.skin_to_model[s as usize] {
+                    u32::MAX => Corner::Fixed(head.skin.positions[s as usize]),
+                    m => Corner::Model(m),
+                })
+            })
+            .collect();
+        Rig {
+            region,
+            units,
+            triangles,
+        }
+    }
+
+    /// Area-weighted normals of the model vertices at posed positions `x` (the rest normal where
+    /// a vertex has no triangle).
+    pub fn normals(&self, x: &[Vec3]) -> Vec<Vec3> {
+        let mut n = vec![Vec3::ZERO; x.len()];
+        let at = |c: &Corner| match c {
+            Corner::Model(m) => x[*m as usize],
+            Corner::Fixed(p) => *p,
+        };
+        for t in &self.triangles {
+            let [a, b, c] = t.map(|k| at(&k));
+            let f = (b - a).cross(c - a);
+            for k in t {
+                if let Corner::Model(m) = k {
+                    n[*m as usize] += f;
+                }
+            }
+        }
+        n.iter()
+            .zip(&self.region.rest_normals)
+            .map(|(v, r)| v.try_normalize().unwrap_or(*r))
+            .collect()
     }
 
     /// Face-unit weights of a pose.

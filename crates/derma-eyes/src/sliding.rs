@@ -18,7 +18,7 @@ const DELTA0_REACH: f32 = 4.0;
 /// How one vertex slides.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Mode {
-    /// Slides on the skull map; pushed out only when inside the globe (δ̂ > 1).
+    /// Follows the region's surface; pushed out only when inside the globe (δ̂ > 1).
     Skull {
         /// Skin thickness t over the globe.
         t: f32,
@@ -137,7 +137,7 @@ impl Slider {
                     let delta = self.maps[e].sample(dir) + t + delta0;
                     pos[i] = c + rot[e] * (dir * delta);
                     // Eq. 3.19: turn the rest normal as the sliding normal turns from τ̂₀ to τ̂
-                    // (to first order, as the skull normals: exact at rest, no rotation to build).
+                    // (to first order: exact at rest, no rotation to build).
                     let tau = rot[e] * dir;
                     let n = rest_normals[i] + tau - tau0;
                     nrm[i] = n * n.length_recip();

@@ -48,6 +48,28 @@ impl<'a> Skin<'a> {
         }
     }
 
+    /// This skin posed by the head's own face units (the rig the eye model learnt from) at
+    /// `weights`: the reference an eye-model frame is judged against.
+    pub fn posed(&self, weights: &[(&str, f32)]) -> Vec<Vec3> {
+        let posed = self.head.posed_skin(weights);
+        match &self.user {
+            None => posed.positions,
+            Some((mesh, carry)) => {
+                let dense: Vec<Vec3> = posed
+                    .positions
+                    .iter()
+                    .zip(&self.head.skin.positions)
+                    .map(|(a, b)| *a - *b)
+                    .collect();
+                mesh.positions
+                    .iter()
+                    .zip(carry.field(&dense))
+                    .map(|(p, d)| *p + d)
+                    .collect()
+            }
+        }
+    }
+
     /// Offsets of the head's skin vertices from offsets `model(m)` of the region's model
     /// vertices (zero outside the region).
     fn dense(&self, region: &EyeRegion, model: &impl Fn(usize) -> Vec3) -> Vec<Vec3> {
@@ -69,20 +91,15 @@ impl<'a> Skin<'a> {
     pub fn offsets(&self, region: &EyeRegion, model: impl Fn(usize) -> Vec3) -> Vec<(u32, Vec3)> {
         let dense = self.dense(region, &model);
         match &self.user {
-            Some((_, carry)) => carry.offsets(&dense),
-            None => dense
-                .iter()
-                .enumerate()
-                .filter(|(_, d)| d.length_squared() > 1e-12)
-                .map(|(i, d)| (i as u32, *d))
-                .collect(),
+            Some((_, carry)) => derma_head::fit::onto::sparse(carry.field(&dense)),
+            None => derma_head::fit::onto::sparse(dense),
         }
     }
 
     /// Positions and normals of the vertices `which` of this skin in frame `f`: the model's own
-    /// on the head's skin; on a user's mesh its rest normal plus the change the model makes to
-    /// the skin's normals (carried like the positions), renormalised — not normals recomputed
-    /// from the moved triangles, which show the linear model's lid folds as facets.
+    /// on the head's skin; on a user's mesh its rest normal turned as the skin's normal turns at
+    /// its point (rest and posed skin normals carried like the positions) — not normals
+    /// recomputed from the moved triangles, which show the linear model's lid folds as facets.
     pub fn frame(&self, region: &EyeRegion, f: &Frame, which: &[u32]) -> (Vec<Vec3>, Vec<Vec3>) {
         let mesh = self.mesh();
         match &self.user {
@@ -99,16 +116,28 @@ impl<'a> Skin<'a> {
                 .unzip(),
             Some((_, carry)) => {
                 let moved = self.dense(region, &|m| f.positions[m] - region.rest[m]);
-                let turned = self.dense(region, &|m| f.normals[m] - region.rest_normals[m]);
+                // The turn of the skin's normals, carried as rest and posed normals: the user's
+                // rest normal turns as the skin's at its point does.
+                let rest = &self.head.skin.normals;
+                let mut posed = rest.clone();
+                for (s, &m) in region.skin_to_model.iter().enumerate() {
+                    if m != u32::MAX {
+                        posed[s] = f.normals[m as usize];
+                    }
+                }
+                let (moved, rest, posed) =
+                    (carry.field(&moved), carry.field(rest), carry.field(&posed));
                 which
                     .iter()
                     .map(|&s| {
                         let s = s as usize;
                         let n = mesh.normals.get(s).copied().unwrap_or(Vec3::Z);
-                        (
-                            mesh.positions[s] + carry.offset(s, &moved),
-                            (n + carry.offset(s, &turned)).normalize_or(n),
-                        )
+                        let (a, b) = (rest[s], posed[s]);
+                        let turn = match (a.try_normalize(), b.try_normalize()) {
+                            (Some(a), Some(b)) => glam::Quat::from_rotation_arc(a, b),
+                            _ => glam::Quat::IDENTITY,
+                        };
+                        (mesh.positions[s] + moved[s], turn * n)
                     })
                     .unzip()
             }

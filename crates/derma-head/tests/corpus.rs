@@ -36,6 +36,29 @@ struct Outcome {
     seconds: f64,
     /// Per hand-placed landmark, its distance (mm) from the fitted head's.
     errors: Vec<(String, f32)>,
+    /// Per eye, the height (mm) of the upper lid's middle over the lower lid's under the fitted
+    /// head's own eyeBlink at full weight (0: the margins meet).
+    blink_gap: [f32; 2],
+}
+
+/// [`Outcome::blink_gap`] of a fitted head.
+fn blink_gaps(head: &derma_head::Head) -> [f32; 2] {
+    ["left", "right"].map(|side| {
+        let side_cap = if side == "left" { "Left" } else { "Right" };
+        let posed = head.posed_skin(&[(&format!("eyeBlink{side_cap}"), 1.0)]);
+        let (up, low) = (
+            head.landmarks.get(&format!("lid_upper_{side}")),
+            head.landmarks.get(&format!("lid_lower_{side}")),
+        );
+        let i = (0..head.skin.positions.len())
+            .min_by(|&a, &b| {
+                (head.skin.positions[a] - up)
+                    .length()
+                    .total_cmp(&(head.skin.positions[b] - up).length())
+            })
+            .unwrap();
+        posed.positions[i].y - low.y
+    })
 }
 
 /// The landmark error as the hand placement read it: the canthi and mouth corners were read
@@ -91,6 +114,7 @@ fn fit(mesh: &Path, out: &Path, points: &BTreeMap<String, [f32; 3]>) -> Outcome 
         report,
         seconds,
         errors,
+        blink_gap: blink_gaps(head),
     }
 }
 
@@ -116,7 +140,7 @@ fn row(name: &str, o: &Outcome) -> String {
         .find(|e| e.0 == "glabella")
         .map_or(0.0, |g| g.1);
     format!(
-        "| {name} | {} · {} | {:.1} s | {:.2} / {:.3} | {} | {} of 6 | {:.1} | {worst} | {glabella:.1} |",
+        "| {name} | {} · {} | {:.1} s | {:.2} / {:.3} | {} | {} of 6 | {:.1} | {worst} | {glabella:.1} | {:+.1} / {:+.1} |",
         f.axes,
         f.unit
             .clone()
@@ -126,7 +150,9 @@ fn row(name: &str, o: &Outcome) -> String {
         o.report.median_mm,
         o.report.flipped,
         o.report.detected.len(),
-        median(&mut e)
+        median(&mut e),
+        o.blink_gap[0],
+        o.blink_gap[1]
     )
 }
 
@@ -149,11 +175,17 @@ fn meets_goals(o: &Outcome) -> bool {
     o.report.flipped == 0 && median(&mut e) <= 3.0 && e.iter().all(|&x| x <= 6.0)
 }
 
-/// What every corpus fit holds: nothing turned over; landmarks median ≤ `median_mm`, none over
-/// `max_mm`.
+/// What every corpus fit holds: nothing turned over; the carried blink closes each eye (its
+/// upper lid's middle within 1 mm of the lower lid's); landmarks median ≤ `median_mm`, none
+/// over `max_mm`.
 fn check(name: &str, o: &Outcome, median_mm: f32, max_mm: f32) {
     let mut e = judged(o);
     assert_eq!(o.report.flipped, 0, "{name}: triangles turned over");
+    assert!(
+        o.blink_gap.iter().all(|g| g.abs() <= 1.0),
+        "{name}: the blink leaves the lids {:?} mm apart",
+        o.blink_gap
+    );
     let m = median(&mut e);
     assert!(
         m <= median_mm,
@@ -206,8 +238,8 @@ fn the_corpus_is_fitted_with_no_flags() {
     .unwrap();
     let hand = hand_placed();
     let out = derma_test_support::scratch_dir("corpus");
-    println!("| mesh | found | time | RMS / median (mm) | flipped | corners | landmarks median (mm) | worst (mm) | glabella (mm) |");
-    println!("|---|---|---:|---:|---:|---:|---:|---|---:|");
+    println!("| mesh | found | time | RMS / median (mm) | flipped | corners | landmarks median (mm) | worst (mm) | glabella (mm) | blink gap L / R (mm) |");
+    println!("|---|---|---:|---:|---:|---:|---:|---|---:|---:|");
     let mut failures = Vec::new();
     for m in &list {
         let o = fit(&dir.join(&m.mesh), &out.join(&m.name), &hand[&m.name]);

@@ -168,9 +168,10 @@ pub struct HeadArg {
 /// `--unit` and `--node`, the same on every command that reads a user's mesh.
 #[derive(clap::Args, Clone, Default)]
 pub struct MeshReadArg {
-    /// The mesh's unit: auto (with --head, the unit its fit found; else the one of mm, cm, m
-    /// that makes it head-sized), mm, cm, m, or fit (its largest extent made an adult head's).
-    /// A unit that contradicts the fitted head's is refused.
+    /// The mesh's unit: auto (`head fit`: found from the face; with --head, the unit its fit
+    /// found; else the one of mm, cm, m that makes it head-sized), mm, cm, m, or fit (its
+    /// largest extent made an adult head's). A unit that contradicts the fitted head's is
+    /// refused.
     #[arg(long, value_name = "auto|mm|cm|m|fit")]
     pub unit: Option<String>,
     /// The part of a mesh file of several to read: a node, mesh or material name. Default: the

@@ -14,6 +14,9 @@ pub const REACH_MM: f32 = 10.0;
 /// point to count as lying on the socket ([`Carry::outer`]).
 pub const SOCKET_MARGIN_MM: f32 = 0.5;
 
+/// Smoothing passes of a carried field over the mesh's edges ([`Carry::field`]).
+pub const SMOOTHING: usize = 2;
+
 /// Below this share of a mesh's vertices near the fitted skin, it is not the fitted mesh.
 pub const MIN_SHARE: f32 = 0.5;
 
@@ -23,6 +26,10 @@ pub struct Carry {
     /// Per mesh vertex: the skin triangle's corners and the barycentric weights of corners 1
     /// and 2 (`None`: nothing within [`REACH_MM`]).
     corr: Vec<Option<([u32; 3], [f32; 2])>>,
+    /// Per mesh vertex, the first vertex at its position (the mesh welded across UV seams).
+    weld: Vec<u32>,
+    /// Per welded vertex, its welded neighbours along the mesh's edges.
+    rings: Vec<Vec<u32>>,
 }
 
 impl Carry {
@@ -39,7 +46,7 @@ impl Carry {
                     .map(|c| (skin.triangles[c.triangle as usize], c.bary))
             })
             .collect();
-        Carry { corr }
+        Carry::with_rings(corr, mesh)
     }
 
     /// As [`Carry::new`] onto the skin's outer surface alone: the eye sockets' charts (the
@@ -71,7 +78,13 @@ impl Carry {
                     .then(|| (outer[o.triangle as usize], o.bary))
             })
             .collect();
-        Carry { corr }
+        Carry::with_rings(corr, mesh)
+    }
+
+    fn with_rings(corr: Vec<Option<([u32; 3], [f32; 2])>>, mesh: &TriMesh) -> Carry {
+        let weld = super::scan::welded(&mesh.positions);
+        let rings = rings(mesh, &weld);
+        Carry { corr, weld, rings }
     }
 
     /// The share of the mesh's vertices that follow the skin (near 0: not the mesh the head was
@@ -101,16 +114,68 @@ impl Carry {
         }
     }
 
-    /// The offsets of the mesh's vertices that move (sparse, by vertex) from `dense` offsets of
-    /// the skin's vertices.
-    pub fn offsets(&self, dense: &[Vec3]) -> Vec<(u32, Vec3)> {
-        (0..self.corr.len())
-            .filter_map(|i| {
-                let d = self.offset(i, dense);
-                (d.length_squared() > 1e-10).then_some((i as u32, d))
-            })
-            .collect()
+    /// The offsets of every mesh vertex from `dense` offsets of the skin's vertices, smoothed
+    /// over the mesh's own edges ([`SMOOTHING`] Jacobi passes, each vertex halfway to its
+    /// neighbours' mean, the mesh welded across its UV seams): where the skin folds,
+    /// neighbouring mesh vertices may land on either side of the crease and take motions that
+    /// differ by the fold's depth, and a mesh coarser than the skin would show that as a
+    /// sawtooth.
+    pub fn field(&self, dense: &[Vec3]) -> Vec<Vec3> {
+        let mut f: Vec<Vec3> = (0..self.corr.len())
+            .into_par_iter()
+            .map(|i| self.offset(i, dense))
+            .collect();
+        for _ in 0..SMOOTHING {
+            f = (0..f.len())
+                .into_par_iter()
+                .map(|i| {
+                    let ring = &self.rings[i];
+                    if self.corr[i].is_none() || ring.is_empty() {
+                        return f[i];
+                    }
+                    let mean =
+                        ring.iter().map(|&j| f[j as usize]).sum::<Vec3>() / ring.len() as f32;
+                    0.5 * (f[i] + mean)
+                })
+                .collect();
+        }
+        // Seam copies take their welded vertex's offset.
+        self.weld.iter().map(|&w| f[w as usize]).collect()
     }
+
+    /// The offsets of the mesh's vertices that move (sparse, by vertex) from `dense` offsets of
+    /// the skin's vertices, each its own point's (unsmoothed: a face unit keeps its magnitude).
+    pub fn offsets(&self, dense: &[Vec3]) -> Vec<(u32, Vec3)> {
+        sparse((0..self.corr.len()).map(|i| self.offset(i, dense)))
+    }
+}
+
+/// The nonzero offsets of a field, by vertex.
+pub fn sparse(field: impl IntoIterator<Item = Vec3>) -> Vec<(u32, Vec3)> {
+    field
+        .into_iter()
+        .enumerate()
+        .filter(|(_, d)| d.length_squared() > 1e-10)
+        .map(|(i, d)| (i as u32, d))
+        .collect()
+}
+
+/// Per welded vertex of `mesh` (`weld`: each vertex's first at its position), its welded
+/// neighbours along the mesh's edges (sorted, each once; empty for seam copies).
+fn rings(mesh: &TriMesh, weld: &[u32]) -> Vec<Vec<u32>> {
+    let mut r = vec![Vec::new(); mesh.positions.len()];
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (weld[t[k] as usize], weld[t[(k + 1) % 3] as usize]);
+            r[a as usize].push(b);
+            r[b as usize].push(a);
+        }
+    }
+    for ring in &mut r {
+        ring.sort_unstable();
+        ring.dedup();
+    }
+    r
 }
 
 /// The head's 52 face units as morph targets of `mesh` (mm, the frame the head was fitted in):
@@ -138,6 +203,50 @@ pub fn face_units(head: &Head, mesh: &TriMesh) -> (Vec<MorphTarget>, f32) {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn the_smoothed_field_keeps_linear_motion_and_seams_closed() {
+        // The head's own skin, its seams split (as a user's UV'd mesh is): a field linear in
+        // position is kept by the smoothing wherever every neighbour is carried (a linear field's
+        // ring mean is its value on a symmetric ring, near it on any), and the copies of a seam
+        // vertex move alike.
+        let head = crate::Head::builtin();
+        let skin = &head.skin;
+        let carry = super::Carry::new(head, skin);
+        let lin: Vec<glam::Vec3> = skin
+            .positions
+            .iter()
+            .map(|p| glam::Vec3::new(0.01 * p.x, 0.0, 0.02 * p.y))
+            .collect();
+        let f = carry.field(&lin);
+        let worst = (0..f.len())
+            .map(|i| (f[i] - lin[i]).length())
+            .fold(0.0f32, f32::max);
+        assert!(worst < 0.05, "a linear field moved by {worst}");
+        let mut seams = 0;
+        for (i, &w) in carry.weld.iter().enumerate() {
+            if w as usize != i {
+                seams += 1;
+                assert_eq!(f[i], f[w as usize], "seam copy {i} of {w}");
+            }
+        }
+        assert!(seams > 0, "the head's skin has UV seams");
+        // A sawtooth (every other vertex of a ring offset) is evened out.
+        let saw: Vec<glam::Vec3> = (0..skin.positions.len())
+            .map(|i| glam::Vec3::Y * (i % 2) as f32)
+            .collect();
+        let g = carry.field(&saw);
+        let spread = |v: &[glam::Vec3]| {
+            let m = v.iter().map(|d| d.y).sum::<f32>() / v.len() as f32;
+            v.iter().map(|d| (d.y - m).abs()).sum::<f32>() / v.len() as f32
+        };
+        assert!(
+            spread(&g) < 0.5 * spread(&saw),
+            "{} of {}",
+            spread(&g),
+            spread(&saw)
+        );
+    }
+
     #[test]
     fn the_outer_map_carries_the_outside_and_leaves_the_socket() {
         // The built-in head's own skin as a user's mesh: its outer vertices follow themselves,

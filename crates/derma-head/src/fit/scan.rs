@@ -105,7 +105,7 @@ impl Scan {
 }
 
 /// Per vertex, the first vertex at exactly its position (bitwise): the mesh welded.
-fn welded(positions: &[Vec3]) -> Vec<u32> {
+pub(crate) fn welded(positions: &[Vec3]) -> Vec<u32> {
     let mut first: HashMap<[u32; 3], u32> = HashMap::with_capacity(positions.len());
     positions
         .iter()

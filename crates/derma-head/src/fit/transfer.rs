@@ -237,11 +237,53 @@ pub fn carry(
             })
         })
         .collect::<Result<_, _>>()?;
+    let mut targets = targets;
+    calibrate_blinks(tpl, fine, &mut targets);
     Ok(Carried {
         positions,
         eyes,
         targets,
     })
+}
+
+/// Scales each transferred eyeBlink unit so that at full weight its upper lid margin meets the
+/// lower one, as the template's does (its lower-lid landmark is where its closing upper lid
+/// lands): deformation transfer carries the template's lid travel, which over- or under-closes
+/// an eye opened more or less than the template's. The scale s minimises the margins' gap
+/// |Δp + s Δd| (Δp the rest gap, Δd the difference of the margins' offsets), kept within
+/// ×0.5–2.
+fn calibrate_blinks(
+    tpl: &super::template::Template,
+    fine: &[Vec3],
+    targets: &mut [crate::asset::SparseTarget],
+) {
+    for (side, unit) in [("left", "eyeBlinkLeft"), ("right", "eyeBlinkRight")] {
+        let Some(t) = targets.iter_mut().find(|t| t.name == unit) else {
+            continue;
+        };
+        let offset: HashMap<u32, Vec3> = t.offsets.iter().copied().collect();
+        let moved = |landmark: &str| -> Vec3 {
+            tpl.stencils2.rows[tpl.landmarks[landmark]]
+                .iter()
+                .map(|&(l, w)| {
+                    w * offset
+                        .get(&tpl.coarse_ids[l as usize])
+                        .copied()
+                        .unwrap_or(Vec3::ZERO)
+                })
+                .sum()
+        };
+        let (up, low) = (format!("lid_upper_{side}"), format!("lid_lower_{side}"));
+        let dp = fine[tpl.landmarks[&up]] - fine[tpl.landmarks[&low]];
+        let dd = moved(&up) - moved(&low);
+        if dd.length_squared() < 1e-8 {
+            continue;
+        }
+        let s = (-dp.dot(dd) / dd.length_squared()).clamp(0.5, 2.0);
+        for o in &mut t.offsets {
+            o.1 *= s;
+        }
+    }
 }
 
 #[cfg(test)]
