@@ -227,6 +227,12 @@ def three_json_to_obj(text):
 
 def fetch(out, source_dir, only):
     os.makedirs(out, exist_ok=True)
+    # With --only, the other meshes already fetched stay listed.
+    listed = os.path.join(out, "corpus.json")
+    kept = []
+    if only and os.path.exists(listed):
+        with open(listed) as f:
+            kept = [m for m in json.load(f) if m["name"] not in only]
     manifest = []
     for entry in CORPUS:
         if only and entry["name"] not in only:
@@ -250,7 +256,9 @@ def fetch(out, source_dir, only):
             manifest.append({"name": entry["name"], "mesh": entry["mesh"], "sha256": sha256(f.read()),
                              "licence": entry["licence"], "held_out": entry["held_out"]})
         print(f"{entry['name']}: {entry['mesh']}")
-    write(os.path.join(out, "corpus.json"), json.dumps(manifest, indent=1).encode())
+    order = [e["name"] for e in CORPUS]
+    manifest = sorted(kept + manifest, key=lambda m: order.index(m["name"]) if m["name"] in order else len(order))
+    write(listed, json.dumps(manifest, indent=1).encode())
     print("wrote", os.path.relpath(out))
 
 

@@ -24,6 +24,7 @@ function fick(h, v) {
 
 export class EyeModel {
   constructor(header, bin) {
+    if (header.version !== 2) throw new Error(`eyes/model.bin: layout version ${header.version}; this viewer reads version 2 (export the set again)`);
     this.h = header;
     const arr = (name) => {
       const a = header.arrays[name];
@@ -99,10 +100,11 @@ export class EyeModel {
     }
     this.contact();
     // Depth and normal, each linear in e: [value at e = 0, k columns] × (z, n_x, n_y, n_z).
-    const k1 = k + 1;
+    const kd = this.h.depth.k;
+    const k1 = kd + 1;
     const at = (b) => {
       let v = depth[b];
-      for (let j = 0; j < k; j++) v += e[j] * depth[b + 1 + j];
+      for (let j = 0; j < kd; j++) v += e[j] * depth[b + 1 + j];
       return v;
     };
     for (let i = 0; i < this.n; i++) {

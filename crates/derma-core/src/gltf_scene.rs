@@ -118,8 +118,15 @@ impl Doc {
             };
             let mesh = &self.root.meshes[m.value()];
             let targets = target_names(mesh);
-            for prim in &mesh.primitives {
-                if let Some(geometry) = self.primitive(prim, xf, &targets)? {
+            for (k, prim) in mesh.primitives.iter().enumerate() {
+                let within = |e: CoreError| match e {
+                    CoreError::Mesh { path, detail } => CoreError::Mesh {
+                        path,
+                        detail: format!("mesh {} primitive {k}: {detail}", m.value()),
+                    },
+                    other => other,
+                };
+                if let Some(geometry) = self.primitive(prim, xf, &targets).map_err(within)? {
                     parts.push(Part {
                         node: names[i].clone(),
                         node_index: i,
@@ -187,27 +194,48 @@ impl Doc {
     }
 
     /// A skinned mesh's placement at its bind pose (§3.7.3: the skinned node's own transform is
-    /// ignored): its first joint's world transform after its inverse bind matrix.
+    /// ignored): a joint's world transform after its inverse bind matrix, which every joint
+    /// still in its bind pose shares — the one most joints agree on (a posed jaw or head joint
+    /// does not move the mesh). Joints outside the scene are not counted.
     fn bind_transform(&self, skin: usize, world: &[Option<Mat4>]) -> Result<Mat4> {
         let s = &self.root.skins[skin];
-        let Some(j0) = s.joints.first() else {
+        if s.joints.is_empty() {
             return Err(self.err(format!("skin {skin} has no joints")));
-        };
-        let joint = world[j0.value()].unwrap_or(Mat4::IDENTITY);
+        }
         let ibm = match s.inverse_bind_matrices {
             Some(a) => {
                 let (v, n) = self.accessor(a.value())?;
-                if n != 16 || v.len() < 16 {
+                if n != 16 || v.len() < 16 * s.joints.len() {
                     return Err(self.err(format!(
-                        "skin {skin}'s inverse bind matrices are not 4×4 matrices"
+                        "skin {skin}'s inverse bind matrices are not one 4×4 matrix per joint"
                     )));
                 }
-                let m: [f32; 16] = std::array::from_fn(|k| v[k] as f32);
-                Mat4::from_cols_array(&m)
+                v.chunks_exact(16)
+                    .map(|c| Mat4::from_cols_array(&std::array::from_fn(|k| c[k] as f32)))
+                    .collect()
             }
-            None => Mat4::IDENTITY,
+            None => vec![Mat4::IDENTITY; s.joints.len()],
         };
-        Ok(joint * ibm)
+        let placed: Vec<Mat4> = s
+            .joints
+            .iter()
+            .zip(&ibm)
+            .filter_map(|(j, m)| world.get(j.value()).copied().flatten().map(|w| w * *m))
+            .collect();
+        let agree = |a: &Mat4, b: &Mat4| {
+            let tol = 1e-4
+                * a.abs()
+                    .to_cols_array()
+                    .iter()
+                    .fold(1.0f32, |m, x| m.max(*x));
+            a.abs_diff_eq(*b, tol)
+        };
+        placed
+            .iter()
+            .rev() // the first of equals
+            .max_by_key(|a| placed.iter().filter(|b| agree(a, b)).count())
+            .copied()
+            .ok_or_else(|| self.err(format!("skin {skin}'s joints are not in the scene")))
     }
 
     /// A triangle primitive as a mesh with its morph targets (None for points and lines).
@@ -260,7 +288,13 @@ impl Doc {
             assemble(mode, &indices),
         );
         let targets = match draco {
-            // Draco carries no morph targets here (they would be separate attributes).
+            // The encoders leave primitives with targets uncompressed; one that is not would
+            // lose them here, which is refused rather than done silently.
+            Some(_) if prim.targets.as_ref().is_some_and(|t| !t.is_empty()) => {
+                return Err(self.err(
+                    "a Draco-compressed primitive has morph targets, which derma does not read under Draco compression: store that mesh uncompressed",
+                ))
+            }
             Some(_) => Vec::new(),
             None => self.morph_targets(prim, Mat3::from_mat4(xf), n, names)?,
         };
@@ -400,8 +434,10 @@ impl From<RawTransform> for UvTransform {
 }
 
 /// `KHR_texture_transform`'s affine map of UVs (glTF's v-down convention): scale, then a
-/// rotation, then the offset, `uv' = T R S uv` with R's columns (cos r, sin r) and (−sin r,
-/// cos r), as the extension's specification writes it.
+/// rotation, then the offset, `uv' = T R S uv` with `u' = cos r·u + sin r·v`,
+/// `v' = −sin r·u + cos r·v` — the UVs turned counter-clockwise as the image shows them (v
+/// down), which is what the specification's example asks (offset (0, 1), rotation π/2, scale
+/// ½: the image's lower-left quadrant).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct UvTransform {
     /// Offset (in UV units).
@@ -424,7 +460,7 @@ impl UvTransform {
     pub fn apply(&self, uv: Vec2) -> Vec2 {
         let s = uv * self.scale;
         let (sin, cos) = self.rotation.sin_cos();
-        Vec2::new(cos * s.x - sin * s.y, sin * s.x + cos * s.y) + self.offset
+        Vec2::new(cos * s.x + sin * s.y, -sin * s.x + cos * s.y) + self.offset
     }
 }
 
@@ -443,11 +479,13 @@ fn check(path: &Path, root: &json::Root) -> Result<()> {
         let p = p().to_string();
         // Required extensions are judged below, by what derma reads; an accessor without a
         // buffer view holds zeros (§3.6.2.1), or its data lies in a compressed primitive.
-        // Textures, images and samplers are never read: they never block geometry.
+        // Textures, images and samplers (and materials' references to them) are never read:
+        // they never block geometry.
         let zeros = p.starts_with("accessors[") && p.ends_with("].bufferView");
         let unread = ["extensionsRequired", "textures", "images", "samplers"]
             .iter()
-            .any(|k| p.starts_with(k));
+            .any(|k| p.starts_with(k))
+            || (p.starts_with("materials[") && p.contains("Texture"));
         if !unread && !zeros {
             errors.push(format!("{p}: {e}"));
         }
@@ -683,16 +721,32 @@ mod tests {
 
     #[test]
     fn texture_transforms_follow_the_extension() {
-        // KHR_texture_transform: uv' = T R S uv, R's columns (cos r, sin r), (−sin r, cos r).
+        // The specification's example: offset (0, 1), rotation π/2, scale ½ maps the unit
+        // square onto the image's lower-left quadrant, u in [0, ½], v in [½, 1].
         let t = UvTransform {
-            offset: Vec2::new(0.5, 0.25),
+            offset: Vec2::new(0.0, 1.0),
             rotation: std::f32::consts::FRAC_PI_2,
-            scale: Vec2::new(2.0, 3.0),
+            scale: Vec2::splat(0.5),
         };
-        // (1, 0) → scaled (2, 0) → turned (0, 2) → offset (0.5, 2.25).
-        assert!((t.apply(Vec2::X) - Vec2::new(0.5, 2.25)).length() < 1e-6);
-        // (0, 1) → (0, 3) → (−3, 0) → (−2.5, 0.25).
-        assert!((t.apply(Vec2::Y) - Vec2::new(-2.5, 0.25)).length() < 1e-6);
+        for (uv, want) in [
+            (Vec2::ZERO, Vec2::new(0.0, 1.0)),
+            (Vec2::X, Vec2::new(0.0, 0.5)),
+            (Vec2::Y, Vec2::new(0.5, 1.0)),
+            (Vec2::ONE, Vec2::new(0.5, 0.5)),
+        ] {
+            assert!(
+                (t.apply(uv) - want).length() < 1e-6,
+                "{uv} → {}",
+                t.apply(uv)
+            );
+        }
+        // Its second: offset (0, 1), scale (1, −1) flips v.
+        let flip = UvTransform {
+            offset: Vec2::new(0.0, 1.0),
+            rotation: 0.0,
+            scale: Vec2::new(1.0, -1.0),
+        };
+        assert!((flip.apply(Vec2::new(0.3, 0.2)) - Vec2::new(0.3, 0.8)).length() < 1e-6);
         assert_eq!(
             UvTransform::IDENTITY.apply(Vec2::new(0.3, 0.7)),
             Vec2::new(0.3, 0.7)

@@ -198,10 +198,7 @@ pub fn load_head_geometry(
         None => MeshFrame::scaled(None, 1.0),
     };
     if how.fitted.is_none() {
-        frame.part = match &how.part {
-            PartChoice::Named(n) => Some(n.clone()),
-            PartChoice::Auto => None,
-        };
+        frame.part = how.part.name();
     }
     let (mut mesh, chosen) = TriMesh::load_part(path, &frame.part_choice())?;
     if let Some(n) = chosen.note {
@@ -228,6 +225,9 @@ fn agree(path: &Path, how: &HeadRead, f: &MeshFrame) -> Result<MeshFrame> {
     };
     let asked = match how.unit {
         HeadUnit::Length(u) => Some((u.name(), u.to_mm())),
+        // "Made head-sized" agrees with a fit that found no named unit (its scale is the
+        // head's), not with one that read the mesh in mm, cm or m.
+        HeadUnit::Fit if f.unit.is_none() => None,
         HeadUnit::Fit => Some(("fit", f32::NAN)),
         HeadUnit::Auto => None,
     };
@@ -236,7 +236,7 @@ fn agree(path: &Path, how: &HeadRead, f: &MeshFrame) -> Result<MeshFrame> {
             return Err(conflict(format!(
                 "its fitted head read it at {} mm per unit ({}, head.json); the unit asked for, {name}, reads it otherwise: ask for none, or fit the head again in that unit",
                 f.mm_per_unit,
-                f.unit.map(|u| u.long_name()).unwrap_or("found from the face")
+                f.unit.map(|u| u.long_name()).unwrap_or("no named unit")
             )));
         }
     }
@@ -338,6 +338,40 @@ mod tests {
         assert_eq!(
             MeshFrame::scaled(None, 1.0).axes_in_words(),
             "+Y up, facing +Z"
+        );
+    }
+
+    #[test]
+    fn an_asked_unit_agrees_with_the_fit_or_is_refused_naming_both() {
+        let path = Path::new("scan.glb");
+        let ask = |unit: HeadUnit, f: &MeshFrame| {
+            agree(
+                path,
+                &HeadRead {
+                    unit,
+                    part: PartChoice::Auto,
+                    fitted: Some(f),
+                },
+                f,
+            )
+        };
+        let cm = MeshFrame::scaled(Some(LengthUnit::Cm), 10.0);
+        let found = MeshFrame::scaled(None, 49.4);
+        assert!(ask(HeadUnit::Length(LengthUnit::Cm), &cm).is_ok());
+        assert!(ask(HeadUnit::Auto, &found).is_ok());
+        // Made head-sized agrees with a scale found from the face, not with a named unit.
+        assert!(ask(HeadUnit::Fit, &found).is_ok());
+        let e = ask(HeadUnit::Fit, &cm).unwrap_err().to_string();
+        assert!(
+            e.contains("scan.glb") && e.contains("fit") && e.contains("centimetre"),
+            "{e}"
+        );
+        let e = ask(HeadUnit::Length(LengthUnit::Mm), &found)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("49.4") && e.contains("mm") && e.contains("no named unit"),
+            "{e}"
         );
     }
 }

@@ -8,15 +8,16 @@ use crate::mesh_parts::{Chosen, Part, PartChoice};
 use glam::{Vec2, Vec3};
 use std::path::Path;
 
-/// The vertex positions of a mesh file in the file's own order (OBJ `v` lines; glTF/GLB as
-/// loaded), unscaled: what topology-indexed landmarks (MediaPipe's 468 points) refer to. Loading
-/// for painting may reorder vertices (it splits them at UV seams).
-pub fn file_positions(path: &Path) -> Result<Vec<Vec3>> {
+/// The vertex positions of a mesh file in the file's own order (OBJ `v` lines; glTF/GLB the
+/// accessor order of the part `choice` picks, UVs or not), unscaled: what topology-indexed
+/// landmarks (MediaPipe's 468 points) refer to. Loading for painting may reorder vertices (it
+/// splits them at UV seams).
+pub fn file_positions(path: &Path, choice: &PartChoice) -> Result<Vec<Vec3>> {
     let is_obj = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
     if !is_obj {
-        return Ok(TriMesh::load(path)?.positions);
+        return Ok(TriMesh::load_part(path, choice)?.0.positions);
     }
     let text = std::fs::read_to_string(path).map_err(|e| CoreError::Read {
         path: path.to_path_buf(),

@@ -36,6 +36,16 @@ pub enum PartChoice {
     Named(String),
 }
 
+impl PartChoice {
+    /// The name asked for (None: the skin by the rules).
+    pub fn name(&self) -> Option<String> {
+        match self {
+            PartChoice::Named(n) => Some(n.clone()),
+            PartChoice::Auto => None,
+        }
+    }
+}
+
 /// What was read, and why.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Chosen {

@@ -173,3 +173,139 @@ fn a_required_extension_derma_does_not_read_is_named() {
     );
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+#[test]
+fn broken_references_and_missing_data_are_errors_naming_them() {
+    // rig.gltf with one accessor pointing past the buffer views, or with no data at all: an
+    // error naming the accessor or view, never a panic or a mesh of zeros.
+    let src: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(fixture("rig.gltf")).unwrap()).unwrap();
+    let d = derma_test_support::scratch_dir("gltf-broken");
+    let buffer = src["buffers"][0]["uri"].as_str().unwrap().to_string();
+    if !buffer.starts_with("data:") {
+        std::fs::copy(fixture(&buffer), d.join(&buffer)).unwrap();
+    }
+    for (name, edit, want) in [
+        ("view.gltf", serde_json::json!(999), "buffer view 999"),
+        (
+            "none.gltf",
+            serde_json::Value::Null,
+            "accessor 0 has no data",
+        ),
+    ] {
+        let mut g = src.clone();
+        match edit {
+            serde_json::Value::Null => {
+                g["accessors"][0]
+                    .as_object_mut()
+                    .unwrap()
+                    .remove("bufferView");
+            }
+            v => g["accessors"][0]["bufferView"] = v,
+        }
+        let p = d.join(name);
+        std::fs::write(&p, serde_json::to_vec(&g).unwrap()).unwrap();
+        let e = load_parts(&p).unwrap_err().to_string();
+        assert!(e.contains(name) && e.contains(want), "{e}");
+    }
+    // A material's texture that is not there never blocks the geometry.
+    let mut g = src.clone();
+    g["materials"] =
+        serde_json::json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 99}}}]);
+    g["meshes"][0]["primitives"][0]["material"] = serde_json::json!(0);
+    let p = d.join("texture.gltf");
+    std::fs::write(&p, serde_json::to_vec(&g).unwrap()).unwrap();
+    assert_eq!(load_parts(&p).unwrap().len(), 2);
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// Standard base64 (RFC 4648), padded or not.
+fn base64(text: &str) -> Vec<u8> {
+    let value = |c: u8| match c {
+        b'A'..=b'Z' => c - b'A',
+        b'a'..=b'z' => c - b'a' + 26,
+        b'0'..=b'9' => c - b'0' + 52,
+        b'+' => 62,
+        _ => 63,
+    };
+    let digits: Vec<u8> = text.bytes().filter(|&c| c != b'=').map(value).collect();
+    digits
+        .chunks(4)
+        .flat_map(|q| {
+            let n = q.iter().fold(0u32, |a, &d| a << 6 | d as u32) << (6 * (4 - q.len()));
+            n.to_be_bytes()[1..q.len()].to_vec()
+        })
+        .collect()
+}
+
+#[test]
+fn a_skin_sits_where_most_of_its_joints_put_it() {
+    // rig.gltf's skin given two more joints under its root, in their bind pose, and the first
+    // joint (a jaw) posed: the face stays where the bind pose puts it.
+    let src: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(fixture("rig.gltf")).unwrap()).unwrap();
+    let uri = src["buffers"][0]["uri"].as_str().unwrap();
+    let bytes = base64(uri.split_once(',').unwrap().1);
+    let ibm_of = |k: usize| {
+        let view =
+            &src["bufferViews"][src["accessors"][k]["bufferView"].as_u64().unwrap() as usize];
+        let at = view["byteOffset"].as_u64().unwrap() as usize;
+        let f: Vec<f32> = bytes[at..at + 64]
+            .chunks(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        glam::Mat4::from_cols_slice(&f)
+    };
+    let root_ibm = ibm_of(src["skins"][0]["inverseBindMatrices"].as_u64().unwrap() as usize);
+    let (jaw_at, spine_at) = (Vec3::new(0.0, -0.02, 0.01), Vec3::new(0.0, 0.05, 0.0));
+    let ibms = [
+        glam::Mat4::from_translation(-jaw_at) * root_ibm,
+        root_ibm,
+        glam::Mat4::from_translation(-spine_at) * root_ibm,
+    ];
+    let d = derma_test_support::scratch_dir("gltf-skin");
+    let bin: Vec<u8> = ibms
+        .iter()
+        .flat_map(|m| m.to_cols_array())
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    std::fs::write(d.join("ibm.bin"), &bin).unwrap();
+    let mut g = src.clone();
+    let nodes = g["nodes"].as_array_mut().unwrap();
+    let (jaw, spine) = (nodes.len(), nodes.len() + 1);
+    nodes.push(
+        serde_json::json!({"name": "Jaw", "translation": jaw_at.to_array(),
+        "rotation": [0.2588190, 0.0, 0.0, 0.9659258]}),
+    );
+    nodes.push(serde_json::json!({"name": "Spine", "translation": spine_at.to_array()}));
+    nodes[1]["children"] = serde_json::json!([jaw, spine]);
+    let buffer = g["buffers"].as_array().unwrap().len();
+    g["buffers"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({"uri": "ibm.bin", "byteLength": 192}));
+    let view = g["bufferViews"].as_array().unwrap().len();
+    g["bufferViews"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({"buffer": buffer, "byteLength": 192}));
+    let accessor = g["accessors"].as_array().unwrap().len();
+    g["accessors"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!(
+        {"bufferView": view, "componentType": 5126, "count": 3, "type": "MAT4"}));
+    g["skins"][0] = serde_json::json!({"joints": [jaw, 1, spine], "inverseBindMatrices": accessor});
+    let p = d.join("posed.gltf");
+    std::fs::write(&p, serde_json::to_vec(&g).unwrap()).unwrap();
+    let bind = &load_parts(&fixture("rig.gltf")).unwrap()[0].geometry;
+    let posed = &load_parts(&p).unwrap()[0].geometry;
+    let off = bind
+        .positions
+        .iter()
+        .zip(&posed.positions)
+        .map(|(a, b)| a.distance(*b))
+        .fold(0.0f32, f32::max);
+    assert!(off < 1e-3 * bind.extent(), "the face moved by {off}");
+    std::fs::remove_dir_all(&d).unwrap();
+}

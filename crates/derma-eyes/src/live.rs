@@ -135,7 +135,7 @@ pub fn pack(m: &StillModel, head: &derma_head::Head, skin_origin: &[u32]) -> (Va
             .zip(&near)
             .flat_map(|(mode, &reach)| match *mode {
                 _ if !reach => [-1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                Mode::Skull { t } => [0.0, t, 0.0, 0.0, 0.0, 0.0],
+                Mode::Surface { t } => [0.0, t, 0.0, 0.0, 0.0, 0.0],
                 Mode::Offset { delta0, t, tau0 } => [1.0, t, delta0, tau0.x, tau0.y, tau0.z],
             }),
     );

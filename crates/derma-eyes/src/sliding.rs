@@ -19,7 +19,7 @@ const DELTA0_REACH: f32 = 4.0;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Mode {
     /// Follows the region's surface; pushed out only when inside the globe (δ̂ > 1).
-    Skull {
+    Surface {
         /// Skin thickness t over the globe.
         t: f32,
     },
@@ -84,7 +84,7 @@ impl Slider {
                         tau0: d,
                     }
                 } else {
-                    Mode::Skull { t }
+                    Mode::Surface { t }
                 }
             })
             .collect();
@@ -121,7 +121,7 @@ impl Slider {
             let len = r.length().max(1e-6);
             let dir = r / len;
             match self.modes[i] {
-                Mode::Skull { t } => {
+                Mode::Surface { t } => {
                     // Beyond the globe's furthest point plus t nothing can push the vertex.
                     if len >= self.reach[e] + t {
                         continue;

@@ -13,7 +13,14 @@ use std::path::Path;
 /// The skin an animation moves.
 pub struct Skin<'a> {
     head: &'a Head,
-    user: Option<(TriMesh, Carry)>,
+    user: Option<User>,
+}
+
+/// A user's mesh, its map onto the fitted skin and the skin's rest normals carried onto it.
+struct User {
+    mesh: TriMesh,
+    carry: Carry,
+    rest_normals: Vec<Vec3>,
 }
 
 impl<'a> Skin<'a> {
@@ -36,14 +43,18 @@ impl<'a> Skin<'a> {
         }
         Ok(Skin {
             head,
-            user: Some((mesh, carry)),
+            user: Some(User {
+                rest_normals: carry.field(&head.skin.normals),
+                mesh,
+                carry,
+            }),
         })
     }
 
     /// The mesh that moves (rest positions, mm).
     pub fn mesh(&self) -> &TriMesh {
         match &self.user {
-            Some((m, _)) => m,
+            Some(u) => &u.mesh,
             None => &self.head.skin,
         }
     }
@@ -54,7 +65,7 @@ impl<'a> Skin<'a> {
         let posed = self.head.posed_skin(weights);
         match &self.user {
             None => posed.positions,
-            Some((mesh, carry)) => {
+            Some(User { mesh, carry, .. }) => {
                 let dense: Vec<Vec3> = posed
                     .positions
                     .iter()
@@ -91,7 +102,7 @@ impl<'a> Skin<'a> {
     pub fn offsets(&self, region: &EyeRegion, model: impl Fn(usize) -> Vec3) -> Vec<(u32, Vec3)> {
         let dense = self.dense(region, &model);
         match &self.user {
-            Some((_, carry)) => derma_head::fit::onto::sparse(carry.field(&dense)),
+            Some(u) => derma_head::fit::onto::sparse(u.carry.field(&dense)),
             None => derma_head::fit::onto::sparse(dense),
         }
     }
@@ -114,25 +125,25 @@ impl<'a> Skin<'a> {
                     }
                 })
                 .unzip(),
-            Some((_, carry)) => {
-                let moved = self.dense(region, &|m| f.positions[m] - region.rest[m]);
+            Some(u) => {
+                let moved = u
+                    .carry
+                    .field(&self.dense(region, &|m| f.positions[m] - region.rest[m]));
                 // The turn of the skin's normals, carried as rest and posed normals: the user's
                 // rest normal turns as the skin's at its point does.
-                let rest = &self.head.skin.normals;
-                let mut posed = rest.clone();
+                let mut posed = self.head.skin.normals.clone();
                 for (s, &m) in region.skin_to_model.iter().enumerate() {
                     if m != u32::MAX {
                         posed[s] = f.normals[m as usize];
                     }
                 }
-                let (moved, rest, posed) =
-                    (carry.field(&moved), carry.field(rest), carry.field(&posed));
+                let posed = u.carry.field(&posed);
                 which
                     .iter()
                     .map(|&s| {
                         let s = s as usize;
                         let n = mesh.normals.get(s).copied().unwrap_or(Vec3::Z);
-                        let (a, b) = (rest[s], posed[s]);
+                        let (a, b) = (u.rest_normals[s], posed[s]);
                         let turn = match (a.try_normalize(), b.try_normalize()) {
                             (Some(a), Some(b)) => glam::Quat::from_rotation_arc(a, b),
                             _ => glam::Quat::IDENTITY,

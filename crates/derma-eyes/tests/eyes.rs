@@ -158,7 +158,7 @@ fn no_skin_inside_the_globes(head: &derma_head::Head, region: &region::EyeRegion
             let r = rot[e].inverse() * (*p - ev.slider.centres[e]);
             let d = ev.slider.maps[e].sample(r.normalize());
             let outside = match ev.slider.modes[i] {
-                sliding::Mode::Skull { .. } => true,
+                sliding::Mode::Surface { .. } => true,
                 sliding::Mode::Offset { delta0, t, .. } => delta0 + t >= 0.0,
             };
             if outside {

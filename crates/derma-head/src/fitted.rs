@@ -4,7 +4,7 @@
 
 use crate::fit::store::{self, StoreError};
 use crate::Head;
-use derma_core::head_mesh::{load_head_mesh, HeadRead, HeadUnit};
+use derma_core::head_mesh::{load_head_mesh, HeadRead, HeadUnit, MeshFrame};
 use derma_core::mesh::TriMesh;
 use derma_core::mesh_parts::PartChoice;
 use derma_core::progress::Progress;
@@ -39,44 +39,28 @@ pub fn load_scan(
     part: &PartChoice,
     progress: &dyn Progress,
 ) -> Result<TriMesh, StoreError> {
-    let frame = store::frame(dir)?;
-    let how = HeadRead {
-        unit,
-        part: part.clone(),
-        fitted: Some(&frame),
-    };
-    let (mesh, _) = load_head_mesh(path, &how, progress).map_err(|e| StoreError::File {
-        path: path.to_path_buf(),
-        detail: e.to_string(),
-    })?;
-    Ok(mesh)
+    Ok(load_user_mesh(Some(dir), path, unit, part, progress)?.0)
 }
 
-/// A user's mesh in derma's frame: through the fitted head's frame when there is one
-/// ([`load_scan`]), else by derma-core's rules for a mesh alone.
+/// A user's mesh in derma's frame, and the frame it was read in: through the fitted head's
+/// frame when there is one ([`load_scan`]), else by derma-core's rules for a mesh alone.
 pub fn load_user_mesh(
     head: Option<&Path>,
     path: &Path,
     unit: HeadUnit,
     part: &PartChoice,
     progress: &dyn Progress,
-) -> Result<TriMesh, StoreError> {
-    match head {
-        Some(dir) => load_scan(dir, path, unit, part, progress),
-        None => {
-            let how = HeadRead {
-                unit,
-                part: part.clone(),
-                fitted: None,
-            };
-            load_head_mesh(path, &how, progress)
-                .map(|m| m.0)
-                .map_err(|e| StoreError::File {
-                    path: path.to_path_buf(),
-                    detail: e.to_string(),
-                })
-        }
-    }
+) -> Result<(TriMesh, MeshFrame), StoreError> {
+    let fitted = head.map(store::frame).transpose()?;
+    let how = HeadRead {
+        unit,
+        part: part.clone(),
+        fitted: fitted.as_ref(),
+    };
+    load_head_mesh(path, &how, progress).map_err(|e| StoreError::File {
+        path: path.to_path_buf(),
+        detail: e.to_string(),
+    })
 }
 
 /// The fitted head in `dir`, or the built-in head when there is none.

@@ -149,26 +149,24 @@ impl Landmarks {
     /// Landmarks from JSON: `{"name": [x, y, z], …}` in the mesh's units, scaled by
     /// `mm_per_unit`; every name of [`NAMES`] is required.
     pub fn from_json(text: &str, mm_per_unit: f32) -> Result<Landmarks, LandmarkError> {
-        let lm = Self::from_json_with(text, mm_per_unit, &NAMES)?;
-        lm.check()?;
-        Ok(lm)
+        Self::from_json_in(text, &|p| p * mm_per_unit)
     }
 
-    /// Like [`Landmarks::from_json`], but only the names in `required` must be present (a
-    /// fit's alignment needs fewer than the regions).
-    pub fn from_json_with(
+    /// As [`Landmarks::from_json`] for a mesh read in another frame: `to_mm` maps the file's
+    /// coordinates into derma's (mm, +Y up, facing +Z; a fitted head's `MeshFrame::point`).
+    pub fn from_json_in(
         text: &str,
-        mm_per_unit: f32,
-        required: &[&str],
+        to_mm: &dyn Fn(Vec3) -> Vec3,
     ) -> Result<Landmarks, LandmarkError> {
-        let mut lm = Self::raw_from_json(text, required)?;
+        let mut lm = Self::raw_from_json(text, &NAMES)?;
         for p in lm.points.values_mut() {
-            *p *= mm_per_unit;
+            *p = to_mm(*p);
         }
         if let Some((n, p)) = lm.points.iter().find(|(_, p)| !p.is_finite()) {
             return Err(LandmarkError::NotFinite(n.clone(), p.to_array()));
         }
         lm.check_orientation()?;
+        lm.check()?;
         Ok(lm)
     }
 
@@ -294,7 +292,7 @@ mod tests {
         let Some(path) = derma_test_support::shared_data("canonical_face_model.obj") else {
             return;
         };
-        let pts = derma_core::mesh_file::file_positions(&path).unwrap();
+        let pts = derma_core::mesh_file::file_positions(&path, &Default::default()).unwrap();
         // The canonical model is in centimetres.
         let pts: Vec<Vec3> = pts.iter().map(|p| *p * 10.0).collect();
         let lm = Landmarks::mediapipe(&pts).unwrap();

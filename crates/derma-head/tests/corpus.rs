@@ -50,13 +50,7 @@ fn blink_gaps(head: &derma_head::Head) -> [f32; 2] {
             head.landmarks.get(&format!("lid_upper_{side}")),
             head.landmarks.get(&format!("lid_lower_{side}")),
         );
-        let i = (0..head.skin.positions.len())
-            .min_by(|&a, &b| {
-                (head.skin.positions[a] - up)
-                    .length()
-                    .total_cmp(&(head.skin.positions[b] - up).length())
-            })
-            .unwrap();
+        let i = derma_test_support::nearest(&head.skin.positions, up).unwrap();
         posed.positions[i].y - low.y
     })
 }

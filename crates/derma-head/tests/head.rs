@@ -157,13 +157,7 @@ fn face_units_are_the_52_arkit_shapes_and_move_what_they_name() {
     let posed = head.posed_skin(&[("eyeBlinkLeft", 1.0)]);
     let up = lm.get("lid_upper_left");
     let low = lm.get("lid_lower_left");
-    let i = (0..head.skin.positions.len())
-        .min_by(|&a, &b| {
-            (head.skin.positions[a] - up)
-                .length()
-                .total_cmp(&(head.skin.positions[b] - up).length())
-        })
-        .unwrap();
+    let i = derma_test_support::nearest(&head.skin.positions, up).unwrap();
     let closed = posed.positions[i];
     assert!(
         (closed.y - low.y).abs() < 0.4 * (up.y - low.y),

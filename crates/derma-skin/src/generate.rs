@@ -330,7 +330,7 @@ impl<'a> SkinGenerator<'a> {
                         Vec::new(),
                     ));
                 } else if has_landmarks {
-                    let lm = self.landmarks(&p, u.mm_per_unit)?;
+                    let lm = self.landmarks(&p, &u)?;
                     user_regions = Some(derma_head::Regions::new(lm, Vec::new(), Vec::new()));
                 }
                 mesh_scale = Some(u);
@@ -610,14 +610,16 @@ impl SkinGenerator<'_> {
         Ok(())
     }
 
-    /// The user mesh's landmarks (`surface.landmarks`), in millimetres.
-    fn landmarks(&self, mesh: &Path, mm_per_unit: f32) -> Result<derma_head::Landmarks> {
+    /// The user mesh's landmarks (`surface.landmarks`) in derma's frame: through the frame the
+    /// mesh was read in (its unit and, with a fitted head, its axes).
+    fn landmarks(&self, mesh: &Path, frame: &MeshFrame) -> Result<derma_head::Landmarks> {
         let v = self.config.surface.landmarks.trim();
         if v == "mediapipe" {
-            let pts: Vec<glam::Vec3> = derma_core::mesh_file::file_positions(mesh)?
-                .into_iter()
-                .map(|p| p * mm_per_unit)
-                .collect();
+            let pts: Vec<glam::Vec3> =
+                derma_core::mesh_file::file_positions(mesh, &frame.part_choice())?
+                    .into_iter()
+                    .map(|p| frame.point(p))
+                    .collect();
             return derma_head::Landmarks::mediapipe(&pts).map_err(|e| SkinError::Mesh {
                 path: mesh.display().to_string(),
                 detail: e.to_string(),
@@ -628,9 +630,11 @@ impl SkinGenerator<'_> {
             path: path.clone(),
             detail: format!("cannot read the landmarks ({e})"),
         })?;
-        derma_head::Landmarks::from_json(&text, mm_per_unit).map_err(|e| SkinError::Input {
-            path,
-            detail: e.to_string(),
+        derma_head::Landmarks::from_json_in(&text, &|p| frame.point(p)).map_err(|e| {
+            SkinError::Input {
+                path,
+                detail: e.to_string(),
+            }
         })
     }
 }
@@ -645,7 +649,7 @@ fn load_mesh(
     head: Option<&Path>,
     progress: &dyn Progress,
 ) -> Result<(TriMesh, MeshFrame)> {
-    use derma_core::head_mesh::{load_head_mesh, HeadRead, HeadUnit};
+    use derma_core::head_mesh::HeadUnit;
     use derma_core::mesh_parts::PartChoice;
     let unit = HeadUnit::parse(&surface.unit).ok_or_else(|| SkinError::Key {
         key: "surface.unit".into(),
@@ -655,13 +659,9 @@ fn load_mesh(
         "" => PartChoice::Auto,
         n => PartChoice::Named(n.to_string()),
     };
-    let fitted = head.map(derma_head::fit::store::frame).transpose()?;
-    let how = HeadRead {
-        unit,
-        part,
-        fitted: fitted.as_ref(),
-    };
-    Ok(load_head_mesh(path, &how, progress)?)
+    Ok(derma_head::fitted::load_user_mesh(
+        head, path, unit, &part, progress,
+    )?)
 }
 
 /// Notes UV overlaps and charts outside [0, 1]; fails when no triangle covers a texel.

@@ -120,3 +120,12 @@ pub fn quad_glb() -> Vec<u8> {
     out.extend_from_slice(&bin);
     out
 }
+
+/// The index of the point of `points` nearest `p` (None for no points).
+pub fn nearest(points: &[glam::Vec3], p: glam::Vec3) -> Option<usize> {
+    (0..points.len()).min_by(|&a, &b| {
+        (points[a] - p)
+            .length_squared()
+            .total_cmp(&(points[b] - p).length_squared())
+    })
+}

@@ -151,6 +151,22 @@ fn a_scan_in_no_unit_and_turned_is_fitted_and_painted_in_its_frame() {
     let mesh = &json(&o.join("report.json"))["inputs"]["mesh"];
     assert_eq!(mesh["axes"], "+Z up, facing −Y", "{mesh}");
     assert!((mesh["mm_per_unit"].as_f64().unwrap() - k).abs() < 1e-3 * k);
+    // Its own landmarks go through the same frame (turned, not only scaled: read upright they
+    // would face the wrong way and be refused).
+    let (ok, _, err) = run(&[
+        "skin",
+        "--size",
+        "128",
+        "--mesh",
+        s(&turned),
+        "--head",
+        s(&fit),
+        "--landmarks",
+        "mediapipe",
+        "--out",
+        s(&d.join("skin_lm")),
+    ]);
+    assert!(ok, "{err}");
     let _ = std::fs::remove_dir_all(&d);
 }
 
@@ -208,5 +224,31 @@ fn a_file_of_several_parts_is_read_by_its_skin_or_the_part_named() {
         !ok && err.contains("'face'") && err.contains("'tongue'"),
         "{err}"
     );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn axes_that_contradict_the_landmarks_are_refused() {
+    let Some(face) = derma_test_support::shared_data("canonical_face_model.obj") else {
+        return;
+    };
+    let d = tmp("frame", "axes");
+    let (ok, _, err) = run(&[
+        "head",
+        "fit",
+        "--mesh",
+        s(&face),
+        "--landmarks",
+        "mediapipe",
+        "--axes",
+        "+Z,-Y",
+        "--out",
+        s(&d.join("fit")),
+    ]);
+    assert!(
+        !ok && err.contains("+Y up, facing +Z") && err.contains("+Z up, facing −Y"),
+        "{err}"
+    );
+    assert!(!d.join("fit/head.json").exists());
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -67,41 +67,72 @@ impl Doc {
             return Err(self.err(format!("accessor {i} declares {count} elements")));
         }
         let count = count as usize;
-        let elem = n * bytes_per(ct);
-        let mut out = vec![0.0f64; count * n];
-        if let Some(v) = a.buffer_view {
-            let data = self.view(v.value())?;
-            let stride = self.root.buffer_views[v.value()]
-                .byte_stride
-                .map(|s| s.0)
-                .unwrap_or(elem);
-            let offset = a.byte_offset.map(|o| o.0).unwrap_or(0) as usize;
-            if stride < elem {
-                return Err(self.err(format!(
-                    "accessor {i}: its buffer view's stride {stride} is shorter than an element ({elem} bytes)"
-                )));
-            }
-            let end = (count.max(1) - 1)
-                .checked_mul(stride)
-                .and_then(|x| x.checked_add(offset + elem));
-            if count > 0 && end.is_none_or(|e| e > data.len()) {
-                return Err(self.err(format!(
-                    "accessor {i} reads past its buffer view ({count} elements of {elem} bytes every {stride} from {offset}; the view holds {})",
-                    data.len()
-                )));
-            }
-            let s = bytes_per(ct);
-            for (k, dst) in out.chunks_exact_mut(n).enumerate() {
-                let at = offset + k * stride;
-                for (c, d) in dst.iter_mut().enumerate() {
-                    *d = component(ct, a.normalized, &data[at + c * s..at + (c + 1) * s]);
+        let mut out = match a.buffer_view {
+            Some(v) => self.strided(i, v.value(), a, ct, n, count)?,
+            None if a.sparse.is_some() => {
+                // Zeros under the substitutions (§3.6.2.3): a size the file does not bound.
+                let need = (count * n * 8) as f64;
+                if let Some((want, have)) = crate::memory::shortfall(need) {
+                    return Err(self.err(format!(
+                        "accessor {i}: {count} sparse elements need {want:.1} GiB, {have:.1} GiB are available"
+                    )));
                 }
+                vec![0.0f64; count * n]
             }
-        }
+            None => {
+                return Err(self.err(format!(
+                    "accessor {i} has no data (neither a bufferView nor sparse values)"
+                )))
+            }
+        };
         if let Some(sp) = &a.sparse {
             self.sparse(i, sp, ct, a.normalized, n, &mut out)?;
         }
         Ok((out, n))
+    }
+
+    /// Accessor `i`'s `count` elements of `n` components from buffer view `v`, its bounds
+    /// checked before anything is allocated (the values then take at most 8 bytes per byte of
+    /// the view).
+    fn strided(
+        &self,
+        i: usize,
+        v: usize,
+        a: &gltf::json::Accessor,
+        ct: ComponentType,
+        n: usize,
+        count: usize,
+    ) -> Result<Vec<f64>> {
+        let elem = n * bytes_per(ct);
+        let data = self.view(v)?;
+        let stride = self.root.buffer_views[v]
+            .byte_stride
+            .map(|s| s.0)
+            .unwrap_or(elem);
+        let offset = a.byte_offset.map(|o| o.0).unwrap_or(0) as usize;
+        if stride < elem {
+            return Err(self.err(format!(
+                "accessor {i}: its buffer view's stride {stride} is shorter than an element ({elem} bytes)"
+            )));
+        }
+        let end = (count.max(1) - 1)
+            .checked_mul(stride)
+            .and_then(|x| x.checked_add(offset + elem));
+        if count > 0 && end.is_none_or(|e| e > data.len()) {
+            return Err(self.err(format!(
+                "accessor {i} reads past its buffer view ({count} elements of {elem} bytes every {stride} from {offset}; the view holds {})",
+                data.len()
+            )));
+        }
+        let s = bytes_per(ct);
+        let mut out = vec![0.0f64; count * n];
+        for (k, dst) in out.chunks_exact_mut(n).enumerate() {
+            let at = offset + k * stride;
+            for (c, d) in dst.iter_mut().enumerate() {
+                *d = component(ct, a.normalized, &data[at + c * s..at + (c + 1) * s]);
+            }
+        }
+        Ok(out)
     }
 
     /// Applies an accessor's sparse substitutions to its values.

@@ -35,7 +35,11 @@ impl Doc {
     /// A buffer view's bytes: a slice of its buffer, or the view decoded from its
     /// `EXT_meshopt_compression` stream.
     pub(super) fn view(&self, i: usize) -> Result<Cow<'_, [u8]>> {
-        let v = &self.root.buffer_views[i];
+        let v = self
+            .root
+            .buffer_views
+            .get(i)
+            .ok_or_else(|| self.err(format!("buffer view {i} does not exist")))?;
         if let Some(ext) = v
             .extensions
             .as_ref()
@@ -43,6 +47,18 @@ impl Doc {
         {
             let m: Meshopt = serde_json::from_value(ext.clone())
                 .map_err(|e| self.err(format!("buffer view {i}'s EXT_meshopt_compression: {e}")))?;
+            let (count, stride) = (m.count as usize, m.byte_stride as usize);
+            if count.checked_mul(stride) != Some(v.byte_length.0 as usize) {
+                return Err(self.err(format!(
+                    "buffer view {i}'s EXT_meshopt_compression decodes {count} × {stride} bytes, the view declares {}",
+                    v.byte_length.0
+                )));
+            }
+            if let Some((want, have)) = crate::memory::shortfall((count * stride) as f64) {
+                return Err(self.err(format!(
+                    "buffer view {i} decodes to {want:.1} GiB, {have:.1} GiB are available"
+                )));
+            }
             return self.meshopt(i, &m).map(Cow::Owned);
         }
         let data = self.buffer(v.buffer.value())?;

@@ -100,12 +100,26 @@ impl FitJob {
                 frame::search(&Scan::new(raw.clone()), &face.view(), given).map_err(fit_err)?
             }
         };
+        if let (Some(_), Some(axes)) = (&named, self.axes) {
+            // The file's up and front as each says them, within 45° of each other.
+            let (t, a) = (found.frame.rotation.transpose(), axes.transpose());
+            let near = |v: glam::Vec3| (t * v).dot(a * v) > std::f32::consts::FRAC_1_SQRT_2;
+            if !(near(glam::Vec3::Y) && near(glam::Vec3::Z)) {
+                let mut asked = found.frame.clone();
+                asked.rotation = axes;
+                return Err(JobError::Input {
+                    path: self.mesh.clone(),
+                    detail: format!(
+                        "its landmarks put its face {}, the axes given say {}: give one or the other",
+                        found.frame.axes_in_words(),
+                        asked.axes_in_words()
+                    ),
+                });
+            }
+        }
         let search_seconds = clock.elapsed().as_secs_f64();
         let mut frame = found.frame.clone();
-        frame.part = match &self.part {
-            PartChoice::Named(n) => Some(n.clone()),
-            PartChoice::Auto => None,
-        };
+        frame.part = self.part.name();
         progress.note(Note::info(format!(
             "mesh '{}': {}, {}; unit: {}",
             self.mesh.display(),
@@ -188,7 +202,7 @@ impl FitJob {
             LandmarkSource::Auto => return Ok(None),
             LandmarkSource::MediaPipe => {
                 // In file order (a loader may reorder vertices to share UVs).
-                let raw = derma_core::mesh_file::file_positions(&self.mesh)?;
+                let raw = derma_core::mesh_file::file_positions(&self.mesh, &self.part)?;
                 if raw.len() != 468 && raw.len() != 478 {
                     return Err(input(
                         &self.mesh,

@@ -158,11 +158,9 @@ impl TemplateFace {
 fn face_points(tpl: &Template) -> (Vec<Vec3>, Vec<Vec3>, Vec<usize>) {
     let l1 = tpl.stencils1.apply(&tpl.coarse.positions);
     let n1 = Template::normals(&tpl.level1, &l1);
-    let lm = |n: &str| tpl.landmark(n);
-    let ear_z = 0.5 * (lm("ear_left").z + lm("ear_right").z);
-    let (y_lo, y_hi) = (lm("menton").y - 5.0, lm("hairline").y + 5.0);
+    let on_face = in_face(tpl);
     let face1: Vec<usize> = (0..l1.len())
-        .filter(|&i| tpl.outer1[i] && l1[i].z > ear_z + 20.0 && (y_lo..y_hi).contains(&l1[i].y))
+        .filter(|&i| tpl.outer1[i] && on_face(l1[i]))
         .collect();
     (
         face1.iter().map(|&i| l1[i]).collect(),
@@ -183,6 +181,16 @@ pub fn auto_alignment(scan: &TriMesh) -> Result<Alignment, FitError> {
     Ok(Alignment::Auto(found.placement))
 }
 
+/// Where the face search puts the template on a scan already in mm and upright.
+fn search_upright(scan: &Scan) -> Result<Similarity, FitError> {
+    let face = TemplateFace::builtin();
+    let upright = frame::Given {
+        mm_per_unit: Some(1.0),
+        axes: Some(glam::Mat3::IDENTITY),
+    };
+    Ok(frame::search(scan, &face.view(), upright)?.start)
+}
+
 /// Fits the built-in head to `scan` (mm, in derma's frame: +Y up, facing +Z; see
 /// [`frame::search`] for a scan in any unit and orientation): placement, registration, the
 /// corners found again and held, then the skin finished and everything else carried.
@@ -193,6 +201,17 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
     let tpl = Template::of(&asset);
     let scan = Scan::new(scan);
     laps.lap("prepare");
+    let searched;
+    let opts = match opts.alignment {
+        Alignment::Search => {
+            searched = FitOptions {
+                alignment: Alignment::Auto(search_upright(&scan)?),
+                ..opts.clone()
+            };
+            &searched
+        }
+        _ => opts,
+    };
 
     progress.stage("align", 1, Unit::Steps);
     let (face_pts, face_nrm, face1) = face_points(&tpl);
@@ -205,13 +224,12 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
     pins.extend(pins_of_corners(&tpl, &placed.detected));
     let (x, mut last, mut iterations) = reg.run(opts, &pins, progress)?;
     // Found again where the registration put the openings (automatic alignment only).
-    let (x, detected) = match opts.alignment {
-        Alignment::Auto(_) => {
-            let (r, found) = reg.refine_corners(x, &given, opts, progress)?;
-            (last, iterations) = (r.residual, iterations + r.iterations);
-            (r.x, found)
-        }
-        Alignment::Landmarks(_) => (x, placed.detected),
+    let (x, detected) = if opts.alignment.is_automatic() {
+        let (r, found) = reg.refine_corners(x, &given, opts, progress)?;
+        (last, iterations) = (r.residual, iterations + r.iterations);
+        (r.x, found)
+    } else {
+        (x, placed.detected)
     };
     laps.lap("non-rigid registration");
     // Converged: close to the scan, with most of the face on it.
@@ -243,7 +261,7 @@ pub fn fit(scan: TriMesh, opts: &FitOptions, progress: &dyn Progress) -> Result<
     let report = FitReport {
         alignment: match &opts.alignment {
             Alignment::Landmarks(_) => format!("landmarks: {}", placed.given.len()),
-            Alignment::Auto(_) => "auto (the face found at every orientation and size, then similarity ICP; eye and mouth corners)".into(),
+            Alignment::Auto(_) | Alignment::Search => "auto (the face found at every orientation and size, then similarity ICP; eye and mouth corners)".into(),
         },
         scale: placed.sim.scale,
         iterations,
@@ -355,13 +373,17 @@ fn corner_gaps(tpl: &Template, fine: &[Vec3], detected: &[Option<Vec3>; 6]) -> V
 /// The fitted skin's face vertices (fine level): outer skin between menton and hairline, 20 mm
 /// in front of the ears.
 fn face_vertices(tpl: &Template) -> Vec<usize> {
+    let on_face = in_face(tpl);
+    (0..tpl.level2.positions.len())
+        .filter(|&i| tpl.outer2[i] && on_face(tpl.level2.positions[i]))
+        .collect()
+}
+
+/// Whether a template point (mm) lies on the face: 20 mm in front of the ears, from 5 mm
+/// below the menton to 5 mm above the hairline.
+fn in_face(tpl: &Template) -> impl Fn(Vec3) -> bool {
     let lm = |n: &str| tpl.landmark(n);
     let ear_z = 0.5 * (lm("ear_left").z + lm("ear_right").z);
     let (y_lo, y_hi) = (lm("menton").y - 5.0, lm("hairline").y + 5.0);
-    (0..tpl.level2.positions.len())
-        .filter(|&i| {
-            let p = tpl.level2.positions[i];
-            tpl.outer2[i] && p.z > ear_z + 20.0 && (y_lo..y_hi).contains(&p.y)
-        })
-        .collect()
+    move |p| p.z > ear_z + 20.0 && (y_lo..y_hi).contains(&p.y)
 }

@@ -18,6 +18,16 @@ pub enum Alignment {
     /// Found on the mesh: the template's face placed where [`super::frame::search`] found a face
     /// (this similarity, template mm → scan mm), then refined by a similarity ICP.
     Auto(Similarity),
+    /// As [`Alignment::Auto`], the face searched for on the scan (in mm, upright) first: what a
+    /// caller that has not searched gets.
+    Search,
+}
+
+impl Alignment {
+    /// Whether the placement is found on the mesh (eye and mouth corners then detected).
+    pub fn is_automatic(&self) -> bool {
+        !matches!(self, Alignment::Landmarks(_))
+    }
 }
 
 /// Options of a fit.
@@ -38,7 +48,7 @@ pub struct FitOptions {
 impl Default for FitOptions {
     fn default() -> Self {
         Self {
-            alignment: Alignment::Auto(Similarity::IDENTITY),
+            alignment: Alignment::Search,
             stiffness: vec![40.0, 20.0, 10.0, 5.0, 2.5, 1.2, 0.6],
             iterations: 10,
             max_distance_mm: 25.0,
@@ -133,7 +143,7 @@ pub struct FrameReport {
     pub axes: String,
     /// Placements the search tried (1 with landmarks).
     pub placements_tried: usize,
-    /// How well the template's face fits where it was found (of at most 2; a face needs
+    /// How well the template's face fits where it was found (of at most 4; a face needs
     /// [`super::frame::MIN_SCORE`]).
     pub face_score: f32,
 }

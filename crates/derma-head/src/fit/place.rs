@@ -51,16 +51,21 @@ pub fn place(
             })?
         }
         Alignment::Auto(start) => *start,
+        // `fit` runs the search first ([`Alignment::Search`] never reaches here).
+        Alignment::Search => {
+            return Err(FitError::Scan(
+                "the face was not searched for before the placement".into(),
+            ))
+        }
     };
     check_orientation(scan, pts, nrm, &start)?;
     let (sim, share) = align::icp(scan, pts, nrm, start, 15, 30.0);
     check_face(scan, &sim, share, lm("nose_tip"))?;
     // The eye and mouth corners, found on the scan near where the placement puts them.
-    let detected = match opts.alignment {
-        Alignment::Auto(_) => {
-            align::detect_corners(scan, &align::CORNERS.map(|n| sim.apply(lm(n))))
-        }
-        Alignment::Landmarks(_) => [None; 6],
+    let detected = if opts.alignment.is_automatic() {
+        align::detect_corners(scan, &align::CORNERS.map(|n| sim.apply(lm(n))))
+    } else {
+        [None; 6]
     };
     Ok(Placement {
         sim,
