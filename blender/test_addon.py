@@ -1,10 +1,13 @@
 """The derma add-on in Blender, headless (bench/blender.sh): installs it from a zip, paints
 derma's built-in head through its operator, checks the material's inputs are wired, the
 expression sliders drive the face units, renders 256² with Cycles (no denoiser) and checks the
-image is neither black nor the missing-texture pink. Run as
+image is neither black nor the missing-texture pink; then paints two more objects, whose names
+make the same folder name, into the same output folder and checks each object got its own
+folder and no paint touched another object's textures. Run as
   blender -b --factory-startup --python-exit-code 1 --python blender/test_addon.py -- OUT_DIR
 with DERMA set to the derma binary (or the derma Python package importable)."""
 
+import hashlib
 import os
 import shutil
 import sys
@@ -29,10 +32,15 @@ for o in list(bpy.data.objects):
 scene = bpy.context.scene
 s = scene.derma
 s.target, s.preset, s.sex, s.age, s.size, s.seed = "BUILTIN", "tan", "female", 45.0, 1024, 3
-s.out_dir = os.path.join(out, "set")
+# Every paint of this test goes into one output folder, each object's set in a folder of its own.
+root = os.path.join(out, "textures")
+shutil.rmtree(root, ignore_errors=True)
+s.out_dir = root
 assert bpy.ops.derma.paint_skin() == {"FINISHED"}
 
 skin = next(o for o in bpy.data.objects if o.type == "MESH" and o.name.startswith("skin"))
+head_dir = skin["derma_texture_dir"]
+assert head_dir == os.path.join(root, "derma_head"), head_dir
 mat = skin.active_material
 assert mat.name.startswith("derma skin"), mat.name
 nodes = mat.node_tree.nodes
@@ -124,26 +132,63 @@ assert mean.max() > 0.05, f"black: mean {mean}"
 assert pink.mean() < 0.01, f"missing-texture pink on {pink.mean():.1%} of the head"
 assert mean[0] > mean[1] > mean[2], f"not skin-coloured: mean RGB {mean}"
 print(f"render: {scene.render.filepath}, head on {len(head)} px, mean RGB {np.round(mean, 3)}")
+
+
+def digest(folder):
+    """The files of a folder and a hash of each."""
+    return {
+        n: hashlib.sha256(open(os.path.join(folder, n), "rb").read()).hexdigest()
+        for n in sorted(os.listdir(folder))
+    }
+
+
+head_files = digest(head_dir)
+assert "base_color.png" in head_files, sorted(head_files)
 # A user's own mesh: a head-sized UV sphere (0.1 m radius), active but not selected, beside
 # another selected object; painted on its own UVs at 256², in metres as derma reads it.
 bpy.ops.mesh.primitive_uv_sphere_add(radius=0.1, location=(1.0, 0.0, 0.0))
 ball = bpy.context.active_object
-bpy.ops.mesh.primitive_cube_add(size=0.1, location=(2.0, 0.0, 0.0))
+bpy.ops.mesh.primitive_cube_add(size=0.2, location=(2.0, 0.0, 0.0))
 cube = bpy.context.active_object
 ball.data.materials.append(bpy.data.materials.new("keep me"))
 ball.data.materials.append(bpy.data.materials.new("slot two"))
 ball.active_material_index = 1
 bpy.context.view_layer.objects.active = ball
 ball.select_set(False)
-s.target, s.size, s.out_dir = "SELECTED", 256, os.path.join(out, "sphere")
+# Two names that make the same safe folder name: the second object gets a folder of its own.
+ball.name, cube.name = "ball: left", "ball? left"
+s.target, s.size = "SELECTED", 256
 assert bpy.ops.derma.paint_skin() == {"FINISHED"}
+ball_dir = ball["derma_texture_dir"]
+assert ball_dir == os.path.join(root, "ball__left"), ball_dir
 assert [m.name for m in ball.data.materials][0] == "keep me"
 assert ball.material_slots[1].material.name.startswith("derma skin")
 assert cube.select_get() and not ball.select_get(), "the user's selection is given back"
 import json  # noqa: E402
 
-with open(os.path.join(out, "sphere", "report.json"), encoding="utf-8") as f:
+with open(os.path.join(ball_dir, "report.json"), encoding="utf-8") as f:
     mesh_in = json.load(f)["inputs"]["mesh"]
 assert mesh_in["mm_per_unit"] == 1000.0, mesh_in
 print("selected mesh: painted on its UVs in metres, in its active slot; selection kept")
+
+# The cube, whose name makes the ball's folder name, then the ball again: three objects, three
+# folders, and no paint touched another object's textures (before, every paint wrote the same
+# folder and the last replaced the others' maps on disk).
+ball_files = digest(ball_dir)
+bpy.context.view_layer.objects.active = cube
+assert bpy.ops.derma.paint_skin() == {"FINISHED"}
+cube_dir = cube["derma_texture_dir"]
+assert cube_dir == os.path.join(root, "ball__left-2"), cube_dir
+assert "base_color.png" in digest(cube_dir)
+assert cube.active_material.name.startswith("derma skin")
+assert digest(head_dir) == head_files, "painting another object changed the head's textures"
+assert digest(ball_dir) == ball_files, "painting the cube changed the ball's textures"
+bpy.context.view_layer.objects.active = ball
+s.seed = 4
+assert bpy.ops.derma.paint_skin() == {"FINISHED"}
+assert ball["derma_texture_dir"] == ball_dir, "a repaint keeps the object's folder"
+assert digest(ball_dir) != ball_files, "the repaint wrote the ball's own folder"
+assert digest(head_dir) == head_files
+assert sorted(os.listdir(root)) == ["ball__left", "ball__left-2", "derma_head"], os.listdir(root)
+print("folders: one per painted object (derma_head, ball__left, ball__left-2), none overwritten")
 print("derma add-on test passed")

@@ -55,7 +55,8 @@ class DermaSettings(bpy.types.PropertyGroup):
         items=[("male", "Male", "beard follicles, stubble"), ("female", "Female", "")],
         default="male",
     )
-    age: FloatProperty(name="Age", default=35.0, min=0.0, max=120.0, description="Years")
+    # derma's person.age_years accepts 10–100 (derma skin --print-config).
+    age: FloatProperty(name="Age", default=35.0, min=10.0, max=100.0, description="Years")
     size: IntProperty(name="Size", default=2048, min=64, max=16384, description="Texels")
     seed: IntProperty(name="Seed", default=1, min=0)
     target: EnumProperty(
@@ -68,11 +69,27 @@ class DermaSettings(bpy.types.PropertyGroup):
     )
     out_dir: StringProperty(
         name="Textures",
-        description="Where the texture set is written (relative to the .blend file with //; "
-        "an unsaved file uses a new temporary folder, which the images are then packed from)",
+        description="The folder the texture sets go in, one folder per painted object named "
+        "after it (relative to the .blend file with //; an unsaved file uses a new temporary "
+        "folder, which the images are then packed from)",
         default="//derma/",
         subtype="DIR_PATH",
     )
+
+
+# The custom property on a painted object that records its texture folder.
+DIR_KEY = "derma_texture_dir"
+
+
+def texture_dir(root, name, obj=None):
+    """The folder under `root` for the textures of `obj` (None: an object not yet imported)
+    called `name`: its own from an earlier paint, else a new one named after it that no other
+    object's textures are in (runner.texture_dir)."""
+    claimed = [
+        o[DIR_KEY] for o in bpy.data.objects if o != obj and isinstance(o.get(DIR_KEY), str)
+    ]
+    own = obj.get(DIR_KEY) if obj is not None else None
+    return runner.texture_dir(root, name, own if isinstance(own, str) else None, claimed)
 
 
 def _import_glb(path):
@@ -147,13 +164,16 @@ class DERMA_OT_paint_skin(bpy.types.Operator):
         # A path relative to an unsaved .blend has no folder: paint into a temporary one and
         # pack the images into the .blend, so the material keeps them.
         transient = not s.out_dir or (s.out_dir.startswith("//") and not bpy.data.filepath)
-        out = tempfile.mkdtemp(prefix="derma-") if transient else bpy.path.abspath(s.out_dir)
+        root = tempfile.mkdtemp(prefix="derma-") if transient else bpy.path.abspath(s.out_dir)
+        # One folder per painted object, named after it, so a paint never writes over another
+        # object's textures (the builtin head's folder: derma_head, derma_head-2, …).
         try:
             if s.target == "SELECTED":
                 obj = context.active_object
                 if obj is None or obj.type != "MESH" or not obj.data.uv_layers:
                     self.report({"ERROR"}, "select a mesh with UVs, or paint derma's head")
                     return {"CANCELLED"}
+                out = texture_dir(root, obj.name, obj)
                 mesh = os.path.join(out, "mesh.obj")
                 os.makedirs(out, exist_ok=True)
                 # Export the active mesh alone, then give the user their selection back.
@@ -178,6 +198,7 @@ class DERMA_OT_paint_skin(bpy.types.Operator):
                 )
                 skin, objects = obj, [obj]
             else:
+                out = texture_dir(root, "derma_head")
                 report = runner.run_skin(
                     prefs.executable, out, s.preset, s.sex, s.age, s.size, s.seed, glb=True
                 )
@@ -186,6 +207,7 @@ class DERMA_OT_paint_skin(bpy.types.Operator):
         except Exception as e:  # derma's message names what is wrong
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
+        skin[DIR_KEY] = out
         uv = skin.data.uv_layers.active.name if skin.data.uv_layers else ""
         mat = material.build("derma skin", out, runner.mm_per_unit(report), uv_map=uv)
         if transient:

@@ -8,6 +8,51 @@ import shutil
 import subprocess
 
 
+# Windows' reserved device names: no folder may be called so, whatever its extension.
+_RESERVED = {"con", "prn", "aux", "nul"} | {f"{d}{i}" for d in ("com", "lpt") for i in range(1, 10)}
+
+
+def safe_name(name, fallback="object"):
+    """`name` as a folder name that is safe on every file system: ASCII letters, digits, '.',
+    '-' and '_' kept, every other character '_'; no leading '.' or '-', no trailing '.'; at
+    most 64 characters; a Windows device name (CON, NUL, COM1…) prefixed with '_'; `fallback`
+    when nothing is left."""
+    s = "".join(c if c.isascii() and (c.isalnum() or c in "._-") else "_" for c in name or "")
+    s = s.lstrip(".-")[:64].rstrip(".")
+    if not s:
+        s = fallback
+    if s.split(".")[0].lower() in _RESERVED:
+        s = "_" + s
+    return s
+
+
+def _key(path):
+    """A path as compared for a clash: absolute, normalised and case-folded (two names that
+    differ in case alone are one folder on macOS and Windows)."""
+    return os.path.normcase(os.path.normpath(os.path.abspath(path))).lower()
+
+
+def texture_dir(root, name, own=None, claimed=()):
+    """The folder under `root` for the texture set of the object called `name`, never another
+    object's: `own` (the folder an earlier paint of this object recorded) when it lies in `root`
+    and no other object claims it; else root/safe_name(name), with -2, -3, … appended while
+    that folder is claimed by another object (`claimed`: the folders other objects recorded)
+    or already holds files (a set painted before, for an object since deleted or in another
+    .blend)."""
+    root = os.path.abspath(root)
+    taken = {_key(p) for p in claimed}
+    if own and _key(os.path.dirname(os.path.normpath(own))) == _key(root) and _key(own) not in taken:
+        return os.path.normpath(own)
+    base = safe_name(name)
+    n = 1
+    while True:
+        d = os.path.join(root, base if n == 1 else f"{base}-{n}")
+        used = os.path.isdir(d) and any(os.scandir(d))
+        if _key(d) not in taken and not used and not (os.path.exists(d) and not os.path.isdir(d)):
+            return d
+        n += 1
+
+
 def person_args(preset, sex, age, size, seed):
     """`derma skin`'s flags for the panel's settings (the preset "config" keeps the config's)."""
     args = ["--size", str(size), "--seed", str(seed), "--sex", sex, "--age", f"{age:g}"]

@@ -93,6 +93,146 @@ pub fn ensure_writable_dir(dir: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Checks, before any work and without creating anything, that `dir` could be made and
+/// written: it is a writable directory, or its nearest existing ancestor is (so an early
+/// error leaves no empty directory behind).
+pub fn check_writable_dest(dir: &Path) -> Result<()> {
+    let mut at = dir;
+    while !at.exists() {
+        match at.parent() {
+            Some(p) if !p.as_os_str().is_empty() => at = p,
+            _ => {
+                at = Path::new(".");
+                break;
+            }
+        }
+    }
+    let denied = |detail: &str| CoreError::Invalid {
+        what: format!("output directory '{}'", dir.display()),
+        detail: detail.into(),
+    };
+    if !at.is_dir() {
+        return Err(denied(&format!(
+            "'{}' is a file, not a directory",
+            at.display()
+        )));
+    }
+    let probe = at.join(format!(".derma-write-probe.{}", unique_tag()));
+    std::fs::write(&probe, b"probe").map_err(|source| CoreError::Write {
+        path: at.to_path_buf(),
+        source,
+    })?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
+/// A directory of outputs written whole: its files go into a staging directory beside the
+/// destination, and [`StagedDir::commit`] swaps it in (the previous contents removed after),
+/// so a killed run leaves the previous set as it was, never a mix of two. A destination that
+/// holds files the writer does not own (`owned` says which names are) is refused, not
+/// replaced. Uncommitted staging is removed on drop.
+pub struct StagedDir {
+    dest: PathBuf,
+    staging: PathBuf,
+    committed: bool,
+}
+
+impl StagedDir {
+    /// Creates the staging directory beside `dest` (and `dest`'s missing parents).
+    pub fn begin(dest: &Path, owned: &dyn Fn(&str) -> bool) -> Result<Self> {
+        if dest.is_file() {
+            return Err(CoreError::Invalid {
+                what: format!("output directory '{}'", dest.display()),
+                detail: "is a file".into(),
+            });
+        }
+        if dest.is_dir() {
+            let entries = std::fs::read_dir(dest).map_err(|source| CoreError::Read {
+                path: dest.to_path_buf(),
+                source,
+            })?;
+            let mut foreign: Vec<String> = entries
+                .filter_map(|e| e.ok())
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|n| !owned(n) && !n.starts_with(".derma-write-probe."))
+                .collect();
+            foreign.sort();
+            if !foreign.is_empty() {
+                return Err(CoreError::Invalid {
+                    what: format!("output directory '{}'", dest.display()),
+                    detail: format!(
+                        "it holds files that are not this output's ({}); derma replaces a previous output whole, so give an empty or new directory",
+                        foreign.join(", ")
+                    ),
+                });
+            }
+        }
+        let staging = sibling(dest, "derma-partial");
+        std::fs::create_dir_all(&staging).map_err(|source| CoreError::Write {
+            path: staging.clone(),
+            source,
+        })?;
+        Ok(Self {
+            dest: dest.to_path_buf(),
+            staging,
+            committed: false,
+        })
+    }
+
+    /// Where the files are written until the commit.
+    pub fn path(&self) -> &Path {
+        &self.staging
+    }
+
+    /// Puts the staged directory in the destination's place: the previous destination is
+    /// renamed aside, the staging renamed in, the previous one removed.
+    pub fn commit(mut self) -> Result<()> {
+        let old = sibling(&self.dest, "derma-old");
+        let had = self.dest.exists();
+        let rename = |a: &Path, b: &Path| {
+            std::fs::rename(a, b).map_err(|source| CoreError::Write {
+                path: b.to_path_buf(),
+                source,
+            })
+        };
+        if had {
+            rename(&self.dest, &old)?;
+        }
+        if let Err(e) = rename(&self.staging, &self.dest) {
+            if had {
+                let _ = std::fs::rename(&old, &self.dest);
+            }
+            return Err(e);
+        }
+        self.committed = true;
+        if had {
+            let _ = std::fs::remove_dir_all(&old);
+        }
+        Ok(())
+    }
+}
+
+impl Drop for StagedDir {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.staging);
+        }
+    }
+}
+
+/// A hidden sibling of `dest` for `purpose`, unique to this writer.
+fn sibling(dest: &Path, purpose: &str) -> PathBuf {
+    let name = dest
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    let parent = match dest.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    parent.join(format!(".{name}.{purpose}.{}", unique_tag()))
+}
+
 /// Fails before any work when writing `outputs` would touch an input: an output that is an
 /// input file, an input inside an output directory (a directory derma fills, such as a rig),
 /// or an output inside an input directory (a fields directory, say). Paths that do not exist
@@ -165,6 +305,49 @@ fn canonical(p: &Path) -> PathBuf {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A staged directory replaces the destination whole on commit, leaves it untouched when
+    /// dropped uncommitted (a killed or failed run), and refuses a destination holding files
+    /// that are not its own.
+    #[test]
+    fn staged_directories_swap_whole_or_not_at_all() {
+        let root = std::env::temp_dir().join(format!("derma-staged-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let dest = root.join("set");
+        let owned = |n: &str| n.ends_with(".png");
+        let s = StagedDir::begin(&dest, &owned).unwrap();
+        assert!(!dest.exists());
+        std::fs::write(s.path().join("a.png"), b"1").unwrap();
+        s.commit().unwrap();
+        assert_eq!(std::fs::read(dest.join("a.png")).unwrap(), b"1");
+        // A rerun that dies before its commit leaves the first set as it was.
+        let s = StagedDir::begin(&dest, &owned).unwrap();
+        std::fs::write(s.path().join("a.png"), b"2").unwrap();
+        std::fs::write(s.path().join("b.png"), b"2").unwrap();
+        drop(s);
+        assert_eq!(std::fs::read(dest.join("a.png")).unwrap(), b"1");
+        assert!(!dest.join("b.png").exists());
+        // A completed rerun leaves only its own files.
+        let s = StagedDir::begin(&dest, &owned).unwrap();
+        std::fs::write(s.path().join("b.png"), b"3").unwrap();
+        s.commit().unwrap();
+        assert!(!dest.join("a.png").exists());
+        assert_eq!(std::fs::read(dest.join("b.png")).unwrap(), b"3");
+        let names: Vec<_> = std::fs::read_dir(&root)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names.len(), 1, "nothing left beside the set: {names:?}");
+        // Somebody else's file in the destination: refused, named.
+        std::fs::write(dest.join("notes.txt"), b"mine").unwrap();
+        let e = StagedDir::begin(&dest, &owned).err().unwrap().to_string();
+        assert!(e.contains("notes.txt"), "{e}");
+        // A destination whose parents do not exist is only checked, not made.
+        let deep = root.join("x/y/z");
+        check_writable_dest(&deep).unwrap();
+        assert!(!root.join("x").exists());
+        std::fs::remove_dir_all(&root).unwrap();
+    }
 
     #[test]
     fn temporary_names_are_unique_to_the_writer() {

@@ -276,7 +276,7 @@ fn unit_by_size(
         HeadUnit::Auto => match LengthUnit::for_head(extent) {
             Some(u) => {
                 progress.note(Note::info(format!(
-                    "mesh '{}': largest extent {extent:.3} units, read as {} ({:.0} mm; a head or face is {lo:.0}–{hi:.0} mm; give its unit to override)",
+                    "mesh '{}': largest extent {extent:.3} units, read as {} ({:.0} mm; a head or face is {lo:.0}–{hi:.0} mm; to override, set its unit — mm, cm, m or fit — with the unit option, surface.unit in a skin config)",
                     path.display(),
                     u.long_name(),
                     extent * u.to_mm()
@@ -285,7 +285,7 @@ fn unit_by_size(
             }
             None => {
                 progress.note(Note::warning(format!(
-                    "mesh '{}': largest extent {extent:.3} units is no head in mm, cm or m ({lo:.0}–{hi:.0} mm); scaled ×{fit:.4} to a nominal {NOMINAL_HEAD_EXTENT_MM:.0} mm head (give its unit to override, or fit the head to it, which finds the unit from the face)",
+                    "mesh '{}': largest extent {extent:.3} units is no head in mm, cm or m ({lo:.0}–{hi:.0} mm); scaled ×{fit:.4} to a nominal {NOMINAL_HEAD_EXTENT_MM:.0} mm head (to override, set its unit — mm, cm or m — with the unit option, surface.unit in a skin config; or fit the head to it, which finds the unit from the face)",
                     path.display(),
                 )));
                 (None, fit)

@@ -111,6 +111,39 @@ pub const HEAD_EXTENT_MM: (f32, f32) = (100.0, 350.0);
 /// adult head, about 215–230 mm (Farkas 1994, "Anthropometry of the Head and Face").
 pub const NOMINAL_HEAD_EXTENT_MM: f32 = 225.0;
 
+/// A fingerprint of a mesh's UV layout that survives the trips a mesh takes between files
+/// (OBJ text, glTF's flipped v, vertex and triangle reordering) and ignores positions, so a
+/// fitted or sculpted copy of a layout matches it: the triangle count, the signed UV area
+/// (a flipped chart changes its sign), its area-weighted first and second moments and the
+/// total UV edge length. Two layouts match within a relative 10⁻⁵; a texture set is only
+/// right on a mesh whose layout matches the one it was painted on.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct UvLayout {
+    /// Triangles with UVs.
+    pub triangles: usize,
+    /// Σ signed UV area.
+    pub signed_area: f64,
+    /// Σ a·u, Σ a·v, Σ a·u², Σ a·u·v, Σ a·v² over triangles (a signed area, (u, v) centroid).
+    pub moments: [f64; 5],
+    /// Σ UV edge length (each triangle's three).
+    pub edge_length: f64,
+}
+
+impl UvLayout {
+    /// True when `other` is this layout up to float noise (relative 10⁻⁵).
+    pub fn matches(&self, other: &UvLayout) -> bool {
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-5 * a.abs().max(b.abs()).max(1e-3);
+        self.triangles == other.triangles
+            && close(self.signed_area, other.signed_area)
+            && close(self.edge_length, other.edge_length)
+            && self
+                .moments
+                .iter()
+                .zip(&other.moments)
+                .all(|(a, b)| close(*a, *b))
+    }
+}
+
 impl TriMesh {
     /// An error naming the file unless the mesh has UVs.
     pub fn require_uvs(&self, path: &Path) -> Result<()> {
@@ -185,6 +218,45 @@ impl TriMesh {
     /// Writes the mesh as Wavefront OBJ (positions, UVs, normals; one index per corner), atomically.
     pub fn write_obj(&self, path: &Path) -> Result<()> {
         write_obj_objects(path, "written by derma", &[("mesh", self)])
+    }
+
+    /// The fingerprint of the mesh's UV layout ([`UvLayout`]).
+    pub fn uv_layout(&self) -> UvLayout {
+        let (mut n, mut area, mut edges) = (0usize, 0.0f64, 0.0f64);
+        let (mut m1, mut m2) = ([0.0f64; 2], [0.0f64; 3]);
+        for t in &self.triangles {
+            let Some(c) = t
+                .iter()
+                .map(|&i| self.uvs.get(i as usize).map(|u| [u.x as f64, u.y as f64]))
+                .collect::<Option<Vec<_>>>()
+            else {
+                continue;
+            };
+            let a = 0.5
+                * ((c[1][0] - c[0][0]) * (c[2][1] - c[0][1])
+                    - (c[2][0] - c[0][0]) * (c[1][1] - c[0][1]));
+            let g = [
+                (c[0][0] + c[1][0] + c[2][0]) / 3.0,
+                (c[0][1] + c[1][1] + c[2][1]) / 3.0,
+            ];
+            n += 1;
+            area += a;
+            m1[0] += a * g[0];
+            m1[1] += a * g[1];
+            m2[0] += a * g[0] * g[0];
+            m2[1] += a * g[0] * g[1];
+            m2[2] += a * g[1] * g[1];
+            for k in 0..3 {
+                let (p, q) = (c[k], c[(k + 1) % 3]);
+                edges += ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
+            }
+        }
+        UvLayout {
+            triangles: n,
+            signed_area: area,
+            moments: [m1[0], m1[1], m2[0], m2[1], m2[2]],
+            edge_length: edges,
+        }
     }
 
     /// Recomputes area-weighted vertex normals (used when the file has none).
@@ -293,6 +365,43 @@ pub fn split_by_tangent(mesh: &TriMesh, corner: &[[f32; 4]]) -> (TriMesh, Vec<[f
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The UV fingerprint ignores vertex order, triangle order, the starting corner, positions
+    /// and float noise, and changes with a moved UV, a flipped winding or a changed topology.
+    #[test]
+    fn uv_layout_names_the_layout_not_the_file() {
+        let m = TriMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE],
+            normals: vec![Vec3::Z; 4],
+            uvs: vec![Vec2::ZERO, Vec2::X, Vec2::Y, Vec2::new(0.9, 0.8)],
+            triangles: vec![[0, 1, 2], [1, 3, 2]],
+        };
+        let h = m.uv_layout();
+        // Vertices renumbered (3 ↔ 0), triangles swapped and rotated, positions moved, v
+        // flipped twice through f32 (glTF's convention).
+        let flip = |v: f32| 1.0 - (1.0 - v);
+        let r = TriMesh {
+            positions: vec![Vec3::splat(9.0), Vec3::X, Vec3::Y, Vec3::ZERO],
+            normals: vec![Vec3::Z; 4],
+            uvs: vec![
+                Vec2::new(0.9, flip(0.8)),
+                Vec2::X,
+                Vec2::new(0.0, flip(1.0)),
+                Vec2::ZERO,
+            ],
+            triangles: vec![[0, 2, 1], [2, 3, 1]],
+        };
+        assert!(r.uv_layout().matches(&h));
+        let mut moved = m.clone();
+        moved.uvs[3] = Vec2::new(0.9, 0.79);
+        assert!(!moved.uv_layout().matches(&h));
+        let mut flipped = m.clone();
+        flipped.triangles[0] = [0, 2, 1];
+        assert!(!flipped.uv_layout().matches(&h));
+        let mut fewer = m.clone();
+        fewer.triangles.pop();
+        assert!(!fewer.uv_layout().matches(&h));
+    }
 
     #[test]
     fn split_by_tangent_keeps_shared_corners_and_splits_mirrored_ones() {

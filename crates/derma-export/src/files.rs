@@ -160,6 +160,7 @@ fn check_units(head: &derma_head::Head, units: &[(&str, f32)]) -> Result<()> {
 fn fitted_mesh_scene(
     path: &Path,
     dir: &Path,
+    skin_dir: &Path,
     units: &[(&str, f32)],
     skin: SkinMaps,
     eye: Option<[Map; 3]>,
@@ -174,6 +175,7 @@ fn fitted_mesh_scene(
         &Default::default(),
         &derma_core::Silent,
     )?;
+    check_layout(skin_dir, &mesh.uv_layout(), path)?;
     let carry = derma_head::fit::onto::Carry::new(head, &mesh);
     crate::glb::check_share(carry.share(), path)?;
     if !units.is_empty() {
@@ -191,6 +193,31 @@ fn fitted_mesh_scene(
     }
     let lashes = skin.lash_color.map(glam::Vec3::from);
     Ok(Scene::mesh(&mesh, skin).with_parts(head, lashes, eye, gaze))
+}
+
+/// Refuses to draw the set in `textures` on a mesh (`what`) whose UV layout is not the one
+/// its manifest says it was painted on: its texels would land on the wrong skin. Sets without
+/// a recorded layout (made before manifests had one, or by other tools) are not checked.
+fn check_layout(textures: &Path, layout: &derma_core::mesh::UvLayout, what: &Path) -> Result<()> {
+    let manifest = textures.join(derma_skin::outputs::MANIFEST);
+    if !manifest.is_file() {
+        return Ok(());
+    }
+    let m = derma_skin::manifest::read(&manifest)?;
+    let painted: Option<derma_core::mesh::UvLayout> =
+        serde_json::from_value(m["uv_layout"].clone()).ok();
+    match painted {
+        Some(p) if !p.matches(layout) => Err(ExportError::Invalid(format!(
+            "the set '{}' was painted on another UV layout ({} triangles, UV area {:.4}) than '{}' has ({} triangles, UV area {:.4}); render it on the mesh it was painted on, or paint it again on this one",
+            textures.display(),
+            p.triangles,
+            p.signed_area,
+            what.display(),
+            layout.triangles,
+            layout.signed_area
+        ))),
+        _ => Ok(()),
+    }
 }
 
 /// The face units posing the head: the job's own, plus (where the head can be posed: the
@@ -237,38 +264,51 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
             skin.normal = wm.blend(&skin.normal, units.iter().copied(), skin.wrap)?;
         }
     }
-    let scene =
-        match (&job.mesh, job.head.as_deref()) {
-            (Some(p), Some(dir)) => fitted_mesh_scene(p, dir, &units, skin.clone(), eye, job.gaze)?,
-            (Some(_), None) if !units.is_empty() => return Err(ExportError::Invalid(
+    let scene = match (&job.mesh, job.head.as_deref()) {
+        (Some(p), Some(dir)) => {
+            fitted_mesh_scene(p, dir, &job.textures, &units, skin.clone(), eye, job.gaze)?
+        }
+        (Some(_), None) if !units.is_empty() => {
+            return Err(ExportError::Invalid(
                 "face units pose a user mesh only through the head fitted to it (derma head fit)"
                     .into(),
-            )),
-            (Some(p), None) => Scene::mesh(&crate::glb::load_mesh_mm(p, progress)?, skin.clone()),
-            (None, dir) => {
-                let head = derma_head::fitted::or_builtin(dir)?;
-                check_units(head, &units)?;
-                let pose = derma_eyes::still::EyePose {
-                    gaze: job.gaze,
-                    closure: job.blink,
-                };
-                if pose == derma_eyes::still::EyePose::REST {
-                    Scene::head(head, skin.clone(), &units, eye, job.gaze)
-                } else {
-                    // The lids and the skin around the eyes follow the gaze through the trained
-                    // eye-region model (thesis §3.9), the pose's units among its inputs.
-                    let mut posed = head.posed_skin(&units);
-                    let lashes = derma_eyes::still::StillModel::new(head)
-                        .map_err(|e| ExportError::Invalid(e.to_string()))?
-                        .pose_skin(head, pose, &units, &mut posed);
-                    let mut scene = Scene::posed_head(head, posed, skin.clone(), eye, job.gaze);
-                    for (name, mesh) in &lashes {
-                        scene.replace_part_mesh(name, mesh);
-                    }
-                    scene
+            ))
+        }
+        (Some(p), None) => {
+            let mesh = crate::glb::load_mesh_mm(p, progress)?;
+            check_layout(&job.textures, &mesh.uv_layout(), p)?;
+            Scene::mesh(&mesh, skin.clone())
+        }
+        (None, dir) => {
+            let head = derma_head::fitted::or_builtin(dir)?;
+            let name = dir.map_or_else(|| "the built-in head".into(), |d| d.display().to_string());
+            check_layout(
+                &job.textures,
+                derma_skin::builtin_head::template_layout(),
+                Path::new(&name),
+            )?;
+            check_units(head, &units)?;
+            let pose = derma_eyes::still::EyePose {
+                gaze: job.gaze,
+                closure: job.blink,
+            };
+            if pose == derma_eyes::still::EyePose::REST {
+                Scene::head(head, skin.clone(), &units, eye, job.gaze)
+            } else {
+                // The lids and the skin around the eyes follow the gaze through the trained
+                // eye-region model (thesis §3.9), the pose's units among its inputs.
+                let mut posed = head.posed_skin(&units);
+                let lashes = derma_eyes::still::StillModel::new(head)
+                    .map_err(|e| ExportError::Invalid(e.to_string()))?
+                    .pose_skin(head, pose, &units, &mut posed);
+                let mut scene = Scene::posed_head(head, posed, skin.clone(), eye, job.gaze);
+                for (name, mesh) in &lashes {
+                    scene.replace_part_mesh(name, mesh);
                 }
+                scene
             }
-        };
+        }
+    };
     let mut scene = scene;
     if let Some(p) = &job.teeth {
         if scene.texture_parts("teeth", &derma_render::material::read_albedo(p)?) == 0 {

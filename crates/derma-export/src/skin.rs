@@ -3,11 +3,15 @@
 
 use crate::glb::{self, GlbOptions, GlbReport};
 use crate::Result;
+use derma_core::atomic::StagedDir;
 use derma_core::head_mesh::{HeadUnit, MeshFrame};
 use derma_core::mesh_parts::PartChoice;
 use derma_core::progress::Progress;
 use derma_skin::{SkinGenerator, TextureSet, Written};
 use std::path::Path;
+
+/// The engine file `--glb` adds to a set.
+const GLB: &str = "head.glb";
 
 /// What [`run`] made and wrote.
 pub struct SkinOutput {
@@ -30,18 +34,23 @@ pub fn run(
 ) -> Result<SkinOutput> {
     generator.check_output(out)?;
     let set = generator.run()?;
-    let written = set.write(out, progress)?;
+    // Written beside `out` and swapped in whole: a killed rerun never leaves a mix of two sets.
+    let staged = StagedDir::begin(out, &|name| {
+        derma_skin::outputs::output(name).is_some() || name == GLB || name.ends_with(".tmp")
+    })?;
+    let dir = staged.path();
+    let written = set.write(dir, progress)?;
     let (unit, part) = painted_read(set.mesh_scale.as_ref(), set.inputs.head.is_some());
     let glb = glb
         .then(|| {
             glb::export(
                 &GlbOptions {
-                    textures: out.to_path_buf(),
+                    textures: dir.to_path_buf(),
                     mesh: set.inputs.mesh.clone(),
                     unit,
                     part: part.clone(),
                     head: set.inputs.head.clone(),
-                    out: out.join("head.glb"),
+                    out: dir.join(GLB),
                     maps: None,
                     wrinkles: true,
                     iris: None,
@@ -52,6 +61,19 @@ pub fn run(
             )
         })
         .transpose()?;
+    let glb = match glb {
+        Some(mut report) => {
+            derma_skin::manifest::add_file(
+                dir,
+                GLB,
+                "the head (or mesh) with this set as glTF PBR materials (derma export glb)",
+            )?;
+            report.path = out.join(GLB);
+            Some(report)
+        }
+        None => None,
+    };
+    staged.commit()?;
     Ok(SkinOutput { set, written, glb })
 }
 

@@ -88,7 +88,8 @@ impl<'a> Stage<'a> {
         }
     }
 
-    /// Renders one frame at `size` px across (linear RGB, cropped to the band's aspect).
+    /// Renders one frame `size` px wide (linear RGB; the height from the band's 104 × 50 mm
+    /// aspect).
     pub fn render(&self, f: &evaluate::Frame, rot: [Quat; 2], size: usize) -> [Map; 3] {
         let mut mesh = self.crop.clone();
         (mesh.positions, mesh.normals) = self.skin.frame(self.region, f, &self.source);
@@ -149,6 +150,11 @@ impl<'a> Stage<'a> {
                 coverage: Some(&LASH_COVERAGE),
             });
         }
+        // The band is 120 × 62 mm, framed at 92 % of the render's width: keep its inner
+        // 104 × 50 mm (the crop's ragged triangle edges stay outside), so render large enough
+        // that this inner part is `size` px wide.
+        let (w_mm, h_mm) = (104.0f32, 50.0f32);
+        let full = ((size as f32 * 120.0 / (0.92 * w_mm)).ceil() as usize).max(size);
         let material = FlatMaterial::new(0.5, 0.35);
         let colour = preview::uniform_color(SKIN_RGB);
         let img = preview::render_lit(
@@ -157,15 +163,12 @@ impl<'a> Stage<'a> {
             &material.textures(&colour),
             &props,
             0.0,
-            size,
+            full,
             &preview::STUDIO,
         );
-        // The band is 120 × 62 mm, framed at 92 % of the width: keep its inner part (the crop's
-        // ragged triangle edges stay outside).
-        let span = 0.92 * size as f32 / 120.0; // px per mm
-        let (w_mm, h_mm) = (104.0, 50.0);
-        let (cw, ch) = ((w_mm * span) as usize, (h_mm * span) as usize);
-        let (x0, y0) = ((size - cw) / 2, (size - ch) / 2 + (2.0 * span) as usize);
+        let span = 0.92 * full as f32 / 120.0; // px per mm
+        let (cw, ch) = (size, ((h_mm / w_mm * size as f32).round() as usize).max(1));
+        let (x0, y0) = ((full - cw) / 2, (full - ch) / 2 + (2.0 * span) as usize);
         img.map(|m| m.crop(x0, y0, cw, ch))
     }
 }

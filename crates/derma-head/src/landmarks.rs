@@ -53,7 +53,7 @@ pub enum LandmarkError {
     #[error("landmarks: {0}; expected a JSON object {{\"name\": [x, y, z], …}}")]
     Json(String),
     /// The mesh does not have MediaPipe's topology.
-    #[error("the mesh has {0} vertices; MediaPipe's face mesh topology has 468 (vertex index = landmark id)")]
+    #[error("not MediaPipe's topology: the mesh has {0} vertices, MediaPipe's face mesh 468 (478 with the irises; vertex index = landmark id)")]
     Topology(usize),
     /// The landmarks contradict the axis convention.
     #[error("landmarks: {0}")]
@@ -123,7 +123,7 @@ impl Landmarks {
     /// Landmarks of a mesh in MediaPipe's 468-point topology, from its vertex positions in
     /// file order (mm, +Y up, facing +Z).
     pub fn mediapipe(positions: &[Vec3]) -> Result<Landmarks, LandmarkError> {
-        if positions.len() < 468 {
+        if positions.len() != 468 && positions.len() != 478 {
             return Err(LandmarkError::Topology(positions.len()));
         }
         let mut points: BTreeMap<String, Vec3> = MEDIAPIPE
@@ -141,8 +141,13 @@ impl Landmarks {
             );
         }
         let lm = Landmarks { points };
-        lm.check()?;
-        lm.check_orientation()?;
+        let not_mediapipe = |e: LandmarkError| {
+            LandmarkError::Orientation(format!(
+                "{e} — with 468 vertices but not MediaPipe's vertex order, this is likely not MediaPipe's topology"
+            ))
+        };
+        lm.check().map_err(not_mediapipe)?;
+        lm.check_orientation().map_err(not_mediapipe)?;
         Ok(lm)
     }
 

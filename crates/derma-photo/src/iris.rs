@@ -146,6 +146,44 @@ pub fn find_iris(img: &RgbImage, start: DVec2) -> Result<(DVec2, f64)> {
     ))
 }
 
+/// The contrast between the ring just outside a found iris (sclera, lids) and the ring just
+/// inside it below which the circle is not taken for an iris: an iris is darker than the white
+/// of the eye around it (medians of the rings at 1.25 R and 0.75 R; photos of eyes measure
+/// 1.5–4, a textured surface near 1).
+pub const MIN_IRIS_CONTRAST: f32 = 1.2;
+
+/// Refuses a found circle that is not an eye's iris: its centre outside the photo, a radius
+/// beyond half the photo, or no brighter ring (the sclera) around it.
+fn check_iris(img: &RgbImage, c: DVec2, r: f64) -> Result<()> {
+    let (w, h) = (img.width as f64, img.height as f64);
+    let found = format!(
+        "the circle found (centre {:.0}, {:.0}; radius {r:.1} px)",
+        c.x, c.y
+    );
+    if !(0.0..w).contains(&c.x) || !(0.0..h).contains(&c.y) || r > 0.5 * w.min(h) {
+        return Err(PhotoError::Invalid(format!(
+            "no iris found: {found} does not lie inside the {w}×{h} photo; crop the photo to one open eye"
+        )));
+    }
+    let ring = |k: f64| {
+        let mut v: Vec<f32> = (0..96)
+            .map(|i| {
+                let a = i as f64 / 96.0 * std::f64::consts::TAU;
+                lum(img.sample(c + k * r * DVec2::new(a.cos(), a.sin())))
+            })
+            .collect();
+        v.sort_by(f32::total_cmp);
+        v[48]
+    };
+    let contrast = ring(1.25) / ring(0.75).max(1e-4);
+    if contrast < MIN_IRIS_CONTRAST {
+        return Err(PhotoError::Invalid(format!(
+            "no iris found: {found} is not darker than around it (outside/inside contrast {contrast:.2}, an iris against the sclera at least {MIN_IRIS_CONTRAST}); is this a photo of one open eye?"
+        )));
+    }
+    Ok(())
+}
+
 /// Sub-pixel refinement of the found circle: along 180 rays, the steepest rise of luminance
 /// between 0.7 r and 1.3 r where the outside is sclera-bright (above `sclera_thr`; lid edges
 /// are left out), then an algebraic circle fit (Kåsa 1976) to those edge points.
@@ -271,6 +309,7 @@ pub fn iris_texture(img: &RgbImage, opts: &IrisOptions) -> Result<IrisTexture> {
         .map(DVec2::from)
         .unwrap_or_else(|| darkest_spot(img));
     let (c, radius) = find_iris(img, start)?;
+    check_iris(img, c, radius)?;
     // Pupil: where the median of a ring rises halfway from the centre's to the iris'.
     let ring = |r: f64| -> f32 {
         let mut v: Vec<f32> = (0..48)

@@ -156,6 +156,33 @@ pub fn label(img: &RgbImage) -> (Vec<Label>, f32, f32) {
     (labels, void_t, gum_t)
 }
 
+/// How much brighter (median luminance) the pixels taken for teeth must be than the rest (gum,
+/// lips, the mouth's dark interior) for a photo to be taken for one of teeth: enamel is the
+/// brightest thing in a smile; on skin or a texture the classes differ little.
+pub const MIN_TEETH_CONTRAST: f32 = 1.5;
+
+/// Refuses a photo whose "tooth" pixels are not brighter than the rest (not a photo of teeth).
+fn check_teeth(img: &RgbImage, labels: &[Label]) -> Result<()> {
+    let median = |want: bool| {
+        let mut v: Vec<f32> = img
+            .data
+            .iter()
+            .zip(labels)
+            .filter(|(_, l)| (**l == Label::Tooth) == want)
+            .map(|(c, _)| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2])
+            .collect();
+        v.sort_by(f32::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(0.0)
+    };
+    let contrast = median(true) / median(false).max(1e-4);
+    if contrast < MIN_TEETH_CONTRAST {
+        return Err(PhotoError::Invalid(format!(
+            "no teeth found: the pixels taken for teeth are {contrast:.2}× as bright as the rest (teeth against gums and the mouth: at least {MIN_TEETH_CONTRAST}×); is this a photo of a smile, cropped to the mouth?"
+        )));
+    }
+    Ok(())
+}
+
 /// Runs §4.2 on a photo of the subject's teeth (linear RGB), mapping the result onto the teeth
 /// meshes `upper` and `lower` (derma-head's, or any with the same convention: mm, +Y up, +Z
 /// forward, front teeth at x ≈ 0).
@@ -180,6 +207,7 @@ pub fn teeth_texture(
             teeth.len()
         )));
     }
+    check_teeth(img, &labels)?;
     let (mut x0, mut y0, mut x1, mut y1) = (w, h, 0, 0);
     for &i in &teeth {
         let (x, y) = (i % w, i / w);

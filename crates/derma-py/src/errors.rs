@@ -36,6 +36,29 @@ pub(crate) fn invalid(what: &str, detail: impl std::fmt::Display) -> PyErr {
     DermaError::new_err(format!("{what}: {detail}"))
 }
 
+/// The value of argument `key` in `d` (None when absent or None); a value of the wrong type is
+/// a `DermaError` naming the argument, what was `expected` and what was given.
+pub(crate) fn item<'py, T>(
+    d: &Bound<'py, pyo3::types::PyDict>,
+    key: &str,
+    expected: &str,
+) -> PyResult<Option<T>>
+where
+    T: for<'a> FromPyObject<'a, 'py>,
+{
+    use pyo3::types::PyDictMethods;
+    let Some(v) = d.get_item(key)? else {
+        return Ok(None);
+    };
+    if v.is_none() {
+        return Ok(None);
+    }
+    v.extract::<T>().map(Some).map_err(|_| {
+        let got = v.repr().map_or_else(|_| "?".into(), |r| r.to_string());
+        invalid(key, format!("expected {expected}, got {got}"))
+    })
+}
+
 /// A device name ("auto", "cpu", "gpu") as derma-core reads it.
 pub(crate) fn device(name: &str) -> PyResult<derma_core::gpu::Device> {
     name.parse().map_err(|e: String| invalid("device", e))

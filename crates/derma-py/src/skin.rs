@@ -13,9 +13,8 @@ use pyo3::types::PyDict;
 use std::path::PathBuf;
 
 /// What the Python call asked for, as derma-skin's generator takes it: the wrapper's keyword
-/// arguments as one dict (every key present), None where the config's value stands.
-#[derive(FromPyObject)]
-#[pyo3(from_item_all)]
+/// arguments as one dict (every key present), None where the config's value stands. A value
+/// of the wrong type or sign is a `DermaError` naming the argument ([`crate::errors::item`]).
 pub struct Request {
     size: Option<u32>,
     seed: Option<u64>,
@@ -34,6 +33,30 @@ pub struct Request {
     device: Option<String>,
 }
 
+impl<'py> FromPyObject<'_, 'py> for Request {
+    type Error = PyErr;
+
+    fn extract(d: pyo3::Borrowed<'_, 'py, PyAny>) -> PyResult<Self> {
+        use crate::errors::item;
+        let d = d.cast::<PyDict>()?;
+        Ok(Self {
+            size: item(&d, "size", "a whole number of texels in [16, 16384]")?,
+            seed: item(&d, "seed", "a whole number ≥ 0")?,
+            preset: item(&d, "preset", "a preset's name")?,
+            ita_deg: item(&d, "ita_deg", "a number (degrees)")?,
+            sex: item(&d, "sex", "'male' or 'female'")?,
+            age: item(&d, "age", "a number of years")?,
+            mesh: item(&d, "mesh", "a path")?,
+            head: item(&d, "head", "a path")?,
+            fields: item(&d, "fields", "a path")?,
+            config: item(&d, "config", "a path")?,
+            appearance: item(&d, "appearance", "'table' or 'analytic'")?,
+            threads: item(&d, "threads", "a whole number ≥ 1")?,
+            device: item(&d, "device", "'auto', 'cpu' or 'gpu'")?,
+        })
+    }
+}
+
 impl Request {
     /// The generator, with `derma skin`'s precedence: the config, then each argument given.
     fn generator<'a>(&self, progress: &'a Callback) -> PyResult<SkinGenerator<'a>> {
@@ -43,6 +66,12 @@ impl Request {
         };
         let cfg = g.config_mut();
         if let Some(s) = self.size {
+            if !(16..=16384).contains(&s) {
+                return Err(crate::errors::invalid(
+                    "size",
+                    format!("{s}: expected a whole number of texels in [16, 16384]"),
+                ));
+            }
             cfg.size = s;
         }
         if let Some(s) = self.seed {
@@ -203,7 +232,7 @@ pub fn skin<'py>(
                     let size = generator.config().size as usize;
                     generator
                         .config()
-                        .validate("the configuration")
+                        .validate("the options")
                         .and_then(|()| derma_skin::generate::check_memory(size))
                         .and_then(|()| generator.run())
                         .map(|set| (set, None))

@@ -450,6 +450,20 @@ impl MatchTable {
         serde_json::from_value(self.dtab.header.meta[crate::surface_fit::META_KEY].clone()).ok()
     }
 
+    /// The largest `NAME.rms` (relative RMS of fit NAME) over the table's nodes; `None` where
+    /// the table has no such value.
+    pub fn worst_rms(&self, name: &str) -> Option<f64> {
+        let (o, _) = self.dtab.header.offset(&format!("{name}.rms"))?;
+        let s = self.dtab.header.stride();
+        Some(
+            self.dtab
+                .data
+                .chunks(s)
+                .map(|r| r[o] as f64)
+                .fold(0.0, f64::max),
+        )
+    }
+
     /// Table coordinates of a texel.
     pub fn coords(&self, bio: &derma_optics::BioTexel) -> Vec<f64> {
         let v = bio.to_array();

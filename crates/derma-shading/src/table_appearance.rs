@@ -70,7 +70,14 @@ pub struct TableAppearance {
     pub base: BaseColor,
     /// The table's surface fit ([`crate::surface_fit`]), when it has one.
     specular: Option<crate::appearance::SurfaceSpecular>,
+    /// The largest relative RMS of the table's subsurface (Burley) fit over its nodes: how far
+    /// the colours it gives may be from the transport they were fitted to.
+    pub subsurface_rms: f64,
 }
+
+/// The subsurface fit's relative RMS above which a match table's colours are not trusted
+/// without a warning: the built-in table's worst node is 0.107 (test below).
+pub const TRUSTED_RMS: f64 = 0.15;
 
 impl TableAppearance {
     /// Compiles `table` with the Monte Carlo diffuse albedo as base colour (the meaning the
@@ -174,6 +181,7 @@ impl TableAppearance {
             values,
             base,
             specular: table.surface_fit().map(|f| f.specular()),
+            subsurface_rms: table.worst_rms("burley").unwrap_or(0.0),
         })
     }
 
@@ -501,6 +509,26 @@ fn shade_of(v: &[f32; N]) -> ([f32; 3], Option<Subsurface>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The built-in table is trusted (no warning on the default run); a table whose fit missed
+    /// is not (the warning derma skin gives with such a --table).
+    #[test]
+    fn the_builtin_tables_fit_is_trusted_and_a_poor_one_is_not() {
+        let t = TableAppearance::builtin();
+        println!(
+            "built-in subsurface relative RMS, worst node: {:.4}",
+            t.subsurface_rms
+        );
+        assert!(t.subsurface_rms > 0.0 && t.subsurface_rms < TRUSTED_RMS);
+        let mut table = builtin_table();
+        let (o, _) = table.dtab.header.offset("burley.rms").unwrap();
+        let s = table.dtab.header.stride();
+        table.dtab.data[3 * s + o] = 0.74;
+        assert_eq!(
+            TableAppearance::new(&table).unwrap().subsurface_rms,
+            0.74f32 as f64
+        );
+    }
 
     fn builtin_table() -> MatchTable {
         let dtab = derma_core::dtab::Dtab::from_bytes(BUILTIN_TABLE, Path::new("builtin")).unwrap();

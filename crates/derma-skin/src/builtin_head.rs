@@ -272,6 +272,35 @@ fn hair_direction(r: &Regions, p: Vec3) -> (Vec3, f32) {
     )
 }
 
+/// The vector fields the built-in head makes.
+pub const VECTOR_FIELDS: [&str; 3] = ["wrinkle_vectors", "tension_vectors", "hair_vectors"];
+
+/// Every field name the built-in head's defaults hold ([`fields_on`]'s keys): the feature
+/// fields, the region masks, the regional biology, the expression-wrinkle masks, the relief
+/// and the vector fields.
+pub fn field_names() -> std::collections::BTreeSet<String> {
+    FIELD_NAMES
+        .iter()
+        .chain(REGIONS.iter())
+        .chain(regional::CHANNELS.iter())
+        .chain(VECTOR_FIELDS.iter())
+        .map(|n| n.to_string())
+        .chain(
+            wrinkle_regions::REGIONS
+                .iter()
+                .map(|r| wrinkle_mask_field(r.name)),
+        )
+        .chain(["relief".to_string()])
+        .collect()
+}
+
+/// The UV layout fingerprint ([`TriMesh::uv_layout`]) of the built-in head's skin, which
+/// every fitted head and every copy of `--export-template`'s mesh shares.
+pub fn template_layout() -> &'static derma_core::mesh::UvLayout {
+    static LAYOUT: std::sync::OnceLock<derma_core::mesh::UvLayout> = std::sync::OnceLock::new();
+    LAYOUT.get_or_init(|| Head::builtin().skin.uv_layout())
+}
+
 /// The default fields of the built-in head for `person`: feature fields ([`FIELD_NAMES`]), the
 /// wrinkle vector field, every region mask (by region name, where it does not clash with a
 /// feature field) and the regional biology maps ([`regional::CHANNELS`]); rasterised at
@@ -403,9 +432,9 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
         std::array::from_fn(|c| -> Get { Box::new(move |v| f(v)[c]) })
     };
     let vectors: [(&str, [Get; 3]); 3] = [
-        ("wrinkle_vectors", xyz(|v| &v.wv)),
-        ("tension_vectors", xyz(|v| &v.tv)),
-        ("hair_vectors", xyz(|v| &v.hv)),
+        (VECTOR_FIELDS[0], xyz(|v| &v.wv)),
+        (VECTOR_FIELDS[1], xyz(|v| &v.tv)),
+        (VECTOR_FIELDS[2], xyz(|v| &v.hv)),
     ];
     let gets: Vec<&Get> = scalars
         .values()
@@ -447,6 +476,26 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
         let mut take = || next.next().expect("one map per field");
         set.vectors.insert((*name).into(), [take(), take(), take()]);
     }
+    // Held at the precision of the 16-bit files `export` writes them to, so a template read
+    // back through `--fields` is these fields exactly (the regional biology goes to float EXR).
+    let q = |m: &mut Map| {
+        let d = m.data_mut();
+        d.par_iter_mut().for_each(|v| {
+            *v = derma_core::image_io::dequantize16(derma_core::image_io::quantize16(*v))
+        });
+    };
+    for (name, m) in set.scalars.iter_mut() {
+        if !regional::CHANNELS.contains(&name.as_str()) {
+            q(m);
+        }
+    }
+    set.vectors.values_mut().flatten().for_each(q);
+    set.origins = set
+        .scalars
+        .keys()
+        .chain(set.vectors.keys())
+        .map(|n| (n.clone(), "built-in".to_string()))
+        .collect();
     set
 }
 
@@ -519,8 +568,9 @@ fn smoothed_gains(mesh: &TriMesh, regions: &Regions, sigma_mm: f32) -> Vec<[f32;
 
 /// Writes the built-in head for artists to start from: `head.obj` (the skin, mm), `head_parts.obj`
 /// (eyes, lashes, teeth, tongue as named objects), `head.glb` (metres, every part a named node,
-/// the 52 face units as morph targets) and every default field as a 16-bit PNG (`NAME.png`,
-/// `wrinkle_vectors.png` as RGB) — the layout `--fields` reads.
+/// the 52 face units as morph targets) and every default field: 16-bit PNG (`NAME.png`, the
+/// `*_vectors` as RGB), the regional biology as float EXR (`regional_*.exr`) — the layout
+/// `--fields` reads (docs/skin.md, "The template's fields").
 pub fn export(dir: &std::path::Path, person: &Person) -> crate::Result<Vec<String>> {
     derma_core::atomic::ensure_writable_dir(dir)?;
     let head = Head::builtin();
@@ -535,8 +585,22 @@ pub fn export(dir: &std::path::Path, person: &Person) -> crate::Result<Vec<Strin
         "head.glb".to_string(),
     ];
     for (name, m) in &fields.scalars {
-        derma_core::image_io::write_png16(&dir.join(format!("{name}.png")), &[m])?;
-        written.push(format!("{name}.png"));
+        // Regional gains and shifts are not probabilities: written as their own values (EXR,
+        // float32), which round-trip exactly; everything else as 16-bit greyscale in [0, 1].
+        let file = if regional::CHANNELS.contains(&name.as_str()) {
+            let file = format!("{name}.exr");
+            derma_core::image_io::write_exr(
+                &dir.join(&file),
+                &[("Y", m)],
+                derma_core::image_io::ExrPrecision::F32,
+            )?;
+            file
+        } else {
+            let file = format!("{name}.png");
+            derma_core::image_io::write_png16(&dir.join(&file), &[m])?;
+            file
+        };
+        written.push(file);
     }
     for (name, [r, g, b]) in &fields.vectors {
         derma_core::image_io::write_png16(&dir.join(format!("{name}.png")), &[r, g, b])?;

@@ -575,10 +575,10 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("surface.patch_size_mm", "mm", 0.1, 10000.0, "physical width and height of a patch"),
     k("surface.tileable", "-", 0.0, 0.0, "patch wraps around so the output tiles seamlessly (thesis §3.3, a modulo space)"),
     k("surface.mesh", "path", 0.0, 0.0, "OBJ, glTF or GLB mesh with UVs (kind = \"mesh\")"),
-    k("surface.unit", "-", 0.0, 0.0, "mesh length unit: \"auto\" (with a fitted head, the unit and axes its fit found; else the unit of mm, cm, m that makes its largest extent a head or face, 100–350 mm, otherwise as \"fit\"), \"fit\" (scaled so its largest extent is 225 mm, adult vertex–gnathion height, Farkas 1994), \"mm\", \"cm\" or \"m\"; a unit that contradicts a fitted head's is an error"),
+    k("surface.unit", "-", 0.0, 0.0, "mesh length unit: \"auto\" (with a fitted head, the unit and axes its fit found; else the first of mm, cm, m, in that order, that makes its largest extent a head or face, 100–350 mm, otherwise as \"fit\", with a warning), \"fit\" (scaled so its largest extent is 225 mm, adult vertex–gnathion height, Farkas 1994), \"mm\", \"cm\" or \"m\"; a unit that contradicts a fitted head's is an error"),
     k("surface.part", "-", 0.0, 0.0, "the part of a mesh file of several to paint: a node, mesh or material name; empty = the skin, chosen by name and size (eyes, teeth, lashes, brows and hair left out; the node named head or face first, else the largest); with a fitted head, the part it was fitted to"),
     k("surface.landmarks", "-", 0.0, 0.0, "landmarks of a user mesh, so the built-in head's default fields and regional biology follow it: \"mediapipe\" (the mesh has MediaPipe's 468-point topology, vertex index = landmark id) or a JSON file {\"name\": [x, y, z]} in the mesh's units with every name of derma_head::landmarks::NAMES; +Y up, facing +Z; empty = none"),
-    k("fields", "-", 0.0, 0.0, "named fields: name = \"file.png\" or an expression such as \"face - eyes - lips\" (operators + - * and min, max, clamp, pow, smooth)"),
+    k("fields", "-", 0.0, 0.0, "named fields: name = \"file.png\" or an expression such as \"face - eyes - lips\" (operators + - * / and min, max, clamp, pow, smooth)"),
     k("baseline.phi", "-", 0.0, 1.0, "noise amplitude as a share of each parameter's plausible range (thesis §5.3.1: φ = 0.1)"),
     k("baseline.noise_wavelengths_mm", "mm", 0.01, 1000.0, "wavelengths of the three band-limited noise octaves (weights ½, ⅓, ⅙)"),
     k("baseline.melanin_map", "path", 0.0, 0.0, "melanin map in the mesh's UV layout (EXR channel melanin, or PNG grey × 0.5, the skin-colour LUT's top) replacing the baseline melanin and its regional gain, e.g. from `derma photo chromophores` (empty = none); features paint on top"),
@@ -690,7 +690,42 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("material.specular_f0", "-", 0.0, 1.0, "normal-incidence reflectance of skin where the surface is not fitted: ((n−1)/(n+1))² for n = 1.4 (Donner & Jensen 2006, the analytic appearance's index) = 0.028"),
 ];
 
+/// How a config's errors name where it came from: a file as "config 'FILE'", a description
+/// ("the options", beginning with "the") as it is.
+fn origin(source: &str) -> String {
+    if source.starts_with("the ") {
+        source.to_string()
+    } else {
+        format!("config '{source}'")
+    }
+}
+
 impl SkinConfig {
+    /// Every field name this configuration reads: the features', hair's and relief's fields,
+    /// the detail regions and the names `[fields]` defines (a fields directory may hold any).
+    pub fn field_names(&self) -> std::collections::BTreeSet<String> {
+        [
+            &self.lips.field,
+            &self.cyst.field,
+            &self.mole.field,
+            &self.freckle.field,
+            &self.wrinkle.field,
+            &self.wrinkle.vector_field,
+            &self.pore.field,
+            &self.follicle.field,
+            &self.eyebrow.field,
+            &self.hair.vector_field,
+            &self.hair.beard_field,
+            &self.relief.field,
+            &self.relief.vector_field,
+        ]
+        .into_iter()
+        .chain(self.detail.regions.keys())
+        .chain(self.fields.keys())
+        .cloned()
+        .collect()
+    }
+
     /// Parses TOML, rejecting unknown keys and out-of-range values. `source` names the file.
     ///
     /// A config that sets `baseline.melanin` and says nothing of `person.calibrate_melanin`
@@ -699,11 +734,11 @@ impl SkinConfig {
     /// `material.fitted_surface` means those values.
     pub fn from_toml(text: &str, source: &str) -> Result<SkinConfig, crate::SkinError> {
         let mut cfg: SkinConfig = toml::from_str(text).map_err(|e| crate::SkinError::Config {
-            origin: source.into(),
+            origin: origin(source),
             detail: e.to_string(),
         })?;
         let table: toml::Table = toml::from_str(text).map_err(|e| crate::SkinError::Config {
-            origin: source.into(),
+            origin: origin(source),
             detail: e.to_string(),
         })?;
         let has = |section: &str, key: &str| {
@@ -727,7 +762,7 @@ impl SkinConfig {
     /// Checks every numeric value against its documented range (NaN is always rejected).
     pub fn validate(&self, source: &str) -> Result<(), crate::SkinError> {
         let value = toml::Value::try_from(self).map_err(|e| crate::SkinError::Config {
-            origin: source.into(),
+            origin: origin(source),
             detail: e.to_string(),
         })?;
         let mut problems = Vec::new();
@@ -778,7 +813,7 @@ impl SkinConfig {
             Ok(())
         } else {
             Err(crate::SkinError::Config {
-                origin: source.into(),
+                origin: origin(source),
                 detail: problems.join("; "),
             })
         }

@@ -17,6 +17,9 @@ pub struct FieldSet {
     pub scalars: BTreeMap<String, Map>,
     /// Vector fields: direction (R, G in [0,1], 0.5 = zero) and length B.
     pub vectors: BTreeMap<String, [Map; 3]>,
+    /// Where each field came from: "built-in", "uniform", the file read or "= expression"
+    /// (the report lists it, so a field left at a default is never silent).
+    pub origins: BTreeMap<String, String>,
 }
 
 /// A vector read from a vector field: a unit direction in UV space and a length in [0, 1].
@@ -73,16 +76,30 @@ pub fn decode_vector_at(f: &[Map; 3], taps: &derma_core::map::Taps) -> UvVector 
     }
 }
 
+/// True when `path` names an OpenEXR file (by its extension).
+fn is_exr(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+}
+
 impl FieldSet {
     /// Loads every `NAME.png`/`NAME.exr` of `dir` as field NAME (`*_vectors` files as vector
-    /// fields); suspicious inputs (colour, out of range) are noted on `progress`.
-    pub fn load_dir(&mut self, dir: &Path, progress: &dyn Progress) -> Result<()> {
+    /// fields) and returns the names read. A name that is not `known` (a misspelt file would
+    /// otherwise be ignored) and a name given twice (PNG and EXR) are errors naming the file;
+    /// suspicious inputs (colour, out of range) are noted on `progress`.
+    pub fn load_dir(
+        &mut self,
+        dir: &Path,
+        known: &std::collections::BTreeSet<String>,
+        progress: &dyn Progress,
+    ) -> Result<Vec<String>> {
         let entries = std::fs::read_dir(dir).map_err(|source| derma_core::CoreError::Read {
             path: dir.to_path_buf(),
             source,
         })?;
         let mut paths: Vec<_> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
         paths.sort();
+        let mut read: BTreeMap<String, std::path::PathBuf> = BTreeMap::new();
         for p in paths {
             let ext = p
                 .extension()
@@ -95,9 +112,28 @@ impl FieldSet {
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_default();
+            if !known.contains(&name) {
+                return Err(SkinError::Input {
+                    path: p,
+                    detail: format!(
+                        "'{name}' is not a field derma reads; known fields: {}",
+                        known.iter().cloned().collect::<Vec<_>>().join(", ")
+                    ),
+                });
+            }
+            if let Some(first) = read.get(&name) {
+                return Err(SkinError::Input {
+                    path: p.clone(),
+                    detail: format!(
+                        "field '{name}' is given twice (also '{}'); keep one",
+                        first.display()
+                    ),
+                });
+            }
             self.load_file(&name, &p, progress)?;
+            read.insert(name, p);
         }
-        Ok(())
+        Ok(read.into_keys().collect())
     }
 
     /// Loads one file as field `name`.
@@ -115,6 +151,7 @@ impl FieldSet {
                 detail: "expected RGB".into(),
             })?;
             self.vectors.insert(name.into(), [r, g, b]);
+            self.origins.insert(name.into(), path.display().to_string());
         } else {
             let img = image_io::read_grey(path)?;
             if img.is_color {
@@ -123,14 +160,21 @@ impl FieldSet {
                     path.display()
                 )));
             }
-            let m = img.channels.into_iter().next().expect("one channel");
-            if m.data().iter().any(|&v| !(0.0..=1.0).contains(&v)) {
+            let mut m = img.channels.into_iter().next().expect("one channel");
+            if crate::regional::CHANNELS.contains(&name) {
+                // Regional gains and shifts: their own values in EXR, encoded in [0, 1] in
+                // 8/16-bit images (regional::decode_png).
+                if !is_exr(path) {
+                    m = m.map(|v| crate::regional::decode_png(name, v).unwrap_or(v));
+                }
+            } else if m.data().iter().any(|&v| !(0.0..=1.0).contains(&v)) {
                 progress.note(Note::warning(format!(
                     "field '{name}' ({}) has values outside [0, 1]; clamped",
                     path.display()
                 )));
             }
             self.scalars.insert(name.into(), m);
+            self.origins.insert(name.into(), path.display().to_string());
         }
         Ok(())
     }
@@ -173,8 +217,19 @@ impl FieldSet {
             .collect();
         self.scalars
             .insert(name.into(), Map::from_vec(size.0, size.1, data)?);
+        self.origins.insert(name.into(), format!("= {expr}"));
         Ok(())
     }
+}
+
+/// The field names an expression reads (none when it does not parse; [`FieldSet::define`]
+/// reports that).
+pub fn expression_names(expr: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    if let Ok(ast) = Parser::new(expr).parse() {
+        ast.names(&mut out);
+    }
+    out
 }
 
 /// Expression tree of the compositing language.

@@ -25,8 +25,10 @@ use derma_core::gpu::Device;
 use derma_core::head_mesh::MeshFrame;
 use derma_core::mesh::TriMesh;
 use derma_core::progress::{Job, Log, Note, Prefixed, Progress, Silent, Unit};
+use derma_core::report::sha256_file;
 use derma_core::Map;
 use derma_shading::Appearance;
+use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
@@ -203,7 +205,7 @@ impl<'a> SkinGenerator<'a> {
     /// Checks before any work that the config is valid, the set fits in memory, `dir` can be
     /// written and no input would be overwritten.
     pub fn check_output(&self, dir: &Path) -> Result<()> {
-        self.config.validate("the configuration")?;
+        self.config.validate("the options")?;
         check_memory(self.config.size as usize)?;
         for (what, p) in [
             ("mesh", &self.mesh),
@@ -219,7 +221,7 @@ impl<'a> SkinGenerator<'a> {
                 }
             }
         }
-        derma_core::atomic::ensure_writable_dir(dir).map_err(|e| SkinError::Input {
+        derma_core::atomic::check_writable_dest(dir).map_err(|e| SkinError::Input {
             path: dir.to_path_buf(),
             detail: format!("the output directory is not writable ({e})"),
         })?;
@@ -259,7 +261,7 @@ impl<'a> SkinGenerator<'a> {
 
     fn generate(&self) -> Result<TextureSet> {
         let started = Instant::now();
-        self.config.validate("the configuration")?;
+        self.config.validate("the options")?;
         // A GPU chosen outright is opened now, so a build or machine without one is told so
         // before any work, as every other command does (auto falls back to the CPU later).
         if self.device == Device::Gpu {
@@ -299,13 +301,18 @@ impl<'a> SkinGenerator<'a> {
             None
         };
         let has_landmarks = !self.config.surface.landmarks.trim().is_empty() || self.head.is_some();
-        let regional_gains = (on_head || has_landmarks) && self.config.regional.enabled;
-        let (person_cfg, melanin) =
-            crate::calibration::apply_person(&self.config, appearance, regional_gains)?;
-        let cfg = &person_cfg;
-        let size = cfg.size as usize;
+        let size = self.config.size as usize;
         check_memory(size)?;
         let job = Job::new(self.progress);
+        if let AppearanceChoice::Table(t) = &self.appearance {
+            if t.subsurface_rms > derma_shading::table_appearance::TRUSTED_RMS {
+                job.note(Note::warning(format!(
+                    "the match table's subsurface fit reaches a relative RMS of {:.2} (trusted up to {}): its colours may be far from the light transport; fit it again with more iterations or nodes",
+                    t.subsurface_rms,
+                    derma_shading::table_appearance::TRUSTED_RMS
+                )));
+            }
+        }
 
         // Surface.
         job.stage("surface and fields", 1, Unit::Steps);
@@ -317,11 +324,12 @@ impl<'a> SkinGenerator<'a> {
         }
         let mut mesh_scale = None;
         let mut user_regions = None;
+        let mut template_layout = false;
         let mesh = match kind {
             SurfaceKind::Template => Some(head.expect("on the head").skin.clone()),
             SurfaceKind::Mesh => {
                 let p = mesh_path.clone().expect("checked");
-                let (m, u) = load_mesh(&p, &cfg.surface, self.head.as_deref(), &job)?;
+                let (m, u) = load_mesh(&p, &self.config.surface, self.head.as_deref(), &job)?;
                 if let (Some(head), true) = (head, self.config.surface.landmarks.trim().is_empty())
                 {
                     user_regions = Some(derma_head::Regions::new(
@@ -332,12 +340,29 @@ impl<'a> SkinGenerator<'a> {
                 } else if has_landmarks {
                     let lm = self.landmarks(&p, &u)?;
                     user_regions = Some(derma_head::Regions::new(lm, Vec::new(), Vec::new()));
+                } else if m
+                    .uv_layout()
+                    .matches(crate::builtin_head::template_layout())
+                {
+                    // The template's own skin (`--export-template`'s head.obj or head.glb, or
+                    // a sculpt of it): the built-in head's landmarks, regions and fields hold.
+                    template_layout = true;
+                    user_regions = Some(derma_head::Head::builtin().regions.clone());
+                    job.note(Note::info(format!(
+                        "'{}' has the built-in head's UV layout: its default fields and regional biology apply",
+                        p.display()
+                    )));
                 }
                 mesh_scale = Some(u);
                 Some(m)
             }
             SurfaceKind::Patch => None,
         };
+        let regional_gains =
+            (on_head || has_landmarks || template_layout) && self.config.regional.enabled;
+        let (person_cfg, melanin) =
+            crate::calibration::apply_person(&self.config, appearance, regional_gains)?;
+        let cfg = &person_cfg;
         if has_landmarks && user_regions.is_none() && !(on_head && self.head.is_some()) {
             return Err(SkinError::Key {
                 key: "surface.landmarks".into(),
@@ -424,7 +449,7 @@ impl<'a> SkinGenerator<'a> {
             check_raster(&surface, mesh_path.as_deref(), &job)?;
         }
         if let Some(dir) = &self.fields {
-            fields.load_dir(dir, &job)?;
+            fields.load_dir(dir, &known_fields(cfg), &job)?;
         }
         for (name, value) in &cfg.fields {
             let v = value.trim();
@@ -436,6 +461,18 @@ impl<'a> SkinGenerator<'a> {
             }
         }
 
+        let uniform: Vec<&str> = fields
+            .origins
+            .iter()
+            .filter(|(_, o)| *o == UNIFORM)
+            .map(|(n, _)| n.as_str())
+            .collect();
+        if !uniform.is_empty() && (self.fields.is_some() || !cfg.fields.is_empty()) {
+            job.note(Note::info(format!(
+                "fields not given, uniform (this mesh has no built-in fields): {}",
+                uniform.join(", ")
+            )));
+        }
         job.stage("scatter", 1, Unit::Steps);
         let features = crate::feature_set::place(cfg, &fields, &scatter_surface, size)?;
         drop(scatter_surface);
@@ -690,6 +727,9 @@ fn check_raster(s: &Surface, mesh: Option<&Path>, progress: &dyn Progress) -> Re
     Ok(())
 }
 
+/// The origin ([`FieldSet::origins`]) of a field left at its uniform default.
+const UNIFORM: &str = "uniform";
+
 /// Uniform defaults for surfaces without painted fields.
 fn uniform_fields() -> FieldSet {
     let mut f = FieldSet::default();
@@ -702,7 +742,24 @@ fn uniform_fields() -> FieldSet {
     }
     f.vectors
         .insert("wrinkle_vectors".into(), [one(0.5), one(0.5), one(0.0)]);
+    f.origins = f
+        .scalars
+        .keys()
+        .chain(f.vectors.keys())
+        .map(|n| (n.clone(), UNIFORM.to_string()))
+        .collect();
     f
+}
+
+/// The field names a fields directory may hold: the built-in head's, those the configuration
+/// reads and those its expressions use.
+fn known_fields(cfg: &SkinConfig) -> std::collections::BTreeSet<String> {
+    let mut known = crate::builtin_head::field_names();
+    known.extend(cfg.field_names());
+    for expr in cfg.fields.values() {
+        known.extend(crate::field::expression_names(expr));
+    }
+    known
 }
 
 /// Everything the main job produced, in memory; [`TextureSet::write`] writes its files.
@@ -754,6 +811,16 @@ impl TextureSet {
     pub fn head(&self) -> &'static derma_head::Head {
         derma_head::fitted::or_builtin(self.inputs.head.as_deref())
             .unwrap_or(derma_head::Head::builtin())
+    }
+
+    /// The UV layout the set was painted on: the template's on the head (fitted or not), the
+    /// mesh's on a user mesh, none on a patch.
+    pub fn uv_layout(&self) -> Option<derma_core::mesh::UvLayout> {
+        match self.inputs.surface {
+            SurfaceKind::Patch => None,
+            SurfaceKind::Template => Some(crate::builtin_head::template_layout().clone()),
+            SurfaceKind::Mesh => self.preview_mesh.as_ref().map(|(m, _)| m.uv_layout()),
+        }
     }
 
     /// Worker threads the set was made with.
@@ -885,13 +952,6 @@ impl TextureSet {
             seconds: self.started.elapsed().as_secs_f64(),
         });
         files.push(outputs::REPORT);
-        // The manifest lists every file but itself.
-        let manifest = crate::report::manifest(self.config.size, &files);
-        derma_core::report::write_json(
-            &dir.join(outputs::MANIFEST),
-            &manifest,
-            derma_core::report::JsonFormat::REPORT,
-        )?;
         let report = crate::report::report(&crate::report::Run {
             config: &self.config,
             inputs: &self.inputs,
@@ -902,6 +962,7 @@ impl TextureSet {
             surface: &self.surface,
             bio: &self.bio,
             render: &self.render,
+            field_origins: &self.fields.origins,
             counts: self.features.counts(),
             height_range,
             log: &log,
@@ -909,6 +970,29 @@ impl TextureSet {
         derma_core::report::write_json(
             &dir.join(outputs::REPORT),
             &report,
+            derma_core::report::JsonFormat::REPORT,
+        )?;
+        // The manifest lists every file but itself, hashed (report.json aside).
+        let mut inputs = report["inputs"].clone();
+        inputs["field_files"] = self
+            .fields
+            .origins
+            .iter()
+            .filter(|(_, o)| Path::new(o).is_file())
+            .map(|(n, o)| (n.clone(), json!(sha256_file(Path::new(o)))))
+            .collect::<serde_json::Map<_, _>>()
+            .into();
+        let made = crate::manifest::Made {
+            size: self.config.size,
+            seed: self.config.seed,
+            surface: report["inputs"]["surface"].as_str().unwrap_or("-"),
+            uv_layout: self.uv_layout(),
+            inputs,
+            options: json!({"config": self.config, "appearance": self.appearance}),
+        };
+        derma_core::report::write_json(
+            &dir.join(outputs::MANIFEST),
+            &crate::manifest::manifest(&made, dir, &files)?,
             derma_core::report::JsonFormat::REPORT,
         )?;
         files.insert(files.len() - 1, outputs::MANIFEST); // manifest order: before report.json

@@ -84,13 +84,13 @@ pub const KINDS: [KindEntry; 9] = [
     },
     KindEntry {
         name: "eyebrow",
-        label: "eyebrow hairs",
+        label: "eyebrow follicles",
         stream: 7,
         place: place_eyebrows,
     },
     KindEntry {
         name: "brow_hair",
-        label: "brow hairs",
+        label: "eyebrow strands",
         stream: 8,
         place: place_brow_hairs,
     },

@@ -33,6 +33,7 @@ pub mod field;
 pub mod generate;
 pub mod index;
 pub mod kinds;
+pub mod manifest;
 pub mod mottling;
 pub mod noise;
 pub mod normal_map;
@@ -50,9 +51,9 @@ pub mod texture_set;
 #[derive(Debug, thiserror::Error)]
 pub enum SkinError {
     /// A config as a whole is invalid (TOML syntax, values out of range).
-    #[error("config '{origin}': {detail}")]
+    #[error("{origin}: {detail}")]
     Config {
-        /// Where the config came from: its file, or "the configuration".
+        /// Where the config came from: "config 'FILE'", or "the options" given in code or flags.
         origin: String,
         /// What is wrong, naming the keys.
         detail: String,

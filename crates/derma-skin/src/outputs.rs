@@ -82,7 +82,7 @@ pub const OUTPUTS: [OutputFile; 19] = [
     out(SSS_RADIUS, "linear (non-colour)", "subsurface scatter distance per channel (Christensen & Burley 2015 mean free path, Blender Subsurface Radius), 16-bit, 0 ↔ 0 mm and 1 ↔ 8 mm"),
     out(FEATURES, "-", "every placed feature with its parameters (mm)"),
     out(PREVIEW, "sRGB", "shaded preview and a contact sheet of the maps"),
-    out(MANIFEST, "-", "this list: every file with its colour space and meaning"),
+    out(MANIFEST, "-", "this list: every file with its colour space, meaning and SHA-256 (report.json unhashed), and the seed, inputs, options and UV layout it was painted with; `derma check` verifies it"),
     out(REPORT, "-", "run report: version, seed, inputs with hashes, counts, statistics, timings"),
 ];
 

@@ -17,6 +17,22 @@ pub const CHANNELS: [&str; 4] = [
     "regional_epidermis",
 ];
 
+/// Largest regional gain an 8- or 16-bit image can hold: a PNG regional field's value v in
+/// [0, 1] reads as the gain 8·v (so 0.125 is 1, no change). EXR fields hold the values
+/// themselves; `--export-template` writes EXR.
+pub const PNG_GAIN_SCALE: f32 = 8.0;
+
+/// The value a regional field `name` stored as an 8/16-bit image encodes by `v` in [0, 1]:
+/// gains (blood, melanin, epidermis) `PNG_GAIN_SCALE`·v, the oxygenation shift v − ½.
+/// `None` for fields that are not regional.
+pub fn decode_png(name: &str, v: f32) -> Option<f32> {
+    match name {
+        "regional_oxygenation" => Some(v - 0.5),
+        n if CHANNELS.contains(&n) => Some(PNG_GAIN_SCALE * v),
+        _ => None,
+    }
+}
+
 /// The values where no region changes anything: gains 1, oxygenation shift 0.
 pub const NEUTRAL: [f32; 4] = [1.0, 1.0, 0.0, 1.0];
 

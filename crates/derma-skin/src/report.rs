@@ -1,10 +1,8 @@
-//! What a `derma skin` run says about itself: manifest.json (every file with its colour space
-//! and meaning, for engines and pipelines) and report.json (version, seed, inputs with their
+//! What a `derma skin` run says about itself: report.json (version, seed, inputs with their
 //! hashes, counts, statistics, notes and stage timings), numbers as the user wrote them.
 
 use crate::config::{SkinConfig, SurfaceKind};
 use crate::feature_set::FeatureCounts;
-use crate::outputs;
 use crate::paint::BioMaps;
 use crate::surface::Surface;
 use crate::texture_set::{HeightRange, RenderMaps};
@@ -51,28 +49,14 @@ pub struct Run<'a> {
     pub bio: &'a BioMaps,
     /// The render maps (the base colour's statistics).
     pub render: &'a RenderMaps,
+    /// Where each field came from (built-in, uniform, a file, an expression).
+    pub field_origins: &'a std::collections::BTreeMap<String, String>,
     /// Features per kind.
     pub counts: FeatureCounts,
     /// Range of height.png.
     pub height_range: HeightRange,
     /// Timings and notes of the whole run.
     pub log: &'a Log,
-}
-
-/// manifest.json of a `size`² set listing `files` (the maps, features.json, preview.png and
-/// report.json).
-pub fn manifest(size: u32, files: &[&str]) -> serde_json::Value {
-    let maps: Vec<&outputs::OutputFile> = files.iter().filter_map(|f| outputs::output(f)).collect();
-    json!({
-        "generator": format!("derma {}", env!("CARGO_PKG_VERSION")),
-        "size": [size, size],
-        "conventions": {
-            "uv": "OpenGL: v up; row 0 of every image is v = 1",
-            "normal": "tangent space, OpenGL +Y (green up); MikkTSpace tangents on meshes",
-            "lengths": "mm"
-        },
-        "maps": maps,
-    })
 }
 
 /// Texels per block of [`covered_stats`]: the blocks' sums are added in order, so the
@@ -165,6 +149,7 @@ pub fn report(set: &Run) -> serde_json::Value {
             "config": file(&set.inputs.config),
             "mesh": mesh,
             "fields": set.inputs.fields.as_ref().map(|p| p.display().to_string()),
+            "field_origins": set.field_origins,
             "head": set.inputs.head.as_ref().map(|p| json!({"path": p.display().to_string(), "sha256": sha256_file(&p.join("head.json"))})),
             "surface": surface,
         },

@@ -93,7 +93,8 @@ pub struct AnimateArgs {
     /// Distance (mm) of what the eyes look at (vergence).
     #[arg(long, default_value_t = 1000.0)]
     distance: f32,
-    /// Render each frame at this width (px); 0: no renders.
+    /// Render each frame at this width (px; the height from the eye band's aspect, 104:50);
+    /// 0: no renders.
     #[arg(long, default_value_t = 480)]
     render: usize,
     /// Eyeball texture for the globes (`derma photo iris`'s eye.exr or eye.png).

@@ -5,6 +5,7 @@
 
 mod args;
 mod batch;
+mod check;
 mod export;
 mod eyes;
 mod head;
@@ -85,6 +86,9 @@ enum Command {
     /// Many identities from one spec (skin tone, sex, age, mesh distributions): resumable,
     /// sharded by a Slurm array or Kubernetes Indexed Job, merged into a manifest.
     Batch(batch::BatchArgs),
+    /// Check a texture set against its manifest (every file's SHA-256; nothing missing or
+    /// unlisted).
+    Check(check::CheckArgs),
 }
 
 fn main() {
@@ -119,6 +123,7 @@ fn main() {
         Command::View(args) => export::view(args),
         Command::Head(cmd) => head::run(cmd, &bars),
         Command::Batch(args) => batch::run(args, &bars),
+        Command::Check(args) => check::run(args),
     };
     bars.finish();
     if let Err(e) = result {

@@ -6,7 +6,8 @@ use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct CalibrateArgs {
-    /// Correspondences: JSON or CSV (format in derma-photo's correspondences module and README).
+    /// Correspondences: JSON or CSV (format in docs/photo.md, "1. Correspondences and cameras",
+    /// under "Formats").
     #[arg(long)]
     pub points: PathBuf,
     /// The mesh the points lie on (OBJ/glTF/GLB, UVs not needed); default: the built-in face.
@@ -24,9 +25,9 @@ pub struct CalibrateArgs {
     /// Intrinsics per photo instead of one shared camera.
     #[arg(long)]
     pub per_photo: bool,
-    /// With --per-photo: each photo's focal length stays within this fraction of the shared
-    /// camera's, fitted first ("inf": unbounded).
-    #[arg(long, default_value_t = 0.15)]
+    /// With --per-photo: relative standard deviation of the log-normal prior that keeps each
+    /// photo's focal length near the shared camera's, fitted first ("inf": no prior).
+    #[arg(long, default_value_t = 0.1)]
     pub focal_deviation: f64,
     /// Also refine the principal point.
     #[arg(long)]

@@ -4,10 +4,16 @@
 use derma_core::progress::{Note, Progress, Unit};
 use indicatif::{ProgressBar, ProgressStyle};
 
-/// Progress bars and notes on stderr.
+/// Progress bars and notes on stderr. Where stderr is not a terminal (a log, a pipe) the bar is
+/// not drawn, so a long stage says once, after [`ESTIMATE_AFTER`], how long it will take.
 pub struct Bars {
     bar: Option<ProgressBar>,
+    /// The current stage's name and start, and whether its estimate was said.
+    stage: std::sync::Mutex<(String, std::time::Instant, bool)>,
 }
+
+/// When a long stage's estimate is said (without a terminal to draw the bar on).
+const ESTIMATE_AFTER: std::time::Duration = std::time::Duration::from_secs(10);
 
 impl Bars {
     /// Bars that show everything, or nothing when `quiet`.
@@ -17,7 +23,10 @@ impl Bars {
             b.set_draw_target(indicatif::ProgressDrawTarget::stderr());
             b
         });
-        Self { bar }
+        Self {
+            bar,
+            stage: std::sync::Mutex::new((String::new(), std::time::Instant::now(), true)),
+        }
     }
 
     /// Clears the bar (before the command's own summary lines).
@@ -32,6 +41,26 @@ impl Bars {
         if let Some(b) = &self.bar {
             b.suspend(|| eprintln!("{text}"));
         }
+    }
+}
+
+impl Bars {
+    /// Says once per stage, after [`ESTIMATE_AFTER`], how long the stage will take in all.
+    fn estimate(&self, b: &ProgressBar) {
+        let Ok(mut s) = self.stage.lock() else { return };
+        let elapsed = s.1.elapsed();
+        let (done, total) = (b.position(), b.length().unwrap_or(0));
+        if s.2 || elapsed < ESTIMATE_AFTER || done == 0 || total == 0 {
+            return;
+        }
+        s.2 = true;
+        let left = elapsed.as_secs_f64() * (total - done.min(total)) as f64 / done as f64;
+        eprintln!(
+            "{}: {done}/{total} in {:.0} s; about {:.0} s more",
+            s.0,
+            elapsed.as_secs_f64(),
+            left
+        );
     }
 }
 
@@ -55,11 +84,16 @@ impl Progress for Bars {
         b.set_position(0);
         b.set_message(name.to_string());
         b.enable_steady_tick(std::time::Duration::from_millis(200));
+        if let Ok(mut s) = self.stage.lock() {
+            *s = (name.to_string(), std::time::Instant::now(), total <= 1);
+        }
     }
 
     fn advance(&self, steps: u64) {
-        if let Some(b) = &self.bar {
-            b.inc(steps);
+        let Some(b) = &self.bar else { return };
+        b.inc(steps);
+        if b.is_hidden() {
+            self.estimate(b);
         }
     }
 

@@ -14,8 +14,8 @@ pub struct SkinArgs {
     /// Output directory (created if needed; existing texture files in it are replaced atomically).
     #[arg(long, default_value = "out")]
     out: PathBuf,
-    /// Texture size in texels (square). Overrides `size` in the config.
-    #[arg(long)]
+    /// Texture size in texels (square, 16–16384). Overrides `size` in the config.
+    #[arg(long, value_parser = |s: &str| in_range::<u32>("size", s))]
     size: Option<u32>,
     /// Random seed. Overrides `seed` in the config.
     #[arg(long)]
@@ -65,15 +65,16 @@ pub struct SkinArgs {
     /// A match table from `derma match fit` instead of the built-in one (implies table).
     #[arg(long, value_name = "FILE.dtab", conflicts_with = "appearance")]
     table: Option<PathBuf>,
-    /// Skin tone preset (ITA° bands of Chardon et al. 1991); sets person.ita_deg. Default: the
-    /// config's person (light, 48°).
+    /// Skin tone preset, an ITA° band of Chardon et al. 1991: very-light (> 55°), light
+    /// (41–55°), intermediate (28–41°), tan (10–28°), brown (−30–10°) or dark (< −30°); sets
+    /// person.ita_deg. Default: the config's person (light, 48°).
     #[arg(long, value_parser = parse_preset)]
     preset: Option<derma_skin::regional::Preset>,
     /// Sex of the person (beard follicles for male). Overrides person.sex.
     #[arg(long, value_enum)]
     sex: Option<SexArg>,
-    /// Age in years (wrinkles). Overrides person.age_years.
-    #[arg(long)]
+    /// Age in years (10–100; wrinkles). Overrides person.age_years.
+    #[arg(long, value_parser = |s: &str| in_range::<f32>("person.age_years", s))]
     age: Option<f32>,
     /// Also head.glb in --out: the head (or --mesh) with the texture set as glTF PBR, for
     /// Blender, Unreal, Unity and three.js (see `derma export glb` for loose maps and naming).
@@ -96,6 +97,20 @@ pub enum AppearanceArg {
 pub enum SexArg {
     Male,
     Female,
+}
+
+/// A flag's value checked against the range of the config key it sets (derma-skin's
+/// KEY_DOCS), so the error names the flag, not the config.
+fn in_range<T: std::str::FromStr + Into<f64> + Copy>(key: &str, s: &str) -> Result<T, String> {
+    let doc = derma_skin::config::KEY_DOCS.iter().find(|d| d.key == key);
+    let (lo, hi) = doc.map_or((f64::MIN, f64::MAX), |d| d.range);
+    let unit = doc.map_or("", |d| d.unit);
+    match s.trim().parse::<T>() {
+        Ok(v) if (lo..=hi).contains(&v.into()) => Ok(v),
+        _ => Err(format!(
+            "'{s}': expected a number from {lo} to {hi} ({unit})"
+        )),
+    }
 }
 
 fn parse_preset(s: &str) -> std::result::Result<derma_skin::regional::Preset, String> {

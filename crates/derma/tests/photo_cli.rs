@@ -119,6 +119,65 @@ fn the_pipeline_runs_from_synthetic_photos_to_a_rig() {
 }
 
 #[test]
+fn a_photo_that_is_not_an_eye_or_teeth_is_refused() {
+    // A crop of real skin (shared/data, a scan's albedo) and a derma base colour are neither an
+    // eye nor a smile: refused with the figure (before: an iris "found" off the eye, teeth
+    // textures made of skin).
+    let d = tmp("not-parts");
+    let mut photos = vec![];
+    let real = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/skin_albedo_forehead_256x128.png");
+    if real.exists() {
+        photos.push(real);
+    }
+    let flat = d.join("flat.png");
+    let img = derma_core::image::Rgb {
+        width: 200,
+        height: 120,
+        data: (0..200 * 120)
+            .map(|i| {
+                let v = 0.35 + 0.1 * (((i * 7919) % 101) as f32 / 101.0);
+                [v, 0.8 * v, 0.7 * v]
+            })
+            .collect(),
+    };
+    img.write_linear(&flat).unwrap();
+    photos.push(flat);
+    for p in &photos {
+        let (ok, _, err) = run(&[
+            "photo",
+            "iris",
+            "--photo",
+            s(p),
+            "--size",
+            "64",
+            "--out",
+            s(&d.join("i")),
+        ]);
+        assert!(
+            !ok && err.contains("no iris found"),
+            "{}: {err}",
+            p.display()
+        );
+        let (ok, _, err) = run(&[
+            "photo",
+            "teeth",
+            "--photo",
+            s(p),
+            "--size",
+            "64",
+            "--out",
+            s(&d.join("t")),
+        ]);
+        assert!(
+            !ok && err.contains("no teeth found") || err.contains("tooth pixels"),
+            "{}: {err}",
+            p.display()
+        );
+    }
+}
+
+#[test]
 fn iris_and_teeth_from_single_photos() {
     let d = tmp("parts");
     let eye = d.join("eye.png");

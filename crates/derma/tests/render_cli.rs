@@ -179,6 +179,35 @@ fn a_teeth_texture_reaches_the_teeth_and_nothing_else() {
 }
 
 #[test]
+fn a_set_is_only_rendered_on_the_uv_layout_it_was_painted_on() {
+    // A set painted on a quad's UVs drawn on the head's (before: drawn without a word, the
+    // quad's texels scattered over the face); the quad itself takes it.
+    let d = tmp("layout");
+    let quad = d.join("quad.glb");
+    std::fs::create_dir_all(&d).unwrap();
+    std::fs::write(&quad, derma_test_support::quad_glb()).unwrap();
+    let set = d.join("set");
+    let (ok, _, err) = run(&["skin", "--mesh", s(&quad), "--size", "64", "--out", s(&set)]);
+    assert!(ok, "{err}");
+    let m: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(set.join("manifest.json")).unwrap()).unwrap();
+    assert_eq!(m["uv_layout"]["triangles"], 2, "{m}");
+    let r = d.join("r");
+    let args = |extra: &[&str]| {
+        let mut a = vec!["render", s(&set), "--size", "64x64", "--out", s(&r)];
+        a.extend_from_slice(extra);
+        run(&a)
+    };
+    let (ok, _, err) = args(&["--device", "cpu"]);
+    assert!(
+        !ok && err.contains("another UV layout") && err.contains("built-in head"),
+        "{err}"
+    );
+    let (ok, _, err) = args(&["--device", "cpu", "--mesh", s(&quad)]);
+    assert!(ok, "{err}");
+}
+
+#[test]
 fn render_names_what_is_wrong() {
     let d = tmp("render-errors");
     std::fs::create_dir_all(d.join("empty")).unwrap();
