@@ -107,15 +107,13 @@ pub fn check_writable_dest(dir: &Path) -> Result<()> {
             }
         }
     }
-    let denied = |detail: &str| CoreError::Invalid {
-        what: format!("output directory '{}'", dir.display()),
-        detail: detail.into(),
-    };
     if !at.is_dir() {
-        return Err(denied(&format!(
-            "'{}' is a file, not a directory",
-            at.display()
-        )));
+        return Err(crate::Invalid::new(
+            format!("output directory '{}'", dir.display()),
+            "a directory or a path to make one",
+            format!("'{}', a file", at.display()),
+        )
+        .into());
     }
     let probe = at.join(format!(".derma-write-probe.{}", unique_tag()));
     std::fs::write(&probe, b"probe").map_err(|source| CoreError::Write {
@@ -141,10 +139,12 @@ impl StagedDir {
     /// Creates the staging directory beside `dest` (and `dest`'s missing parents).
     pub fn begin(dest: &Path, owned: &dyn Fn(&str) -> bool) -> Result<Self> {
         if dest.is_file() {
-            return Err(CoreError::Invalid {
-                what: format!("output directory '{}'", dest.display()),
-                detail: "is a file".into(),
-            });
+            return Err(crate::Invalid::new(
+                format!("output directory '{}'", dest.display()),
+                "a directory",
+                "a file",
+            )
+            .into());
         }
         if dest.is_dir() {
             let entries = std::fs::read_dir(dest).map_err(|source| CoreError::Read {
@@ -158,13 +158,12 @@ impl StagedDir {
                 .collect();
             foreign.sort();
             if !foreign.is_empty() {
-                return Err(CoreError::Invalid {
-                    what: format!("output directory '{}'", dest.display()),
-                    detail: format!(
-                        "it holds files that are not this output's ({}); derma replaces a previous output whole, so give an empty or new directory",
-                        foreign.join(", ")
-                    ),
-                });
+                return Err(crate::Invalid::new(
+                    format!("output directory '{}'", dest.display()),
+                    "an empty or new directory, or one holding only a previous output (derma replaces it whole)",
+                    format!("files that are not this output's: {}", foreign.join(", ")),
+                )
+                .into());
             }
         }
         let staging = sibling(dest, "derma-partial");
@@ -239,10 +238,12 @@ fn sibling(dest: &Path, purpose: &str) -> PathBuf {
 /// yet are compared by their nearest existing ancestor.
 pub fn check_inputs_spared(outputs: &[PathBuf], inputs: &[&Path]) -> Result<()> {
     let refuse = |message: String| {
-        Err(CoreError::Invalid {
-            what: "output".into(),
-            detail: format!("{message}; derma never writes over its inputs — pick another output"),
-        })
+        Err(crate::Invalid::new(
+            "output",
+            "a place apart from the inputs (derma never writes over its inputs — pick another output)",
+            message,
+        )
+        .into())
     };
     for o in outputs {
         let oc = canonical(o);
@@ -375,10 +376,7 @@ mod tests {
         std::fs::write(&target, b"old").unwrap();
         let r = write_with(&target, |tmp| {
             std::fs::write(tmp, b"partial").unwrap();
-            Err(CoreError::Invalid {
-                what: "test".into(),
-                detail: "boom".into(),
-            })
+            Err(crate::Invalid::new("test", "no failure", "boom").into())
         });
         assert!(r.is_err());
         assert_eq!(std::fs::read(&target).unwrap(), b"old");

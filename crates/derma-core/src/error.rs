@@ -55,13 +55,38 @@ pub enum CoreError {
         message: String,
     },
     /// A value is out of its range or inconsistent.
-    #[error("invalid value for {what}: {detail}")]
-    Invalid {
-        /// Which value.
-        what: String,
-        /// What is wrong and what was expected.
-        detail: String,
-    },
+    #[error(transparent)]
+    Invalid(#[from] Invalid),
+}
+
+/// A value derma cannot use — the one vocabulary every crate's errors wrap (as their
+/// `Invalid` variant): what the value is, named as the user knows it (a flag, config key,
+/// Python argument, field, file or setting), what was expected and what was given. Front ends
+/// that know a flag's name for a library's setting say so in `what`.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{what}: expected {expected}, got {got}")]
+pub struct Invalid {
+    /// Which value (a flag, key, argument, field, file or setting).
+    pub what: String,
+    /// What would have been accepted.
+    pub expected: String,
+    /// What was given (or found).
+    pub got: String,
+}
+
+impl Invalid {
+    /// `what` expected `expected`, got `got`.
+    pub fn new(
+        what: impl Into<String>,
+        expected: impl Into<String>,
+        got: impl std::fmt::Display,
+    ) -> Self {
+        Self {
+            what: what.into(),
+            expected: expected.into(),
+            got: got.to_string(),
+        }
+    }
 }
 
 /// Result type of derma-core.

@@ -106,11 +106,12 @@ pub fn parse_axes(s: &str) -> Result<Mat3> {
         };
         Some(v * sign)
     };
-    let bad = || CoreError::Invalid {
-        what: "the mesh's axes".into(),
-        detail: format!(
-            "'{s}': expected UP,FRONT as two of ±X, ±Y, ±Z at right angles, e.g. +Z,-Y"
-        ),
+    let bad = || {
+        CoreError::from(crate::Invalid::new(
+            "the mesh's axes",
+            "UP,FRONT as two of ±X, ±Y, ±Z at right angles, e.g. +Z,-Y",
+            format!("'{s}'"),
+        ))
     };
     let (u, f) = s.split_once(',').ok_or_else(bad)?;
     let (up, front) = (axis(u).ok_or_else(bad)?, axis(f).ok_or_else(bad)?);
@@ -219,9 +220,9 @@ pub fn load_head_geometry(
 
 /// The fitted head's frame, unless what was asked for contradicts it (an error naming both).
 fn agree(path: &Path, how: &HeadRead, f: &MeshFrame) -> Result<MeshFrame> {
-    let conflict = |detail: String| CoreError::Invalid {
-        what: format!("how to read '{}'", path.display()),
-        detail,
+    let what = format!("how to read '{}'", path.display());
+    let conflict = |expected: String, got: String| {
+        CoreError::from(crate::Invalid::new(what.clone(), expected, got))
     };
     let asked = match how.unit {
         HeadUnit::Length(u) => Some((u.name(), u.to_mm())),
@@ -233,22 +234,28 @@ fn agree(path: &Path, how: &HeadRead, f: &MeshFrame) -> Result<MeshFrame> {
     };
     if let Some((name, mm)) = asked {
         if !((mm - f.mm_per_unit).abs() <= 1e-4 * f.mm_per_unit) {
-            return Err(conflict(format!(
-                "its fitted head read it at {} mm per unit ({}, head.json); the unit asked for, {name}, reads it otherwise: ask for none, or fit the head again in that unit",
-                f.mm_per_unit,
-                f.unit.map(|u| u.long_name()).unwrap_or("no named unit")
-            )));
+            return Err(conflict(
+                format!(
+                    "the unit its fitted head read it in, {} mm per unit ({}, head.json) — ask for none, or fit the head again in that unit",
+                    f.mm_per_unit,
+                    f.unit.map(|u| u.long_name()).unwrap_or("no named unit")
+                ),
+                format!("the unit {name}"),
+            ));
         }
     }
     if let PartChoice::Named(n) = &how.part {
         if f.part.as_deref().is_none_or(|p| !p.eq_ignore_ascii_case(n)) {
-            return Err(conflict(format!(
-                "its fitted head was fitted to {} of it; the part asked for is '{n}': ask for none, or fit the head again to that part",
-                f.part
-                    .as_deref()
-                    .map(|p| format!("the part '{p}'"))
-                    .unwrap_or_else(|| "the automatically chosen part".into())
-            )));
+            return Err(conflict(
+                format!(
+                    "the part its fitted head was fitted to, {} — ask for none, or fit the head again to that part",
+                    f.part
+                        .as_deref()
+                        .map(|p| format!("'{p}'"))
+                        .unwrap_or_else(|| "the automatically chosen one".into())
+                ),
+                format!("the part '{n}'"),
+            ));
         }
     }
     Ok(f.clone())

@@ -54,7 +54,7 @@ pub mod rng;
 pub mod sh;
 pub mod shard;
 
-pub use error::{CoreError, Result};
+pub use error::{CoreError, Invalid, Result};
 pub use gpu::{Device, GpuError};
 pub use map::Map;
 pub use progress::{Note, Progress, Silent, Unit};

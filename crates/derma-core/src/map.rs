@@ -1,7 +1,7 @@
 //! Planar f32 maps: one channel per `Map`, row-major with row 0 at the top of the image
 //! (image convention). The texture-space v coordinate increases upward (OpenGL), so v = 1 − (y+½)/h.
 
-use crate::error::{CoreError, Result};
+use crate::error::Result;
 
 /// A single-channel, row-major `f32` image.
 #[derive(Clone, Debug, PartialEq)]
@@ -24,14 +24,12 @@ impl Map {
     /// Wraps existing row-major data; fails when the length does not match the size.
     pub fn from_vec(width: usize, height: usize, data: Vec<f32>) -> Result<Self> {
         if data.len() != width * height {
-            return Err(CoreError::Invalid {
-                what: "map data".into(),
-                detail: format!(
-                    "{} values for a {width}x{height} map (expected {})",
-                    data.len(),
-                    width * height
-                ),
-            });
+            return Err(crate::Invalid::new(
+                format!("the data of a {width}x{height} map"),
+                format!("{} values", width * height),
+                data.len(),
+            )
+            .into());
         }
         Ok(Self {
             width,

@@ -12,11 +12,8 @@ pub struct Shard {
     pub n: usize,
 }
 
-fn invalid(what: &str, detail: String) -> CoreError {
-    CoreError::Invalid {
-        what: what.to_string(),
-        detail,
-    }
+fn invalid(what: &str, expected: &str, got: String) -> CoreError {
+    crate::Invalid::new(what, expected, got).into()
 }
 
 impl Shard {
@@ -25,7 +22,7 @@ impl Shard {
 
     /// Parses "k/n".
     pub fn parse(s: &str) -> Result<Self> {
-        let bad = || invalid("shard", format!("'{s}': expected k/n with 1 ≤ k ≤ n"));
+        let bad = || invalid("shard", "k/n with 1 ≤ k ≤ n", format!("'{s}'"));
         let (a, b) = s.split_once('/').ok_or_else(bad)?;
         let k: usize = a.trim().parse().map_err(|_| bad())?;
         let n: usize = b.trim().parse().map_err(|_| bad())?;
@@ -50,11 +47,11 @@ impl Shard {
                     .trim()
                     .parse()
                     .map(Some)
-                    .map_err(|_| invalid(name, format!("'{v}': expected a whole number"))),
+                    .map_err(|_| invalid(name, "a whole number", format!("'{v}'"))),
             }
         };
         let need = |name: &str, why: &str| -> Result<usize> {
-            num(name)?.ok_or_else(|| invalid(name, format!("not set; {why}")))
+            num(name)?.ok_or_else(|| invalid(name, &format!("a value ({why})"), "none".into()))
         };
         if let Some(id) = num("SLURM_ARRAY_TASK_ID")? {
             let why = "Slurm sets it for job arrays (sbatch --array=MIN-MAX)";
@@ -67,11 +64,11 @@ impl Shard {
             if step != 1 || max < min || max - min + 1 != count || !(min..=max).contains(&id) {
                 return Err(invalid(
                     "SLURM_ARRAY_TASK_ID",
-                    format!(
-                        "Slurm array task {id} of {min}-{max} (count {count}, step {step}): shards \
-                         need a contiguous array, e.g. sbatch --array=0-{}; or give the shard as k/n",
+                    &format!(
+                        "a task of a contiguous array, e.g. sbatch --array=0-{} (or give the shard as k/n)",
                         count.max(1) - 1
                     ),
+                    format!("task {id} of {min}-{max} (count {count}, step {step})"),
                 ));
             }
             return Ok((
@@ -90,7 +87,8 @@ impl Shard {
             if index >= n {
                 return Err(invalid(
                     "JOB_COMPLETION_INDEX",
-                    format!("{index} is not below DERMA_SHARD_COUNT {n}"),
+                    &format!("an index below DERMA_SHARD_COUNT {n}"),
+                    index.to_string(),
                 ));
             }
             return Ok((Self { k: index + 1, n }, "JOB_COMPLETION_INDEX"));
