@@ -17,9 +17,9 @@ pub enum ExportError {
         /// What is wrong and what was expected.
         detail: String,
     },
-    /// Any other invalid value.
-    #[error("{0}")]
-    Invalid(String),
+    /// A value derma cannot use (derma-core's vocabulary: what, expected, got).
+    #[error(transparent)]
+    Invalid(#[from] derma_core::Invalid),
     /// The renderer failed (GPU, scene, maps).
     #[error(transparent)]
     Render(#[from] derma_render::RenderError),

@@ -145,9 +145,12 @@ fn write_rgb8(path: &Path, m: &[Map; 3]) -> Result<()> {
 fn check_units(head: &derma_head::Head, units: &[(&str, f32)]) -> Result<()> {
     for (n, _) in units {
         if !head.face_units().iter().any(|u| u.name == *n) {
-            return Err(ExportError::Invalid(format!(
-                "face unit '{n}' is not one of the head's 52 (e.g. mouthSmileLeft, jawOpen, eyeBlinkLeft)"
-            )));
+            return Err(derma_core::Invalid::new(
+                "face unit",
+                "one of the head's 52 (e.g. mouthSmileLeft, jawOpen, eyeBlinkLeft)",
+                format!("'{n}'"),
+            )
+            .into());
         }
     }
     Ok(())
@@ -207,15 +210,20 @@ fn check_layout(textures: &Path, layout: &derma_core::mesh::UvLayout, what: &Pat
     let painted: Option<derma_core::mesh::UvLayout> =
         serde_json::from_value(m["uv_layout"].clone()).ok();
     match painted {
-        Some(p) if !p.matches(layout) => Err(ExportError::Invalid(format!(
-            "the set '{}' was painted on another UV layout ({} triangles, UV area {:.4}) than '{}' has ({} triangles, UV area {:.4}); render it on the mesh it was painted on, or paint it again on this one",
-            textures.display(),
-            p.triangles,
-            p.signed_area,
-            what.display(),
-            layout.triangles,
-            layout.signed_area
-        ))),
+        Some(p) if !p.matches(layout) => Err(derma_core::Invalid::new(
+            format!("the set '{}'", textures.display()),
+            format!(
+                "a mesh with the UV layout it was painted on ({} triangles, UV area {:.4}; render it on the mesh it was painted on, or paint it again on this one)",
+                p.triangles, p.signed_area
+            ),
+            format!(
+                "'{}', which has another UV layout ({} triangles, UV area {:.4})",
+                what.display(),
+                layout.triangles,
+                layout.signed_area
+            ),
+        )
+        .into()),
         _ => Ok(()),
     }
 }
@@ -244,7 +252,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     let t0 = Instant::now();
     derma_core::atomic::ensure_writable_dir(&job.out)?;
     if job.setups.is_empty() {
-        return Err(ExportError::Invalid("no lighting setup given".into()));
+        return Err(derma_core::Invalid::new("lighting setups", "at least one", "none").into());
     }
     let mut skin = SkinMaps::from_dir(&job.textures)?;
     if let Some(f) = &job.rig {
@@ -256,8 +264,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
         .iris
         .as_deref()
         .map(derma_eyes::files::load_eye_texture)
-        .transpose()
-        .map_err(|e| ExportError::Invalid(e.to_string()))?;
+        .transpose()?;
     let units = posing_units(job);
     if !units.is_empty() {
         if let Some(wm) = derma_render::wrinkles::WrinkleMaps::from_dir(&job.textures)? {
@@ -269,10 +276,12 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
             fitted_mesh_scene(p, dir, &job.textures, &units, skin.clone(), eye, job.gaze)?
         }
         (Some(_), None) if !units.is_empty() => {
-            return Err(ExportError::Invalid(
-                "face units pose a user mesh only through the head fitted to it (derma head fit)"
-                    .into(),
-            ))
+            return Err(derma_core::Invalid::new(
+                "face units on a user mesh",
+                "the head fitted to it, through which they pose it (derma head fit)",
+                "no fitted head",
+            )
+            .into())
         }
         (Some(p), None) => {
             let mesh = crate::glb::load_mesh_mm(p, progress)?;
@@ -298,8 +307,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
                 // The lids and the skin around the eyes follow the gaze through the trained
                 // eye-region model (thesis §3.9), the pose's units among its inputs.
                 let mut posed = head.posed_skin(&units);
-                let lashes = derma_eyes::still::StillModel::new(head)
-                    .map_err(|e| ExportError::Invalid(e.to_string()))?
+                let lashes = derma_eyes::still::StillModel::new(head)?
                     .pose_skin(head, pose, &units, &mut posed);
                 let mut scene = Scene::posed_head(head, posed, skin.clone(), eye, job.gaze);
                 for (name, mesh) in &lashes {
@@ -312,10 +320,12 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     let mut scene = scene;
     if let Some(p) = &job.teeth {
         if scene.texture_parts("teeth", &derma_render::material::read_albedo(p)?) == 0 {
-            return Err(ExportError::Invalid(format!(
-                "{}: a teeth texture needs the head's teeth; this scene has none (a user mesh)",
-                p.display()
-            )));
+            return Err(derma_core::Invalid::new(
+                format!("teeth texture '{}'", p.display()),
+                "a scene with the head's teeth",
+                "a scene with none (a user mesh)",
+            )
+            .into());
         }
     }
     debug_assert!(matches!(scene.parts[0].material, Material::Skin(_)));

@@ -375,13 +375,18 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
     meshes.push(m);
     names.push("skin".to_string());
     if o.mesh.is_some() && o.teeth.is_some() {
-        return Err(ExportError::Invalid(format!(
-            "{}: a teeth texture needs the head's teeth; a user mesh has none",
-            o.teeth
-                .as_ref()
-                .map(|p| p.display().to_string())
-                .unwrap_or_default()
-        )));
+        return Err(derma_core::Invalid::new(
+            format!(
+                "teeth texture '{}'",
+                o.teeth
+                    .as_ref()
+                    .map(|p| p.display().to_string())
+                    .unwrap_or_default()
+            ),
+            "the head's teeth to go on",
+            "a user mesh, which has none",
+        )
+        .into());
     }
     if o.mesh.is_none() {
         let t_teeth = match &o.teeth {
@@ -396,8 +401,7 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
             None => None,
         };
         let eye = srgb_encoded(&match &o.iris {
-            Some(p) => derma_eyes::files::load_eye_texture(p)
-                .map_err(|e| ExportError::Invalid(e.to_string()))?,
+            Some(p) => derma_eyes::files::load_eye_texture(p)?,
             None => default_eye_texture(512),
         });
         let t_eye = image(

@@ -132,8 +132,9 @@ fn write_eyes(
     skin_origin: &[u32],
     out: &Path,
 ) -> Result<serde_json::Value> {
-    let model = derma_eyes::still::StillModel::new(head)
-        .map_err(|e| ExportError::Invalid(format!("the eye-region model: {e}")))?;
+    let model = derma_eyes::still::StillModel::new(head).map_err(|e| {
+        derma_core::Invalid::new("the eye-region model", "one trained on the head's rig", e)
+    })?;
     let (mut header, bin) = derma_eyes::live::pack(&model, head, skin_origin);
     let dir = out.join("eyes");
     derma_core::atomic::ensure_writable_dir(&dir)?;

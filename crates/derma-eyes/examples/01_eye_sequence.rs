@@ -18,7 +18,10 @@ fn main() -> Result<()> {
         .nth(1)
         .map(std::path::PathBuf::from)
         .unwrap_or_else(|| std::env::temp_dir().join("derma-eyes-sequence"));
-    std::fs::create_dir_all(&dir).map_err(|e| EyesError::Invalid(e.to_string()))?;
+    std::fs::create_dir_all(&dir).map_err(|source| derma_core::CoreError::Write {
+        path: dir.clone(),
+        source,
+    })?;
     let head = derma_head::Head::builtin();
     let rig = Rig::new(head)?;
     let model = EyeModel::fit(&rig.samples(300, 1), Components::default())?;

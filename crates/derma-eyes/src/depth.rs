@@ -155,7 +155,9 @@ fn normal_equations(rows: &[Vec<f64>], n: usize) -> crate::Result<impl Fn(&[f64]
             cholesky_solve(&g, &unit)
         })
         .collect::<Result<_, _>>()
-        .map_err(|e| crate::EyesError::Invalid(format!("the depth fit's normal equations: {e}")))?;
+        .map_err(|e| {
+            derma_core::Invalid::new("the depth fit's normal equations", "a solvable system", e)
+        })?;
     let pinv: Vec<Vec<f64>> = (0..n)
         .map(|a| {
             rows.iter()

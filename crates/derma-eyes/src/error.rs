@@ -25,9 +25,9 @@ pub enum EyesError {
         /// What is wrong.
         detail: String,
     },
-    /// Any other invalid input.
-    #[error("{0}")]
-    Invalid(String),
+    /// A value derma cannot use (derma-core's vocabulary: what, expected, got).
+    #[error(transparent)]
+    Invalid(#[from] derma_core::Invalid),
     /// A numerical failure.
     #[error(transparent)]
     Numerics(#[from] derma_core::numerics::NumericsError),
@@ -41,6 +41,11 @@ pub type Result<T, E = EyesError> = std::result::Result<T, E>;
 
 impl From<derma_head::fit::store::StoreError> for EyesError {
     fn from(e: derma_head::fit::store::StoreError) -> Self {
-        EyesError::Invalid(e.to_string())
+        let derma_head::fit::store::StoreError::File { path, detail } = e;
+        derma_core::CoreError::Format {
+            path,
+            message: detail,
+        }
+        .into()
     }
 }

@@ -56,10 +56,12 @@ impl Evaluator {
         thickness: f32,
     ) -> crate::Result<Evaluator> {
         if model.vertices != region.tracked {
-            return Err(crate::EyesError::Invalid(format!(
-                "the model was trained on {} tracked vertices, the head's eye region has {}",
-                model.vertices, region.tracked
-            )));
+            return Err(derma_core::Invalid::new(
+                "the tracked vertices the model was trained on",
+                format!("the {} of the head's eye region", region.tracked),
+                model.vertices,
+            )
+            .into());
         }
         // Extrapolation sources: tracked vertices and the lid control points at rest.
         let mut sources: Vec<Vec3> = region.rest[..region.tracked].to_vec();

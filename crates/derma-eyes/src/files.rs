@@ -11,7 +11,7 @@ use crate::rigdata::Rig;
 use crate::sdf::{self, material};
 use crate::surface::Skin;
 use crate::tracked::Tracked;
-use crate::{EyesError, Result};
+use crate::Result;
 use derma_core::progress::{Progress, Unit};
 use derma_core::Map;
 use derma_head::Head;
@@ -128,9 +128,12 @@ pub fn synthetic(
     progress: &dyn Progress,
 ) -> Result<usize> {
     if !(seconds > 0.0 && fps > 0.0) {
-        return Err(EyesError::Invalid(format!(
-            "a clip of {seconds} s at {fps} frames per second: both must be positive"
-        )));
+        return Err(derma_core::Invalid::new(
+            "seconds and fps",
+            "both positive",
+            format!("a clip of {seconds} s at {fps} frames per second"),
+        )
+        .into());
     }
     progress.stage("synthesise tracked data", 1, Unit::Steps);
     let head = derma_head::fitted::or_builtin(head)?;
@@ -183,7 +186,17 @@ pub struct AnimateOptions {
 
 /// Loads an eyeball texture as linear RGB maps (EXR as stored, other formats sRGB-decoded).
 pub fn load_eye_texture(path: &Path) -> Result<[Map; 3]> {
-    derma_render::material::read_albedo(path).map_err(|e| EyesError::Invalid(e.to_string()))
+    use derma_render::RenderError;
+    derma_render::material::read_albedo(path).map_err(|e| match e {
+        RenderError::Core(e) => e.into(),
+        RenderError::Invalid(e) => e.into(),
+        e => derma_core::Invalid::new(
+            format!("eye texture '{}'", path.display()),
+            "a readable RGB image",
+            e,
+        )
+        .into(),
+    })
 }
 
 /// What `animate` wrote and measured.
@@ -234,10 +247,12 @@ pub fn animate(o: &AnimateOptions, dir: &Path, progress: &dyn Progress) -> Resul
             Skin::user(head, mesh, p)?
         }
         (Some(p), None) => {
-            return Err(EyesError::Invalid(format!(
-                "{}: a user's mesh is animated through the head fitted to it; give that fitted head directory (from 'derma head fit')",
-                p.display()
-            )))
+            return Err(derma_core::Invalid::new(
+                format!("the user's mesh '{}'", p.display()),
+                "the head fitted to it (its fitted head directory, from 'derma head fit', through which a user's mesh is animated)",
+                "no fitted head",
+            )
+            .into())
         }
     };
     let mut drive = o.drive.clone();
@@ -246,8 +261,12 @@ pub fn animate(o: &AnimateOptions, dir: &Path, progress: &dyn Progress) -> Resul
         Targets::Tracker(p) => drive.fixations = Some(animate::read_tracker(p)?),
         Targets::Image(p, fov) => {
             let img = derma_core::image_io::read_rgb(p)?;
-            let rgb: [Map; 3] = img.channels.try_into().map_err(|_| {
-                EyesError::Invalid(format!("{}: expected an RGB image", p.display()))
+            let rgb: [Map; 3] = img.channels.try_into().map_err(|c: Vec<Map>| {
+                derma_core::Invalid::new(
+                    format!("look-at image '{}'", p.display()),
+                    "an RGB image",
+                    format!("{} channels", c.len()),
+                )
             })?;
             drive.fixations = Some(animate::salient_fixations(
                 &rgb,
@@ -301,8 +320,10 @@ pub fn animate(o: &AnimateOptions, dir: &Path, progress: &dyn Progress) -> Resul
         progress.stage("render frames", samples.len() as u64, Unit::Frames);
         let stage = Stage::new(head, &rig.region, &skin, eye_texture.clone());
         let fdir = dir.join("frames");
-        std::fs::create_dir_all(&fdir)
-            .map_err(|e| EyesError::Invalid(format!("cannot create {}: {e}", fdir.display())))?;
+        std::fs::create_dir_all(&fdir).map_err(|source| derma_core::CoreError::Write {
+            path: fdir.clone(),
+            source,
+        })?;
         let mut size = (0, 0);
         for (i, s) in samples.iter().enumerate() {
             ev.frame(&s.gaze, &mut f);
@@ -368,9 +389,12 @@ pub fn distance_fields(
 ) -> Result<Vec<sdf::table::Row>> {
     out_dir(dir)?;
     if !(64..=8192).contains(&width) || !(64..=8192).contains(&height) {
-        return Err(EyesError::Invalid(format!(
-            "size {width}×{height}: expected 64 to 8192 pixels a side"
-        )));
+        return Err(derma_core::Invalid::new(
+            "size",
+            "64 to 8192 pixels a side",
+            format!("{width}×{height}"),
+        )
+        .into());
     }
     progress.stage("distance fields and the lake", 1, Unit::Steps);
     let head = Head::builtin();

@@ -89,10 +89,12 @@ pub fn write(
     use rayon::prelude::*;
     let nf = baked.times.len();
     if nf == 0 || baked.rotations.len() != nf {
-        return Err(crate::EyesError::Invalid(format!(
-            "an animation needs frames with one rotation pair each: {nf} times, {} rotations",
-            baked.rotations.len()
-        )));
+        return Err(derma_core::Invalid::new(
+            "the animation's frames",
+            "at least one, with one rotation pair each",
+            format!("{nf} times and {} rotations", baked.rotations.len()),
+        )
+        .into());
     }
     let nm = region.len();
     // Displacements per frame, flattened (made when needed: a long clip's rows would not fit),

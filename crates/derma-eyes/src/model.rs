@@ -170,10 +170,12 @@ impl EyeModel {
     /// Trains the model on tracked data.
     pub fn fit(t: &Tracked, c: Components) -> Result<EyeModel> {
         if c.lids == 0 || c.skin == 0 || c.skin > MAX_SKIN || c.lids + c.skin > MAX_COEF {
-            return Err(EyesError::Invalid(format!(
-                "components: lids {} and skin {}; expected at least 1 each, at most {MAX_SKIN} for the skin and {MAX_COEF} together",
-                c.lids, c.skin
-            )));
+            return Err(derma_core::Invalid::new(
+                "lid and skin components",
+                format!("at least 1 each, at most {MAX_SKIN} for the skin and {MAX_COEF} together"),
+                format!("lids {} and skin {}", c.lids, c.skin),
+            )
+            .into());
         }
         let plane = planes(t);
         let rows = rows_of(t, plane);
@@ -212,11 +214,15 @@ impl EyeModel {
         for e in 0..2 {
             let travel = [0, 1].map(|k| (open[e][k] - closed[e][k]).abs());
             if travel[0].max(travel[1]) < 0.3 {
-                return Err(EyesError::Invalid(format!(
-                    "the {} lids move {:.2} mm at most between the most closed and the most open frame; the data needs a blink (eye closed) and open eyes",
-                    ["left", "right"][e],
-                    travel[0].max(travel[1])
-                )));
+                return Err(derma_core::Invalid::new(
+                    format!(
+                        "the {} lids' travel between the most closed and the most open frame",
+                        ["left", "right"][e]
+                    ),
+                    "at least 0.3 mm (the data needs a blink, eye closed, and open eyes)",
+                    format!("{:.2} mm at most", travel[0].max(travel[1])),
+                )
+                .into());
             }
             // A lid that barely moves in the data (the built-in rig's lower lid: 0.1 mm)
             // borrows the other lid's travel, so its g̃ stays on a comparable scale.
@@ -270,10 +276,12 @@ impl EyeModel {
             }
         }
         if xs.len() < 4 {
-            return Err(EyesError::Invalid(format!(
-                "{} baseline frames (eyes at rest); the aperture model needs at least 4",
-                xs.len()
-            )));
+            return Err(derma_core::Invalid::new(
+                "baseline frames (eyes at rest)",
+                "at least 4 for the aperture model",
+                xs.len(),
+            )
+            .into());
         }
         let a = Linear::fit(&xs, &ys)?;
         let res: Vec<f64> = xs

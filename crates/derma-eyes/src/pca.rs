@@ -23,9 +23,12 @@ impl Pca {
     pub fn fit(rows: &[Vec<f64>], k: usize) -> crate::Result<Pca> {
         let n = rows.len();
         if n < 2 {
-            return Err(crate::EyesError::Invalid(format!(
-                "principal components need at least 2 frames, got {n}"
-            )));
+            return Err(derma_core::Invalid::new(
+                "frames for principal components",
+                "at least 2",
+                n,
+            )
+            .into());
         }
         let d = rows[0].len();
         let mut mean = vec![0.0; d];

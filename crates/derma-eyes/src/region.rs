@@ -85,7 +85,11 @@ impl EyeRegion {
         let mut moved = vec![false; skin.positions.len()];
         for name in REGION_UNITS {
             let t = units.iter().find(|t| t.name == name).ok_or_else(|| {
-                crate::EyesError::Invalid(format!("the head has no face unit '{name}'"))
+                derma_core::Invalid::new(
+                    "the head's face units",
+                    format!("one named '{name}'"),
+                    "none",
+                )
             })?;
             for &(i, d) in &t.skin {
                 if d.length() > SUPPORT_MM {
@@ -221,9 +225,11 @@ impl EyeRegion {
         let mut margins: [[Vec<u32>; 2]; 2] = Default::default();
         for (e, name) in ["left", "right"].iter().enumerate() {
             let ring = loop_around(&adj, &welded, |p| side(p) == e, eyes[e]).ok_or_else(|| {
-                crate::EyesError::Invalid(format!(
-                    "no closed lid margin found around the {name} eye (seam between the skin and the socket charts)"
-                ))
+                derma_core::Invalid::new(
+                    format!("the lid margin around the {name} eye"),
+                    "a closed loop along the seam between the skin and the socket charts",
+                    "none found",
+                )
             })?;
             let nearest = |p: Vec3| {
                 (0..ring.len())
@@ -258,8 +264,10 @@ impl EyeRegion {
                 c.iter()
                     .map(|id| {
                         model_of.get(id).copied().ok_or_else(|| {
-                            crate::EyesError::Invalid(format!(
-                                "a lid-margin vertex of the {name} eye is not moved by the eye units"
+                            crate::EyesError::Invalid(derma_core::Invalid::new(
+                                format!("the lid margin of the {name} eye"),
+                                "vertices all moved by the eye units",
+                                "a vertex they do not move",
                             ))
                         })
                     })

@@ -23,11 +23,12 @@ impl Linear {
     pub fn fit(xs: &[Vec<f64>], ys: &[Vec<f64>]) -> crate::Result<Linear> {
         let n = xs.len();
         if n == 0 || ys.len() != n {
-            return Err(crate::EyesError::Invalid(format!(
-                "regression needs as many outputs as inputs and at least one row ({} inputs, {} outputs)",
-                n,
-                ys.len()
-            )));
+            return Err(derma_core::Invalid::new(
+                "regression rows",
+                "at least one, with as many outputs as inputs",
+                format!("{} inputs, {} outputs", n, ys.len()),
+            )
+            .into());
         }
         let p = xs[0].len() + 1;
         let mut ata = Matrix::zeros(p, p);

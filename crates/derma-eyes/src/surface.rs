@@ -3,7 +3,7 @@
 
 use crate::evaluate::Frame;
 use crate::region::EyeRegion;
-use crate::{EyesError, Result};
+use crate::Result;
 use derma_core::mesh::TriMesh;
 use derma_head::fit::onto::{Carry, MIN_SHARE, REACH_MM};
 use derma_head::Head;
@@ -35,11 +35,15 @@ impl<'a> Skin<'a> {
         let carry = Carry::outer(head, &mesh);
         let share = carry.share();
         if share < MIN_SHARE {
-            return Err(EyesError::Invalid(format!(
-                "{}: only {:.0} % of its vertices lie within {REACH_MM} mm of the fitted head; is it the mesh the head was fitted to, read in the same unit?",
-                path.display(),
-                100.0 * share
-            )));
+            return Err(derma_core::Invalid::new(
+                format!("the vertices of '{}'", path.display()),
+                format!(
+                    "at least {:.0} % within {REACH_MM} mm of the fitted head (is it the mesh the head was fitted to, read in the same unit?)",
+                    100.0 * MIN_SHARE
+                ),
+                format!("only {:.0} %", 100.0 * share),
+            )
+            .into());
         }
         Ok(Skin {
             head,

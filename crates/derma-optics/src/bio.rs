@@ -95,8 +95,8 @@ impl BioTexel {
                 } else {
                     "a thickness in (0, 2000] µm"
                 };
-                return Err(crate::OpticsError::Invalid(format!(
-                    "{name} = {x}: expected {want}"
+                return Err(crate::OpticsError::Invalid(derma_core::Invalid::new(
+                    name, want, x,
                 )));
             }
         }
@@ -131,7 +131,10 @@ mod tests {
         .validate()
         .unwrap_err()
         .to_string();
-        assert!(e.contains("melanin = 1.5") && e.contains("[0, 1]"), "{e}");
+        assert!(
+            e.contains("melanin: expected a fraction in [0, 1], got 1.5"),
+            "{e}"
+        );
         let e = BioTexel {
             epidermis_um: 0.0,
             ..BioTexel::FAIR
@@ -139,7 +142,7 @@ mod tests {
         .validate()
         .unwrap_err()
         .to_string();
-        assert!(e.contains("epidermis_um = 0"), "{e}");
+        assert!(e.contains("epidermis_um: ") && e.contains("got 0"), "{e}");
         assert!(BioTexel {
             blood: f32::NAN,
             ..BioTexel::FAIR

@@ -6,9 +6,9 @@ use std::path::PathBuf;
 /// Errors of the optics, each naming the value or file at fault.
 #[derive(Debug, thiserror::Error)]
 pub enum OpticsError {
-    /// A value out of range or inconsistent (a layer, a photon count, bins).
-    #[error("invalid optical input: {0}")]
-    Invalid(String),
+    /// A value derma cannot use (derma-core's vocabulary: what, expected, got).
+    #[error(transparent)]
+    Invalid(#[from] derma_core::Invalid),
     /// A grid or precompute file with bad content.
     #[error("{path}: {message}")]
     File {

@@ -182,18 +182,25 @@ pub fn run_gpu_with(run: &Run, progress: &dyn Progress, kernel: &Kernel) -> Resu
     // photons, so each starts at a multiple of nλ. None of this changes the results.
     let max_groups = ctx.device.limits().max_compute_workgroups_per_dimension;
     if nl > max_groups {
-        return Err(crate::error::OpticsError::Invalid(format!(
-            "{nl} wavelength samples; the GPU path runs at most {max_groups} at once"
-        )));
+        return Err(crate::error::OpticsError::Invalid(
+            derma_core::Invalid::new(
+                "wavelength samples on the GPU",
+                format!("at most {max_groups} at once"),
+                nl,
+            ),
+        ));
     }
     let full_columns = (kernel.groups / nl as u64).clamp(1, (max_groups / nl) as u64);
     let per_dispatch =
         full_columns * WORKGROUP as u64 * nl as u64 * kernel.photons_per_thread.max(1);
     if per_dispatch > u32::MAX as u64 {
-        return Err(crate::error::OpticsError::Invalid(format!(
-            "{per_dispatch} photons per dispatch; at most {} (fewer groups or photons per thread)",
-            u32::MAX
-        )));
+        return Err(crate::error::OpticsError::Invalid(
+            derma_core::Invalid::new(
+                "photons per GPU dispatch",
+                format!("at most {} (fewer groups or photons per thread)", u32::MAX),
+                per_dispatch,
+            ),
+        ));
     }
     let columns = if run.photons >= per_dispatch {
         full_columns

@@ -108,74 +108,87 @@ impl Stack {
     /// Checks every value; the error names the layer and field.
     pub fn validate(&self) -> Result<()> {
         if self.layers.is_empty() {
-            return Err(OpticsError::Invalid(
-                "a stack needs at least one layer".into(),
-            ));
-        }
-        if self.layers.len() > crate::MAX_LAYERS {
-            return Err(OpticsError::Invalid(format!(
-                "{} layers given; at most {} are supported",
-                self.layers.len(),
-                crate::MAX_LAYERS
+            return Err(OpticsError::Invalid(derma_core::Invalid::new(
+                "layers of a stack",
+                "at least one",
+                "none",
             )));
         }
-        let check = |ok: bool, what: String| {
+        if self.layers.len() > crate::MAX_LAYERS {
+            return Err(OpticsError::Invalid(derma_core::Invalid::new(
+                "layers of a stack",
+                format!("at most {}", crate::MAX_LAYERS),
+                self.layers.len(),
+            )));
+        }
+        let check = |ok: bool, what: String, expected: &str, got: String| {
             if ok {
                 Ok(())
             } else {
-                Err(OpticsError::Invalid(what))
+                Err(OpticsError::Invalid(derma_core::Invalid::new(
+                    what, expected, got,
+                )))
             }
         };
         for (i, l) in self.layers.iter().enumerate() {
             let k = i + 1;
             check(
                 l.thickness_mm.is_finite() && l.thickness_mm > 0.0,
-                format!(
-                    "layer {k}: thickness {} mm must be finite and > 0",
-                    l.thickness_mm
-                ),
+                format!("layer {k} thickness"),
+                "a finite value > 0",
+                format!("{} mm", l.thickness_mm),
             )?;
             check(
                 l.mua.is_finite() && l.mua >= 0.0,
-                format!(
-                    "layer {k}: absorption μa = {} must be finite and ≥ 0",
-                    l.mua
-                ),
+                format!("layer {k} absorption μa"),
+                "a finite value ≥ 0",
+                format!("{} mm⁻¹", l.mua),
             )?;
             check(
                 l.mus.is_finite() && l.mus >= 0.0,
-                format!(
-                    "layer {k}: scattering μs = {} must be finite and ≥ 0",
-                    l.mus
-                ),
+                format!("layer {k} scattering μs"),
+                "a finite value ≥ 0",
+                format!("{} mm⁻¹", l.mus),
             )?;
             check(
                 l.g.is_finite() && l.g > -1.0 && l.g < 1.0,
-                format!("layer {k}: anisotropy g = {} must lie in (−1, 1)", l.g),
+                format!("layer {k} anisotropy g"),
+                "a value in (−1, 1)",
+                l.g.to_string(),
             )?;
             check(
                 l.n.is_finite() && (1.0..=3.0).contains(&l.n),
-                format!("layer {k}: refractive index n = {} must lie in [1, 3]", l.n),
+                format!("layer {k} refractive index n"),
+                "a value in [1, 3]",
+                l.n.to_string(),
             )?;
         }
         check(
             self.n_above.is_finite() && (1.0..=3.0).contains(&self.n_above),
-            format!("index above n = {} must lie in [1, 3]", self.n_above),
+            "refractive index n above the stack".into(),
+            "a value in [1, 3]",
+            self.n_above.to_string(),
         )?;
         match self.bottom {
             Bottom::Medium { n } => check(
                 n.is_finite() && (1.0..=3.0).contains(&n),
-                format!("index below n = {n} must lie in [1, 3]"),
+                "refractive index n below the stack".into(),
+                "a value in [1, 3]",
+                n.to_string(),
             )?,
             Bottom::Lambertian { albedo } => check(
                 (0.0..=1.0).contains(&albedo),
-                format!("bottom albedo {albedo} must lie in [0, 1]"),
+                "bottom albedo".into(),
+                "a value in [0, 1]",
+                albedo.to_string(),
             )?,
         }
         if let Surface::TrowbridgeReitz { sigma: a } | Surface::Smith { alpha: a } = self.surface {
             check(
                 a.is_finite() && a > 0.0 && a <= 1.0,
-                format!("surface aspect ratio σ = {a} must lie in (0, 1]"),
+                "surface aspect ratio σ".into(),
+                "a value in (0, 1]",
+                a.to_string(),
             )?;
         }
         Ok(())

@@ -263,7 +263,13 @@ fn entry_path(dir: &Path, i: usize) -> PathBuf {
 pub fn prepare_dir(dir: &Path, grid: &Grid) -> Result<()> {
     derma_core::atomic::ensure_writable_dir(&dir.join("entries"))?;
     let path = dir.join("grid.toml");
-    let text = toml::to_string(grid).map_err(|e| OpticsError::Invalid(e.to_string()))?;
+    let text = toml::to_string(grid).map_err(|e| {
+        OpticsError::Invalid(derma_core::Invalid::new(
+            format!("grid for '{}'", path.display()),
+            "a grid that can be written as TOML",
+            e,
+        ))
+    })?;
     if path.exists() {
         let old = std::fs::read_to_string(&path).map_err(|e| OpticsError::Io {
             path: path.clone(),
@@ -353,7 +359,10 @@ pub fn run_shard(
     );
     for &i in &todo {
         compute_entry(dir, grid, i, device, &Folded(progress)).map_err(|e| match e {
-            OpticsError::Invalid(m) => OpticsError::Invalid(format!("grid entry {i}: {m}")),
+            OpticsError::Invalid(mut inv) => {
+                inv.what = format!("{} in grid entry {i}", inv.what);
+                OpticsError::Invalid(inv)
+            }
             other => other,
         })?;
     }
@@ -395,9 +404,13 @@ pub fn value_layout(grid: &Grid) -> Vec<DtabValue> {
 
 /// Joins the entries of `dirs` (all started with the same grid) into one table.
 pub fn merge(dirs: &[PathBuf]) -> Result<Dtab> {
-    let first = dirs
-        .first()
-        .ok_or_else(|| OpticsError::Invalid("merge needs at least one directory".into()))?;
+    let first = dirs.first().ok_or_else(|| {
+        OpticsError::Invalid(derma_core::Invalid::new(
+            "directories to merge",
+            "at least one",
+            "none",
+        ))
+    })?;
     let gp = first.join("grid.toml");
     let text = std::fs::read_to_string(&gp).map_err(|e| OpticsError::Io {
         path: gp.clone(),
@@ -447,11 +460,18 @@ pub fn merge(dirs: &[PathBuf]) -> Result<Dtab> {
     }
     if !missing.is_empty() {
         let show: Vec<String> = missing.iter().take(10).map(|i| i.to_string()).collect();
-        return Err(OpticsError::Invalid(format!(
-            "{} of {} entries are missing (first: {}); run the remaining shards first",
-            missing.len(),
-            grid.len(),
-            show.join(", ")
+        return Err(OpticsError::Invalid(derma_core::Invalid::new(
+            "precompute entries",
+            format!(
+                "all {} entries of the grid (run the remaining shards first)",
+                grid.len()
+            ),
+            format!(
+                "{} of {} missing (first: {})",
+                missing.len(),
+                grid.len(),
+                show.join(", ")
+            ),
         )));
     }
     let axes = AXES

@@ -57,46 +57,72 @@ impl Run {
     /// Checks the stacks, counts and bins; the error says which is wrong.
     pub fn validate(&self) -> Result<()> {
         if self.stacks.is_empty() {
-            return Err(OpticsError::Invalid("no stacks to simulate".into()));
+            return Err(OpticsError::Invalid(derma_core::Invalid::new(
+                "stacks to simulate",
+                "at least one",
+                "none",
+            )));
         }
         if self.photons == 0 {
-            return Err(OpticsError::Invalid(
-                "photon count must be at least 1".into(),
-            ));
+            return Err(OpticsError::Invalid(derma_core::Invalid::new(
+                "photons",
+                "at least 1",
+                self.photons,
+            )));
         }
         let layers = self.stacks[0].layers.len();
         for (i, s) in self.stacks.iter().enumerate() {
-            s.validate()
-                .map_err(|e| OpticsError::Invalid(format!("wavelength sample {i}: {e}")))?;
+            s.validate().map_err(|e| match e {
+                OpticsError::Invalid(mut inv) => {
+                    inv.what = format!("{} at wavelength sample {i}", inv.what);
+                    OpticsError::Invalid(inv)
+                }
+                other => other,
+            })?;
             if s.layers.len() != layers {
-                return Err(OpticsError::Invalid(
-                    "every wavelength must have the same number of layers".into(),
-                ));
+                return Err(OpticsError::Invalid(derma_core::Invalid::new(
+                    format!("layers at wavelength sample {i}"),
+                    format!("{layers} (every wavelength must have the same number of layers)"),
+                    s.layers.len(),
+                )));
             }
         }
         if let Some(b) = self.brdf {
+            let given = format!("{}×{}×{}", b.theta_in, b.theta_out, b.phi);
             if b.is_empty() {
-                return Err(OpticsError::Invalid("BRDF bins must all be ≥ 1".into()));
+                return Err(OpticsError::Invalid(derma_core::Invalid::new(
+                    "BRDF bins",
+                    "at least 1 per angle",
+                    given,
+                )));
             }
             let most = crate::tally::MAX_BRDF_BINS;
             if b.theta_in > most || b.theta_out > most || b.phi > most {
-                return Err(OpticsError::Invalid(format!(
-                    "BRDF bins {}×{}×{}: at most {most} per angle",
-                    b.theta_in, b.theta_out, b.phi
+                return Err(OpticsError::Invalid(derma_core::Invalid::new(
+                    "BRDF bins",
+                    format!("at most {most} per angle"),
+                    given,
                 )));
             }
         }
         if let Some(p) = self.profile {
             if p.bins == 0 || p.bins > crate::tally::MAX_PROFILE_BINS || !(p.d_max_mm > 0.0) {
-                return Err(OpticsError::Invalid(
-                    "radial profile needs ≥ 1 bin and D_max > 0".into(),
-                ));
+                return Err(OpticsError::Invalid(derma_core::Invalid::new(
+                    "radial profile",
+                    format!(
+                        "1 to {} bins and D_max > 0 mm",
+                        crate::tally::MAX_PROFILE_BINS
+                    ),
+                    format!("{} bins and D_max {} mm", p.bins, p.d_max_mm),
+                )));
             }
         }
         if !self.channel_weights.is_empty() && self.channel_weights.len() != self.stacks.len() {
-            return Err(OpticsError::Invalid(
-                "one set of channel weights per wavelength is needed".into(),
-            ));
+            return Err(OpticsError::Invalid(derma_core::Invalid::new(
+                "sets of channel weights",
+                format!("one per wavelength sample ({})", self.stacks.len()),
+                self.channel_weights.len(),
+            )));
         }
         Ok(())
     }

@@ -11,17 +11,20 @@ use serde::{Deserialize, Serialize};
 pub fn parse_layer(text: &str) -> Result<Layer> {
     let parts: Vec<&str> = text.split(',').map(str::trim).collect();
     if parts.len() != 5 {
-        return Err(OpticsError::Invalid(format!(
-            "layer '{text}': expected 5 comma-separated values d_mm,mua_per_cm,mus_per_cm,g,n"
+        return Err(OpticsError::Invalid(derma_core::Invalid::new(
+            format!("layer '{text}'"),
+            "5 comma-separated values (d_mm,mua_per_cm,mus_per_cm,g,n)",
+            parts.len(),
         )));
     }
     let names = ["d_mm", "mua_per_cm", "mus_per_cm", "g", "n"];
     let mut v = [0.0; 5];
     for i in 0..5 {
         v[i] = parts[i].parse::<f64>().map_err(|_| {
-            OpticsError::Invalid(format!(
-                "layer '{text}': {} = '{}' is not a number",
-                names[i], parts[i]
+            OpticsError::Invalid(derma_core::Invalid::new(
+                format!("{} in layer '{text}'", names[i]),
+                "a number",
+                format!("'{}'", parts[i]),
             ))
         })?;
     }

@@ -131,8 +131,10 @@ impl YellowPigments {
             ("bilirubin_blood_g_per_l", self.bilirubin_blood_g_per_l),
         ] {
             if !(0.0..=100.0).contains(&v) {
-                return Err(crate::OpticsError::Invalid(format!(
-                    "yellow pigment {name} = {v} g/L: expected a concentration in 0–100 g/L"
+                return Err(crate::OpticsError::Invalid(derma_core::Invalid::new(
+                    format!("yellow pigment {name}"),
+                    "a concentration in 0–100 g/L",
+                    format!("{v} g/L"),
                 )));
             }
         }

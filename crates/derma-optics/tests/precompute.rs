@@ -72,7 +72,7 @@ fn shards_merge_to_the_same_table_and_resume_skips_finished_entries() {
     let e = precompute::merge(std::slice::from_ref(&a))
         .unwrap_err()
         .to_string();
-    assert!(e.contains("2 of 4 entries are missing"), "{e}");
+    assert!(e.contains("2 of 4 missing"), "{e}");
     let other = Grid {
         photons: 999,
         ..grid.clone()

@@ -401,12 +401,17 @@ pub fn bake(
     progress: &dyn Progress,
 ) -> Result<Baked> {
     if photos.is_empty() {
-        return Err(PhotoError::Invalid("no photos to bake from".into()));
+        return Err(PhotoError::Invalid(derma_core::Invalid::new(
+            "photos to bake from",
+            "at least one",
+            "none",
+        )));
     }
     if photos.len() > MAX_PHOTOS {
-        return Err(PhotoError::Invalid(format!(
-            "{} photos; at most {MAX_PHOTOS} per bake",
-            photos.len()
+        return Err(PhotoError::Invalid(derma_core::Invalid::new(
+            "photos to bake from",
+            format!("at most {MAX_PHOTOS} per bake"),
+            photos.len(),
         )));
     }
     if mesh.uvs.len() != mesh.positions.len() {
@@ -415,9 +420,10 @@ pub fn bake(
         ));
     }
     if !(16..=16384).contains(&opts.size) {
-        return Err(PhotoError::Invalid(format!(
-            "texture size {}; expected 16–16384",
-            opts.size
+        return Err(PhotoError::Invalid(derma_core::Invalid::new(
+            "texture size",
+            "16–16384",
+            opts.size,
         )));
     }
     for p in photos {

@@ -536,18 +536,22 @@ pub fn invert_with(
     smoothness: f64,
 ) -> Result<Chromophores> {
     if !(exposure > 0.0 && exposure.is_finite()) {
-        return Err(PhotoError::Invalid(format!(
-            "exposure {exposure}; expected a positive number"
+        return Err(PhotoError::Invalid(derma_core::Invalid::new(
+            "exposure",
+            "a positive number",
+            exposure,
         )));
     }
     let n = texture.width * texture.height;
     if let Some(m) = mask {
         if m.len() != n {
-            return Err(PhotoError::Invalid(format!(
-                "mask of {} texels for a {}×{} texture",
-                m.len(),
-                texture.width,
-                texture.height
+            return Err(PhotoError::Invalid(derma_core::Invalid::new(
+                "mask",
+                format!(
+                    "{n} texels (one per texel of the {}×{} texture)",
+                    texture.width, texture.height
+                ),
+                format!("{} texels", m.len()),
             )));
         }
     }

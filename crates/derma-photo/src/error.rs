@@ -28,9 +28,9 @@ pub enum PhotoError {
     /// A mesh that the unwrap or the baking cannot take.
     #[error("mesh: {0}")]
     Mesh(String),
-    /// Any other invalid input.
-    #[error("{0}")]
-    Invalid(String),
+    /// A value derma cannot use (derma-core's vocabulary: what, expected, got).
+    #[error(transparent)]
+    Invalid(#[from] derma_core::Invalid),
     /// A numerical failure.
     #[error(transparent)]
     Numerics(#[from] derma_core::numerics::NumericsError),

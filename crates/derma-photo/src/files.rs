@@ -119,12 +119,17 @@ pub fn calibrate(
     let head = Head::builtin();
     let file_landmarks = match inp.landmarks {
         Some(p) => {
-            let text = std::fs::read_to_string(p)
-                .map_err(|e| PhotoError::Invalid(format!("{}: {e}", p.display())))?;
-            Some(
-                derma_head::Landmarks::from_json(&text, 1.0)
-                    .map_err(|e| PhotoError::Invalid(format!("{}: {e}", p.display())))?,
-            )
+            let what = || format!("landmarks file '{}'", p.display());
+            let text = std::fs::read_to_string(p).map_err(|e| {
+                PhotoError::Invalid(derma_core::Invalid::new(what(), "a readable file", e))
+            })?;
+            Some(derma_head::Landmarks::from_json(&text, 1.0).map_err(|e| {
+                PhotoError::Invalid(derma_core::Invalid::new(
+                    what(),
+                    "derma-head's landmark JSON",
+                    e,
+                ))
+            })?)
         }
         None => None,
     };
@@ -246,12 +251,14 @@ pub fn unwrap_file(
 /// Reads `cameras.json`: each photo's image path (resolved against the file's folder), name
 /// and camera.
 pub fn read_cameras(cameras: &Path) -> Result<Vec<(PathBuf, String, Camera)>> {
+    let what = || format!("cameras file '{}'", cameras.display());
     let text = std::fs::read_to_string(cameras)
-        .map_err(|e| PhotoError::Invalid(format!("{}: {e}", cameras.display())))?;
+        .map_err(|e| PhotoError::Invalid(derma_core::Invalid::new(what(), "a readable file", e)))?;
     let file: CamerasFile = serde_json::from_str(&text).map_err(|e| {
-        PhotoError::Invalid(format!(
-            "{}: not a cameras file ({e}); make one with `derma photo calibrate`",
-            cameras.display()
+        PhotoError::Invalid(derma_core::Invalid::new(
+            what(),
+            "the JSON that `derma photo calibrate` writes",
+            e,
         ))
     })?;
     let dir = cameras.parent().unwrap_or(Path::new("."));
@@ -477,13 +484,10 @@ pub fn chromophore_files(
         (Some(p), Some(g)) => {
             let g = &g.channels[0];
             if (g.width(), g.height()) != (tex.width, tex.height) {
-                return Err(PhotoError::Invalid(format!(
-                    "mask {} is {}×{}; the texture is {}×{}",
-                    p.display(),
-                    g.width(),
-                    g.height(),
-                    tex.width,
-                    tex.height
+                return Err(PhotoError::Invalid(derma_core::Invalid::new(
+                    format!("mask '{}'", p.display()),
+                    format!("the texture's size ({}×{})", tex.width, tex.height),
+                    format!("{}×{}", g.width(), g.height()),
                 )));
             }
             Some(g.data().iter().map(|v| *v > 0.5).collect())

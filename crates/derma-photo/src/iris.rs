@@ -141,9 +141,11 @@ pub fn find_iris(img: &RgbImage, start: DVec2) -> Result<(DVec2, f64)> {
         }
         r += 0.25 + 0.01 * r;
     }
-    Err(PhotoError::Invalid(
-        "no iris found: the growing circle never met the sclera (is the eye open and the start inside the iris or pupil?)".into(),
-    ))
+    Err(PhotoError::Invalid(derma_core::Invalid::new(
+        "eye photo",
+        "a photo of one open eye (with the start inside the iris or pupil)",
+        "no iris found: the growing circle never met the sclera",
+    )))
 }
 
 /// The contrast between the ring just outside a found iris (sclera, lids) and the ring just
@@ -161,8 +163,10 @@ fn check_iris(img: &RgbImage, c: DVec2, r: f64) -> Result<()> {
         c.x, c.y
     );
     if !(0.0..w).contains(&c.x) || !(0.0..h).contains(&c.y) || r > 0.5 * w.min(h) {
-        return Err(PhotoError::Invalid(format!(
-            "no iris found: {found} does not lie inside the {w}×{h} photo; crop the photo to one open eye"
+        return Err(PhotoError::Invalid(derma_core::Invalid::new(
+            "eye photo",
+            "a photo cropped to one open eye",
+            format!("no iris found: {found} does not lie inside the {w}×{h} photo"),
         )));
     }
     let ring = |k: f64| {
@@ -177,8 +181,14 @@ fn check_iris(img: &RgbImage, c: DVec2, r: f64) -> Result<()> {
     };
     let contrast = ring(1.25) / ring(0.75).max(1e-4);
     if contrast < MIN_IRIS_CONTRAST {
-        return Err(PhotoError::Invalid(format!(
-            "no iris found: {found} is not darker than around it (outside/inside contrast {contrast:.2}, an iris against the sclera at least {MIN_IRIS_CONTRAST}); is this a photo of one open eye?"
+        return Err(PhotoError::Invalid(derma_core::Invalid::new(
+            "eye photo",
+            format!(
+                "a photo of one open eye (an iris against the sclera: outside/inside contrast at least {MIN_IRIS_CONTRAST})"
+            ),
+            format!(
+                "no iris found: {found} is not darker than around it (outside/inside contrast {contrast:.2})"
+            ),
         )));
     }
     Ok(())
@@ -299,9 +309,10 @@ fn dist2(a: [f32; 3], b: [f32; 3]) -> f32 {
 /// Runs the §4.1 pipeline on an eye photo (linear RGB).
 pub fn iris_texture(img: &RgbImage, opts: &IrisOptions) -> Result<IrisTexture> {
     if img.width < 16 || img.height < 16 {
-        return Err(PhotoError::Invalid(format!(
-            "eye photo of {}×{} pixels; at least 16×16 expected",
-            img.width, img.height
+        return Err(PhotoError::Invalid(derma_core::Invalid::new(
+            "eye photo",
+            "at least 16×16 pixels",
+            format!("{}×{} pixels", img.width, img.height),
         )));
     }
     let start = opts
@@ -379,9 +390,14 @@ pub fn iris_texture(img: &RgbImage, opts: &IrisOptions) -> Result<IrisTexture> {
     }
     let kept = valid.iter().filter(|v| **v).count();
     if kept < nr * 4 {
-        return Err(PhotoError::Invalid(format!(
-            "only {kept} of {} iris samples survive the removals; the iris is too occluded or too small ({radius:.1} px)",
-            nr * na
+        return Err(PhotoError::Invalid(derma_core::Invalid::new(
+            "eye photo",
+            format!(
+                "at least {} of its {} iris samples to survive the removals",
+                nr * 4,
+                nr * na
+            ),
+            format!("only {kept}: the iris is too occluded or too small ({radius:.1} px)"),
         )));
     }
     // Columns (angles) whose samples are ≥ 80 % valid; the longest circular run of them.

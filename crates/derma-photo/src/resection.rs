@@ -517,7 +517,11 @@ fn errors(photo: &PhotoPoints, cam: &Camera) -> Vec<f64> {
 /// and the fit repeated once.
 pub fn resect(photos: &[PhotoPoints], opts: &ResectionOptions) -> Result<Vec<Resection>> {
     if photos.is_empty() {
-        return Err(PhotoError::Invalid("no photos to resect".into()));
+        return Err(PhotoError::Invalid(derma_core::Invalid::new(
+            "photos to resect",
+            "at least one",
+            "none",
+        )));
     }
     if opts.shared_intrinsics {
         if let Some(p) = photos

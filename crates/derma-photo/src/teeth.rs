@@ -176,8 +176,14 @@ fn check_teeth(img: &RgbImage, labels: &[Label]) -> Result<()> {
     };
     let contrast = median(true) / median(false).max(1e-4);
     if contrast < MIN_TEETH_CONTRAST {
-        return Err(PhotoError::Invalid(format!(
-            "no teeth found: the pixels taken for teeth are {contrast:.2}× as bright as the rest (teeth against gums and the mouth: at least {MIN_TEETH_CONTRAST}×); is this a photo of a smile, cropped to the mouth?"
+        return Err(PhotoError::Invalid(derma_core::Invalid::new(
+            "teeth photo",
+            format!(
+                "a photo of a smile, cropped to the mouth (teeth against gums and the mouth: at least {MIN_TEETH_CONTRAST}× as bright as the rest)"
+            ),
+            format!(
+                "no teeth found: the pixels taken for teeth are {contrast:.2}× as bright as the rest"
+            ),
         )));
     }
     Ok(())
@@ -193,18 +199,23 @@ pub fn teeth_texture(
     opts: &TeethOptions,
 ) -> Result<TeethTexture> {
     if img.width < 24 || img.height < 12 {
-        return Err(PhotoError::Invalid(format!(
-            "teeth photo of {}×{} pixels; at least 24×12 expected",
-            img.width, img.height
+        return Err(PhotoError::Invalid(derma_core::Invalid::new(
+            "teeth photo",
+            "at least 24×12 pixels",
+            format!("{}×{} pixels", img.width, img.height),
         )));
     }
     let (labels, void_t, gum_t) = label(img);
     let (w, h) = (img.width, img.height);
     let teeth: Vec<usize> = (0..w * h).filter(|&i| labels[i] == Label::Tooth).collect();
     if teeth.len() < 50 {
-        return Err(PhotoError::Invalid(format!(
-            "only {} tooth pixels found (thresholds: void {void_t:.3}, gum {gum_t:.3}); is the photo of teeth?",
-            teeth.len()
+        return Err(PhotoError::Invalid(derma_core::Invalid::new(
+            "teeth photo",
+            "a photo of teeth (at least 50 tooth pixels)",
+            format!(
+                "only {} tooth pixels (thresholds: void {void_t:.3}, gum {gum_t:.3})",
+                teeth.len()
+            ),
         )));
     }
     check_teeth(img, &labels)?;

@@ -53,22 +53,25 @@ impl UnwrapOptions {
     /// Checks k.
     pub fn check(&self) -> Result<()> {
         if !(1.01..=2.0).contains(&self.k) {
-            return Err(PhotoError::Invalid(format!(
-                "unwrap k = {}; expected 1.01–2 (Tarini et al. 2002 §3.1)",
-                self.k
+            return Err(PhotoError::Invalid(derma_core::Invalid::new(
+                "unwrap k",
+                "1.01–2 (Tarini et al. 2002 §3.1)",
+                self.k,
             )));
         }
         if !(0.0..0.25).contains(&self.margin) {
-            return Err(PhotoError::Invalid(format!(
-                "unwrap margin = {}; expected 0–0.25 of the square",
-                self.margin
+            return Err(PhotoError::Invalid(derma_core::Invalid::new(
+                "unwrap margin",
+                "0–0.25 of the square",
+                self.margin,
             )));
         }
         if let Some(v) = self.view {
             if !v.is_finite() || v.length() < 1e-6 {
-                return Err(PhotoError::Invalid(format!(
-                    "unwrap view direction ({}, {}, {}) has no direction; expected a vector such as 0,0,-1 (or none for a view-independent layout)",
-                    v.x, v.y, v.z
+                return Err(PhotoError::Invalid(derma_core::Invalid::new(
+                    "unwrap view direction",
+                    "a vector such as 0,0,-1 (or none for a view-independent layout)",
+                    format!("({}, {}, {}), which has no direction", v.x, v.y, v.z),
                 )));
             }
         }

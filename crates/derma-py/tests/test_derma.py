@@ -136,6 +136,12 @@ def test_errors_are_derma_errors_naming_the_value(tmp_path):
         (dict(device="tpu"), ["tpu"]),
         (dict(mesh=tmp_path / "nowhere.obj"), ["nowhere.obj"]),
         (dict(size=0), ["size"]),
+        # A value of the wrong sign or type names its argument (before: "failed to extract
+        # field Request.size").
+        (dict(size=-5), ["size", "-5", "expected"]),
+        (dict(seed=-1), ["seed", "-1"]),
+        (dict(age="old"), ["age", "'old'"]),
+        (dict(size=100000), ["size", "16384"]),
     ]
     for kwargs, words in cases:
         with pytest.raises(derma.DermaError) as e:

@@ -17,9 +17,9 @@ pub enum RenderError {
         /// What is wrong and what was expected.
         detail: String,
     },
-    /// Any other invalid value.
-    #[error("{0}")]
-    Invalid(String),
+    /// A value derma cannot use (derma-core's vocabulary: what, expected, got).
+    #[error(transparent)]
+    Invalid(#[from] derma_core::Invalid),
     /// The GPU could not be used.
     #[error(transparent)]
     Gpu(#[from] derma_core::gpu::GpuError),

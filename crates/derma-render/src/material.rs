@@ -202,8 +202,12 @@ pub fn read_albedo(path: &std::path::Path) -> crate::Result<[Map; 3]> {
     let exr = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-    let mut rgb: [Map; 3] = img.channels.try_into().map_err(|_| {
-        crate::RenderError::Invalid(format!("{}: expected an RGB image", path.display()))
+    let mut rgb: [Map; 3] = img.channels.try_into().map_err(|c: Vec<Map>| {
+        crate::RenderError::Invalid(derma_core::Invalid::new(
+            format!("albedo texture '{}'", path.display()),
+            "an RGB image",
+            format!("{} channels", c.len()),
+        ))
     })?;
     if !exr {
         for m in rgb.iter_mut() {

@@ -86,11 +86,10 @@ impl WrinkleMaps {
     ) -> Result<[Map; 3]> {
         let (w, h) = (rest[0].width(), rest[0].height());
         if (self.normal[0].width(), self.normal[0].height()) != (w, h) {
-            return Err(RenderError::Invalid(format!(
-                "{} is {}×{}; normal.png is {w}×{h}",
+            return Err(RenderError::Invalid(derma_core::Invalid::new(
                 files::WRINKLE_NORMAL,
-                self.normal[0].width(),
-                self.normal[0].height()
+                format!("the size of normal.png ({w}×{h})"),
+                format!("{}×{}", self.normal[0].width(), self.normal[0].height()),
             )));
         }
         let weights = wrinkle_regions::weights(units);

@@ -14,9 +14,9 @@ pub enum ShadingError {
         /// What is wrong with it.
         message: String,
     },
-    /// A value out of range or inconsistent.
-    #[error("{0}")]
-    Invalid(String),
+    /// A value derma cannot use (derma-core's vocabulary: what, expected, got).
+    #[error(transparent)]
+    Invalid(#[from] derma_core::Invalid),
     /// From derma-core (files, tables).
     #[error(transparent)]
     Core(#[from] derma_core::CoreError),

@@ -46,8 +46,10 @@ pub fn run(job: &FitJob, progress: &dyn Progress) -> Result<FitReport> {
     derma_core::atomic::check_inputs_spared(&outputs, &[job.grid.as_path()])?;
     let z = job.options.max_zenith_deg;
     if !(z > 0.0 && z <= 90.0) {
-        return Err(ShadingError::Invalid(format!(
-            "max zenith {z}°: expected degrees in (0, 90]"
+        return Err(ShadingError::Invalid(derma_core::Invalid::new(
+            "max zenith",
+            "degrees in (0, 90]",
+            format!("{z}°"),
         )));
     }
     let pre = Dtab::read(&job.grid)?;

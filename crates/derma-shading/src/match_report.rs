@@ -90,8 +90,10 @@ pub fn write_plots(
 ) -> Result<usize> {
     let nodes_in_table = pre.header.nodes();
     if let Some(&n) = nodes.iter().find(|&&n| n >= nodes_in_table) {
-        return Err(ShadingError::Invalid(format!(
-            "plot node {n} outside the table's {nodes_in_table} entries"
+        return Err(ShadingError::Invalid(derma_core::Invalid::new(
+            "plot node",
+            format!("an entry of the table (below {nodes_in_table})"),
+            n,
         )));
     }
     derma_core::atomic::ensure_writable_dir(dir)?;
@@ -100,14 +102,21 @@ pub fn write_plots(
     let geom = FitGeometry::with_cutoff(bins, opts.weighting, opts.max_zenith_deg);
     let pstride = pre.header.stride();
     let mstride = mt.dtab.header.stride();
+    let missing = |name: &str| {
+        ShadingError::Invalid(derma_core::Invalid::new(
+            format!("value '{name}' of the precompute table"),
+            "a value every derma optics precompute table has (make one with `derma optics merge`)",
+            "none",
+        ))
+    };
     let (bo, bl) = pre
         .header
         .offset("brdf_rgb")
-        .ok_or_else(|| ShadingError::Invalid("the precompute table has no brdf_rgb".into()))?;
+        .ok_or_else(|| missing("brdf_rgb"))?;
     let (po, pl) = pre
         .header
         .offset("profile_rgb")
-        .ok_or_else(|| ShadingError::Invalid("the precompute table has no profile_rgb".into()))?;
+        .ok_or_else(|| missing("profile_rgb"))?;
     let mut count = 0;
     for &node in nodes {
         let sim: Vec<[f64; 3]> = pre.data[node * pstride + bo..node * pstride + bo + bl]

@@ -87,17 +87,22 @@ impl ResidualSummary {
 /// The precompute table's bins (from its metadata).
 pub fn precompute_grid(pre: &Dtab) -> Result<Grid> {
     serde_json::from_value(pre.header.meta["grid"].clone()).map_err(|e| {
-        ShadingError::Invalid(format!(
-            "not a derma optics precompute table (meta.grid: {e}); make one with `derma optics merge`"
+        ShadingError::Invalid(derma_core::Invalid::new(
+            "precompute table",
+            "a derma optics precompute table (make one with `derma optics merge`)",
+            format!("a table whose meta.grid is unreadable ({e})"),
         ))
     })
 }
 
 fn slice<'a>(pre: &'a Dtab, node: usize, name: &str) -> Result<&'a [f32]> {
-    let (o, l) = pre
-        .header
-        .offset(name)
-        .ok_or_else(|| ShadingError::Invalid(format!("precompute table has no value '{name}'")))?;
+    let (o, l) = pre.header.offset(name).ok_or_else(|| {
+        ShadingError::Invalid(derma_core::Invalid::new(
+            format!("value '{name}' of the precompute table"),
+            "a value every derma optics precompute table has (make one with `derma optics merge`)",
+            "none",
+        ))
+    })?;
     let s = pre.header.stride();
     Ok(&pre.data[node * s + o..node * s + o + l])
 }
@@ -211,16 +216,20 @@ const SURFACE_DOC: &str = "glTF GGX (roughness, F0) fitted to the light the skin
 pub fn add_surface_fit(table: &mut MatchTable, progress: &dyn Progress) -> Result<SurfaceFit> {
     let meta = &table.dtab.header.meta;
     let grid: Grid = serde_json::from_value(meta["precompute"]["grid"].clone()).map_err(|e| {
-        ShadingError::Invalid(format!(
-            "the match table does not say which precompute grid it was fitted to (meta.precompute.grid: {e})"
+        ShadingError::Invalid(derma_core::Invalid::new(
+            "meta.precompute.grid of the match table",
+            "the precompute grid the table was fitted to",
+            format!("none readable ({e})"),
         ))
     })?;
     let weighting = match meta["weighting"].as_str() {
         Some("uniform") => Weighting::Uniform,
         Some("cosine") | None => Weighting::Cosine,
         Some(other) => {
-            return Err(ShadingError::Invalid(format!(
-                "the match table's meta.weighting is '{other}'; expected 'cosine' or 'uniform'"
+            return Err(ShadingError::Invalid(derma_core::Invalid::new(
+                "meta.weighting of the match table",
+                "'cosine' or 'uniform'",
+                format!("'{other}'"),
             )))
         }
     };
@@ -259,8 +268,14 @@ fn fit_node(
         .map(|c| [c[0] as f64, c[1] as f64, c[2] as f64])
         .collect();
     if brdf.len() != geom.len() || profile.len() != pbins.bins {
-        return Err(ShadingError::Invalid(format!(
-            "node {node}: BRDF or profile length does not match the grid's bins"
+        return Err(ShadingError::Invalid(derma_core::Invalid::new(
+            format!("BRDF and profile lengths of precompute node {node}"),
+            format!(
+                "the grid's bins ({} BRDF bins and {} profile bins)",
+                geom.len(),
+                pbins.bins
+            ),
+            format!("{} and {}", brdf.len(), profile.len()),
         )));
     }
     let mut row: Vec<f32> = albedo.to_vec();

@@ -111,10 +111,18 @@ impl SkinColorLut {
 
     /// Simulates every entry (one stage, advancing by entries).
     pub fn build(opts: LutOptions, device: Device, progress: &dyn Progress) -> Result<Self> {
-        if opts.size < 2 || opts.photons == 0 {
-            return Err(ShadingError::Invalid(format!(
-                "LUT size {} and photons {} must be at least 2 and 1",
-                opts.size, opts.photons
+        if opts.size < 2 {
+            return Err(ShadingError::Invalid(derma_core::Invalid::new(
+                "LUT size",
+                "at least 2",
+                opts.size,
+            )));
+        }
+        if opts.photons == 0 {
+            return Err(ShadingError::Invalid(derma_core::Invalid::new(
+                "photons per LUT entry",
+                "at least 1",
+                opts.photons,
             )));
         }
         for (name, v) in [
@@ -124,7 +132,11 @@ impl SkinColorLut {
             ("blood max", opts.blood_max),
         ] {
             if !(0.0..=1.0).contains(&v) {
-                return Err(ShadingError::Invalid(format!("{name} {v} outside [0, 1]")));
+                return Err(ShadingError::Invalid(derma_core::Invalid::new(
+                    name,
+                    "a value in [0, 1]",
+                    v,
+                )));
             }
         }
         let device = device.resolve().map_err(derma_optics::OpticsError::from)?;
@@ -224,18 +236,40 @@ impl SkinColorLut {
 
     /// Reads a table written by [`Self::to_dtab`]; `what` names it in errors.
     pub fn from_dtab(t: &Dtab, what: &str) -> Result<Self> {
-        let bad = |d: String| ShadingError::Invalid(format!("skin-colour LUT {what}: {d}"));
+        let bad = |part: &str, expected: &str, got: String| {
+            ShadingError::Invalid(derma_core::Invalid::new(
+                format!("{part} of skin-colour LUT '{what}'"),
+                expected,
+                got,
+            ))
+        };
         let axes = &t.header.axes;
         if axes.len() != 2 || axes[0].name != "blood_cbrt" || axes[1].name != "melanin_cbrt" {
-            return Err(bad(format!(
-                "expected axes blood_cbrt, melanin_cbrt; found {:?}",
-                axes.iter().map(|a| a.name.as_str()).collect::<Vec<_>>()
-            )));
+            return Err(bad(
+                "axes",
+                "blood_cbrt, melanin_cbrt",
+                format!(
+                    "{:?}",
+                    axes.iter().map(|a| a.name.as_str()).collect::<Vec<_>>()
+                ),
+            ));
         }
         let n = axes[0].values.len();
         if n < 2 || axes[1].values.len() != n || t.header.offset("linear_srgb") != Some((0, 3)) {
+            let values = t
+                .header
+                .values
+                .iter()
+                .map(|v| format!("{}[{}]", v.name, v.len))
+                .collect::<Vec<_>>();
             return Err(bad(
-                "expected a square table of at least 2×2 linear_srgb triples".into(),
+                "layout",
+                "a square table of at least 2×2 linear_srgb triples",
+                format!(
+                    "{n}×{} nodes of {}",
+                    axes[1].values.len(),
+                    values.join(", ")
+                ),
             ));
         }
         // The axis stores cube roots: undo, rounded to 12 decimals (0.5, not 0.5000000000000001).
@@ -259,12 +293,24 @@ impl SkinColorLut {
             epidermis_um: num("epidermis_um", d.epidermis_um),
             yellow: match meta.get("yellow_pigments") {
                 None => YellowPigments::NONE,
-                Some(v) => serde_json::from_value(v.clone())
-                    .map_err(|e| bad(format!("yellow_pigments: {e}")))?,
+                Some(v) => serde_json::from_value(v.clone()).map_err(|e| {
+                    bad(
+                        "meta.yellow_pigments",
+                        "yellow pigment concentrations",
+                        e.to_string(),
+                    )
+                })?,
             },
         };
         if !(options.melanin_max > 0.0 && options.blood_max > 0.0) {
-            return Err(bad("axis tops must be positive".into()));
+            return Err(bad(
+                "axis tops",
+                "positive values",
+                format!(
+                    "melanin {}, blood {}",
+                    options.melanin_max, options.blood_max
+                ),
+            ));
         }
         let rgb = t
             .data
@@ -272,7 +318,15 @@ impl SkinColorLut {
             .map(|c| [c[0], c[1], c[2]])
             .collect::<Vec<_>>();
         if rgb.len() != n * n || rgb.iter().flatten().any(|v| !v.is_finite()) {
-            return Err(bad("payload is not n² finite triples".into()));
+            let not_finite = rgb
+                .iter()
+                .filter(|c| c.iter().any(|v| !v.is_finite()))
+                .count();
+            return Err(bad(
+                "payload",
+                &format!("{} finite triples ({n}²)", n * n),
+                format!("{} triples, {not_finite} of them not finite", rgb.len()),
+            ));
         }
         Ok(Self { options, rgb })
     }
@@ -302,9 +356,12 @@ impl SkinColorLut {
                     &[&ch[0], &ch[1], &ch[2]],
                 )?)
             }
-            _ => Err(ShadingError::Invalid(format!(
-                "{}: expected a .png or .dtab file name for the skin-color LUT",
-                path.display()
+            _ => Err(ShadingError::Invalid(derma_core::Invalid::new(
+                format!("skin-color LUT file '{}'", path.display()),
+                "a .png or .dtab file name",
+                path.extension().map_or("no extension".to_string(), |e| {
+                    format!("'.{}'", e.to_string_lossy())
+                }),
             ))),
         }
     }

@@ -90,8 +90,13 @@ impl TableAppearance {
     pub fn with_base(table: &MatchTable, base: BaseColor) -> Result<Self> {
         let h = &table.dtab.header;
         let need = |name: &str| {
-            h.offset(name)
-                .ok_or_else(|| ShadingError::Invalid(format!("match table has no value '{name}'")))
+            h.offset(name).ok_or_else(|| {
+                ShadingError::Invalid(derma_core::Invalid::new(
+                    format!("value '{name}' of the match table"),
+                    "a value every derma match table has (make one with `derma match fit`)",
+                    "none",
+                ))
+            })
         };
         let (ob, _) = match base {
             BaseColor::GgxFit => need(ModelKind::Ggx.name())?,
@@ -123,9 +128,10 @@ impl TableAppearance {
                 .expect("checked");
             let a = &h.axes[k];
             if a.values.len() > MAX_NODES {
-                return Err(ShadingError::Invalid(format!(
-                    "match table axis '{name}' has {} nodes; at most {MAX_NODES} are supported",
-                    a.values.len()
+                return Err(ShadingError::Invalid(derma_core::Invalid::new(
+                    format!("nodes of match table axis '{name}'"),
+                    format!("at most {MAX_NODES}"),
+                    a.values.len(),
                 )));
             }
             if a.values.len() >= 2 {

@@ -170,7 +170,7 @@ fn a_photo_that_is_not_an_eye_or_teeth_is_refused() {
             s(&d.join("t")),
         ]);
         assert!(
-            !ok && err.contains("no teeth found") || err.contains("tooth pixels"),
+            !ok && (err.contains("no teeth found") || err.contains("tooth pixels")),
             "{}: {err}",
             p.display()
         );

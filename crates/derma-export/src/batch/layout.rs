@@ -52,7 +52,10 @@ pub(super) fn remove_stale_partials(out: &Path, dir: &str) -> Result<usize> {
 pub fn prepare(out: &Path, spec: &BatchSpec) -> Result<()> {
     derma_core::atomic::ensure_writable_dir(out)?;
     let path = out.join(SPEC_FILE);
-    let text = toml::to_string(spec).map_err(|e| ExportError::Invalid(e.to_string()))?;
+    let text = toml::to_string(spec).map_err(|e| derma_core::CoreError::Encode {
+        path: path.clone(),
+        detail: e.to_string(),
+    })?;
     if path.exists() {
         let old = read_spec_file(&path)?;
         if &old != spec {

@@ -114,7 +114,10 @@ pub fn merge(out: &Path, progress: &dyn Progress) -> Result<Merged> {
             identity: &got,
             seconds,
         })
-        .map_err(|e| ExportError::Invalid(e.to_string()))?;
+        .map_err(|e| derma_core::CoreError::Encode {
+            path: out.join(MANIFEST),
+            detail: e.to_string(),
+        })?;
         lines.push_str(&line);
         lines.push('\n');
     }

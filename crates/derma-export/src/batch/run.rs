@@ -109,7 +109,11 @@ pub fn run_shard(
             let generator = generator_for(&id, size)?;
             let set = partial.join(&sub);
             crate::skin::run(&generator, &set, spec.glb, &Silent).map_err(|e| {
-                ExportError::Invalid(format!("identity {} ({}) at {size}²: {e}", i, id.dir))
+                derma_core::Invalid::new(
+                    format!("identity {} ({}) at {size}²", i, id.dir),
+                    "a painted texture set",
+                    e,
+                )
             })?;
             keep_outputs(&set, spec)?;
         }

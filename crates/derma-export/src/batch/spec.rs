@@ -141,8 +141,13 @@ pub struct Identity {
 impl BatchSpec {
     /// Parses a spec; `origin` names it in errors.
     pub fn parse(text: &str, origin: &str) -> Result<Self> {
-        let spec: BatchSpec = toml::from_str(text)
-            .map_err(|e| ExportError::Invalid(format!("{origin}: {}", e.to_string().trim())))?;
+        let spec: BatchSpec = toml::from_str(text).map_err(|e| {
+            derma_core::Invalid::new(
+                format!("batch spec '{origin}'"),
+                "a valid batch spec (TOML)",
+                e.to_string().trim(),
+            )
+        })?;
         spec.validate(origin)?;
         Ok(spec)
     }
@@ -185,22 +190,22 @@ impl BatchSpec {
     }
 
     fn validate(&self, origin: &str) -> Result<()> {
-        let bad = |key: &str, detail: String| {
-            Err(ExportError::Invalid(format!("{origin}: {key}: {detail}")))
+        let bad = |key: &str, expected: &str, got: &str| -> Result<()> {
+            Err(
+                derma_core::Invalid::new(format!("{key} in batch spec '{origin}'"), expected, got)
+                    .into(),
+            )
         };
         if self.count == 0 {
-            return bad("count", "expected at least one identity".into());
+            return bad("count", "at least one identity", "0");
         }
         let sizes = self.size.dirs();
         if sizes.is_empty() {
-            return bad(
-                "size",
-                "an empty list: expected a size or a list of sizes".into(),
-            );
+            return bad("size", "a size or a list of sizes", "an empty list");
         }
         for (n, _) in &sizes {
             if !(16..=16384).contains(n) {
-                return bad("size", format!("{n} texels: expected 16 … 16384"));
+                return bad("size", "16 … 16384 texels", &format!("{n} texels"));
             }
         }
         if sizes
@@ -208,40 +213,39 @@ impl BatchSpec {
             .enumerate()
             .any(|(i, a)| sizes[..i].iter().any(|b| b.0 == a.0))
         {
-            return bad("size", "a size is listed twice".into());
+            return bad("size", "each size once", "a size listed twice");
         }
         for p in &self.presets {
             if Preset::parse(p).is_none() {
                 let all = Preset::ALL.map(|p| p.name()).join(", ");
-                return bad("presets", format!("'{p}': expected one of {all}"));
+                return bad("presets", &format!("one of {all}"), &format!("'{p}'"));
             }
         }
         if let Some([lo, hi]) = self.ita_deg {
             if !self.presets.is_empty() {
-                return bad("ita_deg", "give presets or ita_deg, not both".into());
+                return bad("ita_deg", "either presets or ita_deg", "both");
             }
             if !(lo.is_finite() && hi.is_finite() && lo <= hi && lo >= -90.0 && hi <= 90.0) {
                 return bad(
                     "ita_deg",
-                    format!("[{lo}, {hi}]: expected −90 ≤ min ≤ max ≤ 90"),
+                    "[min, max] with −90 ≤ min ≤ max ≤ 90",
+                    &format!("[{lo}, {hi}]"),
                 );
             }
         }
         if !(0.0..=1.0).contains(&self.male) {
-            return bad(
-                "male",
-                format!("{}: expected a probability in [0, 1]", self.male),
-            );
+            return bad("male", "a probability in [0, 1]", &self.male.to_string());
         }
         let [a0, a1] = self.age_years;
         if !(a0.is_finite() && a1.is_finite() && 0.0 <= a0 && a0 <= a1 && a1 <= 120.0) {
             return bad(
                 "age_years",
-                format!("[{a0}, {a1}]: expected 0 ≤ min ≤ max ≤ 120"),
+                "[min, max] with 0 ≤ min ≤ max ≤ 120",
+                &format!("[{a0}, {a1}]"),
             );
         }
         if !self.meshes.is_empty() && !self.heads.is_empty() {
-            return bad("heads", "give meshes or heads, not both".into());
+            return bad("heads", "either meshes or heads", "both");
         }
         for f in &self.outputs {
             if derma_skin::outputs::output(f).is_none() {
@@ -251,7 +255,8 @@ impl BatchSpec {
                     .collect();
                 return bad(
                     "outputs",
-                    format!("'{f}': expected one of {}", all.join(", ")),
+                    &format!("one of {}", all.join(", ")),
+                    &format!("'{f}'"),
                 );
             }
         }
