@@ -1,22 +1,12 @@
 //! The errors of the export crate: texture sets, meshes, rigs and options that cannot be used,
 //! each naming the file or value and what was expected, and the viewer's server failing.
 
-use std::path::PathBuf;
-
 /// An error of `derma-export`.
 #[derive(Debug, thiserror::Error)]
 pub enum ExportError {
     /// Input from the core (files, images, meshes).
     #[error(transparent)]
     Core(#[from] derma_core::CoreError),
-    /// A texture set, mesh or option that cannot be used.
-    #[error("{path}: {detail}")]
-    Input {
-        /// The file or directory.
-        path: PathBuf,
-        /// What is wrong and what was expected.
-        detail: String,
-    },
     /// A value derma cannot use (derma-core's vocabulary: what, expected, got).
     #[error(transparent)]
     Invalid(#[from] derma_core::Invalid),
@@ -43,7 +33,11 @@ pub enum ExportError {
 impl From<derma_head::fit::store::StoreError> for ExportError {
     fn from(e: derma_head::fit::store::StoreError) -> Self {
         let derma_head::fit::store::StoreError::File { path, detail } = e;
-        ExportError::Input { path, detail }
+        derma_core::CoreError::Format {
+            path,
+            message: detail,
+        }
+        .into()
     }
 }
 

@@ -85,9 +85,11 @@ pub fn skin_of<'a>(
     dir: &Path,
     base: &[Map; 3],
 ) -> Result<&'a derma_rig::skin_response::SkinResponse> {
-    let bad = |detail: String| ExportError::Input {
-        path: dir.to_path_buf(),
-        detail,
+    let bad = |detail: String| {
+        ExportError::from(derma_core::CoreError::Format {
+            path: dir.to_path_buf(),
+            message: detail,
+        })
     };
     let skin = rig.skin.as_ref().ok_or_else(|| {
         bad("built from bare hemoglobin and melanin maps, its colour is the skin-colour LUT's and would replace the set's base colour; build the rig from the texture set".into())
@@ -119,9 +121,11 @@ fn rig_color(f: &RigFrame, base: &[Map; 3]) -> Result<[Map; 3]> {
     skin_of(&rig, &f.dir, base)?;
     let (w, g) =
         derma_rig::weights::frame_weights(&rig, &f.weights, Normalization::default(), f.global)?;
-    let melanin = rig.melanin.clone().ok_or_else(|| ExportError::Input {
-        path: f.dir.clone(),
-        detail: "the rig has no melanin map to colour with; build the rig with one".into(),
+    let melanin = rig.melanin.clone().ok_or_else(|| {
+        ExportError::from(derma_core::CoreError::Format {
+            path: f.dir.clone(),
+            message: "the rig has no melanin map to colour with; build the rig with one".into(),
+        })
     })?;
     let (_, rgb) = derma_rig::evaluate_frame(
         &rig,

@@ -238,9 +238,11 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
     let head = derma_head::fitted::or_builtin(o.head.as_deref())?;
     let read = |f: &str| -> Result<Vec<u8>> {
         let p = o.textures.join(f);
-        std::fs::read(&p).map_err(|e| ExportError::Input {
-            path: p,
-            detail: format!("cannot read ({e})"),
+        std::fs::read(&p).map_err(|e| {
+            ExportError::from(derma_core::CoreError::Format {
+                path: p,
+                message: format!("cannot read ({e})"),
+            })
         })
     };
     let mut g = Glb::default();
@@ -557,9 +559,11 @@ pub fn write_maps(
     let copy = |key: &str, file: &str, out: &mut Vec<PathBuf>| -> Result<()> {
         let from = src.join(file);
         if from.is_file() {
-            let bytes = std::fs::read(&from).map_err(|e| ExportError::Input {
-                path: from.clone(),
-                detail: e.to_string(),
+            let bytes = std::fs::read(&from).map_err(|e| {
+                ExportError::from(derma_core::CoreError::Format {
+                    path: from.clone(),
+                    message: e.to_string(),
+                })
             })?;
             let to = dir.join(naming.file(key));
             derma_core::atomic::write_bytes(&to, &bytes)?;
@@ -607,14 +611,14 @@ pub fn carried_units(
 /// Refuses a user mesh at `path` of which only `share` lies near the fitted head.
 pub fn check_share(share: f32, path: &std::path::Path) -> Result<()> {
     if share < derma_head::fit::onto::MIN_SHARE {
-        return Err(ExportError::Input {
+        return Err(ExportError::from(derma_core::CoreError::Format {
             path: path.to_path_buf(),
-            detail: format!(
+            message: format!(
                 "only {:.0} % of its vertices lie within {} mm of the fitted head; is it the mesh the head was fitted to, read in the same unit?",
                 100.0 * share,
                 derma_head::fit::onto::REACH_MM
             ),
-        });
+        }));
     }
     Ok(())
 }

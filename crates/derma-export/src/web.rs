@@ -84,9 +84,11 @@ fn region_points(head: &derma_head::Head, n: usize) -> serde_json::Value {
 /// wrong otherwise — a texture set's own manifest.json is not one.
 pub fn check_export(dir: &Path) -> Result<()> {
     let path = dir.join("manifest.json");
-    let bad = |detail: String| ExportError::Input {
-        path: path.clone(),
-        detail: format!("{detail}; expected a directory from `derma export web`"),
+    let bad = |detail: String| {
+        ExportError::from(derma_core::CoreError::Format {
+            path: path.clone(),
+            message: format!("{detail}; expected a directory from `derma export web`"),
+        })
     };
     let bytes = std::fs::read(&path).map_err(|e| bad(format!("cannot read it ({e})")))?;
     let v: serde_json::Value =
@@ -196,9 +198,11 @@ pub fn export(
     let mut targets = 0;
     if let Some(dir) = rig_dir {
         let (rig, lut, rj) = derma_rig::rig_dir::load(dir)?;
-        let melanin = rig.melanin.as_ref().ok_or_else(|| ExportError::Input {
-            path: dir.to_path_buf(),
-            detail: "the rig has no melanin map; build the rig with one".into(),
+        let melanin = rig.melanin.as_ref().ok_or_else(|| {
+            ExportError::from(derma_core::CoreError::Format {
+                path: dir.to_path_buf(),
+                message: "the rig has no melanin map; build the rig with one".into(),
+            })
         })?;
         let skin = crate::files::skin_of(
             &rig,

@@ -9,14 +9,6 @@ pub enum OpticsError {
     /// A value derma cannot use (derma-core's vocabulary: what, expected, got).
     #[error(transparent)]
     Invalid(#[from] derma_core::Invalid),
-    /// A grid or precompute file with bad content.
-    #[error("{path}: {message}")]
-    File {
-        /// The file.
-        path: PathBuf,
-        /// What is wrong with it.
-        message: String,
-    },
     /// A file that could not be read or written.
     #[error("{path}")]
     Io {

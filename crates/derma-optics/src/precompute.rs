@@ -108,9 +108,11 @@ epidermis_um = [20.0, 60.0, 120.0, 200.0]
 impl Grid {
     /// Parses a grid from TOML; `origin` names it in errors (unknown keys, ranges, order).
     pub fn parse(text: &str, origin: &Path) -> Result<Self> {
-        let g: Grid = toml::from_str(text).map_err(|e| OpticsError::File {
-            path: origin.to_path_buf(),
-            message: e.to_string(),
+        let g: Grid = toml::from_str(text).map_err(|e| {
+            crate::OpticsError::from(derma_core::CoreError::Format {
+                path: origin.to_path_buf(),
+                message: e.to_string(),
+            })
         })?;
         g.validate(origin)?;
         Ok(g)
@@ -149,9 +151,11 @@ impl Grid {
     }
 
     fn validate(&self, origin: &Path) -> Result<()> {
-        let bad = |m: String| OpticsError::File {
-            path: origin.to_path_buf(),
-            message: m,
+        let bad = |m: String| {
+            crate::OpticsError::from(derma_core::CoreError::Format {
+                path: origin.to_path_buf(),
+                message: m,
+            })
         };
         if self.photons == 0 {
             return Err(bad("photons must be at least 1".into()));
@@ -277,13 +281,13 @@ pub fn prepare_dir(dir: &Path, grid: &Grid) -> Result<()> {
         })?;
         let old_grid = Grid::parse(&old, &path)?;
         if &old_grid != grid {
-            return Err(OpticsError::File {
+            return Err(crate::OpticsError::from(derma_core::CoreError::Format {
                 path,
                 message:
                     "this directory was started with a different grid; use a new output directory \
                           or the same grid"
                         .into(),
-            });
+            }));
         }
         return Ok(());
     }
@@ -379,9 +383,11 @@ fn read_entry(path: &Path) -> Result<SkinResult> {
         path: path.to_path_buf(),
         source: e,
     })?;
-    serde_json::from_slice(&bytes).map_err(|e| OpticsError::File {
-        path: path.to_path_buf(),
-        message: format!("not a precompute entry: {e}"),
+    serde_json::from_slice(&bytes).map_err(|e| {
+        crate::OpticsError::from(derma_core::CoreError::Format {
+            path: path.to_path_buf(),
+            message: format!("not a precompute entry: {e}"),
+        })
     })
 }
 
@@ -424,10 +430,10 @@ pub fn merge(dirs: &[PathBuf]) -> Result<Dtab> {
             source: e,
         })?;
         if Grid::parse(&t, &p)? != grid {
-            return Err(OpticsError::File {
+            return Err(crate::OpticsError::from(derma_core::CoreError::Format {
                 path: p,
                 message: format!("grid differs from {}", gp.display()),
-            });
+            }));
         }
     }
     let layout = value_layout(&grid);
@@ -442,13 +448,13 @@ pub fn merge(dirs: &[PathBuf]) -> Result<Dtab> {
         };
         let r = read_entry(&path)?;
         if r.config != grid.config(i) || r.bio != grid.node(i) {
-            return Err(OpticsError::File {
+            return Err(crate::OpticsError::from(derma_core::CoreError::Format {
                 path,
                 message: format!(
                     "entry {i} was simulated with other settings than {}'s node {i} (another grid, or a run before the grid's yellow pigments or surface changed); run it again",
                     gp.display()
                 ),
-            });
+            }));
         }
         photons_total += r.config.photons;
         data.extend(r.linear_srgb.iter().map(|&v| v as f32));

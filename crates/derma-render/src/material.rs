@@ -108,14 +108,14 @@ fn three(path: &Path) -> Result<[Map; 3]> {
 
 fn check_size(path: &Path, m: &Map, w: usize, h: usize) -> Result<()> {
     if (m.width(), m.height()) != (w, h) {
-        return Err(RenderError::Input {
+        return Err(RenderError::from(derma_core::CoreError::Format {
             path: path.to_path_buf(),
-            detail: format!(
+            message: format!(
                 "is {}×{}; base_color.png is {w}×{h} (every map of a set must be the same size)",
                 m.width(),
                 m.height()
             ),
-        });
+        }));
     }
     Ok(())
 }
@@ -129,10 +129,10 @@ impl SkinMaps {
             if p.is_file() {
                 Ok(p)
             } else {
-                Err(RenderError::Input {
+                Err(RenderError::from(derma_core::CoreError::Format {
                     path: p,
-                    detail: "missing; expected a texture set as derma skin writes it".into(),
-                })
+                    message: "missing; expected a texture set as derma skin writes it".into(),
+                }))
             }
         };
         let bp = need(files::BASE_COLOR)?;

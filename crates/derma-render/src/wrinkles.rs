@@ -40,13 +40,15 @@ impl WrinkleMaps {
                 let k = channels
                     .iter()
                     .position(|(n, _)| n == r.name)
-                    .ok_or_else(|| RenderError::Input {
-                        path: mp.clone(),
-                        detail: format!(
-                            "has no channel '{}'; expected one per wrinkle region ({})",
-                            r.name,
-                            REGIONS.map(|r| r.name).join(", ")
-                        ),
+                    .ok_or_else(|| {
+                        crate::RenderError::from(derma_core::CoreError::Format {
+                            path: mp.clone(),
+                            message: format!(
+                                "has no channel '{}'; expected one per wrinkle region ({})",
+                                r.name,
+                                REGIONS.map(|r| r.name).join(", ")
+                            ),
+                        })
                     })?;
                 Ok(channels.swap_remove(k).1)
             })

@@ -1,19 +1,9 @@
 //! Typed errors of the shading crate, naming the table, fit or value at fault and what was
 //! expected.
 
-use std::path::PathBuf;
-
 /// Errors of the shading crate, each naming the table or value at fault.
 #[derive(Debug, thiserror::Error)]
 pub enum ShadingError {
-    /// A table with the wrong layout.
-    #[error("{path}: {message}")]
-    Table {
-        /// The table file.
-        path: PathBuf,
-        /// What is wrong with it.
-        message: String,
-    },
     /// A value derma cannot use (derma-core's vocabulary: what, expected, got).
     #[error(transparent)]
     Invalid(#[from] derma_core::Invalid),

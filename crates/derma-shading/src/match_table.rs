@@ -421,9 +421,11 @@ pub struct MatchTable {
 impl MatchTable {
     /// Checks `dtab` is a match table (its axes are bio parameters, its values fitted models); `origin` names it in errors.
     pub fn new(dtab: Dtab, origin: &Path) -> Result<Self> {
-        let bad = |m: String| ShadingError::Table {
-            path: origin.to_path_buf(),
-            message: m,
+        let bad = |m: String| {
+            crate::ShadingError::from(derma_core::CoreError::Format {
+                path: origin.to_path_buf(),
+                message: m,
+            })
         };
         if dtab.header.meta["kind"] != "derma match table" {
             return Err(bad(

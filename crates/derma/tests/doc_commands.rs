@@ -192,8 +192,8 @@ fn small(cmd: &str) -> String {
             set(&mut words, "--size", "4", true);
             set(&mut words, "--photons", "500", true);
         }
-        "photo" if cmd.contains("bake") => set(&mut words, "--size", "128", true),
-        "photo" if cmd.contains("iris") || cmd.contains("teeth") => {
+        "photo" if cmd.contains("photo bake") => set(&mut words, "--size", "128", true),
+        "photo" if cmd.contains("photo iris") || cmd.contains("photo teeth") => {
             set(&mut words, "--size", "64", true)
         }
         "eyes" => set(&mut words, "--seconds", "1", false),

@@ -1087,3 +1087,20 @@ fn crates_sit_on_their_floors() {
     assert!(floor.len() >= 11, "the crate table was not read: {floor:?}");
     assert_none(&wrong, "crates off their floors:");
 }
+
+/// One error vocabulary: no library defines its own free-text `Invalid(String)`; a value that
+/// cannot be used is derma-core's `Invalid {what, expected, got}`, wrapped (ARCHITECTURE.md).
+#[test]
+fn libraries_wrap_the_one_invalid_value_error() {
+    let mut found = Vec::new();
+    for krate in libraries() {
+        for f in rust_files(&krate.join("src")) {
+            let code = non_test_code(&std::fs::read_to_string(&f).unwrap());
+            let squeezed: String = code.split_whitespace().collect();
+            if squeezed.contains("Invalid(String)") {
+                found.push(f.display().to_string());
+            }
+        }
+    }
+    assert_none(&found, "an own Invalid(String) error variant");
+}

@@ -59,12 +59,12 @@ pub fn prepare(out: &Path, spec: &BatchSpec) -> Result<()> {
     if path.exists() {
         let old = read_spec_file(&path)?;
         if &old != spec {
-            return Err(ExportError::Input {
+            return Err(ExportError::from(derma_core::CoreError::Format {
                 path,
-                detail: "this directory holds another batch (its spec differs); use a new output \
+                message: "this directory holds another batch (its spec differs); use a new output \
                          directory or the same spec"
                     .into(),
-            });
+            }));
         }
         return Ok(());
     }
@@ -73,18 +73,20 @@ pub fn prepare(out: &Path, spec: &BatchSpec) -> Result<()> {
 }
 
 pub(super) fn read_spec_file(path: &Path) -> Result<BatchSpec> {
-    let text = std::fs::read_to_string(path).map_err(|e| ExportError::Input {
-        path: path.to_path_buf(),
-        detail: format!("cannot read ({e})"),
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        ExportError::from(derma_core::CoreError::Format {
+            path: path.to_path_buf(),
+            message: format!("cannot read ({e})"),
+        })
     })?;
     BatchSpec::parse(&text, &path.display().to_string())
 }
 
 pub(super) fn io(path: &Path, e: std::io::Error) -> ExportError {
-    ExportError::Input {
+    ExportError::from(derma_core::CoreError::Format {
         path: path.to_path_buf(),
-        detail: e.to_string(),
-    }
+        message: e.to_string(),
+    })
 }
 
 /// SHA-256 of every file under `dir` (one level of size directories deep) but the sets'
@@ -118,9 +120,11 @@ pub(super) fn hashes(dir: &Path) -> Result<BTreeMap<String, String>> {
             if base == UNHASHED || key == IDENTITY_FILE {
                 continue;
             }
-            let h = sha256_file(&p).ok_or_else(|| ExportError::Input {
-                path: p.clone(),
-                detail: "cannot read to hash".into(),
+            let h = sha256_file(&p).ok_or_else(|| {
+                ExportError::from(derma_core::CoreError::Format {
+                    path: p.clone(),
+                    message: "cannot read to hash".into(),
+                })
             })?;
             out.insert(key, h);
         }

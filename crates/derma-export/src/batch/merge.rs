@@ -124,15 +124,15 @@ pub fn merge(out: &Path, progress: &dyn Progress) -> Result<Merged> {
     if !problems.is_empty() {
         let n = problems.len();
         problems.truncate(20);
-        return Err(ExportError::Input {
+        return Err(ExportError::from(derma_core::CoreError::Format {
             path: out.to_path_buf(),
-            detail: format!(
+            message: format!(
                 "{n} of {} identities are not complete (run their shards again): {}{}",
                 spec.count,
                 problems.join("; "),
                 if n > 20 { "; …" } else { "" }
             ),
-        });
+        }));
     }
     // Every identity is complete: an unfinished directory left now is a killed or duplicate
     // worker's (on any host), never needed again.

@@ -129,10 +129,10 @@ pub fn run_shard(
         if done.exists() {
             // A directory under the final name without its record is not derma's: refuse to
             // guess rather than delete it.
-            return Err(ExportError::Input {
+            return Err(ExportError::from(derma_core::CoreError::Format {
                 path: done,
-                detail: format!("exists without its {IDENTITY_FILE}; move it away and run again"),
-            });
+                message: format!("exists without its {IDENTITY_FILE}; move it away and run again"),
+            }));
         }
         std::fs::rename(&partial, &done).map_err(|e| io(&done, e))?;
         report.made += 1;

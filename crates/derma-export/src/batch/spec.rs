@@ -154,16 +154,20 @@ impl BatchSpec {
 
     /// Reads a spec file and resolves its relative paths against its directory.
     pub fn read(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| ExportError::Input {
-            path: path.to_path_buf(),
-            detail: format!("cannot read the batch spec ({e})"),
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            ExportError::from(derma_core::CoreError::Format {
+                path: path.to_path_buf(),
+                message: format!("cannot read the batch spec ({e})"),
+            })
         })?;
         let mut spec = Self::parse(&text, &path.display().to_string())?;
         // Resolved from the spec's real place, so a rerun that spells its path otherwise
         // (relative, absolute, through a link) stores the same spec.
-        let real = std::fs::canonicalize(path).map_err(|e| ExportError::Input {
-            path: path.to_path_buf(),
-            detail: format!("cannot resolve ({e})"),
+        let real = std::fs::canonicalize(path).map_err(|e| {
+            ExportError::from(derma_core::CoreError::Format {
+                path: path.to_path_buf(),
+                message: format!("cannot resolve ({e})"),
+            })
         })?;
         let dir = real.parent().unwrap_or(Path::new(""));
         let resolve = |p: &mut String| {
@@ -180,10 +184,10 @@ impl BatchSpec {
             .chain(spec.config.iter().map(|p| ("config", p)));
         for (key, p) in named {
             if !Path::new(p).exists() {
-                return Err(ExportError::Input {
+                return Err(ExportError::from(derma_core::CoreError::Format {
                     path: path.to_path_buf(),
-                    detail: format!("{key}: '{p}' does not exist"),
-                });
+                    message: format!("{key}: '{p}' does not exist"),
+                }));
             }
         }
         Ok(spec)
