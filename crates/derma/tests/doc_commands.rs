@@ -104,6 +104,10 @@ const SKIPPED: &[(&str, &str)] = &[
         "[--exemplar-channels",
         "a synopsis with optional parts in brackets",
     ),
+    (
+        "flushed=flushed/",
+        "a second photo session (the flushed face) to bake first",
+    ),
 ];
 
 /// Slow lines (matched by substring): the ignored test runs them.
