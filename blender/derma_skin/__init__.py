@@ -9,6 +9,7 @@ import it, else the `derma` command line (set its path in the add-on's preferenc
 """
 
 import os
+import shutil
 import tempfile
 
 import bpy
@@ -174,8 +175,10 @@ class DERMA_OT_paint_skin(bpy.types.Operator):
                     self.report({"ERROR"}, "select a mesh with UVs, or paint derma's head")
                     return {"CANCELLED"}
                 out = texture_dir(root, obj.name, obj)
-                mesh = os.path.join(out, "mesh.obj")
-                os.makedirs(out, exist_ok=True)
+                # The exported mesh goes beside, not into, the set's folder: derma replaces
+                # that folder whole and refuses one holding files that are not the set's.
+                mesh_dir = tempfile.mkdtemp(prefix="derma-mesh-")
+                mesh = os.path.join(mesh_dir, "mesh.obj")
                 # Export the active mesh alone, then give the user their selection back.
                 selected = list(context.selected_objects)
                 for o in selected:
@@ -193,9 +196,12 @@ class DERMA_OT_paint_skin(bpy.types.Operator):
                     obj.select_set(obj in selected)
                     for o in selected:
                         o.select_set(True)
-                report = runner.run_skin(
-                    prefs.executable, out, s.preset, s.sex, s.age, s.size, s.seed, mesh=mesh
-                )
+                try:
+                    report = runner.run_skin(
+                        prefs.executable, out, s.preset, s.sex, s.age, s.size, s.seed, mesh=mesh
+                    )
+                finally:
+                    shutil.rmtree(mesh_dir, ignore_errors=True)
                 skin, objects = obj, [obj]
             else:
                 out = texture_dir(root, "derma_head")
