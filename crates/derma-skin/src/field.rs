@@ -66,15 +66,22 @@ pub fn decode_vector_at(f: &[Map; 3], taps: &derma_core::map::Taps) -> UvVector 
     let x = 2.0 * f[0].sample(taps) - 1.0;
     let y = 2.0 * f[1].sample(taps) - 1.0;
     let d = glam::Vec2::new(x, y);
+    if d.length() < ZERO_VECTOR {
+        return UvVector {
+            dir: glam::Vec2::ZERO,
+            length: 0.0,
+        };
+    }
     UvVector {
-        dir: d.normalize_or_zero(),
-        length: if d.length() < 1e-3 {
-            0.0
-        } else {
-            f[2].sample(taps).clamp(0.0, 1.0)
-        },
+        dir: d.normalize(),
+        length: f[2].sample(taps).clamp(0.0, 1.0),
     }
 }
+
+/// Encoded directions shorter than this are zero: 0.5 (the encoding's zero) is not a code of
+/// an 8- or 16-bit image, so a painted or exported zero reads back as a short diagonal
+/// (|d| ≤ √2/255 in 8 bits), which must not become a direction.
+pub const ZERO_VECTOR: f32 = 1.0 / 127.0;
 
 /// True when `path` names an OpenEXR file (by its extension).
 fn is_exr(path: &Path) -> bool {
@@ -436,6 +443,32 @@ impl<'a> Parser<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The encoding's zero read back from 8- and 16-bit files is no direction (before: the
+    /// 16-bit code nearest 0.5 read as a diagonal, turning the relief's furrows at the seams
+    /// of the exported tension field); a short painted direction stays one.
+    #[test]
+    fn a_quantised_zero_vector_has_no_direction() {
+        use derma_core::image_io::{dequantize16, quantize16};
+        let field = |r: f32, g: f32| {
+            [
+                Map::filled(2, 2, r),
+                Map::filled(2, 2, g),
+                Map::filled(2, 2, 1.0),
+            ]
+        };
+        let z16 = dequantize16(quantize16(0.5));
+        let z8 = 128.0 / 255.0;
+        for z in [z16, z8] {
+            let v = decode_vector(&field(z, z), 0.5, 0.5, false);
+            assert_eq!((v.dir, v.length), (glam::Vec2::ZERO, 0.0), "{z}");
+        }
+        let v = decode_vector(&field(0.52, 0.5), 0.5, 0.5, false);
+        assert!(
+            (v.dir - glam::Vec2::X).length() < 1e-3 && v.length == 1.0,
+            "{v:?}"
+        );
+    }
 
     #[test]
     fn expressions_composite_fields() {
