@@ -84,6 +84,11 @@ pub fn ensure_writable_dir(dir: &Path) -> Result<()> {
         path: dir.to_path_buf(),
         source,
     })?;
+    probe_writable(dir)
+}
+
+/// Writes and removes a probe file in `dir`: an error naming `dir` unless it can be written.
+fn probe_writable(dir: &Path) -> Result<()> {
     let probe = dir.join(format!(".derma-write-probe.{}", unique_tag()));
     std::fs::write(&probe, b"probe").map_err(|source| CoreError::Write {
         path: dir.to_path_buf(),
@@ -115,13 +120,7 @@ pub fn check_writable_dest(dir: &Path) -> Result<()> {
         )
         .into());
     }
-    let probe = at.join(format!(".derma-write-probe.{}", unique_tag()));
-    std::fs::write(&probe, b"probe").map_err(|source| CoreError::Write {
-        path: at.to_path_buf(),
-        source,
-    })?;
-    let _ = std::fs::remove_file(&probe);
-    Ok(())
+    probe_writable(at)
 }
 
 /// A directory of outputs written whole: its files go into a staging directory beside the
