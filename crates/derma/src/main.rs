@@ -99,6 +99,7 @@ fn main() {
         std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir());
     }
     let cli = Cli::parse();
+    let fresh = fresh_outputs();
     let level = match cli.verbose {
         0 => "warn",
         1 => "info",
@@ -132,6 +133,36 @@ fn main() {
             std::process::exit(0);
         }
         eprintln!("error: {e:#}");
+        remove_if_empty(&fresh);
         std::process::exit(1);
+    }
+}
+
+/// The `--out` paths of this command line that do not exist yet.
+fn fresh_outputs() -> Vec<std::path::PathBuf> {
+    let args: Vec<String> = std::env::args().collect();
+    let mut out = Vec::new();
+    for (i, a) in args.iter().enumerate() {
+        let value = match a.strip_prefix("--out=") {
+            Some(v) => Some(v.to_string()),
+            None if a == "--out" => args.get(i + 1).cloned(),
+            None => None,
+        };
+        if let Some(v) = value.map(std::path::PathBuf::from) {
+            if !v.exists() {
+                out.push(v);
+            }
+        }
+    }
+    out
+}
+
+/// After an error, removes the output directories this run made and left empty, so an early
+/// error leaves nothing behind (a directory holding any file is kept).
+fn remove_if_empty(made: &[std::path::PathBuf]) {
+    for d in made {
+        if d.is_dir() {
+            let _ = std::fs::remove_dir(d);
+        }
     }
 }

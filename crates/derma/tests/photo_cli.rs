@@ -174,6 +174,8 @@ fn a_photo_that_is_not_an_eye_or_teeth_is_refused() {
             "{}: {err}",
             p.display()
         );
+        // A refused input leaves no output directory behind.
+        assert!(!d.join("i").exists() && !d.join("t").exists());
     }
 }
 

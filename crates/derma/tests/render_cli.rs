@@ -214,6 +214,10 @@ fn render_names_what_is_wrong() {
     let (ok, _, err) = run(&["render", s(&d.join("empty")), "--out", s(&d.join("r"))]);
     assert!(!ok);
     assert!(
+        !d.join("r").exists(),
+        "an early error leaves no output directory"
+    );
+    assert!(
         err.contains("base_color.png") && err.contains("derma skin"),
         "{err}"
     );
