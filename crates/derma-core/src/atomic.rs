@@ -123,6 +123,41 @@ pub fn check_writable_dest(dir: &Path) -> Result<()> {
     probe_writable(at)
 }
 
+/// Fails unless `dest` is absent, or a directory holding only files `owned` says are the
+/// output's (a previous output, which [`StagedDir`] replaces whole): another's files are never
+/// replaced. Checked before any work and again when the output is staged.
+pub fn check_owned(dest: &Path, owned: &dyn Fn(&str) -> bool) -> Result<()> {
+    if dest.is_file() {
+        return Err(crate::Invalid::new(
+            format!("output directory '{}'", dest.display()),
+            "a directory",
+            "a file",
+        )
+        .into());
+    }
+    if dest.is_dir() {
+        let entries = std::fs::read_dir(dest).map_err(|source| CoreError::Read {
+            path: dest.to_path_buf(),
+            source,
+        })?;
+        let mut foreign: Vec<String> = entries
+            .filter_map(|e| e.ok())
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| !owned(n) && !n.starts_with(".derma-write-probe."))
+            .collect();
+        foreign.sort();
+        if !foreign.is_empty() {
+            return Err(crate::Invalid::new(
+                format!("output directory '{}'", dest.display()),
+                "an empty or new directory, or one holding only a previous output (derma replaces it whole)",
+                format!("files that are not this output's: {}", foreign.join(", ")),
+            )
+            .into());
+        }
+    }
+    Ok(())
+}
+
 /// A directory of outputs written whole: its files go into a staging directory beside the
 /// destination, and [`StagedDir::commit`] swaps it in (the previous contents removed after),
 /// so a killed run leaves the previous set as it was, never a mix of two. A destination that
@@ -137,34 +172,7 @@ pub struct StagedDir {
 impl StagedDir {
     /// Creates the staging directory beside `dest` (and `dest`'s missing parents).
     pub fn begin(dest: &Path, owned: &dyn Fn(&str) -> bool) -> Result<Self> {
-        if dest.is_file() {
-            return Err(crate::Invalid::new(
-                format!("output directory '{}'", dest.display()),
-                "a directory",
-                "a file",
-            )
-            .into());
-        }
-        if dest.is_dir() {
-            let entries = std::fs::read_dir(dest).map_err(|source| CoreError::Read {
-                path: dest.to_path_buf(),
-                source,
-            })?;
-            let mut foreign: Vec<String> = entries
-                .filter_map(|e| e.ok())
-                .map(|e| e.file_name().to_string_lossy().into_owned())
-                .filter(|n| !owned(n) && !n.starts_with(".derma-write-probe."))
-                .collect();
-            foreign.sort();
-            if !foreign.is_empty() {
-                return Err(crate::Invalid::new(
-                    format!("output directory '{}'", dest.display()),
-                    "an empty or new directory, or one holding only a previous output (derma replaces it whole)",
-                    format!("files that are not this output's: {}", foreign.join(", ")),
-                )
-                .into());
-            }
-        }
+        check_owned(dest, owned)?;
         let staging = sibling(dest, "derma-partial");
         std::fs::create_dir_all(&staging).map_err(|source| CoreError::Write {
             path: staging.clone(),

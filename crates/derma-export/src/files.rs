@@ -232,6 +232,65 @@ fn check_layout(textures: &Path, layout: &derma_core::mesh::UvLayout, what: &Pat
     }
 }
 
+/// The scene the job draws: the set on a user mesh (through its fitted head, or alone), or on
+/// the built-in or fitted head, posed by the units and the eye model; every mesh checked
+/// against the UV layout the set was painted on.
+fn scene_of(
+    job: &RenderJob,
+    skin: &SkinMaps,
+    eye: Option<[Map; 3]>,
+    units: &[(&str, f32)],
+    progress: &dyn Progress,
+) -> Result<Scene> {
+    let scene = match (&job.mesh, job.head.as_deref()) {
+        (Some(p), Some(dir)) => {
+            fitted_mesh_scene(p, dir, &job.textures, units, skin.clone(), eye, job.gaze)?
+        }
+        (Some(_), None) if !units.is_empty() => {
+            return Err(derma_core::Invalid::new(
+                "face units on a user mesh",
+                "the head fitted to it, through which they pose it (derma head fit)",
+                "no fitted head",
+            )
+            .into())
+        }
+        (Some(p), None) => {
+            let mesh = crate::glb::load_mesh_mm(p, progress)?;
+            check_layout(&job.textures, &mesh.uv_layout(), p)?;
+            Scene::mesh(&mesh, skin.clone())
+        }
+        (None, dir) => {
+            let head = derma_head::fitted::or_builtin(dir)?;
+            let name = dir.map_or_else(|| "the built-in head".into(), |d| d.display().to_string());
+            check_layout(
+                &job.textures,
+                derma_skin::builtin_head::template_layout(),
+                Path::new(&name),
+            )?;
+            check_units(head, units)?;
+            let pose = derma_eyes::still::EyePose {
+                gaze: job.gaze,
+                closure: job.blink,
+            };
+            if pose == derma_eyes::still::EyePose::REST {
+                Scene::head(head, skin.clone(), units, eye, job.gaze)
+            } else {
+                // The lids and the skin around the eyes follow the gaze through the trained
+                // eye-region model (thesis §3.9), the pose's units among its inputs.
+                let mut posed = head.posed_skin(units);
+                let lashes = derma_eyes::still::StillModel::new(head)?
+                    .pose_skin(head, pose, units, &mut posed);
+                let mut scene = Scene::posed_head(head, posed, skin.clone(), eye, job.gaze);
+                for (name, mesh) in &lashes {
+                    scene.replace_part_mesh(name, mesh);
+                }
+                scene
+            }
+        }
+    };
+    Ok(scene)
+}
+
 /// The face units posing the head: the job's own, plus (where the head can be posed: the
 /// built-in or a fitted head) the rig frame's library expressions through their face units
 /// ([`derma_rig::expression::face_units`]); a unit given both ways adds up to at most 1.
@@ -275,53 +334,7 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
             skin.normal = wm.blend(&skin.normal, units.iter().copied(), skin.wrap)?;
         }
     }
-    let scene = match (&job.mesh, job.head.as_deref()) {
-        (Some(p), Some(dir)) => {
-            fitted_mesh_scene(p, dir, &job.textures, &units, skin.clone(), eye, job.gaze)?
-        }
-        (Some(_), None) if !units.is_empty() => {
-            return Err(derma_core::Invalid::new(
-                "face units on a user mesh",
-                "the head fitted to it, through which they pose it (derma head fit)",
-                "no fitted head",
-            )
-            .into())
-        }
-        (Some(p), None) => {
-            let mesh = crate::glb::load_mesh_mm(p, progress)?;
-            check_layout(&job.textures, &mesh.uv_layout(), p)?;
-            Scene::mesh(&mesh, skin.clone())
-        }
-        (None, dir) => {
-            let head = derma_head::fitted::or_builtin(dir)?;
-            let name = dir.map_or_else(|| "the built-in head".into(), |d| d.display().to_string());
-            check_layout(
-                &job.textures,
-                derma_skin::builtin_head::template_layout(),
-                Path::new(&name),
-            )?;
-            check_units(head, &units)?;
-            let pose = derma_eyes::still::EyePose {
-                gaze: job.gaze,
-                closure: job.blink,
-            };
-            if pose == derma_eyes::still::EyePose::REST {
-                Scene::head(head, skin.clone(), &units, eye, job.gaze)
-            } else {
-                // The lids and the skin around the eyes follow the gaze through the trained
-                // eye-region model (thesis §3.9), the pose's units among its inputs.
-                let mut posed = head.posed_skin(&units);
-                let lashes = derma_eyes::still::StillModel::new(head)?
-                    .pose_skin(head, pose, &units, &mut posed);
-                let mut scene = Scene::posed_head(head, posed, skin.clone(), eye, job.gaze);
-                for (name, mesh) in &lashes {
-                    scene.replace_part_mesh(name, mesh);
-                }
-                scene
-            }
-        }
-    };
-    let mut scene = scene;
+    let mut scene = scene_of(job, &skin, eye, &units, progress)?;
     if let Some(p) = &job.teeth {
         if scene.texture_parts("teeth", &derma_render::material::read_albedo(p)?) == 0 {
             return Err(derma_core::Invalid::new(

@@ -7,11 +7,9 @@ use derma_core::atomic::StagedDir;
 use derma_core::head_mesh::{HeadUnit, MeshFrame};
 use derma_core::mesh_parts::PartChoice;
 use derma_core::progress::Progress;
+use derma_skin::outputs::GLB;
 use derma_skin::{SkinGenerator, TextureSet, Written};
 use std::path::Path;
-
-/// The engine file `--glb` adds to a set.
-const GLB: &str = "head.glb";
 
 /// What [`run`] made and wrote.
 pub struct SkinOutput {
@@ -35,9 +33,7 @@ pub fn run(
     generator.check_output(out)?;
     let set = generator.run()?;
     // Written beside `out` and swapped in whole: a killed rerun never leaves a mix of two sets.
-    let staged = StagedDir::begin(out, &|name| {
-        derma_skin::outputs::output(name).is_some() || name == GLB || name.ends_with(".tmp")
-    })?;
+    let staged = StagedDir::begin(out, &derma_skin::outputs::owned)?;
     let dir = staged.path();
     let written = set.write(dir, progress)?;
     let (unit, part) = painted_read(set.mesh_scale.as_ref(), set.inputs.head.is_some());

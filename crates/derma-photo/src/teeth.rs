@@ -158,7 +158,9 @@ pub fn label(img: &RgbImage) -> (Vec<Label>, f32, f32) {
 
 /// How much brighter (median luminance) the pixels taken for teeth must be than the rest (gum,
 /// lips, the mouth's dark interior) for a photo to be taken for one of teeth: enamel is the
-/// brightest thing in a smile; on skin or a texture the classes differ little.
+/// brightest thing in a smile; on skin or a texture the classes differ little. Authored: a
+/// real skin crop (shared/data) measured 1.22 and a derma base colour 1.06, both refused; the
+/// synthetic smiles of the tests pass; no real smile photo was measured.
 pub const MIN_TEETH_CONTRAST: f32 = 1.5;
 
 /// Refuses a photo whose "tooth" pixels are not brighter than the rest (not a photo of teeth).

@@ -476,11 +476,17 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
         let mut take = || next.next().expect("one map per field");
         set.vectors.insert((*name).into(), [take(), take(), take()]);
     }
-    // Held at the precision of the 16-bit files `export` writes them to, so a template read
-    // back through `--fields` is these fields exactly (the regional biology goes to float EXR).
+    hold_at_file_precision(&mut set);
+    set
+}
+
+/// Holds the fields at the precision of the files [`export`] writes them to — 16-bit PNG, the
+/// regional biology float EXR — so a template read back through `--fields` is these fields
+/// exactly; and marks them built-in ([`FieldSet::origins`]).
+fn hold_at_file_precision(set: &mut FieldSet) {
+    use rayon::prelude::*;
     let q = |m: &mut Map| {
-        let d = m.data_mut();
-        d.par_iter_mut().for_each(|v| {
+        m.data_mut().par_iter_mut().for_each(|v| {
             *v = derma_core::image_io::dequantize16(derma_core::image_io::quantize16(*v))
         });
     };
@@ -496,7 +502,6 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
         .chain(set.vectors.keys())
         .map(|n| (n.clone(), "built-in".to_string()))
         .collect();
-    set
 }
 
 /// Rows of the built-in head's fields made at a time ([`fields_on`]).

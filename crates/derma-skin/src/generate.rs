@@ -225,6 +225,8 @@ impl<'a> SkinGenerator<'a> {
             path: dir.to_path_buf(),
             detail: format!("the output directory is not writable ({e})"),
         })?;
+        // A directory holding another's files is refused now, not after the painting.
+        derma_core::atomic::check_owned(dir, &outputs::owned)?;
         let mesh = self.mesh_path();
         let lm = self.config.surface.landmarks.trim();
         let landmarks = (!lm.is_empty() && lm != "mediapipe").then(|| self.resolve(lm));
@@ -329,32 +331,10 @@ impl<'a> SkinGenerator<'a> {
             SurfaceKind::Template => Some(head.expect("on the head").skin.clone()),
             SurfaceKind::Mesh => {
                 let p = mesh_path.clone().expect("checked");
-                let (m, u) = load_mesh(&p, &self.config.surface, self.head.as_deref(), &job)?;
-                if let (Some(head), true) = (head, self.config.surface.landmarks.trim().is_empty())
-                {
-                    user_regions = Some(derma_head::Regions::new(
-                        head.landmarks.clone(),
-                        Vec::new(),
-                        Vec::new(),
-                    ));
-                } else if has_landmarks {
-                    let lm = self.landmarks(&p, &u)?;
-                    user_regions = Some(derma_head::Regions::new(lm, Vec::new(), Vec::new()));
-                } else if m
-                    .uv_layout()
-                    .matches(crate::builtin_head::template_layout())
-                {
-                    // The template's own skin (`--export-template`'s head.obj or head.glb, or
-                    // a sculpt of it): the built-in head's landmarks, regions and fields hold.
-                    template_layout = true;
-                    user_regions = Some(derma_head::Head::builtin().regions.clone());
-                    job.note(Note::info(format!(
-                        "'{}' has the built-in head's UV layout: its default fields and regional biology apply",
-                        p.display()
-                    )));
-                }
-                mesh_scale = Some(u);
-                Some(m)
+                let read = self.read_user_mesh(&p, head, has_landmarks, &job)?;
+                (user_regions, template_layout) = (read.regions, read.template_layout);
+                mesh_scale = Some(read.frame);
+                Some(read.mesh)
             }
             SurfaceKind::Patch => None,
         };
@@ -392,7 +372,7 @@ impl<'a> SkinGenerator<'a> {
             }
         }
         if kind != SurfaceKind::Template {
-            if user_regions.is_some() {
+            if user_regions.is_some() && !template_layout {
                 job.note(Note::info(
                     "default fields and regional biology placed on the mesh by its landmarks",
                 ));
@@ -647,6 +627,47 @@ impl SkinGenerator<'_> {
         Ok(())
     }
 
+    /// The user's mesh in derma's frame and where its regions come from: the fitted head it
+    /// was given, its landmarks, or — a mesh with the template's UV layout (`--export-template`'s
+    /// head.obj or head.glb, or a sculpt of it) — the built-in head's; none otherwise.
+    fn read_user_mesh(
+        &self,
+        path: &Path,
+        head: Option<&derma_head::Head>,
+        has_landmarks: bool,
+        job: &Job,
+    ) -> Result<UserMesh> {
+        let (mesh, frame) = load_mesh(path, &self.config.surface, self.head.as_deref(), job)?;
+        let mut template_layout = false;
+        let regions = match head {
+            Some(head) if self.config.surface.landmarks.trim().is_empty() => Some(
+                derma_head::Regions::new(head.landmarks.clone(), Vec::new(), Vec::new()),
+            ),
+            _ if has_landmarks => {
+                let lm = self.landmarks(path, &frame)?;
+                Some(derma_head::Regions::new(lm, Vec::new(), Vec::new()))
+            }
+            _ if mesh
+                .uv_layout()
+                .matches(crate::builtin_head::template_layout()) =>
+            {
+                template_layout = true;
+                job.note(Note::info(format!(
+                    "'{}' has the built-in head's UV layout: its default fields and regional biology apply",
+                    path.display()
+                )));
+                Some(derma_head::Head::builtin().regions.clone())
+            }
+            _ => None,
+        };
+        Ok(UserMesh {
+            mesh,
+            frame,
+            regions,
+            template_layout,
+        })
+    }
+
     /// The user mesh's landmarks (`surface.landmarks`) in derma's frame: through the frame the
     /// mesh was read in (its unit and, with a fitted head, its axes).
     fn landmarks(&self, mesh: &Path, frame: &MeshFrame) -> Result<derma_head::Landmarks> {
@@ -674,6 +695,16 @@ impl SkinGenerator<'_> {
             }
         })
     }
+}
+
+/// A user's mesh as [`SkinGenerator::read_user_mesh`] read it.
+struct UserMesh {
+    mesh: TriMesh,
+    frame: MeshFrame,
+    /// Where the built-in head's fields and regional biology come from, if anywhere.
+    regions: Option<derma_head::Regions>,
+    /// The mesh has the built-in head's UV layout.
+    template_layout: bool,
 }
 
 /// The user's mesh in derma's frame (mm, +Y up, facing +Z) through derma-core's one head-mesh
@@ -811,6 +842,34 @@ impl TextureSet {
     pub fn head(&self) -> &'static derma_head::Head {
         derma_head::fitted::or_builtin(self.inputs.head.as_deref())
             .unwrap_or(derma_head::Head::builtin())
+    }
+
+    /// manifest.json: every file of `files` in `dir` hashed (report.json aside), with the seed,
+    /// the inputs as `report` gives them (each field file hashed), the options and the UV layout.
+    fn write_manifest(&self, dir: &Path, files: &[&str], report: &serde_json::Value) -> Result<()> {
+        let mut inputs = report["inputs"].clone();
+        inputs["field_files"] = self
+            .fields
+            .origins
+            .iter()
+            .filter(|(_, o)| Path::new(o).is_file())
+            .map(|(n, o)| (n.clone(), json!(sha256_file(Path::new(o)))))
+            .collect::<serde_json::Map<_, _>>()
+            .into();
+        let made = crate::manifest::Made {
+            size: self.config.size,
+            seed: self.config.seed,
+            surface: report["inputs"]["surface"].as_str().unwrap_or("-"),
+            uv_layout: self.uv_layout(),
+            inputs,
+            options: json!({"config": self.config, "appearance": self.appearance}),
+        };
+        derma_core::report::write_json(
+            &dir.join(outputs::MANIFEST),
+            &crate::manifest::manifest(&made, dir, files)?,
+            derma_core::report::JsonFormat::REPORT,
+        )?;
+        Ok(())
     }
 
     /// The UV layout the set was painted on: the template's on the head (fitted or not), the
@@ -972,29 +1031,7 @@ impl TextureSet {
             &report,
             derma_core::report::JsonFormat::REPORT,
         )?;
-        // The manifest lists every file but itself, hashed (report.json aside).
-        let mut inputs = report["inputs"].clone();
-        inputs["field_files"] = self
-            .fields
-            .origins
-            .iter()
-            .filter(|(_, o)| Path::new(o).is_file())
-            .map(|(n, o)| (n.clone(), json!(sha256_file(Path::new(o)))))
-            .collect::<serde_json::Map<_, _>>()
-            .into();
-        let made = crate::manifest::Made {
-            size: self.config.size,
-            seed: self.config.seed,
-            surface: report["inputs"]["surface"].as_str().unwrap_or("-"),
-            uv_layout: self.uv_layout(),
-            inputs,
-            options: json!({"config": self.config, "appearance": self.appearance}),
-        };
-        derma_core::report::write_json(
-            &dir.join(outputs::MANIFEST),
-            &crate::manifest::manifest(&made, dir, &files)?,
-            derma_core::report::JsonFormat::REPORT,
-        )?;
+        self.write_manifest(dir, &files, &report)?;
         files.insert(files.len() - 1, outputs::MANIFEST); // manifest order: before report.json
         Ok(Written {
             files,

@@ -86,6 +86,15 @@ pub const OUTPUTS: [OutputFile; 19] = [
     out(REPORT, "-", "run report: version, seed, inputs with hashes, counts, statistics, timings"),
 ];
 
+/// `head.glb`: the set on its head or mesh, for engines (written beside the maps on request).
+pub const GLB: &str = "head.glb";
+
+/// True for a name a set's directory may hold: its files, its GLB and the temporary files of
+/// atomic writes. A directory holding anything else is not a set and is never replaced.
+pub fn owned(name: &str) -> bool {
+    output(name).is_some() || name == GLB || name.ends_with(".tmp")
+}
+
 /// The table's entry for `file`.
 pub fn output(file: &str) -> Option<&'static OutputFile> {
     OUTPUTS.iter().find(|o| o.file == file)

@@ -18,7 +18,8 @@ pub const CHANNELS: [&str; 4] = [
 ];
 
 /// Largest regional gain an 8- or 16-bit image can hold: a PNG regional field's value v in
-/// [0, 1] reads as the gain 8·v (so 0.125 is 1, no change). EXR fields hold the values
+/// [0, 1] reads as the gain 8·v (so 0.125 is 1, no change). Authored: room above the largest
+/// gain of [`GAINS`] (5.5, the nose). EXR fields hold the values
 /// themselves; `--export-template` writes EXR.
 pub const PNG_GAIN_SCALE: f32 = 8.0;
 
