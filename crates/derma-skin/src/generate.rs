@@ -225,8 +225,6 @@ impl<'a> SkinGenerator<'a> {
             path: dir.to_path_buf(),
             detail: format!("the output directory is not writable ({e})"),
         })?;
-        // A directory holding another's files is refused now, not after the painting.
-        derma_core::atomic::check_owned(dir, &outputs::owned)?;
         let mesh = self.mesh_path();
         let lm = self.config.surface.landmarks.trim();
         let landmarks = (!lm.is_empty() && lm != "mediapipe").then(|| self.resolve(lm));
@@ -236,6 +234,8 @@ impl<'a> SkinGenerator<'a> {
             .map(PathBuf::as_path)
             .collect();
         derma_core::atomic::check_inputs_spared(&Self::output_files(dir), &inputs)?;
+        // A directory holding another's files is refused now, not after the painting.
+        derma_core::atomic::check_owned(dir, &outputs::owned)?;
         Ok(())
     }
 
