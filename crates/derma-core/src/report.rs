@@ -99,8 +99,17 @@ pub fn write_json(
 
 /// The SHA-256 of a file's bytes as lowercase hex, or `None` when it cannot be read.
 pub fn sha256_file(path: &Path) -> Option<String> {
-    let bytes = std::fs::read(path).ok()?;
-    Some(hex(&Sha256::digest(&bytes)))
+    // Streamed in 1 MiB blocks: a 4096² set's maps are hashed without holding one in memory.
+    use std::io::Read;
+    let mut f = std::fs::File::open(path).ok()?;
+    let (mut h, mut buf) = (Sha256::new(), vec![0u8; 1 << 20]);
+    loop {
+        let n = f.read(&mut buf).ok()?;
+        if n == 0 {
+            return Some(hex(&h.finalize()));
+        }
+        h.update(&buf[..n]);
+    }
 }
 
 /// Lowercase hex of bytes.
