@@ -190,8 +190,10 @@ def three_json_to_obj(text):
     out.write("# LeePerrySmith.js (three.js JSON model format 2) converted by derma's scripts/corpus.py\n")
     for i in range(0, len(v), 3):
         out.write(f"v {v[i]} {v[i + 1]} {v[i + 2]}\n")
+    # The model stores v downward (its forehead at v ≈ 0.1, where Map-COL.jpg's top rows hold
+    # the forehead); OBJ's v runs upward, so v is flipped.
     for i in range(0, len(uv), 2):
-        out.write(f"vt {uv[i]} {uv[i + 1]}\n")
+        out.write(f"vt {uv[i]} {1 - uv[i + 1]}\n")
     for i in range(0, len(n), 3):
         out.write(f"vn {n[i]} {n[i + 1]} {n[i + 2]}\n")
     k = 0

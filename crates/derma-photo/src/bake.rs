@@ -16,7 +16,7 @@ use crate::topology::Topology;
 use derma_core::bvh::Bvh;
 use derma_core::image::{Grey, Image};
 use derma_core::mesh::TriMesh;
-use derma_core::progress::{Progress, Unit};
+use derma_core::progress::{Note, Progress, Unit};
 use derma_core::raster::{dilation_sources, UvRaster, NO_TRIANGLE};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -55,6 +55,9 @@ pub struct BakeOptions {
     /// Refine the cameras photometrically on the de-lit photos ([`crate::register`]; with
     /// de-lighting only); `None` takes them as given.
     pub register: Option<RegisterOptions>,
+    /// Refuse instead of warning: a lighting no model explains, a registration beyond the
+    /// clicks' reach, gains far from 1 ([`BakeReport::warnings`]) become an error.
+    pub strict: bool,
 }
 
 impl Default for BakeOptions {
@@ -71,6 +74,7 @@ impl Default for BakeOptions {
             falloff: [0.1, 0.5],
             ray_offset: 1e-3,
             register: Some(RegisterOptions::default()),
+            strict: false,
         }
     }
 }
@@ -107,6 +111,10 @@ pub struct BakeReport {
     /// Wall-clock seconds of the stages: binding, gains and de-lighting, resampling, spline
     /// blending.
     pub seconds: [f64; 3],
+    /// What the bake fell back from, naming the photo and the figure: a lighting no model
+    /// explained (kept instead), a registration beyond the clicks' reach (the calibrated
+    /// cameras kept), gains far from 1 (the lighting kept).
+    pub warnings: Vec<String>,
 }
 
 /// A baked texture.
@@ -294,6 +302,65 @@ fn level_views(
             sh
         })
         .collect()
+}
+
+/// Gains of a de-lit photo outside this factor of 1 (either way) are far from 1: authored, three
+/// stops of exposure or a white balance no camera makes; a lighting fit that needs them has
+/// gone wrong.
+pub const FAR_GAIN: f32 = 3.0;
+
+/// The checks of the fits that could otherwise go wrong silently, each a warning naming the
+/// photo and the figure: a registration refused for moving a camera beyond
+/// [`RegisterOptions::max_shift_px`]; a lighting no model explained (the de-lighting already
+/// kept the lighting); gains beyond [`FAR_GAIN`] (the lighting then kept: its fallback set).
+fn check_fits(
+    registration: &[Registration],
+    delit: &mut Option<crate::delight::Delit>,
+    photos: &[Photo],
+    opts: &BakeOptions,
+) -> Vec<String> {
+    let mut warnings = Vec::new();
+    if let (Some(r), false) = (opts.register, registration.iter().all(|g| g.kept)) {
+        let worst = registration
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.shift_px.total_cmp(&b.1.shift_px));
+        if let Some((k, g)) = worst.filter(|(_, g)| g.shift_px > r.max_shift_px) {
+            warnings.push(format!(
+                "registration refused: photo '{}' would move {:.1} px, beyond the {:.1} px its clicks allow; the cameras are kept as calibrated",
+                photos[k].name, g.shift_px, r.max_shift_px
+            ));
+        }
+    }
+    let Some(d) = delit.as_mut() else {
+        return warnings;
+    };
+    if let Some(why) = &d.lighting.fallback {
+        warnings.push(format!(
+            "de-lighting: {why}; the lighting is kept (each photo's exposure and white balance only)"
+        ));
+        return warnings;
+    }
+    let far: Vec<String> = d
+        .lighting
+        .gains
+        .iter()
+        .zip(photos)
+        .filter(|(g, _)| g.iter().any(|x| !(1.0 / FAR_GAIN..=FAR_GAIN).contains(x)))
+        .map(|(g, p)| format!("'{}' {:.2} / {:.2} / {:.2}", p.name, g[0], g[1], g[2]))
+        .collect();
+    if !far.is_empty() {
+        let why = format!(
+            "gains beyond {FAR_GAIN}× either way ({}) under the model {}",
+            far.join(", "),
+            d.lighting.model_name
+        );
+        warnings.push(format!(
+            "de-lighting: {why}; the lighting is kept (each photo's exposure and white balance only)"
+        ));
+        d.lighting.fallback = Some(why);
+    }
+    warnings
 }
 
 /// Vertex-to-photo binding (Rocchini et al. 1999 as in §3.2): bit i is set when vertex v
@@ -491,8 +558,10 @@ pub fn bake(
     // camera and the lighting estimated again, warm from the keys found (the misregistered
     // samples had blurred it: on issue 38's ground truth a key and the vignetting are found
     // only after registration).
+    // Registration compares de-lit photos; where the lighting was kept (no model explained
+    // it), their shadows would steer the cameras, so they stay as calibrated.
     let registration = match (&delit, opts.register) {
-        (Some(d), Some(r)) if photos.len() >= 2 => {
+        (Some(d), Some(r)) if photos.len() >= 2 && d.lighting.fallback.is_none() => {
             progress.stage("register the photos", 0, Unit::Steps);
             let nv = topo.positions.len();
             let mut wt = vec![vec![0.0f32; nv]; photos.len()];
@@ -567,6 +636,19 @@ pub fn bake(
                 Some(&keys),
             ));
         }
+    }
+    let warnings = check_fits(&registration, &mut delit, photos, opts);
+    for w in &warnings {
+        progress.note(Note::warning(w.clone()));
+    }
+    if opts.strict && !warnings.is_empty() {
+        return Err(PhotoError::Strict(warnings.join("; ")));
+    }
+    // The lighting as found, for the report; where it was kept, the bake goes on exactly as
+    // with the lighting kept (Brown–Lowe gains, every sample trusted).
+    let lighting = delit.as_ref().map(|d| d.lighting.clone());
+    if lighting.as_ref().is_some_and(|l| l.fallback.is_some()) {
+        delit = None;
     }
     let gains: Vec<[f32; 3]> = match &delit {
         // The shading holds exposure and white balance.
@@ -988,8 +1070,9 @@ pub fn bake(
         triangle_cases: cases,
         unbound_vertices: unbound,
         photo_coverage,
-        lighting: delit.as_ref().map(|d| d.lighting.clone()),
+        lighting,
         registration,
+        warnings,
         seconds: [
             t_bind,
             t_resample,

@@ -31,6 +31,9 @@ pub enum PhotoError {
     /// A value derma cannot use (derma-core's vocabulary: what, expected, got).
     #[error(transparent)]
     Invalid(#[from] derma_core::Invalid),
+    /// A result `--strict` refuses: what the bake would have warned about.
+    #[error("refused (strict): {0}")]
+    Strict(String),
     /// A numerical failure.
     #[error(transparent)]
     Numerics(#[from] derma_core::numerics::NumericsError),

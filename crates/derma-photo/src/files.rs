@@ -9,6 +9,7 @@ use crate::correspondences::{self, exif_focal_px, Surface};
 use crate::error::{PhotoError, Result};
 use crate::iris::{iris_texture, IrisOptions, IrisReport};
 use crate::photo::{Photo, RgbImage};
+use crate::register::RegisterOptions;
 use crate::resection::{resect, Resection, ResectionOptions};
 use crate::synthetic;
 use crate::teeth::{teeth_texture, TeethOptions, TeethReport};
@@ -251,6 +252,34 @@ pub fn unwrap_file(
 /// Reads `cameras.json`: each photo's image path (resolved against the file's folder), name
 /// and camera.
 pub fn read_cameras(cameras: &Path) -> Result<Vec<(PathBuf, String, Camera)>> {
+    Ok(camera_list(read_cameras_file(cameras)?, cameras))
+}
+
+/// Each photo of a cameras file: its path (joined to the file's folder), name and camera.
+fn camera_list(file: CamerasFile, cameras: &Path) -> Vec<(PathBuf, String, Camera)> {
+    let dir = cameras.parent().unwrap_or(Path::new("."));
+    file.photos
+        .into_iter()
+        .map(|e| (dir.join(&e.image), e.image.display().to_string(), e.camera))
+        .collect()
+}
+
+/// The farthest a registration may move a camera whose clicks left an RMS reprojection error
+/// of `rms_px` (the largest of the photos'): twice that, within 2–12 px; cameras given without
+/// clicks (`rms_px` 0) keep [`RegisterOptions::default`]'s 12 px. Authored: resection from
+/// 25–40 clicks leaves each camera within about half the clicks' RMS (issue 38's ground truth:
+/// 0.6–1.4 px from 1.5 px clicks), so a correction of twice the RMS is beyond what the clicks
+/// allow.
+pub fn register_limit(rms_px: f64) -> f64 {
+    if rms_px > 0.0 {
+        (2.0 * rms_px).clamp(2.0, 12.0)
+    } else {
+        crate::register::RegisterOptions::default().max_shift_px
+    }
+}
+
+/// `cameras.json` as written.
+fn read_cameras_file(cameras: &Path) -> Result<CamerasFile> {
     let what = || format!("cameras file '{}'", cameras.display());
     let text = std::fs::read_to_string(cameras)
         .map_err(|e| PhotoError::Invalid(derma_core::Invalid::new(what(), "a readable file", e)))?;
@@ -261,12 +290,7 @@ pub fn read_cameras(cameras: &Path) -> Result<Vec<(PathBuf, String, Camera)>> {
             e,
         ))
     })?;
-    let dir = cameras.parent().unwrap_or(Path::new("."));
-    Ok(file
-        .photos
-        .into_iter()
-        .map(|e| (dir.join(&e.image), e.image.display().to_string(), e.camera))
-        .collect())
+    Ok(file)
 }
 
 /// Reads the photos of [`read_cameras`]' list, each checked against its camera's size.
@@ -299,7 +323,9 @@ pub fn bake_files(
     progress: &dyn Progress,
 ) -> Result<BakeReport> {
     ensure_writable_dir(out_dir)?;
-    let list = read_cameras(cameras)?;
+    let file = read_cameras_file(cameras)?;
+    let rms = file.photos.iter().map(|e| e.rms_px).fold(0.0, f64::max);
+    let list = camera_list(file, cameras);
     let colour = if opts.delight.is_some() {
         "albedo"
     } else {
@@ -323,6 +349,10 @@ pub fn bake_files(
     let m = TriMesh::load(mesh)?;
     let opts = BakeOptions {
         shading_images: opts.delight.is_some(),
+        register: opts.register.map(|r| RegisterOptions {
+            max_shift_px: r.max_shift_px.min(register_limit(rms)),
+            ..r
+        }),
         ..*opts
     };
     let b = bake(&m, &photos, &opts, progress)?;
@@ -454,6 +484,7 @@ pub fn teeth_files(
 pub fn chromophore_files(
     texture: &Path,
     mask: Option<&Path>,
+    lut: &SkinColorLut,
     exposure: Option<f64>,
     out_dir: &Path,
     progress: &dyn Progress,
@@ -494,7 +525,6 @@ pub fn chromophore_files(
         }
         _ => None,
     };
-    let lut = SkinColorLut::builtin();
     let e = match exposure {
         Some(e) => e,
         None => {
@@ -505,10 +535,10 @@ pub fn chromophore_files(
                 .filter(|(i, _)| m.as_ref().is_none_or(|m| m[*i]))
                 .map(|(_, c)| *c)
                 .collect();
-            fit_exposure(&lut, &sel)
+            fit_exposure(lut, &sel)
         }
     };
-    let c = invert(&lut, &tex, m.as_deref(), e)?;
+    let c = invert(lut, &tex, m.as_deref(), e)?;
     write_exr(&outs[0], &[(names::MELANIN, &c.melanin)], ExrPrecision::F32)?;
     write_exr(
         &outs[1],

@@ -23,6 +23,7 @@ pub mod error;
 pub mod files;
 pub mod gain;
 pub mod iris;
+pub mod light_model;
 pub mod photo;
 pub mod register;
 pub mod resection;

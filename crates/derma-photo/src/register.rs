@@ -59,8 +59,8 @@ impl Default for RegisterOptions {
 pub struct Registration {
     /// The refined camera (the one given when the correction was refused).
     pub camera: Camera,
-    /// RMS displacement of the surface's points in the photo (pixels) from the camera given; 0
-    /// when the registration was refused.
+    /// RMS displacement of the surface's points in the photo (pixels) from the camera given:
+    /// the correction made, or where it was refused, the one that was tried.
     pub shift_px: f64,
     /// Robust misfit (mean Cauchy cost) of its de-lit signal, gain-matched, against the other
     /// photos' at full resolution, before and after.
@@ -230,7 +230,7 @@ pub fn register(
     (0..n)
         .map(|k| Registration {
             camera: if kept { cams[k] } else { cameras[k] },
-            shift_px: if kept { shifts[k] } else { 0.0 },
+            shift_px: shifts[k],
             misfit: misfit[k],
             kept,
         })
@@ -555,6 +555,7 @@ mod tests {
         let regs = two(&points, [truth, off], [&image, &image], 0.5);
         assert!(!regs[1].kept);
         assert_eq!(regs[1].camera, off);
-        assert_eq!(regs[1].shift_px, 0.0);
+        // The correction tried is reported (the bake names it in its warning).
+        assert!(regs[1].shift_px > 0.5, "{regs:?}");
     }
 }

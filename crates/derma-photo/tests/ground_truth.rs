@@ -4,7 +4,10 @@
 
 use derma_photo::bake::{bake, BakeOptions};
 use derma_photo::chromophores::invert;
+use derma_photo::error::PhotoError;
+use derma_photo::light_model::Model;
 use derma_photo::photo::Photo;
+use derma_photo::register::RegisterOptions;
 use derma_photo::resection::{resect, ResectionOptions};
 use derma_photo::synthetic::{self, chromophores_at, evaluate};
 use derma_photo::unwrap::{unwrap, UnwrapOptions};
@@ -275,4 +278,82 @@ fn an_even_light_is_kept_simple() {
     );
     assert!(delit.psnr_db > kept.psnr_db + 3.0 && delit.psnr_db > 40.0);
     assert!(delit.cast <= 0.01, "{delit:?}");
+}
+
+#[test]
+fn a_light_no_model_explains_is_kept_with_a_warning_and_strict_refuses() {
+    // Each photo lit through blinds: horizontal stripes of light between 0.3 and 1.0, 60 px
+    // apart, at a phase of its own — a light no candidate model holds. De-lighting must keep
+    // the lighting, say so, and `strict` must refuse.
+    let s = set();
+    let striped: Vec<Photo> = s
+        .photos
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let mut p = p.clone();
+            let w = p.image.width;
+            for (i, c) in p.image.data.iter_mut().enumerate() {
+                let y = (i / w) as f32;
+                let f = 0.65 + 0.35 * (y * std::f32::consts::TAU / 60.0 + 1.3 * k as f32).sin();
+                *c = c.map(|x| x * f);
+            }
+            p
+        })
+        .collect();
+    let opts = BakeOptions {
+        size: 128,
+        ..Default::default()
+    };
+    let b = bake(&s.mesh, &striped, &opts, &derma_core::Silent).unwrap();
+    let l = b.report.lighting.as_ref().unwrap();
+    eprintln!("{:?}", l.candidates);
+    assert_eq!(l.model, Model::KEPT, "{l:?}");
+    assert!(
+        b.report
+            .warnings
+            .iter()
+            .any(|w| w.contains("de-lighting") && w.contains("held-out misfit")),
+        "{:?}",
+        b.report.warnings
+    );
+    let strict = BakeOptions {
+        strict: true,
+        ..opts
+    };
+    match bake(&s.mesh, &striped, &strict, &derma_core::Silent) {
+        Err(PhotoError::Strict(m)) => assert!(m.contains("held-out misfit"), "{m}"),
+        Err(e) => panic!("{e}"),
+        Ok(_) => panic!("strict baked a lighting no model explains"),
+    }
+    // The same photos unstriped: the model is trusted and nothing is said.
+    let plain = bake(&s.mesh, &s.photos, &opts, &derma_core::Silent).unwrap();
+    assert!(
+        plain.report.warnings.is_empty(),
+        "{:?}",
+        plain.report.warnings
+    );
+    assert_ne!(plain.report.lighting.unwrap().model, Model::KEPT);
+}
+
+#[test]
+fn a_registration_beyond_the_clicks_reach_is_refused_with_a_warning() {
+    // The recovered cameras are 0.6–1.4 px off; registration moves them by about that much.
+    // Allowed 0.2 px, it must keep them as calibrated and name the photo and the figure.
+    let s = set();
+    let opts = BakeOptions {
+        size: 128,
+        register: Some(RegisterOptions {
+            max_shift_px: 0.2,
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    let b = bake(&s.mesh, &s.recovered, &opts, &derma_core::Silent).unwrap();
+    assert!(b.report.registration.iter().all(|r| !r.kept));
+    let w = b.report.warnings.join("; ");
+    assert!(
+        w.contains("registration refused") && w.contains("beyond the 0.2 px"),
+        "{w}"
+    );
 }

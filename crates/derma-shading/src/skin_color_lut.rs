@@ -164,6 +164,48 @@ impl SkinColorLut {
         Ok(lut)
     }
 
+    /// The table of an [`Appearance`](crate::appearance::Appearance) over melanin C_m and
+    /// dermal blood C_hd (nodes as [`SkinColorLut::build`]'s, `size`² of them up to the
+    /// maxima), every other parameter held at `at`'s (its melanin and blood ignored; no
+    /// epidermal blood): the colour model a skin set paints with, for an inversion
+    /// (`derma photo chromophores`) whose maps that set then paints back to the same colour.
+    pub fn from_appearance(
+        appearance: &dyn crate::appearance::Appearance,
+        at: &BioTexel,
+        size: usize,
+        melanin_max: f64,
+        blood_max: f64,
+    ) -> Self {
+        let options = LutOptions {
+            size: size.max(2),
+            photons: 0,
+            seed: 0,
+            eumelanin: 1.0 - at.pheomelanin as f64,
+            epidermal_ratio: 0.0,
+            melanin_max,
+            blood_max,
+            oxygenation: at.oxygenation as f64,
+            stratum_corneum_um: at.stratum_corneum_um as f64,
+            epidermis_um: at.epidermis_um as f64,
+            yellow: YellowPigments::BIOSPEC,
+        };
+        let mut lut = Self {
+            options,
+            rgb: Vec::with_capacity(options.size * options.size),
+        };
+        for v in 0..options.size {
+            for u in 0..options.size {
+                let bio = BioTexel {
+                    melanin: lut.node(u, melanin_max) as f32,
+                    blood: lut.node(v, blood_max) as f32,
+                    ..*at
+                };
+                lut.rgb.push(appearance.albedo(&bio));
+            }
+        }
+        lut
+    }
+
     /// Jimenez et al. 2010 eq. 7, normalised to [0, 1]: (∛C_m / ∛C_m,max, ∛C_hd / ∛C_hd,max).
     pub fn uv(&self, c_m: f64, c_hd: f64) -> (f64, f64) {
         (

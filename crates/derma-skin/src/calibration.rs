@@ -2,7 +2,7 @@
 //! scaled by age, and the baseline melanin calibrated by bisection so the cheeks and forehead
 //! land on the person's ITA° (Chardon et al. 1991) under the chosen appearance.
 
-use crate::config::{Range, SkinConfig};
+use crate::config::SkinConfig;
 use crate::regional::{age_factor, gains, ita_deg, NEUTRAL};
 use derma_head::regions;
 
@@ -27,7 +27,7 @@ pub fn apply_person(
         return Ok((out, None));
     }
     let b = &cfg.baseline;
-    let mid = |r: Range| r.min + 0.5 * b.phi * (r.max - r.min);
+    let mean = b.mean_tissue();
     // The cheeks and the forehead, each under its own regional gains (`gains`, or none
     // without regional gains); the ITA of their mean colour is what is calibrated.
     let sample: Vec<[f32; 4]> = ["cheeks", "forehead"]
@@ -43,11 +43,10 @@ pub fn apply_person(
         .collect();
     let texel = |melanin: f32, g: [f32; 4]| derma_shading::BioTexel {
         melanin: melanin * g[1],
-        pheomelanin: mid(b.pheomelanin),
-        blood: (mid(b.blood) * g[0]).min(1.0),
-        oxygenation: (mid(b.oxygenation) + g[2]).clamp(0.0, 1.0),
-        stratum_corneum_um: mid(b.stratum_corneum_um),
-        epidermis_um: mid(b.epidermis_um) * g[3],
+        blood: (mean.blood * g[0]).min(1.0),
+        oxygenation: (mean.oxygenation + g[2]).clamp(0.0, 1.0),
+        epidermis_um: mean.epidermis_um * g[3],
+        ..mean
     };
     let ita_of = |m: f32| {
         let mut lab = [0.0; 3];

@@ -193,6 +193,24 @@ pub struct BaselineConfig {
     pub height_mm: Range,
 }
 
+impl BaselineConfig {
+    /// The baseline's mean tissue: each range at min + ½ φ (max − min), the mean of its noise.
+    /// Measured maps are painted at it (their melanin and blood replacing its own), and
+    /// `derma photo chromophores` inverts colours at it, so that a set painted from a photo's
+    /// maps gives back the photo's colour.
+    pub fn mean_tissue(&self) -> derma_shading::BioTexel {
+        let mid = |r: Range| r.min + 0.5 * self.phi * (r.max - r.min);
+        derma_shading::BioTexel {
+            melanin: mid(self.melanin),
+            pheomelanin: mid(self.pheomelanin),
+            blood: mid(self.blood),
+            oxygenation: mid(self.oxygenation),
+            stratum_corneum_um: mid(self.stratum_corneum_um),
+            epidermis_um: mid(self.epidermis_um),
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 /// `[lips]` (thesis §5.3.6).

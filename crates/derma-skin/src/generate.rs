@@ -543,19 +543,23 @@ impl SkinGenerator<'_> {
             Ok(Some(map))
         };
         let b = &cfg.baseline;
+        let melanin = read(
+            "baseline.melanin_map",
+            &b.melanin_map,
+            &[names::MELANIN, "Y", "R"],
+            lut.melanin_max,
+        )?;
+        let blood = read(
+            "baseline.blood_map",
+            &b.blood_map,
+            &[names::HEMOGLOBIN, names::BLOOD, "Y", "R"],
+            lut.blood_max,
+        )?;
+        let tissue = (melanin.is_some() || blood.is_some()).then(|| b.mean_tissue());
         Ok(crate::paint::BaselineMaps {
-            melanin: read(
-                "baseline.melanin_map",
-                &b.melanin_map,
-                &[names::MELANIN, "Y", "R"],
-                lut.melanin_max,
-            )?,
-            blood: read(
-                "baseline.blood_map",
-                &b.blood_map,
-                &[names::HEMOGLOBIN, names::BLOOD, "Y", "R"],
-                lut.blood_max,
-            )?,
+            melanin,
+            blood,
+            tissue,
         })
     }
 

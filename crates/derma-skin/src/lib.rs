@@ -34,6 +34,7 @@ pub mod generate;
 pub mod index;
 pub mod kinds;
 pub mod manifest;
+pub mod measured;
 pub mod mottling;
 pub mod noise;
 pub mod normal_map;

@@ -110,6 +110,11 @@ pub struct BaselineMaps {
     pub melanin: Option<Map>,
     /// Dermal blood volume fraction C_hd.
     pub blood: Option<Map>,
+    /// Where a map is given, the tissue's other parameters (pheomelanin share, oxygenation,
+    /// the layers' thicknesses), without noise or regional change: the ones the maps' colours
+    /// were inverted at ([`crate::config::BaselineConfig::mean_tissue`]). The photo's colour,
+    /// regional differences included, is in the maps.
+    pub tissue: Option<BioTexel>,
 }
 
 /// Paints every covered texel of `surface`; uncovered texels keep the default sample and are
@@ -371,6 +376,13 @@ impl Painter<'_> {
                 let [b, mel] = m.factors_of(&sc.mottling_noise[k]);
                 s.tissue.blood *= b;
                 s.tissue.melanin *= mel;
+            }
+            if let Some(t) = &self.measured.tissue {
+                s.tissue = BioTexel {
+                    melanin: s.tissue.melanin,
+                    blood: s.tissue.blood,
+                    ..*t
+                };
             }
             if let Some(m) = &self.measured.melanin {
                 s.tissue.melanin = m.sample(&taps);

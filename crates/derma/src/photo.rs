@@ -107,6 +107,7 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
                 size: a.size,
                 gain_compensation: !a.no_gain,
                 multiband: !a.no_multiband,
+                strict: a.strict,
                 ..Default::default()
             };
             if a.keep_lighting {
@@ -143,6 +144,16 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
             }
             if let Some(l) = &r.lighting {
                 let keys = l.key_direction.iter().filter(|d| d.is_some()).count();
+                let scores: Vec<String> = l
+                    .candidates
+                    .iter()
+                    .map(|c| format!("{} {:.3}", c.model, c.held_out_misfit))
+                    .collect();
+                line(format!(
+                    "lighting model: {} (held-out misfit of each: {})",
+                    l.model_name,
+                    scores.join("; ")
+                ))?;
                 line(format!(
                     "lighting: a key light in {keys} of {} photos; relative misfit {:.3}; {:.1} % of samples weighted out (highlights, shadows); vignetting {:?}",
                     l.key_direction.len(),
@@ -168,8 +179,15 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
             let exposure = crate::args::optional_numbers(&a.exposure, "auto", 1)
                 .map_err(|e| anyhow::anyhow!("--exposure {e}"))?
                 .map(|v| v[0]);
-            let r =
-                files::chromophore_files(&a.texture, a.mask.as_deref(), exposure, &a.out, bars)?;
+            let lut = derma_skin::measured::inversion_lut_of(a.config.as_deref())?;
+            let r = files::chromophore_files(
+                &a.texture,
+                a.mask.as_deref(),
+                &lut,
+                exposure,
+                &a.out,
+                bars,
+            )?;
             line(format!(
                 "exposure {:.3}; ΔE*ab median {:.2}, 95th percentile {:.2}; {:.2} % clamped to the gamut; {:.2} % flips; {} texels",
                 r.exposure,

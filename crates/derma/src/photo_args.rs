@@ -81,6 +81,10 @@ pub struct BakeArgs {
     /// Take the cameras as calibrated (no photometric registration of the de-lit photos).
     #[arg(long)]
     pub no_register: bool,
+    /// Refuse instead of falling back: a lighting no model explains, a registration that moves
+    /// a camera beyond its clicks' reach, or gains far from 1 are an error, not a warning.
+    #[arg(long)]
+    pub strict: bool,
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
@@ -98,6 +102,10 @@ pub struct ChromophoreArgs {
     /// Exposure the texture is divided by, or "auto" to fit it.
     #[arg(long, default_value = "auto")]
     pub exposure: String,
+    /// The `derma skin` config the maps will be painted with (its baseline's mean tissue fixes
+    /// the parameters other than melanin and blood); default: the built-in config.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,

@@ -98,6 +98,10 @@ impl Progress for Bars {
     }
 
     fn note(&self, note: Note) {
-        self.say(note);
+        // A warning is said even with --quiet: it tells of a fallback or a doubt in the result.
+        match (&self.bar, note.level) {
+            (None, derma_core::progress::Level::Warning) => eprintln!("{note}"),
+            _ => self.say(note),
+        }
     }
 }

@@ -294,3 +294,142 @@ fn bad_input_gets_a_clear_error() {
     assert!(ok, "{err}");
     assert!(out.contains("100.00 % clamped"), "{out}");
 }
+
+#[test]
+fn chromophores_from_a_real_skin_paint_back_to_its_colour() {
+    // One colour model from photo to skin: a real scan's skin (a forehead crop of the Lee
+    // Perry-Smith scan's photographed albedo, CC BY 3.0, ../shared/data), mirrored-tiled over
+    // the built-in head's UV square, is inverted to melanin and hemoglobin by `derma photo
+    // chromophores`; `derma skin` paints a set from those maps as its baseline; its base colour
+    // must give back the colour the maps stand for, and the albedo (over the exposure the
+    // inversion fitted) within what the inversion itself leaves, over the head's texels
+    // (features paint on top of a few).
+    let Some(crop) = derma_test_support::shared_data("skin_albedo_forehead_256x128.png") else {
+        eprintln!("skipped: ../shared/data is absent");
+        return;
+    };
+    use derma_core::color::{linear_srgb_to_xyz, xyz_to_lab};
+    use derma_photo::photo::RgbImage;
+    let d = tmp("loop");
+    let skin = RgbImage::read_linear(&crop).unwrap();
+    let n = 256usize;
+    let tile = |t: f32, k: f32| {
+        let x = (t * k).rem_euclid(2.0);
+        if x > 1.0 {
+            2.0 - x
+        } else {
+            x
+        }
+    };
+    let albedo = RgbImage {
+        width: n,
+        height: n,
+        data: (0..n * n)
+            .map(|i| {
+                let (u, v) = ((i % n) as f32 / n as f32, (i / n) as f32 / n as f32);
+                let (x, y) = (tile(u, 4.0), tile(v, 8.0));
+                skin.sample(glam::DVec2::new(
+                    (x * (skin.width as f32 - 1.0) + 0.5) as f64,
+                    (y * (skin.height as f32 - 1.0) + 0.5) as f64,
+                ))
+            })
+            .collect(),
+    };
+    let tex = d.join("albedo.exr");
+    albedo.write_linear(&tex).unwrap();
+    let chromo = d.join("chromo");
+    let (ok, out, err) = run(&[
+        "photo",
+        "chromophores",
+        "--texture",
+        s(&tex),
+        "--out",
+        s(&chromo),
+    ]);
+    assert!(ok, "{err}");
+    let exposure: f64 = out
+        .split("exposure ")
+        .nth(1)
+        .and_then(|t| t.split(';').next())
+        .and_then(|t| t.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no exposure in {out}"));
+    let cfg = d.join("skin.toml");
+    std::fs::write(
+        &cfg,
+        format!(
+            "[baseline]\nmelanin_map = \"{}\"\nblood_map = \"{}\"\n",
+            chromo.join("melanin.exr").display(),
+            chromo.join("hemoglobin.exr").display()
+        ),
+    )
+    .unwrap();
+    let set = d.join("set");
+    let (ok, _, err) = run(&[
+        "skin",
+        "--config",
+        s(&cfg),
+        "--size",
+        "256",
+        "--out",
+        s(&set),
+    ]);
+    assert!(ok, "{err}");
+    let painted = RgbImage::read_linear(&set.join("base_color.png")).unwrap();
+    let raster = derma_core::raster::UvRaster::new(&derma_head::Head::builtin().skin, n, n);
+    let lab = |c: [f32; 3], e: f64| xyz_to_lab(linear_srgb_to_xyz(c.map(|x| x as f64 / e)));
+    let mut de: Vec<f64> = (0..n * n)
+        .filter(|&i| raster.triangle[i] != derma_core::raster::NO_TRIANGLE)
+        .map(|i| {
+            let (a, b) = (lab(painted.data[i], 1.0), lab(albedo.data[i], exposure));
+            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+        })
+        .collect();
+    de.sort_by(f64::total_cmp);
+    // The painter against the inversion's own model: the colour the maps stand for (the
+    // table the inversion used, looked up at each texel's melanin and hemoglobin).
+    let lut = derma_skin::measured::inversion_lut(&derma_skin::config::SkinConfig::default());
+    let read = |f: &str| {
+        derma_core::image_io::read_exr_channels(&chromo.join(f))
+            .unwrap()
+            .remove(0)
+            .1
+    };
+    let (m, h) = (read("melanin.exr"), read("hemoglobin.exr"));
+    let mut dp: Vec<f64> = (0..n * n)
+        .filter(|&i| raster.triangle[i] != derma_core::raster::NO_TRIANGLE)
+        .map(|i| {
+            let c = lut.lookup(m.data()[i] as f64, h.data()[i] as f64);
+            let (a, b) = (lab(painted.data[i], 1.0), lab(c.map(|x| x as f32), 1.0));
+            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+        })
+        .collect();
+    dp.sort_by(f64::total_cmp);
+    let (median, painter) = (de[de.len() / 2], dp[dp.len() / 2]);
+    let fitted: f64 = out
+        .split("ΔE*ab median ")
+        .nth(1)
+        .and_then(|t| t.split(',').next())
+        .and_then(|t| t.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no ΔE in {out}"));
+    eprintln!(
+        "loop ΔE*ab median {median:.2} (90th percentile {:.2}) over {} texels; the inversion's own residual {fitted:.2}; painter against the maps' colour {painter:.2}",
+        de[de.len() * 9 / 10],
+        de.len()
+    );
+    // One colour model: the set paints the colour the maps were inverted to (0.79 when this
+    // was written: 8-bit steps and the features painted on top). End to end the loop adds
+    // little to what the inversion itself leaves (its spatial prior smooths the skin's finest
+    // detail: 1.66): 2.88 when this was written. With the two colour models before (the
+    // skin-colour LUT inverted, the match table painted) the old set's base colour differed
+    // from this one by 2.6 median, and over all 256² texels (gutter included) the loop went
+    // from 3.73 to 3.38. Issue 61's 2 is not reached on this sharp crop; the inversion's
+    // residual bounds it.
+    assert!(
+        painter <= 1.0,
+        "painter against the maps' colour: ΔE*ab median {painter}"
+    );
+    assert!(
+        median <= fitted + 1.5,
+        "loop ΔE*ab median {median} against the inversion's {fitted}"
+    );
+}
