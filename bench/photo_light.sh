@@ -21,7 +21,7 @@ fi
 mesh=target/corpus/leeperrysmith.obj
 albedo=target/corpus/Map-COL.jpg
 [ -f "$mesh" ] && [ -f "$albedo" ] || python3 scripts/corpus.py fetch --only leeperrysmith
-venv=target/peer-photo
+venv=target/peer-light
 if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv"
   "$venv/bin/pip" install -q numpy pillow
@@ -66,8 +66,11 @@ for kind in ${KINDS:-flat lambert area point hdri sky}; do
   rm -rf "$set_dir/chromo" "$set_dir/painted"
   $D photo chromophores --texture "$set_dir/clicks/albedo.png" --mask "$set_dir/clicks/mask.png" \
     --out "$set_dir/chromo" -q
-  printf '[baseline]\nmelanin_map = "%s"\nblood_map = "%s"\n' "$PWD/$set_dir/chromo/melanin.exr" \
-    "$PWD/$set_dir/chromo/hemoglobin.exr" >"$set_dir/loop.toml"
+  # Features off: a mesh without fields gets them everywhere, and the loop is the colour's.
+  { printf '[baseline]\nmelanin_map = "%s"\nblood_map = "%s"\n' "$PWD/$set_dir/chromo/melanin.exr" \
+      "$PWD/$set_dir/chromo/hemoglobin.exr"
+    for f in cyst eyebrow follicle freckle lips mole pore wrinkle; do printf '[%s]\nenabled = false\n' $f; done
+  } >"$set_dir/loop.toml"
   $D skin --config "$set_dir/loop.toml" --mesh "$mesh" --size "$size" --out "$set_dir/painted" -q
   looped=$("$py" bench/photo_light_eval.py --loop "$mesh" "$set_dir" "$set_dir/clicks" "$set_dir/chromo" "$set_dir/painted")
   fit=$(python3 -c "import json;print(round(json.load(open('$set_dir/chromo/chromophores.json'))['median_delta_e'],2))")

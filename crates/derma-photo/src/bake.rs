@@ -335,6 +335,11 @@ fn check_fits(
     let Some(d) = delit.as_mut() else {
         return warnings;
     };
+    if d.lighting.fallback.is_none() && d.lighting.model == crate::light_model::Model::KEPT {
+        d.lighting.fallback = Some(
+            "no lighting model explained the held-out photos better than their exposure and white balance alone".into(),
+        );
+    }
     if let Some(why) = &d.lighting.fallback {
         warnings.push(format!(
             "de-lighting: {why}; the lighting is kept (each photo's exposure and white balance only)"
@@ -628,13 +633,16 @@ pub fn bake(
                 .iter()
                 .map(|k| k.map(Vec3::from_array))
                 .collect();
-            delit = Some(estimate_from(
-                &surface,
-                &samples,
-                photos.len(),
-                &d,
-                Some(&keys),
-            ));
+            // The model the photos chose stays (the cameras moved by a pixel or two), and so do
+            // its candidates' scores.
+            let d = DelightOptions {
+                model: Some(first.lighting.model),
+                ..d
+            };
+            let candidates = first.lighting.candidates.clone();
+            let mut again = estimate_from(&surface, &samples, photos.len(), &d, Some(&keys));
+            again.lighting.candidates = candidates;
+            delit = Some(again);
         }
     }
     let warnings = check_fits(&registration, &mut delit, photos, opts);

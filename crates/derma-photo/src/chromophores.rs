@@ -1,7 +1,8 @@
 //! Melanin and hemoglobin maps from a baked photo texture (beyond Tarini et al. 2002; as
 //! Jimenez et al. 2010 §3 turn acquired colour into chromophores): each texel's colour is
-//! matched in CIELAB to derma's skin-colour LUT (eq. 7, the optics behind `derma skin`'s colours),
-//! over its continuous (∛C_m, ∛C_hd) domain, clamped to the gamut with the residual ΔE*ab kept.
+//! matched in CIELAB to a table over (∛C_m, ∛C_hd) in the form of eq. 7 — the one `derma skin`
+//! paints with (`derma_skin::measured::inversion_lut`), or the skin-colour LUT — over its
+//! continuous domain, clamped to the gamut with the residual ΔE*ab kept.
 
 use crate::error::{PhotoError, Result};
 use crate::photo::RgbImage;

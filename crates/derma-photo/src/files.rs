@@ -479,8 +479,9 @@ pub fn teeth_files(
 
 /// Turns a baked texture into melanin and hemoglobin maps; writes `melanin.exr`,
 /// `hemoglobin.exr` (the channels `derma rig` and `derma skin` read), `residual.exr` (ΔE*ab), `confidence.exr`
-/// and `chromophores.json`. `exposure`: `None` fits it. The mask selects the texels the fit and
-/// the report use; every texel gets its maps.
+/// and `chromophores.json`, inverting the colours in `lut` (the model the maps will be painted
+/// with). `exposure`: `None` fits it. The mask selects the texels the fit and the report use;
+/// every texel gets its maps.
 pub fn chromophore_files(
     texture: &Path,
     mask: Option<&Path>,
@@ -504,7 +505,7 @@ pub fn chromophore_files(
     let mut inputs = vec![texture];
     inputs.extend(mask);
     check_inputs_spared(&outs, &inputs)?;
-    progress.stage("invert the skin-colour LUT", 0, Unit::Steps);
+    progress.stage("invert the skin colour model", 0, Unit::Steps);
     // The texture and the mask are read at once.
     let (tex, grey) = rayon::join(
         || RgbImage::read_linear(texture),

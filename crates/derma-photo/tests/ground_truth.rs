@@ -307,22 +307,28 @@ fn a_light_no_model_explains_is_kept_with_a_warning_and_strict_refuses() {
     };
     let b = bake(&s.mesh, &striped, &opts, &derma_core::Silent).unwrap();
     let l = b.report.lighting.as_ref().unwrap();
-    eprintln!("{:?}", l.candidates);
-    assert_eq!(l.model, Model::KEPT, "{l:?}");
+    assert!(l.fallback.is_some(), "{l:?}");
     assert!(
         b.report
             .warnings
             .iter()
-            .any(|w| w.contains("de-lighting") && w.contains("held-out misfit")),
+            .any(|w| w.contains("de-lighting") && w.contains("relative misfit")),
         "{:?}",
         b.report.warnings
     );
+    // Kept exactly as `--keep-lighting` keeps it.
+    let kept = BakeOptions {
+        delight: None,
+        ..opts
+    };
+    let k = bake(&s.mesh, &striped, &kept, &derma_core::Silent).unwrap();
+    assert!(k.texture.data == b.texture.data);
     let strict = BakeOptions {
         strict: true,
         ..opts
     };
     match bake(&s.mesh, &striped, &strict, &derma_core::Silent) {
-        Err(PhotoError::Strict(m)) => assert!(m.contains("held-out misfit"), "{m}"),
+        Err(PhotoError::Strict(m)) => assert!(m.contains("relative misfit"), "{m}"),
         Err(e) => panic!("{e}"),
         Ok(_) => panic!("strict baked a lighting no model explains"),
     }
@@ -333,7 +339,8 @@ fn a_light_no_model_explains_is_kept_with_a_warning_and_strict_refuses() {
         "{:?}",
         plain.report.warnings
     );
-    assert_ne!(plain.report.lighting.unwrap().model, Model::KEPT);
+    let l = plain.report.lighting.unwrap();
+    assert!(l.fallback.is_none() && l.model != Model::KEPT, "{l:?}");
 }
 
 #[test]

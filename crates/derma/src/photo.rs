@@ -149,8 +149,13 @@ pub fn run(cmd: PhotoCommand, bars: &Bars) -> Result<()> {
                     .iter()
                     .map(|c| format!("{} {:.3}", c.model, c.held_out_misfit))
                     .collect();
+                let kept = if l.fallback.is_some() {
+                    ", not trusted: the lighting kept"
+                } else {
+                    ""
+                };
                 line(format!(
-                    "lighting model: {} (held-out misfit of each: {})",
+                    "lighting model: {}{kept} (held-out misfit of each: {})",
                     l.model_name,
                     scores.join("; ")
                 ))?;
