@@ -9,8 +9,9 @@
 # KIND: flat (the albedo as an emission, unlit: the pipeline's ceiling), lambert (diffuse only, a sun per view, constant ambient, no cast shadows, no bounces),
 # area (an area key with soft shadows plus a fill), point (a small point key plus grey ambient:
 # hard shadows), hdri (Blender's bundled courtyard.exr, CC0 by Greg Zaal / Poly Haven, turned
-# per view), sky (Nishita sky with its sun; views 2–4 back-lit). Every kind but lambert is skin:
-# albedo, random-walk subsurface scattering and a specular lobe (Principled BSDF).
+# per view), sky (Nishita sky with its sun; views 2–4 back-lit). Every kind but flat and lambert
+# is skin: albedo, Christensen–Burley subsurface scattering and a specular lobe (Principled
+# BSDF).
 #
 # Writes OUT/photo_K.png, OUT/points.json (derma's correspondences, at vertices' positions), OUT/truth.json
 # (derma's cameras.json format: the cameras the renders used) and OUT/render.json (the light,
@@ -51,6 +52,12 @@ def read_obj(path):
 
 
 V, VT, F = read_obj(mesh_path)
+# The scan's top (its scalp) must map near the top of its albedo (OBJ's v up): a copy converted
+# before scripts/corpus.py flipped the model's v would wear its albedo upside down.
+top = {c[1] for f in F for c in f if V[c[0], 1] > V[:, 1].max() - 0.1 * np.ptp(V[:, 1])}
+if np.mean([VT[t, 1] for t in top]) < 0.5:
+    sys.exit(f"{mesh_path}: its v runs downward (converted before the flip); run "
+             "`python3 scripts/corpus.py fetch --only leeperrysmith` again")
 mesh = bpy.data.meshes.new("scan")
 mesh.from_pydata(V.tolist(), [], [[c[0] for c in f] for f in F])
 uv = mesh.uv_layers.new(name="UV")

@@ -335,11 +335,6 @@ fn check_fits(
     let Some(d) = delit.as_mut() else {
         return warnings;
     };
-    if d.lighting.fallback.is_none() && d.lighting.model == crate::light_model::Model::KEPT {
-        d.lighting.fallback = Some(
-            "no lighting model explained the held-out photos better than their exposure and white balance alone".into(),
-        );
-    }
     if let Some(why) = &d.lighting.fallback {
         warnings.push(format!(
             "de-lighting: {why}; the lighting is kept (each photo's exposure and white balance only)"
@@ -516,7 +511,7 @@ pub fn bake(
     let bvh = Bvh::new(&topo.positions, &topo.triangles);
     let extent = mesh.extent();
     let masks = bind(&topo, &wnormals, photos, &bvh, opts.ray_offset * extent);
-    let cams: Vec<Prepared> = photos.iter().map(|p| Prepared::new(&p.camera)).collect();
+    let mut cams: Vec<Prepared> = photos.iter().map(|p| Prepared::new(&p.camera)).collect();
     // Each vertex sampled once in every photo it is bound to, with that view's weight.
     let (mut samples, mut view_weights): (Vec<Vec<Sample>>, Vec<Vec<f32>>) = (0..topo
         .positions
@@ -595,16 +590,16 @@ pub fn bake(
         _ => Vec::new(),
     };
     // Kept for all photos or none.
+    let mut registration = registration;
     let kept = registration.first().is_some_and(|r| r.kept);
-    let cams: Vec<Prepared> = if kept {
-        registration
+    // The calibrated cameras and their samples, should the lighting found after registration
+    // not be trusted (the bake then goes on as with the lighting kept: calibrated cameras).
+    let calibrated = kept.then(|| (cams.clone(), samples.clone(), view_weights.clone()));
+    if kept {
+        cams = registration
             .iter()
             .map(|r| Prepared::new(&r.camera))
-            .collect()
-    } else {
-        cams
-    };
-    if kept {
+            .collect();
         // Each sample and its view weight again; one the refined camera no longer sees (off
         // the image's edge) keeps no weight.
         samples
@@ -645,7 +640,22 @@ pub fn bake(
             delit = Some(again);
         }
     }
-    let warnings = check_fits(&registration, &mut delit, photos, opts);
+    let mut warnings = check_fits(&registration, &mut delit, photos, opts);
+    if let (Some((c, s, w)), true) = (
+        calibrated,
+        delit
+            .as_ref()
+            .is_some_and(|d| d.lighting.fallback.is_some()),
+    ) {
+        (cams, samples, view_weights) = (c, s, w);
+        for (r, p) in registration.iter_mut().zip(photos) {
+            r.kept = false;
+            r.camera = p.camera;
+        }
+        warnings.push(
+            "the registration is undone with the lighting kept: the cameras as calibrated".into(),
+        );
+    }
     for w in &warnings {
         progress.note(Note::warning(w.clone()));
     }
@@ -692,8 +702,7 @@ pub fn bake(
             };
             let shade: Vec<Vec<[f32; 3]>> = (0..photos.len())
                 .map(|k| {
-                    let raw: Vec<[f32; 3]> =
-                        (0..nv).into_par_iter().map(|v| d.shading(k, v)).collect();
+                    let raw = d.shadings(k);
                     let mean = mean_seen(k, &|v| raw[v]);
                     raw.iter()
                         .map(|r| std::array::from_fn(|c| r[c].max(MIN_SHADING * mean[c])))

@@ -155,6 +155,16 @@ impl Delit {
         let basis = basis_of(&self.lighting.model, &self.transfer, &self.key_terms);
         std::array::from_fn(|c| basis.shade(v, k, &self.lighting.coefficients[k][c]))
     }
+
+    /// Photo k's shading at every vertex ([`Delit::shading`]'s, the basis built once).
+    pub fn shadings(&self, k: usize) -> Vec<[f32; 3]> {
+        let basis = basis_of(&self.lighting.model, &self.transfer, &self.key_terms);
+        let coef = &self.lighting.coefficients[k];
+        (0..self.transfer.len())
+            .into_par_iter()
+            .map(|v| std::array::from_fn(|c| basis.shade(v, k, &coef[c])))
+            .collect()
+    }
 }
 
 /// A model's basis over the given transfer and keys' terms.
@@ -556,16 +566,9 @@ pub fn estimate_from(
     let split = Split::new(samples);
     let start = fit_start(&prob, &split, opts, warm);
     let choice = match opts.model {
-        Some(m) => {
-            let open = light_model::open_transfers(surface.normals);
-            let transfer = if m.occlusion {
-                surface.transfer.to_vec()
-            } else {
-                open
-            };
-            let keys = model_keys(surface, &start.dirs, &start.keys, m.key, None);
-            (m, Vec::new(), transfer, keys, None)
-        }
+        // Without held-out vertices (a mesh of a handful) there is nothing to choose by.
+        Some(m) => given(surface, &start, m),
+        None if split.held.is_empty() => given(surface, &start, Model::START),
         None => choose_model(&prob, &split, &start),
     };
     finish(&prob, &split, opts, start, choice)
@@ -769,19 +772,33 @@ type Choice = (
 /// The largest RMS relative residual of the trusted samples ([`Lighting::rms_relative`]) at which
 /// the de-lighting is trusted; above it the lighting is kept. Tuned on three of
 /// `bench/photo_light.sh`'s Cycles sets (docs/photo.md; the environment and sky sets held out):
-/// where de-lighting paid (the Lambert set, +2.3 dB) the fit left 0.038; where it cost 3–6 dB
-/// (an area and a point key through skin) 0.14–0.27. The held-out ratio misfit that chooses the
+/// where de-lighting paid (the Lambert set, +1.8–2.8 dB) the fit left 0.040; where it cost 3–6 dB
+/// (an area and a point key through skin) 0.15–0.23. The held-out ratio misfit that chooses the
 /// model does not separate these (0.61 of the lighting kept's on the Lambert set, 0.63 on the
 /// point key's): it counts the texture's edges under the cameras' error, which every model
 /// shares.
 pub const MAX_RELATIVE_MISFIT: f64 = 0.08;
+
+/// The transfer a model's soft light goes through: the shadowed one, or the open one.
+fn transfer_of(surface: &Surface, model: &Model) -> Vec<[f32; SH9]> {
+    if model.occlusion || model.soft == 0 {
+        surface.transfer.to_vec()
+    } else {
+        light_model::open_transfers(surface.normals)
+    }
+}
+
+/// A given model, with its transfer and keys' terms (no scores).
+fn given(surface: &Surface, start: &Start, model: Model) -> Choice {
+    let keys = model_keys(surface, &start.dirs, &start.keys, model.key, None);
+    (model, Vec::new(), transfer_of(surface, &model), keys, None)
+}
 
 /// Which model the photos choose: every candidate's lights fitted on [`Split::fit`] (with the
 /// start's vignetting, robust weights and key directions) and scored on [`Split::held`]; the
 /// simplest within 2 % of the least misfit wins.
 fn choose_model(prob: &Problem, split: &Split, start: &Start) -> Choice {
     let surface = prob.surface;
-    let open = light_model::open_transfers(surface.normals);
     let found = start.dirs.iter().any(|d| d.is_some());
     let w_fit = |v: usize, a: usize| start.robust[v][a] * start.lit[v][a];
     let w_held = |v: usize, a: usize| start.lit[v][a];
@@ -790,11 +807,7 @@ fn choose_model(prob: &Problem, split: &Split, start: &Start) -> Choice {
         if model.key != Key::None && !found {
             continue;
         }
-        let transfer = if model.occlusion {
-            surface.transfer
-        } else {
-            &open
-        };
+        let transfer = transfer_of(surface, &model);
         let keys = model_keys(
             surface,
             &start.dirs,
@@ -802,7 +815,7 @@ fn choose_model(prob: &Problem, split: &Split, start: &Start) -> Choice {
             model.key,
             Some(&split.sub),
         );
-        let basis = basis_of(&model, transfer, &keys);
+        let basis = basis_of(&model, &transfer, &keys);
         let mut coef = vec![[[0.0f32; PARAMS]; 3]; prob.photos];
         let mut vig = start.vig.clone();
         let fixed = DelightOptions {
@@ -820,11 +833,7 @@ fn choose_model(prob: &Problem, split: &Split, start: &Start) -> Choice {
         .iter()
         .find(|s| s.1 <= 1.02 * least)
         .map_or(Model::START, |s| s.0);
-    let transfer = if model.occlusion {
-        surface.transfer.to_vec()
-    } else {
-        open
-    };
+    let transfer = transfer_of(surface, &model);
     let keys = model_keys(surface, &start.dirs, &start.keys, model.key, None);
     let candidates = scored
         .iter()
@@ -894,7 +903,20 @@ fn held_out_misfit(
     weight: &Weight,
 ) -> f64 {
     let shade = shader(basis, coef);
-    let mean = mean_shading(prob.samples, &shade, prob.photos);
+    // Each photo's mean shading over the scored vertices (the floor every candidate shares).
+    let mut mean = vec![[0.0f32; 3]; prob.photos];
+    let mut count = vec![0usize; prob.photos];
+    for &v in vertices {
+        for x in &prob.samples[v] {
+            for (c, m) in mean[x.photo].iter_mut().enumerate() {
+                *m += shade(x.photo, v, c);
+            }
+            count[x.photo] += 1;
+        }
+    }
+    for (m, n) in mean.iter_mut().zip(&count) {
+        *m = m.map(|s| (s / (*n).max(1) as f32).max(0.0));
+    }
     let parts: Vec<(f64, f64)> = vertices
         .par_iter()
         .map(|&v| {
@@ -924,7 +946,11 @@ fn held_out_misfit(
     let (num, den) = parts
         .iter()
         .fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y));
-    (num / den.max(1e-30)).sqrt()
+    if den > 0.0 {
+        (num / den).sqrt()
+    } else {
+        f64::INFINITY
+    }
 }
 
 /// The chosen model's lights and vignetting on all of [`Split::sub`], the albedo, one more
@@ -974,7 +1000,10 @@ fn finish(
         fit_quality(samples, &basis, &coef, &albedo, &vig, &weights);
     drop(basis);
     let fallback = fallback.or_else(|| {
-        (model != Model::KEPT && rms_relative > MAX_RELATIVE_MISFIT).then(|| {
+        if model == Model::KEPT {
+            return Some("no lighting model explained the held-out photos better than their exposure and white balance alone".into());
+        }
+        (rms_relative > MAX_RELATIVE_MISFIT).then(|| {
             format!(
                 "the lighting model {} leaves the photos a relative misfit of {rms_relative:.3} (trusted up to {MAX_RELATIVE_MISFIT})",
                 model.name()
@@ -987,7 +1016,11 @@ fn finish(
         candidates,
         fallback,
         coefficients: coef,
-        key_direction: dirs.iter().map(|d| d.map(|d| d.to_array())).collect(),
+        // A model without a key has none to report (the start's stay out of it).
+        key_direction: dirs
+            .iter()
+            .map(|d| d.filter(|_| model.key != Key::None).map(|d| d.to_array()))
+            .collect(),
         vignetting: vig,
         gains,
         rms_relative,

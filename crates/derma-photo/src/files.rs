@@ -264,9 +264,10 @@ fn camera_list(file: CamerasFile, cameras: &Path) -> Vec<(PathBuf, String, Camer
         .collect()
 }
 
-/// The farthest a registration may move a camera whose clicks left an RMS reprojection error
-/// of `rms_px` (the largest of the photos'): twice that, within 2–12 px; cameras given without
-/// clicks (`rms_px` 0) keep [`RegisterOptions::default`]'s 12 px. Authored: resection from
+/// The farthest a registration may move a camera when the cameras file's clicks left an RMS
+/// reprojection error of `rms_px` (the largest of its photos'; one limit for all): twice that,
+/// within 2–12 px; a file of cameras given without clicks (`rms_px` 0) keeps
+/// [`RegisterOptions::default`]'s 12 px. Authored: resection from
 /// 25–40 clicks leaves each camera within about half the clicks' RMS (issue 38's ground truth:
 /// 0.6–1.4 px from 1.5 px clicks), so a correction of twice the RMS is beyond what the clicks
 /// allow.
@@ -382,6 +383,19 @@ pub fn bake_files(
     }
     jobs.par_iter().try_for_each(|job| job())?;
     drop(jobs);
+    // Where the lighting was kept there is no shading to show: a shading image of an earlier
+    // bake into this folder would contradict bake.json.
+    for out in outs[5..].iter().skip(b.shading.len()) {
+        if out.exists() {
+            std::fs::remove_file(out).map_err(|e| {
+                PhotoError::Invalid(derma_core::Invalid::new(
+                    format!("stale '{}'", out.display()),
+                    "removable",
+                    e,
+                ))
+            })?;
+        }
+    }
     Ok(b.report)
 }
 

@@ -60,7 +60,9 @@ impl Model {
 
     /// The candidates, in the order ties go: the sky's occlusion (the physical prior where the
     /// photos' ratios cannot tell: an even light); the lighting kept; soft light alone; soft
-    /// light with a key of hard, soft or no shadows; band 2; ambient occlusion off.
+    /// light with a key of hard, soft or no shadows. (Band 2 and the open transfer were
+    /// candidates and were dropped: the held-out ratios cannot see the shading all photos
+    /// share, and band 2 traded it for the albedo; docs/photo.md.)
     pub fn candidates() -> Vec<Model> {
         let m = |soft, occlusion, key| Model {
             soft,
