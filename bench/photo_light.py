@@ -27,6 +27,9 @@ import numpy as np
 from mathutils import Matrix, Vector
 from mathutils.bvhtree import BVHTree
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from objfile import read_obj  # noqa: E402
+
 argv = sys.argv[sys.argv.index("--") + 1:]
 mesh_path, albedo_path, kind, out = argv[:4]
 opts = dict(zip(argv[4::2], argv[5::2]))
@@ -36,19 +39,6 @@ samples = int(opts.get("--samples", 48))
 rng = np.random.default_rng(int(opts.get("--seed", 1)))
 os.makedirs(out, exist_ok=True)
 VIEWS = 5
-
-
-def read_obj(path):
-    """Positions, UVs and faces (position and UV indices) as the file has them."""
-    V, VT, F = [], [], []
-    for line in open(path):
-        if line.startswith("v "):
-            V.append([float(x) for x in line.split()[1:4]])
-        elif line.startswith("vt "):
-            VT.append([float(x) for x in line.split()[1:3]])
-        elif line.startswith("f "):
-            F.append([[int(i) - 1 for i in c.split("/")[:2]] for c in line.split()[1:]])
-    return np.array(V), np.array(VT), F
 
 
 V, VT, F = read_obj(mesh_path)

@@ -16,6 +16,9 @@ import sys
 import numpy as np
 from PIL import Image
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from objfile import read_obj  # noqa: E402
+
 
 def srgb_to_linear(c):
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
@@ -24,18 +27,6 @@ def srgb_to_linear(c):
 def linear_to_srgb(c):
     c = np.clip(c, 0, 1)
     return np.where(c <= 0.0031308, 12.92 * c, 1.055 * c ** (1 / 2.4) - 0.055)
-
-
-def read_obj(path):
-    V, VT, F = [], [], []
-    for line in open(path):
-        if line.startswith("v "):
-            V.append([float(x) for x in line.split()[1:4]])
-        elif line.startswith("vt "):
-            VT.append([float(x) for x in line.split()[1:3]])
-        elif line.startswith("f "):
-            F.append([[int(i) - 1 for i in c.split("/")[:2]] for c in line.split()[1:]])
-    return np.array(V), np.array(VT), F
 
 
 def face_mask(V, VT, F, box, size):

@@ -347,12 +347,15 @@ fn chromophores_from_a_real_skin_paint_back_to_its_colour() {
         s(&chromo),
     ]);
     assert!(ok, "{err}");
-    let exposure: f64 = out
-        .split("exposure ")
-        .nth(1)
-        .and_then(|t| t.split(';').next())
-        .and_then(|t| t.trim().parse().ok())
-        .unwrap_or_else(|| panic!("no exposure in {out}"));
+    // A figure of the command's line: the number after `label`, up to `end`.
+    let figure = |label: &str, end: char| -> f64 {
+        out.split(label)
+            .nth(1)
+            .and_then(|t| t.split(end).next())
+            .and_then(|t| t.trim().parse().ok())
+            .unwrap_or_else(|| panic!("no {label} in {out}"))
+    };
+    let exposure = figure("exposure ", ';');
     let cfg = d.join("skin.toml");
     std::fs::write(
         &cfg,
@@ -377,14 +380,19 @@ fn chromophores_from_a_real_skin_paint_back_to_its_colour() {
     let painted = RgbImage::read_linear(&set.join("base_color.png")).unwrap();
     let raster = derma_core::raster::UvRaster::new(&derma_head::Head::builtin().skin, n, n);
     let lab = |c: [f32; 3], e: f64| xyz_to_lab(linear_srgb_to_xyz(c.map(|x| x as f64 / e)));
-    let mut de: Vec<f64> = (0..n * n)
-        .filter(|&i| raster.triangle[i] != derma_core::raster::NO_TRIANGLE)
-        .map(|i| {
-            let (a, b) = (lab(painted.data[i], 1.0), lab(albedo.data[i], exposure));
-            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-        })
-        .collect();
-    de.sort_by(f64::total_cmp);
+    // ΔE*ab of the painted base colour against `other` (over `e`) at every covered texel, sorted.
+    let sorted_delta_e = |other: &dyn Fn(usize) -> [f32; 3], e: f64| -> Vec<f64> {
+        let mut d: Vec<f64> = (0..n * n)
+            .filter(|&i| raster.triangle[i] != derma_core::raster::NO_TRIANGLE)
+            .map(|i| {
+                let (a, b) = (lab(painted.data[i], 1.0), lab(other(i), e));
+                ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+            })
+            .collect();
+        d.sort_by(f64::total_cmp);
+        d
+    };
+    let de = sorted_delta_e(&|i| albedo.data[i], exposure);
     // The painter against the inversion's own model: the colour the maps stand for (the
     // table the inversion used, looked up at each texel's melanin and hemoglobin).
     let lut = derma_skin::measured::inversion_lut(&derma_skin::config::SkinConfig::default());
@@ -395,22 +403,15 @@ fn chromophores_from_a_real_skin_paint_back_to_its_colour() {
             .1
     };
     let (m, h) = (read("melanin.exr"), read("hemoglobin.exr"));
-    let mut dp: Vec<f64> = (0..n * n)
-        .filter(|&i| raster.triangle[i] != derma_core::raster::NO_TRIANGLE)
-        .map(|i| {
-            let c = lut.lookup(m.data()[i] as f64, h.data()[i] as f64);
-            let (a, b) = (lab(painted.data[i], 1.0), lab(c.map(|x| x as f32), 1.0));
-            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-        })
-        .collect();
-    dp.sort_by(f64::total_cmp);
+    let dp = sorted_delta_e(
+        &|i| {
+            lut.lookup(m.data()[i] as f64, h.data()[i] as f64)
+                .map(|x| x as f32)
+        },
+        1.0,
+    );
     let (median, painter) = (de[de.len() / 2], dp[dp.len() / 2]);
-    let fitted: f64 = out
-        .split("ΔE*ab median ")
-        .nth(1)
-        .and_then(|t| t.split(',').next())
-        .and_then(|t| t.trim().parse().ok())
-        .unwrap_or_else(|| panic!("no ΔE in {out}"));
+    let fitted = figure("ΔE*ab median ", ',');
     eprintln!(
         "loop ΔE*ab median {median:.2} (90th percentile {:.2}) over {} texels; the inversion's own residual {fitted:.2}; painter against the maps' colour {painter:.2}",
         de[de.len() * 9 / 10],
