@@ -1104,3 +1104,154 @@ fn libraries_wrap_the_one_invalid_value_error() {
     }
     assert_none(&found, "an own Invalid(String) error variant");
 }
+
+/// Every function with a body in `src` (comments, strings and `#[cfg(test)]` items left out):
+/// its name and its length in lines, from the `fn` line to the closing brace.
+fn function_lengths(src: &str) -> Vec<(String, usize)> {
+    let code = non_test_code(src);
+    let b = code.as_bytes();
+    let mut out = Vec::new();
+    let mut at = 0;
+    while let Some(p) = code[at..].find("fn ") {
+        let start = at + p;
+        at = start + 3;
+        let word_start =
+            start == 0 || !(b[start - 1].is_ascii_alphanumeric() || b[start - 1] == b'_');
+        if !word_start {
+            continue;
+        }
+        let name: String = code[start + 3..]
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        if name.is_empty() {
+            continue;
+        }
+        let end = item_end(b, start);
+        if b[end - 1] != b'}' {
+            continue; // a declaration without a body (a trait's)
+        }
+        let lines = code[start..end].matches('\n').count() + 1;
+        out.push((name, lines));
+    }
+    out
+}
+
+/// The most lines a new function may have (issue 62): it reads at once.
+const MAX_FUNCTION_LINES: usize = 120;
+
+/// Functions longer than [`MAX_FUNCTION_LINES`] when the ratchet was set (issue 62), with their
+/// lengths then: each may only shrink, and leaves the list once it is short.
+const LONG_FUNCTIONS: &[(&str, &str, usize)] = &[
+    ("crates/derma/src/photo.rs", "run", 211),
+    ("crates/derma-export/src/glb.rs", "export", 312),
+    ("crates/derma-eyes/src/files.rs", "animate", 122),
+    ("crates/derma-eyes/src/glb.rs", "write", 299),
+    ("crates/derma-eyes/src/live.rs", "pack", 150),
+    ("crates/derma-eyes/src/region.rs", "build", 187),
+    ("crates/derma-head/src/regions.rs", "weights", 192),
+    ("crates/derma-head/src/subdivision.rs", "catmull_clark", 123),
+    ("crates/derma-optics/src/gpu.rs", "run_gpu_with", 210),
+    ("crates/derma-optics/src/transport.rs", "trace", 162),
+    ("crates/derma-optics/src/transport_lanes.rs", "walk", 273),
+    ("crates/derma-photo/src/bake.rs", "bake", 652),
+    ("crates/derma-photo/src/chromophores.rs", "invert_with", 157),
+    ("crates/derma-photo/src/iris.rs", "iris_texture", 180),
+    ("crates/derma-photo/src/register.rs", "register", 129),
+    ("crates/derma-photo/src/register.rs", "refine", 129),
+    ("crates/derma-photo/src/resection.rs", "dlt", 128),
+    ("crates/derma-photo/src/resection.rs", "refine", 132),
+    ("crates/derma-photo/src/resection.rs", "resect", 138),
+    ("crates/derma-photo/src/teeth.rs", "teeth_texture", 159),
+    ("crates/derma-photo/src/unwrap.rs", "unwrap", 164),
+    ("crates/derma-render/src/draw.rs", "draw", 152),
+    ("crates/derma-render/src/renderer.rs", "new", 242),
+    ("crates/derma-render/src/renderer.rs", "upload", 156),
+    ("crates/derma-render/src/renderer.rs", "submit_frame", 182),
+    (
+        "crates/derma-shading/src/match_report.rs",
+        "write_plots",
+        174,
+    ),
+    ("crates/derma-skin/src/builtin_head.rs", "fields_on", 169),
+    ("crates/derma-skin/src/generate.rs", "generate", 242),
+    ("crates/derma-skin/src/generate.rs", "write_files", 139),
+    ("crates/derma-skin/src/texture_set.rs", "write_maps", 192),
+    ("crates/derma-synth/src/gpu.rs", "run", 227),
+    (
+        "crates/derma-synth/src/gpu_patch_pass.rs",
+        "patch_pass_resident",
+        252,
+    ),
+    ("crates/derma-synth/src/search.rs", "scan_pruned_body", 147),
+];
+
+#[test]
+fn functions_stay_short_and_long_ones_only_shrink() {
+    let root = workspace();
+    let mut found = Vec::new();
+    for krate in crates() {
+        for f in rust_files(&krate.join("src")) {
+            let rel = f
+                .strip_prefix(&root)
+                .unwrap()
+                .to_string_lossy()
+                .replace('\\', "/");
+            for (name, n) in function_lengths(&std::fs::read_to_string(&f).unwrap()) {
+                if n > MAX_FUNCTION_LINES {
+                    found.push((rel.clone(), name, n));
+                }
+            }
+        }
+    }
+    let mut bad = Vec::new();
+    for (file, name, n) in &found {
+        match LONG_FUNCTIONS
+            .iter()
+            .find(|(f, m, _)| f == file && m == name)
+        {
+            Some((_, _, was)) if n <= was => {}
+            Some((_, _, was)) => {
+                bad.push(format!("{file}: fn {name} grew to {n} lines (was {was})"))
+            }
+            None => bad.push(format!(
+                "{file}: fn {name} has {n} lines (new functions ≤ {MAX_FUNCTION_LINES})"
+            )),
+        }
+    }
+    for (file, name, _) in LONG_FUNCTIONS {
+        if !found.iter().any(|(f, m, _)| f == file && m == name) {
+            bad.push(format!(
+                "{file}: fn {name} is short now (or gone): take it off LONG_FUNCTIONS"
+            ));
+        }
+    }
+    if !bad.is_empty() {
+        let list: Vec<String> = found
+            .iter()
+            .map(|(f, m, n)| format!("    (\"{f}\", \"{m}\", {n}),"))
+            .collect();
+        panic!(
+            "{}\n\ntoday's long functions:\n{}",
+            bad.join("\n"),
+            list.join("\n")
+        );
+    }
+}
+
+#[test]
+fn the_function_counter_counts_and_the_ratchet_can_fail() {
+    // A 130-line function, one with a brace in a string and a comment, and a trait's
+    // declaration without a body.
+    let body = "    let x = 1;\n".repeat(128);
+    let src = format!(
+        "fn long() {{\n{body}}}\n\nfn short(a: [f32; 3]) -> u8 {{\n    let s = \"}}\"; // {{\n    0\n}}\ntrait T {{\n    fn declared(&self);\n}}\n"
+    );
+    let f = function_lengths(&src);
+    assert_eq!(
+        f,
+        vec![("long".to_string(), 130), ("short".to_string(), 4)],
+        "{f:?}"
+    );
+    assert!(f[0].1 > MAX_FUNCTION_LINES);
+}
