@@ -467,35 +467,7 @@ pub fn bake(
     opts: &BakeOptions,
     progress: &dyn Progress,
 ) -> Result<Baked> {
-    if photos.is_empty() {
-        return Err(PhotoError::Invalid(derma_core::Invalid::new(
-            "photos to bake from",
-            "at least one",
-            "none",
-        )));
-    }
-    if photos.len() > MAX_PHOTOS {
-        return Err(PhotoError::Invalid(derma_core::Invalid::new(
-            "photos to bake from",
-            format!("at most {MAX_PHOTOS} per bake"),
-            photos.len(),
-        )));
-    }
-    if mesh.uvs.len() != mesh.positions.len() {
-        return Err(PhotoError::Mesh(
-            "the mesh has no UVs; unwrap it first (derma photo unwrap)".into(),
-        ));
-    }
-    if !(16..=16384).contains(&opts.size) {
-        return Err(PhotoError::Invalid(derma_core::Invalid::new(
-            "texture size",
-            "16–16384",
-            opts.size,
-        )));
-    }
-    for p in photos {
-        p.check()?;
-    }
+    check_inputs(mesh, photos, opts)?;
     let size = opts.size;
     let t0 = std::time::Instant::now();
     progress.stage("bind vertices to photos", 0, Unit::Steps);
@@ -560,35 +532,14 @@ pub fn bake(
     // only after registration).
     // Registration compares de-lit photos; where the lighting was kept (no model explained
     // it), their shadows would steer the cameras, so they stay as calibrated.
-    let registration = match (&delit, opts.register) {
-        (Some(d), Some(r)) if photos.len() >= 2 && d.lighting.fallback.is_none() => {
-            progress.stage("register the photos", 0, Unit::Steps);
-            let nv = topo.positions.len();
-            let mut wt = vec![vec![0.0f32; nv]; photos.len()];
-            let mut sh = vec![vec![0.0f32; nv]; photos.len()];
-            for (v, s) in samples.iter().enumerate() {
-                for (a, x) in s.iter().enumerate() {
-                    wt[x.photo][v] = view_weights[v][a] * d.weights[v][a];
-                    sh[x.photo][v] = d.shading(x.photo, v).iter().sum::<f32>()
-                        * d.lighting.vignette(x.photo, x.r2);
-                }
-            }
-            let signals: Vec<Vec<Grey>> = photos
-                .par_iter()
-                .map(|p| luminance_pyramid(&p.image, r.levels))
-                .collect();
-            let cameras: Vec<Camera> = photos.iter().map(|p| p.camera).collect();
-            register(
-                &topo.positions,
-                &|v, k| wt[k][v],
-                &|v, k| sh[k][v],
-                &cameras,
-                &signals,
-                &r,
-            )
-        }
-        _ => Vec::new(),
-    };
+    let registration = register_stage(
+        &topo.positions,
+        (&samples, &view_weights),
+        delit.as_ref(),
+        photos,
+        opts,
+        progress,
+    );
     // Kept for all photos or none.
     let mut registration = registration;
     let kept = registration.first().is_some_and(|r| r.kept);
@@ -600,25 +551,13 @@ pub fn bake(
             .iter()
             .map(|r| Prepared::new(&r.camera))
             .collect();
-        // Each sample and its view weight again; one the refined camera no longer sees (off
-        // the image's edge) keeps no weight.
-        samples
-            .par_iter_mut()
-            .zip(view_weights.par_iter_mut())
-            .enumerate()
-            .for_each(|(v, (s, vw))| {
-                let p = topo.positions[v];
-                for (x, w) in s.iter_mut().zip(vw.iter_mut()) {
-                    let i = x.photo;
-                    *w = match sample_at(&cams[i], &photos[i], i, p, wnormals[v], opts.falloff) {
-                        Some((again, wt)) => {
-                            *x = again;
-                            wt
-                        }
-                        None => 0.0,
-                    };
-                }
-            });
+        retake_samples(
+            (&topo.positions, &wnormals),
+            &cams,
+            photos,
+            opts,
+            (&mut samples, &mut view_weights),
+        );
         // Registration ran on the de-lit photos, so both are there.
         if let (Some(d), Some(first)) = (opts.delight, &delit) {
             progress.stage("estimate the lighting again", 0, Unit::Steps);
@@ -668,69 +607,10 @@ pub fn bake(
     if lighting.as_ref().is_some_and(|l| l.fallback.is_some()) {
         delit = None;
     }
-    let gains: Vec<[f32; 3]> = match &delit {
-        // The shading holds exposure and white balance.
-        Some(_) => vec![[1.0; 3]; photos.len()],
-        None if opts.gain_compensation => {
-            // Sums in vertex order: the same gains at any thread count.
-            let mut o = Overlaps::new(photos.len());
-            for s in samples.iter().filter(|s| s.len() >= 2) {
-                let pairs: Vec<(usize, [f32; 3])> = s.iter().map(|x| (x.photo, x.colour)).collect();
-                o.add(&pairs);
-            }
-            crate::gain::unit_mean(o.gains())
-        }
-        None => vec![[1.0; 3]; photos.len()],
-    };
+    let gains = gains_of(delit.as_ref(), &samples, photos.len(), opts);
     // Per photo and welded vertex: shading (floored) and robust weight.
-    let (vshade, vweight): (Vec<Vec<[f32; 3]>>, Vec<Vec<f32>>) = match &delit {
-        Some(d) => {
-            let nv = topo.positions.len();
-            // Per photo: the mean of per-vertex values over the vertices it sees.
-            let mean_seen = |k: usize, val: &dyn Fn(usize) -> [f32; 3]| -> [f32; 3] {
-                let (mut sum, mut n) = ([0.0f64; 3], 0usize);
-                for (v, smp) in samples.iter().enumerate() {
-                    if smp.iter().any(|x| x.photo == k) {
-                        let x = val(v);
-                        for c in 0..3 {
-                            sum[c] += x[c] as f64;
-                        }
-                        n += 1;
-                    }
-                }
-                sum.map(|s| (s / n.max(1) as f64) as f32)
-            };
-            let shade: Vec<Vec<[f32; 3]>> = (0..photos.len())
-                .map(|k| {
-                    let raw = d.shadings(k);
-                    let mean = mean_seen(k, &|v| raw[v]);
-                    raw.iter()
-                        .map(|r| std::array::from_fn(|c| r[c].max(MIN_SHADING * mean[c])))
-                        .collect()
-                })
-                .collect();
-            // Robust weights, times (S / mean S)² up to 1: dividing a dim sample amplifies its
-            // noise and any error of the shadow model (the least-squares weight of I / S).
-            let level: Vec<f32> = (0..photos.len())
-                .map(|k| mean_seen(k, &|v| shade[k][v]).iter().sum())
-                .collect();
-            let mut wt = vec![vec![1.0f32; nv]; photos.len()];
-            for (v, (s, w)) in samples.iter().zip(&d.weights).enumerate() {
-                for (x, w) in s.iter().zip(w) {
-                    let r = shade[x.photo][v].iter().sum::<f32>() / level[x.photo].max(1e-12);
-                    wt[x.photo][v] = *w * (r * r).min(1.0);
-                }
-            }
-            let shade = level_views(
-                &topo.neighbours,
-                &samples,
-                &d.albedo,
-                &wt,
-                shade,
-                |k, r2| d.lighting.vignette(k, r2),
-            );
-            (shade, wt)
-        }
+    let (vshade, vweight) = match &delit {
+        Some(d) => shading_and_trust(d, &samples, &topo.neighbours, photos.len()),
         None => (Vec::new(), Vec::new()),
     };
     // A sample's colour with the lighting (or the gain) taken out.
@@ -769,41 +649,7 @@ pub fn bake(
     fill_vertex_colors(&topo.neighbours, &mut vcolor);
     let vcolor: Vec<[f32; 3]> = vcolor.into_iter().map(|c| c.unwrap_or([0.0; 3])).collect();
     // Per triangle: the paper's case, and the best photo at its centroid (for the masks).
-    let tri_w: Vec<[u32; 3]> = mesh
-        .triangles
-        .iter()
-        .map(|t| t.map(|i| topo.weld[i as usize]))
-        .collect();
-    let mut cases = [0usize; 3];
-    let best: Vec<u8> = tri_w
-        .iter()
-        .map(|t| {
-            let common = masks[t[0] as usize] & masks[t[1] as usize] & masks[t[2] as usize];
-            if common != 0 {
-                cases[0] += 1;
-                let p = t.map(|v| topo.positions[v as usize]);
-                let c = (p[0] + p[1] + p[2]) / 3.0;
-                let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or(Vec3::Z);
-                let mut b = (SOURCE_INTERPOLATED, 0.0f32);
-                for i in 0..photos.len() {
-                    if common & (1 << i) != 0 {
-                        if let Some((w, _)) = weight(&cams[i], c, n, opts.falloff) {
-                            if w > b.1 {
-                                b = (i as u8, w);
-                            }
-                        }
-                    }
-                }
-                b.0
-            } else if t.iter().all(|&v| masks[v as usize] != 0) {
-                cases[1] += 1;
-                SOURCE_INTERPOLATED
-            } else {
-                cases[2] += 1;
-                SOURCE_INTERPOLATED
-            }
-        })
-        .collect();
+    let (tri_w, best, cases) = triangle_sources(mesh, &topo, &masks, &cams, opts);
     let t_bind = t0.elapsed().as_secs_f64();
     progress.stage("resample texels", 0, Unit::Steps);
     let raster = UvRaster::new(mesh, size, size);
@@ -1112,6 +958,235 @@ pub fn bake(
         source,
         report,
     })
+}
+
+/// What a bake refuses before any work: no photos or more than [`MAX_PHOTOS`], a mesh without
+/// UVs, a size outside 16–16384, a photo that does not match its camera.
+fn check_inputs(mesh: &TriMesh, photos: &[Photo], opts: &BakeOptions) -> Result<()> {
+    if photos.is_empty() {
+        return Err(PhotoError::Invalid(derma_core::Invalid::new(
+            "photos to bake from",
+            "at least one",
+            "none",
+        )));
+    }
+    if photos.len() > MAX_PHOTOS {
+        return Err(PhotoError::Invalid(derma_core::Invalid::new(
+            "photos to bake from",
+            format!("at most {MAX_PHOTOS} per bake"),
+            photos.len(),
+        )));
+    }
+    if mesh.uvs.len() != mesh.positions.len() {
+        return Err(PhotoError::Mesh(
+            "the mesh has no UVs; unwrap it first (derma photo unwrap)".into(),
+        ));
+    }
+    if !(16..=16384).contains(&opts.size) {
+        return Err(PhotoError::Invalid(derma_core::Invalid::new(
+            "texture size",
+            "16–16384",
+            opts.size,
+        )));
+    }
+    for p in photos {
+        p.check()?;
+    }
+    Ok(())
+}
+
+/// Photometric registration on the de-lit photos ([`crate::register`]), each vertex weighted
+/// as the blend weights it (view × robust weight); none where the lighting was kept (no model
+/// explained it: the lit photos' shadows would steer the cameras) or with one photo.
+fn register_stage(
+    positions: &[Vec3],
+    (samples, view_weights): (&[Vec<Sample>], &[Vec<f32>]),
+    delit: Option<&crate::delight::Delit>,
+    photos: &[Photo],
+    opts: &BakeOptions,
+    progress: &dyn Progress,
+) -> Vec<Registration> {
+    match (delit, opts.register) {
+        (Some(d), Some(r)) if photos.len() >= 2 && d.lighting.fallback.is_none() => {
+            progress.stage("register the photos", 0, Unit::Steps);
+            let nv = positions.len();
+            let mut wt = vec![vec![0.0f32; nv]; photos.len()];
+            let mut sh = vec![vec![0.0f32; nv]; photos.len()];
+            for (v, s) in samples.iter().enumerate() {
+                for (a, x) in s.iter().enumerate() {
+                    wt[x.photo][v] = view_weights[v][a] * d.weights[v][a];
+                    sh[x.photo][v] = d.shading(x.photo, v).iter().sum::<f32>()
+                        * d.lighting.vignette(x.photo, x.r2);
+                }
+            }
+            let signals: Vec<Vec<Grey>> = photos
+                .par_iter()
+                .map(|p| luminance_pyramid(&p.image, r.levels))
+                .collect();
+            let cameras: Vec<Camera> = photos.iter().map(|p| p.camera).collect();
+            register(
+                positions,
+                &|v, k| wt[k][v],
+                &|v, k| sh[k][v],
+                &cameras,
+                &signals,
+                &r,
+            )
+        }
+        _ => Vec::new(),
+    }
+}
+
+/// Each sample and its view weight again through the refined cameras; one a camera no longer
+/// sees (off the image's edge) keeps no weight.
+fn retake_samples(
+    (positions, normals): (&[Vec3], &[Vec3]),
+    cams: &[Prepared],
+    photos: &[Photo],
+    opts: &BakeOptions,
+    (samples, view_weights): (&mut [Vec<Sample>], &mut [Vec<f32>]),
+) {
+    samples
+        .par_iter_mut()
+        .zip(view_weights.par_iter_mut())
+        .enumerate()
+        .for_each(|(v, (s, vw))| {
+            let p = positions[v];
+            for (x, w) in s.iter_mut().zip(vw.iter_mut()) {
+                let i = x.photo;
+                *w = match sample_at(&cams[i], &photos[i], i, p, normals[v], opts.falloff) {
+                    Some((again, wt)) => {
+                        *x = again;
+                        wt
+                    }
+                    None => 0.0,
+                };
+            }
+        });
+}
+
+/// Each photo's gain per channel: 1 where de-lit (the shading holds exposure and white
+/// balance); else Brown–Lowe's over the vertices seen twice or more, or 1 without gains.
+fn gains_of(
+    delit: Option<&crate::delight::Delit>,
+    samples: &[Vec<Sample>],
+    photos: usize,
+    opts: &BakeOptions,
+) -> Vec<[f32; 3]> {
+    match delit {
+        // The shading holds exposure and white balance.
+        Some(_) => vec![[1.0; 3]; photos],
+        None if opts.gain_compensation => {
+            // Sums in vertex order: the same gains at any thread count.
+            let mut o = Overlaps::new(photos);
+            for s in samples.iter().filter(|s| s.len() >= 2) {
+                let pairs: Vec<(usize, [f32; 3])> = s.iter().map(|x| (x.photo, x.colour)).collect();
+                o.add(&pairs);
+            }
+            crate::gain::unit_mean(o.gains())
+        }
+        None => vec![[1.0; 3]; photos],
+    }
+}
+
+/// Per photo and welded vertex: the shading to divide by (floored at [`MIN_SHADING`] of the
+/// photo's mean, levelled across views) and the trust in it (the robust weight times
+/// (S / mean S)², up to 1: dividing a dim sample amplifies its noise and any error of the
+/// shadow model).
+fn shading_and_trust(
+    d: &crate::delight::Delit,
+    samples: &[Vec<Sample>],
+    neighbours: &[Vec<u32>],
+    photos: usize,
+) -> (Vec<Vec<[f32; 3]>>, Vec<Vec<f32>>) {
+    let nv = samples.len();
+    // Per photo: the mean of per-vertex values over the vertices it sees.
+    let mean_seen = |k: usize, val: &dyn Fn(usize) -> [f32; 3]| -> [f32; 3] {
+        let (mut sum, mut n) = ([0.0f64; 3], 0usize);
+        for (v, smp) in samples.iter().enumerate() {
+            if smp.iter().any(|x| x.photo == k) {
+                let x = val(v);
+                for c in 0..3 {
+                    sum[c] += x[c] as f64;
+                }
+                n += 1;
+            }
+        }
+        sum.map(|s| (s / n.max(1) as f64) as f32)
+    };
+    let shade: Vec<Vec<[f32; 3]>> = (0..photos)
+        .map(|k| {
+            let raw = d.shadings(k);
+            let mean = mean_seen(k, &|v| raw[v]);
+            raw.iter()
+                .map(|r| std::array::from_fn(|c| r[c].max(MIN_SHADING * mean[c])))
+                .collect()
+        })
+        .collect();
+    // Robust weights, times (S / mean S)² up to 1: dividing a dim sample amplifies its
+    // noise and any error of the shadow model (the least-squares weight of I / S).
+    let level: Vec<f32> = (0..photos)
+        .map(|k| mean_seen(k, &|v| shade[k][v]).iter().sum())
+        .collect();
+    let mut wt = vec![vec![1.0f32; nv]; photos];
+    for (v, (s, w)) in samples.iter().zip(&d.weights).enumerate() {
+        for (x, w) in s.iter().zip(w) {
+            let r = shade[x.photo][v].iter().sum::<f32>() / level[x.photo].max(1e-12);
+            wt[x.photo][v] = *w * (r * r).min(1.0);
+        }
+    }
+    let shade = level_views(neighbours, samples, &d.albedo, &wt, shade, |k, r2| {
+        d.lighting.vignette(k, r2)
+    });
+    (shade, wt)
+}
+
+/// Per triangle: its welded corners, the best photo at its centroid (for the masks:
+/// [`SOURCE_INTERPOLATED`] where no photo sees all three corners) and the counts of the
+/// paper's three cases.
+fn triangle_sources(
+    mesh: &TriMesh,
+    topo: &Topology,
+    masks: &[u32],
+    cams: &[Prepared],
+    opts: &BakeOptions,
+) -> (Vec<[u32; 3]>, Vec<u8>, [usize; 3]) {
+    let tri_w: Vec<[u32; 3]> = mesh
+        .triangles
+        .iter()
+        .map(|t| t.map(|i| topo.weld[i as usize]))
+        .collect();
+    let mut cases = [0usize; 3];
+    let best: Vec<u8> = tri_w
+        .iter()
+        .map(|t| {
+            let common = masks[t[0] as usize] & masks[t[1] as usize] & masks[t[2] as usize];
+            if common != 0 {
+                cases[0] += 1;
+                let p = t.map(|v| topo.positions[v as usize]);
+                let c = (p[0] + p[1] + p[2]) / 3.0;
+                let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or(Vec3::Z);
+                let mut b = (SOURCE_INTERPOLATED, 0.0f32);
+                for (i, cam) in cams.iter().enumerate() {
+                    if common & (1 << i) != 0 {
+                        if let Some((w, _)) = weight(cam, c, n, opts.falloff) {
+                            if w > b.1 {
+                                b = (i as u8, w);
+                            }
+                        }
+                    }
+                }
+                b.0
+            } else if t.iter().all(|&v| masks[v as usize] != 0) {
+                cases[1] += 1;
+                SOURCE_INTERPOLATED
+            } else {
+                cases[2] += 1;
+                SOURCE_INTERPOLATED
+            }
+        })
+        .collect();
+    (tri_w, best, cases)
 }
 
 #[cfg(test)]

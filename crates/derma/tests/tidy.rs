@@ -1154,7 +1154,7 @@ const LONG_FUNCTIONS: &[(&str, &str, usize)] = &[
     ("crates/derma-optics/src/gpu.rs", "run_gpu_with", 210),
     ("crates/derma-optics/src/transport.rs", "trace", 162),
     ("crates/derma-optics/src/transport_lanes.rs", "walk", 273),
-    ("crates/derma-photo/src/bake.rs", "bake", 652),
+    ("crates/derma-photo/src/bake.rs", "bake", 498),
     ("crates/derma-photo/src/chromophores.rs", "invert_with", 157),
     ("crates/derma-photo/src/iris.rs", "iris_texture", 180),
     ("crates/derma-photo/src/register.rs", "register", 129),
