@@ -5,7 +5,8 @@ import numpy as np
 
 
 def read_obj(path):
-    """Positions (n × 3), UVs (m × 2) and faces, each a list of [position, uv] indices."""
+    """Positions (n × 3), UVs (m × 2) and faces, each a list of [position, uv] indices (uv -1
+    where the corner has none)."""
     V, VT, F = [], [], []
     for line in open(path):
         if line.startswith("v "):
@@ -13,5 +14,6 @@ def read_obj(path):
         elif line.startswith("vt "):
             VT.append([float(x) for x in line.split()[1:3]])
         elif line.startswith("f "):
-            F.append([[int(i) - 1 for i in c.split("/")[:2]] for c in line.split()[1:]])
+            # "v", "v/vt", "v//vn" or "v/vt/vn": a corner without a UV gets -1.
+            F.append([[int(i) - 1 if i else -1 for i in (c.split("/") + [""])[:2]] for c in line.split()[1:]])
     return np.array(V), np.array(VT), F

@@ -43,16 +43,13 @@ import sys, time, json
 import numpy as np, igl
 out, t_derma = sys.argv[1], float(sys.argv[2])
 
+sys.path.insert(0, "bench")
+from objfile import read_obj
+
 def load_obj(path):
-    V, VT, F = [], [], []
-    for line in open(path):
-        if line.startswith("v "):
-            V.append([float(x) for x in line.split()[1:4]])
-        elif line.startswith("vt "):
-            VT.append([float(x) for x in line.split()[1:3]])
-        elif line.startswith("f "):
-            F.append([int(c.split("/")[0]) - 1 for c in line.split()[1:4]])
-    return np.array(V), (np.array(VT) if VT else None), np.array(F, dtype=np.int64)
+    # Triangles by position index (derma's OBJs index positions and UVs alike).
+    V, VT, F = read_obj(path)
+    return V, (VT if len(VT) else None), np.array([[c[0] for c in f[:3]] for f in F], dtype=np.int64)
 
 def l2_stretch(V, F, UV):
     # Sander et al. 2001 §3: per triangle, S_s, S_t = ∂q/∂s, ∂q/∂t; L2 = sqrt((a + c)/2) with

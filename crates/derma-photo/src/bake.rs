@@ -1012,10 +1012,11 @@ fn register_stage(
             let nv = positions.len();
             let mut wt = vec![vec![0.0f32; nv]; photos.len()];
             let mut sh = vec![vec![0.0f32; nv]; photos.len()];
+            let shading: Vec<Vec<[f32; 3]>> = (0..photos.len()).map(|k| d.shadings(k)).collect();
             for (v, s) in samples.iter().enumerate() {
                 for (a, x) in s.iter().enumerate() {
                     wt[x.photo][v] = view_weights[v][a] * d.weights[v][a];
-                    sh[x.photo][v] = d.shading(x.photo, v).iter().sum::<f32>()
+                    sh[x.photo][v] = shading[x.photo][v].iter().sum::<f32>()
                         * d.lighting.vignette(x.photo, x.r2);
                 }
             }

@@ -15,6 +15,7 @@ use derma_core::sh::SH9;
 use glam::Vec3;
 use rayon::prelude::*;
 use serde::Serialize;
+use std::borrow::Cow;
 
 /// One observation of a vertex in a photo.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -87,7 +88,7 @@ pub struct Lighting {
     /// Why the lighting was kept (exposure and white balance only) although de-lighting was
     /// asked for: no model explained the photos well enough; `None` otherwise.
     pub fallback: Option<String>,
-    /// Per photo and channel: the model's coefficients ([`Model::len`] of them, zero beyond):
+    /// Per photo and channel: the model's coefficients ([`Basis::len`] of them, zero beyond):
     /// the soft light's (SH irradiance: sky, fill, bounce; or the one constant), then the key
     /// light's irradiance; all with exposure and white balance.
     pub coefficients: Vec<[[f32; PARAMS]; 3]>,
@@ -149,14 +150,8 @@ pub struct Delit {
 }
 
 impl Delit {
-    /// Photo k's shading at vertex v (irradiance × exposure × white balance), without
+    /// Photo k's shading at every vertex (irradiance × exposure × white balance), without
     /// vignetting.
-    pub fn shading(&self, k: usize, v: usize) -> [f32; 3] {
-        let basis = basis_of(&self.lighting.model, &self.transfer, &self.key_terms);
-        std::array::from_fn(|c| basis.shade(v, k, &self.lighting.coefficients[k][c]))
-    }
-
-    /// Photo k's shading at every vertex ([`Delit::shading`]'s, the basis built once).
     pub fn shadings(&self, k: usize) -> Vec<[f32; 3]> {
         let basis = basis_of(&self.lighting.model, &self.transfer, &self.key_terms);
         let coef = &self.lighting.coefficients[k];
@@ -779,19 +774,25 @@ type Choice = (
 /// shares.
 pub const MAX_RELATIVE_MISFIT: f64 = 0.08;
 
-/// The transfer a model's soft light goes through: the shadowed one, or the open one.
-fn transfer_of(surface: &Surface, model: &Model) -> Vec<[f32; SH9]> {
+/// The transfer a model's soft light goes through: the shadowed one (borrowed), or the open one.
+fn transfer_of<'a>(surface: &Surface<'a>, model: &Model) -> Cow<'a, [[f32; SH9]]> {
     if model.occlusion || model.soft == 0 {
-        surface.transfer.to_vec()
+        Cow::Borrowed(surface.transfer)
     } else {
-        light_model::open_transfers(surface.normals)
+        Cow::Owned(light_model::open_transfers(surface.normals))
     }
 }
 
 /// A given model, with its transfer and keys' terms (no scores).
 fn given(surface: &Surface, start: &Start, model: Model) -> Choice {
     let keys = model_keys(surface, &start.dirs, &start.keys, model.key, None);
-    (model, Vec::new(), transfer_of(surface, &model), keys, None)
+    (
+        model,
+        Vec::new(),
+        transfer_of(surface, &model).into_owned(),
+        keys,
+        None,
+    )
 }
 
 /// Which model the photos choose: every candidate's lights fitted on [`Split::fit`] (with the
@@ -833,7 +834,7 @@ fn choose_model(prob: &Problem, split: &Split, start: &Start) -> Choice {
         .iter()
         .find(|s| s.1 <= 1.02 * least)
         .map_or(Model::START, |s| s.0);
-    let transfer = transfer_of(surface, &model);
+    let transfer = transfer_of(surface, &model).into_owned();
     let keys = model_keys(surface, &start.dirs, &start.keys, model.key, None);
     let candidates = scored
         .iter()
@@ -904,19 +905,7 @@ fn held_out_misfit(
 ) -> f64 {
     let shade = shader(basis, coef);
     // Each photo's mean shading over the scored vertices (the floor every candidate shares).
-    let mut mean = vec![[0.0f32; 3]; prob.photos];
-    let mut count = vec![0usize; prob.photos];
-    for &v in vertices {
-        for x in &prob.samples[v] {
-            for (c, m) in mean[x.photo].iter_mut().enumerate() {
-                *m += shade(x.photo, v, c);
-            }
-            count[x.photo] += 1;
-        }
-    }
-    for (m, n) in mean.iter_mut().zip(&count) {
-        *m = m.map(|s| (s / (*n).max(1) as f32).max(0.0));
-    }
+    let mean = mean_shading_at(prob.samples, vertices.iter().copied(), &shade, prob.photos);
     let parts: Vec<(f64, f64)> = vertices
         .par_iter()
         .map(|&v| {
@@ -1141,10 +1130,20 @@ fn mean_shading(
     shade: &(dyn Fn(usize, usize, usize) -> f32 + Sync),
     photos: usize,
 ) -> Vec<[f32; 3]> {
+    mean_shading_at(samples, 0..samples.len(), shade, photos)
+}
+
+/// [`mean_shading`] over the given vertices only.
+fn mean_shading_at(
+    samples: &[Vec<Sample>],
+    vertices: impl Iterator<Item = usize>,
+    shade: &(dyn Fn(usize, usize, usize) -> f32 + Sync),
+    photos: usize,
+) -> Vec<[f32; 3]> {
     let mut sum = vec![[0.0f64; 3]; photos];
     let mut n = vec![0usize; photos];
-    for (v, s) in samples.iter().enumerate() {
-        for x in s {
+    for v in vertices {
+        for x in &samples[v] {
             for c in 0..3 {
                 sum[x.photo][c] += shade(x.photo, v, c) as f64;
             }
