@@ -164,4 +164,4 @@ for size in (2048, 4096):
 PY
 
 # 3. Ground truth as the tests score it.
-cargo test --release -q -p derma-photo --test ground_truth -- --nocapture 2>&1 | grep -E "plain|gain|melanin" || true
+cargo test --release -q -p derma-photo --test suite ground_truth:: -- --nocapture 2>&1 | grep -E "plain|gain|melanin" || true

@@ -9,7 +9,7 @@ needs it converted, into target/corpus/ (or --out). Python 3 standard library on
     python3 scripts/corpus.py fetch --only mediapipe einstein
     python3 scripts/corpus.py list                 # what each mesh is, its licence and source
 
-The corpus fits run as ignored tests: `cargo test --release -p derma-head --test corpus --
+The corpus fits run as ignored tests: `cargo test --release -p derma-head --test suite corpus:: --
 --ignored` (DERMA_CORPUS overrides target/corpus). `held_out` marks the meshes kept out of all
 tuning of derma's fit and face search.
 """

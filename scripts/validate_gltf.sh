@@ -13,9 +13,12 @@ if ! command -v npm >/dev/null 2>&1; then
 fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-npm install --silent --prefix "$work/v" gltf-validator@2.0.0-dev.3.10 >/dev/null
+# Installed once into target/ (kept between runs).
+v=target/peer-gltf
+[ -d "$v/node_modules/gltf-validator" ] ||
+  npm install --silent --prefix "$v" gltf-validator@2.0.0-dev.3.10 >/dev/null
 # The workspace feature set of the test command, so its build is reused.
-cargo build --release -q --workspace --bins --examples --all-features
+cargo build --release -q --workspace --exclude derma-py --bins --examples --all-features
 target/release/derma skin --export-template "$work/head" --quiet
 target/release/derma eyes animate --seconds 1 --fps 10 --render 0 --out "$work/eyes" --quiet >/dev/null
 target/release/derma skin --size 256 --glb --out "$work/skin" --quiet
@@ -30,6 +33,6 @@ target/release/derma eyes animate --head "$work/fitted" --seconds 1 --fps 10 --r
   --out "$work/fiteyes" --quiet >/dev/null
 target/release/derma eyes animate --head "$work/fitted" --mesh ../shared/data/canonical_face_model.obj \
   --seconds 1 --fps 10 --render 0 --out "$work/meshyes" --quiet >/dev/null
-node scripts/validate_gltf.js "$work/v" "$work/head/head.glb" "$work/eyes/head.glb" \
+node scripts/validate_gltf.js "$PWD/$v" "$work/head/head.glb" "$work/eyes/head.glb" \
   "$work/skin/head.glb" "$work/unreal.glb" "$work/user/head.glb#static" \
   "$work/fitskin/head.glb" "$work/fiteyes/head.glb" "$work/meshyes/head.glb"

@@ -17,11 +17,19 @@ cleanup() {
   rm -rf "$work"
 }
 trap cleanup EXIT
-npm --prefix viewer ci --silent --no-audit --no-fund
+# The viewer's packages reinstalled only when its lock file changed; playwright-core installed
+# once into target/ (both kept between runs).
+stamp=viewer/node_modules/.derma-lock.sha256
+sha256sum viewer/package-lock.json | cmp -s - "$stamp" || {
+  npm --prefix viewer ci --silent --no-audit --no-fund
+  sha256sum viewer/package-lock.json > "$stamp"
+}
 npm --prefix viewer run build --silent >/dev/null
-npm install --silent --no-audit --no-fund --prefix "$work/pw" playwright-core@1.65.1 >/dev/null
+pw=target/peer-viewer
+[ -d "$pw/node_modules/playwright-core" ] ||
+  npm install --silent --no-audit --no-fund --prefix "$pw" playwright-core@1.65.1 >/dev/null
 # The workspace feature set of the test command, so its build is reused.
-cargo build --release -q --workspace --bins --examples --all-features
+cargo build --release -q --workspace --exclude derma-py --bins --examples --all-features
 d=target/release/derma
 "$d" skin --size 512 --age 60 --out "$work/skin" --quiet
 "$d" rig build --set "$work/skin" \
@@ -33,5 +41,5 @@ d=target/release/derma
 server=$!
 for _ in $(seq 100); do grep -q http "$work/view.log" 2>/dev/null && break; sleep 0.1; done
 url=$(grep -o 'http://[^ ]*' "$work/view.log")
-node scripts/viewer_test.mjs "$work/pw" "$url" "$work/neutral.png" "$work/happy.png" \
+node scripts/viewer_test.mjs "$PWD/$pw" "$url" "$work/neutral.png" "$work/happy.png" \
   "${SHOT:-$work/viewer.png}"

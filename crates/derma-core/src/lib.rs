@@ -34,8 +34,6 @@ pub mod error;
 pub mod exr_writer;
 pub mod gltf_scene;
 pub mod gpu;
-#[cfg(feature = "gpu")]
-pub mod gpu_texture;
 pub mod head_mesh;
 pub mod image;
 pub mod image_io;

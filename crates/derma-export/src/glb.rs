@@ -236,107 +236,12 @@ pub fn load_mesh_in(
 pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> Result<GlbReport> {
     let skin = SkinMaps::from_dir(&o.textures)?;
     let head = derma_head::fitted::or_builtin(o.head.as_deref())?;
-    let read = |f: &str| -> Result<Vec<u8>> {
-        let p = o.textures.join(f);
-        std::fs::read(&p).map_err(|e| {
-            ExportError::from(derma_core::CoreError::Format {
-                path: p,
-                message: format!("cannot read ({e})"),
-            })
-        })
-    };
-    let mut g = Glb::default();
-    let mut images: Vec<Value> = Vec::new();
-    let mut image = |g: &mut Glb, name: &str, png: &[u8]| {
-        let v = g.view(png, None);
-        images.push(json!({"bufferView": v, "mimeType": "image/png", "name": name}));
-        images.len() - 1
-    };
-    // Textures: base colour and normal as written by `derma skin`; roughness (G), metal (B = 0)
-    // and the specular level (A, KHR_materials_specular reads alpha) packed in one.
-    let (w, h) = skin.size();
-    let ones = Map::filled(w, h, 1.0);
-    let zeros = Map::filled(w, h, 0.0);
-    let orm = png8_bytes(
-        "orm_specular",
-        &[&ones, &skin.roughness, &zeros, &skin.specular],
-    )?;
-    let t_base = image(
-        &mut g,
-        "base_color",
-        &read(derma_skin::outputs::BASE_COLOR)?,
-    );
-    let t_norm = image(&mut g, "normal", &read(derma_skin::outputs::NORMAL)?);
-    let t_orm = image(&mut g, "orm_specular", &orm);
-    let mut ext_used = vec!["KHR_materials_specular".to_string()];
-    // F0 = 0.04 (ior 1.5) × specularColorFactor × specular: 2 × s gives F0 = 0.08 s, the
-    // specular map's meaning (F0 / 0.08).
-    let mut exts = json!({
-        "KHR_materials_specular": {
-            "specularFactor": 1.0,
-            "specularTexture": {"index": t_orm},
-            "specularColorFactor": [2.0, 2.0, 2.0]
-        }
-    });
-    if let Some((color, mfp)) = subsurface_means(&skin) {
-        let (att, dist) = attenuation(mfp);
-        // Diffuse transmission: light scattered inside that leaves through the back of thin
-        // parts (ears, nostrils); a quarter of the subsurface light, tinted by Burley's albedo.
-        exts["KHR_materials_diffuse_transmission"] = json!({
-            "diffuseTransmissionFactor": 0.25,
-            "diffuseTransmissionColorFactor": color
-        });
-        ext_used.push("KHR_materials_diffuse_transmission".into());
-        if o.volume {
-            exts["KHR_materials_volume"] = json!({
-                "thicknessFactor": 0.01,
-                "attenuationDistance": dist,
-                "attenuationColor": att
-            });
-            ext_used.push("KHR_materials_volume".into());
-        }
-    }
-    let mut materials = vec![json!({
-        "name": "skin",
-        "pbrMetallicRoughness": {
-            "baseColorTexture": {"index": t_base},
-            "metallicFactor": 0.0,
-            "roughnessFactor": 1.0,
-            "metallicRoughnessTexture": {"index": t_orm}
-        },
-        "normalTexture": {"index": t_norm},
-        "extensions": exts
-    })];
+    let mut s = Scene::default();
+    let ext_used = add_skin_material(o, &skin, &mut s)?;
     if o.wrinkles {
-        if let Some(wm) = derma_render::wrinkles::WrinkleMaps::from_dir(&o.textures)? {
-            let t_wn = image(
-                &mut g,
-                "wrinkle_normal",
-                &read(derma_skin::outputs::WRINKLE_NORMAL)?,
-            );
-            let mut masks = Vec::new();
-            for (k, ([r, gr, b], names)) in wrinkle_mask_images(&wm).iter().enumerate() {
-                let name = format!("wrinkle_masks_{k}");
-                let t = image(&mut g, &name, &png8_bytes(&name, &[r, gr, b])?);
-                masks.push(json!({"index": t, "channels": names}));
-            }
-            materials[0]["extras"] = json!({"derma_wrinkles": {
-                "normalTexture": {"index": t_wn, "encoding": "n·½+½ as normalTexture, every furrow at full activation"},
-                "maskTextures": masks,
-                "regions": wrinkle_regions_json(),
-                "formula": derma_head::wrinkle_regions::FORMULA,
-                "units": "the mesh's morph target weights by name (the 52 face units)"
-            }});
-        }
+        add_wrinkle_extras(o, &mut s)?;
     }
-    let mut meshes = Vec::new();
-    let mut names = Vec::new();
-    let skin_mesh = match (&o.mesh, o.head.as_deref()) {
-        // Through a fitted head, read in the frame the fit found (as render, eyes and rig do).
-        (Some(p), Some(dir)) => derma_head::fitted::load_scan(dir, p, o.unit, &o.part, progress)?,
-        (Some(p), None) => load_mesh_in(p, o.unit, &o.part, progress)?,
-        (None, _) => head.skin.clone(),
-    };
+    let skin_mesh = read_skin_mesh(o, head, progress)?;
     let corner = mikktspace_tangents(&skin_mesh);
     let (split, tangents, origin) = split_by_tangent(&skin_mesh, &corner);
     // Morph targets follow the split vertices: the head's, or on a user mesh with a fitted
@@ -350,8 +255,242 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
         }
         (Some(_), None) => &[],
     };
-    let mut copies: Vec<Vec<u32>> = vec![Vec::new(); skin_mesh.positions.len()];
-    for (i, &v) in origin.iter().enumerate() {
+    let skin_part = SplitSkin {
+        mesh: &split,
+        tangents: &tangents,
+        origin: &origin,
+        source_vertices: skin_mesh.positions.len(),
+    };
+    add_skin_mesh(&mut s, &skin_part, units);
+    refuse_teeth_on_user_mesh(o)?;
+    if o.mesh.is_none() {
+        let textures = add_part_textures(o, &mut s)?;
+        add_parts(&mut s, head, units, &textures);
+        add_brows(&mut s, &skin, head, units)?;
+    }
+    let (bytes, names) = s.finish(&ext_used);
+    derma_core::atomic::write_bytes(&o.out, &bytes)?;
+    let mut maps = Vec::new();
+    if let Some((dir, naming, conv)) = &o.maps {
+        maps = write_maps(&o.textures, &skin, dir, *naming, *conv)?;
+    }
+    Ok(GlbReport {
+        path: o.out.clone(),
+        bytes: bytes.len(),
+        meshes: names,
+        morph_targets: units.len(),
+        extensions: ext_used,
+        maps,
+        skin_origin: origin,
+    })
+}
+
+/// The GLB as it is built: its buffer and the glTF arrays that point into it, with the meshes'
+/// names for the report.
+#[derive(Default)]
+struct Scene {
+    g: Glb,
+    images: Vec<Value>,
+    materials: Vec<Value>,
+    meshes: Vec<Value>,
+    names: Vec<String>,
+}
+
+impl Scene {
+    /// Adds `png` as image `name` (texture `i` samples image `i`); returns its index.
+    fn image(&mut self, name: &str, png: &[u8]) -> usize {
+        let v = self.g.view(png, None);
+        self.images
+            .push(json!({"bufferView": v, "mimeType": "image/png", "name": name}));
+        self.images.len() - 1
+    }
+
+    /// The GLB's bytes (a node per mesh, one scene) and the meshes' names.
+    fn finish(self, ext_used: &[String]) -> (Vec<u8>, Vec<String>) {
+        let Scene {
+            mut g,
+            images,
+            materials,
+            meshes,
+            names,
+        } = self;
+        // The skin's node names the rig library's expressions by the face units they pose, for
+        // tools that drive morph targets from expressions (Blender's importer makes node extras
+        // custom properties; blender/derma_skin builds drivers from them).
+        let expressions = expression_units();
+        let nodes: Vec<Value> = meshes
+            .iter()
+            .enumerate()
+            .map(|(i, m)| {
+                let mut n = json!({"name": m["name"], "mesh": i});
+                if m["name"] == "skin" && m["extras"]["targetNames"].is_array() {
+                    n["extras"] = json!({"derma_expressions": expressions});
+                }
+                n
+            })
+            .collect();
+        let n_images = images.len();
+        let mut doc = json!({
+            "asset": {"version": "2.0", "generator": "derma export glb",
+                "copyright": "MakeHuman base mesh and Face Units by the MakeHuman community and Mika Suominen, CC0 1.0; textures: derma"},
+            "extensionsUsed": ext_used,
+            "scene": 0,
+            "scenes": [{"name": "derma", "nodes": (0..nodes.len()).collect::<Vec<_>>()}],
+            "nodes": nodes,
+            "meshes": meshes,
+            "materials": materials,
+            "images": images,
+            "samplers": [{"magFilter": 9729, "minFilter": 9987, "wrapS": 33071, "wrapT": 33071}],
+            "textures": (0..n_images).map(|i| json!({"source": i, "sampler": 0})).collect::<Vec<_>>(),
+        });
+        doc["buffers"] = json!([{"byteLength": 0}]);
+        doc["bufferViews"] = json!(g.views);
+        doc["accessors"] = json!(g.accessors);
+        while !g.bin.len().is_multiple_of(4) {
+            g.bin.push(0);
+        }
+        doc["buffers"] = json!([{"byteLength": g.bin.len()}]);
+        (g.finish(&doc), names)
+    }
+}
+
+/// The bytes of file `f` of the texture set in `dir`.
+fn read_set_file(dir: &Path, f: &str) -> Result<Vec<u8>> {
+    let p = dir.join(f);
+    std::fs::read(&p).map_err(|e| {
+        ExportError::from(derma_core::CoreError::Format {
+            path: p,
+            message: format!("cannot read ({e})"),
+        })
+    })
+}
+
+/// The skin's textures and its material (material 0); returns the extensions it uses.
+fn add_skin_material(o: &GlbOptions, skin: &SkinMaps, s: &mut Scene) -> Result<Vec<String>> {
+    // Textures: base colour and normal as written by `derma skin`; roughness (G), metal (B = 0)
+    // and the specular level (A, KHR_materials_specular reads alpha) packed in one.
+    let (w, h) = skin.size();
+    let ones = Map::filled(w, h, 1.0);
+    let zeros = Map::filled(w, h, 0.0);
+    let orm = png8_bytes(
+        "orm_specular",
+        &[&ones, &skin.roughness, &zeros, &skin.specular],
+    )?;
+    let t_base = s.image(
+        "base_color",
+        &read_set_file(&o.textures, derma_skin::outputs::BASE_COLOR)?,
+    );
+    let t_norm = s.image(
+        "normal",
+        &read_set_file(&o.textures, derma_skin::outputs::NORMAL)?,
+    );
+    let t_orm = s.image("orm_specular", &orm);
+    let (exts, ext_used) = skin_extensions(skin, o.volume, t_orm);
+    s.materials.push(json!({
+        "name": "skin",
+        "pbrMetallicRoughness": {
+            "baseColorTexture": {"index": t_base},
+            "metallicFactor": 0.0,
+            "roughnessFactor": 1.0,
+            "metallicRoughnessTexture": {"index": t_orm}
+        },
+        "normalTexture": {"index": t_norm},
+        "extensions": exts
+    }));
+    Ok(ext_used)
+}
+
+/// The skin material's extensions (specular from texture `t_orm`; diffuse transmission and, when
+/// `volume`, a volume from the set's subsurface maps) and their names.
+fn skin_extensions(skin: &SkinMaps, volume: bool, t_orm: usize) -> (Value, Vec<String>) {
+    let mut ext_used = vec!["KHR_materials_specular".to_string()];
+    // F0 = 0.04 (ior 1.5) × specularColorFactor × specular: 2 × s gives F0 = 0.08 s, the
+    // specular map's meaning (F0 / 0.08).
+    let mut exts = json!({
+        "KHR_materials_specular": {
+            "specularFactor": 1.0,
+            "specularTexture": {"index": t_orm},
+            "specularColorFactor": [2.0, 2.0, 2.0]
+        }
+    });
+    if let Some((color, mfp)) = subsurface_means(skin) {
+        let (att, dist) = attenuation(mfp);
+        // Diffuse transmission: light scattered inside that leaves through the back of thin
+        // parts (ears, nostrils); a quarter of the subsurface light, tinted by Burley's albedo.
+        exts["KHR_materials_diffuse_transmission"] = json!({
+            "diffuseTransmissionFactor": 0.25,
+            "diffuseTransmissionColorFactor": color
+        });
+        ext_used.push("KHR_materials_diffuse_transmission".into());
+        if volume {
+            exts["KHR_materials_volume"] = json!({
+                "thicknessFactor": 0.01,
+                "attenuationDistance": dist,
+                "attenuationColor": att
+            });
+            ext_used.push("KHR_materials_volume".into());
+        }
+    }
+    (exts, ext_used)
+}
+
+/// The set's expression-wrinkle maps (where it has them) as textures, named in the skin
+/// material's `extras.derma_wrinkles` with the weight table.
+fn add_wrinkle_extras(o: &GlbOptions, s: &mut Scene) -> Result<()> {
+    let Some(wm) = derma_render::wrinkles::WrinkleMaps::from_dir(&o.textures)? else {
+        return Ok(());
+    };
+    let t_wn = s.image(
+        "wrinkle_normal",
+        &read_set_file(&o.textures, derma_skin::outputs::WRINKLE_NORMAL)?,
+    );
+    let mut masks = Vec::new();
+    for (k, ([r, gr, b], names)) in wrinkle_mask_images(&wm).iter().enumerate() {
+        let name = format!("wrinkle_masks_{k}");
+        let t = s.image(&name, &png8_bytes(&name, &[r, gr, b])?);
+        masks.push(json!({"index": t, "channels": names}));
+    }
+    s.materials[0]["extras"] = json!({"derma_wrinkles": {
+        "normalTexture": {"index": t_wn, "encoding": "n·½+½ as normalTexture, every furrow at full activation"},
+        "maskTextures": masks,
+        "regions": wrinkle_regions_json(),
+        "formula": derma_head::wrinkle_regions::FORMULA,
+        "units": "the mesh's morph target weights by name (the 52 face units)"
+    }});
+    Ok(())
+}
+
+/// The skin mesh: the user's (through a fitted head, read in the frame the fit found, as
+/// render, eyes and rig do), or the head's own.
+fn read_skin_mesh(
+    o: &GlbOptions,
+    head: &derma_head::Head,
+    progress: &dyn derma_core::progress::Progress,
+) -> Result<TriMesh> {
+    Ok(match (&o.mesh, o.head.as_deref()) {
+        (Some(p), Some(dir)) => derma_head::fitted::load_scan(dir, p, o.unit, &o.part, progress)?,
+        (Some(p), None) => load_mesh_in(p, o.unit, &o.part, progress)?,
+        (None, _) => head.skin.clone(),
+    })
+}
+
+/// The skin mesh split where mirrored UVs flip the tangent.
+struct SplitSkin<'a> {
+    /// The split mesh.
+    mesh: &'a TriMesh,
+    /// Its tangents (xyz, handedness).
+    tangents: &'a [[f32; 4]],
+    /// Per split vertex, the source mesh's vertex it copies.
+    origin: &'a [u32],
+    /// Vertices of the source mesh.
+    source_vertices: usize,
+}
+
+/// The skin's mesh (material 0) with its tangents and `units` as morph targets, moved onto the
+/// split vertices.
+fn add_skin_mesh(s: &mut Scene, skin: &SplitSkin, units: &[derma_head::MorphTarget]) {
+    let mut copies: Vec<Vec<u32>> = vec![Vec::new(); skin.source_vertices];
+    for (i, &v) in skin.origin.iter().enumerate() {
         copies[v as usize].push(i as u32);
     }
     let remapped: Vec<(String, Vec<(u32, Vec3)>)> = units
@@ -370,12 +509,16 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
         .iter()
         .map(|(n, o)| (n.as_str(), o.as_slice()))
         .collect();
-    let mut m = g.mesh("skin", &split, &targets);
-    let ta = tangent_accessor(&mut g, &tangents);
+    let mut m = s.g.mesh("skin", skin.mesh, &targets);
+    let ta = tangent_accessor(&mut s.g, skin.tangents);
     m["primitives"][0]["attributes"]["TANGENT"] = json!(ta);
     m["primitives"][0]["material"] = json!(0);
-    meshes.push(m);
-    names.push("skin".to_string());
+    s.meshes.push(m);
+    s.names.push("skin".to_string());
+}
+
+/// Refuses a teeth texture with a user mesh (it has no teeth to carry it).
+fn refuse_teeth_on_user_mesh(o: &GlbOptions) -> Result<()> {
     if o.mesh.is_some() && o.teeth.is_some() {
         return Err(derma_core::Invalid::new(
             format!(
@@ -390,160 +533,147 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
         )
         .into());
     }
-    if o.mesh.is_none() {
-        let t_teeth = match &o.teeth {
-            Some(p) => {
-                let rgb = srgb_encoded(&derma_render::material::read_albedo(p)?);
-                Some(image(
-                    &mut g,
-                    "teeth",
-                    &png8_bytes("teeth", &[&rgb[0], &rgb[1], &rgb[2]])?,
-                ))
-            }
-            None => None,
-        };
-        let eye = srgb_encoded(&match &o.iris {
-            Some(p) => derma_eyes::files::load_eye_texture(p)?,
-            None => default_eye_texture(512),
-        });
-        let t_eye = image(
-            &mut g,
-            "eye",
-            &png8_bytes("eye", &[&eye[0], &eye[1], &eye[2]])?,
-        );
-        // The set's lash cards (the hair's colour, lashes as alpha), or near-black lashes.
-        let lashes_png = o.textures.join(derma_render::material::files::LASHES);
-        let lash_bytes = if lashes_png.is_file() {
-            std::fs::read(&lashes_png).map_err(|e| derma_core::CoreError::Read {
-                path: lashes_png.clone(),
-                source: e,
-            })?
-        } else {
-            let lash = derma_head::lashes::coverage_map(512);
-            let black = Map::filled(512, 512, 0.02f32.powf(1.0 / 2.2));
-            png8_bytes("eyelashes", &[&black, &black, &black, &lash])?
-        };
-        let t_lash = image(&mut g, "eyelashes", &lash_bytes);
-        for (k, part) in head.parts.iter().enumerate() {
-            let prop = derma_head::Look::of(&part.name);
-            let mat = if part.name.starts_with("eye_") {
-                json!({"name": part.name, "pbrMetallicRoughness": {"baseColorTexture": {"index": t_eye},
-                    "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
-            } else if prop.coverage.is_some() {
-                json!({"name": part.name, "alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": true,
-                    "pbrMetallicRoughness": {"baseColorTexture": {"index": t_lash},
-                    "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
-            } else if let (Some(t), true) = (t_teeth, part.name.starts_with("teeth")) {
-                json!({"name": part.name, "pbrMetallicRoughness": {"baseColorTexture": {"index": t},
-                    "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
-            } else {
-                let a = (prop.albedo)(glam::Vec2::splat(0.5));
-                json!({"name": part.name, "pbrMetallicRoughness": {"baseColorFactor": [a.x, a.y, a.z, 1.0],
-                    "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
-            };
-            materials.push(mat);
-            let t = derma_head::export::part_targets(units, k);
-            let mut pm = g.mesh(&part.name, &part.mesh, &t);
-            pm["primitives"][0]["material"] = json!(materials.len() - 1);
-            meshes.push(pm);
-            names.push(part.name.clone());
+    Ok(())
+}
+
+/// Image indices of the parts' textures.
+struct PartTextures {
+    /// The teeth's, when given.
+    teeth: Option<usize>,
+    /// The eye globes'.
+    eye: usize,
+    /// The lash cards'.
+    lashes: usize,
+}
+
+/// The parts' textures: the teeth (when given), the eye (given or built in) and the lash cards.
+fn add_part_textures(o: &GlbOptions, s: &mut Scene) -> Result<PartTextures> {
+    let teeth = match &o.teeth {
+        Some(p) => {
+            let rgb = srgb_encoded(&derma_render::material::read_albedo(p)?);
+            Some(s.image("teeth", &png8_bytes("teeth", &[&rgb[0], &rgb[1], &rgb[2]])?))
         }
-        // The brows as an alpha-tested card over the skin, where the set carries its hair.
-        // (The set as read above: its hair coverage and the hair's colour from lashes.png.)
-        if let (Some(coverage), Some(hair)) = (&skin.hair, skin.lash_color) {
-            let (w, h) = (coverage.width(), coverage.height());
-            let rgb = hair.map(|c| Map::filled(w, h, derma_core::color::srgb_encode(c)));
-            let t_brows = image(
-                &mut g,
-                "eyebrows",
-                &png8_bytes("eyebrows", &[&rgb[0], &rgb[1], &rgb[2], coverage])?,
-            );
-            let look = derma_head::Look::of("eyebrows");
-            materials.push(
-                json!({"name": "eyebrows", "alphaMode": "MASK", "alphaCutoff": 0.5,
-                "pbrMetallicRoughness": {"baseColorTexture": {"index": t_brows},
-                "metallicFactor": 0.0, "roughnessFactor": look.roughness}}),
-            );
-            let cards = derma_head::brows::BrowCards::of(head, &head.skin);
-            let mut card_of = std::collections::HashMap::new();
-            for (c, &v) in cards.source.iter().enumerate() {
-                card_of.insert(v, c as u32);
-            }
-            // The skin's face units carried to the card's vertices (one weight array drives both).
-            let offsets: Vec<Vec<(u32, glam::Vec3)>> = units
-                .iter()
-                .map(|u| {
-                    let mut o: Vec<(u32, glam::Vec3)> = u
-                        .skin
-                        .iter()
-                        .filter_map(|(v, d)| card_of.get(v).map(|&c| (c, *d)))
-                        .collect();
-                    o.sort_unstable_by_key(|&(c, _)| c); // glTF's sparse indices increase
-                    o
-                })
-                .collect();
-            let targets: Vec<(&str, &[(u32, glam::Vec3)])> = units
-                .iter()
-                .zip(&offsets)
-                .map(|(u, o)| (u.name.as_str(), o.as_slice()))
-                .collect();
-            let mut bm = g.mesh("eyebrows", &cards.mesh, &targets);
-            bm["primitives"][0]["material"] = json!(materials.len() - 1);
-            meshes.push(bm);
-            names.push("eyebrows".to_string());
-        }
-    }
-    // The skin's node names the rig library's expressions by the face units they pose, for
-    // tools that drive morph targets from expressions (Blender's importer makes node extras
-    // custom properties; blender/derma_skin builds drivers from them).
-    let expressions = expression_units();
-    let nodes: Vec<Value> = meshes
-        .iter()
-        .enumerate()
-        .map(|(i, m)| {
-            let mut n = json!({"name": m["name"], "mesh": i});
-            if m["name"] == "skin" && m["extras"]["targetNames"].is_array() {
-                n["extras"] = json!({"derma_expressions": expressions});
-            }
-            n
-        })
-        .collect();
-    let n_images = images.len();
-    let mut doc = json!({
-        "asset": {"version": "2.0", "generator": "derma export glb",
-            "copyright": "MakeHuman base mesh and Face Units by the MakeHuman community and Mika Suominen, CC0 1.0; textures: derma"},
-        "extensionsUsed": ext_used,
-        "scene": 0,
-        "scenes": [{"name": "derma", "nodes": (0..nodes.len()).collect::<Vec<_>>()}],
-        "nodes": nodes,
-        "meshes": meshes,
-        "materials": materials,
-        "images": images,
-        "samplers": [{"magFilter": 9729, "minFilter": 9987, "wrapS": 33071, "wrapT": 33071}],
-        "textures": (0..n_images).map(|i| json!({"source": i, "sampler": 0})).collect::<Vec<_>>(),
+        None => None,
+    };
+    let eye = srgb_encoded(&match &o.iris {
+        Some(p) => derma_eyes::files::load_eye_texture(p)?,
+        None => default_eye_texture(512),
     });
-    doc["buffers"] = json!([{"byteLength": 0}]);
-    doc["bufferViews"] = json!(g.views);
-    doc["accessors"] = json!(g.accessors);
-    while !g.bin.len().is_multiple_of(4) {
-        g.bin.push(0);
+    let eye = s.image("eye", &png8_bytes("eye", &[&eye[0], &eye[1], &eye[2]])?);
+    // The set's lash cards (the hair's colour, lashes as alpha), or near-black lashes.
+    let lashes_png = o.textures.join(derma_render::material::files::LASHES);
+    let lash_bytes = if lashes_png.is_file() {
+        std::fs::read(&lashes_png).map_err(|e| derma_core::CoreError::Read {
+            path: lashes_png.clone(),
+            source: e,
+        })?
+    } else {
+        let lash = derma_head::lashes::coverage_map(512);
+        let black = Map::filled(512, 512, 0.02f32.powf(1.0 / 2.2));
+        png8_bytes("eyelashes", &[&black, &black, &black, &lash])?
+    };
+    let lashes = s.image("eyelashes", &lash_bytes);
+    Ok(PartTextures { teeth, eye, lashes })
+}
+
+/// The head's parts as meshes, each with its own material and moved by `units`.
+fn add_parts(
+    s: &mut Scene,
+    head: &derma_head::Head,
+    units: &[derma_head::MorphTarget],
+    textures: &PartTextures,
+) {
+    for (k, part) in head.parts.iter().enumerate() {
+        s.materials.push(part_material(part, textures));
+        let t = derma_head::export::part_targets(units, k);
+        let mut pm = s.g.mesh(&part.name, &part.mesh, &t);
+        pm["primitives"][0]["material"] = json!(s.materials.len() - 1);
+        s.meshes.push(pm);
+        s.names.push(part.name.clone());
     }
-    doc["buffers"] = json!([{"byteLength": g.bin.len()}]);
-    let bytes = g.finish(&doc);
-    derma_core::atomic::write_bytes(&o.out, &bytes)?;
-    let mut maps = Vec::new();
-    if let Some((dir, naming, conv)) = &o.maps {
-        maps = write_maps(&o.textures, &skin, dir, *naming, *conv)?;
+}
+
+/// A part's material: the eye texture on the globes, alpha-tested lash cards, the teeth
+/// texture where given, else the part's flat colour.
+fn part_material(part: &derma_head::Part, textures: &PartTextures) -> Value {
+    let prop = derma_head::Look::of(&part.name);
+    if part.name.starts_with("eye_") {
+        json!({"name": part.name, "pbrMetallicRoughness": {"baseColorTexture": {"index": textures.eye},
+            "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
+    } else if prop.coverage.is_some() {
+        json!({"name": part.name, "alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": true,
+            "pbrMetallicRoughness": {"baseColorTexture": {"index": textures.lashes},
+            "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
+    } else if let (Some(t), true) = (textures.teeth, part.name.starts_with("teeth")) {
+        json!({"name": part.name, "pbrMetallicRoughness": {"baseColorTexture": {"index": t},
+            "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
+    } else {
+        let a = (prop.albedo)(glam::Vec2::splat(0.5));
+        json!({"name": part.name, "pbrMetallicRoughness": {"baseColorFactor": [a.x, a.y, a.z, 1.0],
+            "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
     }
-    Ok(GlbReport {
-        path: o.out.clone(),
-        bytes: bytes.len(),
-        meshes: names,
-        morph_targets: units.len(),
-        extensions: ext_used,
-        maps,
-        skin_origin: origin,
-    })
+}
+
+/// The brows as an alpha-tested card over the skin, moved by `units`, where the set carries
+/// their hair.
+fn add_brows(
+    s: &mut Scene,
+    skin: &SkinMaps,
+    head: &derma_head::Head,
+    units: &[derma_head::MorphTarget],
+) -> Result<()> {
+    // (The set as `export` read it: its hair coverage and the hair's colour from lashes.png.)
+    let (Some(coverage), Some(hair)) = (&skin.hair, skin.lash_color) else {
+        return Ok(());
+    };
+    let (w, h) = (coverage.width(), coverage.height());
+    let rgb = hair.map(|c| Map::filled(w, h, derma_core::color::srgb_encode(c)));
+    let t_brows = s.image(
+        "eyebrows",
+        &png8_bytes("eyebrows", &[&rgb[0], &rgb[1], &rgb[2], coverage])?,
+    );
+    let look = derma_head::Look::of("eyebrows");
+    s.materials.push(
+        json!({"name": "eyebrows", "alphaMode": "MASK", "alphaCutoff": 0.5,
+        "pbrMetallicRoughness": {"baseColorTexture": {"index": t_brows},
+        "metallicFactor": 0.0, "roughnessFactor": look.roughness}}),
+    );
+    let cards = derma_head::brows::BrowCards::of(head, &head.skin);
+    let offsets = brow_offsets(&cards, units);
+    let targets: Vec<(&str, &[(u32, glam::Vec3)])> = units
+        .iter()
+        .zip(&offsets)
+        .map(|(u, o)| (u.name.as_str(), o.as_slice()))
+        .collect();
+    let mut bm = s.g.mesh("eyebrows", &cards.mesh, &targets);
+    bm["primitives"][0]["material"] = json!(s.materials.len() - 1);
+    s.meshes.push(bm);
+    s.names.push("eyebrows".to_string());
+    Ok(())
+}
+
+/// The skin's face units carried to the brow cards' vertices (one weight array drives both),
+/// per unit in increasing card-vertex order.
+fn brow_offsets(
+    cards: &derma_head::brows::BrowCards,
+    units: &[derma_head::MorphTarget],
+) -> Vec<Vec<(u32, glam::Vec3)>> {
+    let mut card_of = std::collections::HashMap::new();
+    for (c, &v) in cards.source.iter().enumerate() {
+        card_of.insert(v, c as u32);
+    }
+    units
+        .iter()
+        .map(|u| {
+            let mut o: Vec<(u32, glam::Vec3)> = u
+                .skin
+                .iter()
+                .filter_map(|(v, d)| card_of.get(v).map(|&c| (c, *d)))
+                .collect();
+            o.sort_unstable_by_key(|&(c, _)| c); // glTF's sparse indices increase
+            o
+        })
+        .collect()
 }
 
 /// Writes the loose maps under `naming` (normal in `conv`; the packed ORM as engines import it).

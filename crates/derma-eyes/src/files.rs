@@ -440,12 +440,18 @@ pub fn distance_fields(
     derma_core::image_io::write_png8(&dir.join("equiangular.png"), &[&show(&eq)])?;
     let bt = sdf::samplers::field(&scene.g, sdf::table::DEFAULT, range);
     derma_core::image_io::write_png8(&dir.join("backtracking.png"), &[&show(&bt)])?;
-    let light = glam::Vec3::new(-0.4, 0.5, 0.75);
+    // One key light from the upper left (irradiance 1.6 π: a white matte surface facing it at
+    // 1.6) over a grey ambient of 0.15.
+    let mut light = derma_render::cpu::single_light(
+        glam::Vec3::new(-0.4, 0.5, 0.75),
+        glam::Vec3::splat(1.6 * std::f32::consts::PI),
+    );
+    (light.sky, light.ground) = (glam::Vec3::splat(0.15), glam::Vec3::splat(0.15));
     let px_per_mm = |i: usize| scene.g.px_per_mm(i);
     let surfaces = scene.surfaces(&px_per_mm);
-    let plain = derma_render::lake::shade(&surfaces, None, light, 1.6);
+    let plain = derma_render::lake::shade(&surfaces, None, &light);
     let (d, n) = derma_render::lake::lake(&surfaces, &bt.distance, range);
-    let wet = derma_render::lake::shade(&surfaces, Some((&d, &n)), light, 1.6);
+    let wet = derma_render::lake::shade(&surfaces, Some((&d, &n)), &light);
     let to_maps = |img: &[glam::Vec3]| Map::planes(w, h, |i| img[i].to_array());
     for (name, img) in [("eye.png", &plain), ("lake.png", &wet)] {
         let ch = to_maps(img);

@@ -86,7 +86,33 @@ pub fn write(
     eye: Option<&[derma_core::Map; 3]>,
     path: &Path,
 ) -> crate::Result<Report> {
-    use rayon::prelude::*;
+    check_frames(baked)?;
+    let motion = reduce_motion(region, baked)?;
+    let names: Vec<String> = std::iter::once("eyeRegionMean".to_string())
+        .chain((1..motion.targets.len()).map(|c| format!("eyeRegionPC{c}")))
+        .collect();
+    let mut s = Scene::default();
+    let morph_nodes = add_skin_and_parts(&mut s, head, region, skin, &names, &motion.targets);
+    let eye_nodes = add_globes(&mut s, head);
+    // Animation: weights of the morph nodes, rotations of the eye nodes.
+    let nodes = AnimatedNodes {
+        morph: &morph_nodes,
+        eyes: &eye_nodes,
+        targets: names.len(),
+    };
+    let animation = animation(&mut s.g, baked, &motion.weights, &nodes);
+    let out = s.finish(animation, eye)?;
+    derma_core::atomic::write_bytes(path, &out)?;
+    Ok(Report {
+        targets: names.len(),
+        rms_mm: motion.rms_mm,
+        max_mm: motion.max_mm as f32,
+        bytes: out.len(),
+    })
+}
+
+/// Refuses a clip without frames or without a rotation pair per frame.
+fn check_frames(baked: &Baked) -> crate::Result<()> {
     let nf = baked.times.len();
     if nf == 0 || baked.rotations.len() != nf {
         return Err(derma_core::Invalid::new(
@@ -96,19 +122,45 @@ pub fn write(
         )
         .into());
     }
+    Ok(())
+}
+
+/// The clip's motion as morph targets: per frame the weights (in [0, 1]) of the targets (model-
+/// vertex vectors, the mean first), and how well they reconstruct every frame.
+struct Motion {
+    /// Per frame, the weights of the targets after the mean.
+    weights: Vec<Vec<f64>>,
+    /// The targets, flattened per model vertex (mm).
+    targets: Vec<Vec<f64>>,
+    /// RMS reconstruction error (mm).
+    rms_mm: f32,
+    /// Largest reconstruction error (mm).
+    max_mm: f64,
+}
+
+/// Frame `i`'s displacements of the model vertices from rest (mm), flattened.
+fn displacement_row(region: &crate::region::EyeRegion, baked: &Baked, i: usize) -> Vec<f64> {
+    (baked.positions)(i)
+        .iter()
+        .zip(&region.rest)
+        .flat_map(|(a, b)| (*a - *b).to_array())
+        .map(f64::from)
+        .collect()
+}
+
+/// The clip's displacements reduced to the mean and principal components, every frame
+/// projected and its reconstruction error measured.
+fn reduce_motion(region: &crate::region::EyeRegion, baked: &Baked) -> crate::Result<Motion> {
+    use rayon::prelude::*;
+    let nf = baked.times.len();
     let nm = region.len();
     // Displacements per frame, flattened (made when needed: a long clip's rows would not fit),
     // and their principal components fitted on at most FIT_FRAMES frames spread evenly over the
     // clip, so the fit costs the same for any length; every frame is then projected.
-    let row = |i: usize| -> Vec<f64> {
-        (baked.positions)(i)
-            .iter()
-            .zip(&region.rest)
-            .flat_map(|(a, b)| (*a - *b).to_array())
-            .map(f64::from)
-            .collect()
-    };
-    let fit_rows: Vec<Vec<f64>> = fit_sample(nf).into_par_iter().map(row).collect();
+    let fit_rows: Vec<Vec<f64>> = fit_sample(nf)
+        .into_par_iter()
+        .map(|i| displacement_row(region, baked, i))
+        .collect();
     let pca = if fit_rows.len() >= 2 {
         Pca::fit(&fit_rows, COMPONENTS)?
     } else {
@@ -122,16 +174,47 @@ pub fn write(
     // A clip fitted on every frame projects the rows it already holds; a longer one makes
     // each row again.
     let held = (fit_rows.len() == nf).then_some(fit_rows);
+    let per_frame = project_frames(&pca, held.as_deref(), region, baked);
+    let (mut se, mut worst) = (0.0f64, 0.0f64);
+    let mut weights: Vec<Vec<f64>> = Vec::with_capacity(nf);
+    for (w, s, m) in per_frame {
+        se += s;
+        worst = worst.max(m);
+        weights.push(w);
+    }
+    let rms = (se / (nf * nm) as f64).sqrt() as f32;
+    // glTF's morph weights belong in [0, 1] (Blender's importer clamps them to ±10 and mishandles
+    // larger ones): each component's weights w ∈ [lo, hi] over the clip become (w − lo)/(hi − lo)
+    // on the target scaled by hi − lo, and lo × the component moves into the mean target
+    // (weight 1). The same offsets at every frame, exactly.
+    let (weights, targets) = unit_weights(&pca.mean, &pca.components, &weights);
+    Ok(Motion {
+        weights,
+        targets,
+        rms_mm: rms,
+        max_mm: worst,
+    })
+}
+
+/// Every frame's weights on `pca` with its squared reconstruction error and its largest one
+/// (rows from `held` when it holds them all, else made again).
+fn project_frames(
+    pca: &Pca,
+    held: Option<&[Vec<f64>]>,
+    region: &crate::region::EyeRegion,
+    baked: &Baked,
+) -> Vec<(Vec<f64>, f64, f64)> {
+    use rayon::prelude::*;
     // Every frame projected and its reconstruction error measured, in parallel; the sums are
     // taken in frame order (the same bits at any thread count).
-    let per_frame: Vec<(Vec<f64>, f64, f64)> = (0..nf)
+    (0..baked.times.len())
         .into_par_iter()
         .map(|i| {
             let made;
-            let r: &[f64] = match &held {
+            let r: &[f64] = match held {
                 Some(rows) => &rows[i],
                 None => {
-                    made = row(i);
+                    made = displacement_row(region, baked, i);
                     &made
                 }
             };
@@ -148,72 +231,142 @@ pub fn write(
             }
             (w, se, worst)
         })
-        .collect();
-    let (mut se, mut worst) = (0.0f64, 0.0f64);
-    let mut weights: Vec<Vec<f64>> = Vec::with_capacity(nf);
-    for (w, s, m) in per_frame {
-        se += s;
-        worst = worst.max(m);
-        weights.push(w);
-    }
-    let rms = (se / (nf * nm) as f64).sqrt() as f32;
-    // Per model vertex, a target vector → offsets of the skin's vertices (every UV copy of the
-    // head's skin, or the user's mesh through the fit's B map).
-    let to_skin = |v: &[f64]| -> Vec<(u32, Vec3)> {
-        skin.offsets(region, |m| {
-            Vec3::new(v[3 * m] as f32, v[3 * m + 1] as f32, v[3 * m + 2] as f32)
-        })
-    };
-    // glTF's morph weights belong in [0, 1] (Blender's importer clamps them to ±10 and mishandles
-    // larger ones): each component's weights w ∈ [lo, hi] over the clip become (w − lo)/(hi − lo)
-    // on the target scaled by hi − lo, and lo × the component moves into the mean target
-    // (weight 1). The same offsets at every frame, exactly.
-    let (weights, target_vecs) = unit_weights(&pca.mean, &pca.components, &weights);
-    let names: Vec<String> = std::iter::once("eyeRegionMean".to_string())
-        .chain((1..target_vecs.len()).map(|c| format!("eyeRegionPC{c}")))
-        .collect();
-    let skin_offs: Vec<Vec<(u32, Vec3)>> = target_vecs.iter().map(|v| to_skin(v)).collect();
-    // Lashes follow their nearest lid-margin vertex.
+        .collect()
+}
+
+/// The vertex offsets of model-vertex `targets` on a lash card `mesh`: each vertex follows its
+/// nearest lid-margin vertex.
+fn lash_offsets(
+    region: &crate::region::EyeRegion,
+    targets: &[Vec<f64>],
+    mesh: &derma_core::mesh::TriMesh,
+) -> Vec<Vec<(u32, Vec3)>> {
     let margin: Vec<u32> = region.margins.iter().flatten().flatten().copied().collect();
-    let lash_offs = |mesh: &derma_core::mesh::TriMesh| -> Vec<Vec<(u32, Vec3)>> {
-        let near: Vec<usize> = mesh
-            .positions
-            .iter()
-            .map(|p| {
-                margin
-                    .iter()
-                    .map(|&m| m as usize)
-                    .min_by(|&a, &b| {
-                        (region.rest[a] - *p)
-                            .length_squared()
-                            .total_cmp(&(region.rest[b] - *p).length_squared())
-                    })
-                    .expect("margins")
+    let near: Vec<usize> = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            margin
+                .iter()
+                .map(|&m| m as usize)
+                .min_by(|&a, &b| {
+                    (region.rest[a] - *p)
+                        .length_squared()
+                        .total_cmp(&(region.rest[b] - *p).length_squared())
+                })
+                .expect("margins")
+        })
+        .collect();
+    targets
+        .iter()
+        .map(|v| {
+            near.iter()
+                .enumerate()
+                .map(|(i, &m)| {
+                    (
+                        i as u32,
+                        Vec3::new(v[3 * m] as f32, v[3 * m + 1] as f32, v[3 * m + 2] as f32),
+                    )
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Morph targets by `names` from their per-vertex offsets.
+fn as_targets<'a>(
+    names: &'a [String],
+    offs: &'a [Vec<(u32, Vec3)>],
+) -> Vec<(&'a str, &'a [(u32, Vec3)])> {
+    names
+        .iter()
+        .zip(offs)
+        .map(|(n, o)| (n.as_str(), o.as_slice()))
+        .collect()
+}
+
+/// The GLB as it is built: its buffer, meshes and nodes.
+#[derive(Default)]
+struct Scene {
+    g: Glb,
+    meshes: Vec<Value>,
+    nodes: Vec<Value>,
+}
+
+impl Scene {
+    /// Adds `m` as mesh `name` with morph `targets` and `material`, and a node for it; returns
+    /// the node.
+    fn add(
+        &mut self,
+        name: &str,
+        m: &derma_core::mesh::TriMesh,
+        targets: &[(&str, &[(u32, Vec3)])],
+        material: usize,
+    ) -> usize {
+        let mut mesh = self.g.mesh(name, m, targets);
+        mesh["primitives"][0]["material"] = json!(material);
+        self.meshes.push(mesh);
+        self.nodes
+            .push(json!({"name": name, "mesh": self.meshes.len() - 1}));
+        self.nodes.len() - 1
+    }
+
+    /// The GLB's bytes: the meshes, nodes and `animation`, with the eye texture (`eye` or the
+    /// default) and the lash texture.
+    fn finish(
+        self,
+        animation: (Vec<Value>, Vec<Value>),
+        eye: Option<&[derma_core::Map; 3]>,
+    ) -> crate::Result<Vec<u8>> {
+        let Scene {
+            mut g,
+            meshes,
+            nodes,
+        } = self;
+        let (samplers, channels) = animation;
+        let png = eye_texture_png(512, eye)?;
+        let iv = g.view(&png, None);
+        let lv = g.view(&lash_texture_png(256)?, None);
+        let roots: Vec<usize> = (0..nodes.len())
+            .filter(|i| {
+                !nodes.iter().any(|n| {
+                    n["children"]
+                        .as_array()
+                        .is_some_and(|c| c.iter().any(|x| x.as_u64() == Some(*i as u64)))
+                })
             })
             .collect();
-        target_vecs
-            .iter()
-            .map(|v| {
-                near.iter()
-                    .enumerate()
-                    .map(|(i, &m)| {
-                        (
-                            i as u32,
-                            Vec3::new(v[3 * m] as f32, v[3 * m + 1] as f32, v[3 * m + 2] as f32),
-                        )
-                    })
-                    .collect()
-            })
-            .collect()
-    };
-    let mut g = Glb::default();
-    let mut meshes: Vec<Value> = Vec::new();
-    let mut nodes: Vec<Value> = Vec::new();
-    let mut morph_nodes: Vec<usize> = Vec::new();
-    let as_targets = |offs: &[Vec<(u32, Vec3)>]| -> Vec<(String, Vec<(u32, Vec3)>)> {
-        names.iter().cloned().zip(offs.iter().cloned()).collect()
-    };
-    let materials = json!([
+        let doc = json!({
+            "asset": {"version": "2.0", "generator": "derma eyes",
+                "copyright": "MakeHuman base mesh and Face Units by the MakeHuman community and Mika Suominen, CC0 1.0"},
+            "scene": 0,
+            "scenes": [{"name": "derma eye region", "nodes": roots}],
+            "nodes": nodes,
+            "meshes": meshes,
+            "materials": materials(),
+            "images": [{"bufferView": iv, "mimeType": "image/png", "name": "eye"},
+                       {"bufferView": lv, "mimeType": "image/png", "name": "eyelashes"}],
+            "samplers": [{"magFilter": 9729, "minFilter": 9987, "wrapS": 33071, "wrapT": 33071}],
+            "textures": [{"source": 0, "sampler": 0}, {"source": 1, "sampler": 0}],
+            "animations": [{"name": "eyes", "samplers": samplers, "channels": channels}],
+            "buffers": [{"byteLength": 0}],
+            "bufferViews": [],
+            "accessors": [],
+        });
+        let mut doc = doc;
+        doc["bufferViews"] = json!(g.views);
+        doc["accessors"] = json!(g.accessors);
+        while !g.bin.len().is_multiple_of(4) {
+            g.bin.push(0);
+        }
+        doc["buffers"] = json!([{"byteLength": g.bin.len()}]);
+        Ok(g.finish(&doc))
+    }
+}
+
+/// The materials: skin (0), eye (1), cornea (2), lashes (3) and mouth (4).
+fn materials() -> Value {
+    json!([
         {"name": "skin", "pbrMetallicRoughness": {"baseColorFactor": [0.56, 0.36, 0.28, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.55}},
         {"name": "eye", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0, "roughnessFactor": 0.3}},
         {"name": "cornea", "alphaMode": "BLEND", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 0.06], "metallicFactor": 0.0, "roughnessFactor": 0.02}},
@@ -222,83 +375,83 @@ pub fn write(
         {"name": "lashes", "alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": true,
          "pbrMetallicRoughness": {"baseColorTexture": {"index": 1}, "metallicFactor": 0.0, "roughnessFactor": 0.6}},
         {"name": "mouth", "pbrMetallicRoughness": {"baseColorFactor": [0.62, 0.56, 0.45, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.35}}
-    ]);
-    let mut add = |g: &mut Glb,
-                   nodes: &mut Vec<Value>,
-                   name: &str,
-                   m: &derma_core::mesh::TriMesh,
-                   targets: &[(String, Vec<(u32, Vec3)>)],
-                   material: usize|
-     -> usize {
-        let t: Vec<(&str, &[(u32, Vec3)])> = targets
-            .iter()
-            .map(|(n, o)| (n.as_str(), o.as_slice()))
-            .collect();
-        let mut mesh = g.mesh(name, m, &t);
-        mesh["primitives"][0]["material"] = json!(material);
-        meshes.push(mesh);
-        nodes.push(json!({"name": name, "mesh": meshes.len() - 1}));
-        nodes.len() - 1
+    ])
+}
+
+/// The skin (material 0) with the motion `targets` named `names`, and the head's parts but the
+/// globes: lashes (3) riding on their lid margins, the rest (4) still; returns the morph nodes.
+fn add_skin_and_parts(
+    s: &mut Scene,
+    head: &Head,
+    region: &crate::region::EyeRegion,
+    skin: &crate::surface::Skin,
+    names: &[String],
+    targets: &[Vec<f64>],
+) -> Vec<usize> {
+    // Per model vertex, a target vector → offsets of the skin's vertices (every UV copy of the
+    // head's skin, or the user's mesh through the fit's B map).
+    let to_skin = |v: &[f64]| -> Vec<(u32, Vec3)> {
+        skin.offsets(region, |m| {
+            Vec3::new(v[3 * m] as f32, v[3 * m + 1] as f32, v[3 * m + 2] as f32)
+        })
     };
-    let skin_node = add(
-        &mut g,
-        &mut nodes,
-        "skin",
-        skin.mesh(),
-        &as_targets(&skin_offs),
-        0,
-    );
-    morph_nodes.push(skin_node);
+    let skin_offs: Vec<Vec<(u32, Vec3)>> = targets.iter().map(|v| to_skin(v)).collect();
+    let mut morph_nodes = vec![s.add("skin", skin.mesh(), &as_targets(names, &skin_offs), 0)];
     for p in &head.parts {
         if p.name.starts_with("eye_") {
             continue;
         }
         if p.name.starts_with("eyelashes") {
-            let n = add(
-                &mut g,
-                &mut nodes,
-                &p.name,
-                &p.mesh,
-                &as_targets(&lash_offs(&p.mesh)),
-                3,
-            );
-            morph_nodes.push(n);
+            // Lashes follow their nearest lid-margin vertex.
+            let offs = lash_offsets(region, targets, &p.mesh);
+            morph_nodes.push(s.add(&p.name, &p.mesh, &as_targets(names, &offs), 3));
         } else {
-            add(&mut g, &mut nodes, &p.name, &p.mesh, &[], 4);
+            s.add(&p.name, &p.mesh, &[], 4);
         }
     }
+    morph_nodes
+}
+
+/// The globes: per eye a node at its centre holding the sclera, iris and cornea; returns the
+/// eye nodes.
+fn add_globes(s: &mut Scene, head: &Head) -> Vec<usize> {
     let mut eye_nodes = Vec::new();
     for (e, side) in ["left", "right"].iter().enumerate() {
         let globe = Globe::of(&head.eyes[e]);
         let c = head.eyes[e].centre * M_PER_MM;
-        let sclera = add(
-            &mut g,
-            &mut nodes,
-            &format!("sclera_{side}"),
-            &globe.shell(false),
-            &[],
-            1,
-        );
-        let iris = add(
-            &mut g,
-            &mut nodes,
-            &format!("iris_{side}"),
-            &globe.iris(),
-            &[],
-            1,
-        );
-        let cornea = add(
-            &mut g,
-            &mut nodes,
+        let sclera = s.add(&format!("sclera_{side}"), &globe.shell(false), &[], 1);
+        let iris = s.add(&format!("iris_{side}"), &globe.iris(), &[], 1);
+        let cornea = s.add(
             &format!("cornea_{side}"),
             &globe.shell(true).cornea_cap(&globe),
             &[],
             2,
         );
-        nodes.push(json!({"name": format!("eye_{side}"), "translation": c.to_array(), "children": [sclera, iris, cornea]}));
-        eye_nodes.push(nodes.len() - 1);
+        s.nodes.push(json!({"name": format!("eye_{side}"), "translation": c.to_array(), "children": [sclera, iris, cornea]}));
+        eye_nodes.push(s.nodes.len() - 1);
     }
-    // Animation: weights of the morph nodes, rotations of the eye nodes.
+    eye_nodes
+}
+
+/// The nodes an animation drives.
+struct AnimatedNodes<'a> {
+    /// Nodes whose morph weights it animates.
+    morph: &'a [usize],
+    /// Eye nodes (left, right) whose rotation it animates.
+    eyes: &'a [usize],
+    /// Morph targets per morph node (the mean, at weight 1, and the components).
+    targets: usize,
+}
+
+/// The animation's samplers and channels: the morph `weights` of the morph nodes and the
+/// globes' rotations, over the frame times.
+fn animation(
+    g: &mut Glb,
+    baked: &Baked,
+    weights: &[Vec<f64>],
+    nodes: &AnimatedNodes,
+) -> (Vec<Value>, Vec<Value>) {
+    let nf = baked.times.len();
     let tb: Vec<u8> = baked.times.iter().flat_map(|t| t.to_le_bytes()).collect();
     let tv = g.view(&tb, None);
     let t_min = baked.times.first().copied().unwrap_or(0.0);
@@ -310,13 +463,14 @@ pub fn write(
         .flat_map(f32::to_le_bytes)
         .collect();
     let wv = g.view(&wb, None);
-    let w_acc = g.accessor(json!({"bufferView": wv, "componentType": 5126, "count": nf * names.len(), "type": "SCALAR"}));
+    let w_acc = g.accessor(json!({"bufferView": wv, "componentType": 5126, "count": nf * nodes.targets, "type": "SCALAR"}));
     let mut samplers = vec![json!({"input": time_acc, "output": w_acc, "interpolation": "LINEAR"})];
-    let mut channels: Vec<Value> = morph_nodes
+    let mut channels: Vec<Value> = nodes
+        .morph
         .iter()
         .map(|&n| json!({"sampler": 0, "target": {"node": n, "path": "weights"}}))
         .collect();
-    for (e, &n) in eye_nodes.iter().enumerate() {
+    for (e, &n) in nodes.eyes.iter().enumerate() {
         let qb: Vec<u8> = baked
             .rotations
             .iter()
@@ -332,50 +486,7 @@ pub fn write(
             json!({"sampler": samplers.len() - 1, "target": {"node": n, "path": "rotation"}}),
         );
     }
-    let png = eye_texture_png(512, eye)?;
-    let iv = g.view(&png, None);
-    let lv = g.view(&lash_texture_png(256)?, None);
-    let roots: Vec<usize> = (0..nodes.len())
-        .filter(|i| {
-            !nodes.iter().any(|n| {
-                n["children"]
-                    .as_array()
-                    .is_some_and(|c| c.iter().any(|x| x.as_u64() == Some(*i as u64)))
-            })
-        })
-        .collect();
-    let doc = json!({
-        "asset": {"version": "2.0", "generator": "derma eyes",
-            "copyright": "MakeHuman base mesh and Face Units by the MakeHuman community and Mika Suominen, CC0 1.0"},
-        "scene": 0,
-        "scenes": [{"name": "derma eye region", "nodes": roots}],
-        "nodes": nodes,
-        "meshes": meshes,
-        "materials": materials,
-        "images": [{"bufferView": iv, "mimeType": "image/png", "name": "eye"},
-                   {"bufferView": lv, "mimeType": "image/png", "name": "eyelashes"}],
-        "samplers": [{"magFilter": 9729, "minFilter": 9987, "wrapS": 33071, "wrapT": 33071}],
-        "textures": [{"source": 0, "sampler": 0}, {"source": 1, "sampler": 0}],
-        "animations": [{"name": "eyes", "samplers": samplers, "channels": channels}],
-        "buffers": [{"byteLength": 0}],
-        "bufferViews": [],
-        "accessors": [],
-    });
-    let mut doc = doc;
-    doc["bufferViews"] = json!(g.views);
-    doc["accessors"] = json!(g.accessors);
-    while !g.bin.len().is_multiple_of(4) {
-        g.bin.push(0);
-    }
-    doc["buffers"] = json!([{"byteLength": g.bin.len()}]);
-    let out = g.finish(&doc);
-    derma_core::atomic::write_bytes(path, &out)?;
-    Ok(Report {
-        targets: names.len(),
-        rms_mm: rms,
-        max_mm: worst as f32,
-        bytes: out.len(),
-    })
+    (samplers, channels)
 }
 
 /// The cornea cap of a shell mesh (triangles in front of the limbus).

@@ -84,19 +84,80 @@ fn check(
 /// head's vertices); the arrays list the pairs (that vertex, model vertex) of the region. Lash
 /// parts are listed with their model anchor per vertex.
 pub fn pack(m: &StillModel, head: &derma_head::Head, skin_origin: &[u32]) -> (Value, Vec<u8>) {
-    let to_model = &m.rig.region.skin_to_model;
-    let skin_vertices: Vec<(u32, u32)> = skin_origin
+    let ev = &m.evaluator;
+    let opt = &ev.optimised;
+    let n = opt.len();
+    let mut b = Blob::default();
+    add_model_arrays(&mut b, m);
+    add_slide_arrays(&mut b, &ev.slider, n);
+    let skin_vertices = skin_vertex_pairs(&m.rig.region.skin_to_model, skin_origin);
+    b.u32s(
+        "skin_vertices",
+        2,
+        skin_vertices.iter().flat_map(|&(a, b)| [a, b]),
+    );
+    let mut lashes = Vec::new();
+    for l in &m.lashes {
+        b.u32s(&format!("lash_{}", l.name), 1, l.near.iter().copied());
+        lashes.push(json!({"name": l.name, "anchors": format!("lash_{}", l.name)}));
+    }
+    // Check vertices: the middle of each lid margin of each eye.
+    let region = &m.rig.region;
+    let probes: Vec<u32> = region
+        .margins
+        .iter()
+        .flatten()
+        .map(|c| c[c.len() / 2])
+        .collect();
+    let checks = check_poses(m, head, &probes);
+    let header = json!({
+        "format": FORMAT,
+        "version": VERSION,
+        "units_mm": true,
+        "vertices": n,
+        "k": opt.k,
+        "inputs": "g̃ = (h, v, t, upper, lower) per eye (left, right; Fick degrees, normalised lid openings), then the units",
+        "units": m.model.units,
+        "region_units": crate::region::REGION_UNITS,
+        "w": linear(&opt.w),
+        "baseline": {
+            "features": "[h, |h|, max(v, 0), min(v, 0)]",
+            "rows": [linear(&m.model.baseline[0]), linear(&m.model.baseline[1])],
+            "closure": "per eye c = max(closure, eyeBlink unit), w = eyeWide unit; (upper, lower) = b + w (1 − c)(1 − b), b = (rows · [features, 1]) × (1 − c)",
+        },
+        "fixation_mm": FIXATION_MM,
+        "centres": [head.eyes[0].centre.to_array(), head.eyes[1].centre.to_array()],
+        "depth": {"k": ev.depth.k,
+            "layout": "per vertex z then n_x, n_y, n_z, each its value at e = 0 then k coefficient columns; position (ũ⁺, z) + offset, normal normalise(n + normal_offset)"},
+        "contact": {"layout": "lift: per vertex the share of its upper margin's shortfall below the lower margin (linear along x in the modelling camera; none at the canthi) added to ũ⁺.y"},
+        "radial": {"size": RADIAL_MAP_SIZE, "reach": ev.slider.reach,
+            "layout": "per eye size² texels, octahedral coordinates of the globe-frame direction, texel centres at (i + ½)/size, bilinear"},
+        "lashes": lashes,
+        "margins": region.margins,
+        "checks": {"vertices": probes, "poses": checks},
+        "arrays": b.arrays,
+    });
+    (header, b.bin)
+}
+
+/// The pairs (vertex of the mesh written to, model vertex) of the region, from each vertex's
+/// head skin vertex (`skin_origin`) and each skin vertex's model vertex (`to_model`).
+fn skin_vertex_pairs(to_model: &[u32], skin_origin: &[u32]) -> Vec<(u32, u32)> {
+    skin_origin
         .iter()
         .enumerate()
         .filter_map(|(i, &v)| {
             let mv = *to_model.get(v as usize)?;
             (mv != u32::MAX).then_some((i as u32, mv))
         })
-        .collect();
+        .collect()
+}
+
+/// The per-vertex arrays of the evaluator: the bases, the contact's lift, the rest offsets,
+/// the rest positions and normals, and each vertex's eye.
+fn add_model_arrays(b: &mut Blob, m: &StillModel) {
     let ev = &m.evaluator;
     let opt = &ev.optimised;
-    let n = opt.len();
-    let mut b = Blob::default();
     b.f32s("basis", 2 * (opt.k + 1), opt.basis.iter().copied());
     b.f32s(
         "depth",
@@ -121,15 +182,19 @@ pub fn pack(m: &StillModel, head: &derma_head::Head, skin_origin: &[u32]) -> (Va
         ev.rest_normals.iter().flat_map(|v| v.to_array()),
     );
     b.u32s("eye", 1, ev.slider.eye.iter().map(|&e| e as u32));
+}
+
+/// The globe sliding of each of the `n` vertices and the globes' radial maps.
+fn add_slide_arrays(b: &mut Blob, slider: &crate::sliding::Slider, n: usize) {
     // Sliding per vertex: [kind (0 surface, 1 offset, -1 never reaches a globe), t, δ₀, τ̂₀].
     let mut near = vec![false; n];
-    for &i in &ev.slider.near {
+    for &i in &slider.near {
         near[i as usize] = true;
     }
     b.f32s(
         "slide",
         6,
-        ev.slider
+        slider
             .modes
             .iter()
             .zip(&near)
@@ -142,34 +207,23 @@ pub fn pack(m: &StillModel, head: &derma_head::Head, skin_origin: &[u32]) -> (Va
     b.f32s(
         "radial",
         1,
-        ev.slider.maps.iter().flat_map(|r| r.radius.iter().copied()),
+        slider.maps.iter().flat_map(|r| r.radius.iter().copied()),
     );
-    b.u32s(
-        "skin_vertices",
-        2,
-        skin_vertices.iter().flat_map(|&(a, b)| [a, b]),
-    );
-    let mut lashes = Vec::new();
-    for l in &m.lashes {
-        b.u32s(&format!("lash_{}", l.name), 1, l.near.iter().copied());
-        lashes.push(json!({"name": l.name, "anchors": format!("lash_{}", l.name)}));
-    }
-    let linear = |l: &crate::regression::Linear| {
-        json!(l
-            .w
-            .iter()
-            .map(|r| r.iter().map(|&x| x as f32).collect::<Vec<_>>())
-            .collect::<Vec<_>>())
-    };
-    // Check vertices: the middle of each lid margin of each eye.
-    let region = &m.rig.region;
-    let probes: Vec<u32> = region
-        .margins
+}
+
+/// A linear map's weights as rows of f32.
+fn linear(l: &crate::regression::Linear) -> Value {
+    json!(l
+        .w
         .iter()
-        .flatten()
-        .map(|c| c[c.len() / 2])
-        .collect();
-    let checks = [
+        .map(|r| r.iter().map(|&x| x as f32).collect::<Vec<_>>())
+        .collect::<Vec<_>>())
+}
+
+/// The check poses (rest, downgaze, wide, squinting, closed) with the evaluator's positions of
+/// the `probes`.
+fn check_poses(m: &StillModel, head: &derma_head::Head, probes: &[u32]) -> Vec<Value> {
+    [
         (EyePose::REST, vec![]),
         (
             EyePose {
@@ -202,36 +256,8 @@ pub fn pack(m: &StillModel, head: &derma_head::Head, skin_origin: &[u32]) -> (Va
         ),
     ]
     .iter()
-    .map(|(p, u)| check(m, head, *p, u, &probes))
-    .collect::<Vec<_>>();
-    let header = json!({
-        "format": FORMAT,
-        "version": VERSION,
-        "units_mm": true,
-        "vertices": n,
-        "k": opt.k,
-        "inputs": "g̃ = (h, v, t, upper, lower) per eye (left, right; Fick degrees, normalised lid openings), then the units",
-        "units": m.model.units,
-        "region_units": crate::region::REGION_UNITS,
-        "w": linear(&opt.w),
-        "baseline": {
-            "features": "[h, |h|, max(v, 0), min(v, 0)]",
-            "rows": [linear(&m.model.baseline[0]), linear(&m.model.baseline[1])],
-            "closure": "per eye c = max(closure, eyeBlink unit), w = eyeWide unit; (upper, lower) = b + w (1 − c)(1 − b), b = (rows · [features, 1]) × (1 − c)",
-        },
-        "fixation_mm": FIXATION_MM,
-        "centres": [head.eyes[0].centre.to_array(), head.eyes[1].centre.to_array()],
-        "depth": {"k": ev.depth.k,
-            "layout": "per vertex z then n_x, n_y, n_z, each its value at e = 0 then k coefficient columns; position (ũ⁺, z) + offset, normal normalise(n + normal_offset)"},
-        "contact": {"layout": "lift: per vertex the share of its upper margin's shortfall below the lower margin (linear along x in the modelling camera; none at the canthi) added to ũ⁺.y"},
-        "radial": {"size": RADIAL_MAP_SIZE, "reach": ev.slider.reach,
-            "layout": "per eye size² texels, octahedral coordinates of the globe-frame direction, texel centres at (i + ½)/size, bilinear"},
-        "lashes": lashes,
-        "margins": region.margins,
-        "checks": {"vertices": probes, "poses": checks},
-        "arrays": b.arrays,
-    });
-    (header, b.bin)
+    .map(|(p, u)| check(m, head, *p, u, probes))
+    .collect::<Vec<_>>()
 }
 
 #[cfg(test)]

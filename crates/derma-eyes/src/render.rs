@@ -164,7 +164,7 @@ impl<'a> Stage<'a> {
             &props,
             0.0,
             full,
-            &preview::STUDIO,
+            &derma_render::Setup::Studio.lighting(),
         );
         let span = 0.92 * full as f32 / 120.0; // px per mm
         let (cw, ch) = (size, ((h_mm / w_mm * size as f32).round() as usize).max(1));

@@ -69,6 +69,7 @@ fn the_trained_model_reproduces_held_out_frames() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn one_more_component_never_increases_training_error() {
     let (t, _) = model();
     let mut last = (f64::MAX, f64::MAX);
@@ -173,6 +174,7 @@ fn no_skin_inside_the_globes(head: &derma_head::Head, region: &region::EyeRegion
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn a_fitted_heads_lids_slide_over_its_own_globes() {
     // A scan: the built-in head's outer skin made wider, shorter and deeper, bent, and moved
     // (a head of other proportions), fitted; its rig trains its own model.

@@ -227,12 +227,34 @@ impl Regions {
 
     /// Weights of every region at surface point `p` with texture coordinate `uv`.
     pub fn weights(&self, p: Vec3, uv: Vec2) -> Weights {
+        let mut w: Weights = [0.0; REGIONS.len()];
+        w[region!("mouth_interior")] = Self::in_rects(&self.mouth_charts, uv);
+        w[region!("eye_sockets")] = Self::in_rects(&self.socket_charts, uv);
+        let q = self.point_at(p, &w);
+        (w[region!("ears")], w[region!("scalp")]) = self.ears_and_scalp(&q);
+        (
+            w[region!("eyelids")],
+            w[region!("eyebrows")],
+            w[region!("periorbital")],
+        ) = eye_area(&q);
+        w[region!("nose")] = nose(&q, &w);
+        w[region!("lips")] = lips(&q);
+        w[region!("upper_lip")] = upper_lip(&q, &w);
+        w[region!("chin")] = chin(&q, &w);
+        w[region!("neck")] = neck(&q, &w);
+        w[region!("cheeks")] = cheeks(&q, &w);
+        w[region!("forehead")] = forehead(&q, &w);
+        w[region!("beard")] = beard(&q, &w);
+        w[region!("face")] = face(&q, &w);
+        w
+    }
+
+    /// What every region's weight reads at `p`, whose non-skin weights `w` holds: its side,
+    /// frontness and skin, and the landmark heights several regions share.
+    fn point_at(&self, p: Vec3, w: &Weights) -> At<'_> {
         let at = &self.at;
-        let mouth_interior = Self::in_rects(&self.mouth_charts, uv);
-        let eye_sockets = Self::in_rects(&self.socket_charts, uv);
-        let skin = 1.0 - mouth_interior.max(eye_sockets);
+        let skin = 1.0 - w[region!("mouth_interior")].max(w[region!("eye_sockets")]);
         let c = self.azimuth_cos(p);
-        let front = smoothstep(0.1, 0.35, c);
         let (x, y) = (p.x, p.y);
         let (side, this) = if x >= 0.0 {
             ("left", &at.left)
@@ -240,184 +262,246 @@ impl Regions {
             ("right", &at.right)
         };
         let s = Landmarks::side_sign(side);
-        let ax = x * s; // distance towards this side
-        let (eye, ci, co) = (this.eye, this.canthus_inner, this.canthus_outer);
-        let (ear_p, mc) = (this.ear, this.mouth_corner);
-        let (nose_tip, subnasale) = (at.nose_tip, at.subnasale);
-        let (chin, menton) = (at.chin, at.menton);
-
-        // Ears: the auricle, ~63 × 35 mm (Farkas 1994), standing out from the side of the head.
-        let ey = (y - ear_p.y) / 33.0;
-        let ez = (p.z - ear_p.z) / 20.0;
-        let ears = skin
-            * smoothstep(1.1, 0.9, (ey * ey + ez * ez).sqrt())
-            * smoothstep(ear_p.x.abs() - 16.0, ear_p.x.abs() - 11.0, ax);
-
-        let hy = self.hairline_y(c);
-        let scalp = skin * (1.0 - ears) * smoothstep(hy - 3.0, hy + 4.0, y);
-
-        // Eyelids: from the canthi ± 2 mm, 13 mm above the eye centre (lid to crease and fold)
-        // and 9 mm below (lower lid to the lid–cheek junction).
-        let xm = 0.5 * (ci.x + co.x) * s;
-        let hw = 0.5 * (co.x - ci.x).abs() + 2.0;
-        let du = (ax - xm) / hw;
-        let dv = if y > eye.y {
-            (y - eye.y) / 13.0
-        } else {
-            (eye.y - y) / 9.0
-        };
-        let lid_r = (du * du + dv * dv).sqrt();
-        let ahead = smoothstep(eye.z - 8.0, eye.z - 2.0, p.z);
-        let eyelids = skin * ahead * smoothstep(1.1, 0.9, lid_r);
-
-        // Eyebrows: an arch over the supraorbital rim from 3 mm medial of the inner canthus to
-        // 10 mm beyond the outer one; 18–22 mm above the eye centre, 10 mm tall medially
-        // tapering to 5 mm at the tail.
-        let b0 = ci.x.abs() - 3.0;
-        let b1 = co.x.abs() + 10.0;
-        let t = (2.0 * (ax - b0) / (b1 - b0) - 1.0).clamp(-1.5, 1.5);
-        let brow_y = eye.y + 18.0 + 4.0 * (1.0 - ((t - 0.2) / 1.2).powi(2)).max(0.0);
-        let brow_h = 5.0 - 2.5 * (0.5 * (t + 1.0)).clamp(0.0, 1.0);
-        let eyebrows = skin
-            * front
-            * smoothstep(1.05, 0.9, t.abs())
-            * smoothstep(1.0, 0.7, (y - brow_y).abs() / brow_h);
-
-        // Periorbital: the ring around the lids out to the orbital rim (~12 mm beyond the lids
-        // sideways, 20 mm below the eye centre), darker and bluish in many people (Freitag &
-        // Cestari 2007, J Cosmet Dermatol 6:211).
-        let pv = if y > eye.y {
-            (y - eye.y) / 22.0
-        } else {
-            (eye.y - y) / 21.0
-        };
-        let pu = (ax - xm) / (hw + 10.0);
-        let orbit = ahead * smoothstep(1.1, 0.9, (pu * pu + pv * pv).sqrt());
-        let periorbital = (skin * orbit - eyelids - eyebrows).clamp(0.0, 1.0);
-
-        // Nose: 9 mm either side of the midline at the nasion widening to the alae (alar width
-        // ~35 mm, Farkas 1994), from 8 mm above the eye centres to the subnasale.
-        let w = pwl(
-            &[
-                (subnasale.y, 18.0),
-                (nose_tip.y, 17.0),
-                (eye.y - 12.0, 10.0),
-                (eye.y + 8.0, 8.0),
-            ],
-            y,
-        );
-        let nose = (skin
-            * front
-            * smoothstep(1.05, 0.85, x.abs() / w)
-            * smoothstep(subnasale.y - 2.0, subnasale.y + 1.0, y)
-            * smoothstep(eye.y + 10.0, eye.y + 6.0, y)
-            - eyelids)
-            .clamp(0.0, 1.0);
-
-        // Lips (vermilion): from corner to corner, the upper vermilion 8 mm tall with a cupid's
-        // bow, the lower 10 mm (vermilion heights ls–sto ≈ 8, sto–li ≈ 10 mm; Farkas 1994).
-        let mouth_y = 0.5 * (at.left.mouth_corner.y + at.right.mouth_corner.y);
-        let half = mc.x.abs();
-        let lip_h = if y > mouth_y {
-            8.0 - 1.5 * (-(x / 4.0).powi(2)).exp() + 1.0 * (-((x.abs() - 6.0) / 4.0).powi(2)).exp()
-        } else {
-            10.0
-        };
-        let lip_r = (((y - mouth_y) / lip_h).powi(2) + (x.abs() / half).powf(2.5)).sqrt();
-        let lips = skin * smoothstep(mc.z - 8.0, mc.z - 3.0, p.z) * smoothstep(1.1, 0.92, lip_r);
-
-        // Upper lip (skin): between the vermilion and the subnasale, as wide as the mouth.
-        let upper_lip = (skin
-            * front
-            * smoothstep(mouth_y, mouth_y + 6.0, y)
-            * smoothstep(subnasale.y + 1.0, subnasale.y - 2.0, y)
-            * smoothstep(half + 6.0, half + 1.0, x.abs())
-            - lips
-            - nose)
-            .clamp(0.0, 1.0);
-
-        // Chin: around the pogonion, below the lower lip.
-        let cu = x / 22.0;
-        let cv = (y - chin.y) / 16.0;
-        let chin_w = (skin * front * smoothstep(1.1, 0.9, (cu * cu + cv * cv).sqrt()) - lips)
-            .clamp(0.0, 1.0);
-
-        // Neck: below the jaw line, which runs from under the menton to 38 mm below the ears.
         let ear_y = 0.5 * (at.left.ear.y + at.right.ear.y);
+        // The jaw line runs from under the menton to 38 mm below the ears.
         let jaw_y = pwl(
             &[
                 (-1.0, ear_y - 50.0),
                 (0.0, ear_y - 38.0),
-                (0.5, 0.5 * (menton.y + ear_y) - 15.0),
-                (1.0, menton.y - 2.0),
+                (0.5, 0.5 * (at.menton.y + ear_y) - 15.0),
+                (1.0, at.menton.y - 2.0),
             ],
             c,
         );
-        let neck = skin * (1.0 - ears) * (1.0 - scalp) * smoothstep(jaw_y + 4.0, jaw_y - 4.0, y);
-
-        // Cheeks: below the lids, beside the nose, above the mouth corners' level, in front of
-        // the ears.
-        let cx = (ax - 42.0) / 26.0;
-        let cy = (y - (eye.y - 32.0)) / 24.0;
-        let cheeks = (skin * front * smoothstep(1.1, 0.85, (cx * cx + cy * cy).sqrt())
-            - nose
-            - lips
-            - eyelids
-            - periorbital
-            - upper_lip)
-            .clamp(0.0, 1.0);
-
-        // Forehead: above the brows to the hairline, between the temples.
-        let forehead = (skin
-            * smoothstep(0.35, 0.55, c)
-            * (1.0 - scalp)
-            * smoothstep(eye.y + 20.0, eye.y + 27.0, y)
-            * smoothstep(co.x.abs() + 16.0, co.x.abs() + 8.0, x.abs())
-            - eyebrows)
-            .clamp(0.0, 1.0);
-
-        // Beard area (terminal hair in men): the upper lip, cheeks below a line from the
-        // nasolabial region to the sideburns, chin, jaw and upper neck.
-        let top = pwl(
-            &[
-                (0.0, subnasale.y - 2.0),
-                (half + 8.0, subnasale.y - 6.0),
-                (45.0, eye.y - 35.0),
-                (62.0, ear_y),
-                (75.0, ear_y + 30.0),
-            ],
-            x.abs(),
-        );
-        let beard = (skin
-            * (1.0 - scalp)
-            * (1.0 - ears)
-            * smoothstep(-0.1, 0.1, c)
-            * smoothstep(top + 3.0, top - 3.0, y)
-            * smoothstep(jaw_y - 40.0, jaw_y - 25.0, y)
-            - lips
-            - nose)
-            .clamp(0.0, 1.0);
-
-        let face = (skin * front * (1.0 - scalp) * (1.0 - neck) * (1.0 - ears)).clamp(0.0, 1.0);
-        [
-            scalp,
-            forehead,
-            eyebrows,
-            periorbital,
-            eyelids,
-            nose,
-            cheeks,
-            ears,
-            upper_lip,
-            beard,
-            lips,
-            chin_w,
-            neck,
-            face,
-            mouth_interior,
-            eye_sockets,
-        ]
+        At {
+            p,
+            x,
+            y,
+            ax: x * s,
+            s,
+            c,
+            front: smoothstep(0.1, 0.35, c),
+            skin,
+            this,
+            at,
+            mouth_y: 0.5 * (at.left.mouth_corner.y + at.right.mouth_corner.y),
+            ear_y,
+            jaw_y,
+        }
     }
+
+    /// Ears — the auricle, ~63 × 35 mm (Farkas 1994), standing out from the side of the head —
+    /// and the scalp above the hairline.
+    fn ears_and_scalp(&self, q: &At) -> (f32, f32) {
+        let (p, y, skin, ear_p) = (q.p, q.y, q.skin, q.this.ear);
+        let ey = (y - ear_p.y) / 33.0;
+        let ez = (p.z - ear_p.z) / 20.0;
+        let ears = skin
+            * smoothstep(1.1, 0.9, (ey * ey + ez * ez).sqrt())
+            * smoothstep(ear_p.x.abs() - 16.0, ear_p.x.abs() - 11.0, q.ax);
+
+        let hy = self.hairline_y(q.c);
+        let scalp = skin * (1.0 - ears) * smoothstep(hy - 3.0, hy + 4.0, y);
+        (ears, scalp)
+    }
+}
+
+/// One point's shared quantities for the region weights ([`Regions::weights`]).
+struct At<'a> {
+    p: Vec3,
+    x: f32,
+    y: f32,
+    /// Distance towards this side.
+    ax: f32,
+    /// The side's sign (+1 left, −1 right).
+    s: f32,
+    /// Azimuth cosine ([`Regions::azimuth_cos`]) and the frontness it gives.
+    c: f32,
+    front: f32,
+    /// 1 on skin, 0 on the non-skin charts.
+    skin: f32,
+    /// This side's landmarks, and all of them.
+    this: &'a Side,
+    at: &'a Points,
+    /// Heights of the mouth line, the ears and the jaw line below this point.
+    mouth_y: f32,
+    ear_y: f32,
+    jaw_y: f32,
+}
+
+/// Eyelids, eyebrows and the periorbital ring, as (eyelids, eyebrows, periorbital).
+fn eye_area(q: &At) -> (f32, f32, f32) {
+    let (p, y, ax, skin) = (q.p, q.y, q.ax, q.skin);
+    let (eye, ci, co) = (q.this.eye, q.this.canthus_inner, q.this.canthus_outer);
+    // Eyelids: from the canthi ± 2 mm, 13 mm above the eye centre (lid to crease and fold)
+    // and 9 mm below (lower lid to the lid–cheek junction).
+    let xm = 0.5 * (ci.x + co.x) * q.s;
+    let hw = 0.5 * (co.x - ci.x).abs() + 2.0;
+    let du = (ax - xm) / hw;
+    let dv = if y > eye.y {
+        (y - eye.y) / 13.0
+    } else {
+        (eye.y - y) / 9.0
+    };
+    let lid_r = (du * du + dv * dv).sqrt();
+    let ahead = smoothstep(eye.z - 8.0, eye.z - 2.0, p.z);
+    let eyelids = skin * ahead * smoothstep(1.1, 0.9, lid_r);
+
+    // Eyebrows: an arch over the supraorbital rim from 3 mm medial of the inner canthus to
+    // 10 mm beyond the outer one; 18–22 mm above the eye centre, 10 mm tall medially
+    // tapering to 5 mm at the tail.
+    let b0 = ci.x.abs() - 3.0;
+    let b1 = co.x.abs() + 10.0;
+    let t = (2.0 * (ax - b0) / (b1 - b0) - 1.0).clamp(-1.5, 1.5);
+    let brow_y = eye.y + 18.0 + 4.0 * (1.0 - ((t - 0.2) / 1.2).powi(2)).max(0.0);
+    let brow_h = 5.0 - 2.5 * (0.5 * (t + 1.0)).clamp(0.0, 1.0);
+    let eyebrows = skin
+        * q.front
+        * smoothstep(1.05, 0.9, t.abs())
+        * smoothstep(1.0, 0.7, (y - brow_y).abs() / brow_h);
+
+    // Periorbital: the ring around the lids out to the orbital rim (~12 mm beyond the lids
+    // sideways, 20 mm below the eye centre), darker and bluish in many people (Freitag &
+    // Cestari 2007, J Cosmet Dermatol 6:211).
+    let pv = if y > eye.y {
+        (y - eye.y) / 22.0
+    } else {
+        (eye.y - y) / 21.0
+    };
+    let pu = (ax - xm) / (hw + 10.0);
+    let orbit = ahead * smoothstep(1.1, 0.9, (pu * pu + pv * pv).sqrt());
+    let periorbital = (skin * orbit - eyelids - eyebrows).clamp(0.0, 1.0);
+    (eyelids, eyebrows, periorbital)
+}
+
+/// Nose: 9 mm either side of the midline at the nasion widening to the alae (alar width
+/// ~35 mm, Farkas 1994), from 8 mm above the eye centres to the subnasale.
+fn nose(q: &At, w: &Weights) -> f32 {
+    let (x, y, eye) = (q.x, q.y, q.this.eye);
+    let (nose_tip, subnasale) = (q.at.nose_tip, q.at.subnasale);
+    let width = pwl(
+        &[
+            (subnasale.y, 18.0),
+            (nose_tip.y, 17.0),
+            (eye.y - 12.0, 10.0),
+            (eye.y + 8.0, 8.0),
+        ],
+        y,
+    );
+    (q.skin
+        * q.front
+        * smoothstep(1.05, 0.85, x.abs() / width)
+        * smoothstep(subnasale.y - 2.0, subnasale.y + 1.0, y)
+        * smoothstep(eye.y + 10.0, eye.y + 6.0, y)
+        - w[region!("eyelids")])
+    .clamp(0.0, 1.0)
+}
+
+/// Lips (vermilion): from corner to corner, the upper vermilion 8 mm tall with a cupid's
+/// bow, the lower 10 mm (vermilion heights ls–sto ≈ 8, sto–li ≈ 10 mm; Farkas 1994).
+fn lips(q: &At) -> f32 {
+    let (x, y, mouth_y, mc) = (q.x, q.y, q.mouth_y, q.this.mouth_corner);
+    let half = mc.x.abs();
+    let lip_h = if y > mouth_y {
+        8.0 - 1.5 * (-(x / 4.0).powi(2)).exp() + 1.0 * (-((x.abs() - 6.0) / 4.0).powi(2)).exp()
+    } else {
+        10.0
+    };
+    let lip_r = (((y - mouth_y) / lip_h).powi(2) + (x.abs() / half).powf(2.5)).sqrt();
+    q.skin * smoothstep(mc.z - 8.0, mc.z - 3.0, q.p.z) * smoothstep(1.1, 0.92, lip_r)
+}
+
+/// Upper lip (skin): between the vermilion and the subnasale, as wide as the mouth.
+fn upper_lip(q: &At, w: &Weights) -> f32 {
+    let (x, y, mouth_y, subnasale) = (q.x, q.y, q.mouth_y, q.at.subnasale);
+    let half = q.this.mouth_corner.x.abs();
+    (q.skin
+        * q.front
+        * smoothstep(mouth_y, mouth_y + 6.0, y)
+        * smoothstep(subnasale.y + 1.0, subnasale.y - 2.0, y)
+        * smoothstep(half + 6.0, half + 1.0, x.abs())
+        - w[region!("lips")]
+        - w[region!("nose")])
+    .clamp(0.0, 1.0)
+}
+
+/// Chin: around the pogonion, below the lower lip.
+fn chin(q: &At, w: &Weights) -> f32 {
+    let cu = q.x / 22.0;
+    let cv = (q.y - q.at.chin.y) / 16.0;
+    (q.skin * q.front * smoothstep(1.1, 0.9, (cu * cu + cv * cv).sqrt()) - w[region!("lips")])
+        .clamp(0.0, 1.0)
+}
+
+/// Neck: below the jaw line.
+fn neck(q: &At, w: &Weights) -> f32 {
+    let jaw_y = q.jaw_y;
+    q.skin
+        * (1.0 - w[region!("ears")])
+        * (1.0 - w[region!("scalp")])
+        * smoothstep(jaw_y + 4.0, jaw_y - 4.0, q.y)
+}
+
+/// Cheeks: below the lids, beside the nose, above the mouth corners' level, in front of the
+/// ears.
+fn cheeks(q: &At, w: &Weights) -> f32 {
+    let cx = (q.ax - 42.0) / 26.0;
+    let cy = (q.y - (q.this.eye.y - 32.0)) / 24.0;
+    (q.skin * q.front * smoothstep(1.1, 0.85, (cx * cx + cy * cy).sqrt())
+        - w[region!("nose")]
+        - w[region!("lips")]
+        - w[region!("eyelids")]
+        - w[region!("periorbital")]
+        - w[region!("upper_lip")])
+    .clamp(0.0, 1.0)
+}
+
+/// Forehead: above the brows to the hairline, between the temples.
+fn forehead(q: &At, w: &Weights) -> f32 {
+    let (eye, co) = (q.this.eye, q.this.canthus_outer);
+    (q.skin
+        * smoothstep(0.35, 0.55, q.c)
+        * (1.0 - w[region!("scalp")])
+        * smoothstep(eye.y + 20.0, eye.y + 27.0, q.y)
+        * smoothstep(co.x.abs() + 16.0, co.x.abs() + 8.0, q.x.abs())
+        - w[region!("eyebrows")])
+    .clamp(0.0, 1.0)
+}
+
+/// Beard area (terminal hair in men): the upper lip, cheeks below a line from the nasolabial
+/// region to the sideburns, chin, jaw and upper neck.
+fn beard(q: &At, w: &Weights) -> f32 {
+    let (y, subnasale, ear_y, jaw_y) = (q.y, q.at.subnasale, q.ear_y, q.jaw_y);
+    let half = q.this.mouth_corner.x.abs();
+    let top = pwl(
+        &[
+            (0.0, subnasale.y - 2.0),
+            (half + 8.0, subnasale.y - 6.0),
+            (45.0, q.this.eye.y - 35.0),
+            (62.0, ear_y),
+            (75.0, ear_y + 30.0),
+        ],
+        q.x.abs(),
+    );
+    (q.skin
+        * (1.0 - w[region!("scalp")])
+        * (1.0 - w[region!("ears")])
+        * smoothstep(-0.1, 0.1, q.c)
+        * smoothstep(top + 3.0, top - 3.0, y)
+        * smoothstep(jaw_y - 40.0, jaw_y - 25.0, y)
+        - w[region!("lips")]
+        - w[region!("nose")])
+    .clamp(0.0, 1.0)
+}
+
+/// The face: skin in front, off the scalp, neck and ears.
+fn face(q: &At, w: &Weights) -> f32 {
+    (q.skin
+        * q.front
+        * (1.0 - w[region!("scalp")])
+        * (1.0 - w[region!("neck")])
+        * (1.0 - w[region!("ears")]))
+    .clamp(0.0, 1.0)
 }
 
 impl Regions {

@@ -6,7 +6,7 @@
 //! triangle turned over; landmark error median ≤ 3 mm, none over 6 mm.
 //!
 //!   python3 scripts/corpus.py fetch
-//!   cargo test --release -p derma-head --test corpus -- --ignored --nocapture
+//!   cargo test --release -p derma-head --test suite corpus:: -- --ignored --nocapture
 //!
 //! MediaPipe's face (from ../shared/data) runs in the test command.
 
@@ -194,6 +194,7 @@ fn check(name: &str, o: &Outcome, median_mm: f32, max_mm: f32) {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn mediapipes_face_is_fitted_with_no_flags() {
     let Some(face) = derma_test_support::shared_data("canonical_face_model.obj") else {
         return;

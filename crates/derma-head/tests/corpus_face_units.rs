@@ -6,7 +6,7 @@
 //! cosine ≥ 0.85, eyeBlink ≥ 0.7, median RMS ratio 0.8–1.25).
 //!
 //!   python3 scripts/corpus.py fetch
-//!   cargo test --release -p derma-head --test corpus_face_units -- --ignored --nocapture
+//!   cargo test --release -p derma-head --test suite corpus_face_units:: -- --ignored --nocapture
 
 use derma_core::head_mesh::{load_head_geometry, HeadRead};
 use derma_core::mesh::TriMesh;

@@ -1,9 +1,7 @@
 //! The fit against ground truth it was not tuned on (seed 5; the schedule was set on seeds 1–2),
 //! through the files a user gives (a cm OBJ without UVs), and what it refuses.
 
-#[path = "support/truth.rs"]
-#[allow(dead_code)]
-mod truth;
+use crate::truth;
 
 use derma_core::head_mesh::HeadUnit;
 use derma_core::mesh::TriMesh;
@@ -15,6 +13,7 @@ use derma_test_support::scratch_dir;
 use glam::Vec3;
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn a_warped_remeshed_head_in_centimetres_is_fitted_within_a_millimetre() {
     let case = truth::case(5, 10.0, 60.0);
     let dir = scratch_dir("fit-truth");
@@ -134,6 +133,7 @@ fn sphere(r: f32) -> TriMesh {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn what_is_no_face_or_cannot_fit_is_refused_by_name() {
     let fail = |scan: TriMesh, opts: &FitOptions| match fit::fit(scan, opts, &Silent) {
         Err(e) => e,

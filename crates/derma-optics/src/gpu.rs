@@ -142,11 +142,64 @@ pub fn run_gpu_with(run: &Run, progress: &dyn Progress, kernel: &Kernel) -> Resu
     run.validate()?;
     let (ctx, pipeline) = pipeline(kernel.products)?;
     let prepared: Vec<Prepared> = run.stacks.iter().map(Prepared::new).collect();
-    let nl = prepared.len() as u32;
-    let n_layers = prepared[0].mut_.len() as u32;
-    let mut layer_data = Vec::with_capacity(nl as usize * n_layers as usize * LAYER_FLOATS);
-    for p in &prepared {
-        for l in 0..n_layers as usize {
+    let sizes = Sizes::new(run, &prepared);
+    let grid = dispatch_grid(ctx, run, kernel, sizes.nl)?;
+    let bufs = upload(ctx, pipeline, run, &prepared, &sizes);
+    let base = base_params(run, &prepared[0], &sizes, grid.columns);
+    dispatch_all(ctx, pipeline, &bufs, &base, run, &grid, progress)?;
+    read_tally(ctx, run, &prepared, &sizes, &bufs)
+}
+
+/// The sizes of a run's tables on the GPU: wavelengths, layers, BRDF channels and bins,
+/// profile bins and range, tally slots (two words each) and counters.
+struct Sizes {
+    nl: u32,
+    n_layers: u32,
+    channels: u32,
+    bti: usize,
+    bto: usize,
+    bphi: usize,
+    brdf_len: u32,
+    pbins: usize,
+    pdmax: f64,
+    slots: u32,
+    n_counts: u32,
+}
+
+impl Sizes {
+    /// The sizes of `run`, prepared as `prepared`.
+    fn new(run: &Run, prepared: &[Prepared]) -> Self {
+        let nl = prepared.len() as u32;
+        let n_layers = prepared[0].mut_.len() as u32;
+        let channels = run.channels() as u32;
+        let (bti, bto, bphi) = run
+            .brdf
+            .map_or((0, 0, 0), |b| (b.theta_in, b.theta_out, b.phi));
+        let brdf_len = (bti * bto * bphi) as u32 * channels;
+        let (pbins, pdmax) = run.profile.map_or((0, 1.0), |p| (p.bins, p.d_max_mm));
+        let slots = 8 * nl + nl * n_layers + 1 + brdf_len + pbins as u32 * nl;
+        let n_counts = nl + bti as u32;
+        Self {
+            nl,
+            n_layers,
+            channels,
+            bti,
+            bto,
+            bphi,
+            brdf_len,
+            pbins,
+            pdmax,
+            slots,
+            n_counts,
+        }
+    }
+}
+
+/// The kernel's layer table: per wavelength and layer, [`LAYER_FLOATS`] values in f32.
+fn layer_table(prepared: &[Prepared], n_layers: usize) -> Vec<f32> {
+    let mut layer_data = Vec::with_capacity(prepared.len() * n_layers * LAYER_FLOATS);
+    for p in prepared {
+        for l in 0..n_layers {
             layer_data.extend_from_slice(&[
                 p.z[l] as f32,
                 p.z[l + 1] as f32,
@@ -158,24 +211,31 @@ pub fn run_gpu_with(run: &Run, progress: &dyn Progress, kernel: &Kernel) -> Resu
             ]);
         }
     }
-    let channels = run.channels() as u32;
-    let chan: Vec<f32> = if run.channel_weights.is_empty() {
-        vec![1.0; nl as usize]
+    layer_data
+}
+
+/// The BRDF channel weights per wavelength in f32 (one channel of weight 1 where none given).
+fn channel_table(run: &Run, nl: usize) -> Vec<f32> {
+    if run.channel_weights.is_empty() {
+        vec![1.0; nl]
     } else {
         run.channel_weights
             .iter()
             .flatten()
             .map(|&v| v as f32)
             .collect()
-    };
-    let (bti, bto, bphi) = run
-        .brdf
-        .map_or((0, 0, 0), |b| (b.theta_in, b.theta_out, b.phi));
-    let brdf_len = (bti * bto * bphi) as u32 * channels;
-    let (pbins, pdmax) = run.profile.map_or((0, 1.0), |p| (p.bins, p.d_max_mm));
-    let slots = 8 * nl + nl * n_layers + 1 + brdf_len + pbins as u32 * nl;
-    let n_counts = nl + bti as u32;
+    }
+}
 
+/// How the photons are dispatched: workgroups per wavelength and photons per dispatch.
+struct Grid {
+    columns: u32,
+    per_dispatch: u64,
+}
+
+/// The dispatch grid of `run` on this device under `kernel`; an error where its wavelengths
+/// or photons per dispatch exceed the device's limits.
+fn dispatch_grid(ctx: &derma_core::gpu::Gpu, run: &Run, kernel: &Kernel, nl: u32) -> Result<Grid> {
     // Workgroups: `columns` per wavelength. Large runs fill the device with the kernel's
     // workgroups and photons per thread and dispatch; small ones use fewer
     // (at least 4 photons a thread). Every dispatch but the last holds a multiple of nλ
@@ -209,17 +269,34 @@ pub fn run_gpu_with(run: &Run, progress: &dyn Progress, kernel: &Kernel) -> Resu
             .div_ceil(nl as u64 * WORKGROUP as u64 * 4)
             .clamp(1, full_columns)
     } as u32;
+    Ok(Grid {
+        columns,
+        per_dispatch,
+    })
+}
 
-    let (surface, sigma) = match prepared[0].surface {
-        Surface::Smooth => (0, 0.0),
-        Surface::TrowbridgeReitz { sigma } => (1, sigma as f32),
-        Surface::Smith { alpha } => (2, alpha as f32),
-    };
-    let (bottom, bottom_value) = match prepared[0].bottom {
-        Bottom::Medium { n } => (0, n as f32),
-        Bottom::Lambertian { albedo } => (1, albedo as f32),
-    };
-    let d = &ctx.device;
+/// The run's buffers on the GPU and their bind group.
+struct Buffers {
+    params: wgpu::Buffer,
+    // Bound only; kept for the run's life, as the bind group's.
+    _layers: wgpu::Buffer,
+    _channels: wgpu::Buffer,
+    acc: wgpu::Buffer,
+    counts: wgpu::Buffer,
+    bind: wgpu::BindGroup,
+}
+
+/// Uploads the layer table and channel weights, makes the zeroed tallies and counters and the
+/// parameters' uniform, and binds them.
+fn upload(
+    ctx: &derma_core::gpu::Gpu,
+    pipeline: &wgpu::ComputePipeline,
+    run: &Run,
+    prepared: &[Prepared],
+    sizes: &Sizes,
+) -> Buffers {
+    let layer_data = layer_table(prepared, sizes.n_layers as usize);
+    let chan = channel_table(run, sizes.nl as usize);
     let storage = |label, bytes: &[u8], usage| ctx.upload(label, bytes, usage);
     let layers_buf = storage(
         "layers",
@@ -234,17 +311,17 @@ pub fn run_gpu_with(run: &Run, progress: &dyn Progress, kernel: &Kernel) -> Resu
     let rw = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
     let acc_buf = storage(
         "tallies",
-        bytemuck::cast_slice(&vec![0u32; 2 * slots as usize]),
+        bytemuck::cast_slice(&vec![0u32; 2 * sizes.slots as usize]),
         rw,
     );
     let counts_buf = storage(
         "counts",
-        bytemuck::cast_slice(&vec![0u32; n_counts as usize]),
+        bytemuck::cast_slice(&vec![0u32; sizes.n_counts as usize]),
         rw,
     );
 
     // One uniform buffer and bind group for all dispatches; only the parameters change.
-    let params_buf = d.create_buffer(&wgpu::BufferDescriptor {
+    let params_buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("params"),
         size: std::mem::size_of::<Params>() as u64,
         usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
@@ -256,44 +333,84 @@ pub fn run_gpu_with(run: &Run, progress: &dyn Progress, kernel: &Kernel) -> Resu
         &layout,
         &[&params_buf, &layers_buf, &chan_buf, &acc_buf, &counts_buf],
     );
+    Buffers {
+        params: params_buf,
+        _layers: layers_buf,
+        _channels: chan_buf,
+        acc: acc_buf,
+        counts: counts_buf,
+        bind,
+    }
+}
 
+/// The kernel's parameters for `run` (its first stack prepared as `p0`), but for the
+/// dispatch's photons (offset and count zero).
+fn base_params(run: &Run, p0: &Prepared, sizes: &Sizes, columns: u32) -> Params {
+    let (surface, sigma) = match p0.surface {
+        Surface::Smooth => (0, 0.0),
+        Surface::TrowbridgeReitz { sigma } => (1, sigma as f32),
+        Surface::Smith { alpha } => (2, alpha as f32),
+    };
+    let (bottom, bottom_value) = match p0.bottom {
+        Bottom::Medium { n } => (0, n as f32),
+        Bottom::Lambertian { albedo } => (1, albedo as f32),
+    };
+    Params {
+        seed_lo: run.seed as u32,
+        seed_hi: (run.seed >> 32) as u32,
+        offset_lo: 0,
+        offset_hi: 0,
+        count: 0,
+        lanes: columns * WORKGROUP,
+        n_lambda: sizes.nl,
+        n_layers: sizes.n_layers,
+        incidence: matches!(run.incidence, Incidence::ArcsinZenith) as u32,
+        surface,
+        sigma,
+        bottom,
+        bottom_value,
+        n_above: p0.n_above as f32,
+        brdf_ti: sizes.bti as u32,
+        brdf_to: sizes.bto as u32,
+        brdf_phi: sizes.bphi as u32,
+        channels: sizes.channels,
+        profile_bins: sizes.pbins as u32,
+        profile_dmax: sizes.pdmax as f32,
+    }
+}
+
+/// Traces all of `run`'s photons, `grid.per_dispatch` a dispatch with `base`'s parameters;
+/// `progress` advances by each dispatch's photons as it finishes.
+fn dispatch_all(
+    ctx: &derma_core::gpu::Gpu,
+    pipeline: &wgpu::ComputePipeline,
+    bufs: &Buffers,
+    base: &Params,
+    run: &Run,
+    grid: &Grid,
+    progress: &dyn Progress,
+) -> Result<()> {
     // Dispatches are queued back to back: the host waits for dispatch i − 1 (and reports its
     // photons) only after submitting dispatch i, so the device never idles between them.
     let mut offset = 0u64;
     let mut in_flight: Option<(wgpu::SubmissionIndex, u64)> = None;
     while offset < run.photons {
-        let count = (run.photons - offset).min(per_dispatch) as u32;
+        let count = (run.photons - offset).min(grid.per_dispatch) as u32;
         let params = Params {
-            seed_lo: run.seed as u32,
-            seed_hi: (run.seed >> 32) as u32,
             offset_lo: offset as u32,
             offset_hi: (offset >> 32) as u32,
             count,
-            lanes: columns * WORKGROUP,
-            n_lambda: nl,
-            n_layers,
-            incidence: matches!(run.incidence, Incidence::ArcsinZenith) as u32,
-            surface,
-            sigma,
-            bottom,
-            bottom_value,
-            n_above: prepared[0].n_above as f32,
-            brdf_ti: bti as u32,
-            brdf_to: bto as u32,
-            brdf_phi: bphi as u32,
-            channels,
-            profile_bins: pbins as u32,
-            profile_dmax: pdmax as f32,
+            ..*base
         };
         // Ordered after the previous dispatch by the queue, as wgpu guarantees.
         ctx.queue
-            .write_buffer(&params_buf, 0, bytemuck::bytes_of(&params));
-        let mut enc = d.create_command_encoder(&Default::default());
+            .write_buffer(&bufs.params, 0, bytemuck::bytes_of(&params));
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
             pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(columns * nl, 1, 1);
+            pass.set_bind_group(0, &bufs.bind, &[]);
+            pass.dispatch_workgroups(grid.columns * base.n_lambda, 1, 1);
         }
         let index = ctx.queue.submit([enc.finish()]);
         if let Some((previous, photons)) = in_flight.replace((index, count as u64)) {
@@ -306,9 +423,20 @@ pub fn run_gpu_with(run: &Run, progress: &dyn Progress, kernel: &Kernel) -> Resu
         ctx.wait_for(last, "tracing photons")?;
         progress.advance(photons);
     }
+    Ok(())
+}
 
-    let acc: Vec<u32> = ctx.read_back(&acc_buf, 2 * slots as usize)?;
-    let counts: Vec<u32> = ctx.read_back(&counts_buf, n_counts as usize)?;
+/// Reads the tallies and counters back into `run`'s [`Tally`].
+fn read_tally(
+    ctx: &derma_core::gpu::Gpu,
+    run: &Run,
+    prepared: &[Prepared],
+    sizes: &Sizes,
+    bufs: &Buffers,
+) -> Result<Tally> {
+    let (nl, n_layers) = (sizes.nl, sizes.n_layers);
+    let acc: Vec<u32> = ctx.read_back(&bufs.acc, 2 * sizes.slots as usize)?;
+    let counts: Vec<u32> = ctx.read_back(&bufs.counts, sizes.n_counts as usize)?;
     let val = |slot: u32| fixed_to_f64(acc[2 * slot as usize], acc[2 * slot as usize + 1]);
 
     let mut t = run.empty_tally();
@@ -342,7 +470,7 @@ pub fn run_gpu_with(run: &Run, progress: &dyn Progress, kernel: &Kernel) -> Resu
     for (i, v) in t.brdf_in.iter_mut().enumerate() {
         *v = counts[nl as usize + i] as u64;
     }
-    let prof0 = brdf0 + brdf_len;
+    let prof0 = brdf0 + sizes.brdf_len;
     for (i, v) in t.profile.iter_mut().enumerate() {
         *v = val(prof0 + i as u32);
     }

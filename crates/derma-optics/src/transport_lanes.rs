@@ -261,6 +261,58 @@ impl<L: Lanes> Streams<L> {
     }
 }
 
+/// The lanes' photons: direction, depth, optical path left to the next interaction, weight,
+/// layer and steps taken; the lanes' random streams and the next photon to launch. (Their
+/// sums, [`Book`]s, are kept apart: `book` borrows them, which would keep this in memory.)
+struct Photons<L: Lanes> {
+    alive: L,
+    ux: L,
+    uy: L,
+    uz: L,
+    z: L,
+    s_left: L,
+    w: L,
+    layer: L::I,
+    steps: L,
+    rng: Streams<L>,
+    next: u64,
+}
+
+/// Where one step takes each lane: its layer's μt, its direction's sense, the boundary ahead,
+/// and whether the step reaches that boundary (`hit`) or ends inside the layer (`inside`).
+struct Reach<L: Lanes> {
+    mu_t: L,
+    up: L,
+    down: L,
+    z_b: L,
+    abs_uz: L,
+    hit: L,
+    inside: L,
+}
+
+/// What one step did, for the booking: lanes escaping through the top or the bottom, crossing
+/// into the next layer, winning or losing the roulette; the weights before the step and after
+/// its absorption (before any roulette); and the lanes with something to book.
+struct Events<L: Lanes> {
+    escapes_top: L,
+    escapes_bottom: L,
+    crosses: L,
+    survives: L,
+    killed: L,
+    w_before: L,
+    w_absorbed: L,
+    bits: u32,
+}
+
+/// Lanes whose bit is set in `bits` (all ones), the others zero.
+#[inline(always)]
+fn lane_mask<L: Lanes>(t: L::Token, bits: u32) -> L {
+    L::from_array(
+        t,
+        std::array::from_fn(|l| f32::from_bits(if bits >> l & 1 == 1 { u32::MAX } else { 0 })),
+    )
+}
+
 /// The walk, generic over the lanes; `ONE` is a single layer (every [`pick`] is then one
 /// constant, held out of the loop).
 #[inline(always)]
@@ -272,82 +324,139 @@ fn walk<L: Lanes, const ONE: bool>(
 ) -> Tally {
     let mut tally = run.empty_tally();
     let nl = if ONE { 1 } else { slab.layers };
-    let splat = |v: f32| L::splat(t, v);
-    let isplat = |v: i32| L::I::splat(t, v);
-    let (zero, one) = (splat(0.0), splat(1.0));
-    let lane_mask = |bits: u32| {
-        L::from_array(
-            t,
-            std::array::from_fn(|l| f32::from_bits(if bits >> l & 1 == 1 { u32::MAX } else { 0 })),
-        )
-    };
-
-    // Lane state.
     let mut books = [Book::default(); LANES];
-    let mut alive = zero;
-    let (mut ux, mut uy, mut uz) = (zero, zero, one);
-    let (mut z, mut s_left, mut w) = (zero, zero, zero);
-    let mut layer = isplat(0);
-    let mut steps = zero;
-    let mut rng = Streams::<L> {
-        words: [isplat(0); 8],
-        pos: isplat(8),
-        ctr: [
-            isplat(0),
-            isplat(0),
-            isplat(OPTICS_STREAM as i32),
-            isplat(0),
-        ],
-        key: [run.seed as u32, (run.seed >> 32) as u32],
-    };
-    let mut next = range.start;
-
+    let mut p = Photons::<L>::new(t, run.seed, range.start);
     loop {
-        // Launch photons into empty lanes, in lane order.
-        let empty = !alive.mask_bits() & 0xff;
-        if empty != 0 && next < range.end {
-            let mut launched = 0u32;
-            let (mut lo, mut hi) = (rng.ctr[0].to_array(), rng.ctr[1].to_array());
-            let mut blk = rng.ctr[3].to_array();
-            let mut pos = rng.pos.to_array();
-            for l in 0..LANES {
-                if empty >> l & 1 == 1 && next < range.end {
-                    books[l] = Book {
-                        w_entry: slab.w0,
-                        ..Book::default()
-                    };
-                    (lo[l], hi[l]) = (next as u32 as i32, (next >> 32) as u32 as i32);
-                    (blk[l], pos[l]) = (0, 8);
-                    launched |= 1 << l;
-                    next += 1;
-                }
-            }
-            rng.ctr[0] = L::I::from_array(t, lo);
-            rng.ctr[1] = L::I::from_array(t, hi);
-            rng.ctr[3] = L::I::from_array(t, blk);
-            rng.pos = L::I::from_array(t, pos);
-            let m = lane_mask(launched);
-            ux = m.select(zero, ux);
-            uy = m.select(zero, uy);
-            uz = m.select(one, uz);
-            z = m.select(zero, z);
-            s_left = m.select(zero, s_left);
-            w = m.select(splat(slab.w0), w);
-            layer = m.select(zero, layer.to_f32_bits()).to_bits();
-            steps = m.select(zero, steps);
-            alive = alive.or(m);
-        }
-        if alive.mask_bits() == 0 {
+        p.launch(t, slab, &mut books, range.end);
+        if p.alive.mask_bits() == 0 {
             break;
         }
-        rng.refill(t);
+        p.rng.refill(t);
+        p.draw_step_length(t);
+        let reach = p.reach(t, slab, nl);
+        let mut events = Events::new(t, p.w);
+        // Boundary: hop to it, then reflect or cross (only when a lane got there).
+        if reach.hit.mask_bits() != 0 {
+            p.cross_boundary(t, slab, nl, &reach, &mut events);
+        }
+        // Interaction: hop inside the layer, absorb, scatter, roulette.
+        if reach.inside.mask_bits() != 0 {
+            p.interact(t, slab, nl, reach.inside, &mut events);
+        }
+        events.bits |= p.count_step(t);
+        let done = p.book_events(&mut books, &events);
+        p.change_layer(t, reach.up, events.crosses);
+        p.retire(t, &mut tally, slab, &books, done);
+    }
+    tally
+}
 
-        // Step length where the last one was used up.
-        let fresh = alive.and(s_left.le(zero));
-        let xi = rng.uniform(t, fresh, 3);
-        s_left = fresh.select(zero.sub(one.sub(xi).ln()), s_left);
+impl<L: Lanes> Events<L> {
+    /// Nothing happened yet, at weight `w`.
+    #[inline(always)]
+    fn new(t: L::Token, w: L) -> Self {
+        let zero = L::splat(t, 0.0);
+        Self {
+            escapes_top: zero,
+            escapes_bottom: zero,
+            crosses: zero,
+            survives: zero,
+            killed: zero,
+            w_before: w,
+            w_absorbed: w,
+            bits: 0,
+        }
+    }
+}
 
-        // Does the step reach the boundary ahead (never when moving parallel to it)?
+impl<L: Lanes> Photons<L> {
+    /// Empty lanes, with the streams keyed by `seed`; the first photon is `first`.
+    #[inline(always)]
+    fn new(t: L::Token, seed: u64, first: u64) -> Self {
+        let isplat = |v: i32| L::I::splat(t, v);
+        let (zero, one) = (L::splat(t, 0.0), L::splat(t, 1.0));
+        Self {
+            alive: zero,
+            ux: zero,
+            uy: zero,
+            uz: one,
+            z: zero,
+            s_left: zero,
+            w: zero,
+            layer: isplat(0),
+            steps: zero,
+            rng: Streams::<L> {
+                words: [isplat(0); 8],
+                pos: isplat(8),
+                ctr: [
+                    isplat(0),
+                    isplat(0),
+                    isplat(OPTICS_STREAM as i32),
+                    isplat(0),
+                ],
+                key: [seed as u32, (seed >> 32) as u32],
+            },
+            next: first,
+        }
+    }
+
+    /// Launches photons into empty lanes, in lane order, while any below `end` remain; their
+    /// `books` start afresh.
+    #[inline(always)]
+    fn launch(&mut self, t: L::Token, slab: &Slab, books: &mut [Book; LANES], end: u64) {
+        let empty = !self.alive.mask_bits() & 0xff;
+        if empty == 0 || self.next >= end {
+            return;
+        }
+        let (zero, one) = (L::splat(t, 0.0), L::splat(t, 1.0));
+        let rng = &mut self.rng;
+        let mut launched = 0u32;
+        let (mut lo, mut hi) = (rng.ctr[0].to_array(), rng.ctr[1].to_array());
+        let mut blk = rng.ctr[3].to_array();
+        let mut pos = rng.pos.to_array();
+        for l in 0..LANES {
+            if empty >> l & 1 == 1 && self.next < end {
+                books[l] = Book {
+                    w_entry: slab.w0,
+                    ..Book::default()
+                };
+                let next = self.next;
+                (lo[l], hi[l]) = (next as u32 as i32, (next >> 32) as u32 as i32);
+                (blk[l], pos[l]) = (0, 8);
+                launched |= 1 << l;
+                self.next += 1;
+            }
+        }
+        rng.ctr[0] = L::I::from_array(t, lo);
+        rng.ctr[1] = L::I::from_array(t, hi);
+        rng.ctr[3] = L::I::from_array(t, blk);
+        rng.pos = L::I::from_array(t, pos);
+        let m = lane_mask::<L>(t, launched);
+        self.ux = m.select(zero, self.ux);
+        self.uy = m.select(zero, self.uy);
+        self.uz = m.select(one, self.uz);
+        self.z = m.select(zero, self.z);
+        self.s_left = m.select(zero, self.s_left);
+        self.w = m.select(L::splat(t, slab.w0), self.w);
+        self.layer = m.select(zero, self.layer.to_f32_bits()).to_bits();
+        self.steps = m.select(zero, self.steps);
+        self.alive = self.alive.or(m);
+    }
+
+    /// Draws a step length (in optical depths) where the last one was used up.
+    #[inline(always)]
+    fn draw_step_length(&mut self, t: L::Token) {
+        let (zero, one) = (L::splat(t, 0.0), L::splat(t, 1.0));
+        let fresh = self.alive.and(self.s_left.le(zero));
+        let xi = self.rng.uniform(t, fresh, 3);
+        self.s_left = fresh.select(zero.sub(one.sub(xi).ln()), self.s_left);
+    }
+
+    /// Whether the step reaches the boundary ahead (never when moving parallel to it).
+    #[inline(always)]
+    fn reach(&self, t: L::Token, slab: &Slab, nl: usize) -> Reach<L> {
+        let zero = L::splat(t, 0.0);
+        let (layer, uz, z) = (self.layer, self.uz, self.z);
         let mu_t = pick::<L>(layer, &slab.mut_, nl);
         let down = uz.gt(zero);
         let up = uz.lt(zero);
@@ -360,162 +469,215 @@ fn walk<L: Lanes, const ONE: bool>(
         // itself is needed only where a lane reaches the boundary.
         let abs_uz = zero.sub(uz).max(uz);
         let gap = up.select(z.sub(z_b), z_b.sub(z));
-        let hit = alive
+        let hit = self
+            .alive
             .and(up.or(down))
-            .and(mu_t.mul(gap).le(s_left.mul(abs_uz)));
+            .and(mu_t.mul(gap).le(self.s_left.mul(abs_uz)));
         // (`a.and_not(b)` is b and not a.)
-        let inside = hit.and_not(alive);
-        let (hm, im) = (hit.mask_bits(), inside.mask_bits());
-        let mut events = 0u32; // lanes with something to book
-        let (mut escapes_top, mut escapes_bottom, mut crosses) = (zero, zero, zero);
-
-        // Boundary: hop to it, then reflect or cross (only when a lane got there).
-        if hm != 0 {
-            let is_top = up.and(layer.eq(isplat(0)));
-            let is_bottom = down.and(layer.eq(isplat(nl as i32 - 1)));
-            let n1 = pick::<L>(layer, &slab.n_here, nl);
-            let n2 = up.select(
-                pick::<L>(layer, &slab.n_up, nl),
-                pick::<L>(layer, &slab.n_down, nl),
-            );
-            let eta = up.select(
-                pick::<L>(layer, &slab.eta_up, nl),
-                pick::<L>(layer, &slab.eta_down, nl),
-            );
-            let outer = is_top.or(is_bottom);
-            // Internal boundaries between equal indices are crossed without a Fresnel draw.
-            let crosses_free = outer.and_not(hit).and(n1.eq(n2));
-            let tested = crosses_free.and_not(hit);
-            let xi_f = rng.uniform(t, tested, 4);
-            // The hop to the boundary, along the incident direction.
-            let dist = z_b.sub(z).div(uz);
-            let cos_i = abs_uz;
-            let (f, cos_t) = fresnel(cos_i, n1, n2, eta);
-            let reflect = tested.and(xi_f.lt(f));
-            let refract = reflect.and_not(tested);
-            // Refracted: u' = η u + (η cosθi − cosθt) m, m = (0, 0, ±1) facing the incident
-            // side; through the top, normalised as the scalar walk does.
-            let k = eta.mul(cos_i).sub(cos_t);
-            let side = up.select(one, zero.sub(one));
-            let (rx, ry, rz) = (eta.mul(ux), eta.mul(uy), eta.mul(uz).add(k.mul(side)));
-            let inv_len = one.div(rx.mul(rx).add(ry.mul(ry)).add(rz.mul(rz)).sqrt());
-            let rx = is_top.select(rx.mul(inv_len), rx);
-            let ry = is_top.select(ry.mul(inv_len), ry);
-            let rz = is_top.select(rz.mul(inv_len), rz);
-            escapes_top = refract.and(is_top);
-            escapes_bottom = refract.and(is_bottom);
-            crosses = outer.and_not(refract).or(crosses_free);
-            events |= escapes_top.or(escapes_bottom).or(crosses).mask_bits();
-            ux = refract.select(rx, ux);
-            uy = refract.select(ry, uy);
-            uz = refract.select(rz, reflect.select(zero.sub(uz), uz));
-            s_left = hit.select(s_left.sub(mu_t.mul(dist)), s_left);
-            z = hit.select(z_b, z);
+        let inside = hit.and_not(self.alive);
+        Reach {
+            mu_t,
+            up,
+            down,
+            z_b,
+            abs_uz,
+            hit,
+            inside,
         }
+    }
 
-        // Interaction: hop inside the layer, absorb, scatter, roulette.
-        let (mut survives, mut killed) = (zero, zero);
-        // Weights before the step and after its absorption (before any roulette).
-        let w_before = w;
-        let mut w_absorbed = w;
-        if im != 0 {
-            let d = s_left.mul(pick::<L>(layer, &slab.inv_mut, nl));
-            z = inside.select(uz.mul_add(d, z), z);
-            s_left = inside.select(zero, s_left);
-            let a = pick::<L>(layer, &slab.albedo_c, nl);
-            let w_abs = w.sub(w.mul(a));
-            let g = pick::<L>(layer, &slab.g, nl);
-            let xi_g = rng.uniform(t, inside, 4);
-            let xi_p = rng.uniform(t, inside, 5);
-            // Henyey–Greenstein (MCML eq. 3.28); isotropic for |g| < 10⁻⁶.
-            let tt =
-                pick::<L>(layer, &slab.hg_a, nl).div(one.sub(g).add(splat(2.0).mul(g).mul(xi_g)));
-            let ct_hg = one
-                .add(g.mul(g))
-                .sub(tt.mul(tt))
-                .mul(pick::<L>(layer, &slab.hg_b, nl))
-                .clamp(-1.0, 1.0);
-            let iso = zero.sub(g).max(g).lt(splat(1e-6));
-            let ct = iso.select(splat(2.0).mul(xi_g).sub(one), ct_hg);
-            let (sp, cp) = xi_p.sincos_turns();
-            // Spin (MCML eq. 3.30).
-            let st = one.sub(ct.mul(ct)).max(zero).sqrt();
-            let vertical = zero.sub(uz).max(uz).gt(splat(0.99999));
-            let sign_z = uz.lt(zero).select(zero.sub(one), one);
-            let temp = one.sub(uz.mul(uz)).sqrt();
-            let q = st.div(temp);
-            let uzcp = uz.mul(cp);
-            let sx = q.mul_add(ux.mul_add(uzcp, zero.sub(uy.mul(sp))), ux.mul(ct));
-            let sy = q.mul_add(uy.mul_add(uzcp, ux.mul(sp)), uy.mul(ct));
-            let sz = uz.mul_add(ct, zero.sub(st.mul(cp).mul(temp)));
-            ux = inside.select(vertical.select(st.mul(cp), sx), ux);
-            uy = inside.select(vertical.select(st.mul(sp), sy), uy);
-            uz = inside.select(vertical.select(ct.mul(sign_z), sz), uz);
-            // Roulette below the threshold weight.
-            let low = inside.and(w_abs.lt(splat(ROULETTE_WEIGHT as f32)));
-            w = inside.select(w_abs, w);
-            w_absorbed = w;
-            if low.mask_bits() != 0 {
-                let xi_r = rng.uniform(t, low, 6);
-                survives = low.and(xi_r.lt(splat(ROULETTE_CHANCE as f32)));
-                killed = survives.and_not(low);
-                w = survives.select(w.div(splat(ROULETTE_CHANCE as f32)), w);
-                events |= low.mask_bits();
-            }
+    /// Moves the lanes that reach a boundary onto it, then reflects them or lets them cross
+    /// (Fresnel), into the next layer or out of the slab; `ev` gets the escapes and crossings.
+    #[inline(always)]
+    fn cross_boundary(
+        &mut self,
+        t: L::Token,
+        slab: &Slab,
+        nl: usize,
+        r: &Reach<L>,
+        ev: &mut Events<L>,
+    ) {
+        let (zero, one) = (L::splat(t, 0.0), L::splat(t, 1.0));
+        let isplat = |v: i32| L::I::splat(t, v);
+        let (layer, up, down, hit) = (self.layer, r.up, r.down, r.hit);
+        let is_top = up.and(layer.eq(isplat(0)));
+        let is_bottom = down.and(layer.eq(isplat(nl as i32 - 1)));
+        let n1 = pick::<L>(layer, &slab.n_here, nl);
+        let n2 = up.select(
+            pick::<L>(layer, &slab.n_up, nl),
+            pick::<L>(layer, &slab.n_down, nl),
+        );
+        let eta = up.select(
+            pick::<L>(layer, &slab.eta_up, nl),
+            pick::<L>(layer, &slab.eta_down, nl),
+        );
+        let outer = is_top.or(is_bottom);
+        // Internal boundaries between equal indices are crossed without a Fresnel draw.
+        let crosses_free = outer.and_not(hit).and(n1.eq(n2));
+        let tested = crosses_free.and_not(hit);
+        let xi_f = self.rng.uniform(t, tested, 4);
+        // The hop to the boundary, along the incident direction.
+        let dist = r.z_b.sub(self.z).div(self.uz);
+        let cos_i = r.abs_uz;
+        let (f, cos_t) = fresnel(cos_i, n1, n2, eta);
+        let reflect = tested.and(xi_f.lt(f));
+        let refract = reflect.and_not(tested);
+        // Refracted: u' = η u + (η cosθi − cosθt) m, m = (0, 0, ±1) facing the incident
+        // side; through the top, normalised as the scalar walk does.
+        let (ux, uy, uz) = (self.ux, self.uy, self.uz);
+        let k = eta.mul(cos_i).sub(cos_t);
+        let side = up.select(one, zero.sub(one));
+        let (rx, ry, rz) = (eta.mul(ux), eta.mul(uy), eta.mul(uz).add(k.mul(side)));
+        let inv_len = one.div(rx.mul(rx).add(ry.mul(ry)).add(rz.mul(rz)).sqrt());
+        let rx = is_top.select(rx.mul(inv_len), rx);
+        let ry = is_top.select(ry.mul(inv_len), ry);
+        let rz = is_top.select(rz.mul(inv_len), rz);
+        ev.escapes_top = refract.and(is_top);
+        ev.escapes_bottom = refract.and(is_bottom);
+        ev.crosses = outer.and_not(refract).or(crosses_free);
+        ev.bits |= ev
+            .escapes_top
+            .or(ev.escapes_bottom)
+            .or(ev.crosses)
+            .mask_bits();
+        self.ux = refract.select(rx, ux);
+        self.uy = refract.select(ry, uy);
+        self.uz = refract.select(rz, reflect.select(zero.sub(uz), uz));
+        self.s_left = hit.select(self.s_left.sub(r.mu_t.mul(dist)), self.s_left);
+        self.z = hit.select(r.z_b, self.z);
+    }
+
+    /// Moves the lanes `inside` their layer to the interaction, absorbs, scatters
+    /// (Henyey–Greenstein) and plays the roulette below the threshold weight; `ev` gets the
+    /// weights and the roulette's outcome.
+    #[inline(always)]
+    fn interact(&mut self, t: L::Token, slab: &Slab, nl: usize, inside: L, ev: &mut Events<L>) {
+        let splat = |v: f32| L::splat(t, v);
+        let (zero, one) = (splat(0.0), splat(1.0));
+        let layer = self.layer;
+        let d = self.s_left.mul(pick::<L>(layer, &slab.inv_mut, nl));
+        self.z = inside.select(self.uz.mul_add(d, self.z), self.z);
+        self.s_left = inside.select(zero, self.s_left);
+        let w = self.w;
+        let a = pick::<L>(layer, &slab.albedo_c, nl);
+        let w_abs = w.sub(w.mul(a));
+        let g = pick::<L>(layer, &slab.g, nl);
+        let xi_g = self.rng.uniform(t, inside, 4);
+        let xi_p = self.rng.uniform(t, inside, 5);
+        // Henyey–Greenstein (MCML eq. 3.28); isotropic for |g| < 10⁻⁶.
+        let tt = pick::<L>(layer, &slab.hg_a, nl).div(one.sub(g).add(splat(2.0).mul(g).mul(xi_g)));
+        let ct_hg = one
+            .add(g.mul(g))
+            .sub(tt.mul(tt))
+            .mul(pick::<L>(layer, &slab.hg_b, nl))
+            .clamp(-1.0, 1.0);
+        let iso = zero.sub(g).max(g).lt(splat(1e-6));
+        let ct = iso.select(splat(2.0).mul(xi_g).sub(one), ct_hg);
+        let (sp, cp) = xi_p.sincos_turns();
+        // Spin (MCML eq. 3.30).
+        let (ux, uy, uz) = (self.ux, self.uy, self.uz);
+        let st = one.sub(ct.mul(ct)).max(zero).sqrt();
+        let vertical = zero.sub(uz).max(uz).gt(splat(0.99999));
+        let sign_z = uz.lt(zero).select(zero.sub(one), one);
+        let temp = one.sub(uz.mul(uz)).sqrt();
+        let q = st.div(temp);
+        let uzcp = uz.mul(cp);
+        let sx = q.mul_add(ux.mul_add(uzcp, zero.sub(uy.mul(sp))), ux.mul(ct));
+        let sy = q.mul_add(uy.mul_add(uzcp, ux.mul(sp)), uy.mul(ct));
+        let sz = uz.mul_add(ct, zero.sub(st.mul(cp).mul(temp)));
+        self.ux = inside.select(vertical.select(st.mul(cp), sx), ux);
+        self.uy = inside.select(vertical.select(st.mul(sp), sy), uy);
+        self.uz = inside.select(vertical.select(ct.mul(sign_z), sz), uz);
+        // Roulette below the threshold weight.
+        let low = inside.and(w_abs.lt(splat(ROULETTE_WEIGHT as f32)));
+        self.w = inside.select(w_abs, w);
+        ev.w_absorbed = self.w;
+        if low.mask_bits() != 0 {
+            let xi_r = self.rng.uniform(t, low, 6);
+            ev.survives = low.and(xi_r.lt(splat(ROULETTE_CHANCE as f32)));
+            ev.killed = ev.survives.and_not(low);
+            self.w = ev
+                .survives
+                .select(self.w.div(splat(ROULETTE_CHANCE as f32)), self.w);
+            ev.bits |= low.mask_bits();
         }
+    }
 
-        steps = alive.select(steps.add(one), steps);
-        // Photons trapped beyond MAX_STEPS are abandoned (never in practice).
-        let trapped = alive.and(steps.gt(splat(MAX_STEPS as f32))).mask_bits();
-        events |= trapped;
+    /// Counts the step; the lanes trapped beyond [`MAX_STEPS`], which are abandoned (never in
+    /// practice).
+    #[inline(always)]
+    fn count_step(&mut self, t: L::Token) -> u32 {
+        self.steps = self
+            .alive
+            .select(self.steps.add(L::splat(t, 1.0)), self.steps);
+        self.alive
+            .and(self.steps.gt(L::splat(t, MAX_STEPS as f32)))
+            .mask_bits()
+    }
 
-        // Book the lanes' events, in f64.
+    /// Books the lanes' events into `books` in f64 (each ends the stay in the layer); the
+    /// lanes whose photon ended.
+    #[inline(always)]
+    fn book_events(&self, books: &mut [Book; LANES], ev: &Events<L>) -> u32 {
         let mut done = 0u32;
-        if events != 0 {
-            let (wb, wm, wn) = (w_before.to_array(), w_absorbed.to_array(), w.to_array());
-            let lay = layer.to_array();
-            let (et, eb, cr) = (
-                escapes_top.mask_bits(),
-                escapes_bottom.mask_bits(),
-                crosses.mask_bits(),
-            );
-            let (sv, kl) = (survives.mask_bits(), killed.mask_bits());
-            let mut bits = events;
-            while bits != 0 {
-                let l = bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                let b = &mut books[l];
-                let here = lay[l] as usize;
-                // Each event ends the stay in the layer at some weight `end`.
-                let (end, ended) = if et >> l & 1 == 1 {
-                    b.r_diffuse += wb[l] as f64;
-                    (wb[l], true)
-                } else if eb >> l & 1 == 1 {
-                    b.transmitted += wb[l] as f64;
-                    (wb[l], true)
-                } else if cr >> l & 1 == 1 {
-                    // Into the next layer (`layer` still holds the one it leaves).
-                    (wb[l], false)
-                } else if sv >> l & 1 == 1 {
-                    // Roulette won: the weight ×10 is created.
-                    b.roulette += wn[l] as f64 - wm[l] as f64;
-                    (wm[l], false)
-                } else if kl >> l & 1 == 1 {
-                    b.roulette -= wm[l] as f64;
-                    (wm[l], true)
-                } else {
-                    // Trapped beyond MAX_STEPS: abandoned.
-                    b.roulette -= wn[l] as f64;
-                    (wn[l], true)
-                };
-                b.absorbed[here] += b.w_entry as f64 - end as f64;
-                b.w_entry = wn[l];
-                if ended {
-                    done |= 1 << l;
-                }
+        if ev.bits == 0 {
+            return done;
+        }
+        let (wb, wm, wn) = (
+            ev.w_before.to_array(),
+            ev.w_absorbed.to_array(),
+            self.w.to_array(),
+        );
+        let lay = self.layer.to_array();
+        let (et, eb, cr) = (
+            ev.escapes_top.mask_bits(),
+            ev.escapes_bottom.mask_bits(),
+            ev.crosses.mask_bits(),
+        );
+        let (sv, kl) = (ev.survives.mask_bits(), ev.killed.mask_bits());
+        let mut bits = ev.bits;
+        while bits != 0 {
+            let l = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let b = &mut books[l];
+            let here = lay[l] as usize;
+            // Each event ends the stay in the layer at some weight `end`.
+            let (end, ended) = if et >> l & 1 == 1 {
+                b.r_diffuse += wb[l] as f64;
+                (wb[l], true)
+            } else if eb >> l & 1 == 1 {
+                b.transmitted += wb[l] as f64;
+                (wb[l], true)
+            } else if cr >> l & 1 == 1 {
+                // Into the next layer (`layer` still holds the one it leaves).
+                (wb[l], false)
+            } else if sv >> l & 1 == 1 {
+                // Roulette won: the weight ×10 is created.
+                b.roulette += wn[l] as f64 - wm[l] as f64;
+                (wm[l], false)
+            } else if kl >> l & 1 == 1 {
+                b.roulette -= wm[l] as f64;
+                (wm[l], true)
+            } else {
+                // Trapped beyond MAX_STEPS: abandoned.
+                b.roulette -= wn[l] as f64;
+                (wn[l], true)
+            };
+            b.absorbed[here] += b.w_entry as f64 - end as f64;
+            b.w_entry = wn[l];
+            if ended {
+                done |= 1 << l;
             }
         }
-        layer = crosses
+        done
+    }
+
+    /// Moves the lanes that `crosses` into the layer above (`up`) or below.
+    #[inline(always)]
+    fn change_layer(&mut self, t: L::Token, up: L, crosses: L) {
+        let isplat = |v: i32| L::I::splat(t, v);
+        let layer = self.layer;
+        self.layer = crosses
             .select(
                 up.select(
                     layer.sub(isplat(1)).to_f32_bits(),
@@ -524,18 +686,29 @@ fn walk<L: Lanes, const ONE: bool>(
                 layer.to_f32_bits(),
             )
             .to_bits();
-        // Book the photons that ended.
-        if done != 0 {
-            let mut bits = done;
-            while bits != 0 {
-                let l = bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                book(&mut tally, slab, &books[l]);
-            }
-            alive = lane_mask(done).and_not(alive);
-        }
     }
-    tally
+
+    /// Books the photons of the lanes in `done` into `tally` and empties their lanes.
+    #[inline(always)]
+    fn retire(
+        &mut self,
+        t: L::Token,
+        tally: &mut Tally,
+        slab: &Slab,
+        books: &[Book; LANES],
+        done: u32,
+    ) {
+        if done == 0 {
+            return;
+        }
+        let mut bits = done;
+        while bits != 0 {
+            let l = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            book(tally, slab, &books[l]);
+        }
+        self.alive = lane_mask::<L>(t, done).and_not(self.alive);
+    }
 }
 
 /// Adds one photon's totals to `t`.

@@ -9,6 +9,7 @@ use derma_optics::specimen::SurfaceModel;
 const BINS: usize = 9;
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn the_smith_surface_conserves_energy_at_every_angle_and_the_thesis_surface_does_not() {
     let smith = furnace(SurfaceModel::Smith, 2_000_000, 21, BINS, &Silent).unwrap();
     let thesis = furnace(SurfaceModel::Thesis, 2_000_000, 21, BINS, &Silent).unwrap();

@@ -229,6 +229,7 @@ fn results_do_not_depend_on_thread_count() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn sampled_brdf_is_reciprocal() {
     // A smooth-surfaced scattering slab over a grey diffuse floor: f(θa → θb) = f(θb → θa).
     // Compared after summing over azimuth bins (Σ_φ f is reciprocal too), per zenith pair.
@@ -397,6 +398,7 @@ fn gpu_results_do_not_depend_on_the_kernel_layout() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn skin_spectra_have_the_known_shape() {
     // Fair, medium and dark epidermis over a well-perfused dermis. Features (not bytes): the
     // hemoglobin Soret dip near 420 nm and Q-band dips near 542 and 577 nm with the 560 nm hump

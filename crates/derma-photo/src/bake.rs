@@ -6,7 +6,7 @@
 use crate::blend::{default_levels, multiband_with, Plane};
 use crate::camera::{Camera, Prepared};
 use crate::delight::{
-    estimate, estimate_from, DelightOptions, Lighting, Sample, Surface, MIN_SHADING,
+    estimate, estimate_from, DelightOptions, Delit, Lighting, Sample, Surface, MIN_SHADING,
 };
 use crate::error::{PhotoError, Result};
 use crate::gain::Overlaps;
@@ -471,6 +471,86 @@ pub fn bake(
     let size = opts.size;
     let t0 = std::time::Instant::now();
     progress.stage("bind vertices to photos", 0, Unit::Steps);
+    let welded = welded_geometry(mesh, opts)?;
+    let topo = &welded.topo;
+    let masks = bind(topo, &welded.normals, photos, &welded.bvh, welded.offset);
+    let mut views = first_views(&welded, &masks, photos, opts);
+    let mut fits = delight_and_register(&welded, &mut views, photos, opts, progress);
+    let warnings = settle_fits(&mut fits, &mut views, photos, opts, progress)?;
+    // The lighting as found, for the report; where it was kept, the bake goes on exactly as
+    // with the lighting kept (Brown–Lowe gains, every sample trusted).
+    let lighting = fits.delit.as_ref().map(|d| d.lighting.clone());
+    if lighting.as_ref().is_some_and(|l| l.fallback.is_some()) {
+        fits.delit = None;
+    }
+    let (samples, neighbours) = (&views.samples, &topo.neighbours);
+    let cor = correction_of(fits.delit.as_ref(), samples, neighbours, photos.len(), opts);
+    let (vcolor, unbound) = vertex_colours(samples, &views.view_weights, &cor, neighbours);
+    drop(views.samples);
+    let cams = views.cams;
+    // Per triangle: the paper's case, and the best photo at its centroid (for the masks).
+    let (tri_w, best, cases) = triangle_sources(mesh, topo, &masks, &cams, opts);
+    let t_bind = t0.elapsed().as_secs_f64();
+    progress.stage("resample texels", 0, Unit::Steps);
+    let raster = UvRaster::new(mesh, size, size);
+    let projected = projections(mesh, &welded, &cams);
+    let (covered, dil) = gutter_sources(&raster, size)?;
+    let r = Resampler {
+        mesh,
+        raster: &raster,
+        dil: &dil,
+        photos,
+        cams: &cams,
+        projected: &projected,
+        masks: &masks,
+        tri_w: &tri_w,
+        best: &best,
+        vcolor: &vcolor,
+        cor: &cor,
+        falloff: opts.falloff,
+        size,
+    };
+    let (texture, source, t_resample) = blend(&r, topo.positions.len(), opts, progress, || {
+        t0.elapsed().as_secs_f64() - t_bind
+    });
+    let (photo_reports, photo_coverage) = photo_reports(photos, &cor, &masks, &source, &covered);
+    let report = BakeReport {
+        photos: photo_reports,
+        triangle_cases: cases,
+        unbound_vertices: unbound,
+        photo_coverage,
+        lighting,
+        registration: fits.registration,
+        warnings,
+        seconds: [
+            t_bind,
+            t_resample,
+            t0.elapsed().as_secs_f64() - t_bind - t_resample,
+        ],
+    };
+    Ok(Baked {
+        shading: shading_images(topo, &cor, &cams, opts),
+        texture: RgbImage {
+            width: size,
+            height: size,
+            data: texture,
+        },
+        source,
+        report,
+    })
+}
+
+/// The welded mesh a bake works on: its topology, area-weighted normals (continuous across UV
+/// seams), BVH, and the visibility rays' offset from the surface.
+struct Welded {
+    topo: Topology,
+    normals: Vec<Vec3>,
+    bvh: Bvh,
+    offset: f32,
+}
+
+/// The welded mesh of a UV-mapped mesh ([`Welded`]), the ray offset scaled by its extent.
+fn welded_geometry(mesh: &TriMesh, opts: &BakeOptions) -> Result<Welded> {
     let topo = Topology::new(mesh)?;
     // Area-weighted normals of the welded mesh (continuous across UV seams).
     let mut welded = TriMesh {
@@ -479,51 +559,86 @@ pub fn bake(
         ..Default::default()
     };
     welded.compute_normals();
-    let wnormals = welded.normals;
+    let normals = welded.normals;
     let bvh = Bvh::new(&topo.positions, &topo.triangles);
-    let extent = mesh.extent();
-    let masks = bind(&topo, &wnormals, photos, &bvh, opts.ray_offset * extent);
-    let mut cams: Vec<Prepared> = photos.iter().map(|p| Prepared::new(&p.camera)).collect();
-    // Each vertex sampled once in every photo it is bound to, with that view's weight.
-    let (mut samples, mut view_weights): (Vec<Vec<Sample>>, Vec<Vec<f32>>) = (0..topo
-        .positions
-        .len())
-        .into_par_iter()
-        .map(|v| {
-            let p = topo.positions[v];
-            (0..photos.len())
-                .filter(|i| masks[v] & (1 << i) != 0)
-                .filter_map(|i| sample_at(&cams[i], &photos[i], i, p, wnormals[v], opts.falloff))
-                .unzip()
-        })
-        .unzip();
+    let offset = opts.ray_offset * mesh.extent();
+    Ok(Welded {
+        topo,
+        normals,
+        bvh,
+        offset,
+    })
+}
+
+/// The cameras and, per welded vertex, its samples in the photos it is bound to, each with
+/// that view's weight.
+#[derive(Clone)]
+struct Views {
+    cams: Vec<Prepared>,
+    samples: Vec<Vec<Sample>>,
+    view_weights: Vec<Vec<f32>>,
+}
+
+/// The calibrated cameras, and each vertex sampled once in every photo it is bound to
+/// (`masks`), with that view's weight.
+fn first_views(welded: &Welded, masks: &[u32], photos: &[Photo], opts: &BakeOptions) -> Views {
+    let cams: Vec<Prepared> = photos.iter().map(|p| Prepared::new(&p.camera)).collect();
+    let (samples, view_weights): (Vec<Vec<Sample>>, Vec<Vec<f32>>) =
+        (0..welded.topo.positions.len())
+            .into_par_iter()
+            .map(|v| {
+                let p = welded.topo.positions[v];
+                (0..photos.len())
+                    .filter(|i| masks[v] & (1 << i) != 0)
+                    .filter_map(|i| {
+                        sample_at(&cams[i], &photos[i], i, p, welded.normals[v], opts.falloff)
+                    })
+                    .unzip()
+            })
+            .unzip();
+    Views {
+        cams,
+        samples,
+        view_weights,
+    }
+}
+
+/// What de-lighting and registration found: the lighting, each photo's registration, and the
+/// calibrated views while a correction is kept (should the lighting found after registration
+/// not be trusted).
+struct Fits {
+    delit: Option<Delit>,
+    registration: Vec<Registration>,
+    calibrated: Option<Views>,
+}
+
+/// De-lighting on the mesh's shadowed SH transfer, then photometric registration ([`Fits`]).
+fn delight_and_register(
+    welded: &Welded,
+    views: &mut Views,
+    photos: &[Photo],
+    opts: &BakeOptions,
+    progress: &dyn Progress,
+) -> Fits {
     // De-lighting: per photo and welded vertex, the shading to divide by and the robust weight.
     if opts.delight.is_some() {
         progress.stage("estimate the lighting", 0, Unit::Steps);
     }
-    let offset = opts.ray_offset * extent;
-    let transfer = match opts.delight {
-        Some(_) => derma_core::sh::shadowed_transfer(
-            &topo.positions,
-            &wnormals,
-            &bvh,
-            opts.transfer_side.max(1),
-            offset,
-            0,
-        ),
-        None => Vec::new(),
-    };
+    let (positions, normals, offset) = (&welded.topo.positions, &welded.normals, welded.offset);
+    let transfer = transfer_of(welded, opts);
     let open = |v: usize, dir: Vec3| {
-        !bvh.occluded(topo.positions[v] + wnormals[v] * offset, dir, 0.0, f32::MAX)
+        !welded
+            .bvh
+            .occluded(positions[v] + normals[v] * offset, dir, 0.0, f32::MAX)
     };
     let surface = Surface {
-        normals: &wnormals,
+        normals,
         transfer: &transfer,
         open: &open,
     };
     let mut delit = opts
         .delight
-        .map(|d| estimate(&surface, &samples, photos.len(), &d));
+        .map(|d| estimate(&surface, &views.samples, photos.len(), &d));
     // Photometric registration on the de-lit photos: the cameras nudged so that the photos'
     // detail coincides, each vertex weighted as the blend weights it (view × robust weight);
     // where a correction is kept, every sample is taken again through its photo's refined
@@ -533,60 +648,105 @@ pub fn bake(
     // Registration compares de-lit photos; where the lighting was kept (no model explained
     // it), their shadows would steer the cameras, so they stay as calibrated.
     let registration = register_stage(
-        &topo.positions,
-        (&samples, &view_weights),
+        positions,
+        (&views.samples, &views.view_weights),
         delit.as_ref(),
         photos,
         opts,
         progress,
     );
     // Kept for all photos or none.
-    let mut registration = registration;
     let kept = registration.first().is_some_and(|r| r.kept);
     // The calibrated cameras and their samples, should the lighting found after registration
     // not be trusted (the bake then goes on as with the lighting kept: calibrated cameras).
-    let calibrated = kept.then(|| (cams.clone(), samples.clone(), view_weights.clone()));
+    let calibrated = kept.then(|| views.clone());
     if kept {
-        cams = registration
+        views.cams = registration
             .iter()
             .map(|r| Prepared::new(&r.camera))
             .collect();
         retake_samples(
-            (&topo.positions, &wnormals),
-            &cams,
+            (positions, normals),
+            &views.cams,
             photos,
             opts,
-            (&mut samples, &mut view_weights),
+            (&mut views.samples, &mut views.view_weights),
         );
         // Registration ran on the de-lit photos, so both are there.
         if let (Some(d), Some(first)) = (opts.delight, &delit) {
             progress.stage("estimate the lighting again", 0, Unit::Steps);
-            let keys: Vec<Option<Vec3>> = first
-                .lighting
-                .key_direction
-                .iter()
-                .map(|k| k.map(Vec3::from_array))
-                .collect();
-            // The model the photos chose stays (the cameras moved by a pixel or two), and so do
-            // its candidates' scores.
-            let d = DelightOptions {
-                model: Some(first.lighting.model),
-                ..d
-            };
-            let candidates = first.lighting.candidates.clone();
-            let mut again = estimate_from(&surface, &samples, photos.len(), &d, Some(&keys));
-            again.lighting.candidates = candidates;
-            delit = Some(again);
+            delit = Some(relight(&surface, first, d, &views.samples, photos.len()));
         }
     }
-    let mut warnings = check_fits(&registration, &mut delit, photos, opts);
-    if let (Some((c, s, w)), true) = (
+    Fits {
+        delit,
+        registration,
         calibrated,
+    }
+}
+
+/// The welded mesh's shadowed SH transfer ([`BakeOptions::transfer_side`]² rays per vertex)
+/// for de-lighting; none with the lighting kept.
+fn transfer_of(welded: &Welded, opts: &BakeOptions) -> Vec<[f32; derma_core::sh::SH9]> {
+    match opts.delight {
+        Some(_) => derma_core::sh::shadowed_transfer(
+            &welded.topo.positions,
+            &welded.normals,
+            &welded.bvh,
+            opts.transfer_side.max(1),
+            welded.offset,
+            0,
+        ),
+        None => Vec::new(),
+    }
+}
+
+/// The lighting estimated again on the samples through the refined cameras, warm from the keys
+/// `first` found.
+fn relight(
+    surface: &Surface,
+    first: &Delit,
+    d: DelightOptions,
+    samples: &[Vec<Sample>],
+    photos: usize,
+) -> Delit {
+    let keys: Vec<Option<Vec3>> = first
+        .lighting
+        .key_direction
+        .iter()
+        .map(|k| k.map(Vec3::from_array))
+        .collect();
+    // The model the photos chose stays (the cameras moved by a pixel or two), and so do
+    // its candidates' scores.
+    let d = DelightOptions {
+        model: Some(first.lighting.model),
+        ..d
+    };
+    let candidates = first.lighting.candidates.clone();
+    let mut again = estimate_from(surface, samples, photos, &d, Some(&keys));
+    again.lighting.candidates = candidates;
+    again
+}
+
+/// The fits checked ([`check_fits`]); where the lighting found after registration is not
+/// trusted, the calibrated views back and the registration undone. Each warning is noted, and
+/// with [`BakeOptions::strict`] any warning refuses the bake.
+fn settle_fits(
+    fits: &mut Fits,
+    views: &mut Views,
+    photos: &[Photo],
+    opts: &BakeOptions,
+    progress: &dyn Progress,
+) -> Result<Vec<String>> {
+    let (registration, delit) = (&mut fits.registration, &mut fits.delit);
+    let mut warnings = check_fits(registration, delit, photos, opts);
+    if let (Some(c), true) = (
+        fits.calibrated.take(),
         delit
             .as_ref()
             .is_some_and(|d| d.lighting.fallback.is_some()),
     ) {
-        (cams, samples, view_weights) = (c, s, w);
+        *views = c;
         for (r, p) in registration.iter_mut().zip(photos) {
             r.kept = false;
             r.camera = p.camera;
@@ -601,41 +761,78 @@ pub fn bake(
     if opts.strict && !warnings.is_empty() {
         return Err(PhotoError::Strict(warnings.join("; ")));
     }
-    // The lighting as found, for the report; where it was kept, the bake goes on exactly as
-    // with the lighting kept (Brown–Lowe gains, every sample trusted).
-    let lighting = delit.as_ref().map(|d| d.lighting.clone());
-    if lighting.as_ref().is_some_and(|l| l.fallback.is_some()) {
-        delit = None;
-    }
-    let gains = gains_of(delit.as_ref(), &samples, photos.len(), opts);
-    // Per photo and welded vertex: shading (floored) and robust weight.
-    let (vshade, vweight) = match &delit {
-        Some(d) => shading_and_trust(d, &samples, &topo.neighbours, photos.len()),
-        None => (Vec::new(), Vec::new()),
-    };
-    // A sample's colour with the lighting (or the gain) taken out.
-    let unlit = |k: usize, v: usize, c: [f32; 3], r2: f32| -> [f32; 3] {
-        match &delit {
+    Ok(warnings)
+}
+
+/// How a sample's colour is corrected: with de-lighting, divided by its photo's shading
+/// (per welded vertex) and vignetting and trusted as far as `trust`; with the lighting kept,
+/// multiplied by its photo's gain.
+struct Correction<'a> {
+    /// The lighting (`None` where it was kept).
+    delit: Option<&'a Delit>,
+    /// Per photo and channel ([`gains_of`]).
+    gains: Vec<[f32; 3]>,
+    /// Per photo and welded vertex: the shading to divide by (floored, levelled).
+    shade: Vec<Vec<[f32; 3]>>,
+    /// Per photo and welded vertex: the trust in that shading ([`shading_and_trust`]).
+    trust: Vec<Vec<f32>>,
+}
+
+impl Correction<'_> {
+    /// A sample's colour with the lighting (or the gain) taken out.
+    fn unlit(&self, k: usize, v: usize, c: [f32; 3], r2: f32) -> [f32; 3] {
+        match self.delit {
             Some(d) => {
                 let f = d.lighting.vignette(k, r2);
-                std::array::from_fn(|j| c[j] / (vshade[k][v][j] * f))
+                std::array::from_fn(|j| c[j] / (self.shade[k][v][j] * f))
             }
-            None => std::array::from_fn(|j| c[j] * gains[k][j]),
+            None => std::array::from_fn(|j| c[j] * self.gains[k][j]),
         }
+    }
+}
+
+/// The corrections of [`Correction`]: the gains, and where de-lit the shading and the trust
+/// ([`shading_and_trust`]).
+fn correction_of<'a>(
+    delit: Option<&'a Delit>,
+    samples: &[Vec<Sample>],
+    neighbours: &[Vec<u32>],
+    photos: usize,
+    opts: &BakeOptions,
+) -> Correction<'a> {
+    let gains = gains_of(delit, samples, photos, opts);
+    // Per photo and welded vertex: shading (floored) and robust weight.
+    let (shade, trust) = match delit {
+        Some(d) => shading_and_trust(d, samples, neighbours, photos),
+        None => (Vec::new(), Vec::new()),
     };
-    // Vertex colours (case 2) and the fill (case 3), from the corrected samples, each weighted
-    // by its view and robust weight.
+    Correction {
+        delit,
+        gains,
+        shade,
+        trust,
+    }
+}
+
+/// Vertex colours (case 2) and the fill (case 3), from the corrected samples, each weighted by
+/// its view and robust weight; with the number of vertices the fill coloured.
+fn vertex_colours(
+    samples: &[Vec<Sample>],
+    view_weights: &[Vec<f32>],
+    cor: &Correction,
+    neighbours: &[Vec<u32>],
+) -> (Vec<[f32; 3]>, usize) {
     let mut vcolor: Vec<Option<[f32; 3]>> = samples
         .par_iter()
-        .zip(&view_weights)
+        .zip(view_weights)
         .enumerate()
         .map(|(v, (s, vw))| {
-            let rw = |k: usize| vweight.get(k).map_or(1.0, |w| w[v]);
+            let rw = |k: usize| cor.trust.get(k).map_or(1.0, |w| w[v]);
             let wsum: f32 = s.iter().zip(vw).map(|(x, w)| w * rw(x.photo)).sum();
             (wsum > 0.0).then(|| {
                 let mut c = [0.0f32; 3];
                 for (x, w) in s.iter().zip(vw) {
-                    let u = unlit(x.photo, v, x.colour, x.r2);
+                    let u = cor.unlit(x.photo, v, x.colour, x.r2);
                     for k in 0..3 {
                         c[k] += u[k] * w * rw(x.photo) / wsum;
                     }
@@ -644,30 +841,24 @@ pub fn bake(
             })
         })
         .collect();
-    drop(samples);
     let unbound = vcolor.iter().filter(|c| c.is_none()).count();
-    fill_vertex_colors(&topo.neighbours, &mut vcolor);
-    let vcolor: Vec<[f32; 3]> = vcolor.into_iter().map(|c| c.unwrap_or([0.0; 3])).collect();
-    // Per triangle: the paper's case, and the best photo at its centroid (for the masks).
-    let (tri_w, best, cases) = triangle_sources(mesh, &topo, &masks, &cams, opts);
-    let t_bind = t0.elapsed().as_secs_f64();
-    progress.stage("resample texels", 0, Unit::Steps);
-    let raster = UvRaster::new(mesh, size, size);
-    let n_tex = size * size;
-    // The weighted blend (or interpolated vertex colours) per texel: the paper's resampled
-    // texture, and the complement image of the spline.
-    // Each mesh vertex projected into each photo once, with ⟨N, V⟩ there; a texel's pixel
-    // and cosine are interpolated from its triangle's corners. The projection is projective,
-    // not affine, but across a 1–2 mm triangle at half a metre the difference is ~0.005 px.
+    fill_vertex_colors(neighbours, &mut vcolor);
+    let vcolor = vcolor.into_iter().map(|c| c.unwrap_or([0.0; 3])).collect();
+    (vcolor, unbound)
+}
+
+/// Each mesh vertex projected into each photo once, with ⟨N, V⟩ there; a texel's pixel and
+/// cosine are interpolated from its triangle's corners. The projection is projective, not
+/// affine, but across a 1–2 mm triangle at half a metre the difference is ~0.005 px.
+fn projections(mesh: &TriMesh, welded: &Welded, cams: &[Prepared]) -> Vec<Vec<Option<Corner>>> {
     let vertex_normal = |v: usize| -> Vec3 {
         if mesh.normals.len() == mesh.positions.len() {
             mesh.normals[v]
         } else {
-            wnormals[topo.weld[v] as usize]
+            welded.normals[welded.topo.weld[v] as usize]
         }
     };
-    let projected: Vec<Vec<Option<Corner>>> = cams
-        .iter()
+    cams.iter()
         .map(|cam| {
             (0..mesh.positions.len())
                 .into_par_iter()
@@ -681,25 +872,69 @@ pub fn bake(
                 })
                 .collect()
         })
-        .collect();
-    let interpolate = |i: usize| -> [f32; 3] {
-        let w = tri_w[raster.triangle[i] as usize];
-        let [b1, b2] = raster.bary[i];
+        .collect()
+}
+
+/// The texels a triangle covers, and each texel's dilation source (itself where covered, the
+/// nearest covered texel in the gutter); an error where no triangle covers a texel.
+fn gutter_sources(raster: &UvRaster, size: usize) -> Result<(Vec<bool>, Vec<u32>)> {
+    let covered: Vec<bool> = raster.triangle.iter().map(|t| *t != NO_TRIANGLE).collect();
+    let dil = dilation_sources(&covered, size, size).ok_or_else(|| {
+        PhotoError::Mesh("no triangle covers a texel: are the UVs inside [0, 1]²?".into())
+    })?;
+    Ok((covered, dil))
+}
+
+/// What resampling reads: the mesh, its UV raster and the gutter's dilation sources, the photos
+/// and their cameras (each mesh vertex projected once), the bindings, each triangle's welded
+/// corners and best photo, the vertex colours and the corrections.
+struct Resampler<'a> {
+    mesh: &'a TriMesh,
+    raster: &'a UvRaster,
+    dil: &'a [u32],
+    photos: &'a [Photo],
+    cams: &'a [Prepared],
+    projected: &'a [Vec<Option<Corner>>],
+    masks: &'a [u32],
+    tri_w: &'a [[u32; 3]],
+    best: &'a [u8],
+    vcolor: &'a [[f32; 3]],
+    cor: &'a Correction<'a>,
+    falloff: [f32; 2],
+    size: usize,
+}
+
+/// The running sums of the weighted blend per texel, and each texel's source.
+struct Sums {
+    acc: Vec<[f32; 3]>,
+    wsum: Vec<f32>,
+    source: Vec<u8>,
+}
+
+impl Resampler<'_> {
+    /// The vertex colours interpolated at texel `i` (inside a triangle).
+    fn interpolate(&self, i: usize) -> [f32; 3] {
+        let w = self.tri_w[self.raster.triangle[i] as usize];
+        let [b1, b2] = self.raster.bary[i];
         let b0 = 1.0 - b1 - b2;
+        let vc = self.vcolor;
         std::array::from_fn(|k| {
-            vcolor[w[0] as usize][k] * b0
-                + vcolor[w[1] as usize][k] * b1
-                + vcolor[w[2] as usize][k] * b2
+            vc[w[0] as usize][k] * b0 + vc[w[1] as usize][k] * b1 + vc[w[2] as usize][k] * b2
         })
-    };
-    let common_of = |i: usize| -> u32 {
-        let w = tri_w[raster.triangle[i] as usize];
-        masks[w[0] as usize] & masks[w[1] as usize] & masks[w[2] as usize]
-    };
-    // (colour, weight, trust): trust is the robust weight (1 with the lighting kept).
-    let sample = |i: usize, k: usize| -> Option<([f32; 3], f32, f32)> {
-        let t = mesh.triangles[raster.triangle[i] as usize];
-        let [b1, b2] = raster.bary[i];
+    }
+
+    /// The photos bound to all three corners of texel `i`'s triangle, a bit each.
+    fn common_of(&self, i: usize) -> u32 {
+        let w = self.tri_w[self.raster.triangle[i] as usize];
+        self.masks[w[0] as usize] & self.masks[w[1] as usize] & self.masks[w[2] as usize]
+    }
+
+    /// Photo k's sample of texel `i`: (colour, weight, trust), trust the robust weight (1 with
+    /// the lighting kept); `None` where the photo does not see it.
+    fn sample(&self, i: usize, k: usize) -> Option<([f32; 3], f32, f32)> {
+        let t = self.mesh.triangles[self.raster.triangle[i] as usize];
+        let [b1, b2] = self.raster.bary[i];
+        let projected = self.projected;
         let (c0, c1, c2) = (
             projected[k][t[0] as usize]?,
             projected[k][t[1] as usize]?,
@@ -708,52 +943,58 @@ pub fn bake(
         let b0 = 1.0 - b1 - b2;
         let cos = b0 * c0.1 + b1 * c1.1 + b2 * c2.1;
         let px = [0, 1].map(|a| b0 * c0.0[a] + b1 * c1.0[a] + b2 * c2.0[a]);
-        let mut w = texel_weight(&cams[k].camera, px, cos, opts.falloff)?;
+        let cam = &self.cams[k].camera;
+        let mut w = texel_weight(cam, px, cos, self.falloff)?;
         let mut trust = 1.0;
-        let c = photos[k]
+        let c = self.photos[k]
             .image
             .sample(glam::DVec2::new(px[0] as f64, px[1] as f64));
-        let c = match &delit {
+        let cor = self.cor;
+        let c = match cor.delit {
             Some(d) => {
-                let wv = tri_w[raster.triangle[i] as usize];
+                let wv = self.tri_w[self.raster.triangle[i] as usize];
                 let b = [b0, b1, b2];
                 let sh: [f32; 3] = std::array::from_fn(|j| {
-                    (0..3).map(|q| vshade[k][wv[q] as usize][j] * b[q]).sum()
+                    (0..3).map(|q| cor.shade[k][wv[q] as usize][j] * b[q]).sum()
                 });
                 trust = (0..3)
-                    .map(|q| vweight[k][wv[q] as usize] * b[q])
+                    .map(|q| cor.trust[k][wv[q] as usize] * b[q])
                     .sum::<f32>()
                     .min(1.0);
                 w *= trust;
-                let f = d.lighting.vignette(k, radius2(&cams[k].camera, px));
+                let f = d.lighting.vignette(k, radius2(cam, px));
                 std::array::from_fn(|j| c[j] / (sh[j] * f))
             }
-            None => std::array::from_fn(|j| c[j] * gains[k][j]),
+            None => std::array::from_fn(|j| c[j] * cor.gains[k][j]),
         };
         (w > 0.0).then_some((c, w, trust))
-    };
-    let covered: Vec<bool> = raster.triangle.iter().map(|t| *t != NO_TRIANGLE).collect();
-    let dil = dilation_sources(&covered, size, size).ok_or_else(|| {
-        PhotoError::Mesh("no triangle covers a texel: are the UVs inside [0, 1]²?".into())
-    })?;
-    let dilate_rgb = |img: &mut [[f32; 3]]| {
-        for (i, &s) in dil.iter().enumerate() {
+    }
+
+    /// Gutter texels (no triangle) take the value of their dilation source.
+    fn dilate(&self, img: &mut [[f32; 3]]) {
+        for (i, &s) in self.dil.iter().enumerate() {
             if s as usize != i {
                 img[i] = img[s as usize];
             }
         }
-    };
-    // The weighted blend of the photos per texel (§3.2 case 1), accumulated photo by photo in
-    // photo order — the same sums whether one pass does all photos or each photo's pass adds
-    // its own — then divided, or the interpolated vertex colours where no photo sees (cases 2
-    // and 3). `source` records which.
-    // Gutter texels (no triangle) take the value of their dilation source, computed there.
-    let finish_blend = |acc: &[[f32; 3]], wsum: &[f32], out: &mut [[f32; 3]], source: &mut [u8]| {
+    }
+
+    /// The weighted blend of the photos per texel (§3.2 case 1) divided out of the sums into
+    /// `out`, or the interpolated vertex colours where no photo sees (cases 2 and 3); `source`
+    /// records which. Gutter texels take the value of their dilation source, computed there.
+    fn finish_blend(
+        &self,
+        acc: &[[f32; 3]],
+        wsum: &[f32],
+        out: &mut [[f32; 3]],
+        source: &mut [u8],
+    ) {
+        let (size, raster) = (self.size, self.raster);
         let blend_at = |i: usize| {
             if wsum[i] > 0.0 {
                 acc[i].map(|a| a / wsum[i])
             } else {
-                interpolate(i)
+                self.interpolate(i)
             }
         };
         out.par_chunks_mut(size)
@@ -763,32 +1004,36 @@ pub fn bake(
                 for x in 0..size {
                     let i = y * size + x;
                     if raster.triangle[i] == NO_TRIANGLE {
-                        row[x] = blend_at(dil[i] as usize);
+                        row[x] = blend_at(self.dil[i] as usize);
                         continue;
                     }
                     row[x] = blend_at(i);
                     srow[x] = if wsum[i] > 0.0 {
-                        best[raster.triangle[i] as usize]
+                        self.best[raster.triangle[i] as usize]
                     } else {
                         SOURCE_INTERPOLATED
                     };
                 }
             });
-    };
-    // Adds photo k's samples to the sums; writes them (or the interpolated vertex colours where
-    // photo k does not see the texel) into `img` when given.
-    let add_row = |k: usize,
-                   y: usize,
-                   arow: &mut [[f32; 3]],
-                   wrow: &mut [f32],
-                   mut irow: Option<&mut [[f32; 3]]>| {
-        for x in 0..size {
-            let i = y * size + x;
-            if raster.triangle[i] == NO_TRIANGLE {
+    }
+
+    /// Adds photo k's samples of row `y` to the sums; writes them (or the interpolated vertex
+    /// colours where photo k does not see the texel) into `irow` when given.
+    fn add_row(
+        &self,
+        k: usize,
+        y: usize,
+        arow: &mut [[f32; 3]],
+        wrow: &mut [f32],
+        mut irow: Option<&mut [[f32; 3]]>,
+    ) {
+        for x in 0..self.size {
+            let i = y * self.size + x;
+            if self.raster.triangle[i] == NO_TRIANGLE {
                 continue;
             }
-            let seen = if common_of(i) & (1 << k) != 0 {
-                sample(i, k)
+            let seen = if self.common_of(i) & (1 << k) != 0 {
+                self.sample(i, k)
             } else {
                 None
             };
@@ -801,163 +1046,208 @@ pub fn bake(
                     // The spline image keeps what the photo is trusted with; a highlight or a
                     // deep shadow gives way to the vertices' robust colour.
                     if trust < 1.0 && irow.is_some() {
-                        let v = interpolate(i);
+                        let v = self.interpolate(i);
                         std::array::from_fn(|j| trust * c[j] + (1.0 - trust) * v[j])
                     } else {
                         c
                     }
                 }
-                None if irow.is_some() => interpolate(i),
+                None if irow.is_some() => self.interpolate(i),
                 None => continue,
             };
             if let Some(r) = irow.as_deref_mut() {
                 r[x] = c;
             }
         }
+    }
+
+    /// Adds photo k's samples to the sums, row by row; writes its image into `img` when given
+    /// ([`Self::add_row`]).
+    fn add_photo(
+        &self,
+        k: usize,
+        acc: &mut [[f32; 3]],
+        wsum: &mut [f32],
+        img: Option<&mut [[f32; 3]]>,
+    ) {
+        let size = self.size;
+        let rows = acc.par_chunks_mut(size).zip(wsum.par_chunks_mut(size));
+        match img {
+            Some(img) => rows
+                .zip(img.par_chunks_mut(size))
+                .enumerate()
+                .for_each(|(y, ((a, w), r))| self.add_row(k, y, a, w, Some(r))),
+            None => rows
+                .enumerate()
+                .for_each(|(y, (a, w))| self.add_row(k, y, a, w, None)),
+        }
+    }
+}
+
+/// The texture and each texel's source: the weighted blend (§3.2; the photos' sums accumulated
+/// photo by photo in photo order — the same sums whether one pass does all photos or each
+/// photo's pass adds its own), or with [`BakeOptions::multiband`] and more than one photo the
+/// multiresolution spline ([`spline_blend`]); with what `resample_time` reads once the photos
+/// are resampled, before the spline (the resampling's seconds).
+fn blend(
+    r: &Resampler,
+    vertices: usize,
+    opts: &BakeOptions,
+    progress: &dyn Progress,
+    resample_time: impl Fn() -> f64,
+) -> (Vec<[f32; 3]>, Vec<u8>, f64) {
+    let n_tex = r.size * r.size;
+    let mut sums = Sums {
+        acc: derma_core::image::zeroed(n_tex),
+        wsum: vec![0.0; n_tex],
+        source: vec![SOURCE_NONE; n_tex],
     };
-    let add_photo =
-        |k: usize, acc: &mut [[f32; 3]], wsum: &mut [f32], img: Option<&mut [[f32; 3]]>| {
-            let rows = acc.par_chunks_mut(size).zip(wsum.par_chunks_mut(size));
-            match img {
-                Some(img) => rows
-                    .zip(img.par_chunks_mut(size))
-                    .enumerate()
-                    .for_each(|(y, ((a, w), r))| add_row(k, y, a, w, Some(r))),
-                None => rows
-                    .enumerate()
-                    .for_each(|(y, (a, w))| add_row(k, y, a, w, None)),
-            }
-        };
-    let mut acc: Vec<[f32; 3]> = derma_core::image::zeroed(n_tex);
-    let mut wsum: Vec<f32> = vec![0.0; n_tex];
-    let mut source = vec![SOURCE_NONE; n_tex];
-    let multiband = opts.multiband && photos.len() > 1;
+    let multiband = opts.multiband && r.photos.len() > 1;
     let mut texture: Vec<[f32; 3]> = derma_core::image::zeroed(n_tex);
     if !multiband {
-        for k in 0..photos.len() {
-            add_photo(k, &mut acc, &mut wsum, None);
+        for k in 0..r.photos.len() {
+            r.add_photo(k, &mut sums.acc, &mut sums.wsum, None);
         }
-        finish_blend(&acc, &wsum, &mut texture, &mut source);
+        r.finish_blend(&sums.acc, &sums.wsum, &mut texture, &mut sums.source);
     }
-    let t_resample = t0.elapsed().as_secs_f64() - t_bind;
+    let t_resample = resample_time();
     if multiband {
         progress.stage("multiresolution spline", 0, Unit::Steps);
-        // Shrunk masks: a vertex is inside region r when all its triangles are best seen from
-        // r; a triangle stays in r's mask when its three vertices are inside (the outmost ring
-        // of triangles removed, §3.2).
-        let nv = topo.positions.len();
-        let mut region = vec![u8::MAX - 1; nv];
-        for (t, &b) in tri_w.iter().zip(&best) {
-            for &v in t {
-                let r = &mut region[v as usize];
-                if *r == u8::MAX - 1 {
-                    *r = b;
-                } else if *r != b {
-                    *r = u8::MAX;
-                }
+        let label = spline_labels(r, vertices);
+        let levels = opts
+            .levels
+            .unwrap_or_else(|| default_levels(r.size, r.size));
+        spline_blend(r, &mut sums, &label, levels, &mut texture);
+    }
+    (texture, sums.source, t_resample)
+}
+
+/// Each texel's mask for the spline: its triangle's shrunk region, else the complement (the
+/// last, the photos' count). A vertex is inside region r when all its triangles are best seen
+/// from r; a triangle stays in r's mask when its three vertices are inside (the outmost ring
+/// of triangles removed, §3.2).
+fn spline_labels(r: &Resampler, vertices: usize) -> Vec<u8> {
+    let photos = r.photos.len();
+    let mut region = vec![u8::MAX - 1; vertices];
+    for (t, &b) in r.tri_w.iter().zip(r.best) {
+        for &v in t {
+            let g = &mut region[v as usize];
+            if *g == u8::MAX - 1 {
+                *g = b;
+            } else if *g != b {
+                *g = u8::MAX;
             }
         }
-        let tri_mask: Vec<u8> = tri_w
-            .iter()
-            .zip(&best)
-            .map(|(t, &b)| {
-                if (b as usize) < photos.len() && t.iter().all(|&v| region[v as usize] == b) {
-                    b
-                } else {
-                    SOURCE_INTERPOLATED
-                }
-            })
-            .collect();
-        // Each texel's mask: its triangle's shrunk region, else the complement (the last).
-        let label: Vec<u8> = (0..n_tex)
-            .into_par_iter()
-            .map(|i| match raster.triangle[i] {
-                NO_TRIANGLE => photos.len() as u8,
-                t => match tri_mask[t as usize] {
-                    m if (m as usize) < photos.len() => m,
-                    _ => photos.len() as u8,
-                },
-            })
-            .collect();
-        let levels = opts.levels.unwrap_or_else(|| default_levels(size, size));
-        let mask = |k: usize, m: &mut Plane| {
-            m.data
-                .par_iter_mut()
-                .zip(&label)
-                .for_each(|(v, l)| v[0] = (*l as usize == k) as u8 as f32);
-        };
-        // One pass per photo: its image for the spline (its own samples where it sees the
-        // texel, the interpolated vertex colours elsewhere, dilated into the gutter) and its
-        // share of the blend; the last image is the finished blend (the complement's image).
-        let sums = std::cell::RefCell::new((&mut acc, &mut wsum, &mut source));
-        let out = multiband_with(
-            size,
-            size,
-            photos.len() + 1,
-            levels,
-            mask,
-            |k, img: &mut Image<3>| {
-                let mut s = sums.borrow_mut();
-                let (acc, wsum, source) = &mut *s;
-                if k < photos.len() {
-                    add_photo(k, acc, wsum, Some(&mut img.data));
-                } else {
-                    finish_blend(acc, wsum, &mut img.data, source);
-                }
-                dilate_rgb(&mut img.data);
-            },
-        );
-        for (t, o) in texture.iter_mut().zip(&out.data) {
-            *t = o.map(|v| v.max(0.0));
-        }
-        dilate_rgb(&mut texture);
     }
+    let tri_mask: Vec<u8> = r
+        .tri_w
+        .iter()
+        .zip(r.best)
+        .map(|(t, &b)| {
+            if (b as usize) < photos && t.iter().all(|&v| region[v as usize] == b) {
+                b
+            } else {
+                SOURCE_INTERPOLATED
+            }
+        })
+        .collect();
+    (0..r.size * r.size)
+        .into_par_iter()
+        .map(|i| match r.raster.triangle[i] {
+            NO_TRIANGLE => photos as u8,
+            t => match tri_mask[t as usize] {
+                m if (m as usize) < photos => m,
+                _ => photos as u8,
+            },
+        })
+        .collect()
+}
+
+/// The multiresolution spline (Burt & Adelson 1983) over the masks `label`, into `texture`
+/// (clamped at 0, dilated into the gutter). One pass per photo: its image for the spline (its
+/// own samples where it sees the texel, the interpolated vertex colours elsewhere, dilated into
+/// the gutter) and its share of the blend; the last image is the finished blend (the
+/// complement's image).
+fn spline_blend(
+    r: &Resampler,
+    sums: &mut Sums,
+    label: &[u8],
+    levels: usize,
+    texture: &mut [[f32; 3]],
+) {
+    let photos = r.photos.len();
+    let mask = |k: usize, m: &mut Plane| {
+        m.data
+            .par_iter_mut()
+            .zip(label)
+            .for_each(|(v, l)| v[0] = (*l as usize == k) as u8 as f32);
+    };
+    let sums = std::cell::RefCell::new(sums);
+    let out = multiband_with(
+        r.size,
+        r.size,
+        photos + 1,
+        levels,
+        mask,
+        |k, img: &mut Image<3>| {
+            let mut s = sums.borrow_mut();
+            let Sums { acc, wsum, source } = &mut **s;
+            if k < photos {
+                r.add_photo(k, acc, wsum, Some(&mut img.data));
+            } else {
+                r.finish_blend(acc, wsum, &mut img.data, source);
+            }
+            r.dilate(&mut img.data);
+        },
+    );
+    for (t, o) in texture.iter_mut().zip(&out.data) {
+        *t = o.map(|v| v.max(0.0));
+    }
+    r.dilate(texture);
+}
+
+/// Per photo: its gain, the vertices bound to it and its share of the chart's texels (those
+/// `covered`) as the best view; with the share of the chart coloured from photos directly.
+fn photo_reports(
+    photos: &[Photo],
+    cor: &Correction,
+    masks: &[u32],
+    source: &[u8],
+    covered: &[bool],
+) -> (Vec<PhotoReport>, f64) {
     let chart = covered.iter().filter(|c| **c).count().max(1);
     let photo_coverage = source
         .iter()
         .filter(|s| (**s as usize) < photos.len())
         .count() as f64
         / chart as f64;
-    let report = BakeReport {
-        photos: photos
-            .iter()
-            .enumerate()
-            .map(|(i, p)| PhotoReport {
-                name: p.name.clone(),
-                gain: delit.as_ref().map_or(gains[i], |d| d.lighting.gains[i]),
-                bound_vertices: masks.iter().filter(|m| *m & (1 << i) != 0).count(),
-                best_share: source.iter().filter(|s| **s as usize == i).count() as f64
-                    / chart as f64,
-            })
-            .collect(),
-        triangle_cases: cases,
-        unbound_vertices: unbound,
-        photo_coverage,
-        lighting,
-        registration,
-        warnings,
-        seconds: [
-            t_bind,
-            t_resample,
-            t0.elapsed().as_secs_f64() - t_bind - t_resample,
-        ],
-    };
-    let shading = match (&delit, opts.shading_images) {
-        (Some(d), true) => (0..photos.len())
-            .map(|k| shading_image(&topo, &vshade[k], &cams[k].camera, &d.lighting, k))
+    let reports = photos
+        .iter()
+        .enumerate()
+        .map(|(i, p)| PhotoReport {
+            name: p.name.clone(),
+            gain: cor.delit.map_or(cor.gains[i], |d| d.lighting.gains[i]),
+            bound_vertices: masks.iter().filter(|m| *m & (1 << i) != 0).count(),
+            best_share: source.iter().filter(|s| **s as usize == i).count() as f64 / chart as f64,
+        })
+        .collect();
+    (reports, photo_coverage)
+}
+
+/// Each photo's shading image ([`shading_image`]) with [`BakeOptions::shading_images`] and
+/// de-lighting; else none.
+fn shading_images(
+    topo: &Topology,
+    cor: &Correction,
+    cams: &[Prepared],
+    opts: &BakeOptions,
+) -> Vec<RgbImage> {
+    match (cor.delit, opts.shading_images) {
+        (Some(d), true) => (0..cams.len())
+            .map(|k| shading_image(topo, &cor.shade[k], &cams[k].camera, &d.lighting, k))
             .collect(),
         _ => Vec::new(),
-    };
-    Ok(Baked {
-        shading,
-        texture: RgbImage {
-            width: size,
-            height: size,
-            data: texture,
-        },
-        source,
-        report,
-    })
+    }
 }
 
 /// What a bake refuses before any work: no photos or more than [`MAX_PHOTOS`], a mesh without

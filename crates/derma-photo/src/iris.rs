@@ -322,7 +322,54 @@ pub fn iris_texture(img: &RgbImage, opts: &IrisOptions) -> Result<IrisTexture> {
         .unwrap_or_else(|| darkest_spot(img));
     let (c, radius) = find_iris(img, start)?;
     check_iris(img, c, radius)?;
-    // Pupil: where the median of a ring rises halfway from the centre's to the iris'.
+    let pupil = pupil_radius(img, c, radius);
+    let (iris, sclera) = polar_iris(img, c, (pupil, radius), opts.alpha);
+    let (nr, na) = (iris.nr, iris.na);
+    let kept = iris.valid.iter().filter(|v| **v).count();
+    if kept < nr * 4 {
+        return Err(PhotoError::Invalid(derma_core::Invalid::new(
+            "eye photo",
+            format!(
+                "at least {} of its {} iris samples to survive the removals",
+                nr * 4,
+                nr * na
+            ),
+            format!("only {kept}: the iris is too occluded or too small ({radius:.1} px)"),
+        )));
+    }
+    let sector = reference_sector(&iris, opts.max_sector_deg);
+    // Output polar texture: angle rows at the output texture's resolution.
+    let r_out = IRIS_UV_RADIUS as f64 * opts.size as f64;
+    let na_out = ((std::f64::consts::TAU * r_out).round() as usize).max(64);
+    let (out_rows, synthesis) = synthesise(&iris, &sector, radius, na_out, opts);
+    let polar_img = RgbImage {
+        width: nr,
+        height: na_out,
+        data: out_rows.concat(),
+    };
+    // Pupil: the darkest 5 % of the central disc.
+    let mut core: Vec<[f32; 3]> = polar(img, c, 0.0, pupil * 0.8, 4, 32);
+    core.sort_by(|a, b| lum(*a).total_cmp(&lum(*b)));
+    let pupil_col = core[core.len() / 4];
+    let texture = globe_texture(&polar_img, pupil_col, sclera, opts.size);
+    Ok(IrisTexture {
+        texture,
+        polar: polar_img,
+        report: IrisReport {
+            centre: c.to_array(),
+            radius,
+            pupil_radius: pupil,
+            kept_share: kept as f64 / (nr * na) as f64,
+            sector_deg: sector.deg,
+            synthesis: synthesis.into(),
+            sclera,
+        },
+    })
+}
+
+/// The pupil's radius: where the median of a ring rises halfway from the centre's to the
+/// iris'; without a visible pupil, the texture's own pupil-to-iris ratio.
+fn pupil_radius(img: &RgbImage, c: DVec2, radius: f64) -> f64 {
     let ring = |r: f64| -> f32 {
         let mut v: Vec<f32> = (0..48)
             .map(|k| {
@@ -346,6 +393,26 @@ pub fn iris_texture(img: &RgbImage, opts: &IrisOptions) -> Result<IrisTexture> {
             }
         }
     }
+    pupil
+}
+
+/// The iris in polar coordinates, pupil edge to limbus: `na` angles of `nr` radii each
+/// (sample `a * nr + i`), and which samples survived the removals.
+struct PolarIris {
+    samples: Vec<[f32; 3]>,
+    valid: Vec<bool>,
+    nr: usize,
+    na: usize,
+}
+
+/// The iris sampled in polar coordinates between the radii `(pupil, radius)` at the photo's
+/// resolution, with the removals of skin, lid shadows and α σ outliers; and the sclera colour.
+fn polar_iris(
+    img: &RgbImage,
+    c: DVec2,
+    (pupil, radius): (f64, f64),
+    alpha: f32,
+) -> (PolarIris, [f32; 3]) {
     // Polar image of the iris, pupil edge to limbus: radius samples at the photo's resolution.
     let nr = ((radius - pupil).round() as usize).clamp(4, 256);
     let na = ((std::f64::consts::TAU * radius).round() as usize).clamp(32, 2048);
@@ -355,6 +422,24 @@ pub fn iris_texture(img: &RgbImage, opts: &IrisOptions) -> Result<IrisTexture> {
     outer.sort_by(|a, b| lum(*a).total_cmp(&lum(*b)));
     let skin = outer[outer.len() / 4];
     let sclera = sclera_colour(img, c, radius);
+    let valid = valid_samples(&samples, skin, (nr, na), alpha);
+    let iris = PolarIris {
+        samples,
+        valid,
+        nr,
+        na,
+    };
+    (iris, sclera)
+}
+
+/// Which of the polar samples (`nr` radii at `na` angles) survive the removals: the skin's
+/// colour, pixels beside removed skin along the angle, and α σ outliers per radius.
+fn valid_samples(
+    samples: &[[f32; 3]],
+    skin: [f32; 3],
+    (nr, na): (usize, usize),
+    alpha: f32,
+) -> Vec<bool> {
     let mut valid: Vec<bool> = samples
         .iter()
         .map(|s| dist2(*s, skin) > 0.25 * dist2(skin, [0.0; 3]).max(1e-6) * 0.25)
@@ -382,25 +467,27 @@ pub fn iris_texture(img: &RgbImage, opts: &IrisOptions) -> Result<IrisTexture> {
         let mean: [f32; 3] =
             std::array::from_fn(|k| col.iter().map(|c| c[k]).sum::<f32>() / col.len() as f32);
         let var = col.iter().map(|c| dist2(*c, mean)).sum::<f32>() / col.len() as f32;
-        let lim = opts.alpha * opts.alpha * var;
+        let lim = alpha * alpha * var;
         for a in 0..na {
             if valid[a * nr + i] && dist2(samples[a * nr + i], mean) > lim {
                 valid[a * nr + i] = false;
             }
         }
     }
-    let kept = valid.iter().filter(|v| **v).count();
-    if kept < nr * 4 {
-        return Err(PhotoError::Invalid(derma_core::Invalid::new(
-            "eye photo",
-            format!(
-                "at least {} of its {} iris samples to survive the removals",
-                nr * 4,
-                nr * na
-            ),
-            format!("only {kept}: the iris is too occluded or too small ({radius:.1} px)"),
-        )));
-    }
+    valid
+}
+
+/// The reference sector: its first angle (column), its columns and its degrees.
+struct Sector {
+    start: usize,
+    cols: usize,
+    deg: f64,
+}
+
+/// The reference sector: the longest circular run of angles whose samples are ≥ 80 % valid,
+/// at most `max_deg` degrees.
+fn reference_sector(iris: &PolarIris, max_deg: f32) -> Sector {
+    let (nr, na, valid) = (iris.nr, iris.na, &iris.valid);
     // Columns (angles) whose samples are ≥ 80 % valid; the longest circular run of them.
     let good: Vec<bool> = (0..na)
         .map(|a| (0..nr).filter(|i| valid[a * nr + i]).count() * 5 >= nr * 4)
@@ -418,12 +505,26 @@ pub fn iris_texture(img: &RgbImage, opts: &IrisOptions) -> Result<IrisTexture> {
             }
         }
     }
-    let max_cols = (opts.max_sector_deg as f64 / 360.0 * na as f64).floor() as usize;
+    let max_cols = (max_deg as f64 / 360.0 * na as f64).floor() as usize;
     let sector_cols = best_len.min(max_cols);
-    let sector_deg = sector_cols as f64 / na as f64 * 360.0;
-    // Output polar texture: angle rows at the output texture's resolution.
-    let r_out = IRIS_UV_RADIUS as f64 * opts.size as f64;
-    let na_out = ((std::f64::consts::TAU * r_out).round() as usize).max(64);
+    Sector {
+        start: best_start,
+        cols: sector_cols,
+        deg: sector_cols as f64 / na as f64 * 360.0,
+    }
+}
+
+/// The output's polar rows (`na_out` angles, all radii each) and the synthesis' name: the 1-D
+/// Markov chain on the reference sector where it spans at least [`IrisOptions::min_sector_deg`],
+/// else the 2-D Markov field on all valid samples.
+fn synthesise(
+    iris: &PolarIris,
+    sector: &Sector,
+    radius: f64,
+    na_out: usize,
+    opts: &IrisOptions,
+) -> (Vec<Vec<[f32; 3]>>, &'static str) {
+    let (nr, na, samples, valid) = (iris.nr, iris.na, &iris.samples, &iris.valid);
     let rng = Philox::new(opts.seed, 31);
     // The neighbourhood: 3 × 6 (radius × angle) for an 80-px iris diameter, scaled (§4.1).
     let k_ang = ((6.0 * 2.0 * radius / 80.0).round() as usize).clamp(2, 16);
@@ -439,10 +540,10 @@ pub fn iris_texture(img: &RgbImage, opts: &IrisOptions) -> Result<IrisTexture> {
             std::array::from_fn(|k| col.iter().map(|c| c[k]).sum::<f32>() / n)
         })
         .collect();
-    let (out_rows, synthesis) = if sector_deg >= opts.min_sector_deg as f64 {
-        let reference: Vec<Vec<[f32; 3]>> = (0..sector_cols)
+    if sector.deg >= opts.min_sector_deg as f64 {
+        let reference: Vec<Vec<[f32; 3]>> = (0..sector.cols)
             .map(|j| {
-                let a = (best_start + j) % na;
+                let a = (sector.start + j) % na;
                 (0..nr)
                     .map(|i| {
                         if valid[a * nr + i] {
@@ -460,33 +561,10 @@ pub fn iris_texture(img: &RgbImage, opts: &IrisOptions) -> Result<IrisTexture> {
         )
     } else {
         (
-            markov_field(&samples, &valid, nr, na, na_out, k_ang, &rng),
+            markov_field(samples, valid, nr, na, na_out, k_ang, &rng),
             "markov-field-2d",
         )
-    };
-    let polar_img = RgbImage {
-        width: nr,
-        height: na_out,
-        data: out_rows.concat(),
-    };
-    // Pupil: the darkest 5 % of the central disc.
-    let mut core: Vec<[f32; 3]> = polar(img, c, 0.0, pupil * 0.8, 4, 32);
-    core.sort_by(|a, b| lum(*a).total_cmp(&lum(*b)));
-    let pupil_col = core[core.len() / 4];
-    let texture = globe_texture(&polar_img, pupil_col, sclera, opts.size);
-    Ok(IrisTexture {
-        texture,
-        polar: polar_img,
-        report: IrisReport {
-            centre: c.to_array(),
-            radius,
-            pupil_radius: pupil,
-            kept_share: kept as f64 / (nr * na) as f64,
-            sector_deg,
-            synthesis: synthesis.into(),
-            sclera,
-        },
-    })
+    }
 }
 
 /// §4.1's 1-D synthesis: each output row (all radii at one angle) follows the reference row

@@ -7,6 +7,7 @@ use crate::topology::fill_holes;
 use derma_core::mesh::TriMesh;
 use derma_head::regions::index;
 use derma_head::Head;
+use derma_render::brdf::specular;
 use glam::Vec3;
 
 /// The built-in head's skin without the mouth cavity and eye sockets, the openings closed as a
@@ -276,13 +277,6 @@ impl<'a> Stage<'a> {
     }
 }
 
-/// GGX's normal distribution D(h) for α = roughness² (Walter et al. 2007 eq. 33).
-fn ggx_d(n_h: f32, alpha: f32) -> f32 {
-    let a2 = alpha * alpha;
-    let d = n_h * n_h * (a2 - 1.0) + 1.0;
-    a2 / (std::f32::consts::PI * d * d)
-}
-
 /// A camera for `view` framing the head's face from `distance_mm`.
 pub fn camera_for(
     head: &Head,
@@ -312,8 +306,8 @@ pub fn camera_for(
 /// Renders a photo of the staged mesh (with `albedo` per surface point) through
 /// derma-render's rasteriser (one sample per pixel centre, the camera's pinhole): a Lambertian
 /// surface under the view's ambient sky (times the vertex's sky visibility) and key light (with
-/// a hard shadow ray), plus a white GGX sheen from the key (Schlick's Fresnel, Smith's masking
-/// left out), times exposure, white balance and vignetting, then stored as 8-bit sRGB as a
+/// a hard shadow ray), plus a white GGX sheen from the key (derma-render's microfacet lobe,
+/// [`derma_render::brdf::specular`]), times exposure, white balance and vignetting, then stored as 8-bit sRGB as a
 /// camera would.
 pub fn render(
     stage: &Stage,
@@ -351,12 +345,8 @@ pub fn render(
                             .occluded(p + n * RAY_OFFSET_MM, light, 0.0, f32::MAX);
                     let key = if lit { view.key * n_l } else { 0.0 };
                     let v = (eye - p).normalize();
-                    let n_v = n.dot(v).max(0.05);
-                    let hv = (light + v).normalize();
-                    let fresnel =
-                        view.specular_f0 + (1.0 - view.specular_f0) * (1.0 - hv.dot(v)).powi(5);
                     let sheen = if lit && view.specular_f0 > 0.0 {
-                        view.key * fresnel * ggx_d(n.dot(hv).max(0.0), alpha) / (4.0 * n_v)
+                        view.key * n_l * specular(n, light, v, alpha, view.specular_f0)
                     } else {
                         0.0
                     };

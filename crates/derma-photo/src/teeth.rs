@@ -221,8 +221,64 @@ pub fn teeth_texture(
         )));
     }
     check_teeth(img, &labels)?;
+    let b = teeth_box(&teeth, &labels, w, h);
+    let target = target_colour(img, &teeth, opts.target_luminance);
+    let stripes = stripe_means(img, &teeth, &b, target);
+    let eq = equalise(img, &labels, &b, &stripes, target, opts.gum);
+    // Composite: the generic texture (target colour, shaded toward the back of the arch), the
+    // photo's front teeth mapped orthographically onto the front of each arch.
+    let size = opts.size;
+    let mut rgb = RgbImage::filled(size, size, target);
+    let mut alpha = vec![1.0f32; size * size];
+    let front = Front {
+        eq: &eq,
+        labels: &labels,
+        b: &b,
+    };
+    for (mesh, is_upper) in [(upper, true), (lower, false)] {
+        composite(mesh, is_upper, &front, target, opts, (&mut rgb, &mut alpha))?;
+    }
+    let n = (w * h) as f64;
+    let count = |l: Label| labels.iter().filter(|x| **x == l).count() as f64 / n;
+    Ok(TeethTexture {
+        rgb,
+        alpha,
+        equalised: eq,
+        report: TeethReport {
+            void_threshold: void_t,
+            gum_threshold: gum_t,
+            shares: [count(Label::Tooth), count(Label::Gum), count(Label::Void)],
+            target,
+            stripes_before: stripes,
+            bbox: [b.x0, b.y0, b.x1, b.y1],
+            gap_row: b.gap_row,
+        },
+        labels,
+    })
+}
+
+/// Where the teeth are in the photo: their bounding box (pixels, inclusive) and the row of the
+/// gap between upper and lower teeth.
+struct TeethBox {
+    x0: usize,
+    y0: usize,
+    x1: usize,
+    y1: usize,
+    gap_row: usize,
+}
+
+impl TeethBox {
+    /// The width of each of the six stripes over the box (pixels).
+    fn stripe_w(&self) -> f32 {
+        (self.x1 - self.x0 + 1) as f32 / 6.0
+    }
+}
+
+/// The box of the tooth pixels `teeth` (indices into a `w` × `h` photo) and the gap: the row
+/// inside the box with the fewest tooth pixels in its middle half.
+fn teeth_box(teeth: &[usize], labels: &[Label], w: usize, h: usize) -> TeethBox {
     let (mut x0, mut y0, mut x1, mut y1) = (w, h, 0, 0);
-    for &i in &teeth {
+    for &i in teeth {
         let (x, y) = (i % w, i / w);
         x0 = x0.min(x);
         x1 = x1.max(x);
@@ -241,22 +297,35 @@ pub fn teeth_texture(
             )
         })
         .unwrap_or((y0 + y1) / 2);
-    // Target: the teeth's mean colour with its luminance set to the target.
+    TeethBox {
+        x0,
+        y0,
+        x1,
+        y1,
+        gap_row,
+    }
+}
+
+/// The equalisation target: the teeth's mean colour with its luminance set to `target_luminance`.
+fn target_colour(img: &RgbImage, teeth: &[usize], target_luminance: f32) -> [f32; 3] {
     let mut mean = [0.0f32; 3];
-    for &i in &teeth {
+    for &i in teeth {
         for k in 0..3 {
             mean[k] += img.data[i][k] / teeth.len() as f32;
         }
     }
-    let s = opts.target_luminance / luminance(mean).max(1e-6);
-    let target = mean.map(|v| v * s);
-    // Six stripes over the box; the correction (target − stripe mean) is interpolated linearly
-    // between stripe centres, column by column.
-    let stripe_w = (x1 - x0 + 1) as f32 / 6.0;
+    let s = target_luminance / luminance(mean).max(1e-6);
+    mean.map(|v| v * s)
+}
+
+/// The teeth's mean colour in each of six stripes over the box (the target where a stripe
+/// holds no tooth pixel).
+fn stripe_means(img: &RgbImage, teeth: &[usize], b: &TeethBox, target: [f32; 3]) -> Vec<[f32; 3]> {
+    let (w, stripe_w) = (img.width, b.stripe_w());
     let mut stripes = vec![[0.0f32; 3]; 6];
     let mut counts = [0usize; 6];
-    for &i in &teeth {
-        let k = (((i % w - x0) as f32 / stripe_w) as usize).min(5);
+    for &i in teeth {
+        let k = (((i % w - b.x0) as f32 / stripe_w) as usize).min(5);
         for c in 0..3 {
             stripes[k][c] += img.data[i][c];
         }
@@ -269,6 +338,20 @@ pub fn teeth_texture(
             stripes[k] = target;
         }
     }
+    stripes
+}
+
+/// The equalised photo: each tooth pixel corrected by (target − stripe mean), interpolated
+/// linearly between stripe centres column by column; gums set to `gum`, voids to blue.
+fn equalise(
+    img: &RgbImage,
+    labels: &[Label],
+    b: &TeethBox,
+    stripes: &[[f32; 3]],
+    target: [f32; 3],
+    gum: [f32; 3],
+) -> RgbImage {
+    let (w, x0, stripe_w) = (img.width, b.x0, b.stripe_w());
     let correction = |x: usize| -> [f32; 3] {
         let f = ((x as f32 - x0 as f32) / stripe_w - 0.5).clamp(0.0, 5.0);
         let (k, t) = ((f as usize).min(4), f - (f as usize).min(4) as f32);
@@ -285,73 +368,73 @@ pub fn teeth_texture(
                     p[c] = (p[c] + corr[c]).max(0.0);
                 }
             }
-            Label::Gum => *p = opts.gum,
+            Label::Gum => *p = gum,
             Label::Void => *p = [0.0, 0.0, 1.0],
         }
     }
-    // Composite: the generic texture (target colour, shaded toward the back of the arch), the
-    // photo's front teeth mapped orthographically onto the front of each arch.
-    let size = opts.size;
-    let mut rgb = RgbImage::filled(size, size, target);
-    let mut alpha = vec![1.0f32; size * size];
-    for (mesh, is_upper) in [(upper, true), (lower, false)] {
-        if mesh.uvs.len() != mesh.positions.len() {
-            return Err(PhotoError::Mesh("a teeth mesh has no UVs".into()));
-        }
-        let (lo, hi) = mesh.bounds();
-        let raster = UvRaster::new(mesh, size, size);
-        // Front teeth's vertical extent: incisal edge to the gum line (the arch's other end).
-        for i in 0..size * size {
-            if !raster.covered(i) {
-                continue;
-            }
-            let p = raster.position(mesh, i);
-            let depth = ((hi.z - p.z) / (hi.z - lo.z).max(1e-6)).clamp(0.0, 1.0);
-            let generic = target.map(|v| v * (1.0 - 0.45 * depth));
-            let xf = p.x.abs();
-            let wf = 1.0 - smooth(opts.canine_x_mm - 2.0, opts.canine_x_mm + 2.0, xf);
-            let mut c = generic;
-            let mut a = 1.0;
-            if wf > 0.0 && p.z > hi.z - 12.0 {
-                // Photo coordinates: x across the box, y from the gap (incisal edges) outward.
-                let u = (p.x / (opts.canine_x_mm + 2.0) * 0.5 + 0.5).clamp(0.0, 1.0);
-                let (ey, ry) = if is_upper { (lo.y, hi.y) } else { (hi.y, lo.y) };
-                let v = ((p.y - ey) / (ry - ey)).clamp(0.0, 1.0);
-                let px = x0 as f32 + u * (x1 - x0) as f32;
-                let py = if is_upper {
-                    gap_row as f32 - v * (gap_row - y0) as f32
-                } else {
-                    gap_row as f32 + v * (y1 - gap_row) as f32
-                };
-                let j = (py.round() as usize).min(h - 1) * w + (px.round() as usize).min(w - 1);
-                let (pc, pa) = match labels[j] {
-                    Label::Void => (generic, 0.0),
-                    _ => (eq.data[j], 1.0),
-                };
-                c = std::array::from_fn(|k| pc[k] * wf + generic[k] * (1.0 - wf));
-                a = pa * wf + (1.0 - wf);
-            }
-            rgb.data[i] = c;
-            alpha[i] = a;
-        }
+    eq
+}
+
+/// The photo's front teeth as composited: the equalised photo, its labels and the teeth's box.
+struct Front<'a> {
+    eq: &'a RgbImage,
+    labels: &'a [Label],
+    b: &'a TeethBox,
+}
+
+/// One arch composited into the texture (`rgb`, `alpha`): the generic colour (`target`, shaded
+/// toward the back of the arch), the photo's front teeth mapped orthographically onto its front
+/// and faded out at the canines; voids transparent.
+fn composite(
+    mesh: &TriMesh,
+    is_upper: bool,
+    front: &Front,
+    target: [f32; 3],
+    opts: &TeethOptions,
+    (rgb, alpha): (&mut RgbImage, &mut [f32]),
+) -> Result<()> {
+    if mesh.uvs.len() != mesh.positions.len() {
+        return Err(PhotoError::Mesh("a teeth mesh has no UVs".into()));
     }
-    let n = (w * h) as f64;
-    let count = |l: Label| labels.iter().filter(|x| **x == l).count() as f64 / n;
-    Ok(TeethTexture {
-        rgb,
-        alpha,
-        equalised: eq,
-        report: TeethReport {
-            void_threshold: void_t,
-            gum_threshold: gum_t,
-            shares: [count(Label::Tooth), count(Label::Gum), count(Label::Void)],
-            target,
-            stripes_before: stripes,
-            bbox: [x0, y0, x1, y1],
-            gap_row,
-        },
-        labels,
-    })
+    let (size, b) = (opts.size, front.b);
+    let (w, h) = (front.eq.width, front.eq.height);
+    let (lo, hi) = mesh.bounds();
+    let raster = UvRaster::new(mesh, size, size);
+    // Front teeth's vertical extent: incisal edge to the gum line (the arch's other end).
+    for i in 0..size * size {
+        if !raster.covered(i) {
+            continue;
+        }
+        let p = raster.position(mesh, i);
+        let depth = ((hi.z - p.z) / (hi.z - lo.z).max(1e-6)).clamp(0.0, 1.0);
+        let generic = target.map(|v| v * (1.0 - 0.45 * depth));
+        let xf = p.x.abs();
+        let wf = 1.0 - smooth(opts.canine_x_mm - 2.0, opts.canine_x_mm + 2.0, xf);
+        let mut c = generic;
+        let mut a = 1.0;
+        if wf > 0.0 && p.z > hi.z - 12.0 {
+            // Photo coordinates: x across the box, y from the gap (incisal edges) outward.
+            let u = (p.x / (opts.canine_x_mm + 2.0) * 0.5 + 0.5).clamp(0.0, 1.0);
+            let (ey, ry) = if is_upper { (lo.y, hi.y) } else { (hi.y, lo.y) };
+            let v = ((p.y - ey) / (ry - ey)).clamp(0.0, 1.0);
+            let px = b.x0 as f32 + u * (b.x1 - b.x0) as f32;
+            let py = if is_upper {
+                b.gap_row as f32 - v * (b.gap_row - b.y0) as f32
+            } else {
+                b.gap_row as f32 + v * (b.y1 - b.gap_row) as f32
+            };
+            let j = (py.round() as usize).min(h - 1) * w + (px.round() as usize).min(w - 1);
+            let (pc, pa) = match front.labels[j] {
+                Label::Void => (generic, 0.0),
+                _ => (front.eq.data[j], 1.0),
+            };
+            c = std::array::from_fn(|k| pc[k] * wf + generic[k] * (1.0 - wf));
+            a = pa * wf + (1.0 - wf);
+        }
+        rgb.data[i] = c;
+        alpha[i] = a;
+    }
+    Ok(())
 }
 
 fn smooth(a: f32, b: f32, x: f32) -> f32 {

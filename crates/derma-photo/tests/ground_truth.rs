@@ -48,6 +48,7 @@ fn set() -> Set {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn cameras_texture_and_chromophores_are_recovered() {
     let s = set();
     let lut = SkinColorLut::builtin();
@@ -213,6 +214,7 @@ fn cameras_texture_and_chromophores_are_recovered() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn a_bake_is_the_same_at_any_thread_count() {
     let s = set();
     let opts = BakeOptions {
@@ -233,6 +235,7 @@ fn a_bake_is_the_same_at_any_thread_count() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn an_even_light_is_kept_simple() {
     // The same face under the sky alone (no key, no highlights, no vignetting), with the true
     // cameras: de-lighting must not invent a light, and does better than keeping the light.
@@ -281,6 +284,7 @@ fn an_even_light_is_kept_simple() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn a_light_no_model_explains_is_kept_with_a_warning_and_strict_refuses() {
     // Each photo lit through blinds: horizontal stripes of light between 0.3 and 1.0, 60 px
     // apart, at a phase of its own — a light no candidate model holds. De-lighting must keep
@@ -344,6 +348,7 @@ fn a_light_no_model_explains_is_kept_with_a_warning_and_strict_refuses() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn a_registration_beyond_the_clicks_reach_is_refused_with_a_warning() {
     // The recovered cameras are 0.6–1.4 px off; registration moves them by about that much.
     // Allowed 0.2 px, it must keep them as calibrated and name the photo and the figure.

@@ -1,18 +1,21 @@
-//! The renderer without a GPU: a textured mesh (and props such as eyes and teeth) rasterised by
-//! [`crate::raster`] and shaded under a key and a fill light — Lambert diffuse plus a GGX
-//! specular lobe (Walter et al. 2007), no subsurface scattering or shadows. What previews use
-//! (`derma skin`'s preview.png, the rig's frames, the eyes' frames) where the GPU path's passes
-//! are not needed.
+//! The renderer without a GPU: meshes with their materials rasterised by [`crate::raster`] and
+//! lit by the one CPU shading ([`crate::shade`]: lighting.wgsl's lights and environment without
+//! the key's shadow, subsurface scattering or corneal refraction), then tone-mapped as
+//! composite.wgsl does. [`crate::CpuRenderer`] draws a scene through it, and so do the previews
+//! (`derma skin`'s preview.png, the rig's frames, the eyes' frames).
 
-use crate::brdf::{ggx_d, schlick};
-use crate::raster::{rasterise, Object, Projection};
+use crate::camera::{Camera, View};
+use crate::lighting::{Light, Lighting};
+use crate::material::{MATERIAL_EYE, MATERIAL_OTHER, MATERIAL_SKIN, SPECULAR_SCALE};
+use crate::raster::{rasterise, Hit, Object, Projection};
+use crate::rendered::Rendered;
+use crate::shade::{Env, Surface};
+use crate::SkinMaps;
 use derma_core::mesh::TriMesh;
 use derma_core::Map;
-use glam::{Mat3, Vec2, Vec3};
+use glam::{Mat3, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 use std::f32::consts::PI;
-
-use crate::material::SPECULAR_SCALE;
 
 /// A uniform material for surfaces without maps of their own: flat normals, one perceptual
 /// roughness and one specular level (F0 / [`SPECULAR_SCALE`]), as 1×1 maps.
@@ -160,8 +163,267 @@ pub fn recolour_cards<'a>(props: &mut [Prop<'a>], albedo: &'a (dyn Fn(Vec2) -> V
     }
 }
 
-/// Renders `mesh` (with per-corner tangents) seen from direction `view_yaw` (radians about +Y,
-/// 0 = from +Z) into a `size`×`size` linear RGB image with a dark background.
+/// A uniform-looking part: albedo as a function of its UV, one roughness and one F0, flat
+/// normals (props, and the scene's eyes, cards and flat parts).
+pub struct Plain<'a> {
+    /// Linear albedo at a texture coordinate.
+    pub albedo: &'a (dyn Fn(Vec2) -> Vec3 + Sync),
+    /// Perceptual roughness.
+    pub roughness: f32,
+    /// Normal-incidence reflectance.
+    pub f0: f32,
+}
+
+impl Material for Plain<'_> {
+    fn sample(&self, uv: Vec2) -> MaterialSample {
+        MaterialSample {
+            albedo: (self.albedo)(uv),
+            normal: Vec3::Z,
+            roughness: self.roughness,
+            f0: self.f0,
+        }
+    }
+}
+
+impl Material for SkinMaps {
+    fn sample(&self, uv: Vec2) -> MaterialSample {
+        let at = |m: &Map| m.sample_uv(uv.x, uv.y, self.wrap);
+        let rgb = |m: &[Map; 3]| Vec3::new(at(&m[0]), at(&m[1]), at(&m[2]));
+        MaterialSample {
+            albedo: rgb(&self.base_color),
+            // Stored n·½ + ½, as normal.png.
+            normal: rgb(&self.normal) * 2.0 - 1.0,
+            roughness: at(&self.roughness),
+            f0: at(&self.specular) * SPECULAR_SCALE,
+        }
+    }
+}
+
+/// One mesh the CPU renderer draws.
+pub struct Drawn<'a> {
+    /// The mesh, with normals and UVs.
+    pub mesh: &'a TriMesh,
+    /// Per triangle corner (`3 t + k`), the MikkTSpace tangent and bitangent sign: the material's
+    /// normals are tangent-space normals. `None`: the material's normals are ignored.
+    pub tangents: Option<&'a [[f32; 4]]>,
+    /// Its material.
+    pub material: &'a dyn Material,
+    /// Coverage over its UVs (cards); `None`: opaque.
+    pub coverage: Option<&'a (dyn Fn(Vec2) -> f32 + Sync)>,
+    /// What its pixels show ([`MATERIAL_SKIN`], [`MATERIAL_EYE`] or [`MATERIAL_OTHER`]); an eye
+    /// is lit as a matte globe under a clear film and never shows its back faces.
+    pub kind: u8,
+}
+
+/// Where the viewer of a CPU image stands.
+#[derive(Clone, Copy, Debug)]
+pub enum Viewer {
+    /// A pinhole at this point (world).
+    At(Vec3),
+    /// Infinitely far along this unit direction (orthographic).
+    Along(Vec3),
+}
+
+/// How a CPU image is taken: the projection, the viewer, the camera's axes in world (lights are
+/// given in camera space) and the size.
+pub struct Shot {
+    /// World → pixels.
+    pub projection: Projection,
+    /// Where the viewer stands.
+    pub viewer: Viewer,
+    /// Camera → world rotation (x right, y up, z towards the viewer).
+    pub to_world: Mat3,
+    /// Width (px).
+    pub width: usize,
+    /// Height (px).
+    pub height: usize,
+}
+
+impl Shot {
+    /// The renderer's perspective camera ([`Camera::frame`]) for `view` of the sphere (`centre`,
+    /// `radius`), as the GPU renderer takes it.
+    pub fn framed(centre: Vec3, radius: f32, view: &View, width: usize, height: usize) -> Shot {
+        let cam = Camera::frame(centre, radius, view, width as u32, height as u32);
+        // World → camera in the computer-vision convention (x right, y down, z forward).
+        let [right, up, back] = cam.basis;
+        Shot {
+            projection: Projection::Pinhole {
+                rotation: Mat3::from_cols(right, -up, -back).transpose(),
+                position: cam.eye,
+                focal: cam.focal_px,
+                principal: Vec2::new(0.5 * width as f32, 0.5 * height as f32),
+            },
+            viewer: Viewer::At(cam.eye),
+            to_world: Mat3::from_cols(right, up, back),
+            width,
+            height,
+        }
+    }
+
+    /// An orthographic `size`² view of `mesh` from yaw `view_yaw` (radians about +Y, 0 = from
+    /// +Z), framed on the mesh's extent at 92 % of the image.
+    pub fn orthographic(mesh: &TriMesh, view_yaw: f32, size: usize) -> Shot {
+        let rot = Mat3::from_rotation_y(-view_yaw);
+        let (lo, hi) = mesh.positions.iter().map(|&p| rot * p).fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(a, b), p| (a.min(p), b.max(p)),
+        );
+        Shot {
+            projection: Projection::Orthographic {
+                rotation: rot,
+                centre: 0.5 * (lo + hi),
+                scale: 0.92 * size as f32 / (hi - lo).x.max((hi - lo).y),
+                origin: Vec2::splat(0.5 * size as f32),
+            },
+            viewer: Viewer::Along(rot.transpose() * Vec3::Z),
+            to_world: rot.transpose(),
+            width: size,
+            height: size,
+        }
+    }
+}
+
+/// Draws `drawn` (the first in front where they overlap) as `shot` sees them under `lighting`:
+/// the CPU's one rasterise-and-shade loop.
+pub fn draw(drawn: &[Drawn], shot: &Shot, lighting: &Lighting) -> Rendered {
+    let objects: Vec<Object> = drawn
+        .iter()
+        .map(|d| Object {
+            mesh: d.mesh,
+            coverage: d.coverage,
+        })
+        .collect();
+    let hits = rasterise(&objects, &shot.projection, shot.width, shot.height);
+    let env = Env::new(lighting, |d| shot.to_world * d);
+    let shaded: Vec<Option<(Vec3, u8)>> = hits
+        .par_iter()
+        .map(|hit| {
+            let hit = hit.as_ref()?;
+            let d = &drawn[hit.object as usize];
+            Some((env.shade(&surface_at(hit, d, shot.viewer)), d.kind))
+        })
+        .collect();
+    compose(&shaded, shot.width, shot.height, lighting.exposure)
+}
+
+/// What `hit` shows of `d` seen by `viewer`.
+fn surface_at(hit: &Hit, d: &Drawn, viewer: Viewer) -> Surface {
+    let mesh = d.mesh;
+    let p = hit.interpolate(mesh, &mesh.positions);
+    let uv = hit.interpolate(mesh, &mesh.uvs) * d.material.uv_scale();
+    let (v, towards) = match viewer {
+        Viewer::At(eye) => ((eye - p).normalize(), eye),
+        Viewer::Along(dir) => (dir, p + dir),
+    };
+    let mut ng = hit.interpolate(mesh, &mesh.normals).normalize_or(Vec3::Z);
+    // Back faces show their inside as forward.wgsl does: facing from the triangle's winding
+    // (counter-clockwise in front), not the interpolated normal; the eyes' shader never flips.
+    let [a, b, c] = mesh.triangles[hit.triangle as usize].map(|i| mesh.positions[i as usize]);
+    if (b - a).cross(c - a).dot(towards - a) < 0.0 && d.kind != MATERIAL_EYE {
+        ng = -ng;
+    }
+    let m = d.material.sample(uv);
+    let n = match d.tangents {
+        Some(t) => normal_mapped(hit, t, ng, m.normal),
+        None => ng,
+    };
+    Surface {
+        n,
+        ng,
+        v,
+        albedo: m.albedo,
+        roughness: m.roughness,
+        f0: m.f0,
+        matte_under_film: d.kind == MATERIAL_EYE,
+    }
+}
+
+/// The tangent-space normal `m` (in [−1, 1]) of a hit turned into world space by the per-corner
+/// `tangents` about the geometric normal `ng`.
+fn normal_mapped(hit: &Hit, tangents: &[[f32; 4]], ng: Vec3, m: Vec3) -> Vec3 {
+    let c = |k: usize| Vec4::from(tangents[3 * hit.triangle as usize + k]);
+    let [w0, w1, w2] = hit.weights;
+    let t = c(0) * w0 + c(1) * w1 + c(2) * w2;
+    let t0 = t.truncate() - ng * ng.dot(t.truncate());
+    if t0.length_squared() < 1e-12 {
+        return ng;
+    }
+    let t0 = t0.normalize();
+    let b = ng.cross(t0) * t.w.signum();
+    (t0 * m.x + b * m.y + ng * m.z).normalize_or(ng)
+}
+
+/// Narkowicz 2015, "ACES filmic tone mapping curve".
+fn aces(x: f32) -> f32 {
+    ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
+}
+
+fn byte(v: f32) -> u8 {
+    (v.clamp(0.0, 1.0) * 255.0).round() as u8
+}
+
+/// The frame from per-pixel radiance and material (`None`: the background), as composite.wgsl
+/// composes it: exposure, ACES and sRGB over a soft vertical gradient.
+fn compose(shaded: &[Option<(Vec3, u8)>], w: usize, h: usize, exposure: f32) -> Rendered {
+    let mut display = Vec::with_capacity(4 * w * h);
+    let mut linear = Vec::with_capacity(w * h);
+    let mut material = Vec::with_capacity(w * h);
+    for (i, s) in shaded.iter().enumerate() {
+        match *s {
+            None => {
+                let t = ((i / w) as f32 + 0.5) / h as f32;
+                let bg = Vec3::new(0.06, 0.065, 0.075).lerp(Vec3::new(0.02, 0.02, 0.025), t);
+                display.extend([byte(bg.x), byte(bg.y), byte(bg.z), 255]);
+                linear.push([0.0; 3]);
+                material.push(MATERIAL_OTHER);
+            }
+            Some((rgb, m)) => {
+                let enc = |x: f32| byte(derma_core::color::srgb_encode(aces(x * exposure)));
+                display.extend([enc(rgb.x), enc(rgb.y), enc(rgb.z), 255]);
+                linear.push(rgb.to_array());
+                material.push(m);
+            }
+        }
+    }
+    Rendered {
+        width: w,
+        height: h,
+        display,
+        linear,
+        material,
+    }
+}
+
+/// The surface `mesh` (per-corner `tangents`, material `tex`) and `props` as drawn objects.
+fn with_props<'a>(
+    mesh: &'a TriMesh,
+    tangents: &'a [[f32; 4]],
+    tex: &'a dyn Material,
+    props: &'a [Prop],
+    plains: &'a [Plain],
+) -> Vec<Drawn<'a>> {
+    let skin = Drawn {
+        mesh,
+        tangents: Some(tangents),
+        material: tex,
+        coverage: None,
+        kind: MATERIAL_SKIN,
+    };
+    std::iter::once(skin)
+        .chain(props.iter().zip(plains).map(|(p, plain)| Drawn {
+            mesh: p.mesh,
+            tangents: None,
+            material: plain as &dyn Material,
+            coverage: p.coverage,
+            kind: MATERIAL_OTHER,
+        }))
+        .collect()
+}
+
+/// Renders `mesh` (with per-corner tangents) seen from yaw `view_yaw` (radians about +Y, 0 =
+/// from +Z) through the renderer's camera ([`Shot::framed`]) under the studio lighting
+/// ([`crate::Setup::Studio`], as the GPU renderer's previews) into a `size`×`size` preview
+/// (tone-mapped, linear RGB).
 pub fn render(
     mesh: &TriMesh,
     tangents: &[[f32; 4]],
@@ -182,23 +444,32 @@ pub fn render_with(
     view_yaw: f32,
     size: usize,
 ) -> [Map; 3] {
-    render_lit(mesh, tangents, tex, props, view_yaw, size, &STUDIO)
+    let (centre, radius) = crate::scene::bounding_sphere(mesh);
+    let view = View {
+        yaw_deg: view_yaw.to_degrees(),
+        ..View::default()
+    };
+    let shot = Shot::framed(centre, radius, &view, size, size);
+    let plains = plains(props);
+    let drawn = with_props(mesh, tangents, tex, props, &plains);
+    draw(&drawn, &shot, &crate::Setup::Studio.lighting()).display_linear_maps()
 }
 
-/// A directional light in view space: unit direction towards the light and radiance.
-pub type Light = (Vec3, Vec3);
+/// Props' materials.
+fn plains<'a>(props: &'a [Prop<'a>]) -> Vec<Plain<'a>> {
+    props
+        .iter()
+        .map(|p| Plain {
+            albedo: p.albedo,
+            roughness: p.roughness,
+            f0: p.f0,
+        })
+        .collect()
+}
 
-/// The default lighting: a warm key from the upper left and a cool fill from the right
-/// (radiance units), with a faint ambient term.
-pub const STUDIO: [Light; 2] = [
-    (
-        Vec3::new(-0.5495, 0.5495, 0.6294),
-        Vec3::new(3.0, 2.85, 2.6),
-    ),
-    (Vec3::new(0.7960, 0.0995, 0.5970), Vec3::new(0.55, 0.6, 0.7)),
-];
-
-/// [`render_with`] under the given lights (view space; the view looks down −Z).
+/// An orthographic preview ([`Shot::orthographic`], yaw `view_yaw` in radians) of `mesh` and
+/// `props` under `lighting` (tone-mapped, linear RGB): for flat patches under a grazing light
+/// and crops at a known scale (the eye region's band).
 pub fn render_lit(
     mesh: &TriMesh,
     tangents: &[[f32; 4]],
@@ -206,103 +477,34 @@ pub fn render_lit(
     props: &[Prop],
     view_yaw: f32,
     size: usize,
-    lights: &[Light],
+    lighting: &Lighting,
 ) -> [Map; 3] {
-    let rot = Mat3::from_rotation_y(-view_yaw);
-    let (lo, hi) = mesh.positions.iter().map(|&p| rot * p).fold(
-        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-        |(a, b), p| (a.min(p), b.max(p)),
-    );
-    let projection = Projection::Orthographic {
-        rotation: rot,
-        centre: 0.5 * (lo + hi),
-        scale: 0.92 * size as f32 / (hi - lo).x.max((hi - lo).y),
-        origin: Vec2::splat(0.5 * size as f32),
-    };
-    // Object 0 is the surface, k + 1 prop k.
-    let objects: Vec<Object> = std::iter::once(Object {
-        mesh,
-        coverage: None,
-    })
-    .chain(props.iter().map(|p| Object {
-        mesh: p.mesh,
-        coverage: p.coverage,
-    }))
-    .collect();
-    let hits = rasterise(&objects, &projection, size, size);
-    let ambient = Vec3::new(0.08, 0.085, 0.1);
-    let view = Vec3::Z;
-    let pixels: Vec<Vec3> = hits
-        .par_iter()
-        .map(|hit| {
-            let Some(hit) = hit else {
-                return Vec3::splat(0.02);
-            };
-            let (obj, ti, [w0, w1, w2]) = (hit.object, hit.triangle, hit.weights);
-            if obj > 0 {
-                let p = &props[obj as usize - 1];
-                let t = p.mesh.triangles[ti as usize];
-                let at = |v: &[Vec3]| {
-                    v[t[0] as usize] * w0 + v[t[1] as usize] * w1 + v[t[2] as usize] * w2
-                };
-                let uv = p.mesh.uvs[t[0] as usize] * w0
-                    + p.mesh.uvs[t[1] as usize] * w1
-                    + p.mesh.uvs[t[2] as usize] * w2;
-                let n = (rot * at(&p.mesh.normals)).normalize_or(Vec3::Z);
-                let alpha = (p.roughness * p.roughness).max(0.02);
-                return shade(n, (p.albedo)(uv), alpha, p.f0, lights, ambient, view);
-            }
-            let t = mesh.triangles[ti as usize];
-            let uv = (mesh.uvs[t[0] as usize] * w0
-                + mesh.uvs[t[1] as usize] * w1
-                + mesh.uvs[t[2] as usize] * w2)
-                * tex.uv_scale();
-            let n = (rot
-                * (mesh.normals[t[0] as usize] * w0
-                    + mesh.normals[t[1] as usize] * w1
-                    + mesh.normals[t[2] as usize] * w2))
-                .normalize_or(Vec3::Z);
-            let tc = |k: usize| Vec3::from_slice(&tangents[3 * ti as usize + k][..3]);
-            let tan = rot * (tc(0) * w0 + tc(1) * w1 + tc(2) * w2);
-            let tan = (tan - n * n.dot(tan)).normalize_or(n.any_orthonormal_vector());
-            let bit = n.cross(tan) * tangents[3 * ti as usize][3];
-            let m = tex.sample(uv);
-            let nt = m.normal;
-            let nn = (tan * nt.x + bit * nt.y + n * nt.z).normalize_or(n);
-            let alpha = m.roughness.powi(2).max(0.02);
-            shade(nn, m.albedo, alpha, m.f0, lights, ambient, view)
-        })
-        .collect();
-    Map::planes(size, size, |i| pixels[i].to_array())
+    let shot = Shot::orthographic(mesh, view_yaw, size);
+    let plains = plains(props);
+    let drawn = with_props(mesh, tangents, tex, props, &plains);
+    draw(&drawn, &shot, lighting).display_linear_maps()
 }
 
-/// Lambert diffuse plus a GGX lobe (Smith–Schlick visibility) under `lights` and an ambient term.
-fn shade(
-    nn: Vec3,
-    albedo: Vec3,
-    alpha: f32,
-    f0: f32,
-    lights: &[(Vec3, Vec3)],
-    ambient: Vec3,
-    view: Vec3,
-) -> Vec3 {
-    let mut c = albedo * ambient;
-    for &(l, e) in lights {
-        let nl = nn.dot(l);
-        if nl <= 0.0 {
-            continue;
-        }
-        let h = (l + view).normalize();
-        let nh = nn.dot(h).max(0.0);
-        let nv = nn.dot(view).max(1e-3);
-        let d = ggx_d(nh, alpha);
-        let f = schlick(f0, view.dot(h).max(0.0));
-        let k = alpha * 0.5;
-        let g = (nl / (nl * (1.0 - k) + k)) * (nv / (nv * (1.0 - k) + k));
-        let spec = d * f * g / (4.0 * nl * nv);
-        c += e * nl * (albedo * (1.0 - f) / PI + Vec3::splat(spec));
+/// One light towards `dir` (camera space; normalised here) of irradiance `irradiance`, with the
+/// other two dark and no environment: a single-light [`Lighting`] (a grazing light over a patch).
+pub fn single_light(dir: Vec3, irradiance: Vec3) -> Lighting {
+    let dark = Light {
+        dir: Vec3::Y,
+        irradiance: Vec3::ZERO,
+    };
+    Lighting {
+        lights: [
+            Light {
+                dir: dir.normalize(),
+                irradiance,
+            },
+            dark,
+            dark,
+        ],
+        sky: Vec3::ZERO,
+        ground: Vec3::ZERO,
+        exposure: 1.0,
     }
-    c
 }
 
 /// A UV sphere of `radius` mm with per-corner tangents (for previewing patches).

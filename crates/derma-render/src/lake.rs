@@ -4,7 +4,9 @@
 //! the fluid and a specular highlight. Its one home: the GPU pass (lake.wgsl) reads these
 //! constants, and the CPU compositing below draws it over a G-buffer.
 
+use crate::lighting::Lighting;
 use crate::material::{MATERIAL_EYE, MATERIAL_OTHER, MATERIAL_SKIN};
+use crate::shade::{Env, Surface};
 use glam::Vec3;
 
 /// The lake's range Λ (mm): the meniscus and its fade reach about a millimetre from the lid
@@ -81,45 +83,45 @@ pub fn lake(s: &Surfaces, distance: &[f32], range: f32) -> (Vec<f32>, Vec<Vec3>)
     (d, n)
 }
 
-/// Shades `s` (linear RGB) under one directional light `l` (view space, towards the light) with
-/// an ambient term, with or without the lake.
-pub fn shade(s: &Surfaces, lake: Option<(&[f32], &[Vec3])>, l: Vec3, radiance: f32) -> Vec<Vec3> {
-    let l = l.normalize();
+/// Roughness and F0 of the skin around the globes in the G-buffer's shading: a skin-like lobe
+/// (F0 = 0.35 × 0.08 = 2.8 %, as the previews' flat skin).
+const SKIN_LOBE: (f32, f32) = (0.5, 0.028);
+/// Roughness of the bare tear film over the globe (authored: a thin, slightly uneven film).
+const FILM_ROUGHNESS: f32 = 0.1;
+
+/// Shades `s` (linear RGB, view space) under `lighting` by the one CPU shading
+/// ([`crate::shade`]), with or without the lake (`lake`: per pixel its depth and normal, from
+/// [`lake`]): absorption along the path through the fluid and its specular reflection.
+pub fn shade(s: &Surfaces, lake: Option<(&[f32], &[Vec3])>, lighting: &Lighting) -> Vec<Vec3> {
+    let env = Env::new(lighting, |d| d);
     let v = Vec3::Z;
-    let hv = (l + v).normalize();
     (0..s.width * s.height)
         .map(|i| {
-            if s.material[i] == MATERIAL_OTHER {
-                return Vec3::splat(0.02);
-            }
+            let eye = match s.material[i] {
+                MATERIAL_OTHER => return Vec3::splat(0.02),
+                m => m == MATERIAL_EYE,
+            };
+            let (roughness, f0) = if eye { (FILM_ROUGHNESS, F0) } else { SKIN_LOBE };
             let n = s.normal[i];
-            let mut c = s.albedo[i] * (0.15 + radiance * n.dot(l).max(0.0));
-            if s.material[i] == MATERIAL_EYE {
-                // The bare tear film: a faint highlight everywhere on the globe.
-                c += Vec3::splat(ggx_spec(n, l, v, hv, 0.1) * radiance);
-            }
+            let surface = Surface {
+                n,
+                ng: n,
+                v,
+                albedo: s.albedo[i],
+                roughness,
+                f0,
+                matte_under_film: eye,
+            };
+            let mut c = env.shade(&surface);
             if let Some((d, ln)) = lake {
                 if d[i] > 0.0 {
                     c *= (-ATTENUATION * 2.0 * d[i]).exp();
-                    c += Vec3::splat(ggx_spec(ln[i], l, v, hv, ROUGHNESS) * radiance);
+                    c += env.light(ln[i], ln[i], v, ROUGHNESS, F0).1;
                 }
             }
             c
         })
         .collect()
-}
-
-/// GGX specular (Walter et al. 2007) with Schlick Fresnel and Smith's uncorrelated masking.
-fn ggx_spec(n: Vec3, l: Vec3, v: Vec3, h: Vec3, rough: f32) -> f32 {
-    let alpha = rough * rough;
-    let a2 = alpha * alpha;
-    let nh = n.dot(h).max(0.0);
-    let nl = n.dot(l).max(1e-4);
-    let nv = n.dot(v).max(1e-4);
-    let d = crate::brdf::ggx_d(nh, alpha);
-    let g1 = |x: f32| 2.0 * x / (x + (a2 + (1.0 - a2) * x * x).sqrt());
-    let f = crate::brdf::schlick(F0, v.dot(h).max(0.0));
-    d * g1(nl) * g1(nv) * f / (4.0 * nv) // × n·l / (n·l) cancels
 }
 
 #[cfg(test)]
@@ -162,8 +164,8 @@ mod tests {
         // The fluid's slope tilts the normal in x, not in y, and keeps it a unit vector.
         assert!(n[6].x.abs() > 0.1 && n[6].y == 0.0, "{}", n[6]);
         assert!((n[6].length() - 1.0).abs() < 1e-6);
-        let l = Vec3::new(0.0, 0.0, 1.0);
-        let (dry, wet) = (shade(&s, None, l, 1.0), shade(&s, Some((&d, &n)), l, 1.0));
+        let l = crate::cpu::single_light(Vec3::Z, Vec3::splat(3.0));
+        let (dry, wet) = (shade(&s, None, &l), shade(&s, Some((&d, &n)), &l));
         assert_eq!(dry[0], wet[0]);
         assert_eq!(dry[8], wet[8]);
         // Head-on, the tilted fluid sends its highlight away: only the absorption remains.

@@ -7,10 +7,13 @@
 //! `sss_color`/`sss_radius`, the match table's fitted profile), GGX specular with Smith
 //! visibility from the roughness and specular maps, a shadowed three-light setup with a
 //! hemisphere environment, and eyes with a refracting cornea — plus turntables and contact
-//! sheets; its CPU renderer ([`cpu`], on the one rasteriser [`raster`]) for previews without a GPU;
+//! sheets; its CPU renderer ([`cpu`], on the one rasteriser [`raster`] and the one CPU shading
+//! [`shade`], over the microfacet terms [`brdf`] that the shaders share) for previews without a GPU;
 //! the lacrimal lake ([`lake`]) and Burley's profile ([`burley`]) it draws. It depends on
 //! derma-core and derma-head only; the crates above draw through it. Exporting (GLB, web, the
 //! viewer's server) and rendering from files are derma-export's.
+
+#![warn(missing_docs)]
 
 pub mod brdf;
 pub mod burley;
@@ -18,6 +21,8 @@ pub mod camera;
 pub mod cpu;
 pub mod draw;
 pub mod error;
+#[cfg(feature = "gpu")]
+pub mod gpu_texture;
 pub mod lake;
 pub mod lighting;
 pub mod material;
@@ -26,6 +31,7 @@ pub mod rendered;
 #[cfg(feature = "gpu")]
 pub mod renderer;
 pub mod scene;
+pub mod shade;
 pub mod sheet;
 pub mod sss;
 pub mod wrinkles;

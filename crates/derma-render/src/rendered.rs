@@ -29,6 +29,17 @@ impl Rendered {
         [ch(0), ch(1), ch(2)]
     }
 
+    /// The display image decoded to linear light (the tone-mapped frame as linear maps), for
+    /// sheets composed in linear light and encoded once.
+    pub fn display_linear_maps(&self) -> [Map; 3] {
+        let ch = |k: usize| {
+            Map::from_fn(self.width, self.height, |i| {
+                derma_core::color::srgb_decode(self.display[4 * i + k] as f32 / 255.0)
+            })
+        };
+        [ch(0), ch(1), ch(2)]
+    }
+
     /// The linear radiance as three maps.
     pub fn linear_maps(&self) -> [Map; 3] {
         let ch = |k: usize| Map::from_fn(self.width, self.height, |i| self.linear[i][k]);

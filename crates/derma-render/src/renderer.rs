@@ -5,13 +5,14 @@
 
 use crate::camera::{light_view_proj, Camera, View};
 use crate::error::Result;
+use crate::gpu_texture::{rgba_of, RenderGpu, TexelFormat};
 use crate::lighting::Lighting;
+use crate::material::SkinMaps;
 use crate::material::{MATERIAL_EYE, MATERIAL_OTHER, MATERIAL_SKIN};
 use crate::rendered::Rendered;
 use crate::scene::{Material, Part, Scene, Vertex};
 use crate::sss;
 use derma_core::gpu::{context, Gpu};
-use derma_core::gpu_texture::{rgba_of, TexelFormat};
 use derma_core::Map;
 
 const COMMON: &str = include_str!("common.wgsl");
@@ -19,6 +20,7 @@ const FORWARD: &str = include_str!("forward.wgsl");
 const BLUR: &str = include_str!("blur.wgsl");
 const COMPOSITE: &str = include_str!("composite.wgsl");
 const LIGHTING: &str = include_str!("lighting.wgsl");
+use crate::brdf::WGSL as BRDF;
 const LAKE: &str = include_str!("lake.wgsl");
 /// Most pixels the lake's distance search reaches on each side: Λ = 1 mm spans fewer at every
 /// framing `derma render` makes of a head (≈ 4 px at 1024², ≈ 20 px in a 0.3-zoom close-up).
@@ -98,6 +100,14 @@ struct GpuPart {
     casts_shadow: bool,
 }
 
+/// A part's draw uniforms and five textures, and how it is drawn (see [`Renderer::material`]).
+struct PartMaterial {
+    u: DrawU,
+    textures: [wgpu::Texture; 5],
+    eye: bool,
+    casts_shadow: bool,
+}
+
 /// The targets of one frame size (see [`Renderer::targets`]).
 struct Targets {
     size: (u32, u32),
@@ -119,30 +129,59 @@ struct Targets {
     lake_shade: wgpu::BindGroup,
 }
 
+/// The bind-group layouts of every pass (see [`Layouts::new`]).
+struct Layouts {
+    /// The forward and lake passes' frame group: uniforms, shadow map and samplers.
+    frame: wgpu::BindGroupLayout,
+    /// The shadow pass's frame group: the uniforms alone.
+    shadow: wgpu::BindGroupLayout,
+    /// A part's group: its uniforms and five textures.
+    draw: wgpu::BindGroupLayout,
+    blur: wgpu::BindGroupLayout,
+    composite: wgpu::BindGroupLayout,
+    lake_depth: wgpu::BindGroupLayout,
+    lake_shade: wgpu::BindGroupLayout,
+}
+
+/// The shader modules: each pass's WGSL after the shared code it needs (see [`Shaders::new`]).
+struct Shaders {
+    forward: wgpu::ShaderModule,
+    lake: wgpu::ShaderModule,
+    blur: wgpu::ShaderModule,
+    composite: wgpu::ShaderModule,
+}
+
+/// The render pipelines of every pass (see [`Pipelines::new`]).
+struct Pipelines {
+    shadow: wgpu::RenderPipeline,
+    skin: wgpu::RenderPipeline,
+    eye: wgpu::RenderPipeline,
+    blur: wgpu::RenderPipeline,
+    composite: wgpu::RenderPipeline,
+    lake_depth: wgpu::RenderPipeline,
+    lake_shade: wgpu::RenderPipeline,
+}
+
+/// The buffers, shadow map and sampler that every frame binds, whatever its size, and the
+/// frame bind groups over them (see [`FrameResources::new`]).
+struct FrameResources {
+    lake_buf: wgpu::Buffer,
+    frame_buf: wgpu::Buffer,
+    shadow_tex: wgpu::Texture,
+    lin_sampler: wgpu::Sampler,
+    shadow_bind: wgpu::BindGroup,
+    main_bind: wgpu::BindGroup,
+    cdf: wgpu::Buffer,
+    blur_bufs: [wgpu::Buffer; 2],
+}
+
 /// A scene on the GPU, ready to render views of it.
 pub struct Renderer {
     gpu: &'static Gpu,
     parts: Vec<GpuPart>,
-    draw_layout: wgpu::BindGroupLayout,
-    frame_buf: wgpu::Buffer,
-    shadow_tex: wgpu::Texture,
-    shadow_bind: wgpu::BindGroup,
-    main_bind: wgpu::BindGroup,
-    shadow_pipe: wgpu::RenderPipeline,
-    skin_pipe: wgpu::RenderPipeline,
-    eye_pipe: wgpu::RenderPipeline,
-    blur_pipe: wgpu::RenderPipeline,
-    blur_layout: wgpu::BindGroupLayout,
-    comp_pipe: wgpu::RenderPipeline,
-    comp_layout: wgpu::BindGroupLayout,
-    lake_depth_pipe: wgpu::RenderPipeline,
-    lake_shade_pipe: wgpu::RenderPipeline,
-    lake_depth_layout: wgpu::BindGroupLayout,
-    lake_shade_layout: wgpu::BindGroupLayout,
-    lake_buf: wgpu::Buffer,
-    cdf: wgpu::Buffer,
-    blur_bufs: [wgpu::Buffer; 2],
-    lin_sampler: wgpu::Sampler,
+    layouts: Layouts,
+    pipes: Pipelines,
+    res: FrameResources,
     centre: glam::Vec3,
     radius: f32,
     /// The adapter's name, for reports.
@@ -155,6 +194,20 @@ fn uniform_entry(binding: u32, vis: wgpu::ShaderStages) -> wgpu::BindGroupLayout
         visibility: vis,
         ty: wgpu::BindingType::Buffer {
             ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// A read-only storage buffer the fragment stage reads (the blur's marginal CDF).
+fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
             has_dynamic_offset: false,
             min_binding_size: None,
         },
@@ -282,13 +335,11 @@ fn pipeline(gpu: &Gpu, s: &PipeSpec) -> Result<wgpu::RenderPipeline> {
     })?)
 }
 
-impl Renderer {
-    /// Uploads `scene` to the process's GPU and builds the pipelines.
-    pub fn new(scene: &Scene) -> Result<Renderer> {
-        let gpu = context()?;
-        let d = &gpu.device;
+impl Layouts {
+    /// Creates the frame, shadow, draw, blur, composite and lake layouts, in that order.
+    fn new(gpu: &Gpu) -> Layouts {
         let frag = wgpu::ShaderStages::FRAGMENT;
-        let frame_layout = layout(
+        let frame = layout(
             gpu,
             "frame",
             &[
@@ -298,8 +349,8 @@ impl Renderer {
                 sampler_entry(3, wgpu::SamplerBindingType::Filtering),
             ],
         );
-        let shadow_layout = layout(gpu, "shadow frame", &[uniform_entry(0, VS_FS)]);
-        let draw_layout = layout(
+        let shadow = layout(gpu, "shadow frame", &[uniform_entry(0, VS_FS)]);
+        let draw = layout(
             gpu,
             "draw",
             &[
@@ -311,28 +362,19 @@ impl Renderer {
                 texture_entry(5, FLOAT),
             ],
         );
-        let blur_layout = layout(
+        let blur = layout(
             gpu,
             "blur",
             &[
                 uniform_entry(0, frag),
                 uniform_entry(1, frag),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: frag,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: true },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
+                storage_entry(2),
                 texture_entry(3, FLOAT),
                 texture_entry(4, FLOAT),
                 sampler_entry(5, wgpu::SamplerBindingType::Filtering),
             ],
         );
-        let comp_layout = layout(
+        let composite = layout(
             gpu,
             "composite",
             &[
@@ -349,95 +391,138 @@ impl Renderer {
             texture_entry(2, FLOAT),
             texture_entry(3, FLOAT),
         ];
-        let lake_depth_layout = layout(gpu, "lake depth", &lake_entries[..3]);
-        let lake_shade_layout = layout(gpu, "lake shade", &lake_entries);
-        let fwd = gpu.shader_module("forward.wgsl", &format!("{COMMON}\n{LIGHTING}\n{FORWARD}"))?;
-        let lake_m = gpu.shader_module("lake.wgsl", &format!("{COMMON}\n{LIGHTING}\n{LAKE}"))?;
-        let blur_m = gpu.shader_module("blur.wgsl", &format!("{COMMON}\n{BLUR}"))?;
-        let comp_m = gpu.shader_module("composite.wgsl", &format!("{COMMON}\n{COMPOSITE}"))?;
+        Layouts {
+            frame,
+            shadow,
+            draw,
+            blur,
+            composite,
+            lake_depth: layout(gpu, "lake depth", &lake_entries[..3]),
+            lake_shade: layout(gpu, "lake shade", &lake_entries),
+        }
+    }
+}
+
+impl Shaders {
+    /// Compiles the forward, lake, blur and composite modules, in that order.
+    fn new(gpu: &Gpu) -> Result<Shaders> {
+        Ok(Shaders {
+            forward: gpu.shader_module(
+                "forward.wgsl",
+                &format!("{COMMON}\n{BRDF}\n{LIGHTING}\n{FORWARD}"),
+            )?,
+            lake: gpu.shader_module(
+                "lake.wgsl",
+                &format!("{COMMON}\n{BRDF}\n{LIGHTING}\n{LAKE}"),
+            )?,
+            blur: gpu.shader_module("blur.wgsl", &format!("{COMMON}\n{BLUR}"))?,
+            composite: gpu.shader_module("composite.wgsl", &format!("{COMMON}\n{COMPOSITE}"))?,
+        })
+    }
+}
+
+/// A full-screen triangle's pipeline (no vertex buffers, no depth) with fragment shader `fs`.
+fn screen_pipeline(
+    gpu: &Gpu,
+    label: &str,
+    module: &wgpu::ShaderModule,
+    fs: &str,
+    layouts: &[&wgpu::BindGroupLayout],
+    targets: &[wgpu::TextureFormat],
+) -> Result<wgpu::RenderPipeline> {
+    pipeline(
+        gpu,
+        &spec(
+            label,
+            module,
+            "vs_full",
+            Some(fs),
+            layouts,
+            targets,
+            false,
+            false,
+        ),
+    )
+}
+
+impl Pipelines {
+    /// Compiles the shaders and builds every pass's pipeline on `l`'s layouts: shadow,
+    /// forward skin and eye, blur, composite, lake depth and lake shade.
+    fn new(gpu: &Gpu, l: &Layouts) -> Result<Pipelines> {
+        let m = Shaders::new(gpu)?;
         let gtargets = [HDR, HDR, HDR, wgpu::TextureFormat::Rgba8Unorm];
-        let shadow_pipe = pipeline(
+        let shadow = pipeline(
             gpu,
             &spec(
                 "shadow",
-                &fwd,
+                &m.forward,
                 "vs_shadow",
                 None,
-                &[&shadow_layout],
+                &[&l.shadow],
                 &[],
                 true,
                 true,
             ),
         )?;
-        let skin_pipe = pipeline(
-            gpu,
-            &spec(
-                "forward skin",
-                &fwd,
-                "vs_main",
-                Some("fs_skin"),
-                &[&frame_layout, &draw_layout],
-                &gtargets,
-                true,
-                true,
-            ),
-        )?;
-        let eye_pipe = pipeline(
-            gpu,
-            &spec(
-                "forward eye",
-                &fwd,
-                "vs_main",
-                Some("fs_eye"),
-                &[&frame_layout, &draw_layout],
-                &gtargets,
-                true,
-                true,
-            ),
-        )?;
-        let blur_pipe = pipeline(
-            gpu,
-            &spec(
-                "blur",
-                &blur_m,
-                "vs_full",
-                Some("fs_blur"),
-                &[&blur_layout],
-                &[HDR],
-                false,
-                false,
-            ),
-        )?;
-        let comp_pipe = pipeline(
-            gpu,
-            &spec(
-                "composite",
-                &comp_m,
-                "vs_full",
-                Some("fs_composite"),
-                &[&comp_layout],
-                &[wgpu::TextureFormat::Rgba8Unorm, HDR],
-                false,
-                false,
-            ),
-        )?;
-        let lake_pipe = |label, fs, l: &wgpu::BindGroupLayout| {
+        // The forward pass's pipelines: the parts' vertices, depth-tested, into the G-buffer.
+        let forward = |label, fs| {
+            let layouts = [&l.frame, &l.draw];
             pipeline(
                 gpu,
                 &spec(
                     label,
-                    &lake_m,
-                    "vs_full",
+                    &m.forward,
+                    "vs_main",
                     Some(fs),
-                    &[&frame_layout, l],
-                    &[HDR],
-                    false,
-                    false,
+                    &layouts,
+                    &gtargets,
+                    true,
+                    true,
                 ),
             )
         };
-        let lake_depth_pipe = lake_pipe("lake depth", "fs_lake_depth", &lake_depth_layout)?;
-        let lake_shade_pipe = lake_pipe("lake shade", "fs_lake_shade", &lake_shade_layout)?;
+        let skin = forward("forward skin", "fs_skin")?;
+        let eye = forward("forward eye", "fs_eye")?;
+        let blur = screen_pipeline(gpu, "blur", &m.blur, "fs_blur", &[&l.blur], &[HDR])?;
+        let composite = screen_pipeline(
+            gpu,
+            "composite",
+            &m.composite,
+            "fs_composite",
+            &[&l.composite],
+            &[wgpu::TextureFormat::Rgba8Unorm, HDR],
+        )?;
+        Ok(Pipelines {
+            shadow,
+            skin,
+            eye,
+            blur,
+            composite,
+            lake_depth: screen_pipeline(
+                gpu,
+                "lake depth",
+                &m.lake,
+                "fs_lake_depth",
+                &[&l.frame, &l.lake_depth],
+                &[HDR],
+            )?,
+            lake_shade: screen_pipeline(
+                gpu,
+                "lake shade",
+                &m.lake,
+                "fs_lake_shade",
+                &[&l.frame, &l.lake_shade],
+                &[HDR],
+            )?,
+        })
+    }
+}
+
+impl FrameResources {
+    /// Creates the lake and frame uniforms, the shadow map, the samplers, the frame bind
+    /// groups on `l`'s layouts, and the blur's CDF and direction uniforms.
+    fn new(gpu: &Gpu, l: &Layouts) -> FrameResources {
+        let d = &gpu.device;
         let lake_buf = gpu.upload(
             "lake",
             bytemuck::bytes_of(&LakeU::new(true)),
@@ -464,14 +549,10 @@ impl Renderer {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        let shadow_bind = gpu.bind(
-            "shadow frame",
-            &shadow_layout,
-            &[frame_buf.as_entire_binding()],
-        );
+        let shadow_bind = gpu.bind("shadow frame", &l.shadow, &[frame_buf.as_entire_binding()]);
         let main_bind = gpu.bind(
             "frame",
-            &frame_layout,
+            &l.frame,
             &[
                 frame_buf.as_entire_binding(),
                 wgpu::BindingResource::TextureView(&view(&shadow_tex)),
@@ -493,29 +574,76 @@ impl Renderer {
             )
         };
         let blur_bufs = [blur_u(1.0, 0.0), blur_u(0.0, 1.0)];
+        FrameResources {
+            lake_buf,
+            frame_buf,
+            shadow_tex,
+            lin_sampler,
+            shadow_bind,
+            main_bind,
+            cdf,
+            blur_bufs,
+        }
+    }
+}
+
+/// Colour attachments on `views`, each cleared to transparent and stored.
+fn cleared(views: &[wgpu::TextureView]) -> Vec<Option<wgpu::RenderPassColorAttachment<'_>>> {
+    views
+        .iter()
+        .map(|v| {
+            Some(wgpu::RenderPassColorAttachment {
+                view: v,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        })
+        .collect()
+}
+
+/// Encodes one full-screen pass: `pipe` with `groups` bound in order, drawing one triangle
+/// into `outs` (cleared first).
+fn full_pass(
+    enc: &mut wgpu::CommandEncoder,
+    label: &str,
+    pipe: &wgpu::RenderPipeline,
+    groups: &[&wgpu::BindGroup],
+    outs: &[&wgpu::Texture],
+) {
+    let views: Vec<wgpu::TextureView> = outs.iter().map(|t| view(t)).collect();
+    let att = cleared(&views);
+    let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &att,
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    pass.set_pipeline(pipe);
+    for (i, g) in groups.iter().enumerate() {
+        pass.set_bind_group(i as u32, *g, &[]);
+    }
+    pass.draw(0..3, 0..1);
+}
+
+impl Renderer {
+    /// Uploads `scene` to the process's GPU and builds the pipelines.
+    pub fn new(scene: &Scene) -> Result<Renderer> {
+        let gpu = context()?;
+        let layouts = Layouts::new(gpu);
+        let pipes = Pipelines::new(gpu, &layouts)?;
+        let res = FrameResources::new(gpu, &layouts);
         let mut r = Renderer {
             gpu,
             parts: Vec::new(),
-            draw_layout,
-            frame_buf,
-            shadow_tex,
-            shadow_bind,
-            main_bind,
-            shadow_pipe,
-            skin_pipe,
-            eye_pipe,
-            blur_pipe,
-            blur_layout,
-            comp_pipe,
-            comp_layout,
-            lake_depth_pipe,
-            lake_shade_pipe,
-            lake_depth_layout,
-            lake_shade_layout,
-            lake_buf,
-            cdf,
-            blur_bufs,
-            lin_sampler,
+            layouts,
+            pipes,
+            res,
             centre: scene.centre,
             radius: scene.radius,
             adapter: gpu.name.clone(),
@@ -551,149 +679,27 @@ impl Renderer {
         ]
     }
 
+    /// [`Renderer::part_textures`] with the albedo texture of `albedo` (linear RGB maps).
+    fn albedo_textures(
+        &self,
+        label: &str,
+        albedo: &[Map; 3],
+        roughness: f32,
+        f0: f32,
+    ) -> [wgpu::Texture; 5] {
+        let albedo = self.tex(
+            label,
+            &[&albedo[0], &albedo[1], &albedo[2]],
+            TexelFormat::Srgb8,
+        );
+        self.part_textures(albedo, roughness, f0)
+    }
+
+    /// Uploads part `p`: its material's textures, its uniforms and bind group, then its
+    /// vertices.
     fn upload(&self, p: &Part) -> Result<GpuPart> {
-        let spec_scale = crate::material::SPECULAR_SCALE;
-        let (u, textures, eye, casts) = match &p.material {
-            Material::Skin(s) => {
-                let base = self.tex(
-                    "base colour",
-                    &[&s.base_color[0], &s.base_color[1], &s.base_color[2]],
-                    TexelFormat::Srgb8,
-                );
-                let normal = self.tex(
-                    "normal",
-                    &[&s.normal[0], &s.normal[1], &s.normal[2]],
-                    TexelFormat::Float16,
-                );
-                let rs = self.tex(
-                    "roughness, specular",
-                    &[&s.roughness, &s.specular],
-                    TexelFormat::Linear8,
-                );
-                let (sc, sr) = match &s.subsurface {
-                    Some((c, r)) => (
-                        self.tex("sss colour", &[&c[0], &c[1], &c[2]], TexelFormat::Srgb8),
-                        self.tex("sss radius", &[&r[0], &r[1], &r[2]], TexelFormat::Float16),
-                    ),
-                    None => (
-                        self.one([0.0; 4], TexelFormat::Srgb8),
-                        self.one([0.0; 4], TexelFormat::Float16),
-                    ),
-                };
-                let scatter = if s.subsurface.is_some() { 1.0 } else { 0.0 };
-                (
-                    DrawU {
-                        albedo: [1.0, 1.0, 1.0, 1.0],
-                        params: [0.5, 0.04, 0.0, spec_scale],
-                        eye: [0.0; 4],
-                        eye_axis: [0.0, 0.0, 1.0, scatter],
-                    },
-                    [base, normal, rs, sc, sr],
-                    false,
-                    true,
-                )
-            }
-            Material::Eye {
-                albedo,
-                centre,
-                radius,
-                axis,
-                roughness,
-                f0,
-            } => (
-                DrawU {
-                    albedo: [1.0, 1.0, 1.0, 1.0],
-                    params: [*roughness, *f0, 1.0, spec_scale],
-                    eye: [centre.x, centre.y, centre.z, *radius],
-                    eye_axis: [axis.x, axis.y, axis.z, 0.0],
-                },
-                self.part_textures(
-                    self.tex(
-                        "eye",
-                        &[&albedo[0], &albedo[1], &albedo[2]],
-                        TexelFormat::Srgb8,
-                    ),
-                    *roughness,
-                    *f0,
-                ),
-                true,
-                true,
-            ),
-            Material::Textured {
-                albedo,
-                roughness,
-                f0,
-            } => (
-                // A flat part (kind 2) whose albedo, roughness and F0 come from its textures.
-                DrawU {
-                    albedo: [1.0, 1.0, 1.0, 1.0],
-                    params: [*roughness, *f0, 2.0, spec_scale],
-                    eye: [0.0; 4],
-                    eye_axis: [0.0; 4],
-                },
-                self.part_textures(
-                    self.tex(
-                        "part albedo",
-                        &[&albedo[0], &albedo[1], &albedo[2]],
-                        TexelFormat::Srgb8,
-                    ),
-                    *roughness,
-                    *f0,
-                ),
-                false,
-                true,
-            ),
-            Material::Flat {
-                albedo,
-                roughness,
-                f0,
-            } => (
-                DrawU {
-                    albedo: [albedo.x, albedo.y, albedo.z, 0.0],
-                    params: [*roughness, *f0, 2.0, spec_scale],
-                    eye: [0.0; 4],
-                    eye_axis: [0.0; 4],
-                },
-                self.part_textures(self.one([1.0; 4], TexelFormat::Srgb8), *roughness, *f0),
-                false,
-                true,
-            ),
-            Material::Card {
-                albedo,
-                coverage,
-                roughness,
-                f0,
-            } => {
-                let (w, h) = (coverage.width(), coverage.height());
-                let px: Vec<[f32; 4]> = coverage
-                    .data()
-                    .iter()
-                    .map(|&c| [albedo.x, albedo.y, albedo.z, c])
-                    .collect();
-                (
-                    DrawU {
-                        albedo: [albedo.x, albedo.y, albedo.z, 1.0],
-                        params: [*roughness, *f0, 3.0, spec_scale],
-                        eye: [0.0; 4],
-                        eye_axis: [0.0; 4],
-                    },
-                    self.part_textures(
-                        self.gpu.texture("card", &px, w, h, TexelFormat::Srgb8),
-                        *roughness,
-                        *f0,
-                    ),
-                    false,
-                    false,
-                )
-            }
-        };
-        let ubuf = self
-            .gpu
-            .upload("draw", bytemuck::bytes_of(&u), wgpu::BufferUsages::UNIFORM);
-        let views: Vec<wgpu::TextureView> = textures.iter().map(view).collect();
-        let mut res = vec![ubuf.as_entire_binding()];
-        res.extend(views.iter().map(wgpu::BindingResource::TextureView));
-        let bind = self.gpu.bind(&p.name, &self.draw_layout, &res);
+        let m = self.material(&p.material);
+        let bind = self.draw_bind(&p.name, &m);
         let vertices = self.gpu.upload(
             &p.name,
             bytemuck::cast_slice(&p.vertices),
@@ -703,9 +709,164 @@ impl Renderer {
             vertices,
             count: p.vertices.len() as u32,
             bind,
-            eye,
-            casts_shadow: casts,
+            eye: m.eye,
+            casts_shadow: m.casts_shadow,
         })
+    }
+
+    /// Uploads `m`'s uniforms and binds them with its textures on the draw layout.
+    fn draw_bind(&self, name: &str, m: &PartMaterial) -> wgpu::BindGroup {
+        let ubuf = self.gpu.upload(
+            "draw",
+            bytemuck::bytes_of(&m.u),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let views: Vec<wgpu::TextureView> = m.textures.iter().map(view).collect();
+        let mut res = vec![ubuf.as_entire_binding()];
+        res.extend(views.iter().map(wgpu::BindingResource::TextureView));
+        self.gpu.bind(name, &self.layouts.draw, &res)
+    }
+
+    /// The uniforms and textures (uploaded) of material `m`: the skin and the eyelash cards
+    /// in [`Renderer::skin_material`] and [`Renderer::card_material`], the rest here.
+    fn material(&self, m: &Material) -> PartMaterial {
+        let spec_scale = crate::material::SPECULAR_SCALE;
+        match m {
+            Material::Skin(s) => self.skin_material(s),
+            Material::Eye {
+                albedo,
+                centre,
+                radius,
+                axis,
+                roughness,
+                f0,
+            } => PartMaterial {
+                u: DrawU {
+                    albedo: [1.0, 1.0, 1.0, 1.0],
+                    params: [*roughness, *f0, 1.0, spec_scale],
+                    eye: [centre.x, centre.y, centre.z, *radius],
+                    eye_axis: [axis.x, axis.y, axis.z, 0.0],
+                },
+                textures: self.albedo_textures("eye", albedo, *roughness, *f0),
+                eye: true,
+                casts_shadow: true,
+            },
+            Material::Textured {
+                albedo,
+                roughness,
+                f0,
+            } => PartMaterial {
+                // A flat part (kind 2) whose albedo, roughness and F0 come from its textures.
+                u: DrawU {
+                    albedo: [1.0, 1.0, 1.0, 1.0],
+                    params: [*roughness, *f0, 2.0, spec_scale],
+                    eye: [0.0; 4],
+                    eye_axis: [0.0; 4],
+                },
+                textures: self.albedo_textures("part albedo", albedo, *roughness, *f0),
+                eye: false,
+                casts_shadow: true,
+            },
+            Material::Flat {
+                albedo,
+                roughness,
+                f0,
+            } => PartMaterial {
+                u: DrawU {
+                    albedo: [albedo.x, albedo.y, albedo.z, 0.0],
+                    params: [*roughness, *f0, 2.0, spec_scale],
+                    eye: [0.0; 4],
+                    eye_axis: [0.0; 4],
+                },
+                textures: self.part_textures(
+                    self.one([1.0; 4], TexelFormat::Srgb8),
+                    *roughness,
+                    *f0,
+                ),
+                eye: false,
+                casts_shadow: true,
+            },
+            Material::Card {
+                albedo,
+                coverage,
+                roughness,
+                f0,
+            } => self.card_material(*albedo, coverage, *roughness, *f0),
+        }
+    }
+
+    /// The skin's material: its base colour, normal, roughness-and-specular and (when the
+    /// set has them) subsurface colour and radius maps.
+    fn skin_material(&self, s: &SkinMaps) -> PartMaterial {
+        let base = self.tex(
+            "base colour",
+            &[&s.base_color[0], &s.base_color[1], &s.base_color[2]],
+            TexelFormat::Srgb8,
+        );
+        let normal = self.tex(
+            "normal",
+            &[&s.normal[0], &s.normal[1], &s.normal[2]],
+            TexelFormat::Float16,
+        );
+        let rs = self.tex(
+            "roughness, specular",
+            &[&s.roughness, &s.specular],
+            TexelFormat::Linear8,
+        );
+        let (sc, sr) = match &s.subsurface {
+            Some((c, r)) => (
+                self.tex("sss colour", &[&c[0], &c[1], &c[2]], TexelFormat::Srgb8),
+                self.tex("sss radius", &[&r[0], &r[1], &r[2]], TexelFormat::Float16),
+            ),
+            None => (
+                self.one([0.0; 4], TexelFormat::Srgb8),
+                self.one([0.0; 4], TexelFormat::Float16),
+            ),
+        };
+        let scatter = if s.subsurface.is_some() { 1.0 } else { 0.0 };
+        PartMaterial {
+            u: DrawU {
+                albedo: [1.0, 1.0, 1.0, 1.0],
+                params: [0.5, 0.04, 0.0, crate::material::SPECULAR_SCALE],
+                eye: [0.0; 4],
+                eye_axis: [0.0, 0.0, 1.0, scatter],
+            },
+            textures: [base, normal, rs, sc, sr],
+            eye: false,
+            casts_shadow: true,
+        }
+    }
+
+    /// An alpha-tested card's material (kind 3): a uniform albedo with `coverage` in the
+    /// texture's alpha; it casts no shadow.
+    fn card_material(
+        &self,
+        albedo: glam::Vec3,
+        coverage: &Map,
+        roughness: f32,
+        f0: f32,
+    ) -> PartMaterial {
+        let (w, h) = (coverage.width(), coverage.height());
+        let px: Vec<[f32; 4]> = coverage
+            .data()
+            .iter()
+            .map(|&c| [albedo.x, albedo.y, albedo.z, c])
+            .collect();
+        PartMaterial {
+            u: DrawU {
+                albedo: [albedo.x, albedo.y, albedo.z, 1.0],
+                params: [roughness, f0, 3.0, crate::material::SPECULAR_SCALE],
+                eye: [0.0; 4],
+                eye_axis: [0.0; 4],
+            },
+            textures: self.part_textures(
+                self.gpu.texture("card", &px, w, h, TexelFormat::Srgb8),
+                roughness,
+                f0,
+            ),
+            eye: false,
+            casts_shadow: false,
+        }
     }
 
     /// Replaces part `index`'s material (e.g. the skin's base colour for an animated rig frame).
@@ -719,9 +880,8 @@ impl Renderer {
     pub fn set_lake(&self, on: bool) {
         self.gpu
             .queue
-            .write_buffer(&self.lake_buf, 0, bytemuck::bytes_of(&LakeU::new(on)));
+            .write_buffer(&self.res.lake_buf, 0, bytemuck::bytes_of(&LakeU::new(on)));
     }
-
     /// Renders `view` under `lighting` at `w`×`h` pixels.
     pub fn render(
         &self,
@@ -799,14 +959,14 @@ impl Renderer {
         let blur_group = |src: &wgpu::Texture, k: usize| {
             gpu.bind(
                 "blur",
-                &self.blur_layout,
+                &self.layouts.blur,
                 &[
-                    self.frame_buf.as_entire_binding(),
-                    self.blur_bufs[k].as_entire_binding(),
-                    self.cdf.as_entire_binding(),
+                    self.res.frame_buf.as_entire_binding(),
+                    self.res.blur_bufs[k].as_entire_binding(),
+                    self.res.cdf.as_entire_binding(),
                     wgpu::BindingResource::TextureView(&view(src)),
                     wgpu::BindingResource::TextureView(&sv),
-                    wgpu::BindingResource::Sampler(&self.lin_sampler),
+                    wgpu::BindingResource::Sampler(&self.res.lin_sampler),
                 ],
             )
         };
@@ -814,9 +974,9 @@ impl Renderer {
         let blur_y = blur_group(&ping, 1);
         let composite = gpu.bind(
             "composite",
-            &self.comp_layout,
+            &self.layouts.composite,
             &[
-                self.frame_buf.as_entire_binding(),
+                self.res.frame_buf.as_entire_binding(),
                 wgpu::BindingResource::TextureView(&view(&pong)),
                 wgpu::BindingResource::TextureView(&view(&direct)),
                 wgpu::BindingResource::TextureView(&view(&post)),
@@ -825,13 +985,13 @@ impl Renderer {
         );
         let (pv, lv) = (view(&post), view(&lake_d));
         let lake_in = [
-            self.lake_buf.as_entire_binding(),
+            self.res.lake_buf.as_entire_binding(),
             wgpu::BindingResource::TextureView(&pv),
             wgpu::BindingResource::TextureView(&sv),
             wgpu::BindingResource::TextureView(&lv),
         ];
-        let lake_depth = gpu.bind("lake depth", &self.lake_depth_layout, &lake_in[..3]);
-        let lake_shade = gpu.bind("lake shade", &self.lake_shade_layout, &lake_in);
+        let lake_depth = gpu.bind("lake depth", &self.layouts.lake_depth, &lake_in[..3]);
+        let lake_shade = gpu.bind("lake shade", &self.layouts.lake_shade, &lake_in);
         Targets {
             size: (w, h),
             diffuse,
@@ -853,11 +1013,23 @@ impl Renderer {
         }
     }
 
-    /// Encodes and submits one frame into `t`: shadow, forward, blur x, blur y, composite.
+    /// Encodes and submits one frame into `t`: shadow, forward, blur x, blur y, lake depth,
+    /// lake shade, composite.
     fn submit_frame(&self, t: &Targets, view_spec: &View, lighting: &Lighting) {
         let gpu = self.gpu;
-        let d = &gpu.device;
-        let (w, h) = t.size;
+        let fu = self.frame_uniforms(t.size, view_spec, lighting);
+        gpu.queue
+            .write_buffer(&self.res.frame_buf, 0, bytemuck::bytes_of(&fu));
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        self.encode_shadow(&mut enc);
+        self.encode_forward(&mut enc, t);
+        self.encode_screen_passes(&mut enc, t);
+        gpu.queue.submit([enc.finish()]);
+    }
+
+    /// The frame uniforms of `view_spec` at `w`×`h` under `lighting`: the camera, the key
+    /// light's shadow projection, the sky and ground, and the lights in world space.
+    fn frame_uniforms(&self, (w, h): (u32, u32), view_spec: &View, lighting: &Lighting) -> FrameU {
         let cam = Camera::frame(self.centre, self.radius, view_spec, w, h);
         let key = cam.to_world(lighting.lights[0].dir);
         let lvp = light_view_proj(self.centre, self.radius, key);
@@ -867,7 +1039,7 @@ impl Renderer {
             lights[2 * i] = [dw.x, dw.y, dw.z, 0.0];
             lights[2 * i + 1] = [l.irradiance.x, l.irradiance.y, l.irradiance.z, 0.0];
         }
-        let fu = FrameU {
+        FrameU {
             view_proj: cam.view_proj.to_cols_array_2d(),
             light_view_proj: lvp.to_cols_array_2d(),
             camera: [cam.eye.x, cam.eye.y, cam.eye.z, cam.focal_px],
@@ -888,152 +1060,100 @@ impl Renderer {
             right: cam.basis[0].extend(0.0).to_array(),
             up: cam.basis[1].extend(0.0).to_array(),
             lights,
-        };
-        gpu.queue
-            .write_buffer(&self.frame_buf, 0, bytemuck::bytes_of(&fu));
-        let mut enc = d.create_command_encoder(&Default::default());
-        {
-            let sv = view(&self.shadow_tex);
-            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("shadow"),
-                color_attachments: &[],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &sv,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(&self.shadow_pipe);
-            pass.set_bind_group(0, &self.shadow_bind, &[]);
-            for p in self.parts.iter().filter(|p| p.casts_shadow) {
-                pass.set_vertex_buffer(0, p.vertices.slice(..));
-                pass.draw(0..p.count, 0..1);
-            }
         }
-        {
-            let views = [
-                view(&t.diffuse),
-                view(&t.direct),
-                view(&t.sssp),
-                view(&t.post),
-            ];
-            let att: Vec<Option<wgpu::RenderPassColorAttachment>> = views
-                .iter()
-                .map(|v| {
-                    Some(wgpu::RenderPassColorAttachment {
-                        view: v,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })
-                })
-                .collect();
-            let dv = view(&t.depth);
-            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("forward"),
-                color_attachments: &att,
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &dv,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
+    }
+
+    /// Encodes the shadow pass: the shadow-casting parts' depth from the key light.
+    fn encode_shadow(&self, enc: &mut wgpu::CommandEncoder) {
+        let sv = view(&self.res.shadow_tex);
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("shadow"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &sv,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
                 }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_bind_group(0, &self.main_bind, &[]);
-            for p in &self.parts {
-                pass.set_pipeline(if p.eye {
-                    &self.eye_pipe
-                } else {
-                    &self.skin_pipe
-                });
-                pass.set_bind_group(1, &p.bind, &[]);
-                pass.set_vertex_buffer(0, p.vertices.slice(..));
-                pass.draw(0..p.count, 0..1);
-            }
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipes.shadow);
+        pass.set_bind_group(0, &self.res.shadow_bind, &[]);
+        for p in self.parts.iter().filter(|p| p.casts_shadow) {
+            pass.set_vertex_buffer(0, p.vertices.slice(..));
+            pass.draw(0..p.count, 0..1);
         }
-        let full_pass = |enc: &mut wgpu::CommandEncoder,
-                         label: &str,
-                         pipe: &wgpu::RenderPipeline,
-                         groups: &[&wgpu::BindGroup],
-                         outs: &[&wgpu::Texture]| {
-            let views: Vec<wgpu::TextureView> = outs.iter().map(|t| view(t)).collect();
-            let att: Vec<Option<wgpu::RenderPassColorAttachment>> = views
-                .iter()
-                .map(|v| {
-                    Some(wgpu::RenderPassColorAttachment {
-                        view: v,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })
-                })
-                .collect();
-            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(label),
-                color_attachments: &att,
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
+    }
+
+    /// Encodes the forward pass: every part into `t`'s diffuse, direct, subsurface-parameter
+    /// and post-scatter targets.
+    fn encode_forward(&self, enc: &mut wgpu::CommandEncoder, t: &Targets) {
+        let views = [
+            view(&t.diffuse),
+            view(&t.direct),
+            view(&t.sssp),
+            view(&t.post),
+        ];
+        let att = cleared(&views);
+        let dv = view(&t.depth);
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("forward"),
+            color_attachments: &att,
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &dv,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_bind_group(0, &self.res.main_bind, &[]);
+        for p in &self.parts {
+            pass.set_pipeline(if p.eye {
+                &self.pipes.eye
+            } else {
+                &self.pipes.skin
             });
-            pass.set_pipeline(pipe);
-            for (i, g) in groups.iter().enumerate() {
-                pass.set_bind_group(i as u32, *g, &[]);
-            }
-            pass.draw(0..3, 0..1);
-        };
+            pass.set_bind_group(1, &p.bind, &[]);
+            pass.set_vertex_buffer(0, p.vertices.slice(..));
+            pass.draw(0..p.count, 0..1);
+        }
+    }
+
+    /// Encodes the full-screen passes on `t`: the blur along x then y, the lake's depth and
+    /// shading, and the composite into the display and linear targets.
+    fn encode_screen_passes(&self, enc: &mut wgpu::CommandEncoder, t: &Targets) {
+        let (pipes, main) = (&self.pipes, &self.res.main_bind);
+        full_pass(enc, "blur x", &pipes.blur, &[&t.blur_x], &[&t.ping]);
+        full_pass(enc, "blur y", &pipes.blur, &[&t.blur_y], &[&t.pong]);
         full_pass(
-            &mut enc,
-            "blur x",
-            &self.blur_pipe,
-            &[&t.blur_x],
-            &[&t.ping],
-        );
-        full_pass(
-            &mut enc,
-            "blur y",
-            &self.blur_pipe,
-            &[&t.blur_y],
-            &[&t.pong],
-        );
-        full_pass(
-            &mut enc,
+            enc,
             "lake depth",
-            &self.lake_depth_pipe,
-            &[&self.main_bind, &t.lake_depth],
+            &pipes.lake_depth,
+            &[main, &t.lake_depth],
             &[&t.lake_d],
         );
         full_pass(
-            &mut enc,
+            enc,
             "lake shade",
-            &self.lake_shade_pipe,
-            &[&self.main_bind, &t.lake_shade],
+            &pipes.lake_shade,
+            &[main, &t.lake_shade],
             &[&t.lake_l],
         );
         full_pass(
-            &mut enc,
+            enc,
             "composite",
-            &self.comp_pipe,
+            &pipes.composite,
             &[&t.composite],
             &[&t.display, &t.linear],
         );
-        gpu.queue.submit([enc.finish()]);
     }
 }

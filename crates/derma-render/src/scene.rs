@@ -112,6 +112,19 @@ pub fn corner_vertices(m: &TriMesh, tangents: Option<&[[f32; 4]]>) -> Vec<Vertex
     out
 }
 
+/// The sphere the camera frames a mesh by: centred on its bounding box, through its farthest
+/// vertex.
+pub fn bounding_sphere(mesh: &TriMesh) -> (Vec3, f32) {
+    let (lo, hi) = mesh.bounds();
+    let centre = 0.5 * (lo + hi);
+    let radius = mesh
+        .positions
+        .iter()
+        .map(|p| p.distance(centre))
+        .fold(0.0f32, f32::max);
+    (centre, radius)
+}
+
 /// Rotation of an eye from the neutral gaze (+Z) by yaw (about +Y, positive to the subject's
 /// left) and pitch (up), degrees.
 pub fn gaze_rotation(yaw_deg: f32, pitch_deg: f32) -> Quat {
@@ -122,13 +135,7 @@ impl Scene {
     /// A user mesh (mm, with UVs and normals) with a texture set.
     pub fn mesh(mesh: &TriMesh, skin: SkinMaps) -> Scene {
         let t = mikktspace_tangents(mesh);
-        let (lo, hi) = mesh.bounds();
-        let centre = 0.5 * (lo + hi);
-        let radius = mesh
-            .positions
-            .iter()
-            .map(|p| p.distance(centre))
-            .fold(0.0f32, f32::max);
+        let (centre, radius) = bounding_sphere(mesh);
         Scene {
             parts: vec![Part {
                 name: "skin".into(),

@@ -65,16 +65,6 @@ pub fn normalised(m: &Map) -> [Map; 3] {
     [n.clone(), n.clone(), n]
 }
 
-/// Display values decoded back to linear ([`compose`] encodes its renders).
-pub fn linear(mut m: [Map; 3]) -> [Map; 3] {
-    for c in &mut m {
-        c.data_mut()
-            .iter_mut()
-            .for_each(|v| *v = derma_core::color::srgb_decode(*v));
-    }
-    m
-}
-
 /// Thumbnails of the raw maps (sRGB-encoded where colour, normalised where data): base
 /// colour, normal, roughness, specular, and with subsurface maps sss colour and radius.
 pub fn map_thumbnails(s: &SkinMaps, size: usize) -> Vec<[Map; 3]> {
@@ -121,9 +111,10 @@ pub fn contact_sheet(
                 yaw_deg: yaw,
                 ..Default::default()
             };
-            views.push(linear(
-                r.draw(&v, &s.lighting(), panel, panel)?.display_maps(),
-            ));
+            views.push(
+                r.draw(&v, &s.lighting(), panel, panel)?
+                    .display_linear_maps(),
+            );
         }
         rows.push(compose(&views, &[], panel as usize));
     }

@@ -5,6 +5,7 @@ use derma_rig::expression::{self, Placement};
 use glam::{Vec2, Vec3};
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn the_library_lands_on_a_users_own_uvs_where_it_lands_on_the_built_in_head() {
     // A user's mesh: the built-in head's outer skin, wider, shorter, deeper, bent and moved, with
     // UVs of its own (a cylindrical projection, nothing like derma's layout). Vertex i is the

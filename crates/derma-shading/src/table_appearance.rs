@@ -89,14 +89,24 @@ impl TableAppearance {
     /// Compiles `table` with the chosen base colour.
     pub fn with_base(table: &MatchTable, base: BaseColor) -> Result<Self> {
         let h = &table.dtab.header;
+        // Each value read is an RGB triple: a table whose value is shorter is refused by name,
+        // not read past its row.
         let need = |name: &str| {
-            h.offset(name).ok_or_else(|| {
+            let (o, n) = h.offset(name).ok_or_else(|| {
                 ShadingError::Invalid(derma_core::Invalid::new(
                     format!("value '{name}' of the match table"),
                     "a value every derma match table has (make one with `derma match fit`)",
                     "none",
                 ))
-            })
+            })?;
+            if n < 3 {
+                return Err(ShadingError::Invalid(derma_core::Invalid::new(
+                    format!("value '{name}' of the match table"),
+                    "at least 3 floats (red, green, blue)",
+                    format!("{n}"),
+                )));
+            }
+            Ok((o, n))
         };
         let (ob, _) = match base {
             BaseColor::GgxFit => need(ModelKind::Ggx.name())?,

@@ -6,7 +6,7 @@
 //! `derma-relief` folder in the temporary directory, 256²).
 
 use derma_core::plot::{Plot, Series};
-use derma_render::cpu::{render_lit, tile, Light};
+use derma_render::cpu::{render_lit, single_light, tile};
 use derma_skin::config::{Range, SurfaceKind};
 use derma_skin::{SkinConfig, SkinGenerator, TextureSet};
 use glam::Vec3;
@@ -173,7 +173,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // The patch under a grazing light (10° above the surface, from the left), with and without.
     let off = patch(size as u32, false)?;
     let (m, t) = tile(PATCH_MM);
-    let grazing: [Light; 1] = [(Vec3::new(-0.985, 0.0, 0.174), Vec3::splat(6.0))];
+    let grazing = single_light(
+        Vec3::new(-0.985, 0.0, 0.174),
+        Vec3::splat(6.0 * std::f32::consts::PI),
+    );
     let views: Vec<[derma_core::Map; 3]> = [&off, &on]
         .iter()
         .map(|set| {

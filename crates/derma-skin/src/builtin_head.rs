@@ -311,21 +311,59 @@ pub fn default_fields(mesh: &TriMesh, person: &Person) -> FieldSet {
 
 /// The default fields of any mesh whose landmarks define `regions`.
 pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet {
-    use rayon::prelude::*;
-    let n = FIELD_RESOLUTION;
-    let raster = UvRaster::new(mesh, n, n);
-    let covered: Vec<bool> = (0..n * n).map(|i| raster.covered(i)).collect();
-    let gains = smoothed_gains(mesh, regions, BIO_SMOOTHING_MM);
-    let uv_of = |i: usize| {
+    let raster = FieldRaster::new(mesh, regions, person);
+    let scalars = scalar_getters();
+    let vectors = vector_getters();
+    let gets: Vec<&Get> = scalars
+        .values()
+        .chain(vectors.iter().flat_map(|(_, g)| g.iter()))
+        .collect();
+    let planes = field_planes(&raster, &gets);
+    let mut set = dilated_set(planes, &raster.covered, &scalars, &vectors);
+    hold_at_file_precision(&mut set);
+    set
+}
+
+/// What every texel of [`fields_on`] reads: the mesh rasterised at [`FIELD_RESOLUTION`], its
+/// regions, the person and the smoothed regional biology per vertex.
+struct FieldRaster<'a> {
+    mesh: &'a TriMesh,
+    regions: &'a Regions,
+    person: &'a Person,
+    raster: UvRaster,
+    covered: Vec<bool>,
+    gains: Vec<[f32; 4]>,
+}
+
+impl<'a> FieldRaster<'a> {
+    /// `mesh` rasterised, with its regional biology smoothed over the surface.
+    fn new(mesh: &'a TriMesh, regions: &'a Regions, person: &'a Person) -> Self {
+        let n = FIELD_RESOLUTION;
+        let raster = UvRaster::new(mesh, n, n);
+        let covered: Vec<bool> = (0..n * n).map(|i| raster.covered(i)).collect();
+        let gains = smoothed_gains(mesh, regions, BIO_SMOOTHING_MM);
+        Self {
+            mesh,
+            regions,
+            person,
+            raster,
+            covered,
+            gains,
+        }
+    }
+
+    /// The texture coordinate of texel `i`'s centre.
+    fn uv_of(&self, i: usize) -> Vec2 {
+        let n = FIELD_RESOLUTION;
         Vec2::new(
             ((i % n) as f32 + 0.5) / n as f32,
             1.0 - ((i / n) as f32 + 0.5) / n as f32,
         )
-    };
-    // Each texel's values, made a band of rows at a time and spread into the planar fields, so
-    // only a band is ever held as structs (6.5 MB, not 200 MB at FIELD_RESOLUTION²).
-    let texel = |i: usize| -> Texel {
-        if !covered[i] {
+    }
+
+    /// Texel `i`'s values (neutral where no triangle covers it).
+    fn texel(&self, i: usize) -> Texel {
+        if !self.covered[i] {
             return Texel {
                 f: [0.0; 10],
                 wv: [0.5, 0.5, 0.0],
@@ -337,36 +375,12 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
                 wrinkle: [0.0; wrinkle_regions::COUNT],
             };
         }
-        let p = raster.position(mesh, i);
-        let w = regions.weights(p, uv_of(i));
-        let (f, dir3, len) = feature_values(regions, &w, p, person);
-        // The 3D wrinkle direction in UV coordinates: least squares on the texel's Jacobian
-        // (central differences of the rasterised positions).
-        let (x, y) = (i % n, i / n);
-        let at = |xx: usize, yy: usize| {
-            let j = yy * n + xx;
-            covered[j].then(|| raster.position(mesh, j))
-        };
-        let du = match (at((x + 1).min(n - 1), y), at(x.saturating_sub(1), y)) {
-            (Some(a), Some(b)) => (a - b) * (n as f32 / 2.0),
-            _ => Vec3::ZERO,
-        };
-        let dv = match (at(x, y.saturating_sub(1)), at(x, (y + 1).min(n - 1))) {
-            (Some(a), Some(b)) => (a - b) * (n as f32 / 2.0),
-            _ => Vec3::ZERO,
-        };
-        let (a11, a12, a22) = (du.dot(du), du.dot(dv), dv.dot(dv));
-        let det = a11 * a22 - a12 * a12;
-        let to_uv = |dir3: Vec3, len: f32| {
-            if len > 0.0 && det > 1e-9 {
-                let (b1, b2) = (du.dot(dir3), dv.dot(dir3));
-                let d = Vec2::new(a22 * b1 - a12 * b2, a11 * b2 - a12 * b1).normalize_or_zero();
-                [0.5 + 0.5 * d.x, 0.5 + 0.5 * d.y, len]
-            } else {
-                [0.5, 0.5, 0.0]
-            }
-        };
-        let wv = to_uv(dir3, len);
+        let regions = self.regions;
+        let p = self.raster.position(self.mesh, i);
+        let w = regions.weights(p, self.uv_of(i));
+        let (f, dir3, len) = feature_values(regions, &w, p, self.person);
+        let frame = self.uv_frame(i);
+        let wv = frame.to_uv(dir3, len);
         // Tension lines: relaxed skin tension lines run with the expression lines (Borges
         // 1984) — the wrinkle families' directions where they are, horizontal elsewhere (as
         // RSTLs run on the forehead, temples and neck).
@@ -375,27 +389,11 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
         } else {
             Vec3::X
         };
-        let tv = to_uv(tension, 1.0);
+        let tv = frame.to_uv(tension, 1.0);
         let (hair_dir, hair_len) = hair_direction(regions, p);
-        let hv = to_uv(hair_dir, hair_len);
-        let g = |i: usize| w[i];
-        let skin = 1.0 - g(region!("mouth_interior")).max(g(region!("eye_sockets")));
-        // Relief depth by region (authored): coarser on the nose, finest on the eyelids,
-        // none on the lip vermilion (its own vertical folds are not modelled).
-        let relief = (skin
-            * (1.0 - g(region!("lips")))
-            * (1.0 + 0.3 * g(region!("nose"))
-                - 0.5 * g(region!("eyelids"))
-                - 0.2 * g(region!("scalp"))
-                - 0.2 * g(region!("ears"))))
-        .clamp(0.0, 1.5);
-        let t = mesh.triangles[raster.triangle[i] as usize];
-        let [b1, b2] = raster.bary[i];
-        let bio = [0, 1, 2, 3].map(|c| {
-            gains[t[0] as usize][c] * (1.0 - b1 - b2)
-                + gains[t[1] as usize][c] * b1
-                + gains[t[2] as usize][c] * b2
-        });
+        let hv = frame.to_uv(hair_dir, hair_len);
+        let relief = relief_depth(&w);
+        let bio = self.bio(i);
         Texel {
             f,
             wv,
@@ -408,11 +406,102 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
             // the mouth's or the eye sockets' charts that lie beside it in space).
             wrinkle: wrinkle_regions::masks(regions, p),
         }
-    };
-    // Each field with its value in a texel, named as the set names them: a later insertion of a
-    // name replaces an earlier one; the regions' weights only fill names not taken.
-    type Get = Box<dyn Fn(&Texel) -> f32 + Sync>;
-    let mut scalars: std::collections::BTreeMap<String, Get> = Default::default();
+    }
+
+    /// The 3D-to-UV frame of texel `i`: its Jacobian by central differences of the rasterised
+    /// positions (zero across a chart's edge).
+    fn uv_frame(&self, i: usize) -> UvFrame {
+        let n = FIELD_RESOLUTION;
+        let (x, y) = (i % n, i / n);
+        let at = |xx: usize, yy: usize| {
+            let j = yy * n + xx;
+            self.covered[j].then(|| self.raster.position(self.mesh, j))
+        };
+        let du = match (at((x + 1).min(n - 1), y), at(x.saturating_sub(1), y)) {
+            (Some(a), Some(b)) => (a - b) * (n as f32 / 2.0),
+            _ => Vec3::ZERO,
+        };
+        let dv = match (at(x, y.saturating_sub(1)), at(x, (y + 1).min(n - 1))) {
+            (Some(a), Some(b)) => (a - b) * (n as f32 / 2.0),
+            _ => Vec3::ZERO,
+        };
+        let (a11, a12, a22) = (du.dot(du), du.dot(dv), dv.dot(dv));
+        UvFrame {
+            du,
+            dv,
+            a11,
+            a12,
+            a22,
+            det: a11 * a22 - a12 * a12,
+        }
+    }
+
+    /// The regional biology at texel `i`, interpolated from its triangle's corners.
+    fn bio(&self, i: usize) -> [f32; 4] {
+        let (gains, raster) = (&self.gains, &self.raster);
+        let t = self.mesh.triangles[raster.triangle[i] as usize];
+        let [b1, b2] = raster.bary[i];
+        [0, 1, 2, 3].map(|c| {
+            gains[t[0] as usize][c] * (1.0 - b1 - b2)
+                + gains[t[1] as usize][c] * b1
+                + gains[t[2] as usize][c] * b2
+        })
+    }
+}
+
+/// A texel's Jacobian of position by UV, with the normal equations' terms, for carrying 3D
+/// directions into UV.
+struct UvFrame {
+    du: Vec3,
+    dv: Vec3,
+    a11: f32,
+    a12: f32,
+    a22: f32,
+    det: f32,
+}
+
+impl UvFrame {
+    /// The 3D direction `dir3` in UV coordinates (least squares on the Jacobian), encoded as
+    /// d·½ + ½ with the length `len`; none where the length or the Jacobian vanishes.
+    fn to_uv(&self, dir3: Vec3, len: f32) -> [f32; 3] {
+        let (du, dv, a11, a12, a22) = (self.du, self.dv, self.a11, self.a12, self.a22);
+        if len > 0.0 && self.det > 1e-9 {
+            let (b1, b2) = (du.dot(dir3), dv.dot(dir3));
+            let d = Vec2::new(a22 * b1 - a12 * b2, a11 * b2 - a12 * b1).normalize_or_zero();
+            [0.5 + 0.5 * d.x, 0.5 + 0.5 * d.y, len]
+        } else {
+            [0.5, 0.5, 0.0]
+        }
+    }
+}
+
+/// Relief depth by region (authored): coarser on the nose, finest on the eyelids, none on the
+/// lip vermilion (its own vertical folds are not modelled).
+fn relief_depth(w: &regions::Weights) -> f32 {
+    let g = |i: usize| w[i];
+    let skin = 1.0 - g(region!("mouth_interior")).max(g(region!("eye_sockets")));
+    (skin
+        * (1.0 - g(region!("lips")))
+        * (1.0 + 0.3 * g(region!("nose"))
+            - 0.5 * g(region!("eyelids"))
+            - 0.2 * g(region!("scalp"))
+            - 0.2 * g(region!("ears"))))
+    .clamp(0.0, 1.5)
+}
+
+/// A field's value in a texel.
+type Get = Box<dyn Fn(&Texel) -> f32 + Sync>;
+
+/// The scalar fields, by name, with their value in a texel.
+type ScalarGetters = std::collections::BTreeMap<String, Get>;
+
+/// The vector fields, by name, with their components' values in a texel.
+type VectorGetters = [(&'static str, [Get; 3]); 3];
+
+/// Each scalar field with its value in a texel, named as the set names them: a later insertion
+/// of a name replaces an earlier one; the regions' weights only fill names not taken.
+fn scalar_getters() -> ScalarGetters {
+    let mut scalars = ScalarGetters::new();
     for (k, name) in FIELD_NAMES.iter().enumerate() {
         scalars.insert((*name).into(), Box::new(move |v| v.f[k]));
     }
@@ -428,18 +517,27 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
         scalars.insert(wrinkle_mask_field(r.name), Box::new(move |v| v.wrinkle[k]));
     }
     scalars.insert("relief".into(), Box::new(|v| v.relief));
+    scalars
+}
+
+/// The vector fields ([`VECTOR_FIELDS`]) with their components' values in a texel.
+fn vector_getters() -> VectorGetters {
     let xyz = |f: fn(&Texel) -> &[f32; 3]| -> [Get; 3] {
         std::array::from_fn(|c| -> Get { Box::new(move |v| f(v)[c]) })
     };
-    let vectors: [(&str, [Get; 3]); 3] = [
+    [
         (VECTOR_FIELDS[0], xyz(|v| &v.wv)),
         (VECTOR_FIELDS[1], xyz(|v| &v.tv)),
         (VECTOR_FIELDS[2], xyz(|v| &v.hv)),
-    ];
-    let gets: Vec<&Get> = scalars
-        .values()
-        .chain(vectors.iter().flat_map(|(_, g)| g.iter()))
-        .collect();
+    ]
+}
+
+/// One plane per getter of `gets`: each texel's values, made a band of rows at a time and
+/// spread into the planes, so only a band is ever held as structs (6.5 MB, not 200 MB at
+/// FIELD_RESOLUTION²).
+fn field_planes(raster: &FieldRaster, gets: &[&Get]) -> Vec<Vec<f32>> {
+    use rayon::prelude::*;
+    let n = FIELD_RESOLUTION;
     let mut planes: Vec<Vec<f32>> = gets.iter().map(|_| vec![0.0f32; n * n]).collect();
     let mut band: Vec<Texel> = Vec::with_capacity(FIELD_BAND_ROWS * n);
     for lo in (0..n).step_by(FIELD_BAND_ROWS) {
@@ -447,16 +545,28 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
         texels
             .clone()
             .into_par_iter()
-            .map(texel)
+            .map(|i| raster.texel(i))
             .collect_into_vec(&mut band);
-        planes.par_iter_mut().zip(&gets).for_each(|(plane, get)| {
+        planes.par_iter_mut().zip(gets).for_each(|(plane, get)| {
             for (o, v) in plane[texels.clone()].iter_mut().zip(&band) {
                 *o = get(v);
             }
         });
     }
-    drop(band);
-    let src = dilation_sources(&covered, n, n);
+    planes
+}
+
+/// The planes dilated into the gutter (from the `covered` texels) and named: the scalars',
+/// then the vectors' components, in the getters' order.
+fn dilated_set(
+    planes: Vec<Vec<f32>>,
+    covered: &[bool],
+    scalars: &ScalarGetters,
+    vectors: &VectorGetters,
+) -> FieldSet {
+    use rayon::prelude::*;
+    let n = FIELD_RESOLUTION;
+    let src = dilation_sources(covered, n, n);
     let maps: Vec<Map> = planes
         .into_par_iter()
         .map(|mut plane| {
@@ -472,11 +582,10 @@ pub fn fields_on(mesh: &TriMesh, regions: &Regions, person: &Person) -> FieldSet
         set.scalars
             .insert(name.clone(), next.next().expect("one map per field"));
     }
-    for (name, _) in &vectors {
+    for (name, _) in vectors {
         let mut take = || next.next().expect("one map per field");
         set.vectors.insert((*name).into(), [take(), take(), take()]);
     }
-    hold_at_file_precision(&mut set);
     set
 }
 

@@ -269,19 +269,85 @@ impl<'a> SkinGenerator<'a> {
         if self.device == Device::Gpu {
             self.device.resolve()?;
         }
-        let analytic;
-        let builtin;
-        let appearance: &dyn Appearance = match &self.appearance {
-            AppearanceChoice::Analytic => {
-                analytic = derma_shading::SpectralKubelkaMunk::default();
-                &analytic
-            }
-            AppearanceChoice::Default => {
-                builtin = derma_shading::TableAppearance::builtin();
-                &builtin
-            }
+        let mut made = MadeAppearance::default();
+        let appearance = self.chosen_appearance(&mut made);
+        let plan = self.plan()?;
+        let job = Job::new(self.progress);
+        self.note_table(&job);
+
+        // Surface.
+        job.stage("surface and fields", 1, Unit::Steps);
+        let read = self.read_surface(&plan, &job)?;
+        let (person_cfg, melanin) = self.person_config(appearance, &plan, &read)?;
+        let cfg = &person_cfg;
+        self.note_inputs(cfg, melanin, appearance, &plan, &read, &job);
+        let (surfaces, fields) = self.surface_and_fields(cfg, &plan, &read, &job)?;
+        let Surfaces {
+            surface,
+            dilation,
+            scatter,
+            preview_mesh,
+        } = surfaces;
+        job.stage("scatter", 1, Unit::Steps);
+        let features = crate::feature_set::place(cfg, &fields, &scatter, plan.size)?;
+        drop(scatter);
+
+        let bio = self.paint(cfg, &surface, &fields, &features, dilation.as_deref(), &job)?;
+
+        job.stage("convert", 1, Unit::Steps);
+        let mut render = crate::texture_set::convert(
+            &bio,
+            &surface,
+            appearance,
+            &cfg.material,
+            dilation.as_deref(),
+        );
+        if plan.kind == SurfaceKind::Template {
+            render.lash_color = Some(cfg.hair.melanin(&cfg.person).color());
+        }
+        Ok(TextureSet {
+            surface,
+            fields,
+            features,
+            bio,
+            render,
+            mesh_scale: read.mesh_scale,
+            preview_mesh,
+            appearance: appearance.name(),
+            skin_surface: crate::texture_set::skin_surface(&cfg.material, appearance),
+            // As given (the person's derived melanin and wrinkles are in the notes): rerunning
+            // report.json's config reproduces the set.
+            config: self.config.clone(),
+            inputs: InputFiles {
+                config: self.config_path.clone(),
+                mesh: plan.mesh_path,
+                head: self.head.clone(),
+                fields: self.fields.clone(),
+                surface: plan.kind,
+            },
+            log: job.finish(),
+            started,
+            pool: None,
+            device: self.device,
+        })
+    }
+
+    /// The bio → render conversion chosen, one made here held in `made`.
+    fn chosen_appearance<'m>(&'m self, made: &'m mut MadeAppearance) -> &'m dyn Appearance {
+        match &self.appearance {
+            AppearanceChoice::Analytic => made
+                .analytic
+                .insert(derma_shading::SpectralKubelkaMunk::default()),
+            AppearanceChoice::Default => made
+                .builtin
+                .insert(derma_shading::TableAppearance::builtin()),
             AppearanceChoice::Table(t) => t.as_ref(),
-        };
+        }
+    }
+
+    /// The surface to paint and the head it needs, checked against each other; then the
+    /// memory the texture set needs.
+    fn plan(&self) -> Result<Plan> {
         let mesh_path = self.mesh_path();
         let kind = if mesh_path.is_some() {
             SurfaceKind::Mesh
@@ -305,7 +371,18 @@ impl<'a> SkinGenerator<'a> {
         let has_landmarks = !self.config.surface.landmarks.trim().is_empty() || self.head.is_some();
         let size = self.config.size as usize;
         check_memory(size)?;
-        let job = Job::new(self.progress);
+        Ok(Plan {
+            mesh_path,
+            kind,
+            on_head,
+            head,
+            has_landmarks,
+            size,
+        })
+    }
+
+    /// Warns where the caller's match table fits the light transport worse than is trusted.
+    fn note_table(&self, job: &Job) {
         if let AppearanceChoice::Table(t) = &self.appearance {
             if t.subsurface_rms > derma_shading::table_appearance::TRUSTED_RMS {
                 job.note(Note::warning(format!(
@@ -315,42 +392,71 @@ impl<'a> SkinGenerator<'a> {
                 )));
             }
         }
+    }
 
-        // Surface.
-        job.stage("surface and fields", 1, Unit::Steps);
-        if kind == SurfaceKind::Mesh && mesh_path.is_none() {
+    /// The surface's mesh as `plan` names it (none for a patch), and where its regions come
+    /// from.
+    fn read_surface(&self, plan: &Plan, job: &Job) -> Result<SurfaceMesh> {
+        if plan.kind == SurfaceKind::Mesh && plan.mesh_path.is_none() {
             return Err(SkinError::Key {
                 key: "surface.kind".into(),
                 detail: "\"mesh\" needs surface.mesh or a mesh given to the generator".into(),
             });
         }
-        let mut mesh_scale = None;
-        let mut user_regions = None;
-        let mut template_layout = false;
-        let mesh = match kind {
-            SurfaceKind::Template => Some(head.expect("on the head").skin.clone()),
+        let mut read = SurfaceMesh {
+            mesh: None,
+            mesh_scale: None,
+            user_regions: None,
+            template_layout: false,
+        };
+        read.mesh = match plan.kind {
+            SurfaceKind::Template => Some(plan.head.expect("on the head").skin.clone()),
             SurfaceKind::Mesh => {
-                let p = mesh_path.clone().expect("checked");
-                let read = self.read_user_mesh(&p, head, has_landmarks, &job)?;
-                (user_regions, template_layout) = (read.regions, read.template_layout);
-                mesh_scale = Some(read.frame);
-                Some(read.mesh)
+                let p = plan.mesh_path.clone().expect("checked");
+                let user = self.read_user_mesh(&p, plan.head, plan.has_landmarks, job)?;
+                (read.user_regions, read.template_layout) = (user.regions, user.template_layout);
+                read.mesh_scale = Some(user.frame);
+                Some(user.mesh)
             }
             SurfaceKind::Patch => None,
         };
-        let regional_gains =
-            (on_head || has_landmarks || template_layout) && self.config.regional.enabled;
-        let (person_cfg, melanin) =
-            crate::calibration::apply_person(&self.config, appearance, regional_gains)?;
-        let cfg = &person_cfg;
-        if has_landmarks && user_regions.is_none() && !(on_head && self.head.is_some()) {
+        Ok(read)
+    }
+
+    /// The configuration calibrated to the person (with the regional gains where the surface
+    /// has regions) and the mean baseline melanin it chose; landmarks without a mesh fail.
+    fn person_config(
+        &self,
+        appearance: &dyn Appearance,
+        plan: &Plan,
+        read: &SurfaceMesh,
+    ) -> Result<(SkinConfig, Option<f32>)> {
+        let regional_gains = (plan.on_head || plan.has_landmarks || read.template_layout)
+            && self.config.regional.enabled;
+        let person = crate::calibration::apply_person(&self.config, appearance, regional_gains)?;
+        if plan.has_landmarks
+            && read.user_regions.is_none()
+            && !(plan.on_head && self.head.is_some())
+        {
             return Err(SkinError::Key {
                 key: "surface.landmarks".into(),
                 detail: "landmarks place the built-in head's fields on a user mesh; give the mesh (surface.mesh or the generator's mesh)".into(),
             });
         }
-        let sr = cfg.scatter_resolution as usize;
-        // The fields' notes first (they depend only on the inputs), in a fixed order.
+        Ok(person)
+    }
+
+    /// The inputs' notes, before any field is made (they depend only on the inputs), in a fixed
+    /// order: the person's calibration, measured baselines, where a mesh's fields come from.
+    fn note_inputs(
+        &self,
+        cfg: &SkinConfig,
+        melanin: Option<f32>,
+        appearance: &dyn Appearance,
+        plan: &Plan,
+        read: &SurfaceMesh,
+        job: &Job,
+    ) {
         if let Some(m) = melanin {
             job.note(Note::info(format!(
                 "person: ITA {:.0}° → mean baseline melanin {m:.4} (cheeks and forehead, '{}' appearance); age {:.0} → wrinkle density ×{:.2}",
@@ -371,8 +477,8 @@ impl<'a> SkinGenerator<'a> {
                 )));
             }
         }
-        if kind != SurfaceKind::Template {
-            if user_regions.is_some() && !template_layout {
+        if plan.kind != SurfaceKind::Template {
+            if read.user_regions.is_some() && !read.template_layout {
                 job.note(Note::info(
                     "default fields and regional biology placed on the mesh by its landmarks",
                 ));
@@ -380,62 +486,42 @@ impl<'a> SkinGenerator<'a> {
                 job.note(Note::info("no fields given: uniform fields are used (moles, freckles, cysts and pores everywhere; no lips, hair or wrinkles); paint fields to place them"));
             }
         }
+    }
+
+    /// The surfaces and the fields: the default fields, then a fields directory, then config
+    /// entries.
+    fn surface_and_fields(
+        &self,
+        cfg: &SkinConfig,
+        plan: &Plan,
+        read: &SurfaceMesh,
+        job: &Job,
+    ) -> Result<(Surfaces, FieldSet)> {
         // The surface (tangent frames, UV rasters, gutter dilation) and the default fields do
         // not depend on each other: built side by side, so the single-threaded parts (MikkTSpace,
         // the dilation search) overlap the parallel ones.
-        let build_surface = || match &mesh {
-            Some(m) => {
-                let tangents = crate::surface::mikktspace_tangents(m);
-                let (s, ss) = rayon::join(
-                    || {
-                        let s = Surface::mesh(m, &tangents, size, size);
-                        let d = s.dilation();
-                        (s, d)
-                    },
-                    || Surface::mesh(m, &tangents, sr, sr),
-                );
-                (s, ss, Some((m.clone(), tangents)))
-            }
-            None => {
-                let [w, h] = cfg.surface.patch_size_mm;
-                (
-                    (
-                        Surface::patch(size, size, [w, h], cfg.surface.tileable),
-                        None,
-                    ),
-                    Surface::patch(sr, sr, [w, h], cfg.surface.tileable),
-                    None,
-                )
-            }
-        };
-        // Fields: the built-in head's defaults, or uniform ones; then a fields directory; then
-        // config entries.
-        let build_fields = || {
-            if kind == SurfaceKind::Template {
-                crate::builtin_head::fields_on(
-                    mesh.as_ref().expect("template mesh"),
-                    &head.expect("on the head").regions,
-                    &cfg.person,
-                )
-            } else if let Some(regions) = &user_regions {
-                crate::builtin_head::fields_on(mesh.as_ref().expect("a mesh"), regions, &cfg.person)
-            } else {
-                uniform_fields()
-            }
-        };
-        let (((surface, dilation), scatter_surface, preview_mesh), mut fields) =
-            rayon::join(build_surface, build_fields);
-        if mesh.is_some() {
-            check_raster(&surface, mesh_path.as_deref(), &job)?;
+        let (surfaces, mut fields) = rayon::join(
+            || build_surfaces(cfg, read.mesh.as_ref(), plan.size),
+            || default_fields(cfg, plan, read),
+        );
+        if read.mesh.is_some() {
+            check_raster(&surfaces.surface, plan.mesh_path.as_deref(), job)?;
         }
+        self.load_fields(cfg, &mut fields, job)?;
+        Ok((surfaces, fields))
+    }
+
+    /// Reads the fields directory and the config's field entries over `fields`; notes the
+    /// fields left uniform when some were given.
+    fn load_fields(&self, cfg: &SkinConfig, fields: &mut FieldSet, job: &Job) -> Result<()> {
         if let Some(dir) = &self.fields {
-            fields.load_dir(dir, &known_fields(cfg), &job)?;
+            fields.load_dir(dir, &known_fields(cfg), job)?;
         }
         for (name, value) in &cfg.fields {
             let v = value.trim();
             let lower = v.to_ascii_lowercase();
             if lower.ends_with(".png") || lower.ends_with(".exr") {
-                fields.load_file(name, &self.resolve(v), &job)?;
+                fields.load_file(name, &self.resolve(v), job)?;
             } else {
                 fields.define(name, v)?;
             }
@@ -453,55 +539,121 @@ impl<'a> SkinGenerator<'a> {
                 uniform.join(", ")
             )));
         }
-        job.stage("scatter", 1, Unit::Steps);
-        let features = crate::feature_set::place(cfg, &fields, &scatter_surface, size)?;
-        drop(scatter_surface);
+        Ok(())
+    }
 
+    /// The bio maps: painted, with `[detail]`'s exemplar tiles, dilated into the gutter.
+    fn paint(
+        &self,
+        cfg: &SkinConfig,
+        surface: &Surface,
+        fields: &FieldSet,
+        features: &FeatureSet,
+        dilation: Option<&[u32]>,
+        job: &Job,
+    ) -> Result<BioMaps> {
         let measured = self.baseline_maps(cfg)?;
-        let mut bio = crate::paint::paint_with(cfg, &surface, &fields, &features, &measured, &job)?;
+        let mut bio = crate::paint::paint_with(cfg, surface, fields, features, &measured, job)?;
         if cfg.detail.enabled() {
-            self.apply_detail(cfg, &surface, &fields, &mut bio, &job)?;
+            self.apply_detail(cfg, surface, fields, &mut bio, job)?;
         }
-        if let Some(src) = &dilation {
+        if let Some(src) = dilation {
             bio.dilate(src);
         }
+        Ok(bio)
+    }
+}
 
-        job.stage("convert", 1, Unit::Steps);
-        let mut render = crate::texture_set::convert(
-            &bio,
-            &surface,
-            appearance,
-            &cfg.material,
-            dilation.as_deref(),
-        );
-        if kind == SurfaceKind::Template {
-            render.lash_color = Some(cfg.hair.melanin(&cfg.person).color());
+/// Where an appearance made for one run lives ([`SkinGenerator::chosen_appearance`]).
+#[derive(Default)]
+struct MadeAppearance {
+    analytic: Option<derma_shading::SpectralKubelkaMunk>,
+    builtin: Option<derma_shading::TableAppearance>,
+}
+
+/// The surface a run paints, decided before any work ([`SkinGenerator::plan`]).
+struct Plan {
+    mesh_path: Option<PathBuf>,
+    kind: SurfaceKind,
+    /// Painted on the head itself (the built-in or a fitted one).
+    on_head: bool,
+    /// The head, where it is used.
+    head: Option<&'static derma_head::Head>,
+    /// Landmarks (or a fitted head) place the built-in head's fields.
+    has_landmarks: bool,
+    /// The texture's side.
+    size: usize,
+}
+
+/// The surface's mesh as read ([`SkinGenerator::read_surface`]).
+struct SurfaceMesh {
+    /// None for a patch.
+    mesh: Option<TriMesh>,
+    /// The frame a user mesh was read in.
+    mesh_scale: Option<MeshFrame>,
+    /// Where a user mesh's fields and regional biology come from, if anywhere.
+    user_regions: Option<derma_head::Regions>,
+    /// The user mesh has the built-in head's UV layout.
+    template_layout: bool,
+}
+
+/// The surface at the texture's size and at the scatter's resolution.
+struct Surfaces {
+    surface: Surface,
+    /// The gutter's dilation sources (meshes only).
+    dilation: Option<Vec<u32>>,
+    scatter: Surface,
+    /// The mesh and its tangents for the preview (none on a patch).
+    preview_mesh: Option<(TriMesh, Vec<[f32; 4]>)>,
+}
+
+/// The surfaces of `mesh` (its tangent frames, UV rasters and gutter dilation), or of a patch
+/// where there is none.
+fn build_surfaces(cfg: &SkinConfig, mesh: Option<&TriMesh>, size: usize) -> Surfaces {
+    let sr = cfg.scatter_resolution as usize;
+    match mesh {
+        Some(m) => {
+            let tangents = crate::surface::mikktspace_tangents(m);
+            let ((surface, dilation), scatter) = rayon::join(
+                || {
+                    let s = Surface::mesh(m, &tangents, size, size);
+                    let d = s.dilation();
+                    (s, d)
+                },
+                || Surface::mesh(m, &tangents, sr, sr),
+            );
+            Surfaces {
+                surface,
+                dilation,
+                scatter,
+                preview_mesh: Some((m.clone(), tangents)),
+            }
         }
-        Ok(TextureSet {
-            surface,
-            fields,
-            features,
-            bio,
-            render,
-            mesh_scale,
-            preview_mesh,
-            appearance: appearance.name(),
-            skin_surface: crate::texture_set::skin_surface(&cfg.material, appearance),
-            // As given (the person's derived melanin and wrinkles are in the notes): rerunning
-            // report.json's config reproduces the set.
-            config: self.config.clone(),
-            inputs: InputFiles {
-                config: self.config_path.clone(),
-                mesh: mesh_path,
-                head: self.head.clone(),
-                fields: self.fields.clone(),
-                surface: kind,
-            },
-            log: job.finish(),
-            started,
-            pool: None,
-            device: self.device,
-        })
+        None => {
+            let [w, h] = cfg.surface.patch_size_mm;
+            Surfaces {
+                surface: Surface::patch(size, size, [w, h], cfg.surface.tileable),
+                dilation: None,
+                scatter: Surface::patch(sr, sr, [w, h], cfg.surface.tileable),
+                preview_mesh: None,
+            }
+        }
+    }
+}
+
+/// The default fields: the built-in head's (on the head, or on a mesh with its regions), or
+/// uniform ones.
+fn default_fields(cfg: &SkinConfig, plan: &Plan, read: &SurfaceMesh) -> FieldSet {
+    if plan.kind == SurfaceKind::Template {
+        crate::builtin_head::fields_on(
+            read.mesh.as_ref().expect("template mesh"),
+            &plan.head.expect("on the head").regions,
+            &cfg.person,
+        )
+    } else if let Some(regions) = &read.user_regions {
+        crate::builtin_head::fields_on(read.mesh.as_ref().expect("a mesh"), regions, &cfg.person)
+    } else {
+        uniform_fields()
     }
 }
 
@@ -908,15 +1060,35 @@ impl TextureSet {
         derma_core::atomic::ensure_writable_dir(dir)?;
         let job = Job::new(progress);
         job.stage("write", 1, Unit::Steps);
+        let (mut files, height_range) = self.write_map_files(dir)?;
+        job.stage("preview", 1, Unit::Steps);
+        self.write_preview(dir, &job)?;
+        files.push(outputs::PREVIEW);
+        let log = self.run_log(job);
+        files.push(outputs::REPORT);
+        let report = self.report(height_range, &log);
+        derma_core::report::write_json(
+            &dir.join(outputs::REPORT),
+            &report,
+            derma_core::report::JsonFormat::REPORT,
+        )?;
+        self.write_manifest(dir, &files, &report)?;
+        files.insert(files.len() - 1, outputs::MANIFEST); // manifest order: before report.json
+        Ok(Written {
+            files,
+            height_range,
+            log,
+        })
+    }
+
+    /// The maps, lashes.png (on the head), wrinkle_masks.exr (with landmarks) and
+    /// features.json; returns the files in manifest order and the range of height.png.
+    fn write_map_files(&self, dir: &Path) -> Result<(Vec<&'static str>, HeightRange)> {
         let (mut files, height_range) =
             crate::texture_set::write_maps(dir, &self.bio, &self.render)?;
         if let Some(hair) = self.render.lash_color {
             crate::texture_set::write_lashes(&dir.join(outputs::LASHES), hair)?;
-            let at = files
-                .iter()
-                .position(|f| *f == outputs::HAIR_COVERAGE)
-                .map_or(files.len(), |p| p + 1);
-            files.insert(at, outputs::LASHES);
+            insert_after(&mut files, outputs::HAIR_COVERAGE, outputs::LASHES);
         }
         if crate::texture_set::write_wrinkle_masks(
             &dir.join(outputs::WRINKLE_MASKS),
@@ -925,11 +1097,7 @@ impl TextureSet {
             self.bio.height,
             self.surface.period().is_some(),
         )? {
-            let at = files
-                .iter()
-                .position(|f| *f == outputs::WRINKLE_NORMAL)
-                .map_or(files.len(), |p| p + 1);
-            files.insert(at, outputs::WRINKLE_MASKS);
+            insert_after(&mut files, outputs::WRINKLE_NORMAL, outputs::WRINKLE_MASKS);
         } else {
             // No landmarks, no masks: a previous run's masks would not match this set.
             let stale = dir.join(outputs::WRINKLE_MASKS);
@@ -946,9 +1114,44 @@ impl TextureSet {
             derma_core::report::JsonFormat::DATA,
         )?;
         files.push(outputs::FEATURES);
-        job.stage("preview", 1, Unit::Steps);
+        Ok((files, height_range))
+    }
+
+    /// preview.png: the contact sheet, its shaded views drawn by the GPU renderer where it
+    /// runs, by the CPU previews otherwise.
+    fn write_preview(&self, dir: &Path, job: &Job) -> Result<()> {
         let template = self.inputs.surface == SurfaceKind::Template;
-        let shaded = match crate::preview::gpu_views(
+        let shaded = self.gpu_views(template, job);
+        let lash_color = self.render.lash_color.map(glam::Vec3::from);
+        let lashes = move |_: glam::Vec2| lash_color.unwrap_or_default();
+        let props = if template {
+            let mut props = derma_render::cpu::head_props(self.head());
+            if lash_color.is_some() {
+                derma_render::cpu::recolour_cards(&mut props, &lashes);
+            }
+            props
+        } else {
+            Vec::new()
+        };
+        let preview = crate::preview::contact_sheet(
+            &self.render,
+            &self.bio,
+            &self.surface,
+            self.preview_mesh.as_ref(),
+            &props,
+            shaded,
+        );
+        derma_core::image_io::write_png8(
+            &dir.join(outputs::PREVIEW),
+            &[&preview[0], &preview[1], &preview[2]],
+        )?;
+        Ok(())
+    }
+
+    /// The preview's shaded views from derma-render's GPU renderer, where it runs; a note says
+    /// which renderer draws them, and why.
+    fn gpu_views(&self, template: bool, job: &Job) -> Option<Vec<[Map; 3]>> {
+        match crate::preview::gpu_views(
             &self.render,
             self.preview_mesh.as_ref(),
             template.then(|| self.head()),
@@ -981,31 +1184,11 @@ impl TextureSet {
                 )));
                 None
             }
-        };
-        let lash_color = self.render.lash_color.map(glam::Vec3::from);
-        let lashes = move |_: glam::Vec2| lash_color.unwrap_or_default();
-        let props = if template {
-            let mut props = derma_render::cpu::head_props(self.head());
-            if lash_color.is_some() {
-                derma_render::cpu::recolour_cards(&mut props, &lashes);
-            }
-            props
-        } else {
-            Vec::new()
-        };
-        let preview = crate::preview::contact_sheet(
-            &self.render,
-            &self.bio,
-            &self.surface,
-            self.preview_mesh.as_ref(),
-            &props,
-            shaded,
-        );
-        derma_core::image_io::write_png8(
-            &dir.join(outputs::PREVIEW),
-            &[&preview[0], &preview[1], &preview[2]],
-        )?;
-        files.push(outputs::PREVIEW);
+        }
+    }
+
+    /// The whole run's log: the generation's, then the writing's, then the total time.
+    fn run_log(&self, job: Job) -> Log {
         let mut log = self.log.clone();
         let written = job.finish();
         log.timings.extend(written.timings);
@@ -1014,8 +1197,12 @@ impl TextureSet {
             stage: "total".into(),
             seconds: self.started.elapsed().as_secs_f64(),
         });
-        files.push(outputs::REPORT);
-        let report = crate::report::report(&crate::report::Run {
+        log
+    }
+
+    /// report.json's content, with the range of height.png and the run's `log`.
+    fn report(&self, height_range: HeightRange, log: &Log) -> serde_json::Value {
+        crate::report::report(&crate::report::Run {
             config: &self.config,
             inputs: &self.inputs,
             mesh_scale: self.mesh_scale.clone(),
@@ -1028,19 +1215,16 @@ impl TextureSet {
             field_origins: &self.fields.origins,
             counts: self.features.counts(),
             height_range,
-            log: &log,
-        });
-        derma_core::report::write_json(
-            &dir.join(outputs::REPORT),
-            &report,
-            derma_core::report::JsonFormat::REPORT,
-        )?;
-        self.write_manifest(dir, &files, &report)?;
-        files.insert(files.len() - 1, outputs::MANIFEST); // manifest order: before report.json
-        Ok(Written {
-            files,
-            height_range,
             log,
         })
     }
+}
+
+/// Puts `file` into `files` just after `after` (at the end where `after` is missing).
+fn insert_after(files: &mut Vec<&'static str>, after: &str, file: &'static str) {
+    let at = files
+        .iter()
+        .position(|f| *f == after)
+        .map_or(files.len(), |p| p + 1);
+    files.insert(at, file);
 }

@@ -43,10 +43,10 @@ pub fn gpu_views(
             yaw_deg: yaw,
             ..Default::default()
         };
-        views.push(derma_render::sheet::linear(
+        views.push(
             r.draw(&v, &derma_render::Setup::Studio.lighting(), panel, panel)?
-                .display_maps(),
-        ));
+                .display_linear_maps(),
+        );
     }
     Ok(Some((views, r.name())))
 }

@@ -587,13 +587,129 @@ pub fn write_maps(
     maps: &RenderMaps,
 ) -> crate::Result<(Vec<&'static str>, HeightRange)> {
     let range = height_range(bio);
-    let span = (range.max_mm - range.min_mm).max(1e-9);
-    let (w, h) = (bio.width, bio.height);
-    let path = |name: &str| dir.join(name);
-    let row = |y: usize| &bio.texels[y * w..(y + 1) * w];
-    let rgb8 = |file: &'static str, px: &[[u8; 3]]| -> crate::Result<()> {
+    let writer = MapWriter {
+        dir,
+        bio,
+        range,
+        span: (range.max_mm - range.min_mm).max(1e-9),
+    };
+    let list = map_jobs(&writer, maps);
+    let written: Vec<&'static str> = list.iter().map(|(name, _)| *name).collect();
+    list.into_par_iter()
+        .map(|(_, j)| j())
+        .collect::<crate::Result<Vec<()>>>()?;
+    // The files written, in manifest order.
+    let files = outputs::OUTPUTS
+        .iter()
+        .map(|o| o.file)
+        .filter(|f| written.contains(f))
+        .collect();
+    Ok((files, range))
+}
+
+/// Writing one map file, to run beside the others.
+type MapJob<'a> = Box<dyn FnOnce() -> crate::Result<()> + Send + 'a>;
+
+/// The job of every map [`write_maps`] writes (the subsurface maps' where `maps` has them),
+/// largest first, so the last jobs to start are short.
+fn map_jobs<'a>(wr: &'a MapWriter<'a>, maps: &'a RenderMaps) -> Vec<(&'static str, MapJob<'a>)> {
+    let bio = wr.bio;
+    let (f32, none) = (ExrPrecision::F32, ExrCompression::None);
+    let mut list: Vec<(&'static str, MapJob)> = vec![
+        (
+            outputs::BIO,
+            Box::new(move || write_bio_exr(&wr.path(outputs::BIO), bio, BIO_COMPRESSION)),
+        ),
+        (
+            outputs::MELANIN,
+            Box::new(move || {
+                let names = [names::MELANIN, names::PHEOMELANIN];
+                exr(&wr.path(outputs::MELANIN), bio, names, f32, none, |s| {
+                    [s.tissue.melanin, s.tissue.pheomelanin]
+                })
+            }),
+        ),
+        (
+            outputs::HEMOGLOBIN,
+            Box::new(move || {
+                let names = [names::HEMOGLOBIN, names::OXYGENATION];
+                exr(&wr.path(outputs::HEMOGLOBIN), bio, names, f32, none, |s| {
+                    [s.tissue.blood, s.tissue.oxygenation]
+                })
+            }),
+        ),
+        (
+            outputs::NORMAL,
+            Box::new(move || wr.rgb16(outputs::NORMAL, &maps.normal)),
+        ),
+        (
+            outputs::WRINKLE_NORMAL,
+            Box::new(move || wr.wrinkle_normal(maps)),
+        ),
+        (
+            outputs::HEIGHT_EXR,
+            Box::new(move || {
+                exr(
+                    &wr.path(outputs::HEIGHT_EXR),
+                    bio,
+                    ["height_mm", "height_mm_furrow"],
+                    f32,
+                    none,
+                    |s| [s.height_mm, s.furrow_mm],
+                )
+            }),
+        ),
+        (outputs::HEIGHT_PNG, Box::new(move || wr.height_png())),
+        (
+            outputs::BASE_COLOR,
+            Box::new(move || wr.rgb8(outputs::BASE_COLOR, &maps.base_color)),
+        ),
+        (
+            outputs::ROUGHNESS,
+            Box::new(move || wr.grey8(outputs::ROUGHNESS, &maps.roughness)),
+        ),
+        (
+            outputs::SPECULAR,
+            Box::new(move || wr.grey8(outputs::SPECULAR, &maps.specular)),
+        ),
+        (outputs::HAIR_COVERAGE, Box::new(move || wr.hair_coverage())),
+    ];
+    if let Some(sub) = &maps.subsurface {
+        list.insert(
+            4,
+            (
+                outputs::SSS_RADIUS,
+                Box::new(move || wr.rgb16(outputs::SSS_RADIUS, &sub.radius)),
+            ),
+        );
+        list.push((
+            outputs::SSS_COLOR,
+            Box::new(move || wr.rgb8(outputs::SSS_COLOR, &sub.color)),
+        ));
+    }
+    list
+}
+
+/// Writes the PNG maps of one texture set into a directory, by rows.
+struct MapWriter<'a> {
+    dir: &'a Path,
+    bio: &'a BioMaps,
+    /// The heights' range and its span (height.png's scale).
+    range: HeightRange,
+    span: f32,
+}
+
+impl MapWriter<'_> {
+    /// The path of `name` in the directory.
+    fn path(&self, name: &str) -> std::path::PathBuf {
+        self.dir.join(name)
+    }
+
+    /// An 8-bit RGB PNG of `px`.
+    fn rgb8(&self, file: &'static str, px: &[[u8; 3]]) -> crate::Result<()> {
+        let (w, h) = (self.bio.width, self.bio.height);
         Ok(write_png_rows(
-            &path(file),
+            &self.path(file),
             w,
             h,
             3,
@@ -602,10 +718,13 @@ pub fn write_maps(
                 out.copy_from_slice(px[y * w..(y + 1) * w].as_flattened());
             },
         )?)
-    };
-    let rgb16 = |file: &'static str, px: &[[u16; 3]]| -> crate::Result<()> {
+    }
+
+    /// A 16-bit RGB PNG of `px`.
+    fn rgb16(&self, file: &'static str, px: &[[u16; 3]]) -> crate::Result<()> {
+        let (w, h) = (self.bio.width, self.bio.height);
         Ok(write_png_rows(
-            &path(file),
+            &self.path(file),
             w,
             h,
             3,
@@ -619,10 +738,13 @@ pub fn write_maps(
                 }
             },
         )?)
-    };
-    let grey8 = |file: &'static str, px: &[u8]| -> crate::Result<()> {
+    }
+
+    /// An 8-bit grey PNG of `px`.
+    fn grey8(&self, file: &'static str, px: &[u8]) -> crate::Result<()> {
+        let (w, h) = (self.bio.width, self.bio.height);
         Ok(write_png_rows(
-            &path(file),
+            &self.path(file),
             w,
             h,
             1,
@@ -631,147 +753,71 @@ pub fn write_maps(
                 out.copy_from_slice(&px[y * w..(y + 1) * w]);
             },
         )?)
-    };
-    let (f32, none) = (ExrPrecision::F32, ExrCompression::None);
-    type Job<'a> = Box<dyn FnOnce() -> crate::Result<()> + Send + 'a>;
-    // Largest first, so the last jobs to start are short.
-    let mut list: Vec<(&'static str, Job)> = vec![
-        (
-            outputs::BIO,
-            Box::new(|| write_bio_exr(&path(outputs::BIO), bio, BIO_COMPRESSION)),
-        ),
-        (
-            outputs::MELANIN,
-            Box::new(|| {
-                let names = [names::MELANIN, names::PHEOMELANIN];
-                exr(&path(outputs::MELANIN), bio, names, f32, none, |s| {
-                    [s.tissue.melanin, s.tissue.pheomelanin]
-                })
-            }),
-        ),
-        (
-            outputs::HEMOGLOBIN,
-            Box::new(|| {
-                let names = [names::HEMOGLOBIN, names::OXYGENATION];
-                exr(&path(outputs::HEMOGLOBIN), bio, names, f32, none, |s| {
-                    [s.tissue.blood, s.tissue.oxygenation]
-                })
-            }),
-        ),
-        (
-            outputs::NORMAL,
-            Box::new(|| rgb16(outputs::NORMAL, &maps.normal)),
-        ),
-        (
-            outputs::WRINKLE_NORMAL,
-            Box::new(|| {
-                Ok(write_png_rows(
-                    &path(outputs::WRINKLE_NORMAL),
-                    w,
-                    h,
-                    3,
-                    PngDepth::Sixteen,
-                    |y, out| {
-                        let (a, b) = (y * w, (y + 1) * w);
-                        let wn = &maps.wrinkle_normal;
-                        let first = wn.partition_point(|e| (e.0 as usize) < a);
-                        let last = wn.partition_point(|e| (e.0 as usize) < b);
-                        let mut row = maps.normal[a..b].to_vec();
-                        for (i, n) in &wn[first..last] {
-                            row[*i as usize - a] = *n;
-                        }
-                        for (o, v) in out.chunks_exact_mut(2).zip(row.as_flattened()) {
-                            o.copy_from_slice(&v.to_be_bytes());
-                        }
-                    },
-                )?)
-            }),
-        ),
-        (
-            outputs::HEIGHT_EXR,
-            Box::new(|| {
-                exr(
-                    &path(outputs::HEIGHT_EXR),
-                    bio,
-                    ["height_mm", "height_mm_furrow"],
-                    f32,
-                    none,
-                    |s| [s.height_mm, s.furrow_mm],
-                )
-            }),
-        ),
-        (
-            outputs::HEIGHT_PNG,
-            Box::new(move || {
-                Ok(write_png_rows(
-                    &path(outputs::HEIGHT_PNG),
-                    w,
-                    h,
-                    1,
-                    PngDepth::Sixteen,
-                    |y, out| {
-                        for (o, s) in out.chunks_exact_mut(2).zip(row(y)) {
-                            let v = quantize16((s.height_mm - range.min_mm) / span);
-                            o.copy_from_slice(&v.to_be_bytes());
-                        }
-                    },
-                )?)
-            }),
-        ),
-        (
-            outputs::BASE_COLOR,
-            Box::new(|| rgb8(outputs::BASE_COLOR, &maps.base_color)),
-        ),
-        (
-            outputs::ROUGHNESS,
-            Box::new(|| grey8(outputs::ROUGHNESS, &maps.roughness)),
-        ),
-        (
-            outputs::SPECULAR,
-            Box::new(|| grey8(outputs::SPECULAR, &maps.specular)),
-        ),
-        (
-            outputs::HAIR_COVERAGE,
-            Box::new(move || {
-                Ok(write_png_rows(
-                    &path(outputs::HAIR_COVERAGE),
-                    w,
-                    h,
-                    1,
-                    PngDepth::Eight,
-                    |y, out| {
-                        for (o, s) in out.iter_mut().zip(row(y)) {
-                            *o = quantize8(s.extra[3]);
-                        }
-                    },
-                )?)
-            }),
-        ),
-    ];
-    if let Some(sub) = &maps.subsurface {
-        list.insert(
-            4,
-            (
-                outputs::SSS_RADIUS,
-                Box::new(|| rgb16(outputs::SSS_RADIUS, &sub.radius)),
-            ),
-        );
-        list.push((
-            outputs::SSS_COLOR,
-            Box::new(|| rgb8(outputs::SSS_COLOR, &sub.color)),
-        ));
     }
-    let written: Vec<&'static str> = list.iter().map(|(name, _)| *name).collect();
-    list.into_par_iter()
-        .map(|(_, j)| j())
-        .collect::<crate::Result<Vec<()>>>()?;
-    // The files written, in manifest order.
-    let files = outputs::OUTPUTS
-        .iter()
-        .map(|o| o.file)
-        .filter(|f| written.contains(f))
-        .collect();
-    Ok((files, range))
+
+    /// wrinkle_normal.png: normal.png with the sparse wrinkle normals laid over it.
+    fn wrinkle_normal(&self, maps: &RenderMaps) -> crate::Result<()> {
+        let (w, h) = (self.bio.width, self.bio.height);
+        Ok(write_png_rows(
+            &self.path(outputs::WRINKLE_NORMAL),
+            w,
+            h,
+            3,
+            PngDepth::Sixteen,
+            |y, out| {
+                let (a, b) = (y * w, (y + 1) * w);
+                let wn = &maps.wrinkle_normal;
+                let first = wn.partition_point(|e| (e.0 as usize) < a);
+                let last = wn.partition_point(|e| (e.0 as usize) < b);
+                let mut row = maps.normal[a..b].to_vec();
+                for (i, n) in &wn[first..last] {
+                    row[*i as usize - a] = *n;
+                }
+                for (o, v) in out.chunks_exact_mut(2).zip(row.as_flattened()) {
+                    o.copy_from_slice(&v.to_be_bytes());
+                }
+            },
+        )?)
+    }
+
+    /// height.png: the heights over their range, 16-bit.
+    fn height_png(&self) -> crate::Result<()> {
+        let (w, h) = (self.bio.width, self.bio.height);
+        let (range, span) = (self.range, self.span);
+        Ok(write_png_rows(
+            &self.path(outputs::HEIGHT_PNG),
+            w,
+            h,
+            1,
+            PngDepth::Sixteen,
+            |y, out| {
+                for (o, s) in out
+                    .chunks_exact_mut(2)
+                    .zip(&self.bio.texels[y * w..(y + 1) * w])
+                {
+                    let v = quantize16((s.height_mm - range.min_mm) / span);
+                    o.copy_from_slice(&v.to_be_bytes());
+                }
+            },
+        )?)
+    }
+
+    /// hair_coverage.png: the hair's coverage, 8-bit.
+    fn hair_coverage(&self) -> crate::Result<()> {
+        let (w, h) = (self.bio.width, self.bio.height);
+        Ok(write_png_rows(
+            &self.path(outputs::HAIR_COVERAGE),
+            w,
+            h,
+            1,
+            PngDepth::Eight,
+            |y, out| {
+                for (o, s) in out.iter_mut().zip(&self.bio.texels[y * w..(y + 1) * w]) {
+                    *o = quantize8(s.extra[3]);
+                }
+            },
+        )?)
+    }
 }
 
 /// bio.exr's compression: RLE (see BENCHMARKS.md, "EXR compression", for the alternatives'

@@ -5,6 +5,7 @@ use derma_core::Map;
 use derma_skin::{SkinConfig, SkinGenerator};
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn a_region_exemplar_changes_only_its_region() {
     let dir = derma_test_support::scratch_dir("detail-regions");
     let n = 64;

@@ -12,6 +12,7 @@ use glam::{Vec2, Vec3};
 const REGIONS: [&str; 4] = ["cheeks", "forehead", "neck", "periorbital"];
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn a_fitted_head_and_its_scan_get_the_built_in_heads_regional_colour() {
     // A user's mesh with UVs: the built-in head's outer skin, wider, shorter, deeper and moved,
     // in centimetres.

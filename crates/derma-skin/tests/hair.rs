@@ -81,6 +81,7 @@ fn every_strand_grows_from_a_follicle_of_its_kind() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn brows_and_stubble_cover_their_regions_only() {
     let man = set(Preset::Light, Sex::Male, |_| {});
     let woman = set(Preset::Light, Sex::Female, |_| {});
@@ -109,6 +110,7 @@ fn brows_and_stubble_cover_their_regions_only() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn hair_takes_the_colour_of_its_melanins() {
     // Every hair (stalks, brows, stubble) has the one colour of the hair's melanins, composited
     // over the skin by its coverage: the extra colour is that colour wherever there is hair, and

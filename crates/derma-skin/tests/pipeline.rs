@@ -163,6 +163,7 @@ fn tileable_patch_wraps_seamlessly() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn density_is_per_unit_area_on_patches_and_faces() {
     // A 10×10 cm patch with uniform fields gets density × 100 cm² features of each kind.
     let mut cfg = small(64);
@@ -235,6 +236,7 @@ fn moles_are_darker_than_their_surroundings() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn measured_chromophore_maps_replace_the_baseline() {
     // A photographed face's maps (as `derma photo chromophores` writes them) drive the baseline
     // melanin and blood; features still paint on top.

@@ -55,6 +55,7 @@ fn jacques_range(p: Preset) -> (f32, f32) {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn every_preset_lands_in_its_ita_band_with_real_face_colour() {
     let groups: Groups = toml::from_str(include_str!("../data/facial-colour-groups.toml")).unwrap();
     let appearance = derma_shading::TableAppearance::builtin();

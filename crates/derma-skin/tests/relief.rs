@@ -14,6 +14,7 @@ fn run(size: u32, relief: bool) -> derma_skin::TextureSet {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn the_face_is_not_flat_between_features_at_1024() {
     // A real head scan's tangent-space normal map at 1024²: median tilt 2.6°, 65 % of texels
     // above 2° (issue 21). Required: median ≥ 1.3°, more than 30 % above 2°.
@@ -29,6 +30,7 @@ fn the_face_is_not_flat_between_features_at_1024() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn features_stand_out_of_the_relief() {
     // The texels where features tilt the normal (over 5° without the relief: pores, cysts,
     // follicles, wrinkles) keep tilts well above the relief's own with it. Skin only: texels

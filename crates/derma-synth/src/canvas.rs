@@ -1,10 +1,7 @@
 //! The texture being synthesised: values, their 8-bit codes for the search, and where each
 //! texel was copied from (its source), on a plane or, for tileable output, a torus.
 
-use crate::error::Result;
 use crate::exemplar::ExemplarSet;
-#[cfg(feature = "gpu")]
-use crate::resident::Blended;
 use crate::search::Plane;
 
 /// No source yet: the texel still holds the white noise of §3.1.
@@ -21,11 +18,6 @@ pub(crate) struct Canvas {
     pub src_exemplar: Vec<u8>,
     /// Texel index (y · width + x) of the source in its exemplar, or [`NO_SOURCE`].
     pub src: Vec<u32>,
-    /// The values, codes and sources of the last E-step where it ran on the GPU, kept there for
-    /// the next pass's search: newer than `values`, `codes`, `src` and `src_exemplar` until
-    /// [`Canvas::sync`]. Only in a build with the `gpu` feature.
-    #[cfg(feature = "gpu")]
-    pub blended: Option<Blended>,
 }
 
 impl Canvas {
@@ -40,38 +32,6 @@ impl Canvas {
             codes: vec![0; n * channels],
             src_exemplar: vec![0; n],
             src: vec![NO_SOURCE; n],
-            #[cfg(feature = "gpu")]
-            blended: None,
-        }
-    }
-
-    /// Brings values, codes and sources kept on the GPU (by its E-step) back to the host.
-    pub fn sync(&mut self) -> Result<()> {
-        #[cfg(feature = "gpu")]
-        if let Some(b) = self.blended.take() {
-            return b.read_into(
-                &mut self.values,
-                &mut self.codes,
-                &mut self.src,
-                &mut self.src_exemplar,
-            );
-        }
-        Ok(())
-    }
-
-    /// Whether the newest values, codes and sources are on the GPU (not yet [`Canvas::sync`]ed).
-    pub fn on_gpu(&self) -> bool {
-        #[cfg(feature = "gpu")]
-        return self.blended.is_some();
-        #[cfg(not(feature = "gpu"))]
-        false
-    }
-
-    /// Forgets what the GPU holds (everything is about to be blended anew on the host).
-    pub fn drop_gpu(&mut self) {
-        #[cfg(feature = "gpu")]
-        {
-            self.blended = None;
         }
     }
 
@@ -109,8 +69,6 @@ impl Canvas {
             channels: self.channels,
             wrap: self.tile,
             codes: &self.codes,
-            #[cfg(feature = "gpu")]
-            gpu: self.blended.as_ref().map(Blended::plane),
         }
     }
 
@@ -126,7 +84,6 @@ impl Canvas {
         w: usize,
         probes: &[(usize, usize)],
     ) -> Vec<u32> {
-        debug_assert!(!self.on_gpu(), "guesses from a canvas not synced");
         let e = &set.exemplars[ex];
         let (cw, ch) = e.candidates(w);
         let mut out = Vec::with_capacity(probes.len());
@@ -177,7 +134,6 @@ impl Canvas {
     /// and source.
     #[inline]
     pub fn copy_texel(&mut self, set: &ExemplarSet, t: usize, ex: usize, s: usize) {
-        debug_assert!(!self.on_gpu(), "copy into a canvas not synced");
         let e = &set.exemplars[ex];
         let c = self.channels;
         self.values[t * c..(t + 1) * c].copy_from_slice(&e.texture.data[s * c..(s + 1) * c]);

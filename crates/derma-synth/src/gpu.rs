@@ -435,81 +435,17 @@ impl GpuMatcher {
         let t0 = std::time::Instant::now();
         let w = s.w;
         let e = &set.exemplars[ex];
-        let c = e.channels();
         let (cw, ch) = e.candidates(w);
         let res = self.resident(set, ex, w)?;
-        let half = w / 2;
-        let info_stride = info_stride(c);
         let n = batch.len();
-        // The queries' info and first results; for uploaded windows also their codes (256
-        // where unknown), stacked, and the info's sums and guesses' cost, computed here.
-        let mut qcodes: Vec<u32> = Vec::new();
-        let mut windows: Vec<u32> = Vec::new();
-        let mut info: Vec<u32> = Vec::with_capacity(n * info_stride);
-        let mut result: Vec<u32> = Vec::with_capacity(n * 2 + 1);
-        let (src_width, src_height) = match &batch {
-            Windows::Uploaded(queries) => {
-                let prepared: Vec<(Vec<u32>, Vec<u32>, u32)> = queries
-                    .par_iter()
-                    .enumerate()
-                    .map(|(i, q)| {
-                        let known = |t: usize| q.mask.as_ref().is_none_or(|m| m[t] != 0);
-                        let codes: Vec<u32> = q
-                            .codes
-                            .iter()
-                            .enumerate()
-                            .map(|(i, &v)| if known(i / c) { v as u32 } else { 256 })
-                            .collect();
-                        // The fully known quadrants (bit q of the mask) and their sums, as on
-                        // the CPU.
-                        let mut quad_mask = 0u32;
-                        let mut quad_sums = vec![0f32; 4 * c];
-                        for (ox, oy, sum) in known_block_sums(q, w, c, half) {
-                            let quad = usize::from(ox > 0) + 2 * usize::from(oy > 0);
-                            quad_mask |= 1 << quad;
-                            quad_sums[quad * c..(quad + 1) * c].copy_from_slice(&sum);
-                        }
-                        let first = initial_cost(set, s, q);
-                        let origin_y = (i * w) as u32;
-                        // Known, salt, quadrants, first cost, origin, flags (searched).
-                        let mut info =
-                            vec![known_texels(q, w), q.salt, quad_mask, first, 0, origin_y, 0];
-                        info.extend(quad_sums.iter().map(|v| v.to_bits()));
-                        (codes, info, first)
-                    })
-                    .collect();
-                qcodes.reserve(n * w * w * c);
-                for (codes, inf, first) in prepared {
-                    qcodes.extend_from_slice(&codes);
-                    info.extend_from_slice(&inf);
-                    result.extend_from_slice(&[first, NONE]);
-                }
-                (w, n * w)
-            }
-            Windows::Resident {
-                width,
-                height,
-                queries,
-                ..
-            } => {
-                // Guesses left empty are made on the GPU (`guesses`, below), over these NONEs.
-                // `prepare` writes the info and the first results from the windows' origins,
-                // salts and guesses.
-                let stride = 3 + MAX_GUESSES;
-                windows = vec![NONE; n * stride];
-                for (q, row) in queries.iter().zip(windows.chunks_exact_mut(stride)) {
-                    row[..3].copy_from_slice(&[q.x, q.y, q.salt]);
-                    row[3..3 + q.guesses.len()].copy_from_slice(&q.guesses);
-                }
-                (*width, *height)
-            }
-        };
-        // The survivor counter follows the per-query results (which `prepare` writes for
-        // resident windows, as it writes their info).
-        let counter_at = (n * 2 * 4) as u64;
-        result.push(0);
+        let words = BatchWords::new(set, s, &batch, e.channels());
         let candidates = cw * ch;
-        let capacity = self.survivor_room(n, candidates);
+        let shape = BatchShape {
+            n,
+            info_stride: info_stride(e.channels()),
+            candidates,
+            capacity: self.survivor_room(n, candidates),
+        };
         let penalty: &[u32] = s.penalty.map_or(&[0], |p| &p[ex]);
         let params = Params::search(
             e,
@@ -518,8 +454,8 @@ impl GpuMatcher {
             s.tol,
             s.penalty.is_some(),
             n,
-            capacity,
-            (src_width, src_height),
+            shape.capacity,
+            words.source,
         );
         let d = &ctx.device;
         // Buffers live as long as the matcher and grow when a batch needs more; one batch runs
@@ -529,56 +465,243 @@ impl GpuMatcher {
             .lock()
             .map_err(|_| gpu_error("a previous search panicked".into()))?;
         let sc = guard.get_or_insert_with(|| Scratch::new(d));
+        sc.fit_batch(d, &words, penalty, &shape);
+        sc.upload_batch(&ctx.queue, &words, &params, penalty);
+        let (source, prepare) = match &batch {
+            Windows::Uploaded(_) => (&sc.qcodes.buf, None),
+            Windows::Resident { plane, .. } => (*plane, Some(&pipes.prepare)),
+        };
+        let search = BatchSearch {
+            ctx,
+            pipes,
+            prepare,
+            sc,
+            result: &words.result,
+            shape,
+        };
+        search.guesses(&batch, e, ex, w);
+        search.reset_results();
+        let group = search.bind(&res, source);
+        let t1 = std::time::Instant::now();
+        let out = search.run(&group)?;
+        let t2 = std::time::Instant::now();
+        let out = matches(&out[..n * 2], candidates);
+        tracing::debug!(
+            "GPU search: {n} queries of side {w}: prepare {:.2} ms, GPU {:.2} ms, finish {:.2} ms",
+            (t1 - t0).as_secs_f64() * 1e3,
+            (t2 - t1).as_secs_f64() * 1e3,
+            t2.elapsed().as_secs_f64() * 1e3
+        );
+        out
+    }
+}
+
+/// One batch's sizes: queries, info words per query, candidate positions and room for the
+/// bound's survivors.
+#[derive(Clone, Copy)]
+struct BatchShape {
+    n: usize,
+    info_stride: usize,
+    candidates: usize,
+    capacity: usize,
+}
+
+impl BatchShape {
+    /// Where the survivor counter follows the per-query results, in bytes.
+    fn counter_at(&self) -> u64 {
+        (self.n * 2 * 4) as u64
+    }
+}
+
+/// A batch's words for the GPU: the uploaded windows' codes, the resident windows' rows, the
+/// queries' info, the first results with the survivor counter, and the source plane's size.
+struct BatchWords {
+    qcodes: Vec<u32>,
+    windows: Vec<u32>,
+    info: Vec<u32>,
+    result: Vec<u32>,
+    source: (usize, usize),
+}
+
+impl BatchWords {
+    /// The queries' info and first results; for uploaded windows also their codes (256 where
+    /// unknown), stacked, and the info's sums and guesses' cost, computed here; for resident
+    /// windows their rows (origin, salt, guesses). The exemplar has `c` channels.
+    fn new(set: &ExemplarSet, s: &Search, batch: &Windows, c: usize) -> Self {
+        let mut words = match batch {
+            Windows::Uploaded(queries) => uploaded_words(set, s, queries, c),
+            Windows::Resident {
+                width,
+                height,
+                queries,
+                ..
+            } => Self {
+                qcodes: Vec::new(),
+                windows: resident_rows(queries),
+                info: Vec::with_capacity(queries.len() * info_stride(c)),
+                result: Vec::with_capacity(queries.len() * 2 + 1),
+                source: (*width, *height),
+            },
+        };
+        // The survivor counter follows the per-query results (which `prepare` writes for
+        // resident windows, as it writes their info).
+        words.result.push(0);
+        words
+    }
+}
+
+/// [`BatchWords`] of uploaded windows: their codes (256 where unknown), stacked, and their info
+/// (the fully known quadrants and their sums, as on the CPU) and first results; `c` channels.
+fn uploaded_words(set: &ExemplarSet, s: &Search, queries: &[&Query], c: usize) -> BatchWords {
+    let w = s.w;
+    let half = w / 2;
+    let n = queries.len();
+    let prepared: Vec<(Vec<u32>, Vec<u32>, u32)> = queries
+        .par_iter()
+        .enumerate()
+        .map(|(i, q)| {
+            let known = |t: usize| q.mask.as_ref().is_none_or(|m| m[t] != 0);
+            let codes: Vec<u32> = q
+                .codes
+                .iter()
+                .enumerate()
+                .map(|(i, &v)| if known(i / c) { v as u32 } else { 256 })
+                .collect();
+            // The fully known quadrants (bit q of the mask) and their sums, as on the CPU.
+            let mut quad_mask = 0u32;
+            let mut quad_sums = vec![0f32; 4 * c];
+            for (ox, oy, sum) in known_block_sums(q, w, c, half) {
+                let quad = usize::from(ox > 0) + 2 * usize::from(oy > 0);
+                quad_mask |= 1 << quad;
+                quad_sums[quad * c..(quad + 1) * c].copy_from_slice(&sum);
+            }
+            let first = initial_cost(set, s, q);
+            let origin_y = (i * w) as u32;
+            // Known, salt, quadrants, first cost, origin, flags (searched).
+            let mut info = vec![known_texels(q, w), q.salt, quad_mask, first, 0, origin_y, 0];
+            info.extend(quad_sums.iter().map(|v| v.to_bits()));
+            (codes, info, first)
+        })
+        .collect();
+    let mut qcodes: Vec<u32> = Vec::with_capacity(n * w * w * c);
+    let mut info: Vec<u32> = Vec::with_capacity(n * info_stride(c));
+    let mut result: Vec<u32> = Vec::with_capacity(n * 2 + 1);
+    for (codes, inf, first) in prepared {
+        qcodes.extend_from_slice(&codes);
+        info.extend_from_slice(&inf);
+        result.extend_from_slice(&[first, NONE]);
+    }
+    BatchWords {
+        qcodes,
+        windows: Vec::new(),
+        info,
+        result,
+        source: (w, n * w),
+    }
+}
+
+/// The rows of resident windows: origin, salt and guesses. Guesses left empty are made on the
+/// GPU (`guesses`), over these NONEs; `prepare` writes the info and the first results from the
+/// windows' origins, salts and guesses.
+fn resident_rows(queries: &[&WindowQuery]) -> Vec<u32> {
+    let stride = 3 + MAX_GUESSES;
+    let mut windows = vec![NONE; queries.len() * stride];
+    for (q, row) in queries.iter().zip(windows.chunks_exact_mut(stride)) {
+        row[..3].copy_from_slice(&[q.x, q.y, q.salt]);
+        row[3..3 + q.guesses.len()].copy_from_slice(&q.guesses);
+    }
+    windows
+}
+
+impl Scratch {
+    /// Grows the buffers to hold the batch of `shape`, its `words` and `penalty`.
+    fn fit_batch(
+        &mut self,
+        d: &wgpu::Device,
+        words: &BatchWords,
+        penalty: &[u32],
+        shape: &BatchShape,
+    ) {
+        let (n, capacity, counter_at) = (shape.n, shape.capacity, shape.counter_at());
         let bytes = |v: &[u32]| std::mem::size_of_val(v).max(4) as u64;
-        sc.qcodes.fit(d, bytes(&qcodes));
-        sc.windows.fit(d, bytes(&windows));
-        sc.info.fit(d, (n * info_stride * 4) as u64);
-        sc.penalty.fit(d, bytes(penalty));
-        sc.result.fit(d, counter_at + 4);
-        sc.limits.fit(d, (n * 4) as u64);
-        sc.survivors.fit(d, (capacity * 8) as u64);
-        sc.costs.fit(d, (capacity * 4) as u64);
-        sc.staging.fit(d, counter_at + 4);
-        let q = &ctx.queue;
-        q.write_buffer(&sc.params, 0, bytemuck::bytes_of(&params));
+        self.qcodes.fit(d, bytes(&words.qcodes));
+        self.windows.fit(d, bytes(&words.windows));
+        self.info.fit(d, (n * shape.info_stride * 4) as u64);
+        self.penalty.fit(d, bytes(penalty));
+        self.result.fit(d, counter_at + 4);
+        self.limits.fit(d, (n * 4) as u64);
+        self.survivors.fit(d, (capacity * 8) as u64);
+        self.costs.fit(d, (capacity * 4) as u64);
+        self.staging.fit(d, counter_at + 4);
+    }
+
+    /// Writes the batch's parameters, the words its source needs and the penalty.
+    fn upload_batch(&self, q: &wgpu::Queue, words: &BatchWords, params: &Params, penalty: &[u32]) {
+        q.write_buffer(&self.params, 0, bytemuck::bytes_of(params));
         // Only what this source needs goes up (`prepare` writes a resident batch's info).
         for (buf, words) in [
-            (&sc.qcodes, &qcodes),
-            (&sc.windows, &windows),
-            (&sc.info, &info),
+            (&self.qcodes, &words.qcodes),
+            (&self.windows, &words.windows),
+            (&self.info, &words.info),
         ] {
             if !words.is_empty() {
                 q.write_buffer(&buf.buf, 0, bytemuck::cast_slice(words));
             }
         }
-        q.write_buffer(&sc.penalty.buf, 0, bytemuck::cast_slice(penalty));
-        let (source, prepare) = match &batch {
-            Windows::Uploaded(_) => (&sc.qcodes.buf, None),
-            Windows::Resident { plane, .. } => (*plane, Some(&pipes.prepare)),
-        };
+        q.write_buffer(&self.penalty.buf, 0, bytemuck::cast_slice(penalty));
+    }
+}
+
+/// One batch's search on the GPU: the pipelines, `prepare` for resident windows, the kept
+/// buffers, the first results and the batch's sizes.
+struct BatchSearch<'a> {
+    ctx: &'a derma_core::gpu::Gpu,
+    pipes: &'a Pipelines,
+    prepare: Option<&'a wgpu::ComputePipeline>,
+    sc: &'a Scratch,
+    result: &'a [u32],
+    shape: BatchShape,
+}
+
+impl BatchSearch<'_> {
+    /// The coherent guesses of resident windows from the sources kept on the GPU, where the
+    /// batch has them (exemplar `e`, number `ex`, window side `w`), before `prepare` reads them.
+    fn guesses(&self, batch: &Windows, e: &Exemplar, ex: usize, w: usize) {
         if let Windows::Resident {
             width,
             height,
             wrap,
             sources: Some((sources, source_exemplars)),
             ..
-        } = &batch
+        } = batch
         {
-            // The coherent guesses from the sources kept here, before `prepare` reads them.
-            let gp = GuessParams::new(e, ex, w, n, (*width, *height), *wrap);
+            let gp = GuessParams::new(e, ex, w, batch.len(), (*width, *height), *wrap);
             make_guesses(
-                ctx,
-                pipes,
+                self.ctx,
+                self.pipes,
                 &gp,
                 (sources, source_exemplars),
-                &sc.windows.buf,
+                &self.sc.windows.buf,
             );
         }
-        let reset_results = || {
-            let at = if prepare.is_some() { counter_at } else { 0 };
-            q.write_buffer(&sc.result.buf, at, bytemuck::cast_slice(&result));
+    }
+
+    /// Writes the first results (for resident windows only the survivor counter: `prepare`
+    /// writes the rest).
+    fn reset_results(&self) {
+        let at = if self.prepare.is_some() {
+            self.shape.counter_at()
+        } else {
+            0
         };
-        reset_results();
+        self.ctx
+            .queue
+            .write_buffer(&self.sc.result.buf, at, bytemuck::cast_slice(self.result));
+    }
+
+    /// The search's bind group, the windows read from `source`.
+    fn bind(&self, res: &Resident, source: &wgpu::Buffer) -> wgpu::BindGroup {
+        let sc = self.sc;
         let buffers = [
             &sc.params,
             &res.codes,
@@ -592,65 +715,85 @@ impl GpuMatcher {
             &sc.survivors.buf,
             &sc.costs.buf,
         ];
-        let group = ctx.bind_buffers("search", &pipes.layout, &buffers);
-        let t1 = std::time::Instant::now();
-        let groups_x = (cw * ch).div_ceil(WORKGROUP) as u32;
+        self.ctx
+            .bind_buffers("search", &self.pipes.layout, &buffers)
+    }
+
+    /// The compacted search, or the uncompacted one where more candidates pass the bound than
+    /// there is room for; the result words.
+    fn run(&self, group: &wgpu::BindGroup) -> Result<Vec<u32>> {
+        let pipes = self.pipes;
+        let (n, capacity) = (self.shape.n, self.shape.capacity);
+        let groups_x = self.shape.candidates.div_ceil(WORKGROUP) as u32;
         let nq = n as u32;
         let per_query = derma_core::gpu::grid(n, WORKGROUP);
         let survivor_dims = derma_core::gpu::grid(capacity, WORKGROUP);
-        let result_words = n * 2 + 1;
-        // Runs the steps (after `prepare` for resident windows, then `finish`) and reads the
-        // result words back through the kept staging buffer.
-        let run_steps = |steps: &[(&wgpu::ComputePipeline, (u32, u32))]| -> Result<Vec<u32>> {
-            let all: Vec<_> = prepare
-                .map(|p| (p, per_query))
-                .into_iter()
-                .chain(steps.iter().copied())
-                .chain([(&pipes.finish, per_query)])
-                .collect();
-            ctx.submit_passes(&group, &all);
-            Ok(ctx.read_back_with(&sc.result.buf, &sc.staging.buf, result_words)?)
-        };
-        let mut out = run_steps(&[
-            (&pipes.screen, (groups_x, nq)),
-            (&pipes.cost, survivor_dims),
-            (&pipes.settle, per_query),
-            (&pipes.choose, survivor_dims),
-        ])?;
+        let mut out = self.run_steps(
+            group,
+            &[
+                (&pipes.screen, (groups_x, nq)),
+                (&pipes.cost, survivor_dims),
+                (&pipes.settle, per_query),
+                (&pipes.choose, survivor_dims),
+            ],
+        )?;
         if out[n * 2] as usize > capacity {
             // More passed the bound than there was room for: the uncompacted search.
             tracing::debug!(
                 "GPU search: {} candidates passed the bound, room for {capacity}; searching uncompacted",
                 out[n * 2]
             );
-            reset_results();
-            out = run_steps(&[
-                (&pipes.min_cost, (groups_x, nq)),
-                (&pipes.settle, per_query),
-                (&pipes.pick, (groups_x, nq)),
-            ])?;
+            self.reset_results();
+            out = self.run_steps(
+                group,
+                &[
+                    (&pipes.min_cost, (groups_x, nq)),
+                    (&pipes.settle, per_query),
+                    (&pipes.pick, (groups_x, nq)),
+                ],
+            )?;
         }
-        let t2 = std::time::Instant::now();
-        let out = out[..n * 2]
-            .chunks_exact(2)
-            .map(|r| {
-                let (cost, index) = (r[0], r[1]);
-                if index as usize >= candidates {
-                    return Err(gpu_error(format!(
-                        "the search returned position {index} of {candidates}"
-                    )));
-                }
-                Ok(Match { cost, index })
-            })
-            .collect();
-        tracing::debug!(
-            "GPU search: {n} queries of side {w}: prepare {:.2} ms, GPU {:.2} ms, finish {:.2} ms",
-            (t1 - t0).as_secs_f64() * 1e3,
-            (t2 - t1).as_secs_f64() * 1e3,
-            t2.elapsed().as_secs_f64() * 1e3
-        );
-        out
+        Ok(out)
     }
+
+    /// Runs the steps (after `prepare` for resident windows, then `finish`) and reads the
+    /// result words back through the kept staging buffer.
+    fn run_steps(
+        &self,
+        group: &wgpu::BindGroup,
+        steps: &[(&wgpu::ComputePipeline, (u32, u32))],
+    ) -> Result<Vec<u32>> {
+        let per_query = derma_core::gpu::grid(self.shape.n, WORKGROUP);
+        let all: Vec<_> = self
+            .prepare
+            .map(|p| (p, per_query))
+            .into_iter()
+            .chain(steps.iter().copied())
+            .chain([(&self.pipes.finish, per_query)])
+            .collect();
+        self.ctx.submit_passes(group, &all);
+        let result_words = self.shape.n * 2 + 1;
+        Ok(self
+            .ctx
+            .read_back_with(&self.sc.result.buf, &self.sc.staging.buf, result_words)?)
+    }
+}
+
+/// The matches of the result words (cost, position) of each query; an error where a position
+/// is not one of the `candidates`.
+fn matches(words: &[u32], candidates: usize) -> Result<Vec<Match>> {
+    words
+        .chunks_exact(2)
+        .map(|r| {
+            let (cost, index) = (r[0], r[1]);
+            if index as usize >= candidates {
+                return Err(gpu_error(format!(
+                    "the search returned position {index} of {candidates}"
+                )));
+            }
+            Ok(Match { cost, index })
+        })
+        .collect()
 }
 
 /// Submits `guesses.wgsl` over the window rows in `windows` (x, y, salt, then the guesses it

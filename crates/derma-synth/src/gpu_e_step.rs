@@ -3,8 +3,9 @@
 //!
 //! The host uploads the windows' matches, weights and costs (one word quadruple per window),
 //! the cover lists and the exemplars' two bands; one dispatch blends all texels. Values, codes and sources
-//! stay on the GPU, where the next pass makes its coherent guesses (`guesses.wgsl`) and
-//! searches, until the canvas is synced after the last pass (`Blended`, `Canvas::sync`). Needs
+//! stay on the GPU (a `GpuCanvas`, which the optimiser's GPU path keeps), where the next pass
+//! makes its coherent guesses (`guesses.wgsl`) and searches, until they are read back once after
+//! the last pass (`gpu_optimize.rs`). Needs
 //! 64-bit floats and integers (`SHADER_F64`, `SHADER_INT64`); without them, for a canvas
 //! larger than the adapter binds, or for exemplars whose bands hold subnormal values, the caller
 //! blends on the CPU.
@@ -13,7 +14,7 @@ use crate::canvas::Canvas;
 use crate::e_step::{cover, Windows};
 use crate::error::Result;
 use crate::exemplar::{ExemplarSet, Quantizer};
-use crate::resident::Blended;
+use crate::resident::GpuCanvas;
 use derma_core::gpu::{grid, Gpu, GpuCell};
 
 /// The shader.
@@ -97,29 +98,9 @@ fn cover_words(b: &Windows, canvas: &Canvas) -> Vec<u32> {
     words
 }
 
-/// Blends the canvas on the GPU from the exemplars' `bands` ((low, high) per exemplar); false
-/// where this device cannot (the caller then blends on the CPU).
-pub(crate) fn e_step(
-    canvas: &mut Canvas,
-    set: &ExemplarSet,
-    b: &Windows,
-    bands: &[(Vec<f32>, Vec<f32>)],
-) -> Result<bool> {
-    let Some((ctx, pipes)) = pipelines()? else {
-        return Ok(false);
-    };
-    // A GPU may flush subnormal f32s to zero where it widens them to f64 (Vulkan leaves the
-    // default denormal mode to the implementation); bands holding any blend on the CPU.
-    if bands
-        .iter()
-        .any(|(low, high)| low.iter().chain(high).any(|v| v.is_subnormal()))
-    {
-        tracing::debug!("E-step on the CPU: the exemplars' bands hold subnormal values");
-        return Ok(false);
-    }
-    let prepared = std::time::Instant::now();
-    let (w, h, c) = (canvas.width, canvas.height, canvas.channels);
-    let texels = w * h;
+/// The exemplars' bands in `e_step.wgsl`'s layout: per exemplar its width and where its low
+/// band starts, then the low bands (with the offset of the first), and the high bands.
+fn band_words(set: &ExemplarSet, bands: &[(Vec<f32>, Vec<f32>)]) -> (Vec<u32>, usize, Vec<u32>) {
     let mut exemplars: Vec<u32> = Vec::new();
     let values_at = 2 * set.exemplars.len();
     let mut at = values_at;
@@ -134,8 +115,13 @@ pub(crate) fn e_step(
         .iter()
         .flat_map(|(_, high)| high.iter().map(|v| v.to_bits()))
         .collect();
-    let windows: Vec<[u32; 4]> = b
-        .placed
+    (exemplars, values_at, high)
+}
+
+/// Each window's match as `e_step.wgsl` reads it: exemplar, exemplar texel, weight (its bits)
+/// and cost.
+fn window_words(set: &ExemplarSet, b: &Windows) -> Vec<[u32; 4]> {
+    b.placed
         .iter()
         .zip(&b.weights)
         .zip(&b.costs)
@@ -143,7 +129,35 @@ pub(crate) fn e_step(
             let ew = set.exemplars[ex].width();
             [ex as u32, (my * ew + mx) as u32, wk.to_bits(), cost]
         })
-        .collect();
+        .collect()
+}
+
+/// Blends `canvas` on the GPU from the exemplars' `bands` ((low, high) per exemplar) and
+/// returns the result, kept there; `None` where this device cannot (the caller then blends on
+/// the CPU). The host's canvas gives only its size here and is left as it was.
+pub(crate) fn e_step(
+    canvas: &Canvas,
+    set: &ExemplarSet,
+    b: &Windows,
+    bands: &[(Vec<f32>, Vec<f32>)],
+) -> Result<Option<GpuCanvas>> {
+    let Some((ctx, pipes)) = pipelines()? else {
+        return Ok(None);
+    };
+    // A GPU may flush subnormal f32s to zero where it widens them to f64 (Vulkan leaves the
+    // default denormal mode to the implementation); bands holding any blend on the CPU.
+    if bands
+        .iter()
+        .any(|(low, high)| low.iter().chain(high).any(|v| v.is_subnormal()))
+    {
+        tracing::debug!("E-step on the CPU: the exemplars' bands hold subnormal values");
+        return Ok(None);
+    }
+    let prepared = std::time::Instant::now();
+    let (w, h, c) = (canvas.width, canvas.height, canvas.channels);
+    let texels = w * h;
+    let (exemplars, values_at, high) = band_words(set, bands);
+    let windows = window_words(set, b);
     let cover = cover_words(b, canvas);
     let fits = |what: &str, bytes: usize| ctx.check_storage(what, bytes as u64).is_ok();
     if !fits("the blended values", texels * c * 4)
@@ -153,7 +167,7 @@ pub(crate) fn e_step(
         || !fits("the cover lists", cover.len() * 4)
         || exemplars.len() > u32::MAX as usize
     {
-        return Ok(false);
+        return Ok(None);
     }
     let bounds: Vec<u32> = (0..c).flat_map(|k| set.quantizer.boundaries(k)).collect();
     use wgpu::BufferUsages as U;
@@ -205,16 +219,17 @@ pub(crate) fn e_step(
         (started - prepared).as_secs_f64() * 1e3,
         blended.as_secs_f64() * 1e3,
     );
-    canvas.blended = Some(Blended {
+    Ok(Some(GpuCanvas {
         ctx,
         values,
         codes,
         sources,
         source_exemplars,
-        texels,
+        width: w,
+        height: h,
         channels: c,
-    });
-    Ok(true)
+        wrap: canvas.tile,
+    }))
 }
 
 /// `e_step.wgsl`'s quotient of each pair (a, b) as f32, as Rust's `(a / b) as f32` gives it, for

@@ -28,6 +28,8 @@ pub mod gpu_e_step;
 #[cfg(feature = "gpu")]
 mod gpu_matcher;
 #[cfg(feature = "gpu")]
+mod gpu_optimize;
+#[cfg(feature = "gpu")]
 mod gpu_patch_pass;
 pub mod guide;
 pub mod job;
@@ -49,8 +51,6 @@ pub use exemplar::{Exemplar, ExemplarSet, Quantizer};
 pub use gpu::GpuMatcher;
 pub use guide::Guide;
 pub use matcher::{CpuMatcher, Matcher, PatchPlan};
-#[cfg(feature = "gpu")]
-pub use resident::GpuPlane;
 pub use search::{Match, Plane, Query, Search, Tolerance, WindowQuery, MAX_GUESSES};
 pub use synthesize::{synthesize, SynthOptions, Synthesis};
 pub use synthesizer::{matcher_for, Synthesizer};

@@ -1,12 +1,14 @@
 //! Who runs the searches of Shen et al. §3.2 (eq. 1): the [`Matcher`] trait, which the passes
-//! call, and the CPU's matcher. The GPU's (`gpu_matcher.rs`) keeps the canvas where it searches.
+//! call, and the CPU's matcher. The GPU's is `gpu_matcher.rs`; what the GPU keeps between the
+//! optimisation passes is the optimiser's GPU path's (`gpu_optimize.rs`), not the matcher's.
 
-use crate::error::{invalid, Result};
+use crate::error::Result;
 use crate::exemplar::ExemplarSet;
 use crate::search::{best_matches_cpu, Match, Plane, Query, Search, Tolerance, WindowQuery};
 use derma_core::gpu::Device;
 use derma_core::progress::Progress;
 use rayon::prelude::*;
+use std::any::Any;
 
 /// A patch pass for a matcher that runs it where it keeps the canvas ([`Matcher::patch_pass`]):
 /// one exemplar, the canvas before it, and every wavefront's patches.
@@ -34,7 +36,8 @@ pub struct PatchPlan<'a> {
 const WINDOW_BATCH: usize = 16_384;
 
 /// Runs searches; implemented on the CPU ([`CpuMatcher`]) and on the GPU (`gpu::GpuMatcher`).
-pub trait Matcher: Sync {
+/// `Any`, so that a device's passes can tell their own matcher behind a `dyn Matcher`.
+pub trait Matcher: Sync + Any {
     /// The answer of each query (all of window side `w`), in order.
     fn best_matches(&self, set: &ExemplarSet, s: &Search, queries: &[Query]) -> Result<Vec<Match>>;
     /// The answer of each window query of `plane`, in order, advancing `progress` by the
@@ -80,12 +83,6 @@ pub(crate) fn gathered_window_matches<M: Matcher + ?Sized>(
     queries: &[WindowQuery],
     progress: &dyn Progress,
 ) -> Result<Vec<Match>> {
-    if plane.on_gpu() {
-        return Err(invalid(
-            "window query",
-            "the plane's current codes are on the GPU; the host's copy is older",
-        ));
-    }
     let mut out = Vec::with_capacity(queries.len());
     for chunk in queries.chunks(WINDOW_BATCH) {
         let batch: Vec<Query> = chunk.par_iter().map(|q| q.query(plane, s.w)).collect();

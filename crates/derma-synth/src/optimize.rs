@@ -20,16 +20,17 @@
 //! band is Burt & Adelson's multiresolution spline in two bands: shading joins across the
 //! windows' overlap, the grain is never averaged. Measured at 1024² on skin crops, tuned and
 //! held out, in docs/synth.md.
+//!
+//! Steps 1 and 3 run where a `PassSteps` says: on the host, or, with the GPU's matcher, on the
+//! GPU, whose path (`gpu_optimize.rs`) keeps the blended canvas there between passes and brings
+//! it back once after the last; the host's `Canvas` holds no GPU state.
 
 use crate::canvas::{origins, Canvas};
 use crate::e_step::{e_step, Windows};
 use crate::error::Result;
-#[cfg(feature = "gpu")]
-use crate::gpu_e_step;
-use crate::pass_context::PassContext;
-use crate::search::{Search, Tolerance, WindowQuery};
-#[cfg(feature = "gpu")]
-use derma_core::gpu::Device;
+use crate::exemplar::ExemplarSet;
+use crate::pass_context::{PassContext, PassSteps};
+use crate::search::{Match, Search, Tolerance, WindowQuery};
 use derma_core::progress::Unit;
 use derma_core::rng::Philox;
 use rayon::prelude::*;
@@ -41,8 +42,73 @@ pub const KWATRA_R: f32 = 0.8;
 /// Philox stream of the salts of the tie-breaking choice (one sub-stream per window side).
 const PICK_STREAM: u32 = 0x5e_0003;
 
-/// One optimisation pass with windows of side `w`.
-pub(crate) fn optimise_pass(canvas: &mut Canvas, ctx: &PassContext, w: usize) -> Result<()> {
+/// The optimisation passes, one per window side of `sides` in order, leaving their result in
+/// the canvas. With the GPU's matcher they run on the GPU, which keeps the canvas there between
+/// passes (`gpu_optimize.rs`); otherwise on the host.
+pub(crate) fn optimise(canvas: &mut Canvas, ctx: &PassContext, sides: &[usize]) -> Result<()> {
+    #[cfg(feature = "gpu")]
+    if let Some(gpu) = crate::gpu::GpuMatcher::behind(ctx.matcher) {
+        return passes(canvas, ctx, sides, crate::gpu_optimize::GpuSteps::new(gpu));
+    }
+    passes(canvas, ctx, sides, HostSteps)
+}
+
+/// The passes of `sides` with `steps`, then [`PassSteps::finish`].
+fn passes<S: PassSteps>(
+    canvas: &mut Canvas,
+    ctx: &PassContext,
+    sides: &[usize],
+    mut steps: S,
+) -> Result<()> {
+    for &w in sides {
+        optimise_pass(canvas, &mut steps, ctx, w)?;
+    }
+    steps.finish(canvas)
+}
+
+/// The steps on the host: the matcher searches the windows of the host's canvas and the CPU
+/// blends it ([`crate::e_step`]); nothing is kept elsewhere.
+struct HostSteps;
+
+impl PassSteps for HostSteps {
+    fn guesses_on_host(&self) -> bool {
+        true
+    }
+
+    fn window_matches(
+        &self,
+        canvas: &Canvas,
+        ctx: &PassContext,
+        s: &Search,
+        queries: &[WindowQuery],
+    ) -> Result<Vec<Match>> {
+        ctx.matcher
+            .window_matches(ctx.set, s, &canvas.plane(), queries, ctx.progress)
+    }
+
+    fn e_step(
+        &mut self,
+        canvas: &mut Canvas,
+        set: &ExemplarSet,
+        matched: &Windows,
+        bands: &[(Vec<f32>, Vec<f32>)],
+    ) -> Result<()> {
+        e_step(canvas, set, matched, bands);
+        Ok(())
+    }
+
+    fn finish(self, _canvas: &mut Canvas) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// One optimisation pass with windows of side `w`, its search and E-step run by `steps`.
+fn optimise_pass(
+    canvas: &mut Canvas,
+    steps: &mut impl PassSteps,
+    ctx: &PassContext,
+    w: usize,
+) -> Result<()> {
     let (set, guide, progress) = (ctx.set, ctx.guide, ctx.progress);
     let rng = Philox::new(ctx.seed, PICK_STREAM);
     let (xs, ys) = window_origins(canvas, w);
@@ -57,8 +123,9 @@ pub(crate) fn optimise_pass(canvas: &mut Canvas, ctx: &PassContext, w: usize) ->
     );
     let probes = probes(w);
 
-    // M-step: every window's best match, searched where the matcher keeps the canvas.
+    // M-step: every window's best match, searched where the steps keep the canvas.
     let t0 = Instant::now();
+    let guesses_on_host = steps.guesses_on_host();
     let queries: Vec<WindowQuery> = windows
         .par_iter()
         .enumerate()
@@ -68,11 +135,11 @@ pub(crate) fn optimise_pass(canvas: &mut Canvas, ctx: &PassContext, w: usize) ->
                 exemplar: ex as u32,
                 x: px as u32,
                 y: py as u32,
-                // Where the sources are on the GPU, its matcher makes the same guesses there.
-                guesses: if canvas.on_gpu() {
-                    Vec::new()
-                } else {
+                // Where the sources are kept elsewhere, the search makes the same guesses there.
+                guesses: if guesses_on_host {
                     canvas.coherent_guess(set, ex, px, py, w, &probes)
+                } else {
+                    Vec::new()
                 },
                 salt: rng.u32x4_sub(k as u64, w as u32)[0],
             }
@@ -86,9 +153,7 @@ pub(crate) fn optimise_pass(canvas: &mut Canvas, ctx: &PassContext, w: usize) ->
         prepared: None,
     };
     let t1 = Instant::now();
-    let matches = ctx
-        .matcher
-        .window_matches(set, &search, &canvas.plane(), &queries, progress)?;
+    let matches = steps.window_matches(canvas, ctx, &search, &queries)?;
     drop(queries);
     let t2 = Instant::now();
 
@@ -121,16 +186,7 @@ pub(crate) fn optimise_pass(canvas: &mut Canvas, ctx: &PassContext, w: usize) ->
     };
     let bands = crate::bands::bands(set, w);
     let t3 = Instant::now();
-    #[cfg(feature = "gpu")]
-    let on_gpu =
-        ctx.matcher.device() == Device::Gpu && gpu_e_step::e_step(canvas, set, &matched, &bands)?;
-    #[cfg(not(feature = "gpu"))]
-    let on_gpu = false;
-    if !on_gpu {
-        // Every value and code is blended anew, so any kept on the GPU are dropped.
-        canvas.drop_gpu();
-        e_step(canvas, set, &matched, &bands);
-    }
+    steps.e_step(canvas, set, &matched, &bands)?;
     let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
     tracing::debug!(
         "optimisation {w}×{w}: queries {:.1} ms, search {:.1} ms, weights and bands {:.1} ms, E-step {:.1} ms",

@@ -1,68 +1,62 @@
 //! The synthesis canvas kept on the GPU between optimisation passes (Shen et al. §3.3 run on a
-//! device): the buffers a GPU E-step leaves there and a GPU matcher searches, and their read-back.
+//! device): the buffers a GPU E-step leaves there and the GPU matcher searches, and their
+//! read-back. Owned by the optimiser's GPU path (`gpu_optimize.rs`), beside the host's canvas,
+//! which never refers to it.
 
+use crate::canvas::Canvas;
 use crate::error::Result;
 use derma_core::gpu::Gpu;
 use rayon::prelude::*;
 
-/// A [`crate::search::Plane`] kept on the GPU: its codes (one per 32-bit word) and, per texel, its source and
-/// the source's exemplar, from which a GPU matcher makes the windows' coherent guesses.
-#[derive(Clone, Copy, Debug)]
-pub struct GpuPlane<'a> {
-    /// The codes.
-    pub codes: &'a wgpu::Buffer,
-    /// Source texel per texel (y · exemplar width + x, or `u32::MAX`).
-    pub sources: &'a wgpu::Buffer,
-    /// Exemplar of the source per texel.
-    pub source_exemplars: &'a wgpu::Buffer,
-}
-
 /// A canvas as the GPU's E-step left it (one 32-bit word per value, code, source and source
-/// exemplar), kept there for the next pass's guesses and search.
-pub(crate) struct Blended {
+/// exemplar), kept there for the next pass's guesses and search: newer than the host's canvas
+/// it was blended for, until [`GpuCanvas::read_into`] brings it back.
+pub(crate) struct GpuCanvas {
+    /// The device that holds the buffers.
     pub ctx: &'static Gpu,
+    /// The values, `width × height × channels`.
     pub values: wgpu::Buffer,
+    /// The codes, one per value.
     pub codes: wgpu::Buffer,
+    /// Source texel per texel (y · exemplar width + x, or `u32::MAX`).
     pub sources: wgpu::Buffer,
+    /// Exemplar of the source per texel.
     pub source_exemplars: wgpu::Buffer,
-    pub texels: usize,
+    /// Texels per row.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// Values per texel.
     pub channels: usize,
+    /// A torus (tileable output): windows continue across the edges.
+    pub wrap: bool,
 }
 
-impl Blended {
-    /// The canvas as a search's plane.
-    pub(crate) fn plane(&self) -> GpuPlane<'_> {
-        GpuPlane {
-            codes: &self.codes,
-            sources: &self.sources,
-            source_exemplars: &self.source_exemplars,
-        }
-    }
-
-    /// Copies everything back into the host's canvas.
-    pub(crate) fn read_into(
-        self,
-        values: &mut [f32],
-        codes: &mut [u8],
-        src: &mut [u32],
-        src_exemplar: &mut [u8],
-    ) -> Result<()> {
-        let (n, c) = (self.texels, self.channels);
+impl GpuCanvas {
+    /// Copies everything back into the host's canvas (of the same size), making it current.
+    pub(crate) fn read_into(self, canvas: &mut Canvas) -> Result<()> {
+        let (n, c) = (self.width * self.height, self.channels);
+        debug_assert_eq!((canvas.width, canvas.height), (self.width, self.height));
         let bits: Vec<u32> = self.ctx.read_back(&self.values, n * c)?;
-        values
+        canvas
+            .values
             .par_iter_mut()
             .zip(&bits)
             .for_each(|(v, &b)| *v = f32::from_bits(b));
         drop(bits);
         let words: Vec<u32> = self.ctx.read_back(&self.codes, n * c)?;
-        codes
+        canvas
+            .codes
             .par_iter_mut()
             .zip(&words)
             .for_each(|(q, &w)| *q = w as u8);
         drop(words);
-        src.copy_from_slice(&self.ctx.read_back::<u32>(&self.sources, n)?);
+        canvas
+            .src
+            .copy_from_slice(&self.ctx.read_back::<u32>(&self.sources, n)?);
         let words: Vec<u32> = self.ctx.read_back(&self.source_exemplars, n)?;
-        src_exemplar
+        canvas
+            .src_exemplar
             .par_iter_mut()
             .zip(&words)
             .for_each(|(e, &w)| *e = w as u8);

@@ -176,22 +176,9 @@ pub struct Plane<'a> {
     pub wrap: bool,
     /// `width × height × channels` codes, rows from the top.
     pub codes: &'a [u8],
-    /// The same plane kept on the GPU by the GPU's E-step. Where given, it is current and
-    /// `codes` may be older: only a GPU matcher, which reads it, takes such a plane. Only in a
-    /// build with the `gpu` feature.
-    #[cfg(feature = "gpu")]
-    pub gpu: Option<crate::resident::GpuPlane<'a>>,
 }
 
 impl Plane<'_> {
-    /// Whether the current codes are on the GPU (and `codes` may be older).
-    pub fn on_gpu(&self) -> bool {
-        #[cfg(feature = "gpu")]
-        return self.gpu.is_some();
-        #[cfg(not(feature = "gpu"))]
-        false
-    }
-
     /// The codes of the `w × w` window at (x, y), rows from the top, channels interleaved.
     pub fn window(&self, x: usize, y: usize, w: usize) -> Vec<u8> {
         let c = self.channels;
@@ -217,8 +204,8 @@ impl Plane<'_> {
 }
 
 /// A search for the whole `w × w` window at (x, y) of a [`Plane`]: the optimisation passes'
-/// M-step, whose windows are all known. The GPU reads them from a copy of the plane it keeps
-/// (`gpu::GpuMatcher`), so no window travels on its own.
+/// M-step, whose windows are all known. The GPU reads them from a copy of the canvas on the
+/// device (`gpu::GpuMatcher`), so no window travels on its own.
 #[derive(Clone, Debug)]
 pub struct WindowQuery {
     /// Index of the exemplar in the set.
@@ -227,9 +214,9 @@ pub struct WindowQuery {
     pub x: u32,
     /// Row of the window's top-left texel.
     pub y: u32,
-    /// As [`Query::guesses`]: at least one, at most [`MAX_GUESSES`]; or none where the plane is
-    /// kept on the GPU ([`Plane::gpu`]), whose matcher then makes the coherent guesses from the
-    /// plane's sources there.
+    /// As [`Query::guesses`]: at least one, at most [`MAX_GUESSES`]; or none for a search that
+    /// makes the coherent guesses itself from sources it keeps (the GPU's search of the canvas
+    /// its optimisation passes keep there).
     pub guesses: Vec<u32>,
     /// As [`Query::salt`].
     pub salt: u32,

@@ -7,7 +7,7 @@ use crate::error::{invalid, Result};
 use crate::exemplar::ExemplarSet;
 use crate::guide::Guide;
 use crate::matcher::Matcher;
-use crate::optimize::optimise_pass;
+use crate::optimize::optimise;
 use crate::pass_context::PassContext;
 use crate::patch_pass::{initialise_noise, patch_pass};
 use crate::search::{window_fits, Tolerance};
@@ -194,10 +194,7 @@ pub fn synthesize(
     };
     let tol = Tolerance::from_fraction(opts.tolerance);
     patch_pass(&mut canvas, &ctx, opts.patch, tol, opts.occurrence)?;
-    for w in opts.pass_windows() {
-        optimise_pass(&mut canvas, &ctx, w)?;
-    }
-    canvas.sync()?;
+    optimise(&mut canvas, &ctx, &opts.pass_windows())?;
     correct(
         &mut canvas,
         set,

@@ -171,7 +171,6 @@ fn windows_of_the_canvas_kept_on_the_gpu_get_the_cpu_answers() {
             channels: 3,
             wrap,
             codes: &codes,
-            gpu: None,
         };
         for w in [4, 8] {
             let (xs, ys) = if wrap {

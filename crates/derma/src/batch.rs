@@ -4,7 +4,7 @@
 use crate::progress::Bars;
 use anyhow::{bail, Result};
 use clap::Args;
-use derma_export::batch::{self, BatchSpec, RunOptions};
+use derma_batch::{self as batch, BatchSpec, RunOptions};
 use std::path::PathBuf;
 use std::time::Instant;
 

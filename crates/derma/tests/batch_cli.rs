@@ -4,7 +4,7 @@
 //! process's byte for byte. And the errors a user meets: a bad spec, another spec in the same
 //! directory, an incomplete or altered batch at merge.
 
-mod common;
+use crate::common;
 
 use common::{run, s};
 use std::collections::BTreeMap;
@@ -72,6 +72,7 @@ fn manifest(dir: &Path) -> Vec<serde_json::Value> {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn four_shards_one_killed_and_resumed_equal_one_process_byte_for_byte() {
     let d = common::tmp("batch", "cluster");
     let spec = d.join("spec.toml");
@@ -283,6 +284,7 @@ fn a_spec_s_config_keeps_its_own_relative_paths() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn a_list_of_sizes_paints_each_identity_at_each() {
     let d = common::tmp("batch", "sizes");
     let spec = d.join("spec.toml");

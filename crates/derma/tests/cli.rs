@@ -221,6 +221,7 @@ fn set_difference(a: &Path, b: &Path) -> (f64, Vec<(String, f64)>) {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn exported_template_round_trips_through_mesh_and_fields() {
     // Export the head and its fields, then run on them as a user would before painting: the
     // default set comes back (before: the regional blood clipped to [0, 1] in a PNG and the
@@ -335,6 +336,7 @@ fn exported_template_round_trips_through_mesh_and_fields() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn a_set_knows_what_it_holds_and_a_rerun_replaces_it_whole() {
     let d = tmp("manifest");
     let set = d.join("set");
@@ -734,6 +736,7 @@ fn optics_simulate_writes_result_and_plots() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn match_fit_table_plots_and_skin_with_it() {
     let dir = tmp("match");
     let grid = dir.join("grid.toml");

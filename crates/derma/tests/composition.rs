@@ -4,7 +4,7 @@
 //! its blood moves; moles keep their melanin; the stored quadratic follows exact re-shading; and
 //! render, the CPU and the GPU (lavapipe) agree.
 
-mod common;
+use crate::common;
 
 use common::{run, s};
 use derma_core::gpu::Device;

@@ -2,12 +2,11 @@
 //! directory holding the files a user would have (a mesh, a scan, photos, exemplars), so a doc
 //! line that drifts from the CLI (a renamed flag, a missing file, a wrong example) fails here.
 //!
-//! `cargo test --release -p derma --test doc_commands` runs the quick lines (in the test
-//! command); `cargo test --release -p derma --test doc_commands -- --ignored` the slow ones
-//! (precompute, match fit and lut, photo bake, head fit, the eye model's training and renders).
+//! Both tests are slow checks (scripts/test_slow.sh; one minute for the quick lines, minutes for
+//! the slow ones: precompute, match fit and lut, photo bake, head fit, the eye model's training
+//! and renders): `cargo test --release -p derma --test suite doc_commands:: -- --ignored`.
 
-#[allow(dead_code)] // run and s serve the other CLI tests
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -372,6 +371,7 @@ fn every_doc_line_is_planned() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn the_docs_quick_lines_run_as_written() {
     run_lines("quick", |p| *p == Plan::Quick);
 }

@@ -4,7 +4,7 @@
 //! skin, or by the part named. On MediaPipe's canonical face (../shared/data: a face mask in cm,
 //! not made by derma).
 
-mod common;
+use crate::common;
 
 use common::{run, s, tmp};
 use std::path::Path;
@@ -35,6 +35,7 @@ fn json(p: &Path) -> serde_json::Value {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn every_command_reads_the_scan_in_the_frame_its_fit_found() {
     let Some(face) = derma_test_support::shared_data("canonical_face_model.obj") else {
         return;
@@ -106,6 +107,7 @@ fn every_command_reads_the_scan_in_the_frame_its_fit_found() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn a_scan_in_no_unit_and_turned_is_fitted_and_painted_in_its_frame() {
     let Some(face) = derma_test_support::shared_data("canonical_face_model.obj") else {
         return;

@@ -1,6 +1,6 @@
 //! End-to-end tests of `derma photo …` on a small synthetic set, and its errors for bad input.
 
-mod common;
+use crate::common;
 use common::{run, s};
 
 fn tmp(tag: &str) -> std::path::PathBuf {

@@ -3,7 +3,7 @@
 //! Job's and `--shard` — one killed mid-way and resumed, then `derma optics merge`; the table
 //! equals a single process's byte for byte.
 
-mod common;
+use crate::common;
 
 use common::{run, s};
 use std::path::{Path, PathBuf};

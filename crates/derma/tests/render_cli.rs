@@ -2,7 +2,7 @@
 //! writes, what engines read from the GLB, the web export's 16-bit round trip, and the errors
 //! users meet.
 
-mod common;
+use crate::common;
 
 use common::{run, s};
 use std::path::{Path, PathBuf};
@@ -604,6 +604,7 @@ fn skin_glb_writes_the_set_and_its_head_in_one_run() {
 }
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn a_users_mesh_renders_animates_and_takes_the_rig_through_its_fitted_head() {
     // derma's own head as a user's mesh: exported, fitted, painted through the fit.
     let d = tmp("render-fitted");

@@ -2,7 +2,7 @@
 //! and a painted target, eval (colour, hemoglobin, preview), animate with resume, transfer, and
 //! the errors users meet.
 
-mod common;
+use crate::common;
 
 use common::{run, s};
 use std::path::Path;

@@ -1,7 +1,7 @@
 //! End-to-end tests of `derma synth`: joint channels with files beside the output, the same
 //! seed giving the same bytes, a guide, and the errors users meet.
 
-mod common;
+use crate::common;
 
 use common::s;
 use derma_core::image_io::{read_rgb, write_png16, write_png8};

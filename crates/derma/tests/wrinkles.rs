@@ -3,7 +3,7 @@
 //! raise deepens the forehead's furrows and changes nothing outside the forehead's masks; the
 //! furrows lie in their regions; the GLB carries the maps and the weight table.
 
-mod common;
+use crate::common;
 
 use common::{run, s};
 use derma_core::image_io::{read_exr_channels, read_rgb};
@@ -78,6 +78,7 @@ const BROW_RAISE: [(&str, f32); 3] = [
 ];
 
 #[test]
+#[ignore = "slow: scripts/test_slow.sh"]
 fn brow_raise_deepens_the_forehead_and_nothing_outside_it() {
     for (k, (name, _)) in CASES.iter().enumerate() {
         let set = case(k);

@@ -128,6 +128,21 @@ impl Gpu {
         Ok(())
     }
 
+    /// Runs `build` (which creates GPU objects) inside a validation error scope: a validation
+    /// failure comes back as [`GpuError::Compile`] naming `label` instead of a panic.
+    pub fn validated<T>(&self, label: &str, build: impl FnOnce() -> T) -> Result<T, GpuError> {
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let value = build();
+        match pollster::block_on(scope.pop()) {
+            Some(e) => Err(GpuError::Compile {
+                shader: label.to_string(),
+                adapter: self.name.clone(),
+                detail: e.to_string(),
+            }),
+            None => Ok(value),
+        }
+    }
+
     /// Compiles `source` (WGSL) into a compute pipeline with entry point `entry`; shader
     /// validation errors come back as [`GpuError::Compile`] instead of a panic.
     pub fn compute_pipeline(

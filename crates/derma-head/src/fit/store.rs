@@ -203,11 +203,14 @@ pub fn frame(dir: &Path) -> Result<MeshFrame, StoreError> {
         .unwrap_or_else(|| MeshFrame::scaled(None, s.mm_per_unit));
     let rotation_ok = (f.rotation * f.rotation.transpose()).abs_diff_eq(Mat3::IDENTITY, 1e-4)
         && (f.rotation.determinant() - 1.0).abs() < 1e-4;
-    if !(f.mm_per_unit.is_finite() && f.mm_per_unit > 0.0 && rotation_ok) {
+    // Scans come in any unit (micrometres to kilometres fit the range); beyond it a mesh's
+    // positions leave f32's range once scaled.
+    let scale_ok = (MIN_MM_PER_UNIT..=MAX_MM_PER_UNIT).contains(&f.mm_per_unit);
+    if !(scale_ok && rotation_ok) {
         return Err(err(
             &path,
             format!(
-                "mm_per_unit {} and rotation {:?}; expected a positive scale and a rotation",
+                "mm_per_unit {} and rotation {:?}; expected a scale in [1e-6, 1e6] and a rotation",
                 f.mm_per_unit,
                 f.rotation.to_cols_array()
             ),
@@ -215,6 +218,11 @@ pub fn frame(dir: &Path) -> Result<MeshFrame, StoreError> {
     }
     Ok(f)
 }
+
+/// The smallest scale a fitted head may record (mm per unit of its scan).
+const MIN_MM_PER_UNIT: f32 = 1e-6;
+/// The largest.
+const MAX_MM_PER_UNIT: f32 = 1e6;
 
 /// Reads a fitted head directory's `head.json`.
 pub fn read(dir: &Path) -> Result<Fitted, StoreError> {

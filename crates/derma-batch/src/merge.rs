@@ -1,11 +1,11 @@
 //! A batch's merge (docs/batch.md): every identity present, its record the spec's draw, every
 //! file its hash; then the leftovers removed and the manifest written, a JSON line per identity.
 
-use super::layout::{
+use crate::error::{BatchError, Result};
+use crate::layout::{
     hashes, io, read_spec_file, IDENTITY_FILE, MANIFEST, PARTIAL, SPEC_FILE, UNHASHED,
 };
-use super::spec::Identity;
-use crate::error::{ExportError, Result};
+use crate::spec::Identity;
 use derma_core::progress::{Job, Progress, Unit};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -124,7 +124,7 @@ pub fn merge(out: &Path, progress: &dyn Progress) -> Result<Merged> {
     if !problems.is_empty() {
         let n = problems.len();
         problems.truncate(20);
-        return Err(ExportError::from(derma_core::CoreError::Format {
+        return Err(BatchError::from(derma_core::CoreError::Format {
             path: out.to_path_buf(),
             message: format!(
                 "{n} of {} identities are not complete (run their shards again): {}{}",

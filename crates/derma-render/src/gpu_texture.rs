@@ -1,9 +1,9 @@
-//! What a render pipeline needs on the shared GPU context ([`crate::gpu`]): sampled textures
-//! with CPU-built mip chains, samplers, render targets, validated shader modules and texture
-//! read-back. Every crate that draws (the renderer, previews) builds on these.
+//! What the renderer's pipelines need on derma-core's shared GPU context: sampled textures with
+//! CPU-built mip chains, samplers, render targets, validated shader modules and texture
+//! read-back ([`RenderGpu`], on [`Gpu`]). Only the renderer draws, so these live beside it.
 
-use crate::gpu::{Gpu, GpuError};
-use crate::Map;
+use derma_core::gpu::{Gpu, GpuError};
+use derma_core::Map;
 
 /// A sampled texture's texel format as derma uploads it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -76,9 +76,9 @@ fn encode(level: &[[f32; 4]], format: TexelFormat) -> Vec<u8> {
             .iter()
             .flat_map(|p| {
                 [
-                    q(crate::color::srgb_encode(p[0])),
-                    q(crate::color::srgb_encode(p[1])),
-                    q(crate::color::srgb_encode(p[2])),
+                    q(derma_core::color::srgb_encode(p[0])),
+                    q(derma_core::color::srgb_encode(p[1])),
+                    q(derma_core::color::srgb_encode(p[2])),
                     q(p[3]),
                 ]
             })
@@ -92,24 +92,41 @@ fn encode(level: &[[f32; 4]], format: TexelFormat) -> Vec<u8> {
     }
 }
 
-impl Gpu {
-    /// Runs `build` (which creates GPU objects) inside a validation error scope: a validation
-    /// failure comes back as [`GpuError::Compile`] naming `label` instead of a panic.
-    pub fn validated<T>(&self, label: &str, build: impl FnOnce() -> T) -> Result<T, GpuError> {
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let value = build();
-        match pollster::block_on(scope.pop()) {
-            Some(e) => Err(GpuError::Compile {
-                shader: label.to_string(),
-                adapter: self.name.clone(),
-                detail: e.to_string(),
-            }),
-            None => Ok(value),
-        }
-    }
-
+/// The renderer's GPU resources, made on derma-core's context.
+pub trait RenderGpu {
     /// A WGSL shader module, validated.
-    pub fn shader_module(&self, label: &str, source: &str) -> Result<wgpu::ShaderModule, GpuError> {
+    fn shader_module(&self, label: &str, source: &str) -> Result<wgpu::ShaderModule, GpuError>;
+
+    /// A sampled 2D texture of linear RGBA texels (`w`×`h`, row-major from the top) with a full
+    /// mip chain built on the CPU (box filter in linear space), uploaded in `format`.
+    fn texture(
+        &self,
+        label: &str,
+        texels: &[[f32; 4]],
+        w: usize,
+        h: usize,
+        format: TexelFormat,
+    ) -> wgpu::Texture;
+
+    /// A trilinear, 8× anisotropic sampler; `repeat` wraps (tileable maps), else clamps.
+    fn sampler(&self, label: &str, repeat: bool) -> wgpu::Sampler;
+
+    /// A render target (`w`×`h`, one level) that can also be sampled and copied out.
+    fn render_target(
+        &self,
+        label: &str,
+        w: u32,
+        h: u32,
+        format: wgpu::TextureFormat,
+    ) -> wgpu::Texture;
+
+    /// Reads a whole single-level texture with 4- or 8-byte texels back to the host, rows
+    /// tightly packed (wgpu's 256-byte row alignment removed).
+    fn read_texture(&self, tex: &wgpu::Texture) -> Result<Vec<u8>, GpuError>;
+}
+
+impl RenderGpu for Gpu {
+    fn shader_module(&self, label: &str, source: &str) -> Result<wgpu::ShaderModule, GpuError> {
         self.validated(label, || {
             self.device
                 .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -119,9 +136,7 @@ impl Gpu {
         })
     }
 
-    /// A sampled 2D texture of linear RGBA texels (`w`×`h`, row-major from the top) with a full
-    /// mip chain built on the CPU (box filter in linear space), uploaded in `format`.
-    pub fn texture(
+    fn texture(
         &self,
         label: &str,
         texels: &[[f32; 4]],
@@ -177,8 +192,7 @@ impl Gpu {
         tex
     }
 
-    /// A trilinear, 8× anisotropic sampler; `repeat` wraps (tileable maps), else clamps.
-    pub fn sampler(&self, label: &str, repeat: bool) -> wgpu::Sampler {
+    fn sampler(&self, label: &str, repeat: bool) -> wgpu::Sampler {
         let mode = if repeat {
             wgpu::AddressMode::Repeat
         } else {
@@ -197,8 +211,7 @@ impl Gpu {
         })
     }
 
-    /// A render target (`w`×`h`, one level) that can also be sampled and copied out.
-    pub fn render_target(
+    fn render_target(
         &self,
         label: &str,
         w: u32,
@@ -223,9 +236,7 @@ impl Gpu {
         })
     }
 
-    /// Reads a whole single-level texture with 4- or 8-byte texels back to the host, rows
-    /// tightly packed (wgpu's 256-byte row alignment removed).
-    pub fn read_texture(&self, tex: &wgpu::Texture) -> Result<Vec<u8>, GpuError> {
+    fn read_texture(&self, tex: &wgpu::Texture) -> Result<Vec<u8>, GpuError> {
         let (w, h) = (tex.width() as usize, tex.height() as usize);
         let bpp = tex.format().block_copy_size(None).expect("a colour format") as usize;
         let row = w * bpp;
@@ -289,7 +300,10 @@ mod tests {
     fn encoding_round_trips_within_its_precision() {
         let level = [[0.5, 0.2, 0.0, 1.0]];
         let s = encode(&level, TexelFormat::Srgb8);
-        assert_eq!(s[0], (crate::color::srgb_encode(0.5) * 255.0 + 0.5) as u8);
+        assert_eq!(
+            s[0],
+            (derma_core::color::srgb_encode(0.5) * 255.0 + 0.5) as u8
+        );
         let f = encode(&level, TexelFormat::Float16);
         assert_eq!(f.len(), 8);
         assert_eq!(

@@ -1,7 +1,7 @@
 //! A batch's spec and its draws (docs/batch.md): the distributions of skin tone, sex, age, mesh
 //! and size, checked as read, and identity i's person and seed from Philox(seed, i) alone.
 
-use crate::error::{ExportError, Result};
+use crate::error::{BatchError, Result};
 use derma_core::rng::Philox;
 use derma_skin::regional::{Preset, Sex};
 use serde::{Deserialize, Serialize};
@@ -155,7 +155,7 @@ impl BatchSpec {
     /// Reads a spec file and resolves its relative paths against its directory.
     pub fn read(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(|e| {
-            ExportError::from(derma_core::CoreError::Format {
+            BatchError::from(derma_core::CoreError::Format {
                 path: path.to_path_buf(),
                 message: format!("cannot read the batch spec ({e})"),
             })
@@ -164,7 +164,7 @@ impl BatchSpec {
         // Resolved from the spec's real place, so a rerun that spells its path otherwise
         // (relative, absolute, through a link) stores the same spec.
         let real = std::fs::canonicalize(path).map_err(|e| {
-            ExportError::from(derma_core::CoreError::Format {
+            BatchError::from(derma_core::CoreError::Format {
                 path: path.to_path_buf(),
                 message: format!("cannot resolve ({e})"),
             })
@@ -184,7 +184,7 @@ impl BatchSpec {
             .chain(spec.config.iter().map(|p| ("config", p)));
         for (key, p) in named {
             if !Path::new(p).exists() {
-                return Err(ExportError::from(derma_core::CoreError::Format {
+                return Err(BatchError::from(derma_core::CoreError::Format {
                     path: path.to_path_buf(),
                     message: format!("{key}: '{p}' does not exist"),
                 }));

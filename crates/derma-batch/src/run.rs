@@ -1,9 +1,9 @@
 //! One shard of a batch (docs/batch.md): every identity it owns that is not complete, painted by
 //! the main job into this process's own unfinished directory and renamed into place when done.
 
-use super::layout::{hashes, io, prepare, remove_stale_partials, IDENTITY_FILE, PARTIAL, UNHASHED};
-use super::spec::{Appearance, BatchSpec, Identity};
-use crate::error::{ExportError, Result};
+use crate::error::{BatchError, Result};
+use crate::layout::{hashes, io, prepare, remove_stale_partials, IDENTITY_FILE, PARTIAL, UNHASHED};
+use crate::spec::{Appearance, BatchSpec, Identity};
 use derma_core::progress::{Job, Note, Progress, Silent, Unit};
 use derma_core::report::{write_json, JsonFormat};
 use derma_core::shard::Shard;
@@ -108,7 +108,7 @@ pub fn run_shard(
         for (size, sub) in spec.size.dirs() {
             let generator = generator_for(&id, size)?;
             let set = partial.join(&sub);
-            crate::skin::run(&generator, &set, spec.glb, &Silent).map_err(|e| {
+            derma_export::skin::run(&generator, &set, spec.glb, &Silent).map_err(|e| {
                 derma_core::Invalid::new(
                     format!("identity {} ({}) at {size}²", i, id.dir),
                     "a painted texture set",
@@ -129,7 +129,7 @@ pub fn run_shard(
         if done.exists() {
             // A directory under the final name without its record is not derma's: refuse to
             // guess rather than delete it.
-            return Err(ExportError::from(derma_core::CoreError::Format {
+            return Err(BatchError::from(derma_core::CoreError::Format {
                 path: done,
                 message: format!("exists without its {IDENTITY_FILE}; move it away and run again"),
             }));

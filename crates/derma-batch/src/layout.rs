@@ -1,8 +1,8 @@
 //! A batch directory's layout (docs/batch.md): the spec's copy, each identity's record and its
 //! files' hashes, and the unfinished directories of the processes that paint them.
 
-use super::spec::BatchSpec;
-use crate::error::{ExportError, Result};
+use crate::error::{BatchError, Result};
+use crate::spec::BatchSpec;
 use derma_core::report::sha256_file;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -15,15 +15,15 @@ pub const MANIFEST: &str = "manifest.jsonl";
 /// place after it, so a directory under its final name is complete).
 pub const IDENTITY_FILE: &str = "identity.json";
 /// The set's report: it carries timings, so it is not hashed.
-pub(super) const UNHASHED: &str = derma_skin::outputs::REPORT;
+pub(crate) const UNHASHED: &str = derma_skin::outputs::REPORT;
 /// What follows an identity's directory name in an unfinished directory's:
 /// `NNNNNN.partial.HOST.PID.N` (derma_core::atomic::unique_tag).
-pub(super) const PARTIAL: &str = ".partial.";
+pub(crate) const PARTIAL: &str = ".partial.";
 
 /// Removes the unfinished directories of identity `dir` that no live process is writing:
 /// those of this host whose process has ended (or is this one). Those of other hosts are left
 /// to their writers, or to [`super::merge()`] once the batch is complete. Returns how many it removed.
-pub(super) fn remove_stale_partials(out: &Path, dir: &str) -> Result<usize> {
+pub(crate) fn remove_stale_partials(out: &Path, dir: &str) -> Result<usize> {
     // Whether a process has ended is known only where /proc is.
     if !Path::new("/proc/self").exists() {
         return Ok(0);
@@ -59,7 +59,7 @@ pub fn prepare(out: &Path, spec: &BatchSpec) -> Result<()> {
     if path.exists() {
         let old = read_spec_file(&path)?;
         if &old != spec {
-            return Err(ExportError::from(derma_core::CoreError::Format {
+            return Err(BatchError::from(derma_core::CoreError::Format {
                 path,
                 message: "this directory holds another batch (its spec differs); use a new output \
                          directory or the same spec"
@@ -72,9 +72,9 @@ pub fn prepare(out: &Path, spec: &BatchSpec) -> Result<()> {
     Ok(())
 }
 
-pub(super) fn read_spec_file(path: &Path) -> Result<BatchSpec> {
+pub(crate) fn read_spec_file(path: &Path) -> Result<BatchSpec> {
     let text = std::fs::read_to_string(path).map_err(|e| {
-        ExportError::from(derma_core::CoreError::Format {
+        BatchError::from(derma_core::CoreError::Format {
             path: path.to_path_buf(),
             message: format!("cannot read ({e})"),
         })
@@ -82,8 +82,8 @@ pub(super) fn read_spec_file(path: &Path) -> Result<BatchSpec> {
     BatchSpec::parse(&text, &path.display().to_string())
 }
 
-pub(super) fn io(path: &Path, e: std::io::Error) -> ExportError {
-    ExportError::from(derma_core::CoreError::Format {
+pub(crate) fn io(path: &Path, e: std::io::Error) -> BatchError {
+    BatchError::from(derma_core::CoreError::Format {
         path: path.to_path_buf(),
         message: e.to_string(),
     })
@@ -91,7 +91,7 @@ pub(super) fn io(path: &Path, e: std::io::Error) -> ExportError {
 
 /// SHA-256 of every file under `dir` (one level of size directories deep) but the sets'
 /// report.json and the record itself, by path relative to `dir` ("1024/base_color.png").
-pub(super) fn hashes(dir: &Path) -> Result<BTreeMap<String, String>> {
+pub(crate) fn hashes(dir: &Path) -> Result<BTreeMap<String, String>> {
     let mut out = BTreeMap::new();
     let entries = |d: &Path| -> Result<Vec<std::fs::DirEntry>> {
         Ok(std::fs::read_dir(d)
@@ -121,7 +121,7 @@ pub(super) fn hashes(dir: &Path) -> Result<BTreeMap<String, String>> {
                 continue;
             }
             let h = sha256_file(&p).ok_or_else(|| {
-                ExportError::from(derma_core::CoreError::Format {
+                BatchError::from(derma_core::CoreError::Format {
                     path: p.clone(),
                     message: "cannot read to hash".into(),
                 })

@@ -1,0 +1,13 @@
+//! The integration tests of derma-skin as one test binary (one build and link instead of one per
+//! file; `cargo test -p derma-skin --test suite FILE::` runs one file's tests).
+
+mod detail_regions;
+mod fitted_head;
+mod hair;
+mod pipeline;
+mod regional_color;
+mod relief;
+#[cfg(feature = "gpu")]
+mod render;
+mod robust_files;
+mod robust_inputs;
