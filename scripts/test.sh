@@ -8,9 +8,9 @@
 # reference against scikit-image; checks deploy/; runs the workspace tests with the GPU tests
 # required (on Mesa's lavapipe) and the default build's device choice; validates the exported
 # GLBs with Khronos' glTF-Validator; runs every numbered example; installs the Python wheel in
-# a virtual environment and runs its tests; and drives the web viewer in headless Chromium.
-# The slow checks (`#[ignore]`d tests) run by scripts/test_slow.sh; docs/testing.md says which
-# check runs where.
+# a virtual environment and runs its tests. The slow checks (`#[ignore]`d tests and the web
+# viewer in headless Chromium) run by scripts/test_slow.sh; docs/testing.md says which check runs
+# where.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 start=$SECONDS
@@ -85,7 +85,4 @@ py=$PWD/$venv/bin/python
 (cd "$tmp" && "$py" -c "import derma; s = derma.skin(size=256); print(s['base_color'].shape)")
 (cd "$tmp" && "$py" -m mypy.stubtest derma._derma)
 DERMA_CLI=$PWD/target/release/derma "$py" -m pytest -q -p no:cacheprovider crates/derma-py/tests
-phase viewer
-# The web viewer in Debian's chromium: the GLB loads, the smile slider flushes the cheeks.
-bash scripts/viewer_test.sh
 phase done
