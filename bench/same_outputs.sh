@@ -40,8 +40,8 @@ run() { # run BINARY OUT_DIR
   "$d" synth --exemplar "$in/patch/height.png" --size 160 --seed 2 --device cpu --out "$o/synth/grey.png" --quiet
   "$d" synth --exemplar "$in/patch/base_color.png" --exemplar-channels "height=$in/patch/height.png" \
        --size 128 --tile --seed 4 --device cpu --out "$o/synth/joint.exr" --quiet
-  "$d" rig build --neutral "$in/skin/hemoglobin.exr" --melanin "$in/skin/melanin.exr" --builtin all \
-       --radius 24 --out "$o/rig" --quiet
+  # From the set (a rig of bare maps would replace the set's colour: `export web` refuses it).
+  "$d" rig build --set "$in/skin" --builtin all --radius 24 --out "$o/rig" --quiet
   mkdir -p "$o/frame" "$o/fit" "$o/lut"
   "$d" rig eval --rig "$o/rig" --weights happiness=0.7,anger=0.3 --device cpu --out "$o/frame/color.png" \
        --hemoglobin "$o/frame/hemoglobin.exr" --preview "$o/frame/preview.png" > "$o/frame/stdout.txt"
