@@ -16,22 +16,12 @@ cd "$(dirname "$0")/.."
 start=$SECONDS
 phase() { echo "== $1 (at $((SECONDS - start)) s)"; }
 phase installs
-if ! ls /usr/share/vulkan/icd.d/lvp_icd*.json >/dev/null 2>&1; then
-  apt-get install -y mesa-vulkan-drivers || { apt-get update && apt-get install -y mesa-vulkan-drivers; }
-fi
-python3 -c "import iadpython, scipy, skimage" 2>/dev/null ||
-  python3 -m pip install --quiet iadpython scipy scikit-image
-for c in clippy rustfmt; do
-  rustup component list --installed 2>/dev/null | grep -q "^$c" || rustup component add "$c"
-done
+. scripts/common.sh
+derma_installs
 phase fmt
 cargo fmt --all -- --check
-# Lints come with the build: cargo runs clippy's driver in place of rustc on the workspace's
-# crates (as `cargo clippy` does), here for a build that makes code, denying warnings.
-export RUSTC_WORKSPACE_WRAPPER
-RUSTC_WORKSPACE_WRAPPER="$(rustc --print sysroot)/bin/clippy-driver"
-export CLIPPY_ARGS="-D__CLIPPY_HACKERY__warnings__CLIPPY_HACKERY__"
-export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
+# The lints come with the build (scripts/common.sh): clippy's driver compiles the workspace.
+derma_lint_build
 phase "build (default features: the CLI as README's first command builds it)"
 # First, so that the build with every feature below leaves its binaries in target/release.
 cargo build --release -q -p derma
@@ -74,13 +64,14 @@ python3 -m maturin --version >/dev/null 2>&1 || python3 -m pip install --quiet "
 rm -rf target/wheels
 python3 -m maturin build --release --quiet -m crates/derma-py/Cargo.toml -o target/wheels
 venv=target/py-venv
-[ -x "$venv/bin/pytest" ] && [ -x "$venv/bin/mypy" ] || {
+"$venv/bin/python" -c "import pytest, mypy" 2>/dev/null || {
   rm -rf "$venv"
   python3 -m venv "$venv"
   "$venv/bin/pip" install --quiet pytest mypy
 }
+# The wheel itself anew, then its dependencies as its metadata names them.
 "$venv/bin/pip" install --quiet --force-reinstall --no-deps target/wheels/derma-*.whl
-"$venv/bin/python" -c "import numpy" 2>/dev/null || "$venv/bin/pip" install --quiet numpy
+"$venv/bin/pip" install --quiet target/wheels/derma-*.whl
 py=$PWD/$venv/bin/python
 (cd "$tmp" && "$py" -c "import derma; s = derma.skin(size=256); print(s['base_color'].shape)")
 (cd "$tmp" && "$py" -m mypy.stubtest derma._derma)

@@ -10,11 +10,10 @@
 # own command (docs/head.md). docs/testing.md lists which check runs where.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
+. scripts/common.sh
+derma_installs
 # The same lints-with-the-build as scripts/test.sh, so each reuses the other's build.
-export RUSTC_WORKSPACE_WRAPPER
-RUSTC_WORKSPACE_WRAPPER="$(rustc --print sysroot)/bin/clippy-driver"
-export CLIPPY_ARGS="-D__CLIPPY_HACKERY__warnings__CLIPPY_HACKERY__"
+derma_lint_build
 DERMA_REQUIRE_GPU=1 cargo test --release --workspace --exclude derma-py --all-features -- --ignored \
   --skip corpus::the_corpus_is_fitted_with_no_flags --skip corpus_face_units::
 # The web viewer (software-rendered Chromium: about 2 min 40 s).

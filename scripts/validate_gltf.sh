@@ -4,19 +4,17 @@
 # names and DirectX normals (`derma export glb`), a set on a user mesh (MediaPipe's canonical
 # face from ../shared/data), and the head fitted to that face (`derma head fit`) with its set
 # and its animated eyes, on the fitted head and on the face mesh itself, and checks every GLB with Khronos'
-# glTF-Validator from npm (installed here into a temporary directory, with Node.js from apt when
+# glTF-Validator from npm (installed into target/peer-gltf, kept between runs, with Node.js from apt when
 # the machine lacks it). Run by scripts/test.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if ! command -v npm >/dev/null 2>&1; then
-  apt-get install -y nodejs npm || { apt-get update && apt-get install -y nodejs npm; }
-fi
+. scripts/common.sh
+derma_lint_build
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-# Installed once into target/ (kept between runs).
+# Installed once into target/ (kept between runs; again for another version).
 v=target/peer-gltf
-[ -d "$v/node_modules/gltf-validator" ] ||
-  npm install --silent --prefix "$v" gltf-validator@2.0.0-dev.3.10 >/dev/null
+npm_peer "$v" gltf-validator@2.0.0-dev.3.10
 # The workspace feature set of the test command, so its build is reused.
 cargo build --release -q --workspace --exclude derma-py --bins --examples --all-features
 target/release/derma skin --export-template "$work/head" --quiet

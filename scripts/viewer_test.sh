@@ -9,6 +9,8 @@ install() {
   apt-get install -y "$@" || { apt-get update && apt-get install -y "$@"; }
 }
 command -v npm >/dev/null 2>&1 || install nodejs npm
+. scripts/common.sh
+derma_lint_build
 command -v chromium >/dev/null 2>&1 || install chromium
 work=$(mktemp -d)
 server=
@@ -26,8 +28,7 @@ sha256sum viewer/package-lock.json | cmp -s - "$stamp" || {
 }
 npm --prefix viewer run build --silent >/dev/null
 pw=target/peer-viewer
-[ -d "$pw/node_modules/playwright-core" ] ||
-  npm install --silent --no-audit --no-fund --prefix "$pw" playwright-core@1.65.1 >/dev/null
+npm_peer "$pw" playwright-core@1.65.1
 # The workspace feature set of the test command, so its build is reused.
 cargo build --release -q --workspace --exclude derma-py --bins --examples --all-features
 d=target/release/derma

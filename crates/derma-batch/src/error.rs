@@ -1,5 +1,5 @@
-//! The batch's one error type: what its files, the main job and the exporter report, wrapped
-//! (ARCHITECTURE.md, "one error style").
+//! The batch's one error type: what its files and the main job report, wrapped (an identity's
+//! failed set is an `Invalid` naming the identity; ARCHITECTURE.md, "one error style").
 
 /// Everything a batch reports.
 #[derive(Debug, thiserror::Error)]
@@ -13,9 +13,6 @@ pub enum BatchError {
     /// The main job.
     #[error(transparent)]
     Skin(#[from] derma_skin::SkinError),
-    /// The set's GLB.
-    #[error(transparent)]
-    Export(#[from] derma_export::ExportError),
 }
 
 /// The batch's result type.

@@ -141,6 +141,16 @@ mod tests {
                 }
             }
         }
+        // The edges: cosines of 1 and 0 (Schlick's clamp; the NaN a negative base once made on
+        // lavapipe), the mirror peak (α 0.05: smaller ones cancel to f32 rounding), Smith's floor at grazing light and view.
+        for (nh, nv, a) in [
+            (1.0, 1.0, 0.05),
+            (1.0, 0.0, 0.05),
+            (0.0, 1.0, 0.3),
+            (0.0, 0.0, 0.002),
+        ] {
+            x.push([nh, nv, a, 0.04]);
+        }
         if derma_test_support::skip_without_gpu() {
             return;
         }

@@ -294,7 +294,7 @@ pub fn draw(drawn: &[Drawn], shot: &Shot, lighting: &Lighting) -> Rendered {
         })
         .collect();
     let hits = rasterise(&objects, &shot.projection, shot.width, shot.height);
-    let env = Env::new(lighting, |d| shot.to_world * d);
+    let env = Env::new(lighting, |d| (shot.to_world * d).normalize());
     let shaded: Vec<Option<(Vec3, u8)>> = hits
         .par_iter()
         .map(|hit| {
