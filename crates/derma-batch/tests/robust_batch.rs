@@ -40,7 +40,7 @@ fn damaged_batch(tag: &str, rel: &str, bytes: &[u8]) -> PathBuf {
     let src = batch_dir();
     let dst = scratch(&format!("batch-{tag}"));
     let _ = std::fs::remove_dir_all(&dst);
-    for e in walk(src) {
+    for e in derma_test_support::files_under(src) {
         let to = dst.join(e.strip_prefix(src).unwrap());
         std::fs::create_dir_all(to.parent().unwrap()).unwrap();
         std::fs::copy(&e, to).unwrap();
@@ -48,19 +48,6 @@ fn damaged_batch(tag: &str, rel: &str, bytes: &[u8]) -> PathBuf {
     let _ = std::fs::remove_file(dst.join(layout::MANIFEST));
     std::fs::write(dst.join(rel), bytes).unwrap();
     dst
-}
-
-fn walk(dir: &Path) -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    for e in std::fs::read_dir(dir).unwrap() {
-        let p = e.unwrap().path();
-        if p.is_dir() {
-            out.extend(walk(&p));
-        } else {
-            out.push(p);
-        }
-    }
-    out
 }
 
 /// The record of identity 0, relative to the batch directory.

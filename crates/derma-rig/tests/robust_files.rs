@@ -48,25 +48,12 @@ fn damaged_rig(tag: &str, name: &str, bytes: &[u8]) -> PathBuf {
     let dst = scratch(&format!("{tag}-{}", name.replace('/', "-")));
     let _ = std::fs::remove_dir_all(&dst);
     std::fs::create_dir_all(dst.join("targets")).unwrap();
-    for e in walk(src) {
+    for e in derma_test_support::files_under(src) {
         let rel = e.strip_prefix(src).unwrap();
         std::fs::copy(&e, dst.join(rel)).unwrap();
     }
     std::fs::write(dst.join(name), bytes).unwrap();
     dst
-}
-
-fn walk(dir: &Path) -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    for e in std::fs::read_dir(dir).unwrap() {
-        let p = e.unwrap().path();
-        if p.is_dir() {
-            out.extend(walk(&p));
-        } else {
-            out.push(p);
-        }
-    }
-    out
 }
 
 proptest! {

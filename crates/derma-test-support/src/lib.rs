@@ -13,7 +13,7 @@
 
 pub mod truth_scan;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// A fresh, empty directory for one test, named after `tag` and the process.
 pub fn scratch_dir(tag: &str) -> PathBuf {
@@ -128,4 +128,18 @@ pub fn nearest(points: &[glam::Vec3], p: glam::Vec3) -> Option<usize> {
             .length_squared()
             .total_cmp(&(points[b] - p).length_squared())
     })
+}
+
+/// Every file below `dir`, at any depth (for tests that copy a directory before damaging it).
+pub fn files_under(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(files_under(&p));
+        } else {
+            out.push(p);
+        }
+    }
+    out
 }
