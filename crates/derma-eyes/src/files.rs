@@ -15,6 +15,7 @@ use crate::Result;
 use derma_core::progress::{Progress, Unit};
 use derma_core::Map;
 use derma_head::Head;
+use derma_render::frame::Steps;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -447,12 +448,14 @@ pub fn distance_fields(
         glam::Vec3::splat(1.6 * std::f32::consts::PI),
     );
     (light.sky, light.ground) = (glam::Vec3::splat(0.15), glam::Vec3::splat(0.15));
-    let px_per_mm = |i: usize| scene.g.px_per_mm(i);
-    let surfaces = scene.surfaces(&px_per_mm);
-    let plain = derma_render::lake::shade(&surfaces, None, &light);
-    let (d, n) = derma_render::lake::lake(&surfaces, &bt.distance, range);
-    let wet = derma_render::lake::shade(&surfaces, Some((&d, &n)), &light);
-    let to_maps = |img: &[glam::Vec3]| Map::planes(w, h, |i| img[i].to_array());
+    let plain = scene.frame.shade(&light, Steps::default());
+    let lake = scene.frame.lake(&bt.distance, range);
+    let lake = Steps {
+        lake: Some(&lake),
+        ..Steps::default()
+    };
+    let wet = scene.frame.shade(&light, lake);
+    let to_maps = |img: &derma_render::Rendered| img.linear_maps();
     for (name, img) in [("eye.png", &plain), ("lake.png", &wet)] {
         let ch = to_maps(img);
         derma_core::image_io::write_png8_srgb(&dir.join(name), &[&ch[0], &ch[1], &ch[2]])?;

@@ -138,6 +138,7 @@ impl<'a> Stage<'a> {
                     roughness: if iris { 0.7 } else { 0.08 },
                     f0: if iris { 0.02 } else { 0.025 },
                     coverage: None,
+                    kind: derma_render::material::MATERIAL_EYE,
                 }
             })
             .collect();
@@ -148,6 +149,7 @@ impl<'a> Stage<'a> {
                 roughness: 0.6,
                 f0: 0.04,
                 coverage: Some(&LASH_COVERAGE),
+                kind: derma_render::material::MATERIAL_OTHER,
             });
         }
         // The band is 120 × 62 mm, framed at 92 % of the render's width: keep its inner

@@ -1,6 +1,7 @@
 //! The microfacet terms every renderer of this crate shares: the GGX / Trowbridge–Reitz
 //! distribution (Walter et al. 2007), Schlick's Fresnel (Schlick 1994), the height-correlated
-//! Smith visibility (Heitz 2014, eq. 99) and Karis 2014's split-sum environment fit — the CPU's
+//! Smith visibility (Heitz 2014, eq. 99), Karis 2014's split-sum environment fit and Frostbite's
+//! grazing reflectance ([`f90`]) — the CPU's
 //! forms of brdf.wgsl's functions, which a GPU test holds equal.
 
 use glam::{Vec3, Vec4};
@@ -26,11 +27,20 @@ pub fn smith_vis(nl: f32, nv: f32, a: f32) -> f32 {
     0.5 / (gv + gl).max(1e-5)
 }
 
-/// Schlick's Fresnel at cos θ = `vh` (clamped, an integer power: finite even where a rounded
-/// cosine passes 1).
+/// Reflectance at grazing incidence for normal-incidence reflectance `f0`: 1 for every real
+/// dielectric (F0 ≥ 2 %: n ≥ 1.33), falling to 0 with F0 below it — a surface of F0 = 0
+/// reflects nothing at all, and F0 under 2 %, which no material has, reads as occluded specular
+/// (Lagarde & de Rousiers 2014, "Moving Frostbite to PBR", f90 = saturate(50 F0)).
+#[inline]
+pub fn f90(f0: f32) -> f32 {
+    (50.0 * f0).clamp(0.0, 1.0)
+}
+
+/// Schlick's Fresnel at cos θ = `vh` towards [`f90`] (clamped, an integer power: finite even
+/// where a rounded cosine passes 1).
 #[inline]
 pub fn schlick(f0: f32, vh: f32) -> f32 {
-    f0 + (1.0 - f0) * (1.0 - vh).clamp(0.0, 1.0).powi(5)
+    f0 + (f90(f0) - f0) * (1.0 - vh).clamp(0.0, 1.0).powi(5)
 }
 
 /// The specular lobe D·V·F (per unit n·l irradiance) of unit normal `n` lit from unit `l` and
@@ -43,7 +53,7 @@ pub fn specular(n: Vec3, l: Vec3, v: Vec3, a: f32, f0: f32) -> f32 {
 }
 
 /// Karis 2014 ("Physically based shading on mobile"): the split-sum environment BRDF's F0
-/// scale and bias at perceptual roughness `rough` and n·v = `nv`.
+/// scale and bias (the bias is [`f90`]'s share) at perceptual roughness `rough` and n·v = `nv`.
 #[inline]
 pub fn env_brdf(rough: f32, nv: f32) -> (f32, f32) {
     let c0 = Vec4::new(-1.0, -0.0275, -0.572, 0.022);
@@ -70,6 +80,9 @@ mod tests {
         assert!((s - 1.0).abs() < 1e-2, "{s}");
         assert_eq!(schlick(0.04, 1.0), 0.04);
         assert_eq!(schlick(0.04, 0.0), 1.0);
+        // No reflectance at normal incidence, none at grazing: F0 = 0 reflects nothing.
+        assert_eq!((schlick(0.0, 0.0), schlick(0.0, 0.5)), (0.0, 0.0));
+        assert_eq!((f90(0.01), f90(0.02), f90(0.3)), (0.5, 1.0, 1.0));
         // Smith visibility of a smooth surface at normal incidence: 1 / (4 n·l n·v) = ¼.
         assert!((smith_vis(1.0, 1.0, 0.0) - 0.25).abs() < 1e-6);
         // Karis 2014: a mirror seen head-on reflects all of F0 (scale ≈ 1, bias ≈ 0).
@@ -99,7 +112,7 @@ mod tests {
     }
 
     /// brdf.wgsl evaluated on the GPU (lavapipe in CI) at the inputs `x` (nh/nl, nv/vh, a/rough,
-    /// f0 per row): per row ggx_d, smith_vis, schlick and env_brdf's two terms.
+    /// f0 per row): per row ggx_d, smith_vis, schlick, env_brdf's two terms and f90.
     #[cfg(feature = "gpu")]
     fn on_gpu(x: &[[f32; 4]]) -> Option<Vec<[f32; 8]>> {
         let gpu = derma_core::gpu::context().ok()?;
@@ -111,7 +124,7 @@ mod tests {
                let i = id.x; if (i >= n.x) {{ return; }}\n\
                let p = x[i]; let e = env_brdf(p.z, p.y);\n\
                y[i] = array<f32, 8>(ggx_d(p.x, p.z), smith_vis(p.x, p.y, p.z), schlick(p.w, p.y),\n\
-                                    e.x, e.y, 0.0, 0.0, 0.0);\n\
+                                    e.x, e.y, f90(p.w), 0.0, 0.0);\n\
              }}\n"
         );
         let (layout, [pipe]) = gpu.entry_points("brdf check", &src, 1, 1, ["main"]).ok()?;
@@ -151,6 +164,10 @@ mod tests {
         ] {
             x.push([nh, nv, a, 0.04]);
         }
+        // F0 below 2 %, where f90 falls.
+        for f0 in [0.0, 0.005, 0.0199] {
+            x.push([0.7, 0.3, 0.3, f0]);
+        }
         if derma_test_support::skip_without_gpu() {
             return;
         }
@@ -163,8 +180,9 @@ mod tests {
                 schlick(p[3], p[1]),
                 s,
                 b,
+                f90(p[3]),
             ];
-            for k in 0..5 {
+            for k in 0..6 {
                 let tol = 1e-4 * cpu[k].abs().max(1.0);
                 assert!(
                     (cpu[k] - g[k]).abs() <= tol,

@@ -1,6 +1,7 @@
 // The microfacet terms every shader of the renderer shares, mirrored by brdf.rs (a GPU test
 // holds the two together): GGX (Walter et al. 2007), height-correlated Smith visibility
-// (Heitz 2014), Schlick's Fresnel and Karis 2014's split-sum environment fit.
+// (Heitz 2014), Schlick's Fresnel towards Frostbite's f90 and Karis 2014's split-sum
+// environment fit.
 
 const PI: f32 = 3.14159265;
 
@@ -23,7 +24,13 @@ fn smith_vis(nl: f32, nv: f32, a: f32) -> f32 {
 // WGSL's pow of a negative base is undefined (NaN on lavapipe; one such pixel spread by the
 // blur into a 20-pixel black square).
 fn schlick(f0: f32, vh: f32) -> f32 {
-    return f0 + (1.0 - f0) * pow(clamp(1.0 - vh, 0.0, 1.0), 5.0);
+    return f0 + (f90(f0) - f0) * pow(clamp(1.0 - vh, 0.0, 1.0), 5.0);
+}
+
+// Reflectance at grazing incidence: 1 for every real dielectric (F0 ≥ 2 %), to 0 below it
+// (Lagarde & de Rousiers 2014, "Moving Frostbite to PBR": f90 = saturate(50 F0)).
+fn f90(f0: f32) -> f32 {
+    return clamp(50.0 * f0, 0.0, 1.0);
 }
 
 // Karis 2014 ("Physically based shading on mobile"): analytic fit of the split-sum

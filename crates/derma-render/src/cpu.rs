@@ -1,20 +1,15 @@
-//! The renderer without a GPU: meshes with their materials rasterised by [`crate::raster`] and
-//! lit by the one CPU shading ([`crate::shade`]: lighting.wgsl's lights and environment without
-//! the key's shadow, subsurface scattering or corneal refraction), then tone-mapped as
-//! composite.wgsl does. [`crate::CpuRenderer`] draws a scene through it, and so do the previews
-//! (`derma skin`'s preview.png, the rig's frames, the eyes' frames).
+//! The renderer's materials and previews without a GPU: planar maps, a texture set's maps and
+//! plain props as [`Material`]s, and the previews (`derma skin`'s preview.png, the rig's and the
+//! eyes' frames, patches on a sphere or a tile) drawn through the CPU frame ([`crate::frame`]).
 
-use crate::camera::{Camera, View};
+use crate::camera::View;
+use crate::frame::{draw, Drawn, Material, MaterialSample, Shot};
 use crate::lighting::{Light, Lighting};
 use crate::material::{MATERIAL_EYE, MATERIAL_OTHER, MATERIAL_SKIN, SPECULAR_SCALE};
-use crate::raster::{rasterise, Hit, Object, Projection};
-use crate::rendered::Rendered;
-use crate::shade::{Env, Surface};
 use crate::SkinMaps;
 use derma_core::mesh::TriMesh;
 use derma_core::Map;
-use glam::{Mat3, Vec2, Vec3, Vec4};
-use rayon::prelude::*;
+use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
 /// A uniform material for surfaces without maps of their own: flat normals, one perceptual
@@ -73,32 +68,8 @@ pub struct Textures<'a> {
     pub uv_scale: Vec2,
 }
 
-/// What the renderer reads of a surface's material at a texture coordinate.
-#[derive(Clone, Copy, Debug)]
-pub struct MaterialSample {
-    /// Diffuse albedo, linear RGB.
-    pub albedo: Vec3,
-    /// Tangent-space normal (normalised by the renderer).
-    pub normal: Vec3,
-    /// Perceptual roughness.
-    pub roughness: f32,
-    /// Normal-incidence reflectance F0.
-    pub f0: f32,
-}
-
-/// A surface material the renderer samples: planar maps ([`Textures`]) or any other store of
-/// texels (a texture set's encoded maps, sampled without decoded copies).
-pub trait Material: Sync {
-    /// The material at texture coordinate `uv` (already scaled by [`Material::uv_scale`]).
-    fn sample(&self, uv: Vec2) -> MaterialSample;
-    /// UV scale applied before sampling (tiling a patch over the preview sphere).
-    fn uv_scale(&self) -> Vec2 {
-        Vec2::ONE
-    }
-}
-
 impl Material for Textures<'_> {
-    fn sample(&self, uv: Vec2) -> MaterialSample {
+    fn sample(&self, uv: Vec2, _p: Vec3) -> MaterialSample {
         let taps = derma_core::map::Taps::uv(
             self.base_color[0].width(),
             self.base_color[0].height(),
@@ -137,6 +108,9 @@ pub struct Prop<'a> {
     /// Coverage in [0, 1] at a texture coordinate, for cards such as eyelashes: a pixel is drawn
     /// where the coverage exceeds an ordered-dither threshold (no blending). `None`: opaque.
     pub coverage: Option<&'a (dyn Fn(Vec2) -> f32 + Sync)>,
+    /// What its pixels show: [`MATERIAL_EYE`] (lit as a matte globe under a clear film, as the
+    /// renderer lights an eye) or [`MATERIAL_OTHER`].
+    pub kind: u8,
 }
 
 /// The parts of `head` as props with their looks ([`derma_head::Look`]).
@@ -151,6 +125,11 @@ pub fn head_props(head: &derma_head::Head) -> Vec<Prop<'_>> {
                 roughness: look.roughness,
                 f0: look.f0,
                 coverage: look.coverage,
+                kind: if p.name.starts_with("eye_") {
+                    MATERIAL_EYE
+                } else {
+                    MATERIAL_OTHER
+                },
             }
         })
         .collect()
@@ -175,7 +154,7 @@ pub struct Plain<'a> {
 }
 
 impl Material for Plain<'_> {
-    fn sample(&self, uv: Vec2) -> MaterialSample {
+    fn sample(&self, uv: Vec2, _p: Vec3) -> MaterialSample {
         MaterialSample {
             albedo: (self.albedo)(uv),
             normal: Vec3::Z,
@@ -186,7 +165,7 @@ impl Material for Plain<'_> {
 }
 
 impl Material for SkinMaps {
-    fn sample(&self, uv: Vec2) -> MaterialSample {
+    fn sample(&self, uv: Vec2, _p: Vec3) -> MaterialSample {
         let at = |m: &Map| m.sample_uv(uv.x, uv.y, self.wrap);
         let rgb = |m: &[Map; 3]| Vec3::new(at(&m[0]), at(&m[1]), at(&m[2]));
         MaterialSample {
@@ -196,201 +175,6 @@ impl Material for SkinMaps {
             roughness: at(&self.roughness),
             f0: at(&self.specular) * SPECULAR_SCALE,
         }
-    }
-}
-
-/// One mesh the CPU renderer draws.
-pub struct Drawn<'a> {
-    /// The mesh, with normals and UVs.
-    pub mesh: &'a TriMesh,
-    /// Per triangle corner (`3 t + k`), the MikkTSpace tangent and bitangent sign: the material's
-    /// normals are tangent-space normals. `None`: the material's normals are ignored.
-    pub tangents: Option<&'a [[f32; 4]]>,
-    /// Its material.
-    pub material: &'a dyn Material,
-    /// Coverage over its UVs (cards); `None`: opaque.
-    pub coverage: Option<&'a (dyn Fn(Vec2) -> f32 + Sync)>,
-    /// What its pixels show ([`MATERIAL_SKIN`], [`MATERIAL_EYE`] or [`MATERIAL_OTHER`]); an eye
-    /// is lit as a matte globe under a clear film and never shows its back faces.
-    pub kind: u8,
-}
-
-/// Where the viewer of a CPU image stands.
-#[derive(Clone, Copy, Debug)]
-pub enum Viewer {
-    /// A pinhole at this point (world).
-    At(Vec3),
-    /// Infinitely far along this unit direction (orthographic).
-    Along(Vec3),
-}
-
-/// How a CPU image is taken: the projection, the viewer, the camera's axes in world (lights are
-/// given in camera space) and the size.
-pub struct Shot {
-    /// World → pixels.
-    pub projection: Projection,
-    /// Where the viewer stands.
-    pub viewer: Viewer,
-    /// Camera → world rotation (x right, y up, z towards the viewer).
-    pub to_world: Mat3,
-    /// Width (px).
-    pub width: usize,
-    /// Height (px).
-    pub height: usize,
-}
-
-impl Shot {
-    /// The renderer's perspective camera ([`Camera::frame`]) for `view` of the sphere (`centre`,
-    /// `radius`), as the GPU renderer takes it.
-    pub fn framed(centre: Vec3, radius: f32, view: &View, width: usize, height: usize) -> Shot {
-        let cam = Camera::frame(centre, radius, view, width as u32, height as u32);
-        // World → camera in the computer-vision convention (x right, y down, z forward).
-        let [right, up, back] = cam.basis;
-        Shot {
-            projection: Projection::Pinhole {
-                rotation: Mat3::from_cols(right, -up, -back).transpose(),
-                position: cam.eye,
-                focal: cam.focal_px,
-                principal: Vec2::new(0.5 * width as f32, 0.5 * height as f32),
-            },
-            viewer: Viewer::At(cam.eye),
-            to_world: Mat3::from_cols(right, up, back),
-            width,
-            height,
-        }
-    }
-
-    /// An orthographic `size`² view of `mesh` from yaw `view_yaw` (radians about +Y, 0 = from
-    /// +Z), framed on the mesh's extent at 92 % of the image.
-    pub fn orthographic(mesh: &TriMesh, view_yaw: f32, size: usize) -> Shot {
-        let rot = Mat3::from_rotation_y(-view_yaw);
-        let (lo, hi) = mesh.positions.iter().map(|&p| rot * p).fold(
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(a, b), p| (a.min(p), b.max(p)),
-        );
-        Shot {
-            projection: Projection::Orthographic {
-                rotation: rot,
-                centre: 0.5 * (lo + hi),
-                scale: 0.92 * size as f32 / (hi - lo).x.max((hi - lo).y),
-                origin: Vec2::splat(0.5 * size as f32),
-            },
-            viewer: Viewer::Along(rot.transpose() * Vec3::Z),
-            to_world: rot.transpose(),
-            width: size,
-            height: size,
-        }
-    }
-}
-
-/// Draws `drawn` (the first in front where they overlap) as `shot` sees them under `lighting`:
-/// the CPU's one rasterise-and-shade loop.
-pub fn draw(drawn: &[Drawn], shot: &Shot, lighting: &Lighting) -> Rendered {
-    let objects: Vec<Object> = drawn
-        .iter()
-        .map(|d| Object {
-            mesh: d.mesh,
-            coverage: d.coverage,
-        })
-        .collect();
-    let hits = rasterise(&objects, &shot.projection, shot.width, shot.height);
-    let env = Env::new(lighting, |d| (shot.to_world * d).normalize());
-    let shaded: Vec<Option<(Vec3, u8)>> = hits
-        .par_iter()
-        .map(|hit| {
-            let hit = hit.as_ref()?;
-            let d = &drawn[hit.object as usize];
-            Some((env.shade(&surface_at(hit, d, shot.viewer)), d.kind))
-        })
-        .collect();
-    compose(&shaded, shot.width, shot.height, lighting.exposure)
-}
-
-/// What `hit` shows of `d` seen by `viewer`.
-fn surface_at(hit: &Hit, d: &Drawn, viewer: Viewer) -> Surface {
-    let mesh = d.mesh;
-    let p = hit.interpolate(mesh, &mesh.positions);
-    let uv = hit.interpolate(mesh, &mesh.uvs) * d.material.uv_scale();
-    let (v, towards) = match viewer {
-        Viewer::At(eye) => ((eye - p).normalize(), eye),
-        Viewer::Along(dir) => (dir, p + dir),
-    };
-    let mut ng = hit.interpolate(mesh, &mesh.normals).normalize_or(Vec3::Z);
-    // Back faces show their inside as forward.wgsl does: facing from the triangle's winding
-    // (counter-clockwise in front), not the interpolated normal; the eyes' shader never flips.
-    let [a, b, c] = mesh.triangles[hit.triangle as usize].map(|i| mesh.positions[i as usize]);
-    if (b - a).cross(c - a).dot(towards - a) < 0.0 && d.kind != MATERIAL_EYE {
-        ng = -ng;
-    }
-    let m = d.material.sample(uv);
-    let n = match d.tangents {
-        Some(t) => normal_mapped(hit, t, ng, m.normal),
-        None => ng,
-    };
-    Surface {
-        n,
-        ng,
-        v,
-        albedo: m.albedo,
-        roughness: m.roughness,
-        f0: m.f0,
-        matte_under_film: d.kind == MATERIAL_EYE,
-    }
-}
-
-/// The tangent-space normal `m` (in [−1, 1]) of a hit turned into world space by the per-corner
-/// `tangents` about the geometric normal `ng`.
-fn normal_mapped(hit: &Hit, tangents: &[[f32; 4]], ng: Vec3, m: Vec3) -> Vec3 {
-    let c = |k: usize| Vec4::from(tangents[3 * hit.triangle as usize + k]);
-    let [w0, w1, w2] = hit.weights;
-    let t = c(0) * w0 + c(1) * w1 + c(2) * w2;
-    let t0 = t.truncate() - ng * ng.dot(t.truncate());
-    if t0.length_squared() < 1e-12 {
-        return ng;
-    }
-    let t0 = t0.normalize();
-    let b = ng.cross(t0) * t.w.signum();
-    (t0 * m.x + b * m.y + ng * m.z).normalize_or(ng)
-}
-
-/// Narkowicz 2015, "ACES filmic tone mapping curve".
-fn aces(x: f32) -> f32 {
-    ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
-}
-
-fn byte(v: f32) -> u8 {
-    (v.clamp(0.0, 1.0) * 255.0).round() as u8
-}
-
-/// The frame from per-pixel radiance and material (`None`: the background), as composite.wgsl
-/// composes it: exposure, ACES and sRGB over a soft vertical gradient.
-fn compose(shaded: &[Option<(Vec3, u8)>], w: usize, h: usize, exposure: f32) -> Rendered {
-    let mut display = Vec::with_capacity(4 * w * h);
-    let mut linear = Vec::with_capacity(w * h);
-    let mut material = Vec::with_capacity(w * h);
-    for (i, s) in shaded.iter().enumerate() {
-        match *s {
-            None => {
-                let t = ((i / w) as f32 + 0.5) / h as f32;
-                let bg = Vec3::new(0.06, 0.065, 0.075).lerp(Vec3::new(0.02, 0.02, 0.025), t);
-                display.extend([byte(bg.x), byte(bg.y), byte(bg.z), 255]);
-                linear.push([0.0; 3]);
-                material.push(MATERIAL_OTHER);
-            }
-            Some((rgb, m)) => {
-                let enc = |x: f32| byte(derma_core::color::srgb_encode(aces(x * exposure)));
-                display.extend([enc(rgb.x), enc(rgb.y), enc(rgb.z), 255]);
-                linear.push(rgb.to_array());
-                material.push(m);
-            }
-        }
-    }
-    Rendered {
-        width: w,
-        height: h,
-        display,
-        linear,
-        material,
     }
 }
 
@@ -415,7 +199,7 @@ fn with_props<'a>(
             tangents: None,
             material: plain as &dyn Material,
             coverage: p.coverage,
-            kind: MATERIAL_OTHER,
+            kind: p.kind,
         }))
         .collect()
 }
@@ -575,6 +359,7 @@ mod tests {
             roughness: 0.5,
             f0: 0.0,
             coverage,
+            kind: MATERIAL_OTHER,
         };
         render_with(&m, &t, &tex, &[prop], 0.0, 64)
     }

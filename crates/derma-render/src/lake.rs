@@ -2,12 +2,11 @@
 //! that falls linearly with the distance λ to the skin, normals from its screen-space slope, and
 //! the two effects Alexander et al. 2013 name — darkening by absorption along the path through
 //! the fluid and a specular highlight. Its one home: the GPU pass (lake.wgsl) reads these
-//! constants, and the CPU compositing below draws it over a G-buffer.
+//! constants, and the CPU frame ([`crate::frame`]) runs the steps below over its G-buffer.
 
-use crate::lighting::Lighting;
-use crate::material::{MATERIAL_EYE, MATERIAL_OTHER, MATERIAL_SKIN};
-use crate::shade::{Env, Surface};
-use glam::Vec3;
+use crate::material::{MATERIAL_EYE, MATERIAL_SKIN};
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
 
 /// The lake's range Λ (mm): the meniscus and its fade reach about a millimetre from the lid
 /// margin.
@@ -33,95 +32,101 @@ pub fn depth(lambda: f32, range: f32) -> f32 {
     }
 }
 
-/// A G-buffer the CPU compositing reads: per pixel the material ([`MATERIAL_SKIN`],
-/// [`MATERIAL_EYE`]; anything else, [`MATERIAL_OTHER`], is shaded as the background — the eyes'
-/// close-up draws only skin and globes), view-space normal and linear albedo, and the pixels per
-/// millimetre at the pixel's depth.
-pub struct Surfaces<'a> {
-    /// Width (px).
-    pub width: usize,
-    /// Height (px).
-    pub height: usize,
-    /// Material per pixel.
-    pub material: &'a [u8],
-    /// View-space normal per pixel.
-    pub normal: &'a [Vec3],
-    /// Linear albedo per pixel.
-    pub albedo: &'a [Vec3],
-    /// Pixels per millimetre at pixel i (f / z).
-    pub px_per_mm: &'a (dyn Fn(usize) -> f32 + Sync),
+/// Most pixels the distance search reaches on each side (lake.wgsl's and [`distance`]'s): Λ =
+/// 1 mm spans fewer at every framing `derma render` makes of a head (≈ 4 px at 1024², ≈ 20 px
+/// in a 0.3-zoom close-up).
+pub const MAX_SEARCH_PX: u32 = 48;
+
+/// The lake over a frame: per pixel the meniscus depth (0 off the lake) and the fluid
+/// surface's normal (world).
+pub struct Lake {
+    /// Depth per pixel (mm).
+    pub depth: Vec<f32>,
+    /// Unit normal of the fluid surface per pixel.
+    pub normal: Vec<Vec3>,
 }
 
-/// The lake over `s` from the distances λ (mm, per pixel; infinite off the globes): per pixel
-/// its depth and normal (view space).
-pub fn lake(s: &Surfaces, distance: &[f32], range: f32) -> (Vec<f32>, Vec<Vec3>) {
-    let (w, h) = (s.width, s.height);
-    let d: Vec<f32> = distance.iter().map(|&l| depth(l, range)).collect();
-    let mut n = s.normal.to_vec();
-    for y in 1..h - 1 {
-        for x in 1..w - 1 {
-            let i = y * w + x;
-            if s.material[i] != MATERIAL_EYE || d[i] <= 0.0 {
-                continue;
-            }
-            // ∂depth/∂x and ∂y in mm per mm of Ψ (central differences; skin neighbours count as
-            // the full meniscus height).
-            let at = |j: usize| {
-                if s.material[j] == MATERIAL_SKIN {
-                    MENISCUS_MM
-                } else {
-                    d[j]
-                }
-            };
-            let mm_per_px = 1.0 / (s.px_per_mm)(i);
-            let dx = (at(i + 1) - at(i - 1)) / (2.0 * mm_per_px);
-            let dy = -(at(i + w) - at(i - w)) / (2.0 * mm_per_px);
-            // The fluid surface rises towards the skin: tilt the globe normal by the slope.
-            n[i] = (s.normal[i] + Vec3::new(dx, dy, 0.0)).normalize();
-        }
-    }
-    (d, n)
-}
-
-/// Roughness and F0 of the skin around the globes in the G-buffer's shading: a skin-like lobe
-/// (F0 = 0.35 × 0.08 = 2.8 %, as the previews' flat skin).
-const SKIN_LOBE: (f32, f32) = (0.5, 0.028);
-/// Roughness of the bare tear film over the globe (authored: a thin, slightly uneven film).
-const FILM_ROUGHNESS: f32 = 0.1;
-
-/// Shades `s` (linear RGB, view space) under `lighting` by the one CPU shading
-/// ([`crate::shade`]), with or without the lake (`lake`: per pixel its depth and normal, from
-/// [`lake`]): absorption along the path through the fluid and its specular reflection.
-pub fn shade(s: &Surfaces, lake: Option<(&[f32], &[Vec3])>, lighting: &Lighting) -> Vec<Vec3> {
-    let env = Env::new(lighting, |d| d);
-    let v = Vec3::Z;
-    (0..s.width * s.height)
+/// The distance buffer lake.wgsl's first pass finds: per globe pixel of `material` (rows of
+/// `width`) the distance λ (mm) to the nearest skin pixel, exact within `range` and
+/// [`MAX_SEARCH_PX`] (square rings outwards, stopping once a ring lies beyond the best found);
+/// infinite elsewhere. `px_per_mm`: pixels per mm at each pixel's depth.
+pub fn distance(material: &[u8], width: usize, px_per_mm: &[f32], range: f32) -> Vec<f32> {
+    let height = material.len() / width;
+    let skin = |x: i64, y: i64| {
+        x >= 0
+            && y >= 0
+            && (x as usize) < width
+            && (y as usize) < height
+            && material[y as usize * width + x as usize] == MATERIAL_SKIN
+    };
+    (0..material.len())
+        .into_par_iter()
         .map(|i| {
-            let eye = match s.material[i] {
-                MATERIAL_OTHER => return Vec3::splat(0.02),
-                m => m == MATERIAL_EYE,
-            };
-            let (roughness, f0) = if eye { (FILM_ROUGHNESS, F0) } else { SKIN_LOBE };
-            let n = s.normal[i];
-            let surface = Surface {
-                n,
-                ng: n,
-                v,
-                albedo: s.albedo[i],
-                roughness,
-                f0,
-                matte_under_film: eye,
-            };
-            let mut c = env.shade(&surface);
-            if let Some((d, ln)) = lake {
-                if d[i] > 0.0 {
-                    c *= (-ATTENUATION * 2.0 * d[i]).exp();
-                    c += env.light(ln[i], ln[i], v, ROUGHNESS, F0).1;
+            if material[i] != MATERIAL_EYE {
+                return f32::INFINITY;
+            }
+            let (x, y) = ((i % width) as i64, (i / width) as i64);
+            let reach = ((range * px_per_mm[i]).ceil() as i64).min(MAX_SEARCH_PX as i64);
+            let mut best = i64::MAX;
+            for r in 1..=reach {
+                if r * r >= best {
+                    break;
+                }
+                for k in -r..=r {
+                    let d2 = k * k + r * r;
+                    if d2 < best
+                        && (skin(x + k, y - r)
+                            || skin(x + k, y + r)
+                            || skin(x - r, y + k)
+                            || skin(x + r, y + k))
+                    {
+                        best = d2;
+                    }
                 }
             }
-            c
+            let lambda = (best as f32).sqrt() / px_per_mm[i];
+            if best == i64::MAX || lambda >= range {
+                f32::INFINITY
+            } else {
+                lambda
+            }
         })
         .collect()
+}
+
+/// Per pixel the slope (∂depth/∂x right, ∂depth/∂y up; mm per mm in the plane Ψ) of the lake's
+/// depth `depth` over the globe pixels of `material` (central differences; skin neighbours
+/// stand at the full meniscus height, as lake.wgsl's `depth_at`); zero elsewhere and on the
+/// image's edge.
+pub fn slopes(material: &[u8], width: usize, depth: &[f32], px_per_mm: &[f32]) -> Vec<Vec2> {
+    let height = material.len() / width;
+    let at = |j: usize| {
+        if material[j] == MATERIAL_SKIN {
+            MENISCUS_MM
+        } else {
+            depth[j]
+        }
+    };
+    (0..material.len())
+        .map(|i| {
+            let (x, y) = (i % width, i / width);
+            let inside = x > 0 && y > 0 && x + 1 < width && y + 1 < height;
+            if !inside || material[i] != MATERIAL_EYE || depth[i] <= 0.0 {
+                return Vec2::ZERO;
+            }
+            let mm_per_px = 1.0 / px_per_mm[i];
+            Vec2::new(
+                (at(i + 1) - at(i - 1)) / (2.0 * mm_per_px),
+                -(at(i + width) - at(i - width)) / (2.0 * mm_per_px),
+            )
+        })
+        .collect()
+}
+
+/// A globe's radiance `c` under a lake of depth `depth` (mm) whose surface reflects `specular`:
+/// absorbed along the light's double pass through the fluid, plus the fluid's highlight.
+pub fn over(c: Vec3, depth: f32, specular: Vec3) -> Vec3 {
+    c * (-ATTENUATION * 2.0 * depth).exp() + specular
 }
 
 #[cfg(test)]
@@ -137,38 +142,44 @@ mod tests {
     }
 
     #[test]
-    fn the_lake_darkens_the_globe_only_where_it_lies() {
-        // A 5×3 strip: skin, then four eye pixels at λ = 0.2, 0.6, 2 mm and off the lake.
-        let material = [
+    fn the_search_finds_the_nearest_skin_within_the_reach() {
+        // 9×9 globe with one skin pixel at (2, 3), 10 px per mm, Λ = 0.45 mm = 4.5 px.
+        let (w, mut m) = (9, vec![MATERIAL_EYE; 81]);
+        m[3 * w + 2] = MATERIAL_SKIN;
+        let d = distance(&m, w, &[10.0; 81], 0.45);
+        for (i, &l) in d.iter().enumerate() {
+            let (dx, dy) = ((i % w) as f32 - 2.0, (i / w) as f32 - 3.0);
+            let truth = (dx * dx + dy * dy).sqrt() / 10.0;
+            match m[i] {
+                MATERIAL_SKIN => assert!(l.is_infinite()),
+                _ if truth < 0.45 => assert!((l - truth).abs() < 1e-6, "{i}: {l} vs {truth}"),
+                _ => assert!(l.is_infinite(), "{i}: {l} beyond the reach"),
+            }
+        }
+    }
+
+    #[test]
+    fn the_slope_rises_towards_the_skin_and_the_fluid_darkens_the_globe() {
+        // A 5×3 strip: skin, then eye pixels at λ = 0.2, 0.6, 2 mm and off the lake.
+        let m: Vec<u8> = [
             MATERIAL_SKIN,
             MATERIAL_EYE,
             MATERIAL_EYE,
             MATERIAL_EYE,
             MATERIAL_EYE,
-        ];
-        let material: Vec<u8> = material.repeat(3);
-        let normal = vec![Vec3::Z; 15];
-        let albedo = vec![Vec3::splat(0.8); 15];
-        let px = |_: usize| 10.0;
-        let s = Surfaces {
-            width: 5,
-            height: 3,
-            material: &material,
-            normal: &normal,
-            albedo: &albedo,
-            px_per_mm: &px,
-        };
+        ]
+        .repeat(3);
         let lambda = [f32::INFINITY, 0.2, 0.6, 2.0, f32::INFINITY].repeat(3);
-        let (d, n) = lake(&s, &lambda, RANGE_MM);
+        let d: Vec<f32> = lambda.iter().map(|&l| depth(l, RANGE_MM)).collect();
+        let s = slopes(&m, 5, &d, &[10.0; 15]);
         assert!(d[6] > d[7] && d[7] > 0.0 && d[8] == 0.0, "{d:?}");
-        // The fluid's slope tilts the normal in x, not in y, and keeps it a unit vector.
-        assert!(n[6].x.abs() > 0.1 && n[6].y == 0.0, "{}", n[6]);
-        assert!((n[6].length() - 1.0).abs() < 1e-6);
-        let l = crate::cpu::single_light(Vec3::Z, Vec3::splat(3.0));
-        let (dry, wet) = (shade(&s, None, &l), shade(&s, Some((&d, &n)), &l));
-        assert_eq!(dry[0], wet[0]);
-        assert_eq!(dry[8], wet[8]);
-        // Head-on, the tilted fluid sends its highlight away: only the absorption remains.
-        assert!(wet[6].x < dry[6].x, "{} vs {}", wet[6], dry[6]);
+        // Rising towards the skin on the left: a negative x slope, none in y; none on the
+        // edge rows or off the lake.
+        assert!(s[6].x < -0.1 && s[6].y == 0.0, "{}", s[6]);
+        assert_eq!((s[1], s[8]), (Vec2::ZERO, Vec2::ZERO));
+        // Absorption: e^(−2 · 1.5 /mm · 0.25 mm) of the globe, plus the highlight.
+        let c = over(Vec3::ONE, MENISCUS_MM, Vec3::splat(0.1));
+        assert!((c.x - ((-0.75f32).exp() + 0.1)).abs() < 1e-6, "{c}");
+        assert_eq!(over(Vec3::ONE, 0.0, Vec3::ZERO), Vec3::ONE);
     }
 }

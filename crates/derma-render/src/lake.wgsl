@@ -86,8 +86,9 @@ fn fs_lake_shade(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {
     // ∂depth/∂x (right) and ∂depth/∂y (up) in mm per mm, by central differences.
     let dx = (depth_at(p + vec2<i32>(1, 0)) - depth_at(p - vec2<i32>(1, 0))) / (2.0 * mm);
     let dy = -(depth_at(p + vec2<i32>(0, 1)) - depth_at(p - vec2<i32>(0, 1))) / (2.0 * mm);
-    // The fluid surface rises towards the skin: tilt the globe normal by the slope.
-    let n = normalize(ng + dx * frame.right.xyz + dy * frame.up.xyz);
+    // The fluid surface rises towards the skin: a height field's normal leans down its slope,
+    // away from the lid (n = (−∂x, −∂y, 1) over the globe's).
+    let n = normalize(ng - dx * frame.right.xyz - dy * frame.up.xyz);
     // The pixel's point on the globe from its view depth.
     let c = (pos.xy - 0.5 * frame.viewport.xy) / frame.camera.w;
     let ray = frame.forward.xyz + c.x * frame.right.xyz - c.y * frame.up.xyz;

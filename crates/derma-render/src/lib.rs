@@ -7,8 +7,9 @@
 //! `sss_color`/`sss_radius`, the match table's fitted profile), GGX specular with Smith
 //! visibility from the roughness and specular maps, a shadowed three-light setup with a
 //! hemisphere environment, and eyes with a refracting cornea — plus turntables and contact
-//! sheets; its CPU renderer ([`cpu`], on the one rasteriser [`raster`] and the one CPU shading
-//! [`shade`], over the microfacet terms [`brdf`] that the shaders share) for previews without a GPU;
+//! sheets; its CPU renderer ([`frame`]: a G-buffer on the one rasteriser [`raster`], steps over it
+//! and the one CPU shading [`shade`], over the microfacet terms [`brdf`] that the shaders share)
+//! with the previews' materials ([`cpu`]) for drawing without a GPU;
 //! the lacrimal lake ([`lake`]) and Burley's profile ([`burley`]) it draws. It depends on
 //! derma-core and derma-head only; the crates above draw through it. Exporting (GLB, web, the
 //! viewer's server) and rendering from files are derma-export's.
@@ -21,6 +22,7 @@ pub mod camera;
 pub mod cpu;
 pub mod draw;
 pub mod error;
+pub mod frame;
 #[cfg(feature = "gpu")]
 pub mod gpu_texture;
 pub mod lake;

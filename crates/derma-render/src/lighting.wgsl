@@ -60,6 +60,6 @@ fn light_surface(world: vec3<f32>, n: vec3<f32>, ng: vec3<f32>, v: vec3<f32>, ro
     out.diffuse += environment(n) * (1.0 - f0);
     let r = reflect(-v, n);
     let ab = env_brdf(rough, nv);
-    out.specular += mix(environment(r), 0.5 * (frame.sky.rgb + frame.ground.rgb), rough) * (f0 * ab.x + ab.y);
+    out.specular += mix(environment(r), 0.5 * (frame.sky.rgb + frame.ground.rgb), rough) * (f0 * ab.x + f90(f0) * ab.y);
     return out;
 }

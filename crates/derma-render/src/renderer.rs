@@ -22,9 +22,6 @@ const COMPOSITE: &str = include_str!("composite.wgsl");
 const LIGHTING: &str = include_str!("lighting.wgsl");
 use crate::brdf::WGSL as BRDF;
 const LAKE: &str = include_str!("lake.wgsl");
-/// Most pixels the lake's distance search reaches on each side: Λ = 1 mm spans fewer at every
-/// framing `derma render` makes of a head (≈ 4 px at 1024², ≈ 20 px in a 0.3-zoom close-up).
-pub const LAKE_MAX_PX: u32 = 48;
 
 /// Shadow map size (texels per side).
 pub const SHADOW_SIZE: u32 = 2048;
@@ -66,7 +63,7 @@ impl LakeU {
             ],
             search: [
                 lake::ROUGHNESS,
-                LAKE_MAX_PX as f32,
+                lake::MAX_SEARCH_PX as f32,
                 if enabled { 1.0 } else { 0.0 },
                 0.0,
             ],

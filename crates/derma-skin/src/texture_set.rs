@@ -13,7 +13,7 @@ use derma_core::image_io::{quantize16, quantize8, srgb8, write_png_rows, ExrPrec
 use derma_core::map::{box_reduced, Taps};
 use derma_core::Map;
 use derma_optics::bio::names;
-use derma_render::cpu::{Material, MaterialSample};
+use derma_render::frame::{Material, MaterialSample};
 use derma_shading::{Appearance, BioTexel};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -182,7 +182,7 @@ fn unit16(c: u16) -> f32 {
 }
 
 impl Material for EncodedMaterial<'_> {
-    fn sample(&self, uv: glam::Vec2) -> MaterialSample {
+    fn sample(&self, uv: glam::Vec2, _p: glam::Vec3) -> MaterialSample {
         let r = self.maps;
         let taps = Taps::uv(r.width, r.height, uv.x, uv.y, self.wrap);
         let t = taps.texels();

@@ -4,6 +4,7 @@
 mod detail_regions;
 mod fitted_head;
 mod hair;
+mod lake;
 mod pipeline;
 mod regional_color;
 mod relief;

@@ -1,11 +1,12 @@
-//! The G-buffer of a close-up of the built-in head's eyes (material mask, view depth, normals
-//! and albedo), drawn by derma-render's rasteriser through a pinhole over the skin (lids and
-//! sockets as skin) and the globes: the input the distance fields and the lake compositing need.
+//! The G-buffer of a close-up of the built-in head's eyes (material mask, view depth and the
+//! surfaces), drawn by derma-render's CPU frame through a pinhole over the skin (lids and
+//! sockets as skin) and the globes: the input the distance fields and the lake step need.
 
 use super::{material, GBuffer};
 use derma_core::mesh::TriMesh;
-use derma_render::lake::Surfaces;
-use derma_render::raster::{rasterise, Object, Projection};
+use derma_render::cpu::Plain;
+use derma_render::frame::{gbuffer, Drawn, Shot};
+use derma_render::raster::Projection;
 use glam::{Mat3, Vec2, Vec3};
 
 /// A pinhole camera looking down −Z (view space), at `position` in head space.
@@ -51,14 +52,12 @@ impl Camera {
     }
 }
 
-/// A rendered close-up: the G-buffer plus view-space normals and linear albedo.
+/// A rendered close-up: derma-render's G-buffer, and the mask and depth the fields read.
 pub struct Scene {
     /// Mask, depth, focal length.
     pub g: GBuffer,
-    /// View-space normal per pixel.
-    pub normal: Vec<Vec3>,
-    /// Linear albedo per pixel.
-    pub albedo: Vec<Vec3>,
+    /// The renderer's G-buffer, which the lake is composited over and shaded from.
+    pub frame: derma_render::frame::GBuffer,
 }
 
 /// A mesh to draw: its material and albedo function of UV.
@@ -71,57 +70,62 @@ pub struct Layer<'a> {
     pub albedo: &'a (dyn Fn(Vec2) -> Vec3 + Sync),
 }
 
-/// Rasterises the layers with derma-render's rasteriser (perspective-correct interpolation,
-/// nearest surface wins).
+/// Roughness and F0 of the skin around the globes: a skin-like lobe (F0 = 0.35 × 0.08 = 2.8 %,
+/// as derma-render's flat skin).
+const SKIN_LOBE: (f32, f32) = (0.5, 0.028);
+/// Roughness of the bare tear film over the globe (authored: a thin, slightly uneven film) and
+/// its F0 (water's, derma-render's lake).
+const FILM_LOBE: (f32, f32) = (0.1, derma_render::lake::F0);
+
+/// Draws the layers into derma-render's G-buffer (its rasteriser: perspective-correct
+/// interpolation, nearest surface wins).
 pub fn render(cam: &Camera, layers: &[Layer]) -> Scene {
-    let (w, h) = (cam.width, cam.height);
-    let objects: Vec<Object> = layers
+    let plains: Vec<Plain> = layers
         .iter()
-        .map(|l| Object {
-            mesh: l.mesh,
-            coverage: None,
+        .map(|l| {
+            let (roughness, f0) = if l.material == material::EYE {
+                FILM_LOBE
+            } else {
+                SKIN_LOBE
+            };
+            Plain {
+                albedo: l.albedo,
+                roughness,
+                f0,
+            }
         })
         .collect();
-    let hits = rasterise(&objects, &cam.projection(), w, h);
-    let mut depth = vec![0.0; w * h];
-    let mut mask = vec![material::NONE; w * h];
-    let mut normal = vec![Vec3::Z; w * h];
-    let mut albedo = vec![Vec3::ZERO; w * h];
-    for (i, hit) in hits.iter().enumerate() {
-        let Some(hit) = hit else { continue };
-        let l = &layers[hit.object as usize];
-        depth[i] = hit.depth;
-        mask[i] = l.material;
-        normal[i] = hit
-            .interpolate(l.mesh, &l.mesh.normals)
-            .normalize_or(Vec3::Z);
-        albedo[i] = (l.albedo)(hit.interpolate(l.mesh, &l.mesh.uvs));
-    }
-    Scene {
-        g: GBuffer {
-            width: w,
-            height: h,
-            mask,
-            depth,
-            focal: cam.focal,
-        },
-        normal,
-        albedo,
-    }
-}
-
-impl Scene {
-    /// The scene as derma-render's lake compositing reads it.
-    pub fn surfaces<'a>(&'a self, px_per_mm: &'a (dyn Fn(usize) -> f32 + Sync)) -> Surfaces<'a> {
-        Surfaces {
-            width: self.g.width,
-            height: self.g.height,
-            material: &self.g.mask,
-            normal: &self.normal,
-            albedo: &self.albedo,
-            px_per_mm,
-        }
-    }
+    let drawn: Vec<Drawn> = layers
+        .iter()
+        .zip(&plains)
+        .map(|(l, plain)| Drawn {
+            mesh: l.mesh,
+            tangents: None,
+            material: plain,
+            coverage: None,
+            kind: l.material,
+        })
+        .collect();
+    let shot = Shot::pinhole(
+        cam.position,
+        Mat3::IDENTITY,
+        cam.focal,
+        cam.width,
+        cam.height,
+    );
+    let frame = gbuffer(&drawn, &shot);
+    let g = GBuffer {
+        width: cam.width,
+        height: cam.height,
+        mask: frame.kinds(),
+        depth: frame
+            .pixels
+            .iter()
+            .map(|p| p.map_or(0.0, |p| p.depth))
+            .collect(),
+        focal: cam.focal,
+    };
+    Scene { g, frame }
 }
 
 /// The built-in head's eye close-up at rest: skin (skin albedo), globes with the default eye
