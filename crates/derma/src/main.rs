@@ -73,7 +73,7 @@ enum Command {
     Eyes(eyes::EyesCommand),
     /// Render a texture set on the head or your mesh: subsurface scattering, specular, shadows,
     /// eyes; two lighting setups, turntables, contact sheets (wgpu in a build with the `gpu`
-    /// feature, on any GPU or lavapipe; else the CPU renderer, without scattering or shadows).
+    /// feature, on any GPU or lavapipe; else the CPU renderer, without scattering or refraction).
     Render(render::RenderArgs),
     /// Files for engines and the web: a GLB with the PBR material, or the web viewer's files.
     #[command(subcommand)]
