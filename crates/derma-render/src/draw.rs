@@ -266,17 +266,7 @@ mod tests {
     #[test]
     fn a_user_mesh_draws_on_the_cpu_framed_lit_and_repeatable() {
         let (mesh, _) = crate::cpu::sphere(50.0, 48);
-        let one = |v: f32| Map::filled(4, 4, v);
-        let maps = crate::SkinMaps {
-            base_color: [one(0.6), one(0.4), one(0.3)],
-            normal: [one(0.5), one(0.5), one(1.0)],
-            roughness: one(0.5),
-            specular: one(0.35),
-            subsurface: None,
-            lash_color: None,
-            hair: None,
-            wrap: false,
-        };
+        let maps = crate::SkinMaps::uniform([0.6, 0.4, 0.3], 0.5, 0.35);
         let scene = Scene::mesh(&mesh, maps);
         let r = CpuRenderer::new(&scene);
         let l = Setup::Studio.lighting();

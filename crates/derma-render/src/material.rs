@@ -121,6 +121,22 @@ fn check_size(path: &Path, m: &Map, w: usize, h: usize) -> Result<()> {
 }
 
 impl SkinMaps {
+    /// A uniform skin: one linear albedo `rgb`, flat normals, one perceptual `roughness` and
+    /// one specular level (F0 / 0.08), as 1×1 maps (a plain material for a mesh, a test scene).
+    pub fn uniform(rgb: [f32; 3], roughness: f32, specular: f32) -> SkinMaps {
+        let one = |v: f32| Map::filled(1, 1, v);
+        SkinMaps {
+            base_color: rgb.map(one),
+            normal: [one(0.5), one(0.5), one(1.0)],
+            roughness: one(roughness),
+            specular: one(specular),
+            subsurface: None,
+            lash_color: None,
+            hair: None,
+            wrap: false,
+        }
+    }
+
     /// Reads a texture set written by `derma skin` (base_color, normal, roughness, specular and,
     /// when present, sss_color and sss_radius).
     pub fn from_dir(dir: &Path) -> Result<SkinMaps> {

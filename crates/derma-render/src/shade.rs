@@ -145,19 +145,26 @@ mod tests {
     use super::*;
     use crate::lighting::Setup;
 
-    #[test]
-    fn a_white_matte_surface_under_one_light_is_lambertian() {
-        // One unit light at 60° from the normal, no environment: a white surface reflects
-        // E cos θ (1 − F(θ)) / π whatever the view (the diffuse keeps what Schlick's Fresnel does
-        // not reflect) — with F0 = 0 nothing is reflected (f90 = 0): E cos θ / π and no lobe;
-        // with F0 = 0.04, F(60°) = 0.04 + 0.96 · 0.5⁵ and the lobe adds the specular term.
+    /// One unit key light at 60° from +Z (in the xz plane), the others dark, sky and ground of
+    /// radiance `sky`.
+    fn key_at_60(sky: f32) -> Lighting {
         let mut lighting = Setup::Studio.lighting();
         lighting.lights[0].dir = Vec3::new(0.866, 0.0, 0.5);
         lighting.lights[0].irradiance = Vec3::ONE;
         for l in &mut lighting.lights[1..] {
             l.irradiance = Vec3::ZERO;
         }
-        (lighting.sky, lighting.ground) = (Vec3::ZERO, Vec3::ZERO);
+        (lighting.sky, lighting.ground) = (Vec3::splat(sky), Vec3::splat(sky));
+        lighting
+    }
+
+    #[test]
+    fn a_white_matte_surface_under_one_light_is_lambertian() {
+        // One unit light at 60° from the normal, no environment: a white surface reflects
+        // E cos θ (1 − F(θ)) / π whatever the view (the diffuse keeps what Schlick's Fresnel does
+        // not reflect) — with F0 = 0 nothing is reflected (f90 = 0): E cos θ / π and no lobe;
+        // with F0 = 0.04, F(60°) = 0.04 + 0.96 · 0.5⁵ and the lobe adds the specular term.
+        let mut lighting = key_at_60(0.0);
         let env = Env::new(&lighting, |d| d);
         for (v, f0) in [Vec3::Z, Vec3::new(-0.6, 0.0, 0.8)]
             .into_iter()
@@ -204,14 +211,7 @@ mod tests {
     fn the_key_shadow_takes_away_the_keys_light_only() {
         // Key at 60° (irradiance 1), sky and ground 0.2: in the key's shadow only the
         // environment remains, and a half shadow takes half the key.
-        let mut lighting = Setup::Studio.lighting();
-        lighting.lights[0].dir = Vec3::new(0.866, 0.0, 0.5);
-        lighting.lights[0].irradiance = Vec3::ONE;
-        for l in &mut lighting.lights[1..] {
-            l.irradiance = Vec3::ZERO;
-        }
-        (lighting.sky, lighting.ground) = (Vec3::splat(0.2), Vec3::splat(0.2));
-        let env = Env::new(&lighting, |d| d);
+        let env = Env::new(&key_at_60(0.2), |d| d);
         let lobe = Lobe {
             n: Vec3::Z,
             ng: Vec3::Z,

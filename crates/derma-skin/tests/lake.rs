@@ -2,23 +2,12 @@
 //! the globes only, within the lake's reach Λ of the skin, darkening every globe pixel at the
 //! lid margin — the CPU renderer's lake step and, on a GPU, lake.wgsl.
 
-use derma_core::Map;
 use derma_render::material::{MATERIAL_EYE, MATERIAL_SKIN};
 use derma_render::{CpuRenderer, Draw, Rendered, Scene, Setup, SkinMaps, View};
 
 /// The built-in head under a flat skin (the lake reads geometry and materials only).
 fn head() -> Scene {
-    let one = |v: f32| Map::filled(4, 4, v);
-    let maps = SkinMaps {
-        base_color: [one(0.6), one(0.4), one(0.3)],
-        normal: [one(0.5), one(0.5), one(1.0)],
-        roughness: one(0.5),
-        specular: one(0.35),
-        subsurface: None,
-        lash_color: None,
-        hair: None,
-        wrap: false,
-    };
+    let maps = SkinMaps::uniform([0.6, 0.4, 0.3], 0.5, 0.35);
     Scene::head(derma_head::Head::builtin(), maps, &[], None, (0.0, 0.0))
 }
 
