@@ -67,10 +67,10 @@ fn skin_marker() -> f32 {
 }
 
 struct GOut {
-    @location(0) diffuse: vec4<f32>,  // skin: diffuse light × √albedo, to be scattered
+    @location(0) diffuse: vec4<f32>,  // skin: colourless diffuse light, to be scattered
     @location(1) direct: vec4<f32>,   // everything not scattered; a = coverage
     @location(2) sss: vec4<f32>,      // x view depth (mm), yzw Burley shape d per channel (mm)
-    @location(3) post: vec4<f32>,     // skin: √albedo, applied after scattering; eyes: normal; a material
+    @location(3) post: vec4<f32>,     // skin: albedo, applied after scattering; eyes: normal; a material
 }
 
 fn shading_normal(in: VertexOut, ng: vec3<f32>, textured: bool) -> vec3<f32> {
@@ -140,9 +140,11 @@ fn fs_skin(in: VertexOut, @builtin(front_facing) front: bool) -> GOut {
         let sa = textureSample(sss_color, tex_sampler, tex_uv(in.uv)).rgb;
         let mfp = textureSample(sss_radius, tex_sampler, tex_uv(in.uv)).rgb;
         let d = max(mfp / burley_s(clamp(sa, vec3<f32>(0.0), vec3<f32>(1.0))), vec3<f32>(1e-4));
-        let s = sqrt(max(albedo, vec3<f32>(0.0)));
-        o.diffuse = vec4<f32>(lit.diffuse * s, 1.0);
-        o.post = vec4<f32>(s, skin_marker());
+        // Post-scatter texturing (Jimenez et al. 2010 §6): colourless light is scattered and the
+        // set's colour multiplied after, once — its maps already hold the colour the scattering
+        // made (the skin's diffuse reflectance, not a surface pigment seen twice).
+        o.diffuse = vec4<f32>(lit.diffuse, 1.0);
+        o.post = vec4<f32>(max(albedo, vec3<f32>(0.0)), skin_marker());
         o.sss = vec4<f32>(o.sss.x, d);
         o.direct = vec4<f32>(lit.specular, 1.0);
     } else {
