@@ -15,6 +15,9 @@ pub struct LoadedImage {
     pub channels: Vec<Map>,
     /// True when the file had colour channels that differ from each other.
     pub is_color: bool,
+    /// The file's alpha channel in [0, 1] where it has one ([`read_rgb`]: a PNG with alpha, an
+    /// EXR with an `A` channel beside R, G and B); `None` otherwise.
+    pub alpha: Option<Map>,
 }
 
 fn decode(path: &Path) -> Result<image::DynamicImage> {
@@ -36,7 +39,9 @@ pub fn read_rgb(path: &Path) -> Result<LoadedImage> {
     if is_exr {
         return read_exr_rgb(path);
     }
-    let img = decode(path)?.into_rgb32f();
+    let decoded = decode(path)?;
+    let has_alpha = decoded.color().has_alpha();
+    let img = decoded.into_rgba32f();
     let (w, h) = (img.width() as usize, img.height() as usize);
     if w == 0 || h == 0 {
         return Err(CoreError::Image {
@@ -48,10 +53,14 @@ pub fn read_rgb(path: &Path) -> Result<LoadedImage> {
         Vec::with_capacity(w * h),
         Vec::with_capacity(w * h),
         Vec::with_capacity(w * h),
+        Vec::with_capacity(if has_alpha { w * h } else { 0 }),
     ];
     let mut is_color = false;
     for p in img.pixels() {
-        for (c, &v) in ch.iter_mut().zip(&p.0) {
+        if has_alpha {
+            ch[3].push(p.0[3]);
+        }
+        for (c, &v) in ch[..3].iter_mut().zip(&p.0[..3]) {
             if !v.is_finite() {
                 return Err(CoreError::Image {
                     path: path.to_path_buf(),
@@ -64,7 +73,7 @@ pub fn read_rgb(path: &Path) -> Result<LoadedImage> {
             is_color = true;
         }
     }
-    let [r, g, b] = ch;
+    let [r, g, b, a] = ch;
     Ok(LoadedImage {
         channels: vec![
             Map::from_vec(w, h, r)?,
@@ -72,6 +81,11 @@ pub fn read_rgb(path: &Path) -> Result<LoadedImage> {
             Map::from_vec(w, h, b)?,
         ],
         is_color,
+        alpha: if has_alpha {
+            Some(Map::from_vec(w, h, a)?)
+        } else {
+            None
+        },
     })
 }
 
@@ -84,6 +98,7 @@ pub fn read_grey(path: &Path) -> Result<LoadedImage> {
         return Ok(LoadedImage {
             channels: vec![r],
             is_color: false,
+            alpha: rgb.alpha,
         });
     }
     let (w, h) = (rgb.channels[0].width(), rgb.channels[0].height());
@@ -99,6 +114,7 @@ pub fn read_grey(path: &Path) -> Result<LoadedImage> {
     Ok(LoadedImage {
         channels: vec![Map::from_vec(w, h, d)?],
         is_color: true,
+        alpha: rgb.alpha,
     })
 }
 
@@ -116,17 +132,18 @@ fn read_exr_rgb(path: &Path) -> Result<LoadedImage> {
         path: path.to_path_buf(),
         detail: detail.into(),
     };
-    let (r, g, b) = match (find(&["R"]), find(&["G"]), find(&["B"])) {
-        (Some(r), Some(g), Some(b)) => (r, g, b),
+    let (r, g, b, alpha) = match (find(&["R"]), find(&["G"]), find(&["B"])) {
+        (Some(r), Some(g), Some(b)) => (r, g, b, find(&["A"])),
         _ => {
             let y = find(&["Y", "L", "A"])
                 .or_else(|| (channels.len() == 1).then(|| channels[0].1.clone()));
             let y = y.ok_or_else(|| bad("no R,G,B channels and no single grey (Y) channel"))?;
-            (y.clone(), y.clone(), y)
+            (y.clone(), y.clone(), y, None)
         }
     };
-    if [&r, &g, &b]
+    if [Some(&r), Some(&g), Some(&b), alpha.as_ref()]
         .iter()
+        .flatten()
         .any(|m| m.data().iter().any(|v| !v.is_finite()))
     {
         return Err(bad("contains NaN or infinite values"));
@@ -140,6 +157,7 @@ fn read_exr_rgb(path: &Path) -> Result<LoadedImage> {
     Ok(LoadedImage {
         channels: vec![r, g, b],
         is_color,
+        alpha,
     })
 }
 
@@ -478,6 +496,31 @@ mod tests {
 
     fn tmpdir(tag: &str) -> std::path::PathBuf {
         derma_test_support::scratch_dir(&format!("io-{tag}"))
+    }
+
+    #[test]
+    fn an_rgba_pngs_alpha_is_read_and_an_rgb_pngs_is_none() {
+        let d = tmpdir("alpha");
+        let g = Map::from_fn(4, 2, |i| i as f32 / 7.0);
+        let a = Map::from_fn(4, 2, |i| if i % 2 == 0 { 0.0 } else { 1.0 });
+        let (rgba, rgb) = (d.join("rgba.png"), d.join("rgb.png"));
+        write_png8(&rgba, &[&g, &g, &g, &a]).unwrap();
+        write_png8(&rgb, &[&g, &g, &g]).unwrap();
+        let read = read_rgb(&rgba).unwrap();
+        assert_eq!(read.alpha.unwrap().data(), a.data());
+        for (x, y) in read.channels[0].data().iter().zip(g.data()) {
+            assert!((x - y).abs() <= 0.5 / 255.0, "{x} vs {y}");
+        }
+        assert!(read_rgb(&rgb).unwrap().alpha.is_none());
+        // An EXR with A beside R, G and B keeps it.
+        let exr = d.join("rgba.exr");
+        write_exr(
+            &exr,
+            &[("R", &g), ("G", &g), ("B", &g), ("A", &a)],
+            ExrPrecision::F32,
+        )
+        .unwrap();
+        assert_eq!(read_rgb(&exr).unwrap().alpha.unwrap().data(), a.data());
     }
 
     #[test]

@@ -538,8 +538,8 @@ fn refuse_teeth_on_user_mesh(o: &GlbOptions) -> Result<()> {
 
 /// Image indices of the parts' textures.
 struct PartTextures {
-    /// The teeth's, when given.
-    teeth: Option<usize>,
+    /// The teeth's, when given, and whether it has alpha (voids).
+    teeth: Option<(usize, bool)>,
     /// The eye globes'.
     eye: usize,
     /// The lash cards'.
@@ -548,10 +548,15 @@ struct PartTextures {
 
 /// The parts' textures: the teeth (when given), the eye (given or built in) and the lash cards.
 fn add_part_textures(o: &GlbOptions, s: &mut Scene) -> Result<PartTextures> {
+    // The teeth's colour, and its alpha where the texture has one (the voids between teeth).
     let teeth = match &o.teeth {
         Some(p) => {
-            let rgb = srgb_encoded(&derma_render::material::read_albedo(p)?);
-            Some(s.image("teeth", &png8_bytes("teeth", &[&rgb[0], &rgb[1], &rgb[2]])?))
+            let t = derma_render::material::read_albedo(p)?;
+            let rgb = srgb_encoded(&t.rgb);
+            let mut maps = vec![&rgb[0], &rgb[1], &rgb[2]];
+            maps.extend(t.alpha.as_ref());
+            let image = s.image("teeth", &png8_bytes("teeth", &maps)?);
+            Some((image, t.alpha.is_some()))
         }
         None => None,
     };
@@ -604,9 +609,15 @@ fn part_material(part: &derma_head::Part, textures: &PartTextures) -> Value {
         json!({"name": part.name, "alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": true,
             "pbrMetallicRoughness": {"baseColorTexture": {"index": textures.lashes},
             "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
-    } else if let (Some(t), true) = (textures.teeth, part.name.starts_with("teeth")) {
-        json!({"name": part.name, "pbrMetallicRoughness": {"baseColorTexture": {"index": t},
-            "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
+    } else if let (Some((t, voids)), true) = (textures.teeth, part.name.starts_with("teeth")) {
+        let mut m = json!({"name": part.name, "pbrMetallicRoughness": {"baseColorTexture": {"index": t},
+            "metallicFactor": 0.0, "roughnessFactor": prop.roughness}});
+        if voids {
+            // The voids between teeth cut out, as the renderers test them.
+            m["alphaMode"] = json!("MASK");
+            m["alphaCutoff"] = json!(0.5);
+        }
+        m
     } else {
         let a = (prop.albedo)(glam::Vec2::splat(0.5));
         json!({"name": part.name, "pbrMetallicRoughness": {"baseColorFactor": [a.x, a.y, a.z, 1.0],

@@ -188,16 +188,18 @@ pub struct AnimateOptions {
 /// Loads an eyeball texture as linear RGB maps (EXR as stored, other formats sRGB-decoded).
 pub fn load_eye_texture(path: &Path) -> Result<[Map; 3]> {
     use derma_render::RenderError;
-    derma_render::material::read_albedo(path).map_err(|e| match e {
-        RenderError::Core(e) => e.into(),
-        RenderError::Invalid(e) => e.into(),
-        e => derma_core::Invalid::new(
-            format!("eye texture '{}'", path.display()),
-            "a readable RGB image",
-            e,
-        )
-        .into(),
-    })
+    derma_render::material::read_albedo(path)
+        .map(|t| t.rgb)
+        .map_err(|e| match e {
+            RenderError::Core(e) => e.into(),
+            RenderError::Invalid(e) => e.into(),
+            e => derma_core::Invalid::new(
+                format!("eye texture '{}'", path.display()),
+                "a readable RGB image",
+                e,
+            )
+            .into(),
+        })
 }
 
 /// What `animate` wrote and measured.

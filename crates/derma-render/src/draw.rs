@@ -134,13 +134,14 @@ fn looks(m: &Material) -> (Option<Albedo<'_>>, f32, f32, Option<Cover<'_>>, u8) 
         } => (Some(textured(albedo)), *roughness, *f0, None, MATERIAL_EYE),
         Material::Textured {
             albedo,
+            coverage,
             roughness,
             f0,
         } => (
             Some(textured(albedo)),
             *roughness,
             *f0,
-            None,
+            coverage.as_deref().map(voids),
             MATERIAL_OTHER,
         ),
         Material::Flat {
@@ -174,6 +175,18 @@ fn looks(m: &Material) -> (Option<Albedo<'_>>, f32, f32, Option<Cover<'_>>, u8) 
             )
         }
     }
+}
+
+/// A textured part's coverage: its texture's alpha tested at ½ (forward.wgsl's test), so the
+/// voids are cut out, not dithered.
+fn voids(alpha: &Map) -> Cover<'_> {
+    Box::new(move |uv: Vec2| {
+        if alpha.sample_uv(uv.x, uv.y, false) < 0.5 {
+            0.0
+        } else {
+            1.0
+        }
+    })
 }
 
 /// An albedo texture on a part's UVs (not repeated).
@@ -297,5 +310,86 @@ mod tests {
         assert!(c[0] > c[1] && c[1] > c[2], "{c:?}");
         let b = r.draw(&View::default(), &l, 128, 96).unwrap();
         assert!(a.display == b.display && a.linear == b.linear);
+    }
+}
+
+#[cfg(test)]
+mod voids {
+    use super::*;
+    use crate::lighting::Setup;
+    use crate::scene::{corner_vertices, Part};
+
+    /// A 40 mm skin square and, 5 mm in front of it, a 20 mm textured square whose texture's
+    /// alpha is 0 on its left half (a void, as between teeth).
+    fn scene() -> Scene {
+        let square = |half: f32, z: f32| TriMesh {
+            positions: [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                .map(|(x, y)| Vec3::new(half * x, half * y, z))
+                .to_vec(),
+            normals: vec![Vec3::Z; 4],
+            uvs: vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        };
+        let mut scene = Scene::mesh(
+            &square(20.0, 0.0),
+            crate::SkinMaps::uniform([0.6, 0.4, 0.3], 0.5, 0.35),
+        );
+        let alpha = Map::from_fn(8, 8, |i| if i % 8 < 4 { 0.0 } else { 1.0 });
+        scene.parts.push(Part {
+            name: "teeth_upper".into(),
+            vertices: corner_vertices(&square(10.0, 5.0), None),
+            material: Material::Textured {
+                albedo: Box::new([0.9, 0.9, 0.85].map(|v| Map::filled(8, 8, v))),
+                coverage: Some(Box::new(alpha)),
+                roughness: 0.4,
+                f0: 0.04,
+            },
+        });
+        scene
+    }
+
+    /// What `r` shows in the textured square's left and right halves (a 128² frame, head-on).
+    fn halves(r: &dyn Draw) -> (Vec<u8>, Vec<u8>) {
+        let img = r
+            .draw(&View::default(), &Setup::Studio.lighting(), 128, 128)
+            .unwrap();
+        // The front square spans about the middle third of the frame: sample well inside it.
+        let at = |xs: std::ops::Range<usize>| {
+            (56..72)
+                .flat_map(|y| xs.clone().map(move |x| y * 128 + x))
+                .map(|i| img.material[i])
+                .collect()
+        };
+        (at(50..60), at(68..78))
+    }
+
+    fn the_voids_show_what_is_behind(r: &dyn Draw) {
+        let (left, right) = halves(r);
+        assert!(
+            left.iter().all(|&m| m == MATERIAL_SKIN),
+            "{}: {left:?}",
+            r.name()
+        );
+        assert!(
+            right.iter().all(|&m| m == MATERIAL_OTHER),
+            "{}: {right:?}",
+            r.name()
+        );
+    }
+
+    #[test]
+    fn a_textured_parts_voids_show_the_skin_behind_on_the_cpu() {
+        let scene = scene();
+        the_voids_show_what_is_behind(&CpuRenderer::new(&scene));
+    }
+
+    #[cfg(feature = "gpu")]
+    #[test]
+    fn a_textured_parts_voids_show_the_skin_behind_on_the_gpu() {
+        if derma_test_support::skip_without_gpu() {
+            return;
+        }
+        let scene = scene();
+        the_voids_show_what_is_behind(&Renderer::new(&scene).unwrap());
     }
 }

@@ -132,6 +132,10 @@ fn fs_skin(in: VertexOut, @builtin(front_facing) front: bool) -> GOut {
     if (draw.params.z == KIND_CARD && coverage <= bayer4(in.clip.xy)) {
         discard;
     }
+    // A textured part's voids (the alpha of `derma photo teeth`'s texture between the teeth).
+    if (textured && draw.params.z == KIND_FLAT && coverage < 0.5) {
+        discard;
+    }
     let n = shading_normal(in, ng, textured && draw.params.z == KIND_SKIN);
     let lit = light_surface(in.world, n, ng, v, rough, f0);
     o.sss = vec4<f32>(view_depth(in.world), 0.0, 0.0, 0.0);

@@ -211,10 +211,12 @@ impl SkinMaps {
     }
 }
 
-/// An albedo texture as linear RGB maps: EXR as stored, other formats (PNG, JPEG) sRGB-decoded —
-/// how `derma photo iris` and `derma photo teeth` textures are read for the parts.
-pub fn read_albedo(path: &std::path::Path) -> crate::Result<[Map; 3]> {
+/// An albedo texture as linear RGB maps and, where the file has one, its alpha: EXR as stored,
+/// other formats (PNG, JPEG) sRGB-decoded — how `derma photo iris` and `derma photo teeth` textures
+/// are read for the parts.
+pub fn read_albedo(path: &std::path::Path) -> crate::Result<AlbedoTexture> {
     let img = derma_core::image_io::read_rgb(path)?;
+    let alpha = img.alpha;
     let exr = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
@@ -232,7 +234,17 @@ pub fn read_albedo(path: &std::path::Path) -> crate::Result<[Map; 3]> {
                 .for_each(|v| *v = derma_core::color::srgb_decode(*v));
         }
     }
-    Ok(rgb)
+    Ok(AlbedoTexture { rgb, alpha })
+}
+
+/// A part's albedo texture as [`read_albedo`] reads it.
+#[derive(Clone)]
+pub struct AlbedoTexture {
+    /// Linear RGB.
+    pub rgb: [Map; 3],
+    /// The file's alpha (coverage: 0 where the part is a void, as `derma photo teeth` writes
+    /// between the teeth), where it has one.
+    pub alpha: Option<Map>,
 }
 
 /// Linear RGB maps of size `n`×`n` on the eye globe's UVs (derma-head's azimuthal map): the

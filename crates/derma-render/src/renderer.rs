@@ -750,17 +750,30 @@ impl Renderer {
             },
             Material::Textured {
                 albedo,
+                coverage,
                 roughness,
                 f0,
             } => PartMaterial {
-                // A flat part (kind 2) whose albedo, roughness and F0 come from its textures.
+                // A flat part (kind 2) whose albedo, roughness and F0 come from its textures, its
+                // coverage (tested at ½ by forward.wgsl) the albedo texture's alpha.
                 u: DrawU {
                     albedo: [1.0, 1.0, 1.0, 1.0],
                     params: [*roughness, *f0, 2.0, spec_scale],
                     eye: [0.0; 4],
                     eye_axis: [0.0; 4],
                 },
-                textures: self.albedo_textures("part albedo", albedo, *roughness, *f0),
+                textures: self.part_textures(
+                    self.tex(
+                        "part albedo",
+                        &[&albedo[0], &albedo[1], &albedo[2]]
+                            .into_iter()
+                            .chain(coverage.as_deref())
+                            .collect::<Vec<_>>(),
+                        TexelFormat::Srgb8,
+                    ),
+                    *roughness,
+                    *f0,
+                ),
                 eye: false,
                 casts_shadow: true,
             },

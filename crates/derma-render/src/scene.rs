@@ -2,7 +2,7 @@
 //! parts with their own materials — eyes with a refracting cornea, lash cards, teeth, tongue —
 //! as GPU-ready vertex lists (one vertex per triangle corner, MikkTSpace tangents).
 
-use crate::material::{default_eye_texture, SkinMaps};
+use crate::material::{default_eye_texture, AlbedoTexture, SkinMaps};
 use derma_core::mesh::{mikktspace_tangents, TriMesh};
 use derma_core::Map;
 use glam::{Quat, Vec3};
@@ -46,6 +46,9 @@ pub enum Material {
     Textured {
         /// Linear RGB on the part's UVs.
         albedo: Box<[Map; 3]>,
+        /// Coverage on the part's UVs (the texture's alpha: the voids between teeth), tested
+        /// at ½; `None`: opaque.
+        coverage: Option<Box<Map>>,
         /// Perceptual roughness.
         roughness: f32,
         /// F0.
@@ -196,14 +199,15 @@ impl Scene {
     }
 
     /// Gives every flat part whose name starts with `prefix` (`teeth` for `teeth_upper` and
-    /// `teeth_lower`) the albedo texture `albedo` on its UVs, keeping its roughness and F0.
-    /// Returns how many parts took it.
-    pub fn texture_parts(&mut self, prefix: &str, albedo: &[Map; 3]) -> usize {
+    /// `teeth_lower`) the albedo texture `albedo` on its UVs (its alpha the part's coverage),
+    /// keeping its roughness and F0. Returns how many parts took it.
+    pub fn texture_parts(&mut self, prefix: &str, albedo: &AlbedoTexture) -> usize {
         let mut n = 0;
         for p in self.parts.iter_mut().filter(|p| p.name.starts_with(prefix)) {
             if let Material::Flat { roughness, f0, .. } = p.material {
                 p.material = Material::Textured {
-                    albedo: Box::new(albedo.clone()),
+                    albedo: Box::new(albedo.rgb.clone()),
+                    coverage: albedo.alpha.clone().map(Box::new),
                     roughness,
                     f0,
                 };

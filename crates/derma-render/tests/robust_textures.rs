@@ -53,9 +53,10 @@ fn read_both(name: &str, bytes: &[u8]) -> Result<(), TestCaseError> {
     if let Ok(m) = read_hair_coverage(&p) {
         prop_assert_eq!(m.data().len(), m.width() * m.height());
     }
-    if let Ok(rgb) = read_albedo(&p) {
-        let size = (rgb[0].width(), rgb[0].height());
-        prop_assert!(rgb.iter().all(|m| (m.width(), m.height()) == size));
+    if let Ok(t) = read_albedo(&p) {
+        let size = (t.rgb[0].width(), t.rgb[0].height());
+        prop_assert!(t.rgb.iter().all(|m| (m.width(), m.height()) == size));
+        prop_assert!(t.alpha.iter().all(|m| (m.width(), m.height()) == size));
     }
     Ok(())
 }
@@ -86,6 +87,6 @@ fn the_valid_textures_read() {
         let p = scratch(&format!("ok-{name}"));
         std::fs::write(&p, bytes).unwrap();
         assert_eq!(read_hair_coverage(&p).unwrap().width(), 7);
-        assert_eq!(read_albedo(&p).unwrap()[0].height(), 5);
+        assert_eq!(read_albedo(&p).unwrap().rgb[0].height(), 5);
     }
 }

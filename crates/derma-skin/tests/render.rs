@@ -239,7 +239,10 @@ fn the_sets_colour_is_applied_once_after_the_scattering() {
         roughness: flat(0.6),
         // F0 = 0: no specular light at all (f90 = 0), the frame is diffuse alone.
         specular: flat(0.0),
-        subsurface: Some(([flat(0.5), flat(0.5), flat(0.5)], [flat(1.0), flat(0.4), flat(0.2)])),
+        subsurface: Some((
+            [flat(0.5), flat(0.5), flat(0.5)],
+            [flat(1.0), flat(0.4), flat(0.2)],
+        )),
         lash_color: None,
         hair: None,
         wrap: false,
@@ -263,7 +266,10 @@ fn the_sets_colour_is_applied_once_after_the_scattering() {
             }
         }
     }
-    assert!(worst.iter().all(|&w| w < 0.02), "irradiance off by {worst:?} near the step");
+    assert!(
+        worst.iter().all(|&w| w < 0.02),
+        "irradiance off by {worst:?} near the step"
+    );
 }
 
 #[test]
