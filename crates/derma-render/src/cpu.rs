@@ -105,8 +105,8 @@ pub struct Prop<'a> {
     pub roughness: f32,
     /// Normal-incidence Fresnel reflectance.
     pub f0: f32,
-    /// Coverage in [0, 1] at a texture coordinate, for cards such as eyelashes: a pixel is drawn
-    /// where the coverage exceeds an ordered-dither threshold (no blending). `None`: opaque.
+    /// Coverage in [0, 1] at a texture coordinate, for cards such as eyelashes: the card is
+    /// blended over what lies behind it by this alpha ([`crate::frame`]). `None`: opaque.
     pub coverage: Option<&'a (dyn Fn(Vec2) -> f32 + Sync)>,
     /// What its pixels show: [`MATERIAL_EYE`] (lit as a matte globe under a clear film, as the
     /// renderer lights an eye) or [`MATERIAL_OTHER`].
@@ -364,26 +364,28 @@ mod tests {
         render_with(&m, &t, &tex, &[prop], 0.0, 64)
     }
 
-    /// Share of the pixels in the card's footprint that show the card (red, no green).
-    fn card_share(img: &[Map; 3]) -> f32 {
-        let (mut red, mut n) = (0, 0);
-        for y in 26..38 {
-            for x in 26..38 {
-                n += 1;
-                if img[1].get(x, y) < 0.01 && img[0].get(x, y) > 0.05 {
-                    red += 1;
-                }
-            }
-        }
-        red as f32 / n as f32
+    /// The green channel (the white tile's, which the red card has none of) over the card's
+    /// footprint, linear.
+    fn green(img: &[Map; 3]) -> Vec<f32> {
+        (26..38)
+            .flat_map(|y| (26..38).map(move |x| (x, y)))
+            .map(|(x, y)| derma_core::color::srgb_decode(img[1].get(x, y)))
+            .collect()
     }
 
     #[test]
-    fn props_draw_in_front_and_coverage_thins_them() {
-        assert_eq!(card_share(&scene(None)), 1.0);
-        assert_eq!(card_share(&scene(Some(&|_| 0.0))), 0.0);
-        // Half coverage draws half of the pixels, evenly (the 4×4 ordered dither).
-        let half = card_share(&scene(Some(&|_| 0.5)));
-        assert!((half - 0.5).abs() < 0.05, "{half}");
+    fn props_draw_in_front_and_coverage_blends_them() {
+        let (card, none) = (green(&scene(None)), green(&scene(Some(&|_| 0.0))));
+        assert!(card.iter().all(|&g| g < 0.01), "{card:?}");
+        assert!(none.iter().all(|&g| g > 0.1), "{none:?}");
+        // Half coverage: every pixel a half-and-half mix, the same everywhere — no dither
+        // pattern (the 4×4 ordered dither drew half of the pixels whole: two values, 0 and the
+        // tile's). Mixed in linear light, then tone-mapped: between the two, at neither.
+        let half = green(&scene(Some(&|_| 0.5)));
+        let (lo, hi) = half
+            .iter()
+            .fold((f32::MAX, f32::MIN), |(a, b), &g| (a.min(g), b.max(g)));
+        assert!(hi - lo < 0.01 * hi, "a pattern: {lo} to {hi}");
+        assert!(lo > 0.02 && hi < 0.9 * none[0], "{lo} {hi} vs {}", none[0]);
     }
 }

@@ -8,7 +8,7 @@ use crate::camera::{Camera, View};
 use crate::lake;
 use crate::lighting::Lighting;
 use crate::material::{MATERIAL_EYE, MATERIAL_OTHER};
-use crate::raster::{rasterise, Hit, Object, Projection};
+use crate::raster::{rasterise, rasterise_above, Hit, Object, Projection};
 use crate::rendered::Rendered;
 use crate::shade::{Env, Lobe, Surface};
 use derma_core::bvh::Bvh;
@@ -50,7 +50,8 @@ pub struct Drawn<'a> {
     pub tangents: Option<&'a [[f32; 4]]>,
     /// Its material.
     pub material: &'a dyn Material,
-    /// Coverage over its UVs (cards); `None`: opaque.
+    /// Coverage over its UVs (cards, a part's voids): the part is blended over what lies
+    /// behind it by this alpha, nearest fragment first ([`GBuffer::layers`]); `None`: opaque.
     pub coverage: Option<&'a (dyn Fn(Vec2) -> f32 + Sync)>,
     /// What its pixels show ([`crate::material::MATERIAL_SKIN`], [`MATERIAL_EYE`] or
     /// [`MATERIAL_OTHER`]); an eye is lit as a matte globe under a clear film and never shows
@@ -160,6 +161,17 @@ pub struct Pixel {
     pub surface: Surface,
 }
 
+/// A fragment of a blended part (a card) in front of the opaque surface at its pixel.
+#[derive(Clone, Copy, Debug)]
+pub struct Fragment {
+    /// Its pixel (row-major index).
+    pub pixel: usize,
+    /// Its coverage: the share of the pixel it covers.
+    pub alpha: f32,
+    /// What it shows there.
+    pub px: Pixel,
+}
+
 /// The frame's G-buffer: per pixel what was drawn (`None`: the background).
 pub struct GBuffer {
     /// Width (px).
@@ -172,6 +184,9 @@ pub struct GBuffer {
     pub to_world: Mat3,
     /// Pixels per unit of length at each pixel's depth (pinhole: f / z).
     pub px_per_unit: Vec<f32>,
+    /// The blended parts' fragments in front of the opaque surface: one per part and pixel
+    /// (its nearest with any coverage), sorted by pixel and, within one, far to near.
+    pub layers: Vec<Fragment>,
 }
 
 /// The key light's shadow: an occluder over the drawn meshes and the offset (units of length)
@@ -193,13 +208,15 @@ pub struct Steps<'a> {
     pub shadow: Option<Shadow<'a>>,
 }
 
-/// Rasterises `drawn` (the first in front where they overlap) as `shot` sees them.
+/// Rasterises `drawn` as `shot` sees them: the opaque parts (the first in front where they
+/// overlap) into the pixels, the blended ones into [`GBuffer::layers`].
 pub fn gbuffer(drawn: &[Drawn], shot: &Shot) -> GBuffer {
-    let objects: Vec<Object> = drawn
+    let opaque: Vec<&Drawn> = drawn.iter().filter(|d| d.coverage.is_none()).collect();
+    let objects: Vec<Object> = opaque
         .iter()
         .map(|d| Object {
             mesh: d.mesh,
-            coverage: d.coverage,
+            coverage: None,
         })
         .collect();
     let hits = rasterise(&objects, &shot.projection, shot.width, shot.height);
@@ -207,9 +224,10 @@ pub fn gbuffer(drawn: &[Drawn], shot: &Shot) -> GBuffer {
         .par_iter()
         .map(|hit| {
             let hit = hit.as_ref()?;
-            Some(pixel_at(hit, &drawn[hit.object as usize], shot.viewer))
+            Some(pixel_at(hit, opaque[hit.object as usize], shot.viewer))
         })
         .collect();
+    let layers = layers(drawn, shot, &pixels);
     let px_per_unit = pixels
         .iter()
         .map(|p| shot.px_per_unit(p.map_or(1.0, |p| p.depth)))
@@ -220,7 +238,46 @@ pub fn gbuffer(drawn: &[Drawn], shot: &Shot) -> GBuffer {
         pixels,
         to_world: shot.to_world,
         px_per_unit,
+        layers,
     }
+}
+
+/// The fragments of `drawn`'s blended parts in front of `pixels` (the opaque surface), each
+/// part's nearest with any coverage per pixel, sorted by pixel and far to near.
+fn layers(drawn: &[Drawn], shot: &Shot, pixels: &[Option<Pixel>]) -> Vec<Fragment> {
+    let mut out = Vec::new();
+    for d in drawn.iter().filter(|d| d.coverage.is_some()) {
+        let object = [Object {
+            mesh: d.mesh,
+            coverage: d.coverage,
+        }];
+        let hits = rasterise_above(
+            &object,
+            &shot.projection,
+            shot.width,
+            shot.height,
+            &|_, _| 0.0,
+        );
+        let cover = d.coverage.expect("a blended part");
+        out.par_extend(hits.par_iter().enumerate().filter_map(|(i, hit)| {
+            let hit = hit.as_ref()?;
+            if pixels[i].is_some_and(|p| p.depth <= hit.depth) {
+                return None;
+            }
+            let uv = hit.interpolate(d.mesh, &d.mesh.uvs);
+            Some(Fragment {
+                pixel: i,
+                alpha: cover(uv).clamp(0.0, 1.0),
+                px: pixel_at(hit, d, shot.viewer),
+            })
+        }));
+    }
+    out.sort_by(|a, b| {
+        a.pixel
+            .cmp(&b.pixel)
+            .then(b.px.depth.total_cmp(&a.px.depth))
+    });
+    out
 }
 
 /// Draws `drawn` as `shot` sees them under `lighting`: [`gbuffer`] shaded without steps.
@@ -270,16 +327,20 @@ impl GBuffer {
     pub fn shade(&self, lighting: &Lighting, steps: Steps) -> Rendered {
         let env = Env::new(lighting, |d| (self.to_world * d).normalize());
         let key = env.lights[0].0;
-        let shaded: Vec<Option<(Vec3, u8)>> = self
+        let surface = |px: &Pixel| {
+            let mut s = px.surface;
+            if let Some(sh) = steps.shadow {
+                s.key_seen *= lit(sh, px.p, s.ng, key);
+            }
+            s
+        };
+        let mut shaded: Vec<Option<(Vec3, u8)>> = self
             .pixels
             .par_iter()
             .enumerate()
             .map(|(i, px)| {
                 let px = px.as_ref()?;
-                let mut s = px.surface;
-                if let Some(sh) = steps.shadow {
-                    s.key_seen *= lit(sh, px.p, s.ng, key);
-                }
+                let s = surface(px);
                 let mut c = env.shade(&s);
                 if let Some(l) = steps.lake.filter(|l| l.depth[i] > 0.0) {
                     let film = Lobe {
@@ -293,6 +354,18 @@ impl GBuffer {
                 Some((c, px.kind))
             })
             .collect();
+        // The blended parts over it, far to near (the background as black light); a pixel
+        // shows what covers at least half of it.
+        let over: Vec<(&Fragment, Vec3)> = self
+            .layers
+            .par_iter()
+            .map(|f| (f, env.shade(&surface(&f.px))))
+            .collect();
+        for (f, c) in over {
+            let (under, kind) = shaded[f.pixel].unwrap_or((Vec3::ZERO, MATERIAL_OTHER));
+            let kind = if f.alpha >= 0.5 { f.px.kind } else { kind };
+            shaded[f.pixel] = Some((under.lerp(c, f.alpha), kind));
+        }
         compose(&shaded, self.width, self.height, lighting.exposure)
     }
 }
@@ -484,6 +557,7 @@ mod tests {
             pixels,
             to_world: Mat3::IDENTITY,
             px_per_unit: vec![10.0; 15],
+            layers: Vec::new(),
         }
     }
 

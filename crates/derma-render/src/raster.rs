@@ -113,12 +113,25 @@ pub const NEAR: f32 = 1.0;
 
 /// Rasterises `objects` into a `width`×`height` image (row 0 at the top): per pixel the nearest
 /// surface, `None` where nothing is drawn. Pixel (x, y) samples at (x + ½, y + ½); of two
-/// surfaces at the same depth the first drawn stays.
+/// surfaces at the same depth the first drawn stays. An object with a coverage draws where it
+/// exceeds the ordered [`dither`].
 pub fn rasterise(
     objects: &[Object],
     projection: &Projection,
     width: usize,
     height: usize,
+) -> Vec<Option<Hit>> {
+    rasterise_above(objects, projection, width, height, &dither)
+}
+
+/// [`rasterise`] with an object's coverage tested against `threshold(x, y)` instead of the
+/// dither: `&|_, _| 0.0` keeps the nearest fragment with any coverage (a blended card's layer).
+pub fn rasterise_above(
+    objects: &[Object],
+    projection: &Projection,
+    width: usize,
+    height: usize,
+    threshold: &dyn Fn(usize, usize) -> f32,
 ) -> Vec<Option<Hit>> {
     let perspective = matches!(projection, Projection::Pinhole { .. });
     let mut out: Vec<Option<Hit>> = vec![None; width * height];
@@ -163,7 +176,7 @@ pub fn rasterise(
                         let uv = m.uvs[t[0] as usize] * weights[0]
                             + m.uvs[t[1] as usize] * weights[1]
                             + m.uvs[t[2] as usize] * weights[2];
-                        if cov(uv) <= dither(x, y) {
+                        if cov(uv) <= threshold(x, y) {
                             continue;
                         }
                     }
