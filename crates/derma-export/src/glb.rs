@@ -105,6 +105,20 @@ pub struct GlbOptions {
     /// of, while Blender's importer turns it into a volume absorption that darkens the head's
     /// bounding box in Eevee.
     pub volume: bool,
+    /// The hair cards (lashes, brows) alpha-tested (`alphaMode: MASK`, cutoff ½) for engines
+    /// that sort no transparency; by default they are blended (`BLEND`), so a lash thinner than
+    /// a pixel fades instead of breaking into dots.
+    pub hair_mask: bool,
+}
+
+/// A hair card material's alpha mode: blended, or alpha-tested at ½ with `mask`.
+fn hair_alpha(material: &mut Value, mask: bool) {
+    if mask {
+        material["alphaMode"] = json!("MASK");
+        material["alphaCutoff"] = json!(0.5);
+    } else {
+        material["alphaMode"] = json!("BLEND");
+    }
 }
 
 /// The rig library's expressions that pose the face, each as its (face unit, weight) table:
@@ -266,7 +280,7 @@ pub fn export(o: &GlbOptions, progress: &dyn derma_core::progress::Progress) -> 
     if o.mesh.is_none() {
         let textures = add_part_textures(o, &mut s)?;
         add_parts(&mut s, head, units, &textures);
-        add_brows(&mut s, &skin, head, units)?;
+        add_brows(&mut s, &skin, head, units, o.hair_mask)?;
     }
     let (bytes, names) = s.finish(&ext_used);
     derma_core::atomic::write_bytes(&o.out, &bytes)?;
@@ -544,6 +558,8 @@ struct PartTextures {
     eye: usize,
     /// The lash cards'.
     lashes: usize,
+    /// The hair cards alpha-tested, not blended ([`GlbOptions::hair_mask`]).
+    hair_mask: bool,
 }
 
 /// The parts' textures: the teeth (when given), the eye (given or built in) and the lash cards.
@@ -578,7 +594,12 @@ fn add_part_textures(o: &GlbOptions, s: &mut Scene) -> Result<PartTextures> {
         png8_bytes("eyelashes", &[&black, &black, &black, &lash])?
     };
     let lashes = s.image("eyelashes", &lash_bytes);
-    Ok(PartTextures { teeth, eye, lashes })
+    Ok(PartTextures {
+        teeth,
+        eye,
+        lashes,
+        hair_mask: o.hair_mask,
+    })
 }
 
 /// The head's parts as meshes, each with its own material and moved by `units`.
@@ -598,7 +619,7 @@ fn add_parts(
     }
 }
 
-/// A part's material: the eye texture on the globes, alpha-tested lash cards, the teeth
+/// A part's material: the eye texture on the globes, blended (or alpha-tested) lash cards, the teeth
 /// texture where given, else the part's flat colour.
 fn part_material(part: &derma_head::Part, textures: &PartTextures) -> Value {
     let prop = derma_head::Look::of(&part.name);
@@ -606,9 +627,11 @@ fn part_material(part: &derma_head::Part, textures: &PartTextures) -> Value {
         json!({"name": part.name, "pbrMetallicRoughness": {"baseColorTexture": {"index": textures.eye},
             "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
     } else if prop.coverage.is_some() {
-        json!({"name": part.name, "alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": true,
+        let mut m = json!({"name": part.name, "doubleSided": true,
             "pbrMetallicRoughness": {"baseColorTexture": {"index": textures.lashes},
-            "metallicFactor": 0.0, "roughnessFactor": prop.roughness}})
+            "metallicFactor": 0.0, "roughnessFactor": prop.roughness}});
+        hair_alpha(&mut m, textures.hair_mask);
+        m
     } else if let (Some((t, voids)), true) = (textures.teeth, part.name.starts_with("teeth")) {
         let mut m = json!({"name": part.name, "pbrMetallicRoughness": {"baseColorTexture": {"index": t},
             "metallicFactor": 0.0, "roughnessFactor": prop.roughness}});
@@ -625,13 +648,14 @@ fn part_material(part: &derma_head::Part, textures: &PartTextures) -> Value {
     }
 }
 
-/// The brows as an alpha-tested card over the skin, moved by `units`, where the set carries
-/// their hair.
+/// The brows as a card over the skin (blended, or alpha-tested with `hair_mask`), moved by
+/// `units`, where the set carries their hair.
 fn add_brows(
     s: &mut Scene,
     skin: &SkinMaps,
     head: &derma_head::Head,
     units: &[derma_head::MorphTarget],
+    hair_mask: bool,
 ) -> Result<()> {
     // (The set as `export` read it: its hair coverage and the hair's colour from lashes.png.)
     let (Some(coverage), Some(hair)) = (&skin.hair, skin.lash_color) else {
@@ -644,11 +668,11 @@ fn add_brows(
         &png8_bytes("eyebrows", &[&rgb[0], &rgb[1], &rgb[2], coverage])?,
     );
     let look = derma_head::Look::of("eyebrows");
-    s.materials.push(
-        json!({"name": "eyebrows", "alphaMode": "MASK", "alphaCutoff": 0.5,
+    let mut m = json!({"name": "eyebrows",
         "pbrMetallicRoughness": {"baseColorTexture": {"index": t_brows},
-        "metallicFactor": 0.0, "roughnessFactor": look.roughness}}),
-    );
+        "metallicFactor": 0.0, "roughnessFactor": look.roughness}});
+    hair_alpha(&mut m, hair_mask);
+    s.materials.push(m);
     let cards = derma_head::brows::BrowCards::of(head, &head.skin);
     let offsets = brow_offsets(&cards, units);
     let targets: Vec<(&str, &[(u32, glam::Vec3)])> = units

@@ -52,6 +52,7 @@ pub fn run(
                     iris: None,
                     teeth: None,
                     volume: false,
+                    hair_mask: false,
                 },
                 progress,
             )

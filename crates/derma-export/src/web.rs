@@ -179,6 +179,8 @@ pub fn export(
             iris: parts.iris.map(Path::to_path_buf),
             teeth: parts.teeth.map(Path::to_path_buf),
             volume: false,
+            // three.js sorts blended materials: the viewer's lashes and brows blend.
+            hair_mask: false,
         },
         &derma_core::progress::Silent,
     )?;

@@ -370,9 +370,9 @@ fn materials() -> Value {
         {"name": "skin", "pbrMetallicRoughness": {"baseColorFactor": [0.56, 0.36, 0.28, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.55}},
         {"name": "eye", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0, "roughnessFactor": 0.3}},
         {"name": "cornea", "alphaMode": "BLEND", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 0.06], "metallicFactor": 0.0, "roughnessFactor": 0.02}},
-        // The lash cards: alpha-tested with the head's lash coverage (texture 1), as the head's
-        // own GLB and the renderer cut them.
-        {"name": "lashes", "alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": true,
+        // The lash cards: blended by the head's lash coverage (texture 1), as the head's own GLB
+        // blends them.
+        {"name": "lashes", "alphaMode": "BLEND", "doubleSided": true,
          "pbrMetallicRoughness": {"baseColorTexture": {"index": 1}, "metallicFactor": 0.0, "roughnessFactor": 0.6}},
         {"name": "mouth", "pbrMetallicRoughness": {"baseColorFactor": [0.62, 0.56, 0.45, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.35}}
     ])

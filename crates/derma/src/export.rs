@@ -68,6 +68,10 @@ pub struct GlbArgs {
     /// no effect without transmission; Blender's importer makes it a volume that darkens Eevee.
     #[arg(long)]
     volume: bool,
+    /// The lash and brow cards alpha-tested at ½ (glTF `MASK`) instead of blended (`BLEND`),
+    /// for engines that do not sort transparent materials.
+    #[arg(long)]
+    hair_mask: bool,
 }
 
 fn glb_options(textures: PathBuf, mesh: Option<PathBuf>, out: PathBuf) -> GlbOptions {
@@ -83,6 +87,7 @@ fn glb_options(textures: PathBuf, mesh: Option<PathBuf>, out: PathBuf) -> GlbOpt
         iris: None,
         teeth: None,
         volume: false,
+        hair_mask: false,
     }
 }
 
@@ -116,6 +121,7 @@ pub fn export(cmd: ExportCommand, bars: &Bars) -> Result<()> {
             o.iris = a.iris;
             o.teeth = a.teeth;
             o.volume = a.volume;
+            o.hair_mask = a.hair_mask;
             o.maps = a.maps.map(|d| {
                 (
                     d,

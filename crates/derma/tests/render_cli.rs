@@ -236,10 +236,13 @@ fn glb_carries_the_set_as_pbr_with_tangents_units_and_engine_maps() {
     let iris = d.join("eye.png");
     let plane = |v: f32| derma_core::map::Map::filled(64, 64, v);
     derma_core::image_io::write_png8(&iris, &[&plane(0.2), &plane(0.6), &plane(0.3)]).unwrap();
-    // A teeth texture as `derma photo teeth` writes one (sRGB PNG, 2:1): ivory.
+    // A teeth texture as `derma photo teeth` writes one (sRGB PNG, 2:1, alpha 0 on the voids):
+    // ivory, a void on its right quarter.
     let teeth = d.join("teeth.png");
     let ivory = |v: f32| derma_core::map::Map::filled(32, 16, v);
-    derma_core::image_io::write_png8(&teeth, &[&ivory(0.8), &ivory(0.75), &ivory(0.6)]).unwrap();
+    let voids = derma_core::map::Map::from_fn(32, 16, |i| if i % 32 < 24 { 1.0 } else { 0.0 });
+    derma_core::image_io::write_png8(&teeth, &[&ivory(0.8), &ivory(0.75), &ivory(0.6), &voids])
+        .unwrap();
     let (ok, _, err) = run(&[
         "export",
         "glb",
@@ -279,6 +282,12 @@ fn glb_carries_the_set_as_pbr_with_tangents_units_and_engine_maps() {
         .filter_map(|m| m.name())
         .collect();
     assert_eq!(holders, ["teeth_upper", "teeth_lower"]);
+    // Their voids cut out, as the renderers cut them.
+    for t in holders {
+        let m = doc.materials().find(|m| m.name() == Some(t)).unwrap();
+        assert_eq!(m.alpha_mode(), gltf::material::AlphaMode::Mask, "{t}");
+        assert_eq!(m.alpha_cutoff(), Some(0.5), "{t}");
+    }
     // The globes carry the given eye texture (its sRGB codes back within a level).
     for eye in ["eye_left", "eye_right"] {
         let m = doc.materials().find(|m| m.name() == Some(eye)).unwrap();
@@ -307,7 +316,8 @@ fn glb_carries_the_set_as_pbr_with_tangents_units_and_engine_maps() {
         .materials()
         .find(|m| m.name() == Some("eyelashes_left"))
         .unwrap();
-    assert_eq!(lash_card.alpha_mode(), gltf::material::AlphaMode::Mask);
+    // Blended: a lash thinner than a pixel fades instead of breaking into dots.
+    assert_eq!(lash_card.alpha_mode(), gltf::material::AlphaMode::Blend);
     let tex = lash_card
         .pbr_metallic_roughness()
         .base_color_texture()
@@ -317,10 +327,20 @@ fn glb_carries_the_set_as_pbr_with_tangents_units_and_engine_maps() {
     };
     let embedded = &buffers[view.buffer().index()][view.offset()..view.offset() + view.length()];
     assert!(embedded == std::fs::read(set.join("lashes.png")).unwrap().as_slice());
-    // The brows as a card: alpha-tested, with the skin's face units as morph targets.
+    // The brows as a card: blended, with the skin's face units as morph targets.
     let brows = doc.meshes().find(|m| m.name() == Some("eyebrows")).unwrap();
     let bp = brows.primitives().next().unwrap();
-    assert_eq!(bp.material().alpha_mode(), gltf::material::AlphaMode::Mask);
+    assert_eq!(bp.material().alpha_mode(), gltf::material::AlphaMode::Blend);
+    // `--hair-mask`: both alpha-tested at ½ instead, for engines that sort no transparency.
+    let masked = d.join("masked.glb");
+    let (ok, _, err) = run(&["export", "glb", s(&set), "--out", s(&masked), "--hair-mask"]);
+    assert!(ok, "{err}");
+    let (mdoc, _, _) = gltf::import(&masked).unwrap();
+    for name in ["eyelashes_left", "eyelashes_right", "eyebrows"] {
+        let m = mdoc.materials().find(|m| m.name() == Some(name)).unwrap();
+        assert_eq!(m.alpha_mode(), gltf::material::AlphaMode::Mask, "{name}");
+        assert_eq!(m.alpha_cutoff(), Some(0.5), "{name}");
+    }
     let br = bp.reader(|b| Some(&buffers[b.index()]));
     let skin_prim = doc
         .meshes()
