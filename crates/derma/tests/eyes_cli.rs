@@ -140,12 +140,12 @@ fn an_iris_texture_reaches_the_glb() {
             }
         }
         assert!(n > 0, "no morph weights animated");
-        // The lashes are alpha-tested cards with a coverage texture, not opaque slabs.
+        // The lashes are blended cards with a coverage texture, not opaque slabs.
         let lashes = doc
             .materials()
             .find(|m| m.name() == Some("lashes"))
             .expect("a lash material");
-        assert_eq!(lashes.alpha_mode(), gltf::material::AlphaMode::Mask);
+        assert_eq!(lashes.alpha_mode(), gltf::material::AlphaMode::Blend);
         let t = lashes
             .pbr_metallic_roughness()
             .base_color_texture()
