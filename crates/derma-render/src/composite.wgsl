@@ -37,7 +37,9 @@ fn fs_composite(@builtin(position) pos: vec4<f32>) -> CompOut {
         return o;
     }
     let lk = textureLoad(lake_light, p, 0);
-    let rgb = textureLoad(scattered, p, 0).rgb * textureLoad(post_scatter, p, 0).rgb + dl.rgb * lk.a + lk.rgb;
+    // The post-scatter albedo, stored as its square root (forward.wgsl).
+    let post = textureLoad(post_scatter, p, 0).rgb;
+    let rgb = textureLoad(scattered, p, 0).rgb * post * post + dl.rgb * lk.a + lk.rgb;
     o.linear = vec4<f32>(rgb, 1.0);
     o.display = vec4<f32>(srgb(aces(rgb * comp_frame.sky.w)), 1.0);
     return o;

@@ -70,7 +70,7 @@ struct GOut {
     @location(0) diffuse: vec4<f32>,  // skin: colourless diffuse light, to be scattered
     @location(1) direct: vec4<f32>,   // everything not scattered; a = coverage
     @location(2) sss: vec4<f32>,      // x view depth (mm), yzw Burley shape d per channel (mm)
-    @location(3) post: vec4<f32>,     // skin: albedo, applied after scattering; eyes: normal; a material
+    @location(3) post: vec4<f32>,     // skin: √albedo, squared and applied after scattering; eyes: normal; a material
 }
 
 fn shading_normal(in: VertexOut, ng: vec3<f32>, textured: bool) -> vec3<f32> {
@@ -147,8 +147,10 @@ fn fs_skin(in: VertexOut, @builtin(front_facing) front: bool) -> GOut {
         // Post-scatter texturing (Jimenez et al. 2010 §6): colourless light is scattered and the
         // set's colour multiplied after, once — its maps already hold the colour the scattering
         // made (the skin's diffuse reflectance, not a surface pigment seen twice).
+        // The 8-bit target holds √albedo (a gamma of 2: dark skin's blue keeps its precision);
+        // composite.wgsl squares it.
         o.diffuse = vec4<f32>(lit.diffuse, 1.0);
-        o.post = vec4<f32>(max(albedo, vec3<f32>(0.0)), skin_marker());
+        o.post = vec4<f32>(sqrt(max(albedo, vec3<f32>(0.0))), skin_marker());
         o.sss = vec4<f32>(o.sss.x, d);
         o.direct = vec4<f32>(lit.specular, 1.0);
     } else {

@@ -51,7 +51,8 @@ pub struct Drawn<'a> {
     /// Its material.
     pub material: &'a dyn Material,
     /// Coverage over its UVs (cards, a part's voids): the part is blended over what lies
-    /// behind it by this alpha, nearest fragment first ([`GBuffer::layers`]); `None`: opaque.
+    /// behind it by this alpha — its nearest covered fragment per pixel, composited far to near
+    /// with the other blended parts' ([`GBuffer::layers`]); `None`: opaque.
     pub coverage: Option<&'a (dyn Fn(Vec2) -> f32 + Sync)>,
     /// What its pixels show ([`crate::material::MATERIAL_SKIN`], [`MATERIAL_EYE`] or
     /// [`MATERIAL_OTHER`]); an eye is lit as a matte globe under a clear film and never shows

@@ -51,6 +51,9 @@ pub struct Lake {
 /// [`MAX_SEARCH_PX`] (square rings outwards, stopping once a ring lies beyond the best found);
 /// infinite elsewhere. `px_per_mm`: pixels per mm at each pixel's depth.
 pub fn distance(material: &[u8], width: usize, px_per_mm: &[f32], range: f32) -> Vec<f32> {
+    if width == 0 {
+        return Vec::new();
+    }
     let height = material.len() / width;
     let skin = |x: i64, y: i64| {
         x >= 0
@@ -99,6 +102,9 @@ pub fn distance(material: &[u8], width: usize, px_per_mm: &[f32], range: f32) ->
 /// stand at the full meniscus height, as lake.wgsl's `depth_at`); zero elsewhere and on the
 /// image's edge.
 pub fn slopes(material: &[u8], width: usize, depth: &[f32], px_per_mm: &[f32]) -> Vec<Vec2> {
+    if width == 0 {
+        return Vec::new();
+    }
     let height = material.len() / width;
     let at = |j: usize| {
         if material[j] == MATERIAL_SKIN {

@@ -67,7 +67,8 @@ impl Projection {
 }
 
 /// A mesh to rasterise, with an optional coverage over its UVs (cards such as eyelashes): a
-/// pixel is drawn where the coverage exceeds an ordered-dither threshold (no blending).
+/// pixel is drawn where the coverage exceeds a threshold — the ordered dither ([`rasterise`]) or
+/// the caller's ([`rasterise_above`]).
 pub struct Object<'a> {
     /// The mesh (positions; UVs where `coverage` is given).
     pub mesh: &'a TriMesh,
