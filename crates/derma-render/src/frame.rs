@@ -299,9 +299,13 @@ impl GBuffer {
     /// skin, units of length; infinite off the globes) for a lake of reach `range`: its depth,
     /// and the globe's normal tilted by its slope.
     pub fn lake(&self, distance: &[f32], range: f32) -> lake::Lake {
-        let kinds = self.kinds();
+        self.lake_over(&self.kinds(), distance, range)
+    }
+
+    /// The lake over the pixels whose kinds are `kinds` ([`GBuffer::kinds`]).
+    fn lake_over(&self, kinds: &[u8], distance: &[f32], range: f32) -> lake::Lake {
         let depth: Vec<f32> = distance.iter().map(|&l| lake::depth(l, range)).collect();
-        let slope = lake::slopes(&kinds, self.width, &depth, &self.px_per_unit);
+        let slope = lake::slopes(kinds, self.width, &depth, &self.px_per_unit);
         let (right, up) = (self.to_world.x_axis, self.to_world.y_axis);
         let normal = self
             .pixels
@@ -321,7 +325,7 @@ impl GBuffer {
     pub fn searched_lake(&self) -> lake::Lake {
         let kinds = self.kinds();
         let distance = lake::distance(&kinds, self.width, &self.px_per_unit, lake::RANGE_MM);
-        self.lake(&distance, lake::RANGE_MM)
+        self.lake_over(&kinds, &distance, lake::RANGE_MM)
     }
 
     /// Shades the frame under `lighting` with `steps`.

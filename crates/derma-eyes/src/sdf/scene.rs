@@ -6,7 +6,6 @@ use super::{material, GBuffer};
 use derma_core::mesh::TriMesh;
 use derma_render::cpu::Plain;
 use derma_render::frame::{gbuffer, Drawn, Shot};
-use derma_render::raster::Projection;
 use glam::{Mat3, Vec2, Vec3};
 
 /// A pinhole camera looking down −Z (view space), at `position` in head space.
@@ -36,19 +35,20 @@ impl Camera {
         }
     }
 
-    /// The camera as derma-render's pinhole (looking down −Z: camera y down, z forward).
-    pub fn projection(&self) -> Projection {
-        Projection::Pinhole {
-            rotation: Mat3::from_diagonal(Vec3::new(1.0, -1.0, -1.0)),
-            position: self.position,
-            focal: self.focal,
-            principal: Vec2::new(self.width as f32 * 0.5, self.height as f32 * 0.5),
-        }
+    /// The camera as derma-render's shot: a pinhole looking down −Z, its axes head space's.
+    pub fn shot(&self) -> Shot {
+        Shot::pinhole(
+            self.position,
+            Mat3::IDENTITY,
+            self.focal,
+            self.width,
+            self.height,
+        )
     }
 
     /// Pixel coordinates and view depth of a head-space point.
     pub fn project(&self, p: Vec3) -> (Vec2, f32) {
-        self.projection().project(p)
+        self.shot().projection.project(p)
     }
 }
 
@@ -106,14 +106,7 @@ pub fn render(cam: &Camera, layers: &[Layer]) -> Scene {
             kind: l.material,
         })
         .collect();
-    let shot = Shot::pinhole(
-        cam.position,
-        Mat3::IDENTITY,
-        cam.focal,
-        cam.width,
-        cam.height,
-    );
-    let frame = gbuffer(&drawn, &shot);
+    let frame = gbuffer(&drawn, &cam.shot());
     let g = GBuffer {
         width: cam.width,
         height: cam.height,
