@@ -157,6 +157,11 @@ try {
     if (wr.error || !(wr.crows >= 10 && wr.outside === 0)) fail(`the smile's wrinkles: ${JSON.stringify(wr)}`);
   }
 
+  // 2b. The hair cards blend (the GLB's BLEND): transparent, no alpha test, no dither.
+  const hair = await page.evaluate(() => window.derma.hairMaterials());
+  console.log(`hair cards: ${hair.map((h) => `${h.name} transparent ${h.transparent}, alphaTest ${h.alphaTest}`).join('; ')}`);
+  if (!(hair.length >= 3 && hair.every((h) => h.transparent && h.alphaTest === 0))) fail(`hair cards that do not blend: ${JSON.stringify(hair)}`);
+
   // 3. The trained eye model live: the JS port against derma's evaluator at the export's check
   // poses, then the upper lid followed in the picture as the gaze drops: in a column of pixels
   // through a margin vertex, the lid's edge is the strongest rise in luminance going down from

@@ -99,6 +99,18 @@ const api = {
     return true;
   },
   frameFace: () => frameFace(),
+  // The hair cards' materials as three.js loaded them (the GLB's alphaMode): blended cards are
+  // transparent with no alpha test.
+  hairMaterials: () => {
+    const out = [];
+    skin?.parent.traverse((o) => {
+      if (o.isMesh && /lash|brow/.test(o.name)) {
+        const m = o.material;
+        out.push({ name: o.name, transparent: m.transparent, alphaTest: m.alphaTest, depthWrite: m.depthWrite });
+      }
+    });
+    return out;
+  },
   regions: {},
   setWeight: (name, w) => setWeight(name, w),
 };

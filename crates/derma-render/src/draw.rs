@@ -393,3 +393,112 @@ mod voids {
         the_voids_show_what_is_behind(&Renderer::new(&scene).unwrap());
     }
 }
+
+#[cfg(test)]
+mod cards {
+    use super::*;
+    use crate::lighting::Setup;
+    use crate::scene::{corner_vertices, Part};
+
+    /// A 40 mm grey skin square and, 5 mm in front of it, a 20 mm dark card whose coverage
+    /// rises from 0 at its left edge to 1 at its right (a lash's edge, drawn large).
+    fn scene() -> Scene {
+        let square = |half: f32, z: f32| TriMesh {
+            positions: [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                .map(|(x, y)| Vec3::new(half * x, half * y, z))
+                .to_vec(),
+            normals: vec![Vec3::Z; 4],
+            uvs: vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        };
+        let mut scene = Scene::mesh(
+            &square(20.0, 0.0),
+            crate::SkinMaps::uniform([0.6, 0.6, 0.6], 0.5, 0.35),
+        );
+        let ramp = Map::from_fn(64, 4, |i| (i % 64) as f32 / 63.0);
+        scene.parts.push(Part {
+            name: "lashes".into(),
+            vertices: corner_vertices(&square(10.0, 5.0), None),
+            material: Material::Card {
+                albedo: Vec3::splat(0.02),
+                coverage: Box::new(ramp),
+                roughness: 0.5,
+                f0: 0.04,
+            },
+        });
+        scene
+    }
+
+    /// The green channel's display codes along the card's middle rows, left to right, and the
+    /// skin's beside it (a 128² frame, head-on).
+    fn ramp(r: &dyn Draw) -> (Vec<Vec<u8>>, u8) {
+        let img = r
+            .draw(&View::default(), &Setup::Studio.lighting(), 128, 128)
+            .unwrap();
+        let g = |x: usize, y: usize| img.display[4 * (y * 128 + x) + 1];
+        // The card spans about the middle third of the frame; rows and columns well inside it.
+        let rows = (58..70)
+            .map(|y| (48..80).map(|x| g(x, y)).collect())
+            .collect();
+        (rows, g(34, 64))
+    }
+
+    /// The alpha edge's pixels: every row falls smoothly from the skin to the card (no pixel
+    /// brighter than its left neighbour by more than a code), the rows agree (no pattern from
+    /// row to row), and the histogram is spread over many levels between the two ends — where
+    /// the 4×4 ordered dither put nearly every pixel at the card's or the skin's value.
+    fn the_alpha_edge_is_blended(r: &dyn Draw) {
+        let (rows, skin) = ramp(r);
+        for row in &rows {
+            for w in row.windows(2) {
+                assert!(w[1] <= w[0] + 1, "{}: not monotone {row:?}", r.name());
+            }
+            assert!(
+                row.iter().zip(&rows[0]).all(|(a, b)| a.abs_diff(*b) <= 2),
+                "{}: rows differ {row:?} vs {:?}",
+                r.name(),
+                rows[0]
+            );
+        }
+        let codes: Vec<u8> = rows.concat();
+        let (lo, hi) = (*codes.iter().min().unwrap(), *codes.iter().max().unwrap());
+        let mut levels: Vec<u8> = codes.clone();
+        levels.sort();
+        levels.dedup();
+        assert!(
+            levels.len() >= 16,
+            "{}: {} levels {levels:?}",
+            r.name(),
+            levels.len()
+        );
+        let ends = codes
+            .iter()
+            .filter(|&&c| c <= lo + 2 || c >= hi - 2)
+            .count();
+        assert!(
+            ends * 4 < codes.len(),
+            "{}: {ends} of {} pixels at the ends",
+            r.name(),
+            codes.len()
+        );
+        assert!(
+            hi <= skin && lo < skin / 2,
+            "{}: {lo}..{hi} against the skin's {skin}",
+            r.name()
+        );
+    }
+
+    #[test]
+    fn a_cards_alpha_edge_is_blended_on_the_cpu() {
+        the_alpha_edge_is_blended(&CpuRenderer::new(&scene()));
+    }
+
+    #[cfg(feature = "gpu")]
+    #[test]
+    fn a_cards_alpha_edge_is_blended_on_the_gpu() {
+        if derma_test_support::skip_without_gpu() {
+            return;
+        }
+        the_alpha_edge_is_blended(&Renderer::new(&scene()).unwrap());
+    }
+}

@@ -97,12 +97,41 @@ fn view_depth(world: vec3<f32>) -> f32 {
     return dot(world - frame.camera.xyz, frame.forward.xyz);
 }
 
-/// The 4×4 Bayer threshold of the pixel at `p` (framebuffer coordinates), in (0, 1).
-fn bayer4(p: vec2<f32>) -> f32 {
-    let m = array<u32, 16>(0u, 8u, 2u, 10u, 12u, 4u, 14u, 6u, 3u, 11u, 1u, 9u, 15u, 7u, 13u, 5u);
-    let x = u32(p.x) % 4u;
-    let y = u32(p.y) % 4u;
-    return (f32(m[y * 4u + x]) + 0.5) / 16.0;
+// A blended card fragment's weight (McGuire & Bavoil 2013, "Weighted Blended Order-Independent
+// Transparency", eq. 9, view depth in metres), scaled by 1/100 so a few overlapping layers stay
+// within a half-float target: nearer layers count more where cards overlap.
+fn card_weight(depth_mm: f32, alpha: f32) -> f32 {
+    let z = depth_mm * 1e-3;
+    return alpha * clamp(0.1 / (1e-5 + pow(z / 5.0, 2.0) + pow(z / 200.0, 6.0)), 1e-4, 30.0);
+}
+
+struct CardOut {
+    @location(0) accum: vec4<f32>,   // Σ w α c (premultiplied radiance), Σ w α
+    @location(1) reveal: vec4<f32>,  // r α: the target keeps Π (1 − α)
+}
+
+// Cards (lashes, brows, stubble), blended by their coverage over what the forward pass drew
+// (composite.wgsl resolves them): no dither, no alpha test.
+@fragment
+fn fs_card(in: VertexOut, @builtin(front_facing) front: bool) -> CardOut {
+    var o: CardOut;
+    let v = normalize(frame.camera.xyz - in.world);
+    var ng = normalize(in.normal);
+    if (!front) {
+        ng = -ng;
+    }
+    let c = textureSample(base_color, tex_sampler, tex_uv(in.uv));
+    let rs = textureSample(rough_spec, tex_sampler, tex_uv(in.uv));
+    let alpha = clamp(c.a, 0.0, 1.0);
+    if (alpha <= 0.0) {
+        discard;
+    }
+    let lit = light_surface(in.world, ng, ng, v, rs.r, rs.g * draw.params.w);
+    let rgb = lit.diffuse * c.rgb + lit.specular;
+    let w = card_weight(view_depth(in.world), alpha);
+    o.accum = vec4<f32>(rgb * w, w);
+    o.reveal = vec4<f32>(alpha, 0.0, 0.0, 0.0);
+    return o;
 }
 
 @fragment
@@ -125,12 +154,6 @@ fn fs_skin(in: VertexOut, @builtin(front_facing) front: bool) -> GOut {
         let rs = textureSample(rough_spec, tex_sampler, tex_uv(in.uv));
         rough = rs.r;
         f0 = rs.g * draw.params.w;
-    }
-    // Cards are alpha-tested against the 4×4 ordered dither the CPU rasteriser uses
-    // (raster::dither): a card's coverage of c draws a share c of its pixels, so lashes thinner
-    // than a pixel (whose filtered coverage is below ½) thin out instead of vanishing.
-    if (draw.params.z == KIND_CARD && coverage <= bayer4(in.clip.xy)) {
-        discard;
     }
     // A textured part's voids (the alpha of `derma photo teeth`'s texture between the teeth).
     if (textured && draw.params.z == KIND_FLAT && coverage < 0.5) {

@@ -66,9 +66,9 @@ impl Projection {
     }
 }
 
-/// A mesh to rasterise, with an optional coverage over its UVs (cards such as eyelashes): a
-/// pixel is drawn where the coverage exceeds a threshold — the ordered dither ([`rasterise`]) or
-/// the caller's ([`rasterise_above`]).
+/// A mesh to rasterise, with an optional coverage over its UVs (cards such as eyelashes, a
+/// texture's voids): a pixel is drawn where the coverage exceeds a threshold — ½ ([`rasterise`])
+/// or the caller's ([`rasterise_above`]).
 pub struct Object<'a> {
     /// The mesh (positions; UVs where `coverage` is given).
     pub mesh: &'a TriMesh,
@@ -101,13 +101,6 @@ impl Hit {
     }
 }
 
-/// Threshold in [0, 1) of pixel (x, y): the 4×4 Bayer matrix, so a coverage c draws about c of
-/// the pixels, evenly spread.
-pub fn dither(x: usize, y: usize) -> f32 {
-    const BAYER: [[u8; 4]; 4] = [[0, 8, 2, 10], [12, 4, 14, 6], [3, 11, 1, 9], [15, 7, 13, 5]];
-    (BAYER[y % 4][x % 4] as f32 + 0.5) / 16.0
-}
-
 /// Nearest depth a pinhole camera draws (units of length): triangles with a corner closer are
 /// dropped (no clipping).
 pub const NEAR: f32 = 1.0;
@@ -115,18 +108,17 @@ pub const NEAR: f32 = 1.0;
 /// Rasterises `objects` into a `width`×`height` image (row 0 at the top): per pixel the nearest
 /// surface, `None` where nothing is drawn. Pixel (x, y) samples at (x + ½, y + ½); of two
 /// surfaces at the same depth the first drawn stays. An object with a coverage draws where it
-/// exceeds the ordered [`dither`].
+/// exceeds ½ (an alpha test; blended cards go through [`rasterise_above`]).
 pub fn rasterise(
     objects: &[Object],
     projection: &Projection,
     width: usize,
     height: usize,
 ) -> Vec<Option<Hit>> {
-    rasterise_above(objects, projection, width, height, &dither)
+    rasterise_above(objects, projection, width, height, &|_, _| 0.5)
 }
 
-/// [`rasterise`] with an object's coverage tested against `threshold(x, y)` instead of the
-/// dither: `&|_, _| 0.0` keeps the nearest fragment with any coverage (a blended card's layer).
+/// [`rasterise`] with an object's coverage tested against `threshold(x, y)` instead of ½: `&|_, _| 0.0` keeps the nearest fragment with any coverage (a blended card's layer).
 pub fn rasterise_above(
     objects: &[Object],
     projection: &Projection,
@@ -311,9 +303,9 @@ mod tests {
     }
 
     #[test]
-    fn coverage_thins_a_card_by_the_ordered_dither() {
+    fn coverage_is_tested_at_a_half() {
         let m = quad(0.0, 16.0);
-        let half = |_: Vec2| 0.5;
+        let half = |uv: Vec2| uv.x;
         let img = rasterise(
             &[Object {
                 mesh: &m,
@@ -328,7 +320,12 @@ mod tests {
             16,
             16,
         );
+        // u runs 0.25 → 0.75 across the frame: the right half is drawn, whole, and no more.
         let drawn = img.iter().filter(|h| h.is_some()).count();
         assert_eq!(drawn, 128);
+        assert!(img
+            .iter()
+            .enumerate()
+            .all(|(i, h)| h.is_some() == (i % 16 >= 8)));
     }
 }

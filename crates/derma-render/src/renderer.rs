@@ -93,15 +93,27 @@ struct GpuPart {
     vertices: wgpu::Buffer,
     count: u32,
     bind: wgpu::BindGroup,
-    eye: bool,
+    pass: Pass,
     casts_shadow: bool,
+}
+
+/// Which pipeline draws a part.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Pass {
+    /// The forward pass's surface shader (skin, flat and textured parts).
+    Surface,
+    /// The forward pass's eye shader.
+    Eye,
+    /// The cards' pass after it: blended by coverage (weighted blended order-independent
+    /// transparency, McGuire & Bavoil 2013) over what the forward pass drew.
+    Blended,
 }
 
 /// A part's draw uniforms and five textures, and how it is drawn (see [`Renderer::material`]).
 struct PartMaterial {
     u: DrawU,
     textures: [wgpu::Texture; 5],
-    eye: bool,
+    pass: Pass,
     casts_shadow: bool,
 }
 
@@ -119,6 +131,8 @@ struct Targets {
     depth: wgpu::Texture,
     lake_d: wgpu::Texture,
     lake_l: wgpu::Texture,
+    accum: wgpu::Texture,
+    reveal: wgpu::Texture,
     blur_x: wgpu::BindGroup,
     blur_y: wgpu::BindGroup,
     composite: wgpu::BindGroup,
@@ -153,6 +167,7 @@ struct Pipelines {
     shadow: wgpu::RenderPipeline,
     skin: wgpu::RenderPipeline,
     eye: wgpu::RenderPipeline,
+    cards: wgpu::RenderPipeline,
     blur: wgpu::RenderPipeline,
     composite: wgpu::RenderPipeline,
     lake_depth: wgpu::RenderPipeline,
@@ -258,6 +273,9 @@ struct PipeSpec<'a> {
     targets: &'a [wgpu::TextureFormat],
     vertex: bool,
     depth: bool,
+    /// The blended cards' targets: the first adds (the weighted premultiplied colour and
+    /// weight), the second multiplies by 1 − α (the revealage); depth tested, not written.
+    blended: bool,
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -280,7 +298,32 @@ fn spec<'a>(
         targets,
         vertex,
         depth,
+        blended: false,
     }
+}
+
+/// The blend states of the blended cards' two targets ([`PipeSpec::blended`]).
+fn card_blends() -> [wgpu::BlendState; 2] {
+    let add = wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Add,
+    };
+    let reveal = wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::Zero,
+        dst_factor: wgpu::BlendFactor::OneMinusSrc,
+        operation: wgpu::BlendOperation::Add,
+    };
+    [
+        wgpu::BlendState {
+            color: add,
+            alpha: add,
+        },
+        wgpu::BlendState {
+            color: reveal,
+            alpha: reveal,
+        },
+    ]
 }
 
 fn pipeline(gpu: &Gpu, s: &PipeSpec) -> Result<wgpu::RenderPipeline> {
@@ -298,8 +341,18 @@ fn pipeline(gpu: &Gpu, s: &PipeSpec) -> Result<wgpu::RenderPipeline> {
         step_mode: wgpu::VertexStepMode::Vertex,
         attributes: &attrs,
     })];
-    let targets: Vec<Option<wgpu::ColorTargetState>> =
-        s.targets.iter().map(|f| Some((*f).into())).collect();
+    let blends = card_blends();
+    let targets: Vec<Option<wgpu::ColorTargetState>> = s
+        .targets
+        .iter()
+        .enumerate()
+        .map(|(k, f)| {
+            Some(wgpu::ColorTargetState {
+                blend: s.blended.then(|| blends[k]),
+                ..(*f).into()
+            })
+        })
+        .collect();
     Ok(gpu.validated(s.label, || {
         gpu.device
             .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -314,7 +367,7 @@ fn pipeline(gpu: &Gpu, s: &PipeSpec) -> Result<wgpu::RenderPipeline> {
                 primitive: wgpu::PrimitiveState::default(),
                 depth_stencil: s.depth.then(|| wgpu::DepthStencilState {
                     format: DEPTH,
-                    depth_write_enabled: Some(true),
+                    depth_write_enabled: Some(!s.blended),
                     depth_compare: Some(wgpu::CompareFunction::Less),
                     stencil: Default::default(),
                     bias: Default::default(),
@@ -380,6 +433,8 @@ impl Layouts {
                 texture_entry(2, FLOAT),
                 texture_entry(3, FLOAT),
                 texture_entry(4, FLOAT),
+                texture_entry(5, FLOAT),
+                texture_entry(6, FLOAT),
             ],
         );
         let lake_entries = [
@@ -480,6 +535,22 @@ impl Pipelines {
         };
         let skin = forward("forward skin", "fs_skin")?;
         let eye = forward("forward eye", "fs_eye")?;
+        let cards = pipeline(
+            gpu,
+            &PipeSpec {
+                blended: true,
+                ..spec(
+                    "cards",
+                    &m.forward,
+                    "vs_main",
+                    Some("fs_card"),
+                    &[&l.frame, &l.draw],
+                    &[HDR, HDR],
+                    true,
+                    true,
+                )
+            },
+        )?;
         let blur = screen_pipeline(gpu, "blur", &m.blur, "fs_blur", &[&l.blur], &[HDR])?;
         let composite = screen_pipeline(
             gpu,
@@ -493,6 +564,7 @@ impl Pipelines {
             shadow,
             skin,
             eye,
+            cards,
             blur,
             composite,
             lake_depth: screen_pipeline(
@@ -706,7 +778,7 @@ impl Renderer {
             vertices,
             count: p.vertices.len() as u32,
             bind,
-            eye: m.eye,
+            pass: m.pass,
             casts_shadow: m.casts_shadow,
         })
     }
@@ -745,7 +817,7 @@ impl Renderer {
                     eye_axis: [axis.x, axis.y, axis.z, 0.0],
                 },
                 textures: self.albedo_textures("eye", albedo, *roughness, *f0),
-                eye: true,
+                pass: Pass::Eye,
                 casts_shadow: true,
             },
             Material::Textured {
@@ -774,7 +846,7 @@ impl Renderer {
                     *roughness,
                     *f0,
                 ),
-                eye: false,
+                pass: Pass::Surface,
                 casts_shadow: true,
             },
             Material::Flat {
@@ -793,7 +865,7 @@ impl Renderer {
                     *roughness,
                     *f0,
                 ),
-                eye: false,
+                pass: Pass::Surface,
                 casts_shadow: true,
             },
             Material::Card {
@@ -842,7 +914,7 @@ impl Renderer {
                 eye_axis: [0.0, 0.0, 1.0, scatter],
             },
             textures: [base, normal, rs, sc, sr],
-            eye: false,
+            pass: Pass::Surface,
             casts_shadow: true,
         }
     }
@@ -874,7 +946,7 @@ impl Renderer {
                 roughness,
                 f0,
             ),
-            eye: false,
+            pass: Pass::Blended,
             casts_shadow: false,
         }
     }
@@ -964,6 +1036,8 @@ impl Renderer {
         let linear = target("linear", HDR);
         let lake_d = target("lake depth", HDR);
         let lake_l = target("lake light", HDR);
+        let accum = target("cards accumulated", HDR);
+        let reveal = target("cards revealage", HDR);
         let depth = target("depth", DEPTH);
         let sv = view(&sssp);
         let blur_group = |src: &wgpu::Texture, k: usize| {
@@ -991,6 +1065,8 @@ impl Renderer {
                 wgpu::BindingResource::TextureView(&view(&direct)),
                 wgpu::BindingResource::TextureView(&view(&post)),
                 wgpu::BindingResource::TextureView(&view(&lake_l)),
+                wgpu::BindingResource::TextureView(&view(&accum)),
+                wgpu::BindingResource::TextureView(&view(&reveal)),
             ],
         );
         let (pv, lv) = (view(&post), view(&lake_d));
@@ -1015,6 +1091,8 @@ impl Renderer {
             depth,
             lake_d,
             lake_l,
+            accum,
+            reveal,
             blur_x,
             blur_y,
             composite,
@@ -1033,6 +1111,7 @@ impl Renderer {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         self.encode_shadow(&mut enc);
         self.encode_forward(&mut enc, t);
+        self.encode_cards(&mut enc, t);
         self.encode_screen_passes(&mut enc, t);
         gpu.queue.submit([enc.finish()]);
     }
@@ -1117,7 +1196,7 @@ impl Renderer {
                 view: &dv,
                 depth_ops: Some(wgpu::Operations {
                     load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
+                    store: wgpu::StoreOp::Store,
                 }),
                 stencil_ops: None,
             }),
@@ -1126,12 +1205,57 @@ impl Renderer {
             multiview_mask: None,
         });
         pass.set_bind_group(0, &self.res.main_bind, &[]);
-        for p in &self.parts {
-            pass.set_pipeline(if p.eye {
+        for p in self.parts.iter().filter(|p| p.pass != Pass::Blended) {
+            pass.set_pipeline(if p.pass == Pass::Eye {
                 &self.pipes.eye
             } else {
                 &self.pipes.skin
             });
+            pass.set_bind_group(1, &p.bind, &[]);
+            pass.set_vertex_buffer(0, p.vertices.slice(..));
+            pass.draw(0..p.count, 0..1);
+        }
+    }
+
+    /// Encodes the cards' pass: the blended parts, depth-tested against the forward pass's
+    /// depth, into the accumulation (cleared to 0) and revealage (cleared to 1) targets.
+    fn encode_cards(&self, enc: &mut wgpu::CommandEncoder, t: &Targets) {
+        let views = [view(&t.accum), view(&t.reveal)];
+        let clear = [wgpu::Color::TRANSPARENT, wgpu::Color::WHITE];
+        let att: Vec<Option<wgpu::RenderPassColorAttachment>> = views
+            .iter()
+            .zip(clear)
+            .map(|(v, c)| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view: v,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(c),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            })
+            .collect();
+        let dv = view(&t.depth);
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("cards"),
+            color_attachments: &att,
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &dv,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipes.cards);
+        pass.set_bind_group(0, &self.res.main_bind, &[]);
+        for p in self.parts.iter().filter(|p| p.pass == Pass::Blended) {
             pass.set_bind_group(1, &p.bind, &[]);
             pass.set_vertex_buffer(0, p.vertices.slice(..));
             pass.draw(0..p.count, 0..1);

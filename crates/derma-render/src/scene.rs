@@ -63,7 +63,7 @@ pub enum Material {
         /// F0.
         f0: f32,
     },
-    /// An alpha-tested card (eyelashes): uniform albedo, coverage from a map.
+    /// A card (eyelashes, brows): uniform albedo, blended over what lies behind by its coverage.
     Card {
         /// Linear albedo.
         albedo: Vec3,

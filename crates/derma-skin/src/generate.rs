@@ -91,6 +91,7 @@ pub struct SkinGenerator<'a> {
     appearance: AppearanceChoice,
     device: Device,
     threads: Option<usize>,
+    albedo: Option<PathBuf>,
     progress: &'a dyn Progress,
 }
 
@@ -106,6 +107,7 @@ impl<'a> SkinGenerator<'a> {
             appearance: AppearanceChoice::Default,
             device: Device::Auto,
             threads: None,
+            albedo: None,
             progress: &Silent,
         }
     }
@@ -171,6 +173,13 @@ impl<'a> SkinGenerator<'a> {
     /// Worker threads (default: all cores); outputs are identical for any number.
     pub fn threads(mut self, threads: usize) -> Self {
         self.threads = Some(threads);
+        self
+    }
+
+    /// A photographed albedo of the mesh (its own UV layout) to compare the painted set with,
+    /// region by region ([`crate::albedo_compare`]): the set's `albedo_comparison`.
+    pub fn compare_albedo(mut self, path: impl Into<PathBuf>) -> Self {
+        self.albedo = Some(path.into());
         self
     }
 
@@ -272,6 +281,10 @@ impl<'a> SkinGenerator<'a> {
         let mut made = MadeAppearance::default();
         let appearance = self.chosen_appearance(&mut made);
         let plan = self.plan()?;
+        let albedo = match &self.albedo {
+            Some(p) => Some((derma_core::image_io::read_rgb(p)?, p.display().to_string())),
+            None => None,
+        };
         let job = Job::new(self.progress);
         self.note_table(&job);
 
@@ -305,7 +318,7 @@ impl<'a> SkinGenerator<'a> {
         if plan.kind == SurfaceKind::Template {
             render.lash_color = Some(cfg.hair.melanin(&cfg.person).color());
         }
-        Ok(TextureSet {
+        let mut set = TextureSet {
             surface,
             fields,
             features,
@@ -329,7 +342,12 @@ impl<'a> SkinGenerator<'a> {
             started,
             pool: None,
             device: self.device,
-        })
+            albedo_comparison: None,
+        };
+        if let Some((photo, name)) = albedo {
+            set.albedo_comparison = Some(crate::albedo_compare::compare(&set, &photo, &name)?);
+        }
+        Ok(set)
     }
 
     /// The bio → render conversion chosen, one made here held in `made`.
@@ -979,6 +997,8 @@ pub struct TextureSet {
     started: Instant,
     pool: Option<Arc<rayon::ThreadPool>>,
     device: Device,
+    /// The set beside a photographed albedo ([`SkinGenerator::compare_albedo`]).
+    pub albedo_comparison: Option<crate::albedo_compare::AlbedoComparison>,
 }
 
 /// What [`TextureSet::write`] wrote.
@@ -1216,6 +1236,7 @@ impl TextureSet {
             counts: self.features.counts(),
             height_range,
             log,
+            albedo_comparison: self.albedo_comparison.as_ref(),
         })
     }
 }

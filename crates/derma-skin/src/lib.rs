@@ -22,6 +22,7 @@
 
 #![warn(missing_docs)]
 
+pub mod albedo_compare;
 pub mod builtin_head;
 pub mod calibration;
 pub mod color_stats;

@@ -57,6 +57,8 @@ pub struct Run<'a> {
     pub height_range: HeightRange,
     /// Timings and notes of the whole run.
     pub log: &'a Log,
+    /// The set beside a photographed albedo, when one was given.
+    pub albedo_comparison: Option<&'a crate::albedo_compare::AlbedoComparison>,
 }
 
 /// Texels per block of [`covered_stats`]: the blocks' sums are added in order, so the
@@ -137,7 +139,7 @@ pub fn report(set: &Run) -> serde_json::Value {
         SurfaceKind::Patch => "patch",
         SurfaceKind::Mesh => "mesh",
     };
-    json!({
+    let mut report = json!({
         "derma_version": env!("CARGO_PKG_VERSION"),
         "command": "skin",
         "seed": set.config.seed,
@@ -168,5 +170,9 @@ pub fn report(set: &Run) -> serde_json::Value {
         },
         "notes": set.log.notes,
         "timings_s": set.log.timings,
-    })
+    });
+    if let Some(c) = set.albedo_comparison {
+        report["albedo_comparison"] = json!(c);
+    }
+    report
 }

@@ -85,6 +85,10 @@ pub struct SkinArgs {
     /// CPU renderer otherwise).
     #[command(flatten)]
     device: crate::args::DeviceArg,
+    /// A photographed albedo of --mesh (its own UV layout, sRGB): the painted set is compared
+    /// with it region by region (mean L*a*b*, ΔE*ab, a* spread), printed and kept in report.json.
+    #[arg(long, value_name = "IMAGE", requires = "mesh")]
+    compare_albedo: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -210,6 +214,9 @@ pub fn run(args: SkinArgs, bars: &Bars) -> Result<()> {
     if let Some(n) = args.threads {
         generator = generator.threads(n);
     }
+    if let Some(a) = &args.compare_albedo {
+        generator = generator.compare_albedo(a);
+    }
     let derma_export::skin::SkinOutput { set, glb, .. } =
         derma_export::skin::run(&generator, &args.out, args.glb, bars)?;
     if let Some(report) = glb {
@@ -222,6 +229,9 @@ pub fn run(args: SkinArgs, bars: &Bars) -> Result<()> {
         ));
     }
     bars.finish();
+    if let Some(c) = &set.albedo_comparison {
+        print_comparison(c)?;
+    }
     bars.say(format!(
         "wrote {} ({}², {} features: {}) in {:.1} s",
         args.out.display(),
@@ -231,4 +241,26 @@ pub fn run(args: SkinArgs, bars: &Bars) -> Result<()> {
         start.elapsed().as_secs_f64()
     ));
     Ok(())
+}
+
+/// The albedo comparison as a Markdown table.
+fn print_comparison(c: &derma_skin::albedo_compare::AlbedoComparison) -> Result<()> {
+    let mut t = format!(
+        "{} beside the set (photo's cheek ITA {:.0}°)\n| region | photo L* a* b* | derma L* a* b* | ΔE*ab | a* spread photo / derma |\n|---|---|---|---:|---|\n",
+        c.albedo, c.photo_cheek_ita_deg
+    );
+    let lab = |l: [f64; 3]| format!("{:.1} {:.1} {:.1}", l[0], l[1], l[2]);
+    for r in &c.regions {
+        t += &format!(
+            "| {} | {} | {} | {:.1} | {:.2} / {:.2} |\n",
+            r.region,
+            lab(r.photo.lab),
+            lab(r.derma.lab),
+            r.delta_e,
+            r.photo.a_spread,
+            r.derma.a_spread
+        );
+    }
+    t += &format!("median ΔE*ab {:.1}\n", c.median_delta_e);
+    crate::output::text(&t)
 }
