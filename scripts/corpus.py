@@ -31,6 +31,7 @@ THREE = "https://raw.githubusercontent.com/alteredq/three.js/c32f89a1d8f5bcdd08b
 ICT = "https://raw.githubusercontent.com/ICT-VGL/ICT-FaceKit/da5f95a607f5e6b37755b38d3385d7f2853732e5/"
 TDS = "https://raw.githubusercontent.com/polygonjs/polygonjs-assets/5404a0cf55b796deb1ce94dc773374afdaa0684c/models/resources/threedscans.com/"
 MINDAR = "https://registry.npmjs.org/mind-ar/-/mind-ar-1.2.5.tgz"
+JON = "https://raw.githubusercontent.com/colejd/jon-trombone/00f441c730f9b7540e5582f94dac12e9f73f2cd8/"
 
 # ICT-FaceKit's neutral head and its expression shapes (same topology), FaceXModel/.
 ICT_SHAPES = [
@@ -108,6 +109,19 @@ CORPUS = [
         "held_out": False,
     },
     {
+        "name": "jon",
+        "mesh": "jon.obj",
+        "what": "head-and-shoulders 3D scan of Jonathan Cole by himself (his Jon-Trombone project), metres, +Y up, facing +Z, with UVs and its photographed texture (jon.jpg: a camera-projected atlas, light baked in; a full dark beard); the two untextured black materials (the mouth's inside) are left out (held out: never used in tuning, the second scan of docs/skin.md's comparison with photographed albedo)",
+        "licence": "MIT (Copyright 2017 Jonathan Cole, the scanned person: jon-trombone's license.md; the readme calls it 'a 3D scanned model of me')",
+        "files": [
+            (JON + "resources/jon/three/jon.json", "jon.json", "afd8802d97d807ca7f9a0d714202bc0fe3eb177a6bebb0898eef4faa606e2d5e"),
+            (JON + "resources/jon/three/jon.jpg", "jon.jpg", "c405e38a1f9d4dc2900433768fb6e0c6a5997f0fb06acef3324fc7c212d99829"),
+            (JON + "license.md", "jon-LICENSE.md", "d7ad28c52e9d87d85e66d7a26e3b3534215e21a49228830c7190e876c07cd06f"),
+        ],
+        "make": "three_json_textured",
+        "held_out": True,
+    },
+    {
         "name": "ict_facekit",
         "mesh": "generic_neutral_mesh.obj",
         "what": "ICT-FaceKit's generic neutral head (an average of light-stage scans), centimetres, +Y up, facing +Z; skin, eyes, teeth, gums and lashes as materials of one object; 57 FACS/ARKit-named expression shapes of the same topology",
@@ -178,22 +192,26 @@ def obtain(url, name, digest, source_dir):
     return data
 
 
-def three_json_to_obj(text):
-    """three.js JSON model format 2 (the Blender 2.56 exporter) to OBJ: vertices, per-vertex
+def three_json_to_obj(text, name="LeePerrySmith.js", flip_v=True, textured=None):
+    """three.js JSON model formats 2 and 3 (the Blender exporters) to OBJ: vertices, per-vertex
     UVs and normals as the faces index them. Face type bits: 1 quad, 2 material, 4 face UV,
-    8 vertex UVs, 16 face normal, 32 vertex normals, 64 face colour, 128 vertex colours."""
+    8 vertex UVs, 16 face normal, 32 vertex normals, 64 face colour, 128 vertex colours.
+    `textured`: keep only the faces of materials that have a texture (`mapDiffuse`)."""
     body = text[text.index("{"): text.rindex("}") + 1]
     model = json.loads(body)
     v, n, faces = model["vertices"], model["normals"], model["faces"]
     uv = model["uvs"][0] if model.get("uvs") else []
+    keep = None
+    if textured:
+        keep = {k for k, m in enumerate(model.get("materials", [])) if m.get("mapDiffuse")}
     out = io.StringIO()
-    out.write("# LeePerrySmith.js (three.js JSON model format 2) converted by derma's scripts/corpus.py\n")
+    out.write(f"# {name} (three.js JSON model) converted by derma's scripts/corpus.py\n")
     for i in range(0, len(v), 3):
         out.write(f"v {v[i]} {v[i + 1]} {v[i + 2]}\n")
-    # The model stores v downward (its forehead at v ≈ 0.1, where Map-COL.jpg's top rows hold
-    # the forehead); OBJ's v runs upward, so v is flipped.
+    # LeePerrySmith.js stores v downward (its forehead at v ≈ 0.1, where Map-COL.jpg's top rows
+    # hold the forehead); OBJ's v runs upward, so there v is flipped.
     for i in range(0, len(uv), 2):
-        out.write(f"vt {uv[i]} {1 - uv[i + 1]}\n")
+        out.write(f"vt {uv[i]} {1 - uv[i + 1] if flip_v else uv[i + 1]}\n")
     for i in range(0, len(n), 3):
         out.write(f"vn {n[i]} {n[i + 1]} {n[i + 2]}\n")
     k = 0
@@ -203,7 +221,10 @@ def three_json_to_obj(text):
         corners = 4 if t & 1 else 3
         vi = faces[k: k + corners]
         k += corners
-        k += 1 if t & 2 else 0
+        material = None
+        if t & 2:
+            material = faces[k]
+            k += 1
         k += 1 if t & 4 else 0
         ti = []
         if t & 8:
@@ -216,6 +237,8 @@ def three_json_to_obj(text):
             k += corners
         k += 1 if t & 64 else 0
         k += corners if t & 128 else 0
+        if keep is not None and material not in keep:
+            continue
         refs = []
         for c in range(corners):
             r = str(vi[c] + 1)
@@ -251,6 +274,8 @@ def fetch(out, source_dir, only):
                 write(os.path.join(out, "mind-ar-LICENSE"), licence)
             elif entry.get("make") == "three_json" and name.endswith(".js"):
                 write(os.path.join(out, entry["mesh"]), three_json_to_obj(data.decode()))
+            elif entry.get("make") == "three_json_textured" and name.endswith(".json"):
+                write(os.path.join(out, entry["mesh"]), three_json_to_obj(data.decode(), name, False, True))
             else:
                 write(path, data)
         mesh = os.path.join(out, entry["mesh"])

@@ -112,9 +112,10 @@ fn fit(mesh: &Path, out: &Path, points: &BTreeMap<String, [f32; 3]>) -> Outcome 
     }
 }
 
+/// The median (NaN for a mesh with no hand-placed landmarks).
 fn median(v: &mut [f32]) -> f32 {
     v.sort_by(f32::total_cmp);
-    v[v.len() / 2]
+    v.get(v.len() / 2).copied().unwrap_or(f32::NAN)
 }
 
 /// One markdown row of docs/head.md's corpus table.
@@ -171,7 +172,8 @@ fn meets_goals(o: &Outcome) -> bool {
 
 /// What every corpus fit holds: nothing turned over; the carried blink closes each eye (its
 /// upper lid's middle within 1 mm of the lower lid's); landmarks median ≤ `median_mm`, none
-/// over `max_mm`.
+/// over `max_mm` (where landmarks were hand-placed: not on the scan added for its photographed
+/// albedo, `jon`).
 fn check(name: &str, o: &Outcome, median_mm: f32, max_mm: f32) {
     let mut e = judged(o);
     assert_eq!(o.report.flipped, 0, "{name}: triangles turned over");
@@ -180,6 +182,9 @@ fn check(name: &str, o: &Outcome, median_mm: f32, max_mm: f32) {
         "{name}: the blink leaves the lids {:?} mm apart",
         o.blink_gap
     );
+    if e.is_empty() {
+        return;
+    }
     let m = median(&mut e);
     assert!(
         m <= median_mm,
@@ -237,7 +242,8 @@ fn the_corpus_is_fitted_with_no_flags() {
     println!("|---|---|---:|---:|---:|---:|---:|---|---:|---:|");
     let mut failures = Vec::new();
     for m in &list {
-        let o = fit(&dir.join(&m.mesh), &out.join(&m.name), &hand[&m.name]);
+        let points = hand.get(&m.name).cloned().unwrap_or_default();
+        let o = fit(&dir.join(&m.mesh), &out.join(&m.name), &points);
         let name = if m.held_out {
             format!("{} (held out)", m.name)
         } else {
@@ -246,7 +252,13 @@ fn the_corpus_is_fitted_with_no_flags() {
         println!("{}", row(&name, &o));
         println!(
             "  goals {}; {}",
-            if meets_goals(&o) { "met" } else { "missed" },
+            if o.errors.is_empty() {
+                "not judged (no hand-placed landmarks)"
+            } else if meets_goals(&o) {
+                "met"
+            } else {
+                "missed"
+            },
             o.errors
                 .iter()
                 .map(|(n, e)| format!("{n} {e:.1}"))

@@ -2,7 +2,8 @@
 //! mean CIELAB (D65), ΔE*ab between the means and the a* spread — S0 §6.2's side-by-side, in numbers.
 //!
 //! Both sides are measured as a camera sees them (hair included: a scan's albedo holds its
-//! stubble), on the texels the mesh covers where the region's field exceeds 0.7. The a* spread is
+//! stubble), on the texels the mesh covers where the region's field exceeds 0.7 and the photo
+//! shows skin ([`photo_shows_skin`]: not dense hair, clothing or an atlas's empty space). The a* spread is
 //! the standard deviation of a* over the region after a [`SPREAD_BLUR_MM`] box blur, so it counts
 //! blotches and erythema rather than pores, hairs or a photograph's noise.
 
@@ -33,6 +34,24 @@ pub const SPREAD_BLUR_MM: f64 = 2.0;
 /// Field value above which a texel belongs to a region (as [`crate::color_stats`]).
 const IN_REGION: f32 = 0.7;
 
+/// Share of a region's texels the photo must show as skin for the region to count in the
+/// median (a scan whose beard or shirt covers a region says nothing of its skin there).
+pub const MIN_SKIN_SHARE: f64 = 0.5;
+
+/// Whether a photographed colour can be skin: inside the gamut of measured human skin in
+/// CIELAB — L* 25–85, a* 0–30, b* 0–35 (Chardon et al. 1991's ITA° range, −70° to 70°, and the
+/// facial measurements of Xiao et al. 2017 and Wee et al. 2009 all fall inside; authored
+/// bounds) — so dense dark hair, a yellow shirt or an atlas's black space is left out.
+pub fn photo_shows_skin(lab: [f64; 3]) -> bool {
+    (25.0..=85.0).contains(&lab[0])
+        && (0.0..=30.0).contains(&lab[1])
+        && (0.0..=35.0).contains(&lab[2])
+}
+
+/// L* below which a photo texel is an atlas's empty space; texels next to it are left out (a
+/// seam's bilinear samples mix it in).
+const EMPTY_L: f64 = 5.0;
+
 /// One side's colour over a region.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct RegionLab {
@@ -47,14 +66,21 @@ pub struct RegionLab {
 pub struct RegionPair {
     /// Region (derma-head's name).
     pub region: String,
-    /// Texels measured.
+    /// Texels measured (the photo shows skin there).
     pub texels: usize,
+    /// Share of the region's covered texels where the photo shows skin.
+    pub skin_share: f64,
     /// The photographed albedo.
     pub photo: RegionLab,
     /// The painted set's base colour.
     pub derma: RegionLab,
     /// CIE 1976 ΔE*ab between the means.
     pub delta_e: f64,
+    /// The photo at the exposure that gives its cheeks and forehead derma's mean luminance
+    /// ([`AlbedoComparison::exposure_gain`]): its mean Lab and ΔE*ab from derma's.
+    pub photo_matched: [f64; 3],
+    /// ΔE*ab between derma's mean and [`RegionPair::photo_matched`].
+    pub delta_e_matched: f64,
 }
 
 /// The whole comparison.
@@ -64,10 +90,18 @@ pub struct AlbedoComparison {
     pub albedo: String,
     /// ITA° of the photo's mean cheek colour (Chardon et al. 1991): the preset to paint at.
     pub photo_cheek_ita_deg: f64,
+    /// ITA° of the photo's mean over cheeks and forehead, what `person.ita_deg` calibrates:
+    /// the scan's own tone.
+    pub photo_ita_deg: f64,
+    /// Factor on the photo's linear RGB that gives its cheeks and forehead derma's mean
+    /// luminance: 1 for an albedo at derma's exposure; a camera texture's unknown exposure.
+    pub exposure_gain: f64,
     /// Per region, in [`REGIONS`]' order (regions the mesh does not show are left out).
     pub regions: Vec<RegionPair>,
-    /// Median ΔE*ab over the regions.
+    /// Median ΔE*ab over the regions whose skin share reaches [`MIN_SKIN_SHARE`].
     pub median_delta_e: f64,
+    /// The same median at the matched exposure.
+    pub median_delta_e_matched: f64,
 }
 
 /// CIE 1976 colour difference.
@@ -75,28 +109,69 @@ pub fn delta_e76(a: [f64; 3], b: [f64; 3]) -> f64 {
     (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
 }
 
-/// Lab of an sRGB-encoded colour in [0, 1].
-fn lab_of_encoded(rgb: [f32; 3]) -> [f64; 3] {
-    xyz_to_lab(linear_srgb_to_xyz(
-        rgb.map(|v| srgb_decode(v.clamp(0.0, 1.0)) as f64),
-    ))
+/// Lab of a linear sRGB colour.
+fn lab_of_linear(rgb: [f64; 3]) -> [f64; 3] {
+    xyz_to_lab(linear_srgb_to_xyz(rgb))
+}
+
+/// Relative luminance of a linear sRGB colour (ITU-R BT.709 weights).
+fn luminance(rgb: [f64; 3]) -> f64 {
+    0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
+}
+
+/// One texel's two colours, linear sRGB.
+#[derive(Clone, Copy)]
+struct Texel {
+    photo: [f64; 3],
+    derma: [f64; 3],
+}
+
+/// Median of `v` (NaN when empty).
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
 }
 
 /// Per covered texel of the set, the Lab of the photo at the texel's UV and of the set's base
-/// colour (`None` off the mesh).
-fn lab_maps(set: &TextureSet, photo: &LoadedImage) -> Vec<Option<([f64; 3], [f64; 3])>> {
+/// colour (`None` off the mesh, where the photo shows no skin, and next to an atlas's empty
+/// space).
+fn lab_maps(set: &TextureSet, photo: &LoadedImage) -> Vec<Option<Texel>> {
     let s = &set.surface;
+    let (w, h) = (s.width, s.height);
     let ch = &photo.channels;
+    let photo_rgb: Vec<[f64; 3]> = (0..s.len())
+        .map(|i| {
+            let uv = s.uv(i);
+            [0, 1, 2]
+                .map(|k| srgb_decode(ch[k].sample_uv(uv.x, uv.y, false).clamp(0.0, 1.0)) as f64)
+        })
+        .collect();
+    let photo_lab: Vec<[f64; 3]> = photo_rgb.iter().map(|&c| lab_of_linear(c)).collect();
+    let near_empty = |i: usize| {
+        let (x, y) = ((i % w) as isize, (i / w) as isize);
+        (-1..=1).any(|dy| {
+            (-1..=1).any(|dx| {
+                let (xx, yy) = (x + dx, y + dy);
+                (0..w as isize).contains(&xx)
+                    && (0..h as isize).contains(&yy)
+                    && photo_lab[yy as usize * w + xx as usize][0] < EMPTY_L
+            })
+        })
+    };
     (0..s.len())
         .map(|i| {
-            if !s.covered(i) {
+            if !s.covered(i) || !photo_shows_skin(photo_lab[i]) || near_empty(i) {
                 return None;
             }
-            let uv = s.uv(i);
-            let p = [0, 1, 2].map(|k| ch[k].sample_uv(uv.x, uv.y, false));
-            let c = set.render.base_color[i];
-            let d = xyz_to_lab(linear_srgb_to_xyz(c.map(|v| srgb8_decode(v) as f64)));
-            Some((lab_of_encoded(p), d))
+            let c = set.render.base_color[i].map(|v| srgb8_decode(v) as f64);
+            Some(Texel {
+                photo: photo_rgb[i],
+                derma: c,
+            })
         })
         .collect()
 }
@@ -165,72 +240,146 @@ fn texel_mm(set: &TextureSet, mask: &[bool]) -> f64 {
     (area / n.max(1) as f64).sqrt()
 }
 
+/// The texels of each region of [`REGIONS`] on the mesh, and of those where the photo shows skin.
+fn region_texels(
+    set: &TextureSet,
+    texels: &[Option<Texel>],
+) -> Result<Vec<(&'static str, usize, Vec<usize>)>> {
+    let s = &set.surface;
+    let mut out = Vec::new();
+    for name in REGIONS {
+        let f = set.fields.scalar(name)?;
+        let on_mesh: Vec<usize> = (0..s.len())
+            .filter(|&i| {
+                let uv = s.uv(i);
+                s.covered(i) && f.sample_uv(uv.x, uv.y, false) > IN_REGION
+            })
+            .collect();
+        let skin: Vec<usize> = on_mesh
+            .iter()
+            .copied()
+            .filter(|&i| texels[i].is_some())
+            .collect();
+        if !skin.is_empty() {
+            out.push((name, on_mesh.len(), skin));
+        }
+    }
+    Ok(out)
+}
+
+/// The exposure gain on the photo that gives the texels `idx` derma's mean luminance.
+fn exposure_gain(texels: &[Option<Texel>], idx: &[usize]) -> f64 {
+    let (mut p, mut d) = (0.0, 0.0);
+    for t in idx.iter().filter_map(|&i| texels[i]) {
+        p += luminance(t.photo);
+        d += luminance(t.derma);
+    }
+    if p > 0.0 {
+        d / p
+    } else {
+        1.0
+    }
+}
+
 /// Compares `set` with `photo`, an albedo of the same mesh in the same UV layout (`name` is its
 /// file, for the report). Regions of [`REGIONS`] that cover no texel are left out.
 pub fn compare(set: &TextureSet, photo: &LoadedImage, name: &str) -> Result<AlbedoComparison> {
     let s = &set.surface;
     let (w, h) = (s.width, s.height);
-    let labs = lab_maps(set, photo);
-    let a_of = |side: usize| -> Vec<Option<f64>> {
-        labs.iter()
-            .map(|l| l.map(|(p, d)| [p, d][side][1]))
-            .collect()
-    };
+    let texels = lab_maps(set, photo);
+    let regions = region_texels(set, &texels)?;
+    let tone: Vec<usize> = regions
+        .iter()
+        .filter(|r| r.0 == "cheeks" || r.0 == "forehead")
+        .flat_map(|r| r.2.iter().copied())
+        .collect();
+    let gain = exposure_gain(&texels, &tone);
+    // Per texel: the photo's Lab as given and at the matched exposure, and derma's.
+    let labs: Vec<Option<[[f64; 3]; 3]>> = texels
+        .iter()
+        .map(|t| {
+            t.map(|t| {
+                [
+                    lab_of_linear(t.photo),
+                    lab_of_linear(t.photo.map(|c| c * gain)),
+                    lab_of_linear(t.derma),
+                ]
+            })
+        })
+        .collect();
     let all: Vec<bool> = labs.iter().map(Option::is_some).collect();
     let side = ((SPREAD_BLUR_MM / texel_mm(set, &all)).round() as usize).max(1) | 1;
-    let blurred = [
-        masked_box_blur(&a_of(0), w, h, side),
-        masked_box_blur(&a_of(1), w, h, side),
-    ];
-    let mut regions = Vec::new();
-    let mut cheek_ita = f64::NAN;
-    for name in REGIONS {
-        let f = set.fields.scalar(name)?;
-        let idx: Vec<usize> = (0..s.len())
-            .filter(|&i| {
-                labs[i].is_some() && {
-                    let uv = s.uv(i);
-                    f.sample_uv(uv.x, uv.y, false) > IN_REGION
-                }
-            })
+    let blurred: Vec<Vec<Option<f64>>> = [0, 2]
+        .iter()
+        .map(|&k| {
+            let a: Vec<Option<f64>> = labs.iter().map(|l| l.map(|l| l[k][1])).collect();
+            masked_box_blur(&a, w, h, side)
+        })
+        .collect();
+    let side_of = |idx: &[usize], k: usize, b: usize| {
+        let l: Vec<[f64; 3]> = idx
+            .iter()
+            .map(|&i| labs[i].expect("a skin texel")[k])
             .collect();
-        if idx.is_empty() {
-            continue;
-        }
-        let sides: [RegionLab; 2] = [0, 1].map(|k| {
-            let l: Vec<[f64; 3]> = idx
-                .iter()
-                .map(|&i| {
-                    let (p, d) = labs[i].unwrap();
-                    [p, d][k]
-                })
-                .collect();
-            let a: Vec<f64> = idx.iter().map(|&i| blurred[k][i].unwrap_or(0.0)).collect();
-            region_lab(&l, &a)
-        });
-        if name == "cheeks" {
-            cheek_ita = ita_deg(sides[0].lab);
-        }
-        regions.push(RegionPair {
-            region: name.into(),
-            texels: idx.len(),
-            delta_e: delta_e76(sides[0].lab, sides[1].lab),
-            photo: sides[0],
-            derma: sides[1],
-        });
-    }
-    let mut de: Vec<f64> = regions.iter().map(|r| r.delta_e).collect();
-    de.sort_by(f64::total_cmp);
-    let median_delta_e = match de.len() {
-        0 => f64::NAN,
-        n if n % 2 == 1 => de[n / 2],
-        n => 0.5 * (de[n / 2 - 1] + de[n / 2]),
+        let a: Vec<f64> = idx.iter().map(|&i| blurred[b][i].unwrap_or(0.0)).collect();
+        region_lab(&l, &a)
     };
+    let pairs: Vec<RegionPair> = regions
+        .iter()
+        .map(|(name, on_mesh, idx)| {
+            let (photo, derma) = (side_of(idx, 0, 0), side_of(idx, 2, 1));
+            let matched = side_of(idx, 1, 0).lab;
+            RegionPair {
+                region: (*name).into(),
+                texels: idx.len(),
+                skin_share: idx.len() as f64 / *on_mesh as f64,
+                delta_e: delta_e76(photo.lab, derma.lab),
+                photo_matched: matched,
+                delta_e_matched: delta_e76(matched, derma.lab),
+                photo,
+                derma,
+            }
+        })
+        .collect();
+    let counted = |f: fn(&RegionPair) -> f64| {
+        median(
+            pairs
+                .iter()
+                .filter(|r| r.skin_share >= MIN_SKIN_SHARE)
+                .map(f)
+                .collect(),
+        )
+    };
+    let mean_lab = |idx: &[usize]| {
+        let n = idx.len().max(1) as f64;
+        [0, 1, 2].map(|c| {
+            idx.iter()
+                .map(|&i| labs[i].expect("a skin texel")[0][c])
+                .sum::<f64>()
+                / n
+        })
+    };
+    let cheeks: Vec<usize> = regions
+        .iter()
+        .filter(|r| r.0 == "cheeks")
+        .flat_map(|r| r.2.iter().copied())
+        .collect();
     Ok(AlbedoComparison {
         albedo: name.into(),
-        photo_cheek_ita_deg: cheek_ita,
-        regions,
-        median_delta_e,
+        photo_cheek_ita_deg: if cheeks.is_empty() {
+            f64::NAN
+        } else {
+            ita_deg(mean_lab(&cheeks))
+        },
+        photo_ita_deg: if tone.is_empty() {
+            f64::NAN
+        } else {
+            ita_deg(mean_lab(&tone))
+        },
+        exposure_gain: gain,
+        median_delta_e: counted(|r| r.delta_e),
+        median_delta_e_matched: counted(|r| r.delta_e_matched),
+        regions: pairs,
     })
 }
 

@@ -61,7 +61,7 @@ impl Default for MottlingConfig {
         Self {
             enabled: true,
             wavelengths_mm: [20.0, 10.0, 5.0],
-            blood: 0.7,
+            blood: 1.2,
             melanin: 0.15,
         }
     }
@@ -448,7 +448,7 @@ impl Default for LipsConfig {
         Self {
             enabled: true,
             field: "lips".into(),
-            blood: 0.1,
+            blood: 0.05,
             pheomelanin: 0.6,
             epidermis_um: 40.0,
         }
@@ -610,7 +610,7 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("baseline.height_mm", "mm", -10.0, 10.0, "baseline displacement range"),
     k("lips.enabled", "-", 0.0, 0.0, "paint lips (thesis §5.3.6)"),
     k("lips.field", "field", 0.0, 0.0, "lip field ∆(p)"),
-    k("lips.blood", "volume fraction", 0.0, 1.0, "lip blood ratio B (authored: the vermilion is highly vascular; 10 %, the top node of the built-in match table, so the lips stay redder than the well-perfused cheeks)"),
+    k("lips.blood", "volume fraction", 0.0, 1.0, "lip blood ratio B (authored: the vermilion is highly vascular and its thin epidermis shows it; 5 % keeps the lips redder than the well-perfused cheeks with the orange-red hue of photographed lips — 10 % turned them mauve, b* 7 against two scans' 14, docs/skin.md \"Beside a real face\")"),
     k("lips.pheomelanin", "fraction", 0.0, 1.0, "lip pheomelanin ratio H (authored)"),
     k("lips.epidermis_um", "µm", 0.0, 2000.0, "epidermis thickness inside the lips (thin vermilion epidermis; authored)"),
     k("cyst.enabled", "-", 0.0, 0.0, "scatter cysts (thesis §5.3.2)"),
@@ -702,7 +702,7 @@ pub const KEY_DOCS: &[KeyDoc] = &[
     k("person.age_years", "years", 10.0, 100.0, "age: wrinkle density × age_factor and depth × √age_factor (1 at 40, 0.2 at ≤ 20, 2.2 at ≥ 70; regional::age_factor)"),
     k("mottling.enabled", "-", 0.0, 0.0, "centimetre-scale blotches of blood and pigment (mottling.rs): the uneven colour within a region of a real face"),
     k("mottling.wavelengths_mm", "mm", 1.0, 1000.0, "wavelengths of the mottling's three noise octaves (weights ½, ⅓, ⅙): blotches from millimetres to centimetres, the band of measured facial colour heterogeneity"),
-    k("mottling.blood", "-", 0.0, 3.0, "log amplitude of the blood's mottling: the factor exp(a (2n − 1)) spans e^±a; authored and subtle (0.7): the regions carry the face's coarse redness, blotches this strong alone read as a rash"),
+    k("mottling.blood", "-", 0.0, 3.0, "log amplitude of the blood's mottling: the factor exp(a (2n − 1)) spans e^±a; authored (1.2): two photographed albedos vary 1.6–3.3 in a* within a region after a 2 mm blur (docs/skin.md, \"Beside a real face\"), which 0.7 reached only halfway; the regions still carry the face's coarse redness"),
     k("mottling.melanin", "-", 0.0, 3.0, "log amplitude of the melanin's mottling (pigment blotches, independent of the blood's)"),
     k("regional.enabled", "-", 0.0, 0.0, "regional biology of the built-in head (regional.rs GAINS): blood, melanin, oxygenation and epidermis by region"),
     k("material.specular_f0", "-", 0.0, 1.0, "normal-incidence reflectance of skin where the surface is not fitted: ((n−1)/(n+1))² for n = 1.4 (Donner & Jensen 2006, the analytic appearance's index) = 0.028"),

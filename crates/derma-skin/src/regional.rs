@@ -79,26 +79,31 @@ pub const GAINS: [Gain; 12] = [
     // excess over 1 was cut to 0.6× when the optics' surface became the Smith microsurface;
     // when the baseline blood was lowered to 0.3–2 % (so facial a* and b* land near measured
     // faces), cheeks and nose were raised to 5 and 5.5 so their diffuse erythema still stands
-    // out (coarse a* σ ≥ 2.5 on light skin, as a fair face scan's 3.0).
+    // out (coarse a* σ ≥ 2.5 on light skin, as a fair face scan's 3.0). Beside two
+    // photographed albedos (docs/skin.md, "Beside a real face") the rest of the face was far
+    // paler than theirs — chin 7.8 against 15, neck 6 against 14, lids 9 against 15–17, where
+    // their cheeks lead the chin by 1.6 a* and the forehead by 2.6–3.3 — so forehead, chin,
+    // upper lip, ears, lids and neck were raised towards the cheeks (forehead 2.56 → 3.2, the
+    // others to 4, the neck 0.9 → 2.5; tuned on the Lee Perry-Smith scan, checked on the other).
     g("cheeks", 5.0, 1.0, 0.2, 1.0),
     g("nose", 5.5, 1.0, 0.2, 1.0),
-    g("forehead", 2.56, 1.0, 0.12, 1.0),
-    g("chin", 1.96, 1.0, 0.0, 1.0),
-    g("upper_lip", 2.08, 1.0, 0.0, 1.0),
+    g("forehead", 3.2, 1.0, 0.12, 1.0),
+    g("chin", 4.0, 1.0, 0.0, 1.0),
+    g("upper_lip", 4.0, 1.0, 0.0, 1.0),
     // The auricle is thin and well perfused and reads redder than the scalp around it (as in
     // the reference head scan of the issue this follows).
-    g("ears", 3.1, 1.0, 0.15, 1.0),
+    g("ears", 4.0, 1.0, 0.15, 1.0),
     // Periorbital skin: darker and bluish — venous blood of the orbicularis plexus seen through
     // thin skin, and more melanin (Freitag & Cestari 2007, "What causes dark circles under the
     // eyes?", J Cosmet Dermatol 6:211–215).
-    g("periorbital", 2.8, 1.25, -0.4, 0.85),
+    g("periorbital", 4.0, 1.25, -0.4, 0.85),
     // Eyelid skin is the thinnest of the face (Ha et al. 2005, Plast Reconstr Surg 115:1769).
-    g("eyelids", 2.2, 1.3, -0.2, 0.6),
-    // The neck is paler than the face.
+    g("eyelids", 4.0, 1.3, -0.2, 0.6),
     // The lip vermilion: the lips feature sets its blood (thesis §5.3.6); its capillary loops
     // lie close under a thin epidermis and carry well-oxygenated blood.
     g("lips", 1.0, 1.0, 0.2, 1.0),
-    g("neck", 0.9, 0.95, 0.0, 1.0),
+    // The neck is paler than the face.
+    g("neck", 2.5, 0.95, 0.0, 1.0),
     g("scalp", 1.0, 1.0, 0.0, 1.0),
     g("eyebrows", 1.2, 1.0, 0.0, 1.0),
 ];

@@ -70,6 +70,10 @@ pub struct SkinArgs {
     /// person.ita_deg. Default: the config's person (light, 48°).
     #[arg(long, value_parser = parse_preset)]
     preset: Option<derma_skin::regional::Preset>,
+    /// Skin tone as an ITA° (cheeks and forehead; e.g. a scan's own, which --compare-albedo
+    /// prints): sets person.ita_deg, after --preset.
+    #[arg(long, value_name = "DEG", value_parser = |s: &str| in_range::<f32>("person.ita_deg", s))]
+    ita: Option<f32>,
     /// Sex of the person (beard follicles for male). Overrides person.sex.
     #[arg(long, value_enum)]
     sex: Option<SexArg>,
@@ -142,6 +146,9 @@ fn apply_person(cfg: &mut SkinConfig, args: &SkinArgs) {
     }
     if let Some(p) = args.preset {
         cfg.person = p.person(cfg.person.sex, cfg.person.age_years);
+    }
+    if let Some(ita) = args.ita {
+        cfg.person.ita_deg = ita;
     }
 }
 
@@ -246,21 +253,27 @@ pub fn run(args: SkinArgs, bars: &Bars) -> Result<()> {
 /// The albedo comparison as a Markdown table.
 fn print_comparison(c: &derma_skin::albedo_compare::AlbedoComparison) -> Result<()> {
     let mut t = format!(
-        "{} beside the set (photo's cheek ITA {:.0}°)\n| region | photo L* a* b* | derma L* a* b* | ΔE*ab | a* spread photo / derma |\n|---|---|---|---:|---|\n",
-        c.albedo, c.photo_cheek_ita_deg
+        "{} beside the set: the photo's ITA {:.0}° on cheeks and forehead ({:.0}° on the cheeks); its exposure ×{:.2} matches derma's luminance there\n| region | skin in the photo | photo L* a* b* | derma L* a* b* | ΔE*ab | matched exposure: photo L* a* b* | ΔE*ab | a* spread photo / derma |\n|---|---:|---|---|---:|---|---:|---|\n",
+        c.albedo, c.photo_ita_deg, c.photo_cheek_ita_deg, c.exposure_gain
     );
     let lab = |l: [f64; 3]| format!("{:.1} {:.1} {:.1}", l[0], l[1], l[2]);
     for r in &c.regions {
         t += &format!(
-            "| {} | {} | {} | {:.1} | {:.2} / {:.2} |\n",
+            "| {} | {:.0} % | {} | {} | {:.1} | {} | {:.1} | {:.2} / {:.2} |\n",
             r.region,
+            100.0 * r.skin_share,
             lab(r.photo.lab),
             lab(r.derma.lab),
             r.delta_e,
+            lab(r.photo_matched),
+            r.delta_e_matched,
             r.photo.a_spread,
             r.derma.a_spread
         );
     }
-    t += &format!("median ΔE*ab {:.1}\n", c.median_delta_e);
+    t += &format!(
+        "median ΔE*ab {:.1}, at the matched exposure {:.1} (regions the photo shows as skin over half their texels)\n",
+        c.median_delta_e, c.median_delta_e_matched
+    );
     crate::output::text(&t)
 }
