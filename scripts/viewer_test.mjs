@@ -162,6 +162,15 @@ try {
   console.log(`hair cards: ${hair.map((h) => `${h.name} transparent ${h.transparent}, alphaTest ${h.alphaTest}`).join('; ')}`);
   if (!(hair.length >= 3 && hair.every((h) => h.transparent && h.alphaTest === 0))) fail(`hair cards that do not blend: ${JSON.stringify(hair)}`);
 
+  // 2c. The pupil slider drives the globes' morphs.
+  await page.locator('#pupil').fill('8');
+  const wide = await page.evaluate(() => window.derma.pupil());
+  await page.locator('#pupil').fill('2');
+  const narrow = await page.evaluate(() => window.derma.pupil());
+  await page.locator('#pupil').fill('4');
+  console.log(`pupil 8 mm: ${JSON.stringify(wide)}; 2 mm: ${JSON.stringify(narrow)}`);
+  if (!(wide.eye_left?.pupilDilate === 1 && narrow.eye_right?.pupilConstrict === 1 && wide.eye_left?.pupilConstrict === 0)) fail(`the pupil slider did not drive the globes' morphs`);
+
   // 3. The trained eye model live: the JS port against derma's evaluator at the export's check
   // poses, then the upper lid followed in the picture as the gaze drops: in a column of pixels
   // through a margin vertex, the lid's edge is the strongest rise in luminance going down from

@@ -99,6 +99,16 @@ const api = {
     return true;
   },
   frameFace: () => frameFace(),
+  // The globes' pupil morphs (the GLB's pupilDilate / pupilConstrict) as last set.
+  pupil: () => {
+    const out = {};
+    for (const n of ['eye_left', 'eye_right']) {
+      const o = skin?.parent.getObjectByName(n);
+      const dict = o?.morphTargetDictionary;
+      if (dict) out[n] = Object.fromEntries(Object.entries(dict).map(([k, i]) => [k, o.morphTargetInfluences[i]]));
+    }
+    return out;
+  },
   // The hair cards' materials as three.js loaded them (the GLB's alphaMode): blended cards are
   // transparent with no alpha test.
   hairMaterials: () => {
@@ -178,6 +188,18 @@ function setWeight(name, w) {
 
 // ---- controls ----
 const panel = document.getElementById('panel');
+// The pupil `mm` across through the globes' morphs: the texture's own is 4 mm, pupilDilate
+// draws 8 and pupilConstrict 2 (derma-head's eye::PUPIL_MORPHS_MM); between, linearly.
+function setPupil(mm) {
+  for (const n of ['eye_left', 'eye_right']) {
+    const o = skin?.parent.getObjectByName(n);
+    const dict = o?.morphTargetDictionary;
+    if (!dict || !('pupilDilate' in dict)) continue;
+    o.morphTargetInfluences[dict.pupilDilate] = Math.max(0, (mm - 4) / 4);
+    o.morphTargetInfluences[dict.pupilConstrict] = Math.max(0, (4 - mm) / 2);
+  }
+}
+
 function slider(parent, id, label, min, max, step, value, onInput) {
   const row = document.createElement('label');
   row.className = 'row';
@@ -239,6 +261,7 @@ function buildControls() {
   slider(e, 'gaze-yaw', 'gaze yaw °', -35, 35, 0.5, 0, (v) => (face.gaze[0] = v));
   slider(e, 'gaze-pitch', 'gaze pitch °', -30, 25, 0.5, 0, (v) => (face.gaze[1] = v));
   slider(e, 'aperture', 'aperture', -1, 1, 0.01, 0, (v) => (face.aperture = v));
+  slider(e, 'pupil', 'pupil mm', 2, 8, 0.1, 4, (v) => setPupil(v));
   const b = document.createElement('button');
   b.id = 'blink';
   b.textContent = 'blink';

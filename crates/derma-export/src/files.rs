@@ -55,6 +55,9 @@ pub struct RenderJob {
     pub gaze: (f32, f32),
     /// Lid closure in [0, 1] (a blink's peak; 0 open).
     pub blink: f32,
+    /// Pupil diameter (mm) drawn through the eye texture's coordinates; `None`: the texture's
+    /// own (4 mm).
+    pub pupil_mm: Option<f32>,
     /// Draw the lacrimal lake along the lid margins.
     pub lake: bool,
     /// Where to draw: a GPU (the full renderer) or the CPU (no subsurface scattering, shadows,
@@ -335,6 +338,9 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
         }
     }
     let mut scene = scene_of(job, &skin, eye, &units, progress)?;
+    if let Some(d) = job.pupil_mm {
+        scene.set_pupil(d);
+    }
     if let Some(p) = &job.teeth {
         if scene.texture_parts("teeth", &derma_render::material::read_albedo(p)?) == 0 {
             return Err(derma_core::Invalid::new(

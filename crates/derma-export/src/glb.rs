@@ -611,7 +611,19 @@ fn add_parts(
 ) {
     for (k, part) in head.parts.iter().enumerate() {
         s.materials.push(part_material(part, textures));
-        let t = derma_head::export::part_targets(units, k);
+        let mut t = derma_head::export::part_targets(units, k);
+        // The globes dilate and constrict their pupils by morph (docs/eyes.md).
+        let pupil: Vec<(&str, Vec<(u32, glam::Vec3)>)> = match part.name.as_str() {
+            "eye_left" | "eye_right" => {
+                let c = head.eyes[usize::from(part.name == "eye_right")].centre;
+                derma_head::eye::PUPIL_MORPHS_MM
+                    .iter()
+                    .map(|(n, d)| (*n, derma_head::eye::pupil_offsets(&part.mesh, c, *d)))
+                    .collect()
+            }
+            _ => Vec::new(),
+        };
+        t.extend(pupil.iter().map(|(n, o)| (*n, o.as_slice())));
         let mut pm = s.g.mesh(&part.name, &part.mesh, &t);
         pm["primitives"][0]["material"] = json!(s.materials.len() - 1);
         s.meshes.push(pm);

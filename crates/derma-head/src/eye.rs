@@ -85,6 +85,95 @@ pub const IRIS_UV_RADIUS: f32 = 0.5 * 29.0 / 180.0;
 /// Pupil radius (UV): a 4 mm pupil in indoor light, asin(2 / 12) ≈ 9.6°.
 pub const PUPIL_UV_RADIUS: f32 = 0.5 * 9.6 / 180.0;
 
+/// Pupil diameters a `--pupil` may ask for (mm): about 2 in bright light to 8 dark-adapted in
+/// young adults (Watson & Yellott 2012, "A unified formula for light-adapted pupil size", J Vis
+/// 12(10):12), with room either side.
+pub const PUPIL_RANGE_MM: (f32, f32) = (1.5, 9.0);
+
+/// The UV radius of a pupil `diameter_mm` across on a globe of `radius_mm`: its edge at
+/// asin(d/2 / r) from the optical axis, which [`uv_of`] maps to 0.5 θ/π.
+pub fn pupil_uv_radius(diameter_mm: f32, radius_mm: f32) -> f32 {
+    0.5 * (0.5 * diameter_mm / radius_mm).clamp(0.0, 1.0).asin() / PI
+}
+
+/// Where the texture is read for a point at UV radius `r` from the iris centre when the pupil
+/// is drawn at UV radius `pupil` (the texture's own is [`PUPIL_UV_RADIUS`]): pupil dilation
+/// through texture coordinates (Tarini et al., the iris model's §4.1) — the pupil scaled to its
+/// new edge and the iris annulus stretched between that edge and the limbus, which stays.
+pub fn dilated_radius(r: f32, pupil: f32) -> f32 {
+    if r >= IRIS_UV_RADIUS {
+        r
+    } else if r < pupil {
+        r / pupil * PUPIL_UV_RADIUS
+    } else {
+        PUPIL_UV_RADIUS
+            + (r - pupil) / (IRIS_UV_RADIUS - pupil) * (IRIS_UV_RADIUS - PUPIL_UV_RADIUS)
+    }
+}
+
+/// The inverse of [`dilated_radius`]: the UV radius at which the texture's radius `r_tex` is
+/// drawn (what a morph of the globe's vertices needs: each vertex keeps its UV and moves).
+pub fn undilated_radius(r_tex: f32, pupil: f32) -> f32 {
+    if r_tex >= IRIS_UV_RADIUS {
+        r_tex
+    } else if r_tex < PUPIL_UV_RADIUS {
+        r_tex / PUPIL_UV_RADIUS * pupil
+    } else {
+        pupil
+            + (r_tex - PUPIL_UV_RADIUS) / (IRIS_UV_RADIUS - PUPIL_UV_RADIUS)
+                * (IRIS_UV_RADIUS - pupil)
+    }
+}
+
+/// The texture coordinate to sample at the globe's `uv` for a pupil of UV radius `pupil`
+/// ([`dilated_radius`] along the ray from the iris centre).
+pub fn dilated_uv(uv: Vec2, pupil: f32) -> Vec2 {
+    let d = uv - Vec2::splat(0.5);
+    let r = d.length();
+    if r == 0.0 {
+        return uv;
+    }
+    Vec2::splat(0.5) + d * (dilated_radius(r, pupil) / r)
+}
+
+/// Pupil diameters of the globes' morph targets (mm): dilated in the dark and constricted in
+/// bright light (Watson & Yellott 2012's range for young adults), against the texture's 4 mm.
+pub const PUPIL_MORPHS_MM: [(&str, f32); 2] = [("pupilDilate", 8.0), ("pupilConstrict", 2.0)];
+
+/// The vertex offsets that draw a globe's pupil `diameter_mm` across with its texture's
+/// coordinates unchanged: each vertex inside the iris slides along the sphere about `centre` to
+/// the [`undilated_radius`] of its own UV radius (a glTF morph target; a texture transform
+/// cannot bend the radial map). The optical axis is the direction of the vertex at the UV
+/// centre; vertices outside the iris stay. Exact at the vertices, linear between them.
+pub fn pupil_offsets(mesh: &TriMesh, centre: Vec3, diameter_mm: f32) -> Vec<(u32, Vec3)> {
+    let pole = mesh
+        .uvs
+        .iter()
+        .position(|uv| (*uv - Vec2::splat(0.5)).length() < 1e-6);
+    let Some(pole) = pole else {
+        return Vec::new();
+    };
+    let axis = (mesh.positions[pole] - centre).normalize_or(Vec3::Z);
+    let radius = (mesh.positions[pole] - centre).length();
+    let pupil = pupil_uv_radius(diameter_mm, radius);
+    let mut out = Vec::new();
+    for (i, (p, uv)) in mesh.positions.iter().zip(&mesh.uvs).enumerate() {
+        let r = (*uv - Vec2::splat(0.5)).length();
+        if r <= 0.0 || r >= IRIS_UV_RADIUS {
+            continue;
+        }
+        let d = *p - centre;
+        let turn = axis.cross(d).normalize_or_zero();
+        // θ = 2π r (uv_of's map), so the UV radius change is an angle change of 2π Δr.
+        let dtheta = TAU * (undilated_radius(r, pupil) - r);
+        let moved = glam::Quat::from_axis_angle(turn, dtheta) * d;
+        if turn != Vec3::ZERO {
+            out.push((i as u32, moved - d));
+        }
+    }
+    out
+}
+
 /// The default eye albedo (linear) at a UV of the globe: a dark pupil, a brown iris with radial
 /// striations and a darker limbal ring, and an off-white sclera.
 pub fn default_albedo(uv: Vec2) -> Vec3 {
@@ -105,6 +194,56 @@ pub fn default_albedo(uv: Vec2) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_pupil_morph_puts_the_textures_pupil_edge_at_the_new_diameter() {
+        let e = Eye {
+            centre: Vec3::new(30.0, 0.0, 60.0),
+            radius: 12.0,
+        };
+        let m = e.mesh();
+        let offs = pupil_offsets(&m, e.centre, 8.0);
+        assert!(!offs.is_empty());
+        for (i, o) in &offs {
+            let (p, uv) = (m.positions[*i as usize], m.uvs[*i as usize]);
+            let q = p + *o;
+            // Still on the globe, and at the angle from the axis where its texel is drawn.
+            assert!(((q - e.centre).length() - 12.0).abs() < 1e-3);
+            let theta = ((q - e.centre).normalize().dot(Vec3::Z))
+                .clamp(-1.0, 1.0)
+                .acos();
+            let want = TAU
+                * undilated_radius((uv - Vec2::splat(0.5)).length(), pupil_uv_radius(8.0, 12.0));
+            assert!((theta - want).abs() < 1e-3, "{theta} vs {want}");
+        }
+        // The texture's pupil edge is drawn 4 mm from the axis (8 mm across).
+        let r_new = undilated_radius(PUPIL_UV_RADIUS, pupil_uv_radius(8.0, 12.0));
+        assert!((12.0 * (TAU * r_new).sin() - 4.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn dilation_keeps_the_limbus_moves_the_pupil_edge_and_inverts() {
+        let pupil = pupil_uv_radius(7.0, 12.0);
+        // A 7 mm pupil on a 12 mm globe: 17.0° from the axis.
+        assert!(
+            (pupil - 0.5 * 17.0f32.to_radians() / PI).abs() < 2e-4,
+            "{pupil}"
+        );
+        // The texture's own 4 mm pupil is the identity.
+        let own = pupil_uv_radius(4.0, 12.0);
+        assert!((own - PUPIL_UV_RADIUS).abs() < 2e-4);
+        let limbus = Vec2::new(0.5 + IRIS_UV_RADIUS, 0.5);
+        assert!((dilated_uv(limbus, pupil) - limbus).length() < 1e-6);
+        let edge = Vec2::new(0.5, 0.5 + pupil);
+        assert!((dilated_uv(edge, pupil).y - (0.5 + PUPIL_UV_RADIUS)).abs() < 1e-6);
+        for k in 0..=100 {
+            let r = IRIS_UV_RADIUS * 1.2 * k as f32 / 100.0;
+            let back = undilated_radius(dilated_radius(r, pupil), pupil);
+            assert!((back - r).abs() < 1e-6, "{r} → {back}");
+            // Monotone: the iris is stretched, never folded.
+            assert!(dilated_radius(r + 1e-4, pupil) > dilated_radius(r, pupil));
+        }
+    }
 
     #[test]
     fn globe_is_a_closed_sphere_facing_out_with_the_iris_at_the_uv_centre() {

@@ -715,24 +715,6 @@ fn globe_texture(polar: &RgbImage, pupil: [f32; 3], sclera: [f32; 3], size: usiz
     }
 }
 
-/// The texture coordinate to sample for a pupil of UV radius `pupil` (dilation or constriction
-/// through texture coordinates, §4.1): the iris annulus is stretched between the new pupil edge
-/// and the limbus. `uv` is the globe's UV; returns where to sample the texture.
-pub fn dilated_uv(uv: Vec2, pupil: f32) -> Vec2 {
-    let d = uv - Vec2::splat(0.5);
-    let r = d.length();
-    if r >= IRIS_UV_RADIUS || r == 0.0 {
-        return uv;
-    }
-    let r_tex = if r < pupil {
-        r / pupil * PUPIL_UV_RADIUS
-    } else {
-        PUPIL_UV_RADIUS
-            + (r - pupil) / (IRIS_UV_RADIUS - pupil) * (IRIS_UV_RADIUS - PUPIL_UV_RADIUS)
-    };
-    Vec2::splat(0.5) + d * (r_tex / r)
-}
-
 /// A synthetic eye photo for tests and examples: sclera, an iris of radius `radius` px with
 /// radial striations, a pupil, and upper and lower lids of skin covering part of the iris.
 pub fn synthetic_eye(
@@ -849,13 +831,5 @@ mod tests {
         .unwrap();
         assert_eq!(t.report.synthesis, "markov-field-2d");
         assert!(t.polar.data.iter().all(|c| c.iter().all(|v| v.is_finite())));
-    }
-
-    #[test]
-    fn dilation_keeps_the_limbus_and_moves_the_pupil_edge() {
-        let limbus = Vec2::new(0.5 + IRIS_UV_RADIUS, 0.5);
-        assert!((dilated_uv(limbus, 0.06) - limbus).length() < 1e-6);
-        let edge = Vec2::new(0.5 + 0.06, 0.5);
-        assert!((dilated_uv(edge, 0.06).x - (0.5 + PUPIL_UV_RADIUS)).abs() < 1e-6);
     }
 }

@@ -130,8 +130,13 @@ fn looks(m: &Material) -> (Option<Albedo<'_>>, f32, f32, Option<Cover<'_>>, u8) 
             albedo,
             roughness,
             f0,
+            pupil,
             ..
-        } => (Some(textured(albedo)), *roughness, *f0, None, MATERIAL_EYE),
+        } => {
+            let (tex, pupil) = (textured(albedo), *pupil);
+            let dilated: Albedo = Box::new(move |uv| tex(derma_head::eye::dilated_uv(uv, pupil)));
+            (Some(dilated), *roughness, *f0, None, MATERIAL_EYE)
+        }
         Material::Textured {
             albedo,
             coverage,
@@ -500,5 +505,119 @@ mod cards {
             return;
         }
         the_alpha_edge_is_blended(&Renderer::new(&scene()).unwrap());
+    }
+}
+
+#[cfg(test)]
+mod pupil {
+    use super::*;
+    use crate::lighting::Setup;
+    use crate::scene::{corner_vertices, Part};
+
+    /// An eye texture of black pupil, light iris and grey sclera (the pupil the texture's own
+    /// 4 mm), so the pupil's edge is unmistakable under any light.
+    fn contrast_eye(n: usize) -> [Map; 3] {
+        use derma_head::eye::{IRIS_UV_RADIUS, PUPIL_UV_RADIUS};
+        let m = Map::from_fn(n, n, |i| {
+            let uv = Vec2::new((i % n) as f32 + 0.5, (i / n) as f32 + 0.5) / n as f32;
+            let r = (uv - Vec2::splat(0.5)).length();
+            if r < PUPIL_UV_RADIUS {
+                0.0
+            } else if r < IRIS_UV_RADIUS {
+                0.8
+            } else {
+                0.4
+            }
+        });
+        [m.clone(), m.clone(), m]
+    }
+
+    /// A 12 mm globe looking at the camera in front of a skin square, its pupil `mm` across.
+    fn scene(mm: f32) -> Scene {
+        let square = TriMesh {
+            positions: [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                .map(|(x, y)| Vec3::new(30.0 * x, 30.0 * y, -20.0))
+                .to_vec(),
+            normals: vec![Vec3::Z; 4],
+            uvs: vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        };
+        let mut scene = Scene::mesh(
+            &square,
+            crate::SkinMaps::uniform([0.6, 0.4, 0.3], 0.5, 0.35),
+        );
+        let eye = derma_head::eye::Eye {
+            centre: Vec3::ZERO,
+            radius: 12.0,
+        };
+        scene.parts.push(Part {
+            name: "eye_left".into(),
+            vertices: corner_vertices(&eye.mesh(), None),
+            material: Material::Eye {
+                albedo: Box::new(contrast_eye(256)),
+                centre: Vec3::ZERO,
+                radius: 12.0,
+                axis: Vec3::Z,
+                roughness: 0.1,
+                f0: 0.02,
+                pupil: derma_head::eye::PUPIL_UV_RADIUS,
+            },
+        });
+        scene.set_pupil(mm);
+        scene
+    }
+
+    /// Pixels of the pupil (nearly black) in a head-on frame of the globe.
+    fn pupil_pixels(r: &dyn Draw) -> usize {
+        let img = r
+            .draw(
+                &View {
+                    zoom: 0.5,
+                    ..View::default()
+                },
+                &Setup::Studio.lighting(),
+                128,
+                128,
+            )
+            .unwrap();
+        // Within 20 px of the frame's centre (about 5.5 mm: inside the iris, whose edge is
+        // 5.8 mm out), away from the globe's shadowed rim.
+        let near = |i: usize| {
+            (((i % 128) as f32 - 63.5).powi(2) + ((i / 128) as f32 - 63.5).powi(2)) < 400.0
+        };
+        img.display
+            .chunks_exact(4)
+            .zip(&img.material)
+            .enumerate()
+            .filter(|(i, (p, m))| near(*i) && **m == MATERIAL_EYE && p[0].max(p[1]).max(p[2]) < 40)
+            .count()
+    }
+
+    /// The pupil dilates and constricts through the texture's coordinates: its drawn area
+    /// scales as the diameter squared (8 mm against 2 mm: 16×; the cornea magnifies both alike,
+    /// the pixel grid and the specular highlight blur the count).
+    fn the_pupils_area_follows_its_diameter(make: &dyn Fn(&Scene) -> Box<dyn Draw + '_>) {
+        let (small, large) = (scene(2.0), scene(8.0));
+        let (a, b) = (pupil_pixels(&*make(&small)), pupil_pixels(&*make(&large)));
+        let ratio = b as f32 / a.max(1) as f32;
+        println!("pupil 2 mm: {a} px, 8 mm: {b} px, ×{ratio:.1}");
+        assert!(
+            a > 10 && (11.0..=21.0).contains(&ratio),
+            "2 mm: {a} px, 8 mm: {b} px, ×{ratio}"
+        );
+    }
+
+    #[test]
+    fn the_pupil_dilates_on_the_cpu() {
+        the_pupils_area_follows_its_diameter(&|s| Box::new(CpuRenderer::new(s)));
+    }
+
+    #[cfg(feature = "gpu")]
+    #[test]
+    fn the_pupil_dilates_on_the_gpu() {
+        if derma_test_support::skip_without_gpu() {
+            return;
+        }
+        the_pupils_area_follows_its_diameter(&|s| Box::new(Renderer::new(s).unwrap()));
     }
 }

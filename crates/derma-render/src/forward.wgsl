@@ -6,6 +6,25 @@ struct Draw {
     params: vec4<f32>,    // x perceptual roughness, y F0, z kind, w specular scale (F0 per unit)
     eye: vec4<f32>,       // eye centre (mm), w = globe radius
     eye_axis: vec4<f32>,  // optical axis (unit), w = scatter (1: skin's subsurface maps apply)
+    pupil: vec4<f32>,     // eyes: x the pupil's UV radius drawn, y the texture's own, z the iris'
+}
+
+// Pupil dilation through texture coordinates (derma-head's eye::dilated_uv): the UV to read
+// for the globe's `uv`, the pupil scaled to its new edge and the iris stretched to the limbus.
+fn dilated_uv(uv: vec2<f32>) -> vec2<f32> {
+    let d = uv - vec2<f32>(0.5);
+    let r = length(d);
+    let p = draw.pupil.x;
+    let own = draw.pupil.y;
+    let iris = draw.pupil.z;
+    if (r <= 0.0 || r >= iris || p <= 0.0) {
+        return uv;
+    }
+    var rt = own + (r - p) / (iris - p) * (iris - own);
+    if (r < p) {
+        rt = r / p * own;
+    }
+    return vec2<f32>(0.5) + d * (rt / r);
 }
 
 const KIND_SKIN: f32 = 0.0;
@@ -239,13 +258,13 @@ fn fs_eye(in: VertexOut, @builtin(front_facing) front: bool) -> GOut {
         let theta = asin(min(rho / rg, 1.0));
         let phi = atan2(local.y, local.x);
         let uv = vec2<f32>(0.5) + 0.5 * (theta / PI) * vec2<f32>(cos(phi), sin(phi));
-        albedo = textureSample(base_color, tex_sampler, uv).rgb;
+        albedo = textureSample(base_color, tex_sampler, dilated_uv(uv)).rgb;
         spec_n = nq;
         lit_n = axis;
         lit_p = s;
         transmit = 1.0 - schlick(draw.params.y, max(dot(nq, v), 0.0));
     } else {
-        albedo = textureSample(base_color, tex_sampler, tex_uv(in.uv)).rgb;
+        albedo = textureSample(base_color, tex_sampler, tex_uv(dilated_uv(in.uv))).rgb;
     }
     // Diffuse from the iris or sclera; specular from the tear film over the cornea or sclera.
     let d = light_surface(lit_p, lit_n, ng, v, 1.0, 0.0);

@@ -78,6 +78,8 @@ struct DrawU {
     params: [f32; 4],
     eye: [f32; 4],
     eye_axis: [f32; 4],
+    /// Eyes: the pupil's UV radius drawn, the texture's own and the iris' (derma-head's eye).
+    pupil: [f32; 4],
 }
 
 /// The material of a post-scatter target's alpha byte (forward.wgsl: skin 1, eye ½).
@@ -809,12 +811,19 @@ impl Renderer {
                 axis,
                 roughness,
                 f0,
+                pupil,
             } => PartMaterial {
                 u: DrawU {
                     albedo: [1.0, 1.0, 1.0, 1.0],
                     params: [*roughness, *f0, 1.0, spec_scale],
                     eye: [centre.x, centre.y, centre.z, *radius],
                     eye_axis: [axis.x, axis.y, axis.z, 0.0],
+                    pupil: [
+                        *pupil,
+                        derma_head::eye::PUPIL_UV_RADIUS,
+                        derma_head::eye::IRIS_UV_RADIUS,
+                        0.0,
+                    ],
                 },
                 textures: self.albedo_textures("eye", albedo, *roughness, *f0),
                 pass: Pass::Eye,
@@ -833,6 +842,7 @@ impl Renderer {
                     params: [*roughness, *f0, 2.0, spec_scale],
                     eye: [0.0; 4],
                     eye_axis: [0.0; 4],
+                    pupil: [0.0; 4],
                 },
                 textures: self.part_textures(
                     self.tex(
@@ -859,6 +869,7 @@ impl Renderer {
                     params: [*roughness, *f0, 2.0, spec_scale],
                     eye: [0.0; 4],
                     eye_axis: [0.0; 4],
+                    pupil: [0.0; 4],
                 },
                 textures: self.part_textures(
                     self.one([1.0; 4], TexelFormat::Srgb8),
@@ -912,6 +923,7 @@ impl Renderer {
                 params: [0.5, 0.04, 0.0, crate::material::SPECULAR_SCALE],
                 eye: [0.0; 4],
                 eye_axis: [0.0, 0.0, 1.0, scatter],
+                pupil: [0.0; 4],
             },
             textures: [base, normal, rs, sc, sr],
             pass: Pass::Surface,
@@ -940,6 +952,7 @@ impl Renderer {
                 params: [roughness, f0, 3.0, crate::material::SPECULAR_SCALE],
                 eye: [0.0; 4],
                 eye_axis: [0.0; 4],
+                pupil: [0.0; 4],
             },
             textures: self.part_textures(
                 self.gpu.texture("card", &px, w, h, TexelFormat::Srgb8),

@@ -41,6 +41,9 @@ pub enum Material {
         roughness: f32,
         /// Tear film F0.
         f0: f32,
+        /// The pupil's UV radius as drawn (the texture's own: `derma_head::eye::PUPIL_UV_RADIUS`;
+        /// another dilates or constricts it through texture coordinates, `eye::dilated_uv`).
+        pupil: f32,
     },
     /// A part with its own albedo texture on its UVs (teeth from `derma photo teeth`).
     Textured {
@@ -217,6 +220,16 @@ impl Scene {
         n
     }
 
+    /// Draws every globe's pupil `diameter_mm` across (its texture's is 4 mm): dilated or
+    /// constricted through the texture coordinates, the limbus kept.
+    pub fn set_pupil(&mut self, diameter_mm: f32) {
+        for p in &mut self.parts {
+            if let Material::Eye { radius, pupil, .. } = &mut p.material {
+                *pupil = derma_head::eye::pupil_uv_radius(diameter_mm, *radius);
+            }
+        }
+    }
+
     /// The part named `name` drawn with `mesh` instead (a lash riding on a moved lid); false
     /// when the scene has no such part.
     pub fn replace_part_mesh(&mut self, name: &str, mesh: &TriMesh) -> bool {
@@ -257,6 +270,7 @@ impl Scene {
                     axis: rot * Vec3::Z,
                     roughness: prop.roughness,
                     f0: prop.f0,
+                    pupil: derma_head::eye::PUPIL_UV_RADIUS,
                 }
             } else if prop.coverage.is_some() {
                 Material::Card {

@@ -71,6 +71,10 @@ pub struct RenderArgs {
     /// Lid closure from 0 (open) to 1 (a full blink), through the eye-region model.
     #[arg(long, default_value_t = 0.0, value_parser = crate::args::unit_interval, conflicts_with = "mesh")]
     blink: f32,
+    /// Pupil diameter in mm (about 2 in bright light to 8 in the dark; the eye texture's own is
+    /// 4): the pupil dilates or constricts through the texture's coordinates, the limbus kept.
+    #[arg(long, value_name = "MM", value_parser = pupil_mm)]
+    pupil: Option<f32>,
     /// Leave out the lacrimal lake (the tear meniscus along the lid margins).
     #[arg(long)]
     no_lake: bool,
@@ -79,6 +83,16 @@ pub struct RenderArgs {
     out: PathBuf,
     #[command(flatten)]
     device: crate::args::DeviceArg,
+}
+
+fn pupil_mm(s: &str) -> Result<f32, String> {
+    let (lo, hi) = derma_head::eye::PUPIL_RANGE_MM;
+    match s.trim().parse::<f32>() {
+        Ok(v) if (lo..=hi).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "'{s}': expected a pupil diameter from {lo} to {hi} mm"
+        )),
+    }
 }
 
 fn parse_setup(s: &str) -> Result<Setup, String> {
@@ -110,6 +124,7 @@ pub fn render(a: RenderArgs, bars: &Bars) -> Result<()> {
         teeth: a.teeth,
         gaze: a.gaze,
         blink: a.blink,
+        pupil_mm: a.pupil,
         lake: !a.no_lake,
         device: a.device.device,
         out: a.out,

@@ -391,6 +391,19 @@ fn glb_carries_the_set_as_pbr_with_tangents_units_and_engine_maps() {
             .unwrap()
             .len()
     );
+    // The globes dilate and constrict their pupils by morph (8 and 2 mm against 4).
+    let eye = doc.meshes().find(|m| m.name() == Some("eye_left")).unwrap();
+    let eye_extras = eye
+        .extras()
+        .as_ref()
+        .map(|r| r.get().to_string())
+        .unwrap_or_default();
+    assert!(
+        eye_extras.contains("pupilDilate") && eye_extras.contains("pupilConstrict"),
+        "{eye_extras}"
+    );
+    let eye_prim = eye.primitives().next().unwrap();
+    assert_eq!(eye_prim.morph_targets().count(), 2);
     // The material: base colour and normal from the set; metallic 0, roughness in G.
     let mat = prim.material();
     let pbr = mat.pbr_metallic_roughness();
