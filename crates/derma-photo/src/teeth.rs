@@ -382,6 +382,68 @@ struct Front<'a> {
     b: &'a TeethBox,
 }
 
+impl Front<'_> {
+    /// Per photo column, how many rows from the gap row outward (up for the upper arch, down
+    /// for the lower) the teeth and the voids between them run before the lips or gums (two
+    /// gum rows in a row end it: one is a speck of the labelling).
+    fn visible_runs(&self, is_upper: bool) -> Vec<usize> {
+        let (w, h, g) = (self.eq.width, self.eq.height, self.b.gap_row);
+        let row = |n: usize| {
+            if is_upper {
+                g.checked_sub(n)
+            } else {
+                Some(g + n)
+            }
+        };
+        let gum = |x: usize, n: usize| match row(n) {
+            Some(y) if y < h => self.labels[y * w + x] == Label::Gum,
+            _ => true,
+        };
+        (0..w)
+            .map(|x| {
+                let mut n = 0;
+                while !(gum(x, n + 1) && gum(x, n + 2)) {
+                    n += 1;
+                }
+                n
+            })
+            .collect()
+    }
+}
+
+/// Rows of teeth a photo column must show for the arch to take it (fewer: the lips cover that
+/// arch there, and the generic texture is drawn).
+const MIN_RUN: usize = 3;
+
+/// The photo pixel (column, row) that a point of an arch's front shows: `across` ∈ [0, 1] over
+/// the teeth's box, `from_edge_mm` from the incisal edge toward the gum line. The rows keep the
+/// photo's own scale (`px_per_mm`, from the box's width over the front teeth), so the teeth keep
+/// their proportions; past the column's `runs` (where the lips hid the rest of the tooth) the
+/// row 2 px inside the visible end continues it — §4.2: the teeth are expanded into what the
+/// lips covered. `None` where the column shows none of this arch's teeth.
+fn photo_pixel(
+    b: &TeethBox,
+    runs: &[usize],
+    is_upper: bool,
+    across: f32,
+    from_edge_mm: f32,
+    px_per_mm: f32,
+) -> Option<(usize, usize)> {
+    let x = (b.x0 as f32 + across * (b.x1 - b.x0) as f32).round() as usize;
+    let x = x.min(runs.len() - 1);
+    if runs[x] < MIN_RUN {
+        return None;
+    }
+    let reach = (runs[x] - 2) as f32;
+    let off = (from_edge_mm * px_per_mm).min(reach).round() as usize;
+    let y = if is_upper {
+        b.gap_row.saturating_sub(off)
+    } else {
+        b.gap_row + off
+    };
+    Some((x, y))
+}
+
 /// One arch composited into the texture (`rgb`, `alpha`): the generic colour (`target`, shaded
 /// toward the back of the arch), the photo's front teeth mapped orthographically onto its front
 /// and faded out at the canines; voids transparent.
@@ -400,6 +462,8 @@ fn composite(
     let (w, h) = (front.eq.width, front.eq.height);
     let (lo, hi) = mesh.bounds();
     let raster = UvRaster::new(mesh, size, size);
+    let runs = front.visible_runs(is_upper);
+    let px_per_mm = (b.x1 - b.x0) as f32 / (2.0 * (opts.canine_x_mm + 2.0));
     // Front teeth's vertical extent: incisal edge to the gum line (the arch's other end).
     for i in 0..size * size {
         if !raster.covered(i) {
@@ -415,18 +479,12 @@ fn composite(
         if wf > 0.0 && p.z > hi.z - 12.0 {
             // Photo coordinates: x across the box, y from the gap (incisal edges) outward.
             let u = (p.x / (opts.canine_x_mm + 2.0) * 0.5 + 0.5).clamp(0.0, 1.0);
-            let (ey, ry) = if is_upper { (lo.y, hi.y) } else { (hi.y, lo.y) };
-            let v = ((p.y - ey) / (ry - ey)).clamp(0.0, 1.0);
-            let px = b.x0 as f32 + u * (b.x1 - b.x0) as f32;
-            let py = if is_upper {
-                b.gap_row as f32 - v * (b.gap_row - b.y0) as f32
-            } else {
-                b.gap_row as f32 + v * (b.y1 - b.gap_row) as f32
-            };
-            let j = (py.round() as usize).min(h - 1) * w + (px.round() as usize).min(w - 1);
-            let (pc, pa) = match front.labels[j] {
-                Label::Void => (generic, 0.0),
-                _ => (front.eq.data[j], 1.0),
+            let edge = if is_upper { lo.y } else { hi.y };
+            let at = photo_pixel(b, &runs, is_upper, u, (p.y - edge).abs(), px_per_mm);
+            let (pc, pa) = match at.map(|(px, py)| py.min(h - 1) * w + px.min(w - 1)) {
+                Some(j) if front.labels[j] == Label::Void => (generic, 0.0),
+                Some(j) if front.labels[j] == Label::Tooth => (front.eq.data[j], 1.0),
+                _ => (generic, 1.0),
             };
             c = std::array::from_fn(|k| pc[k] * wf + generic[k] * (1.0 - wf));
             a = pa * wf + (1.0 - wf);
@@ -488,6 +546,67 @@ pub fn synthetic_smile(width: usize, height: usize) -> (RgbImage, Vec<Label>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_teeth_keep_the_photos_scale_and_continue_under_the_lips() {
+        let b = TeethBox {
+            x0: 10,
+            y0: 5,
+            x1: 110,
+            y1: 75,
+            gap_row: 40,
+        };
+        // Column 60's upper tooth shows for 12 rows above the gap before the lip, the lower
+        // for 30.
+        let mut runs = vec![30usize; 120];
+        runs[60] = 12;
+        // 3 px a millimetre: 2 mm from the incisal edge is 6 rows from the gap, either arch.
+        assert_eq!(photo_pixel(&b, &runs, true, 0.5, 2.0, 3.0), Some((60, 34)));
+        assert_eq!(
+            photo_pixel(&b, &[30; 120], false, 0.5, 2.0, 3.0),
+            Some((60, 46))
+        );
+        // 8 mm up (24 rows) is under the lip: the row 2 px inside the visible end continues
+        // the tooth, where stretching the visible 12 rows over the crown would have drawn the
+        // whole tooth twice as tall.
+        assert_eq!(photo_pixel(&b, &runs, true, 0.5, 8.0, 3.0), Some((60, 30)));
+        // Where the whole crown shows, it is read at scale.
+        assert_eq!(photo_pixel(&b, &runs, true, 0.2, 8.0, 3.0), Some((30, 16)));
+        // A column where the lips cover the arch: the generic texture.
+        runs[40] = 2;
+        assert_eq!(photo_pixel(&b, &runs, true, 0.3, 1.0, 3.0), None);
+    }
+
+    #[test]
+    fn the_visible_runs_end_at_the_lips() {
+        let (img, _) = synthetic_smile(240, 120);
+        let (labels, _, _) = label(&img);
+        let teeth: Vec<usize> = (0..labels.len())
+            .filter(|&i| labels[i] == Label::Tooth)
+            .collect();
+        let b = teeth_box(&teeth, &labels, 240, 120);
+        let eq = img.clone();
+        let front = Front {
+            eq: &eq,
+            labels: &labels,
+            b: &b,
+        };
+        let (up, down) = (front.visible_runs(true), front.visible_runs(false));
+        // Mid-mouth the teeth run to the gums (fy 0.75 of the 0.4-height ellipse: 36 rows from
+        // the centre); toward the corners the lips' ellipse cuts them shorter.
+        assert!(
+            (30..=40).contains(&up[120]) && (30..=40).contains(&down[120]),
+            "{} {}",
+            up[120],
+            down[120]
+        );
+        assert!(
+            up[30] < up[120] && down[30] < down[120],
+            "{} {}",
+            up[30],
+            down[30]
+        );
+    }
 
     #[test]
     fn labels_match_the_synthetic_smile() {
