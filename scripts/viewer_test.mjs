@@ -162,6 +162,11 @@ try {
   console.log(`hair cards: ${hair.map((h) => `${h.name} transparent ${h.transparent}, alphaTest ${h.alphaTest}`).join('; ')}`);
   if (!(hair.length >= 3 && hair.every((h) => h.transparent && h.alphaTest === 0))) fail(`hair cards that do not blend: ${JSON.stringify(hair)}`);
 
+  // 2b'. The globes refract through the cornea and carry the tear film's gloss, as derma render.
+  const eyeShading = await page.evaluate(() => window.derma.eyeShading());
+  console.log(`globes: ${JSON.stringify(eyeShading)}`);
+  if (!(eyeShading.length === 2 && eyeShading.every((e) => e.cornea && Math.abs(e.ior - 1.376) < 1e-6 && e.roughness <= 0.1))) fail('the globes lack the cornea');
+
   // 2c. The pupil slider drives the globes' morphs.
   await page.locator('#pupil').fill('8');
   const wide = await page.evaluate(() => window.derma.pupil());
@@ -170,6 +175,19 @@ try {
   await page.locator('#pupil').fill('4');
   console.log(`pupil 8 mm: ${JSON.stringify(wide)}; 2 mm: ${JSON.stringify(narrow)}`);
   if (!(wide.eye_left?.pupilDilate === 1 && narrow.eye_right?.pupilConstrict === 1 && wide.eye_left?.pupilConstrict === 0)) fail(`the pupil slider did not drive the globes' morphs`);
+
+  // 2d. The idle eyes: derma-eyes' blinks as the viewer plays them, over at least 200 blinks,
+  // their mean interval within 15 % of the table's at the export's activity (rest: 17 /min).
+  const idle = await page.evaluate(() => window.derma.idleBlinks());
+  console.log(`idle eyes: ${idle?.blinks} blinks, mean interval ${idle?.meanInterval.toFixed(2)} s against the table's ${idle?.table.toFixed(2)} s (${idle?.activity})`);
+  if (!(idle && idle.blinks >= 200 && Math.abs(idle.meanInterval / idle.table - 1) <= 0.15)) fail(`the idle blinks miss table 3.1: ${JSON.stringify(idle)}`);
+  await page.locator('#idle').check();
+  const g0 = await page.evaluate(() => window.derma.units());
+  await page.waitForTimeout(3000);
+  const g1 = await page.evaluate(() => window.derma.units());
+  await page.locator('#idle').uncheck();
+  const moved = Object.keys(g1).some((k) => Math.abs((g1[k] ?? 0) - (g0[k] ?? 0)) > 1e-3);
+  if (!moved) fail('the idle eyes did not move the face units in 3 s');
 
   // 3. The trained eye model live: the JS port against derma's evaluator at the export's check
   // poses, then the upper lid followed in the picture as the gaze drops: in a column of pixels

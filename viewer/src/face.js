@@ -9,19 +9,19 @@ import * as THREE from 'three';
  */
 const LOOK_RANGE = { horizontal: 35, up: 25, down: 30 };
 
-/** Blink timing (ms): lid closing, closed, reopening; the down-phase is faster than the
- * up-phase (Evinger et al. 1991: ~100 ms down, ~2–3 × that to reopen). */
-export const BLINK_MS = { close: 100, hold: 40, open: 220 };
+/** A spontaneous blink of mean amplitude (derma-eyes' blink model, thesis §3.9): the down
+ * phase 66 ms (Evinger et al. 1991), the up phase 1.435 times longer (Sforza et al. 2008), each
+ * on the minimum-jerk profile (Flash & Hogan 1985). */
+export const BLINK_MS = { down: 66, up: 66 * 1.435 };
 
-/** Lid closure (0–1) `t` ms into a blink, eased in each phase. */
+const minJerk = (x) => x * x * x * (10 + x * (-15 + 6 * x));
+
+/** Lid closure (0–1) `t` ms into that blink. */
 export function blinkCurve(t) {
-  const { close, hold, open } = BLINK_MS;
-  const ease = (x) => x * x * (3 - 2 * x);
-  if (t < 0) return 0;
-  if (t < close) return ease(t / close);
-  if (t < close + hold) return 1;
-  if (t < close + hold + open) return 1 - ease((t - close - hold) / open);
-  return 0;
+  const { down, up } = BLINK_MS;
+  if (t < 0 || t >= down + up) return 0;
+  if (t < down) return minJerk(t / down);
+  return 1 - minJerk((t - down) / up);
 }
 
 /**

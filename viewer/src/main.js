@@ -11,6 +11,7 @@ import { Rig, MODES } from './rig.js';
 import { Face, blinkCurve, BLINK_MS } from './face.js';
 import { Wrinkles } from './wrinkles.js';
 import { EyeModel, LiveEyes } from './eyes.js';
+import { corneaMaterial } from './cornea.js';
 
 // Where the export lives: ?data=URL, else the `data/` that `derma view` serves beside the viewer.
 const base = (new URLSearchParams(location.search).get('data') ?? 'data').replace(/\/?$/, '/');
@@ -99,6 +100,26 @@ const api = {
     return true;
   },
   frameFace: () => frameFace(),
+  // The globes' materials: refraction through the cornea and the tear film's gloss.
+  eyeShading: () =>
+    (face?.eyes ?? []).map((p) => {
+      const m = p.getObjectByProperty('isMesh', true).material;
+      return { cornea: !!m.userData.cornea, ior: m.ior, roughness: m.roughness };
+    }),
+  // The idle track as the viewer plays it, sampled at 100 Hz over its length: its blinks (the
+  // closure crossing 0.3 upward), their mean interval (s) and the table's at its activity.
+  idleBlinks: () => {
+    if (!motion) return null;
+    const onsets = [];
+    let last = 0;
+    for (let t = 0; t < motion.seconds; t += 0.01) {
+      const c = idleAt(t)[2];
+      if (last < 0.3 && c >= 0.3) onsets.push(t);
+      last = c;
+    }
+    const mean = (onsets[onsets.length - 1] - onsets[0]) / (onsets.length - 1);
+    return { blinks: onsets.length, meanInterval: mean, table: 60 / motion.perMinute, activity: motion.activity };
+  },
   // The globes' pupil morphs (the GLB's pupilDilate / pupilConstrict) as last set.
   pupil: () => {
     const out = {};
@@ -166,7 +187,20 @@ let skin = null;
 const original = {};
 let dirty = true;
 let blinkStart = -1;
-let nextAutoBlink = 0;
+// The idle eyes (manifest.eyes.motion, derma-eyes' models): frames of gaze and lid closure, and
+// when their playing started (0: not playing).
+let motion = null;
+let idleStart = 0;
+
+/** The idle track at `t` s (looped): [gaze h°, gaze v°, closure], linear between frames. */
+function idleAt(t) {
+  const { fps, seconds, frames } = motion;
+  const f = ((t % seconds) + seconds) % seconds * fps;
+  const i = Math.floor(f);
+  const j = Math.min(i + 1, frames.length / 3 - 1);
+  const r = f - i;
+  return [0, 1, 2].map((k) => frames[3 * i + k] * (1 - r) + frames[3 * j + k] * r);
+}
 
 function resize() {
   const w = canvas.clientWidth;
@@ -190,7 +224,9 @@ function setWeight(name, w) {
 const panel = document.getElementById('panel');
 // The pupil `mm` across through the globes' morphs: the texture's own is 4 mm, pupilDilate
 // draws 8 and pupilConstrict 2 (derma-head's eye::PUPIL_MORPHS_MM); between, linearly.
+let pupilMm = 4;
 function setPupil(mm) {
+  pupilMm = mm;
   for (const n of ['eye_left', 'eye_right']) {
     const o = skin?.parent.getObjectByName(n);
     const dict = o?.morphTargetDictionary;
@@ -268,9 +304,16 @@ function buildControls() {
   b.addEventListener('click', () => (blinkStart = performance.now()));
   e.append(b);
   if (eyes) checkbox(e, 'eye-model', 'lids from the trained eye-region model (off: face units)', true, (on) => (eyes.enabled = on));
-  checkbox(e, 'auto-blink', 'blink on its own (every 2–6 s)', false, (on) => {
-    nextAutoBlink = on ? performance.now() + 1000 : 0;
-  });
+  if (motion) {
+    checkbox(e, 'idle', `eyes on their own (derma-eyes: blinks at ${motion.perMinute.toFixed(0)}/min as table 3.1 draws them, idle saccades on the main sequence)`, false, (on) => {
+      idleStart = on ? performance.now() : 0;
+      if (!on) {
+        // Back to the sliders' gaze.
+        face.gaze[0] = Number(document.getElementById('gaze-yaw').value);
+        face.gaze[1] = Number(document.getElementById('gaze-pitch').value);
+      }
+    });
+  }
 
   const m = section('Maps');
   const select = document.createElement('select');
@@ -370,9 +413,21 @@ async function load() {
   });
   const centres = manifest.eyes?.centres.map((c) => c.map((x) => x * 0.001));
   face = new Face(gltf.scene, manifest.expression_units ?? {}, centres);
+  // The globes drawn as derma render draws them: refraction, the pupil, the wet tear film.
+  for (const pivot of face.eyes) {
+    const mesh = pivot.getObjectByProperty('isMesh', true);
+    const b = mesh.geometry.boundingBox;
+    corneaMaterial(mesh, pivot, (b.max.x - b.min.x) / 2, () => pupilMm);
+  }
   if (manifest.eyes) {
     status.textContent = 'loading the eye model…';
     eyes = new LiveEyes(await EyeModel.load(base, manifest.eyes), skin, gltf.scene, face.eyes);
+    const m = manifest.eyes.motion;
+    if (m) {
+      const res = await fetch(base + m.file);
+      if (!res.ok) throw new Error(`${base}${m.file}: HTTP ${res.status}`);
+      motion = { fps: m.fps, seconds: m.seconds, activity: m.activity, perMinute: m.blinks_per_minute, frames: new Float32Array(await res.arrayBuffer()) };
+    }
   }
   if (manifest.wrinkles && mat.normalMap) {
     wrinkles = await Wrinkles.load(base, manifest, mat.normalMap);
@@ -397,13 +452,15 @@ async function load() {
 function frame(now) {
   requestAnimationFrame(frame);
   if (!face) return;
-  if (nextAutoBlink && now >= nextAutoBlink) {
-    blinkStart = now;
-    nextAutoBlink = now + 2000 + 4000 * Math.random();
-  }
   const t = blinkStart >= 0 ? now - blinkStart : -1;
   face.blink = blinkCurve(t);
-  if (t > BLINK_MS.close + BLINK_MS.hold + BLINK_MS.open) blinkStart = -1;
+  if (t > BLINK_MS.down + BLINK_MS.up) blinkStart = -1;
+  if (idleStart && motion) {
+    const [h, v, closure] = idleAt((now - idleStart) / 1000);
+    face.gaze[0] = h;
+    face.gaze[1] = v;
+    face.blink = Math.max(face.blink, closure);
+  }
   face.apply();
   eyes?.apply(face.gaze, 0, face.units);
   wrinkles?.evaluate(renderer, face.units);

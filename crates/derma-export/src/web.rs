@@ -126,6 +126,12 @@ fn write_wrinkles(textures: &Path, out: &Path) -> Result<serde_json::Value> {
     }))
 }
 
+/// Length (s) and rate of the idle eye motion the viewer plays (`eyes/motion.bin`): 900 s holds
+/// about 230 blinks at rest.
+const MOTION_SECONDS: f32 = 900.0;
+/// See [`MOTION_SECONDS`].
+const MOTION_FPS: f32 = 60.0;
+
 /// Writes the head's eye-region model for the viewer's live evaluation (`eyes/model.bin`, the
 /// arrays of [`derma_eyes::live::pack`]) and returns its manifest entry (the header, with the
 /// file): trained on the head's rig as `derma render --gaze` trains it.
@@ -142,6 +148,25 @@ fn write_eyes(
     derma_core::atomic::ensure_writable_dir(&dir)?;
     derma_core::atomic::write_bytes(&dir.join("model.bin"), &bin)?;
     header["file"] = json!("eyes/model.bin");
+    // The idle eyes the viewer plays when left alone: table 3.1's blinks at rest and idle
+    // saccades on the main sequence, long enough for 200 blinks.
+    let (seconds, fps) = (MOTION_SECONDS, MOTION_FPS);
+    let track = model.idle_track(head, seconds, fps, derma_eyes::blink::Activity::Rest, 1);
+    let bytes: Vec<u8> = track
+        .iter()
+        .flatten()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    derma_core::atomic::write_bytes(&dir.join("motion.bin"), &bytes)?;
+    header["motion"] = json!({
+        "file": "eyes/motion.bin",
+        "fps": fps,
+        "seconds": seconds,
+        "activity": "rest",
+        "blinks_per_minute": 60.0 * derma_eyes::blink::Activity::Rest.rate_hz(),
+        "frame": ["gaze h (°, + the subject's left)", "gaze v (°, + up)", "lid closure (0 open, 1 shut)"],
+        "encoding": "little-endian f32, three per frame",
+    });
     Ok(header)
 }
 

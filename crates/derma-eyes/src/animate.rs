@@ -116,6 +116,41 @@ pub fn full_blink_amplitude(m: &EyeModel, centre_y: f32, radius: f32) -> f32 {
     (a(up) - a(closed)).max(1.0)
 }
 
+/// The idle eyes as the web viewer plays them: `seconds` at `fps`, each frame the cyclopean
+/// gaze (h, v in °, Fick, as [`Scanpath::at`]: Lee et al.'s idle fixations joined by saccades on
+/// the main sequence) and the lids' closure in [0, 1] (table 3.1's blinks at `activity`, a
+/// blink of `full_amplitude` ° closing the eye).
+pub fn idle_track(
+    seconds: f32,
+    fps: f32,
+    activity: Activity,
+    seed: u64,
+    full_amplitude: f32,
+) -> Vec<[f32; 3]> {
+    let path = Scanpath::new(idle::schedule(seconds, seed));
+    let blinks = blink::schedule(seconds, activity, seed);
+    let n = (seconds * fps).round().max(1.0) as usize;
+    let mut next = 0;
+    (0..n)
+        .map(|i| {
+            let t = i as f32 / fps;
+            // Blinks are in order and never overlap: only those that may be under way count.
+            while next < blinks.len()
+                && blinks[next].start + blinks[next].down + blinks[next].up < t
+            {
+                next += 1;
+            }
+            let closure = blinks[next..]
+                .iter()
+                .take_while(|b| b.start <= t)
+                .map(|b| b.closure(t, full_amplitude))
+                .fold(0.0f32, f32::max);
+            let g = path.at(t);
+            [g.h, g.v, closure]
+        })
+        .collect()
+}
+
 /// The frames of a drive for `model` with globe centres `centres` (head space) and radius.
 pub fn timeline(model: &EyeModel, centres: [Vec3; 2], radius: f32, d: &Drive) -> Vec<Sample> {
     let fix = d
@@ -244,4 +279,43 @@ pub fn salient_fixations(
         k += 1;
     }
     out
+}
+
+#[cfg(test)]
+mod idle_track_tests {
+    use super::*;
+
+    #[test]
+    fn the_idle_track_blinks_at_the_tables_rate_over_200_blinks() {
+        // 900 s at rest (17 blinks a minute, Bentivoglio et al. 1997).
+        let track = idle_track(900.0, 60.0, Activity::Rest, 3, 40.0);
+        let onsets: Vec<f32> = track
+            .windows(2)
+            .enumerate()
+            .filter(|(_, w)| w[0][2] < 0.3 && w[1][2] >= 0.3)
+            .map(|(i, _)| i as f32 / 60.0)
+            .collect();
+        assert!(onsets.len() >= 200, "{} blinks", onsets.len());
+        let mean = (onsets[onsets.len() - 1] - onsets[0]) / (onsets.len() - 1) as f32;
+        let table = 60.0 / 17.0;
+        println!(
+            "{} blinks, mean interval {mean:.2} s (table {table:.2} s)",
+            onsets.len()
+        );
+        assert!(
+            (mean / table - 1.0).abs() <= 0.15,
+            "mean interval {mean} s against {table}"
+        );
+        // Gaze moves (saccades) and stays within the idle model's reach.
+        assert!(track
+            .iter()
+            .all(|f| f[0].abs() <= 30.0 && f[1].abs() <= 30.0));
+        assert!(
+            track
+                .windows(2)
+                .filter(|w| (w[1][0] - w[0][0]).abs() > 0.5)
+                .count()
+                > 100
+        );
+    }
 }

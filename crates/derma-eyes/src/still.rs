@@ -94,6 +94,21 @@ impl LashAnchors {
 }
 
 impl StillModel {
+    /// [`crate::animate::idle_track`] for this model on `head`: a blink of the model's full
+    /// amplitude about the left globe closes the eye.
+    pub fn idle_track(
+        &self,
+        head: &Head,
+        seconds: f32,
+        fps: f32,
+        activity: crate::blink::Activity,
+        seed: u64,
+    ) -> Vec<[f32; 3]> {
+        let eye = head.eyes[0];
+        let full = crate::animate::full_blink_amplitude(&self.model, eye.centre.y, eye.radius);
+        crate::animate::idle_track(seconds, fps, activity, seed, full)
+    }
+
     /// Trains the model of `head` and binds it (skin thickness over the globes
     /// [`crate::sliding::THICKNESS`]).
     pub fn new(head: &Head) -> crate::Result<StillModel> {
