@@ -318,6 +318,19 @@ mod tests {
     }
 }
 
+/// A square `2 half` across at depth `z`, facing +Z, with UVs over it (the tests' scenes).
+#[cfg(test)]
+fn square(half: f32, z: f32) -> TriMesh {
+    TriMesh {
+        positions: [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+            .map(|(x, y)| Vec3::new(half * x, half * y, z))
+            .to_vec(),
+        normals: vec![Vec3::Z; 4],
+        uvs: vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y],
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+    }
+}
+
 #[cfg(test)]
 mod voids {
     use super::*;
@@ -327,14 +340,6 @@ mod voids {
     /// A 40 mm skin square and, 5 mm in front of it, a 20 mm textured square whose texture's
     /// alpha is 0 on its left half (a void, as between teeth).
     fn scene() -> Scene {
-        let square = |half: f32, z: f32| TriMesh {
-            positions: [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
-                .map(|(x, y)| Vec3::new(half * x, half * y, z))
-                .to_vec(),
-            normals: vec![Vec3::Z; 4],
-            uvs: vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y],
-            triangles: vec![[0, 1, 2], [0, 2, 3]],
-        };
         let mut scene = Scene::mesh(
             &square(20.0, 0.0),
             crate::SkinMaps::uniform([0.6, 0.4, 0.3], 0.5, 0.35),
@@ -408,14 +413,6 @@ mod cards {
     /// A 40 mm grey skin square and, 5 mm in front of it, a 20 mm dark card whose coverage
     /// rises from 0 at its left edge to 1 at its right (a lash's edge, drawn large).
     fn scene() -> Scene {
-        let square = |half: f32, z: f32| TriMesh {
-            positions: [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
-                .map(|(x, y)| Vec3::new(half * x, half * y, z))
-                .to_vec(),
-            normals: vec![Vec3::Z; 4],
-            uvs: vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y],
-            triangles: vec![[0, 1, 2], [0, 2, 3]],
-        };
         let mut scene = Scene::mesh(
             &square(20.0, 0.0),
             crate::SkinMaps::uniform([0.6, 0.6, 0.6], 0.5, 0.35),
@@ -534,16 +531,8 @@ mod pupil {
 
     /// A 12 mm globe looking at the camera in front of a skin square, its pupil `mm` across.
     fn scene(mm: f32) -> Scene {
-        let square = TriMesh {
-            positions: [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
-                .map(|(x, y)| Vec3::new(30.0 * x, 30.0 * y, -20.0))
-                .to_vec(),
-            normals: vec![Vec3::Z; 4],
-            uvs: vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y],
-            triangles: vec![[0, 1, 2], [0, 2, 3]],
-        };
         let mut scene = Scene::mesh(
-            &square,
+            &square(30.0, -20.0),
             crate::SkinMaps::uniform([0.6, 0.4, 0.3], 0.5, 0.35),
         );
         let eye = derma_head::eye::Eye {

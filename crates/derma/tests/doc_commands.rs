@@ -244,6 +244,7 @@ fn fixtures(dir: &Path) {
         "albedo.png",
         "skin.png",
         "painting.png",
+        "scan_albedo.png", // a photographed albedo on scan.obj's UVs (README, "Your own head")
     ] {
         copy(&skin, name);
     }
