@@ -345,7 +345,11 @@ impl<'a> SkinGenerator<'a> {
             albedo_comparison: None,
         };
         if let Some((photo, name)) = albedo {
-            set.albedo_comparison = Some(crate::albedo_compare::compare(&set, &photo, &name)?);
+            set.albedo_comparison = Some(crate::albedo_compare::compare(
+                set.painted(),
+                &photo,
+                &name,
+            )?);
         }
         Ok(set)
     }
@@ -1013,6 +1017,15 @@ pub struct Written {
 }
 
 impl TextureSet {
+    /// What [`crate::albedo_compare`] compares of the set.
+    pub fn painted(&self) -> crate::albedo_compare::Painted<'_> {
+        crate::albedo_compare::Painted {
+            surface: &self.surface,
+            fields: &self.fields,
+            base_color: &self.render.base_color,
+        }
+    }
+
     /// The head the set was painted on or for: the fitted one it was given, or the built-in
     /// one (a fitted head was read once already, so this does not fail).
     pub fn head(&self) -> &'static derma_head::Head {
