@@ -124,20 +124,20 @@ pub fn delta_e76(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 /// Lab of a linear sRGB colour.
-fn lab_of_linear(rgb: [f64; 3]) -> [f64; 3] {
-    xyz_to_lab(linear_srgb_to_xyz(rgb))
+fn lab_of(rgb: [f32; 3]) -> [f64; 3] {
+    xyz_to_lab(linear_srgb_to_xyz(rgb.map(f64::from)))
 }
 
 /// Relative luminance of a linear sRGB colour (ITU-R BT.709 weights).
-fn luminance(rgb: [f64; 3]) -> f64 {
-    0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
+fn luminance(rgb: [f32; 3]) -> f64 {
+    0.2126 * rgb[0] as f64 + 0.7152 * rgb[1] as f64 + 0.0722 * rgb[2] as f64
 }
 
-/// One texel's two colours, linear sRGB.
+/// One texel's two colours, linear sRGB (single precision: the comparison keeps one per texel).
 #[derive(Clone, Copy)]
 struct Texel {
-    photo: [f64; 3],
-    derma: [f64; 3],
+    photo: [f32; 3],
+    derma: [f32; 3],
 }
 
 /// Median of `v` (NaN when empty).
@@ -157,14 +157,13 @@ fn lab_maps(set: Painted, photo: &LoadedImage) -> Vec<Option<Texel>> {
     let s = &set.surface;
     let (w, h) = (s.width, s.height);
     let ch = &photo.channels;
-    let photo_rgb: Vec<[f64; 3]> = (0..s.len())
+    let photo_rgb: Vec<[f32; 3]> = (0..s.len())
         .map(|i| {
             let uv = s.uv(i);
-            [0, 1, 2]
-                .map(|k| srgb_decode(ch[k].sample_uv(uv.x, uv.y, false).clamp(0.0, 1.0)) as f64)
+            [0, 1, 2].map(|k| srgb_decode(ch[k].sample_uv(uv.x, uv.y, false).clamp(0.0, 1.0)))
         })
         .collect();
-    let photo_lab: Vec<[f64; 3]> = photo_rgb.iter().map(|&c| lab_of_linear(c)).collect();
+    let photo_l: Vec<f32> = photo_rgb.iter().map(|&c| lab_of(c)[0] as f32).collect();
     let near_empty = |i: usize| {
         let (x, y) = ((i % w) as isize, (i / w) as isize);
         (-1..=1).any(|dy| {
@@ -172,16 +171,16 @@ fn lab_maps(set: Painted, photo: &LoadedImage) -> Vec<Option<Texel>> {
                 let (xx, yy) = (x + dx, y + dy);
                 (0..w as isize).contains(&xx)
                     && (0..h as isize).contains(&yy)
-                    && photo_lab[yy as usize * w + xx as usize][0] < EMPTY_L
+                    && (photo_l[yy as usize * w + xx as usize] as f64) < EMPTY_L
             })
         })
     };
     (0..s.len())
         .map(|i| {
-            if !s.covered(i) || !photo_shows_skin(photo_lab[i]) || near_empty(i) {
+            if !s.covered(i) || !photo_shows_skin(lab_of(photo_rgb[i])) || near_empty(i) {
                 return None;
             }
-            let c = set.base_color[i].map(|v| srgb8_decode(v) as f64);
+            let c = set.base_color[i].map(srgb8_decode);
             Some(Texel {
                 photo: photo_rgb[i],
                 derma: c,
@@ -309,31 +308,33 @@ pub fn compare(set: Painted, photo: &LoadedImage, name: &str) -> Result<AlbedoCo
         .collect();
     let gain = exposure_gain(&texels, &tone);
     // Per texel: the photo's Lab as given and at the matched exposure, and derma's.
-    let labs: Vec<Option<[[f64; 3]; 3]>> = texels
+    let lab32 = |c: [f32; 3]| lab_of(c).map(|v| v as f32);
+    let labs: Vec<Option<[[f32; 3]; 3]>> = texels
         .iter()
         .map(|t| {
             t.map(|t| {
                 [
-                    lab_of_linear(t.photo),
-                    lab_of_linear(t.photo.map(|c| c * gain)),
-                    lab_of_linear(t.derma),
+                    lab32(t.photo),
+                    lab32(t.photo.map(|c| c * gain as f32)),
+                    lab32(t.derma),
                 ]
             })
         })
         .collect();
+    drop(texels);
     let all: Vec<bool> = labs.iter().map(Option::is_some).collect();
     let side = ((SPREAD_BLUR_MM / texel_mm(set, &all)).round() as usize).max(1) | 1;
     let blurred: Vec<Vec<Option<f64>>> = [0, 2]
         .iter()
         .map(|&k| {
-            let a: Vec<Option<f64>> = labs.iter().map(|l| l.map(|l| l[k][1])).collect();
+            let a: Vec<Option<f64>> = labs.iter().map(|l| l.map(|l| l[k][1] as f64)).collect();
             masked_box_blur(&a, w, h, side)
         })
         .collect();
     let side_of = |idx: &[usize], k: usize, b: usize| {
         let l: Vec<[f64; 3]> = idx
             .iter()
-            .map(|&i| labs[i].expect("a skin texel")[k])
+            .map(|&i| labs[i].expect("a skin texel")[k].map(f64::from))
             .collect();
         let a: Vec<f64> = idx.iter().map(|&i| blurred[b][i].unwrap_or(0.0)).collect();
         region_lab(&l, &a)
@@ -368,7 +369,7 @@ pub fn compare(set: Painted, photo: &LoadedImage, name: &str) -> Result<AlbedoCo
         let n = idx.len().max(1) as f64;
         [0, 1, 2].map(|c| {
             idx.iter()
-                .map(|&i| labs[i].expect("a skin texel")[0][c])
+                .map(|&i| labs[i].expect("a skin texel")[0][c] as f64)
                 .sum::<f64>()
                 / n
         })
