@@ -36,7 +36,8 @@ export class Face {
     this.morphed = [];
     this.eyes = [];
     root.traverse((o) => {
-      if (o.isMesh && o.morphTargetDictionary) this.morphed.push(o);
+      // The face units' meshes (the globes' pupil morphs are the pupil slider's).
+      if (o.isMesh && o.morphTargetDictionary && !('pupilDilate' in o.morphTargetDictionary)) this.morphed.push(o);
     });
     for (const name of ['eye_left', 'eye_right']) {
       const eye = root.getObjectByName(name);

@@ -12,6 +12,7 @@ import { Face, blinkCurve, BLINK_MS } from './face.js';
 import { Wrinkles } from './wrinkles.js';
 import { EyeModel, LiveEyes } from './eyes.js';
 import { corneaMaterial } from './cornea.js';
+import { Sss } from './sss.js';
 
 // Where the export lives: ?data=URL, else the `data/` that `derma view` serves beside the viewer.
 const base = (new URLSearchParams(location.search).get('data') ?? 'data').replace(/\/?$/, '/');
@@ -100,6 +101,28 @@ const api = {
     return true;
   },
   frameFace: () => frameFace(),
+  // Screen-space subsurface scattering of the skin on or off (sss.js); returns its state.
+  setSss: (on) => {
+    sss.enabled = on;
+    return sss.enabled;
+  },
+  // Milliseconds a frame over `n` frames drawn back to back (the eye model, the wrinkles and the
+  // SSS as the frame loop runs them), the GPU finished after each.
+  frameMs: (n = 20) => {
+    const gl = renderer.getContext();
+    const px = new Uint8Array(4);
+    const t0 = performance.now();
+    for (let i = 0; i < n; i++) {
+      face.gaze[0] = 10 * Math.sin(i);
+      face.apply();
+      eyes?.apply(face.gaze, 0, face.units);
+      wrinkles?.evaluate(renderer, face.units);
+      sss.render(scene, camera, skin);
+      gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, px);
+    }
+    face.gaze[0] = Number(document.getElementById('gaze-yaw')?.value ?? 0);
+    return (performance.now() - t0) / n;
+  },
   // The globes' materials: refraction through the cornea and the tear film's gloss.
   eyeShading: () =>
     (face?.eyes ?? []).map((p) => {
@@ -161,6 +184,8 @@ renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
 renderer.toneMapping = THREE.ACESFilmicToneMapping;
 renderer.toneMappingExposure = 1.0;
 renderer.outputColorSpace = THREE.SRGBColorSpace;
+
+const sss = new Sss(renderer);
 
 const scene = new THREE.Scene();
 scene.background = new THREE.Color(0x0d0e12);
@@ -334,6 +359,7 @@ function buildControls() {
   select.addEventListener('change', () => setDisplay(select.value));
   m.append(select);
   if (rig) checkbox(m, 'map-rig', 'albedo from the rig (off: base_color.png)', true, (on) => setMap('map', on ? rig.target.texture : original.map));
+  checkbox(m, 'sss', 'subsurface scattering (screen space, Jimenez et al. 2015)', true, (on) => (sss.enabled = on));
   checkbox(m, 'map-normal', 'normal map', true, (on) => setMap('normalMap', on ? original.normalMap : null));
   checkbox(m, 'map-rough', 'roughness and specular maps', true, (on) => {
     setMap('roughnessMap', on ? original.roughnessMap : null);
@@ -466,7 +492,7 @@ function frame(now) {
   wrinkles?.evaluate(renderer, face.units);
   refresh();
   controls.update();
-  renderer.render(scene, camera);
+  sss.render(scene, camera, skin);
   api.frames = (api.frames ?? 0) + 1;
 }
 
