@@ -97,6 +97,12 @@ uniform sampler2D blurred;
 ${DEPTH}
 void main() {
   vec4 f = texture2D(full, vUv);
+  if (texture2D(fullDepth, vUv).x >= 1.0) {
+    // The background: its colour as the canvas draws it, not tone-mapped.
+    gl_FragColor = vec4(f.rgb, 1.0);
+    #include <colorspace_fragment>
+    return;
+  }
   vec4 d = texture2D(diffuse, vUv);
   // Where the skin is what the frame shows: its diffuse light replaced by the scattered.
   float shown = d.a > 0.0 && abs(viewDepth(texture2D(diffuseDepth, vUv).x) - viewDepth(texture2D(fullDepth, vUv).x)) < 0.0005 ? 1.0 : 0.0;
