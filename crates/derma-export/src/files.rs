@@ -339,7 +339,14 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     }
     let mut scene = scene_of(job, &skin, eye, &units, progress)?;
     if let Some(d) = job.pupil_mm {
-        scene.set_pupil(d);
+        if scene.set_pupil(d) == 0 {
+            return Err(derma_core::Invalid::new(
+                format!("--pupil {d}"),
+                "a scene with the head's globes",
+                "a scene with none (a user mesh without --head)",
+            )
+            .into());
+        }
     }
     if let Some(p) = &job.teeth {
         if scene.texture_parts("teeth", &derma_render::material::read_albedo(p)?) == 0 {

@@ -109,21 +109,9 @@ pub fn pause_scale(activity: Activity) -> f32 {
     let (mu, cv) = (1.0f64, (FREQUENCY_HZ.1 / FREQUENCY_HZ.0) as f64);
     let (lo, hi) = (FREQ_RANGE.0 as f64, FREQ_RANGE.1 as f64);
     // E[1/f]·μ by Simpson's rule over the truncated density (1024 panels).
-    let n = 1024;
     let density = |x: f64| (-0.5 * ((x - mu) / cv).powi(2)).exp();
-    let (mut inv, mut mass) = (0.0, 0.0);
-    for i in 0..=n {
-        let x = lo + (hi - lo) * i as f64 / n as f64;
-        let w = if i == 0 || i == n {
-            1.0
-        } else if i % 2 == 1 {
-            4.0
-        } else {
-            2.0
-        };
-        inv += w * density(x) / x;
-        mass += w * density(x);
-    }
+    let simpson = |g: &dyn Fn(f64) -> f64| derma_core::numerics::simpson(g, lo, hi, 1024);
+    let (inv, mass) = (simpson(&|x| density(x) / x), simpson(&density));
     let rate = activity.rate_hz() as f64;
     let mean_pause = inv / mass / rate;
     let blink = DOWN_PHASE_MS as f64 * 1e-3 * (1.0 + UP_OVER_DOWN as f64);

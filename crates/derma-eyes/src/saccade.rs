@@ -37,14 +37,8 @@ pub struct Profile {
 
 fn beta_shape_peak(a: f64, b: f64) -> (f64, f64) {
     // ∫ τ^a (1 − τ)^b dτ by Simpson's rule (2048 panels) and the density's peak.
-    let n = 2048;
     let f = |t: f64| t.powf(a) * (1.0 - t).powf(b);
-    let mut s = f(0.0) + f(1.0);
-    for i in 1..n {
-        let t = i as f64 / n as f64;
-        s += if i % 2 == 1 { 4.0 } else { 2.0 } * f(t);
-    }
-    let integral = s / (3.0 * n as f64);
+    let integral = derma_core::numerics::simpson(f, 0.0, 1.0, 2048);
     let p = a / (a + b);
     (integral, f(p) / integral)
 }

@@ -331,31 +331,41 @@ fn square(half: f32, z: f32) -> TriMesh {
     }
 }
 
+/// The tests' scene: a 40 mm skin square of colour `skin` and, 5 mm in front of it, a 20 mm
+/// square part `name` drawn with `material`.
+#[cfg(test)]
+fn part_before_skin(skin: [f32; 3], name: &str, material: Material) -> Scene {
+    let mut scene = Scene::mesh(
+        &square(20.0, 0.0),
+        crate::SkinMaps::uniform(skin, 0.5, 0.35),
+    );
+    scene.parts.push(crate::scene::Part {
+        name: name.into(),
+        vertices: crate::scene::corner_vertices(&square(10.0, 5.0), None),
+        material,
+    });
+    scene
+}
+
 #[cfg(test)]
 mod voids {
     use super::*;
     use crate::lighting::Setup;
-    use crate::scene::{corner_vertices, Part};
 
     /// A 40 mm skin square and, 5 mm in front of it, a 20 mm textured square whose texture's
     /// alpha is 0 on its left half (a void, as between teeth).
     fn scene() -> Scene {
-        let mut scene = Scene::mesh(
-            &square(20.0, 0.0),
-            crate::SkinMaps::uniform([0.6, 0.4, 0.3], 0.5, 0.35),
-        );
         let alpha = Map::from_fn(8, 8, |i| if i % 8 < 4 { 0.0 } else { 1.0 });
-        scene.parts.push(Part {
-            name: "teeth_upper".into(),
-            vertices: corner_vertices(&square(10.0, 5.0), None),
-            material: Material::Textured {
+        part_before_skin(
+            [0.6, 0.4, 0.3],
+            "teeth_upper",
+            Material::Textured {
                 albedo: Box::new([0.9, 0.9, 0.85].map(|v| Map::filled(8, 8, v))),
                 coverage: Some(Box::new(alpha)),
                 roughness: 0.4,
                 f0: 0.04,
             },
-        });
-        scene
+        )
     }
 
     /// What `r` shows in the textured square's left and right halves (a 128² frame, head-on).
@@ -408,27 +418,21 @@ mod voids {
 mod cards {
     use super::*;
     use crate::lighting::Setup;
-    use crate::scene::{corner_vertices, Part};
 
     /// A 40 mm grey skin square and, 5 mm in front of it, a 20 mm dark card whose coverage
     /// rises from 0 at its left edge to 1 at its right (a lash's edge, drawn large).
     fn scene() -> Scene {
-        let mut scene = Scene::mesh(
-            &square(20.0, 0.0),
-            crate::SkinMaps::uniform([0.6, 0.6, 0.6], 0.5, 0.35),
-        );
         let ramp = Map::from_fn(64, 4, |i| (i % 64) as f32 / 63.0);
-        scene.parts.push(Part {
-            name: "lashes".into(),
-            vertices: corner_vertices(&square(10.0, 5.0), None),
-            material: Material::Card {
+        part_before_skin(
+            [0.6, 0.6, 0.6],
+            "lashes",
+            Material::Card {
                 albedo: Vec3::splat(0.02),
                 coverage: Box::new(ramp),
                 roughness: 0.5,
                 f0: 0.04,
             },
-        });
-        scene
+        )
     }
 
     /// The green channel's display codes along the card's middle rows, left to right, and the

@@ -221,13 +221,17 @@ impl Scene {
     }
 
     /// Draws every globe's pupil `diameter_mm` across (its texture's is 4 mm): dilated or
-    /// constricted through the texture coordinates, the limbus kept.
-    pub fn set_pupil(&mut self, diameter_mm: f32) {
+    /// constricted through the texture coordinates, the limbus kept. Returns how many globes
+    /// took it.
+    pub fn set_pupil(&mut self, diameter_mm: f32) -> usize {
+        let mut n = 0;
         for p in &mut self.parts {
             if let Material::Eye { radius, pupil, .. } = &mut p.material {
                 *pupil = derma_head::eye::pupil_uv_radius(diameter_mm, *radius);
+                n += 1;
             }
         }
+        n
     }
 
     /// The part named `name` drawn with `mesh` instead (a lash riding on a moved lid); false

@@ -233,7 +233,7 @@ pub fn masked_box_blur(
         .collect()
 }
 
-/// Mean Lab and blurred-a* spread of `side` (0 photo, 1 derma) over the texels of `mask`.
+/// Mean Lab of `labs` and the spread (standard deviation) of `blurred_a`, one per texel.
 fn region_lab(labs: &[[f64; 3]], blurred_a: &[f64]) -> RegionLab {
     let n = labs.len().max(1) as f64;
     let lab = [0, 1, 2].map(|k| labs.iter().map(|l| l[k]).sum::<f64>() / n);

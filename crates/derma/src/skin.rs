@@ -71,7 +71,7 @@ pub struct SkinArgs {
     #[arg(long, value_parser = parse_preset)]
     preset: Option<derma_skin::regional::Preset>,
     /// Skin tone as an ITA° (cheeks and forehead; e.g. a scan's own, which --compare-albedo
-    /// prints): sets person.ita_deg, after --preset.
+    /// prints): sets person.ita_deg, after --preset, and calibrates the melanin to it.
     #[arg(long, value_name = "DEG", value_parser = |s: &str| in_range::<f32>("person.ita_deg", s))]
     ita: Option<f32>,
     /// Sex of the person (beard follicles for male). Overrides person.sex.
@@ -148,7 +148,10 @@ fn apply_person(cfg: &mut SkinConfig, args: &SkinArgs) {
         cfg.person = p.person(cfg.person.sex, cfg.person.age_years);
     }
     if let Some(ita) = args.ita {
+        // A tone asked for is painted: the melanin is calibrated to it (as --preset does), even
+        // where the config set the melanin itself.
         cfg.person.ita_deg = ita;
+        cfg.person.calibrate_melanin = true;
     }
 }
 

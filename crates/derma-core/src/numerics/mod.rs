@@ -14,12 +14,14 @@ pub mod fastmath;
 pub mod lanes;
 pub mod levenberg_marquardt;
 pub mod nnls;
+pub mod quadrature;
 pub mod robust;
 pub mod sparse;
 
 pub use dense::{solve, Eigen, Matrix, Svd};
 pub use levenberg_marquardt::{levenberg_marquardt, DenseSolver, LmOptions, ResidualFn};
 pub use nnls::nnls_normal;
+pub use quadrature::simpson;
 pub use sparse::{SparseCholesky, SparsePattern};
 
 /// Where a singular matrix showed it, for [`NumericsError::Singular`]'s message.
