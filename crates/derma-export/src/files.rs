@@ -341,9 +341,9 @@ pub fn run(job: &RenderJob, progress: &dyn Progress) -> Result<RenderReport> {
     if let Some(d) = job.pupil_mm {
         if scene.set_pupil(d) == 0 {
             return Err(derma_core::Invalid::new(
-                format!("--pupil {d}"),
+                format!("pupil diameter {d} mm"),
                 "a scene with the head's globes",
-                "a scene with none (a user mesh without --head)",
+                "a scene with none (a user mesh without its fitted head)",
             )
             .into());
         }
