@@ -4,7 +4,8 @@
 // rig against derma's CPU evaluation (`derma rig eval`), moves the "happiness" (smile) slider
 // and checks that the cheeks flush while the forehead stays and that the crow's feet deepen in
 // the normal map only inside the regions the smile drives, checks the live eye model against
-// derma's evaluator and that the upper lid follows the gaze in the picture, then saves a
+// derma's evaluator and that the upper lid follows the gaze in the picture, the model in the
+// vertex shader against the JavaScript port and the lacrimal lake in the picture, then saves a
 // screenshot (EYESHOT=PREFIX also saves crops of the eyes at several gazes).
 // Usage: node viewer_test.mjs PLAYWRIGHT_DIR URL NEUTRAL.png HAPPY.png SCREENSHOT.png
 import fs from 'node:fs';
@@ -200,7 +201,7 @@ try {
   const [withSss, without] = [await detail(true), await detail(false)];
   const [msSss, msPlain] = [await page.evaluate(() => window.derma.setSss(true) && window.derma.frameMs(10)), await page.evaluate(() => !window.derma.setSss(false) && window.derma.frameMs(10))];
   await page.evaluate(() => window.derma.setSss(true));
-  console.log(`subsurface scattering: mean |Laplacian| of red over the face ${without.toFixed(3)} → ${withSss.toFixed(3)}; frame ${msPlain.toFixed(1)} ms without, ${msSss.toFixed(1)} ms with (software-rendered Chromium, the eye model in JavaScript)`);
+  console.log(`subsurface scattering: mean |Laplacian| of red over the face ${without.toFixed(3)} → ${withSss.toFixed(3)}; frame ${msPlain.toFixed(1)} ms without, ${msSss.toFixed(1)} ms with (software-rendered Chromium)`);
   if (!(withSss < 0.9 * without)) fail(`the subsurface scattering did not soften the skin (${without} → ${withSss})`);
 
   // 2d. The idle eyes: derma-eyes' blinks as the viewer plays them, over at least 200 blinks,
@@ -269,6 +270,63 @@ try {
     if (!(dv > 3)) fail(`the eye model did not lower the upper lid in downgaze (${dv.toFixed(1)} px at ${t})`);
     if (!(de >= 0.5 * dv && de <= 2 * dv + 4)) fail(`the upper lid's edge in the picture did not follow its vertex at ${t} (${de} px for ${dv.toFixed(1)})`);
   });
+  // 3b. The eye model in the skin's vertex shader against the JavaScript port, in the picture:
+  // the eyes' close-up at a lowered gaze with the lids half closed, drawn both ways (within a
+  // few levels: float32 on the GPU against JavaScript's doubles), and with the model off (the
+  // face units alone), which must differ where the lids are.
+  await page.locator('#gaze-pitch').fill('-15');
+  await page.locator('#aperture').fill('-0.3');
+  const eyeShot = async (setup) => {
+    await page.evaluate(setup);
+    await page.waitForFunction((f) => window.derma.frames > f + 1, await page.evaluate(() => window.derma.frames), { timeout: 60_000 });
+    const box = await page.locator('#view').boundingBox();
+    return (await page.screenshot({ clip: { x: box.x, y: box.y + box.height / 2 - 120, width: box.width, height: 240 } })).toString('base64');
+  };
+  const differ = (a, b) =>
+    page.evaluate(async ([a, b]) => {
+      const [x, y] = [await window.testDecode(`data:image/png;base64,${a}`), await window.testDecode(`data:image/png;base64,${b}`)];
+      let over = 0, sum = 0, dark = 0;
+      for (let i = 0; i < x.length; i += 4) {
+        const d = [0, 1, 2].map((k) => y[i + k] - x[i + k]);
+        const m = Math.max(...d.map(Math.abs));
+        if (m > 8) {
+          over++;
+          sum += (d[0] + d[1] + d[2]) / 3;
+          if (d[0] + d[1] + d[2] < 0) dark++;
+        }
+      }
+      const n = x.length / 4;
+      return { share: over / n, meanChange: over ? sum / over : 0, darker: over ? dark / over : 0 };
+    }, [a, b]);
+  const onGpu = await eyeShot(() => window.derma.eyesOnGpu(true) && window.derma.setLake(false));
+  const inJs = await eyeShot(() => !window.derma.eyesOnGpu(false));
+  await page.locator('#eye-model').uncheck();
+  const unitsOnly = await eyeShot(() => true);
+  await page.locator('#eye-model').check();
+  const [gpuJs, gpuUnits] = [await differ(onGpu, inJs), await differ(onGpu, unitsOnly)];
+  console.log(`eye model in the vertex shader against JavaScript: ${(100 * gpuJs.share).toFixed(3)} % of the close-up's pixels differ by more than 8 levels; against the face units alone ${(100 * gpuUnits.share).toFixed(2)} %`);
+  if (!(gpuJs.share < 0.002)) fail(`the vertex shader's eye model differs from the JavaScript port in the picture: ${JSON.stringify(gpuJs)}`);
+  if (!(gpuUnits.share > 0.005)) fail(`the vertex shader's eye model draws what the face units alone draw: ${JSON.stringify(gpuUnits)}`);
+
+  // 3c. The lacrimal lake: with it, a thin band of the globes along the lid margins darkens (the
+  // fluid's absorption, lake.rs); nothing else changes. At this framing (≈ 14 px/mm) the four
+  // margins' bands of reach Λ = 1 mm, ≤ 35 mm long each, cover at most ≈ 9 % of the crop.
+  const withLake = await eyeShot(() => window.derma.eyesOnGpu(true) && window.derma.setLake(true));
+  const lake = await differ(onGpu, withLake);
+  console.log(`lacrimal lake: ${(100 * lake.share).toFixed(2)} % of the close-up's pixels change, ${(100 * lake.darker).toFixed(0)} % of them darker, by ${lake.meanChange.toFixed(1)} levels on average`);
+  if (!(lake.share > 0.001 && lake.share < 0.09 && lake.darker > 0.8)) fail(`the lacrimal lake is not a darker band along the margins: ${JSON.stringify(lake)}`);
+  await page.locator('#gaze-pitch').fill('0');
+  await page.locator('#aperture').fill('0');
+
+  // 3d. What a frame costs: the JavaScript that poses the region either way, and whole frames
+  // (SSS and lake on) at the default framing either way.
+  await page.evaluate(() => window.derma.frameFace());
+  const [applyGpu, applyJs] = await page.evaluate(() => [window.derma.eyeApplyMs(20, true), window.derma.eyeApplyMs(20, false)]);
+  const [frameGpu, frameJs] = await page.evaluate(() => [window.derma.eyesOnGpu(true) && window.derma.frameMs(10), !window.derma.eyesOnGpu(false) && window.derma.frameMs(10)]);
+  await page.evaluate(() => window.derma.eyesOnGpu(true));
+  console.log(`eye region posed in JavaScript: ${applyGpu.toFixed(2)} ms a frame with the model in the vertex shader, ${applyJs.toFixed(2)} ms with it in JavaScript; whole frame ${frameGpu.toFixed(0)} ms against ${frameJs.toFixed(0)} ms (software-rendered Chromium: its vertex shaders run on the CPU too)`);
+  await page.evaluate(() => window.derma.lookAtEyes(0.09));
+
   if (process.env.EYESHOT) {
     // The eye model in the viewer (README figure): both eyes at four gazes and a half blink.
     await page.evaluate(() => window.derma.lookAtEyes(0.1));

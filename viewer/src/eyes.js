@@ -37,13 +37,13 @@ export class EyeModel {
     this.lashAnchors = Object.fromEntries(header.lashes.map((l) => [l.name, arr(l.anchors)]));
     this.n = header.vertices;
     this.k = header.k;
-    this.u = new Float32Array(2 * this.n);
     this.pos = new Float32Array(3 * this.n);
     this.nrm = new Float32Array(3 * this.n);
     this.angles = [
       [0, 0],
       [0, 0],
     ];
+    this.pose([0, 0], 0, {});
   }
 
   static async load(base, entry) {
@@ -82,23 +82,45 @@ export class EyeModel {
     return g;
   }
 
-  /** Model-vertex positions and normals (mm) into this.pos / this.nrm. */
-  evaluate(gaze, closure, units) {
+  /**
+   * The pose's per-frame quantities: the latent e = W g̃, each globe's angles and rotation, and
+   * each eye's lid contact (where its upper margin falls below the lower, by how much along x;
+   * null where it does not). Everything per vertex then follows from these ([`vertexAt`]), here
+   * or in the vertex shader (eyes_gpu.js).
+   */
+  pose(gaze, closure, units) {
     const g = this.inputs(gaze, closure, units);
-    const e = this.h.w.map((row) => row.reduce((s, x, i) => s + x * (i < g.length ? g[i] : 1), 0));
-    const { basis, depth, offset, normal_offset: noff, pos, nrm, k, u } = this;
-    const stride = 2 * (k + 1);
-    for (let i = 0; i < this.n; i++) {
-      let x = basis[i * stride];
-      let y = basis[i * stride + 1];
-      for (let j = 0; j < k; j++) {
-        x += e[j] * basis[i * stride + 2 + 2 * j];
-        y += e[j] * basis[i * stride + 3 + 2 * j];
-      }
-      u[2 * i] = x;
-      u[2 * i + 1] = y;
+    this.e = this.h.w.map((row) => row.reduce((s, x, i) => s + x * (i < g.length ? g[i] : 1), 0));
+    this.rot = this.angles.map(([h, v]) => fick(h, v));
+    this.short = this.contact();
+  }
+
+  /** ũ⁺ of vertex i before the lids' contact: the basis' mean plus Σ e_j times its columns. */
+  basisAt(i) {
+    const { basis, k, e } = this;
+    const s = i * 2 * (k + 1);
+    let [x, y] = [basis[s], basis[s + 1]];
+    for (let j = 0; j < k; j++) {
+      x += e[j] * basis[s + 2 + 2 * j];
+      y += e[j] * basis[s + 3 + 2 * j];
     }
-    this.contact();
+    return [x, y];
+  }
+
+  /** Model-vertex positions and normals (mm) into this.pos / this.nrm: of all the vertices, or
+   * of the listed ones only. */
+  evaluate(gaze, closure, units, vertices = null) {
+    this.pose(gaze, closure, units);
+    if (vertices) for (const i of vertices) this.vertexAt(i);
+    else for (let i = 0; i < this.n; i++) this.vertexAt(i);
+  }
+
+  /** Vertex i's position and normal for the current pose. */
+  vertexAt(i) {
+    const { depth, offset, normal_offset: noff, pos, nrm, lift, e } = this;
+    let [x, y] = this.basisAt(i);
+    const short = this.short[this.eye[i]];
+    if (short && lift[i] > 0) y += lift[i] * (heightAt(short, x) ?? 0);
     // Depth and normal, each linear in e: [value at e = 0, k columns] × (z, n_x, n_y, n_z).
     const kd = this.h.depth.k;
     const k1 = kd + 1;
@@ -107,38 +129,32 @@ export class EyeModel {
       for (let j = 0; j < kd; j++) v += e[j] * depth[b + 1 + j];
       return v;
     };
-    for (let i = 0; i < this.n; i++) {
-      const b = 4 * k1 * i;
-      const n = [at(b + k1), at(b + 2 * k1), at(b + 3 * k1)];
-      const p = [u[2 * i], u[2 * i + 1], at(b)];
-      let nl = Math.hypot(n[0], n[1], n[2]);
-      const m = nl > 0 ? n.map((c) => c / nl) : [0, 0, 1];
-      for (let q = 0; q < 3; q++) {
-        pos[3 * i + q] = p[q] + offset[3 * i + q];
-        m[q] += noff[3 * i + q];
-      }
-      nl = 1 / Math.hypot(m[0], m[1], m[2]);
-      for (let q = 0; q < 3; q++) nrm[3 * i + q] = m[q] * nl;
+    const b = 4 * k1 * i;
+    const n = [at(b + k1), at(b + 2 * k1), at(b + 3 * k1)];
+    const p = [x, y, at(b)];
+    let nl = Math.hypot(n[0], n[1], n[2]);
+    const m = nl > 0 ? n.map((c) => c / nl) : [0, 0, 1];
+    for (let q = 0; q < 3; q++) {
+      pos[3 * i + q] = p[q] + offset[3 * i + q];
+      m[q] += noff[3 * i + q];
     }
-    this.slideOnGlobes();
+    nl = 1 / Math.hypot(m[0], m[1], m[2]);
+    for (let q = 0; q < 3; q++) nrm[3 * i + q] = m[q] * nl;
+    this.slideAt(i);
   }
 
-  /** The lids' contact: each eye's upper lid lifted where its margin falls below the lower. */
+  /** The lids' contact: per eye the polyline [[x, shortfall]…] along its upper margin where it
+   * falls below the lower (the upper lid is lifted by it, times each vertex's lift), or null. */
   contact() {
-    const { u, lift, eye: eyeOf } = this;
-    const chain = (c) => c.map((i) => [u[2 * i], u[2 * i + 1]]);
-    this.h.margins.forEach(([upperIdx, lowerIdx], e) => {
+    const chain = (c) => c.map((i) => this.basisAt(i));
+    return this.h.margins.map(([upperIdx, lowerIdx]) => {
       const [upper, lower] = [chain(upperIdx), chain(lowerIdx)];
       const short = upper.map(([x, y], j) => {
         const h = heightAt(lower, x);
         const inner = j > 0 && j + 1 < upper.length;
         return [x, inner && h !== null ? Math.max(h - y, 0) : 0];
       });
-      if (short.every(([, s]) => s === 0)) return;
-      for (let i = 0; i < this.n; i++) {
-        if (eyeOf[i] !== e || lift[i] <= 0) continue;
-        u[2 * i + 1] += lift[i] * (heightAt(short, u[2 * i]) ?? 0);
-      }
+      return short.every(([, s]) => s === 0) ? null : short;
     });
   }
 
@@ -166,59 +182,57 @@ export class EyeModel {
     return top + (bot - top) * ty;
   }
 
-  /** Algorithm 1: skin inside a globe (in its current orientation) pushed out to its surface. */
-  slideOnGlobes() {
+  /** Algorithm 1: vertex i, where it is skin inside its globe (in the globe's current
+   * orientation), pushed out to the globe's surface. */
+  slideAt(i) {
     const { pos, nrm, slide, eye: eyeOf, rest_normals: rn } = this;
-    const rot = this.angles.map(([h, v]) => fick(h, v));
     const reach = this.h.radial.reach;
     const c = this.h.centres;
-    for (let i = 0; i < this.n; i++) {
-      const s = 6 * i;
-      const kind = slide[s];
-      if (kind < 0) continue;
-      const t = slide[s + 1];
-      const e = eyeOf[i];
-      const R = rot[e];
-      const [cx, cy, cz] = c[e];
-      const qx = pos[3 * i] - cx;
-      const qy = pos[3 * i + 1] - cy;
-      const qz = pos[3 * i + 2] - cz;
-      // Into the globe's frame (Rᵀ).
-      const rx = R[0] * qx + R[3] * qy + R[6] * qz;
-      const ry = R[1] * qx + R[4] * qy + R[7] * qz;
-      const rz = R[2] * qx + R[5] * qy + R[8] * qz;
-      const len = Math.max(Math.sqrt(rx * rx + ry * ry + rz * rz), 1e-6);
-      if (kind === 0 && len >= reach[e] + t) continue;
-      const dx = rx / len;
-      const dy = ry / len;
-      const dz = rz / len;
-      // Back to head space: τ = R · dir.
-      const tx = R[0] * dx + R[1] * dy + R[2] * dz;
-      const ty = R[3] * dx + R[4] * dy + R[5] * dz;
-      const tz = R[6] * dx + R[7] * dy + R[8] * dz;
-      if (kind === 0) {
-        const delta = this.radius(e, dx, dy, dz) + t;
-        if (delta > len) {
-          pos[3 * i] = cx + tx * delta;
-          pos[3 * i + 1] = cy + ty * delta;
-          pos[3 * i + 2] = cz + tz * delta;
-          nrm[3 * i] = tx;
-          nrm[3 * i + 1] = ty;
-          nrm[3 * i + 2] = tz;
-        }
-      } else {
-        const delta = this.radius(e, dx, dy, dz) + t + slide[s + 2];
-        const nx = rn[3 * i] + tx - slide[s + 3];
-        const ny = rn[3 * i + 1] + ty - slide[s + 4];
-        const nz = rn[3 * i + 2] + tz - slide[s + 5];
-        const nl = 1 / Math.sqrt(nx * nx + ny * ny + nz * nz);
+    const s = 6 * i;
+    const kind = slide[s];
+    if (kind < 0) return;
+    const t = slide[s + 1];
+    const e = eyeOf[i];
+    const R = this.rot[e];
+    const [cx, cy, cz] = c[e];
+    const qx = pos[3 * i] - cx;
+    const qy = pos[3 * i + 1] - cy;
+    const qz = pos[3 * i + 2] - cz;
+    // Into the globe's frame (Rᵀ).
+    const rx = R[0] * qx + R[3] * qy + R[6] * qz;
+    const ry = R[1] * qx + R[4] * qy + R[7] * qz;
+    const rz = R[2] * qx + R[5] * qy + R[8] * qz;
+    const len = Math.max(Math.sqrt(rx * rx + ry * ry + rz * rz), 1e-6);
+    if (kind === 0 && len >= reach[e] + t) return;
+    const dx = rx / len;
+    const dy = ry / len;
+    const dz = rz / len;
+    // Back to head space: τ = R · dir.
+    const tx = R[0] * dx + R[1] * dy + R[2] * dz;
+    const ty = R[3] * dx + R[4] * dy + R[5] * dz;
+    const tz = R[6] * dx + R[7] * dy + R[8] * dz;
+    if (kind === 0) {
+      const delta = this.radius(e, dx, dy, dz) + t;
+      if (delta > len) {
         pos[3 * i] = cx + tx * delta;
         pos[3 * i + 1] = cy + ty * delta;
         pos[3 * i + 2] = cz + tz * delta;
-        nrm[3 * i] = nx * nl;
-        nrm[3 * i + 1] = ny * nl;
-        nrm[3 * i + 2] = nz * nl;
+        nrm[3 * i] = tx;
+        nrm[3 * i + 1] = ty;
+        nrm[3 * i + 2] = tz;
       }
+    } else {
+      const delta = this.radius(e, dx, dy, dz) + t + slide[s + 2];
+      const nx = rn[3 * i] + tx - slide[s + 3];
+      const ny = rn[3 * i + 1] + ty - slide[s + 4];
+      const nz = rn[3 * i + 2] + tz - slide[s + 5];
+      const nl = 1 / Math.sqrt(nx * nx + ny * ny + nz * nz);
+      pos[3 * i] = cx + tx * delta;
+      pos[3 * i + 1] = cy + ty * delta;
+      pos[3 * i + 2] = cz + tz * delta;
+      nrm[3 * i] = nx * nl;
+      nrm[3 * i + 1] = ny * nl;
+      nrm[3 * i + 2] = nz * nl;
     }
   }
 
@@ -237,15 +251,18 @@ export class EyeModel {
 }
 
 /**
- * The model bound to the scene: writes the skin's region vertices (the model's positions plus
- * the offsets of the face units outside the region, as derma render composes them), the lashes
- * riding on their lid margins, and the globes' verged angles.
+ * The model bound to the scene: the skin's region vertices posed by it (the model's positions
+ * replacing the face units' inside the region, as derma render composes them) — in the skin's
+ * vertex shader (eyes_gpu.js) or, with `gpu` null or `onGpu` false, written from JavaScript —
+ * the lashes riding on their lid margins, and the globes' verged angles.
  */
 export class LiveEyes {
-  constructor(model, skin, root, pivots) {
+  constructor(model, skin, root, pivots, gpu = null) {
     this.model = model;
     this.skin = skin;
     this.pivots = pivots;
+    this.gpu = gpu;
+    this.onGpu = !!gpu;
     this.enabled = true;
     const geo = skin.geometry;
     this.restPos = geo.attributes.position.array.slice();
@@ -255,33 +272,65 @@ export class LiveEyes {
       const mesh = o && (o.isMesh ? o : o.getObjectByProperty('isMesh', true));
       return mesh ? [{ mesh, anchors, rest: mesh.geometry.attributes.position.array.slice() }] : [];
     });
+    this.anchors = [...new Set(this.lashes.flatMap((l) => [...l.anchors]))];
     this.key = '';
+    this.written = false;
   }
 
   /** Poses the region for gaze (yaw, pitch)°, closure and the face units (after Face.apply). */
   apply(gaze, closure, units) {
     const m = this.model;
-    const geo = this.skin.geometry;
-    const P = geo.attributes.position;
-    const N = geo.attributes.normal;
     // The lashes ride on the model's lid margins, not on the face units.
     if (this.enabled) for (const l of this.lashes) l.mesh.morphTargetInfluences?.fill(0);
-    const key = this.enabled ? JSON.stringify([gaze, closure, units]) : 'off';
+    const gpu = this.enabled && this.onGpu;
+    const key = this.enabled ? JSON.stringify([gaze, closure, units, gpu]) : 'off';
     if (key === this.key) {
       if (this.enabled) this.turnGlobes();
       return;
     }
     this.key = key;
+    this.gpu?.update(m, false);
     if (!this.enabled) {
-      P.array.set(this.restPos);
-      N.array.set(this.restNrm);
+      this.restore();
       for (const l of this.lashes) l.mesh.geometry.attributes.position.array.set(l.rest);
-      P.needsUpdate = N.needsUpdate = true;
       for (const l of this.lashes) l.mesh.geometry.attributes.position.needsUpdate = true;
       return;
     }
-    m.evaluate(gaze, closure, units);
-    // The region units' morphs that three.js will add on top, to take back off.
+    if (gpu) {
+      m.evaluate(gaze, closure, units, this.anchors);
+      this.restore();
+      this.gpu.update(m, true);
+    } else {
+      m.evaluate(gaze, closure, units);
+      this.write(units);
+    }
+    for (const l of this.lashes) {
+      const a = l.mesh.geometry.attributes.position;
+      for (let j = 0; j < l.anchors.length; j++) {
+        const v = l.anchors[j];
+        for (let q = 0; q < 3; q++) a.array[3 * j + q] = l.rest[3 * j + q] + (m.pos[3 * v + q] - m.rest[3 * v + q]) * 0.001;
+      }
+      a.needsUpdate = true;
+    }
+    this.turnGlobes();
+  }
+
+  /** The skin's rest positions and normals back in its buffers (once after JavaScript wrote them). */
+  restore() {
+    if (!this.written) return;
+    const geo = this.skin.geometry;
+    geo.attributes.position.array.set(this.restPos);
+    geo.attributes.normal.array.set(this.restNrm);
+    geo.attributes.position.needsUpdate = geo.attributes.normal.needsUpdate = true;
+    this.written = false;
+  }
+
+  /** The evaluated region into the skin's buffers, less the region units' morphs that three.js
+   * adds on top. */
+  write(units) {
+    const m = this.model;
+    const geo = this.skin.geometry;
+    const [P, N] = [geo.attributes.position, geo.attributes.normal];
     const dict = this.skin.morphTargetDictionary;
     const morphs = m.h.region_units
       .filter((u) => (units[u] ?? 0) !== 0 && dict[u] !== undefined)
@@ -297,15 +346,7 @@ export class LiveEyes {
       }
     }
     P.needsUpdate = N.needsUpdate = true;
-    for (const l of this.lashes) {
-      const a = l.mesh.geometry.attributes.position;
-      for (let j = 0; j < l.anchors.length; j++) {
-        const v = l.anchors[j];
-        for (let q = 0; q < 3; q++) a.array[3 * j + q] = l.rest[3 * j + q] + (m.pos[3 * v + q] - m.rest[3 * v + q]) * 0.001;
-      }
-      a.needsUpdate = true;
-    }
-    this.turnGlobes();
+    this.written = true;
   }
 
   /** Each globe to its own (verged) Fick angles. */
@@ -319,8 +360,9 @@ export class LiveEyes {
     return this.model.check();
   }
 
-  /** Head-space position (m) of model vertex `v` as last evaluated. */
+  /** Head-space position (m) of model vertex `v` as last posed. */
   vertex(v) {
+    this.model.vertexAt(v);
     return [0, 1, 2].map((q) => this.model.pos[3 * v + q] * 0.001);
   }
 }

@@ -11,6 +11,7 @@ import { Rig, MODES } from './rig.js';
 import { Face, blinkCurve, BLINK_MS } from './face.js';
 import { Wrinkles } from './wrinkles.js';
 import { EyeModel, LiveEyes } from './eyes.js';
+import { EyeShader } from './eyes_gpu.js';
 import { corneaMaterial } from './cornea.js';
 import { Sss } from './sss.js';
 
@@ -78,6 +79,20 @@ const api = {
     eyes.key = '';
     return ms;
   },
+  // Milliseconds of JavaScript a frame spends posing the eye region (the mean of `n` poses at
+  // moving gazes): the whole model in JavaScript, or only the pose and the lashes' anchors with
+  // the model in the vertex shader.
+  eyeApplyMs: (n = 20, gpu = true) => {
+    if (!eyes) return null;
+    const was = eyes.onGpu;
+    eyes.onGpu = gpu && !!eyes.gpu;
+    const t0 = performance.now();
+    for (let i = 0; i < n; i++) eyes.apply([10 * Math.sin(i), 10 * Math.cos(i)], 0, face.units);
+    const ms = (performance.now() - t0) / n;
+    eyes.onGpu = was;
+    eyes.key = '';
+    return ms;
+  },
   // Canvas pixel (x, y from the top-left) of the upper lid of eye `e` (0 left, 1 right) as last
   // posed, at fraction `t` of its margin from the inner canthus.
   upperLidPixel: (e = 0, t = 0.5) => {
@@ -101,10 +116,21 @@ const api = {
     return true;
   },
   frameFace: () => frameFace(),
+  // The eye model in the skin's vertex shader (true) or in JavaScript (false); returns the state.
+  eyesOnGpu: (on) => {
+    if (!eyes) return null;
+    eyes.onGpu = on && !!eyes.gpu;
+    return eyes.onGpu;
+  },
   // Screen-space subsurface scattering of the skin on or off (sss.js); returns its state.
   setSss: (on) => {
     sss.enabled = on;
     return sss.enabled;
+  },
+  // The lacrimal lake (lake.js) on or off; returns its state (false without the export's lake).
+  setLake: (on) => {
+    sss.lake.enabled = on && sss.lake.uniforms.maxSearch.value > 0;
+    return sss.lake.enabled;
   },
   // Milliseconds a frame over `n` frames drawn back to back (the eye model, the wrinkles and the
   // SSS as the frame loop runs them), the GPU finished after each.
@@ -329,6 +355,7 @@ function buildControls() {
   b.addEventListener('click', () => (blinkStart = performance.now()));
   e.append(b);
   if (eyes) checkbox(e, 'eye-model', 'lids from the trained eye-region model (off: face units)', true, (on) => (eyes.enabled = on));
+  if (eyes?.gpu) checkbox(e, 'eye-gpu', 'eye model in the vertex shader (off: JavaScript)', true, (on) => api.eyesOnGpu(on));
   if (motion) {
     checkbox(e, 'idle', `eyes on their own (derma-eyes: blinks at ${motion.perMinute.toFixed(0)}/min as table 3.1 draws them, idle saccades on the main sequence)`, false, (on) => {
       idleStart = on ? performance.now() : 0;
@@ -360,6 +387,7 @@ function buildControls() {
   m.append(select);
   if (rig) checkbox(m, 'map-rig', 'albedo from the rig (off: base_color.png)', true, (on) => setMap('map', on ? rig.target.texture : original.map));
   checkbox(m, 'sss', 'subsurface scattering (screen space, Jimenez et al. 2015)', true, (on) => (sss.enabled = on));
+  if (sss.lake.enabled) checkbox(m, 'lake', 'lacrimal lake (the tear meniscus, EyeMove §4.5)', true, (on) => api.setLake(on));
   checkbox(m, 'map-normal', 'normal map', true, (on) => setMap('normalMap', on ? original.normalMap : null));
   checkbox(m, 'map-rough', 'roughness and specular maps', true, (on) => {
     setMap('roughnessMap', on ? original.roughnessMap : null);
@@ -447,7 +475,11 @@ async function load() {
   }
   if (manifest.eyes) {
     status.textContent = 'loading the eye model…';
-    eyes = new LiveEyes(await EyeModel.load(base, manifest.eyes), skin, gltf.scene, face.eyes);
+    const model = await EyeModel.load(base, manifest.eyes);
+    const gpu = new EyeShader(model, skin);
+    for (const m of [mat, flat]) gpu.patch(m);
+    eyes = new LiveEyes(model, skin, gltf.scene, face.eyes, gpu);
+    if (manifest.eyes.lake) sss.lake.configure(manifest.eyes.lake);
     const m = manifest.eyes.motion;
     if (m) {
       const res = await fetch(base + m.file);

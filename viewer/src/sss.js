@@ -1,7 +1,9 @@
 // Screen-space subsurface scattering of the skin (Jimenez et al. 2015, "Separable subsurface
 // scattering"): the skin's diffuse light, drawn alone, blurred along x then y by skin's diffusion
-// profile scaled to each pixel's depth, and put back under everything else of the frame.
+// profile scaled to each pixel's depth, and put back under everything else of the frame; the
+// lacrimal lake (lake.js) reads the same diffuse target and joins the composite.
 import * as THREE from 'three';
+import { Lake, VIEW_DEPTH as DEPTH, LAKE_COMPOSITE } from './lake.js';
 
 // Skin's diffusion profile as six Gaussians (d'Eon & Luebke 2007, GPU Gems 3 ch. 14, table
 // 14-1, the three-layer skin fit): variance (mm²) and the RGB weight of each.
@@ -44,16 +46,6 @@ varying vec2 vUv;
 void main() { vUv = uv; gl_Position = vec4(position.xy, 0.0, 1.0); }
 `;
 
-/** Linear view depth (m) from a perspective depth buffer. */
-const DEPTH = /* glsl */ `
-uniform float near;
-uniform float far;
-float viewDepth(float d) {
-  float z = d * 2.0 - 1.0;
-  return 2.0 * near * far / (far + near - z * (far - near));
-}
-`;
-
 function blurShader(taps) {
   const list = taps.map(([o, w]) => `vec4(${o.toFixed(6)}, ${w.map((x) => x.toFixed(6)).join(', ')})`).join(',\n  ');
   return /* glsl */ `
@@ -68,7 +60,7 @@ const vec4 TAPS[${taps.length}] = vec4[](
 );
 void main() {
   vec4 c = texture2D(source, vUv);
-  if (c.a <= 0.0) { gl_FragColor = c; return; }
+  if (c.a <= 0.75) { gl_FragColor = c; return; }
   float z = viewDepth(texture2D(depth, vUv).x);
   // One millimetre on the skin, in pixels here.
   float px = focal * 0.001 / z;
@@ -79,7 +71,7 @@ void main() {
     float zs = viewDepth(texture2D(depth, uv).x);
     // Follow the surface (Jimenez et al. 2015 §3): across a depth step of a few mm, or off the
     // skin, the sample is the centre's.
-    float keep = s.a > 0.0 ? clamp(1.0 - abs(zs - z) / 0.003, 0.0, 1.0) : 0.0;
+    float keep = s.a > 0.75 ? clamp(1.0 - abs(zs - z) / 0.003, 0.0, 1.0) : 0.0;
     sum += TAPS[k].yzw * mix(c.rgb, s.rgb, keep);
   }
   gl_FragColor = vec4(sum, c.a);
@@ -91,10 +83,11 @@ const COMPOSITE_FS = /* glsl */ `
 varying vec2 vUv;
 uniform sampler2D full;
 uniform sampler2D fullDepth;
-uniform sampler2D diffuse;
-uniform sampler2D diffuseDepth;
 uniform sampler2D blurred;
+uniform float scatter;   // 1: the skin's diffuse light replaced by the blurred, 0: kept
+uniform float lakeOn;
 ${DEPTH}
+${LAKE_COMPOSITE}
 void main() {
   vec4 f = texture2D(full, vUv);
   if (texture2D(fullDepth, vUv).x >= 1.0) {
@@ -104,16 +97,20 @@ void main() {
     return;
   }
   vec4 d = texture2D(diffuse, vUv);
-  // Where the skin is what the frame shows: its diffuse light replaced by the scattered.
-  float shown = d.a > 0.0 && abs(viewDepth(texture2D(diffuseDepth, vUv).x) - viewDepth(texture2D(fullDepth, vUv).x)) < 0.0005 ? 1.0 : 0.0;
-  vec3 rgb = f.rgb + shown * (texture2D(blurred, vUv).rgb - d.rgb);
+  float z = viewDepth(texture2D(fullDepth, vUv).x);
+  // Where the diffuse target's surface is what the frame shows (no card or part before it).
+  bool shown = abs(viewDepth(texture2D(diffuseDepth, vUv).x) - z) < 0.0005;
+  vec3 rgb = f.rgb;
+  if (shown && d.a > 0.75) rgb += scatter * (texture2D(blurred, vUv).rgb - d.rgb);
+  if (shown && lakeOn > 0.5) rgb = lakeOver(rgb, z);
   gl_FragColor = vec4(rgb, 1.0);
   #include <tonemapping_fragment>
   #include <colorspace_fragment>
 }
 `;
 
-/** The separable SSS over `renderer`'s frames; `render(scene, camera, skin)` draws a frame. */
+/** The separable SSS and the lacrimal lake over `renderer`'s frames; `render(scene, camera,
+ * skin)` draws a frame. */
 export class Sss {
   constructor(renderer) {
     this.renderer = renderer;
@@ -127,12 +124,19 @@ export class Sss {
     this.diffuse = target();
     this.ping = new THREE.WebGLRenderTarget(1, 1, { type: THREE.HalfFloatType });
     this.pong = new THREE.WebGLRenderTarget(1, 1, { type: THREE.HalfFloatType });
-    const shared = { near: { value: 0.01 }, far: { value: 100 } };
-    const blur = blurShader(kernel());
+    // Shared by the passes: the depth range, the focal length (px), the diffuse target.
+    const shared = {
+      near: { value: 0.01 },
+      far: { value: 100 },
+      focal: { value: 1 },
+      diffuse: { value: this.diffuse.texture },
+      diffuseDepth: { value: this.diffuse.depthTexture },
+    };
+    this.lake = new Lake(shared);
     this.blurMat = new THREE.ShaderMaterial({
       vertexShader: QUAD_VS,
-      fragmentShader: blur,
-      uniforms: { ...shared, source: { value: null }, depth: { value: null }, step: { value: new THREE.Vector2() }, focal: { value: 1 } },
+      fragmentShader: blurShader(kernel()),
+      uniforms: { ...shared, source: { value: null }, depth: { value: null }, step: { value: new THREE.Vector2() } },
       depthTest: false,
       depthWrite: false,
     });
@@ -141,11 +145,12 @@ export class Sss {
       fragmentShader: COMPOSITE_FS,
       uniforms: {
         ...shared,
+        ...this.lake.uniforms,
         full: { value: this.full.texture },
         fullDepth: { value: this.full.depthTexture },
-        diffuse: { value: this.diffuse.texture },
-        diffuseDepth: { value: this.diffuse.depthTexture },
         blurred: { value: this.pong.texture },
+        scatter: { value: 1 },
+        lakeOn: { value: 0 },
       },
       depthTest: false,
       depthWrite: false,
@@ -160,14 +165,22 @@ export class Sss {
   }
 
   setSize(w, h) {
-    for (const t of [this.full, this.diffuse, this.ping, this.pong]) t.setSize(w, h);
+    for (const t of [this.full, this.diffuse, this.ping, this.pong, this.lake.target]) t.setSize(w, h);
   }
 
-  /** One frame: the whole scene, the skin's diffuse light alone, its blur along x then y, and
-   * the composite to the canvas. */
+  /** A full-screen pass of `material` into `target`. */
+  pass(material, target) {
+    this.quad.material = material;
+    this.renderer.setRenderTarget(target);
+    this.renderer.render(this.quadScene, this.quadCamera);
+  }
+
+  /** One frame: the whole scene; the skin's diffuse light alone (the globes as the lake's
+   * markers); its blur along x then y; the lake's distances; the composite to the canvas. */
   render(scene, camera, skin) {
     const r = this.renderer;
-    if (!this.enabled || !skin) {
+    const lake = this.lake.enabled ? this.lake : null;
+    if ((!this.enabled && !lake) || !skin) {
       r.setRenderTarget(null);
       r.render(scene, camera);
       return;
@@ -176,10 +189,34 @@ export class Sss {
     if (this.full.width !== size.x || this.full.height !== size.y) this.setSize(size.x, size.y);
     this.shared.near.value = camera.near;
     this.shared.far.value = camera.far;
+    this.shared.focal.value = (0.5 * size.y) / Math.tan((camera.fov * Math.PI) / 360);
     r.setRenderTarget(this.full);
     r.render(scene, camera);
-    // The skin alone, its specular off: the diffuse light to scatter. Opaque parts (globes,
-    // teeth) still hide what lies behind them, in depth only; blended cards are left out.
+    this.drawDiffuse(scene, camera, skin, lake);
+    if (this.enabled) {
+      const u = this.blurMat.uniforms;
+      u.depth.value = this.diffuse.depthTexture;
+      u.source.value = this.diffuse.texture;
+      u.step.value.set(1 / size.x, 0);
+      this.pass(this.blurMat, this.ping);
+      u.source.value = this.ping.texture;
+      u.step.value.set(0, 1 / size.y);
+      this.pass(this.blurMat, this.pong);
+    }
+    if (lake) {
+      lake.lights(scene, camera);
+      this.pass(lake.depthMat, lake.target);
+    }
+    this.compMat.uniforms.scatter.value = this.enabled ? 1 : 0;
+    this.compMat.uniforms.lakeOn.value = lake ? 1 : 0;
+    this.pass(this.compMat, null);
+  }
+
+  /** The skin alone, its specular off: the diffuse light to scatter. Opaque parts (globes,
+   * teeth) still hide what lies behind them, in depth only, or the globes as the lake's markers
+   * (their view-space normal, alpha ½); blended cards are left out. */
+  drawDiffuse(scene, camera, skin, lake) {
+    const r = this.renderer;
     const hidden = [];
     const masked = [];
     scene.traverseVisible((o) => {
@@ -188,7 +225,7 @@ export class Sss {
       else masked.push([o, o.material]);
     });
     for (const o of hidden) o.visible = false;
-    for (const [o] of masked) o.material = this.depthOnly;
+    for (const [o, mat] of masked) o.material = lake && mat.userData.cornea ? lake.marker : this.depthOnly;
     const m = skin.material;
     const spec = m.specularIntensity;
     m.specularIntensity = 0;
@@ -204,22 +241,5 @@ export class Sss {
     m.specularIntensity = spec;
     for (const o of hidden) o.visible = true;
     for (const [o, mat] of masked) o.material = mat;
-    // The blur, x then y.
-    const focal = (0.5 * size.y) / Math.tan((camera.fov * Math.PI) / 360);
-    const u = this.blurMat.uniforms;
-    u.focal.value = focal;
-    u.depth.value = this.diffuse.depthTexture;
-    this.quad.material = this.blurMat;
-    u.source.value = this.diffuse.texture;
-    u.step.value.set(1 / size.x, 0);
-    r.setRenderTarget(this.ping);
-    r.render(this.quadScene, this.quadCamera);
-    u.source.value = this.ping.texture;
-    u.step.value.set(0, 1 / size.y);
-    r.setRenderTarget(this.pong);
-    r.render(this.quadScene, this.quadCamera);
-    this.quad.material = this.compMat;
-    r.setRenderTarget(null);
-    r.render(this.quadScene, this.quadCamera);
   }
 }

@@ -148,6 +148,18 @@ fn write_eyes(
     derma_core::atomic::ensure_writable_dir(&dir)?;
     derma_core::atomic::write_bytes(&dir.join("model.bin"), &bin)?;
     header["file"] = json!("eyes/model.bin");
+    // The lacrimal lake's constants, from their one home (derma-render's lake.rs).
+    {
+        use derma_render::lake;
+        header["lake"] = json!({
+            "meniscus_mm": lake::MENISCUS_MM,
+            "range_mm": lake::RANGE_MM,
+            "attenuation_per_mm": lake::ATTENUATION,
+            "f0": lake::F0,
+            "roughness": lake::ROUGHNESS,
+            "max_search_px": lake::MAX_SEARCH_PX,
+        });
+    }
     // The idle eyes the viewer plays when left alone: table 3.1's blinks at rest and idle
     // saccades on the main sequence, long enough for 200 blinks.
     let (seconds, fps) = (MOTION_SECONDS, MOTION_FPS);
