@@ -41,6 +41,8 @@ pub struct SynthReport {
     pub seconds: f64,
     /// Seconds per stage.
     pub timings: Vec<Timing>,
+    /// Each optimisation pass's windows and how many were searched (§3.3's self-adaptive skip).
+    pub passes: Vec<crate::optimize::PassStats>,
     /// The metrics, when asked for.
     pub metrics: Option<Metrics>,
 }
@@ -58,6 +60,7 @@ impl SynthReport {
         Some(serde_json::json!({
             "seconds": self.seconds,
             "stages": stages,
+            "windows_searched": self.passes.iter().map(|p| serde_json::json!({"side": p.w, "windows": p.windows, "searched": p.searched})).collect::<Vec<_>>(),
             "patch_swd": m.patch_swd,
             "patch_swd_half": m.patch_swd_half,
             "patch_swd_quarter": m.patch_swd_quarter,
@@ -128,6 +131,7 @@ pub fn run(job: &SynthJob, progress: &dyn Progress) -> Result<SynthReport> {
         matcher: out.matcher,
         seconds,
         timings: out.timings,
+        passes: out.passes,
         metrics,
     })
 }

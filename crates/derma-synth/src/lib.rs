@@ -41,6 +41,7 @@ pub mod quality;
 #[cfg(feature = "gpu")]
 mod resident;
 pub mod search;
+pub mod settle;
 pub mod synthesize;
 pub mod synthesizer;
 pub mod texture;

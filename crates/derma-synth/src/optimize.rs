@@ -31,6 +31,7 @@ use crate::error::Result;
 use crate::exemplar::ExemplarSet;
 use crate::pass_context::{PassContext, PassSteps};
 use crate::search::{Match, Search, Tolerance, WindowQuery};
+use crate::settle::Settled;
 use derma_core::progress::Unit;
 use derma_core::rng::Philox;
 use rayon::prelude::*;
@@ -45,12 +46,31 @@ const PICK_STREAM: u32 = 0x5e_0003;
 /// The optimisation passes, one per window side of `sides` in order, leaving their result in
 /// the canvas. With the GPU's matcher they run on the GPU, which keeps the canvas there between
 /// passes (`gpu_optimize.rs`); otherwise on the host.
-pub(crate) fn optimise(canvas: &mut Canvas, ctx: &PassContext, sides: &[usize]) -> Result<()> {
+/// `settle`: the self-adaptive skip's factor ([`crate::settle`]; 0 searches every window).
+pub(crate) fn optimise(
+    canvas: &mut Canvas,
+    ctx: &PassContext,
+    sides: &[usize],
+    settle: f32,
+) -> Result<Vec<PassStats>> {
     #[cfg(feature = "gpu")]
     if let Some(gpu) = crate::gpu::GpuMatcher::behind(ctx.matcher) {
-        return passes(canvas, ctx, sides, crate::gpu_optimize::GpuSteps::new(gpu));
+        let steps = crate::gpu_optimize::GpuSteps::new(gpu);
+        return passes(canvas, ctx, sides, settle, steps);
     }
-    passes(canvas, ctx, sides, HostSteps)
+    passes(canvas, ctx, sides, settle, HostSteps)
+}
+
+/// What an optimisation pass did: its window side, windows, and how many it searched (the rest
+/// inherited their settled matches).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PassStats {
+    /// Window side.
+    pub w: usize,
+    /// Windows of the pass.
+    pub windows: usize,
+    /// Windows searched.
+    pub searched: usize,
 }
 
 /// The passes of `sides` with `steps`, then [`PassSteps::finish`].
@@ -58,12 +78,21 @@ fn passes<S: PassSteps>(
     canvas: &mut Canvas,
     ctx: &PassContext,
     sides: &[usize],
+    settle: f32,
     mut steps: S,
-) -> Result<()> {
+) -> Result<Vec<PassStats>> {
+    let mut prev = None;
+    let mut stats = Vec::new();
     for &w in sides {
-        optimise_pass(canvas, &mut steps, ctx, w)?;
+        let (done, st) = optimise_pass(canvas, &mut steps, ctx, w, prev.as_ref())?;
+        stats.push(st);
+        prev = (settle > 0.0).then(|| {
+            let inherited: Vec<bool> = done.1;
+            crate::settle::settle(done.0, &inherited, ctx.set, settle)
+        });
     }
-    steps.finish(canvas)
+    steps.finish(canvas)?;
+    Ok(stats)
 }
 
 /// The steps on the host: the matcher searches the windows of the host's canvas and the CPU
@@ -102,13 +131,16 @@ impl PassSteps for HostSteps {
     }
 }
 
-/// One optimisation pass with windows of side `w`, its search and E-step run by `steps`.
+/// One optimisation pass with windows of side `w`, its search and E-step run by `steps`; the
+/// windows held by a settled window of `prev` inherit its match unsearched. Returns the pass's
+/// windows with which were inherited, and its counts.
 fn optimise_pass(
     canvas: &mut Canvas,
     steps: &mut impl PassSteps,
     ctx: &PassContext,
     w: usize,
-) -> Result<()> {
+    prev: Option<&Settled>,
+) -> Result<((Windows, Vec<bool>), PassStats)> {
     let (set, guide, progress) = (ctx.set, ctx.guide, ctx.progress);
     let rng = Philox::new(ctx.seed, PICK_STREAM);
     let (xs, ys) = window_origins(canvas, w);
@@ -116,21 +148,33 @@ fn optimise_pass(
         .iter()
         .flat_map(|&y| xs.iter().map(move |&x| (x, y)))
         .collect();
+    let probes = probes(w);
+    let t0 = Instant::now();
+    let exemplar_of: Vec<usize> = windows
+        .par_iter()
+        .map(|&(px, py)| guide.map_or(0, |g| g.at(canvas, px + w / 2, py + w / 2)))
+        .collect();
+    // The self-adaptive skip: windows inside settled ones keep their match.
+    let inherited = match prev {
+        Some(p) => crate::settle::inherit(p, &xs, &ys, w, &exemplar_of, set),
+        None => vec![None; windows.len()],
+    };
+    let to_search: Vec<usize> = (0..windows.len())
+        .filter(|&k| inherited[k].is_none())
+        .collect();
     progress.stage(
         &format!("optimisation {w}×{w}"),
-        windows.len() as u64,
+        to_search.len() as u64,
         Unit::Windows,
     );
-    let probes = probes(w);
 
-    // M-step: every window's best match, searched where the steps keep the canvas.
-    let t0 = Instant::now();
+    // M-step: every other window's best match, searched where the steps keep the canvas.
     let guesses_on_host = steps.guesses_on_host();
-    let queries: Vec<WindowQuery> = windows
+    let queries: Vec<WindowQuery> = to_search
         .par_iter()
-        .enumerate()
-        .map(|(k, &(px, py))| {
-            let ex = guide.map_or(0, |g| g.at(canvas, px + w / 2, py + w / 2));
+        .map(|&k| {
+            let (px, py) = windows[k];
+            let ex = exemplar_of[k];
             WindowQuery {
                 exemplar: ex as u32,
                 x: px as u32,
@@ -145,7 +189,6 @@ fn optimise_pass(
             }
         })
         .collect();
-    let exemplar_of: Vec<usize> = queries.iter().map(|q| q.exemplar as usize).collect();
     let search = Search {
         w,
         tol: Tolerance(0),
@@ -153,8 +196,12 @@ fn optimise_pass(
         prepared: None,
     };
     let t1 = Instant::now();
-    let matches = steps.window_matches(canvas, ctx, &search, &queries)?;
+    let searched = steps.window_matches(canvas, ctx, &search, &queries)?;
     drop(queries);
+    let mut matches: Vec<Match> = inherited.iter().map(|m| m.unwrap_or_default()).collect();
+    for (&k, m) in to_search.iter().zip(searched) {
+        matches[k] = m;
+    }
     let t2 = Instant::now();
 
     // Where each match lies: (exemplar, x, y) of its window.
@@ -195,7 +242,13 @@ fn optimise_pass(
         ms(t2, t3),
         ms(t3, Instant::now())
     );
-    Ok(())
+    let stats = PassStats {
+        w,
+        windows: windows.len(),
+        searched: to_search.len(),
+    };
+    let inherited = inherited.iter().map(Option::is_some).collect();
+    Ok(((matched, inherited), stats))
 }
 
 /// The windows' origins along x and along y for windows of side `w`, every w/2 texels.

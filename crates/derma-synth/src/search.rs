@@ -106,7 +106,7 @@ const fn inverse_mod_2_32(a: u32) -> u32 {
 }
 
 /// The answer: position index and its cost (distance plus any occurrence penalty).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Match {
     /// Distance plus occurrence penalty.
     pub cost: u32,

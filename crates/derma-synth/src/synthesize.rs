@@ -44,6 +44,10 @@ pub struct SynthOptions {
     /// Texel-level coherent correction passes after the optimisation (0 = off, as the paper);
     /// see [`crate::correction`].
     pub correction: usize,
+    /// The self-adaptive optimisation's factor (§3.3, [`crate::settle`]): windows inside one
+    /// whose match region holds this many times the mean share are optimised once (0 = every
+    /// window every pass).
+    pub settle: f32,
 }
 
 impl Default for SynthOptions {
@@ -58,6 +62,7 @@ impl Default for SynthOptions {
             seed: 1,
             tile: false,
             correction: 1,
+            settle: crate::settle::DEFAULT_FACTOR,
         }
     }
 }
@@ -149,6 +154,8 @@ pub struct Synthesis {
     pub source: Vec<u32>,
     /// Wall-clock seconds of each stage (patch pass, then each optimisation pass).
     pub timings: Vec<Timing>,
+    /// Each optimisation pass's windows and how many of them were searched.
+    pub passes: Vec<crate::optimize::PassStats>,
     /// What ran the searches ("CPU", "GPU (NVIDIA H200 (Vulkan))").
     pub matcher: String,
 }
@@ -194,7 +201,7 @@ pub fn synthesize(
     };
     let tol = Tolerance::from_fraction(opts.tolerance);
     patch_pass(&mut canvas, &ctx, opts.patch, tol, opts.occurrence)?;
-    optimise(&mut canvas, &ctx, &opts.pass_windows())?;
+    let passes = optimise(&mut canvas, &ctx, &opts.pass_windows(), opts.settle)?;
     correct(
         &mut canvas,
         set,
@@ -218,6 +225,7 @@ pub fn synthesize(
         source_exemplar,
         source,
         timings,
+        passes,
         matcher: matcher.name(),
     })
 }

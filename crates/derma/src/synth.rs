@@ -51,6 +51,11 @@ pub struct SynthArgs {
     /// exemplar's finest grain (0 = off, as the paper).
     #[arg(long, default_value_t = 1)]
     correction: usize,
+    /// Self-adaptive optimisation (Shen et al. §3.3): windows inside one whose best match lies
+    /// in a region holding FACTOR times the mean share of matches are optimised once, not
+    /// searched again (0: every window every pass).
+    #[arg(long, value_name = "FACTOR", default_value_t = derma_synth::settle::DEFAULT_FACTOR)]
+    settle: f32,
     /// Guide map (grey): level v draws from exemplar round(v·(count − 1)).
     #[arg(long)]
     guide: Option<PathBuf>,
@@ -74,6 +79,7 @@ pub fn run(args: SynthArgs, bars: &Bars) -> Result<()> {
             tolerance: args.tolerance,
             occurrence: args.occurrence,
             correction: args.correction,
+            settle: args.settle,
             seed: args.seed,
             tile: args.tile,
         },
@@ -94,6 +100,14 @@ pub fn run(args: SynthArgs, bars: &Bars) -> Result<()> {
     ));
     for timing in &r.timings {
         tracing::info!("{}: {:.3} s", timing.stage, timing.seconds);
+    }
+    for p in &r.passes {
+        tracing::info!(
+            "pass {0}×{0}: {1} of {2} windows searched",
+            p.w,
+            p.searched,
+            p.windows
+        );
     }
     if let Some(m) = r.metrics_json() {
         line(m)?;
