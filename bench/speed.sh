@@ -1,14 +1,17 @@
 #!/usr/bin/env bash
-# Issue 39's figures in one run, on this machine (BENCHMARKS.md, "Speed, round two"):
-#  1. the main job, `derma skin --size N --out D -q`, at 4096² and 8192²: wall time and peak
-#     memory of the whole process (/usr/bin/time), three runs at 4096², one at 8192²;
-#  2. a new user's first command in a scratch clone with its own target directory:
-#     `cargo build --release -p derma` then `derma skin --out out/` (crates already downloaded:
-#     the figure is compile time, not the network's);
-#  3. exemplar synthesis against texture-synthesis (bench/synth.sh at 1024²: two grey and two
-#     colour exemplars, the median of three alternating runs of each tool, ratios and quality
-#     in its table);
+# Issue 64's figures in one run, each beside its goal (BENCHMARKS.md, "Speed, round three"):
+#  1. the main job, `derma skin --size N --out D -q`: wall time and peak memory of the whole
+#     process (/usr/bin/time), three runs at 4096² (goal 4 s, 1.2 GB), one at 8192² (16 s, 4 GB),
+#     and 1024², 2048² for the growth;
+#  2. a new user's first command from a fresh clone with an empty cargo registry (its own
+#     CARGO_HOME and target directory: `cargo fetch`, `cargo build --release -p derma`, then
+#     `derma skin --out out/`; goal 4 min in all);
+#  3. exemplar synthesis against texture-synthesis (bench/synth.sh at 1024² on the colour 128²
+#     and 256×128 crops, the median of three alternating runs; goal 10× the peer, grain ≥ 0.85,
+#     patch SWD ≤ the peer's) and the self-adaptive optimisation with and without
+#     (bench/synth_adaptive.sh);
 #  4. the optics' photons per second per core beside MCML (bench/mcml.sh).
+# GPU figures come from bench/gpu.sh on a lent device.
 #   bash bench/speed.sh [main] [build] [synth] [optics]    (default: all four)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -21,11 +24,12 @@ echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -
 
 if has main; then
   cargo build --release -q -p derma
-  for size in 4096 4096 4096 8192; do
+  for size in 1024 2048 4096 4096 4096 8192; do
     rm -rf "$out/skin$size"
     /usr/bin/time -f "%e %M" -o "$out/time.txt" target/release/derma skin --size "$size" --out "$out/skin$size" -q >/dev/null
     read -r wall kb <"$out/time.txt"
-    echo "main job ${size}²: ${wall} s wall, $((kb / 1024)) MB peak"
+    case $size in 4096) goal="goal 4 s, 1.2 GB" ;; 8192) goal="goal 16 s, 4 GB" ;; *) goal="growth" ;; esac
+    echo "main job ${size}²: ${wall} s wall, $((kb / 1024)) MB peak ($goal)"
   done
   rm -rf "$out"/skin*
 fi
@@ -36,18 +40,22 @@ if has build; then
   git clone -q . "$scratch/derma"
   (
     cd "$scratch/derma"
+    export CARGO_HOME="$scratch/cargo-home" CARGO_TARGET_DIR="$scratch/derma/target"
     s=$(date +%s.%N)
+    cargo fetch -q
+    f=$(date +%s.%N)
     cargo build --release -q -p derma
     m=$(date +%s.%N)
     target/release/derma skin --out out/ -q >/dev/null
     e=$(date +%s.%N)
-    echo "first build (fresh clone, empty target/): $(echo "$m - $s" | bc) s; then the main job $(echo "$e - $m" | bc) s"
+    echo "first command (fresh clone, empty registry and target/): fetch $(echo "$f - $s" | bc) s, build $(echo "$m - $f" | bc) s, the main job $(echo "$e - $m" | bc) s; in all $(echo "$e - $s" | bc) s (goal 240 s)"
   )
   rm -rf "$scratch"
 fi
 
 if has synth; then
-  RUNS=3 bash bench/synth.sh 1024
+  RUNS=3 EXEMPLARS="albedo128 albedo256x128" bash bench/synth.sh 1024
+  bash bench/synth_adaptive.sh 1024
 fi
 
 if has optics; then
