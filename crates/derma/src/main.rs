@@ -100,15 +100,19 @@ fn main() {
     }
     let cli = Cli::parse();
     let fresh = fresh_outputs();
+    use tracing_subscriber::{filter::Targets, prelude::*};
     let level = match cli.verbose {
-        0 => "warn",
-        1 => "info",
-        // Debug output of derma's own crates only (wgpu and naga are very chatty).
-        _ => "info,derma=debug,derma_core=debug,derma_skin=debug,derma_optics=debug,derma_shading=debug,derma_rig=debug,derma_synth=debug,derma_photo=debug,derma_eyes=debug,derma_render=debug",
+        0 => Targets::new().with_default(tracing::Level::WARN),
+        1 => Targets::new().with_default(tracing::Level::INFO),
+        // Debug output of derma's own crates only (wgpu and naga are very chatty): a target
+        // matches by prefix, so "derma" covers every derma_* crate.
+        _ => Targets::new()
+            .with_default(tracing::Level::INFO)
+            .with_target("derma", tracing::Level::DEBUG),
     };
-    tracing_subscriber::fmt()
-        .with_env_filter(tracing_subscriber::EnvFilter::new(level))
-        .with_writer(std::io::stderr)
+    tracing_subscriber::registry()
+        .with(tracing_subscriber::fmt::layer().with_writer(std::io::stderr))
+        .with(level)
         .init();
     let bars = progress::Bars::new(cli.quiet);
     let result = match cli.command {
