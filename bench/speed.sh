@@ -7,7 +7,8 @@
 #     CARGO_HOME and target directory: `cargo fetch`, `cargo build --release -p derma`, then
 #     `derma skin --out out/`; goal 4 min in all);
 #  3. exemplar synthesis against texture-synthesis (bench/synth.sh at 1024² on the colour 128²
-#     and 256×128 crops, the median of three alternating runs; goal 10× the peer, grain ≥ 0.85,
+#     and 256×128 crops, and the held-out 128² and 256² crops of a photographed albedo where
+#     scripts/corpus.py has fetched it, the median of three alternating runs; goal 10× the peer, grain ≥ 0.85,
 #     patch SWD ≤ the peer's) and the self-adaptive optimisation with and without
 #     (bench/synth_adaptive.sh);
 #  4. the optics' photons per second per core beside MCML (bench/mcml.sh).
@@ -54,7 +55,10 @@ if has build; then
 fi
 
 if has synth; then
-  RUNS=3 EXEMPLARS="albedo128 albedo256x128" bash bench/synth.sh 1024
+  # The held-out photographed crops too, where scripts/corpus.py has fetched their source.
+  ex="albedo128 albedo256x128"
+  [ -f target/corpus/Map-COL.jpg ] && ex="$ex lps128 lps256"
+  RUNS=3 EXEMPLARS="$ex" bash bench/synth.sh 1024
   bash bench/synth_adaptive.sh 1024
 fi
 

@@ -7,7 +7,8 @@
 # grain ratios, verbatim-copy ratio, seam energy).
 #   bash bench/synth.sh [SIZES...]      (default: 512 1024 2048)
 # RUNS=n times each tool n times, alternating, and reports the median of each (default 1);
-# EXEMPLARS="albedo128 ..." picks exemplars (default: all four).
+# EXEMPLARS="albedo128 ..." picks exemplars (default: all four; lps128 and lps256, held-out
+# crops of a photographed albedo, once `python3 scripts/corpus.py fetch` has made target/corpus).
 # Needs ../shared/data (the skin crops) and python3 with Pillow (for cropping and the figure).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -27,7 +28,7 @@ derma=target/release/derma
 quality=target/release/examples/02_quality
 
 # The exemplars, two grey and two colour (bench/synth_crops.py).
-python3 bench/synth_crops.py "$data" "$out"
+python3 bench/synth_crops.py "$data" "$out" target/corpus
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
 csv="$out/results.csv"

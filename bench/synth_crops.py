@@ -2,15 +2,26 @@
 128² and 256², the forehead albedo crop (256×128) and its left 128². No synthesis test reads the
 albedo (only the photo pipeline's held-out test does). Provenance:
 ../shared/data/skin_exemplars.PROVENANCE.txt.
-    python3 bench/synth_crops.py DATA OUT"""
+
+With CORPUS (scripts/corpus.py's directory) holding Lee Perry-Smith's photographed albedo
+(Map-COL.jpg, CC BY 3.0, Infinite-Realities via three.js; provenance in corpus.py), two more
+colour crops that no synthesis test or tuning has seen: lps128 (forehead, 128² at (420, 96))
+and lps256 (neck and upper chest with two moles, 256² at (130, 590)).
+    python3 bench/synth_crops.py DATA OUT [CORPUS]"""
+import os
 import sys
 
 from PIL import Image
 
 data, out = sys.argv[1], sys.argv[2]
+corpus = sys.argv[3] if len(sys.argv) > 3 else None
 d = Image.open(f"{data}/skin_displacement_forehead_512.png")
 d.crop((0, 0, 128, 128)).save(f"{out}/disp128.png")
 d.crop((0, 0, 256, 256)).save(f"{out}/disp256.png")
 a = Image.open(f"{data}/skin_albedo_forehead_256x128.png").convert("RGB")
 a.save(f"{out}/albedo256x128.png")
 a.crop((0, 0, 128, 128)).save(f"{out}/albedo128.png")
+if corpus and os.path.exists(f"{corpus}/Map-COL.jpg"):
+    lps = Image.open(f"{corpus}/Map-COL.jpg").convert("RGB")
+    lps.crop((420, 96, 548, 224)).save(f"{out}/lps128.png")
+    lps.crop((130, 590, 386, 846)).save(f"{out}/lps256.png")
