@@ -5,8 +5,9 @@ albedo (only the photo pipeline's held-out test does). Provenance:
 
 With CORPUS (scripts/corpus.py's directory) holding Lee Perry-Smith's photographed albedo
 (Map-COL.jpg, CC BY 3.0, Infinite-Realities via three.js; provenance in corpus.py), two more
-colour crops that no synthesis test or tuning has seen: lps128 (forehead, 128² at (420, 96))
-and lps256 (neck and upper chest with two moles, 256² at (130, 590)).
+colour crops that no synthesis test or tuning has seen — the same photograph as the albedo crop
+above (its forehead, x 436..692, y 100..228), another part of it: lps256 (neck and upper chest
+with two moles, 256² at (130, 590)) and lps128 (its top-left 128²).
     python3 bench/synth_crops.py DATA OUT [CORPUS]"""
 import os
 import sys
@@ -23,5 +24,5 @@ a.save(f"{out}/albedo256x128.png")
 a.crop((0, 0, 128, 128)).save(f"{out}/albedo128.png")
 if corpus and os.path.exists(f"{corpus}/Map-COL.jpg"):
     lps = Image.open(f"{corpus}/Map-COL.jpg").convert("RGB")
-    lps.crop((420, 96, 548, 224)).save(f"{out}/lps128.png")
+    lps.crop((130, 590, 258, 718)).save(f"{out}/lps128.png")
     lps.crop((130, 590, 386, 846)).save(f"{out}/lps256.png")
