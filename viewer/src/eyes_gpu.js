@@ -57,7 +57,10 @@ uniform mat3 eyeRot[2];
 uniform vec4 eyeCentre[2];   // xyz the globe's centre (mm), w its reach
 uniform ivec2 eyeShortN;     // points of each eye's contact polyline (0: none)
 uniform bool eyeOn;
+uniform ivec4 eyeRegionBits; // the region's own face units among the morphs, 31 to a lane
 attribute float eyeVertex;   // the model vertex this skin vertex is, or −1
+
+bool eyeRegionUnit(int i) { return ((eyeRegionBits[i / 31] >> (i % 31)) & 1) == 1; }
 
 float eyeCoef(int j) { return j == 0 ? 1.0 : eyeE[(j - 1) / 4][(j - 1) % 4]; }
 
@@ -135,6 +138,32 @@ void eyeEval(int v, out vec3 pos, out vec3 nrm) {
 }
 `;
 
+// The region's vertices: the model's position, plus what the face units outside the region
+// add (a raised brow, a smile's cheeks), as derma render composes them; the region's own units
+// are the model's to pose, so their offsets are taken back off.
+const REPLACE = /* glsl */ `
+  if (eyeHere) {
+    vec3 others = transformed - eyeBefore;
+  #ifdef USE_MORPHTARGETS
+    for (int i = 0; i < MORPHTARGETS_COUNT; i++) {
+      if (morphTargetInfluences[i] != 0.0 && eyeRegionUnit(i)) others -= getMorph(gl_VertexID, i, 0).xyz * morphTargetInfluences[i];
+    }
+  #endif
+    transformed = eyePos * 0.001 + others;
+  }`;
+
+/** The region units' morph indices on `skin` as bits, 31 to a lane (bit i % 31 of lane i / 31). */
+function regionBits(m, skin) {
+  const bits = [0, 0, 0, 0];
+  for (const u of m.h.region_units) {
+    const i = skin.morphTargetDictionary?.[u];
+    if (i === undefined) continue;
+    if (i >= 124) throw new Error(`eye model: face unit '${u}' is morph ${i}; the shader marks at most 124`);
+    bits[Math.floor(i / 31)] |= 1 << i % 31;
+  }
+  return new THREE.Vector4(...bits);
+}
+
 /** The model's vertex shader over the skin: its data, its uniforms, and the materials it is in. */
 export class EyeShader {
   constructor(model, skin) {
@@ -156,8 +185,10 @@ export class EyeShader {
       eyeCentre: { value: m.h.centres.map((c, e) => new THREE.Vector4(...c, m.h.radial.reach[e])) },
       eyeShortN: { value: new THREE.Vector2(0, 0) },
       eyeOn: { value: false },
+      eyeRegionBits: { value: regionBits(m, skin) },
     };
     this.glsl = decls({ evec, stride, pairs, radial: size });
+    this.key = [evec, stride, pairs, size].join('-');
     // Each skin vertex's model vertex (−1 outside the region).
     const geo = skin.geometry;
     const index = new Float32Array(geo.attributes.position.count).fill(-1);
@@ -174,9 +205,10 @@ export class EyeShader {
         .replace('#include <common>', `#include <common>\n${this.glsl}`)
         .replace('void main() {', 'void main() {\n  vec3 eyePos, eyeNrm;\n  bool eyeHere = eyeOn && eyeVertex >= 0.0;\n  if (eyeHere) eyeEval(int(eyeVertex), eyePos, eyeNrm);')
         .replace('#include <morphnormal_vertex>', '#include <morphnormal_vertex>\n  if (eyeHere) objectNormal = eyeNrm;')
-        .replace('#include <morphtarget_vertex>', '#include <morphtarget_vertex>\n  if (eyeHere) transformed = eyePos * 0.001;');
+        .replace('#include <morphtarget_vertex>', `vec3 eyeBefore = transformed;\n#include <morphtarget_vertex>\n${REPLACE}`);
     };
-    material.customProgramCacheKey = () => 'derma-eye-model';
+    // The sizes baked into the shader's text key its program.
+    material.customProgramCacheKey = () => `derma-eye-model-${this.key}`;
     material.needsUpdate = true;
   }
 

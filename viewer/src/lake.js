@@ -38,13 +38,16 @@ void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
   if (!isGlobe(texelFetch(diffuse, p, 0))) { gl_FragColor = vec4(0.0); return; }
   float ppm = pxPerMm(viewDepth(texelFetch(diffuseDepth, p, 0).x));
-  int reach = min(int(ceil(shape.y * ppm)), int(maxSearch));
+  int reach = int(ceil(shape.y * ppm));
   // Square rings outwards; a pixel on ring r is at least r away, so stop once r² passes the
-  // best squared distance found.
+  // best squared distance found. The viewer zooms freely: where Λ spans more than the search's
+  // most pixels, the rings and their texels are taken every ⌈reach / most⌉ px, so the lake
+  // keeps its width (to within that step) instead of ending short of Λ.
+  int stride = max(1, (reach + int(maxSearch) - 1) / int(maxSearch));
   float best = 1e30;
-  for (int r = 1; r <= reach; r++) {
+  for (int r = stride; r <= reach; r += stride) {
     if (float(r * r) >= best) break;
-    for (int k = -r; k <= r; k++) {
+    for (int k = -r; k <= r; k += stride) {
       float d2 = float(k * k + r * r);
       if (d2 >= best) continue;
       if (isSkin(p + ivec2(k, -r)) || isSkin(p + ivec2(k, r)) || isSkin(p + ivec2(-r, k)) || isSkin(p + ivec2(r, k))) best = d2;
@@ -62,7 +65,10 @@ uniform sampler2D lakeDepth;
 uniform float roughness;
 uniform vec3 lightDir[2];     // view space, towards each directional light
 uniform vec3 lightColor[2];   // colour × intensity
-float lakeAt(ivec2 p) { return isSkin(p) ? shape.x : texelFetch(lakeDepth, p, 0).x; }
+float lakeAt(ivec2 p) {
+  p = clamp(p, ivec2(0), textureSize(lakeDepth, 0) - 1);
+  return isSkin(p) ? shape.x : texelFetch(lakeDepth, p, 0).x;
+}
 vec3 lakeOver(vec3 rgb, float z) {
   ivec2 p = ivec2(gl_FragCoord.xy);
   float d = texelFetch(lakeDepth, p, 0).x;

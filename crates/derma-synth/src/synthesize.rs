@@ -140,6 +140,15 @@ impl SynthOptions {
                 format!("{} (expected a finite λ ≥ 0)", self.occurrence),
             ));
         }
+        if !(self.settle >= 0.0 && self.settle.is_finite()) {
+            return Err(invalid(
+                "settle factor",
+                format!(
+                    "{} (expected a finite factor ≥ 0; 0 searches every window)",
+                    self.settle
+                ),
+            ));
+        }
         Ok(())
     }
 }

@@ -112,6 +112,13 @@ impl<'a> Synthesizer<'a> {
         self
     }
 
+    /// The self-adaptive optimisation's factor (default [`crate::settle::DEFAULT_FACTOR`];
+    /// 0 searches every window every pass; §3.3, [`crate::settle`]).
+    pub fn settle(mut self, factor: f32) -> Self {
+        self.options.settle = factor;
+        self
+    }
+
     /// A guide map choosing the exemplar per output region (default none).
     pub fn guide(mut self, guide: Guide) -> Self {
         self.guide = Some(guide);

@@ -140,6 +140,15 @@ fn a_seed_gives_the_same_texture_on_cpu_and_gpu() {
         );
         assert_eq!(a.source, b.source);
         assert_eq!(a.source_exemplar, b.source_exemplar);
+        // The self-adaptive skip (on by default) acted, the same way on both.
+        assert_eq!(a.passes, b.passes);
+        if width >= 160 {
+            assert!(
+                a.passes.iter().any(|p| p.searched < p.windows),
+                "{:?}",
+                a.passes
+            );
+        }
         // One round per wavefront, three wavefronts a submission: most wavefronts stop their
         // submission and get more rounds; the texture is the same.
         let c = synthesize(set, &opts, None, &tight, &none).unwrap();

@@ -63,6 +63,46 @@ fn square(side: usize, correction: usize) -> SynthOptions {
     }
 }
 
+/// S4 §3.3's self-adaptive skip: at the default factor some windows of the later passes inherit
+/// their match unsearched; a factor no cell reaches takes the inheritance path with nothing
+/// settled and gives the bits of no skip at all (0), the old behaviour.
+#[test]
+fn the_self_adaptive_skip_inherits_windows_and_a_factor_nothing_reaches_is_no_skip() {
+    let set = ExemplarSet::new(vec![blobs(64, 64, 2, 1, 0.5)], 16).unwrap();
+    let at = |settle: f32| {
+        let opts = SynthOptions {
+            settle,
+            ..square(160, 1)
+        };
+        synthesize(&set, &opts, None, &CpuMatcher, &Silent).unwrap()
+    };
+    let on = at(derma_synth::settle::DEFAULT_FACTOR);
+    assert_eq!(on.passes[0].searched, on.passes[0].windows);
+    assert!(
+        on.passes[1..].iter().any(|p| p.searched < p.windows),
+        "no window inherited: {:?}",
+        on.passes
+    );
+    let (off, never) = (at(0.0), at(f32::MAX));
+    assert!(off.passes.iter().all(|p| p.searched == p.windows));
+    assert!(never.passes.iter().all(|p| p.searched == p.windows));
+    assert_eq!(off.texture, never.texture);
+    assert_ne!(off.texture, on.texture);
+    for bad in [-1.0, f32::NAN, f32::INFINITY] {
+        let opts = SynthOptions {
+            settle: bad,
+            ..square(64, 0)
+        };
+        let err = synthesize(&set, &opts, None, &CpuMatcher, &Silent)
+            .err()
+            .map(|e| e.to_string());
+        assert!(
+            err.as_deref().is_some_and(|e| e.contains("settle factor")),
+            "{bad}: {err:?}"
+        );
+    }
+}
+
 #[test]
 fn same_seed_same_texture_on_one_or_two_threads_and_another_seed_differs() {
     let set = ExemplarSet::new(vec![blobs(64, 64, 2, 1, 0.5)], 16).unwrap();
