@@ -271,11 +271,13 @@ try {
     if (!(de >= 0.5 * dv && de <= 2 * dv + 4)) fail(`the upper lid's edge in the picture did not follow its vertex at ${t} (${de} px for ${dv.toFixed(1)})`);
   });
   // 3b. The eye model in the skin's vertex shader against the JavaScript port, in the picture:
-  // the eyes' close-up at a lowered gaze with the lids half closed, drawn both ways (within a
-  // few levels: float32 on the GPU against JavaScript's doubles), and with the model off (the
-  // face units alone), which must differ where the lids are.
+  // the eyes' close-up at a lowered gaze with the lids half closed and surprise's raised brows
+  // (face units outside the region add their offsets on top of the model), drawn both ways
+  // (within a few levels: float32 on the GPU against JavaScript's doubles), and with the model
+  // off (the face units alone), which must differ where the lids are.
   await page.locator('#gaze-pitch').fill('-15');
   await page.locator('#aperture').fill('-0.3');
+  await page.locator('#w-surprise').fill('1');
   const eyeShot = async (setup) => {
     await page.evaluate(setup);
     await page.waitForFunction((f) => window.derma.frames > f + 1, await page.evaluate(() => window.derma.frames), { timeout: 60_000 });
@@ -317,6 +319,7 @@ try {
   if (!(lake.share > 0.001 && lake.share < 0.09 && lake.darker > 0.8)) fail(`the lacrimal lake is not a darker band along the margins: ${JSON.stringify(lake)}`);
   await page.locator('#gaze-pitch').fill('0');
   await page.locator('#aperture').fill('0');
+  await page.locator('#w-surprise').fill('0');
 
   // 3d. What a frame costs: the JavaScript that poses the region either way, and whole frames
   // (SSS and lake on) at the default framing either way.
