@@ -84,12 +84,9 @@ fn passes<S: PassSteps>(
     let mut prev = None;
     let mut stats = Vec::new();
     for &w in sides {
-        let (done, st) = optimise_pass(canvas, &mut steps, ctx, w, prev.as_ref())?;
+        let (windows, inherited, st) = optimise_pass(canvas, &mut steps, ctx, w, prev.as_ref())?;
         stats.push(st);
-        prev = (settle > 0.0).then(|| {
-            let inherited: Vec<bool> = done.1;
-            crate::settle::settle(done.0, &inherited, ctx.set, settle)
-        });
+        prev = (settle > 0.0).then(|| crate::settle::settle(windows, &inherited, ctx.set, settle));
     }
     steps.finish(canvas)?;
     Ok(stats)
@@ -140,7 +137,7 @@ fn optimise_pass(
     ctx: &PassContext,
     w: usize,
     prev: Option<&Settled>,
-) -> Result<((Windows, Vec<bool>), PassStats)> {
+) -> Result<(Windows, Vec<bool>, PassStats)> {
     let (set, guide, progress) = (ctx.set, ctx.guide, ctx.progress);
     let rng = Philox::new(ctx.seed, PICK_STREAM);
     let (xs, ys) = window_origins(canvas, w);
@@ -204,33 +201,7 @@ fn optimise_pass(
     }
     let t2 = Instant::now();
 
-    // Where each match lies: (exemplar, x, y) of its window.
-    let placed: Vec<(usize, usize, usize)> = matches
-        .iter()
-        .zip(&exemplar_of)
-        .map(|(m, &ex)| {
-            let cw = set.exemplars[ex].width() + 1 - w;
-            (ex, m.index as usize % cw, m.index as usize / cw)
-        })
-        .collect();
-    // Kwatra's robust weights of the low band's mean: ‖·‖ the RMS code difference per value in
-    // units of the code range, floored at one code so exact matches get a large, finite weight.
-    let values_per_window = (w * w * canvas.channels) as f64;
-    let weights = matches
-        .iter()
-        .map(|m| {
-            let rms = (m.cost as f64 / values_per_window).sqrt() / 255.0;
-            rms.max(1.0 / 255.0).powf(KWATRA_R as f64 - 2.0) as f32
-        })
-        .collect();
-    let matched = Windows {
-        w,
-        xs,
-        ys,
-        placed,
-        costs: matches.iter().map(|m| m.cost).collect(),
-        weights,
-    };
+    let matched = matched_windows(set, canvas.channels, (w, xs, ys), &matches, &exemplar_of);
     let bands = crate::bands::bands(set, w);
     let t3 = Instant::now();
     steps.e_step(canvas, set, &matched, &bands)?;
@@ -248,7 +219,44 @@ fn optimise_pass(
         searched: to_search.len(),
     };
     let inherited = inherited.iter().map(Option::is_some).collect();
-    Ok(((matched, inherited), stats))
+    Ok((matched, inherited, stats))
+}
+
+/// A pass's windows of side `w` at `xs × ys` with their `matches` (in the exemplars
+/// `exemplar_of`): where each match lies, its cost, and Kwatra's robust weight of the low band's
+/// mean — ‖·‖ the RMS code difference per value in units of the code range, floored at one code
+/// so exact matches get a large, finite weight.
+fn matched_windows(
+    set: &ExemplarSet,
+    channels: usize,
+    (w, xs, ys): (usize, Vec<usize>, Vec<usize>),
+    matches: &[Match],
+    exemplar_of: &[usize],
+) -> Windows {
+    let placed = matches
+        .iter()
+        .zip(exemplar_of)
+        .map(|(m, &ex)| {
+            let cw = set.exemplars[ex].width() + 1 - w;
+            (ex, m.index as usize % cw, m.index as usize / cw)
+        })
+        .collect();
+    let values_per_window = (w * w * channels) as f64;
+    let weights = matches
+        .iter()
+        .map(|m| {
+            let rms = (m.cost as f64 / values_per_window).sqrt() / 255.0;
+            rms.max(1.0 / 255.0).powf(KWATRA_R as f64 - 2.0) as f32
+        })
+        .collect();
+    Windows {
+        w,
+        xs,
+        ys,
+        placed,
+        costs: matches.iter().map(|m| m.cost).collect(),
+        weights,
+    }
 }
 
 /// The windows' origins along x and along y for windows of side `w`, every w/2 texels.
