@@ -117,21 +117,15 @@ export class EyeModel {
 
   /** Vertex i's position and normal for the current pose. */
   vertexAt(i) {
-    const { depth, offset, normal_offset: noff, pos, nrm, lift, e } = this;
+    const { offset, normal_offset: noff, pos, nrm, lift } = this;
     let [x, y] = this.basisAt(i);
     const short = this.short[this.eye[i]];
     if (short && lift[i] > 0) y += lift[i] * (heightAt(short, x) ?? 0);
     // Depth and normal, each linear in e: [value at e = 0, k columns] × (z, n_x, n_y, n_z).
-    const kd = this.h.depth.k;
-    const k1 = kd + 1;
-    const at = (b) => {
-      let v = depth[b];
-      for (let j = 0; j < kd; j++) v += e[j] * depth[b + 1 + j];
-      return v;
-    };
+    const k1 = this.h.depth.k + 1;
     const b = 4 * k1 * i;
-    const n = [at(b + k1), at(b + 2 * k1), at(b + 3 * k1)];
-    const p = [x, y, at(b)];
+    const n = [this.linearAt(b + k1), this.linearAt(b + 2 * k1), this.linearAt(b + 3 * k1)];
+    const p = [x, y, this.linearAt(b)];
     let nl = Math.hypot(n[0], n[1], n[2]);
     const m = nl > 0 ? n.map((c) => c / nl) : [0, 0, 1];
     for (let q = 0; q < 3; q++) {
@@ -141,6 +135,15 @@ export class EyeModel {
     nl = 1 / Math.hypot(m[0], m[1], m[2]);
     for (let q = 0; q < 3; q++) nrm[3 * i + q] = m[q] * nl;
     this.slideAt(i);
+  }
+
+  /** A depth-basis value at offset b: its value at e = 0 plus Σ e_j times its columns. */
+  linearAt(b) {
+    const { depth, e } = this;
+    const kd = this.h.depth.k;
+    let v = depth[b];
+    for (let j = 0; j < kd; j++) v += e[j] * depth[b + 1 + j];
+    return v;
   }
 
   /** The lids' contact: per eye the polyline [[x, shortfall]…] along its upper margin where it
