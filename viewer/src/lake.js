@@ -81,7 +81,8 @@ vec3 lakeOver(vec3 rgb, float z) {
   vec3 n = normalize(normalize(m.rgb * 2.0 - 1.0) - vec3(dx, dy, 0.0));
   vec2 c = (gl_FragCoord.xy - 0.5 * vec2(textureSize(diffuse, 0))) / focal;
   vec3 v = normalize(-vec3(c * z, -z));
-  // GGX with Smith's visibility and Schlick's Fresnel (three.js' direct-light form).
+  // GGX (Walter et al. 2007) with the height-correlated Smith visibility (Heitz 2014) and
+  // Schlick's Fresnel (1994), lit as three.js lights its direct lights (radiance × n·l).
   float a = max(roughness * roughness, 0.002);
   float a2 = a * a;
   float nv = max(dot(n, v), 1e-4);

@@ -16,7 +16,9 @@ use crate::exemplar::ExemplarSet;
 use crate::search::Match;
 use std::collections::HashMap;
 
-/// The default factor over the mean cell count above which a window's match region is settled.
+/// The default factor over the mean cell count above which a window's match region is settled:
+/// measured, not from the paper (`bench/synth_adaptive.sh`, docs/synth.md): at 1 the patch
+/// grid's seams stayed (seam energy 0.26 against −0.11), at 4 almost nothing was skipped.
 pub const DEFAULT_FACTOR: f32 = 2.0;
 
 /// A finished pass as the next one needs it: its windows and which of them are settled.
