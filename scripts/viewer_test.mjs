@@ -282,7 +282,7 @@ try {
     await page.evaluate(setup);
     await page.waitForFunction((f) => window.derma.frames > f + 1, await page.evaluate(() => window.derma.frames), { timeout: 60_000 });
     const box = await page.locator('#view').boundingBox();
-    return (await page.screenshot({ clip: { x: box.x, y: box.y + box.height / 2 - 120, width: box.width, height: 240 } })).toString('base64');
+    return (await page.screenshot({ clip: { x: box.x, y: box.y + box.height / 2 - 120, width: box.width, height: 240 }, timeout: 60_000 })).toString('base64');
   };
   const differ = (a, b) =>
     page.evaluate(async ([a, b]) => {
