@@ -82,6 +82,232 @@ pub fn write_exr_rows<F>(
 where
     F: Fn(usize, &mut [&mut [f32]]) + Sync,
 {
+    let mut sink = ExrRowSink::create(path, width, height, channels, compression)?;
+    sink.push(height, fill)?;
+    sink.finish()
+}
+
+/// A scan-line EXR written from lines pushed in order ([`ExrRowSink::push`]), for callers that
+/// make the image band by band; [`write_exr_rows`] is one push of every line. Blocks are
+/// compressed as soon as their lines are in; the file appears at its path on
+/// [`ExrRowSink::finish`] (atomically); dropped unfinished, it leaves nothing.
+pub struct ExrRowSink {
+    path: std::path::PathBuf,
+    tmp: std::path::PathBuf,
+    out: std::io::BufWriter<std::fs::File>,
+    width: usize,
+    height: usize,
+    /// Channel precisions as given, and the order the file stores them in.
+    precisions: Vec<ExrPrecision>,
+    order: Vec<usize>,
+    compression: ExrCompression,
+    table_at: u64,
+    at: u64,
+    offsets: Vec<u64>,
+    /// The next line to push, and the raw lines of its block pushed so far.
+    next: usize,
+    pending: Vec<u8>,
+}
+
+impl ExrRowSink {
+    /// Starts `path` (written beside it until [`Self::finish`]), its header and a blank offset
+    /// table written; the size, channels and compression as [`write_exr_rows`] takes them.
+    pub fn create(
+        path: &Path,
+        width: usize,
+        height: usize,
+        channels: &[ExrChannel<'_>],
+        compression: ExrCompression,
+    ) -> Result<Self> {
+        let order = checked_order(path, width, height, channels)?;
+        let sorted: Vec<ExrChannel> = order.iter().map(|&k| channels[k]).collect();
+        let header = header_bytes(width, height, &sorted, compression);
+        let blocks = height.div_ceil(compression.lines_per_block());
+        let tmp = atomic::temp_path(path);
+        let io = |source: std::io::Error| CoreError::Write {
+            path: path.to_path_buf(),
+            source,
+        };
+        let file = std::fs::File::create(&tmp).map_err(io)?;
+        let mut sink = ExrRowSink {
+            path: path.to_path_buf(),
+            tmp,
+            out: std::io::BufWriter::with_capacity(1 << 20, file),
+            width,
+            height,
+            precisions: channels.iter().map(|c| c.precision).collect(),
+            order,
+            compression,
+            table_at: header.len() as u64,
+            at: (header.len() + 8 * blocks) as u64,
+            offsets: Vec::with_capacity(blocks),
+            next: 0,
+            pending: Vec::new(),
+        };
+        sink.out.write_all(&header).map_err(io)?;
+        // The offset table, filled in once every block's position is known.
+        sink.out.write_all(&vec![0u8; 8 * blocks]).map_err(io)?;
+        Ok(sink)
+    }
+
+    /// Appends the next `n` lines, line `y` (counted from the image's top) made by
+    /// `fill(y, rows)`; whole blocks are filled and compressed in parallel.
+    pub fn push<F>(&mut self, n: usize, fill: F) -> Result<()>
+    where
+        F: Fn(usize, &mut [&mut [f32]]) + Sync,
+    {
+        let end = self.next + n;
+        if end > self.height {
+            return Err(self.bad(format!(
+                "lines {}..{end} pushed: the image has {}",
+                self.next, self.height
+            )));
+        }
+        let lpb = self.compression.lines_per_block();
+        // A block begun by the last push, line by line.
+        while self.next < end && (self.next % lpb != 0 || !self.pending.is_empty()) {
+            self.push_line(&fill)?;
+        }
+        // Whole blocks, in parallel batches.
+        let whole_end = if end == self.height {
+            end
+        } else {
+            end - end % lpb
+        };
+        while self.next < whole_end {
+            let first = self.next / lpb;
+            let last = (first + BLOCKS_PER_BATCH).min(whole_end.div_ceil(lpb));
+            let chunks = self.blocks(first..last, &fill);
+            for c in &chunks {
+                self.emit(c)?;
+            }
+            self.next = (last * lpb).min(self.height);
+        }
+        // The start of a block the next push ends.
+        while self.next < end {
+            self.push_line(&fill)?;
+        }
+        Ok(())
+    }
+
+    /// Fills and compresses `blocks` in parallel.
+    fn blocks<F>(&self, blocks: std::ops::Range<usize>, fill: &F) -> Vec<Vec<u8>>
+    where
+        F: Fn(usize, &mut [&mut [f32]]) + Sync,
+    {
+        let lpb = self.compression.lines_per_block();
+        blocks
+            .into_par_iter()
+            .map_init(
+                || (Vec::new(), Vec::new(), Vec::new()),
+                |(rows, raw, halves), b| {
+                    let (y0, y1) = (b * lpb, ((b + 1) * lpb).min(self.height));
+                    raw.clear();
+                    for y in y0..y1 {
+                        self.line(y, fill, rows, raw, halves);
+                    }
+                    chunk(y0 as i32, raw, self.compression)
+                },
+            )
+            .collect()
+    }
+
+    /// Line `y` from `fill`, appended to `raw` in the file's channel order.
+    fn line<F>(
+        &self,
+        y: usize,
+        fill: &F,
+        rows: &mut Vec<Vec<f32>>,
+        raw: &mut Vec<u8>,
+        halves: &mut Vec<half::f16>,
+    ) where
+        F: Fn(usize, &mut [&mut [f32]]) + Sync,
+    {
+        rows.resize(self.precisions.len(), Vec::new());
+        for r in rows.iter_mut() {
+            r.clear();
+            r.resize(self.width, 0.0);
+        }
+        let mut refs: Vec<&mut [f32]> = rows.iter_mut().map(|r| r.as_mut_slice()).collect();
+        fill(y, &mut refs);
+        for &k in &self.order {
+            push_samples(raw, &rows[k], halves, self.precisions[k]);
+        }
+    }
+
+    /// The next line into the pending block, which is compressed and written once complete.
+    fn push_line<F>(&mut self, fill: &F) -> Result<()>
+    where
+        F: Fn(usize, &mut [&mut [f32]]) + Sync,
+    {
+        let lpb = self.compression.lines_per_block();
+        let mut raw = std::mem::take(&mut self.pending);
+        self.line(self.next, fill, &mut Vec::new(), &mut raw, &mut Vec::new());
+        self.next += 1;
+        if self.next % lpb == 0 || self.next == self.height {
+            let y0 = (self.next - 1) / lpb * lpb;
+            let c = chunk(y0 as i32, &raw, self.compression);
+            self.emit(&c)?;
+        } else {
+            self.pending = raw;
+        }
+        Ok(())
+    }
+
+    fn emit(&mut self, c: &[u8]) -> Result<()> {
+        self.offsets.push(self.at);
+        self.at += c.len() as u64;
+        let path = &self.path;
+        self.out.write_all(c).map_err(|source| CoreError::Write {
+            path: path.clone(),
+            source,
+        })
+    }
+
+    /// Ends the image (every line must have been pushed): writes the offset table and moves
+    /// the file to its path.
+    pub fn finish(mut self) -> Result<()> {
+        if self.next != self.height {
+            return Err(self.bad(format!("{} of {} lines pushed", self.next, self.height)));
+        }
+        let path = self.path.clone();
+        let io = |source: std::io::Error| CoreError::Write {
+            path: path.clone(),
+            source,
+        };
+        self.out.seek(SeekFrom::Start(self.table_at)).map_err(io)?;
+        let table: Vec<u8> = self.offsets.iter().flat_map(|o| o.to_le_bytes()).collect();
+        self.out.write_all(&table).map_err(io)?;
+        self.out.flush().map_err(io)?;
+        std::fs::rename(&self.tmp, &self.path).map_err(io)?;
+        self.tmp = std::path::PathBuf::new();
+        Ok(())
+    }
+
+    fn bad(&self, detail: String) -> CoreError {
+        CoreError::Encode {
+            path: self.path.clone(),
+            detail,
+        }
+    }
+}
+
+impl Drop for ExrRowSink {
+    fn drop(&mut self) {
+        if !self.tmp.as_os_str().is_empty() {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// Checks the size and channels of an EXR to write; returns the order the file stores the
+/// channels in (sorted by name, as the format requires).
+fn checked_order(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: &[ExrChannel<'_>],
+) -> Result<Vec<usize>> {
     let bad = |detail: String| CoreError::Encode {
         path: path.to_path_buf(),
         detail,
@@ -94,7 +320,6 @@ where
     if channels.is_empty() {
         return Err(bad("no channels".into()));
     }
-    // The format stores channels sorted by name, in the header and in every line.
     let mut order: Vec<usize> = (0..channels.len()).collect();
     order.sort_by(|&a, &b| channels[a].name.as_bytes().cmp(channels[b].name.as_bytes()));
     for w in order.windows(2) {
@@ -114,75 +339,7 @@ where
             c.name
         )));
     }
-    let sorted: Vec<ExrChannel> = order.iter().map(|&k| channels[k]).collect();
-    let header = header_bytes(width, height, &sorted, compression);
-    let lpb = compression.lines_per_block();
-    let blocks = height.div_ceil(lpb);
-    let line_bytes: usize = sorted
-        .iter()
-        .map(|c| width * sample_bytes(c.precision))
-        .sum();
-
-    atomic::write_with(path, |tmp| {
-        let io = |source: std::io::Error| CoreError::Write {
-            path: path.to_path_buf(),
-            source,
-        };
-        let file = std::fs::File::create(tmp).map_err(io)?;
-        let mut out = std::io::BufWriter::with_capacity(1 << 20, file);
-        out.write_all(&header).map_err(io)?;
-        let table_at = header.len() as u64;
-        // The offset table, filled in once every block's position is known.
-        out.write_all(&vec![0u8; 8 * blocks]).map_err(io)?;
-        let mut offsets = Vec::with_capacity(blocks);
-        let mut at = table_at + 8 * blocks as u64;
-        for first in (0..blocks).step_by(BLOCKS_PER_BATCH) {
-            let last = (first + BLOCKS_PER_BATCH).min(blocks);
-            let chunks: Vec<Vec<u8>> = (first..last)
-                .into_par_iter()
-                .map_init(
-                    || {
-                        let raw = Vec::with_capacity(line_bytes * lpb);
-                        let rows = vec![vec![0.0f32; width]; channels.len()];
-                        (rows, raw, Vec::with_capacity(width))
-                    },
-                    |(rows, raw, halves), b| {
-                        let (y0, y1) = (b * lpb, ((b + 1) * lpb).min(height));
-                        raw.clear();
-                        for y in y0..y1 {
-                            for r in rows.iter_mut() {
-                                r.iter_mut().for_each(|v| *v = 0.0);
-                            }
-                            let mut refs: Vec<&mut [f32]> =
-                                rows.iter_mut().map(|r| r.as_mut_slice()).collect();
-                            fill(y, &mut refs);
-                            for &k in &order {
-                                push_samples(raw, &rows[k], halves, channels[k].precision);
-                            }
-                        }
-                        chunk(y0 as i32, raw, compression)
-                    },
-                )
-                .collect();
-            for c in &chunks {
-                offsets.push(at);
-                out.write_all(c).map_err(io)?;
-                at += c.len() as u64;
-            }
-        }
-        out.seek(SeekFrom::Start(table_at)).map_err(io)?;
-        let table: Vec<u8> = offsets.iter().flat_map(|o| o.to_le_bytes()).collect();
-        out.write_all(&table).map_err(io)?;
-        out.flush().map_err(io)?;
-        Ok(())
-    })
-}
-
-fn sample_bytes(p: ExrPrecision) -> usize {
-    match p {
-        ExrPrecision::F32 => 4,
-        ExrPrecision::F16 => 2,
-    }
+    Ok(order)
 }
 
 /// Appends `row` to `raw` as little-endian samples of `precision` (half floats rounded to
@@ -631,5 +788,64 @@ mod tests {
         let e = write_exr_rows(&p, 0, 4, &c[..1], ExrCompression::Rle, |_, _| {}).unwrap_err();
         assert!(e.to_string().contains("0×4"), "{e}");
         assert!(!p.exists());
+    }
+
+    #[test]
+    fn lines_pushed_in_uneven_bands_give_the_bytes_of_one_push() {
+        // Bands that split ZIP's 16-line blocks anywhere, one of a single line, an empty one.
+        let chans = [
+            ExrChannel {
+                name: "b",
+                precision: ExrPrecision::F32,
+            },
+            ExrChannel {
+                name: "a",
+                precision: ExrPrecision::F16,
+            },
+        ];
+        let fill = |y: usize, rows: &mut [&mut [f32]]| {
+            for (c, r) in rows.iter_mut().enumerate() {
+                for (x, v) in r.iter_mut().enumerate() {
+                    *v = value(c, x, y);
+                }
+            }
+        };
+        for compression in [ExrCompression::Zip, ExrCompression::Rle] {
+            let whole = tmp("whole");
+            write_exr_rows(&whole, 29, 83, &chans, compression, fill).unwrap();
+            let banded = tmp("banded");
+            let mut sink = ExrRowSink::create(&banded, 29, 83, &chans, compression).unwrap();
+            for n in [7, 1, 0, 24, 3, 16, 32] {
+                sink.push(n, fill).unwrap();
+            }
+            sink.finish().unwrap();
+            assert_eq!(
+                std::fs::read(&whole).unwrap(),
+                std::fs::read(&banded).unwrap()
+            );
+        }
+    }
+
+    #[test]
+    fn an_unfinished_sink_leaves_nothing_and_a_short_one_is_refused() {
+        let chans = [ExrChannel {
+            name: "h",
+            precision: ExrPrecision::F16,
+        }];
+        let p = tmp("short");
+        let _ = std::fs::remove_file(&p);
+        let mut sink = ExrRowSink::create(&p, 8, 10, &chans, ExrCompression::Rle).unwrap();
+        sink.push(4, |_, _| {}).unwrap();
+        let e = sink.push(7, |_, _| {}).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("lines 4..11 pushed: the image has 10"),
+            "{e}"
+        );
+        let e = sink.finish().unwrap_err();
+        assert!(e.to_string().contains("4 of 10 lines pushed"), "{e}");
+        let dir = p.parent().unwrap();
+        let left: Vec<_> = std::fs::read_dir(dir).unwrap().flatten().collect();
+        assert!(left.is_empty(), "left behind: {left:?}");
     }
 }

@@ -256,35 +256,102 @@ pub fn write_png_rows<F>(
 where
     F: Fn(usize, &mut [u8]) + Sync,
 {
-    use rayon::prelude::*;
-    let bad = |detail: String| CoreError::Encode {
-        path: path.to_path_buf(),
-        detail,
-    };
-    let color = match channels {
-        1 => png::ColorType::Grayscale,
-        3 => png::ColorType::Rgb,
-        4 => png::ColorType::Rgba,
-        n => return Err(bad(format!("{n} channels (expected 1, 3 or 4)"))),
-    };
-    if width == 0 || height == 0 || width > u32::MAX as usize || height > u32::MAX as usize {
-        return Err(bad(format!(
-            "{width}×{height} texels: expected a positive size"
-        )));
+    let mut sink = PngRowSink::create(path, width, height, channels, depth)?;
+    sink.push(height, fill)?;
+    sink.finish()
+}
+
+/// A PNG written from rows pushed in order ([`PngRowSink::push`]), for callers that make the
+/// image band by band; [`write_png_rows`] is one push of every row. The file appears at its
+/// path on [`PngRowSink::finish`] (atomically); dropped unfinished, it leaves nothing.
+pub struct PngRowSink {
+    path: std::path::PathBuf,
+    tmp: std::path::PathBuf,
+    stream: Option<png::StreamWriter<'static, Recording>>,
+    failed: std::sync::Arc<std::sync::Mutex<Option<std::io::Error>>>,
+    row: usize,
+    next: usize,
+    height: usize,
+    strip: Vec<u8>,
+}
+
+/// The file a PNG stream writes to, keeping the first I/O error (the encoder's own writer
+/// drops its last errors).
+struct Recording {
+    file: std::io::BufWriter<std::fs::File>,
+    failed: std::sync::Arc<std::sync::Mutex<Option<std::io::Error>>>,
+}
+
+impl Recording {
+    fn keep<T>(&self, r: std::io::Result<T>) -> std::io::Result<T> {
+        if let Err(e) = &r {
+            let mut f = self.failed.lock().unwrap_or_else(|p| p.into_inner());
+            f.get_or_insert_with(|| std::io::Error::new(e.kind(), e.to_string()));
+        }
+        r
     }
-    let bytes = match depth {
-        PngDepth::Eight => 1,
-        PngDepth::Sixteen => 2,
-    };
-    let row = width * channels * bytes;
-    atomic::write_with(path, |tmp| {
-        let err = |e: png::EncodingError| bad(e.to_string());
-        let file = std::fs::File::create(tmp).map_err(|source| CoreError::Write {
+}
+
+impl std::io::Write for Recording {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let r = self.file.write(buf);
+        self.keep(r)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        let r = self.file.flush();
+        self.keep(r)
+    }
+}
+
+impl Drop for Recording {
+    fn drop(&mut self) {
+        let r = std::io::Write::flush(&mut self.file);
+        let _ = self.keep(r);
+    }
+}
+
+impl PngRowSink {
+    /// Starts `path` (written beside it until [`Self::finish`]); the size and format as
+    /// [`write_png_rows`] takes them.
+    pub fn create(
+        path: &Path,
+        width: usize,
+        height: usize,
+        channels: usize,
+        depth: PngDepth,
+    ) -> Result<Self> {
+        let color = png_color(path, channels)?;
+        if width == 0 || height == 0 || width > u32::MAX as usize || height > u32::MAX as usize {
+            return Err(encode_error(
+                path,
+                format!("{width}×{height} texels: expected a positive size"),
+            ));
+        }
+        let bytes = match depth {
+            PngDepth::Eight => 1,
+            PngDepth::Sixteen => 2,
+        };
+        let tmp = atomic::temp_path(path);
+        let file = std::fs::File::create(&tmp).map_err(|source| CoreError::Write {
             path: path.to_path_buf(),
             source,
         })?;
-        let writer = std::io::BufWriter::with_capacity(1 << 20, file);
-        let mut enc = png::Encoder::new(writer, width as u32, height as u32);
+        let failed = std::sync::Arc::default();
+        let out = Recording {
+            file: std::io::BufWriter::with_capacity(1 << 20, file),
+            failed: std::sync::Arc::clone(&failed),
+        };
+        let mut sink = PngRowSink {
+            path: path.to_path_buf(),
+            tmp,
+            stream: None,
+            failed,
+            row: width * channels * bytes,
+            next: 0,
+            height,
+            strip: Vec::new(),
+        };
+        let mut enc = png::Encoder::new(out, width as u32, height as u32);
         enc.set_color(color);
         enc.set_depth(match depth {
             PngDepth::Eight => png::BitDepth::Eight,
@@ -292,25 +359,107 @@ where
         });
         enc.set_compression(png::Compression::Fast);
         enc.set_filter(png::Filter::Adaptive);
-        let mut wr = enc.write_header().map_err(err)?;
-        let mut stream = wr.stream_writer_with_size(1 << 20).map_err(err)?;
-        let mut strip = vec![0u8; row * PNG_STRIP_ROWS.min(height)];
-        for y0 in (0..height).step_by(PNG_STRIP_ROWS) {
-            let n = PNG_STRIP_ROWS.min(height - y0);
-            strip[..n * row]
+        let stream = enc
+            .write_header()
+            .and_then(|w| w.into_stream_writer_with_size(1 << 20))
+            .map_err(|e| sink.error(e))?;
+        sink.stream = Some(stream);
+        Ok(sink)
+    }
+
+    /// Appends the next `n` rows, row `y` (counted from the image's top) made by `fill(y, row)`
+    /// in strips filled in parallel and compressed in order.
+    pub fn push<F>(&mut self, n: usize, fill: F) -> Result<()>
+    where
+        F: Fn(usize, &mut [u8]) + Sync,
+    {
+        use rayon::prelude::*;
+        if self.next + n > self.height {
+            return Err(encode_error(
+                &self.path,
+                format!(
+                    "rows {}..{} pushed: the image has {}",
+                    self.next,
+                    self.next + n,
+                    self.height
+                ),
+            ));
+        }
+        let (row, end) = (self.row, self.next + n);
+        self.strip.resize(row * PNG_STRIP_ROWS.min(n.max(1)), 0);
+        while self.next < end {
+            let (y0, k) = (self.next, PNG_STRIP_ROWS.min(end - self.next));
+            self.strip[..k * row]
                 .par_chunks_mut(row)
                 .enumerate()
-                .for_each(|(k, r)| fill(y0 + k, r));
-            std::io::Write::write_all(&mut stream, &strip[..n * row]).map_err(|source| {
-                CoreError::Write {
-                    path: path.to_path_buf(),
-                    source,
-                }
+                .for_each(|(j, r)| fill(y0 + j, r));
+            let stream = self.stream.as_mut().expect("a sink writes until finished");
+            let r = std::io::Write::write_all(stream, &self.strip[..k * row]);
+            r.map_err(|source| CoreError::Write {
+                path: self.path.clone(),
+                source,
             })?;
+            self.next += k;
         }
-        stream.finish().map_err(err)?;
-        wr.finish().map_err(err)
-    })
+        Ok(())
+    }
+
+    /// Ends the image (every row must have been pushed) and moves it to its path.
+    pub fn finish(mut self) -> Result<()> {
+        if self.next != self.height {
+            let detail = format!("{} of {} rows pushed", self.next, self.height);
+            return Err(encode_error(&self.path, detail));
+        }
+        let stream = self.stream.take().expect("a sink writes until finished");
+        let done = stream.finish();
+        // The stream's writer (and the file) are closed now; their last errors were kept.
+        done.map_err(|e| self.error(e))?;
+        if let Some(source) = self.failed.lock().unwrap_or_else(|p| p.into_inner()).take() {
+            return Err(CoreError::Write {
+                path: self.path.clone(),
+                source,
+            });
+        }
+        std::fs::rename(&self.tmp, &self.path).map_err(|source| CoreError::Write {
+            path: self.path.clone(),
+            source,
+        })?;
+        self.tmp = std::path::PathBuf::new();
+        Ok(())
+    }
+
+    fn error(&self, e: png::EncodingError) -> CoreError {
+        encode_error(&self.path, e.to_string())
+    }
+}
+
+impl Drop for PngRowSink {
+    fn drop(&mut self) {
+        drop(self.stream.take());
+        if !self.tmp.as_os_str().is_empty() {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+fn encode_error(path: &Path, detail: String) -> CoreError {
+    CoreError::Encode {
+        path: path.to_path_buf(),
+        detail,
+    }
+}
+
+/// The PNG colour type of `channels` samples per texel.
+fn png_color(path: &Path, channels: usize) -> Result<png::ColorType> {
+    match channels {
+        1 => Ok(png::ColorType::Grayscale),
+        3 => Ok(png::ColorType::Rgb),
+        4 => Ok(png::ColorType::Rgba),
+        n => Err(encode_error(
+            path,
+            format!("{n} channels (expected 1, 3 or 4)"),
+        )),
+    }
 }
 
 /// Writes 1 (grey), 3 (RGB) or 4 (RGBA) maps of already-encoded values in [0, 1] as an 8-bit PNG.
@@ -650,5 +799,44 @@ mod tests {
         let e = read_grey(&d.join("missing.png")).err().unwrap().to_string();
         assert!(e.contains("missing.png"), "{e}");
         std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn rows_pushed_in_uneven_bands_give_the_bytes_of_one_push_and_decode() {
+        let d = tmpdir("bands");
+        let (w, h) = (23, 150);
+        let fill = |y: usize, row: &mut [u8]| {
+            for (x, v) in row.iter_mut().enumerate() {
+                *v = ((x * 7 + y * 13) % 251) as u8;
+            }
+        };
+        let whole = d.join("whole.png");
+        write_png_rows(&whole, w, h, 3, PngDepth::Sixteen, fill).unwrap();
+        let banded = d.join("banded.png");
+        let mut sink = PngRowSink::create(&banded, w, h, 3, PngDepth::Sixteen).unwrap();
+        for n in [1, 70, 0, 64, 15] {
+            sink.push(n, fill).unwrap();
+        }
+        assert!(!banded.exists(), "the file appears only when finished");
+        sink.finish().unwrap();
+        let bytes = std::fs::read(&banded).unwrap();
+        assert_eq!(std::fs::read(&whole).unwrap(), bytes);
+        // The image crate (an independent decoder) reads the rows back.
+        let img = image::load_from_memory(&bytes).unwrap().into_rgb16();
+        let px = img.get_pixel(5, 101);
+        let byte = |k: usize| ((k * 7 + 101 * 13) % 251) as u16;
+        assert_eq!(px[1], byte(5 * 6 + 2) << 8 | byte(5 * 6 + 3));
+    }
+
+    #[test]
+    fn an_unfinished_png_leaves_nothing() {
+        let d = tmpdir("unfinished");
+        let p = d.join("u.png");
+        let mut sink = PngRowSink::create(&p, 4, 4, 1, PngDepth::Eight).unwrap();
+        sink.push(2, |_, _| {}).unwrap();
+        let e = sink.finish().unwrap_err();
+        assert!(e.to_string().contains("2 of 4 rows pushed"), "{e}");
+        let left: Vec<_> = std::fs::read_dir(&d).unwrap().flatten().collect();
+        assert!(left.is_empty(), "left behind: {left:?}");
     }
 }

@@ -7,14 +7,17 @@ use derma_core::atomic::StagedDir;
 use derma_core::head_mesh::{HeadUnit, MeshFrame};
 use derma_core::mesh_parts::PartChoice;
 use derma_core::progress::Progress;
+use derma_skin::generate::SetSummary;
 use derma_skin::outputs::GLB;
+use derma_skin::report::InputFiles;
 use derma_skin::{SkinGenerator, TextureSet, Written};
 use std::path::Path;
 
-/// What [`run`] made and wrote.
-pub struct SkinOutput {
-    /// The texture set in memory (its maps, features, configuration and log).
-    pub set: TextureSet,
+/// What [`run`] (or [`run_in_memory`]) made and wrote.
+pub struct SkinOutput<S = SetSummary> {
+    /// What the set was (its features, configuration, inputs and albedo comparison; with
+    /// [`run_in_memory`], the whole [`TextureSet`] with its maps).
+    pub set: S,
     /// The files written into the output directory.
     pub written: Written,
     /// `head.glb`, when asked for.
@@ -23,29 +26,72 @@ pub struct SkinOutput {
 
 /// Checks the output directory, generates the set, writes it into `out` and, with `glb`, writes
 /// `out/head.glb`: the built-in head with its parts, or the set's own mesh in the unit it was
-/// painted in.
+/// painted in. The set is streamed to its files band by band ([`SkinGenerator::write_to`]).
 pub fn run(
     generator: &SkinGenerator,
     out: &Path,
     glb: bool,
     progress: &dyn Progress,
 ) -> Result<SkinOutput> {
+    staged(generator, out, glb, progress, |dir| generator.write_to(dir))
+}
+
+/// [`run`], keeping the whole set in memory (the same files): for callers that want its maps.
+pub fn run_in_memory(
+    generator: &SkinGenerator,
+    out: &Path,
+    glb: bool,
+    progress: &dyn Progress,
+) -> Result<SkinOutput<TextureSet>> {
+    staged(generator, out, glb, progress, |dir| {
+        let set = generator.run()?;
+        let written = set.write(dir, progress)?;
+        Ok((set, written))
+    })
+}
+
+/// What [`staged`] needs of a set to export its GLB.
+pub trait Painted {
+    /// How a user mesh was read, and the files read.
+    fn read(&self) -> (Option<&MeshFrame>, &InputFiles);
+}
+
+impl Painted for SetSummary {
+    fn read(&self) -> (Option<&MeshFrame>, &InputFiles) {
+        (self.mesh_scale.as_ref(), &self.inputs)
+    }
+}
+
+impl Painted for TextureSet {
+    fn read(&self) -> (Option<&MeshFrame>, &InputFiles) {
+        (self.mesh_scale.as_ref(), &self.inputs)
+    }
+}
+
+/// Writes a set with `write` into a directory beside `out`, adds its GLB, and swaps it in.
+fn staged<S: Painted>(
+    generator: &SkinGenerator,
+    out: &Path,
+    glb: bool,
+    progress: &dyn Progress,
+    write: impl FnOnce(&Path) -> derma_skin::Result<(S, Written)>,
+) -> Result<SkinOutput<S>> {
     generator.check_output(out)?;
-    let set = generator.run()?;
     // Written beside `out` and swapped in whole: a killed rerun never leaves a mix of two sets.
     let staged = StagedDir::begin(out, &derma_skin::outputs::owned)?;
     let dir = staged.path();
-    let written = set.write(dir, progress)?;
-    let (unit, part) = painted_read(set.mesh_scale.as_ref(), set.inputs.head.is_some());
+    let (set, written) = write(dir)?;
+    let (frame, inputs) = set.read();
+    let (unit, part) = painted_read(frame, inputs.head.is_some());
     let glb = glb
         .then(|| {
             glb::export(
                 &GlbOptions {
                     textures: dir.to_path_buf(),
-                    mesh: set.inputs.mesh.clone(),
+                    mesh: inputs.mesh.clone(),
                     unit,
                     part: part.clone(),
-                    head: set.inputs.head.clone(),
+                    head: inputs.head.clone(),
                     out: dir.join(GLB),
                     maps: None,
                     wrinkles: true,

@@ -224,7 +224,7 @@ pub fn skin<'py>(
         || -> Result<(TextureSet, Option<Vec<&'static str>>), String> {
             match &out {
                 Some(dir) => {
-                    let o = derma_export::skin::run(&generator, dir, glb, &callback)
+                    let o = derma_export::skin::run_in_memory(&generator, dir, glb, &callback)
                         .map_err(|e| message(&e))?;
                     Ok((o.set, Some(o.written.files)))
                 }

@@ -55,20 +55,34 @@ impl std::fmt::Debug for AppearanceChoice {
     }
 }
 
-/// Bytes of memory per output texel at the pipeline's peak: measured peak resident memory of
-/// `derma skin` on the built-in head was 1.59 GB at 4096² and 5.51 GB at 8192² (issue 15), i.e.
-/// 78 bytes per added texel (bio samples 48, the files' encodings of the render maps 20, UV
-/// raster 12, dilation sources 4, less what is freed before the render maps exist); rounded
-/// up for a margin.
+/// Bytes of memory per output texel at the pipeline's peak with the whole set in memory
+/// ([`SkinGenerator::run`]): measured peak resident memory of `derma skin` on the built-in head
+/// was 1.59 GB at 4096² and 5.51 GB at 8192² (issue 15), i.e. 78 bytes per added texel (bio
+/// samples 48, the files' encodings of the render maps 20, UV raster 12, dilation sources 4,
+/// less what is freed before the render maps exist); rounded up for a margin.
 pub const BYTES_PER_TEXEL: f64 = 90.0;
+
+/// [`BYTES_PER_TEXEL`] of the streamed main job ([`SkinGenerator::write_to`]): 0.84 GB at
+/// 4096² and 2.22 GB at 8192² (issue 64), 27.5 bytes per added texel (UV raster 12, dilation
+/// sources 4, heights 4, the preview's maps 11); rounded up for a margin.
+pub const STREAMED_BYTES_PER_TEXEL: f64 = 36.0;
 
 /// Memory the job takes whatever the size (the built-in head, its fields at 1024², the
 /// features and their index): 0.27 GB measured by the same two runs, rounded up.
 pub const FIXED_BYTES: f64 = 0.4e9;
 
-/// Fails early when a `size`² texture set would not fit in memory.
+/// Fails early when a `size`² texture set would not fit in memory whole.
 pub fn check_memory(size: usize) -> Result<()> {
-    match derma_core::memory::shortfall(FIXED_BYTES + BYTES_PER_TEXEL * (size * size) as f64) {
+    check_need(size, BYTES_PER_TEXEL)
+}
+
+/// Fails early when the streamed main job of a `size`² set would not fit in memory.
+pub fn check_memory_streamed(size: usize) -> Result<()> {
+    check_need(size, STREAMED_BYTES_PER_TEXEL)
+}
+
+fn check_need(size: usize, per_texel: f64) -> Result<()> {
+    match derma_core::memory::shortfall(FIXED_BYTES + per_texel * (size * size) as f64) {
         Some((need_gib, have_gib)) => Err(SkinError::TooLarge {
             width: size,
             height: size,
@@ -211,11 +225,12 @@ impl<'a> SkinGenerator<'a> {
         outputs::OUTPUTS.iter().map(|o| dir.join(o.file)).collect()
     }
 
-    /// Checks before any work that the config is valid, the set fits in memory, `dir` can be
-    /// written and no input would be overwritten.
+    /// Checks before any work that the config is valid, the streamed job fits in memory
+    /// ([`check_memory`] checks the whole set's need), `dir` can be written and no input would
+    /// be overwritten.
     pub fn check_output(&self, dir: &Path) -> Result<()> {
         self.config.validate("the options")?;
-        check_memory(self.config.size as usize)?;
+        check_memory_streamed(self.config.size as usize)?;
         for (what, p) in [
             ("mesh", &self.mesh),
             ("fields", &self.fields),
@@ -250,18 +265,8 @@ impl<'a> SkinGenerator<'a> {
 
     /// Runs the main job in memory (in its own thread pool when [`Self::threads`] was given).
     pub fn run(&self) -> Result<TextureSet> {
-        let pool = match self.threads {
-            Some(n) => Some(Arc::new(
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(n)
-                    .build()
-                    .map_err(|e| SkinError::Key {
-                        key: "threads".into(),
-                        detail: format!("cannot start {n} worker threads: {e}"),
-                    })?,
-            )),
-            None => None,
-        };
+        check_memory(self.config.size as usize)?;
+        let pool = self.pool()?;
         let mut set = match &pool {
             Some(p) => p.install(|| self.generate()),
             None => self.generate(),
@@ -270,7 +275,68 @@ impl<'a> SkinGenerator<'a> {
         Ok(set)
     }
 
+    /// The worker pool of [`Self::threads`], when given.
+    fn pool(&self) -> Result<Option<Arc<rayon::ThreadPool>>> {
+        let Some(n) = self.threads else {
+            return Ok(None);
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .map_err(|e| SkinError::Key {
+                key: "threads".into(),
+                detail: format!("cannot start {n} worker threads: {e}"),
+            })?;
+        Ok(Some(Arc::new(pool)))
+    }
+
     fn generate(&self) -> Result<TextureSet> {
+        let mut made = MadeAppearance::default();
+        let pre = self.prepare(&mut made)?;
+        let cfg = &pre.cfg;
+        let measured = self.baseline_maps(cfg)?;
+        let bio = self.paint(cfg, &pre, &measured)?;
+        pre.job.stage("convert", 1, Unit::Steps);
+        let mut render = crate::texture_set::convert(
+            &bio,
+            &pre.surface,
+            pre.appearance,
+            &cfg.material,
+            pre.dilation.as_deref(),
+        );
+        render.lash_color = pre.lash_color();
+        let outline = pre.outline(self);
+        let mut set = TextureSet {
+            surface: pre.surface,
+            fields: pre.fields,
+            features: pre.features,
+            bio,
+            render,
+            mesh_scale: pre.read.mesh_scale,
+            preview_mesh: pre.preview_mesh,
+            appearance: outline.appearance,
+            skin_surface: outline.skin_surface,
+            config: self.config.clone(),
+            inputs: outline.inputs,
+            log: pre.job.finish(),
+            started: pre.started,
+            pool: None,
+            device: self.device,
+            albedo_comparison: None,
+        };
+        if let Some((photo, name)) = pre.albedo {
+            set.albedo_comparison = Some(crate::albedo_compare::compare(
+                set.painted(),
+                &photo,
+                &name,
+            )?);
+        }
+        Ok(set)
+    }
+
+    /// Everything before painting: the options checked, the surface, the fields and the
+    /// features placed.
+    fn prepare<'m>(&'m self, made: &'m mut MadeAppearance) -> Result<Prepared<'m>> {
         let started = Instant::now();
         self.config.validate("the options")?;
         // A GPU chosen outright is opened now, so a build or machine without one is told so
@@ -278,8 +344,7 @@ impl<'a> SkinGenerator<'a> {
         if self.device == Device::Gpu {
             self.device.resolve()?;
         }
-        let mut made = MadeAppearance::default();
-        let appearance = self.chosen_appearance(&mut made);
+        let appearance = self.chosen_appearance(made);
         let plan = self.plan()?;
         let albedo = match &self.albedo {
             Some(p) => Some((derma_core::image_io::read_rgb(p)?, p.display().to_string())),
@@ -288,70 +353,131 @@ impl<'a> SkinGenerator<'a> {
         let job = Job::new(self.progress);
         self.note_table(&job);
 
-        // Surface.
         job.stage("surface and fields", 1, Unit::Steps);
         let read = self.read_surface(&plan, &job)?;
-        let (person_cfg, melanin) = self.person_config(appearance, &plan, &read)?;
-        let cfg = &person_cfg;
-        self.note_inputs(cfg, melanin, appearance, &plan, &read, &job);
-        let (surfaces, fields) = self.surface_and_fields(cfg, &plan, &read, &job)?;
+        let (cfg, melanin) = self.person_config(appearance, &plan, &read)?;
+        self.note_inputs(&cfg, melanin, appearance, &plan, &read, &job);
+        let (surfaces, fields) = self.surface_and_fields(&cfg, &plan, &read, &job)?;
+        job.stage("scatter", 1, Unit::Steps);
+        let features = crate::feature_set::place(&cfg, &fields, &surfaces.scatter, plan.size)?;
         let Surfaces {
             surface,
             dilation,
-            scatter,
             preview_mesh,
+            ..
         } = surfaces;
-        job.stage("scatter", 1, Unit::Steps);
-        let features = crate::feature_set::place(cfg, &fields, &scatter, plan.size)?;
-        drop(scatter);
-
-        let bio = self.paint(cfg, &surface, &fields, &features, dilation.as_deref(), &job)?;
-
-        job.stage("convert", 1, Unit::Steps);
-        let mut render = crate::texture_set::convert(
-            &bio,
-            &surface,
+        Ok(Prepared {
+            started,
             appearance,
-            &cfg.material,
-            dilation.as_deref(),
-        );
-        if plan.kind == SurfaceKind::Template {
-            render.lash_color = Some(cfg.hair.melanin(&cfg.person).color());
-        }
-        let mut set = TextureSet {
+            plan,
+            albedo,
+            job,
+            read,
+            cfg,
             surface,
+            dilation,
+            preview_mesh,
             fields,
             features,
-            bio,
-            render,
-            mesh_scale: read.mesh_scale,
-            preview_mesh,
-            appearance: appearance.name(),
-            skin_surface: crate::texture_set::skin_surface(&cfg.material, appearance),
-            // As given (the person's derived melanin and wrinkles are in the notes): rerunning
-            // report.json's config reproduces the set.
-            config: self.config.clone(),
-            inputs: InputFiles {
-                config: self.config_path.clone(),
-                mesh: plan.mesh_path,
-                head: self.head.clone(),
-                fields: self.fields.clone(),
-                surface: plan.kind,
+        })
+    }
+
+    /// Runs the main job and writes its files into `dir`, band by band where nothing needs the
+    /// whole set in memory (the streamed main job, `crate::stream`: the same files, with the
+    /// same bits, in a fraction of the memory); whole where `[detail]` tiles or an albedo
+    /// comparison do. Returns what was written and what the set was.
+    pub fn write_to(&self, dir: &Path) -> Result<(SetSummary, Written)> {
+        let pool = self.pool()?;
+        let run = || {
+            if self.config.detail.enabled() || self.albedo.is_some() {
+                let set = self.generate()?;
+                let written = set.write_files(dir, self.progress)?;
+                return Ok((set.summary(), written));
+            }
+            self.stream_to(dir)
+        };
+        match &pool {
+            Some(p) => p.install(run),
+            None => run(),
+        }
+    }
+
+    /// [`Self::write_to`]'s streamed path.
+    fn stream_to(&self, dir: &Path) -> Result<(SetSummary, Written)> {
+        derma_core::atomic::ensure_writable_dir(dir)?;
+        let mut made = MadeAppearance::default();
+        let pre = self.prepare(&mut made)?;
+        let measured = self.baseline_maps(&pre.cfg)?;
+        let painter = crate::paint::Painter::new(
+            &pre.cfg,
+            &pre.surface,
+            &pre.fields,
+            &pre.features,
+            &measured,
+        )?;
+        let keep_sss =
+            derma_core::gpu::BUILT && self.device != Device::Cpu && pre.preview_mesh.is_some();
+        let out = crate::stream::write_bands(
+            &crate::stream::Bands {
+                painter: &painter,
+                surface: &pre.surface,
+                dilation: pre.dilation.as_deref(),
+                appearance: pre.appearance,
+                material: &pre.cfg.material,
+                keep_subsurface: keep_sss,
             },
-            log: job.finish(),
+            dir,
+            &pre.job,
+        )?;
+        drop(painter);
+        let mut preview = out.preview;
+        preview.lash_color = pre.lash_color();
+        let outline = pre.outline(self);
+        let Prepared {
+            job,
             started,
-            pool: None,
+            read,
+            surface,
+            preview_mesh,
+            fields,
+            features,
+            ..
+        } = pre;
+        let log = job.finish();
+        let view = SetView {
+            surface: &surface,
+            fields: &fields,
+            features: &features,
+            mesh_scale: read.mesh_scale.as_ref(),
+            preview_mesh: preview_mesh.as_ref(),
+            appearance: outline.appearance,
+            skin_surface: outline.skin_surface,
+            config: &self.config,
+            inputs: &outline.inputs,
+            log: &log,
+            started,
+            threads: rayon::current_num_threads(),
             device: self.device,
             albedo_comparison: None,
         };
-        if let Some((photo, name)) = albedo {
-            set.albedo_comparison = Some(crate::albedo_compare::compare(
-                set.painted(),
-                &photo,
-                &name,
-            )?);
-        }
-        Ok(set)
+        let maps = MapsWritten {
+            files: out.files,
+            height_range: out.height_range,
+            statistics: &out.statistics,
+            preview: &preview,
+            reduced: &out.reduced,
+        };
+        let wjob = Job::new(self.progress);
+        wjob.stage("write", 1, Unit::Steps);
+        let written = view.write_rest(dir, maps, wjob)?;
+        let summary = SetSummary {
+            config: self.config.clone(),
+            features,
+            mesh_scale: read.mesh_scale,
+            inputs: outline.inputs,
+            albedo_comparison: None,
+        };
+        Ok((summary, written))
     }
 
     /// The bio → render conversion chosen, one made here held in `made`.
@@ -392,7 +518,7 @@ impl<'a> SkinGenerator<'a> {
         };
         let has_landmarks = !self.config.surface.landmarks.trim().is_empty() || self.head.is_some();
         let size = self.config.size as usize;
-        check_memory(size)?;
+        check_memory_streamed(size)?;
         Ok(Plan {
             mesh_path,
             kind,
@@ -568,21 +694,65 @@ impl<'a> SkinGenerator<'a> {
     fn paint(
         &self,
         cfg: &SkinConfig,
-        surface: &Surface,
-        fields: &FieldSet,
-        features: &FeatureSet,
-        dilation: Option<&[u32]>,
-        job: &Job,
+        pre: &Prepared,
+        measured: &crate::paint::BaselineMaps,
     ) -> Result<BioMaps> {
-        let measured = self.baseline_maps(cfg)?;
-        let mut bio = crate::paint::paint_with(cfg, surface, fields, features, &measured, job)?;
+        let (surface, fields, job) = (&pre.surface, &pre.fields, &pre.job);
+        let mut bio = crate::paint::paint_with(cfg, surface, fields, &pre.features, measured, job)?;
         if cfg.detail.enabled() {
             self.apply_detail(cfg, surface, fields, &mut bio, job)?;
         }
-        if let Some(src) = dilation {
+        if let Some(src) = pre.dilation.as_deref() {
             bio.dilate(src);
         }
         Ok(bio)
+    }
+}
+
+/// What the main job knows before it paints ([`SkinGenerator::prepare`]).
+struct Prepared<'m> {
+    started: Instant,
+    appearance: &'m dyn Appearance,
+    plan: Plan,
+    albedo: Option<(derma_core::image_io::LoadedImage, String)>,
+    job: Job<'m>,
+    read: SurfaceMesh,
+    /// The person's configuration (the options with the calibration and age applied).
+    cfg: SkinConfig,
+    surface: Surface,
+    dilation: Option<Vec<u32>>,
+    preview_mesh: Option<(TriMesh, Vec<[f32; 4]>)>,
+    fields: FieldSet,
+    features: FeatureSet,
+}
+
+/// The parts of a set [`Prepared::outline`] derives.
+struct Outline {
+    appearance: &'static str,
+    skin_surface: crate::texture_set::SkinSurface,
+    inputs: InputFiles,
+}
+
+impl Prepared<'_> {
+    /// The built-in lash cards' colour, on the head.
+    fn lash_color(&self) -> Option<[f32; 3]> {
+        (self.plan.kind == SurfaceKind::Template)
+            .then(|| self.cfg.hair.melanin(&self.cfg.person).color())
+    }
+
+    /// The appearance's name, the skin's surface and the files read.
+    fn outline(&self, g: &SkinGenerator) -> Outline {
+        Outline {
+            appearance: self.appearance.name(),
+            skin_surface: crate::texture_set::skin_surface(&self.cfg.material, self.appearance),
+            inputs: InputFiles {
+                config: g.config_path.clone(),
+                mesh: self.plan.mesh_path.clone(),
+                head: g.head.clone(),
+                fields: g.fields.clone(),
+                surface: self.plan.kind,
+            },
+        }
     }
 }
 
@@ -1029,8 +1199,164 @@ impl TextureSet {
     /// The head the set was painted on or for: the fitted one it was given, or the built-in
     /// one (a fitted head was read once already, so this does not fail).
     pub fn head(&self) -> &'static derma_head::Head {
+        self.view().head()
+    }
+
+    /// The UV layout the set was painted on: the template's on the head (fitted or not), the
+    /// mesh's on a user mesh, none on a patch.
+    pub fn uv_layout(&self) -> Option<derma_core::mesh::UvLayout> {
+        self.view().uv_layout()
+    }
+
+    /// Worker threads the set was made with.
+    pub fn threads(&self) -> usize {
+        self.pool
+            .as_ref()
+            .map_or_else(rayon::current_num_threads, |p| p.current_num_threads())
+    }
+
+    /// What the caller of [`SkinGenerator::write_to`] gets of a set.
+    pub fn summary(self) -> SetSummary {
+        SetSummary {
+            config: self.config,
+            features: self.features,
+            mesh_scale: self.mesh_scale,
+            inputs: self.inputs,
+            albedo_comparison: self.albedo_comparison,
+        }
+    }
+
+    /// The set as its writing reads it.
+    fn view(&self) -> SetView<'_> {
+        SetView {
+            surface: &self.surface,
+            fields: &self.fields,
+            features: &self.features,
+            mesh_scale: self.mesh_scale.as_ref(),
+            preview_mesh: self.preview_mesh.as_ref(),
+            appearance: self.appearance,
+            skin_surface: self.skin_surface,
+            config: &self.config,
+            inputs: &self.inputs,
+            log: &self.log,
+            started: self.started,
+            threads: self.threads(),
+            device: self.device,
+            albedo_comparison: self.albedo_comparison.as_ref(),
+        }
+    }
+
+    /// Writes every file of [`outputs::OUTPUTS`] into `dir` — the maps, features.json,
+    /// preview.png, then manifest.json and report.json — each atomically. The preview's views
+    /// are drawn by derma-render's GPU renderer where the set's device resolves to a GPU and it
+    /// has a mesh, by its CPU renderer otherwise (a note says which).
+    pub fn write(&self, dir: &Path, progress: &dyn Progress) -> Result<Written> {
+        match &self.pool {
+            Some(p) => p.install(|| self.write_files(dir, progress)),
+            None => self.write_files(dir, progress),
+        }
+    }
+
+    fn write_files(&self, dir: &Path, progress: &dyn Progress) -> Result<Written> {
+        derma_core::atomic::ensure_writable_dir(dir)?;
+        let job = Job::new(progress);
+        job.stage("write", 1, Unit::Steps);
+        let (files, height_range) = crate::texture_set::write_maps(dir, &self.bio, &self.render)?;
+        let statistics = crate::report::Statistics::of_set(&self.surface, &self.bio, &self.render);
+        let maps = MapsWritten {
+            files,
+            height_range,
+            statistics: &statistics,
+            preview: &self.render,
+            reduced: &crate::preview::reduced_bio(&self.bio),
+        };
+        self.view().write_rest(dir, maps, job)
+    }
+}
+
+/// What a run made besides its maps: what [`SkinGenerator::write_to`] returns with the files.
+pub struct SetSummary {
+    /// The configuration as given.
+    pub config: SkinConfig,
+    /// Every placed feature.
+    pub features: FeatureSet,
+    /// The unit a user mesh was read in.
+    pub mesh_scale: Option<MeshFrame>,
+    /// The files read.
+    pub inputs: InputFiles,
+    /// The set beside a photographed albedo ([`SkinGenerator::compare_albedo`]).
+    pub albedo_comparison: Option<crate::albedo_compare::AlbedoComparison>,
+}
+
+/// The map files written, and what the rest of the set's files need of the maps.
+struct MapsWritten<'a> {
+    files: Vec<&'static str>,
+    height_range: HeightRange,
+    statistics: &'a crate::report::Statistics,
+    /// The render maps the preview draws (whole; the wrinkle normals and, on the CPU, the
+    /// subsurface maps may be left out).
+    preview: &'a RenderMaps,
+    /// The contact sheet's bio channels ([`crate::preview::reduced_bio`]).
+    reduced: &'a [Map; 3],
+}
+
+/// A set as its writing reads it: a whole [`TextureSet`], or the streamed main job's state.
+struct SetView<'a> {
+    surface: &'a Surface,
+    fields: &'a FieldSet,
+    features: &'a FeatureSet,
+    mesh_scale: Option<&'a MeshFrame>,
+    preview_mesh: Option<&'a (TriMesh, Vec<[f32; 4]>)>,
+    appearance: &'static str,
+    skin_surface: crate::texture_set::SkinSurface,
+    config: &'a SkinConfig,
+    inputs: &'a InputFiles,
+    log: &'a Log,
+    started: Instant,
+    threads: usize,
+    device: Device,
+    albedo_comparison: Option<&'a crate::albedo_compare::AlbedoComparison>,
+}
+
+impl SetView<'_> {
+    /// The head the set was painted on or for.
+    fn head(&self) -> &'static derma_head::Head {
         derma_head::fitted::or_builtin(self.inputs.head.as_deref())
             .unwrap_or(derma_head::Head::builtin())
+    }
+
+    /// The set's UV layout (see [`TextureSet::uv_layout`]).
+    fn uv_layout(&self) -> Option<derma_core::mesh::UvLayout> {
+        match self.inputs.surface {
+            SurfaceKind::Patch => None,
+            SurfaceKind::Template => Some(crate::builtin_head::template_layout().clone()),
+            SurfaceKind::Mesh => self.preview_mesh.map(|(m, _)| m.uv_layout()),
+        }
+    }
+
+    /// After the maps: lashes.png, wrinkle_masks.exr, features.json (in `job`'s current
+    /// stage), preview.png, report.json and manifest.json.
+    fn write_rest(&self, dir: &Path, mut maps: MapsWritten, job: Job) -> Result<Written> {
+        let map_files = std::mem::take(&mut maps.files);
+        let mut files = self.write_other_files(dir, map_files, maps.preview.lash_color)?;
+        job.stage("preview", 1, Unit::Steps);
+        self.write_preview(dir, &maps, &job)?;
+        files.push(outputs::PREVIEW);
+        let log = self.run_log(job);
+        files.push(outputs::REPORT);
+        let report = self.report(maps.height_range, maps.statistics, &log);
+        derma_core::report::write_json(
+            &dir.join(outputs::REPORT),
+            &report,
+            derma_core::report::JsonFormat::REPORT,
+        )?;
+        self.write_manifest(dir, &files, &report)?;
+        files.insert(files.len() - 1, outputs::MANIFEST); // manifest order: before report.json
+        Ok(Written {
+            files,
+            height_range: maps.height_range,
+            log,
+        })
     }
 
     /// manifest.json: every file of `files` in `dir` hashed (report.json aside), with the seed,
@@ -1061,73 +1387,23 @@ impl TextureSet {
         Ok(())
     }
 
-    /// The UV layout the set was painted on: the template's on the head (fitted or not), the
-    /// mesh's on a user mesh, none on a patch.
-    pub fn uv_layout(&self) -> Option<derma_core::mesh::UvLayout> {
-        match self.inputs.surface {
-            SurfaceKind::Patch => None,
-            SurfaceKind::Template => Some(crate::builtin_head::template_layout().clone()),
-            SurfaceKind::Mesh => self.preview_mesh.as_ref().map(|(m, _)| m.uv_layout()),
-        }
-    }
-
-    /// Worker threads the set was made with.
-    pub fn threads(&self) -> usize {
-        self.pool
-            .as_ref()
-            .map_or_else(rayon::current_num_threads, |p| p.current_num_threads())
-    }
-
-    /// Writes every file of [`outputs::OUTPUTS`] into `dir` — the maps, features.json,
-    /// preview.png, then manifest.json and report.json — each atomically. The preview's views
-    /// are drawn by derma-render's GPU renderer where the set's device resolves to a GPU and it
-    /// has a mesh, by its CPU renderer otherwise (a note says which).
-    pub fn write(&self, dir: &Path, progress: &dyn Progress) -> Result<Written> {
-        match &self.pool {
-            Some(p) => p.install(|| self.write_files(dir, progress)),
-            None => self.write_files(dir, progress),
-        }
-    }
-
-    fn write_files(&self, dir: &Path, progress: &dyn Progress) -> Result<Written> {
-        derma_core::atomic::ensure_writable_dir(dir)?;
-        let job = Job::new(progress);
-        job.stage("write", 1, Unit::Steps);
-        let (mut files, height_range) = self.write_map_files(dir)?;
-        job.stage("preview", 1, Unit::Steps);
-        self.write_preview(dir, &job)?;
-        files.push(outputs::PREVIEW);
-        let log = self.run_log(job);
-        files.push(outputs::REPORT);
-        let report = self.report(height_range, &log);
-        derma_core::report::write_json(
-            &dir.join(outputs::REPORT),
-            &report,
-            derma_core::report::JsonFormat::REPORT,
-        )?;
-        self.write_manifest(dir, &files, &report)?;
-        files.insert(files.len() - 1, outputs::MANIFEST); // manifest order: before report.json
-        Ok(Written {
-            files,
-            height_range,
-            log,
-        })
-    }
-
-    /// The maps, lashes.png (on the head), wrinkle_masks.exr (with landmarks) and
-    /// features.json; returns the files in manifest order and the range of height.png.
-    fn write_map_files(&self, dir: &Path) -> Result<(Vec<&'static str>, HeightRange)> {
-        let (mut files, height_range) =
-            crate::texture_set::write_maps(dir, &self.bio, &self.render)?;
-        if let Some(hair) = self.render.lash_color {
+    /// lashes.png (on the head), wrinkle_masks.exr (with landmarks) and features.json after
+    /// the map `files`; returns every file in manifest order.
+    fn write_other_files(
+        &self,
+        dir: &Path,
+        mut files: Vec<&'static str>,
+        lash_color: Option<[f32; 3]>,
+    ) -> Result<Vec<&'static str>> {
+        if let Some(hair) = lash_color {
             crate::texture_set::write_lashes(&dir.join(outputs::LASHES), hair)?;
             insert_after(&mut files, outputs::HAIR_COVERAGE, outputs::LASHES);
         }
         if crate::texture_set::write_wrinkle_masks(
             &dir.join(outputs::WRINKLE_MASKS),
             &self.fields,
-            self.bio.width,
-            self.bio.height,
+            self.surface.width,
+            self.surface.height,
             self.surface.period().is_some(),
         )? {
             insert_after(&mut files, outputs::WRINKLE_NORMAL, outputs::WRINKLE_MASKS);
@@ -1147,15 +1423,15 @@ impl TextureSet {
             derma_core::report::JsonFormat::DATA,
         )?;
         files.push(outputs::FEATURES);
-        Ok((files, height_range))
+        Ok(files)
     }
 
     /// preview.png: the contact sheet, its shaded views drawn by the GPU renderer where it
     /// runs, by the CPU previews otherwise.
-    fn write_preview(&self, dir: &Path, job: &Job) -> Result<()> {
+    fn write_preview(&self, dir: &Path, maps: &MapsWritten, job: &Job) -> Result<()> {
         let template = self.inputs.surface == SurfaceKind::Template;
-        let shaded = self.gpu_views(template, job);
-        let lash_color = self.render.lash_color.map(glam::Vec3::from);
+        let shaded = self.gpu_views(maps.preview, template, job);
+        let lash_color = maps.preview.lash_color.map(glam::Vec3::from);
         let lashes = move |_: glam::Vec2| lash_color.unwrap_or_default();
         let props = if template {
             let mut props = derma_render::cpu::head_props(self.head());
@@ -1167,10 +1443,10 @@ impl TextureSet {
             Vec::new()
         };
         let preview = crate::preview::contact_sheet(
-            &self.render,
-            &self.bio,
-            &self.surface,
-            self.preview_mesh.as_ref(),
+            maps.preview,
+            maps.reduced,
+            self.surface,
+            self.preview_mesh,
             &props,
             shaded,
         );
@@ -1183,10 +1459,10 @@ impl TextureSet {
 
     /// The preview's shaded views from derma-render's GPU renderer, where it runs; a note says
     /// which renderer draws them, and why.
-    fn gpu_views(&self, template: bool, job: &Job) -> Option<Vec<[Map; 3]>> {
+    fn gpu_views(&self, maps: &RenderMaps, template: bool, job: &Job) -> Option<Vec<[Map; 3]>> {
         match crate::preview::gpu_views(
-            &self.render,
-            self.preview_mesh.as_ref(),
+            maps,
+            self.preview_mesh,
             template.then(|| self.head()),
             self.device,
         ) {
@@ -1234,22 +1510,26 @@ impl TextureSet {
     }
 
     /// report.json's content, with the range of height.png and the run's `log`.
-    fn report(&self, height_range: HeightRange, log: &Log) -> serde_json::Value {
+    fn report(
+        &self,
+        height_range: HeightRange,
+        statistics: &crate::report::Statistics,
+        log: &Log,
+    ) -> serde_json::Value {
         crate::report::report(&crate::report::Run {
             config: &self.config,
             inputs: &self.inputs,
-            mesh_scale: self.mesh_scale.clone(),
-            threads: self.threads(),
+            mesh_scale: self.mesh_scale.cloned(),
+            threads: self.threads,
             appearance: self.appearance,
             skin_surface: self.skin_surface,
-            surface: &self.surface,
-            bio: &self.bio,
-            render: &self.render,
+            surface: self.surface,
+            statistics,
             field_origins: &self.fields.origins,
             counts: self.features.counts(),
             height_range,
             log,
-            albedo_comparison: self.albedo_comparison.as_ref(),
+            albedo_comparison: self.albedo_comparison,
         })
     }
 }

@@ -46,6 +46,7 @@ pub mod preview;
 pub mod regional;
 pub mod report;
 pub mod scatter;
+mod stream;
 pub mod surface;
 pub mod texture_set;
 

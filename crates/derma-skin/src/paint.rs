@@ -147,109 +147,17 @@ pub fn paint_with(
     progress: &dyn Progress,
 ) -> crate::Result<BioMaps> {
     progress.stage("paint", surface.height as u64, Unit::Rows);
-    let b = &cfg.baseline;
-    let noise = BandNoise::new(
-        stream_seed(cfg.seed, NOISE_STREAM) as u64,
-        b.noise_wavelengths_mm,
-        surface.period(),
-    );
-    let mottling = cfg.mottling.enabled.then(|| {
-        crate::mottling::Mottling::new(
-            stream_seed(cfg.seed, crate::mottling::MOTTLING_STREAM) as u64,
-            cfg.mottling.wavelengths_mm,
-            cfg.mottling.blood,
-            cfg.mottling.melanin,
-            surface.period(),
-        )
-    });
-    let lips_map = if cfg.lips.enabled {
-        Some(fields.scalar(&cfg.lips.field)?)
-    } else {
-        None
-    };
-    let lip_params = LipParams {
-        blood: cfg.lips.blood,
-        pheomelanin: cfg.lips.pheomelanin,
-        epidermis_um: cfg.lips.epidermis_um,
-    };
-    // Regional biology (regional.rs): gains on blood, melanin and epidermis and a shift of
-    // oxygenation, where the fields carry them (the built-in head) and they are enabled.
-    let regional: Option<Vec<&Map>> = if cfg.regional.enabled {
-        crate::regional::CHANNELS
-            .iter()
-            .map(|c| fields.scalars.get(*c))
-            .collect()
-    } else {
-        None
-    };
-    // Micro-relief (features/relief.rs): its depth field and, if given, the tension lines.
-    let relief = if cfg.relief.enabled {
-        let r = &cfg.relief;
-        Some((
-            ReliefParams::from_config(r, stream_seed(cfg.seed, RELIEF_STREAM), surface.period()),
-            fields.scalar(&r.field)?,
-            fields.vectors.get(&r.vector_field),
-        ))
-    } else {
-        None
-    };
-    let kinds: Vec<_> = features.kinds().map(|(_, k)| k).collect();
-    let phi = b.phi;
-    let amp = |r: crate::config::Range| (r.min, phi * (r.max - r.min));
-    let chans = [
-        amp(b.melanin),
-        amp(b.pheomelanin),
-        amp(b.blood),
-        amp(b.oxygenation),
-        amp(b.stratum_corneum_um),
-        amp(b.epidermis_um),
-        amp(b.height_mm),
-    ];
-    // The size most fields share (the built-in head's are all FIELD_RESOLUTION²).
-    let field_size = regional
-        .as_ref()
-        .and_then(|r| r.first().copied())
-        .or(lips_map)
-        .map_or((1, 1), |m| (m.width(), m.height()));
-    let painter = Painter {
-        surface,
-        noise,
-        mottling,
-        lips: lips_map.map(|m| (m, lip_params)),
-        regional,
-        measured,
-        relief,
-        chans,
-        wrap: surface.period().is_some(),
-        field_size,
-    };
-    let w = surface.width;
-    // Filled in parallel: the first touch of these pages (about 1 GB at 4096²) is spread over
-    // the threads instead of one.
-    let mut texels = Vec::with_capacity(surface.len());
-    texels.par_extend(rayon::iter::repeat_n(BioSample::default(), surface.len()));
-    texels
-        .par_chunks_mut(w * ROWS_PER_TASK)
-        .enumerate()
-        .for_each(|(task, rows)| {
-            let mut cursors: Vec<GridCursor> =
-                kinds.iter().map(|k| GridCursor::new(k.grid())).collect();
-            let mut scratch = Scratch::default();
-            for (r, row) in rows.chunks_mut(w).enumerate() {
-                let first = (task * ROWS_PER_TASK + r) * w;
-                painter.row(first, row, &kinds, &mut cursors, &mut scratch);
-            }
-            progress.advance((rows.len() / w) as u64);
-        });
+    let painter = Painter::new(cfg, surface, fields, features, measured)?;
     Ok(BioMaps {
         width: surface.width,
         height: surface.height,
-        texels,
+        texels: painter.rows(0..surface.height, progress),
     })
 }
 
-/// What painting a row reads, shared by every task.
-struct Painter<'a> {
+/// What painting a row reads, shared by every task ([`Painter::new`]); [`paint_with`] paints
+/// every row, the streamed main job a band of rows or a few texels at a time.
+pub struct Painter<'a> {
     surface: &'a Surface,
     noise: BandNoise,
     mottling: Option<crate::mottling::Mottling>,
@@ -261,6 +169,167 @@ struct Painter<'a> {
     chans: [(f32, f32); 7],
     wrap: bool,
     field_size: (usize, usize),
+    /// The feature kinds present, in the table's order.
+    kinds: Vec<&'a dyn crate::placement::PlacedKind>,
+}
+
+impl<'a> Painter<'a> {
+    /// What painting reads, from the options, the surface, the fields, the features and the
+    /// measured maps.
+    pub fn new(
+        cfg: &SkinConfig,
+        surface: &'a Surface,
+        fields: &'a crate::field::FieldSet,
+        features: &'a FeatureSet,
+        measured: &'a BaselineMaps,
+    ) -> crate::Result<Self> {
+        let b = &cfg.baseline;
+        let noise = BandNoise::new(
+            stream_seed(cfg.seed, NOISE_STREAM) as u64,
+            b.noise_wavelengths_mm,
+            surface.period(),
+        );
+        let mottling = cfg.mottling.enabled.then(|| {
+            crate::mottling::Mottling::new(
+                stream_seed(cfg.seed, crate::mottling::MOTTLING_STREAM) as u64,
+                cfg.mottling.wavelengths_mm,
+                cfg.mottling.blood,
+                cfg.mottling.melanin,
+                surface.period(),
+            )
+        });
+        let lips_map = if cfg.lips.enabled {
+            Some(fields.scalar(&cfg.lips.field)?)
+        } else {
+            None
+        };
+        let lip_params = LipParams {
+            blood: cfg.lips.blood,
+            pheomelanin: cfg.lips.pheomelanin,
+            epidermis_um: cfg.lips.epidermis_um,
+        };
+        // Regional biology (regional.rs): gains on blood, melanin and epidermis and a shift of
+        // oxygenation, where the fields carry them (the built-in head) and they are enabled.
+        let regional: Option<Vec<&Map>> = if cfg.regional.enabled {
+            crate::regional::CHANNELS
+                .iter()
+                .map(|c| fields.scalars.get(*c))
+                .collect()
+        } else {
+            None
+        };
+        // Micro-relief (features/relief.rs): its depth field and, if given, the tension lines.
+        let relief = if cfg.relief.enabled {
+            let r = &cfg.relief;
+            Some((
+                ReliefParams::from_config(
+                    r,
+                    stream_seed(cfg.seed, RELIEF_STREAM),
+                    surface.period(),
+                ),
+                fields.scalar(&r.field)?,
+                fields.vectors.get(&r.vector_field),
+            ))
+        } else {
+            None
+        };
+        let kinds: Vec<_> = features.kinds().map(|(_, k)| k).collect();
+        let phi = b.phi;
+        let amp = |r: crate::config::Range| (r.min, phi * (r.max - r.min));
+        let chans = [
+            amp(b.melanin),
+            amp(b.pheomelanin),
+            amp(b.blood),
+            amp(b.oxygenation),
+            amp(b.stratum_corneum_um),
+            amp(b.epidermis_um),
+            amp(b.height_mm),
+        ];
+        // The size most fields share (the built-in head's are all FIELD_RESOLUTION²).
+        let field_size = regional
+            .as_ref()
+            .and_then(|r| r.first().copied())
+            .or(lips_map)
+            .map_or((1, 1), |m| (m.width(), m.height()));
+        Ok(Painter {
+            surface,
+            noise,
+            mottling,
+            lips: lips_map.map(|m| (m, lip_params)),
+            regional,
+            measured,
+            relief,
+            chans,
+            wrap: surface.period().is_some(),
+            field_size,
+            kinds,
+        })
+    }
+
+    /// Rows `rows` painted (uncovered texels keep the default sample, for the dilation to
+    /// fill), advancing `progress` by rows; rows are painted in parallel tasks.
+    pub fn rows(&self, rows: std::ops::Range<usize>, progress: &dyn Progress) -> Vec<BioSample> {
+        let w = self.surface.width;
+        let start = rows.start * w;
+        // Filled in parallel: the first touch of these pages (about 1 GB at 4096² for the
+        // whole map) is spread over the threads instead of one.
+        let mut texels = Vec::with_capacity(rows.len() * w);
+        texels.par_extend(rayon::iter::repeat_n(BioSample::default(), rows.len() * w));
+        texels
+            .par_chunks_mut(w * ROWS_PER_TASK)
+            .enumerate()
+            .for_each(|(task, rows)| {
+                let (mut cursors, mut scratch) = self.task_state();
+                for (r, row) in rows.chunks_mut(w).enumerate() {
+                    let first = start + (task * ROWS_PER_TASK + r) * w;
+                    self.row(first, row, None, &mut cursors, &mut scratch);
+                }
+                progress.advance((rows.len() / w) as u64);
+            });
+        texels
+    }
+
+    /// The samples of `texels` (sorted and distinct), each painted as in its whole row:
+    /// a texel's sample does not depend on the others of its row.
+    pub fn texels(&self, texels: &[u32]) -> Vec<BioSample> {
+        let w = self.surface.width;
+        // The texels grouped by row.
+        let mut groups: Vec<&[u32]> = Vec::new();
+        let mut rest = texels;
+        while let Some(&t) = rest.first() {
+            let y = t as usize / w;
+            let n = rest.partition_point(|&u| u as usize / w == y);
+            groups.push(&rest[..n]);
+            rest = &rest[n..];
+        }
+        let painted: Vec<Vec<BioSample>> = groups
+            .par_chunks(ROWS_PER_TASK)
+            .flat_map_iter(|task| {
+                let (mut cursors, mut scratch) = self.task_state();
+                let mut row = vec![BioSample::default(); w];
+                task.iter()
+                    .map(|g| {
+                        let first = g[0] as usize / w * w;
+                        let cols: Vec<usize> = g.iter().map(|&t| t as usize - first).collect();
+                        row.fill(BioSample::default());
+                        self.row(first, &mut row, Some(&cols), &mut cursors, &mut scratch);
+                        cols.iter().map(|&x| row[x]).collect()
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        painted.into_iter().flatten().collect()
+    }
+
+    /// A task's grid cursors (one per feature kind) and scratch buffers.
+    fn task_state(&self) -> (Vec<GridCursor<'_>>, Scratch) {
+        let cursors = self
+            .kinds
+            .iter()
+            .map(|k| GridCursor::new(k.grid()))
+            .collect();
+        (cursors, Scratch::default())
+    }
 }
 
 /// A task's caches and a row's buffers, reused from row to row.
@@ -289,11 +358,11 @@ impl Painter<'_> {
         &self,
         first: usize,
         row: &mut [BioSample],
-        kinds: &[&dyn crate::placement::PlacedKind],
+        cols: Option<&[usize]>,
         cursors: &mut [GridCursor],
         sc: &mut Scratch,
     ) {
-        self.baseline(first, row, sc);
+        self.baseline(first, row, cols, sc);
         if let Some((prm, _, _)) = &self.relief {
             sc.relief_out.resize(sc.relief_in.len(), 0.0);
             heights(prm, &sc.relief_in, &mut sc.relief_out, &mut sc.relief_cache);
@@ -306,7 +375,7 @@ impl Painter<'_> {
             if let Some((_, params)) = &self.lips {
                 apply_lips(params, lip.clamp(0.0, 1.0), s);
             }
-            for (kind, cursor) in kinds.iter().zip(cursors.iter_mut()) {
+            for (kind, cursor) in self.kinds.iter().zip(cursors.iter_mut()) {
                 let ids = cursor.query(q.p);
                 if !ids.is_empty() {
                     kind.paint(ids, q, s);
@@ -320,15 +389,27 @@ impl Painter<'_> {
 
     /// The first pass: each covered texel's baseline, regional gains, mottling and measured
     /// maps, and what the later passes need (its point and lip mask, the relief's inputs).
-    fn baseline(&self, first: usize, row: &mut [BioSample], sc: &mut Scratch) {
+    fn baseline(
+        &self,
+        first: usize,
+        row: &mut [BioSample],
+        cols: Option<&[usize]>,
+        sc: &mut Scratch,
+    ) {
         let surface = self.surface;
         sc.row_points.clear();
         sc.relief_in.clear();
         sc.relief_at.clear();
         // The covered texels' points, and the noises there for the whole row at once.
         sc.covered.clear();
-        sc.covered
-            .extend((0..row.len()).filter(|&x| surface.covered(first + x)));
+        match cols {
+            Some(cols) => sc
+                .covered
+                .extend(cols.iter().copied().filter(|&x| surface.covered(first + x))),
+            None => sc
+                .covered
+                .extend((0..row.len()).filter(|&x| surface.covered(first + x))),
+        }
         sc.points.clear();
         sc.points
             .extend(sc.covered.iter().map(|&x| surface.position(first + x)));

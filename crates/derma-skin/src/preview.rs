@@ -51,13 +51,30 @@ pub fn gpu_views(
     Ok(Some((views, r.name())))
 }
 
+/// The whole factor the contact sheet's thumbnails are box-reduced by first, for maps of
+/// `width` × `height` texels: to about twice the thumbnails' size.
+pub fn reduction(width: usize, height: usize) -> usize {
+    (width.max(height) / PANEL).max(1)
+}
+
+/// The bio channels the contact sheet shows (height, melanin, blood) of a sample.
+pub fn sheet_channels(s: &crate::features::BioSample) -> [f32; 3] {
+    [s.height_mm, s.tissue.melanin, s.tissue.blood]
+}
+
+/// The contact sheet's bio channels of `bio`, box-reduced by [`reduction`].
+pub fn reduced_bio(bio: &BioMaps) -> [Map; 3] {
+    bio.channels_reduced(reduction(bio.width, bio.height), sheet_channels)
+}
+
 /// Shaded views of `render_maps` on its mesh (or a sphere and a tile for patches) plus the contact
-/// sheet (base colour, normal, height, roughness, melanin, blood): preview.png. `shaded`: views
+/// sheet (base colour, normal, height, roughness, melanin, blood; the bio channels given
+/// [`reduced_bio`]): preview.png. `shaded`: views
 /// already rendered (by the GPU renderer, linear radiance after tone mapping, [`PANEL`]²); `None`
 /// draws them with derma-render's CPU previews.
 pub fn contact_sheet(
     render_maps: &RenderMaps,
-    bio: &BioMaps,
+    reduced: &[Map; 3],
     surface: &Surface,
     mesh: Option<&(TriMesh, Vec<[f32; 4]>)>,
     props: &[Prop],
@@ -111,12 +128,9 @@ pub fn contact_sheet(
         m
     };
     // Thumbnails from maps reduced to about twice their size first (no full-size copies).
-    let k = (bio.width.max(bio.height) / (2 * t)).max(1);
-    let (base, normal, rough) = r.reduced(k);
+    let (base, normal, rough) = r.reduced(reduction(r.width, r.height));
     let rough = small(&rough);
-    let [height, melanin, blood] = bio
-        .channels_reduced(k, |s| [s.height_mm, s.tissue.melanin, s.tissue.blood])
-        .map(|m| small(&m));
+    let [height, melanin, blood] = reduced.each_ref().map(small);
     let sheet = vec![
         base.each_ref().map(enc),
         normal.each_ref().map(half),

@@ -43,12 +43,10 @@ pub struct Run<'a> {
     pub appearance: &'a str,
     /// The skin's roughness and F0 and their source.
     pub skin_surface: crate::texture_set::SkinSurface,
-    /// The surface (its chart coverage masks the statistics).
+    /// The surface painted.
     pub surface: &'a Surface,
-    /// The painted bio maps.
-    pub bio: &'a BioMaps,
-    /// The render maps (the base colour's statistics).
-    pub render: &'a RenderMaps,
+    /// The statistics over the covered texels.
+    pub statistics: &'a Statistics,
     /// Where each field came from (built-in, uniform, a file, an expression).
     pub field_origins: &'a std::collections::BTreeMap<String, String>,
     /// Features per kind.
@@ -61,66 +59,106 @@ pub struct Run<'a> {
     pub albedo_comparison: Option<&'a crate::albedo_compare::AlbedoComparison>,
 }
 
-/// Texels per block of [`covered_stats`]: the blocks' sums are added in order, so the
-/// statistics do not depend on the thread count.
+/// Texels per block of [`Statistics`]: the blocks' sums are added in order, so the statistics
+/// do not depend on the thread count, nor on the bands the texels come in.
 const STATS_BLOCK: usize = 1 << 16;
 
-/// [`MapStats`] of `C` values per covered texel of `surface`, in one parallel pass.
-fn covered_stats<const C: usize>(
-    surface: &Surface,
-    values: impl Fn(usize) -> [f32; C] + Sync,
-) -> [MapStats; C] {
-    use rayon::prelude::*;
-    type Acc = (f64, usize, f32, f32);
-    let empty: Acc = (0.0, 0, f32::INFINITY, f32::NEG_INFINITY);
-    let blocks: Vec<[Acc; C]> = (0..surface.len().div_ceil(STATS_BLOCK))
-        .into_par_iter()
-        .map(|b| {
-            let mut acc = [empty; C];
-            for i in b * STATS_BLOCK..((b + 1) * STATS_BLOCK).min(surface.len()) {
-                if !surface.covered(i) {
-                    continue;
-                }
-                for (a, v) in acc.iter_mut().zip(values(i)) {
-                    *a = (a.0 + v as f64, a.1 + 1, a.2.min(v), a.3.max(v));
-                }
-            }
-            acc
-        })
-        .collect();
-    std::array::from_fn(|c| {
-        let (sum, n, lo, hi) = blocks.iter().fold(empty, |t, b| {
-            let a = b[c];
-            (t.0 + a.0, t.1 + a.1, t.2.min(a.2), t.3.max(a.3))
-        });
-        MapStats {
-            mean: if n > 0 { sum / n as f64 } else { 0.0 },
-            min: lo,
-            max: hi,
-            count: n,
+/// Values per texel in report.json's statistics: melanin, pheomelanin, blood, oxygenation,
+/// epidermis, height, and the base colour's three linear channels.
+const STATS: usize = 9;
+
+/// One block's sum, count, least and greatest value of one statistic.
+type Acc = (f64, usize, f32, f32);
+const EMPTY: Acc = (0.0, 0, f32::INFINITY, f32::NEG_INFINITY);
+
+/// report.json's statistics over the covered texels, accumulated as texels come: whole
+/// ([`Statistics::of_set`]) or band by band (the streamed main job), with the same bits.
+pub struct Statistics {
+    blocks: Vec<[Acc; STATS]>,
+}
+
+impl Statistics {
+    /// No texel yet, of a surface of `texels` texels.
+    pub fn new(texels: usize) -> Self {
+        Self {
+            blocks: vec![[EMPTY; STATS]; texels.div_ceil(STATS_BLOCK)],
         }
-    })
+    }
+
+    /// The statistics of a whole set.
+    pub fn of_set(surface: &Surface, bio: &BioMaps, render: &RenderMaps) -> Self {
+        let mut s = Self::new(surface.len());
+        s.add(surface, 0..surface.len(), |i| {
+            values(&bio.texels[i], render.base_color[i])
+        });
+        s
+    }
+
+    /// Adds texels `texels` (each texel once, ranges in increasing order), `values(i)` giving
+    /// texel i's; the blocks they fall in are summed in parallel.
+    pub fn add(
+        &mut self,
+        surface: &Surface,
+        texels: std::ops::Range<usize>,
+        values: impl Fn(usize) -> [f32; STATS] + Sync,
+    ) {
+        use rayon::prelude::*;
+        if texels.is_empty() {
+            return;
+        }
+        let (b0, b1) = (texels.start / STATS_BLOCK, (texels.end - 1) / STATS_BLOCK);
+        self.blocks[b0..=b1]
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(k, acc)| {
+                let b = b0 + k;
+                let lo = texels.start.max(b * STATS_BLOCK);
+                let hi = texels.end.min((b + 1) * STATS_BLOCK);
+                for i in (lo..hi).filter(|&i| surface.covered(i)) {
+                    for (a, v) in acc.iter_mut().zip(values(i)) {
+                        *a = (a.0 + v as f64, a.1 + 1, a.2.min(v), a.3.max(v));
+                    }
+                }
+            });
+    }
+
+    /// The statistics, the blocks added in order.
+    pub fn finish(&self) -> [MapStats; STATS] {
+        std::array::from_fn(|c| {
+            let (sum, n, lo, hi) = self.blocks.iter().fold(EMPTY, |t, b| {
+                let a = b[c];
+                (t.0 + a.0, t.1 + a.1, t.2.min(a.2), t.3.max(a.3))
+            });
+            MapStats {
+                mean: if n > 0 { sum / n as f64 } else { 0.0 },
+                min: lo,
+                max: hi,
+                count: n,
+            }
+        })
+    }
+}
+
+/// The statistics' values of one texel: its sample and its base colour's code.
+pub fn values(s: &crate::features::BioSample, c: [u8; 3]) -> [f32; STATS] {
+    let srgb = derma_core::color::srgb8_decode;
+    let t = &s.tissue;
+    [
+        t.melanin,
+        t.pheomelanin,
+        t.blood,
+        t.oxygenation,
+        t.epidermis_um,
+        s.height_mm,
+        srgb(c[0]),
+        srgb(c[1]),
+        srgb(c[2]),
+    ]
 }
 
 /// report.json of a run.
 pub fn report(set: &Run) -> serde_json::Value {
-    // Every statistic in one parallel pass over the covered texels.
-    let srgb = derma_core::color::srgb8_decode;
-    let [mel, pheo, blood, oxy, epi, height, r, g, b] = covered_stats(set.surface, |i| {
-        let (s, c) = (&set.bio.texels[i], set.render.base_color[i]);
-        let t = &s.tissue;
-        [
-            t.melanin,
-            t.pheomelanin,
-            t.blood,
-            t.oxygenation,
-            t.epidermis_um,
-            s.height_mm,
-            srgb(c[0]),
-            srgb(c[1]),
-            srgb(c[2]),
-        ]
-    });
+    let [mel, pheo, blood, oxy, epi, height, r, g, b] = set.statistics.finish();
     let file = |p: &Option<std::path::PathBuf>| {
         p.as_ref()
             .map(|p| json!({"path": p.display().to_string(), "sha256": sha256_file(p)}))

@@ -8,8 +8,10 @@ use crate::outputs;
 use crate::paint::{BioMaps, BIO_CHANNELS};
 use crate::surface::Surface;
 use derma_core::color::srgb8_decode;
-use derma_core::exr_writer::{write_exr_rows, ExrChannel, ExrCompression};
-use derma_core::image_io::{quantize16, quantize8, srgb8, write_png_rows, ExrPrecision, PngDepth};
+use derma_core::exr_writer::{write_exr_rows, ExrChannel, ExrCompression, ExrRowSink};
+use derma_core::image_io::{
+    quantize16, quantize8, srgb8, write_png_rows, ExrPrecision, PngDepth, PngRowSink,
+};
 use derma_core::map::{box_reduced, Taps};
 use derma_core::Map;
 use derma_optics::bio::names;
@@ -62,8 +64,22 @@ pub struct SubsurfaceMaps {
 pub use derma_render::material::SSS_RADIUS_RANGE_MM;
 
 impl RenderMaps {
+    /// Rows of `band` (a band of the same width) copied in at row `first_row`: every map
+    /// this one has but the wrinkle normals.
+    pub(crate) fn copy_rows(&mut self, band: &RenderMaps, first_row: usize) {
+        let at = first_row * self.width..(first_row + band.height) * self.width;
+        self.base_color[at.clone()].copy_from_slice(&band.base_color);
+        self.roughness[at.clone()].copy_from_slice(&band.roughness);
+        self.specular[at.clone()].copy_from_slice(&band.specular);
+        self.normal[at.clone()].copy_from_slice(&band.normal);
+        if let (Some(all), Some(b)) = (self.subsurface.as_mut(), band.subsurface.as_ref()) {
+            all.color[at.clone()].copy_from_slice(&b.color);
+            all.radius[at].copy_from_slice(&b.radius);
+        }
+    }
+
     /// Maps of `width` × `height` texels, zero until [`convert`] fills them.
-    fn zeroed(width: usize, height: usize, subsurface: bool) -> Self {
+    pub(crate) fn zeroed(width: usize, height: usize, subsurface: bool) -> Self {
         let n = width * height;
         Self {
             width,
@@ -297,6 +313,20 @@ struct Strip<'a> {
     wrinkle_normal: Vec<(u32, [u16; 3])>,
 }
 
+/// Bio samples by texel index: the whole maps, or a band of rows with the rows around it
+/// (the streamed main job's, `crate::stream`).
+pub trait Samples: Sync {
+    /// The sample of texel `j`.
+    fn at(&self, j: usize) -> &BioSample;
+}
+
+impl Samples for BioMaps {
+    #[inline]
+    fn at(&self, j: usize) -> &BioSample {
+        &self.texels[j]
+    }
+}
+
 /// Converts painted bio maps (already dilated on meshes, see [`BioMaps::dilate`]) to render maps
 /// in one pass per texel, straight to the files' encodings; `dilation` fills the normal map's
 /// texels outside the UV charts.
@@ -307,61 +337,103 @@ pub fn convert(
     material: &MaterialConfig,
     dilation: Option<&[u32]>,
 ) -> RenderMaps {
-    let (w, h) = (bio.width, bio.height);
-    let has_sss = appearance.subsurface(&bio.texels[0].tissue).is_some();
-    let mut maps = RenderMaps::zeroed(w, h, has_sss);
-    let height = |j: usize| bio.texels[j].height_mm;
-    let n = w * CONVERT_ROWS;
-    let mut strips = Vec::with_capacity(h.div_ceil(CONVERT_ROWS));
-    {
-        let mut sss = maps
-            .subsurface
-            .as_mut()
-            .map(|s| (s.color.chunks_mut(n), s.radius.chunks_mut(n)));
-        for (k, (((b, r), s), nm)) in maps
-            .base_color
-            .chunks_mut(n)
-            .zip(maps.roughness.chunks_mut(n))
-            .zip(maps.specular.chunks_mut(n))
-            .zip(maps.normal.chunks_mut(n))
-            .enumerate()
-        {
-            strips.push(Strip {
-                first_row: k * CONVERT_ROWS,
-                base_color: b,
-                roughness: r,
-                specular: s,
-                normal: nm,
-                subsurface: sss
-                    .as_mut()
-                    .map(|(c, r)| (c.next().expect("rows"), r.next().expect("rows"))),
-                wrinkle_normal: Vec::new(),
-            });
-        }
+    let mut maps = convert_rows(bio, 0..bio.height, surface, appearance, material);
+    if let Some(src) = dilation {
+        derma_core::raster::apply_dilation(&mut maps.normal, src);
+        maps.wrinkle_normal = dilate_sparse(&maps.wrinkle_normal, src);
     }
-    let furrow = |j: usize| bio.texels[j].furrow_mm;
-    let wrap = surface.period().is_some();
-    let with_furrows = |j: usize| bio.texels[j].height_mm + bio.texels[j].furrow_mm;
-    let SkinSurface {
-        roughness: skin_r,
-        f0: skin_f0,
-        ..
-    } = skin_surface(material, appearance);
-    strips.par_iter_mut().for_each(|st| {
+    maps
+}
+
+/// The render maps of `rows` (a band; texel 0 of the result is the first row's first), read
+/// from `bio` (which must hold those rows and the rows next to them), with no dilation: texels
+/// outside the UV charts get the up normal. The wrinkle normals' texels are the image's.
+pub fn convert_rows<S: Samples>(
+    bio: &S,
+    rows: std::ops::Range<usize>,
+    surface: &Surface,
+    appearance: &dyn Appearance,
+    material: &MaterialConfig,
+) -> RenderMaps {
+    let w = surface.width;
+    let has_sss = appearance
+        .subsurface(&bio.at(rows.start * w).tissue)
+        .is_some();
+    let mut maps = RenderMaps::zeroed(w, rows.len(), has_sss);
+    let mut strips = strips(&mut maps, rows.start);
+    let ctx = Converter {
+        bio,
+        surface,
+        appearance,
+        material,
+        skin: skin_surface(material, appearance),
+    };
+    strips.par_iter_mut().for_each(|st| ctx.strip(st));
+    maps.wrinkle_normal = strips
+        .into_iter()
+        .flat_map(|st| st.wrinkle_normal)
+        .collect();
+    maps
+}
+
+/// `maps` cut into strips of [`CONVERT_ROWS`] rows, the first at image row `first_row`.
+fn strips(maps: &mut RenderMaps, first_row: usize) -> Vec<Strip<'_>> {
+    let n = maps.width * CONVERT_ROWS;
+    let mut strips = Vec::with_capacity(maps.height.div_ceil(CONVERT_ROWS));
+    let mut sss = maps
+        .subsurface
+        .as_mut()
+        .map(|s| (s.color.chunks_mut(n), s.radius.chunks_mut(n)));
+    for (k, (((b, r), s), nm)) in maps
+        .base_color
+        .chunks_mut(n)
+        .zip(maps.roughness.chunks_mut(n))
+        .zip(maps.specular.chunks_mut(n))
+        .zip(maps.normal.chunks_mut(n))
+        .enumerate()
+    {
+        strips.push(Strip {
+            first_row: first_row + k * CONVERT_ROWS,
+            base_color: b,
+            roughness: r,
+            specular: s,
+            normal: nm,
+            subsurface: sss
+                .as_mut()
+                .map(|(c, r)| (c.next().expect("rows"), r.next().expect("rows"))),
+            wrinkle_normal: Vec::new(),
+        });
+    }
+    strips
+}
+
+/// What converting a strip reads.
+struct Converter<'a, S> {
+    bio: &'a S,
+    surface: &'a Surface,
+    appearance: &'a dyn Appearance,
+    material: &'a MaterialConfig,
+    skin: SkinSurface,
+}
+
+impl<S: Samples> Converter<'_, S> {
+    /// Converts one strip of texels.
+    fn strip(&self, st: &mut Strip) {
+        let (bio, surface, material) = (self.bio, self.surface, self.material);
+        let (w, h) = (surface.width, surface.height);
         let first = st.first_row * w;
         let len = st.roughness.len();
         // The appearance over the whole strip at once (the match table interpolates eight
         // texels per SIMD register).
-        let tissue: Vec<BioTexel> = bio.texels[first..first + len]
-            .iter()
-            .map(|t| t.tissue)
-            .collect();
+        let tissue: Vec<BioTexel> = (first..first + len).map(|i| bio.at(i).tissue).collect();
         let mut shade = vec![([0.0f32; 3], None); len];
-        appearance.shade_batch(&tissue, &mut shade);
+        self.appearance.shade_batch(&tissue, &mut shade);
+        let height = |j: usize| bio.at(j).height_mm;
+        let (skin_r, skin_f0) = (self.skin.roughness, self.skin.f0);
         for k in 0..len {
             let i = first + k;
             let (x, y) = (i % w, i / w);
-            let t = &bio.texels[i];
+            let t = bio.at(i);
             let (a, sub) = shade[k];
             let ea = t.extra[3].clamp(0.0, 1.0);
             st.base_color[k] = std::array::from_fn(|c| srgb8(a[c] + (t.extra[c] - a[c]) * ea));
@@ -372,17 +444,14 @@ pub fn convert(
             st.roughness[k] = quantize8(r);
             st.specular[k] = quantize8(s);
             // Normals use only texels on the surface (one-sided differences at chart borders);
-            // texels off it are dilated below.
-            let nrm = if surface.covered(i) {
-                crate::normal_map::tangent_normal(surface, height, x, y)
+            // texels off it are dilated later.
+            st.normal[k] = if surface.covered(i) {
+                normal_code(surface, bio, i)
             } else {
-                [0.0, 0.0, 1.0]
+                [0.0f32, 0.0, 1.0].map(|v| quantize16(0.5 * v + 0.5))
             };
-            st.normal[k] = nrm.map(|v| quantize16(0.5 * v + 0.5));
-            if surface.covered(i) && near_furrow(furrow, (w, h), (x, y), wrap) {
-                let n = crate::normal_map::tangent_normal(surface, with_furrows, x, y);
-                st.wrinkle_normal
-                    .push((i as u32, n.map(|v| quantize16(0.5 * v + 0.5))));
+            if let Some(n) = wrinkle_code(surface, bio, i) {
+                st.wrinkle_normal.push((i as u32, n));
             }
             if let (Some(sub), Some((color, radius))) = (sub, st.subsurface.as_mut()) {
                 // Hair lies on the skin and scatters no light beneath it: composited over the
@@ -395,16 +464,28 @@ pub fn convert(
                     .map(|v| quantize16(v * (1.0 - ea) / SSS_RADIUS_RANGE_MM));
             }
         }
-    });
-    maps.wrinkle_normal = strips
-        .into_iter()
-        .flat_map(|st| st.wrinkle_normal)
-        .collect();
-    if let Some(src) = dilation {
-        derma_core::raster::apply_dilation(&mut maps.normal, src);
-        maps.wrinkle_normal = dilate_sparse(&maps.wrinkle_normal, src);
     }
-    maps
+}
+
+/// normal.png's code at covered texel `i`, from the heights of `bio` around it.
+pub fn normal_code<S: Samples + ?Sized>(surface: &Surface, bio: &S, i: usize) -> [u16; 3] {
+    let w = surface.width;
+    let n = crate::normal_map::tangent_normal(surface, |j| bio.at(j).height_mm, i % w, i / w);
+    n.map(|v| quantize16(0.5 * v + 0.5))
+}
+
+/// wrinkle_normal.png's code at texel `i` where it differs from normal.png's: on the surface
+/// within a texel of an expression furrow ([`near_furrow`]); `None` elsewhere.
+pub fn wrinkle_code<S: Samples + ?Sized>(surface: &Surface, bio: &S, i: usize) -> Option<[u16; 3]> {
+    let (w, h) = (surface.width, surface.height);
+    let wrap = surface.period().is_some();
+    let furrow = |j: usize| bio.at(j).furrow_mm;
+    if !surface.covered(i) || !near_furrow(furrow, (w, h), (i % w, i / w), wrap) {
+        return None;
+    }
+    let with_furrows = |j: usize| bio.at(j).height_mm + bio.at(j).furrow_mm;
+    let n = crate::normal_map::tangent_normal(surface, with_furrows, i % w, i / w);
+    Some(n.map(|v| quantize16(0.5 * v + 0.5)))
 }
 
 /// Whether texel (`x`, `y`) or one of the four neighbours the normal reads (across the edges
@@ -447,6 +528,24 @@ pub struct HeightRange {
     pub min_mm: f32,
     /// Height of texel value 1, mm.
     pub max_mm: f32,
+}
+
+/// The range of heights (mm) of every texel.
+pub fn range_of(heights: &[f32]) -> HeightRange {
+    let (lo, hi) = heights
+        .par_iter()
+        .fold(
+            || (f32::INFINITY, f32::NEG_INFINITY),
+            |(lo, hi), &v| (lo.min(v), hi.max(v)),
+        )
+        .reduce(
+            || (f32::INFINITY, f32::NEG_INFINITY),
+            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+        );
+    HeightRange {
+        min_mm: lo,
+        max_mm: hi,
+    }
 }
 
 /// The range of the painted heights (every texel, the gutter's dilated ones included).
@@ -576,247 +675,257 @@ pub fn write_lashes(path: &Path, hair: [f32; 3]) -> crate::Result<()> {
     })?)
 }
 
-/// Writes the maps of the texture set into `dir` (each atomically; files in parallel, each
-/// streamed from the bio samples or the render maps by rows, with no whole-image copy): every
-/// file of [`crate::outputs::OUTPUTS`] but features.json, preview.png, manifest.json and
-/// report.json, the subsurface maps only when `maps` has them. Returns the files written and
-/// the height range of height.png.
+/// Writes the maps of the texture set into `dir` (each atomically; every file streamed from the
+/// bio samples or the render maps by rows, with no whole-image copy): every file of
+/// [`crate::outputs::OUTPUTS`] but features.json, preview.png, manifest.json and report.json,
+/// the subsurface maps only when `maps` has them. Returns the files written and the height
+/// range of height.png. The streamed main job pushes the same files band by band.
 pub fn write_maps(
     dir: &Path,
     bio: &BioMaps,
     maps: &RenderMaps,
 ) -> crate::Result<(Vec<&'static str>, HeightRange)> {
     let range = height_range(bio);
-    let writer = MapWriter {
-        dir,
-        bio,
-        range,
-        span: (range.max_mm - range.min_mm).max(1e-9),
-    };
-    let list = map_jobs(&writer, maps);
-    let written: Vec<&'static str> = list.iter().map(|(name, _)| *name).collect();
-    list.into_par_iter()
-        .map(|(_, j)| j())
-        .collect::<crate::Result<Vec<()>>>()?;
-    // The files written, in manifest order.
-    let files = outputs::OUTPUTS
+    let mut sinks = MapSinks::create(dir, bio.width, bio.height, maps.subsurface.is_some())?;
+    sinks.push(bio, maps, 0)?;
+    let mut files = sinks.finish()?;
+    write_height_png(dir, (bio.width, bio.height), range, |i| {
+        bio.texels[i].height_mm
+    })?;
+    files.push(outputs::HEIGHT_PNG);
+    Ok((in_manifest_order(&files), range))
+}
+
+/// The files written, in manifest order.
+pub fn in_manifest_order(written: &[&'static str]) -> Vec<&'static str> {
+    outputs::OUTPUTS
         .iter()
         .map(|o| o.file)
         .filter(|f| written.contains(f))
-        .collect();
-    Ok((files, range))
+        .collect()
 }
 
-/// Writing one map file, to run beside the others.
-type MapJob<'a> = Box<dyn FnOnce() -> crate::Result<()> + Send + 'a>;
-
-/// The job of every map [`write_maps`] writes (the subsurface maps' where `maps` has them),
-/// largest first, so the last jobs to start are short.
-fn map_jobs<'a>(wr: &'a MapWriter<'a>, maps: &'a RenderMaps) -> Vec<(&'static str, MapJob<'a>)> {
-    let bio = wr.bio;
-    let (f32, none) = (ExrPrecision::F32, ExrCompression::None);
-    let mut list: Vec<(&'static str, MapJob)> = vec![
-        (
-            outputs::BIO,
-            Box::new(move || write_bio_exr(&wr.path(outputs::BIO), bio, BIO_COMPRESSION)),
-        ),
-        (
-            outputs::MELANIN,
-            Box::new(move || {
-                let names = [names::MELANIN, names::PHEOMELANIN];
-                exr(&wr.path(outputs::MELANIN), bio, names, f32, none, |s| {
-                    [s.tissue.melanin, s.tissue.pheomelanin]
-                })
-            }),
-        ),
-        (
-            outputs::HEMOGLOBIN,
-            Box::new(move || {
-                let names = [names::HEMOGLOBIN, names::OXYGENATION];
-                exr(&wr.path(outputs::HEMOGLOBIN), bio, names, f32, none, |s| {
-                    [s.tissue.blood, s.tissue.oxygenation]
-                })
-            }),
-        ),
-        (
-            outputs::NORMAL,
-            Box::new(move || wr.rgb16(outputs::NORMAL, &maps.normal)),
-        ),
-        (
-            outputs::WRINKLE_NORMAL,
-            Box::new(move || wr.wrinkle_normal(maps)),
-        ),
-        (
-            outputs::HEIGHT_EXR,
-            Box::new(move || {
-                exr(
-                    &wr.path(outputs::HEIGHT_EXR),
-                    bio,
-                    ["height_mm", "height_mm_furrow"],
-                    f32,
-                    none,
-                    |s| [s.height_mm, s.furrow_mm],
-                )
-            }),
-        ),
-        (outputs::HEIGHT_PNG, Box::new(move || wr.height_png())),
-        (
-            outputs::BASE_COLOR,
-            Box::new(move || wr.rgb8(outputs::BASE_COLOR, &maps.base_color)),
-        ),
-        (
-            outputs::ROUGHNESS,
-            Box::new(move || wr.grey8(outputs::ROUGHNESS, &maps.roughness)),
-        ),
-        (
-            outputs::SPECULAR,
-            Box::new(move || wr.grey8(outputs::SPECULAR, &maps.specular)),
-        ),
-        (outputs::HAIR_COVERAGE, Box::new(move || wr.hair_coverage())),
-    ];
-    if let Some(sub) = &maps.subsurface {
-        list.insert(
-            4,
-            (
-                outputs::SSS_RADIUS,
-                Box::new(move || wr.rgb16(outputs::SSS_RADIUS, &sub.radius)),
-            ),
-        );
-        list.push((
-            outputs::SSS_COLOR,
-            Box::new(move || wr.rgb8(outputs::SSS_COLOR, &sub.color)),
-        ));
-    }
-    list
-}
-
-/// Writes the PNG maps of one texture set into a directory, by rows.
-struct MapWriter<'a> {
-    dir: &'a Path,
-    bio: &'a BioMaps,
-    /// The heights' range and its span (height.png's scale).
+/// height.png of a `size` map: the heights (`height(i)`, mm) over `range`, 16-bit.
+pub fn write_height_png(
+    dir: &Path,
+    (w, h): (usize, usize),
     range: HeightRange,
-    span: f32,
+    height: impl Fn(usize) -> f32 + Sync,
+) -> crate::Result<()> {
+    let span = (range.max_mm - range.min_mm).max(1e-9);
+    Ok(write_png_rows(
+        &dir.join(outputs::HEIGHT_PNG),
+        w,
+        h,
+        1,
+        PngDepth::Sixteen,
+        |y, out| {
+            for (x, o) in out.chunks_exact_mut(2).enumerate() {
+                let v = quantize16((height(y * w + x) - range.min_mm) / span);
+                o.copy_from_slice(&v.to_be_bytes());
+            }
+        },
+    )?)
 }
 
-impl MapWriter<'_> {
-    /// The path of `name` in the directory.
-    fn path(&self, name: &str) -> std::path::PathBuf {
-        self.dir.join(name)
+/// A map file being written: a PNG or an EXR.
+enum Sink {
+    Png(PngRowSink),
+    Exr(ExrRowSink),
+}
+
+/// Every map file but height.png (which needs the heights' range first), written from rows
+/// pushed band by band ([`MapSinks::push`]), the files side by side.
+pub struct MapSinks {
+    sinks: Vec<(&'static str, Sink)>,
+    width: usize,
+}
+
+/// The rows of one band: the bio samples (by texel, [`Samples`]) and the band's render maps,
+/// whose texel 0 is the first row's first.
+struct BandRows<'a, S: ?Sized> {
+    bio: &'a S,
+    maps: &'a RenderMaps,
+    first_row: usize,
+    width: usize,
+}
+
+impl MapSinks {
+    /// Starts every map file of a `width` × `height` set in `dir`, the subsurface maps' with
+    /// `subsurface`, largest first (the last to finish a band are short).
+    pub fn create(
+        dir: &Path,
+        width: usize,
+        height: usize,
+        subsurface: bool,
+    ) -> crate::Result<Self> {
+        let (f16, f32) = (ExrPrecision::F16, ExrPrecision::F32);
+        let exr = |file: &'static str, names: &[&str], precision, compression| {
+            let list: Vec<ExrChannel> = names
+                .iter()
+                .map(|&name| ExrChannel { name, precision })
+                .collect();
+            let s = ExrRowSink::create(&dir.join(file), width, height, &list, compression);
+            Ok::<_, crate::SkinError>((file, Sink::Exr(s?)))
+        };
+        let png = |file: &'static str, channels, depth| {
+            let s = PngRowSink::create(&dir.join(file), width, height, channels, depth)?;
+            Ok::<_, crate::SkinError>((file, Sink::Png(s)))
+        };
+        let none = ExrCompression::None;
+        let bio_names = BIO_CHANNELS.map(|(n, _)| n);
+        let mut sinks = vec![
+            exr(outputs::BIO, &bio_names, f16, BIO_COMPRESSION)?,
+            exr(
+                outputs::MELANIN,
+                &[names::MELANIN, names::PHEOMELANIN],
+                f32,
+                none,
+            )?,
+            exr(
+                outputs::HEMOGLOBIN,
+                &[names::HEMOGLOBIN, names::OXYGENATION],
+                f32,
+                none,
+            )?,
+            png(outputs::NORMAL, 3, PngDepth::Sixteen)?,
+            png(outputs::WRINKLE_NORMAL, 3, PngDepth::Sixteen)?,
+            exr(
+                outputs::HEIGHT_EXR,
+                &["height_mm", "height_mm_furrow"],
+                f32,
+                none,
+            )?,
+            png(outputs::BASE_COLOR, 3, PngDepth::Eight)?,
+            png(outputs::ROUGHNESS, 1, PngDepth::Eight)?,
+            png(outputs::SPECULAR, 1, PngDepth::Eight)?,
+            png(outputs::HAIR_COVERAGE, 1, PngDepth::Eight)?,
+        ];
+        if subsurface {
+            sinks.insert(4, png(outputs::SSS_RADIUS, 3, PngDepth::Sixteen)?);
+            sinks.push(png(outputs::SSS_COLOR, 3, PngDepth::Eight)?);
+        }
+        Ok(Self { sinks, width })
     }
 
-    /// An 8-bit RGB PNG of `px`.
-    fn rgb8(&self, file: &'static str, px: &[[u8; 3]]) -> crate::Result<()> {
-        let (w, h) = (self.bio.width, self.bio.height);
-        Ok(write_png_rows(
-            &self.path(file),
-            w,
-            h,
-            3,
-            PngDepth::Eight,
-            |y, out| {
-                out.copy_from_slice(px[y * w..(y + 1) * w].as_flattened());
-            },
-        )?)
+    /// Appends the rows of `maps` (a band starting at image row `first_row`) to every file,
+    /// the bio samples read from `bio`; the files in parallel.
+    pub fn push<S: Samples>(
+        &mut self,
+        bio: &S,
+        maps: &RenderMaps,
+        first_row: usize,
+    ) -> crate::Result<()> {
+        let band = BandRows {
+            bio,
+            maps,
+            first_row,
+            width: self.width,
+        };
+        self.sinks
+            .par_iter_mut()
+            .map(|(file, sink)| band.push(file, sink))
+            .collect::<crate::Result<Vec<()>>>()?;
+        Ok(())
     }
 
-    /// A 16-bit RGB PNG of `px`.
-    fn rgb16(&self, file: &'static str, px: &[[u16; 3]]) -> crate::Result<()> {
-        let (w, h) = (self.bio.width, self.bio.height);
-        Ok(write_png_rows(
-            &self.path(file),
-            w,
-            h,
-            3,
-            PngDepth::Sixteen,
-            |y, out| {
-                for (o, v) in out
-                    .chunks_exact_mut(2)
-                    .zip(px[y * w..(y + 1) * w].as_flattened())
-                {
-                    o.copy_from_slice(&v.to_be_bytes());
-                }
-            },
-        )?)
+    /// Ends every file; returns their names.
+    pub fn finish(self) -> crate::Result<Vec<&'static str>> {
+        let mut files = Vec::with_capacity(self.sinks.len());
+        for (file, sink) in self.sinks {
+            match sink {
+                Sink::Png(s) => s.finish()?,
+                Sink::Exr(s) => s.finish()?,
+            }
+            files.push(file);
+        }
+        Ok(files)
+    }
+}
+
+impl<S: Samples + ?Sized> BandRows<'_, S> {
+    /// The bio samples of image row `y`'s texels.
+    fn samples(&self, y: usize) -> impl Iterator<Item = &BioSample> {
+        (y * self.width..(y + 1) * self.width).map(|i| self.bio.at(i))
     }
 
-    /// An 8-bit grey PNG of `px`.
-    fn grey8(&self, file: &'static str, px: &[u8]) -> crate::Result<()> {
-        let (w, h) = (self.bio.width, self.bio.height);
-        Ok(write_png_rows(
-            &self.path(file),
-            w,
-            h,
-            1,
-            PngDepth::Eight,
-            |y, out| {
-                out.copy_from_slice(&px[y * w..(y + 1) * w]);
-            },
-        )?)
+    /// Image row `y`'s texels in the band's render maps.
+    fn span(&self, y: usize) -> std::ops::Range<usize> {
+        let a = (y - self.first_row) * self.width;
+        a..a + self.width
     }
 
-    /// wrinkle_normal.png: normal.png with the sparse wrinkle normals laid over it.
-    fn wrinkle_normal(&self, maps: &RenderMaps) -> crate::Result<()> {
-        let (w, h) = (self.bio.width, self.bio.height);
-        Ok(write_png_rows(
-            &self.path(outputs::WRINKLE_NORMAL),
-            w,
-            h,
-            3,
-            PngDepth::Sixteen,
-            |y, out| {
-                let (a, b) = (y * w, (y + 1) * w);
-                let wn = &maps.wrinkle_normal;
-                let first = wn.partition_point(|e| (e.0 as usize) < a);
-                let last = wn.partition_point(|e| (e.0 as usize) < b);
-                let mut row = maps.normal[a..b].to_vec();
-                for (i, n) in &wn[first..last] {
-                    row[*i as usize - a] = *n;
-                }
-                for (o, v) in out.chunks_exact_mut(2).zip(row.as_flattened()) {
-                    o.copy_from_slice(&v.to_be_bytes());
-                }
-            },
-        )?)
+    /// Pushes the band's rows of `file` to `sink`.
+    fn push(&self, file: &str, sink: &mut Sink) -> crate::Result<()> {
+        let n = self.maps.height;
+        match sink {
+            Sink::Exr(s) => Ok(s.push(n, |y, rows| self.exr_row(file, y, rows))?),
+            Sink::Png(s) => Ok(s.push(n, |y, out| self.png_row(file, y, out))?),
+        }
     }
 
-    /// height.png: the heights over their range, 16-bit.
-    fn height_png(&self) -> crate::Result<()> {
-        let (w, h) = (self.bio.width, self.bio.height);
-        let (range, span) = (self.range, self.span);
-        Ok(write_png_rows(
-            &self.path(outputs::HEIGHT_PNG),
-            w,
-            h,
-            1,
-            PngDepth::Sixteen,
-            |y, out| {
-                for (o, s) in out
-                    .chunks_exact_mut(2)
-                    .zip(&self.bio.texels[y * w..(y + 1) * w])
-                {
-                    let v = quantize16((s.height_mm - range.min_mm) / span);
-                    o.copy_from_slice(&v.to_be_bytes());
-                }
-            },
-        )?)
+    /// Line `y` of an EXR map, every channel.
+    fn exr_row(&self, file: &str, y: usize, rows: &mut [&mut [f32]]) {
+        match file {
+            outputs::BIO => self.line(y, rows, BioSample::channels),
+            outputs::MELANIN => self.line(y, rows, |s| [s.tissue.melanin, s.tissue.pheomelanin]),
+            outputs::HEMOGLOBIN => self.line(y, rows, |s| [s.tissue.blood, s.tissue.oxygenation]),
+            _ => self.line(y, rows, |s| [s.height_mm, s.furrow_mm]),
+        }
     }
 
-    /// hair_coverage.png: the hair's coverage, 8-bit.
-    fn hair_coverage(&self) -> crate::Result<()> {
-        let (w, h) = (self.bio.width, self.bio.height);
-        Ok(write_png_rows(
-            &self.path(outputs::HAIR_COVERAGE),
-            w,
-            h,
-            1,
-            PngDepth::Eight,
-            |y, out| {
-                for (o, s) in out.iter_mut().zip(&self.bio.texels[y * w..(y + 1) * w]) {
+    /// Line `y` of `C` channels, each texel's from `values`.
+    fn line<const C: usize>(
+        &self,
+        y: usize,
+        rows: &mut [&mut [f32]],
+        values: impl Fn(&BioSample) -> [f32; C],
+    ) {
+        for (x, s) in self.samples(y).enumerate() {
+            let v = values(s);
+            for c in 0..C {
+                rows[c][x] = v[c];
+            }
+        }
+    }
+
+    /// Row `y` of a PNG map, as the file stores it.
+    fn png_row(&self, file: &str, y: usize, out: &mut [u8]) {
+        let (m, span) = (self.maps, self.span(y));
+        let sixteen = |out: &mut [u8], px: &[[u16; 3]]| {
+            for (o, v) in out.chunks_exact_mut(2).zip(px.as_flattened()) {
+                o.copy_from_slice(&v.to_be_bytes());
+            }
+        };
+        match file {
+            outputs::NORMAL => sixteen(out, &m.normal[span]),
+            outputs::WRINKLE_NORMAL => sixteen(out, &self.wrinkle_row(y)),
+            outputs::SSS_RADIUS => sixteen(out, &m.subsurface.as_ref().expect("sss").radius[span]),
+            outputs::BASE_COLOR => out.copy_from_slice(m.base_color[span].as_flattened()),
+            outputs::SSS_COLOR => {
+                out.copy_from_slice(m.subsurface.as_ref().expect("sss").color[span].as_flattened())
+            }
+            outputs::ROUGHNESS => out.copy_from_slice(&m.roughness[span]),
+            outputs::SPECULAR => out.copy_from_slice(&m.specular[span]),
+            _ => {
+                for (o, s) in out.iter_mut().zip(self.samples(y)) {
                     *o = quantize8(s.extra[3]);
                 }
-            },
-        )?)
+            }
+        }
+    }
+
+    /// wrinkle_normal.png's row `y`: normal.png's with the sparse wrinkle normals laid over it.
+    fn wrinkle_row(&self, y: usize) -> Vec<[u16; 3]> {
+        let (a, b) = (y * self.width, (y + 1) * self.width);
+        let wn = &self.maps.wrinkle_normal;
+        let first = wn.partition_point(|e| (e.0 as usize) < a);
+        let last = wn.partition_point(|e| (e.0 as usize) < b);
+        let mut row = self.maps.normal[self.span(y)].to_vec();
+        for (i, n) in &wn[first..last] {
+            row[*i as usize - a] = *n;
+        }
+        row
     }
 }
 

@@ -13,3 +13,4 @@ mod relief;
 mod render;
 mod robust_files;
 mod robust_inputs;
+mod streamed;
