@@ -73,12 +73,22 @@ pub(crate) fn write_bands(
         preview: None,
         reduced: [Vec::new(), Vec::new(), Vec::new()],
     };
+    // Each band is painted and converted while the last one is written, so the cores that
+    // finish one side early help the other.
+    let mut last: Option<(Band, RenderMaps)> = None;
     for a in (0..h).step_by(rows) {
-        let band = Band::paint(b, gutter.as_ref(), a..(a + rows).min(h));
-        let maps = band.convert(b, gutter.as_ref());
-        state.take(b, &band, &maps, dir, k)?;
-        progress.advance(maps.height as u64);
+        let (next, written) = rayon::join(
+            || {
+                let band = Band::paint(b, gutter.as_ref(), a..(a + rows).min(h));
+                let maps = band.convert(b, gutter.as_ref());
+                (band, maps)
+            },
+            || state.take_last(b, last.take(), dir, k, progress),
+        );
+        written?;
+        last = Some(next);
     }
+    state.take_last(b, last, dir, k, progress)?;
     state.finish(dir, (w, h), k)
 }
 
@@ -92,6 +102,22 @@ struct State {
 }
 
 impl State {
+    /// [`Self::take`] of `band`, where there is one, advancing `progress` by its rows.
+    fn take_last(
+        &mut self,
+        b: &Bands,
+        band: Option<(Band, RenderMaps)>,
+        dir: &Path,
+        k: usize,
+        progress: &dyn Progress,
+    ) -> crate::Result<()> {
+        if let Some((band, maps)) = band {
+            self.take(b, &band, &maps, dir, k)?;
+            progress.advance(maps.height as u64);
+        }
+        Ok(())
+    }
+
     /// Writes a band's rows and keeps what the rest of the set needs of them.
     fn take(
         &mut self,
@@ -229,14 +255,17 @@ impl Samples for Gutter<'_> {
     }
 }
 
-/// One band's samples (rows `start..end`), with the rows next to it, dilated.
+/// One band's samples (rows `start..end`), with the rows next to it, dilated: the row above
+/// (where there is one), the band, the row below (where there is one).
 struct Band {
     start: usize,
     end: usize,
-    /// The image row of the first row held (the row above the band where there is one).
-    first: usize,
+    /// The texel index the first sample would have were the rows held consecutive (the row
+    /// above the band's first; wrapping below zero on the first band of a tileable patch).
+    base: usize,
+    /// The rows above and below the band held, where they wrap around the image.
+    above: Option<usize>,
     width: usize,
-    height: usize,
     texels: Vec<BioSample>,
 }
 
@@ -271,9 +300,9 @@ impl Band {
         Band {
             start: rows.start,
             end: rows.end,
-            first,
+            base: (rows.start * w).wrapping_sub(if above.is_some() { w } else { 0 }),
+            above,
             width: w,
-            height: h,
             texels,
         }
     }
@@ -312,8 +341,17 @@ impl Band {
 impl Samples for Band {
     #[inline]
     fn at(&self, j: usize) -> &BioSample {
+        let k = j.wrapping_sub(self.base);
+        if k < self.texels.len() {
+            return &self.texels[k];
+        }
+        // A row held out of order: the row above the first band, or below the last, of a
+        // tileable patch.
         let (y, x) = (j / self.width, j % self.width);
-        let r = (y + self.height - self.first) % self.height;
-        &self.texels[r * self.width + x]
+        if Some(y) == self.above {
+            &self.texels[x]
+        } else {
+            &self.texels[self.texels.len() - self.width + x]
+        }
     }
 }
