@@ -9,6 +9,7 @@
 //! is `gpu_matcher.rs`; a whole patch pass on the GPU (`Matcher::patch_pass`) is in
 //! `gpu_patch_pass.rs`.
 
+use crate::coherence::{Coherence, SIMILAR};
 use crate::error::{invalid, Result, SynthError};
 use crate::exemplar::{Exemplar, ExemplarSet};
 use crate::search::{
@@ -73,6 +74,10 @@ pub(crate) struct Params {
     pub(crate) k16_hi: u32,
     pub(crate) cap: u32,
     pub(crate) fronts: u32,
+    pub(crate) sim_at: u32,
+    pub(crate) sim_k: u32,
+    pub(crate) n_random: u32,
+    pub(crate) n_cand: u32,
     pub(crate) pad: [u32; 2],
 }
 
@@ -90,6 +95,7 @@ impl Params {
         n_queries: usize,
         capacity: usize,
         source: (usize, usize),
+        random: usize,
     ) -> Self {
         let (cw, ch) = e.candidates(w);
         Self {
@@ -110,7 +116,32 @@ impl Params {
             max_guesses: MAX_GUESSES as u32,
             ..Self::zeroed()
         }
+        .over(res, random)
     }
+
+    /// The search over each query's k-coherence candidates where `res` holds the similarity
+    /// table, with `random` random ones; over every position where it does not.
+    fn over(mut self, res: &Resident, random: usize) -> Self {
+        if let Some(at) = res.sim_at {
+            self.sim_at = at as u32;
+            self.sim_k = SIMILAR as u32;
+            self.n_random = random as u32;
+            self.n_cand = candidates_per_query(random) as u32;
+        }
+        self
+    }
+}
+
+/// Threads per query of the k-coherence search with `random` random candidates: the guess
+/// slots, their similar positions and the random ones (search.wgsl, `position_of`).
+pub(crate) fn candidates_per_query(random: usize) -> usize {
+    MAX_GUESSES * (1 + SIMILAR) + random
+}
+
+/// Threads per query of a search over `positions` positions with `coherence` (the random
+/// candidates' count) where it runs over k-coherence candidates.
+pub(crate) fn threads_per_query(positions: usize, coherence: Option<usize>) -> usize {
+    coherence.map_or(positions, candidates_per_query)
 }
 
 /// guesses.wgsl's parameters.
@@ -325,16 +356,19 @@ impl Scratch {
 
 /// An exemplar's codes and block sums for one window side, resident on the GPU.
 pub(crate) struct Resident {
+    /// The exemplar's codes, then the similarity table where the search is k-coherent.
     pub(crate) codes: wgpu::Buffer,
     pub(crate) sums: wgpu::Buffer,
     pub(crate) plane_w: usize,
     pub(crate) plane_len: usize,
+    /// Where the similarity table starts in `codes`, if it is there.
+    pub(crate) sim_at: Option<usize>,
 }
 
 /// The GPU matcher. Exemplar uploads are kept for the matcher's life, keyed by the exemplar's
 /// codes (address and length) and the window side; one matcher is meant for one exemplar set.
 pub struct GpuMatcher {
-    resident: Mutex<HashMap<(usize, usize, usize), Arc<Resident>>>,
+    resident: Mutex<HashMap<(usize, usize, usize, bool), Arc<Resident>>>,
     scratch: Mutex<Option<Scratch>>,
     pub(crate) name: String,
     max_survivors: usize,
@@ -395,13 +429,26 @@ impl GpuMatcher {
         })
     }
 
-    pub(crate) fn resident(&self, set: &ExemplarSet, ex: usize, w: usize) -> Result<Arc<Resident>> {
+    /// Exemplar `ex`'s upload for windows of side `w`, with the similarity table of
+    /// `coherence` (for that side) where given.
+    pub(crate) fn resident(
+        &self,
+        set: &ExemplarSet,
+        ex: usize,
+        w: usize,
+        coherence: Option<&Coherence>,
+    ) -> Result<Arc<Resident>> {
         let mut map = self
             .resident
             .lock()
             .map_err(|_| gpu_error("a previous search panicked".into()))?;
         let e = &set.exemplars[ex];
-        let key = (e.codes.as_ptr() as usize, e.codes.len(), w);
+        let key = (
+            e.codes.as_ptr() as usize,
+            e.codes.len(),
+            w,
+            coherence.is_some(),
+        );
         if let Some(r) = map.get(&key) {
             return Ok(r.clone());
         }
@@ -409,7 +456,12 @@ impl GpuMatcher {
         let half = w / 2;
         let plane_w = e.width() + 1 - half;
         let plane_len = plane_w * (e.height() + 1 - half);
-        let codes: Vec<u32> = e.codes.iter().map(|&v| v as u32).collect();
+        let mut codes: Vec<u32> = e.codes.iter().map(|&v| v as u32).collect();
+        let sim_at = coherence.map(|c| {
+            let at = codes.len();
+            codes.extend_from_slice(&c.tables[ex]);
+            at
+        });
         let sums: Vec<f32> = e.block_sums(half).into_iter().flatten().collect();
         let init = |label, bytes: &[u8]| ctx.upload(label, bytes, wgpu::BufferUsages::STORAGE);
         let r = Arc::new(Resident {
@@ -417,6 +469,7 @@ impl GpuMatcher {
             sums: init("exemplar block sums", bytemuck::cast_slice(&sums)),
             plane_w,
             plane_len,
+            sim_at,
         });
         map.insert(key, r.clone());
         Ok(r)
@@ -436,15 +489,17 @@ impl GpuMatcher {
         let w = s.w;
         let e = &set.exemplars[ex];
         let (cw, ch) = e.candidates(w);
-        let res = self.resident(set, ex, w)?;
+        let res = self.resident(set, ex, w, s.coherence.map(|c| c.tables))?;
         let n = batch.len();
         let words = BatchWords::new(set, s, &batch, e.channels());
         let candidates = cw * ch;
+        let random = s.coherence.map(|c| c.random);
+        let threads = threads_per_query(candidates, random);
         let shape = BatchShape {
             n,
             info_stride: info_stride(e.channels()),
-            candidates,
-            capacity: self.survivor_room(n, candidates),
+            threads,
+            capacity: self.survivor_room(n, threads),
         };
         let penalty: &[u32] = s.penalty.map_or(&[0], |p| &p[ex]);
         let params = Params::search(
@@ -456,6 +511,7 @@ impl GpuMatcher {
             n,
             shape.capacity,
             words.source,
+            random.unwrap_or(0),
         );
         let d = &ctx.device;
         // Buffers live as long as the matcher and grow when a batch needs more; one batch runs
@@ -496,13 +552,13 @@ impl GpuMatcher {
     }
 }
 
-/// One batch's sizes: queries, info words per query, candidate positions and room for the
-/// bound's survivors.
+/// One batch's sizes: queries, info words per query, threads per query (the positions, or the
+/// k-coherence candidates) and room for the bound's survivors.
 #[derive(Clone, Copy)]
 struct BatchShape {
     n: usize,
     info_stride: usize,
-    candidates: usize,
+    threads: usize,
     capacity: usize,
 }
 
@@ -591,9 +647,26 @@ fn uploaded_words(set: &ExemplarSet, s: &Search, queries: &[&Query], c: usize) -
         info.extend_from_slice(&inf);
         result.extend_from_slice(&[first, NONE]);
     }
+    // The guesses, for the k-coherence search's candidates (rows as resident windows have).
+    let rows: Vec<WindowQuery> = queries
+        .iter()
+        .enumerate()
+        .map(|(i, q)| WindowQuery {
+            exemplar: q.exemplar,
+            x: 0,
+            y: (i * w) as u32,
+            guesses: q.guesses.clone(),
+            salt: q.salt,
+        })
+        .collect();
+    let windows = if s.coherence.is_some() {
+        resident_rows(&rows.iter().collect::<Vec<_>>())
+    } else {
+        Vec::new()
+    };
     BatchWords {
         qcodes,
-        windows: Vec::new(),
+        windows,
         info,
         result,
         source: (w, n * w),
@@ -724,7 +797,7 @@ impl BatchSearch<'_> {
     fn run(&self, group: &wgpu::BindGroup) -> Result<Vec<u32>> {
         let pipes = self.pipes;
         let (n, capacity) = (self.shape.n, self.shape.capacity);
-        let groups_x = self.shape.candidates.div_ceil(WORKGROUP) as u32;
+        let groups_x = self.shape.threads.div_ceil(WORKGROUP) as u32;
         let nq = n as u32;
         let per_query = derma_core::gpu::grid(n, WORKGROUP);
         let survivor_dims = derma_core::gpu::grid(capacity, WORKGROUP);

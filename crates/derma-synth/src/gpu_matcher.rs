@@ -115,6 +115,12 @@ fn unguessed(queries: &[WindowQuery]) -> Result<bool> {
 
 impl Matcher for GpuMatcher {
     fn best_matches(&self, set: &ExemplarSet, s: &Search, queries: &[Query]) -> Result<Vec<Match>> {
+        if let Some(q) = queries.iter().find(|q| q.guesses.len() > MAX_GUESSES) {
+            return Err(invalid(
+                "query",
+                format!("{} guesses (at most {MAX_GUESSES})", q.guesses.len()),
+            ));
+        }
         let per_query = s.w * s.w * set.channels() * 4;
         let chunk = (MAX_QUERY_BYTES / per_query).clamp(1, MAX_BATCH_QUERIES);
         by_exemplar(

@@ -9,7 +9,10 @@
 use crate::canvas::NO_SOURCE;
 use crate::error::Result;
 use crate::exemplar::{Exemplar, ExemplarSet};
-use crate::gpu::{gpu_error, info_stride, GpuMatcher, Params, Resident, PATCH_SHADER, WORKGROUP};
+use crate::gpu::{
+    gpu_error, info_stride, threads_per_query, GpuMatcher, Params, Resident, PATCH_SHADER,
+    WORKGROUP,
+};
 use crate::matcher::PatchPlan;
 use crate::search::MAX_GUESSES;
 use derma_core::gpu::GpuCell;
@@ -100,6 +103,8 @@ struct Shape {
     c: usize,
     cw: usize,
     candidates: usize,
+    /// Threads per query of the searches: the positions, or the k-coherence candidates.
+    threads: usize,
     ex_height: usize,
     nq_max: usize,
     capacity: usize,
@@ -165,15 +170,17 @@ impl GpuMatcher {
         if !fits(texels * c * 4) || !fits(nq_max * n * n * c * 4) {
             return Ok(None);
         }
-        let res = self.resident(set, 0, n)?;
+        let res = self.resident(set, 0, n, plan.coherence.map(|c| c.tables))?;
+        let threads = threads_per_query(cw * ch, plan.coherence.map(|c| c.random));
         let shape = Shape {
             n,
             c,
             cw,
             candidates: cw * ch,
+            threads,
             ex_height: e.height(),
             nq_max,
-            capacity: self.survivor_room(nq_max, cw * ch),
+            capacity: self.survivor_room(nq_max, threads),
         };
         let fronts = fronts(plan);
         let bufs = PatchBuffers::new(ctx, plan, e, &shape, &fronts);
@@ -307,6 +314,7 @@ fn patch_params(
             nq_max,
             shape.capacity,
             (n, nq_max * n),
+            plan.coherence.map_or(0, |c| c.random),
         )
     }
 }
@@ -497,7 +505,7 @@ fn round_dispatches<'a>(
         &pipes.steps;
     let (n, nq_max, candidates) = (shape.n, shape.nq_max, shape.candidates);
     let per_query = derma_core::gpu::grid(nq_max, WORKGROUP);
-    let screen_dims = ((candidates.div_ceil(WORKGROUP)) as u32, nq_max as u32);
+    let screen_dims = ((shape.threads.div_ceil(WORKGROUP)) as u32, nq_max as u32);
     let survivor_dims = derma_core::gpu::grid(shape.capacity, WORKGROUP);
     let round = [
         (

@@ -14,6 +14,7 @@
 mod bands;
 pub mod canvas;
 mod clash_rounds;
+pub mod coherence;
 pub mod correction;
 mod e_step;
 pub mod error;

@@ -29,6 +29,8 @@ pub struct PatchPlan<'a> {
     pub plane: Plane<'a>,
     /// The canvas's sources before the pass (exemplar texel or `u32::MAX`).
     pub sources: &'a [u32],
+    /// The k-coherence tables where the searches run over candidates (`None`: exhaustive).
+    pub coherence: Option<crate::coherence::Candidates<'a>>,
 }
 
 /// Window queries per batch of the default [`Matcher::window_matches`] (bounds the memory of

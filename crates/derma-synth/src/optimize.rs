@@ -26,6 +26,7 @@
 //! it back once after the last; the host's `Canvas` holds no GPU state.
 
 use crate::canvas::{origins, Canvas};
+use crate::coherence::{Candidates, RANDOM};
 use crate::e_step::{e_step, Windows};
 use crate::error::Result;
 use crate::exemplar::ExemplarSet;
@@ -186,11 +187,16 @@ fn optimise_pass(
             }
         })
         .collect();
+    let coherence = ctx.coherence.map(|t| t.of(set, w));
     let search = Search {
         w,
         tol: Tolerance(0),
         penalty: None,
         prepared: None,
+        coherence: coherence.as_deref().map(|tables| Candidates {
+            tables,
+            random: RANDOM,
+        }),
     };
     let t1 = Instant::now();
     let searched = steps.window_matches(canvas, ctx, &search, &queries)?;

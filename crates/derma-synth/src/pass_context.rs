@@ -18,6 +18,8 @@ pub(crate) struct PassContext<'a> {
     pub guide: Option<&'a Guide>,
     pub progress: &'a dyn Progress,
     pub seed: u64,
+    /// The k-coherence tables where the searches run over candidates (`None`: exhaustive).
+    pub coherence: Option<&'a crate::coherence::Tables>,
 }
 
 /// Where the optimisation passes search and blend, and where each E-step leaves the canvas: on

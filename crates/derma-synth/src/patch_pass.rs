@@ -25,6 +25,7 @@
 
 use crate::canvas::{origins, Canvas, NO_SOURCE};
 use crate::clash_rounds::{ClashRounds, Window};
+use crate::coherence::{Candidates, RANDOM_PATCH};
 use crate::error::Result;
 use crate::exemplar::ExemplarSet;
 use crate::matcher::PatchPlan;
@@ -117,6 +118,7 @@ pub(crate) fn patch_pass(
     let probes = [(0, 0), (0, d), (d, 0), (n - 1, 0)];
     let mut occ = Occurrence::new(set, n, occurrence);
     let fronts = wavefronts(&xs, &ys);
+    let coherence = ctx.coherence.map(|t| t.of(set, n));
     // One exemplar on the GPU: the matcher may run the whole pass where it keeps the canvas.
     if set.exemplars.len() == 1 && ctx.matcher.device() == Device::Gpu {
         let plan = PatchPlan {
@@ -138,6 +140,10 @@ pub(crate) fn patch_pass(
                 .collect(),
             plane: canvas.plane(),
             sources: &canvas.src,
+            coherence: coherence.as_deref().map(|tables| Candidates {
+                tables,
+                random: RANDOM_PATCH,
+            }),
         };
         if let Some(sources) = ctx.matcher.patch_pass(set, &plan, progress)? {
             for (t, s) in sources.into_iter().enumerate() {
@@ -149,7 +155,8 @@ pub(crate) fn patch_pass(
         }
     }
     // The exemplars' block sums, once for every round's searches on the CPU.
-    let prepared = (ctx.matcher.device() == Device::Cpu).then(|| Prepared::new(set, n));
+    let prepared = (ctx.matcher.device() == Device::Cpu && ctx.coherence.is_none())
+        .then(|| Prepared::new(set, n));
     for patches in fronts {
         if patches.is_empty() {
             continue;
@@ -181,6 +188,10 @@ pub(crate) fn patch_pass(
                 tol,
                 penalty,
                 prepared: prepared.as_ref(),
+                coherence: coherence.as_deref().map(|tables| Candidates {
+                    tables,
+                    random: RANDOM_PATCH,
+                }),
             };
             // A candidate left free joins the guesses: where the coherent ones are barred, it
             // gives the search a first limit below the cap (the answer is the same).
@@ -349,12 +360,10 @@ impl Occurrence {
             .collect();
         let charged = |e: usize| self.barred[e].iter().any(|&l| l as usize > from[e]);
         let charged: Vec<bool> = (0..self.barred.len()).map(charged).collect();
-        let free = (self.barred.iter().zip(&from).zip(&charged))
-            .map(|((b, &f), &c)| {
-                c.then(|| b.iter().position(|&l| l as usize <= f))
-                    .flatten()
-                    .map(|i| i as u32)
-            })
+        // The first candidate not barred (as patch_pass.wgsl's `bar` finds it): a guess, so
+        // in the k-coherence search also a candidate with its similar positions.
+        let free = (self.barred.iter().zip(&from))
+            .map(|(b, &f)| b.iter().position(|&l| l as usize <= f).map(|i| i as u32))
             .collect();
         let barring = Barring { from, free };
         if self.lambda <= 0.0 && !charged.contains(&true) {
@@ -462,7 +471,7 @@ mod tests {
             let (p, b) = occ.penalties_excluding(&[], d);
             assert_eq!(
                 (p.is_some(), b.from, b.free),
-                (lambda > 0.0, vec![0], vec![None])
+                (lambda > 0.0, vec![0], vec![Some(0)])
             );
             // One window at (8, 8): its 7² neighbours pay the cap, the rest nothing; the first
             // free candidate in scan order is a guess.

@@ -252,11 +252,11 @@ fn prepare_round(@builtin(global_invocation_id) gid: vec3<u32>) {
     // The coherent guesses' least cost, or a free candidate's where that is less: where the
     // guesses are barred, their cost includes the cap and would prune nothing (the answer is
     // the same; patch_pass.rs adds the free candidate to the guesses likewise).
-    var first = guesses_cost(q);
+    // The free candidate is the last guess slot (gather leaves it NONE: 4 probes, 5 slots),
+    // so the k-coherence search also takes it and its similar positions, as patch_pass.rs does.
     let free = atomicLoad(&state[STATE_FREE]);
-    if (free != NONE) {
-        first = min(first, distance(q, free % p.cand_w, free / p.cand_w, NONE) + candidate_penalty(q, free));
-    }
+    windows[q * window_stride() + 3u + p.max_guesses - 1u] = free;
+    let first = guesses_cost(q);
     info[base + 3u] = first;
     atomicStore(&result[2u * q], first);
     atomicStore(&result[2u * q + 1u], NONE);

@@ -22,6 +22,7 @@
 //! found so far cannot be chosen. It starts from coherent guesses (positions continuing the
 //! neighbouring texels' sources), which make the first limit tight.
 
+use crate::coherence::Candidates;
 use crate::exemplar::{Exemplar, ExemplarSet};
 use rayon::prelude::*;
 
@@ -145,6 +146,9 @@ pub struct Search<'a> {
     /// The exemplar set's block sums for windows of side `w`, made once for many searches (the
     /// patch pass's rounds); `None`: the CPU makes them per call. The GPU keeps its own.
     pub prepared: Option<&'a Prepared<'a>>,
+    /// Where given, the search runs over each query's k-coherence candidates (see
+    /// [`crate::coherence`]) instead of every position: the same rule over fewer positions.
+    pub coherence: Option<Candidates<'a>>,
 }
 
 impl Search<'_> {
@@ -462,6 +466,14 @@ pub(crate) fn known_block_sums(
 /// with the block-sum bounds, the exemplars' block sums those of the search or prepared once
 /// per call.
 pub(crate) fn best_matches_cpu(set: &ExemplarSet, s: &Search, queries: &[Query]) -> Vec<Match> {
+    if let Some(c) = s.coherence {
+        return queries
+            .par_iter()
+            .map_init(Vec::new, |cands, q| {
+                best_match_coherent(set, s, c, q, cands)
+            })
+            .collect();
+    }
     let own;
     let prep = match s.prepared {
         Some(p) if p.w == s.w && std::ptr::eq(p.set, set) => p,
@@ -498,6 +510,65 @@ pub(crate) fn best_matches_cpu(set: &ExemplarSet, s: &Search, queries: &[Query])
             choose(q.salt, kept, s.tol.limit(best))
         })
         .collect()
+}
+
+/// The search over a query's k-coherence candidates ([`Coherence::candidates`], into `cands`):
+/// each cost computed exactly, stopping early once it exceeds the tolerance of the least so far.
+pub(crate) fn best_match_coherent(
+    set: &ExemplarSet,
+    s: &Search,
+    c: Candidates,
+    q: &Query,
+    cands: &mut Vec<u32>,
+) -> Match {
+    let ex = q.exemplar as usize;
+    let e = &set.exemplars[ex];
+    let (cw, ch) = e.candidates(s.w);
+    let (runs, known) = (Runs::of(q, s.w), known_texels(q, s.w));
+    c.tables
+        .candidates(ex, cw * ch, &q.guesses, q.salt, c.random, cands);
+    let avx2 =
+        cfg!(target_arch = "x86_64") && derma_core::numerics::lanes::Avx2::detect().is_some();
+    let mut best = u32::MAX;
+    let mut kept = Vec::with_capacity(cands.len());
+    for &i in cands.iter() {
+        let pen = s.penalty_of(ex, i as usize, known);
+        let limit = s.tol.limit(best);
+        if pen > limit {
+            continue;
+        }
+        let (x, y) = (i as usize % cw, i as usize / cw);
+        let d = if avx2 {
+            ssd_bounded_on::<true>(e, &runs, &q.codes, x, y, limit - pen)
+        } else {
+            ssd_at_bounded(e, &runs, &q.codes, x, y, limit - pen)
+        };
+        if d <= limit - pen {
+            kept.push((d + pen, i));
+            best = best.min(d + pen);
+        }
+    }
+    choose(q.salt, kept, s.tol.limit(best))
+}
+
+/// Brute force over a query's k-coherence candidates: the definition itself, for tests.
+pub fn best_match_coherent_brute(set: &ExemplarSet, s: &Search, c: Candidates, q: &Query) -> Match {
+    let e = &set.exemplars[q.exemplar as usize];
+    let (cw, ch) = e.candidates(s.w);
+    let known = known_texels(q, s.w);
+    let mut cands = Vec::new();
+    let ex = q.exemplar as usize;
+    c.tables
+        .candidates(ex, cw * ch, &q.guesses, q.salt, c.random, &mut cands);
+    let all: Vec<(u32, u32)> = cands
+        .iter()
+        .map(|&i| {
+            let pen = s.penalty_of(q.exemplar as usize, i as usize, known);
+            (ssd_at(e, s.w, q, i as usize % cw, i as usize / cw) + pen, i)
+        })
+        .collect();
+    let best = all.iter().map(|a| a.0).min().unwrap_or(u32::MAX);
+    choose(q.salt, all, s.tol.limit(best))
 }
 
 /// Exact search with the block-sum bounds over every candidate, on one thread.
@@ -887,6 +958,7 @@ pub(crate) mod tests {
                         tol,
                         penalty,
                         prepared: None,
+                        coherence: None,
                     };
                     let want = best_match_brute(&set, &s, &q);
                     assert_eq!(best_match_pruned(&set, &prep, &s, &q), want);
@@ -904,6 +976,7 @@ pub(crate) mod tests {
                     // The block sums made once for many searches give the same answer.
                     let shared = Search {
                         prepared: Some(&prep),
+                        coherence: None,
                         ..s
                     };
                     let split = pool.install(|| {
@@ -922,6 +995,7 @@ pub(crate) mod tests {
             tol: Tolerance::from_fraction(0.1),
             penalty: None,
             prepared: None,
+            coherence: None,
         };
         let want: Vec<Match> = batch
             .iter()
@@ -944,6 +1018,7 @@ pub(crate) mod tests {
             tol: Tolerance(0),
             penalty: None,
             prepared: None,
+            coherence: None,
         };
         CpuMatcher.best_matches(set, &s, &[q]).unwrap()
     }

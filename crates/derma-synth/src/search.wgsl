@@ -38,12 +38,17 @@ struct Params {
     k16_hi: u32,
     cap: u32,          // patch_pass.wgsl: the penalty's cap per known texel
     fronts: u32,       // patch_pass.wgsl: wavefronts in `plan`
+    sim_at: u32,       // k-coherence (coherence.rs): where the similarity table starts in `ex`
+    sim_k: u32,        // its positions per position
+    n_random: u32,     // random candidates per query
+    n_cand: u32,       // candidates per query (0: every position, the exhaustive search)
     pad1: u32,
     pad2: u32,
 }
 
 @group(0) @binding(0) var<uniform> p: Params;
-// Exemplar codes, one value per word, texels row-major, channels interleaved.
+// Exemplar codes, one value per word, texels row-major, channels interleaved; then, for the
+// k-coherence search, the similarity table (`sim_k` positions per position, from `sim_at`).
 @group(0) @binding(1) var<storage, read> ex: array<u32>;
 // Per channel, sums of codes over (w/2)² blocks at every position.
 @group(0) @binding(2) var<storage, read> sums: array<f32>;
@@ -192,11 +197,39 @@ fn cost_within(q: u32, index: u32, limit: u32) -> u32 {
     return d + pen;
 }
 
+// The searches' threads: (query, j) → the position searched, or NONE. Exhaustive (n_cand 0):
+// position j. k-coherence (coherence.rs, Coherence::candidates): the query's guesses (clamped
+// to the positions; NONE slots skipped), each guess's `sim_k` similar positions, then
+// `n_random` random ones; repeats are harmless (same position, same cost, same key).
+fn position_of(q: u32, j: u32) -> u32 {
+    let positions = p.cand_w * p.cand_h;
+    if (p.n_cand == 0u) {
+        if (j >= positions) { return NONE; }
+        return j;
+    }
+    if (j >= p.n_cand) { return NONE; }
+    let row = q * window_stride() + 3u;
+    if (j < p.max_guesses) {
+        let g = windows[row + j];
+        if (g == NONE) { return NONE; }
+        return min(g, positions - 1u);
+    }
+    let s = j - p.max_guesses;
+    if (s < p.max_guesses * p.sim_k) {
+        let g = windows[row + s / p.sim_k];
+        if (g == NONE) { return NONE; }
+        return ex[p.sim_at + min(g, positions - 1u) * p.sim_k + s % p.sim_k];
+    }
+    let r = s - p.max_guesses * p.sim_k;
+    return pick_key(info[q * p.info_stride + 1u] ^ 0x5bd1e995u, r) % positions;
+}
+
 @compute @workgroup_size(64)
 fn min_cost(@builtin(global_invocation_id) gid: vec3<u32>) {
     let q = gid.y;
-    let index = gid.x;
-    if (q >= p.n_queries || index >= p.cand_w * p.cand_h || !searched(q)) { return; }
+    if (q >= p.n_queries || !searched(q)) { return; }
+    let index = position_of(q, gid.x);
+    if (index == NONE) { return; }
     if (p.guarded == 1u && !overflowed()) { return; }
     let c = cost_within(q, index, info[q * p.info_stride + 3u]);
     if (c != NONE) {
@@ -214,8 +247,9 @@ fn settle(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(64)
 fn pick(@builtin(global_invocation_id) gid: vec3<u32>) {
     let q = gid.y;
-    let index = gid.x;
-    if (q >= p.n_queries || index >= p.cand_w * p.cand_h || !searched(q)) { return; }
+    if (q >= p.n_queries || !searched(q)) { return; }
+    let index = position_of(q, gid.x);
+    if (index == NONE) { return; }
     if (p.guarded == 1u && !overflowed()) { return; }
     if (cost_within(q, index, limits[q]) != NONE) {
         atomicMin(&result[2u * q + 1u], pick_key(info[q * p.info_stride + 1u], index));
@@ -242,10 +276,11 @@ fn screen(
     if (lid == 0u) { atomicStore(&wg_count, 0u); }
     workgroupBarrier();
     let q = gid.y;
-    let index = gid.x;
+    var index = NONE;
+    if (q < p.n_queries) { index = position_of(q, gid.x); }
     var passes = false;
     var local = 0u;
-    if (q < p.n_queries && index < p.cand_w * p.cand_h && searched(q)) {
+    if (q < p.n_queries && index != NONE && searched(q)) {
         let upper = tolerance_limit(info[q * p.info_stride + 3u]);
         let pen = candidate_penalty(q, index);
         if (pen <= upper && !bound_exceeds(q, index % p.cand_w, index / p.cand_w, upper - pen)) {
@@ -373,7 +408,7 @@ fn guesses_cost(q: u32) -> u32 {
     var first = NONE;
     for (var j = 0u; j < p.max_guesses; j++) {
         let g0 = windows[at + j];
-        if (g0 == NONE) { break; }
+        if (g0 == NONE) { continue; }
         let g = min(g0, last);
         first = min(first, distance(q, g % p.cand_w, g / p.cand_w, NONE) + candidate_penalty(q, g));
     }

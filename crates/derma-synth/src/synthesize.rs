@@ -48,6 +48,9 @@ pub struct SynthOptions {
     /// whose match region holds this many times the mean share are optimised once (0 = every
     /// window every pass).
     pub settle: f32,
+    /// Which positions each search verifies: the k-coherence candidates (default) or every
+    /// position; see [`crate::coherence`].
+    pub search: crate::coherence::Scope,
 }
 
 impl Default for SynthOptions {
@@ -63,6 +66,7 @@ impl Default for SynthOptions {
             tile: false,
             correction: 1,
             settle: crate::settle::DEFAULT_FACTOR,
+            search: crate::coherence::Scope::default(),
         }
     }
 }
@@ -201,12 +205,14 @@ pub fn synthesize(
     let mut canvas = Canvas::new(w, h, c, opts.tile);
     initialise_noise(&mut canvas, set, opts.seed);
     let job = Job::new(progress);
+    let tables = crate::coherence::Tables::default();
     let ctx = PassContext {
         set,
         matcher,
         guide,
         progress: &job,
         seed: opts.seed,
+        coherence: (opts.search == crate::coherence::Scope::Coherent).then_some(&tables),
     };
     let tol = Tolerance::from_fraction(opts.tolerance);
     patch_pass(&mut canvas, &ctx, opts.patch, tol, opts.occurrence)?;

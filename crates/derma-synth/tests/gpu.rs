@@ -3,6 +3,8 @@
 
 use derma_core::progress::Silent;
 use derma_core::rng::Philox;
+use derma_synth::coherence::{Candidates, Coherence};
+use derma_synth::search::best_match_coherent_brute;
 use derma_synth::{
     synthesize, CpuMatcher, ExemplarSet, GpuMatcher, Guide, Matcher, Plane, Query, Search,
     SynthOptions, Texture, Tolerance, WindowQuery,
@@ -65,24 +67,42 @@ fn gpu_search_equals_cpu_search() {
         .collect();
     // Room for only 100 survivors forces the uncompacted fallback.
     let cramped = GpuMatcher::with_survivor_room(100).unwrap();
-    for tol in [Tolerance(0), Tolerance::from_fraction(0.1)] {
-        for penalty in [None, Some(&pen[..])] {
-            let s = Search {
-                w,
-                tol,
-                penalty,
-                prepared: None,
-            };
-            let a = CpuMatcher.best_matches(&set, &s, &queries).unwrap();
-            let b = gpu.best_matches(&set, &s, &queries).unwrap();
-            assert_eq!(a, b, "tolerance {tol:?}, penalty {}", penalty.is_some());
-            let c = cramped.best_matches(&set, &s, &queries).unwrap();
-            assert_eq!(
-                a,
-                c,
-                "uncompacted, tolerance {tol:?}, penalty {}",
-                penalty.is_some()
-            );
+    // Over every position, and over the k-coherence candidates (with many random ones, so the
+    // survivors overflow the cramped room there too).
+    let tables = Coherence::new(&set, w);
+    let scopes = [
+        None,
+        Some(Candidates {
+            tables: &tables,
+            random: 64,
+        }),
+    ];
+    for coherence in scopes {
+        for tol in [Tolerance(0), Tolerance::from_fraction(0.1)] {
+            for penalty in [None, Some(&pen[..])] {
+                let s = Search {
+                    w,
+                    tol,
+                    penalty,
+                    prepared: None,
+                    coherence,
+                };
+                let what = format!(
+                    "tolerance {tol:?}, penalty {}, coherent {}",
+                    penalty.is_some(),
+                    coherence.is_some()
+                );
+                let a = CpuMatcher.best_matches(&set, &s, &queries).unwrap();
+                let b = gpu.best_matches(&set, &s, &queries).unwrap();
+                assert_eq!(a, b, "{what}");
+                let c = cramped.best_matches(&set, &s, &queries).unwrap();
+                assert_eq!(a, c, "uncompacted, {what}");
+                if let Some(c) = coherence {
+                    for (q, m) in queries.iter().zip(&a) {
+                        assert_eq!(*m, best_match_coherent_brute(&set, &s, c, q), "{what}");
+                    }
+                }
+            }
         }
     }
 }
@@ -199,12 +219,23 @@ fn windows_of_the_canvas_kept_on_the_gpu_get_the_cpu_answers() {
                     }
                 })
                 .collect();
-            for tol in [Tolerance(0), Tolerance::from_fraction(0.1)] {
+            let tables = Coherence::new(&set, w);
+            let coherent = Some(Candidates {
+                tables: &tables,
+                random: 8,
+            });
+            for (tol, coherence) in [
+                (Tolerance(0), None),
+                (Tolerance::from_fraction(0.1), None),
+                (Tolerance(0), coherent),
+                (Tolerance::from_fraction(0.1), coherent),
+            ] {
                 let s = Search {
                     w,
                     tol,
                     penalty: None,
                     prepared: None,
+                    coherence,
                 };
                 let a = CpuMatcher
                     .window_matches(&set, &s, &plane, &queries, &Silent)
@@ -212,10 +243,14 @@ fn windows_of_the_canvas_kept_on_the_gpu_get_the_cpu_answers() {
                 let b = gpu
                     .window_matches(&set, &s, &plane, &queries, &Silent)
                     .unwrap();
-                assert_eq!(a, b, "wrap {wrap}, side {w}, tolerance {tol:?}");
+                let what = format!(
+                    "wrap {wrap}, side {w}, tolerance {tol:?}, coherent {}",
+                    coherence.is_some()
+                );
+                assert_eq!(a, b, "{what}");
                 // The same answers as the windows gathered and uploaded.
                 let gathered: Vec<Query> = queries.iter().map(|q| q.query(&plane, w)).collect();
-                assert_eq!(a, gpu.best_matches(&set, &s, &gathered).unwrap());
+                assert_eq!(a, gpu.best_matches(&set, &s, &gathered).unwrap(), "{what}");
             }
         }
     }

@@ -56,6 +56,11 @@ pub struct SynthArgs {
     /// searched again (0: every window every pass).
     #[arg(long, value_name = "FACTOR", default_value_t = derma_synth::settle::DEFAULT_FACTOR)]
     settle: f32,
+    /// Which windows each search verifies: coherent (each window's coherent guesses, the
+    /// exemplar windows most like them and a few random ones: k-coherence, a cost that does
+    /// not grow with the exemplar) or exhaustive (every window: the exact best match).
+    #[arg(long, value_enum, default_value_t = SearchArg::Coherent)]
+    search: SearchArg,
     /// Guide map (grey): level v draws from exemplar round(v·(count − 1)).
     #[arg(long)]
     guide: Option<PathBuf>,
@@ -63,6 +68,13 @@ pub struct SynthArgs {
     /// ratio, seam energy.
     #[arg(long)]
     metrics: bool,
+}
+
+/// `--search`'s values.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum SearchArg {
+    Coherent,
+    Exhaustive,
 }
 
 pub fn run(args: SynthArgs, bars: &Bars) -> Result<()> {
@@ -80,6 +92,10 @@ pub fn run(args: SynthArgs, bars: &Bars) -> Result<()> {
             occurrence: args.occurrence,
             correction: args.correction,
             settle: args.settle,
+            search: match args.search {
+                SearchArg::Coherent => derma_synth::coherence::Scope::Coherent,
+                SearchArg::Exhaustive => derma_synth::coherence::Scope::Exhaustive,
+            },
             seed: args.seed,
             tile: args.tile,
         },
