@@ -12,7 +12,8 @@ use pyo3::prelude::*;
 /// (`ex_height`, `ex_width`, `channels`), C order; returns (height, width, channels) float32.
 #[pyfunction]
 #[pyo3(signature = (exemplar, ex_width, ex_height, channels, width, height, *, seed=1, tile=false,
-    patch=None, passes=None, device="auto".to_string(), progress=None))]
+    patch=None, passes=None, settle=None, search="coherent".to_string(), device="auto".to_string(),
+    progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn synth(
     py: Python<'_>,
@@ -26,6 +27,8 @@ pub fn synth(
     tile: bool,
     patch: Option<usize>,
     passes: Option<usize>,
+    settle: Option<f32>,
+    search: String,
     device: String,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Py<PyAny>> {
@@ -33,6 +36,12 @@ pub fn synth(
     let texture =
         Texture::new(ex_width, ex_height, channels, data).map_err(crate::errors::error)?;
     let device = crate::errors::device(&device)?;
+    let scope = derma_synth::coherence::Scope::parse(&search).ok_or_else(|| {
+        crate::errors::invalid(
+            "search",
+            format!("'{search}': expected 'coherent' or 'exhaustive'"),
+        )
+    })?;
     if width == 0 || height == 0 {
         return Err(crate::errors::invalid(
             "size",
@@ -46,7 +55,11 @@ pub fn synth(
             .seed(seed)
             .tile(tile)
             .device(device)
+            .search(scope)
             .progress(&callback);
+        if let Some(f) = settle {
+            s = s.settle(f);
+        }
         if let Some(p) = patch {
             s = s.patch(p);
         }

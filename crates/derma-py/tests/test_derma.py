@@ -226,6 +226,11 @@ def test_synthesis_copies_exemplar_texels_and_repeats_by_seed():
     assert all(tuple(t) in texels for t in a.reshape(-1, 3))
     grey = derma.synth(rng.random((64, 64)), 72, seed=1, patch=16)
     assert grey.shape == (72, 72)
+    # The exhaustive search and no self-adaptive skip: another texture from the same texels.
+    d = derma.synth(ex, (96, 80), seed=3, patch=16, search="exhaustive", settle=0)
+    assert not np.array_equal(a, d) and all(tuple(t) in texels for t in d.reshape(-1, 3))
+    with pytest.raises(derma.DermaError, match="search"):
+        derma.synth(ex, 32, search="tree")
 
 
 def test_a_rig_on_a_set_gives_its_base_colour_at_neutral_and_flushes_with_happiness(

@@ -196,20 +196,18 @@ pub fn similarity_table(e: &Exemplar, w: usize) -> Vec<u32> {
         w,
         dist: &dist,
     };
-    let mut lists: Vec<Vec<(u32, u32)>> = (0..n as u32)
+    let mut lists: Vec<List> = (0..n as u32)
         .into_par_iter()
-        .map(|p| {
-            knn.keep(
-                p,
-                &[],
-                (0..4 * SIMILAR as u32).map(|j| pick_key(p, j) % n as u32),
-            )
+        .map_init(Vec::new, |tries, p| {
+            tries.clear();
+            tries.extend((0..4 * SIMILAR as u32).map(|j| pick_key(p, j) % n as u32));
+            knn.keep(p, &[(u32::MAX, u32::MAX); SIMILAR], tries)
         })
         .collect();
     for it in 0..ITERATIONS as u32 {
         lists = (0..n as u32)
             .into_par_iter()
-            .map(|p| knn.improve(p, &lists, it))
+            .map_init(Vec::new, |tries, p| knn.improve(p, &lists, it, tries))
             .collect();
     }
     let mut table = vec![0u32; n * SIMILAR];
@@ -217,7 +215,8 @@ pub fn similarity_table(e: &Exemplar, w: usize) -> Vec<u32> {
         for j in 0..SIMILAR {
             // Too few other places (a tiny exemplar): the list repeats its nearest, or the
             // position itself.
-            table[p * SIMILAR + j] = l.get(j).or(l.first()).map_or(p as u32, |e| e.1);
+            let e = if l[j].1 != u32::MAX { l[j] } else { l[0] };
+            table[p * SIMILAR + j] = if e.1 != u32::MAX { e.1 } else { p as u32 };
         }
     }
     table
@@ -233,63 +232,69 @@ struct Knn<'a, D: Fn(u32, u32) -> u32 + Sync> {
 
 impl<D: Fn(u32, u32) -> u32 + Sync> Knn<'_, D> {
     /// Position `p`'s new list: its old one, its neighbours' entries shifted to it, and random
-    /// searches around its best, at halving radii.
-    fn improve(&self, p: u32, lists: &[Vec<(u32, u32)>], it: u32) -> Vec<(u32, u32)> {
+    /// searches around its best, at halving radii (`tries`: a buffer).
+    fn improve(&self, p: u32, lists: &[List], it: u32, tries: &mut Vec<u32>) -> List {
         let (cw, ch) = (self.cw as i64, self.ch as i64);
         let (x, y) = (p as i64 % cw, p as i64 / cw);
-        let mut tries = Vec::with_capacity(64);
+        let at = |ex: i64, ey: i64| {
+            (ex >= 0 && ey >= 0 && ex < cw && ey < ch).then(|| (ey * cw + ex) as u32)
+        };
+        tries.clear();
         for (dx, dy) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
-            let (nx, ny) = (x + dx, y + dy);
-            if nx < 0 || ny < 0 || nx >= cw || ny >= ch {
+            let Some(nb) = at(x + dx, y + dy) else {
                 continue;
-            }
-            for &(_, e) in &lists[(ny * cw + nx) as usize] {
-                let (ex, ey) = (e as i64 % cw - dx, e as i64 / cw - dy);
-                if ex >= 0 && ey >= 0 && ex < cw && ey < ch {
-                    tries.push((ey * cw + ex) as u32);
-                }
+            };
+            for &(_, e) in lists[nb as usize].iter().filter(|e| e.1 != u32::MAX) {
+                tries.extend(at(e as i64 % cw - dx, e as i64 / cw - dy));
             }
         }
         let own = &lists[p as usize];
         let mut radius = cw.max(ch) / 2;
         let mut j = 0u32;
         while radius >= 1 {
-            for &(_, e) in own.iter().take(2) {
+            for &(_, e) in own.iter().take(2).filter(|e| e.1 != u32::MAX) {
                 let h = pick_key(p ^ it.wrapping_mul(0x9e37_79b9), j);
                 j += 1;
                 let ox = (h & 0xffff) as i64 % (2 * radius + 1) - radius;
                 let oy = (h >> 16) as i64 % (2 * radius + 1) - radius;
-                let (ex, ey) = (e as i64 % cw + ox, e as i64 / cw + oy);
-                if ex >= 0 && ey >= 0 && ex < cw && ey < ch {
-                    tries.push((ey * cw + ex) as u32);
-                }
+                tries.extend(at(e as i64 % cw + ox, e as i64 / cw + oy));
             }
             radius /= 2;
         }
-        self.keep(p, own, tries.into_iter())
+        self.keep(p, own, tries)
     }
 
-    /// The [`SIMILAR`] nearest of `old` and `tries` to `p` (none near it), nearest first.
-    fn keep(
-        &self,
-        p: u32,
-        old: &[(u32, u32)],
-        tries: impl Iterator<Item = u32>,
-    ) -> Vec<(u32, u32)> {
-        let mut tries: Vec<u32> = tries.collect();
+    /// The [`SIMILAR`] nearest of `old` and `tries` to `p` (none near it, no repeats),
+    /// nearest first; entries not found yet are (MAX, MAX).
+    fn keep(&self, p: u32, old: &List, tries: &mut [u32]) -> List {
         tries.sort_unstable();
-        tries.dedup();
-        let mut all: Vec<(u32, u32)> = old.to_vec();
-        for t in tries {
-            if !near(p, t, self.cw, self.w) && !old.iter().any(|e| e.1 == t) {
-                all.push(((self.dist)(p, t), t));
+        let mut best = *old;
+        let mut last = u32::MAX;
+        for &t in tries.iter() {
+            if t == last {
+                continue;
+            }
+            last = t;
+            if near(p, t, self.cw, self.w) || old.iter().any(|e| e.1 == t) {
+                continue;
+            }
+            let e = ((self.dist)(p, t), t);
+            if e < best[SIMILAR - 1] {
+                // Into the sorted list.
+                let mut k = SIMILAR - 1;
+                while k > 0 && e < best[k - 1] {
+                    best[k] = best[k - 1];
+                    k -= 1;
+                }
+                best[k] = e;
             }
         }
-        all.sort_unstable();
-        all.truncate(SIMILAR);
-        all
+        best
     }
 }
+
+/// A position's list: (distance, position), nearest first.
+type List = [(u32, u32); SIMILAR];
 
 #[cfg(test)]
 mod tests {

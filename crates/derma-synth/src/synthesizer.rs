@@ -119,6 +119,13 @@ impl<'a> Synthesizer<'a> {
         self
     }
 
+    /// Which positions each search verifies (default: the k-coherence candidates; or every
+    /// position; see [`crate::coherence::Scope`]).
+    pub fn search(mut self, scope: crate::coherence::Scope) -> Self {
+        self.options.search = scope;
+        self
+    }
+
     /// A guide map choosing the exemplar per output region (default none).
     pub fn guide(mut self, guide: Guide) -> Self {
         self.guide = Some(guide);

@@ -134,6 +134,8 @@ def synth(
     tile: bool = False,
     patch: Optional[int] = None,
     passes: Optional[int] = None,
+    settle: Optional[float] = None,
+    search: str = "coherent",
     device: str = "auto",
     progress: Optional[Progress] = None,
 ) -> np.ndarray:
@@ -142,7 +144,9 @@ def synth(
     ``exemplar``: (h, w) or (h, w, c) array of any real type (values as they are, e.g. height
     in mm or linear colour); ``size``: n or (width, height). Returns (height, width, c)
     float32 (or (height, width) for a 2-D exemplar); the same seed gives the same texture on
-    CPU and GPU.
+    CPU and GPU. ``settle``: the self-adaptive optimisation's factor (0 searches every window
+    every pass); ``search``: ``"coherent"`` (k-coherence candidates) or ``"exhaustive"`` (every
+    exemplar window), as ``derma synth --settle/--search``.
     """
     ex = np.asarray(exemplar)
     flat = ex.ndim == 2
@@ -166,6 +170,8 @@ def synth(
             tile=tile,
             patch=patch,
             passes=passes,
+            settle=settle,
+            search=search,
             device=device,
             progress=progress,
         )

@@ -51,6 +51,8 @@ def synth(
     tile: bool = ...,
     patch: Optional[int] = ...,
     passes: Optional[int] = ...,
+    settle: Optional[float] = ...,
+    search: str = ...,
     device: str = ...,
     progress: _Progress = ...,
 ) -> Array: ...
