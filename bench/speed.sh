@@ -9,8 +9,9 @@
 #  3. exemplar synthesis against texture-synthesis (bench/synth.sh at 1024² on the colour 128²
 #     and 256×128 crops, and the held-out 128² and 256² crops of a photographed albedo where
 #     scripts/corpus.py has fetched it, the median of three alternating runs; goal 10× the peer, grain ≥ 0.85,
-#     patch SWD ≤ the peer's) and the self-adaptive optimisation with and without
-#     (bench/synth_adaptive.sh);
+#     patch SWD ≤ the peer's), the k-coherence search against the exhaustive one as the
+#     exemplar's side doubles (128² → 256²: 4× the area), and the self-adaptive optimisation
+#     with and without (bench/synth_adaptive.sh);
 #  4. the optics' photons per second per core beside MCML (bench/mcml.sh).
 # GPU figures come from bench/gpu.sh on a lent device.
 #   bash bench/speed.sh [main] [build] [synth] [optics]    (default: all four)
@@ -59,6 +60,20 @@ if has synth; then
   ex="albedo128 albedo256x128"
   [ -f target/corpus/Map-COL.jpg ] && ex="$ex lps128 lps256"
   RUNS=3 EXEMPLARS="$ex" bash bench/synth.sh 1024
+  # Growth with the exemplar's area, each search scope (crops made by bench/synth.sh).
+  pairs="albedo128:albedo256x128"
+  [ -f target/corpus/Map-COL.jpg ] && pairs="$pairs lps128:lps256"
+  for pair in $pairs; do
+    for scope in coherent exhaustive; do
+      line="search $scope:"
+      for e in ${pair%%:*} ${pair##*:}; do
+        /usr/bin/time -f "%e" -o "$out/time.txt" target/release/derma synth --exemplar \
+          "bench/out/synth/$e.png" --size 1024 --search "$scope" --out "$out/scope.png" -q
+        line="$line $e $(cat "$out/time.txt") s,"
+      done
+      echo "${line%,} (1024², one run each)"
+    done
+  done
   bash bench/synth_adaptive.sh 1024
 fi
 
