@@ -1,28 +1,30 @@
 #!/usr/bin/env bash
 # Shen et al. §3.3's self-adaptive optimisation, measured (docs/synth.md, "Self-adaptive
 # optimisation"): `derma synth --size 1024 --correction 0` from the bench crops (bench/synth_crops.py)
-# after 0, 1, 2 and 3 optimisation passes, with the skip (--settle 2, the default) and without
-# (--settle 0): seconds of each pass, windows searched, and the quality metrics (grain ratio,
+# after 0, 1, 2 and 3 optimisation passes, with the skip (--settle 2) and without (--settle 0,
+# the default), under the search SEARCH (exhaustive, where the skip pays, by default; coherent,
+# the default search, where it does not): seconds of each pass, windows searched, and the quality metrics (grain ratio,
 # patch SWD, seam energy). Then S4 Fig. 3 remade: the 1024² output's top-left 256² after the
 # patch pass and after each optimisation pass (docs/images/synth-passes.png). Needs python3
 # with Pillow.
-#   bash bench/synth_adaptive.sh [SIZE]
+#   [SEARCH=coherent] bash bench/synth_adaptive.sh [SIZE]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 size=${1:-1024}
+search=${SEARCH:-exhaustive}
 cargo build --release -q -p derma
 out=bench/out/adaptive
 mkdir -p "$out"
 python3 bench/synth_crops.py ../shared/data "$out"
 d=target/release/derma
-echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F); --search $search"
 echo "| exemplar | passes | settle | seconds | each pass (s) | windows searched (per pass) | grain ratio | patch SWD | seam energy |"
 echo "|---|---|---|---|---|---|---|---|---|"
 for ex in albedo256x128 albedo128 disp256; do
   for settle in 0 2; do
     for passes in 0 1 2 3; do
       m=$("$d" synth --exemplar "$out/$ex.png" --size "$size" --passes "$passes" --correction 0 \
-        --settle "$settle" --metrics --out "$out/$ex-p$passes-s$settle.png" -q)
+        --settle "$settle" --search "$search" --metrics --out "$out/$ex-p$passes-s$settle.png" -q)
       python3 - "$ex" "$passes" "$settle" "$m" <<'PY'
 import json, sys
 ex, passes, settle, m = sys.argv[1], sys.argv[2], sys.argv[3], json.loads(sys.argv[4])

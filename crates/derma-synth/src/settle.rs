@@ -16,10 +16,15 @@ use crate::exemplar::ExemplarSet;
 use crate::search::Match;
 use std::collections::HashMap;
 
-/// The default factor over the mean cell count above which a window's match region is settled:
-/// measured, not from the paper (`bench/synth_adaptive.sh`, docs/synth.md): at 1 the patch
-/// grid's seams stayed (seam energy 0.26 against −0.11), at 4 almost nothing was skipped.
-pub const DEFAULT_FACTOR: f32 = 2.0;
+/// The default factor: 0, the skip off. With the exhaustive search a factor of 2 saved 13–34 %
+/// of the time (at 1 the patch grid's seams stayed: seam energy 0.26 against −0.11; at 4 almost
+/// nothing was skipped); with the k-coherence search, the default since, the searches it skips
+/// cost milliseconds, so it saves nothing, and it left seams (seam energy 0.15–1.67 against
+/// −0.08–0.11 without it on five of six crops; BENCHMARKS.md, issue 64's second stop).
+pub const DEFAULT_FACTOR: f32 = 0.0;
+
+/// The factor measured best with the exhaustive search (`bench/synth_adaptive.sh`).
+pub const EXHAUSTIVE_FACTOR: f32 = 2.0;
 
 /// A finished pass as the next one needs it: its windows and which of them are settled.
 pub(crate) struct Settled {

@@ -63,7 +63,7 @@ fn square(side: usize, correction: usize) -> SynthOptions {
     }
 }
 
-/// S4 §3.3's self-adaptive skip: at the default factor some windows of the later passes inherit
+/// S4 §3.3's self-adaptive skip: at the exhaustive search's factor some windows of the later passes inherit
 /// their match unsearched; a factor no cell reaches takes the inheritance path with nothing
 /// settled and gives the bits of no skip at all (0), the old behaviour.
 #[test]
@@ -76,7 +76,7 @@ fn the_self_adaptive_skip_inherits_windows_and_a_factor_nothing_reaches_is_no_sk
         };
         synthesize(&set, &opts, None, &CpuMatcher, &Silent).unwrap()
     };
-    let on = at(derma_synth::settle::DEFAULT_FACTOR);
+    let on = at(derma_synth::settle::EXHAUSTIVE_FACTOR);
     assert_eq!(on.passes[0].searched, on.passes[0].windows);
     assert!(
         on.passes[1..].iter().any(|p| p.searched < p.windows),

@@ -53,7 +53,8 @@ pub struct SynthArgs {
     correction: usize,
     /// Self-adaptive optimisation (Shen et al. §3.3): windows inside one whose best match lies
     /// in a region holding FACTOR times the mean share of matches are optimised once, not
-    /// searched again (0: every window every pass).
+    /// searched again (0, the default: every window every pass; 2 saves time with --search
+    /// exhaustive).
     #[arg(long, value_name = "FACTOR", default_value_t = derma_synth::settle::DEFAULT_FACTOR)]
     settle: f32,
     /// Which windows each search verifies: coherent (each window's coherent guesses, the
