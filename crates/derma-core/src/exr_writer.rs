@@ -165,7 +165,7 @@ impl ExrRowSink {
         }
         let lpb = self.compression.lines_per_block();
         // A block begun by the last push, line by line.
-        while self.next < end && (self.next % lpb != 0 || !self.pending.is_empty()) {
+        while self.next < end && (!self.next.is_multiple_of(lpb) || !self.pending.is_empty()) {
             self.push_line(&fill)?;
         }
         // Whole blocks, in parallel batches.
@@ -244,7 +244,7 @@ impl ExrRowSink {
         let mut raw = std::mem::take(&mut self.pending);
         self.line(self.next, fill, &mut Vec::new(), &mut raw, &mut Vec::new());
         self.next += 1;
-        if self.next % lpb == 0 || self.next == self.height {
+        if self.next.is_multiple_of(lpb) || self.next == self.height {
             let y0 = (self.next - 1) / lpb * lpb;
             let c = chunk(y0 as i32, &raw, self.compression);
             self.emit(&c)?;

@@ -1401,7 +1401,7 @@ impl SetView<'_> {
         }
         if crate::texture_set::write_wrinkle_masks(
             &dir.join(outputs::WRINKLE_MASKS),
-            &self.fields,
+            self.fields,
             self.surface.width,
             self.surface.height,
             self.surface.period().is_some(),
@@ -1517,8 +1517,8 @@ impl SetView<'_> {
         log: &Log,
     ) -> serde_json::Value {
         crate::report::report(&crate::report::Run {
-            config: &self.config,
-            inputs: &self.inputs,
+            config: self.config,
+            inputs: self.inputs,
             mesh_scale: self.mesh_scale.cloned(),
             threads: self.threads,
             appearance: self.appearance,

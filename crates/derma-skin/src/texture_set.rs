@@ -730,8 +730,8 @@ pub fn write_height_png(
 
 /// A map file being written: a PNG or an EXR.
 enum Sink {
-    Png(PngRowSink),
-    Exr(ExrRowSink),
+    Png(Box<PngRowSink>),
+    Exr(Box<ExrRowSink>),
 }
 
 /// Every map file but height.png (which needs the heights' range first), written from rows
@@ -766,11 +766,11 @@ impl MapSinks {
                 .map(|&name| ExrChannel { name, precision })
                 .collect();
             let s = ExrRowSink::create(&dir.join(file), width, height, &list, compression);
-            Ok::<_, crate::SkinError>((file, Sink::Exr(s?)))
+            Ok::<_, crate::SkinError>((file, Sink::Exr(Box::new(s?))))
         };
         let png = |file: &'static str, channels, depth| {
             let s = PngRowSink::create(&dir.join(file), width, height, channels, depth)?;
-            Ok::<_, crate::SkinError>((file, Sink::Png(s)))
+            Ok::<_, crate::SkinError>((file, Sink::Png(Box::new(s))))
         };
         let none = ExrCompression::None;
         let bio_names = BIO_CHANNELS.map(|(n, _)| n);

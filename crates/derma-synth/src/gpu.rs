@@ -365,10 +365,14 @@ pub(crate) struct Resident {
     pub(crate) sim_at: Option<usize>,
 }
 
+/// An upload's key: the exemplar's codes (address, length), the window side, and whether it
+/// carries the similarity table.
+type ResidentKey = (usize, usize, usize, bool);
+
 /// The GPU matcher. Exemplar uploads are kept for the matcher's life, keyed by the exemplar's
 /// codes (address and length) and the window side; one matcher is meant for one exemplar set.
 pub struct GpuMatcher {
-    resident: Mutex<HashMap<(usize, usize, usize, bool), Arc<Resident>>>,
+    resident: Mutex<HashMap<ResidentKey, Arc<Resident>>>,
     scratch: Mutex<Option<Scratch>>,
     pub(crate) name: String,
     max_survivors: usize,
