@@ -532,30 +532,21 @@ pub struct HeightRange {
 
 /// The range of heights (mm) of every texel.
 pub fn range_of(heights: &[f32]) -> HeightRange {
-    let (lo, hi) = heights
-        .par_iter()
-        .fold(
-            || (f32::INFINITY, f32::NEG_INFINITY),
-            |(lo, hi), &v| (lo.min(v), hi.max(v)),
-        )
-        .reduce(
-            || (f32::INFINITY, f32::NEG_INFINITY),
-            |a, b| (a.0.min(b.0), a.1.max(b.1)),
-        );
-    HeightRange {
-        min_mm: lo,
-        max_mm: hi,
-    }
+    range_by(heights, |&v| v)
 }
 
 /// The range of the painted heights (every texel, the gutter's dilated ones included).
 pub fn height_range(bio: &BioMaps) -> HeightRange {
-    let (lo, hi) = bio
-        .texels
+    range_by(&bio.texels, |t| t.height_mm)
+}
+
+/// The least and greatest `height(item)` of `items`.
+fn range_by<T: Sync>(items: &[T], height: impl Fn(&T) -> f32 + Sync) -> HeightRange {
+    let (lo, hi) = items
         .par_iter()
         .fold(
             || (f32::INFINITY, f32::NEG_INFINITY),
-            |(lo, hi), t| (lo.min(t.height_mm), hi.max(t.height_mm)),
+            |(lo, hi), t| (lo.min(height(t)), hi.max(height(t))),
         )
         .reduce(
             || (f32::INFINITY, f32::NEG_INFINITY),

@@ -13,7 +13,7 @@
 //! applies over them as over every position in the exhaustive search (`crate::search`).
 
 use crate::exemplar::{Exemplar, ExemplarSet};
-use crate::search::pick_key;
+use crate::key::pick_key;
 use rayon::prelude::*;
 
 /// Positions per entry of the similarity table (k).

@@ -4,7 +4,8 @@
 //! [`synthesize()`] grows a texture of any size from one or more exemplars: white noise, a patch
 //! pass ([`patch_pass`]), optimisation passes with a two-band E-step ([`optimize`]), then a texel-level
 //! coherent [`correction`]. Every
-//! best-match search is the exact integer search of [`search`], run by a [`Matcher`]: the CPU
+//! best-match search is the integer search of [`search`], over each query's k-coherence
+//! candidates ([`coherence`]; or every exemplar window), run by a [`Matcher`]: the CPU
 //! one ([`CpuMatcher`], rayon) or, with the `gpu` feature, the GPU one (`gpu::GpuMatcher`, WGSL), which give identical
 //! answers, so a seed gives the same texture on either. [`quality`] holds the metrics that
 //! judge the result without neural networks.
@@ -34,6 +35,7 @@ mod gpu_optimize;
 mod gpu_patch_pass;
 pub mod guide;
 pub mod job;
+mod key;
 pub mod matcher;
 pub mod optimize;
 mod pass_context;

@@ -98,6 +98,14 @@ fn overlapping(patches: &[(usize, usize, usize)], n: usize, width: usize, height
     })
 }
 
+/// A wavefront's patches as the GPU's plan takes them: (x, y, salt).
+fn salted(front: &[(usize, usize, usize)], rng: &Philox) -> Vec<[u32; 3]> {
+    front
+        .iter()
+        .map(|&(x, y, k)| [x as u32, y as u32, rng.u32x4(k as u64)[0]])
+        .collect()
+}
+
 /// Runs the patch pass with patches of side `n`.
 pub(crate) fn patch_pass(
     canvas: &mut Canvas,
@@ -118,7 +126,11 @@ pub(crate) fn patch_pass(
     let probes = [(0, 0), (0, d), (d, 0), (n - 1, 0)];
     let mut occ = Occurrence::new(set, n, occurrence);
     let fronts = wavefronts(&xs, &ys);
-    let coherence = ctx.coherence.map(|t| t.of(set, n));
+    let tables = ctx.coherence.map(|t| t.of(set, n));
+    let candidates = tables.as_deref().map(|tables| Candidates {
+        tables,
+        random: RANDOM_PATCH,
+    });
     // One exemplar on the GPU: the matcher may run the whole pass where it keeps the canvas.
     if set.exemplars.len() == 1 && ctx.matcher.device() == Device::Gpu {
         let plan = PatchPlan {
@@ -126,24 +138,14 @@ pub(crate) fn patch_pass(
             tol,
             weight16: occ.weight16(),
             cap: penalty_cap(n),
-            wavefronts: fronts
-                .iter()
-                .map(|f| {
-                    f.iter()
-                        .map(|&(x, y, k)| [x as u32, y as u32, rng.u32x4(k as u64)[0]])
-                        .collect()
-                })
-                .collect(),
+            wavefronts: fronts.iter().map(|f| salted(f, &rng)).collect(),
             overlaps: fronts
                 .iter()
                 .map(|f| overlapping(f, n, canvas.width, canvas.height))
                 .collect(),
             plane: canvas.plane(),
             sources: &canvas.src,
-            coherence: coherence.as_deref().map(|tables| Candidates {
-                tables,
-                random: RANDOM_PATCH,
-            }),
+            coherence: candidates,
         };
         if let Some(sources) = ctx.matcher.patch_pass(set, &plan, progress)? {
             for (t, s) in sources.into_iter().enumerate() {
@@ -188,10 +190,7 @@ pub(crate) fn patch_pass(
                 tol,
                 penalty,
                 prepared: prepared.as_ref(),
-                coherence: coherence.as_deref().map(|tables| Candidates {
-                    tables,
-                    random: RANDOM_PATCH,
-                }),
+                coherence: candidates,
             };
             // A candidate left free joins the guesses: where the coherent ones are barred, it
             // gives the search a first limit below the cap (the answer is the same).
