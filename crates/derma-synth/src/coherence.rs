@@ -4,7 +4,8 @@
 //!
 //! Definition (both backends compute exactly this): for exemplar positions of windows of side
 //! `w`, the similarity table holds, per position, [`SIMILAR`] other positions whose windows'
-//! `b × b` block means (b = w/4, a 4 × 4 grid of blocks, as 8-bit codes) lie nearest, none within [`near`] of
+//! `b × b` block means (b = w/4, a 4 × 4 grid of blocks — w × w texels under 4 — as 8-bit
+//! codes) lie nearest, none within [`near`] of
 //! it, found by a deterministic PatchMatch (Barnes et al. 2009) over the exemplar
 //! ([`similarity_table`]: integer distances, every iteration reading only the last one's
 //! lists, so the table does not depend on the thread count). A query's candidates are its
@@ -148,20 +149,20 @@ pub fn near(a: u32, b: u32, cw: usize, w: usize) -> bool {
 }
 
 /// Every position's descriptor: the means (rounded down, as 8-bit codes) of its window's
-/// 4 × 4 blocks of side w/4 (at least 1), per channel.
+/// g × g blocks of side b = w/4 (at least 1; g = 4, or w for windows under 4), per channel.
 fn descriptors(e: &Exemplar, w: usize) -> (Vec<u8>, usize) {
-    let b = (w / 4).max(1);
+    let (b, g) = ((w / 4).max(1), w.min(4));
     let sums = e.block_sums(b);
     let (cw, ch) = e.candidates(w);
     let pw = e.width() + 1 - b;
-    let d = 16 * e.channels();
+    let d = g * g * e.channels();
     let area = (b * b) as u32;
     let mut out = vec![0u8; cw * ch * d];
     out.par_chunks_mut(d).enumerate().for_each(|(p, v)| {
         let (x, y) = (p % cw, p / cw);
         let mut k = 0;
-        for by in 0..4 {
-            for bx in 0..4 {
+        for by in 0..g {
+            for bx in 0..g {
                 let at = (y + by * b) * pw + x + bx * b;
                 for plane in &sums {
                     v[k] = (plane[at] as u32 / area) as u8;
@@ -318,6 +319,19 @@ mod tests {
         let first = table[p * SIMILAR] as usize;
         assert_eq!((first % cw % 16, first / cw % 16), (21 % 16, 20 % 16));
         assert_ne!(first, p);
+    }
+
+    #[test]
+    fn windows_of_every_side_have_tables() {
+        // Windows under 4 texels (a patch of 8 gives passes of 8, 4 and 2) and odd ones.
+        let t = noise_texture(24, 24, 3, 11);
+        let set = ExemplarSet::new(vec![t], 8).unwrap();
+        for w in [1, 2, 3, 5, 6, 8, 12] {
+            let table = similarity_table(&set.exemplars[0], w);
+            let (cw, ch) = set.exemplars[0].candidates(w);
+            assert_eq!(table.len(), cw * ch * SIMILAR, "side {w}");
+            assert!(table.iter().all(|&p| (p as usize) < cw * ch), "side {w}");
+        }
     }
 
     #[test]
