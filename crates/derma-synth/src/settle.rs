@@ -19,8 +19,9 @@ use std::collections::HashMap;
 /// The default factor: 0, the skip off. With the exhaustive search a factor of 2 saved 13–34 %
 /// of the time (at 1 the patch grid's seams stayed: seam energy 0.26 against −0.11; at 4 almost
 /// nothing was skipped); with the k-coherence search, the default since, the searches it skips
-/// cost milliseconds, so it saves nothing, and it left seams (seam energy 0.15–1.67 against
-/// −0.08–0.11 without it on five of six crops; BENCHMARKS.md, issue 64's second stop).
+/// cost milliseconds, so it saves nothing, and it raised the seam energy on all six crops
+/// measured (to 0.15, 0.20 and 1.67 on three of them, against −0.05, −0.01 and 0.11 without;
+/// BENCHMARKS.md, issue 64's second stop).
 pub const DEFAULT_FACTOR: f32 = 0.0;
 
 /// The factor measured best with the exhaustive search (`bench/synth_adaptive.sh`).
