@@ -558,17 +558,14 @@ fn range_by<T: Sync>(items: &[T], height: impl Fn(&T) -> f32 + Sync) -> HeightRa
     }
 }
 
-/// Writes an EXR of `C` channels of the bio samples, each line in one pass over its samples.
-fn exr<const C: usize>(
-    path: &Path,
-    bio: &BioMaps,
-    names: [&str; C],
-    precision: ExrPrecision,
-    compression: ExrCompression,
-    values: impl Fn(&BioSample) -> [f32; C] + Sync,
-) -> crate::Result<()> {
+/// bio.exr: every bio channel ([`BIO_CHANNELS`]) as half floats, with `compression` (the main
+/// job uses [`BIO_COMPRESSION`]; the `exr_compression` bench compares the others).
+pub fn write_bio_exr(path: &Path, bio: &BioMaps, compression: ExrCompression) -> crate::Result<()> {
     let w = bio.width;
-    let list = names.map(|name| ExrChannel { name, precision });
+    let list = BIO_CHANNELS.map(|(name, _)| ExrChannel {
+        name,
+        precision: ExrPrecision::F16,
+    });
     Ok(write_exr_rows(
         path,
         w,
@@ -577,27 +574,12 @@ fn exr<const C: usize>(
         compression,
         |y, rows| {
             for (x, s) in bio.texels[y * w..(y + 1) * w].iter().enumerate() {
-                let v = values(s);
-                for c in 0..C {
-                    rows[c][x] = v[c];
+                for (row, v) in rows.iter_mut().zip(s.channels()) {
+                    row[x] = v;
                 }
             }
         },
     )?)
-}
-
-/// bio.exr: every bio channel ([`BIO_CHANNELS`]) as half floats, with `compression` (the main
-/// job uses [`BIO_COMPRESSION`]; the `exr_compression` bench compares the others).
-pub fn write_bio_exr(path: &Path, bio: &BioMaps, compression: ExrCompression) -> crate::Result<()> {
-    let names = BIO_CHANNELS.map(|(n, _)| n);
-    exr(
-        path,
-        bio,
-        names,
-        ExrPrecision::F16,
-        compression,
-        BioSample::channels,
-    )
 }
 
 /// Largest side of wrinkle_masks.exr: the masks vary over millimetres, not texels.
